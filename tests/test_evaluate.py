@@ -1,0 +1,329 @@
+"""Ground-truth readers and OTB single-target metrics, checked against hand-computed values."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from vtrack.errors import ConfigError, InputError
+from vtrack.evaluate import (
+    ERROR_THRESHOLDS,
+    OVERLAP_THRESHOLDS,
+    auc,
+    frame_scores,
+    mean_center_error,
+    mean_overlap,
+    parse_box,
+    precision_at,
+    precision_curve,
+    read_boxes,
+    read_mot,
+    read_mot_detections,
+    success_curve,
+    summarize,
+)
+from vtrack.geometry import Box, center_error, iou
+
+G = Box(0, 0, 10, 10)
+
+
+def write(tmp_path, text, name="gt.txt"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+# --- per-frame IoU and centre error -------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("pred", "expected"),
+    [
+        (Box(0, 0, 10, 10), 1.0),  # identical
+        (Box(20, 20, 10, 10), 0.0),  # disjoint
+        (Box(10, 0, 10, 10), 0.0),  # touching edges
+        (Box(5, 0, 10, 10), 50 / 150),  # half of each overlaps: 50 / (100 + 100 - 50)
+        (Box(2, 2, 4, 4), 16 / 100),  # contained
+        (Box(0, 0, 10, 5), 0.5),  # top half
+    ],
+)
+def test_iou_of_known_boxes(pred, expected):
+    assert iou(pred, G) == pytest.approx(expected)
+    assert frame_scores([pred], [G])[0] == [pytest.approx(expected)]
+
+
+def test_center_error_is_euclidean_distance_of_centres():
+    assert center_error(Box(3, 4, 10, 10), G) == pytest.approx(5.0)
+    assert frame_scores([Box(3, 4, 10, 10)], [G])[1] == [pytest.approx(5.0)]
+
+
+def test_lost_frame_scores_zero_overlap_and_infinite_error():
+    overlaps, errors = frame_scores([None, Box(0, 0, 0, 0)], [G, G])
+    assert overlaps == [0.0, 0.0]
+    assert errors == [math.inf, math.inf]
+
+
+def test_absent_or_missing_ground_truth_is_not_evaluated():
+    pred = [G, G, G, G]
+    overlaps, errors = frame_scores(pred, [None, Box(0, 0, 0, 0), G])  # gt ends before pred
+    assert overlaps == [None, None, 1.0, None]
+    assert errors == [None, None, 0.0, None]
+    assert frame_scores([G], [G, G]) == ([1.0], [0.0])  # gt beyond pred is not scored
+
+
+# --- success / AUC ------------------------------------------------------------------------------
+
+
+def test_thresholds_are_otb_grids():
+    assert OVERLAP_THRESHOLDS.shape == (21,)
+    assert OVERLAP_THRESHOLDS[0] == 0.0 and OVERLAP_THRESHOLDS[-1] == 1.0
+    assert OVERLAP_THRESHOLDS[6] == 0.3  # exact, so "IoU == threshold" behaves as written
+    np.testing.assert_array_equal(ERROR_THRESHOLDS, np.arange(51))
+    with pytest.raises(ValueError):
+        OVERLAP_THRESHOLDS[0] = 1.0
+
+
+def test_auc_of_known_overlaps():
+    # Evaluated IoUs 0, 0.5, 1 (None is excluded). IoU > t: t = 0..0.45 (10 thresholds) -> 2/3,
+    # t = 0.5..0.95 (10) -> 1/3 (0.5 is not > 0.5), t = 1 -> 0. Mean = (20/3 + 10/3) / 21 = 10/21.
+    overlaps = [0.0, 0.5, 1.0, None]
+    expected = np.array([2 / 3] * 10 + [1 / 3] * 10 + [0.0])
+    np.testing.assert_allclose(success_curve(overlaps), expected)
+    assert auc(overlaps) == pytest.approx(10 / 21)
+    assert mean_overlap(overlaps) == pytest.approx(0.5)
+
+
+def test_success_is_strictly_greater():
+    # IoU exactly 0.3 passes t = 0..0.25 (6 thresholds) but not t = 0.3.
+    curve = success_curve([0.3])
+    np.testing.assert_array_equal(curve, [1.0] * 6 + [0.0] * 15)
+    assert auc([0.3]) == pytest.approx(6 / 21)
+    # From real boxes: IoU exactly 0.5 does not count at t = 0.5.
+    overlaps, _ = frame_scores([Box(0, 0, 10, 5)], [G])
+    assert success_curve(overlaps)[10] == 0.0 and success_curve(overlaps)[9] == 1.0
+    # A perfect tracker scores 20/21, since no IoU is > 1.
+    assert auc([1.0]) == pytest.approx(20 / 21)
+
+
+# --- precision ----------------------------------------------------------------------------------
+
+
+def test_precision_counts_error_equal_to_threshold():
+    _, errors = frame_scores([Box(20, 0, 10, 10)], [G])  # centres exactly 20 px apart
+    assert errors == [20.0]
+    assert precision_at(errors, 20) == 1.0
+    assert precision_at([20.000001], 20) == 0.0
+    curve = precision_curve(errors)
+    assert curve.shape == (51,)
+    np.testing.assert_array_equal(curve, [0.0] * 20 + [1.0] * 31)
+    assert precision_curve(errors, max_px=10).shape == (11,)
+
+
+def test_lost_frames_fail_every_threshold():
+    overlaps, errors = frame_scores([None, G], [G, G])
+    np.testing.assert_array_equal(success_curve(overlaps), [0.5] * 20 + [0.0])
+    np.testing.assert_array_equal(precision_curve(errors), [0.5] * 51)
+    assert mean_center_error(errors) == 0.0  # finite mean over frames with a box
+
+
+def test_no_evaluated_frames_gives_nan():
+    assert np.isnan(success_curve([None, None])).all()
+    assert np.isnan(precision_curve([])).all()
+    assert math.isnan(auc([])) and math.isnan(mean_overlap([None]))
+    assert math.isnan(precision_at([])) and math.isnan(mean_center_error([math.inf]))
+
+
+# --- summary ------------------------------------------------------------------------------------
+
+
+def test_summarize_hand_computed():
+    pred = [G, Box(5, 0, 10, 10), None, G]
+    gt = [G, G, G, None]
+    # Evaluated: frames 0-2, IoUs 1, 1/3, 0; errors 0, 5, inf.
+    # IoU > t: t = 0..0.30 (7 thresholds) -> 2/3; t = 0.35..0.95 (13) -> 1/3; t = 1 -> 0.
+    summary = summarize(pred, gt)
+    assert list(summary) == [
+        "frames_evaluated",
+        "mean_overlap",
+        "auc",
+        "precision20",
+        "mean_center_error",
+    ]
+    assert summary["frames_evaluated"] == 3
+    assert summary["mean_overlap"] == pytest.approx(4 / 9)
+    assert summary["auc"] == pytest.approx((7 * 2 / 3 + 13 / 3) / 21)
+    assert summary["precision20"] == pytest.approx(2 / 3)
+    assert summary["mean_center_error"] == pytest.approx(2.5)
+
+
+def test_summarize_without_evaluated_frames_is_json_null():
+    summary = summarize([G, None], [None])
+    assert summary["frames_evaluated"] == 0
+    assert json.loads(json.dumps(summary))["auc"] is None
+    assert summarize([None], [G])["mean_center_error"] is None  # always lost: no finite error
+
+
+# --- read_boxes ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        "10,20,30,40",
+        "10\t20\t30\t40",
+        "10 20 30 40",
+        "10,20\t30  40",
+        "10, 20, 30, 40",
+        "10,20,30,40,",
+    ],
+)
+def test_read_boxes_otb_separators(tmp_path, line):
+    path = write(tmp_path, f"{line}\n1.5,2.5,3.5,4.5\n")
+    assert read_boxes(path) == [Box(10, 20, 30, 40), Box(1.5, 2.5, 3.5, 4.5)]
+
+
+def test_read_boxes_vot_polygon_and_rectangle(tmp_path):
+    path = write(
+        tmp_path,
+        "1,2,11,2,11,22,1,22\n"  # axis-aligned polygon
+        "0,5,5,0,10,5,5,10\n"  # rotated square (diamond)
+        "3,4,5,6\n",  # VOT rectangle
+    )
+    assert read_boxes(path) == [Box(1, 2, 10, 20), Box(0, 0, 10, 10), Box(3, 4, 5, 6)]
+
+
+def test_read_boxes_absent_frames(tmp_path):
+    path = write(
+        tmp_path,
+        "1,2,3,4\nNaN,NaN,NaN,NaN\n0,0,0,0\nnan,nan,nan,nan,nan,nan,nan,nan\n5,5,0,10\n5,5,10,-1\n"
+        "\n\n",  # trailing blank lines are ignored
+    )
+    assert read_boxes(path) == [Box(1, 2, 3, 4), None, None, None, None, None]
+
+
+def test_read_boxes_origin_one(tmp_path):
+    path = write(tmp_path, "1,1,10,10\n0,0,0,0\n")
+    assert read_boxes(path, origin=1) == [Box(0, 0, 10, 10), None]
+    with pytest.raises(ConfigError, match="origin"):
+        read_boxes(path, origin=2)
+
+
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        ("1,2,3,4\nabc\n", "line 2: expected 4 or 8 numbers, got 'abc'"),
+        ("1,2,3\n", "line 1: expected 4 or 8 numbers, got '1,2,3'"),
+        ("1,2,3,4\n\n1,2,3,4\n", "line 2: expected 4 or 8 numbers, got ''"),
+        ("1,2,inf,4\n", "line 1: infinite coordinate"),
+    ],
+)
+def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):
+    path = write(tmp_path, text)
+    with pytest.raises(InputError) as info:
+        read_boxes(path)
+    assert str(info.value).startswith(f"{path} {problem}")
+    assert "\n" not in str(info.value)
+
+
+def test_read_boxes_unreadable_or_empty(tmp_path):
+    with pytest.raises(InputError, match="missing.txt"):
+        read_boxes(tmp_path / "missing.txt")
+    with pytest.raises(InputError, match="cannot read"):
+        read_boxes(tmp_path)  # a directory
+    with pytest.raises(InputError, match="empty"):
+        read_boxes(write(tmp_path, ""))
+    with pytest.raises(InputError, match="empty"):
+        read_boxes(write(tmp_path, "\n \n"))
+    binary = tmp_path / "gt.bin"
+    binary.write_bytes(b"\xff\xfe\x00\x81")
+    with pytest.raises(InputError, match="not text"):
+        read_boxes(binary)
+
+
+# --- MOTChallenge -------------------------------------------------------------------------------
+
+
+def test_read_mot_ground_truth_mot17_layout(tmp_path):
+    path = write(
+        tmp_path,
+        "1,1,10,20,30,40,1,1,0.9\n"
+        "1,2,50,60,10,10,1,1,1.0\n"
+        "1,3,0,0,10,10,0,1,1.0\n"  # consider flag 0: ignored
+        "2,1,11,21,30,40,1,1,0.8\n"
+        "2,4,5,5,10,10,1,7,1.0\n"  # static person (class 7): not a pedestrian
+        "\n"
+        "5,2,1,2,3,4,1,1,0.5\n",
+    )
+    assert read_mot(path) == {
+        0: [(1, Box(10, 20, 30, 40)), (2, Box(50, 60, 10, 10))],
+        1: [(1, Box(11, 21, 30, 40))],
+        4: [(2, Box(1, 2, 3, 4))],
+    }
+
+
+def test_read_mot_mot15_layout_has_no_class_column(tmp_path):
+    path = write(tmp_path, "2,7,10,20,30,40,1,-1,-1,-1\n1,3,1,2,3,4,1,-1,-1,-1\n1,5,1,2,3,4\n")
+    assert read_mot(path) == {
+        0: [(3, Box(1, 2, 3, 4)), (5, Box(1, 2, 3, 4))],
+        1: [(7, Box(10, 20, 30, 40))],
+    }
+
+
+def test_read_mot_detections(tmp_path):
+    path = write(
+        tmp_path,
+        "1,-1,1359.1,413.27,120.26,362.77,2.3092,-1,-1,-1\n"
+        "1,-1,10,10,5,5,-0.5,-1,-1,-1\n"  # negative scores are kept
+        "3,-1,1,2,3,4,0,-1,-1,-1\n",
+        name="det.txt",
+    )
+    assert read_mot_detections(path) == {
+        0: [(Box(1359.1, 413.27, 120.26, 362.77), 2.3092), (Box(10, 10, 5, 5), -0.5)],
+        2: [(Box(1, 2, 3, 4), 0.0)],
+    }
+
+
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        ("1,1,1,2,3,4\n0,1,1,2,3,4\n", "line 2: frame must be an integer >= 1"),
+        ("1.5,1,1,2,3,4\n", "line 1: frame must be an integer >= 1"),
+        ("1,1,1,2,3\n", "line 1: expected at least 6 numbers"),
+        ("1,x,1,2,3,4\n", "line 1: expected at least 6 numbers"),
+        ("1,1.5,1,2,3,4\n", "line 1: id must be an integer"),
+        ("1,1,nan,2,3,4\n", "line 1: non-finite number"),
+    ],
+)
+def test_read_mot_malformed_line_names_file_and_line(tmp_path, text, problem):
+    path = write(tmp_path, text)
+    with pytest.raises(InputError) as info:
+        read_mot(path)
+    assert str(info.value).startswith(f"{path} {problem}")
+
+
+def test_read_mot_detections_needs_confidence(tmp_path):
+    with pytest.raises(InputError, match="line 1: expected at least 7 numbers"):
+        read_mot_detections(write(tmp_path, "1,-1,1,2,3,4\n"))
+
+
+# --- --init -------------------------------------------------------------------------------------
+
+
+def test_parse_box():
+    assert parse_box("10,20,30,40") == Box(10, 20, 30, 40)
+    assert parse_box(" 1.5, 2, 3 ,4") == Box(1.5, 2, 3, 4)
+
+
+@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3 4"])
+def test_parse_box_rejects_malformed(text):
+    with pytest.raises(ConfigError, match=r"^--init: expected x,y,w,h, got '"):
+        parse_box(text)
+
+
+@pytest.mark.parametrize("text", ["1,2,0,4", "1,2,3,-4"])
+def test_parse_box_rejects_empty_box(text):
+    with pytest.raises(ConfigError, match="--init: width and height must be positive"):
+        parse_box(text)

@@ -1,0 +1,3 @@
+from vtrack.cli import main
+
+main()

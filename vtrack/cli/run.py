@@ -1,0 +1,99 @@
+"""``vtrack run INPUT``: track one video, image folder or raw stream."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+from tqdm import tqdm
+
+from vtrack.config import load_config
+from vtrack.evaluate.groundtruth import parse_box
+from vtrack.io import RawFormat
+from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
+
+PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
+
+
+def default_out_dir(input_spec: str) -> Path:
+    """``./vtrack-out/<name>/``, where name is the input's file or folder name (stdin: ``stdin``)."""
+    if input_spec == "-":
+        return Path("vtrack-out") / "stdin"
+    path = Path(input_spec.rstrip("/"))
+    return Path("vtrack-out") / (path.stem if path.suffix else path.name)
+
+
+@click.command("run")
+@click.argument("input_spec", metavar="INPUT")
+@click.option("--config", "-c", "config_spec", default=None, metavar="FILE|NAME",
+              help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
+                   "Default: s0.")
+@click.option("--init", "init_text", metavar="x,y,w,h",
+              help="Initial box (top-left x, y, width, height). Default: first --gt box.")
+@click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="FILE",
+              help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
+                   "multi-target configs): fills overlap and center_error.")
+@click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
+              help="1 for MATLAB-style 1-based ground-truth boxes (OTB).")
+@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
+              help="Output folder. Default: ./vtrack-out/<input name>/")
+@click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
+              help="Override a stage parameter (repeatable). See `vtrack stages`.")
+@click.option("--raw", "raw_size", metavar="WxH",
+              help="Input is raw frames of this size (from -, a FIFO or a file).")
+@click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
+              default="bgr24", show_default=True, help="Pixel format of --raw input.")
+@click.option("--fps", type=float, default=None, help="Frame rate of --raw input (default 30).")
+@click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
+@click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
+              help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
+@click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
+              help="x264 quality of annotated.mp4 (lower is better and larger).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the stochastic stages (particle filter), recorded in run.json.")
+@click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None,
+              help="Stop after this many frames.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
+def command(input_spec: str, config_spec: str | None, init_text: str | None,
+            gt_path: Path | None, gt_origin: int, out_dir: Path | None, overrides: tuple[str, ...],
+            raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
+            crf: int, seed: int, max_frames: int | None, quiet: bool) -> None:
+    """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
+
+    INPUT is a video file, an image-sequence folder (img/0001.jpg ...), or raw frames from
+    '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
+    """
+    config = load_config(config_spec).with_overrides(list(overrides))
+    raw = RawFormat.parse(raw_size, pix_fmt, fps or 30.0) if raw_size else None
+    if raw is None and input_spec == "-":
+        raise click.UsageError("reading frames from '-' needs --raw WxH (and --pix-fmt, --fps)")
+    request = RunRequest(
+        input=input_spec,
+        out_dir=out_dir or default_out_dir(input_spec),
+        config=config,
+        init_box=parse_box(init_text) if init_text is not None else None,
+        gt_path=gt_path,
+        gt_origin=gt_origin,
+        raw=raw,
+        video=not no_video,
+        preset=preset,
+        crf=crf,
+        seed=seed,
+        max_frames=max_frames,
+    )
+    show_bar = not quiet and sys.stderr.isatty()
+    with tqdm(total=max_frames, unit="frame", disable=not show_bar, dynamic_ncols=True,
+              desc=Path(input_spec).name or input_spec) as bar:
+        summary = run(request, on_frame=lambda _n: bar.update())
+    for warning in summary.warnings:
+        click.echo(f"vtrack: warning: {warning}", err=True)
+    if not quiet:
+        click.echo(summary.line())
+    if summary.status == STATUS_INTERRUPTED:
+        click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}", err=True)
+        sys.exit(130)
+    if summary.status != STATUS_COMPLETE:
+        click.echo(f"vtrack: error: {summary.error}; results up to there are in "
+                   f"{summary.out_dir}", err=True)
+        sys.exit(1)

@@ -1,0 +1,156 @@
+"""Tracker configurations: an ordered chain of stages with parameters, from a TOML file.
+
+File format (``configs/s0.toml``)::
+
+    name = "s0"
+    description = "Mean shift + Kalman, one iteration per frame (S0)"
+
+    [[stage]]
+    name = "hue"
+    search_scale = 2.0
+
+    [[stage]]
+    name = "backproject"
+
+A config given by name (``s0``, ``camshift`` ...) is one of the files shipped in ``configs/``.
+Everything is checked at load time; errors name the file, the stage and the parameter.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from vtrack.errors import ConfigError
+from vtrack.stages.base import PIPELINE_PROVIDES, Stage, build_stage, stage_class
+
+DEFAULT_CONFIG = "s0"
+
+
+@dataclass
+class Config:
+    """A validated chain: ``stages`` is a list of (stage name, explicitly set parameters)."""
+
+    name: str
+    source: str
+    description: str = ""
+    stages: list[tuple[str, dict[str, Any]]] = field(default_factory=list)
+
+    def build(self) -> list[Stage]:
+        """Construct the stages (values were validated when the config was loaded)."""
+        return [build_stage(name, values, self.source) for name, values in self.stages]
+
+    def resolved(self) -> dict[str, Any]:
+        """Every stage with every parameter value, defaults included (for ``run.json``)."""
+        return {
+            "name": self.name,
+            "source": self.source,
+            "description": self.description,
+            "stages": [{"name": s.name, **s.settings()} for s in self.build()],
+        }
+
+    def with_overrides(self, assignments: list[str]) -> Config:
+        """Apply ``stage.param=value`` strings (``--set``); the stage must be in the chain."""
+        stages = [(name, dict(values)) for name, values in self.stages]
+        for text in assignments:
+            where = f"--set {text}"
+            key, sep, raw = text.partition("=")
+            stage_name, dot, param_name = key.strip().partition(".")
+            if not sep or not dot or not stage_name or not param_name:
+                raise ConfigError(f"{where}: expected stage.param=value")
+            matches = [values for name, values in stages if name == stage_name]
+            if not matches:
+                chain = " -> ".join(name for name, _ in stages)
+                raise ConfigError(f"{where}: stage {stage_name!r} is not in the chain ({chain})")
+            declared = {p.name: p for p in stage_class(stage_name, where).params}
+            if param_name not in declared:
+                known = ", ".join(declared) or "none"
+                raise ConfigError(
+                    f"{where}: stage '{stage_name}' has no parameter {param_name!r} "
+                    f"(parameters: {known})"
+                )
+            value = declared[param_name].parse(raw.strip(), f"{where}: stage '{stage_name}'")
+            for values in matches:
+                values[param_name] = value
+        return Config(self.name, self.source, self.description, stages)
+
+
+def shipped_configs() -> dict[str, Path]:
+    """The configurations shipped with vtrack, by name."""
+    folder = resources.files("vtrack.configs")
+    return {
+        Path(entry.name).stem: Path(str(entry))
+        for entry in folder.iterdir()
+        if entry.name.endswith(".toml")
+    }
+
+
+def load_config(spec: str | Path | None = None) -> Config:
+    """Load a config from a path, or a shipped one by name (default: S0)."""
+    spec = DEFAULT_CONFIG if spec is None else spec
+    path = Path(spec)
+    if not path.exists():
+        shipped = shipped_configs()
+        if str(spec) in shipped:
+            path = shipped[str(spec)]
+        elif path.suffix == ".toml" or "/" in str(spec):
+            raise ConfigError(f"{spec}: config file not found")
+        else:
+            raise ConfigError(
+                f"{spec}: no such config file or shipped config (shipped: {', '.join(sorted(shipped))})"
+            )
+    where = str(spec)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot read config ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{where}: config is not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{where}: not valid TOML ({exc})") from None
+    return parse_config(data, where, default_name=path.stem)
+
+
+def parse_config(data: dict[str, Any], where: str, default_name: str = "config") -> Config:
+    """Validate a decoded TOML document (see the module docstring for its shape)."""
+    unknown = set(data) - {"name", "description", "stage"}
+    if unknown:
+        raise ConfigError(
+            f"{where}: unknown top-level key(s) {', '.join(sorted(unknown))} "
+            "(expected name, description, [[stage]])"
+        )
+    raw_stages = data.get("stage")
+    if not isinstance(raw_stages, list) or not raw_stages:
+        raise ConfigError(f"{where}: no [[stage]] tables: a config is a chain of stages")
+    stages: list[tuple[str, dict[str, Any]]] = []
+    for position, table in enumerate(raw_stages, start=1):
+        if not isinstance(table, dict) or not isinstance(table.get("name"), str):
+            raise ConfigError(f"{where}: stage #{position} has no name")
+        values = {k: v for k, v in table.items() if k != "name"}
+        build_stage(table["name"], values, where)  # validates names, parameters, types
+        stages.append((table["name"], values))
+    config = Config(
+        name=str(data.get("name", default_name)),
+        source=where,
+        description=str(data.get("description", "")),
+        stages=stages,
+    )
+    check_chain(config)
+    return config
+
+
+def check_chain(config: Config) -> None:
+    """Reject a chain in which a stage reads a context field no earlier stage provides."""
+    available = set(PIPELINE_PROVIDES)
+    for name, _ in config.stages:
+        cls = stage_class(name, config.source)
+        missing = cls.requires - available
+        if missing:
+            raise ConfigError(
+                f"{config.source}: stage '{name}' needs {', '.join(sorted(missing))}, "
+                "which no earlier stage provides (check the order of the chain)"
+            )
+        available |= cls.provides

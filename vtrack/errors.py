@@ -1,0 +1,29 @@
+"""Errors a user can cause. The CLI prints them as one line and exits non-zero; no traceback."""
+
+from __future__ import annotations
+
+
+class VtrackError(Exception):
+    """A problem with what the user gave us (input, config, options). ``str()`` is the message."""
+
+    exit_code = 2
+
+
+class InputError(VtrackError):
+    """An input that cannot be opened, decoded or understood (video, frames, ground truth)."""
+
+
+class ConfigError(VtrackError):
+    """A configuration or parameter that is unknown, mistyped or impossible."""
+
+
+class OutputError(VtrackError):
+    """An output location that cannot be written."""
+
+
+class PartialInputError(InputError):
+    """The input broke part way; everything before ``frames_done`` was tracked and written."""
+
+    def __init__(self, message: str, frames_done: int) -> None:
+        super().__init__(message)
+        self.frames_done = frames_done

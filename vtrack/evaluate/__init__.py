@@ -1,0 +1,38 @@
+"""Evaluation: ground-truth readers and single-target metrics (OTB conventions).
+
+``groundtruth`` reads OTB/VOT/UAV123/LaSOT single-target files and MOTChallenge files into
+:class:`~vtrack.geometry.Box` lists; ``metrics`` scores a tracker's boxes against them.
+"""
+
+from vtrack.evaluate.groundtruth import parse_box, read_boxes, read_mot, read_mot_detections
+from vtrack.evaluate.metrics import (
+    ERROR_THRESHOLDS,
+    OVERLAP_THRESHOLDS,
+    Summary,
+    auc,
+    frame_scores,
+    mean_center_error,
+    mean_overlap,
+    precision_at,
+    precision_curve,
+    success_curve,
+    summarize,
+)
+
+__all__ = [
+    "ERROR_THRESHOLDS",
+    "OVERLAP_THRESHOLDS",
+    "Summary",
+    "auc",
+    "frame_scores",
+    "mean_center_error",
+    "mean_overlap",
+    "parse_box",
+    "precision_at",
+    "precision_curve",
+    "read_boxes",
+    "read_mot",
+    "read_mot_detections",
+    "success_curve",
+    "summarize",
+]

@@ -1,0 +1,184 @@
+"""Ground-truth readers (OTB, VOT, UAV123/LaSOT, MOTChallenge) and the ``--init`` box parser.
+
+All boxes come back as :class:`~vtrack.geometry.Box` in vtrack's convention: 0-based pixels,
+``(x, y)`` the top-left corner. Frames come back 0-based. Anything a file gets wrong raises
+:class:`~vtrack.errors.InputError` with one line naming the file, the line and the problem.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator
+from os import PathLike
+from pathlib import Path
+
+from vtrack.errors import ConfigError, InputError
+from vtrack.geometry import Box
+
+#: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
+_SEPARATORS = re.compile(r"[,\s]+")
+
+#: MOT16/17/20 ``gt.txt`` class id of a walking/standing pedestrian (column 8).
+MOT_PEDESTRIAN = 1
+
+_QUOTE_MAX = 60
+
+
+def _quote(text: str) -> str:
+    """``repr`` of a line for an error message, shortened so the message stays one short line."""
+    text = text.strip()
+    return repr(text if len(text) <= _QUOTE_MAX else text[:_QUOTE_MAX] + "...")
+
+
+def _tokens(line: str) -> list[str]:
+    return [t for t in _SEPARATORS.split(line) if t]
+
+
+def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
+    """The file's lines without trailing blank lines; InputError if unreadable or empty."""
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read {what} file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: {what} file is not text") from None
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if not lines:
+        raise InputError(f"{path}: {what} file is empty")
+    return lines
+
+
+def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
+    """Read single-target ground truth: one box per frame, ``None`` where the target is absent.
+
+    Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
+    ``x1,y1,...,x4,y4``, which becomes its axis-aligned bounding box. Numbers may be separated by
+    commas, tabs or spaces, mixed freely. A line holding NaN, or whose box has ``w <= 0`` or
+    ``h <= 0`` (which includes the ``0,0,0,0`` UAV123/LaSOT write for out-of-view), means the
+    target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
+    from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
+    4 or 8 numbers, or an infinite number is an error, as are a missing, unreadable or empty file.
+    """
+    if origin not in (0, 1):
+        raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
+    boxes: list[Box | None] = []
+    for number, line in enumerate(_read_lines(path, "ground-truth"), start=1):
+        tokens = _tokens(line)
+        try:
+            values = [float(t) for t in tokens]
+        except ValueError:
+            values = []
+        if len(values) not in (4, 8):
+            raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got {_quote(line)}")
+        if any(math.isnan(v) for v in values):
+            boxes.append(None)
+            continue
+        if not all(math.isfinite(v) for v in values):
+            raise InputError(f"{path} line {number}: infinite coordinate in {_quote(line)}")
+        if len(values) == 8:
+            xs, ys = values[0::2], values[1::2]
+            box = Box(min(xs), min(ys), max(xs) - min(xs), max(ys) - min(ys))
+        else:
+            box = Box(*values)
+        if box.w <= 0 or box.h <= 0:
+            boxes.append(None)
+        else:
+            boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
+    return boxes
+
+
+def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int, list[float]]]:
+    """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file.
+
+    ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
+    finite numbers and the frame an integer >= 1. Further columns are passed through unchecked.
+    """
+    min_columns = layout.count(",") + 1
+    for number, line in enumerate(_read_lines(path, "MOT"), start=1):
+        if not line.strip():
+            continue
+        try:
+            values = [float(t) for t in _tokens(line)]
+        except ValueError:
+            values = []
+        if len(values) < min_columns:
+            raise InputError(
+                f"{path} line {number}: expected at least {min_columns} numbers"
+                f" ({layout},...), got {_quote(line)}"
+            )
+        if not all(math.isfinite(v) for v in values[:min_columns]):
+            raise InputError(f"{path} line {number}: non-finite number in {_quote(line)}")
+        frame = values[0]
+        if not frame.is_integer() or frame < 1:
+            raise InputError(
+                f"{path} line {number}: frame must be an integer >= 1 (MOTChallenge frames are"
+                f" 1-based), got {_quote(line)}"
+            )
+        yield number, int(frame) - 1, values
+
+
+def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
+    """Read a MOTChallenge ground-truth file (``gt.txt``): ``{0-based frame: [(id, box), ...]}``.
+
+    Rows are ``frame,id,x,y,w,h[,consider,class,visibility]`` (MOT16/17/20) or
+    ``frame,id,x,y,w,h,1,-1,-1,-1`` (MOT15 layout, columns 8-10 are world coordinates). Kept
+    rows:
+
+    - column 7 (the "consider" flag) equal to 0 drops the row (MOTChallenge: ignore this box);
+    - only in the 8- and 9-column MOT16/17/20 layout, column 8 is the class: only pedestrians
+      (class 1) are kept; persons on vehicles, static persons, distractors, reflections etc. are
+      dropped. The 10-column layout has no class column and is not filtered;
+    - a row whose box has ``w <= 0`` or ``h <= 0`` is dropped.
+
+    Frames without kept rows are not keys; keys are ascending, rows keep file order. Frame 1 of
+    the file is key 0; boxes are taken as written (MOTChallenge's top-left corner). Blank lines
+    are skipped. For ``det.txt`` files use :func:`read_mot_detections`.
+    """
+    frames: dict[int, list[tuple[int, Box]]] = {}
+    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
+        if not values[1].is_integer():
+            raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
+        if len(values) >= 7 and values[6] == 0:
+            continue
+        if len(values) in (8, 9) and values[7] != MOT_PEDESTRIAN:
+            continue
+        box = Box(*values[2:6])
+        if box.w > 0 and box.h > 0:
+            frames.setdefault(frame, []).append((int(values[1]), box))
+    return dict(sorted(frames.items()))
+
+
+def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, float]]]:
+    """Read MOTChallenge detections (``det.txt``): ``{0-based frame: [(box, confidence), ...]}``.
+
+    Rows are ``frame,id,x,y,w,h,conf,...`` (the id, usually -1, and later columns are ignored).
+    Every detection is kept whatever its confidence (detector scores may be 0 or negative;
+    thresholding is the caller's job) except boxes with ``w <= 0`` or ``h <= 0``. Keys are
+    ascending, detections keep file order; frames without detections are not keys.
+    """
+    frames: dict[int, list[tuple[Box, float]]] = {}
+    for _, frame, values in _mot_rows(path, "frame,id,x,y,w,h,conf"):
+        box = Box(*values[2:6])
+        if box.w > 0 and box.h > 0:
+            frames.setdefault(frame, []).append((box, values[6]))
+    return dict(sorted(frames.items()))
+
+
+def parse_box(text: str) -> Box:
+    """Parse the CLI's ``--init x,y,w,h``: 4 comma-separated finite numbers, ``w, h > 0``.
+
+    Spaces around the numbers are allowed. Raises ConfigError naming ``--init`` otherwise.
+    """
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 4 or not all(math.isfinite(v) for v in values):
+        raise ConfigError(f"--init: expected x,y,w,h, got {text!r}")
+    box = Box(*values)
+    if box.w <= 0 or box.h <= 0:
+        raise ConfigError(f"--init: width and height must be positive, got {text!r}")
+    return box

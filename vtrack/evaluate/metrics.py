@@ -1,0 +1,149 @@
+"""Single-target metrics with the OTB conventions (Wu, Lim, Yang, "Online Object Tracking: A
+Benchmark", CVPR 2013).
+
+Per frame: the overlap (IoU) and the centre error (pixels) between the tracker's box and the
+ground truth. Over a sequence:
+
+- success curve: share of frames with IoU **>** t for t = 0, 0.05, ..., 1 (strictly greater, as
+  the OTB toolkit's ``errCoverage > threshold``); its mean over the 21 thresholds is the AUC;
+- precision curve: share of frames with centre error **<=** t for t = 0, 1, ..., 50 px; the
+  value at 20 px is the usual precision score.
+
+Frames whose ground truth is absent (target out of view, or the ground truth ends before the
+tracker's output) are not evaluated: they count neither for nor against the tracker (the OTB
+toolkit counts them in the denominator; we do not). A frame where the tracker claims no box
+(``lost``) while the target is present has IoU 0 and an infinite centre error, so it fails
+every threshold. Functions over a sequence take the per-frame lists of :func:`frame_scores`,
+``None`` entries included, and return NaN when no frame is evaluated.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TypedDict
+
+import numpy as np
+
+from vtrack.geometry import Box, center_error, iou
+
+#: Success-plot overlap thresholds, OTB ``0:0.05:1`` (i/20 so 0.15, 0.3, ... are exact floats).
+OVERLAP_THRESHOLDS = np.arange(21) / 20
+OVERLAP_THRESHOLDS.setflags(write=False)
+
+#: Precision-plot centre-error thresholds in pixels, OTB ``0:50``.
+ERROR_THRESHOLDS = np.arange(51, dtype=float)
+ERROR_THRESHOLDS.setflags(write=False)
+
+#: The centre-error threshold of the precision score (OTB: 20 px).
+PRECISION_THRESHOLD_PX = 20.0
+
+
+class Summary(TypedDict):
+    """One sequence's scores; metric values are None when no frame is evaluated."""
+
+    frames_evaluated: int
+    mean_overlap: float | None
+    auc: float | None
+    precision20: float | None
+    mean_center_error: float | None
+
+
+def _score(pred: Box | None, gt: Box | None) -> tuple[float | None, float | None]:
+    if gt is None or not gt.is_valid():
+        return None, None
+    if pred is None or not pred.is_valid():
+        return 0.0, math.inf
+    return iou(pred, gt), center_error(pred, gt)
+
+
+def frame_scores(
+    pred: Sequence[Box | None], gt: Sequence[Box | None]
+) -> tuple[list[float | None], list[float | None]]:
+    """Per-frame ``(overlaps, centre_errors)``, one entry per predicted frame.
+
+    An entry is None where the ground truth is absent (None, non-finite or ``w/h <= 0``) or
+    missing (``gt`` shorter than ``pred``); ground truth beyond ``pred`` is not scored. A
+    predicted box that is None or invalid (the tracker claims nothing, e.g. ``lost``) while the
+    target is present scores IoU 0 and centre error ``inf``.
+    """
+    padded = list(gt[: len(pred)]) + [None] * (len(pred) - len(gt))
+    scores = [_score(p, g) for p, g in zip(pred, padded, strict=True)]
+    return [s[0] for s in scores], [s[1] for s in scores]
+
+
+def _evaluated(values: Sequence[float | None]) -> np.ndarray:
+    """The values of evaluated frames (None dropped) as a float array."""
+    array = np.asarray(values, dtype=float)  # None -> NaN
+    return array[~np.isnan(array)]
+
+
+def _rate(passed: np.ndarray) -> np.ndarray:
+    """Share of frames (rows) passing each threshold (columns); NaN when there are no frames."""
+    if len(passed) == 0:
+        return np.full(passed.shape[1], np.nan)
+    return passed.mean(axis=0)
+
+
+def success_curve(overlaps: Sequence[float | None]) -> np.ndarray:
+    """Share of evaluated frames with IoU > t for each t in :data:`OVERLAP_THRESHOLDS` (21)."""
+    return _rate(_evaluated(overlaps)[:, None] > OVERLAP_THRESHOLDS)
+
+
+def auc(overlaps: Sequence[float | None]) -> float:
+    """Area under the success curve, OTB style: the mean of its 21 values."""
+    return float(success_curve(overlaps).mean())
+
+
+def mean_overlap(overlaps: Sequence[float | None]) -> float:
+    """Mean IoU over evaluated frames (lost frames count as 0)."""
+    values = _evaluated(overlaps)
+    return float(values.mean()) if values.size else math.nan
+
+
+def precision_curve(errors: Sequence[float | None], max_px: int = 50) -> np.ndarray:
+    """Share of evaluated frames with centre error <= t for t = 0, 1, ..., ``max_px`` pixels.
+
+    With the default ``max_px`` the thresholds are :data:`ERROR_THRESHOLDS`.
+    """
+    thresholds = np.arange(max_px + 1, dtype=float)
+    return _rate(_evaluated(errors)[:, None] <= thresholds)
+
+
+def precision_at(
+    errors: Sequence[float | None], threshold_px: float = PRECISION_THRESHOLD_PX
+) -> float:
+    """Share of evaluated frames with centre error <= ``threshold_px`` (an error equal counts)."""
+    return float(_rate(_evaluated(errors)[:, None] <= threshold_px)[0])
+
+
+def mean_center_error(errors: Sequence[float | None]) -> float:
+    """Mean centre error in pixels over evaluated frames where the tracker claimed a box.
+
+    Lost frames (infinite error) are left out so the mean stays finite; NaN if there are none.
+    """
+    values = _evaluated(errors)
+    values = values[np.isfinite(values)]
+    return float(values.mean()) if values.size else math.nan
+
+
+def _or_none(value: float) -> float | None:
+    return None if math.isnan(value) else value
+
+
+def summarize(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> Summary:
+    """One sequence's scores for ``vtrack run``'s summary, ``run.json`` and reports.
+
+    Keys: ``frames_evaluated`` (frames with ground truth present), ``mean_overlap``, ``auc``,
+    ``precision20`` (share of frames within 20 px) and ``mean_center_error`` (pixels, over frames
+    where the tracker claimed a box). A value that cannot be computed (no frame evaluated, or no
+    box claimed for the centre error) is None, so the dict is valid JSON as it is.
+    """
+    overlaps, errors = frame_scores(pred, gt)
+    return Summary(
+        frames_evaluated=sum(o is not None for o in overlaps),
+        mean_overlap=_or_none(mean_overlap(overlaps)),
+        auc=_or_none(auc(overlaps)),
+        precision20=_or_none(precision_at(errors)),
+        mean_center_error=_or_none(mean_center_error(errors)),
+    )

@@ -1,0 +1,132 @@
+"""Frames as the readers hand them over: pixels in their native layout, converted per window.
+
+Stages ask a frame for the window they need (``frame.bgr(window)``, ``frame.gray(window)``); only
+that window is converted, so a 1080p frame decoded as yuv420p never becomes a full BGR image on
+the tracking path. Writers ask for ``frame.i420()`` (planar Y, U, V stacked as one
+``(h * 3 // 2, w)`` array), which is free for yuv420p input.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import cv2
+import numpy as np
+
+from vtrack.geometry import Window
+
+
+class Frame(ABC):
+    """One picture of the input. ``index`` is 0-based; ``time_s`` comes from its timestamp."""
+
+    __slots__ = ("index", "time_s", "width", "height")
+
+    def __init__(self, index: int, time_s: float, width: int, height: int) -> None:
+        self.index = index
+        self.time_s = time_s
+        self.width = width
+        self.height = height
+
+    def full_window(self) -> Window:
+        return Window(0, 0, self.width, self.height)
+
+    @abstractmethod
+    def bgr(self, window: Window | None = None) -> np.ndarray:
+        """The window (default: whole frame) as a ``uint8`` BGR array of shape (h, w, 3)."""
+
+    @abstractmethod
+    def gray(self, window: Window | None = None) -> np.ndarray:
+        """The window (default: whole frame) as a ``uint8`` grey (luma) array of shape (h, w)."""
+
+    @abstractmethod
+    def i420(self) -> np.ndarray:
+        """The whole frame as I420 (``(h * 3 // 2, w)`` uint8); width and height must be even."""
+
+
+class BgrFrame(Frame):
+    """A frame held as a BGR array (image files, raw bgr24/rgb24 input, odd-sized video)."""
+
+    __slots__ = ("_bgr",)
+
+    def __init__(self, index: int, time_s: float, bgr: np.ndarray) -> None:
+        super().__init__(index, time_s, bgr.shape[1], bgr.shape[0])
+        self._bgr = bgr
+
+    def bgr(self, window: Window | None = None) -> np.ndarray:
+        return self._bgr if window is None else self._bgr[window.slices]
+
+    def gray(self, window: Window | None = None) -> np.ndarray:
+        return cv2.cvtColor(self.bgr(window), cv2.COLOR_BGR2GRAY)
+
+    def i420(self) -> np.ndarray:
+        return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2YUV_I420)
+
+
+class GrayFrame(Frame):
+    """A single-channel frame (raw gray input, grey image sequences, thermal footage)."""
+
+    __slots__ = ("_gray",)
+
+    def __init__(self, index: int, time_s: float, gray: np.ndarray) -> None:
+        super().__init__(index, time_s, gray.shape[1], gray.shape[0])
+        self._gray = gray
+
+    def bgr(self, window: Window | None = None) -> np.ndarray:
+        return cv2.cvtColor(self.gray(window), cv2.COLOR_GRAY2BGR)
+
+    def gray(self, window: Window | None = None) -> np.ndarray:
+        return self._gray if window is None else self._gray[window.slices]
+
+    def i420(self) -> np.ndarray:
+        out = np.full((self.height * 3 // 2, self.width), 128, np.uint8)
+        out[: self.height] = self._gray
+        return out
+
+
+class I420Frame(Frame):
+    """A frame held as I420 planes (decoded yuv420p video, raw yuv420p input).
+
+    ``planes`` is the ``(h * 3 // 2, w)`` array PyAV's ``to_ndarray(format="yuv420p")`` returns:
+    the Y plane, then U and V each ``(h / 2, w / 2)`` laid out row after row.
+    """
+
+    __slots__ = ("_planes",)
+
+    def __init__(self, index: int, time_s: float, planes: np.ndarray) -> None:
+        super().__init__(index, time_s, planes.shape[1], planes.shape[0] * 2 // 3)
+        self._planes = planes
+
+    def _chroma(self) -> tuple[np.ndarray, np.ndarray]:
+        h, w = self.height, self.width
+        flat = self._planes[h:].reshape(-1)
+        quarter = (h // 2) * (w // 2)
+        u = flat[:quarter].reshape(h // 2, w // 2)
+        v = flat[quarter : 2 * quarter].reshape(h // 2, w // 2)
+        return u, v
+
+    def bgr(self, window: Window | None = None) -> np.ndarray:
+        if window is None:
+            return cv2.cvtColor(self._planes, cv2.COLOR_YUV2BGR_I420)
+        # Convert an even-aligned window on its own, then trim it to the one asked for.
+        ex0, ey0 = window.x0 & ~1, window.y0 & ~1
+        ex1 = min(window.x1 + (window.x1 & 1), self.width)
+        ey1 = min(window.y1 + (window.y1 & 1), self.height)
+        ew, eh = ex1 - ex0, ey1 - ey0
+        u, v = self._chroma()
+        cu = u[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
+        cv = v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
+        packed = np.empty((eh * 3 // 2, ew), np.uint8)
+        packed[:eh] = self._planes[ey0:ey1, ex0:ex1]
+        chroma = packed[eh:].reshape(-1)
+        quarter = (eh // 2) * (ew // 2)
+        chroma[:quarter] = cu.reshape(-1)
+        chroma[quarter:] = cv.reshape(-1)
+        bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
+        return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
+
+    def gray(self, window: Window | None = None) -> np.ndarray:
+        luma = self._planes[: self.height]
+        return luma if window is None else luma[window.slices]
+
+    def i420(self) -> np.ndarray:
+        return self._planes

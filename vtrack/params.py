@@ -1,0 +1,88 @@
+"""Stage parameters, declared once.
+
+Every stage lists its parameters as :class:`Param` objects. That single declaration drives config
+validation (:meth:`Param.validate`), ``--set stage.param=value`` parsing (:meth:`Param.parse`),
+``vtrack stages`` and the generated parameter docs (:meth:`Param.describe`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from vtrack.errors import ConfigError
+
+_TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: its name, Python type, default, one-line help and optional constraints."""
+
+    name: str
+    type: type
+    default: Any
+    help: str
+    choices: tuple[Any, ...] | None = None
+    min: float | None = None
+    max: float | None = None
+
+    def validate(self, value: Any, where: str) -> Any:
+        """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
+
+        ``where`` names the place the value came from, e.g. ``"configs/s0.toml: stage 'kalman'"``.
+        Integers are accepted for numbers; nothing else is converted (a string is not a number).
+        """
+        expected = _TYPE_NAMES[self.type]
+        if self.type is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        wrong_bool = self.type is not bool and isinstance(value, bool)
+        if wrong_bool or not isinstance(value, self.type):
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be a {expected}, got {value!r}"
+            )
+        if self.type is float and not math.isfinite(value):
+            raise ConfigError(f"{where}: parameter '{self.name}' must be finite, got {value!r}")
+        if self.choices is not None and value not in self.choices:
+            options = ", ".join(repr(c) for c in self.choices)
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be one of {options}, got {value!r}"
+            )
+        if self.min is not None and value < self.min:
+            raise ConfigError(f"{where}: parameter '{self.name}' must be >= {self.min}, got {value}")
+        if self.max is not None and value > self.max:
+            raise ConfigError(f"{where}: parameter '{self.name}' must be <= {self.max}, got {value}")
+        return value
+
+    def parse(self, text: str, where: str) -> Any:
+        """Parse a command-line string (``--set``) into this parameter's type, then validate it."""
+        value: Any = text
+        try:
+            if self.type is bool:
+                lowered = text.strip().lower()
+                if lowered not in ("true", "false", "1", "0", "yes", "no", "on", "off"):
+                    raise ValueError(text)
+                value = lowered in ("true", "1", "yes", "on")
+            elif self.type is int:
+                value = int(text)
+            elif self.type is float:
+                value = float(text)
+        except ValueError:
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be a {_TYPE_NAMES[self.type]}, got {text!r}"
+            ) from None
+        return self.validate(value, where)
+
+    def describe(self) -> str:
+        """One line for ``vtrack stages`` and the docs: name, type, default, help, constraints."""
+        extra = []
+        if self.choices is not None:
+            extra.append("one of " + "|".join(str(c) for c in self.choices))
+        if self.min is not None:
+            extra.append(f">= {self.min}")
+        if self.max is not None:
+            extra.append(f"<= {self.max}")
+        default = str(self.default).lower() if self.type is bool else repr(self.default)
+        tail = f" ({'; '.join(extra)})" if extra else ""
+        return f"{self.name} ({_TYPE_NAMES[self.type]}, default {default}): {self.help}{tail}"

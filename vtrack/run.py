@@ -1,0 +1,340 @@
+"""One input end to end: reader -> pipeline -> writers, with ground truth, errors and a summary.
+
+``run(RunRequest(...))`` is what ``vtrack run`` and every ``vtrack batch`` job call. It writes into
+``request.out_dir``:
+
+- ``track.csv`` (single target) or ``tracks.csv`` (multi-target, MOTChallenge order), rows
+  flushed as frames complete;
+- ``annotated.mp4`` unless ``video=False``;
+- ``run.json``, written last and atomically: its ``status`` says whether the run is
+  ``complete``, ``partial`` (the input broke part way; everything before was tracked) or
+  ``interrupted`` (Ctrl-C). A complete-looking file is complete: the CSV and video are written
+  under temporary names and renamed when closed.
+
+User errors raise :class:`~vtrack.errors.VtrackError` before anything is written; an input that
+breaks part way returns a summary with ``status = "partial"`` and the error message.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import sys
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import av
+import cv2
+import numpy as np
+
+from vtrack import __version__
+from vtrack.annotate import Annotator
+from vtrack.config import Config
+from vtrack.errors import ConfigError, InputError, OutputError, PartialInputError
+from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.evaluate.metrics import frame_scores, summarize
+from vtrack.geometry import Box
+from vtrack.io import CsvWriter, RawFormat, Source, VideoWriter, open_source, write_json
+from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.stages.base import LOST, OCCLUDED
+
+#: Columns every single-target ``track.csv`` starts with (DESIGN.md contract).
+TRACK_COLUMNS = (
+    "frame", "time_s", "x", "y", "w", "h", "cx", "cy", "state", "score", "overlap", "center_error",
+)
+#: MOTChallenge order for multi-target ``tracks.csv`` (frames 1-based), then our ``state``.
+MOT_COLUMNS = ("frame", "id", "x", "y", "w", "h", "conf", "wx", "wy", "wz", "state")
+
+STATUS_COMPLETE, STATUS_PARTIAL, STATUS_INTERRUPTED = "complete", "partial", "interrupted"
+
+
+@dataclass
+class RunRequest:
+    """Everything one run needs. Paths are used as given (the CLI resolves defaults)."""
+
+    input: str
+    out_dir: Path
+    config: Config
+    init_box: Box | None = None
+    gt_path: Path | None = None
+    gt_origin: int = 0
+    raw: RawFormat | None = None
+    video: bool = True
+    preset: str = "ultrafast"
+    crf: int = 23
+    seed: int = 0
+    max_frames: int | None = None
+    progress: bool = False
+
+
+@dataclass
+class RunSummary:
+    """The outcome of one run: what ``vtrack run`` prints and ``vtrack batch`` tabulates."""
+
+    input: str
+    out_dir: str
+    config: str
+    status: str
+    frames: int
+    seconds: float
+    fps: float
+    mean_overlap: float | None = None
+    auc: float | None = None
+    precision20: float | None = None
+    frames_occluded: int = 0
+    frames_lost: int = 0
+    error: str | None = None
+    warnings: list[str] = field(default_factory=list)
+    mot: dict[str, Any] | None = None
+
+    def line(self) -> str:
+        """The one-line summary printed at the end of ``vtrack run``."""
+        parts = [f"{self.frames} frames", f"{self.fps:.1f} fps"]
+        if self.mean_overlap is not None:
+            parts.append(f"mean overlap {self.mean_overlap:.3f}")
+            parts.append(f"AUC {self.auc:.3f}")
+            parts.append(f"precision@20 {self.precision20:.3f}")
+        if self.mot:
+            parts += [f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
+                      for k, v in self.mot.items() if k in ("mota", "motp", "idf1", "id_switches")]
+        else:
+            parts.append(f"occluded {self.frames_occluded}")
+            parts.append(f"lost {self.frames_lost}")
+        head = f"{self.input}: " if self.status == STATUS_COMPLETE else f"{self.input} ({self.status}): "
+        return head + ", ".join(parts) + f" -> {self.out_dir}"
+
+
+def versions() -> dict[str, str]:
+    """Versions of everything that shapes a result, for ``run.json``."""
+    return {
+        "vtrack": __version__,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "opencv": cv2.__version__,
+        "pyav": av.__version__,
+        "ffmpeg": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
+        "platform": platform.platform(),
+    }
+
+
+def prepare_out_dir(out_dir: Path) -> None:
+    """Create the output folder or raise OutputError naming it and the reason."""
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        probe = out_dir / ".vtrack-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise OutputError(f"{out_dir}: cannot write output ({exc.strerror or exc})") from None
+
+
+def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
+    if not box.is_valid():
+        raise ConfigError(f"{where}: the box {tuple(box)} is empty (width and height must be > 0)")
+    if box.window(width, height) is None:
+        raise ConfigError(
+            f"{where}: the box {tuple(round(v, 2) for v in box)} lies outside the "
+            f"{width}x{height} frame"
+        )
+
+
+def _limited(frames: Iterator, limit: int | None) -> Iterator:
+    for n, frame in enumerate(frames):
+        if limit is not None and n >= limit:
+            return
+        yield frame
+
+
+def _fmt(value: float | None) -> float | None:
+    return None if value is None or not math.isfinite(value) else value
+
+
+class _SingleTargetRows:
+    """Formats single-target results as ``track.csv`` rows and keeps the boxes for metrics."""
+
+    def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None) -> None:
+        self.columns = TRACK_COLUMNS + extras
+        self.extras = extras
+        self.gt = gt
+        self.boxes: list[Box | None] = []
+
+    def rows(self, result: FrameResult) -> list[list[Any]]:
+        box = result.box
+        self.boxes.append(box)
+        overlap = error = None
+        if self.gt is not None and result.index < len(self.gt):
+            overlaps, errors = frame_scores([box], [self.gt[result.index]])
+            overlap, error = overlaps[0], _fmt(errors[0])
+        geometry = [None] * 6 if box is None else [box.x, box.y, box.w, box.h, box.cx, box.cy]
+        row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
+               overlap, error]
+        return [row + [result.extras.get(column) for column in self.extras]]
+
+
+class _MultiTargetRows:
+    """Formats multi-target results as MOTChallenge rows (1-based frames) plus ``state``."""
+
+    columns = MOT_COLUMNS
+
+    def __init__(self) -> None:
+        self.tracks: dict[int, list[tuple[int, Box]]] = {}
+
+    def rows(self, result: FrameResult) -> list[list[Any]]:
+        rows = []
+        for track in result.tracks:
+            if track.state != "confirmed":
+                continue
+            self.tracks.setdefault(result.index, []).append((track.id, track.box))
+            b = track.box
+            rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
+                         -1, -1, -1, track.state])
+        return rows
+
+
+def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> RunSummary:
+    """Track one input and write its outputs; see the module docstring for what is written.
+
+    ``on_frame(n)`` is called after each frame with the number of frames done (progress bars).
+    """
+    stages = request.config.build()
+    pipeline = Pipeline(stages, seed=request.seed)
+    prepare_out_dir(request.out_dir)
+    gt = read_boxes(request.gt_path, origin=request.gt_origin) if request.gt_path else None
+    init_box = request.init_box
+    if init_box is None and gt is not None and pipeline.needs_init_box:
+        if gt[0] is None:
+            raise InputError(
+                f"{request.gt_path}: the first ground-truth box is empty; give --init x,y,w,h"
+            )
+        init_box = gt[0]
+    if init_box is None and pipeline.needs_init_box:
+        raise ConfigError(
+            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h "
+            "or --gt FILE"
+        )
+
+    source: Source = open_source(request.input, request.raw)
+    info = source.info
+    if init_box is not None:
+        _check_init_box(init_box, info.width, info.height, "--init" if request.init_box else
+                        str(request.gt_path))
+
+    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
+        pipeline.columns, gt)
+    csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
+    csv = CsvWriter(request.out_dir / csv_name, formatter.columns)
+    video = None
+    annotator = None
+    if request.video:
+        video = VideoWriter(request.out_dir / "annotated.mp4", info.width, info.height,
+                            info.fps or 30.0, preset=request.preset, crf=request.crf)
+        annotator = Annotator(info.width, info.height, gt=gt)
+
+    status, error = STATUS_COMPLETE, None
+    states = {OCCLUDED: 0, LOST: 0}
+    frames = 0
+    started = time.perf_counter()
+    try:
+        for result, frame in _results(pipeline, source, init_box, request.max_frames):
+            for row in formatter.rows(result):
+                csv.write(row)
+            if video is not None and annotator is not None:
+                video.write(frame.i420(), lambda planes, r=result: annotator.draw(planes, r),
+                            time_s=frame.time_s)
+            if result.state in states:
+                states[result.state] += 1
+            frames += 1
+            if on_frame is not None:
+                on_frame(frames)
+    except PartialInputError as exc:
+        status, error = STATUS_PARTIAL, str(exc)
+    except KeyboardInterrupt:
+        status, error = STATUS_INTERRUPTED, "interrupted by the user"
+    finally:
+        seconds = time.perf_counter() - started
+        source.close()
+        csv.close()
+        if video is not None:
+            video.close()
+
+    summary = RunSummary(
+        input=request.input,
+        out_dir=str(request.out_dir),
+        config=request.config.name,
+        status=status,
+        frames=frames,
+        seconds=seconds,
+        fps=frames / seconds if seconds > 0 else 0.0,
+        frames_occluded=states[OCCLUDED],
+        frames_lost=states[LOST],
+        error=error,
+    )
+    if frames == 0 and status == STATUS_COMPLETE:
+        status = summary.status = STATUS_PARTIAL
+        summary.error = error = f"{request.input}: no frame could be decoded"
+    metrics: dict[str, Any] = {}
+    if isinstance(formatter, _SingleTargetRows) and gt is not None:
+        metrics = summarize(formatter.boxes, gt)
+        summary.mean_overlap = metrics.get("mean_overlap")
+        summary.auc = metrics.get("auc")
+        summary.precision20 = metrics.get("precision20")
+        if len(gt) != frames and status == STATUS_COMPLETE:
+            side = "fewer" if len(gt) < frames else "more"
+            note = (
+                f"{request.gt_path}: ground truth has {len(gt)} boxes for {frames} frames "
+                f"({side}); " + ("overlap is empty from frame "
+                                 f"{len(gt)} on" if len(gt) < frames else "extra boxes ignored")
+            )
+            summary.warnings.append(note)
+    elif isinstance(formatter, _MultiTargetRows) and request.gt_path is not None:
+        from vtrack.evaluate.mot import mot_summary  # multi-target metrics, only when asked
+
+        summary.mot = mot_summary(formatter.tracks, request.gt_path, frames)
+        metrics = dict(summary.mot)
+
+    record = {
+        "status": status,
+        "error": error,
+        "warnings": summary.warnings,
+        "frames": frames,
+        "input": info.to_dict(),
+        "request": {
+            "input": request.input,
+            "init": list(init_box) if init_box is not None else None,
+            "gt": str(request.gt_path) if request.gt_path else None,
+            "seed": request.seed,
+            "video": request.video,
+            "preset": request.preset,
+            "crf": request.crf,
+            "max_frames": request.max_frames,
+        },
+        "config": request.config.resolved(),
+        "metrics": metrics,
+        "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},
+        "timing": {
+            "seconds": seconds,
+            "fps": summary.fps,
+            "stage_us_per_frame": pipeline.stage_microseconds_per_frame(),
+        },
+        "outputs": [csv_name] + (["annotated.mp4"] if request.video else []),
+        "versions": versions(),
+        "command": sys.argv,
+    }
+    write_json(request.out_dir / "run.json", record)
+    return summary
+
+
+def _results(pipeline: Pipeline, source: Source, init_box: Box | None, limit: int | None):
+    """Pair each pipeline result with its frame (the writer needs the frame's pixels)."""
+    current: list = []
+
+    def frames():
+        for frame in _limited(iter(source), limit):
+            current[:] = [frame]
+            yield frame
+
+    for result in pipeline.track(frames(), init_box):
+        yield result, current[0]
