@@ -92,15 +92,18 @@ def load_config(spec: str | Path | None = None) -> Config:
     """Load a config from a path, or a shipped one by name (default: S0)."""
     spec = DEFAULT_CONFIG if spec is None else spec
     path = Path(spec)
-    if not path.exists():
+    if not path.is_file():
         shipped = shipped_configs()
         if str(spec) in shipped:
             path = shipped[str(spec)]
+        elif path.is_dir():
+            raise ConfigError(f"{spec}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
             raise ConfigError(f"{spec}: config file not found")
         else:
             raise ConfigError(
-                f"{spec}: no such config file or shipped config (shipped: {', '.join(sorted(shipped))})"
+                f"{spec}: no such config file or shipped config "
+                f"(shipped: {', '.join(sorted(shipped))})"
             )
     where = str(spec)
     try:

@@ -50,9 +50,13 @@ class Param:
                 f"{where}: parameter '{self.name}' must be one of {options}, got {value!r}"
             )
         if self.min is not None and value < self.min:
-            raise ConfigError(f"{where}: parameter '{self.name}' must be >= {self.min}, got {value}")
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be >= {self.min}, got {value}"
+            )
         if self.max is not None and value > self.max:
-            raise ConfigError(f"{where}: parameter '{self.name}' must be <= {self.max}, got {value}")
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be <= {self.max}, got {value}"
+            )
         return value
 
     def parse(self, text: str, where: str) -> Any:

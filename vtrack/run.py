@@ -21,7 +21,7 @@ import math
 import platform
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -103,7 +103,8 @@ class RunSummary:
         else:
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
-        head = f"{self.input}: " if self.status == STATUS_COMPLETE else f"{self.input} ({self.status}): "
+        status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
+        head = f"{self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
 
 
@@ -275,7 +276,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
-    metrics: dict[str, Any] = {}
+    metrics: Mapping[str, Any] = {}
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
         metrics = summarize(formatter.boxes, gt)
         summary.mean_overlap = metrics.get("mean_overlap")

@@ -17,7 +17,7 @@ PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "sl
 
 
 def default_out_dir(input_spec: str) -> Path:
-    """``./vtrack-out/<name>/``, where name is the input's file or folder name (stdin: ``stdin``)."""
+    """``./vtrack-out/<name>/``: name is the input's file or folder name (``stdin`` for -)."""
     if input_spec == "-":
         return Path("vtrack-out") / "stdin"
     path = Path(input_spec.rstrip("/"))
@@ -91,7 +91,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     if not quiet:
         click.echo(summary.line())
     if summary.status == STATUS_INTERRUPTED:
-        click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}", err=True)
+        click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
+                   err=True)
         sys.exit(130)
     if summary.status != STATUS_COMPLETE:
         click.echo(f"vtrack: error: {summary.error}; results up to there are in "

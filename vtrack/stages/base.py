@@ -13,7 +13,8 @@ stage class declares, once:
 
 Lifecycle: ``start(ctx)`` once on the first frame (``ctx.box`` holds the initial box, may be None
 for detecting trackers), then ``step(ctx)`` on every later frame. The first frame's output is the
-initial box; later frames' output is ``ctx.box`` / ``ctx.state`` / ``ctx.score`` after the last stage.
+initial box; later frames' output is ``ctx.box`` / ``ctx.state`` / ``ctx.score`` after the
+last stage.
 """
 
 from __future__ import annotations
@@ -116,7 +117,7 @@ class Stage:
     needs_init_box: ClassVar[bool] = True
 
     def __init__(self, **values: Any) -> None:
-        """``values`` are already validated (see :func:`build_stage`); missing ones take defaults."""
+        """``values`` are validated (see :func:`build_stage`); missing ones take defaults."""
         for param in self.params:
             setattr(self, param.name, values.get(param.name, param.default))
 

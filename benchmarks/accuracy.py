@@ -1,0 +1,50 @@
+"""Accuracy of S0 and of OpenCV's CamShift (the tutorial pipeline) on the real sequences.
+
+    python benchmarks/accuracy.py
+
+For every single-target sequence of ``../shared/data`` (or ``$VTRACK_DATA``): AUC (OTB success,
+21 thresholds), precision at 20 px and mean IoU, for the shipped ``s0`` config and the shipped
+``camshift`` config (180-bin hue histogram with mask S>=60, V>=32, full-frame back-projection,
+``cv2.CamShift`` with criteria (10 iterations, 1 px)), both run by the same code path as
+``vtrack run``. Prints a Markdown table with the means. Skips (and says so) when there is no data.
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+
+from common import run_sequence, single_target_sequences
+
+CONFIGS = ("s0", "camshift")
+
+
+def main() -> None:
+    sequences = single_target_sequences()
+    if not sequences:
+        print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
+        return
+    print("Command: `python benchmarks/accuracy.py`\n")
+    header = "| sequence | " + " | ".join(
+        f"{c} AUC | {c} P@20 | {c} mIoU" for c in CONFIGS) + " |"
+    print(header)
+    print("|---|" + "---:|" * (3 * len(CONFIGS)))
+    totals: dict[str, list[tuple[float, float, float]]] = {c: [] for c in CONFIGS}
+    for seq in sequences:
+        cells = []
+        for config in CONFIGS:
+            summary = run_sequence(seq, config)
+            values = (summary.auc or 0.0, summary.precision20 or 0.0, summary.mean_overlap or 0.0)
+            totals[config].append(values)
+            cells += [f"{v:.3f}" for v in values]
+        print(f"| {seq.name} | " + " | ".join(cells) + " |")
+        sys.stdout.flush()
+    means = []
+    for config in CONFIGS:
+        for i in range(3):
+            means.append(f"**{statistics.mean(v[i] for v in totals[config]):.3f}**")
+    print("| **mean** | " + " | ".join(means) + " |")
+
+
+if __name__ == "__main__":
+    main()

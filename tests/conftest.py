@@ -1,0 +1,86 @@
+"""Shared fixtures: synthetic scenes with exact ground truth, in memory or written to files.
+
+``scene_factory(scenario, seed=0, width=320, height=240, frames=90, fps=30.0)`` returns a
+(cached) :class:`vtrack.scenes.Scene`.
+
+``clip_factory(scenario, seed=0, width=320, height=240, frames=90, fps=30.0, fmt="mp4",
+pix_fmt=None)`` writes the scene once per parameter set (per test session) the way
+``vtrack scene`` does and returns a :class:`Clip`: ``clip.path`` (the .mp4, the raw file or the
+OTB image folder), ``clip.gt`` (OTB ground truth), ``clip.mot`` (MOTChallenge ground truth,
+multi-target scenes only, else None) and ``clip.scene``. Videos use x264 ``veryfast`` at crf 23.
+Treat the files as read-only: other tests share them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import Scene, make_scene, write_clip
+
+
+@dataclass(frozen=True)
+class Clip:
+    """A scene written to disk: the clip, its ground-truth files and the scene itself."""
+
+    path: Path
+    gt: Path
+    mot: Path | None
+    scene: Scene
+
+
+SceneFactory = Callable[..., Scene]
+ClipFactory = Callable[..., Clip]
+
+
+@pytest.fixture(scope="session")
+def scene_factory() -> SceneFactory:
+    cache: dict[tuple, Scene] = {}
+
+    def make(
+        scenario: str,
+        seed: int = 0,
+        width: int = 320,
+        height: int = 240,
+        frames: int = 90,
+        fps: float = 30.0,
+    ) -> Scene:
+        key = (scenario, seed, width, height, frames, fps)
+        if key not in cache:
+            cache[key] = make_scene(scenario, seed, width, height, frames, fps)
+        return cache[key]
+
+    return make
+
+
+@pytest.fixture(scope="session")
+def clip_factory(
+    tmp_path_factory: pytest.TempPathFactory, scene_factory: SceneFactory
+) -> ClipFactory:
+    root = tmp_path_factory.mktemp("clips")
+    cache: dict[tuple, Clip] = {}
+    suffixes = {"mp4": ".mp4", "raw": ".raw", "images": ""}
+
+    def make(
+        scenario: str,
+        seed: int = 0,
+        width: int = 320,
+        height: int = 240,
+        frames: int = 90,
+        fps: float = 30.0,
+        fmt: str = "mp4",
+        pix_fmt: str | None = None,
+    ) -> Clip:
+        key = (scenario, seed, width, height, frames, fps, fmt, pix_fmt)
+        if key not in cache:
+            scene = scene_factory(scenario, seed, width, height, frames, fps)
+            name = "_".join(str(part) for part in key if part is not None).replace(".", "p")
+            out = root / f"{name}{suffixes[fmt]}"
+            files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, preset="veryfast")
+            cache[key] = Clip(files.clip, files.groundtruth, files.mot, scene)
+        return cache[key]
+
+    return make

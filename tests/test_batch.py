@@ -1,0 +1,208 @@
+"""`vtrack batch` end to end on small generated clips: discovery, failures, resume, worker death,
+Dask, and the one-line errors."""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import av
+import cv2
+import pytest
+from click.testing import CliRunner, Result
+
+from vtrack.batch import CRASH_ENV, SUMMARY_COLUMNS, find_inputs
+from vtrack.cli import main
+from vtrack.scenes import make_scene, write_groundtruth
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+W, H, FRAMES = 160, 120, 48
+CONFIGS = ("s0", "camshift")
+
+
+def batch(*args: str) -> Result:
+    return CliRunner().invoke(main, ["batch", *args], catch_exceptions=False)
+
+
+def summary(out: Path) -> dict[tuple[str, str], dict[str, str]]:
+    with (out / "summary.csv").open(newline="") as handle:
+        reader = csv.DictReader(handle)
+        assert tuple(reader.fieldnames or ()) == SUMMARY_COLUMNS
+        rows = list(reader)
+    keyed = {(row["input"], row["config"]): row for row in rows}
+    assert len(keyed) == len(rows), "one row per input x config"
+    return keyed
+
+
+def write_faststart_mp4(path: Path, frames: int) -> None:
+    """An H.264 mp4 with its index first (movflags=faststart): cut short, it still opens."""
+    scene = make_scene("smooth", 1, W, H, frames, 30)
+    with av.open(str(path), "w", options={"movflags": "faststart"}) as container:
+        stream = container.add_stream("libx264", rate=30, options={"preset": "ultrafast"})
+        stream.width, stream.height, stream.pix_fmt = W, H, "yuv420p"
+        for index, bgr in enumerate(scene.frames()):
+            frame = av.VideoFrame.from_ndarray(cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420),
+                                               format="yuv420p")
+            frame.pts = index
+            container.mux(stream.encode(frame))
+        container.mux(stream.encode(None))
+    write_groundtruth(scene, path.with_suffix(".gt.txt"))
+
+
+def add_clip(folder: Path, clip_factory: ClipFactory, scenario: str, name: str,
+             fmt: str = "mp4") -> None:
+    clip = clip_factory(scenario, width=W, height=H, frames=FRAMES, fmt=fmt)
+    if fmt == "images":
+        shutil.copytree(clip.path, folder / name)
+    else:
+        shutil.copy(clip.path, folder / f"{name}.mp4")
+        shutil.copy(clip.gt, folder / f"{name}.gt.txt")
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory: pytest.TempPathFactory, clip_factory: ClipFactory) -> Path:
+    """Good clips (video + gt, OTB folder, video with only an init box), a truncated mp4 and a
+    text file named .mp4."""
+    folder = tmp_path_factory.mktemp("inputs")
+    add_clip(folder, clip_factory, "smooth", "smooth")
+    add_clip(folder, clip_factory, "jump", "jump")
+    add_clip(folder, clip_factory, "smooth", "seq", fmt="images")
+    add_clip(folder, clip_factory, "distractor", "nogt")
+    gt = folder / "nogt.gt.txt"
+    (folder / "nogt.init.txt").write_text(gt.read_text().splitlines()[0] + "\n")
+    gt.unlink()
+    write_faststart_mp4(folder / "truncated.mp4", FRAMES)
+    data = (folder / "truncated.mp4").read_bytes()
+    (folder / "truncated.mp4").write_bytes(data[: len(data) * 6 // 10])
+    (folder / "notvideo.mp4").write_text("this is not a video\n")
+    shutil.copy(folder / "smooth.gt.txt", folder / "notvideo.gt.txt")
+    (folder / "README.txt").write_text("not an input\n")
+    return folder
+
+
+def test_find_inputs_pairs_ground_truth_and_origin(inputs: Path) -> None:
+    found = {item.name: item for item in find_inputs(inputs)}
+    assert sorted(found) == ["jump", "nogt", "notvideo", "seq", "smooth", "truncated"]
+    assert found["smooth"].groundtruth == inputs / "smooth.gt.txt"
+    assert found["smooth"].gt_origin == 0
+    assert found["seq"].groundtruth == inputs / "seq" / "groundtruth_rect.txt"
+    assert found["seq"].gt_origin == 1  # OTB: 1-based boxes inside sequence folders
+    assert found["nogt"].groundtruth is None
+    assert found["nogt"].init == inputs / "nogt.init.txt"
+    assert {i.gt_origin for i in find_inputs(inputs, gt_origin=0)} == {0}
+
+
+def test_batch_records_failures_resumes_and_forces(inputs: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = [str(inputs), "-c", CONFIGS[0], "-c", CONFIGS[1], "--jobs", "2", "--no-video",
+            "--out", str(out)]
+    first = batch(*args)
+    assert first.exit_code == 1, first.output
+    rows = summary(out)
+    names = ("jump", "nogt", "notvideo", "seq", "smooth", "truncated")
+    assert set(rows) == {(n, c) for n in names for c in CONFIGS}
+    good = [(n, c) for n in ("jump", "nogt", "seq", "smooth") for c in CONFIGS]
+    for key in good:
+        assert rows[key]["status"] == "complete", rows[key]
+        assert (out / key[0] / key[1] / "track.csv").is_file()
+        assert not (out / key[0] / key[1] / "annotated.mp4").exists()
+    assert rows[("smooth", "s0")]["auc"] != ""
+    assert rows[("nogt", "s0")]["auc"] == "" and rows[("nogt", "s0")]["frames"] == str(FRAMES)
+    for config in CONFIGS:
+        assert rows[("notvideo", config)]["status"] == "failed"
+        assert "notvideo.mp4" in rows[("notvideo", config)]["error"]
+        assert rows[("truncated", config)]["status"] == "partial"
+        assert "truncated.mp4" in rows[("truncated", config)]["error"]
+    assert "notvideo" in first.stderr and "Traceback" not in first.stderr
+
+    stamps = {key: (out / key[0] / key[1] / "run.json").stat().st_mtime_ns for key in good}
+    first_rows = rows
+    second = batch(*args)
+    assert second.exit_code == 1
+    rows = summary(out)
+    for key in good:
+        assert rows[key]["status"] == "skipped"
+        assert rows[key]["auc"] == first_rows[key]["auc"]
+        assert (out / key[0] / key[1] / "run.json").stat().st_mtime_ns == stamps[key]
+    assert rows[("truncated", "s0")]["status"] == "partial"  # not complete: run again
+
+    third = batch(*args, "--force")
+    rows = summary(out)
+    for key in good:
+        assert rows[key]["status"] == "complete"
+        assert (out / key[0] / key[1] / "run.json").stat().st_mtime_ns != stamps[key]
+    assert third.exit_code == 1
+
+
+def test_a_killed_worker_is_retried_without_duplicates(inputs: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("smooth", "jump"):
+        shutil.copy(inputs / f"{name}.mp4", folder)
+        shutil.copy(inputs / f"{name}.gt.txt", folder)
+    out = tmp_path / "out"
+    env = {**os.environ, CRASH_ENV: "smooth"}
+    result = subprocess.run(
+        [sys.executable, "-m", "vtrack", "batch", str(folder), "--jobs", "2", "--no-video",
+         "--out", str(out)], capture_output=True, text=True, env=env, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+    rows = summary(out)
+    assert set(rows) == {("smooth", "s0"), ("jump", "s0")}
+    assert all(row["status"] == "complete" for row in rows.values())
+    assert "attempt 2" in result.stdout  # the crash hook did kill the first attempt
+
+
+def test_dask_gives_the_same_tracks_as_the_local_pool(inputs: Path, tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("smooth", "jump"):
+        shutil.copy(inputs / f"{name}.mp4", folder)
+        shutil.copy(inputs / f"{name}.gt.txt", folder)
+    shutil.copytree(inputs / "seq", folder / "seq")
+    local = batch(str(folder), "--jobs", "2", "--no-video", "--out", str(tmp_path / "local"))
+    assert local.exit_code == 0, local.output
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        remote = batch(str(folder), "--scheduler", cluster.scheduler_address, "--no-video",
+                       "--out", str(tmp_path / "dask"))
+    assert remote.exit_code == 0, remote.output
+    assert summary(tmp_path / "dask").keys() == summary(tmp_path / "local").keys()
+    for name in ("smooth", "jump", "seq"):
+        tracks = [(tmp_path / side / name / "s0" / "track.csv").read_text()
+                  for side in ("local", "dask")]
+        assert tracks[0] == tracks[1]
+
+
+def one_error_line(result: Result) -> str:
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
+    return lines[0]
+
+
+def test_a_folder_without_inputs_is_one_line(tmp_path: Path) -> None:
+    (tmp_path / "notes.txt").write_text("nothing to track\n")
+    line = one_error_line(batch(str(tmp_path)))
+    assert str(tmp_path) in line and "no inputs" in line
+
+
+def test_an_unreachable_scheduler_is_one_line(inputs: Path, tmp_path: Path) -> None:
+    line = one_error_line(batch(str(inputs), "--scheduler", "tcp://127.0.0.1:9",
+                                "--scheduler-timeout", "1", "--out", str(tmp_path)))
+    assert "tcp://127.0.0.1:9" in line and "cannot reach" in line
+
+
+def test_scheduler_without_dask_says_how_to_install(inputs: Path, tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    line = one_error_line(batch(str(inputs), "--scheduler", "tcp://127.0.0.1:8786",
+                                "--out", str(tmp_path)))
+    assert "pip install 'vtrack[dask]'" in line

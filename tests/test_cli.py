@@ -1,0 +1,310 @@
+"""`vtrack run` end to end as a user runs it: real generated video in, real files out.
+
+Every case runs the installed command (``python -m vtrack``) in a subprocess, so what is checked
+is exactly what a user sees: exit codes, the one-line errors on stderr, and the files left behind.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import av
+import numpy as np
+import pytest
+from vtrack.scenes import (
+    make_scene,
+    write_groundtruth,
+    write_image_sequence,
+    write_raw,
+    write_video,
+)
+
+from vtrack.geometry import Box, iou
+from vtrack.run import TRACK_COLUMNS
+
+W, H, FPS = 320, 240, 30
+
+
+def vtrack(*args: str, stdin: bytes | None = None, cwd: Path | None = None,
+           timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], input=stdin,
+                          capture_output=True, cwd=cwd, timeout=timeout, check=False)
+
+
+def read_csv(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def decoded_frames(path: Path) -> tuple[int, int, int]:
+    with av.open(str(path)) as container:
+        frames = [f for f in container.decode(video=0)]
+    return len(frames), frames[0].width, frames[0].height
+
+
+def assert_one_line_error(result: subprocess.CompletedProcess, *needles: str) -> str:
+    """Non-zero exit, no traceback, and the error line names every needle."""
+    stderr = result.stderr.decode()
+    assert result.returncode != 0, stderr
+    assert "Traceback" not in stderr, stderr
+    errors = [line for line in stderr.splitlines() if line.startswith(("vtrack: error", "Error"))]
+    assert len(errors) == 1, stderr
+    for needle in needles:
+        assert needle in errors[0], (needle, errors[0])
+    return errors[0]
+
+
+@pytest.fixture(scope="module")
+def occlusion_clip(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, object]:
+    folder = tmp_path_factory.mktemp("occlusion")
+    scene = make_scene("occlusion", seed=3, width=W, height=H, frames=120, fps=FPS)
+    clip, gt = folder / "occ.mp4", folder / "occ.gt.txt"
+    write_video(scene, clip)
+    write_groundtruth(scene, gt)
+    return clip, gt, scene
+
+
+@pytest.fixture(scope="module")
+def smooth_scene():
+    return make_scene("smooth", seed=5, width=W, height=H, frames=60, fps=FPS)
+
+
+def test_run_video_with_ground_truth(occlusion_clip, tmp_path: Path) -> None:
+    clip, gt, scene = occlusion_clip
+    out = tmp_path / "out"
+    result = vtrack("run", str(clip), "--gt", str(gt), "--out", str(out))
+    assert result.returncode == 0, result.stderr.decode()
+    summary = result.stdout.decode().strip().splitlines()[-1]
+    assert "120 frames" in summary and "mean overlap" in summary and str(out) in summary
+
+    rows = read_csv(out / "track.csv")
+    assert len(rows) == 120
+    assert tuple(rows[0])[: len(TRACK_COLUMNS)] == TRACK_COLUMNS
+    assert {"pred_cx", "pred_cy", "iterations", "bp_mass"} <= set(rows[0])
+    assert [int(r["frame"]) for r in rows] == list(range(120))
+    assert float(rows[1]["time_s"]) == pytest.approx(1 / FPS, abs=1e-3)
+
+    # S0 stays on the target where it is visible, and says "occluded" on the hidden span.
+    visible = [i for i, v in enumerate(scene.visibility) if v > 0.5]
+    overlaps = [float(rows[i]["overlap"]) for i in visible]
+    assert np.mean(overlaps) >= 0.7
+    start, end = scene.events["occluded"]
+    occluded = [i for i, r in enumerate(rows) if r["state"] == "occluded"]
+    assert occluded, "no frame reported occluded"
+    assert abs(occluded[0] - start) <= 3 and abs(occluded[-1] + 1 - end) <= 3
+
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "complete" and record["frames"] == 120
+    assert [s["name"] for s in record["config"]["stages"]] == [
+        "hue", "backproject", "meanshift", "occlusion", "kalman"]
+    assert record["input"]["width"] == W and record["input"]["height"] == H
+    assert set(record["timing"]["stage_us_per_frame"]) == {
+        "hue", "backproject", "meanshift", "occlusion", "kalman"}
+    assert record["metrics"]["auc"] == pytest.approx(
+        np.mean([np.mean(np.array(overlaps_all(rows)) > t) for t in np.arange(21) / 20]),
+        abs=1e-3)
+    assert {"vtrack", "pyav", "opencv", "numpy"} <= set(record["versions"])
+
+    assert decoded_frames(out / "annotated.mp4") == (120, W, H)
+    assert not list(out.glob("*.part")) and not list(out.glob(".*tmp*"))
+
+
+def overlaps_all(rows: list[dict[str, str]]) -> list[float]:
+    return [float(r["overlap"]) for r in rows if r["overlap"] != ""]
+
+
+def test_run_image_folder_and_set_override(smooth_scene, tmp_path: Path) -> None:
+    folder = tmp_path / "seq"
+    write_image_sequence(smooth_scene, folder)
+    out = tmp_path / "out"
+    gt_file = next(folder.glob("groundtruth*.txt"))
+    result = vtrack("run", str(folder), "--gt", str(gt_file), "--out", str(out), "--no-video",
+                    "--set", "meanshift.iterations=5")
+    assert result.returncode == 0, result.stderr.decode()
+    rows = read_csv(out / "track.csv")
+    assert len(rows) == 60
+    assert np.mean(overlaps_all(rows)) >= 0.7
+    assert max(int(r["iterations"]) for r in rows) > 1
+    record = json.loads((out / "run.json").read_text())
+    meanshift = next(s for s in record["config"]["stages"] if s["name"] == "meanshift")
+    assert meanshift["iterations"] == 5
+    assert not (out / "annotated.mp4").exists()
+
+
+def test_raw_stdin_end_to_end(smooth_scene, tmp_path: Path) -> None:
+    raw = tmp_path / "frames.bgr"
+    write_raw(smooth_scene, raw, "bgr24")
+    box = smooth_scene.boxes[0]
+    out = tmp_path / "out"
+    result = vtrack("run", "-", "--raw", f"{W}x{H}", "--pix-fmt", "bgr24", "--fps", "30",
+                    "--init", ",".join(f"{v:.2f}" for v in box), "--out", str(out),
+                    stdin=raw.read_bytes())
+    assert result.returncode == 0, result.stderr.decode()
+    rows = read_csv(out / "track.csv")
+    assert len(rows) == 60
+    tracked = [Box(*(float(r[k]) for k in "xywh")) for r in rows]
+    assert np.mean([iou(a, b) for a, b in zip(tracked, smooth_scene.boxes, strict=True)]) >= 0.7
+    assert decoded_frames(out / "annotated.mp4") == (60, W, H)
+
+
+def test_stages_lists_every_parameter() -> None:
+    from vtrack.stages.base import all_stages
+
+    result = vtrack("stages")
+    assert result.returncode == 0
+    text = result.stdout.decode()
+    for name, cls in all_stages().items():
+        assert f"{name}:" in text
+        for param in cls.params:
+            assert param.describe() in text
+
+
+# --- bad input: one clear line, non-zero exit, valid outputs -----------------------------------
+
+
+def test_missing_input(tmp_path: Path) -> None:
+    result = vtrack("run", str(tmp_path / "nope.mp4"), "--init", "1,1,5,5", "--out",
+                    str(tmp_path / "o"))
+    assert_one_line_error(result, "nope.mp4")
+
+
+def test_not_a_video(tmp_path: Path) -> None:
+    fake = tmp_path / "notes.mp4"
+    fake.write_text("this is not a video\n" * 50)
+    result = vtrack("run", str(fake), "--init", "1,1,5,5", "--out", str(tmp_path / "o"))
+    assert_one_line_error(result, "notes.mp4")
+
+
+def test_truncated_video_tracks_what_decodes(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=90, fps=FPS)
+    clip = tmp_path / "clip.ts"
+    write_video(scene, clip)
+    data = clip.read_bytes()
+    cut = tmp_path / "cut.ts"
+    cut.write_bytes(data[: len(data) // 2])
+    out = tmp_path / "out"
+    result = vtrack("run", str(cut), "--init", ",".join(map(str, scene.boxes[0])), "--out",
+                    str(out))
+    line = assert_one_line_error(result, "cut.ts", "frame")
+    assert result.returncode == 1, line
+    rows = read_csv(out / "track.csv")
+    assert 0 < len(rows) < 90
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "partial" and record["frames"] == len(rows)
+    assert decoded_frames(out / "annotated.mp4")[0] == len(rows)
+
+
+def test_raw_stream_with_partial_frame(smooth_scene, tmp_path: Path) -> None:
+    raw = tmp_path / "frames.bgr"
+    write_raw(smooth_scene, raw, "bgr24")
+    data = raw.read_bytes()[: W * H * 3 * 10 + 1234]
+    out = tmp_path / "out"
+    result = vtrack("run", "-", "--raw", f"{W}x{H}", "--fps", "30", "--init",
+                    ",".join(map(str, smooth_scene.boxes[0])), "--out", str(out), stdin=data)
+    assert_one_line_error(result, "stdin", "1234")
+    assert len(read_csv(out / "track.csv")) == 10
+
+
+@pytest.mark.parametrize(("init", "needle"), [
+    ("400,300,20,20", "outside"),
+    ("10,10,0,5", "--init"),
+    ("10,10,abc", "--init"),
+    ("", "--init"),
+])
+def test_bad_init(occlusion_clip, tmp_path: Path, init: str, needle: str) -> None:
+    clip, _, _ = occlusion_clip
+    result = vtrack("run", str(clip), "--init", init, "--out", str(tmp_path / "o"))
+    assert_one_line_error(result, needle)
+
+
+def test_ground_truth_shorter_and_longer(occlusion_clip, tmp_path: Path) -> None:
+    clip, gt, _ = occlusion_clip
+    lines = gt.read_text().splitlines()
+    short = tmp_path / "short.txt"
+    short.write_text("\n".join(lines[:100]) + "\n")
+    result = vtrack("run", str(clip), "--gt", str(short), "--out", str(tmp_path / "a"),
+                    "--no-video")
+    assert result.returncode == 0
+    assert "warning" in result.stderr.decode() and "short.txt" in result.stderr.decode()
+    rows = read_csv(tmp_path / "a" / "track.csv")
+    assert rows[99]["overlap"] != "" and rows[100]["overlap"] == "" and len(rows) == 120
+    long = tmp_path / "long.txt"
+    long.write_text("\n".join(lines + lines[:10]) + "\n")
+    result = vtrack("run", str(clip), "--gt", str(long), "--out", str(tmp_path / "b"),
+                    "--no-video")
+    assert result.returncode == 0 and "long.txt" in result.stderr.decode()
+
+
+def test_bad_ground_truth_file(occlusion_clip, tmp_path: Path) -> None:
+    clip, _, _ = occlusion_clip
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1,2,3,4\n5,6,seven,8\n")
+    result = vtrack("run", str(clip), "--gt", str(bad), "--out", str(tmp_path / "o"))
+    assert_one_line_error(result, "bad.txt", "2")
+
+
+@pytest.mark.parametrize(("body", "needles"), [
+    ('[[stage]]\nname = "huee"\n', ("cfg.toml", "huee")),
+    ('[[stage]]\nname = "hue"\nbinz = 3\n', ("cfg.toml", "hue", "binz")),
+    ('[[stage]]\nname = "meanshift"\niterations = "many"\n',
+     ("cfg.toml", "meanshift", "iterations")),
+    ('[[stage]\nname = "hue"\n', ("cfg.toml", "TOML")),
+])
+def test_bad_config(occlusion_clip, tmp_path: Path, body: str, needles: tuple[str, ...]) -> None:
+    clip, gt, _ = occlusion_clip
+    config = tmp_path / "cfg.toml"
+    config.write_text(body)
+    result = vtrack("run", str(clip), "--gt", str(gt), "--config", str(config), "--out",
+                    str(tmp_path / "o"))
+    assert_one_line_error(result, *needles)
+
+
+def test_bad_set_override(occlusion_clip, tmp_path: Path) -> None:
+    clip, gt, _ = occlusion_clip
+    result = vtrack("run", str(clip), "--gt", str(gt), "--set", "kalman.q=lots", "--out",
+                    str(tmp_path / "o"))
+    assert_one_line_error(result, "kalman", "q")
+
+
+def test_unwritable_output(occlusion_clip, tmp_path: Path) -> None:
+    clip, gt, _ = occlusion_clip
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    result = vtrack("run", str(clip), "--gt", str(gt), "--out", str(blocker / "out"))
+    assert_one_line_error(result, str(blocker / "out"))
+
+
+def test_ctrl_c_leaves_valid_partial_outputs(smooth_scene, tmp_path: Path) -> None:
+    frames = [f for f in smooth_scene.frames()]
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vtrack", "run", "-", "--raw", f"{W}x{H}", "--fps", "30",
+         "--init", ",".join(map(str, smooth_scene.boxes[0])), "--out", str(out)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdin is not None
+    for frame in frames[:30]:
+        process.stdin.write(frame.tobytes())
+    process.stdin.flush()
+    deadline = time.monotonic() + 60
+    partial = list(out.glob("track.csv*"))
+    while time.monotonic() < deadline:
+        partial = list(out.glob("track.csv*"))
+        if partial and len(partial[0].read_text().splitlines()) >= 20:
+            break
+        time.sleep(0.1)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr.decode()
+    assert "Traceback" not in stderr.decode()
+    rows = read_csv(out / "track.csv")
+    assert 20 <= len(rows) <= 30
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "interrupted" and record["frames"] == len(rows)
+    assert decoded_frames(out / "annotated.mp4")[0] == len(rows)
+

@@ -1,0 +1,522 @@
+"""Readers and writers: real files written with PyAV/NumPy, read back and compared pixel-wise."""
+
+from __future__ import annotations
+
+import csv
+import fcntl
+import json
+import os
+import sys
+import threading
+from fractions import Fraction
+from pathlib import Path
+
+import av
+import cv2
+import numpy as np
+import pytest
+
+from vtrack.annotate import Annotator
+from vtrack.errors import ConfigError, InputError, OutputError, PartialInputError
+from vtrack.frame import BgrFrame, GrayFrame, I420Frame
+from vtrack.geometry import Box, Window
+from vtrack.io import (
+    CsvWriter,
+    RawFormat,
+    VideoWriter,
+    open_source,
+    prepare_output_dir,
+    write_json,
+)
+from vtrack.io.files import temp_path
+from vtrack.io.threads import Prefetcher
+from vtrack.pipeline import FrameResult
+
+W, H = 160, 120
+
+
+def pictures(n: int, width: int = W, height: int = H, seed: int = 0) -> list[np.ndarray]:
+    """``n`` distinct BGR pictures: smooth texture plus a bright square moving right."""
+    rng = np.random.default_rng(seed)
+    base = cv2.GaussianBlur(rng.integers(0, 256, (height, width, 3), np.uint8), (0, 0), 2)
+    out = []
+    for i in range(n):
+        img = base.copy()
+        x = (4 * i) % (width - 20)
+        img[height // 3 : height // 3 + 20, x : x + 20] = (40, 200, 240)
+        out.append(img)
+    return out
+
+
+def write_video(
+    path: Path,
+    frames: list[np.ndarray],
+    times: list[float] | None = None,
+    fmt: str | None = None,
+    options: dict[str, str] | None = None,
+    rotation: int = 0,
+) -> Path:
+    """Encode BGR pictures with PyAV (x264, ms time base when ``times`` are given)."""
+    with av.open(str(path), "w", format=fmt, options=options or {}) as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], \
+            "yuv420p"
+        stream.options = {"preset": "ultrafast", "crf": "18"}
+        if times is not None:
+            stream.codec_context.time_base = stream.time_base = Fraction(1, 1000)
+        if rotation:
+            stream.set_display_rotation(rotation)
+        for i, img in enumerate(frames):
+            frame = av.VideoFrame.from_ndarray(img, format="bgr24")
+            frame.pts = i if times is None else round(times[i] * 1000)
+            for packet in stream.encode(frame):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    return path
+
+
+def decode_all(path: Path) -> list[np.ndarray]:
+    with av.open(str(path)) as container:
+        return [f.to_ndarray(format="yuv420p") for f in container.decode(video=0)]
+
+
+def read_all(spec: str, **kwargs) -> list:
+    with open_source(spec, **kwargs) as source:
+        return list(source)
+
+
+def i420(bgr: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420)
+
+
+# --- video files ------------------------------------------------------------------------------
+
+
+def test_video_writer_output_decodes_to_same_count_and_size(tmp_path):
+    out = tmp_path / "annotated.mp4"
+    with VideoWriter(out, W, H, 30.0) as writer:
+        for img in pictures(12):
+            writer.write(i420(img))
+    assert out.exists() and not temp_path(out).exists()
+    decoded = decode_all(out)
+    assert len(decoded) == 12
+    assert decoded[0].shape == (H * 3 // 2, W)
+    with open_source(str(out)) as source:
+        info = source.info
+        frames = list(source)
+    assert (info.kind, info.name, info.width, info.height) == ("video", "annotated", W, H)
+    assert info.fps == pytest.approx(30.0) and info.frame_count == 12
+    assert info.codec == "h264" and info.pix_fmt == "yuv420p" and info.rotation == 0
+    assert json.dumps(info.to_dict())
+    assert [f.index for f in frames] == list(range(12))
+    assert all(isinstance(f, I420Frame) for f in frames)
+    assert [f.time_s for f in frames] == pytest.approx([i / 30 for i in range(12)])
+    # The encoded pictures are close to the originals (lossy, crf 23).
+    assert np.abs(frames[5].bgr().astype(int) - pictures(12)[5]).mean() < 6
+
+
+def test_i420_windows_of_decoded_frame_match_full_conversion(tmp_path):
+    clip = write_video(tmp_path / "clip.mp4", pictures(3))
+    frame = read_all(str(clip))[1]
+    assert isinstance(frame, I420Frame)
+    full_bgr, full_gray = frame.bgr(), frame.gray()
+    np.testing.assert_array_equal(full_bgr, cv2.cvtColor(frame.i420(), cv2.COLOR_YUV2BGR_I420))
+    for window in (Window(0, 0, W, H), Window(3, 5, 41, 38), Window(10, 11, 12, 14),
+                   Window(W - 7, H - 9, W, H)):
+        np.testing.assert_array_equal(frame.bgr(window), full_bgr[window.slices])
+        np.testing.assert_array_equal(frame.gray(window), full_gray[window.slices])
+
+
+def test_variable_frame_rate_timestamps(tmp_path):
+    times = [0.0, 0.040, 0.050, 0.200, 0.210, 0.500, 0.533, 1.000]
+    clip = write_video(tmp_path / "vfr.mp4", pictures(len(times)), times=times)
+    frames = read_all(str(clip))
+    assert [f.time_s for f in frames] == pytest.approx(times, abs=1e-6)
+    # The writer keeps the input's timing when given the frames' times.
+    out = tmp_path / "copy.mp4"
+    with VideoWriter(out, W, H, 30.0) as writer:
+        for frame in frames:
+            writer.write(frame)
+    assert [f.time_s for f in read_all(str(out))] == pytest.approx(times, abs=1e-4)
+
+
+def test_display_rotation_is_applied(tmp_path):
+    img = np.full((H, W, 3), 60, np.uint8)
+    img[:16, :16] = 250  # bright marker top-left
+    clip = write_video(tmp_path / "phone.mp4", [img] * 3, rotation=90)
+    with open_source(str(clip)) as source:
+        assert (source.info.rotation, source.info.width, source.info.height) == (90, H, W)
+        frame = next(iter(source))
+    assert (frame.width, frame.height) == (H, W)
+    luma = frame.gray()
+    # Turned 90 degrees counter-clockwise: the top-left marker is now bottom-left.
+    assert luma[-12:, :12].mean() > 200 and luma[:12, :12].mean() < 100
+    assert frame.bgr().shape == (W, H, 3)
+
+
+def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
+    frames = pictures(40)
+    for name, kwargs in (("fast.mp4", {"options": {"movflags": "faststart"}}),
+                         ("clip.mkv", {})):
+        whole = write_video(tmp_path / name, frames, **kwargs)
+        cut = tmp_path / f"cut_{name}"
+        data = whole.read_bytes()
+        cut.write_bytes(data[: len(data) // 2])
+        got = []
+        with open_source(str(cut)) as source, pytest.raises(PartialInputError) as err:
+            for frame in source:
+                got.append(frame.index)
+        assert 0 < err.value.frames_done < 40
+        assert got == list(range(err.value.frames_done))
+        message = str(err.value)
+        assert str(cut) in message and f"stopped at frame {err.value.frames_done}" in message
+        assert "\n" not in message
+
+
+def test_corrupt_packets_mid_stream_are_partial(tmp_path):
+    whole = write_video(tmp_path / "clip.mp4", pictures(40), options={"movflags": "faststart"})
+    data = bytearray(whole.read_bytes())
+    mid = len(data) // 2
+    data[mid : mid + 3000] = np.random.default_rng(1).integers(0, 256, 3000, np.uint8).tobytes()
+    broken = tmp_path / "broken.mp4"
+    broken.write_bytes(bytes(data))
+    count = 0
+    with open_source(str(broken)) as source, pytest.raises(PartialInputError) as err:
+        for _ in source:
+            count += 1
+    assert 0 < count == err.value.frames_done < 40
+    assert str(err.value).startswith(f"{broken}: decoding stopped at frame {count} (")
+
+
+def test_truncated_mp4_with_index_at_the_end_cannot_be_opened(tmp_path):
+    whole = write_video(tmp_path / "clip.mp4", pictures(20))
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])
+    with pytest.raises(InputError, match=r"cut\.mp4: not a video FFmpeg can decode"):
+        open_source(str(cut))
+
+
+def test_bad_inputs_raise_input_error_naming_them(tmp_path):
+    missing = tmp_path / "clip.mp4"
+    with pytest.raises(InputError, match=r"clip\.mp4: no such file"):
+        open_source(str(missing))
+    text = tmp_path / "notes.mp4"
+    text.write_text("this is not a video\n" * 50)
+    with pytest.raises(InputError) as err:
+        open_source(str(text))
+    assert str(err.value).startswith(f"{text}: not a video FFmpeg can decode (")
+    audio = tmp_path / "sound.m4a"
+    with av.open(str(audio), "w") as out:
+        stream = out.add_stream("aac", rate=8000)
+        samples = av.AudioFrame.from_ndarray(np.zeros((1, 1024), np.float32), format="fltp",
+                                             layout="mono")
+        samples.sample_rate, samples.pts = 8000, 0
+        for packet in [*stream.encode(samples), *stream.encode()]:
+            out.mux(packet)
+    with pytest.raises(InputError, match=r"sound\.m4a: no video stream \(streams: audio\)"):
+        open_source(str(audio))
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(InputError, match=r"empty: no images"):
+        open_source(str(empty))
+    with pytest.raises(ConfigError, match="--raw"):
+        open_source("-")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads files regardless of permissions")
+def test_unreadable_file_raises_input_error(tmp_path):
+    clip = write_video(tmp_path / "clip.mp4", pictures(2))
+    clip.chmod(0)
+    with pytest.raises(InputError, match="permission denied"):
+        open_source(str(clip))
+
+
+def test_closing_mid_stream_stops_the_reader_thread(tmp_path):
+    clip = write_video(tmp_path / "clip.mp4", pictures(60))
+    source = open_source(str(clip))
+    it = iter(source)
+    assert [next(it).index for _ in range(3)] == [0, 1, 2]
+    source.close()
+    source.close()
+    assert not [t for t in threading.enumerate() if t.name.startswith("vtrack-read")]
+    with pytest.raises(RuntimeError):
+        iter(source)
+
+
+def test_prefetcher_hands_over_items_then_the_producer_error():
+    def produce():
+        yield from range(5)
+        raise ValueError("broken at 5")
+
+    got = []
+    with pytest.raises(ValueError, match="broken at 5"):
+        for item in Prefetcher(produce(), depth=2, name="test"):
+            got.append(item)
+    assert got == [0, 1, 2, 3, 4]
+
+    def endless():
+        n = 0
+        while True:
+            yield n
+            n += 1
+
+    prefetch = Prefetcher(endless(), depth=2, name="test-endless")
+    assert next(iter(prefetch)) == 0
+    assert prefetch.close() is True
+
+
+# --- image folders ----------------------------------------------------------------------------
+
+
+def test_image_folder_natural_order_and_gray_images(tmp_path):
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    for n in (10, 2, 1):
+        cv2.imwrite(str(folder / f"{n}.png"), np.full((H, W), n * 20, np.uint8))
+    with open_source(str(folder)) as source:
+        info = source.info
+        frames = list(source)
+    assert (info.kind, info.name, info.frame_count, info.fps) == ("images", "seq", 3, 30.0)
+    assert all(isinstance(f, GrayFrame) for f in frames)
+    assert [int(f.gray()[0, 0]) for f in frames] == [20, 40, 200]
+    assert [f.time_s for f in frames] == pytest.approx([0, 1 / 30, 2 / 30])
+
+
+def test_otb_layout_colour_images(tmp_path):
+    img_dir = tmp_path / "Car9" / "img"
+    img_dir.mkdir(parents=True)
+    imgs = pictures(3)
+    for i, img in enumerate(imgs):
+        cv2.imwrite(str(img_dir / f"{i + 1:04d}.png"), img)
+    frames = read_all(str(tmp_path / "Car9"), fps=10)
+    assert all(isinstance(f, BgrFrame) for f in frames)
+    for frame, img in zip(frames, imgs, strict=True):
+        np.testing.assert_array_equal(frame.bgr(), img)
+    assert frames[2].time_s == pytest.approx(0.2)
+    with open_source(str(img_dir)) as source:
+        assert source.info.name == "Car9"
+
+
+def test_image_of_another_size_stops_the_sequence(tmp_path):
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / f"{i}.jpg"), pictures(1)[0])
+    cv2.imwrite(str(tmp_path / "3.jpg"), pictures(1, width=W + 2)[0])
+    got = []
+    with open_source(str(tmp_path)) as source, pytest.raises(PartialInputError) as err:
+        for frame in source:
+            got.append(frame.index)
+    assert got == [0, 1, 2] and err.value.frames_done == 3
+    assert str(tmp_path / "3.jpg") in str(err.value) and "162x120" in str(err.value)
+
+
+# --- raw frames -------------------------------------------------------------------------------
+
+
+def raw_frames(pix_fmt: str, n: int, width: int = 32, height: int = 24) -> list[np.ndarray]:
+    fmt = RawFormat(width, height, pix_fmt, 30.0)
+    rng = np.random.default_rng(7)
+    return [rng.integers(0, 256, fmt.shape, np.uint8) for _ in range(n)]
+
+
+@pytest.mark.parametrize("pix_fmt", ["bgr24", "rgb24", "yuv420p", "gray"])
+def test_raw_file_reads_back_exactly(tmp_path, pix_fmt):
+    stored = raw_frames(pix_fmt, 12)  # more frames than the reader's buffer ring
+    path = tmp_path / "frames.raw"
+    path.write_bytes(b"".join(f.tobytes() for f in stored))
+    expected_type = {"bgr24": BgrFrame, "rgb24": BgrFrame, "yuv420p": I420Frame,
+                     "gray": GrayFrame}[pix_fmt]
+    pixels = {BgrFrame: BgrFrame.bgr, I420Frame: I420Frame.i420, GrayFrame: GrayFrame.gray}
+    with open_source(str(path), RawFormat.parse("32x24", pix_fmt, 25)) as source:
+        info = source.info
+        # Compare each frame while it is current: the reader's buffers are reused.
+        for frame, want in zip(source, stored, strict=True):
+            assert isinstance(frame, expected_type)
+            assert frame.time_s == pytest.approx(frame.index / 25)
+            if pix_fmt == "rgb24":
+                want = want[:, :, ::-1]
+            np.testing.assert_array_equal(pixels[expected_type](frame), want)
+    assert (info.kind, info.name, info.frame_count, info.fps) == ("raw", "frames", 12, 25.0)
+
+
+def _feed(fd_or_path, data: bytes) -> threading.Thread:
+    def run():
+        with open(fd_or_path, "wb") as pipe:
+            pipe.write(data)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return thread
+
+
+def test_raw_stdin_pipe_reads_back_exactly_and_is_enlarged(monkeypatch):
+    stored = raw_frames("bgr24", 8, 64, 48)
+    read_fd, write_fd = os.pipe()
+    with open(read_fd, "rb", closefd=True) as fake_stdin:
+        monkeypatch.setattr(sys, "stdin", fake_stdin)
+        feeder = _feed(write_fd, b"".join(f.tobytes() for f in stored))
+        with open_source("-", RawFormat.parse("64x48", "bgr24", 60)) as source:
+            assert source.info.name == "stdin" and source.info.frame_count is None
+            assert fcntl.fcntl(read_fd, 1032) >= 1 << 20  # F_GETPIPE_SZ: enlarged to 1 MiB
+            for frame, want in zip(source, stored, strict=True):
+                np.testing.assert_array_equal(frame.bgr(), want)
+        feeder.join()
+
+
+def test_raw_fifo_with_stray_bytes_is_partial(tmp_path):
+    stored = raw_frames("gray", 5)
+    fifo = tmp_path / "camera.fifo"
+    os.mkfifo(fifo)
+    feeder = _feed(fifo, b"".join(f.tobytes() for f in stored) + b"\x00" * 100)
+    got = []
+    with open_source(str(fifo), RawFormat(32, 24, "gray", 30.0)) as source, \
+            pytest.raises(PartialInputError) as err:
+        for frame in source:
+            np.testing.assert_array_equal(frame.gray(), stored[frame.index])
+            got.append(frame.index)
+    feeder.join()
+    assert got == [0, 1, 2, 3, 4] and err.value.frames_done == 5
+    assert str(err.value) == (f"{fifo}: raw stream ended with 100 stray bytes after 5 whole "
+                              "frames (frame size 768 bytes for 32x24 gray)")
+
+
+def test_raw_file_shorter_than_one_frame_is_an_input_error(tmp_path):
+    path = tmp_path / "tiny.raw"
+    path.write_bytes(b"\x01" * 10)
+    with pytest.raises(InputError, match=r"tiny\.raw: raw stream ended with 10 stray bytes"):
+        open_source(str(path), RawFormat(32, 24, "gray", 30.0))
+    path.write_bytes(b"")
+    with pytest.raises(InputError, match=r"tiny\.raw: no raw frames"):
+        open_source(str(path), RawFormat(32, 24, "gray", 30.0))
+
+
+@pytest.mark.parametrize(
+    ("size", "pix_fmt", "fps", "match"),
+    [
+        ("19x", "bgr24", 30, "expected WIDTHxHEIGHT"),
+        ("0x10", "bgr24", 30, "positive"),
+        ("321x240", "yuv420p", 30, "even"),
+        ("320x240", "nv12", 30, "--pix-fmt"),
+        ("320x240", "gray", 0, "--fps"),
+    ],
+)
+def test_raw_format_rejects_bad_values(size, pix_fmt, fps, match):
+    with pytest.raises(ConfigError, match=match):
+        RawFormat.parse(size, pix_fmt, fps)
+
+
+def test_raw_format_parse_and_sizes():
+    fmt = RawFormat.parse("1920x1080", "bgr24", 60)
+    assert (fmt.width, fmt.height, fmt.frame_bytes) == (1920, 1080, 6220800)
+    assert RawFormat.parse("320X240", "yuv420p", 30).frame_bytes == 320 * 240 * 3 // 2
+
+
+# --- writers ----------------------------------------------------------------------------------
+
+
+def test_csv_rows_are_on_disk_as_written_and_renamed_on_close(tmp_path):
+    path = tmp_path / "track.csv"
+    writer = CsvWriter(path, ["frame", "x", "state", "overlap", "score"])
+    writer.write([0, 12.345678, "tracking", 0.123456, float("nan")])
+    writer.write([1, 3.0, "lost", None, np.float32(0.5)])
+    partial = temp_path(path)
+    assert not path.exists()
+    rows = list(csv.reader(partial.open()))
+    assert rows == [["frame", "x", "state", "overlap", "score"],
+                    ["0", "12.346", "tracking", "0.1235", ""],
+                    ["1", "3", "lost", "", "0.5"]]
+    writer.close()
+    writer.close()
+    assert not partial.exists()
+    assert list(csv.reader(path.open())) == rows
+    with pytest.raises(ValueError):
+        CsvWriter(tmp_path / "t.csv", ["a"]).write([1, 2])
+
+
+def test_write_json_is_atomic_and_maps_nan_to_null(tmp_path):
+    path = tmp_path / "run.json"
+    write_json(path, {"fps": float("nan"), "n": np.int64(3), "box": (1.5, 2), "ok": np.bool_(1),
+                      "where": tmp_path, "arr": np.array([1.0, np.inf])})
+    assert json.loads(path.read_text()) == {"fps": None, "n": 3, "box": [1.5, 2], "ok": True,
+                                            "where": str(tmp_path), "arr": [1.0, None]}
+    assert path.read_text().startswith("{\n  ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]
+
+
+def test_unwritable_output_folder_raises_output_error(tmp_path):
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("not a folder")
+    out = blocker / "out"
+    with pytest.raises(OutputError, match=r"file\.txt/out: cannot write output here"):
+        prepare_output_dir(out)
+    with pytest.raises(OutputError, match=r"track\.csv: cannot write"):
+        CsvWriter(out / "track.csv", ["frame"])
+    with pytest.raises(OutputError, match=r"annotated\.mp4: cannot write"):
+        VideoWriter(out / "annotated.mp4", W, H, 30.0)
+    with pytest.raises(OutputError, match=r"run\.json: cannot write"):
+        write_json(out / "run.json", {})
+    assert prepare_output_dir(tmp_path / "a" / "b").is_dir()
+
+
+def test_video_writer_bad_preset_is_a_config_error(tmp_path):
+    with pytest.raises(ConfigError, match="preset 'warp'"):
+        VideoWriter(tmp_path / "v.mp4", W, H, 30.0, preset="warp")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_video_writer_abort_leaves_nothing_and_odd_sizes_are_cropped(tmp_path):
+    writer = VideoWriter(tmp_path / "v.mp4", W, H, 30.0)
+    writer.write(i420(pictures(1)[0]))
+    writer.abort()
+    assert list(tmp_path.iterdir()) == []
+    odd = pictures(3, width=W + 1, height=H + 1)
+    out = tmp_path / "odd.mp4"
+    with VideoWriter(out, W + 1, H + 1, 25.0) as writer:
+        for i, img in enumerate(odd):
+            writer.write(BgrFrame(i, i / 25, img))
+    assert (writer.width, writer.height) == (W, H)
+    decoded = decode_all(out)
+    assert [f.shape for f in decoded] == [(H * 3 // 2, W)] * 3
+    want = i420(np.ascontiguousarray(odd[1][:H, :W]))
+    assert np.abs(decoded[1].astype(int) - want).mean() < 3
+
+
+def test_video_closed_after_an_interrupt_is_playable(tmp_path):
+    out = tmp_path / "annotated.mp4"
+    writer = VideoWriter(out, W, H, 30.0, preset="medium")  # lookahead: frames still queued
+    with pytest.raises(KeyboardInterrupt):
+        try:
+            for i, img in enumerate(pictures(20)):
+                if i == 9:
+                    raise KeyboardInterrupt
+                writer.write(i420(img))
+        finally:
+            writer.close()
+    assert len(decode_all(out)) == 9 and writer.frames_written == 9
+
+
+def test_annotated_video_shows_box_and_lost_caption_without_touching_the_input(tmp_path):
+    grey = np.full((H, W, 3), 100, np.uint8)
+    source = i420(grey)
+    original = source.copy()
+    box = Box(40, 30, 50, 40)
+    annotator = Annotator(W, H)
+    out = tmp_path / "annotated.mp4"
+    with VideoWriter(out, W, H, 30.0) as writer:
+        for i in range(6):
+            state = "lost" if i == 5 else "tracking"
+            result = FrameResult(i, i / 30, None if state == "lost" else box, state, 1.0, None)
+            writer.write(source, lambda buf, r=result: annotator.draw(buf, r))
+    np.testing.assert_array_equal(source, original)
+    frames = decode_all(out)
+    assert len(frames) == 6
+    luma = frames[2][:H]
+    background = int(luma[100, 140])
+    assert abs(background - int(original[100, 140])) < 4
+    assert abs(int(luma[30:70, 40].mean()) - background) > 40  # left edge of the box
+    assert abs(int(luma[60, 120]) - background) < 4  # away from the drawing
+    lost = frames[5][:H]
+    top_right, top_left = lost[:12, W - 30 :], lost[:12, :30]
+    assert np.abs(top_right.astype(int) - background).max() > 40
+    assert np.abs(top_left.astype(int) - background).max() < 8
+    assert np.abs(lost[30:70, 40].astype(int) - background).max() < 8  # no box while lost

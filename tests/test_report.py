@@ -1,0 +1,158 @@
+"""`vtrack report` on real batch and run output: plots, HTML, tables and OTB numbers."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import cv2
+import pytest
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+from vtrack.evaluate import auc, frame_scores, precision_at, read_boxes
+from vtrack.geometry import Box
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+W, H = 160, 120
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+def track_boxes(path: Path) -> list[Box | None]:
+    with path.open(newline="") as handle:
+        return [None if row["x"] == "" else Box(*(float(row[k]) for k in "xywh"))
+                for row in csv.DictReader(handle)]
+
+
+def html_rows(html: str, table: int) -> tuple[list[str], list[list[str]]]:
+    """Header and body cells of the ``table``-th table of the page."""
+    body = re.findall(r"<table>(.*?)</table>", html, re.S)[table]
+    header = re.findall(r"<th[^>]*>(.*?)</th>", body)
+    rows = [re.findall(r"<td[^>]*>(.*?)</td>", row)
+            for row in re.findall(r"<tr[^>]*>(.*?)</tr>", body)[1:]]
+    return header, rows
+
+
+@pytest.fixture(scope="module")
+def batch_out(tmp_path_factory: pytest.TempPathFactory,
+              clip_factory: ClipFactory) -> tuple[Path, Path]:
+    """Two clips (one with an occlusion) run with two configs by `vtrack batch`: the input
+    folder and the batch output folder."""
+    folder = tmp_path_factory.mktemp("report-inputs")
+    for scenario, frames in (("occlusion", 60), ("smooth", 40)):
+        clip = clip_factory(scenario, width=W, height=H, frames=frames)
+        shutil.copy(clip.path, folder / f"{scenario}.mp4")
+        shutil.copy(clip.gt, folder / f"{scenario}.gt.txt")
+    out = tmp_path_factory.mktemp("report-batch")
+    result = vtrack("batch", str(folder), "-c", "s0", "-c", "camshift", "--jobs", "2",
+                    "--no-video", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    return folder, out
+
+
+def test_report_of_a_batch(batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    inputs, batch = batch_out
+    report = tmp_path / "report"
+    result = vtrack("report", str(batch), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    html = (report / "index.html").read_text()
+    plots = sorted((report / "plots").glob("*.png"))
+    # overlap-over-time and success/precision per input, plus the average over inputs
+    assert {p.name for p in plots} == {"overlap_occlusion.png", "overlap_smooth.png",
+                                       "curves_occlusion.png", "curves_smooth.png",
+                                       "curves_all.png"}
+    for plot in plots:
+        assert plot.read_bytes().startswith(PNG_SIGNATURE)
+        image = cv2.imread(str(plot))
+        assert image is not None and image.shape[0] > 100 and image.shape[1] > 100
+        assert f'src="plots/{plot.name}"' in html
+    assert html.count("<table>") == 2  # averages per config, results per input x config
+    assert "lost" in html.split("<footer>")[1]  # the footer states how lost frames count
+
+    header, rows = html_rows(html, 1)
+    cells = {(row[0], row[1]): dict(zip(header, row, strict=True)) for row in rows}
+    assert set(cells) == {(i, c) for i in ("occlusion", "smooth") for c in ("s0", "camshift")}
+    for (name, config), row in cells.items():
+        gt = read_boxes(inputs / f"{name}.gt.txt")
+        overlaps, errors = frame_scores(track_boxes(batch / name / config / "track.csv"), gt)
+        assert row["AUC"] == f"{auc(overlaps):.3f}"
+        assert row["Precision@20"] == f"{precision_at(errors):.3f}"
+        recorded = json.loads((batch / name / config / "run.json").read_text())["metrics"]
+        assert row["AUC"] == f"{recorded['auc']:.3f}"
+    assert '<td class=" best">' in html  # best per column highlighted
+    markdown = (report / "summary.md").read_text()
+    assert "| occlusion | s0 |" in markdown and "plots/curves_all.png" in markdown
+    with (report / "summary.csv").open(newline="") as handle:
+        assert len(list(csv.DictReader(handle))) == 4
+
+
+def test_report_scores_a_run_without_ground_truth_with_gt(clip_factory: ClipFactory,
+                                                          tmp_path: Path) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    first = clip.gt.read_text().splitlines()[0]
+    run = tmp_path / "run"
+    assert vtrack("run", str(clip.path), "--init", first, "--no-video", "--quiet",
+                  "--out", str(run)).exit_code == 0
+
+    bare = vtrack("report", str(run), "--out", str(tmp_path / "bare"))
+    assert bare.exit_code == 0 and "no ground truth" in bare.stderr
+    assert not list((tmp_path / "bare" / "plots").glob("*.png"))
+
+    scored = vtrack("report", str(run), "--gt", str(clip.gt), "--out", str(tmp_path / "gt"))
+    assert scored.exit_code == 0, scored.output
+    overlaps, _ = frame_scores(track_boxes(run / "track.csv"), read_boxes(clip.gt))
+    with (tmp_path / "gt" / "summary.csv").open(newline="") as handle:
+        (row,) = list(csv.DictReader(handle))
+    assert float(row["auc"]) == pytest.approx(auc(overlaps), abs=1e-6)
+    assert row["ground_truth"] == str(clip.gt)
+
+
+def write_multi_target_run(folder: Path, metrics: dict[str, float]) -> None:
+    """A multi-target run folder as `vtrack run` leaves it (tracks.csv + run.json)."""
+    folder.mkdir(parents=True)
+    (folder / "tracks.csv").write_text("frame,id,x,y,w,h,conf,wx,wy,wz,state\n"
+                                       "1,1,10,10,5,5,1,-1,-1,-1,confirmed\n")
+    record = {"status": "complete", "frames": 1, "input": {"name": "crowd"},
+              "config": {"name": folder.name}, "request": {"gt": "gt.txt" if metrics else None},
+              "metrics": metrics, "timing": {"fps": 100.0},
+              "summary": {"frames_occluded": 0, "frames_lost": 0}}
+    (folder / "run.json").write_text(json.dumps(record))
+
+
+def test_multi_target_runs_get_a_metrics_table(tmp_path: Path) -> None:
+    write_multi_target_run(tmp_path / "runs" / "mht",
+                           {"mota": 0.5, "motp": 0.75, "idf1": 0.625, "id_switches": 2})
+    write_multi_target_run(tmp_path / "runs" / "blobs", {})  # no ground truth: no metrics
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    html = (tmp_path / "report" / "index.html").read_text()
+    header, rows = html_rows(html, 0)
+    assert header[3:] == ["Frames", "MOTA", "MOTP", "IDF1", "id switches", "FPS"]
+    cells = {row[1]: row for row in rows}
+    assert cells["mht"][4:8] == ["0.500", "0.750", "0.625", "2"]
+    assert cells["blobs"][4:8] == ["—"] * 4
+    assert "<img" not in html and not list((tmp_path / "report").rglob("*.png"))
+    assert "CLEAR MOT" in html.split("<footer>")[1]
+
+
+def one_error_line(result: Result) -> str:
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
+    return lines[0]
+
+
+def test_report_errors_are_one_line(tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    assert "no run.json" in one_error_line(vtrack("report", str(tmp_path / "empty")))
+    assert "missing" in one_error_line(vtrack("report", str(tmp_path / "missing")))

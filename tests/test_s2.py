@@ -1,0 +1,224 @@
+"""S2 (kernel mean shift, 3 scales, Kalman failure logic): the document's claims, generated scenes.
+
+Every run goes through the shipped config: ``Pipeline(load_config("s2").build()).track(...)``,
+i.e. ``kernel_meanshift -> kalman(model="ca")`` with the document's values.
+
+What the document claims and where it is checked here:
+
+- a displacement between two frames larger than the target, which plain mean shift loses, is
+  followed by rerunning the search from the Kalman prediction (sec. 5 (2)(1), fig. 1): on a
+  target that accelerates until it moves more than its width per frame (the motion the
+  constant-acceleration predictor describes). The shipped ``jump`` scene teleports the target
+  2.5 widths with no motion before it: no predictor can point there, so the failure logic cannot
+  help on it (see ``benchmarks/claims_s2.py``);
+- full occlusion (sec. 5 (2)(2)): the occlusion branch is taken while the window holds nothing
+  of the target and the box coasts on the prediction; riding through >= 15 hidden frames is not
+  reproduced (strict xfail, reasons in the test);
+- scale change (fig. 3(d) shows a zoom out): the box follows a x2 shrink; a x2 growth is not
+  followed with the pyramid kernel (strict xfail) but is with the Epanechnikov kernel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vtrack.config import load_config
+from vtrack.errors import ConfigError
+from vtrack.frame import BgrFrame
+from vtrack.geometry import Box, iou
+from vtrack.params import Param
+from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.scenes import Scene, make_scene
+from vtrack.scenes.render import (
+    PAPER,
+    Compositor,
+    Ellipse,
+    SensorNoise,
+    StaticBackground,
+    make_background,
+    target_paint,
+)
+from vtrack.scenes.scene import SceneSpec, assemble
+from vtrack.stages.base import OCCLUDED, build_stage
+from vtrack.stages.kernel_meanshift import KernelMeanShift
+
+FPS = 30.0
+DECISIONS = {"accept", "fast_motion", "occlusion"}
+
+
+def track(frames: list[BgrFrame], init_box: Box, *overrides: str) -> list[FrameResult]:
+    """Run the shipped S2 config (with ``--set``-style overrides) over ``frames``."""
+    config = load_config("s2").with_overrides(list(overrides))
+    return list(Pipeline(config.build()).track(frames, init_box))
+
+
+def overlaps(results: list[FrameResult], boxes: list[Box | None]) -> np.ndarray:
+    """Per-frame IoU of the tracker's box with the ground truth."""
+    return np.array([iou(r.box, g) if r.box and g else 0.0 for r, g in
+                     zip(results, boxes, strict=True)])
+
+
+def accelerating_scene(seed: int, frames: int = 25) -> Scene:
+    """A 32x20 target (the document's table 2 size) accelerating from rest at 2 px/frame^2.
+
+    Its displacement between frames grows by 2 px a frame and exceeds its own width from
+    ``events["jump"]`` on: from there, a window opened at the last position no longer holds the
+    target (sec. 5: "相邻帧目标位置变化大于目标大小"), while the constant-acceleration predictor
+    still points at it. 640 px wide so that 8 such frames fit.
+    """
+    spec = SceneSpec("accelerating", seed, 640, 240, frames, FPS)
+    motion, looks = spec.rng(0), spec.rng(1)
+    ax, ay = 16.0, 10.0
+    travel = 2.0 * np.arange(frames, dtype=np.float64) ** 2 / 2
+    angle = motion.uniform(-0.15, 0.15)
+    direction = 1.0 if motion.random() < 0.5 else -1.0
+    start = ax + 12 if direction > 0 else spec.width - ax - 12
+    cx = start + direction * travel * np.cos(angle)
+    cy = spec.height / 2 + travel * np.sin(angle)
+    first_jump = int(np.flatnonzero(np.hypot(np.diff(cx), np.diff(cy)) > 2 * ax)[0]) + 1
+    background = StaticBackground(make_background(looks, spec.height, spec.width, PAPER))
+    target = Ellipse(cx, cy, np.full(frames, ax), np.full(frames, ay), target_paint(looks), 1)
+    compositor = Compositor(background, [target], SensorNoise(3.0), seed)
+    return assemble(spec, compositor, lambda truth: {"jump": first_jump})
+
+
+def as_frames(images: list[np.ndarray]) -> list[BgrFrame]:
+    return [BgrFrame(i, i / FPS, image) for i, image in enumerate(images)]
+
+
+def covered(scene: Scene, start: int, hidden: int) -> list[BgrFrame]:
+    """The scene's frames with a flat white occluder over the target's whole path (and two box
+    sizes around it) on frames ``start .. start + hidden - 1``: nothing of the target, and no
+    value of its model, is left in any window there (the document's full occlusion)."""
+    path = [b for b in scene.boxes[start : start + hidden] if b is not None]
+    w, h = path[0].w, path[0].h
+    x0 = max(int(min(b.x for b in path) - 2 * w), 0)
+    y0 = max(int(min(b.y for b in path) - 2 * h), 0)
+    x1 = int(max(b.x + b.w for b in path) + 2 * w)
+    y1 = int(max(b.y + b.h for b in path) + 2 * h)
+    images = list(scene.frames())
+    for image in images[start : start + hidden]:
+        image[y0:y1, x0:x1] = 250
+    return as_frames(images)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_follows_displacements_larger_than_the_target(seed: int) -> None:
+    scene = accelerating_scene(seed)
+    frames = as_frames(list(scene.frames()))
+    s2 = track(frames, scene.boxes[0])
+    plain = track(frames, scene.boxes[0], "kernel_meanshift.failure_logic=false")
+    s2_iou, plain_iou = overlaps(s2, scene.boxes), overlaps(plain, scene.boxes)
+    decisions = [r.extras["decision"] for r in s2]
+    assert set(decisions) <= DECISIONS
+    k = scene.events["jump"]
+
+    # Without the failure logic the search stays where the target was: lost for good.
+    lost = int(np.flatnonzero(plain_iou == 0.0)[0])
+    assert plain_iou[-3:].max() == 0.0
+    # With it, the two runs are the same computation until the first rejected search, which is
+    # the fast-motion branch, at the latest on the frame plain mean shift loses the target ...
+    first = next(i for i, d in enumerate(decisions) if d != "accept")
+    assert decisions[first] == "fast_motion"
+    assert first <= lost
+    assert "occlusion" not in decisions
+    # ... and the box is on the target on every frame that moved more than the target's width.
+    assert s2_iou[k:].min() > 0.5, np.round(s2_iou, 2)
+    assert all(r.state == "tracking" and 0.0 <= r.score <= 1.0 for r in s2)
+
+
+def test_full_occlusion_takes_the_occlusion_branch_and_coasts_on_the_prediction() -> None:
+    scene = make_scene("occlusion", seed=0, width=320, height=240, frames=60, fps=FPS)
+    start, hidden = 8, 15
+    results = track(covered(scene, start, hidden), scene.boxes[0])
+    assert [r.extras["decision"] for r in results[:start]] == ["accept"] * start
+    for previous, current in zip(results[start - 1 : start + hidden - 1],
+                                 results[start : start + hidden], strict=True):
+        assert current.extras["decision"] == "occlusion"
+        assert current.state == OCCLUDED
+        # S2 sec. 5 (2)(2): the position is the prediction, and the next frame starts there.
+        assert previous.prediction is not None and current.box is not None
+        assert current.box.cx == pytest.approx(previous.prediction.cx)
+        assert current.box.cy == pytest.approx(previous.prediction.cy)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced: coasting the document's constant-acceleration predictor (W = diag(0,0,1), "
+    "R = 1, T = 1 frame, T^2 as printed) for 15 frames extrapolates the acceleration it estimated "
+    "from mean-shift jitter quadratically and ends 20-30 px (straight path) to 100+ px (curved "
+    "path) off, beyond the window; on the shipped scene the slab's grey also matches the target's "
+    "and partial occlusion teaches the predictor a false deceleration"))
+@pytest.mark.parametrize("seed", [0, 1])
+def test_rides_through_a_15_frame_full_occlusion(seed: int) -> None:
+    scene = make_scene("occlusion", seed=seed, width=320, height=240, frames=60, fps=FPS)
+    start, end = scene.events["occluded"]
+    assert end - start >= 15
+    results = track(as_frames(list(scene.frames())), scene.boxes[0])
+    assert {r.extras["decision"] for r in results[start:end]} == {"occlusion"}
+    back = overlaps(results, scene.boxes)[end : end + 5]
+    assert back.max() > 0.5
+
+
+def reversed_scale_scene(seed: int) -> tuple[list[BgrFrame], list[Box | None]]:
+    """The shipped ``scale`` scene played backwards: the target shrinks to half its size."""
+    scene = make_scene("scale", seed=seed, width=320, height=240, fps=FPS)
+    return as_frames(list(scene.frames())[::-1]), scene.boxes[::-1]
+
+
+def size_ratios(results: list[FrameResult], boxes: list[Box | None]) -> np.ndarray:
+    """Tracked over true box width, per frame (S2 keeps the initial aspect ratio)."""
+    return np.array([r.box.w / g.w for r, g in zip(results, boxes, strict=True)])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_box_size_follows_a_x2_shrink(seed: int) -> None:
+    frames, boxes = reversed_scale_scene(seed)
+    assert boxes[0].w == pytest.approx(2 * boxes[-1].w)
+    ratios = size_ratios(track(frames, boxes[0]), boxes)
+    assert np.abs(ratios - 1.0).max() <= 0.15, np.round(ratios, 2)
+
+
+def grow(seed: int, *overrides: str) -> np.ndarray:
+    scene = make_scene("scale", seed=seed, width=320, height=240, fps=FPS)
+    return size_ratios(track(as_frames(list(scene.frames())), scene.boxes[0], *overrides),
+                       scene.boxes)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced with the pyramid kernel: it weighs the box's edges at about half its centre, "
+    "so the model holds much background; a window inside a grown target loses that background "
+    "at every candidate bandwidth, rho no longer prefers the larger one, and the box shrinks "
+    "(ends at 0.57-0.71 of the true size); the Epanechnikov kernel follows (next test)"))
+def test_box_size_follows_a_x2_growth_with_the_pyramid_kernel() -> None:
+    assert np.abs(grow(0) - 1.0).max() <= 0.15
+
+
+def test_box_size_follows_a_x2_growth_with_the_epanechnikov_kernel() -> None:
+    ratios = grow(0, "kernel_meanshift.kernel=epanechnikov")
+    assert np.abs(ratios - 1.0).max() <= 0.15, np.round(ratios, 2)
+
+
+def test_shipped_config_is_the_documented_chain() -> None:
+    config = load_config("s2")
+    assert [name for name, _ in config.stages] == ["kernel_meanshift", "kalman"]
+    meanshift, kalman = config.build()
+    assert meanshift.settings() == {
+        "feature": "gray16", "bins": 16, "kernel": "pyramid", "weights": "ratio",
+        "similarity": "intersection", "max_iterations": 20, "epsilon": 1.0, "scale_step": 0.1,
+        "scale_smoothing": 0.1, "failure_logic": True, "distance": 20.0,
+    }
+    assert kalman.settings()["model"] == "ca"
+    assert Pipeline([meanshift, kalman]).columns == ("decision", "scale", "iterations",
+                                                     "pred_cx", "pred_cy")
+
+
+WRONG = {str: 3, int: "3", float: "x", bool: 1}
+
+
+@pytest.mark.parametrize("param", KernelMeanShift.params, ids=lambda p: p.name)
+def test_every_parameter_rejects_a_wrong_type(param: Param) -> None:
+    with pytest.raises(ConfigError) as error:
+        build_stage("kernel_meanshift", {param.name: WRONG[param.type]}, "s2.toml")
+    message = str(error.value)
+    assert "s2.toml" in message and "'kernel_meanshift'" in message and param.name in message

@@ -1,0 +1,333 @@
+"""The scene generator: determinism, ground truth that matches the pixels, events, writers, CLI."""
+
+from __future__ import annotations
+
+import math
+
+import av
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vtrack.errors import ConfigError
+from vtrack.frame import BgrFrame
+from vtrack.geometry import Box, center_error
+from vtrack.scenes import SCENARIOS, make_scene, write_groundtruth, write_raw
+
+
+def target_mask(bgr: np.ndarray) -> np.ndarray:
+    """Pixels of the saturated red/orange target (the background is low-saturation)."""
+    hue, sat, val = cv2.split(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV))
+    return (sat > 110) & ((hue <= 25) | (hue >= 170)) & (val > 60)
+
+
+def measured(bgr: np.ndarray, box: Box, mask_of=target_mask) -> tuple[float, float, int]:
+    """Centroid (pixel centres at +0.5) and pixel count of the mask around ``box``."""
+    win = box.window(bgr.shape[1], bgr.shape[0])
+    assert win is not None
+    x0, y0 = max(win.x0 - 3, 0), max(win.y0 - 3, 0)
+    x1, y1 = min(win.x1 + 3, bgr.shape[1]), min(win.y1 + 3, bgr.shape[0])
+    ys, xs = np.nonzero(mask_of(bgr[y0:y1, x0:x1]))
+    return x0 + xs.mean() + 0.5, y0 + ys.mean() + 0.5, xs.size
+
+
+def centre(box: Box) -> np.ndarray:
+    return np.array([box.cx, box.cy])
+
+
+# ----------------------------------------------------------------------------- determinism
+
+
+def test_same_arguments_give_identical_frames_and_truth():
+    a = make_scene("distractor", seed=3, width=160, height=120, frames=30)
+    b = make_scene("distractor", seed=3, width=160, height=120, frames=30)
+    assert a.boxes == b.boxes and a.visibility == b.visibility and a.events == b.events
+    for fa, fb in zip(a.frames(), b.frames(), strict=True):
+        assert np.array_equal(fa, fb)
+    assert np.array_equal(a.frame(17), next(f for i, f in enumerate(b.frames()) if i == 17))
+
+
+def test_different_seeds_give_different_frames():
+    a = make_scene("smooth", seed=0, width=160, height=120, frames=10)
+    b = make_scene("smooth", seed=1, width=160, height=120, frames=10)
+    assert not np.array_equal(a.frame(0), b.frame(0))
+    assert a.boxes != b.boxes
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_every_scenario_renders_with_consistent_truth(name, scene_factory):
+    scene = scene_factory(name, width=160, height=120, frames=60)
+    assert len(scene) == len(scene.boxes) == len(scene.visibility) == len(scene.tracks) == 60
+    first = scene.frame(0)
+    assert first.dtype == np.uint8 and first.shape == (120, 160, 3)
+    assert all(0.0 <= v <= 1.0 for v in scene.visibility)
+    for box, visible, tracks in zip(scene.boxes, scene.visibility, scene.tracks, strict=True):
+        if box is None:
+            assert visible == 0.0 and all(tid != 1 for tid, _ in tracks)
+        else:
+            assert box.is_valid() and (1, box) in tracks
+
+
+def test_unknown_scenario_lists_the_valid_ones():
+    with pytest.raises(ConfigError, match="occlusion.*leave_return.*benchmark"):
+        make_scene("nope")
+
+
+@pytest.mark.parametrize(
+    "kwargs", [{"frames": 20}, {"width": 32}, {"fps": 0.0}, {"seed": -1}], ids=str
+)
+def test_impossible_requests_are_config_errors(kwargs):
+    with pytest.raises(ConfigError):
+        make_scene("occlusion", **kwargs)
+
+
+def test_noise_has_the_documented_sigma(scene_factory):
+    scene = scene_factory("bounce")
+    # Two renderings of the static background differ only by noise (std sqrt(2) * sigma).
+    keep = np.ones((scene.height, scene.width), bool)
+    for i in (0, 40):
+        keep[scene.boxes[i].window(scene.width, scene.height).slices] = False
+    diff = scene.frame(0).astype(np.float64) - scene.frame(40).astype(np.float64)
+    assert 2.8 < np.std(diff[keep]) / math.sqrt(2) < 3.2
+
+
+# ------------------------------------------------------------------- truth matches pixels
+
+
+@pytest.mark.parametrize("name", ["smooth", "scale", "lighting", "occlusion", "distractor"])
+def test_target_centroid_matches_ground_truth(name, scene_factory):
+    scene = scene_factory(name)
+    checked = 0
+    for index, bgr in enumerate(scene.frames()):
+        box = scene.boxes[index]
+        if box is None or scene.visibility[index] < 1.0:
+            continue
+        cx, cy, count = measured(bgr, box)
+        assert math.hypot(cx - box.cx, cy - box.cy) < 0.5, index
+        assert count == pytest.approx(math.pi * box.w * box.h / 4, rel=0.05), index
+        checked += 1
+    assert checked > 30
+
+
+def test_blob_centroids_match_multi_target_truth(scene_factory):
+    scene = scene_factory("multi")
+
+    def bright(patch: np.ndarray) -> np.ndarray:
+        return cv2.cvtColor(patch, cv2.COLOR_BGR2GRAY) > 90
+
+    for index in (0, 20, 70):
+        bgr = scene.frame(index)
+        for _, box in scene.tracks[index]:
+            if box.x < 1 or box.x + box.w > scene.width - 1:
+                continue  # partly out of the frame
+            cx, cy, _ = measured(bgr, box, bright)
+            assert math.hypot(cx - box.cx, cy - box.cy) < 0.5
+
+
+# ---------------------------------------------------------------------------------- events
+
+
+def test_occlusion_hides_the_target_for_at_least_15_frames(scene_factory):
+    scene = scene_factory("occlusion")
+    start, end = scene.events["occluded"]
+    assert end - start >= 15
+    assert all(scene.visibility[i] == 0.0 for i in range(start, end))
+    assert scene.visibility[start - 1] > 0.0 and scene.visibility[end] > 0.0
+    assert scene.visibility[0] == 1.0 and scene.visibility[-1] == 1.0
+    for i in range(start, end):
+        assert scene.boxes[i] is not None  # the true, hidden position
+        assert not target_mask(scene.frame(i)).any()
+    # Constant velocity: a linear prediction through the occlusion is exact.
+    steps = np.diff([centre(b) for b in scene.boxes], axis=0)
+    assert np.allclose(steps, steps[0])
+
+
+def test_jump_is_larger_than_the_target_and_motion_is_smooth_otherwise(scene_factory):
+    scene = scene_factory("jump")
+    k = scene.events["jump"]
+    steps = [center_error(a, b) for a, b in zip(scene.boxes, scene.boxes[1:], strict=False)]
+    size = max(scene.boxes[k].w, scene.boxes[k].h)
+    assert steps[k - 1] > size
+    assert max(steps[: k - 1] + steps[k:]) < 0.25 * size
+
+
+def test_scale_doubles_the_target(scene_factory):
+    scene = scene_factory("scale")
+    first, last = scene.boxes[0], scene.boxes[-1]
+    assert last.w / first.w == pytest.approx(2.0, rel=0.05)
+    assert last.h / first.h == pytest.approx(2.0, rel=0.05)
+    _, _, count_first = measured(scene.frame(0), first)
+    _, _, count_last = measured(scene.frame(len(scene) - 1), last)
+    assert count_last / count_first == pytest.approx(4.0, rel=0.05)
+    assert scene.events["scale"] == (0, len(scene) - 1, 2.0)
+
+
+def test_leave_return_is_out_of_view_for_at_least_15_frames(scene_factory):
+    scene = scene_factory("leave_return")
+    gone, back = scene.events["leave"]
+    assert back - gone >= 15
+    assert all(scene.boxes[i] is None for i in range(gone, back))
+    assert scene.boxes[gone - 1] is not None and scene.boxes[back] is not None
+    assert scene.visibility[0] == 1.0 and scene.visibility[-1] == 1.0
+    assert not target_mask(scene.frame((gone + back) // 2)).any()
+
+
+def test_distractor_looks_like_the_target_and_passes_close(scene_factory):
+    scene = scene_factory("distractor")
+    closest = scene.events["closest"]
+    start, end = scene.events["distractor"]
+    assert start < closest < end
+    box = scene.boxes[closest]
+    count, labels = cv2.connectedComponents(target_mask(scene.frame(closest)).astype(np.uint8))
+    areas = sorted(np.bincount(labels.ravel())[1:])[-2:]
+    assert count - 1 >= 2 and areas[0] > 0.8 * areas[1]  # two target-coloured objects
+    assert all(v == 1.0 for v in scene.visibility)  # close, never touching
+    assert box.w > 0
+
+
+def test_lighting_dims_the_frame_by_40_percent(scene_factory):
+    scene = scene_factory("lighting")
+    ratio = scene.frame(len(scene) - 1).mean() / scene.frame(0).mean()
+    assert ratio == pytest.approx(0.6, abs=0.03)
+
+
+def test_multi_targets_cross_leave_and_appear(scene_factory):
+    scene = scene_factory("multi")
+    ev = scene.events
+    ids = [{tid for tid, _ in tracks} for tracks in scene.tracks]
+    boxes = [dict(tracks) for tracks in scene.tracks]
+    a, b = ev["cross_ids"]
+    assert center_error(boxes[ev["cross"]][a], boxes[ev["cross"]][b]) < boxes[ev["cross"]][a].w
+    assert ev["exit_id"] in ids[ev["exit"] - 1] and all(
+        ev["exit_id"] not in s for s in ids[ev["exit"] :]
+    )
+    assert all(ev["appear_id"] not in s for s in ids[: ev["appear"]])
+    assert all(ev["appear_id"] in s for s in ids[ev["appear"] :])
+    assert 0 < ev["appear"] < len(scene) - 1 and 0 < ev["exit"] < len(scene) - 1
+    sizes = [box.w for tracks in scene.tracks for _, box in tracks]
+    assert min(sizes) >= 6.0 and max(sizes) <= 12.0
+    assert cv2.cvtColor(scene.frame(0), cv2.COLOR_BGR2GRAY).mean() < 50  # dark, like infrared
+
+
+def test_bounce_contacts_are_where_the_ball_turns_on_the_floor(scene_factory):
+    scene = scene_factory("bounce")
+    bounces = scene.events["bounce"]
+    assert len(bounces) >= 2
+    heights = np.array([b.y for b in scene.boxes])  # y grows downwards
+    for k in (k for k in bounces if k + 1 < len(scene)):
+        assert heights[k - 1] > heights[k - 2]  # falling before the contact
+        assert heights[k + 1] < heights[k]  # rising after it
+    # Static background: away from the ball, frames differ only by sensor noise.
+    last = len(scene) - 1
+    diff = cv2.absdiff(scene.frame(0), scene.frame(last)).max(axis=2)
+    for i in (0, last):
+        diff[scene.boxes[i].window(scene.width, scene.height).slices] = 0
+    assert diff.max() < 20
+
+
+# ---------------------------------------------------------------------------------- writers
+
+
+def test_mp4_decodes_to_the_right_frames(clip_factory):
+    clip = clip_factory("occlusion")
+    with av.open(str(clip.path)) as container:
+        stream = container.streams.video[0]
+        assert stream.average_rate == 30
+        decoded = [f.to_ndarray(format="bgr24") for f in container.decode(stream)]
+    assert len(decoded) == len(clip.scene)
+    assert decoded[0].shape == (240, 320, 3)
+    error = np.abs(decoded[10].astype(int) - clip.scene.frame(10).astype(int)).mean()
+    assert error < 5.0
+
+
+def test_groundtruth_files_follow_otb_and_mot(clip_factory):
+    clip = clip_factory("leave_return")
+    lines = clip.gt.read_text().splitlines()
+    assert len(lines) == len(clip.scene)
+    gone, back = clip.scene.events["leave"]
+    assert lines[gone] == "0,0,0,0"
+    x, y, w, h = (float(v) for v in lines[0].split(","))
+    assert (x, y, w, h) == pytest.approx(tuple(clip.scene.boxes[0]), abs=0.005)
+    assert clip.mot is None
+
+    multi = clip_factory("multi", fmt="raw", pix_fmt="gray")
+    rows = [line.split(",") for line in multi.mot.read_text().splitlines()]
+    assert len(rows) == sum(len(t) for t in multi.scene.tracks)
+    assert rows[0][:2] == ["1", "1"] and rows[0][6:] == ["1", "1", "1"]
+    assert {int(r[0]) for r in rows} == set(range(1, len(multi.scene) + 1))
+
+
+def test_image_sequence_has_otb_layout(clip_factory):
+    clip = clip_factory("smooth", frames=12, fmt="images")
+    images = sorted((clip.path / "img").iterdir())
+    assert [p.name for p in images[:2]] == ["0001.jpg", "0002.jpg"] and len(images) == 12
+    assert clip.gt == clip.path / "groundtruth_rect.txt"
+    assert len(clip.gt.read_text().splitlines()) == 12
+    assert cv2.imread(str(images[0])).shape == (240, 320, 3)
+
+
+@pytest.mark.parametrize(
+    ("pix_fmt", "code", "per_frame"),
+    [
+        ("bgr24", None, 320 * 240 * 3),
+        ("rgb24", cv2.COLOR_BGR2RGB, 320 * 240 * 3),
+        ("yuv420p", cv2.COLOR_BGR2YUV_I420, 320 * 240 * 3 // 2),
+        ("gray", cv2.COLOR_BGR2GRAY, 320 * 240),
+    ],
+)
+def test_raw_frames_have_the_right_layout(tmp_path, scene_factory, pix_fmt, code, per_frame):
+    scene = scene_factory("smooth", frames=10)
+    path = write_raw(scene, tmp_path / "clip.raw", pix_fmt)
+    data = path.read_bytes()
+    assert len(data) == 10 * per_frame
+    first = scene.frame(0) if code is None else cv2.cvtColor(scene.frame(0), code)
+    assert data[:per_frame] == first.tobytes()
+
+
+def test_writers_reject_bad_requests(tmp_path, scene_factory):
+    with pytest.raises(ConfigError, match="gray"):
+        write_raw(scene_factory("smooth", frames=10), tmp_path / "x.raw", "nv12")
+    odd = scene_factory("smooth", width=161, height=120, frames=10)
+    with pytest.raises(ConfigError, match="even"):
+        write_raw(odd, tmp_path / "x.raw", "yuv420p")
+    write_groundtruth(odd, tmp_path / "deep" / "gt.txt")  # parent folders are created
+
+
+def test_scene_feeds_vtrack_frames_directly(scene_factory):
+    scene = scene_factory("smooth", frames=10)
+    frames = list(scene.as_frames())
+    assert all(isinstance(f, BgrFrame) for f in frames)
+    assert frames[3].index == 3 and frames[3].time_s == pytest.approx(0.1)
+    assert np.array_equal(frames[3].bgr(), scene.frame(3))
+
+
+# -------------------------------------------------------------------------------------- CLI
+
+
+def test_cli_writes_clip_and_groundtruth(tmp_path):
+    from vtrack.cli.scene import command
+
+    out = tmp_path / "clips" / "m.mp4"
+    args = ["multi", str(out), "--frames", "60", "--size", "160x120", "--preset", "ultrafast"]
+    result = CliRunner().invoke(command, args)
+    assert result.exit_code == 0, result.output
+    assert out.exists() and (tmp_path / "clips" / "m.gt.txt").exists()
+    assert len((tmp_path / "clips" / "m.mot.txt").read_text().splitlines()) > 60
+    assert "60 frames, 160x120" in result.output
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nope", "x.mp4"], "choose one of: smooth, occlusion"),
+        (["smooth", "x.mp4", "--size", "big"], "WIDTHxHEIGHT"),
+        (["smooth", "x", "--format", "images", "--pix-fmt", "gray"], "--pix-fmt"),
+    ],
+)
+def test_cli_user_errors_are_config_errors(tmp_path, args, message):
+    from vtrack.cli.scene import command
+
+    result = CliRunner().invoke(command, [*args[:1], str(tmp_path / args[1]), *args[2:]])
+    assert isinstance(result.exception, ConfigError)
+    assert message in str(result.exception)

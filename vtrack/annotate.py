@@ -1,0 +1,231 @@
+"""Drawing the tracker's output straight into I420 planes, before the frame is encoded.
+
+Every shape is drawn twice: on the Y plane at full resolution with the colour's luma, and on the
+half-size U and V planes at half coordinates with its chroma. The frame is never converted to BGR
+and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
+
+What is drawn: the ground-truth box (if given), the stage overlays (``("window", Box | Window)``
+as a thin search window, ``("particles", boxes or (x, y) points)`` as small dots; other kinds are
+ignored), the trajectory of the last ``trail`` centres, the tracked box and its centre, confirmed
+multi-target tracks (a stable colour and a short trail per id, the id as text), and the state
+caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Iterable, Sequence
+from typing import Any, NamedTuple
+
+import cv2
+import numpy as np
+
+from vtrack.geometry import Box, Window
+from vtrack.io.planes import i420_planes
+from vtrack.pipeline import FrameResult
+from vtrack.stages.base import LOST, OCCLUDED
+
+
+class Yuv(NamedTuple):
+    """A colour as the Y, U, V values OpenCV's BGR <-> I420 conversion uses (BT.601)."""
+
+    y: int
+    u: int
+    v: int
+
+    @classmethod
+    def from_bgr(cls, b: int, g: int, r: int) -> Yuv:
+        i420 = cv2.cvtColor(np.full((2, 2, 3), (b, g, r), np.uint8), cv2.COLOR_BGR2YUV_I420)
+        return cls(int(i420[0, 0]), int(i420[2, 0]), int(i420[2, 1]))
+
+
+TRACKED = Yuv.from_bgr(0, 255, 255)  # yellow
+OCCLUDED_BOX = Yuv.from_bgr(0, 165, 255)  # orange
+LOST_TEXT = Yuv.from_bgr(40, 40, 255)  # red
+GROUND_TRUTH = Yuv.from_bgr(0, 220, 0)  # green
+WINDOW = Yuv.from_bgr(255, 255, 0)  # cyan
+PARTICLES = Yuv.from_bgr(255, 0, 255)  # magenta
+CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
+TRACK_PALETTE = tuple(
+    Yuv.from_bgr(*bgr)
+    for bgr in (
+        (255, 128, 0), (0, 200, 255), (180, 0, 255), (0, 255, 128), (255, 0, 128),
+        (128, 255, 0), (0, 128, 255), (255, 255, 255), (160, 160, 255), (255, 160, 160),
+    )
+)
+FONT = cv2.FONT_HERSHEY_SIMPLEX
+#: Coordinates are clipped to this far outside the frame before drawing (cv2 needs int32).
+_MARGIN = 1 << 15
+
+
+def _point(x: float, y: float) -> tuple[int, int]:
+    return (int(min(max(round(x), -_MARGIN), _MARGIN)), int(min(max(round(y), -_MARGIN), _MARGIN)))
+
+
+def _corners(box: Box) -> tuple[tuple[int, int], tuple[int, int]]:
+    """Top-left and bottom-right pixel of a box (inclusive, as cv2.rectangle wants)."""
+    return _point(box.x, box.y), _point(box.x + box.w - 1, box.y + box.h - 1)
+
+
+def _half(p: tuple[int, int]) -> tuple[int, int]:
+    return p[0] // 2, p[1] // 2
+
+
+class Canvas:
+    """The Y, U, V planes of one I420 buffer, with shapes drawn in all three."""
+
+    def __init__(self, buffer: np.ndarray) -> None:
+        self.height = buffer.shape[0] * 2 // 3
+        self.width = buffer.shape[1]
+        self.y, self.u, self.v = i420_planes(buffer, self.width, self.height)
+
+    def rectangle(self, p0: tuple[int, int], p1: tuple[int, int], colour: Yuv, thickness: int,
+                  ) -> None:
+        """Outline (``thickness`` > 0) or fill (``thickness`` = -1) the rectangle p0..p1."""
+        cv2.rectangle(self.y, p0, p1, colour.y, thickness)
+        half = thickness if thickness < 0 else max(1, thickness // 2)
+        cv2.rectangle(self.u, _half(p0), _half(p1), colour.u, half)
+        cv2.rectangle(self.v, _half(p0), _half(p1), colour.v, half)
+
+    def circle(self, centre: tuple[int, int], radius: int, colour: Yuv) -> None:
+        """A filled disc."""
+        cv2.circle(self.y, centre, radius, colour.y, -1)
+        cv2.circle(self.u, _half(centre), max(1, radius // 2), colour.u, -1)
+        cv2.circle(self.v, _half(centre), max(1, radius // 2), colour.v, -1)
+
+    def polyline(self, points: Sequence[tuple[int, int]], colour: Yuv, thickness: int) -> None:
+        if len(points) < 2:
+            return
+        full = np.array(points, np.int32).reshape(-1, 1, 2)
+        cv2.polylines(self.y, [full], False, colour.y, thickness)
+        half = full // 2
+        cv2.polylines(self.u, [half], False, colour.u, max(1, thickness // 2))
+        cv2.polylines(self.v, [half], False, colour.v, max(1, thickness // 2))
+
+    def text(self, origin: tuple[int, int], text: str, colour: Yuv, scale: float,
+             thickness: int) -> None:
+        """Text with its baseline starting at ``origin`` (chroma drawn at half scale)."""
+        cv2.putText(self.y, text, origin, FONT, scale, colour.y, thickness, cv2.LINE_AA)
+        half = max(1, thickness // 2)
+        cv2.putText(self.u, text, _half(origin), FONT, scale / 2, colour.u, half)
+        cv2.putText(self.v, text, _half(origin), FONT, scale / 2, colour.v, half)
+
+    def dots(self, points: np.ndarray, colour: Yuv) -> None:
+        """2x2-pixel dots at ``points`` (an (N, 2) array of x, y); points outside are skipped."""
+        if points.size == 0:
+            return
+        finite = np.isfinite(points).all(axis=1)
+        cells = (points[finite] // 2).astype(np.int64)  # one chroma sample = a 2x2 luma block
+        inside = ((cells[:, 0] >= 0) & (cells[:, 0] < self.width // 2)
+                  & (cells[:, 1] >= 0) & (cells[:, 1] < self.height // 2))
+        cx, cy = cells[inside, 0], cells[inside, 1]
+        for dy in (0, 1):
+            for dx in (0, 1):
+                self.y[2 * cy + dy, 2 * cx + dx] = colour.y
+        self.u[cy, cx] = colour.u
+        self.v[cy, cx] = colour.v
+
+
+def _centres(payload: Any) -> np.ndarray:
+    """An (N, 2) array of points from boxes (x, y, w, h) or points (x, y)."""
+    arr = np.asarray(list(payload) if not isinstance(payload, np.ndarray) else payload, float)
+    if arr.ndim != 2 or arr.shape[0] == 0:
+        return np.empty((0, 2))
+    if arr.shape[1] >= 4:
+        return arr[:, :2] + arr[:, 2:4] / 2.0
+    return arr[:, :2]
+
+
+def _drawable(box: Box | None) -> bool:
+    return box is not None and all(math.isfinite(v) for v in box) and box.w > 0 and box.h > 0
+
+
+class Annotator:
+    """Draws one :class:`~vtrack.pipeline.FrameResult` per frame into an I420 buffer.
+
+    Keeps the trajectory (last ``trail`` centres) and per-track trails between calls, so call
+    ``draw`` once per frame, in order. ``gt`` is the ground truth by frame index (None = none).
+    ``width``/``height`` set line widths and text size; the planes' size comes from the buffer.
+    """
+
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        gt: Sequence[Box | None] | None = None,
+        trail: int = 30,
+    ) -> None:
+        scale = max(width, height * 16 / 9) / 1280.0  # 1.0 at 720p, 1.5 at 1080p
+        self.thickness = max(1, round(2 * scale))
+        self.font_scale = max(0.35, 0.7 * scale)
+        self.gt = gt
+        self.trail: deque[tuple[int, int] | None] = deque(maxlen=max(trail, 1))
+        self.track_trail = max(2, trail // 2)
+        self._tracks: dict[int, deque[tuple[int, int]]] = {}
+        self._last_seen: dict[int, int] = {}
+
+    def draw(self, i420_buffer: np.ndarray, result: FrameResult) -> None:
+        """Draw ``result`` into ``i420_buffer`` (an ``(h * 3 // 2, w)`` I420 array) in place."""
+        canvas = Canvas(i420_buffer)
+        t = self.thickness
+        if self.gt is not None and result.index < len(self.gt):
+            gt_box = self.gt[result.index]
+            if _drawable(gt_box):
+                canvas.rectangle(*_corners(gt_box), GROUND_TRUTH, t)
+        for kind, payload in result.overlays:
+            if kind == "window":
+                box = payload.as_box() if isinstance(payload, Window) else Box(*payload)
+                canvas.rectangle(*_corners(box), WINDOW, 1)
+            elif kind == "particles":
+                canvas.dots(_centres(payload), PARTICLES)
+        box = result.box
+        colour = OCCLUDED_BOX if result.state == OCCLUDED else TRACKED
+        self.trail.append(_point(box.cx, box.cy) if _drawable(box) else None)
+        for run in self._runs(self.trail):
+            canvas.polyline(run, colour, max(1, t // 2))
+        if _drawable(box):
+            canvas.rectangle(*_corners(box), colour, t)
+            canvas.circle(_point(box.cx, box.cy), t + 1, colour)
+        self._draw_tracks(canvas, result)
+        self._caption(canvas, result.state)
+
+    @staticmethod
+    def _runs(points: Iterable[tuple[int, int] | None]) -> list[list[tuple[int, int]]]:
+        """Consecutive stretches of the trail without a gap (frames with no box break it)."""
+        runs: list[list[tuple[int, int]]] = [[]]
+        for p in points:
+            if p is None:
+                runs.append([])
+            else:
+                runs[-1].append(p)
+        return [r for r in runs if len(r) > 1]
+
+    def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> None:
+        t = self.thickness
+        for track in result.tracks:
+            if track.state != "confirmed" or not _drawable(track.box):
+                continue
+            colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
+            b = track.box
+            trail = self._tracks.setdefault(track.id, deque(maxlen=self.track_trail))
+            trail.append(_point(b.cx, b.cy))
+            self._last_seen[track.id] = result.index
+            canvas.polyline(list(trail), colour, max(1, t // 2))
+            p0, p1 = _corners(b)
+            canvas.rectangle(p0, p1, colour, t)
+            canvas.text((p0[0], p0[1] - 2 * t), str(track.id), colour, self.font_scale * 0.8, t)
+        stale = [i for i, seen in self._last_seen.items() if result.index - seen > self.track_trail]
+        for track_id in stale:
+            del self._tracks[track_id], self._last_seen[track_id]
+
+    def _caption(self, canvas: Canvas, state: str) -> None:
+        text = state.upper()
+        t = self.thickness
+        (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
+        pad = 2 * t + 2
+        x0 = canvas.width - w - 2 * pad if state == LOST else 0
+        colour = {LOST: LOST_TEXT, OCCLUDED: OCCLUDED_BOX}.get(state, TRACKED)
+        canvas.rectangle((x0, 0), (x0 + w + 2 * pad, h + baseline + 2 * pad), CAPTION_BACKGROUND,
+                         -1)
+        canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, t)

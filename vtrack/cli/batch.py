@@ -1,0 +1,124 @@
+"""``vtrack batch FOLDER``: every input of a folder with every configuration, in parallel."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import click
+from tqdm import tqdm
+
+from vtrack.batch import (
+    DaskExecutor,
+    Executor,
+    LocalExecutor,
+    RunOptions,
+    cpu_count,
+    find_inputs,
+    plan,
+    run_batch,
+)
+from vtrack.cli.run import command as run_command
+from vtrack.cli.run import default_out_dir
+from vtrack.config import DEFAULT_CONFIG, Config, load_config
+from vtrack.errors import ConfigError
+
+
+def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
+    """Add ``vtrack run``'s own options of these parameter names (same flags, help, defaults)."""
+    declared = {param.name: param for param in run_command.params}
+
+    def add(command: click.Command) -> click.Command:
+        command.params.extend(declared[name] for name in names)
+        return command
+
+    return add
+
+
+def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
+    """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
+    configs: dict[str, Config] = {}
+    for spec in specs or (DEFAULT_CONFIG,):
+        config = load_config(spec).with_overrides(list(overrides))
+        if config.name in configs:
+            raise ConfigError(
+                f"--config {spec}: another config is also named '{config.name}' "
+                f"({configs[config.name].source}); results are kept per name, rename one"
+            )
+        configs[config.name] = config
+    return configs
+
+
+@_run_options("overrides", "no_video", "preset", "crf", "seed", "max_frames", "quiet")
+@click.command("batch")
+@click.argument("folder", type=click.Path(path_type=Path))
+@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
+              help="Tracker config, a TOML file or a shipped name; repeat to run every input "
+                   "with each. Default: s0.")
+@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
+              help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
+                   "Default: ./vtrack-out/<folder name>/")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
+              help="Local worker processes. Default: the number of cores.")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="Run on this Dask distributed scheduler (tcp://host:8786) instead; workers "
+                   "must see the input and output paths. Needs: pip install 'vtrack[dask]'.")
+@click.option("--scheduler-timeout", type=click.FloatRange(min=0.1), default=10.0,
+              show_default=True, metavar="SECONDS", help="Give up connecting to --scheduler "
+                                                         "after this long.")
+@click.option("--gt-origin", type=click.Choice(["auto", "0", "1"]), default="auto",
+              show_default=True,
+              help="Origin of ground-truth boxes. auto: 1 (OTB's MATLAB convention) for "
+                   "groundtruth*.txt inside sequence folders, 0 for name.gt.txt / name.txt "
+                   "beside videos.")
+@click.option("--force", is_flag=True,
+              help="Run again input x config pairs whose results are already complete.")
+def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
+            jobs: int | None, scheduler: str | None, scheduler_timeout: float, gt_origin: str,
+            force: bool, overrides: tuple[str, ...], no_video: bool, preset: str, crf: int,
+            seed: int, max_frames: int | None, quiet: bool) -> None:
+    """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
+    of `vtrack run`) and DIR/summary.csv.
+
+    Inputs are video files (ground truth beside them: name.gt.txt or name.txt, MOTChallenge
+    name.mot.txt) and sequence folders holding img/ (ground truth inside: groundtruth_rect.txt
+    or groundtruth.txt, MOTChallenge gt.txt). Without ground truth, single-target configs
+    start from the box in name.init.txt (init.txt in a sequence folder). Results already
+    complete are skipped (resume) unless --force. A failing input does not stop the others;
+    the exit code is 1 if any failed.
+    """
+    if scheduler and jobs is not None:
+        raise click.UsageError("--jobs and --scheduler exclude each other")
+    configs = _configs(config_specs, overrides)
+    inputs = find_inputs(folder, None if gt_origin == "auto" else int(gt_origin))
+    workers = jobs or cpu_count()
+    executor: Executor = (DaskExecutor(scheduler, scheduler_timeout) if scheduler
+                          else LocalExecutor(workers))
+    out_dir = out_dir or default_out_dir(str(folder))
+    options = RunOptions(video=not no_video, preset=preset, crf=crf, seed=seed,
+                         max_frames=max_frames)
+    batch = plan(inputs, configs, out_dir, options, threads=max(1, cpu_count() // workers),
+                 force=force)
+    summary_path = out_dir / "summary.csv"
+    outcomes = []
+    with tqdm(total=len(batch.order), unit="run", desc="batch", dynamic_ncols=True,
+              disable=quiet or not sys.stderr.isatty()) as bar:
+        for outcome in run_batch(batch, executor, summary_path):
+            outcomes.append(outcome)
+            if not quiet:
+                bar.write(outcome.line(), file=sys.stdout)
+            bar.update()
+    counts: dict[str, int] = {}
+    for outcome in outcomes:
+        counts[outcome.status] = counts.get(outcome.status, 0) + 1
+    if not quiet:
+        tally = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
+        click.echo(f"{len(outcomes)} runs ({tally}) -> {summary_path}")
+    failed = [o for o in outcomes if not o.ok]
+    for outcome in failed:
+        click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.status}: "
+                   f"{outcome.error}", err=True)
+    if failed:
+        sys.exit(1)
+

@@ -1,0 +1,239 @@
+"""Multi-target metrics: CLEAR MOT and the identity measures, as the MOTChallenge devkit does them.
+
+- **CLEAR MOT** (Bernardin & Stiefelhagen, "Evaluating Multiple Object Tracking Performance:
+  The CLEAR MOT Metrics", EURASIP JIVP 2008). A ground-truth box and a track box may be matched
+  when their IoU is >= 0.5. Frame by frame: a pair matched before (the object's last matched
+  track) stays matched if it still may be; the other objects and tracks are matched by a
+  minimum-cost assignment (Hungarian) on ``1 - IoU``; a matched object whose last track was a
+  different one is an **id switch** (counted once, on the frame it happens). Unmatched objects
+  are **misses**, unmatched track boxes **false positives**.
+  ``MOTA = 1 - (misses + false positives + id switches) / ground-truth boxes``.
+  **MOTP is the mean IoU of the matched pairs** (0..1, higher is better: the MOTChallenge
+  devkit's convention; py-motmetrics reports ``1 - IoU`` instead).
+  An object is **mostly tracked** when matched in >= 80% of the frames it is present,
+  **mostly lost** below 20%, partially tracked otherwise.
+- **IDF1 / IDP / IDR** (Ristani et al., "Performance Measures and a Data Set for Multi-Target,
+  Multi-Camera Tracking", ECCV 2016 workshops). Each ground-truth identity is paired with at most
+  one track identity (and vice versa) by a global assignment that maximises the number of frames
+  in which the paired boxes overlap with IoU >= 0.5 (the identity true positives, IDTP).
+  ``IDF1 = 2 IDTP / (ground-truth boxes + track boxes)``, ``IDP = IDTP / track boxes``,
+  ``IDR = IDTP / ground-truth boxes``.
+
+These are the definitions py-motmetrics implements; the assignment is done here by a small
+Hungarian solver (:func:`linear_assignment`), so neither SciPy nor py-motmetrics (which calls
+``np.asfarray``, gone in NumPy 2) is needed.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from typing import Any
+
+import numpy as np
+
+from vtrack.evaluate.groundtruth import read_mot
+from vtrack.geometry import Box, iou
+
+#: A ground-truth box and a track box may be matched when their IoU is at least this.
+MATCH_IOU = 0.5
+#: An object matched in at least this share of its frames is mostly tracked ...
+MOSTLY_TRACKED = 0.8
+#: ... and below this share mostly lost.
+MOSTLY_LOST = 0.2
+
+#: Boxes per frame: ``{0-based frame: [(id, box), ...]}`` (ground truth or tracker output).
+FrameBoxes = Mapping[int, Sequence[tuple[int, Box]]]
+
+
+def linear_assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum-cost assignment of rows to columns (Kuhn-Munkres with potentials, O(n^2 m)).
+
+    ``cost`` is a finite 2-D array; a rectangular one gets ``min(rows, columns)`` pairs. Returns
+    ``(rows, cols)`` index arrays, sorted by row, like ``scipy.optimize.linear_sum_assignment``.
+    Forbidden pairs are the caller's business: give them a cost so large that any assignment
+    using one is worse than any assignment that does not, and drop them afterwards.
+    """
+    matrix = np.asarray(cost, dtype=float)
+    if matrix.ndim != 2:
+        raise ValueError(f"cost must be a 2-D array, got shape {matrix.shape}")
+    if not np.isfinite(matrix).all():
+        raise ValueError("cost must be finite")
+    transposed = matrix.shape[0] > matrix.shape[1]
+    c = matrix.T if transposed else matrix
+    n, m = c.shape
+    if n == 0:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    # Shortest augmenting paths with row potentials u and column potentials v; column 0 is a
+    # virtual start column; owner[j] is the 1-based row holding column j (0: free).
+    u = np.zeros(n + 1)
+    v = np.zeros(m + 1)
+    owner = np.zeros(m + 1, np.intp)
+    way = np.zeros(m + 1, np.intp)
+    for row in range(1, n + 1):
+        owner[0] = row
+        j0 = 0
+        slack = np.full(m + 1, np.inf)
+        used = np.zeros(m + 1, bool)
+        while True:
+            used[j0] = True
+            i0 = owner[j0]
+            free = ~used[1:]
+            reduced = c[i0 - 1] - u[i0] - v[1:]
+            better = free & (reduced < slack[1:])
+            slack[1:][better] = reduced[better]
+            way[1:][better] = j0
+            candidates = np.where(free, slack[1:], np.inf)
+            j1 = int(np.argmin(candidates)) + 1
+            delta = candidates[j1 - 1]
+            u[owner[used]] += delta
+            v[used] -= delta
+            slack[1:][free] -= delta
+            j0 = j1
+            if owner[j0] == 0:
+                break
+        while j0:  # flip the augmenting path
+            j1 = way[j0]
+            owner[j0] = owner[j1]
+            j0 = j1
+    cols = np.flatnonzero(owner[1:])
+    rows = owner[1:][cols] - 1
+    if transposed:
+        rows, cols = cols, rows
+    order = np.argsort(rows)
+    return rows[order], cols[order]
+
+
+def _iou_matrix(a: Sequence[Box], b: Sequence[Box]) -> np.ndarray:
+    return np.array([[iou(x, y) for y in b] for x in a], dtype=float).reshape(len(a), len(b))
+
+
+def _forbidding(cost: np.ndarray, allowed: np.ndarray) -> np.ndarray:
+    """``cost`` with forbidden pairs priced so no minimum assignment prefers one to an allowed
+    pair (py-motmetrics' ``add_expensive_edges``: more than ``(2r - 1)`` times the largest
+    allowed cost, ``r`` the number of pairs an assignment makes)."""
+    if not allowed.any():
+        return np.zeros_like(cost)
+    bound = float(np.abs(cost[allowed]).max()) + 1.0
+    return np.where(allowed, cost, 2.0 * min(cost.shape) * bound + 1.0)
+
+
+def _ratio(numerator: float, denominator: float) -> float | None:
+    return numerator / denominator if denominator > 0 else None
+
+
+def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int) -> dict[str, Any]:
+    """CLEAR MOT and identity measures of ``tracks`` against ``gt`` over frames ``0..frames-1``.
+
+    Boxes of other frames are ignored. Returns ``mota``, ``motp`` (mean IoU of matches),
+    ``idf1``, ``idp``, ``idr`` (floats; None when undefined: no ground-truth box, no match, no
+    box at all), ``id_switches``, ``false_positives``, ``misses``, ``matches``,
+    ``mostly_tracked``, ``partially_tracked``, ``mostly_lost``, ``gt_ids``, ``gt_boxes``,
+    ``track_ids``, ``track_boxes`` and ``frames`` (ints). See the module docstring.
+    """
+    last_match: dict[int, int] = {}  # object id -> track id it was last matched to
+    switches = false_positives = misses = 0
+    overlaps: list[float] = []
+    present: Counter[int] = Counter()  # frames each object is present
+    matched: Counter[int] = Counter()  # frames each object is matched
+    track_boxes: Counter[int] = Counter()
+    pair_frames: Counter[tuple[int, int]] = Counter()  # frames a pair overlaps enough (IDF1)
+    for frame in range(frames):
+        objects = list(gt.get(frame, ()))
+        hyps = list(tracks.get(frame, ()))
+        oids = [o for o, _ in objects]
+        hids = [h for h, _ in hyps]
+        present.update(oids)
+        track_boxes.update(hids)
+        overlap = _iou_matrix([b for _, b in objects], [b for _, b in hyps])
+        allowed = overlap >= MATCH_IOU
+        for i, j in zip(*np.nonzero(allowed), strict=True):
+            pair_frames[oids[i], hids[j]] += 1
+        pairs: list[tuple[int, int]] = []
+        free_o = np.ones(len(oids), bool)
+        free_h = np.ones(len(hids), bool)
+        # 1. Keep the correspondences made before while they still may be matched.
+        for i, o in enumerate(oids):
+            if o in last_match and last_match[o] in hids:
+                j = hids.index(last_match[o])
+                if free_h[j] and allowed[i, j]:
+                    pairs.append((i, j))
+                    free_o[i] = free_h[j] = False
+        # 2. Minimum total 1 - IoU for the rest; a new partner of a matched object is a switch.
+        rest_o, rest_h = np.flatnonzero(free_o), np.flatnonzero(free_h)
+        sub_allowed = allowed[np.ix_(rest_o, rest_h)]
+        if sub_allowed.any():
+            cost = _forbidding(1.0 - overlap[np.ix_(rest_o, rest_h)], sub_allowed)
+            for r, c in zip(*linear_assignment(cost), strict=True):
+                if not sub_allowed[r, c]:
+                    continue
+                i, j = int(rest_o[r]), int(rest_h[c])
+                o, h = oids[i], hids[j]
+                if o in last_match and last_match[o] != h:
+                    switches += 1
+                last_match[o] = h
+                pairs.append((i, j))
+                free_o[i] = free_h[j] = False
+        matched.update(oids[i] for i, _ in pairs)
+        overlaps.extend(float(overlap[i, j]) for i, j in pairs)
+        misses += int(free_o.sum())
+        false_positives += int(free_h.sum())
+
+    gt_boxes = sum(present.values())
+    hyp_boxes = sum(track_boxes.values())
+    ratios = [matched[o] / present[o] for o in present]
+    return {
+        "mota": _ratio(gt_boxes - misses - false_positives - switches, gt_boxes),
+        "motp": float(np.mean(overlaps)) if overlaps else None,
+        **_identity_scores(pair_frames, list(present), list(track_boxes), gt_boxes, hyp_boxes),
+        "id_switches": switches,
+        "false_positives": false_positives,
+        "misses": misses,
+        "matches": len(overlaps),
+        "mostly_tracked": sum(r >= MOSTLY_TRACKED for r in ratios),
+        "partially_tracked": sum(MOSTLY_LOST <= r < MOSTLY_TRACKED for r in ratios),
+        "mostly_lost": sum(r < MOSTLY_LOST for r in ratios),
+        "gt_ids": len(present),
+        "gt_boxes": gt_boxes,
+        "track_ids": len(track_boxes),
+        "track_boxes": hyp_boxes,
+        "frames": frames,
+    }
+
+
+def _identity_scores(
+    pair_frames: Mapping[tuple[int, int], int],
+    oids: list[int],
+    hids: list[int],
+    gt_boxes: int,
+    hyp_boxes: int,
+) -> dict[str, float | None]:
+    """IDF1, IDP, IDR from the frames each (object, track) pair overlaps (Ristani et al. 2016)."""
+    idtp = 0
+    if oids and hids:
+        counts = np.zeros((len(oids), len(hids)))
+        row = {o: i for i, o in enumerate(oids)}
+        col = {h: j for j, h in enumerate(hids)}
+        for (o, h), n in pair_frames.items():
+            counts[row[o], col[h]] = n
+        rows, cols = linear_assignment(-counts)  # maximise the identity true positives
+        idtp = int(counts[rows, cols].sum())
+    return {
+        "idf1": _ratio(2 * idtp, gt_boxes + hyp_boxes),
+        "idp": _ratio(idtp, hyp_boxes),
+        "idr": _ratio(idtp, gt_boxes),
+    }
+
+
+def mot_summary(
+    tracks: dict[int, list[tuple[int, Box]]], gt_path: str | PathLike[str], frames: int
+) -> dict[str, Any]:
+    """Score a run's confirmed tracks against a MOTChallenge ``gt.txt`` (see :func:`evaluate_mot`).
+
+    ``tracks`` is ``{0-based frame: [(track id, box), ...]}``, ``frames`` the number of frames
+    the run processed: ground truth beyond them is not scored. The ground truth is read with
+    :func:`~vtrack.evaluate.groundtruth.read_mot` (ignored rows and non-pedestrian classes
+    dropped); an unreadable file raises :class:`~vtrack.errors.InputError`.
+    """
+    return evaluate_mot(read_mot(gt_path), tracks, frames)

@@ -1,0 +1,58 @@
+"""File-system checks and names shared by the readers and writers.
+
+Writers never write the final name directly: they write :func:`temp_path` and rename it when the
+file is complete, so a complete-looking file is complete.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+
+from vtrack.errors import InputError, OutputError
+
+
+def os_reason(exc: BaseException) -> str:
+    """The short reason of an OS or FFmpeg error (``Permission denied``), without errno noise."""
+    return getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+
+
+def check_input_path(path: str) -> None:
+    """Raise InputError when ``path`` does not exist or cannot be read."""
+    if not os.path.lexists(path):
+        raise InputError(f"{path}: no such file")
+    if not os.path.exists(path):
+        raise InputError(f"{path}: no such file (broken link)")
+    if not os.access(path, os.R_OK):
+        raise InputError(f"{path}: cannot be read (permission denied)")
+
+
+def temp_path(path: Path) -> Path:
+    """Where a writer writes ``path`` until it is complete: ``dir/.name.tmp.ext``.
+
+    The extension is kept so FFmpeg still picks the container format from the name.
+    """
+    return path.with_name(f".{path.stem}.tmp{path.suffix}")
+
+
+def remove_quietly(path: Path) -> None:
+    """Delete a temporary file if it is there (a failure to delete is not worth reporting)."""
+    with contextlib.suppress(OSError):
+        path.unlink(missing_ok=True)
+
+
+def prepare_output_dir(folder: Path) -> Path:
+    """Create ``folder`` (and parents) and check a file can be written in it.
+
+    Raises OutputError naming the folder and the reason (a parent is a file, read-only file
+    system, permission denied ...). Call it before decoding anything.
+    """
+    probe = folder / ".vtrack-write-test"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
+    return folder

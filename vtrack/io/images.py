@@ -1,0 +1,120 @@
+"""Image-sequence folders (OTB layout ``seq/img/0001.jpg`` or images directly in the folder).
+
+Images are sorted by name with numbers compared as numbers (``2.png`` before ``10.png``) and
+decoded with PyAV in the reader thread. A sequence whose first image is grey becomes
+:class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
+converted to match). There are no timestamps: ``time_s = index / fps``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import av
+import cv2
+import numpy as np
+
+from vtrack.errors import InputError, PartialInputError
+from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.io.files import os_reason
+from vtrack.io.source import InputInfo, Source
+
+IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
+#: Frame rate of an image sequence unless told otherwise.
+DEFAULT_FPS = 30.0
+
+
+def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
+    """Sort key comparing digit runs as numbers: ``img2`` < ``img10``."""
+    return tuple(
+        (0, int(part)) if part.isdigit() else (1, part.lower())
+        for part in re.split(r"(\d+)", name)
+        if part
+    )
+
+
+def list_images(folder: Path) -> list[Path]:
+    """The images of a sequence folder in frame order (``folder/img/`` if it exists)."""
+    where = folder / "img" if (folder / "img").is_dir() else folder
+    files = [p for p in where.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file()]
+    return sorted(files, key=lambda p: natural_key(p.name))
+
+
+def read_image(path: Path) -> np.ndarray:
+    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR.
+
+    Raises InputError naming the file when FFmpeg cannot decode it.
+    """
+    try:
+        with av.open(str(path)) as container:
+            picture = next(container.decode(video=0))
+            if picture.format.name.startswith(("gray", "ya")):
+                return picture.to_ndarray(format="gray")
+            return picture.to_ndarray(format="bgr24")
+    except (av.FFmpegError, OSError, StopIteration) as exc:
+        reason = "no picture" if isinstance(exc, StopIteration) else os_reason(exc)
+        raise InputError(f"{path}: not an image FFmpeg can decode ({reason})") from None
+
+
+class ImageFolderSource(Source):
+    """The images of a folder as frames, in natural name order."""
+
+    def __init__(self, folder: str, fps: float | None = None) -> None:
+        root = Path(folder)
+        try:
+            self._files = list_images(root)
+        except OSError as exc:
+            raise InputError(f"{folder}: cannot list the folder ({os_reason(exc)})") from None
+        if not self._files:
+            suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
+            raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/")
+        self._first = read_image(self._files[0])
+        height, width = self._first.shape[:2]
+        fps = fps or DEFAULT_FPS
+        name = root.resolve().name
+        if name == "img":  # given the img/ folder itself: name it after the sequence
+            name = root.resolve().parent.name
+        super().__init__(
+            InputInfo(
+                path=folder,
+                kind="images",
+                name=name,
+                width=width,
+                height=height,
+                fps=fps,
+                frame_count=len(self._files),
+                duration_s=len(self._files) / fps,
+                codec=self._files[0].suffix.lower().lstrip("."),
+                pix_fmt="gray" if self._first.ndim == 2 else "bgr24",
+            )
+        )
+
+    def _frames(self) -> Iterator[Frame]:
+        fps = self.info.fps or DEFAULT_FPS
+        size = self._first.shape[:2]
+        first, self._first = self._first, None
+        for index, path in enumerate(self._files):
+            try:
+                pixels = first if index == 0 else read_image(path)
+            except InputError as exc:
+                raise PartialInputError(f"{exc} (stopped at frame {index})", index) from None
+            if pixels.shape[:2] != size:
+                raise PartialInputError(
+                    f"{path}: image is {pixels.shape[1]}x{pixels.shape[0]}, the sequence is "
+                    f"{size[1]}x{size[0]} (stopped at frame {index})",
+                    index,
+                )
+            time_s = index / fps
+            if first.ndim == 2:  # the first image decides: a sequence is grey or colour
+                if pixels.ndim == 3:
+                    pixels = cv2.cvtColor(pixels, cv2.COLOR_BGR2GRAY)
+                yield GrayFrame(index, time_s, pixels)
+            else:
+                if pixels.ndim == 2:
+                    pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
+                yield BgrFrame(index, time_s, pixels)
+
+    def _release(self) -> None:
+        """Nothing stays open: each image is opened and closed by :func:`read_image`."""

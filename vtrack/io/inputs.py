@@ -1,0 +1,32 @@
+"""``open_source``: one entry point for every kind of input."""
+
+from __future__ import annotations
+
+import os
+
+from vtrack.errors import ConfigError
+from vtrack.io.files import check_input_path
+from vtrack.io.images import ImageFolderSource
+from vtrack.io.raw import RawFormat, RawSource
+from vtrack.io.source import Source
+from vtrack.io.video import VideoSource
+
+
+def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None) -> Source:
+    """Open an input and decode its first frame; raise InputError if that is impossible.
+
+    - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
+    - ``spec`` a folder: an image sequence (``folder/img/*`` or ``folder/*``) at ``fps``
+      (default 30) frames per second;
+    - anything else: a video file FFmpeg can open.
+    """
+    if raw is not None:
+        return RawSource(spec, raw)
+    if spec == "-":
+        raise ConfigError(
+            "-: reading frames from stdin needs their format: --raw WxH --pix-fmt FMT --fps N"
+        )
+    check_input_path(spec)
+    if os.path.isdir(spec):
+        return ImageFolderSource(spec, fps=fps)
+    return VideoSource(spec)

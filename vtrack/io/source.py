@@ -1,0 +1,100 @@
+"""What every reader hands over: :class:`InputInfo` about the input and a :class:`Source` of frames.
+
+A source is opened by :func:`vtrack.io.open_source`, which checks the input and decodes its first
+frame before returning (so a bad input fails at once with an :class:`~vtrack.errors.InputError`).
+Iterating it decodes in a background thread a few frames ahead of the consumer; closing it (or
+leaving its ``with`` block) stops that thread and releases the file, also mid-stream.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from types import TracebackType
+from typing import Any, ClassVar, Literal
+
+from vtrack.frame import Frame
+from vtrack.io.threads import Prefetcher
+
+InputKind = Literal["video", "images", "raw"]
+
+
+@dataclass
+class InputInfo:
+    """What is known about an input when it is opened (``run.json`` records it)."""
+
+    #: The input as the user gave it (path, folder, ``-``).
+    path: str
+    kind: InputKind
+    #: Short name for output folders: file stem, folder name or ``stdin``.
+    name: str
+    #: Size of the frames the source yields (after any rotation was applied).
+    width: int
+    height: int
+    #: Nominal frame rate (None when the container does not say).
+    fps: float | None
+    #: Number of frames, exact or the container's estimate (None when unknown, e.g. a pipe).
+    frame_count: int | None
+    duration_s: float | None
+    codec: str | None
+    pix_fmt: str | None
+    #: Degrees (0, 90, 180, 270) the stored pictures were turned counter-clockwise to display
+    #: them upright, from the stream's display matrix. Frames come out already turned.
+    rotation: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+class Source(ABC):
+    """An opened input: ``info``, one pass over its frames in order, ``close()``.
+
+    Frames are decoded ``depth`` frames ahead in a background thread. A source can be iterated
+    once. If the input breaks part way, iteration yields every good frame and then raises
+    :class:`~vtrack.errors.PartialInputError` saying where it stopped.
+    """
+
+    #: Frames decoded ahead of the consumer.
+    depth: ClassVar[int] = 4
+
+    def __init__(self, info: InputInfo) -> None:
+        self.info = info
+        self._prefetch: Prefetcher[Frame] | None = None
+        self._closed = False
+
+    @abstractmethod
+    def _frames(self) -> Iterator[Frame]:
+        """Produce the frames (runs in the reader thread)."""
+
+    @abstractmethod
+    def _release(self) -> None:
+        """Close files and containers; called once, after the reader thread has stopped."""
+
+    def __iter__(self) -> Iterator[Frame]:
+        if self._closed:
+            raise RuntimeError(f"{self.info.path}: the source is closed")
+        if self._prefetch is not None:
+            raise RuntimeError(f"{self.info.path}: a source can be iterated only once")
+        self._prefetch = Prefetcher(self._frames(), self.depth, f"vtrack-read:{self.info.name}")
+        return iter(self._prefetch)
+
+    def close(self) -> None:
+        """Stop decoding and release the input. Safe to call twice and mid-stream."""
+        if self._closed:
+            return
+        self._closed = True
+        finished = self._prefetch.close() if self._prefetch is not None else True
+        if finished:  # else the reader is stuck in a blocking read and still owns the file
+            self._release()
+
+    def __enter__(self) -> Source:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()

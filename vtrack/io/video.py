@@ -1,0 +1,191 @@
+"""Video files through PyAV: frames in their decoded layout, timestamps, rotation, truncation.
+
+yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no full-frame
+colour conversion); anything else is converted once to BGR. ``time_s`` is each frame's
+presentation time relative to the first frame, so variable frame rate input keeps its timing.
+A display-matrix rotation (phone footage) is applied to the pixels and recorded in
+``info.rotation``.
+
+A truncated file often decodes "successfully" to fewer frames than its container promises;
+that is reported like a decoding error, as a :class:`~vtrack.errors.PartialInputError` after the
+good frames.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from pathlib import Path
+
+import av
+import cv2
+
+from vtrack.errors import InputError, PartialInputError
+from vtrack.frame import BgrFrame, Frame, I420Frame
+from vtrack.io.files import os_reason
+from vtrack.io.planes import ROTATE_CODES, rotate_i420
+from vtrack.io.source import InputInfo, Source
+
+#: Decoded layouts handed over as I420 planes without conversion.
+I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
+#: Slack when comparing the decoded length with the container's: a few frames or half a second.
+_END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
+
+
+def _quarter_turns(degrees: float) -> int:
+    """A display-matrix angle as 0, 90, 180 or 270 degrees counter-clockwise."""
+    return int(round(degrees / 90.0)) % 4 * 90
+
+
+class VideoSource(Source):
+    """A video file (anything FFmpeg opens), decoded with frame threads in a reader thread."""
+
+    def __init__(self, path: str) -> None:
+        try:
+            container = av.open(path)
+        except PermissionError:
+            raise InputError(f"{path}: cannot be read (permission denied)") from None
+        except FileNotFoundError:
+            raise InputError(f"{path}: no such file") from None
+        except av.FFmpegError as exc:
+            raise InputError(
+                f"{path}: not a video FFmpeg can decode ({os_reason(exc)})"
+            ) from None
+        except OSError as exc:
+            raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
+        try:
+            info = self._open(path, container)
+        except BaseException:
+            container.close()
+            raise
+        super().__init__(info)
+
+    def _open(self, path: str, container: av.container.InputContainer) -> InputInfo:
+        """Pick the video stream, decode the first frame, describe the input."""
+        if not container.streams.video:
+            kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
+            raise InputError(f"{path}: no video stream (streams: {kinds})")
+        self._container = container
+        self._stream = stream = container.streams.video[0]
+        stream.thread_type = "AUTO"
+        self._decoded = container.decode(stream)
+        try:
+            self._first = next(self._decoded)
+        except StopIteration:
+            raise InputError(f"{path}: no frame could be decoded") from None
+        except av.FFmpegError as exc:
+            raise InputError(
+                f"{path}: not a video FFmpeg can decode ({os_reason(exc)})"
+            ) from None
+
+        rate = stream.guessed_rate or stream.average_rate
+        fps = float(rate) if rate else None
+        self._end_s = self._promised_end_s()
+        start_s = self._first.time
+        duration = None
+        if self._end_s is not None and start_s is not None:
+            duration = self._end_s - start_s
+        frame_count = stream.frames or None
+        if frame_count is None and duration is not None and fps:
+            frame_count = round(duration * fps)
+
+        self._rotation = _quarter_turns(self._first.rotation)
+        width, height = self._first.width, self._first.height
+        self._coded_size = (width, height)
+        if self._rotation in (90, 270):
+            width, height = height, width
+        return InputInfo(
+            path=path,
+            kind="video",
+            name=Path(path).stem,
+            width=width,
+            height=height,
+            fps=fps,
+            frame_count=frame_count,
+            duration_s=duration,
+            codec=stream.codec_context.name,
+            pix_fmt=self._first.format.name,
+            rotation=self._rotation,
+        )
+
+    def _promised_end_s(self) -> float | None:
+        """Where the container says the video stream ends (seconds, stream clock), if it says.
+
+        The whole container's duration counts only when the video is its only stream (an audio
+        track may run longer than the video).
+        """
+        stream, container = self._stream, self._container
+        if stream.duration and stream.time_base:
+            return float((stream.start_time or 0) * stream.time_base + stream.duration *
+                         stream.time_base)
+        if container.duration and len(container.streams) == 1:
+            return ((container.start_time or 0) + container.duration) / av.time_base
+        return None
+
+    def _frames(self) -> Iterator[Frame]:
+        info = self.info
+        fps = info.fps or 30.0
+        first, self._first = self._first, None  # do not keep a decoded picture alive
+        t0 = last_time = first.time
+        index = 0
+        even = info.width % 2 == 0 and info.height % 2 == 0
+        try:
+            for decoded in itertools.chain((first,), self._decoded):
+                if (decoded.width, decoded.height) != self._coded_size:
+                    raise PartialInputError(
+                        f"{info.path}: the frame size changed from {self._coded_size[0]}x"
+                        f"{self._coded_size[1]} to {decoded.width}x{decoded.height} at frame "
+                        f"{index}; an input must keep one size",
+                        index,
+                    )
+                t = decoded.time
+                time_s = index / fps if t is None or t0 is None else t - t0
+                last_time = t if t is not None else last_time
+                if even and decoded.format.name in I420_FORMATS:
+                    planes = decoded.to_ndarray()
+                    if self._rotation:
+                        planes = rotate_i420(planes, decoded.width, decoded.height,
+                                             self._rotation)
+                    yield I420Frame(index, time_s, planes)
+                else:
+                    bgr = decoded.to_ndarray(format="bgr24")
+                    if self._rotation:
+                        bgr = cv2.rotate(bgr, ROTATE_CODES[self._rotation])
+                    yield BgrFrame(index, time_s, bgr)
+                index += 1
+        except av.FFmpegError as exc:
+            raise PartialInputError(
+                f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
+            ) from None
+        shortfall = self._shortfall(index, t0, last_time, fps)
+        if shortfall:
+            raise PartialInputError(
+                f"{info.path}: decoding stopped at frame {index} {shortfall} (truncated file?)",
+                index,
+            )
+
+    def _shortfall(
+        self, frames: int, t0: float | None, last_time: float | None, fps: float
+    ) -> str | None:
+        """How the decoded stream falls short of what the container promised, or None.
+
+        With a listed frame count, fewer frames is a shortfall unless the decoded frames still
+        reach the promised end (edit lists can hide frames); without one, the decoded frames
+        must reach the promised end within a few frames.
+        """
+        reaches_end = None
+        if self._end_s is not None and t0 is not None and last_time is not None:
+            covered = last_time + 1.0 / fps
+            reaches_end = covered >= self._end_s - max(_END_SLACK_S, _END_SLACK_FRAMES / fps)
+        listed = self._stream.frames
+        if listed:
+            return f"of the {listed} the container lists" if (
+                frames < listed and not reaches_end) else None
+        if reaches_end is False:
+            return (f"after {covered - t0:.2f} s of the {self._end_s - t0:.2f} s the container "
+                    "promises")
+        return None
+
+    def _release(self) -> None:
+        self._decoded.close()  # finish the demuxer before its container goes
+        self._container.close()

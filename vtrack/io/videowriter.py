@@ -1,0 +1,242 @@
+"""Annotated H.264 MP4 output, encoded in a background thread from reused frames.
+
+``write()`` copies the frame's I420 pixels into a reused output buffer (never into the decoded
+frame: the decoder keeps it as a reference, PERFORMANCE.md point 4), lets the caller draw on that
+copy, and queues it. The encoder thread copies it into a reused ``av.VideoFrame`` (honouring
+FFmpeg's padded line sizes) and encodes it with frame threads. Timestamps follow the input's
+(90 kHz clock), so variable frame rate input keeps its timing.
+
+The file is written under a temporary name and renamed by ``close()``, which also flushes the
+encoder; call it in a ``finally`` so an error or Ctrl-C mid-run still leaves a playable video.
+``abort()`` throws the video away instead.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+from collections.abc import Callable
+from fractions import Fraction
+from pathlib import Path
+from types import TracebackType
+
+import av
+import cv2
+import numpy as np
+
+from vtrack.errors import ConfigError, OutputError
+from vtrack.frame import Frame, I420Frame
+from vtrack.geometry import Window
+from vtrack.io.files import os_reason, remove_quietly, temp_path
+from vtrack.io.planes import i420_planes
+
+#: Clock of the output timestamps: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
+TIME_BASE = Fraction(1, 90000)
+
+Draw = Callable[[np.ndarray], None]
+
+
+class _Slot:
+    """One output picture: the packed I420 buffer the caller draws on, and the frame encoded."""
+
+    def __init__(self, width: int, height: int) -> None:
+        self.buffer = np.empty((height * 3 // 2, width), np.uint8)
+        self.frame = av.VideoFrame(width, height, "yuv420p")
+        self.pts = 0
+
+    def fill_frame(self, width: int, height: int) -> av.VideoFrame:
+        """Copy the buffer into the frame's planes (each row of a plane may be padded)."""
+        frame = self.frame
+        frame.make_writable()  # a no-op unless the encoder still holds the previous picture
+        for plane, src in zip(frame.planes, i420_planes(self.buffer, width, height), strict=True):
+            rows, cols = src.shape
+            dst = np.frombuffer(plane, np.uint8).reshape(rows, plane.line_size)
+            dst[:, :cols] = src
+        frame.pts = self.pts
+        return frame
+
+
+class VideoWriter:
+    """Encode I420 pictures to an H.264 MP4 at ``path`` (yuv420p, ``preset``, ``crf``).
+
+    ``width`` and ``height`` are the input's; yuv420p needs even sizes, so an odd last row or
+    column is left out of the video (``self.width``/``self.height`` are the encoded size).
+    """
+
+    #: Output pictures in flight between the caller and the encoder thread.
+    depth = 3
+
+    def __init__(
+        self,
+        path: Path | str,
+        width: int,
+        height: int,
+        fps: float,
+        preset: str = "ultrafast",
+        crf: int = 23,
+        codec: str = "libx264",
+    ) -> None:
+        self.path = Path(path)
+        self.width, self.height = width & ~1, height & ~1
+        if self.width <= 0 or self.height <= 0:
+            raise OutputError(f"{self.path}: cannot encode a {width}x{height} video")
+        self._temp = temp_path(self.path)
+        self._rate = Fraction(fps).limit_denominator(1001) if fps and fps > 0 else Fraction(30)
+        self._container = self._open(preset, crf, codec)
+        self._stream = self._container.streams.video[0]
+        self._free: queue.Queue[_Slot] = queue.Queue()
+        for _ in range(self.depth):
+            self._free.put(_Slot(self.width, self.height))
+        self._todo: queue.Queue[_Slot | bool] = queue.Queue()
+        self._error: BaseException | None = None
+        self._error_reported = False
+        self._frames = 0
+        self._last_pts = -1
+        self._closed = False
+        self._thread = threading.Thread(target=self._encode_loop, name="vtrack-encode",
+                                        daemon=True)
+        self._thread.start()
+
+    def _open(self, preset: str, crf: int, codec: str) -> av.container.OutputContainer:
+        """Open the encoder and create the temporary file: bad settings and unwritable places
+        fail here (ConfigError / OutputError), not in the encoder thread."""
+        container = av.open(str(self._temp), "w")  # nothing touches the disk yet
+        try:
+            stream = container.add_stream(codec, rate=self._rate)
+            stream.width, stream.height, stream.pix_fmt = self.width, self.height, "yuv420p"
+            stream.codec_context.time_base = stream.time_base = TIME_BASE
+            stream.codec_context.thread_type = "FRAME"  # +28% over slices (PERFORMANCE.md 2)
+            stream.options = {"preset": preset, "crf": str(crf)}
+            stream.codec_context.open()
+        except (av.FFmpegError, ValueError) as exc:
+            container.close()
+            raise ConfigError(
+                f"video encoder {codec} (preset {preset!r}, crf {crf}): {os_reason(exc)}"
+            ) from None
+        try:
+            container.start_encoding()  # creates the file and writes the header
+        except (av.FFmpegError, OSError) as exc:
+            container.close()
+            remove_quietly(self._temp)
+            raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
+        return container
+
+    def _encode_loop(self) -> None:
+        """Encoder thread: encode queued slots in order; ``True`` flushes and ends, ``False``
+        ends without flushing. After a failure it only recycles slots."""
+        stream, container = self._stream, self._container
+        while True:
+            item = self._todo.get()
+            if isinstance(item, bool):
+                flush = item
+                break
+            if self._error is None:
+                try:
+                    for packet in stream.encode(item.fill_frame(self.width, self.height)):
+                        container.mux(packet)
+                except BaseException as exc:  # reported to the caller by write()/close()
+                    self._error = exc
+            self._free.put(item)
+        if flush and self._error is None:
+            try:
+                for packet in stream.encode(None):
+                    container.mux(packet)
+            except BaseException as exc:
+                self._error = exc
+
+    def _raise_error(self) -> None:
+        """Raise the encoder thread's failure as an OutputError, once."""
+        if self._error is not None and not self._error_reported:
+            self._error_reported = True
+            raise OutputError(f"{self.path}: cannot write video ({os_reason(self._error)})")
+
+    def _fill(self, buffer: np.ndarray, image: Frame | np.ndarray) -> None:
+        """Copy (or convert) ``image`` into the I420 output ``buffer``."""
+        if isinstance(image, np.ndarray):
+            np.copyto(buffer, image)
+        elif isinstance(image, I420Frame) and (image.width, image.height) == (
+                self.width, self.height):
+            np.copyto(buffer, image.i420())
+        else:  # BGR/grey pictures convert straight into the buffer; odd sizes lose a row/column
+            window = Window(0, 0, self.width, self.height)
+            cv2.cvtColor(image.bgr(window), cv2.COLOR_BGR2YUV_I420, dst=buffer)
+
+    def write(
+        self, image: Frame | np.ndarray, draw: Draw | None = None, time_s: float | None = None
+    ) -> None:
+        """Queue one picture: ``image`` is an I420 buffer of the encoded size or a Frame.
+
+        The pixels are copied into a reused output buffer first, ``draw(buffer)`` may then
+        annotate that copy in place (an I420 buffer, see :mod:`vtrack.io.planes`); ``image``
+        itself is never modified and may be reused as soon as this returns. ``time_s`` is the
+        picture's time (a Frame's own by default; else ``frame number / fps``).
+        Blocks while the encoder is ``depth`` pictures behind.
+        """
+        if self._closed:
+            raise RuntimeError(f"{self.path}: the video writer is closed")
+        self._raise_error()
+        if time_s is None and isinstance(image, Frame):
+            time_s = image.time_s
+        slot = self._free.get()
+        try:
+            self._fill(slot.buffer, image)
+            if draw is not None:
+                draw(slot.buffer)
+        except BaseException:
+            self._free.put(slot)
+            raise
+        if time_s is None:
+            time_s = self._frames / self._rate
+        pts = max(round(time_s / TIME_BASE), self._last_pts + 1)  # strictly increasing
+        slot.pts = self._last_pts = pts
+        self._frames += 1
+        self._todo.put(slot)
+
+    def _finish(self, flush: bool) -> None:
+        self._closed = True
+        self._todo.put(flush)
+        self._thread.join()
+        try:
+            self._container.close()
+        except (av.FFmpegError, OSError) as exc:
+            self._error = self._error or exc
+
+    def close(self) -> None:
+        """Encode what is queued, finish the file and give it its final name.
+
+        Safe to call twice. Raises OutputError if encoding or writing failed (the partial
+        file is removed then).
+        """
+        if self._closed:
+            return
+        self._finish(flush=True)
+        if self._error is not None:
+            remove_quietly(self._temp)
+            self._raise_error()
+            return
+        try:
+            os.replace(self._temp, self.path)
+        except OSError as exc:
+            raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
+
+    def abort(self) -> None:
+        """Stop without a video: nothing is renamed and the temporary file is removed."""
+        if not self._closed:
+            self._finish(flush=False)
+        remove_quietly(self._temp)
+
+    @property
+    def frames_written(self) -> int:
+        return self._frames
+
+    def __enter__(self) -> VideoWriter:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()

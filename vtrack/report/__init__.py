@@ -1,0 +1,190 @@
+"""``vtrack report``: an overlap report from result folders (``vtrack run`` or ``vtrack batch``).
+
+:func:`build_report` finds every ``run.json`` below the given folders and writes into the report
+folder ``index.html`` (opens from disk: PNG plots in ``plots/`` referenced relatively),
+``summary.md`` and ``summary.csv``:
+
+- per input: overlap over time for each configuration with occluded / lost frames shaded, and
+  the OTB success plot (AUC in the legend) beside the precision plot (value at 20 px);
+- over all inputs: the success and precision plots averaged over inputs;
+- tables of AUC / precision@20 / mean IoU / fps / lost frames per input and configuration and
+  averaged per configuration, best per column highlighted; multi-target runs get a table of the
+  metrics their ``run.json`` records (MOTA, MOTP, IDF1, ID switches ...);
+- batch rows that failed without results, from the batch's ``summary.csv``.
+
+Scores follow the OTB definitions of :mod:`vtrack.evaluate.metrics` (see :mod:`.runs`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from vtrack import __version__
+from vtrack.errors import InputError, OutputError
+from vtrack.report import pages, plots, tables
+from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
+
+DEFAULT_TITLE = "vtrack report"
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote and read."""
+
+    out_dir: Path
+    index: Path
+    markdown: Path
+    csv: Path
+    plots: list[Path]
+    runs: list[RunResult]
+    warnings: list[str]
+
+
+def _slugs(names: Sequence[str]) -> dict[str, str]:
+    """A distinct file-name-safe slug per name."""
+    slugs: dict[str, str] = {}
+    for name in names:
+        base = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "input"
+        slug, n = base, 1
+        while slug in slugs.values():
+            n += 1
+            slug = f"{base}-{n}"
+        slugs[name] = slug
+    return slugs
+
+
+def _distinct_labels(runs: list[RunResult]) -> None:
+    """Give runs of the same input and config name (e.g. from two batch folders) distinct
+    config labels, suffixed with where they differ: ``s0 (batch-a)``."""
+    groups: dict[tuple[str, str], list[RunResult]] = {}
+    for run in runs:
+        groups.setdefault((run.input, run.config), []).append(run)
+    for group in (g for g in groups.values() if len(g) > 1):
+        common = os.path.commonpath([r.folder for r in group])
+        paths = [os.path.relpath(r.folder, common) for r in group]
+        heads = [p.split(os.sep)[0] for p in paths]
+        where = heads if len(set(heads)) == len(heads) else paths
+        for run, place in zip(group, where, strict=True):
+            run.config = f"{run.config} ({place})"
+
+
+def _group(runs: Sequence[RunResult], key: Callable[[RunResult], str]
+           ) -> dict[str, list[RunResult]]:
+    groups: dict[str, list[RunResult]] = {}
+    for run in runs:
+        groups.setdefault(key(run), []).append(run)
+    return groups
+
+
+def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Per config, the mean success and precision curves over its scored runs (for the runs of
+    one input: each run's own curves)."""
+    success: dict[str, list[np.ndarray]] = {}
+    precision: dict[str, list[np.ndarray]] = {}
+    for run in runs:
+        if run.scores is not None and run.scores.frames_evaluated:
+            success.setdefault(run.config, []).append(run.scores.success)
+            precision.setdefault(run.config, []).append(run.scores.precision)
+    return ({c: np.mean(v, axis=0) for c, v in success.items()},
+            {c: np.mean(v, axis=0) for c, v in precision.items()})
+
+
+def build_report(results: Sequence[Path], out_dir: Path, gt: Path | None = None,
+                 gt_origin: int = 0, title: str = DEFAULT_TITLE) -> Report:
+    """Read every run below ``results`` and write the report into ``out_dir``.
+
+    ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
+    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes). A run folder that cannot be read is
+    left out with a warning. Raises InputError when nothing below ``results`` is a run (or a
+    failed batch row) and OutputError when ``out_dir`` cannot be written.
+    """
+    truth = GroundTruth.read(gt, gt_origin) if gt is not None else None
+    warnings: list[str] = []
+    runs: list[RunResult] = []
+    for folder in run_folders(results):
+        try:
+            runs.append(load_run(folder, truth))
+        except InputError as exc:
+            warnings.append(f"left out: {exc}")
+    failed = failed_runs(results)
+    if not runs and not failed:
+        named = ", ".join(str(r) for r in results)
+        raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
+                         "folders)" + (f"; {warnings[0]}" if warnings else ""))
+    _distinct_labels(runs)
+    runs.sort(key=lambda r: (r.input, r.config))
+    single = [r for r in runs if not r.multi_target]
+    multi = [r for r in runs if r.multi_target]
+    unscored = [r for r in single if r.scores is None]
+    if unscored:
+        warnings.append(f"{len(unscored)} single-target run(s) have no ground truth; give "
+                        "--gt FILE to score runs of one input")
+
+    plot_dir = out_dir / "plots"
+    try:
+        plot_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{out_dir}: cannot write ({exc.strerror or exc})") from None
+    palette = plots.colours(sorted({r.config for r in runs}))
+    by_input = _group(single, lambda r: r.input)
+    written: list[Path] = []
+    sections = []
+    for name, slug in _slugs(list(by_input)).items():
+        scored = [r for r in by_input[name] if r.scores is not None]
+        figures = []
+        if scored:
+            figures.append(plots.overlap_plot(name, scored, palette,
+                                              plot_dir / f"overlap_{slug}.png"))
+            success, precision = _mean_curves(scored)
+            if success:
+                figures.append(plots.curves_plot(name, success, precision, palette,
+                                                 plot_dir / f"curves_{slug}.png"))
+        written += figures
+        sections.append(pages.Section(name, f"input-{slug}",
+                                      [p.relative_to(out_dir).as_posix() for p in figures]))
+
+    by_config = _group(single, lambda r: r.config)
+    overall = None
+    success, precision = _mean_curves(single)
+    if success:
+        scored_inputs = {r.input for r in single if r.scores is not None}
+        covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
+        if any(inputs != scored_inputs for inputs in covered.values()):
+            warnings.append("configurations were scored on different inputs: their averages "
+                            "are not directly comparable")
+        path = plots.curves_plot(f"All inputs (mean over {len(scored_inputs)} inputs)",
+                                 success, precision, palette, plot_dir / "curves_all.png")
+        written.append(path)
+        overall = path.relative_to(out_dir).as_posix()
+
+    inputs = {r.input for r in runs}
+    page = pages.Page(
+        title=title,
+        meta=(f"{len(runs)} runs of {len(inputs)} inputs with "
+              f"{len({r.config for r in runs})} configurations; generated "
+              f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
+        warnings=warnings,
+        overall_plot=overall,
+        averages=tables.average_table(by_config) if by_config else None,
+        results=tables.results_table(list(by_input.values())) if single else None,
+        mot=tables.mot_table(list(_group(multi, lambda r: r.input).values())) if multi else None,
+        failed=failed,
+        sections=sections,
+    )
+    return Report(
+        out_dir=out_dir,
+        index=pages.write_atomic(out_dir / "index.html", pages.render_html(page)),
+        markdown=pages.write_atomic(out_dir / "summary.md", pages.render_markdown(page)),
+        csv=pages.write_atomic(out_dir / "summary.csv", pages.render_csv(runs, out_dir)),
+        plots=written,
+        runs=runs,
+        warnings=warnings,
+    )
+

@@ -1,0 +1,218 @@
+"""Writing a report: ``index.html`` (self-contained, plots referenced relatively), ``summary.md``
+and ``summary.csv``. Every file is written under a temporary name and renamed when complete."""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from vtrack.report.runs import FailedRun, RunResult
+from vtrack.report.tables import Table
+
+#: The footer of every report: what the numbers mean (OTB conventions, vtrack.evaluate.metrics).
+DEFINITIONS = (
+    "Overlap is the intersection over union (IoU) of the tracker's box and the ground-truth box. "
+    "Success plot: share of evaluated frames whose overlap is > t, for t = 0, 0.05, ..., 1; "
+    "AUC is the mean of these 21 values. Precision plot: share of evaluated frames whose "
+    "centre error is <= t pixels, t = 0 ... 50; the score is the value at 20 px. Frames whose "
+    "ground truth is empty or marked absent (target out of view) are not evaluated; a frame "
+    "where the tracker claims no box (lost) counts as a failure (overlap 0, infinite centre "
+    "error). Averages over inputs are means of the per-input curves and scores. Best value per "
+    "column (among the configurations of an input, or among configurations) in bold."
+)
+#: Added to the footer when multi-target runs are shown.
+MOT_DEFINITIONS = (
+    "Multi-target runs show the CLEAR MOT and identity metrics (MOTA, MOTP, IDF1, ID switches "
+    "...) that vtrack run recorded in run.json against MOTChallenge ground truth; a dash means "
+    "the run had no ground truth."
+)
+
+CSS = """
+body { font: 14px/1.45 system-ui, -apple-system, "Segoe UI", sans-serif; color: #1d1d1f;
+       max-width: 1100px; margin: 24px auto; padding: 0 16px; }
+h1 { font-size: 24px; margin-bottom: 4px; } h2 { margin-top: 32px; border-bottom: 1px solid #ddd; }
+.meta { color: #666; margin-top: 0; } .warn { color: #9a5b00; }
+table { border-collapse: collapse; margin: 12px 0; font-variant-numeric: tabular-nums; }
+th, td { padding: 4px 10px; border-bottom: 1px solid #e5e5e5; text-align: right; }
+th { background: #f4f4f6; } td.label, th.label { text-align: left; }
+tr.group td { border-top: 2px solid #bbb; } td.best { font-weight: 700; background: #e6f4ea; }
+img { max-width: 100%; display: block; margin: 8px 0; }
+nav a { margin-right: 10px; } footer { margin-top: 40px; color: #555; font-size: 13px;
+       border-top: 1px solid #ddd; padding-top: 8px; }
+"""
+
+
+@dataclass
+class Section:
+    """One input's part of the report: its name, anchor and plots (paths relative to the
+    report folder)."""
+
+    name: str
+    anchor: str
+    plots: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Page:
+    """Everything the report files show."""
+
+    title: str
+    meta: str
+    warnings: list[str]
+    overall_plot: str | None
+    averages: Table | None
+    results: Table | None
+    mot: Table | None
+    failed: list[FailedRun]
+    sections: list[Section]
+
+
+def write_atomic(path: Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file renamed when complete."""
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(text, encoding="utf-8")
+    os.replace(temporary, path)
+    return path
+
+
+def _footer(page: Page) -> str:
+    return DEFINITIONS + (" " + MOT_DEFINITIONS if page.mot is not None else "")
+
+
+# --- HTML ------------------------------------------------------------------------------------
+
+def _e(text: object) -> str:
+    return html.escape(str(text))
+
+
+def html_table(table: Table, labels: int) -> str:
+    """A table; the first ``labels`` columns are left-aligned text, best cells highlighted."""
+    head = "".join(f'<th class="label">{_e(h)}</th>' if n < labels else f"<th>{_e(h)}</th>"
+                   for n, h in enumerate(table.header))
+    rows = []
+    for index, row in enumerate(table.rows):
+        cells = "".join(
+            f'<td class="{"label" if n < labels else ""}{" best" if cell.best else ""}">'
+            f"{_e(cell.text)}</td>"
+            for n, cell in enumerate(row)
+        )
+        group = ' class="group"' if index in table.groups[1:] else ""
+        rows.append(f"<tr{group}>{cells}</tr>")
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+
+
+def _img(path: str, alt: str) -> str:
+    return f'<img src="{_e(path)}" alt="{_e(alt)}" loading="lazy">'
+
+
+def render_html(page: Page) -> str:
+    """The whole page: plots are ``<img>`` of PNG files beside it (relative paths)."""
+    parts = [f"<h1>{_e(page.title)}</h1>", f'<p class="meta">{_e(page.meta)}</p>']
+    if page.sections:
+        links = " ".join(f'<a href="#{_e(s.anchor)}">{_e(s.name)}</a>' for s in page.sections)
+        parts.append(f"<nav>Inputs: {links}</nav>")
+    parts += [f'<p class="warn">Warning: {_e(w)}</p>' for w in page.warnings]
+    if page.averages is not None:
+        parts.append('<h2 id="overall">All inputs</h2>')
+        if page.overall_plot:
+            parts.append(_img(page.overall_plot, "success and precision plots, all inputs"))
+        parts.append(html_table(page.averages, 1))
+    if page.results is not None:
+        parts += ['<h2 id="results">Results per input and configuration</h2>',
+                  html_table(page.results, 3)]
+    if page.mot is not None:
+        parts += ['<h2 id="multi-target">Multi-target runs</h2>', html_table(page.mot, 3)]
+    if page.failed:
+        items = "".join(f"<li><b>{_e(f.input)}</b> [{_e(f.config)}]: {_e(f.error)}</li>"
+                        for f in page.failed)
+        parts += ['<h2 id="failed">Runs that failed (no results)</h2>', f"<ul>{items}</ul>"]
+    for section in page.sections:
+        parts.append(f'<h2 id="{_e(section.anchor)}">{_e(section.name)}</h2>')
+        parts += [_img(p, f"{section.name}: {Path(p).stem}") for p in section.plots]
+        if not section.plots:
+            parts.append("<p>No ground truth: nothing to plot.</p>")
+    parts.append(f"<footer>{_e(_footer(page))}</footer>")
+    return (
+        '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
+        f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
+        f"<title>{_e(page.title)}</title>\n<style>{CSS}</style>\n</head>\n<body>\n"
+        + "\n".join(parts) + "\n</body>\n</html>\n"
+    )
+
+
+# --- Markdown --------------------------------------------------------------------------------
+
+def _md(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def markdown_table(table: Table, labels: int) -> str:
+    """A GitHub-flavoured Markdown table, best cells in bold."""
+    align = ["---" if n < labels else "---:" for n in range(len(table.header))]
+    lines = ["| " + " | ".join(_md(h) for h in table.header) + " |",
+             "| " + " | ".join(align) + " |"]
+    for row in table.rows:
+        cells = [f"**{_md(c.text)}**" if c.best else _md(c.text) for c in row]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def render_markdown(page: Page) -> str:
+    """The report's tables (and links to its plots) as Markdown."""
+    parts = [f"# {page.title}", page.meta]
+    parts += [f"> Warning: {w}" for w in page.warnings]
+    if page.averages is not None:
+        parts.append("## All inputs")
+        if page.overall_plot:
+            parts.append(f"![success and precision plots]({page.overall_plot})")
+        parts.append(markdown_table(page.averages, 1))
+    if page.results is not None:
+        parts += ["## Results per input and configuration", markdown_table(page.results, 3)]
+    if page.mot is not None:
+        parts += ["## Multi-target runs", markdown_table(page.mot, 3)]
+    if page.failed:
+        parts += ["## Runs that failed (no results)",
+                  "\n".join(f"- **{f.input}** [{f.config}]: {f.error}" for f in page.failed)]
+    for section in page.sections:
+        if section.plots:
+            parts.append(f"## {section.name}")
+            parts += [f"![{Path(p).stem}]({p})" for p in section.plots]
+    parts.append("---\n" + _footer(page))
+    return "\n\n".join(parts) + "\n"
+
+
+# --- CSV -------------------------------------------------------------------------------------
+
+#: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
+CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
+               "mean_overlap", "mean_center_error", "fps", "frames_occluded", "frames_lost",
+               "ground_truth", "run")
+
+
+def _cell(value: object) -> object:
+    if isinstance(value, float):
+        return "" if not math.isfinite(value) else round(value, 6)
+    return "" if value is None else value
+
+
+def render_csv(runs: Sequence[RunResult], root: Path) -> str:
+    """One row per run: OTB scores (empty without ground truth), speed, states, MOT metrics."""
+    mot_keys = sorted({k for r in runs for k in r.mot})
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS + tuple(mot_keys))
+    for run in runs:
+        s = run.scores
+        scores = ([s.frames_evaluated, s.auc, s.precision20, s.mean_overlap, s.mean_center_error]
+                  if s else [None] * 5)
+        row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
+               run.frames_occluded, run.frames_lost, run.ground_truth,
+               os.path.relpath(run.folder, root)] + [run.mot.get(k) for k in mot_keys]
+        writer.writerow([_cell(v) for v in row])
+    return buffer.getvalue()

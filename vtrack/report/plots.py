@@ -1,0 +1,110 @@
+"""The report's figures, drawn with matplotlib's Agg canvas (no display, no pyplot state).
+
+- :func:`overlap_plot`: overlap (%) over time, one panel per configuration, occluded and lost
+  frames shaded (the layout of S0's Fig. 20);
+- :func:`curves_plot`: OTB success plot (AUC in the legend) beside the precision plot (value at
+  20 px in the legend).
+
+Every function writes one PNG and returns its path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from vtrack.evaluate.metrics import ERROR_THRESHOLDS, OVERLAP_THRESHOLDS, PRECISION_THRESHOLD_PX
+from vtrack.report.runs import RunResult
+from vtrack.stages.base import LOST, OCCLUDED
+
+DPI = 100
+#: Shading of the frames a tracker reported occluded / lost, and of frames not evaluated.
+SHADES = {OCCLUDED: ("#f5a623", "occluded"), LOST: ("#d0021b", "lost")}
+NO_GT_SHADE = "#9b9b9b"
+
+
+def colours(configs: Sequence[str]) -> dict[str, str]:
+    """One colour per configuration, the same in every figure (matplotlib's tab10 cycle)."""
+    cycle = [f"C{n % 10}" for n in range(len(configs))]
+    return dict(zip(configs, cycle, strict=True))
+
+
+def runs_of(values: Sequence[object]) -> list[tuple[int, int, object]]:
+    """Maximal stretches of equal values as ``(start, end, value)``, ``end`` exclusive."""
+    stretches, start = [], 0
+    for index in range(1, len(values) + 1):
+        if index == len(values) or values[index] != values[start]:
+            stretches.append((start, index, values[start]))
+            start = index
+    return stretches
+
+
+def _shade(axis, values: Sequence[object], value: object, colour: str, label: str) -> None:
+    """Shade the frames where ``values`` equals ``value`` (one legend entry)."""
+    spans = [(start, end) for start, end, v in runs_of(values) if v == value]
+    for n, (start, end) in enumerate(spans):
+        axis.axvspan(start - 0.5, end - 0.5, color=colour, alpha=0.22, lw=0,
+                     label=label if n == 0 else None)
+
+
+def overlap_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
+                 path: Path) -> Path:
+    """Overlap with the ground truth in % per frame; a panel per run (configuration) with the
+    frames it reported occluded or lost shaded, and frames without ground truth in grey."""
+    figure = Figure(figsize=(10, 0.6 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
+    axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
+    for axis, run in zip(axes, runs, strict=True):
+        overlaps = np.array([np.nan if o is None else o for o in run.overlaps or []], float)
+        for state, (colour, label) in SHADES.items():
+            _shade(axis, run.states, state, colour, label)
+        _shade(axis, [o is None for o in run.overlaps or []], True, NO_GT_SHADE,
+               "no ground truth")
+        axis.plot(np.arange(len(overlaps)), 100 * overlaps, color=palette[run.config], lw=1.2)
+        axis.set_ylim(0, 100)
+        axis.set_xlim(-0.5, max(len(overlaps), 1) - 0.5)
+        axis.set_ylabel("overlap %")
+        axis.set_title(run.config, loc="left", fontsize=10, color=palette[run.config])
+        axis.grid(alpha=0.3)
+        if axis.get_legend_handles_labels()[0]:
+            axis.legend(loc="lower right", fontsize=8, ncols=3, framealpha=0.8)
+    axes[-1].set_xlabel("frame")
+    figure.suptitle(f"{name}: overlap with ground truth over time", fontsize=11)
+    figure.savefig(path)
+    return path
+
+
+def curves_plot(title: str, success: Mapping[str, np.ndarray], precision: Mapping[str, np.ndarray],
+                palette: Mapping[str, str], path: Path) -> Path:
+    """Success plot and precision plot side by side, configurations ordered best first.
+
+    ``success[config]`` holds the 21 success rates at :data:`OVERLAP_THRESHOLDS`, its legend the
+    AUC (their mean); ``precision[config]`` the 51 rates at :data:`ERROR_THRESHOLDS`, its legend
+    the value at 20 px.
+    """
+    figure = Figure(figsize=(10, 3.8), dpi=DPI, layout="constrained")
+    left, right = figure.subplots(1, 2)
+    at20 = int(np.searchsorted(ERROR_THRESHOLDS, PRECISION_THRESHOLD_PX))
+    for config in sorted(success, key=lambda c: -success[c].mean()):
+        left.plot(OVERLAP_THRESHOLDS, success[config], color=palette[config], lw=1.8,
+                  label=f"{config} [{success[config].mean():.3f}]")
+    for config in sorted(precision, key=lambda c: -precision[c][at20]):
+        right.plot(ERROR_THRESHOLDS, precision[config], color=palette[config], lw=1.8,
+                   label=f"{config} [{precision[config][at20]:.3f}]")
+    right.axvline(PRECISION_THRESHOLD_PX, color="0.5", lw=0.8, ls="--")
+    for axis, xlabel, name, xmax in (
+        (left, "overlap threshold", "Success plot (AUC)", 1.0),
+        (right, "location error threshold (px)", "Precision plot (at 20 px)", 50.0),
+    ):
+        axis.set_xlim(0, xmax)
+        axis.set_ylim(0, 1.02)
+        axis.set_xlabel(xlabel)
+        axis.set_ylabel("success rate" if axis is left else "precision")
+        axis.set_title(name, fontsize=10)
+        axis.grid(alpha=0.3)
+        axis.legend(loc="lower left" if axis is left else "lower right", fontsize=8)
+    figure.suptitle(title, fontsize=11)
+    figure.savefig(path)
+    return path

@@ -1,0 +1,253 @@
+"""Finding and reading result folders for a report: ``run.json`` + ``track.csv``/``tracks.csv``.
+
+Per-frame scores of a single-target run are its ``track.csv`` boxes scored by
+:func:`vtrack.evaluate.metrics.frame_scores` against:
+
+- the ground truth the run recorded in ``run.json``, read with the recorded ``gt_origin``; a
+  record without one gets the origin (0 or 1) whose scores reproduce the run's own ``overlap``
+  column. If that file can no longer be read, the run's ``overlap`` and ``center_error`` columns
+  are used as they are (rounded to 4 and 3 decimals; an empty ``center_error`` next to an
+  overlap is a frame where the tracker claimed no box: infinite error);
+- otherwise the ``--gt`` file of the report.
+
+Sequence scores (AUC, precision@20, mean IoU) come from :mod:`vtrack.evaluate.metrics` and
+nowhere else.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vtrack.batch import STATUS_FAILED, SUMMARY_COLUMNS
+from vtrack.errors import InputError
+from vtrack.evaluate import metrics
+from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.geometry import Box
+
+
+@dataclass(frozen=True)
+class Scores:
+    """One run's OTB scores (NaN when no frame is evaluated)."""
+
+    frames_evaluated: int
+    auc: float
+    precision20: float
+    mean_overlap: float
+    mean_center_error: float
+    success: np.ndarray
+    precision: np.ndarray
+
+    @classmethod
+    def of(cls, overlaps: Sequence[float | None], errors: Sequence[float | None]) -> Scores:
+        return cls(
+            frames_evaluated=sum(o is not None for o in overlaps),
+            auc=metrics.auc(overlaps),
+            precision20=metrics.precision_at(errors),
+            mean_overlap=metrics.mean_overlap(overlaps),
+            mean_center_error=metrics.mean_center_error(errors),
+            success=metrics.success_curve(overlaps),
+            precision=metrics.precision_curve(errors),
+        )
+
+
+@dataclass
+class RunResult:
+    """One run folder as the report needs it.
+
+    ``overlaps`` / ``errors`` are per frame (None: not evaluated) and None altogether when the
+    run has no ground truth; ``states`` is per frame (single target). ``mot`` holds a
+    multi-target run's metrics from ``run.json`` (empty without ground truth).
+    """
+
+    folder: Path
+    input: str
+    config: str
+    status: str
+    frames: int
+    fps: float | None
+    frames_occluded: int
+    frames_lost: int
+    multi_target: bool
+    ground_truth: str | None = None
+    error: str | None = None
+    states: list[str] = field(default_factory=list)
+    overlaps: list[float | None] | None = None
+    errors: list[float | None] | None = None
+    mot: dict[str, Any] = field(default_factory=dict)
+
+    @cached_property
+    def scores(self) -> Scores | None:
+        """OTB scores, or None without ground truth (and for multi-target runs)."""
+        if self.overlaps is None or self.errors is None:
+            return None
+        return Scores.of(self.overlaps, self.errors)
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """A ground-truth file given to the report (``--gt``), read once."""
+
+    path: str
+    boxes: list[Box | None]
+
+    @classmethod
+    def read(cls, path: Path, origin: int = 0) -> GroundTruth:
+        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError)."""
+        return cls(str(path), read_boxes(path, origin=origin))
+
+
+@dataclass(frozen=True)
+class FailedRun:
+    """A batch row with no results (``failed`` in a batch ``summary.csv``)."""
+
+    input: str
+    config: str
+    error: str
+
+
+def _number(text: str | None) -> float | None:
+    return None if text is None or text == "" else float(text)
+
+
+def _read_csv(path: Path) -> list[dict[str, str]]:
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            return list(csv.DictReader(handle))
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: not a readable CSV file ({exc})") from None
+
+
+#: Per-frame ``(overlaps, centre errors)``, None where a frame is not evaluated.
+FrameScores = tuple[list[float | None], list[float | None]]
+
+
+def _recorded_scores(rows: list[dict[str, str]]) -> FrameScores:
+    overlaps = [_number(row.get("overlap")) for row in rows]
+    errors = [
+        math.inf if overlap is not None and row.get("center_error") in (None, "")
+        else _number(row.get("center_error"))
+        for overlap, row in zip(overlaps, rows, strict=True)
+    ]
+    return overlaps, errors
+
+
+def _rescored(rows: list[dict[str, str]], request: dict[str, Any]) -> FrameScores:
+    """The run's boxes against the ground truth it recorded (see the module docstring)."""
+    recorded = _recorded_scores(rows)
+    boxes = _boxes(rows)
+    origins = [request["gt_origin"]] if "gt_origin" in request else [0, 1]
+    candidates = []
+    for origin in origins:
+        try:
+            scores = metrics.frame_scores(boxes, read_boxes(request["gt"], origin=origin))
+        except InputError:
+            return recorded
+        distance = sum(abs(a - b) for a, b in zip(scores[0], recorded[0], strict=True)
+                       if a is not None and b is not None)
+        candidates.append((distance, scores))
+    return min(candidates, key=lambda c: c[0])[1]
+
+
+def _boxes(rows: list[dict[str, str]]) -> list[Box | None]:
+    return [None if row.get("x") in (None, "") else
+            Box(float(row["x"]), float(row["y"]), float(row["w"]), float(row["h"]))
+            for row in rows]
+
+
+def _input_name(record: dict[str, Any], folder: Path) -> str:
+    info = record.get("input") or {}
+    if info.get("name"):
+        return str(info["name"])
+    given = str((record.get("request") or {}).get("input") or folder.name).rstrip("/")
+    path = Path(given)
+    return path.stem if path.suffix else path.name
+
+
+def load_run(folder: Path, gt: GroundTruth | None = None) -> RunResult:
+    """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth.
+
+    Raises InputError naming the file when ``run.json`` or the CSV cannot be read.
+    """
+    record_path = folder / "run.json"
+    try:
+        record = json.loads(record_path.read_text(encoding="utf-8"))
+        summary = record.get("summary") or {}
+        request = record.get("request") or {}
+    except OSError as exc:
+        raise InputError(f"{record_path}: cannot read ({exc.strerror or exc})") from None
+    except (ValueError, AttributeError):
+        raise InputError(f"{record_path}: not a vtrack run record") from None
+    result = RunResult(
+        folder=folder,
+        input=_input_name(record, folder),
+        config=str((record.get("config") or {}).get("name") or summary.get("config") or "?"),
+        status=str(record.get("status", "?")),
+        frames=int(record.get("frames") or 0),
+        fps=(record.get("timing") or {}).get("fps", summary.get("fps")),
+        frames_occluded=int(summary.get("frames_occluded") or 0),
+        frames_lost=int(summary.get("frames_lost") or 0),
+        multi_target=(folder / "tracks.csv").is_file(),
+        error=record.get("error"),
+    )
+    if result.multi_target:
+        result.mot = dict(record.get("metrics") or {})
+        result.ground_truth = request.get("gt")
+        return result
+    rows = _read_csv(folder / "track.csv")
+    try:
+        result.states = [row["state"] for row in rows]
+        if request.get("gt"):
+            result.ground_truth = str(request["gt"])
+            result.overlaps, result.errors = _rescored(rows, request)
+        elif gt is not None:
+            result.ground_truth = gt.path
+            result.overlaps, result.errors = metrics.frame_scores(_boxes(rows), gt.boxes)
+    except (KeyError, ValueError, TypeError) as exc:
+        raise InputError(f"{folder / 'track.csv'}: not a vtrack track.csv ({exc})") from None
+    return result
+
+
+def run_folders(paths: Iterable[Path]) -> list[Path]:
+    """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats).
+
+    A path may be a run folder, a batch folder, any folder above them, or a ``run.json``.
+    """
+    found: dict[Path, None] = {}
+    for path in paths:
+        if not path.exists():
+            raise InputError(f"{path}: no such file or folder")
+        if path.is_file():
+            if path.name != "run.json":
+                raise InputError(f"{path}: not a results folder or run.json")
+            found.setdefault(path.parent.resolve())
+        else:
+            for record in sorted(path.rglob("run.json")):
+                found.setdefault(record.parent.resolve())
+    return list(found)
+
+
+def failed_runs(paths: Iterable[Path]) -> list[FailedRun]:
+    """Rows of batch ``summary.csv`` files at or below ``paths`` that left no results."""
+    failed = []
+    for path in paths:
+        summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
+        for summary in summaries:
+            if summary.name != "summary.csv":
+                continue
+            rows = _read_csv(summary)
+            if rows and tuple(rows[0]) == SUMMARY_COLUMNS:
+                failed += [FailedRun(r["input"], r["config"], r["error"]) for r in rows
+                           if r["status"] == STATUS_FAILED]
+    return failed
+

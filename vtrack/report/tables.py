@@ -1,0 +1,163 @@
+"""The report's tables as plain data, rendered to HTML and Markdown by :mod:`vtrack.report.pages`.
+
+A :class:`Table` is a header and rows of :class:`Cell`; a cell marked ``best`` holds the best
+value of its column within its group of rows (the configurations of one input, or all
+configurations in the averages table). Ties are all marked; a group of one row marks nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from vtrack.report.runs import RunResult
+
+#: Multi-target metrics shown first, in this order, when a run records them.
+MOT_ORDER = ("mota", "motp", "idf1", "id_switches", "fragmentations", "false_positives",
+             "misses", "precision", "recall")
+#: Multi-target metrics where lower is better (all others: higher, except unknown counts).
+MOT_LOWER_IS_BETTER = frozenset({"id_switches", "fragmentations", "false_positives", "misses"})
+
+
+@dataclass
+class Cell:
+    text: str
+    best: bool = False
+
+
+@dataclass
+class Table:
+    """``groups`` are the row indices where a new group (an input) starts."""
+
+    header: list[str]
+    rows: list[list[Cell]] = field(default_factory=list)
+    groups: list[int] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Column:
+    """A numeric column: title, decimals shown, which way is better (None: neither)."""
+
+    title: str
+    digits: int
+    higher_is_better: bool | None = True
+
+
+Values = list[float | None]
+
+
+def _finite(value: float | None) -> bool:
+    return value is not None and math.isfinite(value)
+
+
+def _text(value: float | None, digits: int) -> str:
+    if not _finite(value):
+        return "—"
+    return f"{value:.{digits}f}" if digits else str(round(value))
+
+
+def _add_group(table: Table, labels: list[list[str]], values: list[Values],
+               columns: Sequence[Column]) -> None:
+    """Append rows (label cells, then the formatted values) marking each column's best."""
+    table.groups.append(len(table.rows))
+    rows = [[Cell(t) for t in label] + [Cell(_text(v, c.digits))
+                                        for v, c in zip(row, columns, strict=True)]
+            for label, row in zip(labels, values, strict=True)]
+    offset = len(labels[0]) if labels else 0
+    for c, column in enumerate(columns):
+        present = [row[c] for row in values if _finite(row[c])]
+        if column.higher_is_better is None or len(present) < 2:
+            continue
+        best = max(present) if column.higher_is_better else min(present)
+        for cells, row in zip(rows, values, strict=True):
+            cells[offset + c].best = row[c] == best
+    table.rows += rows
+
+
+def _scores(run: RunResult) -> Values:
+    s = run.scores
+    return [None] * 4 if s is None else [s.frames_evaluated, s.auc, s.precision20,
+                                          s.mean_overlap]
+
+
+#: Per input x configuration: OTB scores, speed and lost frames.
+RESULT_COLUMNS = (
+    Column("Frames", 0, None),
+    Column("Evaluated", 0, None),
+    Column("AUC", 3),
+    Column("Precision@20", 3),
+    Column("Mean IoU", 3),
+    Column("FPS", 1),
+    Column("Lost frames", 0, False),
+)
+RUN_LABELS = ["Input", "Config", "Status"]
+
+
+def _run_label(run: RunResult) -> list[str]:
+    return [run.input, run.config, run.status]
+
+
+def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
+    """One row per input x configuration, best per column within each input."""
+    table = Table(RUN_LABELS + [c.title for c in RESULT_COLUMNS])
+    for runs in by_input:
+        _add_group(table, [_run_label(r) for r in runs],
+                   [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
+                   RESULT_COLUMNS)
+    return table
+
+
+#: Per configuration, over inputs: mean scores, mean fps, total lost frames.
+AVERAGE_COLUMNS = (
+    Column("Inputs", 0, None),
+    Column("AUC", 3),
+    Column("Precision@20", 3),
+    Column("Mean IoU", 3),
+    Column("FPS", 1),
+    Column("Lost frames", 0, False),
+)
+
+
+def _mean(values: Sequence[float | None]) -> float | None:
+    present = [v for v in values if _finite(v)]
+    return sum(present) / len(present) if present else None
+
+
+def average_table(by_config: dict[str, list[RunResult]]) -> Table:
+    """One row per configuration: the mean of each score over its inputs with ground truth
+    (the AUC of the averaged success plot), the mean fps and the total of lost frames."""
+    table = Table(["Config"] + [c.title for c in AVERAGE_COLUMNS])
+    values = []
+    for runs in by_config.values():
+        scored = [_scores(r)[1:] for r in runs if r.scores is not None]
+        means = [_mean(column) for column in zip(*scored, strict=True)] if scored else [None] * 3
+        values.append([len(scored), *means, _mean([r.fps for r in runs]),
+                       sum(r.frames_lost for r in runs)])
+    _add_group(table, [[config] for config in by_config], values, AVERAGE_COLUMNS)
+    return table
+
+
+def _mot_column(key: str, runs: Sequence[RunResult]) -> Column:
+    values = [r.mot[key] for r in runs if key in r.mot]
+    digits = 0 if all(isinstance(v, int) for v in values) else 3
+    title = key.upper() if key in ("mota", "motp", "idf1") else key.replace("_", " ")
+    return Column(title, digits, key not in MOT_LOWER_IS_BETTER)
+
+
+def mot_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
+    """Multi-target runs: the metrics their ``run.json`` records (MOTA, MOTP, IDF1, ID
+    switches, ...) per input x configuration; ``—`` where a run has none (no ground truth)."""
+    runs = [r for group in by_input for r in group]
+    keys = {k for r in runs for k, v in r.mot.items()
+            if isinstance(v, int | float) and not isinstance(v, bool)}
+    ordered = [k for k in MOT_ORDER if k in keys] + sorted(keys - set(MOT_ORDER))
+    columns = [Column("Frames", 0, None), *(_mot_column(k, runs) for k in ordered),
+               Column("FPS", 1)]
+    table = Table(RUN_LABELS + [c.title for c in columns])
+    for group in by_input:
+        _add_group(table, [_run_label(r) for r in group],
+                   [[r.frames, *(r.mot.get(k) for k in ordered), r.fps] for r in group],
+                   columns)
+    return table
+

@@ -1,0 +1,248 @@
+"""Writing scenes to files: H.264 video, OTB / MOTChallenge ground truth, image folders, raw.
+
+Ground-truth conventions:
+
+- OTB text (``write_groundtruth``): one ``x,y,w,h`` line per frame, 2 decimals, top-left
+  corner, not clipped to the frame (a box partly outside has a negative ``x`` or runs past the
+  edge). A frame where the target is entirely outside the frame is ``0,0,0,0`` (the UAV123 /
+  LaSOT convention for an absent target). A fully *occluded* target keeps its true box (see
+  :class:`~vtrack.scenes.scene.Scene`).
+- MOTChallenge (``write_mot_groundtruth``): ``frame,id,x,y,w,h,1,1,1`` with 1-based frames, one
+  line per object at least partly inside the frame.
+
+Every writer creates missing parent folders and turns an OS failure into
+:class:`~vtrack.errors.OutputError` naming the path.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+import av
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from vtrack.errors import ConfigError, OutputError
+from vtrack.scenes.scene import Scene
+
+#: Layouts ``write_raw`` can produce (bytes per frame: 3wh, 3wh, 1.5wh, wh).
+RAW_PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
+#: Speed/size presets of the x264 and x265 encoders.
+X264_PRESETS = (
+    "ultrafast",
+    "superfast",
+    "veryfast",
+    "faster",
+    "fast",
+    "medium",
+    "slow",
+    "slower",
+    "veryslow",
+    "placebo",
+)
+#: What ``write_clip`` can write.
+CLIP_FORMATS = ("mp4", "images", "raw")
+
+
+@contextmanager
+def _writing(path: Path, folder: bool = False) -> Iterator[None]:
+    """Create ``path``'s parent folder (or ``path`` itself when it is a ``folder``); report
+    OS / FFmpeg failures as OutputError naming ``path``."""
+    try:
+        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
+        yield
+    except (OSError, av.FFmpegError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise OutputError(f"{path}: cannot write ({reason})") from exc
+
+
+def _progress(scene: Scene, enabled: bool, what: str) -> Iterable[np.ndarray]:
+    """The scene's frames, with a tqdm bar on stderr when ``enabled``."""
+    return tqdm(
+        scene.frames(),
+        total=len(scene),
+        desc=what,
+        unit="frame",
+        file=sys.stderr,
+        disable=not enabled,
+        leave=False,
+    )
+
+
+def _need_even(scene: Scene, what: str) -> None:
+    if scene.width % 2 or scene.height % 2:
+        raise ConfigError(
+            f"{what} needs an even width and height, the scene is {scene.width}x{scene.height}"
+        )
+
+
+def write_video(
+    scene: Scene,
+    path: str | Path,
+    crf: int = 23,
+    preset: str = "medium",
+    codec: str = "libx264",
+    pix_fmt: str = "yuv420p",
+    progress: bool = False,
+) -> Path:
+    """Encode every frame of ``scene`` to ``path`` (container from the suffix, e.g. ``.mp4``).
+
+    Constant frame rate ``scene.fps``, exactly ``len(scene)`` frames, pts = frame index.
+    ``crf`` / ``preset`` are passed to the encoder (x264 / x265 understand both). For yuv420p
+    the BGR -> I420 conversion is done by OpenCV (width and height must be even). The scene's
+    frames are deterministic, the encoded bytes need not be (x264's mb-tree can vary slightly
+    from run to run).
+    """
+    path = Path(path)
+    try:
+        av.codec.Codec(codec, "w")
+    except ValueError as exc:
+        raise ConfigError(f"{path}: no video encoder named {codec!r}") from exc
+    if codec in ("libx264", "libx265") and preset not in X264_PRESETS:
+        raise ConfigError(f"{path}: preset {preset!r}: choose one of {', '.join(X264_PRESETS)}")
+    try:
+        av.VideoFormat(pix_fmt)
+    except ValueError as exc:
+        raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
+    if pix_fmt == "yuv420p":
+        _need_even(scene, f"{path}: pixel format yuv420p")
+    rate = Fraction(scene.fps).limit_denominator(1001)
+    with _writing(path), av.open(str(path), "w") as container:
+        stream = container.add_stream(codec, rate=rate, options={"crf": str(crf), "preset": preset})
+        stream.width, stream.height = scene.width, scene.height
+        stream.pix_fmt = pix_fmt
+        stream.thread_type = "FRAME"
+        for index, bgr in enumerate(_progress(scene, progress, path.name)):
+            if pix_fmt == "yuv420p":
+                i420 = cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420)
+                frame = av.VideoFrame.from_ndarray(i420, format="yuv420p")
+            else:
+                frame = av.VideoFrame.from_ndarray(bgr, format="bgr24")
+            frame.pts = index
+            container.mux(stream.encode(frame))
+        container.mux(stream.encode(None))
+    return path
+
+
+def _box_line(values: Iterable[float]) -> str:
+    return ",".join(f"{v:.2f}" for v in values)
+
+
+def write_groundtruth(scene: Scene, path: str | Path) -> Path:
+    """OTB ground truth: one ``x,y,w,h`` line per frame; ``0,0,0,0`` where the target is absent."""
+    path = Path(path)
+    lines = [_box_line(box) if box is not None else "0,0,0,0" for box in scene.boxes]
+    with _writing(path):
+        path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def write_mot_groundtruth(scene: Scene, path: str | Path) -> Path:
+    """MOTChallenge ground truth: ``frame,id,x,y,w,h,1,1,1`` per visible object, 1-based frames."""
+    path = Path(path)
+    lines = [
+        f"{index + 1},{track_id},{_box_line(box)},1,1,1"
+        for index, tracks in enumerate(scene.tracks)
+        for track_id, box in tracks
+    ]
+    with _writing(path):
+        path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+def write_image_sequence(
+    scene: Scene, folder: str | Path, ext: str = "jpg", progress: bool = False
+) -> Path:
+    """OTB layout: ``folder/img/0001.<ext>`` ... (1-based, >= 4 digits) and
+    ``folder/groundtruth_rect.txt``. JPEG quality 95; ``ext`` is ``jpg`` or ``png``."""
+    if ext not in ("jpg", "png"):
+        raise ConfigError(f"image format {ext!r}: choose jpg or png")
+    folder = Path(folder)
+    images = folder / "img"
+    digits = max(4, len(str(len(scene))))
+    params = [cv2.IMWRITE_JPEG_QUALITY, 95] if ext == "jpg" else []
+    with _writing(images, folder=True):
+        for index, bgr in enumerate(_progress(scene, progress, folder.name)):
+            name = images / f"{index + 1:0{digits}d}.{ext}"
+            if not cv2.imwrite(str(name), bgr, params):
+                raise OSError(f"OpenCV could not write {name}")
+    write_groundtruth(scene, folder / "groundtruth_rect.txt")
+    return folder
+
+
+def write_raw(
+    scene: Scene, path: str | Path, pix_fmt: str = "bgr24", progress: bool = False
+) -> Path:
+    """Frames back to back, no header, in ``pix_fmt`` (one of :data:`RAW_PIX_FMTS`)."""
+    conversions = {
+        "bgr24": None,
+        "rgb24": cv2.COLOR_BGR2RGB,
+        "yuv420p": cv2.COLOR_BGR2YUV_I420,
+        "gray": cv2.COLOR_BGR2GRAY,
+    }
+    if pix_fmt not in conversions:
+        raise ConfigError(f"raw pixel format {pix_fmt!r}: choose one of {', '.join(RAW_PIX_FMTS)}")
+    path = Path(path)
+    if pix_fmt == "yuv420p":
+        _need_even(scene, f"{path}: pixel format yuv420p")
+    code = conversions[pix_fmt]
+    with _writing(path), path.open("wb") as out:
+        for bgr in _progress(scene, progress, path.name):
+            out.write((bgr if code is None else cv2.cvtColor(bgr, code)).tobytes())
+    return path
+
+
+def sidecar(path: str | Path, kind: str) -> Path:
+    """``clip.mp4`` -> ``clip.<kind>.txt`` (ground-truth files written beside a clip)."""
+    return Path(path).with_suffix(f".{kind}.txt")
+
+
+@dataclass(frozen=True)
+class ClipFiles:
+    """What ``write_clip`` wrote: the clip (file or folder), OTB and (multi) MOT ground truth."""
+
+    clip: Path
+    groundtruth: Path
+    mot: Path | None
+
+
+def write_clip(
+    scene: Scene,
+    out: str | Path,
+    fmt: str = "mp4",
+    pix_fmt: str | None = None,
+    crf: int = 23,
+    preset: str = "medium",
+    progress: bool = False,
+) -> ClipFiles:
+    """Write ``scene`` and its ground truth the way ``vtrack scene`` does.
+
+    - ``mp4``: video ``out`` (``pix_fmt`` default yuv420p) and ``out`` -> ``<stem>.gt.txt``;
+    - ``raw``: raw frames ``out`` (``pix_fmt`` default bgr24) and ``<stem>.gt.txt``;
+    - ``images``: OTB folder ``out`` (``out/img/0001.jpg``, ``out/groundtruth_rect.txt``).
+
+    Scenes with more than one tracked object (``multi``) also get MOTChallenge ground truth:
+    ``<stem>.mot.txt`` beside a file, ``out/groundtruth_mot.txt`` in an image folder.
+    """
+    out = Path(out)
+    if fmt == "mp4":
+        pix = pix_fmt or "yuv420p"
+        write_video(scene, out, crf=crf, preset=preset, pix_fmt=pix, progress=progress)
+    elif fmt == "raw":
+        write_raw(scene, out, pix_fmt=pix_fmt or "bgr24", progress=progress)
+    elif fmt == "images":
+        write_image_sequence(scene, out, progress=progress)
+    else:
+        raise ConfigError(f"clip format {fmt!r}: choose one of {', '.join(CLIP_FORMATS)}")
+    if fmt == "images":
+        gt, mot = out / "groundtruth_rect.txt", out / "groundtruth_mot.txt"
+    else:
+        gt, mot = write_groundtruth(scene, sidecar(out, "gt")), sidecar(out, "mot")
+    multi = any(len(tracks) > 1 for tracks in scene.tracks)
+    return ClipFiles(out, gt, write_mot_groundtruth(scene, mot) if multi else None)

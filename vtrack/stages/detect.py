@@ -1,0 +1,335 @@
+"""Detection stages: foreground segmentation of the whole frame, then blobs as measurements.
+
+Detecting trackers (S3, S4) look for targets everywhere, so these stages work on the whole grey
+frame (free for yuv420p input: it is the Y plane), with OpenCV doing every per-pixel step.
+
+- ``background`` (S4 items 1-2): background ``B`` = mean of the first ``frames`` frames,
+  foreground ``|D - B| >= Th``; or OpenCV's MOG2 for scenes where a fixed mean background fails.
+- ``threshold`` (S3 items 1-2): adaptive grey threshold fed back from the previous frame's
+  candidates, then a median filter.
+- ``blobs`` (S3 item 3, S4 item 2): connected components -> :class:`Detection` list in
+  ``ctx.detections``.
+- ``largest_blob`` (S4 item 2): the largest blob becomes ``ctx.measurement`` for a single-target
+  Kalman filter.
+
+The segmenting stages hand over ``ctx.window`` (the whole frame), ``ctx.feature`` (its grey
+image) and ``ctx.likelihood`` (the foreground: 0 = background, anything else = foreground).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vtrack.geometry import Box
+from vtrack.params import Param
+from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
+
+#: ``ctx.memory`` key: mean grey of the candidates ``blobs`` found in the last frame (S3 item 1).
+CANDIDATE_GREY = "candidate_grey"
+
+_SEGMENTS = frozenset({"window", "feature", "likelihood"})
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One measurement of a detecting stage, as found in ``ctx.detections``.
+
+    ``box`` is the bounding box (pixels), ``(cx, cy)`` the centroid (a blob's pixel centroid, a
+    detector box's centre), ``area`` the pixel count (the box area for detector boxes), ``grey``
+    the mean grey of the blob's pixels (NaN when unknown) and ``score`` the detector's confidence
+    (NaN for blobs).
+    """
+
+    box: Box
+    cx: float
+    cy: float
+    area: float
+    grey: float = math.nan
+    score: float = math.nan
+
+
+#: States of the tracks of multi-target stages (``Track.state``); run.py writes only confirmed.
+TENTATIVE, CONFIRMED, COASTING = "tentative", "confirmed", "coasting"
+
+
+def track_state(confirmed: bool, updated: bool) -> str:
+    """``confirmed`` (confirmed and measured this frame), ``coasting`` (confirmed, predicted
+    only) or ``tentative`` (not confirmed yet)."""
+    if not confirmed:
+        return TENTATIVE
+    return CONFIRMED if updated else COASTING
+
+
+def centroids(detections: list[Detection]) -> np.ndarray:
+    """The detections' centroids as an ``(M, 2)`` float array."""
+    return np.array([(d.cx, d.cy) for d in detections], float).reshape(-1, 2)
+
+
+def pairwise_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Euclidean distances between the points of ``a`` (N, 2) and ``b`` (M, 2): (N, M)."""
+    return np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+
+
+def _foreground_at_least(image: np.ndarray, level: float) -> np.ndarray:
+    """255 where the uint8 ``image`` is >= ``level``, else 0 (one OpenCV pass)."""
+    return cv2.threshold(image, math.ceil(level) - 1, 255, cv2.THRESH_BINARY)[1]
+
+
+@register
+class Background(Stage):
+    """S4 background subtraction: ``B`` = mean of the first frames, foreground ``|D - B| >= Th``.
+
+    ``method = "mean"`` is the document's: the first ``frames`` frames are averaged into ``B``
+    (S4 eq. 1, kept as grey levels 0..255) and **nothing is detected during those frames**; from
+    frame ``frames`` on (0-based), a pixel is foreground when ``|D - B| >= threshold`` (S4 eq. 2).
+    ``B`` is never updated: it suits a static camera and constant lighting, as the document says;
+    a target present during the first frames leaves a ghost in ``B`` where it was, which is
+    detected for the rest of the run unless the target moved fast.
+
+    ``method = "mog2"`` uses OpenCV's adaptive Gaussian-mixture background (Zivkovic 2004):
+    it learns continuously over ``history`` frames, so it follows lighting changes and absorbs
+    ghosts and objects that stop; it detects from the second frame on (on the first, everything
+    is new), ``var_threshold`` replaces ``threshold``, and shadows are not detected.
+    """
+
+    name = "background"
+    summary = "S4 background subtraction (mean of the first frames, or MOG2) -> foreground"
+    params = (
+        Param(
+            "method",
+            str,
+            "mean",
+            "mean: S4's fixed background, mean of the first `frames` frames (no detection "
+            "during them); mog2: OpenCV's adaptive mixture model, for changing backgrounds",
+            choices=("mean", "mog2"),
+        ),
+        Param(
+            "frames",
+            int,
+            10,
+            "mean: frames averaged into the background (S4 eq. 1, N not given: 10)",
+            min=1,
+        ),
+        Param(
+            "threshold",
+            float,
+            25.0,
+            "mean: a pixel is foreground when |frame - background| >= this, in grey levels "
+            "(S4 eq. 2, Th not given: 25)",
+            min=1.0,
+            max=255.0,
+        ),
+        Param(
+            "history",
+            int,
+            500,
+            "mog2: frames the mixture model remembers (OpenCV's default 500)",
+            min=1,
+        ),
+        Param(
+            "var_threshold",
+            float,
+            16.0,
+            "mog2: squared Mahalanobis distance to call a pixel foreground (OpenCV's default 16)",
+            min=0.0,
+        ),
+    )
+    provides = _SEGMENTS
+    needs_init_box = False
+
+    def start(self, ctx: TrackContext) -> None:
+        """Forget any previous run and start learning the background from this frame."""
+        self._sum: np.ndarray | None = None
+        self._seen = 0
+        self._background: np.ndarray | None = None
+        self._mog2: cv2.BackgroundSubtractorMOG2 | None = None
+        if self.method == "mog2":
+            self._mog2 = cv2.createBackgroundSubtractorMOG2(
+                history=self.history, varThreshold=self.var_threshold, detectShadows=False
+            )
+            self._mog2.apply(ctx.frame.gray())  # the first frame only starts the model
+            return
+        self.step(ctx)
+
+    def step(self, ctx: TrackContext) -> None:
+        grey = ctx.frame.gray()
+        ctx.window = ctx.frame.full_window()
+        ctx.feature = grey
+        if self._mog2 is not None:
+            ctx.likelihood = self._mog2.apply(grey)
+            return
+        if self._background is None:
+            self._learn(grey)
+            return
+        difference = cv2.absdiff(grey, self._background)
+        ctx.likelihood = _foreground_at_least(difference, self.threshold)  # S4 eq. 2
+
+    def _learn(self, grey: np.ndarray) -> None:
+        """Add one frame to the mean background (S4 eq. 1); finish it after ``frames`` frames."""
+        if self._sum is None:
+            self._sum = np.zeros(grey.shape, np.float64)
+        cv2.accumulate(grey, self._sum)
+        self._seen += 1
+        if self._seen == self.frames:
+            self._background = np.clip(np.rint(self._sum / self.frames), 0, 255).astype(np.uint8)
+            self._sum = None
+
+
+@register
+class AdaptiveThreshold(Stage):
+    """S3 adaptive segmentation + median filter.
+
+    The threshold for frame k+1 is the mean grey of the candidates ``blobs`` found in frame k
+    minus ``offset`` (S3 item 1; on the first frame, and after a frame without candidates, it is
+    ``initial``, and it never goes below ``floor``). Pixels below it become 0, the others keep
+    their grey; a ``median`` x ``median`` median filter then removes the fragments the
+    segmentation leaves around targets (S3 item 2, Fig. 2c).
+    """
+
+    name = "threshold"
+    summary = "S3 adaptive grey threshold from the last frame's candidates + median filter"
+    params = (
+        Param(
+            "offset",
+            float,
+            60.0,
+            "threshold = mean grey of the last frame's candidates minus this (S3 section 2.1, "
+            "value not given: 60 grey levels)",
+            min=0.0,
+            max=255.0,
+        ),
+        Param(
+            "initial",
+            float,
+            100.0,
+            "threshold when there are no candidates to learn from (first frame, or none found; "
+            "not given by S3: 100)",
+            min=1.0,
+            max=255.0,
+        ),
+        Param(
+            "floor",
+            float,
+            40.0,
+            "lowest threshold the feedback may reach, so dim clutter cannot pull it into the "
+            "noise (not in S3: 40)",
+            min=1.0,
+            max=255.0,
+        ),
+        Param(
+            "median",
+            int,
+            3,
+            "median filter kernel size in pixels (S3 section 2.1 'median filter', size not "
+            "given: 3; 1 = off)",
+            choices=(1, 3, 5, 7),
+        ),
+    )
+    provides = _SEGMENTS
+    needs_init_box = False
+
+    def step(self, ctx: TrackContext) -> None:
+        grey = ctx.frame.gray()
+        level = self.threshold(ctx.memory.get(CANDIDATE_GREY))
+        # S3 section 2.1: below the threshold -> 0, the rest keeps its grey.
+        kept = cv2.threshold(grey, math.ceil(level) - 1, 0, cv2.THRESH_TOZERO)[1]
+        ctx.window = ctx.frame.full_window()
+        ctx.feature = grey
+        ctx.likelihood = kept if self.median == 1 else cv2.medianBlur(kept, self.median)
+
+    def threshold(self, candidate_grey: float | None) -> float:
+        """This frame's threshold from the last frame's mean candidate grey (None: none)."""
+        if candidate_grey is None:
+            return self.initial
+        return max(candidate_grey - self.offset, self.floor)
+
+
+@register
+class Blobs(Stage):
+    """Connected foreground regions -> :class:`Detection` (centroid, box, area, mean grey).
+
+    8-connected components of ``ctx.likelihood`` (non-zero = foreground) with ``min_area`` <=
+    area <= ``max_area`` pixels; at most ``max_blobs`` of them, the largest, so a cluttered frame
+    costs a bounded amount downstream. Publishes the candidates' mean grey for ``threshold``'s
+    next frame (S3 item 1). Detections come in raster order of their first pixel.
+    """
+
+    name = "blobs"
+    summary = "connected components of the foreground -> detections (centroid, box, area, grey)"
+    params = (
+        Param("min_area", int, 4, "smallest blob kept, in pixels (smaller: noise)", min=1),
+        Param("max_area", int, 0, "largest blob kept, in pixels (0: no limit)", min=0),
+        Param(
+            "max_blobs",
+            int,
+            100,
+            "at most this many blobs per frame, the largest (bounds the trackers' work)",
+            min=1,
+        ),
+    )
+    requires = _SEGMENTS
+    provides = frozenset({"detections"})
+    needs_init_box = False
+
+    def step(self, ctx: TrackContext) -> None:
+        ctx.memory.pop(CANDIDATE_GREY, None)
+        if ctx.likelihood is None or ctx.window is None or ctx.feature is None:
+            return  # the segmenting stage is still learning (background's first frames)
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(
+            ctx.likelihood, connectivity=8, ltype=cv2.CV_32S
+        )
+        areas = stats[1:count, cv2.CC_STAT_AREA]
+        keep = areas >= self.min_area
+        if self.max_area:
+            keep &= areas <= self.max_area
+        chosen = np.flatnonzero(keep) + 1  # label numbers
+        if chosen.size > self.max_blobs:
+            largest = np.argsort(-stats[chosen, cv2.CC_STAT_AREA], kind="stable")
+            chosen = np.sort(chosen[largest[: self.max_blobs]])
+        x0, y0 = ctx.window.x0, ctx.window.y0
+        for label in chosen:
+            x, y, w, h, area = (int(v) for v in stats[label])
+            inside = labels[y : y + h, x : x + w] == label
+            grey = float(ctx.feature[y : y + h, x : x + w][inside].mean())
+            cx, cy = centroids[label]
+            ctx.detections.append(
+                Detection(
+                    Box(float(x + x0), float(y + y0), float(w), float(h)),
+                    float(cx) + x0,
+                    float(cy) + y0,
+                    float(area),
+                    grey,
+                )
+            )
+        if ctx.detections:
+            ctx.memory[CANDIDATE_GREY] = float(np.mean([d.grey for d in ctx.detections]))
+
+
+@register
+class LargestBlob(Stage):
+    """S4 item 2: the largest detection is this frame's measurement of the single target.
+
+    ``ctx.measurement`` is its bounding box centred on its centroid (S4: 'the centre and size of
+    the detected target'), and the state is ``tracking``. When nothing was detected the
+    measurement is None (a Kalman stage coasts) and the state is ``occluded`` once a target has
+    been seen (``ctx.box`` set), ``lost`` before (no box is output, e.g. while ``background``
+    learns).
+    """
+
+    name = "largest_blob"
+    summary = "the largest detection becomes the single-target measurement (S4)"
+    requires = frozenset({"detections"})
+    provides = frozenset({"measurement", "state"})
+    needs_init_box = False
+
+    def step(self, ctx: TrackContext) -> None:
+        if ctx.detections:
+            best = max(ctx.detections, key=lambda d: d.area)
+            ctx.measurement = best.box.moved_to(best.cx, best.cy)
+            ctx.state = TRACKING
+        else:
+            ctx.state = LOST if ctx.box is None else OCCLUDED

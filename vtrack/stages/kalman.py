@@ -1,0 +1,126 @@
+"""Kalman filtering of the target centre: places the next search window, rides through occlusion.
+
+The filter math and the three motion models live in :mod:`vtrack.filters`:
+
+- ``cv``: S0 item 6 (Liu et al. 2022, eq. 8-17): per axis ``(x, dx)``, ``F = [[1,1],[0,1]]``,
+  ``H = [1,0]``, ``Q = q I`` (S0: I), ``R = r`` (S0: 1), ``P0 = p0 I`` (not given; 100 I);
+- ``ca``: S2 item 8 (Di & Zhu 2008, eq. 14-16): per axis ``(x, v, a)``, ``A`` with ``T^2`` as
+  printed (``kinematic``: ``T^2/2``), ``W = diag(0, 0, q)``, ``R = r``, started from the first
+  three measured positions; until then there is no prediction and the measurement passes
+  through;
+- ``gravity``: S4 item 3 (Gan 2018, eq. 11-13): ``(x, y, ux, vy)``, constant velocity plus a
+  gravity input ``g`` on the vertical velocity, ``P(1) = p0 I`` (S4: 100 I); ``init =
+  "document"`` starts from ``(w/2, 0, 0, 0)`` (``w`` the image width) corrected by the first
+  measurement, ``"first_measurement"`` starts at the first measurement at rest.
+
+Each frame: if ``ctx.measurement`` is a box, the filter is updated with its centre; otherwise it
+coasts. The frame's box is the measurement (``output = "measurement"``: the mean-shift result is
+the position, the filter only places the next window) or the filtered centre (``"filtered"``);
+while there is no measurement it is this frame's prediction. Then the filter predicts the next
+frame: ``ctx.prediction`` is a box of the frame's box size centred there.
+
+Pipeline contract of stage ``kalman``: reads ``ctx.measurement``, ``ctx.box``,
+``ctx.prediction`` (the one used for this frame) and ``ctx.frame.width``; writes ``ctx.box``,
+``ctx.prediction`` and the extras ``pred_cx``, ``pred_cy`` (the centre of the prediction this
+frame's search started from; empty when there was none).
+"""
+
+from __future__ import annotations
+
+from vtrack.filters import KalmanFilter, Point, constant_acceleration, constant_velocity, gravity
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TrackContext, register
+
+
+@register
+class Kalman(Stage):
+    """Kalman filter on the box centre: cv (S0), ca (S2) or gravity (S4) motion model."""
+
+    name = "kalman"
+    summary = "Kalman filter on the box centre (cv: S0 6, ca: S2 8, gravity: S4 3); predicts"
+    params = (
+        Param(
+            "model", str, "cv",
+            "cv = constant velocity per axis (S0); ca = constant acceleration per axis (S2); "
+            "gravity = (x, y, ux, vy) with gravity input (S4)",
+            choices=("cv", "ca", "gravity"),
+        ),
+        Param(
+            "output", str, "measurement",
+            "the frame's box: measurement = the measured box (S0; the filter places the next "
+            "window); filtered = the filter's corrected centre",
+            choices=("measurement", "filtered"),
+        ),
+        Param("q", float, 1.0, "process noise: Q = q I (cv, gravity), W = diag(0,0,q) (ca)",
+              min=0.0),
+        Param("r", float, 1.0, "measurement noise variance R (S0, S2: 1)", min=1e-9),
+        Param("p0", float, 100.0, "initial covariance P0 = p0 I (cv, gravity; S4: 100)",
+              min=0.0),
+        Param("dt", float, 1.0, "time step between frames in the models' unit (1 = a frame)",
+              min=1e-9),
+        Param("kinematic", bool, False,
+              "ca: use T^2/2 in A instead of the T^2 printed in S2 eq. 14"),
+        Param("g", float, 1.0,
+              "gravity: vertical acceleration in pixels per dt^2, downwards positive"),
+        Param(
+            "init", str, "document",
+            "gravity: document = start from (w/2, 0, 0, 0) as in S4; first_measurement = "
+            "start at the first measured centre",
+            choices=("document", "first_measurement"),
+        ),
+    )
+    requires = frozenset({"measurement", "box", "prediction"})
+    provides = frozenset({"box", "prediction"})
+    columns = ("pred_cx", "pred_cy")
+
+    # Set from the parameters by Stage.__init__.
+    model: str
+    output: str
+    q: float
+    r: float
+    p0: float
+    dt: float
+    kinematic: bool
+    g: float
+    init: str
+
+    def start(self, ctx: TrackContext) -> None:
+        """Forget any previous run, then take the first frame's box as the first measurement."""
+        self._filter: KalmanFilter | None = None
+        self._points: list[Point] = []  # ca: positions until the filter can start
+        self.step(ctx)
+
+    def step(self, ctx: TrackContext) -> None:
+        if ctx.prediction is not None:
+            ctx.extras["pred_cx"] = ctx.prediction.cx
+            ctx.extras["pred_cy"] = ctx.prediction.cy
+        box = ctx.measurement
+        if box is not None:
+            self._correct((box.cx, box.cy), ctx.frame.width)
+            if self.output == "filtered" and self._filter is not None:
+                box = box.moved_to(*self._filter.position())
+            ctx.box = box
+        elif self._filter is not None and ctx.box is not None:
+            ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior
+        if self._filter is None or ctx.box is None:
+            ctx.prediction = None
+            return
+        self._filter.predict()
+        ctx.prediction = ctx.box.moved_to(*self._filter.position())
+
+    def _correct(self, point: Point, width: int) -> None:
+        """Update the filter with a measured centre, creating it when it does not exist yet."""
+        if self._filter is not None:
+            self._filter.update(point)
+        elif self.model == "cv":
+            self._filter = constant_velocity(point, self.q, self.r, self.p0, self.dt)
+        elif self.model == "gravity":
+            start = (width / 2.0, 0.0) if self.init == "document" else point
+            self._filter = gravity(start, self.q, self.r, self.p0, self.dt, self.g)
+            if self.init == "document":
+                self._filter.update(point)  # S4: X(1) = (w/2, 0, 0, 0), corrected by y(1)
+        else:
+            self._points.append(point)
+            if len(self._points) == 3:
+                self._filter = constant_acceleration(self._points, self.q, self.r, self.dt,
+                                                     self.kinematic)

@@ -1,0 +1,62 @@
+"""A detection source that reads a MOTChallenge ``det.txt`` instead of looking at the pixels.
+
+``mot_detections`` puts the boxes a file lists for the current frame into ``ctx.detections``,
+so the multi-target trackers (``mht``, ``kalman_tracks``) can be run and scored on a benchmark's
+public detections, which separates the tracker's quality from the detector's::
+
+    [[stage]]
+    name = "mot_detections"
+    path = "MOT_TUD-Campus/det.txt"
+
+    [[stage]]
+    name = "mht"
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from vtrack.errors import ConfigError
+from vtrack.evaluate.groundtruth import read_mot_detections
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TrackContext, register
+from vtrack.stages.detect import Detection
+
+
+@register
+class MotDetections(Stage):
+    """Detections from a MOTChallenge ``det.txt`` (frame ``i`` of the file = 0-based frame
+    ``i - 1`` of the input), each with its box centre as centroid, its box area and the file's
+    confidence as score; boxes below ``min_score`` are dropped."""
+
+    name = "mot_detections"
+    summary = "detections read from a MOTChallenge det.txt (public detections) instead of pixels"
+    params = (
+        Param(
+            "path",
+            str,
+            "",
+            "the det.txt file (frame,id,x,y,w,h,conf,...), relative to the working directory",
+        ),
+        Param(
+            "min_score",
+            float,
+            0.0,
+            "detections with a confidence below this are dropped (DPM scores may be negative: "
+            "lower it to keep them)",
+        ),
+    )
+    provides = frozenset({"detections"})
+    needs_init_box = False
+
+    def start(self, ctx: TrackContext) -> None:
+        """Read the file (InputError if it cannot be read or parsed), then this frame's boxes."""
+        if not self.path:
+            raise ConfigError(f"stage '{self.name}': parameter 'path' must name a det.txt file")
+        self._frames = read_mot_detections(Path(self.path))
+        self.step(ctx)
+
+    def step(self, ctx: TrackContext) -> None:
+        for box, score in self._frames.get(ctx.frame.index, ()):
+            if score >= self.min_score:
+                ctx.detections.append(Detection(box, box.cx, box.cy, box.area, score=score))

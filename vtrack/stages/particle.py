@@ -1,0 +1,256 @@
+"""S1: centroid-corrected particle filter with a tracked/lost state (patent CN105869186A).
+
+One stage runs the document's whole per-frame loop (ALGORITHMS.md S1 items 1-7; patent steps
+1-9, paragraphs [0041]-[0048]):
+
+1. the target model is the hue histogram of the first frame's box;
+2. ``particles`` boxes of the target's size are scattered: while tracked, ``near_share`` of them
+   around the last position and the rest over the whole frame; while lost, all of them over the
+   whole frame;
+3. each particle's hue pixels give its hue histogram and its centroid weighted by the target
+   histogram (CamShift's centroid, ``c = sum (x, y) q[H] / sum q[H]``); only the best
+   particle's centroid is ever output, so only that one is computed (the FPGA computes all of
+   them in the same pixel pass because it costs it nothing);
+4. its weight is the Bhattacharyya coefficient of the normalised histograms;
+5. the output is the centroid of the best particle (its centre with ``centroid_correction``
+   off), with a box of the initial size centred on it;
+6. the best weight is compared with the one ``history`` tracked frames ago to decide between
+   tracked and lost, and the history is frozen while lost.
+
+Hue is the 8-bit full-range hue of OpenCV's ``COLOR_BGR2HSV_FULL`` (0..255 for 0..360 degrees),
+converted only inside the particle boxes (or once for the bounding region of a cluster of
+particles when that is smaller than converting each). Particle boxes always lie inside the frame
+(patent [0045]: "particles never leave the visible screen").
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import cv2
+import numpy as np
+
+from vtrack.errors import InputError
+from vtrack.frame import Frame
+from vtrack.geometry import Box, Window
+from vtrack.params import Param
+from vtrack.stages.base import LOST, TRACKING, Stage, TrackContext, register
+
+#: Levels of the 8-bit hue of ``COLOR_BGR2HSV_FULL`` (0..255 spans 0..360 degrees).
+HUE_LEVELS = 256
+
+
+def hue_histogram(hsv: np.ndarray, bins: int) -> np.ndarray:
+    """Counts of the hue channel of a ``COLOR_BGR2HSV_FULL`` image in ``bins`` equal bins.
+
+    Bin ``u`` holds the hue values ``v`` with ``v * bins // 256 == u``.
+    """
+    counts = cv2.calcHist([hsv], [0], None, [bins], [0, HUE_LEVELS])
+    return counts.ravel().astype(np.float64)
+
+
+def bhattacharyya(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Bhattacharyya coefficient ``sum_u sqrt(p_u q_u)`` of each histogram in ``p`` (rows of
+    shape (..., bins)) with ``q``, all normalised to sum 1 here; 1.0 means identical
+    distributions, 0.0 no common bin (or an empty histogram)."""
+    totals = np.sqrt(p.sum(axis=-1) * q.sum())
+    overlap = np.sqrt(p * q).sum(axis=-1)
+    return np.divide(overlap, totals, out=np.zeros_like(overlap), where=totals > 0)
+
+
+def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
+    """The ``COLOR_BGR2HSV_FULL`` image of each window, converting only what is needed.
+
+    The bounding region of all windows is converted once when its area is at most the windows'
+    total area (a cluster of overlapping particles); otherwise each window is converted alone.
+    """
+    if not windows:
+        return []
+    union = Window(
+        min(w.x0 for w in windows),
+        min(w.y0 for w in windows),
+        max(w.x1 for w in windows),
+        max(w.y1 for w in windows),
+    )
+    if len(windows) > 1 and union.width * union.height <= sum(w.width * w.height for w in windows):
+        hsv = cv2.cvtColor(frame.bgr(union), cv2.COLOR_BGR2HSV_FULL)
+        return [
+            hsv[w.y0 - union.y0 : w.y1 - union.y0, w.x0 - union.x0 : w.x1 - union.x0]
+            for w in windows
+        ]
+    return [cv2.cvtColor(frame.bgr(w), cv2.COLOR_BGR2HSV_FULL) for w in windows]
+
+
+@register
+class ParticleFilter(Stage):
+    """S1: particle filter whose particles are corrected to their target-weighted centroid,
+    with the patent's tracked/lost decision on the best weight's 10-frame ratio."""
+
+    name = "particle"
+    summary = "S1 particle filter: hue histograms, centroid correction, tracked/lost state"
+    params = (
+        Param("particles", int, 8, "number of particles per frame (S1 embodiment: 8)", min=1),
+        Param(
+            "near_share",
+            float,
+            0.75,
+            "share of particles scattered near the last position while tracked, the rest over "
+            "the whole frame (S1 item 2: 'most' near, 'a few' elsewhere: 6 of 8)",
+            min=0.0,
+            max=1.0,
+        ),
+        Param(
+            "spread",
+            float,
+            0.25,
+            "near particles are offset uniformly by up to spread x the box width/height from "
+            "the last position (in box sizes; not given by S1: 0.25 keeps the best of 6 near "
+            "particles' weight >= 0.9 in 90% of frames on a still target)",
+            min=0.0,
+        ),
+        Param(
+            "bins",
+            int,
+            256,
+            "hue bins over 0..360 degrees (S1 item 1: one per degree; 256 is the full "
+            "resolution of 8-bit hue)",
+            min=2,
+            max=HUE_LEVELS,
+        ),
+        Param(
+            "centroid_correction",
+            bool,
+            True,
+            "output the best particle's target-weighted centroid (S1 item 5); false: its "
+            "centre (the plain particle filter)",
+        ),
+        Param(
+            "threshold",
+            float,
+            0.9,
+            "tracked while best weight / weight `history` frames ago >= threshold "
+            "(S1 item 6: 0.86..0.92)",
+            min=0.0,
+            max=1.0,
+        ),
+        Param(
+            "history",
+            int,
+            10,
+            "tracked frames between the compared weights (S1 item 6: 10)",
+            min=1,
+        ),
+        Param("draw_particles", bool, False, "add the particle boxes to the drawing overlays"),
+    )
+    requires = frozenset({"frame", "box"})
+    provides = frozenset({"box", "state", "score"})
+    columns = ("weight_ratio", "reference_weight", "particle_cx", "particle_cy")
+
+    particles: int
+    near_share: float
+    spread: float
+    bins: int
+    centroid_correction: bool
+    threshold: float
+    history: int
+    draw_particles: bool
+
+    def start(self, ctx: TrackContext) -> None:
+        """Build the target model from the initial box (S1 item 1) and clear the history."""
+        frame = ctx.frame
+        box = ctx.box
+        assert box is not None  # needs_init_box: the pipeline refuses to start without one
+        window = box.window(frame.width, frame.height)
+        if window is None:
+            raise InputError(
+                f"stage '{self.name}': initial box {tuple(box)} is outside the "
+                f"{frame.width}x{frame.height} frame"
+            )
+        # S1 item 1: target feature = hue histogram of the first frame's box.
+        self._target = hue_histogram(hue_windows(frame, [window])[0], self.bins)
+        # S1 item 3: q[H] per 8-bit hue value, for the centroid weights (cv2.LUT table).
+        bin_of_hue = np.arange(HUE_LEVELS) * self.bins // HUE_LEVELS
+        self._q_of_hue = (self._target / self._target.sum())[bin_of_hue].astype(np.float32)
+        self._size = (box.w, box.h)
+        self._pixels = (
+            min(max(round(box.w), 1), frame.width),
+            min(max(round(box.h), 1), frame.height),
+        )
+        # S1 item 6: best weights of the last `history` tracked frames, oldest first. Empty at
+        # the start: the first tracked frame is compared with itself and, until `history`
+        # weights are stored, later frames with the oldest one. This is the patent's own start
+        # ([0047]: the first tracked frame's weight fills the whole shift register).
+        self._weights: deque[float] = deque(maxlen=self.history)
+        ctx.state = TRACKING
+        ctx.score = 1.0  # the target box against its own histogram
+
+    def step(self, ctx: TrackContext) -> None:
+        """Scatter, score and correct the particles, output the best one, update the state."""
+        frame = ctx.frame
+        assert ctx.box is not None  # set by start and never cleared
+        windows, near = self._scatter(ctx)
+        hsvs = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
+        # S1 items 3-4: per particle, from the same hue pixels, histogram and centroid.
+        histograms = np.array([hue_histogram(hsv, self.bins) for hsv in hsvs])
+        weights = bhattacharyya(histograms, self._target)
+        best = int(np.argmax(weights))
+        weight = float(weights[best])
+        window = windows[best]
+        centre = (window.x0 + window.width / 2.0, window.y0 + window.height / 2.0)
+        # S1 item 5: output the best particle's centroid (its centre for the plain filter).
+        point = self._centroid(hsvs[best], window) if self.centroid_correction else centre
+
+        # S1 item 6: tracked/lost ratio against the best weight `history` tracked frames ago
+        # (while lost every stored weight is the frozen reference, so it is the oldest one too).
+        reference = self._weights[0] if self._weights else weight
+        tracked = weight >= self.threshold * reference
+        if tracked:
+            self._weights.append(weight)  # tracking (or re-acquired): the history resumes
+            ctx.box = Box.from_center(point[0], point[1], *self._size)
+            ctx.state = TRACKING
+        elif ctx.state != LOST:
+            # S1 item 6: entering lost freezes the history at the weight `history` frames before
+            # the loss ([0047]: it replaces the other nine entries; this frame is not stored).
+            self._weights.extend([reference] * self.history)
+            ctx.state = LOST  # ctx.box keeps the last tracked box; the pipeline outputs none
+        ctx.score = weight
+        ctx.extras.update(
+            weight_ratio=weight / reference if reference > 0 else float("nan"),
+            reference_weight=reference,
+            particle_cx=centre[0],
+            particle_cy=centre[1],
+        )
+        if self.draw_particles:
+            ctx.overlays.append(("particles", [w.as_box() for w in windows]))
+
+    def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int]:
+        """Particle windows of the target's pixel size, inside the frame (S1 item 2).
+
+        Returns the windows and how many of them (the first ones) were scattered near the last
+        position: ``round(near_share * particles)`` while tracked, none while lost.
+        """
+        frame, rng = ctx.frame, ctx.rng
+        assert ctx.box is not None
+        pw, ph = self._pixels
+        size = np.array([pw, ph], dtype=np.float64)
+        near = round(self.near_share * self.particles) if ctx.state != LOST else 0
+        offsets = rng.uniform(-self.spread, self.spread, (near, 2)) * self._size
+        near_corners = np.array([ctx.box.cx, ctx.box.cy]) + offsets - size / 2.0
+        # S1 item 2: a few particles (all of them while lost) uniformly over the whole frame.
+        room = np.array([frame.width - pw, frame.height - ph], dtype=np.float64)
+        far_corners = rng.uniform(0.0, 1.0, (self.particles - near, 2)) * room
+        corners = np.clip(np.rint(np.vstack([near_corners, far_corners])), 0, room).astype(int)
+        windows = [Window(int(x), int(y), int(x) + pw, int(y) + ph) for x, y in corners]
+        return windows, near
+
+    def _centroid(self, hsv: np.ndarray, window: Window) -> tuple[float, float]:
+        """``sum (x, y) q[H] / sum q[H]`` over the window's pixel centres (S1 item 3);
+        the window's centre when no pixel has a target hue."""
+        mass = cv2.LUT(cv2.extractChannel(hsv, 0), self._q_of_hue.reshape(1, HUE_LEVELS))
+        moments = cv2.moments(mass)
+        if moments["m00"] <= 0:
+            return window.x0 + window.width / 2.0, window.y0 + window.height / 2.0
+        return (
+            window.x0 + 0.5 + moments["m10"] / moments["m00"],
+            window.y0 + 0.5 + moments["m01"] / moments["m00"],
+        )
