@@ -10,6 +10,8 @@ every input runs) in alternating rounds:
 - a Dask ``LocalCluster`` of 2 worker processes x 1 thread on this machine, started before the
   clock (its start-up time is reported on its own).
 
+The order of the three rotates from round to round.
+
 Prints a Markdown table of the median wall time per batch, inputs per second, the 2-job / 1-job
 speed-up and the Dask overhead against the local pool with 2 jobs. Machines here are shared and
 noisy: only ratios measured in the same run mean much.
@@ -18,9 +20,11 @@ noisy: only ratios measured in the same run mean much.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from vtrack.batch import (
@@ -84,20 +88,24 @@ def main() -> None:
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                            host="127.0.0.1", dashboard_address=None)
     startup = time.perf_counter() - started
-    times: dict[str, list[float]] = {"jobs 1": [], "jobs 2": [], "dask 2x1": []}
+    executors: dict[str, Callable[[], tuple[Executor, int]]] = {
+        "jobs 1": lambda: (LocalExecutor(1), 1),
+        "jobs 2": lambda: (LocalExecutor(2), 2),
+        "dask 2x1": lambda: (DaskExecutor(cluster.scheduler_address), 2),
+    }
+    times: dict[str, list[float]] = {name: [] for name in executors}
+    names = list(executors)
     try:
-        for _ in range(args.rounds):
-            times["jobs 1"].append(time_batch(folder, LocalExecutor(1), 1))
-            times["jobs 2"].append(time_batch(folder, LocalExecutor(2), 2))
-            times["dask 2x1"].append(
-                time_batch(folder, DaskExecutor(cluster.scheduler_address), 2))
+        for round_ in range(args.rounds):  # rotate the order: no executor always goes last
+            for name in names[round_ % len(names):] + names[: round_ % len(names)]:
+                times[name].append(time_batch(folder, *executors[name]()))
     finally:
         cluster.close()
 
     median = {name: statistics.median(values) for name, values in times.items()}
     print(f"\n{args.clips} clips of {args.frames} frames at {width}x{height} (H.264, "
           f"camera-like), S0 with annotated video, {cpu_count()} cores, median of "
-          f"{args.rounds} rounds\n")
+          f"{args.rounds} rounds, load average {os.getloadavg()[0]:.1f} at the end\n")
     print("| executor | seconds per batch | inputs/s | frames/s | vs jobs 1 | vs jobs 2 |")
     print("|---|---:|---:|---:|---:|---:|")
     for name, seconds in median.items():

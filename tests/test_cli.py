@@ -183,15 +183,15 @@ def test_not_a_video(tmp_path: Path) -> None:
 
 def test_truncated_video_tracks_what_decodes(tmp_path: Path) -> None:
     scene = make_scene("smooth", seed=1, width=W, height=H, frames=90, fps=FPS)
-    clip = tmp_path / "clip.ts"
+    clip = tmp_path / "clip.mkv"
     write_video(scene, clip)
     data = clip.read_bytes()
-    cut = tmp_path / "cut.ts"
+    cut = tmp_path / "cut.mkv"
     cut.write_bytes(data[: len(data) // 2])
     out = tmp_path / "out"
     result = vtrack("run", str(cut), "--init", ",".join(map(str, scene.boxes[0])), "--out",
                     str(out))
-    line = assert_one_line_error(result, "cut.ts", "frame")
+    line = assert_one_line_error(result, "cut.mkv", "frame")
     assert result.returncode == 1, line
     rows = read_csv(out / "track.csv")
     assert 0 < len(rows) < 90
@@ -292,9 +292,9 @@ def test_ctrl_c_leaves_valid_partial_outputs(smooth_scene, tmp_path: Path) -> No
         process.stdin.write(frame.tobytes())
     process.stdin.flush()
     deadline = time.monotonic() + 60
-    partial = list(out.glob("track.csv*"))
+    partial = list(out.glob("*track*.csv"))
     while time.monotonic() < deadline:
-        partial = list(out.glob("track.csv*"))
+        partial = list(out.glob("*track*.csv"))
         if partial and len(partial[0].read_text().splitlines()) >= 20:
             break
         time.sleep(0.1)

@@ -158,7 +158,8 @@ def test_display_rotation_is_applied(tmp_path):
 def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
     frames = pictures(40)
     for name, kwargs in (("fast.mp4", {"options": {"movflags": "faststart"}}),
-                         ("clip.mkv", {})):
+                         ("clip.mkv", {}), ("clip.ts", {"fmt": "mpegts"}),
+                         ("clip.h264", {"fmt": "h264"})):
         whole = write_video(tmp_path / name, frames, **kwargs)
         cut = tmp_path / f"cut_{name}"
         data = whole.read_bytes()

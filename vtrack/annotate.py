@@ -174,6 +174,8 @@ class Annotator:
             if _drawable(gt_box):
                 canvas.rectangle(*_corners(gt_box), GROUND_TRUTH, t)
         for kind, payload in result.overlays:
+            if payload is None:
+                continue
             if kind == "window":
                 box = payload.as_box() if isinstance(payload, Window) else Box(*payload)
                 canvas.rectangle(*_corners(box), WINDOW, 1)

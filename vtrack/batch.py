@@ -42,7 +42,7 @@ import traceback
 import uuid
 from collections import deque
 from collections.abc import Iterable, Iterator, Sequence
-from contextlib import closing
+from contextlib import closing, suppress
 from dataclasses import asdict, dataclass, fields, replace
 from multiprocessing.connection import Connection, wait
 from pathlib import Path
@@ -250,7 +250,8 @@ def completed_summary(request: RunRequest) -> RunSummary | None:
     """The summary of a finished run of exactly ``request`` in ``request.out_dir``, else None.
 
     Finished means ``run.json`` (written last, atomically) says ``complete``; exactly means it
-    records the same input, ground truth, seed, video settings and resolved stage chain.
+    records the same input, ground truth, initial box (when one is given), seed, video settings
+    and resolved stage chain.
     """
     try:
         record = json.loads((request.out_dir / "run.json").read_text(encoding="utf-8"))
@@ -259,6 +260,8 @@ def completed_summary(request: RunRequest) -> RunSummary | None:
         wanted_stages = json.loads(json.dumps(request.config.resolved()["stages"]))
         recorded = {k: record["request"].get(k) for k in _recorded_request(request)}
         if recorded != _recorded_request(request) or record["config"]["stages"] != wanted_stages:
+            return None
+        if request.init_box is not None and record["request"]["init"] != list(request.init_box):
             return None
         names = {f.name for f in fields(RunSummary)}
         return RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
@@ -282,8 +285,7 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
 
     Known outcomes: ``skipped`` for results complete from an earlier batch (unless ``force``),
     ``failed`` for a single-target config on an input with neither ground truth nor a readable
-    initial box.
-    ``threads`` is the number of OpenCV threads of each job.
+    initial box. ``threads`` is the number of OpenCV threads of each job.
     """
     result = Plan([], [], [])
     out_dir = out_dir.resolve()
@@ -359,14 +361,18 @@ def execute(job: Job) -> Outcome:
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
 
 
-def _worker(job: Job, results: Connection) -> None:
-    """Entry point of a local worker process: run ``job``, send its outcome back."""
+def _serve(connection: Connection) -> None:
+    """A local worker process: run each job received, send back its outcome; stop at None."""
     try:
-        outcome = execute(job)
-    except KeyboardInterrupt:
-        outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted")
-    results.send(outcome)
-    results.close()
+        while (job := connection.recv()) is not None:
+            try:
+                outcome = execute(job)
+            except KeyboardInterrupt:
+                outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted",
+                                  attempt=job.attempt)
+            connection.send(outcome)
+    except (EOFError, OSError, KeyboardInterrupt):
+        pass  # the batch went away or was interrupted: nothing left to do
 
 
 # --- executors -------------------------------------------------------------------------------
@@ -404,12 +410,54 @@ def _context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context("spawn")
 
 
-class LocalExecutor:
-    """One new worker process per job, at most ``workers`` at a time.
+class _Worker:
+    """A long-lived local worker process, its end of the pipe, and the job it is running."""
 
-    A process per job (rather than a pool) means a worker that dies (killed, segfault) takes
-    down only its own job, and that job is known: it is started again :data:`RETRIES` times,
-    then reported ``failed``. Every other job carries on.
+    def __init__(self, context: multiprocessing.context.BaseContext) -> None:
+        self.connection, theirs = context.Pipe()
+        self.process = context.Process(target=_serve, args=(theirs,), daemon=True,
+                                       name="vtrack batch worker")
+        self.process.start()
+        theirs.close()  # the worker holds the only other end: EOF here when it dies
+        self.job: Job | None = None
+
+    def start(self, job: Job) -> bool:
+        """Hand ``job`` to the worker; False if it is gone."""
+        self.job = job
+        try:
+            self.connection.send(job)
+        except OSError:
+            return False
+        return True
+
+    def result(self) -> Outcome | None:
+        """The outcome of the running job, or None if the worker died first."""
+        try:
+            return self.connection.recv()
+        except (EOFError, OSError):
+            return None
+
+    def stop(self, grace_s: float = 5) -> None:
+        """Ask the worker to finish; a job still running (interrupted, it is writing its
+        ``run.json``) gets ``grace_s``, then the process is terminated."""
+        with suppress(OSError):
+            self.connection.send(None)
+        self.process.join(grace_s)
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join()
+        self.connection.close()
+
+
+class LocalExecutor:
+    """At most ``workers`` long-lived worker processes, each running one job at a time.
+
+    Unlike a ``ProcessPoolExecutor`` (which breaks entirely, ``BrokenProcessPool``, when one of
+    its workers dies), every worker has its own pipe and the executor knows which job each one
+    runs: a worker that dies (killed, segfault) costs only that job, which is started again on
+    a fresh worker :data:`RETRIES` times and then reported ``failed``; the other workers carry
+    on. Workers stay alive between jobs, so a job starts warm (imports, codec and OpenCV set-up
+    are done once per worker, not once per job).
     """
 
     def __init__(self, workers: int) -> None:
@@ -418,48 +466,37 @@ class LocalExecutor:
     def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
         context = _context()
         pending = deque(jobs)
-        running: dict[Connection, tuple[multiprocessing.process.BaseProcess, Job]] = {}
+        workers: list[_Worker] = []
         try:
-            while pending or running:
-                while pending and len(running) < self.workers:
-                    job = pending.popleft()
-                    receiver, sender = context.Pipe(duplex=False)
-                    process = context.Process(target=_worker, args=(job, sender), daemon=True,
-                                              name=f"vtrack {job.input} [{job.config}]")
-                    process.start()
-                    sender.close()  # the child holds the only write end: EOF when it dies
-                    running[receiver] = (process, job)
-                for receiver in wait(list(running)):
-                    process, job = running.pop(receiver)
-                    outcome = _receive(receiver)
-                    process.join()
-                    if outcome is not None:
+            while pending or workers:
+                while pending and len(workers) < self.workers:
+                    workers.append(_Worker(context))
+                lost = []  # workers found dead, with the job they had
+                for worker in workers:
+                    if worker.job is None and pending and not worker.start(pending.popleft()):
+                        lost.append(worker)
+                busy = {w.connection: w for w in workers if w.job is not None and w not in lost}
+                for connection in wait(list(busy)) if busy else ():
+                    worker = busy[connection]
+                    outcome = worker.result()
+                    if outcome is None:
+                        lost.append(worker)
+                    else:
+                        worker.job = None
                         yield outcome
-                    elif job.attempt <= RETRIES:
+                for worker in lost:
+                    workers.remove(worker)
+                    worker.stop()
+                    job = worker.job
+                    if job.attempt <= RETRIES:
                         pending.appendleft(replace(job, attempt=job.attempt + 1))
                     else:
-                        yield _died(job, _exit_reason(process.exitcode))
+                        yield _died(job, _exit_reason(worker.process.exitcode))
+                if not pending and all(w.job is None for w in workers):
+                    return
         finally:
-            _stop(process for process, _ in running.values())
-
-
-def _receive(receiver: Connection) -> Outcome | None:
-    """The outcome a worker sent, or None if it died first (its pipe closed empty)."""
-    try:
-        return receiver.recv()
-    except (EOFError, OSError):
-        return None
-    finally:
-        receiver.close()
-
-
-def _stop(processes: Iterable[multiprocessing.process.BaseProcess], grace_s: float = 5) -> None:
-    """Let interrupted workers write their ``run.json`` for a moment, then terminate them."""
-    for process in processes:
-        process.join(grace_s)
-        if process.is_alive():
-            process.terminate()
-            process.join()
+            for worker in workers:
+                worker.stop()
 
 
 class DaskExecutor:

@@ -14,6 +14,7 @@ from typing import Any
 from vtrack.errors import ConfigError
 
 _TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}
+_A_TYPE = {int: "an integer", float: "a number", bool: "true or false", str: "a string"}
 
 
 @dataclass(frozen=True)
@@ -34,13 +35,13 @@ class Param:
         ``where`` names the place the value came from, e.g. ``"configs/s0.toml: stage 'kalman'"``.
         Integers are accepted for numbers; nothing else is converted (a string is not a number).
         """
-        expected = _TYPE_NAMES[self.type]
+        expected = _A_TYPE[self.type]
         if self.type is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         wrong_bool = self.type is not bool and isinstance(value, bool)
         if wrong_bool or not isinstance(value, self.type):
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be a {expected}, got {value!r}"
+                f"{where}: parameter '{self.name}' must be {expected}, got {value!r}"
             )
         if self.type is float and not math.isfinite(value):
             raise ConfigError(f"{where}: parameter '{self.name}' must be finite, got {value!r}")
@@ -74,7 +75,7 @@ class Param:
                 value = float(text)
         except ValueError:
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be a {_TYPE_NAMES[self.type]}, got {text!r}"
+                f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got {text!r}"
             ) from None
         return self.validate(value, where)
 

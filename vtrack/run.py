@@ -34,8 +34,9 @@ from vtrack import __version__
 from vtrack.annotate import Annotator
 from vtrack.config import Config
 from vtrack.errors import ConfigError, InputError, OutputError, PartialInputError
-from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import frame_scores, summarize
+from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import Box
 from vtrack.io import CsvWriter, RawFormat, Source, VideoWriter, open_source, write_json
 from vtrack.pipeline import FrameResult, Pipeline
@@ -203,7 +204,12 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     stages = request.config.build()
     pipeline = Pipeline(stages, seed=request.seed)
     prepare_out_dir(request.out_dir)
-    gt = read_boxes(request.gt_path, origin=request.gt_origin) if request.gt_path else None
+    # Multi-target ground truth (MOTChallenge) is read by the MOT metrics at the end.
+    gt = mot_gt = None
+    if request.gt_path is not None and pipeline.multi_target:
+        mot_gt = read_mot(request.gt_path)
+    elif request.gt_path is not None:
+        gt = read_boxes(request.gt_path, origin=request.gt_origin)
     init_box = request.init_box
     if init_box is None and gt is not None and pipeline.needs_init_box:
         if gt[0] is None:
@@ -290,10 +296,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
                                  f"{len(gt)} on" if len(gt) < frames else "extra boxes ignored")
             )
             summary.warnings.append(note)
-    elif isinstance(formatter, _MultiTargetRows) and request.gt_path is not None:
-        from vtrack.evaluate.mot import mot_summary  # multi-target metrics, only when asked
-
-        summary.mot = mot_summary(formatter.tracks, request.gt_path, frames)
+    elif isinstance(formatter, _MultiTargetRows) and mot_gt is not None:
+        summary.mot = evaluate_mot(mot_gt, formatter.tracks, frames)
         metrics = dict(summary.mot)
 
     record = {

@@ -36,9 +36,13 @@ def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
 
 
 def list_images(folder: Path) -> list[Path]:
-    """The images of a sequence folder in frame order (``folder/img/`` if it exists)."""
+    """The images of a sequence folder in frame order (``folder/img/`` if it exists; hidden
+    files such as macOS ``._0001.jpg`` are not images)."""
     where = folder / "img" if (folder / "img").is_dir() else folder
-    files = [p for p in where.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file()]
+    files = [
+        p for p in where.iterdir()
+        if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
+    ]
     return sorted(files, key=lambda p: natural_key(p.name))
 
 

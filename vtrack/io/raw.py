@@ -108,6 +108,7 @@ class RawSource(Source):
 
     def __init__(self, spec: str, fmt: RawFormat) -> None:
         self._fmt = fmt
+        self._label = "stdin" if spec == "-" else spec  # how messages name the input
         self._stream = self._open(spec)
         try:
             fd = self._stream.fileno()
@@ -144,10 +145,12 @@ class RawSource(Source):
             raise
         if self._first is None:
             self._release()
-            raise InputError(f"{spec}: no raw frames (the input is empty)")
+            raise InputError(f"{self._label}: no raw frames (the input is empty)")
 
     def _open(self, spec: str) -> BinaryIO:
         if spec == "-":
+            if sys.stdin.isatty():
+                raise InputError("stdin: is a terminal; pipe raw frames into vtrack")
             return open(sys.stdin.fileno(), "rb", buffering=0, closefd=False)
         check_input_path(spec)
         if os.path.isdir(spec):
@@ -158,8 +161,7 @@ class RawSource(Source):
             raise InputError(f"{spec}: cannot be read ({os_reason(exc)})") from None
 
     def _read_frames(self) -> Iterator[Frame]:
-        fmt, ring, where = self._fmt, self._ring, self.info.path
-        label = "stdin" if where == "-" else where
+        fmt, ring, label = self._fmt, self._ring, self._label
         index = 0
         while True:
             slot = ring[index % len(ring)]

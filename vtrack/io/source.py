@@ -53,6 +53,9 @@ class Source(ABC):
     Frames are decoded ``depth`` frames ahead in a background thread. A source can be iterated
     once. If the input breaks part way, iteration yields every good frame and then raises
     :class:`~vtrack.errors.PartialInputError` saying where it stopped.
+
+    A frame's pixels are valid while it and the next frame are being processed: raw input
+    reuses a small ring of buffers, so whoever keeps pixels longer must copy them.
     """
 
     #: Frames decoded ahead of the consumer.

@@ -28,6 +28,8 @@ from vtrack.io.source import InputInfo, Source
 
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
+#: MPEG-TS packet sizes (plain, M2TS with timestamps, DVB with Reed-Solomon bytes).
+TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
 _END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
 
@@ -35,6 +37,60 @@ _END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
 def _quarter_turns(degrees: float) -> int:
     """A display-matrix angle as 0, 90, 180 or 270 degrees counter-clockwise."""
     return int(round(degrees / 90.0)) % 4 * 90
+
+
+class _Tail:
+    """How a decoded stream ended, to tell a cut-off file from a complete one.
+
+    FFmpeg decodes a truncated file "successfully" to fewer frames; the evidence is that the
+    stream falls short of the frame count or duration its container promised, or (for streams
+    without an index, like MPEG-TS or raw H.264) that its last frame decoded with errors or
+    came after a jump over missing frames (B-frames cut off) in an otherwise regular stream.
+    """
+
+    def __init__(self) -> None:
+        self.frames = 0
+        self.first_time: float | None = None
+        self.last_time: float | None = None
+        self.last_gap = 0.0
+        self.regular_gap = 0.0  # the largest gap between frames before the last one
+        self.last_corrupt = False
+
+    def add(self, time: float | None, corrupt: bool) -> None:
+        self.frames += 1
+        self.last_corrupt = corrupt
+        if time is None:
+            return
+        if self.first_time is None:
+            self.first_time = time
+        elif self.last_time is not None:
+            self.regular_gap = max(self.regular_gap, self.last_gap)
+            self.last_gap = time - self.last_time
+        self.last_time = time
+
+    def shortfall(self, listed: int, end_s: float | None, fps: float) -> str | None:
+        """Why the stream looks cut short (None: it looks complete).
+
+        ``listed``: the container's frame count (0 = none); ``end_s``: where it says the
+        stream ends. A listed count is trusted unless the frames still reach ``end_s`` (edit
+        lists can hide frames); a promised end must be reached within a few frames.
+        """
+        reaches_end = None
+        if end_s is not None and self.first_time is not None and self.last_time is not None:
+            covered = self.last_time + 1.0 / fps
+            reaches_end = covered >= end_s - max(_END_SLACK_S, _END_SLACK_FRAMES / fps)
+        if listed and self.frames < listed and not reaches_end:
+            return f"the container lists {listed} frames"
+        if not listed and reaches_end is False:
+            return (f"{covered - self.first_time:.2f} s of the "
+                    f"{end_s - self.first_time:.2f} s the container promises")
+        if self.last_corrupt:
+            return "the last frame is incomplete"
+        period = 1.0 / fps
+        regular = self.frames >= 3 and self.regular_gap <= 1.2 * period
+        if regular and self.last_gap > 1.5 * period:
+            return f"{round(self.last_gap / period) - 1} frames missing before the last one"
+        return None
 
 
 class VideoSource(Source):
@@ -126,7 +182,8 @@ class VideoSource(Source):
         info = self.info
         fps = info.fps or 30.0
         first, self._first = self._first, None  # do not keep a decoded picture alive
-        t0 = last_time = first.time
+        t0 = first.time
+        tail = _Tail()
         index = 0
         even = info.width % 2 == 0 and info.height % 2 == 0
         try:
@@ -139,8 +196,8 @@ class VideoSource(Source):
                         index,
                     )
                 t = decoded.time
+                tail.add(t, decoded.is_corrupt)
                 time_s = index / fps if t is None or t0 is None else t - t0
-                last_time = t if t is not None else last_time
                 if even and decoded.format.name in I420_FORMATS:
                     planes = decoded.to_ndarray()
                     if self._rotation:
@@ -157,33 +214,21 @@ class VideoSource(Source):
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
             ) from None
-        shortfall = self._shortfall(index, t0, last_time, fps)
+        shortfall = tail.shortfall(self._stream.frames, self._end_s, fps) or self._torn_packet()
         if shortfall:
             raise PartialInputError(
-                f"{info.path}: decoding stopped at frame {index} {shortfall} (truncated file?)",
+                f"{info.path}: decoding stopped at frame {index} ({shortfall}; truncated file?)",
                 index,
             )
 
-    def _shortfall(
-        self, frames: int, t0: float | None, last_time: float | None, fps: float
-    ) -> str | None:
-        """How the decoded stream falls short of what the container promised, or None.
-
-        With a listed frame count, fewer frames is a shortfall unless the decoded frames still
-        reach the promised end (edit lists can hide frames); without one, the decoded frames
-        must reach the promised end within a few frames.
-        """
-        reaches_end = None
-        if self._end_s is not None and t0 is not None and last_time is not None:
-            covered = last_time + 1.0 / fps
-            reaches_end = covered >= self._end_s - max(_END_SLACK_S, _END_SLACK_FRAMES / fps)
-        listed = self._stream.frames
-        if listed:
-            return f"of the {listed} the container lists" if (
-                frames < listed and not reaches_end) else None
-        if reaches_end is False:
-            return (f"after {covered - t0:.2f} s of the {self._end_s - t0:.2f} s the container "
-                    "promises")
+    def _torn_packet(self) -> str | None:
+        """MPEG-TS is a run of fixed-size packets (188 bytes; 192 or 204 in variants): a file
+        that ends inside one was cut (FFmpeg drops the torn packet without a word)."""
+        if self._container.format.name != "mpegts":
+            return None
+        size = self._container.size
+        if size > 0 and all(size % n for n in TS_PACKET_SIZES):
+            return f"the file ends inside a {TS_PACKET_SIZES[0]}-byte transport packet"
         return None
 
     def _release(self) -> None:

@@ -201,7 +201,7 @@ def _cell(value: object) -> object:
     return "" if value is None else value
 
 
-def render_csv(runs: Sequence[RunResult], root: Path) -> str:
+def render_csv(runs: Sequence[RunResult]) -> str:
     """One row per run: OTB scores (empty without ground truth), speed, states, MOT metrics."""
     mot_keys = sorted({k for r in runs for k in r.mot})
     buffer = io.StringIO()
@@ -213,6 +213,6 @@ def render_csv(runs: Sequence[RunResult], root: Path) -> str:
                   if s else [None] * 5)
         row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
                run.frames_occluded, run.frames_lost, run.ground_truth,
-               os.path.relpath(run.folder, root)] + [run.mot.get(k) for k in mot_keys]
+               str(run.folder)] + [run.mot.get(k) for k in mot_keys]
         writer.writerow([_cell(v) for v in row])
     return buffer.getvalue()

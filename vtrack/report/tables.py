@@ -2,7 +2,8 @@
 
 A :class:`Table` is a header and rows of :class:`Cell`; a cell marked ``best`` holds the best
 value of its column within its group of rows (the configurations of one input, or all
-configurations in the averages table). Ties are all marked; a group of one row marks nothing.
+configurations in the averages table). Ties for best are all marked; a column whose values are
+all equal (or a group of one row) marks nothing.
 """
 
 from __future__ import annotations
@@ -67,7 +68,7 @@ def _add_group(table: Table, labels: list[list[str]], values: list[Values],
     offset = len(labels[0]) if labels else 0
     for c, column in enumerate(columns):
         present = [row[c] for row in values if _finite(row[c])]
-        if column.higher_is_better is None or len(present) < 2:
+        if column.higher_is_better is None or len(set(present)) < 2:
             continue
         best = max(present) if column.higher_is_better else min(present)
         for cells, row in zip(rows, values, strict=True):

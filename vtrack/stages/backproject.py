@@ -13,9 +13,10 @@ Pipeline contract of stage ``backproject``:
 - reads ``ctx.window``, ``ctx.feature`` and, from ``ctx.memory``, ``"feature_levels"`` (how many
   values the feature takes, default 256) and ``"feature_mask"`` (0 = pixel not valid, or None);
 - writes ``ctx.likelihood`` (uint8 back-projection of the window; masked pixels are 0);
-- on the first frame publishes in ``ctx.memory``: ``"hue_model"`` (float32 histogram, ``bins``
+- on the first frame publishes in ``ctx.memory``: ``"hue_model"`` (float64 histogram, ``bins``
   counts of the initial box's valid pixels) and ``"bp_initial"`` (mean back-projection inside the
-  initial box, 0..255: the reference of the ``bp_mass`` signal, see :func:`bp_mass`).
+  initial box, 0..255) and ``"bp_background"`` (mean back-projection of the rest of the first
+  window, at most half ``bp_initial``): the references of the ``bp_mass`` signal (:func:`bp_mass`).
 
 The helpers :func:`box_slices`, :func:`box_mean`, :func:`hue_histogram` and :func:`bp_mass` are
 shared with the mean-shift and occlusion stages.
@@ -71,15 +72,15 @@ def bp_mass(ctx: TrackContext, box: Box) -> float:
 
     ``(mean BP in box - background) / (mean BP in initial box - background)``, where the means
     run over the box's pixels in the search window and ``background`` is the first frame's mean
-    BP in the search window around the initial box (``ctx.memory["bp_initial"]``,
-    ``["bp_background"]``). 1 on the first frame; about the fraction of the target's colour
-    still seen, 0 when the box shows no more of it than the surroundings did. The background
-    term removes the floor that hue noise of grey pixels (any hue at low saturation) gives
-    without a saturation mask, which differs from scene to scene.
+    BP in the search window around the initial box, at most half the initial mean
+    (``ctx.memory["bp_initial"]``, ``["bp_background"]``). 1 on the first frame; about the
+    fraction of the target's colour still seen, 0 when the box shows no more of it than the
+    surroundings did. The background term removes the floor that hue noise of grey pixels (any
+    hue at low saturation) gives without a saturation mask, which differs from scene to scene.
     """
     assert ctx.likelihood is not None and ctx.window is not None
     background = ctx.memory["bp_background"]
-    contrast = max(ctx.memory["bp_initial"] - background, 1.0)
+    contrast = ctx.memory["bp_initial"] - background
     return (box_mean(ctx.likelihood, ctx.window, box) - background) / contrast
 
 
@@ -111,8 +112,8 @@ class BackProject(Stage):
             raise InputError(f"backproject: the initial box {box} covers no pixel of the frame")
         levels = ctx.memory.get("feature_levels", 256)
         mask = ctx.memory.get("feature_mask")
-        hist = hue_histogram(ctx.feature[part], None if mask is None else mask[part], self.bins,
-                             levels)
+        part_mask = None if mask is None else mask[part]
+        hist = hue_histogram(ctx.feature[part], part_mask, self.bins, levels).astype(np.float64)
         top = float(hist.max())
         if top == 0:
             raise InputError(
@@ -123,7 +124,7 @@ class BackProject(Stage):
         # (256 entries for cv2.LUT; values >= levels never occur and map to 0)
         values = np.arange(levels)
         self._lut = np.zeros(256, np.uint8)
-        self._lut[:levels] = np.rint(hist[values * self.bins // levels] * (255.0 / top))
+        self._lut[:levels] = np.rint(hist[values * self.bins // levels] * 255.0 / top)
         ctx.memory["hue_model"] = hist
         self.step(ctx)
         assert ctx.likelihood is not None
@@ -132,9 +133,10 @@ class BackProject(Stage):
         total = float(cv2.sumElems(ctx.likelihood)[0])
         initial = float(cv2.mean(inside)[0])
         ctx.memory["bp_initial"] = initial
-        ctx.memory["bp_background"] = (
-            (total - initial * inside.size) / outside if outside else 0.0
-        )
+        background = (total - initial * inside.size) / outside if outside else 0.0
+        # capped at half the initial mass, so the signal keeps a scale (and is 1 on frame 0)
+        # even when the surroundings are as target-coloured as the target
+        ctx.memory["bp_background"] = min(background, initial / 2.0)
 
     def step(self, ctx: TrackContext) -> None:
         """Back-project the window: one table look-up per pixel (S0 eq. 4)."""

@@ -97,9 +97,11 @@ class Hue(Stage):
     full_frame: bool
 
     def start(self, ctx: TrackContext) -> None:
+        """First frame: the mask (if any thresholds are set) always applies to the model."""
         self._convert(ctx, masked=self.sat_min > 0 or self.val_min > 0)
 
     def step(self, ctx: TrackContext) -> None:
+        """Later frames: masked too unless ``mask_model_only``."""
         masked = (self.sat_min > 0 or self.val_min > 0) and not self.mask_model_only
         self._convert(ctx, masked)
 

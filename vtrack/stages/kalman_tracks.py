@@ -2,8 +2,9 @@
 
 S4 (Gan 2018) tracks one ball: background subtraction gives the measurement, a Kalman filter
 with state ``(x, y, ux, vy)`` (S4 eq. 11-13) smooths and predicts it. The ``kalman_tracks``
-stage runs that filter for every target the detector reports (``ctx.detections``), which is
-what S4's method becomes with several targets:
+stage runs that filter (:func:`vtrack.filters.gravity`; ``g = 0`` leaves S4's constant-velocity
+matrices without the gravity input) for every target the detector reports
+(``ctx.detections``), which is what S4's method becomes with several targets:
 
 1. every track's filter predicts this frame (S4 eq. 5-6);
 2. association by global nearest neighbour: the (track, measurement) pairs whose distance
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vtrack.filters import KalmanFilter, constant_velocity, gravity
+from vtrack.filters import KalmanFilter, gravity
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
@@ -50,20 +51,12 @@ class _KalmanTrack:
 
 @register
 class KalmanTracks(Stage):
-    """S4 per track: a Kalman filter per target (gravity or constant velocity model),
-    nearest-neighbour gated association, confirmation and deletion counts."""
+    """S4 per track: S4's Kalman filter per target, nearest-neighbour gated association,
+    confirmation and deletion counts."""
 
     name = "kalman_tracks"
     summary = "S4 per track: a Kalman filter per detected target, nearest-neighbour association"
     params = (
-        Param(
-            "model",
-            str,
-            "gravity",
-            "gravity = S4's (x, y, ux, vy) with gravity input (eq. 11); cv = S0's constant "
-            "velocity per axis (g = 0 in effect)",
-            choices=("gravity", "cv"),
-        ),
         Param("q", float, 1.0, "process noise Q = q I (not given by S4: 1)", min=0.0),
         Param("r", float, 1.0, "measurement noise R = r I (not given by S4: 1)", min=1e-9),
         Param("p0", float, 100.0, "initial covariance P(1) = p0 I (S4 eq. 13: 100)", min=0.0),
@@ -71,9 +64,10 @@ class KalmanTracks(Stage):
         Param(
             "g",
             float,
-            1.0,
-            "gravity model: vertical acceleration in pixels per dt^2, downwards positive (S4's "
-            "g; 1 px/frame^2 matches the generated bounce scene at 30 fps)",
+            0.0,
+            "S4's gravity input: vertical acceleration in pixels per dt^2, downwards positive "
+            "(0: constant velocity, for targets that do not fall; the generated bounce scene "
+            "at 30 fps falls at 1 px/frame^2)",
         ),
         Param(
             "gate",
@@ -141,11 +135,7 @@ class KalmanTracks(Stage):
         ]
 
     def _start(self, detection: Detection) -> _KalmanTrack:
-        point = (detection.cx, detection.cy)
-        if self.model == "gravity":
-            kalman = gravity(point, self.q, self.r, self.p0, self.dt, self.g)
-        else:
-            kalman = constant_velocity(point, self.q, self.r, self.p0, self.dt)
+        kalman = gravity((detection.cx, detection.cy), self.q, self.r, self.p0, self.dt, self.g)
         return _KalmanTrack(
             next(self._ids), kalman, (detection.box.w, detection.box.h),
             confirmed=self.confirm <= 1,

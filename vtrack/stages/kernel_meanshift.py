@@ -14,9 +14,10 @@ Pipeline contract (chain ``kernel_meanshift -> kalman(model="ca")``):
   this frame, None while the predictor is starting: then the result is accepted);
 - writes ``ctx.measurement`` (the mean-shift box, or None on full occlusion so the filter
   coasts), ``ctx.box``, ``ctx.state`` (``tracking`` / ``occluded``), ``ctx.score`` (similarity
-  ``rho`` in 0..1) and the extras ``decision`` (``accept`` / ``fast_motion`` / ``occlusion``),
-  ``scale`` (box size over the initial box size) and ``iterations`` (mean-shift steps this
-  frame, all bandwidths and the rerun from the prediction included).
+  ``rho`` in 0..1 of the kept search; on occlusion, of the search from the prediction) and the
+  extras ``decision`` (``accept`` / ``fast_motion`` / ``occlusion``), ``scale`` (box size over
+  the initial box size) and ``iterations`` (mean-shift steps this frame, all bandwidths and the
+  rerun from the prediction included).
 
 Implementation notes:
 
@@ -169,7 +170,8 @@ class KernelMeanShift(Stage):
         # S2 sec. 6.1: m levels of an 8-bit value, b(X) = value * m / 256
         self._lut = (np.arange(_LEVELS) * self.bins // _LEVELS).astype(np.intp)
         # Trying 1.0 first and replacing only on a strictly larger rho keeps the scale on ties
-        # (a window inside a uniform target scores the same at every bandwidth).
+        # (a window inside a uniform target scores the same at every bandwidth); the document's
+        # order 9, 10, 11 with a strict "<" would keep 0.9 on ties and shrink the box.
         step = self.scale_step
         self._factors = (1.0,) if step == 0 else (1.0, 1.0 - step, 1.0 + step)
         self._size0 = (box.w, box.h)

@@ -14,10 +14,10 @@ Method ``meanshift``:
 - ``region`` is the window ``S_r`` the sums run over. ``"target"`` (default): a target-sized box
   centred at ``(x, y)``. This is the document's reading: the search window is the tracking box
   placed at the Kalman prediction ("每帧画面的 Mean Shift 计算使用 ... Kalman 滤波预测值作为
-  搜索窗口"), and it is what keeps the centroid on the target when the background shares some of
-  its hue. ``"window"``:
-  a box the size of the whole search window (``ctx.window``): a larger capture range for a
-  single step, but background back-projection pulls the centroid towards the window centre.
+  搜索窗口"), and it keeps the centroid on the target when something of its hue is near (the
+  generated "distractor" scene: mean IoU 0.98 against 0.43-0.78). ``"window"``: a box the size
+  of the whole search window (``ctx.window``): a larger capture range for a single step, but
+  any back-projection in the window (a look-alike, unmasked grey) pulls the centroid to it.
   Either way the sums only see the back-projected window ``ctx.window`` (the region is clipped
   to it) and are image moments (``cv2.moments``) of that slice: no per-pixel Python.
 - ``iterations`` steps at most (S0: 1); with more, stop early once a step is shorter than

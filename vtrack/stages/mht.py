@@ -42,9 +42,9 @@ never reused.
 
 Bounded work per frame: at most ``max_branches`` + 1 children per branch, ``max_hypotheses``
 hypotheses, and the search for the best extensions of one hypothesis stops after
-``4 * max_hypotheses * (tracks + 1)`` steps (it always finds the greedy best extension first;
-the search is exact unless the budget runs out). With ``B`` branches and ``M`` measurements a
-frame costs ``O(B M)`` for gating (NumPy) plus the bounded search.
+``4 * max_hypotheses * (tracks with a choice + 1)`` steps (it always finds the greedy best
+extension first; the search is exact unless the budget runs out). With ``B`` branches and
+``M`` measurements a frame costs ``O(B M)`` for gating (NumPy) plus the bounded search.
 """
 
 from __future__ import annotations
@@ -53,6 +53,7 @@ import heapq
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -103,13 +104,16 @@ class _Branch:
 
     family: int  # the track's id (0 until the track survives its first frame)
     positions: tuple[Point, ...]  # last <= HISTORY positions, oldest first
-    measured: int  # how many of the last positions in a row are measurements (<= 3)
+    measured: int  # how many of the last positions in a row are uncontested measurements (<= 3)
     box: Box
     confidence: float  # P_R
     cost: float  # accumulated association cost (tie-break between hypotheses of equal P_H)
     confirmed: bool
     coasting: int  # frames in a row without measurement
     detection: int | None  # index of this frame's measurement, None when coasting
+
+
+_Key = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -123,13 +127,20 @@ class _Option:
     extension, so extensions compare by their options alone.
     """
 
-    key: tuple[float, float, float]
+    key: _Key
     child: _Branch | None
     bit: int  # measurement bit, 0 when coasting or ending
 
 
 _Hypothesis = tuple[_Branch, ...]
-_Key = tuple[float, float, float]
+
+
+class _Choices(NamedTuple):
+    """A branch's options this frame, best first, and the best key any of them adds, part by
+    part (a valid bound for a lexicographic comparison)."""
+
+    options: list[_Option]
+    bound: _Key
 
 
 def _score(hypothesis: _Hypothesis) -> _Key:
@@ -173,7 +184,7 @@ class MultipleHypothesis(Stage):
         Param("initial", float, 1.0, "P_R of a new track (S3 2.3, value not given: 1)", min=0.0),
         Param("hit", float, 1.0, "P_R increment on an update (S3 2.3, value not given: 1)",
               min=0.0),
-        Param("miss", float, 1.0, "P_R decrement on a frame without update (S3 2.3: 1)",
+        Param("miss", float, 1.0, "P_R decrement on a frame without update (S3 2.3, not given: 1)",
               min=0.0),
         Param(
             "confirm",
@@ -276,8 +287,8 @@ class MultipleHypothesis(Stage):
 
     def _branch_out(
         self, branches: list[_Branch], detections: list[Detection]
-    ) -> dict[int, list[_Option]]:
-        """Each branch's options for this frame (best first), by ``id(branch)``."""
+    ) -> dict[int, _Choices]:
+        """Each branch's options for this frame, by ``id(branch)``."""
         predictions = np.array(
             [predict_position(b.positions, b.measured) for b in branches], float
         ).reshape(-1, 2)
@@ -288,7 +299,7 @@ class MultipleHypothesis(Stage):
         lowest = np.where(gated, families, np.inf).min(axis=0, initial=np.inf)
         highest = np.where(gated, families, -np.inf).max(axis=0, initial=-np.inf)
         contested = lowest < highest
-        options: dict[int, list[_Option]] = {}
+        options: dict[int, _Choices] = {}
         for row, branch in enumerate(branches):
             inside = np.flatnonzero(gated[row])
             inside = inside[np.argsort(distances[row, inside], kind="stable")][: self.max_branches]
@@ -300,7 +311,9 @@ class MultipleHypothesis(Stage):
             if inside.size == 0 or contested[inside].any():
                 choices.append(self._coast(branch, predictions[row]))
             choices.sort(key=lambda o: o.key, reverse=True)
-            options[id(branch)] = choices
+            keys = [o.key for o in choices]
+            bound = (max(k[0] for k in keys), max(k[1] for k in keys), max(k[2] for k in keys))
+            options[id(branch)] = _Choices(choices, bound)
         return options
 
     def _update(self, branch: _Branch, detection: Detection, index: int, distance: float,
@@ -323,7 +336,7 @@ class MultipleHypothesis(Stage):
     def _coast(self, branch: _Branch, prediction: np.ndarray) -> _Option:
         confidence = branch.confidence - self.miss
         if confidence < self.delete or branch.coasting >= self.max_coast:
-            return _Option((0.0, 0.0, 0.0), None, 0)  # S3 2.3: deleted below the threshold
+            return _Option((0.0, 0.0, 0.0), None, 0)  # the track ends here (S3 2.3 deletion)
         x, y = float(prediction[0]), float(prediction[1])
         child = replace(
             branch,
@@ -339,23 +352,31 @@ class MultipleHypothesis(Stage):
 
     # --- hypotheses -----------------------------------------------------------------------
 
-    def _extend(self, options: dict[int, list[_Option]]) -> list[_Hypothesis]:
+    def _extend(self, options: dict[int, _Choices]) -> list[_Hypothesis]:
         """The ``max_hypotheses`` best extensions of the current hypotheses (without the new
         tracks), best first: branch-and-bound over one option per branch, no measurement used
-        twice (S3 2.4), ranked by :func:`_score`."""
+        twice (S3 2.4), ranked by :func:`_score`. Branches with a single option (a measurement
+        no other track gates, or none at all) take it without search."""
         limit = self.max_hypotheses
         found: list[tuple[_Key, int, tuple]] = []  # min-heap of (key, order, path), worst first
         order = itertools.count()
         for parent in self._hypotheses:
-            choices = [options[id(b)] for b in parent]
-            n = len(choices)
-            # Best key the remaining branches can add, part by part (a valid lexicographic bound).
-            rest: list[_Key] = [(0.0, 0.0, 0.0)] * (n + 1)
+            key: _Key = (0.0, 0.0, 0.0)
+            used = 0
+            path: tuple = ()
+            free = []
+            for choices in (options[id(b)] for b in parent):
+                if len(choices.options) == 1:
+                    (only,) = choices.options
+                    key, used, path = _add(key, only.key), used | only.bit, (only, path)
+                else:
+                    free.append(choices)
+            n = len(free)
+            rest: list[_Key] = [(0.0, 0.0, 0.0)] * (n + 1)  # best the remaining ones can add
             for i in range(n - 1, -1, -1):
-                keys = [o.key for o in choices[i]]
-                rest[i] = _add(rest[i + 1], tuple(max(k[j] for k in keys) for j in range(3)))
+                rest[i] = _add(rest[i + 1], free[i].bound)
             budget = _SEARCH_EFFORT * limit * (n + 1)
-            stack: list[tuple[int, _Key, int, tuple]] = [(0, (0.0, 0.0, 0.0), 0, ())]
+            stack: list[tuple[int, _Key, int, tuple]] = [(0, key, used, path)]
             while stack and budget > 0:
                 budget -= 1
                 depth, key, used, path = stack.pop()
@@ -366,7 +387,7 @@ class MultipleHypothesis(Stage):
                     if len(found) > limit:
                         heapq.heappop(found)
                     continue
-                for option in reversed(choices[depth]):  # best popped first
+                for option in reversed(free[depth].options):  # best popped first
                     if not option.bit & used:
                         stack.append((depth + 1, _add(key, option.key), used | option.bit,
                                       (option, path)))

@@ -86,15 +86,15 @@ class Occlusion(Stage):
             choices=("bp_mass", "similarity"),
         ),
         Param(
-            "threshold", float, 0.1,
-            "hidden below this: a fully hidden target leaves only chance hue matches, a "
-            "partly hidden one its visible share; 0.1 = 90% of its colour gone",
+            "threshold", float, 0.05,
+            "hidden below this: bp_mass is the visible share of the target's colour, ~0 when "
+            "fully hidden with a saturation mask (without one, grey's random hue: use ~0.15)",
             min=0.0,
         ),
         Param(
-            "recover", float, 0.1,
-            "tracking again at or above this (hysteresis, >= threshold); 0.1 = a tenth of "
-            "the target back, so the filter gets measurements early",
+            "recover", float, 0.05,
+            "tracking again at or above this (hysteresis, >= threshold; without a saturation "
+            "mask the best box of a widened window reaches ~0.1 by chance: use ~0.25)",
             min=0.0,
         ),
         Param(

@@ -49,12 +49,16 @@ def hue_histogram(hsv: np.ndarray, bins: int) -> np.ndarray:
     return counts.ravel().astype(np.float64)
 
 
-def bhattacharyya(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Bhattacharyya coefficient ``sum_u sqrt(p_u q_u)`` of each histogram in ``p`` (rows of
-    shape (..., bins)) with ``q``, all normalised to sum 1 here; 1.0 means identical
-    distributions, 0.0 no common bin (or an empty histogram)."""
-    totals = np.sqrt(p.sum(axis=-1) * q.sum())
-    overlap = np.sqrt(p * q).sum(axis=-1)
+def bhattacharyya(p: np.ndarray, q: np.ndarray) -> float:
+    """Bhattacharyya coefficient ``sum_u sqrt(p_u q_u)`` of two histograms, each normalised to
+    sum 1 here; 1.0 means identical distributions, 0.0 no common bin (or an empty histogram)."""
+    return float(bhattacharyya_rows(p[np.newaxis], q)[0])
+
+
+def bhattacharyya_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """:func:`bhattacharyya` of each row of ``p`` (shape (n, bins)) with ``q``, at once."""
+    totals = np.sqrt(p.sum(axis=1) * q.sum())
+    overlap = np.sqrt(p * q).sum(axis=1)
     return np.divide(overlap, totals, out=np.zeros_like(overlap), where=totals > 0)
 
 
@@ -190,9 +194,9 @@ class ParticleFilter(Stage):
         assert ctx.box is not None  # set by start and never cleared
         windows, near = self._scatter(ctx)
         hsvs = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
-        # S1 items 3-4: per particle, from the same hue pixels, histogram and centroid.
+        # S1 items 3-4: each particle's hue histogram and its Bhattacharyya weight.
         histograms = np.array([hue_histogram(hsv, self.bins) for hsv in hsvs])
-        weights = bhattacharyya(histograms, self._target)
+        weights = bhattacharyya_rows(histograms, self._target)
         best = int(np.argmax(weights))
         weight = float(weights[best])
         window = windows[best]
@@ -227,7 +231,8 @@ class ParticleFilter(Stage):
         """Particle windows of the target's pixel size, inside the frame (S1 item 2).
 
         Returns the windows and how many of them (the first ones) were scattered near the last
-        position: ``round(near_share * particles)`` while tracked, none while lost.
+        position: ``near_share * particles`` rounded to the nearest integer while tracked, none
+        while lost. The box size is rounded to whole pixels.
         """
         frame, rng = ctx.frame, ctx.rng
         assert ctx.box is not None

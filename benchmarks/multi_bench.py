@@ -1,0 +1,271 @@
+"""Multi-target trackers measured: S3 (``mht``) and S4 per track (``kalman_tracks``).
+
+    python benchmarks/multi_bench.py [SEEDS]
+
+Prints Markdown tables:
+
+1. MOTA / IDF1 / id switches (CLEAR MOT, IoU >= 0.5; IDF1 of Ristani et al.) of the shipped
+   ``s3`` and ``s4_multi`` configs (and ``s4_multi`` with MOG2 instead of S4's mean background)
+   on the generated ``multi`` scene (320x240 and 640x480, 150 frames, seeds 0 .. SEEDS-1, summed
+   over seeds).
+2. MOT_TUD-Campus (``../shared/data`` or ``$VTRACK_DATA``; skipped when absent): how S4's
+   background subtraction (+ ``blobs``) detects pedestrians compared with the public detections
+   of ``det.txt`` (precision / recall of boxes at IoU >= 0.5), then both trackers on the pixels
+   and on the public detections (``mot_detections``).
+3. Cost per frame at 1080p (grey frames, as a decoded yuv420p video hands over the Y plane) with
+   4, 16 and 64 moving targets, with and without clutter (extra bright specks each frame):
+   microseconds per stage.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from common import data_dir
+
+from vtrack.config import Config, load_config, parse_config
+from vtrack.evaluate.groundtruth import read_mot, read_mot_detections
+from vtrack.evaluate.mot import MATCH_IOU, evaluate_mot, linear_assignment
+from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.geometry import Box, iou
+from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.scenes import make_scene
+from vtrack.stages.base import Stage, TrackContext
+
+#: (label, config, --set overrides) of the trackers on pixels.
+TRACKERS = [
+    ("S3 `s3`", "s3", []),
+    ("S4 per track `s4_multi` (mean background)", "s4_multi", []),
+    ("S4 per track `s4_multi` + MOG2", "s4_multi", ["background.method=mog2"]),
+]
+#: MOG2 foreground cleaned for pedestrians at 640x480: opening 3, closing 25, blobs of 1500+ px
+#: (chosen on MOT_TUD-Campus itself: an upper bound for this detector, not a fair test).
+CLEANED = ["background.method=mog2", "background.open=3", "background.close=25",
+           "blobs.min_area=1500"]
+#: (label, --set overrides) of the background-subtraction detectors compared on TUD-Campus.
+DETECTORS = [
+    ("mean of 30 frames (S4, shipped)", []),
+    ("mean of 10 frames", ["background.frames=10"]),
+    ("MOG2", ["background.method=mog2"]),
+    ("mean of 30 frames, cleaned (open 3, close 25, >= 1500 px)",
+     ["background.open=3", "background.close=25", "blobs.min_area=1500"]),
+    ("MOG2, cleaned (open 3, close 25, >= 1500 px)", CLEANED),
+]
+COLUMNS = ("MOTA", "IDF1", "ID sw.", "FP", "FN", "MT", "ML", "ids")
+
+
+def confirmed(results: list[FrameResult]) -> dict[int, list[tuple[int, Box]]]:
+    """What ``tracks.csv`` holds: the confirmed tracks of each frame."""
+    return {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+            for r in results}
+
+
+def run_chain(config: Config, frames: Iterator[Frame]) -> tuple[list[FrameResult], Pipeline]:
+    pipeline = Pipeline(config.build())
+    return list(pipeline.track(frames)), pipeline
+
+
+def row(label: str, scores: dict[str, Any]) -> str:
+    def fmt(value: Any) -> str:
+        return "-" if value is None else f"{value:.3f}" if isinstance(value, float) else str(value)
+
+    values = [scores["mota"], scores["idf1"], scores["id_switches"], scores["false_positives"],
+              scores["misses"], scores["mostly_tracked"], scores["mostly_lost"],
+              f"{scores['track_ids']}/{scores['gt_ids']}"]
+    return f"| {label} | " + " | ".join(fmt(v) for v in values) + " |"
+
+
+def header(first: str) -> str:
+    return (f"| {first} | " + " | ".join(COLUMNS) + " |\n|---|"
+            + "---:|" * len(COLUMNS))
+
+
+def summed(parts: list[dict[str, Any]]) -> dict[str, Any]:
+    """Scores of several sequences pooled: counts added, MOTA and IDF1 recomputed."""
+    total = {k: sum(p[k] for p in parts) for k in (
+        "id_switches", "false_positives", "misses", "mostly_tracked", "mostly_lost", "gt_ids",
+        "gt_boxes", "track_ids", "track_boxes", "matches")}
+    gt_boxes = total["gt_boxes"]
+    errors = total["misses"] + total["false_positives"] + total["id_switches"]
+    total["mota"] = 1 - errors / gt_boxes
+    idtp = sum(p["idf1"] * (p["gt_boxes"] + p["track_boxes"]) / 2 for p in parts if p["idf1"])
+    total["idf1"] = 2 * idtp / (gt_boxes + total["track_boxes"])
+    return total
+
+
+# --- 1. generated scenes ------------------------------------------------------------------------
+
+
+def generated(seeds: int) -> None:
+    print("## Generated `multi` scene (4 targets: two cross and merge, one leaves, one enters)\n")
+    print(f"150 frames, seeds 0..{seeds - 1}, scores pooled over the seeds; `ids` = track ids "
+          "written / ground-truth ids.\n")
+    for width, height in ((320, 240), (640, 480)):
+        print(header(f"{width}x{height}"))
+        scenes = [make_scene("multi", seed, width, height, 150) for seed in range(seeds)]
+        for label, config, overrides in TRACKERS:
+            cfg = load_config(config).with_overrides(overrides)
+            parts = []
+            for scene in scenes:
+                results, _ = run_chain(cfg, scene.as_frames())
+                parts.append(evaluate_mot(dict(enumerate(scene.tracks)), confirmed(results),
+                                          len(scene)))
+            print(row(label, summed(parts)))
+        print()
+
+
+# --- 2. MOT_TUD-Campus --------------------------------------------------------------------------
+
+
+def tud_frames(folder: Path) -> Iterator[Frame]:
+    for index, path in enumerate(sorted((folder / "img").glob("*.jpg"))):
+        yield BgrFrame(index, index / 25.0, cv2.imread(str(path)))
+
+
+def detection_scores(gt: dict[int, list[tuple[int, Box]]], found: dict[int, list[Box]],
+                     frames: range) -> tuple[float, float, int]:
+    """Precision, recall (one-to-one matching at IoU >= 0.5, per frame) and detections."""
+    hits = total_found = total_gt = 0
+    for frame in frames:
+        truth = [b for _, b in gt.get(frame, [])]
+        boxes = found.get(frame, [])
+        total_gt += len(truth)
+        total_found += len(boxes)
+        if truth and boxes:
+            overlap = np.array([[iou(t, b) for b in boxes] for t in truth])
+            rows, cols = linear_assignment(-overlap)
+            hits += int((overlap[rows, cols] >= MATCH_IOU).sum())
+    return hits / max(total_found, 1), hits / max(total_gt, 1), total_found
+
+
+def tud(folder: Path) -> None:
+    gt = read_mot(folder / "gt.txt")
+    frames = len(list((folder / "img").glob("*.jpg")))
+    print(f"## MOT_TUD-Campus ({frames} frames, 640x480, static camera, "
+          f"{len({i for rows in gt.values() for i, _ in rows})} pedestrians)\n")
+    print("### Detections: S4 background subtraction + `blobs` vs the public `det.txt`\n")
+    print("Frames 31..71 (after the 30 frames the shipped mean background learns from); a box "
+          "counts when it overlaps a ground-truth box one to one with IoU >= 0.5.\n")
+    print("| detector | precision | recall | boxes |\n|---|---:|---:|---:|")
+    scored = range(30, frames)
+    public = read_mot_detections(folder / "det.txt")
+    for threshold in (0.0, 30.0):
+        kept = {f: [b for b, s in rows if s >= threshold] for f, rows in public.items()}
+        p, r, n = detection_scores(gt, kept, scored)
+        print(f"| public det.txt, score >= {threshold:g} | {p:.3f} | {r:.3f} | {n} |")
+    for label, overrides in DETECTORS:
+        cfg = parse_config({"stage": [{"name": "background"}, {"name": "blobs"}]}, "bench")
+        cfg = cfg.with_overrides(overrides)
+        stages = cfg.build()
+        found: dict[int, list[Box]] = {}
+        for result, detections in _detections(stages, tud_frames(folder)):
+            found[result] = [d.box for d in detections]
+        p, r, n = detection_scores(gt, found, scored)
+        print(f"| background {label} | {p:.3f} | {r:.3f} | {n} |")
+    print()
+    print("### Trackers\n")
+    print(header("chain"))
+    det = folder / "det.txt"
+    chains = [(label, load_config(c).with_overrides(o)) for label, c, o in TRACKERS]
+    chains.append(("S4 per track `s4_multi` + MOG2, cleaned (as above)",
+                   load_config("s4_multi").with_overrides(CLEANED + ["kalman_tracks.gate=40"])))
+    for tracker in ("mht", "kalman_tracks"):
+        for gate in (20.0, 40.0):
+            chains.append((
+                f"public det.txt -> `{tracker}` (gate {gate:g})",
+                parse_config({"stage": [{"name": "mot_detections", "path": str(det)},
+                                        {"name": tracker, "gate": gate}]}, "bench"),
+            ))
+    for label, cfg in chains:
+        results, _ = run_chain(cfg, tud_frames(folder))
+        print(row(label, evaluate_mot(gt, confirmed(results), frames)))
+    print()
+
+
+def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
+    """Run detection stages alone; each frame's index and detections."""
+    ctx = None
+    for frame in frames:
+        if ctx is None:
+            ctx = TrackContext(frame=frame, rng=np.random.default_rng(0))
+        ctx.new_frame(frame)
+        for stage in stages:
+            (stage.start if frame.index == 0 else stage.step)(ctx)
+        yield frame.index, ctx.detections
+
+
+# --- 3. cost at 1080p ---------------------------------------------------------------------------
+
+
+def synthetic_1080p(targets: int, clutter: int, frames: int, seed: int = 0) -> list[Frame]:
+    """Grey 1920x1080 frames: a dark textured background with sensor noise, ``targets`` bright
+    discs (radius 6-10 px) moving at 2-8 px/frame and bouncing off the borders, and ``clutter``
+    bright 3x3 specks at random places each frame."""
+    rng = np.random.default_rng(seed)
+    h, w = 1080, 1920
+    base = cv2.GaussianBlur(rng.normal(30, 12, (h, w)).astype(np.float32), (0, 0), 8) + 30
+    position = rng.uniform((50, 50), (w - 50, h - 50), (targets, 2))
+    velocity = rng.uniform(2, 8, (targets, 2)) * rng.choice((-1, 1), (targets, 2))
+    radius = rng.uniform(6, 10, targets)
+    out = []
+    for index in range(frames):
+        grey = base + rng.normal(0, 4, (h, w)).astype(np.float32)
+        image = np.clip(grey, 0, 255).astype(np.uint8)
+        for (x, y), r in zip(position, radius, strict=True):
+            cv2.circle(image, (int(x), int(y)), int(r), 200, -1, cv2.LINE_AA)
+        for x, y in rng.uniform((0, 0), (w - 3, h - 3), (clutter, 2)).astype(int):
+            image[y : y + 3, x : x + 3] = 190
+        out.append(GrayFrame(index, index / 60.0, image))
+        position += velocity
+        bounce = (position < 30) | (position > (w - 30, h - 30))
+        velocity[bounce] *= -1
+    return out
+
+
+def cost(frames: int = 40, repeats: int = 3) -> None:
+    print(f"## Cost per frame at 1080p (microseconds per stage, grey frames; best of {repeats} "
+          f"runs over {frames} frames)\n")
+    chains = [("s3", load_config("s3")), ("s4_multi", load_config("s4_multi")),
+              ("s4_multi + MOG2", load_config("s4_multi").with_overrides(
+                  ["background.method=mog2"]))]
+    names = ("threshold", "background", "blobs", "mht", "kalman_tracks")
+    print("| targets | clutter/frame | chain | " + " | ".join(names) + " | total | tracks |")
+    print("|---:|---:|---|" + "---:|" * (len(names) + 2))
+    for targets in (4, 16, 64):
+        for clutter in (0, 100):
+            clip = synthetic_1080p(targets, clutter, frames)
+            for label, cfg in chains:
+                best: dict[str, float] = {}
+                for _ in range(repeats):
+                    started = time.perf_counter()
+                    results, pipeline = run_chain(cfg, iter(clip))
+                    wall = (time.perf_counter() - started) * 1e6 / len(clip)
+                    timing = {**pipeline.stage_microseconds_per_frame(), "total": wall}
+                    best = {k: min(v, best.get(k, v)) for k, v in timing.items()}
+                cells = [f"{best[n]:.0f}" if n in best else "" for n in (*names, "total")]
+                written = sum(t.state == "confirmed" for t in results[-1].tracks)
+                print(f"| {targets} | {clutter} | {label} | " + " | ".join(cells)
+                      + f" | {written} |")
+    print()
+
+
+def main(argv: list[str]) -> None:
+    seeds = int(argv[0]) if argv else 5
+    generated(seeds)
+    root = data_dir()
+    folder = root / "MOT_TUD-Campus" if root else None
+    if folder is not None and (folder / "gt.txt").is_file():
+        tud(folder)
+    else:
+        print("(MOT_TUD-Campus not found: skipped)\n")
+    cost()
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,547 @@
+"""Multi-target tracking: detection stages, S3 (mht), S4 (background + Kalman, one target and per
+track), public detections, and the CLEAR MOT / identity metrics.
+
+Metrics are checked against hand-computed cases (and against py-motmetrics when it is
+installed); the trackers end to end on generated scenes with exact ground truth: the ``multi``
+scene (4 small bright blobs: two cross through the same point and merge into one blob for
+~10 frames, one leaves through the left side, one enters from the right) and ``bounce``.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vtrack.cli import main
+from vtrack.config import load_config
+from vtrack.errors import ConfigError, InputError
+from vtrack.evaluate.mot import evaluate_mot, linear_assignment, mot_summary
+from vtrack.frame import GrayFrame
+from vtrack.geometry import Box, center_error, iou
+from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.scenes import Scene
+from vtrack.stages import detect
+from vtrack.stages.base import Stage, TrackContext, build_stage
+from vtrack.stages.detect import (
+    CANDIDATE_GREY,
+    AdaptiveThreshold,
+    Background,
+    Blobs,
+    Detection,
+    LargestBlob,
+)
+from vtrack.stages.kalman_tracks import KalmanTracks
+from vtrack.stages.mht import MultipleHypothesis, predict_position
+from vtrack.stages.mot_detections import MotDetections
+
+OURS: tuple[type[Stage], ...] = (
+    Background, AdaptiveThreshold, Blobs, LargestBlob, MultipleHypothesis, KalmanTracks,
+    MotDetections,
+)
+MULTI_FRAMES = 150  # the multi scenario's default length: the crossing is at frame 74
+
+# --- the assignment solver ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("rows", "cols"), [(1, 1), (3, 3), (4, 2), (2, 5), (5, 5), (0, 3)])
+def test_linear_assignment_finds_the_minimum_of_every_assignment(rows: int, cols: int) -> None:
+    rng = np.random.default_rng(rows * 10 + cols)
+    for trial in range(20):
+        cost = rng.integers(0, 9, (rows, cols)).astype(float) if trial % 2 else rng.random(
+            (rows, cols))
+        r, c = linear_assignment(cost)
+        assert len(r) == min(rows, cols) and len(set(r)) == len(r) and len(set(c)) == len(c)
+        assert list(r) == sorted(r)
+        if rows <= cols:
+            best = min(sum(cost[i, p[i]] for i in range(rows))
+                       for p in itertools.permutations(range(cols), rows))
+        else:
+            best = min(sum(cost[p[j], j] for j in range(cols))
+                       for p in itertools.permutations(range(rows), cols))
+        assert cost[r, c].sum() == pytest.approx(best)
+
+
+def test_linear_assignment_rejects_non_finite_costs() -> None:
+    with pytest.raises(ValueError):
+        linear_assignment(np.array([[1.0, np.inf]]))
+
+
+# --- CLEAR MOT and identity measures, hand-computed ---------------------------------------------
+
+A = Box(0, 0, 10, 10)
+B = Box(100, 100, 10, 10)
+FAR = Box(300, 300, 10, 10)
+
+
+def test_a_perfect_track_scores_one() -> None:
+    gt = {f: [(1, A), (2, B)] for f in range(5)}
+    scores = evaluate_mot(gt, {f: [(7, A), (9, B)] for f in range(5)}, 5)
+    assert scores["mota"] == 1.0 and scores["idf1"] == 1.0 and scores["motp"] == 1.0
+    assert scores["id_switches"] == scores["false_positives"] == scores["misses"] == 0
+    assert (scores["mostly_tracked"], scores["mostly_lost"], scores["gt_ids"]) == (2, 0, 2)
+    assert (scores["gt_boxes"], scores["track_boxes"], scores["matches"]) == (10, 10, 10)
+
+
+def test_an_id_switch_is_counted_once() -> None:
+    gt = {f: [(1, A)] for f in range(4)}
+    tracks = {0: [(1, A)], 1: [(1, A)], 2: [(2, A)], 3: [(2, A)]}
+    scores = evaluate_mot(gt, tracks, 4)
+    assert scores["id_switches"] == 1
+    assert scores["mota"] == pytest.approx(1 - 1 / 4)
+    # IDF1: object 1 is paired with track 1 (or 2): 2 identity true positives of 4 + 4 boxes.
+    assert scores["idf1"] == pytest.approx(2 * 2 / (4 + 4))
+    assert scores["idp"] == scores["idr"] == pytest.approx(0.5)
+
+
+def test_a_false_positive_and_a_miss() -> None:
+    shifted = Box(2, 0, 10, 10)  # IoU with A: 80 / 120
+    gt = {0: [(1, A)], 1: [(1, A)]}
+    tracks = {0: [(5, shifted)], 1: [(5, FAR)]}
+    scores = evaluate_mot(gt, tracks, 2)
+    assert (scores["false_positives"], scores["misses"], scores["id_switches"]) == (1, 1, 0)
+    assert scores["mota"] == pytest.approx(1 - 2 / 2)
+    assert scores["motp"] == pytest.approx(80 / 120)
+    assert scores["idf1"] == pytest.approx(2 * 1 / (2 + 2))
+    assert scores["mostly_tracked"] == 0 and scores["partially_tracked"] == 1
+
+
+def test_iou_one_half_matches_and_just_below_does_not() -> None:
+    half = Box(0, 0, 10, 20)  # IoU with A: 100 / 200
+    assert evaluate_mot({0: [(1, A)]}, {0: [(1, half)]}, 1)["misses"] == 0
+    below = Box(0, 0, 10, 20.01)
+    assert evaluate_mot({0: [(1, A)]}, {0: [(1, below)]}, 1)["misses"] == 1
+
+
+def test_an_earlier_match_is_kept_over_a_better_new_one() -> None:
+    """CLEAR MOT: a correspondence that still may be matched is kept (no switch) even when
+    another track fits better in this frame."""
+    near = Box(1, 0, 10, 10)  # IoU 90/110 with A
+    gt = {0: [(1, A)], 1: [(1, A)]}
+    tracks = {0: [(1, near)], 1: [(1, near), (2, A)]}
+    scores = evaluate_mot(gt, tracks, 2)
+    assert (scores["id_switches"], scores["false_positives"]) == (0, 1)
+
+
+def test_undefined_scores_are_none_and_other_frames_are_ignored() -> None:
+    scores = evaluate_mot({}, {0: [(1, A)], 5: [(1, A)]}, 3)
+    assert scores["mota"] is None and scores["motp"] is None and scores["idr"] is None
+    assert scores["false_positives"] == 1 and scores["idf1"] == 0.0
+    assert evaluate_mot({}, {}, 3)["idf1"] is None
+
+
+def test_mot_summary_reads_the_ground_truth_file(tmp_path) -> None:
+    path = tmp_path / "gt.txt"
+    path.write_text("1,1,0,0,10,10,1,1,1\n2,1,0,0,10,10,1,1,1\n3,1,0,0,10,10,1,1,1\n")
+    scores = mot_summary({0: [(4, A)], 1: [(4, A)]}, path, 2)  # frame 3 was not processed
+    assert scores["mota"] == 1.0 and scores["gt_boxes"] == 2 and scores["frames"] == 2
+    with pytest.raises(InputError):
+        mot_summary({}, tmp_path / "missing.txt", 2)
+
+
+def test_the_metrics_agree_with_py_motmetrics() -> None:
+    mm = pytest.importorskip("motmetrics")
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        gt: dict[int, list[tuple[int, Box]]] = {}
+        tracks: dict[int, list[tuple[int, Box]]] = {}
+        for frame in range(25):
+            for obj in range(4):
+                if rng.random() < 0.85:
+                    box = Box(12 * obj + frame * 0.7, 6 * obj + rng.normal(0, 1), 10, 10)
+                    gt.setdefault(frame, []).append((obj, box))
+                    hid = obj if rng.random() < 0.9 else 10 + obj
+                    if rng.random() < 0.8:
+                        moved = box._replace(x=box.x + rng.normal(0, 2), y=box.y + rng.normal(0, 2))
+                        tracks.setdefault(frame, []).append((hid, moved))
+        accumulator = mm.MOTAccumulator(auto_id=True)
+        for frame in range(25):
+            objects, hyps = gt.get(frame, []), tracks.get(frame, [])
+            distance = np.array([[1 - iou(o, h) for _, h in hyps] for _, o in objects]).reshape(
+                len(objects), len(hyps))
+            distance[distance > 0.5] = np.nan
+            accumulator.update([o for o, _ in objects], [h for h, _ in hyps], distance)
+        theirs = mm.metrics.create().compute(
+            accumulator, metrics=["mota", "motp", "idf1", "num_switches", "num_false_positives",
+                                  "num_misses", "mostly_tracked", "mostly_lost"], name="x")
+        ours = evaluate_mot(gt, tracks, 25)
+        assert ours["mota"] == pytest.approx(theirs["mota"].iloc[0])
+        assert ours["motp"] == pytest.approx(1 - theirs["motp"].iloc[0])
+        assert ours["idf1"] == pytest.approx(theirs["idf1"].iloc[0])
+        assert ours["id_switches"] == theirs["num_switches"].iloc[0]
+        assert ours["false_positives"] == theirs["num_false_positives"].iloc[0]
+        assert ours["misses"] == theirs["num_misses"].iloc[0]
+        assert ours["mostly_tracked"] == theirs["mostly_tracked"].iloc[0]
+        assert ours["mostly_lost"] == theirs["mostly_lost"].iloc[0]
+
+
+# --- parameters ---------------------------------------------------------------------------------
+
+WRONG = {int: "3", float: "1.5", str: 7, bool: "yes"}
+
+
+@pytest.mark.parametrize(
+    ("stage", "param"), [(cls.name, p.name) for cls in OURS for p in cls.params]
+)
+def test_every_parameter_rejects_a_wrong_type(stage: str, param: str) -> None:
+    declared = {p.name: p for cls in OURS if cls.name == stage for p in cls.params}
+    with pytest.raises(ConfigError) as error:
+        build_stage(stage, {param: WRONG[declared[param].type]}, "mine.toml")
+    assert f"'{param}'" in str(error.value) and "mine.toml" in str(error.value)
+
+
+@pytest.mark.parametrize("name", ["s3", "s4", "s4_multi"])
+def test_the_shipped_configs_load_and_need_no_initial_box(name: str) -> None:
+    pipeline = Pipeline(load_config(name).build())
+    assert not pipeline.needs_init_box
+    assert pipeline.multi_target == (name != "s4")
+
+
+# --- detection stages ---------------------------------------------------------------------------
+
+
+def run_stages(stages: list[Stage], frames: list[np.ndarray]) -> list[TrackContext]:
+    """Run stages over grey frames; a snapshot of the context after each frame."""
+    ctx = TrackContext(frame=GrayFrame(0, 0.0, frames[0]), rng=np.random.default_rng(0))
+    snapshots = []
+    for index, grey in enumerate(frames):
+        ctx.new_frame(GrayFrame(index, index / 30, grey))
+        for stage in stages:
+            (stage.start if index == 0 else stage.step)(ctx)
+        snapshots.append(TrackContext(**{**ctx.__dict__, "memory": dict(ctx.memory)}))
+    return snapshots
+
+
+def frame_with(spots: list[tuple[int, int, int, int]], base: int = 20) -> np.ndarray:
+    """A 60x80 grey frame with squares ``(x, y, size, grey)``."""
+    grey = np.full((60, 80), base, np.uint8)
+    for x, y, size, value in spots:
+        grey[y : y + size, x : x + size] = value
+    return grey
+
+
+def test_mean_background_detects_nothing_while_learning_then_the_difference() -> None:
+    frames = [frame_with([]) for _ in range(3)] + [frame_with([(10, 20, 5, 60)])]
+    after = run_stages([Background(frames=3, threshold=40.0), Blobs()], frames)
+    assert all(ctx.likelihood is None and not ctx.detections for ctx in after[:3])
+    assert after[3].detections == [Detection(Box(10, 20, 5, 5), 12.0, 22.0, 25.0, 60.0)]
+    # |60 - 20| = 40 >= Th is foreground; 59 is not.
+    frames[3] = frame_with([(10, 20, 5, 59)])
+    assert not run_stages([Background(frames=3, threshold=40.0), Blobs()], frames)[3].detections
+
+
+def test_mog2_background_detects_from_the_second_frame() -> None:
+    frames = [frame_with([])] * 5 + [frame_with([(30, 30, 6, 200)])]
+    after = run_stages([Background(method="mog2"), Blobs()], frames)
+    assert not after[0].detections
+    assert [tuple(d.box) for d in after[5].detections] == [(30, 30, 6, 6)]
+
+
+def test_adaptive_threshold_follows_the_last_candidates_grey() -> None:
+    stage = AdaptiveThreshold(offset=50.0, initial=100.0, floor=40.0)
+    assert stage.threshold(None) == 100.0  # S3 2.1: nothing learnt yet
+    assert stage.threshold(180.0) == 130.0  # mean candidate grey - offset
+    assert stage.threshold(70.0) == 40.0  # never below the floor
+    frames = [frame_with([(5, 5, 6, 180), (40, 30, 6, 120)])] * 2
+    first, second = run_stages([AdaptiveThreshold(offset=20.0, median=1), Blobs()], frames)
+    assert len(first.detections) == 2  # threshold 100 (initial): both
+    assert first.memory[CANDIDATE_GREY] == pytest.approx(150.0)
+    assert [d.grey for d in second.detections] == [180.0]  # threshold 150 - 20 = 130
+    kept = second.likelihood
+    assert kept is not None and kept[7, 7] == 180 and kept[0, 0] == 0  # pixels keep their grey
+
+
+def test_the_median_filter_removes_fragments() -> None:
+    grey = frame_with([(5, 5, 8, 200)])
+    grey[40, 40] = grey[41, 60] = 200  # one-pixel fragments
+    (ctx,) = run_stages([AdaptiveThreshold(median=3), Blobs(min_area=1)], [grey])
+    assert [tuple(d.box) for d in ctx.detections] == [(5, 5, 8, 8)]
+
+
+def test_blobs_area_limits_and_the_cap_keeps_the_largest() -> None:
+    grey = frame_with([(2, 2, 2, 200), (10, 10, 4, 200), (30, 10, 6, 200), (50, 30, 9, 200)])
+    (ctx,) = run_stages([AdaptiveThreshold(median=1), Blobs(min_area=5, max_area=40)], [grey])
+    assert sorted(d.area for d in ctx.detections) == [16.0, 36.0]
+    (ctx,) = run_stages([AdaptiveThreshold(median=1), Blobs(max_blobs=2)], [grey])
+    assert sorted(d.area for d in ctx.detections) == [36.0, 81.0]
+
+
+def test_labelling_only_the_foreground_regions_finds_what_the_whole_frame_has(
+        monkeypatch) -> None:
+    """Blobs of every shape and place: crossing tile borders, an L around another region's
+    tiles, specks, touching the frame edges; the same detections whichever way they are found."""
+    rng = np.random.default_rng(5)
+    grey = np.zeros((130, 210), np.uint8)
+    specks = grey[70:, :170]
+    specks[rng.random(specks.shape) < 0.001] = 150
+    grey[10:60, 30:34] = grey[56:60, 30:90] = 200  # an L ...
+    grey[18:28, 66:76] = 220  # ... around another blob, a tile apart
+    grey[100:130, 180:210] = 90  # in the corner
+    grey[14:18, 0:40] = 120  # across tiles, from the left edge
+    assert len(detect.foreground_regions(grey)) >= 3
+    labelled = []
+    for regions in (detect._MAX_REGIONS, 0):  # 0: always the whole frame at once
+        monkeypatch.setattr(detect, "_MAX_REGIONS", regions)
+        (ctx,) = run_stages([AdaptiveThreshold(initial=50.0, median=1), Blobs(min_area=1)],
+                            [grey])
+        labelled.append(ctx.detections)
+    assert labelled[0] == labelled[1] and len(labelled[0]) > 8
+    assert detect.foreground_regions(np.zeros((40, 40), np.uint8)) == []
+
+
+def test_opening_and_closing_clean_the_background_foreground() -> None:
+    frames = [frame_with([])] * 2 + [frame_with([(10, 10, 6, 200), (17, 10, 6, 200),
+                                                 (50, 40, 1, 200)])]
+    plain = run_stages([Background(frames=2), Blobs(min_area=1)], frames)[2]
+    assert len(plain.detections) == 3  # two halves of a target and a speck
+    cleaned = run_stages([Background(frames=2, open=3, close=5), Blobs(min_area=1)], frames)[2]
+    assert [tuple(d.box) for d in cleaned.detections] == [(10, 10, 13, 6)]
+
+
+def test_largest_blob_is_the_measurement_and_sets_the_state() -> None:
+    ctx = TrackContext(frame=GrayFrame(0, 0.0, frame_with([])), rng=np.random.default_rng(0))
+    LargestBlob().step(ctx)
+    assert ctx.measurement is None and ctx.state == "lost"
+    ctx.detections = [Detection(Box(0, 0, 2, 2), 1, 1, 4), Detection(Box(10, 10, 4, 2), 12.5,
+                                                                       11, 8)]
+    LargestBlob().step(ctx)
+    assert ctx.measurement == Box(10.5, 10, 4, 2) and ctx.state == "tracking"
+    ctx.box, ctx.detections = ctx.measurement, []
+    LargestBlob().step(ctx)
+    assert ctx.state == "occluded"
+
+
+# --- the MHT's predictor and bounded work -------------------------------------------------------
+
+
+def test_quadratic_predictor_is_s3_eq_6_with_constant_velocity_fallbacks() -> None:
+    parabola = [(t, 2 * t * t - t) for t in (0.0, 1.0, 2.0)]
+    assert predict_position(parabola, 3) == (3.0, 15.0)  # exact for a parabola
+    # Least-squares velocity of (0, 1, 6) is 3 per frame.
+    assert predict_position(parabola, 2) == pytest.approx((3.0, 6.0 + 3.0))
+    assert predict_position([(1.0, 1.0), (2.0, 3.0)], 2) == (3.0, 5.0)
+    assert predict_position([(4.0, 5.0)], 1) == (4.0, 5.0)
+
+
+def points_frame(index: int, points: list[tuple[float, float]]) -> TrackContext:
+    """A context whose detections are 6x6 boxes centred on ``points``."""
+    ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((4, 4), np.uint8)),
+                       rng=np.random.default_rng(0))
+    ctx.detections = [Detection(Box.from_center(x, y, 6, 6), x, y, 36.0) for x, y in points]
+    return ctx
+
+
+def feed(stage: Stage, frames: list[list[tuple[float, float]]]) -> list[list]:
+    """Run a tracking stage on point detections; the tracks of every frame."""
+    out = []
+    for index, points in enumerate(frames):
+        ctx = points_frame(index, points)
+        (stage.start if index == 0 else stage.step)(ctx)
+        out.append(ctx.tracks)
+    return out
+
+
+def crossing(frames: int = 60, merged: int = 8) -> list[list[tuple[float, float]]]:
+    """Two targets crossing at frame 30; within ``merged`` frames of it they are one blob."""
+    out = []
+    for k in range(frames):
+        a, b = (10 + 2 * k, 20 + 1.5 * k), (10 + 2 * k, 110 - 1.5 * k)
+        if abs(k - 30) < merged:
+            out.append([((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)])
+        else:
+            out.append([a, b])
+    return out
+
+
+def id_near(tracks: list, point: tuple[float, float]) -> int | None:
+    near = [t.id for t in tracks if t.state == "confirmed"
+            and math.hypot(t.box.cx - point[0], t.box.cy - point[1]) < 3]
+    return near[0] if len(near) == 1 else None
+
+
+@pytest.mark.parametrize("stage", [MultipleHypothesis(), KalmanTracks()], ids=["mht", "kalman"])
+def test_identities_survive_two_targets_merging_into_one_blob(stage: Stage) -> None:
+    frames = crossing()
+    out = feed(stage, frames)
+    before = [id_near(out[20], p) for p in frames[20]]
+    after = [id_near(out[45], p) for p in frames[45]]
+    assert None not in before and len(set(before)) == 2 and before == after
+
+
+def test_mht_work_stays_bounded_in_clutter() -> None:
+    rng = np.random.default_rng(0)
+    stage = MultipleHypothesis(max_hypotheses=4, max_branches=2)
+    frames = [[(50 + 2 * k, 50.0)] + [tuple(p) for p in rng.uniform(30, 90, (30, 2))]
+              for k in range(12)]
+    out = feed(stage, frames)
+    assert len(stage._hypotheses) <= 4
+    assert all(len({t.id for t in tracks}) == len(tracks) for tracks in out)
+
+
+def test_kalman_tracks_confirm_and_delete_by_counts() -> None:
+    stage = KalmanTracks(confirm=3, max_coast=2)
+    path = [[(10.0 + k, 10.0)] for k in range(4)] + [[]] * 4 + [[(60.0, 60.0)], []]
+    out = feed(stage, path)
+    assert [t.state for t in out[1]] == ["tentative"]
+    assert [(t.id, t.state) for t in out[2]] == [(1, "confirmed")]
+    assert [t.state for t in out[5]] == ["coasting"]  # 2 misses: still kept
+    assert out[6] == []  # 3 misses > max_coast: deleted
+    assert [(t.id, t.state) for t in out[8]] == [(2, "tentative")]  # a new id
+    assert out[9] == []  # a tentative track dies on its first miss
+
+
+# --- end to end on the generated multi scene ----------------------------------------------------
+
+
+def track(scene: Scene, config: str, *overrides: str) -> list[FrameResult]:
+    stages = load_config(config).with_overrides(list(overrides)).build()
+    return list(Pipeline(stages).track(scene.as_frames()))
+
+
+def matched_ids(scene: Scene, results: list[FrameResult]) -> dict[int, dict[int, int]]:
+    """``{gt id: {frame: id of the confirmed track overlapping it}}`` (IoU >= 0.3)."""
+    ids: dict[int, dict[int, int]] = {}
+    for result in results:
+        for gid, box in scene.tracks[result.index]:
+            for t in result.tracks:
+                if t.state == "confirmed" and iou(t.box, box) >= 0.3:
+                    ids.setdefault(gid, {})[result.index] = t.id
+    return ids
+
+
+MULTI_RUNS = [("s3", 0), ("s3", 1), ("s4_multi", 0)]
+
+
+@pytest.fixture(scope="module", params=MULTI_RUNS, ids=[f"{c}-seed{s}" for c, s in MULTI_RUNS])
+def multi_run(request, scene_factory) -> tuple[Scene, list[FrameResult], int]:
+    config, seed = request.param
+    scene = scene_factory("multi", seed=seed, frames=MULTI_FRAMES)
+    # S4's mean background would need 30 target-free frames: MOG2 learns while detecting.
+    overrides = ["background.method=mog2"] if config == "s4_multi" else []
+    stage = load_config(config).build()[-1]
+    return scene, track(scene, config, *overrides), stage.max_coast
+
+
+def test_every_target_is_confirmed_within_5_frames_of_appearing(multi_run) -> None:
+    scene, results, _ = multi_run
+    ids = matched_ids(scene, results)
+    for gid in {gid for frame in scene.tracks for gid, _ in frame}:
+        appears = next(i for i, frame in enumerate(scene.tracks) if gid in dict(frame))
+        assert min(ids[gid]) - appears <= 5, gid
+
+
+def test_no_identity_switch_where_two_targets_cross(multi_run) -> None:
+    scene, results, _ = multi_run
+    ids = matched_ids(scene, results)
+    cross = scene.events["cross"]
+    for gid in scene.events["cross_ids"]:
+        before = {ids[gid][f] for f in range(cross - 20, cross - 10) if f in ids[gid]}
+        after = {ids[gid][f] for f in range(cross + 10, cross + 20) if f in ids[gid]}
+        assert len(before) == 1 and before == after, gid
+    gt = {i: frame for i, frame in enumerate(scene.tracks)}
+    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+                 for r in results}
+    assert evaluate_mot(gt, confirmed, len(scene))["id_switches"] == 0
+
+
+def test_a_target_that_leaves_is_deleted_within_max_coast_frames(multi_run) -> None:
+    scene, results, max_coast = multi_run
+    exit_frame, gid = scene.events["exit"], scene.events["exit_id"]
+    (leaver,) = {track for f, track in matched_ids(scene, results)[gid].items()
+                 if exit_frame - 15 <= f < exit_frame - 5}
+    alive = [r.index for r in results if any(t.id == leaver for t in r.tracks)]
+    assert max(alive) <= exit_frame + max_coast
+
+
+def test_an_identity_is_never_reused(multi_run) -> None:
+    _, results, _ = multi_run
+    frames_of: dict[int, list[int]] = {}
+    for result in results:
+        for t in result.tracks:
+            frames_of.setdefault(t.id, []).append(result.index)
+    for frames in frames_of.values():  # one unbroken run of frames per id
+        assert frames == list(range(frames[0], frames[-1] + 1))
+
+
+# --- S4 on the bounce scene ---------------------------------------------------------------------
+
+
+def test_s4_error_returns_under_2_px_within_10_frames_after_a_bounce(scene_factory) -> None:
+    scene = scene_factory("bounce", seed=0, frames=150)
+    results = track(scene, "s4")
+    errors = np.array([center_error(r.box, g) if r.box and g else np.inf
+                       for r, g in zip(results, scene.boxes, strict=True)])
+    learning = load_config("s4").build()[0].frames
+    assert np.isinf(errors[:learning]).all()  # no detection while the background is learnt
+    bounces = scene.events["bounce"]
+    checked = 0
+    for bounce, following in itertools.pairwise(bounces):
+        if bounce < learning + 5 or following - bounce <= 10:
+            continue
+        assert (errors[bounce + 10 : following] < 2.0).all(), bounce
+        checked += 1
+    assert checked >= 3
+
+
+# --- public detections --------------------------------------------------------------------------
+
+
+def test_mot_detections_feed_the_trackers(tmp_path, scene_factory) -> None:
+    scene = scene_factory("multi", seed=0, frames=MULTI_FRAMES)
+    det = tmp_path / "det.txt"
+    det.write_text("".join(
+        f"{i + 1},-1,{b.x},{b.y},{b.w},{b.h},{0.5 if gid == 4 else 0.9}\n"
+        for i, frame in enumerate(scene.tracks) for gid, b in frame))
+    stage = MotDetections(path=str(det), min_score=0.6)
+    ctx = points_frame(0, [])
+    stage.start(ctx)
+    assert [d.box for d in ctx.detections] == [b for _, b in scene.tracks[0]]
+    assert all(d.score == 0.9 and d.area == d.box.area for d in ctx.detections)
+    results = list(Pipeline([MotDetections(path=str(det)), MultipleHypothesis()]).track(
+        scene.as_frames()))
+    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+                 for r in results}
+    scores = evaluate_mot(dict(enumerate(scene.tracks)), confirmed, len(scene))
+    assert scores["mota"] > 0.9 and scores["id_switches"] == 0
+
+
+def test_mot_detections_needs_a_readable_file(tmp_path) -> None:
+    with pytest.raises(ConfigError, match="path"):
+        MotDetections().start(points_frame(0, []))
+    with pytest.raises(InputError):
+        MotDetections(path=str(tmp_path / "none.txt")).start(points_frame(0, []))
+
+
+# --- through the command line -------------------------------------------------------------------
+
+
+def test_vtrack_run_s3_with_mot_ground_truth_and_no_init(tmp_path, clip_factory) -> None:
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt",
+                                       str(clip.mot), "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    with open(out / "tracks.csv", newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == ["frame", "id", "x", "y", "w", "h", "conf", "wx", "wy", "wz", "state"]
+    assert len(rows) > 300 and {row[-1] for row in rows[1:]} == {"confirmed"}
+    metrics = json.loads((out / "run.json").read_text())["metrics"]
+    assert metrics["mota"] > 0.85 and metrics["idf1"] > 0.9
+
+
+def test_vtrack_run_s4_needs_no_init(tmp_path, clip_factory) -> None:
+    clip = clip_factory("bounce", seed=0, frames=90)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s4", "--no-video",
+                                       "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    with open(out / "track.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert {row["state"] for row in rows[:30]} == {"lost"}  # learning the background
+    assert {row["state"] for row in rows[30:]} == {"tracking"}
+
