@@ -32,18 +32,14 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
-from common import single_target_sequences
+from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
 
 from vtrack.config import load_config
 from vtrack.evaluate import frame_scores, mean_center_error
-from vtrack.evaluate.groundtruth import read_boxes
-from vtrack.frame import BgrFrame, Frame, I420Frame
-from vtrack.geometry import Box
+from vtrack.frame import Frame
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 
@@ -59,15 +55,6 @@ CLAIMED_REDUCTION, HOLDS_FROM = 0.54, 0.44
 EQUAL_WITHIN = 1.2
 
 
-@dataclass(frozen=True)
-class Clip:
-    """Frames (BGR arrays) and ground truth of one sequence; ``boxes[0]`` starts the tracker."""
-
-    name: str
-    frames: list[np.ndarray]
-    boxes: list[Box | None]
-
-
 def _track(
     clip: Clip, particles: int, correction: bool, mode: tuple[str, ...], seed: int
 ) -> tuple[float, float]:
@@ -76,29 +63,9 @@ def _track(
         [f"particle.particles={particles}",
          f"particle.centroid_correction={str(correction).lower()}", *mode]
     )
-    pipeline = Pipeline(config.build(), seed=seed)
-    frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
-    assert clip.boxes[0] is not None
-    predicted = [result.box for result in pipeline.track(frames, clip.boxes[0])]
-    _, errors = frame_scores(predicted, clip.boxes)
+    _, errors = frame_scores(track_clip(clip, config, seed), clip.boxes)
     scored = np.array([e for e in errors if e is not None])
     return mean_center_error(errors), float(np.isfinite(scored).mean())
-
-
-def _clips(seed: int) -> list[Clip]:
-    """The generated scenes drawn with ``seed``."""
-    clips = []
-    for name in SCENES:
-        scene = make_scene(name, seed=seed, width=320, height=240, frames=150, fps=30)
-        clips.append(Clip(name, list(scene.frames()), scene.boxes))
-    return clips
-
-
-def _load(folder: Path, name: str, groundtruth: Path) -> Clip:
-    """A real sequence: its ``img/`` frames read with ``cv2.imread``, 1-based ground truth."""
-    paths = sorted(p for p in (folder / "img").iterdir() if p.suffix in (".jpg", ".png"))
-    frames = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
-    return Clip(name, frames, read_boxes(groundtruth, origin=1)[: len(frames)])
 
 
 def _mean_sd(values: list[float]) -> tuple[float, float]:
@@ -143,10 +110,10 @@ def s1_claims(seeds: int = 10) -> list[dict]:
                 per[label].append(_track(clip, particles, correction, overrides, seed))
 
     for seed in range(seeds):
-        for clip in _clips(seed):
-            measure(clip, seed)
+        for name in SCENES:
+            measure(scene_clip(name, seed), seed)
     for seq in single_target_sequences():
-        clip = _load(seq.folder, seq.name, seq.groundtruth)
+        clip = load_clip(seq)
         for seed in range(seeds):
             measure(clip, seed)
     return [_row(sequence, mode, per) for (sequence, mode), per in runs.items()]
@@ -156,10 +123,7 @@ def s1_cost(repeats: int = 300) -> dict[str, float]:
     """Microseconds per frame of the ``particle`` stage on a 1920x1080 ``smooth`` scene held as
     I420 (what a decoded video hands over), for 8 and 32 particles, tracked and while lost."""
     scene = make_scene("smooth", seed=0, width=1920, height=1080, frames=60, fps=60)
-    frames: list[Frame] = [
-        I420Frame(i, i / 60.0, cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420))
-        for i, bgr in enumerate(scene.frames())
-    ]
+    frames: list[Frame] = [to_frame(i, 60.0, bgr) for i, bgr in enumerate(scene.frames())]
     assert scene.boxes[0] is not None
     cost = {}
     for particles in (8, 32):
@@ -179,7 +143,8 @@ def s1_cost(repeats: int = 300) -> dict[str, float]:
     return cost
 
 
-def _claim_1(row: dict) -> str:
+def claim_1(row: dict) -> str:
+    """Verdict on claim 1 (correction cuts the error by 54%) for one :func:`s1_claims` row."""
     reduction, spread = row["reduction"]
     if row["identical"]:
         return "n/a (correction changes nothing)"
@@ -191,7 +156,8 @@ def _claim_1(row: dict) -> str:
     return f"weaker ({measured})" if reduction > 0 else f"fails ({measured})"
 
 
-def _claim_2(row: dict) -> str:
+def claim_2(row: dict) -> str:
+    """Verdict on claim 2 (8 corrected ~ 32 plain particles) for one :func:`s1_claims` row."""
     ratio = row["8c / 32p"]
     if math.isnan(ratio):
         return "n/a"
@@ -199,30 +165,50 @@ def _claim_2(row: dict) -> str:
     return f"holds{better}" if ratio <= EQUAL_WITHIN else "fails"
 
 
+def claims_table(rows: list[dict]) -> list[str]:
+    """The Markdown table of :func:`s1_claims` rows, one line a row, verdicts included."""
+    labels = [label for label, _, _ in VARIANTS]
+    lines = [
+        "| sequence | mode | " + " | ".join(f"{label}: err px (claimed)" for label in labels)
+        + " | claim 1: correction cuts error 54% | 8c / 32p | claim 2: 8c ~ 32p |",
+        "|---|---|" + "---:|" * len(labels) + "---|---:|---|",
+    ]
+    for row in rows:
+        cells = [f"{row[label][0]:.1f} +- {row[label][1]:.1f} ({row[f'claimed {label}']:.0%})"
+                 for label in labels]
+        lines.append(f"| {row['sequence']} | {row['mode']} | " + " | ".join(cells)
+                     + f" | {claim_1(row)} | {row['8c / 32p']:.2f} | {claim_2(row)} |")
+    return lines
+
+
+def claims_summary(rows: list[dict]) -> list[str]:
+    """One line per mode: on how many sequences each claim holds."""
+    lines = []
+    for mode, _ in MODES:
+        chosen = [r for r in rows if r["mode"] == mode]
+        counted = [r for r in chosen if not r["identical"]]
+        holds_1 = sum(claim_1(r).startswith("holds") for r in counted)
+        holds_2 = sum(claim_2(r).startswith("holds") for r in chosen)
+        lines.append(f"{mode}: claim 1 holds on {holds_1}/{len(counted)} sequences where "
+                     f"correction changes anything; claim 2 holds on {holds_2}/{len(chosen)}.")
+    return lines
+
+
+def cost_table(cost: dict[str, float]) -> list[str]:
+    """The Markdown table of :func:`s1_cost`."""
+    return ["| particle stage, 1080p I420 | us per frame |", "|---|---:|",
+            *(f"| {key} | {value:.0f} |" for key, value in cost.items())]
+
+
 def main() -> None:
     seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 10
     print(f"Command: `python benchmarks/claims_s1.py {seeds}`\n")
     rows = s1_claims(seeds)
-    labels = [label for label, _, _ in VARIANTS]
-    print("| sequence | mode | " + " | ".join(f"{label}: err px (claimed)" for label in labels)
-          + " | claim 1: correction cuts error 54% | 8c / 32p | claim 2: 8c ~ 32p |")
-    print("|---|---|" + "---:|" * len(labels) + "---|---:|---|")
-    for row in rows:
-        cells = [f"{row[label][0]:.1f} +- {row[label][1]:.1f} ({row[f'claimed {label}']:.0%})"
-                 for label in labels]
-        print(f"| {row['sequence']} | {row['mode']} | " + " | ".join(cells)
-              + f" | {_claim_1(row)} | {row['8c / 32p']:.2f} | {_claim_2(row)} |")
+    print("\n".join(claims_table(rows)))
     print()
-    for mode, _ in MODES:
-        chosen = [r for r in rows if r["mode"] == mode]
-        counted = [r for r in chosen if not r["identical"]]
-        holds_1 = sum(_claim_1(r).startswith("holds") for r in counted)
-        holds_2 = sum(_claim_2(r).startswith("holds") for r in chosen)
-        print(f"{mode}: claim 1 holds on {holds_1}/{len(counted)} sequences where correction "
-              f"changes anything; claim 2 holds on {holds_2}/{len(chosen)}.")
-    print("\n| particle stage, 1080p I420 | us per frame |\n|---|---:|")
-    for key, value in s1_cost().items():
-        print(f"| {key} | {value:.0f} |")
+    print("\n".join(claims_summary(rows)))
+    print()
+    print("\n".join(cost_table(s1_cost())))
 
 
 if __name__ == "__main__":

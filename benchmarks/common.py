@@ -11,8 +11,16 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
+import numpy as np
+
 from vtrack.config import Config, load_config
-from vtrack.run import RunRequest, RunSummary, run
+from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.frame import BgrFrame, Frame, I420Frame
+from vtrack.geometry import Box
+from vtrack.pipeline import Pipeline
+from vtrack.run import RunRequest, RunSummary, run, versions
+from vtrack.scenes import make_scene
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -60,3 +68,51 @@ def run_sequence(seq: Sequence, config: str | Config, seed: int = 0,
     with tempfile.TemporaryDirectory() as tmp:
         return run(RunRequest(input=str(seq.folder), out_dir=Path(tmp), config=cfg,
                               gt_path=seq.groundtruth, gt_origin=1, video=False, seed=seed))
+
+
+@dataclass(frozen=True)
+class Clip:
+    """Frames (BGR arrays) and ground truth of one sequence held in memory, for fast repeated
+    runs; ``boxes[0]`` starts the tracker."""
+
+    name: str
+    frames: list[np.ndarray]
+    boxes: list[Box | None]
+
+
+def load_clip(seq: Sequence) -> Clip:
+    """A real sequence: its ``img/`` frames read once with ``cv2.imread``, 1-based ground truth."""
+    paths = sorted(p for p in (seq.folder / "img").iterdir() if p.suffix in (".jpg", ".png"))
+    frames = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
+    return Clip(seq.name, frames, read_boxes(seq.groundtruth, origin=1)[: len(frames)])
+
+
+def scene_clip(name: str, seed: int) -> Clip:
+    """The generated scene ``name`` drawn with ``seed`` at 320x240, 150 frames, 30 fps."""
+    scene = make_scene(name, seed=seed, width=320, height=240, frames=150, fps=30)
+    return Clip(name, list(scene.frames()), scene.boxes)
+
+
+def track_clip(clip: Clip, config: Config, seed: int = 0) -> list[Box | None]:
+    """The boxes ``config`` claims on every frame of ``clip`` (30 fps BGR frames, tracker seeded
+    with ``seed``), started on the first ground-truth box; None where it claims none."""
+    pipeline = Pipeline(config.build(), seed=seed)
+    frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
+    assert clip.boxes[0] is not None
+    return [result.box for result in pipeline.track(frames, clip.boxes[0])]
+
+
+def to_frame(index: int, fps: float, bgr: np.ndarray, layout: str = "I420") -> Frame:
+    """A rendered BGR image as the pipeline receives it: ``"I420"`` (what a decoded video hands
+    over, converted here, outside any timed call) or ``"BGR"``."""
+    if layout == "I420":
+        return I420Frame(index, index / fps, cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420))
+    return BgrFrame(index, index / fps, bgr)
+
+
+def machine() -> str:
+    """One line naming this machine and the versions that shape a measurement."""
+    v = versions()
+    return (f"Machine: {os.cpu_count()} cores, {v['platform']}; vtrack {v['vtrack']}, "
+            f"Python {v['python']}, OpenCV {v['opencv']}, NumPy {v['numpy']}, PyAV {v['pyav']} "
+            f"(libavcodec {v['ffmpeg']})")

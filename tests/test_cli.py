@@ -17,6 +17,9 @@ from pathlib import Path
 import av
 import numpy as np
 import pytest
+
+from vtrack.geometry import Box, iou
+from vtrack.run import TRACK_COLUMNS
 from vtrack.scenes import (
     make_scene,
     write_groundtruth,
@@ -24,9 +27,6 @@ from vtrack.scenes import (
     write_raw,
     write_video,
 )
-
-from vtrack.geometry import Box, iou
-from vtrack.run import TRACK_COLUMNS
 
 W, H, FPS = 320, 240, 30
 

@@ -306,11 +306,14 @@ class Pillar:
         image[:, self.x0 : self.x1] = self.texture
 
 
-def pillar_texture(rng: np.random.Generator, height: int, width: int) -> np.ndarray:
-    """Dark grey slab texture with vertical grain (uint8 BGR, low saturation)."""
+def pillar_texture(
+    rng: np.random.Generator, height: int, width: int, grey: float = 92.0
+) -> np.ndarray:
+    """Grey slab texture with vertical grain (uint8 BGR, low saturation) around the grey level
+    ``grey`` (default: a dark grey, 92)."""
     grain = smooth_noise(rng, max(height // 24, 2), width, 2.0)
     grain = cv2.resize(grain, (width, height), interpolation=cv2.INTER_CUBIC)
-    lum = 92.0 + 10.0 * grain + 3.0 * smooth_noise(rng, height, width, 1.0)
+    lum = grey + 10.0 * grain + 3.0 * smooth_noise(rng, height, width, 1.0)
     bgr = np.stack([lum + 3.0, lum, lum - 2.0], axis=2)
     return np.clip(np.rint(bgr), 0, 255).astype(np.uint8)
 

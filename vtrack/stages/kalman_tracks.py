@@ -9,7 +9,10 @@ matrices without the gravity input) for every target the detector reports
 1. every track's filter predicts this frame (S4 eq. 5-6);
 2. association by global nearest neighbour: the (track, measurement) pairs whose distance
    between predicted and measured centre is within ``gate`` pixels are taken shortest first,
-   each track and each measurement at most once;
+   each track and each measurement at most once, tracks that missed fewer frames in a row
+   first (the matching cascade of DeepSORT, Wojke et al. 2017): when two targets merge into
+   one blob, the track that had it keeps it and the other coasts on its filter, instead of the
+   two taking turns and both filters learning the blob's motion;
 3. matched tracks are updated with the measured centre (S4 eq. 7-10); a measurement left over
    starts a tentative track (its filter starts at the measurement, at rest: S4's start at
    ``(w/2, 0)`` suits one ball falling from the top, not targets anywhere);
@@ -142,11 +145,13 @@ class KalmanTracks(Stage):
         )
 
     def _associate(self, detections: list[Detection]) -> list[tuple[int, int]]:
-        """Global nearest neighbour: gated (track, measurement) pairs, shortest first."""
+        """Global nearest neighbour: gated (track, measurement) pairs, by the track's misses in
+        a row, then shortest first."""
         predicted = np.array([t.filter.position() for t in self._tracks], float).reshape(-1, 2)
         distances = pairwise_distances(predicted, centroids(detections))
         rows, columns = np.nonzero(distances <= self.gate)
-        order = np.argsort(distances[rows, columns], kind="stable")
+        misses = np.array([t.misses for t in self._tracks], int)
+        order = np.lexsort((distances[rows, columns], misses[rows]))
         matches: list[tuple[int, int]] = []
         used_rows: set[int] = set()
         used_columns: set[int] = set()
