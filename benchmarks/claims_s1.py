@@ -33,7 +33,6 @@ from __future__ import annotations
 import math
 import sys
 
-import cv2
 import numpy as np
 from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
 

@@ -124,7 +124,8 @@ def test_run_image_folder_and_set_override(smooth_scene, tmp_path: Path) -> None
     write_image_sequence(smooth_scene, folder)
     out = tmp_path / "out"
     gt_file = next(folder.glob("groundtruth*.txt"))
-    result = vtrack("run", str(folder), "--gt", str(gt_file), "--out", str(out), "--no-video",
+    result = vtrack("run", str(folder), "--gt", str(gt_file), "--gt-origin", "1", "--out", str(out),
+                    "--no-video",
                     "--set", "meanshift.iterations=5")
     assert result.returncode == 0, result.stderr.decode()
     rows = read_csv(out / "track.csv")

@@ -263,7 +263,11 @@ def test_image_sequence_has_otb_layout(clip_factory):
     images = sorted((clip.path / "img").iterdir())
     assert [p.name for p in images[:2]] == ["0001.jpg", "0002.jpg"] and len(images) == 12
     assert clip.gt == clip.path / "groundtruth_rect.txt"
-    assert len(clip.gt.read_text().splitlines()) == 12
+    lines = clip.gt.read_text().splitlines()
+    assert len(lines) == 12
+    first = [float(v) for v in lines[0].split(",")]
+    box = clip.scene.boxes[0]
+    assert first == pytest.approx([box.x + 1, box.y + 1, box.w, box.h], abs=0.006)  # 1-based
     assert cv2.imread(str(images[0])).shape == (240, 320, 3)
 
 

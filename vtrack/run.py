@@ -310,6 +310,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
             "input": request.input,
             "init": list(init_box) if init_box is not None else None,
             "gt": str(request.gt_path) if request.gt_path else None,
+            "gt_origin": request.gt_origin,
             "seed": request.seed,
             "video": request.video,
             "preset": request.preset,

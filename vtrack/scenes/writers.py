@@ -134,10 +134,17 @@ def _box_line(values: Iterable[float]) -> str:
     return ",".join(f"{v:.2f}" for v in values)
 
 
-def write_groundtruth(scene: Scene, path: str | Path) -> Path:
-    """OTB ground truth: one ``x,y,w,h`` line per frame; ``0,0,0,0`` where the target is absent."""
+def write_groundtruth(scene: Scene, path: str | Path, origin: int = 0) -> Path:
+    """OTB ground truth: one ``x,y,w,h`` line per frame; ``0,0,0,0`` where the target is absent.
+
+    ``origin=1`` writes MATLAB-style 1-based boxes, as OTB's ``groundtruth_rect.txt`` files are.
+    """
     path = Path(path)
-    lines = [_box_line(box) if box is not None else "0,0,0,0" for box in scene.boxes]
+    lines = [
+        _box_line(box._replace(x=box.x + origin, y=box.y + origin)) if box is not None
+        else "0,0,0,0"
+        for box in scene.boxes
+    ]
     with _writing(path):
         path.write_text("\n".join(lines) + "\n")
     return path
@@ -160,7 +167,8 @@ def write_image_sequence(
     scene: Scene, folder: str | Path, ext: str = "jpg", progress: bool = False
 ) -> Path:
     """OTB layout: ``folder/img/0001.<ext>`` ... (1-based, >= 4 digits) and
-    ``folder/groundtruth_rect.txt``. JPEG quality 95; ``ext`` is ``jpg`` or ``png``."""
+    ``folder/groundtruth_rect.txt`` with 1-based boxes, as OTB writes them (read it with
+    ``--gt-origin 1``). JPEG quality 95; ``ext`` is ``jpg`` or ``png``."""
     if ext not in ("jpg", "png"):
         raise ConfigError(f"image format {ext!r}: choose jpg or png")
     folder = Path(folder)
@@ -172,7 +180,7 @@ def write_image_sequence(
             name = images / f"{index + 1:0{digits}d}.{ext}"
             if not cv2.imwrite(str(name), bgr, params):
                 raise OSError(f"OpenCV could not write {name}")
-    write_groundtruth(scene, folder / "groundtruth_rect.txt")
+    write_groundtruth(scene, folder / "groundtruth_rect.txt", origin=1)
     return folder
 
 

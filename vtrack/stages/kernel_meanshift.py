@@ -144,6 +144,13 @@ class KernelMeanShift(Stage):
         Param("distance", float, 20.0,
               "threshold D in pixels on r = |x_ms - x_pred| + |y_ms - y_pred| (S2 eq. 17)",
               min=0.0),
+        Param("occluded_update", str, "prediction",
+              "what the predictor is fed on a full-occlusion frame: prediction = the frame's "
+              "position, which is the prediction (S2 sec. 5 (2)(2) with eq. 14: the predictor "
+              "runs on every frame's position; zero innovation, so the state coasts and V "
+              "shrinks as in eq. 16), none = no measurement (the filter coasts, its covariance "
+              "grows)",
+              choices=("prediction", "none")),
     )
     requires = frozenset({"frame", "box", "prediction"})
     provides = frozenset({"box", "measurement", "state", "score"})
@@ -161,6 +168,7 @@ class KernelMeanShift(Stage):
     scale_smoothing: float
     failure_logic: bool
     distance: float
+    occluded_update: str
 
     def start(self, ctx: TrackContext) -> None:
         """Build the target model on the first frame's box (S2 algorithm step 1)."""
@@ -201,10 +209,12 @@ class KernelMeanShift(Stage):
             decision = FAST_MOTION if _r(found, prediction) <= self.distance else OCCLUSION
         if decision == OCCLUSION:
             # S2 sec. 5 (2)(2): full occlusion, the position is the prediction (the next frame
-            # starts there); the filter gets no measurement and the scale is kept.
+            # starts there) and the scale is kept. Eq. 14 runs on every frame's position x_(k-1),
+            # so the predictor is fed the prediction itself (occluded_update = "prediction");
+            # "none" gives it no measurement.
             assert prediction is not None
             ctx.box = Box.from_center(prediction.cx, prediction.cy, *self._box_size())
-            ctx.measurement = None
+            ctx.measurement = ctx.box if self.occluded_update == "prediction" else None
             ctx.state = OCCLUDED
         else:
             self._scale = found.scale
