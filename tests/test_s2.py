@@ -12,13 +12,20 @@ What the document claims and where it is checked here:
   2.5 widths with no motion before it: no predictor can point there, so the failure logic cannot
   help on it (see ``benchmarks/claims_s2.py``);
 - full occlusion (sec. 5 (2)(2)): the occlusion branch is taken while the window holds nothing
-  of the target and the box coasts on the prediction; riding through >= 15 hidden frames is not
-  reproduced (strict xfail, reasons in the test);
+  of the target and the box coasts on the prediction. Riding through >= 15 hidden frames (the
+  document: about 13) on a straight constant-velocity path depends on the unit of the
+  predictor's T, which the document gives only as the time between frames (with sigma_w^2 =
+  1): with T in seconds (1/25 s) it is reproduced when the target vanishes and reappears at
+  once; with T = 1 frame (the shipped config) it is not (strict xfail). Behind a slab, where
+  partial occlusion comes first, it is reproduced with neither (strict xfail, reasons in the
+  tests);
 - scale change (fig. 3(d) shows a zoom out): the box follows a x2 shrink; a x2 growth is not
   followed with the pyramid kernel (strict xfail) but is with the Epanechnikov kernel.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
@@ -34,12 +41,14 @@ from vtrack.scenes.render import (
     PAPER,
     Compositor,
     Ellipse,
+    Pillar,
     SensorNoise,
     StaticBackground,
     make_background,
+    pillar_texture,
     target_paint,
 )
-from vtrack.scenes.scene import SceneSpec, assemble
+from vtrack.scenes.scene import SceneSpec, Truth, assemble
 from vtrack.stages.base import OCCLUDED, build_stage
 from vtrack.stages.kernel_meanshift import KernelMeanShift
 
@@ -143,21 +152,110 @@ def test_full_occlusion_takes_the_occlusion_branch_and_coasts_on_the_prediction(
         assert current.box.cy == pytest.approx(previous.prediction.cy)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "not reproduced: coasting the document's constant-acceleration predictor (W = diag(0,0,1), "
-    "R = 1, T = 1 frame, T^2 as printed) for 15 frames extrapolates the acceleration it estimated "
-    "from mean-shift jitter quadratically and ends 20-30 px (straight path) to 100+ px (curved "
-    "path) off, beyond the window; on the shipped scene the slab's grey also matches the target's "
-    "and partial occlusion teaches the predictor a false deceleration"))
-@pytest.mark.parametrize("seed", [0, 1])
-def test_rides_through_a_15_frame_full_occlusion(seed: int) -> None:
-    scene = make_scene("occlusion", seed=seed, width=320, height=240, frames=60, fps=FPS)
+def crossing_scene(seed: int, occluder: str, lead: int = 30, hidden: int = 15) -> Scene:
+    """A 40x30 target at a constant 4 px/frame (the document's roughly constant-velocity car),
+    tracked for ``lead`` frames, then fully hidden for ``hidden`` frames (``events["occluded"]``,
+    half-open), then visible again.
+
+    ``occluder="slab"``: it passes behind a full-height slab whose grey (about 40, grey bin 2 of
+    16) is neither the target's (92-139, bins 5-8) nor the background's (about 178, bin 11), so a
+    grey-level model finds nothing of itself on the slab; it is partly hidden for the 10 frames
+    before and after the full occlusion. ``occluder="cover"``: the frames are those of
+    :func:`covered` (a flat white patch over the whole path, no partial occlusion: the target
+    vanishes and reappears at once).
+    """
+    ax, ay, speed, width, height = 20.0, 15.0, 4.0, 400, 240
+    cross = math.ceil(2 * ax / speed)  # frames from touching the slab to fully behind it
+    if occluder == "cover":
+        cross = 0
+    frames = lead + cross + hidden + cross + 12
+    spec = SceneSpec(f"crossing_{occluder}", seed, width, height, frames, FPS)
+    motion, looks = spec.rng(0), spec.rng(1)
+    x_start = ax + 12
+    cx = x_start + speed * np.arange(frames, dtype=np.float64)
+    slab = math.ceil(2 * ax + 2 + speed * hidden)
+    x0 = math.floor(x_start + ax + lead * speed) + 1
+    y0, y1 = motion.uniform(0.4, 0.6, 2) * height
+    cy = y0 + (y1 - y0) * np.arange(frames) / (frames - 1)
+    if motion.random() < 0.5:
+        cx, x0 = width - cx, width - x0 - slab
+    background = StaticBackground(make_background(looks, height, width, PAPER))
+    sprites: list = [Ellipse(cx, cy, np.full(frames, ax), np.full(frames, ay),
+                             target_paint(looks), 1)]
+    if occluder == "slab":
+        sprites.append(Pillar(x0, pillar_texture(looks, height, slab, grey=40.0)))
+
+    def events(truth: Truth) -> dict[str, tuple[int, int]]:
+        if occluder == "cover":
+            return {"occluded": (lead, lead + hidden)}
+        hidden_frames = np.flatnonzero([visible == 0.0 for _, _, visible in truth[1]])
+        return {"occluded": (int(hidden_frames[0]), int(hidden_frames[-1]) + 1)}
+
+    compositor = Compositor(background, sprites, SensorNoise(3.0), seed)
+    return assemble(spec, compositor, events)
+
+
+def crossing_frames(scene: Scene, occluder: str) -> list[BgrFrame]:
+    if occluder == "cover":
+        start, end = scene.events["occluded"]
+        return covered(scene, start, end - start)
+    return as_frames(list(scene.frames()))
+
+
+def rides_through(seed: int, occluder: str, *overrides: str) -> tuple[list[str], np.ndarray]:
+    """Decisions on the fully hidden frames, and the IoU on the 5 frames after them."""
+    scene = crossing_scene(seed, occluder)
     start, end = scene.events["occluded"]
     assert end - start >= 15
-    results = track(as_frames(list(scene.frames())), scene.boxes[0])
-    assert {r.extras["decision"] for r in results[start:end]} == {"occlusion"}
-    back = overlaps(results, scene.boxes)[end : end + 5]
-    assert back.max() > 0.5
+    results = track(crossing_frames(scene, occluder), scene.boxes[0], *overrides)
+    return ([r.extras["decision"] for r in results[start:end]],
+            overlaps(results, scene.boxes)[end : end + 5])
+
+
+#: S2 sec. 5: "T 为帧间时间间隔" (T is the time interval between frames) read in seconds, at the
+#: document's 25 fps; see the kalman stage's comment in configs/s2.toml.
+T_SECONDS = "kalman.dt=0.04"
+SEEDS = range(6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_rides_through_a_15_frame_sudden_full_occlusion_with_t_in_seconds(seed: int) -> None:
+    # A straight constant-velocity track, 30 frames tracked (the document's big car: 42), then
+    # 15 frames with nothing of the target in any window (the document: about 13): the
+    # occlusion branch on every hidden frame, and the box back on the target within 5 frames of
+    # its reappearance.
+    decisions, back = rides_through(seed, "cover", T_SECONDS)
+    assert set(decisions) == {"occlusion"}
+    assert back.max() > 0.5, np.round(back, 2)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced with T = 1 frame (the shipped config): with W = diag(0,0,1) in pixels per "
+    "frame^2 the acceleration follows the mean-shift jitter of the last frames (R = 1), and 15 "
+    "frames of coasting extrapolate it quadratically: on the same straight constant-velocity "
+    "path as the previous test, 56 to 311 px off on the last hidden frame, and on no seed back "
+    "on the target within 5 frames (T in seconds: 3 to 18 px off, back on every seed)"))
+def test_rides_through_a_15_frame_sudden_full_occlusion_with_t_one_frame() -> None:
+    for seed in SEEDS:
+        decisions, back = rides_through(seed, "cover")
+        assert set(decisions) == {"occlusion"} and back.max() > 0.5
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced behind a slab, with either reading of T, although the slab's grey is unlike "
+    "the target's: for the 10 frames of partial occlusion before the target is fully hidden, "
+    "mean shift follows its visible part and, r staying <= D = 20 px, is accepted and fed to the "
+    "predictor (S2 sec. 5 (1); the document has no other test, and does not use rho), which "
+    "learns that the target slows down at the slab's edge. With T = 1 frame the prediction stops "
+    "with it: on 3 seeds of 6 the occlusion branch is never taken (the box stays at the edge, "
+    "on background of the model); with T in seconds it is taken 17 to 19 px behind the target "
+    "and coasts too slowly. On the last hidden frame the box is 41 to 694 px off; no seed is "
+    "back on the target within 5 frames of its reappearance"))
+@pytest.mark.parametrize("t", ["kalman.dt=1", T_SECONDS])
+def test_rides_through_a_15_frame_full_occlusion_behind_a_slab(t: str) -> None:
+    for seed in SEEDS:
+        decisions, back = rides_through(seed, "slab", t)
+        assert set(decisions) == {"occlusion"} and back.max() > 0.5
 
 
 def reversed_scale_scene(seed: int) -> tuple[list[BgrFrame], list[Box | None]]:
@@ -189,7 +287,9 @@ def grow(seed: int, *overrides: str) -> np.ndarray:
     "not reproduced with the pyramid kernel: it weighs the box's edges at about half its centre, "
     "so the model holds much background; a window inside a grown target loses that background "
     "at every candidate bandwidth, rho no longer prefers the larger one, and the box shrinks "
-    "(ends at 0.57-0.71 of the true size); the Epanechnikov kernel follows (next test)"))
+    "(ends at 0.57-0.71 of the true size on seeds 0-2, 0.57-0.70 with the Bhattacharyya "
+    "coefficient instead of eq. 11); the document shows only a zoom out (fig. 3(d), 60x40 to "
+    "48x32), reproduced above; the Epanechnikov kernel follows the growth (next test)"))
 def test_box_size_follows_a_x2_growth_with_the_pyramid_kernel() -> None:
     assert np.abs(grow(0) - 1.0).max() <= 0.15
 
@@ -207,6 +307,7 @@ def test_shipped_config_is_the_documented_chain() -> None:
         "feature": "gray16", "bins": 16, "kernel": "pyramid", "weights": "ratio",
         "similarity": "intersection", "max_iterations": 20, "epsilon": 1.0, "scale_step": 0.1,
         "scale_smoothing": 0.1, "failure_logic": True, "distance": 20.0,
+        "occluded_update": "prediction",
     }
     assert kalman.settings()["model"] == "ca"
     assert Pipeline([meanshift, kalman]).columns == ("decision", "scale", "iterations",

@@ -55,7 +55,14 @@ from vtrack.errors import InputError, VtrackError
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.geometry import Box
 from vtrack.pipeline import Pipeline
-from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, RunSummary, run
+from vtrack.run import (
+    STATUS_COMPLETE,
+    STATUS_FAILED,
+    STATUS_INTERRUPTED,
+    RunRequest,
+    RunSummary,
+    run,
+)
 
 #: File suffixes taken as video inputs (anything else beside them is ignored).
 VIDEO_SUFFIXES = frozenset({
@@ -73,7 +80,7 @@ VIDEO_MOT_GT = ("{}.mot.txt",)
 #: Initial box of an input without single-target ground truth (video, sequence folder).
 VIDEO_INIT, SEQUENCE_INIT = "{}.init.txt", "init.txt"
 
-STATUS_FAILED, STATUS_SKIPPED = "failed", "skipped"
+STATUS_SKIPPED = "skipped"
 #: ``summary.csv`` columns, in order.
 SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
                    "frames_lost", "status", "error")

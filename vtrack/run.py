@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import math
 import platform
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,6 +53,9 @@ TRACK_COLUMNS = (
 MOT_COLUMNS = ("frame", "id", "x", "y", "w", "h", "conf", "wx", "wy", "wz", "state")
 
 STATUS_COMPLETE, STATUS_PARTIAL, STATUS_INTERRUPTED = "complete", "partial", "interrupted"
+#: The tracker stopped on an error that is not the input's (e.g. a target with no colour for a
+#: hue model): outputs up to there are valid, ``run.json`` says so, and the error is re-raised.
+STATUS_FAILED = "failed"
 
 
 @dataclass
@@ -141,6 +147,45 @@ def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
             f"{where}: the box {tuple(round(v, 2) for v in box)} lies outside the "
             f"{width}x{height} frame"
         )
+
+
+class _AtomicFrames:
+    """Delays Ctrl-C while one frame's outputs are written, so they never disagree.
+
+    Outside ``writing()`` a SIGINT raises KeyboardInterrupt at once (e.g. while waiting for the
+    next frame); inside, it is held and raised when the frame's row and picture are both out.
+    Only installed in the main thread (signal handlers can only be set there).
+    """
+
+    def __init__(self) -> None:
+        self.pending = False
+        self.inside = False
+        self.previous: Any = None
+
+    def __enter__(self) -> _AtomicFrames:
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+
+    def _handle(self, signum: int, frame: object) -> None:
+        if self.inside:
+            self.pending = True
+        else:
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def writing(self) -> Iterator[None]:
+        self.inside = True
+        try:
+            yield
+        finally:
+            self.inside = False
+        if self.pending:
+            raise KeyboardInterrupt
 
 
 def _limited(frames: Iterator, limit: int | None) -> Iterator:
@@ -241,25 +286,30 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         annotator = Annotator(info.width, info.height, gt=gt)
 
     status, error = STATUS_COMPLETE, None
+    failure: Exception | None = None
     states = {OCCLUDED: 0, LOST: 0}
     frames = 0
     started = time.perf_counter()
     try:
-        for result, frame in _results(pipeline, source, init_box, request.max_frames):
-            for row in formatter.rows(result):
-                csv.write(row)
-            if video is not None and annotator is not None:
-                video.write(frame.i420(), lambda planes, r=result: annotator.draw(planes, r),
-                            time_s=frame.time_s)
-            if result.state in states:
-                states[result.state] += 1
-            frames += 1
-            if on_frame is not None:
-                on_frame(frames)
+        with _AtomicFrames() as interrupts:
+            for result, frame in _results(pipeline, source, init_box, request.max_frames):
+                with interrupts.writing():
+                    for row in formatter.rows(result):
+                        csv.write(row)
+                    if video is not None and annotator is not None:
+                        video.write(frame.i420(), lambda planes, r=result: annotator.draw(
+                            planes, r), time_s=frame.time_s)
+                    if result.state in states:
+                        states[result.state] += 1
+                    frames += 1
+                if on_frame is not None:
+                    on_frame(frames)
     except PartialInputError as exc:
         status, error = STATUS_PARTIAL, str(exc)
     except KeyboardInterrupt:
         status, error = STATUS_INTERRUPTED, "interrupted by the user"
+    except Exception as exc:  # recorded in run.json, then raised again below
+        status, error, failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
         seconds = time.perf_counter() - started
         source.close()
@@ -330,6 +380,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         "command": sys.argv,
     }
     write_json(request.out_dir / "run.json", record)
+    if failure is not None:
+        raise failure
     return summary
 
 

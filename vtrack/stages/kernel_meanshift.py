@@ -12,12 +12,13 @@ Pipeline contract (chain ``kernel_meanshift -> kalman(model="ca")``):
 - reads ``ctx.box`` (last frame's position: the measurement, or the Kalman prediction after an
   occlusion, so the next frame starts there) and ``ctx.prediction`` (the Kalman prediction for
   this frame, None while the predictor is starting: then the result is accepted);
-- writes ``ctx.measurement`` (the mean-shift box, or None on full occlusion so the filter
-  coasts), ``ctx.box``, ``ctx.state`` (``tracking`` / ``occluded``), ``ctx.score`` (similarity
-  ``rho`` in 0..1 of the kept search; on occlusion, of the search from the prediction) and the
-  extras ``decision`` (``accept`` / ``fast_motion`` / ``occlusion``), ``scale`` (box size over
-  the initial box size) and ``iterations`` (mean-shift steps this frame, all bandwidths and the
-  rerun from the prediction included).
+- writes ``ctx.measurement`` (the mean-shift box; on full occlusion the prediction, so that
+  the predictor runs on every frame's position as in eq. 14 and its state coasts, or None with
+  ``occluded_update = "none"``), ``ctx.box``, ``ctx.state`` (``tracking`` / ``occluded``),
+  ``ctx.score`` (similarity ``rho`` in 0..1 of the kept search; on occlusion, of the search
+  from the prediction) and the extras ``decision`` (``accept`` / ``fast_motion`` /
+  ``occlusion``), ``scale`` (box size over the initial box size) and ``iterations`` (mean-shift
+  steps this frame, all bandwidths and the rerun from the prediction included).
 
 Implementation notes:
 
