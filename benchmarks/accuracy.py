@@ -18,7 +18,16 @@ from common import run_sequence, single_target_sequences
 
 from vtrack.errors import VtrackError
 
-CONFIGS = ("s0", "camshift")
+#: (label, shipped config, --set overrides): S0 as shipped, S0 without the saturation/value mask
+#: (the paper's literal hue-only model), S0 iterating mean shift to convergence in every frame,
+#: and the OpenCV-tutorial CamShift peer.
+VARIANTS = (
+    ("s0", "s0", []),
+    ("s0 no-mask", "s0", ["hue.sat_min=0", "hue.val_min=0"]),
+    ("s0 iter10", "s0", ["meanshift.iterations=10"]),
+    ("camshift", "camshift", []),
+)
+CONFIGS = tuple(label for label, _, _ in VARIANTS)
 
 
 def main() -> None:
@@ -35,9 +44,9 @@ def main() -> None:
     failures: list[str] = []
     for seq in sequences:
         cells = []
-        for config in CONFIGS:
+        for config, name, overrides in VARIANTS:
             try:
-                summary = run_sequence(seq, config)
+                summary = run_sequence(seq, name, overrides=overrides)
             except VtrackError as exc:  # e.g. a hue tracker on grey footage: scores 0
                 failures.append(f"{seq.name} [{config}]: {exc}")
                 totals[config].append((0.0, 0.0, 0.0))

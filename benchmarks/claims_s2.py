@@ -32,6 +32,7 @@ import numpy as np
 from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
 
 from vtrack.config import load_config
+from vtrack.errors import VtrackError
 from vtrack.evaluate import summarize
 from vtrack.frame import Frame
 from vtrack.pipeline import Pipeline
@@ -59,11 +60,15 @@ TRACKERS = (
 COST_BOXES = ((32, 20), (100, 100))
 
 
-def _success(clip: Clip, config: str, overrides: tuple[str, ...]) -> tuple[float, float]:
-    """(mean IoU, AUC) of one tracker on one clip, started on the first ground-truth box."""
-    predicted = track_clip(clip, load_config(config).with_overrides(list(overrides)))
+def _success(clip: Clip, config: str, overrides: tuple[str, ...]) -> tuple[float, float, str]:
+    """(mean IoU, AUC, "") of one tracker on one clip, started on the first ground-truth box;
+    (0, 0, the message) when the tracker refuses the clip (a hue tracker on grey footage)."""
+    try:
+        predicted = track_clip(clip, load_config(config).with_overrides(list(overrides)))
+    except VtrackError as exc:
+        return 0.0, 0.0, str(exc)
     summary = summarize(predicted, clip.boxes)
-    return summary["mean_overlap"] or 0.0, summary["auc"] or 0.0
+    return summary["mean_overlap"] or 0.0, summary["auc"] or 0.0, ""
 
 
 def _rows(name: str, clips: list[Clip]) -> list[dict]:
@@ -77,6 +82,7 @@ def _rows(name: str, clips: list[Clip]) -> list[dict]:
             "tracker": label,
             "mean_iou": statistics.mean(s[0] for s in scores),
             "auc": statistics.mean(s[1] for s in scores),
+            "error": next((s[2] for s in scores if s[2]), ""),
         })
     return rows
 
@@ -86,7 +92,8 @@ def s2_success(seeds: int = 3) -> list[dict]:
 
     One dict per (sequence, tracker): ``sequence`` (``"jump"``, ``"occlusion"`` or the real
     sequence's folder name), ``seeds`` (generated scenes: how many seeds were averaged; real
-    sequences: 1), ``tracker``, ``mean_iou`` and ``auc`` (OTB success AUC, 21 thresholds).
+    sequences: 1), ``tracker``, ``mean_iou`` and ``auc`` (OTB success AUC, 21 thresholds),
+    ``error`` (why the tracker refused a clip, which then scores 0; "" when it ran on all).
     """
     rows = []
     for name in SCENES:
@@ -154,7 +161,8 @@ def s2_claims(seeds: int = 3) -> list[dict]:
 def success_table(rows: list[dict]) -> list[str]:
     """The Markdown table of :func:`s2_success` rows."""
     return ["| sequence | seeds | tracker | mean IoU | AUC |", "|---|---:|---|---:|---:|",
-            *(f"| {row['sequence']} | {row['seeds']} | {row['tracker']} | "
+            *(f"| {row['sequence']} | {row['seeds']} | {row['tracker']}"
+              f"{' (failed, scored 0)' if row['error'] else ''} | "
               f"{row['mean_iou']:.3f} | {row['auc']:.3f} |" for row in rows)]
 
 

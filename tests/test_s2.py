@@ -180,7 +180,7 @@ def crossing_scene(seed: int, occluder: str, lead: int = 30, hidden: int = 15) -
     if motion.random() < 0.5:
         cx, x0 = width - cx, width - x0 - slab
     background = StaticBackground(make_background(looks, height, width, PAPER))
-    sprites: list = [Ellipse(cx, cy, np.full(frames, ax), np.full(frames, ay),
+    sprites: list[Ellipse | Pillar] = [Ellipse(cx, cy, np.full(frames, ax), np.full(frames, ay),
                              target_paint(looks), 1)]
     if occluder == "slab":
         sprites.append(Pillar(x0, pillar_texture(looks, height, slab, grey=40.0)))
@@ -224,9 +224,25 @@ def test_rides_through_a_15_frame_sudden_full_occlusion_with_t_in_seconds(seed: 
     # 15 frames with nothing of the target in any window (the document: about 13): the
     # occlusion branch on every hidden frame, and the box back on the target within 5 frames of
     # its reappearance.
+    # (It needs that history: after only 20 tracked frames the acceleration is not averaged out
+    # yet and about half the seeds come back off the target.)
     decisions, back = rides_through(seed, "cover", T_SECONDS)
     assert set(decisions) == {"occlusion"}
     assert back.max() > 0.5, np.round(back, 2)
+
+
+def test_t_in_seconds_does_not_follow_a_curving_target() -> None:
+    # Why the shipped config keeps T = 1 frame: the nearly constant acceleration of T in seconds
+    # falls more than D behind the curvy path of the `smooth` scene, and the failure logic
+    # rejects good mean-shift results there (on every seed; IoU 0.73/0.78 -> 0.49/0.43 on seeds
+    # 0/1), where T = 1 frame accepts every frame.
+    for seed in range(3):
+        scene = make_scene("smooth", seed=seed, width=320, height=240, fps=FPS)
+        frames = as_frames(list(scene.frames()))
+        frame_t = track(frames, scene.boxes[0])
+        seconds_t = track(frames, scene.boxes[0], T_SECONDS)
+        assert {r.extras["decision"] for r in frame_t} == {"accept"}
+        assert {r.extras["decision"] for r in seconds_t} != {"accept"}
 
 
 @pytest.mark.xfail(strict=True, reason=(
