@@ -32,6 +32,9 @@ class FrameResult:
     extras: dict[str, Any] = field(default_factory=dict)
     tracks: list[Track] = field(default_factory=list)
     overlays: list[tuple[str, Any]] = field(default_factory=list)
+    #: The frame this result is about (writers take its pixels from here); the pipeline always
+    #: sets it, results built by hand (e.g. to test drawing) may leave it out.
+    frame: Frame | None = None
 
 
 class Pipeline:
@@ -88,6 +91,7 @@ class Pipeline:
             yield FrameResult(
                 index=frame.index,
                 time_s=frame.time_s,
+                frame=frame,
                 box=None if ctx.state == LOST else ctx.box,  # lost: no box is claimed
                 state=ctx.state,
                 score=ctx.score,

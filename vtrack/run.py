@@ -292,13 +292,15 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     started = time.perf_counter()
     try:
         with _AtomicFrames() as interrupts:
-            for result, frame in _results(pipeline, source, init_box, request.max_frames):
+            frames_in = _limited(iter(source), request.max_frames)
+            for result in pipeline.track(frames_in, init_box):
                 with interrupts.writing():
                     for row in formatter.rows(result):
                         csv.write(row)
                     if video is not None and annotator is not None:
-                        video.write(frame.i420(), lambda planes, r=result: annotator.draw(
-                            planes, r), time_s=frame.time_s)
+                        assert result.frame is not None
+                        video.write(result.frame.i420(), lambda planes, r=result: annotator.draw(
+                            planes, r), time_s=result.time_s)
                     if result.state in states:
                         states[result.state] += 1
                     frames += 1
@@ -384,15 +386,3 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         raise failure
     return summary
 
-
-def _results(pipeline: Pipeline, source: Source, init_box: Box | None, limit: int | None):
-    """Pair each pipeline result with its frame (the writer needs the frame's pixels)."""
-    current: list = []
-
-    def frames():
-        for frame in _limited(iter(source), limit):
-            current[:] = [frame]
-            yield frame
-
-    for result in pipeline.track(frames(), init_box):
-        yield result, current[0]
