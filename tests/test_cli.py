@@ -309,3 +309,15 @@ def test_ctrl_c_leaves_valid_partial_outputs(smooth_scene, tmp_path: Path) -> No
     assert record["status"] == "interrupted" and record["frames"] == len(rows)
     assert decoded_frames(out / "annotated.mp4")[0] == len(rows)
 
+
+
+def test_odd_sized_image_folder_gets_an_even_cropped_video(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=2, width=161, height=121, frames=20, fps=FPS)
+    folder = tmp_path / "odd"
+    write_image_sequence(scene, folder)
+    out = tmp_path / "out"
+    result = vtrack("run", str(folder), "--gt", str(folder / "groundtruth_rect.txt"),
+                    "--gt-origin", "1", "--out", str(out))
+    assert result.returncode == 0, result.stderr.decode()
+    assert len(read_csv(out / "track.csv")) == 20
+    assert decoded_frames(out / "annotated.mp4") == (20, 160, 120)

@@ -16,6 +16,17 @@ import numpy as np
 from vtrack.geometry import Window
 
 
+def i420_planes(buffer: np.ndarray, width: int, height: int) -> tuple[np.ndarray, ...]:
+    """Writable, contiguous views ``(y, u, v)`` of an I420 buffer (no copy)."""
+    flat = buffer.reshape(-1)
+    luma = width * height
+    quarter = luma // 4
+    y = flat[:luma].reshape(height, width)
+    u = flat[luma : luma + quarter].reshape(height // 2, width // 2)
+    v = flat[luma + quarter : luma + 2 * quarter].reshape(height // 2, width // 2)
+    return y, u, v
+
+
 class Frame(ABC):
     """One picture of the input. ``index`` is 0-based; ``time_s`` comes from its timestamp."""
 
@@ -96,14 +107,6 @@ class I420Frame(Frame):
         super().__init__(index, time_s, planes.shape[1], planes.shape[0] * 2 // 3)
         self._planes = planes
 
-    def _chroma(self) -> tuple[np.ndarray, np.ndarray]:
-        h, w = self.height, self.width
-        flat = self._planes[h:].reshape(-1)
-        quarter = (h // 2) * (w // 2)
-        u = flat[:quarter].reshape(h // 2, w // 2)
-        v = flat[quarter : 2 * quarter].reshape(h // 2, w // 2)
-        return u, v
-
     def bgr(self, window: Window | None = None) -> np.ndarray:
         if window is None:
             return cv2.cvtColor(self._planes, cv2.COLOR_YUV2BGR_I420)
@@ -112,15 +115,14 @@ class I420Frame(Frame):
         ex1 = min(window.x1 + (window.x1 & 1), self.width)
         ey1 = min(window.y1 + (window.y1 & 1), self.height)
         ew, eh = ex1 - ex0, ey1 - ey0
-        u, v = self._chroma()
+        _, u, v = i420_planes(self._planes, self.width, self.height)
         cu = u[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         cv = v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         packed = np.empty((eh * 3 // 2, ew), np.uint8)
-        packed[:eh] = self._planes[ey0:ey1, ex0:ex1]
-        chroma = packed[eh:].reshape(-1)
-        quarter = (eh // 2) * (ew // 2)
-        chroma[:quarter] = cu.reshape(-1)
-        chroma[quarter:] = cv.reshape(-1)
+        packed[:eh] = self._planes[ey0:ey1, ex0:ex1]  # luma rows come first
+        _, pu, pv = i420_planes(packed, ew, eh)
+        pu[:] = cu
+        pv[:] = cv
         bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
         return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
 

@@ -36,12 +36,20 @@ import numpy as np
 from vtrack import __version__
 from vtrack.annotate import Annotator
 from vtrack.config import Config
-from vtrack.errors import ConfigError, InputError, OutputError, PartialInputError
+from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import frame_scores, summarize
 from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import Box
-from vtrack.io import CsvWriter, RawFormat, Source, VideoWriter, open_source, write_json
+from vtrack.io import (
+    CsvWriter,
+    RawFormat,
+    Source,
+    VideoWriter,
+    open_source,
+    prepare_output_dir,
+    write_json,
+)
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.stages.base import LOST, OCCLUDED
 
@@ -126,17 +134,6 @@ def versions() -> dict[str, str]:
         "ffmpeg": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
         "platform": platform.platform(),
     }
-
-
-def prepare_out_dir(out_dir: Path) -> None:
-    """Create the output folder or raise OutputError naming it and the reason."""
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        probe = out_dir / ".vtrack-write-test"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        raise OutputError(f"{out_dir}: cannot write output ({exc.strerror or exc})") from None
 
 
 def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
@@ -248,7 +245,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     """
     stages = request.config.build()
     pipeline = Pipeline(stages, seed=request.seed)
-    prepare_out_dir(request.out_dir)
+    prepare_output_dir(request.out_dir)
     # Multi-target ground truth (MOTChallenge) is read by the MOT metrics at the end.
     gt = mot_gt = None
     if request.gt_path is not None and pipeline.multi_target:
@@ -299,7 +296,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
                         csv.write(row)
                     if video is not None and annotator is not None:
                         assert result.frame is not None
-                        video.write(result.frame.i420(), lambda planes, r=result: annotator.draw(
+                        video.write(result.frame, lambda planes, r=result: annotator.draw(
                             planes, r), time_s=result.time_s)
                     if result.state in states:
                         states[result.state] += 1

@@ -10,23 +10,14 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from vtrack.frame import i420_planes
+
 #: Counter-clockwise quarter turns (degrees) -> ``cv2.rotate`` code.
 ROTATE_CODES = {
     90: cv2.ROTATE_90_COUNTERCLOCKWISE,
     180: cv2.ROTATE_180,
     270: cv2.ROTATE_90_CLOCKWISE,
 }
-
-
-def i420_planes(buffer: np.ndarray, width: int, height: int) -> tuple[np.ndarray, ...]:
-    """Writable, contiguous views ``(y, u, v)`` of an I420 buffer (no copy)."""
-    flat = buffer.reshape(-1)
-    luma = width * height
-    quarter = luma // 4
-    y = flat[:luma].reshape(height, width)
-    u = flat[luma : luma + quarter].reshape(height // 2, width // 2)
-    v = flat[luma + quarter : luma + 2 * quarter].reshape(height // 2, width // 2)
-    return y, u, v
 
 
 def rotate_i420(buffer: np.ndarray, width: int, height: int, degrees: int) -> np.ndarray:
