@@ -11,13 +11,12 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
 import numpy as np
 
 from vtrack.errors import OutputError
-from vtrack.io.files import os_reason, temp_path
+from vtrack.io.files import Closing, os_reason, temp_path
 
 #: Decimals of float columns: pixels to a thousandth, times/scores/overlaps to 4 places.
 DECIMALS: Mapping[str, int] = {"time_s": 4, "score": 4, "overlap": 4, "conf": 4}
@@ -36,7 +35,7 @@ def format_cell(value: Any, decimals: int = DEFAULT_DECIMALS) -> str:
     return str(value)
 
 
-class CsvWriter:
+class CsvWriter(Closing):
     """Write a header and rows to ``path``; each row is flushed as it is written."""
 
     def __init__(
@@ -77,13 +76,3 @@ class CsvWriter:
         except OSError as exc:
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
 
-    def __enter__(self) -> CsvWriter:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()

@@ -9,8 +9,19 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
+from typing import Self
 
 from vtrack.errors import InputError, OutputError
+
+
+class Closing:
+    """``with`` support for anything with a ``close()``: closes it however the block ends."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()  # type: ignore[attr-defined]
 
 
 def os_reason(exc: BaseException) -> str:

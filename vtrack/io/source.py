@@ -11,10 +11,10 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
-from types import TracebackType
 from typing import Any, ClassVar, Literal
 
 from vtrack.frame import Frame
+from vtrack.io.files import Closing
 from vtrack.io.threads import Prefetcher
 
 InputKind = Literal["video", "images", "raw"]
@@ -47,7 +47,7 @@ class InputInfo:
         return asdict(self)
 
 
-class Source(ABC):
+class Source(Closing, ABC):
     """An opened input: ``info``, one pass over its frames in order, ``close()``.
 
     Frames are decoded ``depth`` frames ahead in a background thread. A source can be iterated
@@ -91,13 +91,3 @@ class Source(ABC):
         if finished:  # else the reader is stuck in a blocking read and still owns the file
             self._release()
 
-    def __enter__(self) -> Source:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()

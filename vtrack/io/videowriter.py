@@ -19,7 +19,6 @@ import threading
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
-from types import TracebackType
 
 import av
 import cv2
@@ -28,7 +27,7 @@ import numpy as np
 from vtrack.errors import ConfigError, OutputError
 from vtrack.frame import Frame, I420Frame
 from vtrack.geometry import Window
-from vtrack.io.files import os_reason, remove_quietly, temp_path
+from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
 
 #: Clock of the output timestamps: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
@@ -57,7 +56,7 @@ class _Slot:
         return frame
 
 
-class VideoWriter:
+class VideoWriter(Closing):
     """Encode I420 pictures to an H.264 MP4 at ``path`` (yuv420p, ``preset``, ``crf``).
 
     ``width`` and ``height`` are the input's; yuv420p needs even sizes, so an odd last row or
@@ -230,13 +229,3 @@ class VideoWriter:
     def frames_written(self) -> int:
         return self._frames
 
-    def __enter__(self) -> VideoWriter:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
