@@ -69,8 +69,9 @@ def transcode(clip: Path, preset: str) -> float:
             out.thread_type = "FRAME"
             started = time.perf_counter()
             n = 0
+            tick = 1 / stream.average_rate
             for frame in source.decode(stream):
-                frame.pts = None
+                frame.pts, frame.time_base = n, tick  # restamp as the encoder's 1/fps ticks
                 for packet in out.encode(frame):
                     sink.mux(packet)
                 n += 1

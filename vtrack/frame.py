@@ -95,40 +95,55 @@ class GrayFrame(Frame):
 
 
 class I420Frame(Frame):
-    """A frame held as I420 planes (decoded yuv420p video, raw yuv420p input).
+    """A frame held as its Y, U and V planes (decoded yuv420p video, raw yuv420p input).
 
-    ``planes`` is the ``(h * 3 // 2, w)`` array PyAV's ``to_ndarray(format="yuv420p")`` returns:
-    the Y plane, then U and V each ``(h / 2, w / 2)`` laid out row after row.
+    Build it from one packed ``(h * 3 // 2, w)`` I420 array (PyAV's ``to_ndarray()`` layout, raw
+    yuv420p input), or with :meth:`from_planes` from three plane arrays, which may be strided
+    views of a decoder's own buffers: nothing is copied until a window is asked for.
     """
 
-    __slots__ = ("_planes",)
+    __slots__ = ("y", "u", "v")
 
     def __init__(self, index: int, time_s: float, planes: np.ndarray) -> None:
-        super().__init__(index, time_s, planes.shape[1], planes.shape[0] * 2 // 3)
-        self._planes = planes
+        width, height = planes.shape[1], planes.shape[0] * 2 // 3
+        super().__init__(index, time_s, width, height)
+        self.y, self.u, self.v = i420_planes(planes, width, height)
+
+    @classmethod
+    def from_planes(cls, index: int, time_s: float, y: np.ndarray, u: np.ndarray,
+                    v: np.ndarray) -> I420Frame:
+        """A frame over existing planes (``y`` is (h, w), ``u`` and ``v`` (h/2, w/2)); no copy."""
+        frame = cls.__new__(cls)
+        Frame.__init__(frame, index, time_s, y.shape[1], y.shape[0])
+        frame.y, frame.u, frame.v = y, u, v
+        return frame
 
     def bgr(self, window: Window | None = None) -> np.ndarray:
         if window is None:
-            return cv2.cvtColor(self._planes, cv2.COLOR_YUV2BGR_I420)
+            return cv2.cvtColor(self.i420(), cv2.COLOR_YUV2BGR_I420)
         # Convert an even-aligned window on its own, then trim it to the one asked for.
         ex0, ey0 = window.x0 & ~1, window.y0 & ~1
         ex1 = min(window.x1 + (window.x1 & 1), self.width)
         ey1 = min(window.y1 + (window.y1 & 1), self.height)
         ew, eh = ex1 - ex0, ey1 - ey0
-        _, u, v = i420_planes(self._planes, self.width, self.height)
-        cu = u[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
-        cv = v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         packed = np.empty((eh * 3 // 2, ew), np.uint8)
-        packed[:eh] = self._planes[ey0:ey1, ex0:ex1]  # luma rows come first
-        _, pu, pv = i420_planes(packed, ew, eh)
-        pu[:] = cu
-        pv[:] = cv
+        py, pu, pv = i420_planes(packed, ew, eh)
+        py[:] = self.y[ey0:ey1, ex0:ex1]
+        pu[:] = self.u[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
+        pv[:] = self.v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
         return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
 
     def gray(self, window: Window | None = None) -> np.ndarray:
-        luma = self._planes[: self.height]
-        return luma if window is None else luma[window.slices]
+        return self.y if window is None else self.y[window.slices]
+
+    def copy_planes_into(self, buffer: np.ndarray) -> None:
+        """Copy the picture into a packed I420 ``buffer`` of the same size."""
+        for target, plane in zip(i420_planes(buffer, self.width, self.height),
+                                 (self.y, self.u, self.v), strict=True):
+            np.copyto(target, plane)
 
     def i420(self) -> np.ndarray:
-        return self._planes
+        packed = np.empty((self.height * 3 // 2, self.width), np.uint8)
+        self.copy_planes_into(packed)
+        return packed

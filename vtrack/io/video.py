@@ -19,6 +19,7 @@ from pathlib import Path
 
 import av
 import cv2
+import numpy as np
 
 from vtrack.errors import InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, I420Frame
@@ -32,6 +33,15 @@ I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
 _END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
+
+
+def plane_views(frame: av.VideoFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Y, U, V planes of a decoded yuv420p frame as numpy views (no copy)."""
+    views = []
+    for plane in frame.planes:
+        rows = np.frombuffer(plane, np.uint8)[: plane.line_size * plane.height]
+        views.append(rows.reshape(plane.height, plane.line_size)[:, : plane.width])
+    return views[0], views[1], views[2]
 
 
 def _quarter_turns(degrees: float) -> int:
@@ -198,12 +208,14 @@ class VideoSource(Source):
                 t = decoded.time
                 tail.add(t, decoded.is_corrupt)
                 time_s = index / fps if t is None or t0 is None else t - t0
-                if even and decoded.format.name in I420_FORMATS:
-                    planes = decoded.to_ndarray()
-                    if self._rotation:
-                        planes = rotate_i420(planes, decoded.width, decoded.height,
-                                             self._rotation)
+                if even and decoded.format.name in I420_FORMATS and self._rotation:
+                    planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height,
+                                         self._rotation)
                     yield I420Frame(index, time_s, planes)
+                elif even and decoded.format.name in I420_FORMATS:
+                    # Views of the decoder's own planes: no 3 MB copy per 1080p frame. Reading
+                    # them is safe; the buffers live as long as the views (PyAV refcounts them).
+                    yield I420Frame.from_planes(index, time_s, *plane_views(decoded))
                 else:
                     bgr = decoded.to_ndarray(format="bgr24")
                     if self._rotation:

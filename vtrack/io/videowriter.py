@@ -156,7 +156,7 @@ class VideoWriter(Closing):
             np.copyto(buffer, image)
         elif isinstance(image, I420Frame) and (image.width, image.height) == (
                 self.width, self.height):
-            np.copyto(buffer, image.i420())
+            image.copy_planes_into(buffer)
         else:  # BGR/grey pictures convert straight into the buffer; odd sizes lose a row/column
             window = Window(0, 0, self.width, self.height)
             cv2.cvtColor(image.bgr(window), cv2.COLOR_BGR2YUV_I420, dst=buffer)
