@@ -122,7 +122,7 @@ def build_report(results: Sequence[Path], out_dir: Path, gt: Path | None = None,
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]
     multi = [r for r in runs if r.multi_target]
-    unscored = [r for r in single if r.scores is None]
+    unscored = [r for r in single if r.overlaps is None]  # (not: failed before frame 1)
     if unscored:
         warnings.append(f"{len(unscored)} single-target run(s) have no ground truth; give "
                         "--gt FILE to score runs of one input")

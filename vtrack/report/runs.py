@@ -86,8 +86,9 @@ class RunResult:
 
     @cached_property
     def scores(self) -> Scores | None:
-        """OTB scores, or None without ground truth (and for multi-target runs)."""
-        if self.overlaps is None or self.errors is None:
+        """OTB scores, or None without ground truth, for multi-target runs and for runs that
+        stopped before their first frame."""
+        if not self.overlaps or self.errors is None:
             return None
         return Scores.of(self.overlaps, self.errors)
 
