@@ -29,6 +29,13 @@ import numpy as np
 Point = tuple[float, float]
 
 
+def _is_diagonal(S: np.ndarray) -> bool:
+    """Whether the square matrix ``S`` has only zeros off its diagonal (checked on Python floats:
+    cheaper than NumPy calls on a 2 x 2)."""
+    rows = S.tolist()
+    return all(value == 0.0 for i, row in enumerate(rows) for j, value in enumerate(row) if i != j)
+
+
 class KalmanFilter:
     """A linear Kalman filter ``x' = F x + B u + w``, ``z = H x + v`` (``w ~ Q``, ``v ~ R``).
 
@@ -77,7 +84,11 @@ class KalmanFilter:
         ``P = (I - K H) P``.
         """
         PHt = self.P @ self.H.T
-        gain = PHt @ np.linalg.inv(self.H @ PHt + self.R)
+        S = self.H @ PHt + self.R
+        # In the three models the measured coordinates are independent (per-axis blocks,
+        # diagonal R), so S is diagonal and S^-1 is the reciprocal of its diagonal: the same
+        # numbers as np.linalg.inv, without a general inversion every frame.
+        gain = PHt * (1.0 / np.diagonal(S)) if _is_diagonal(S) else PHt @ np.linalg.inv(S)
         self.x = self.x + gain @ (np.asarray(z, np.float64) - self.H @ self.x)
         self.P = self.P - gain @ self.H @ self.P
         return self.x

@@ -27,7 +27,8 @@ def format_cell(value: Any, decimals: int = DEFAULT_DECIMALS) -> str:
     """One CSV cell: None and non-finite floats -> empty, floats rounded without trailing zeros."""
     if value is None:
         return ""
-    if isinstance(value, float | np.floating):
+    # plain float first: most cells are floats (np.float64 is one), ints and strings are not
+    if isinstance(value, float) or isinstance(value, np.floating):  # noqa: SIM101
         if not math.isfinite(value):
             return ""
         text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")

@@ -25,7 +25,6 @@ Pipeline contract of stage ``hue``:
 from __future__ import annotations
 
 import cv2
-import numpy as np
 
 from vtrack.geometry import Box, Window
 from vtrack.params import Param
@@ -116,16 +115,16 @@ class Hue(Stage):
         # S0 eq. 1: H from the piecewise RGB formula, 0..360 degrees scaled to 0..255 (HSV_FULL)
         hsv = cv2.cvtColor(frame.bgr(window), _CONVERSION[self.hue_scale])
         ctx.window = window
-        ctx.feature = cv2.extractChannel(hsv, 0)
+        if masked:
+            # One split gives the hue and the two planes the mask tests (cheaper than
+            # extractChannel + a 3-channel inRange): 255 where S >= sat_min and V >= val_min.
+            hue, sat, val = cv2.split(hsv)
+            mask = cv2.compare(sat, self.sat_min, cv2.CMP_GE)
+            cv2.bitwise_and(mask, cv2.compare(val, self.val_min, cv2.CMP_GE), dst=mask)
+        else:
+            hue, mask = cv2.extractChannel(hsv, 0), None
+        ctx.feature = hue
         ctx.memory["search_box"] = center
         ctx.memory["feature_levels"] = HUE_LEVELS[self.hue_scale]
-        ctx.memory["feature_mask"] = (
-            cv2.inRange(
-                hsv,
-                np.array((0, self.sat_min, self.val_min), np.uint8),
-                np.array((255, 255, 255), np.uint8),
-            )
-            if masked
-            else None
-        )
+        ctx.memory["feature_mask"] = mask
         ctx.overlays.append(("window", window.as_box()))
