@@ -38,7 +38,7 @@ from vtrack.annotate import Annotator
 from vtrack.config import Config
 from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
-from vtrack.evaluate.metrics import frame_scores, summarize
+from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import Box
 from vtrack.io import (
@@ -210,8 +210,8 @@ class _SingleTargetRows:
         self.boxes.append(box)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
-            overlaps, errors = frame_scores([box], [self.gt[result.index]])
-            overlap, error = overlaps[0], _fmt(errors[0])
+            overlap, error = score_frame(box, self.gt[result.index])
+            error = _fmt(error)
         geometry = [None] * 6 if box is None else [box.x, box.y, box.w, box.h, box.cx, box.cy]
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
                overlap, error]

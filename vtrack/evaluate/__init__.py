@@ -15,6 +15,7 @@ from vtrack.evaluate.metrics import (
     mean_overlap,
     precision_at,
     precision_curve,
+    score_frame,
     success_curve,
     summarize,
 )
@@ -33,6 +34,7 @@ __all__ = [
     "read_boxes",
     "read_mot",
     "read_mot_detections",
+    "score_frame",
     "success_curve",
     "summarize",
 ]

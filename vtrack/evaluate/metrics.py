@@ -49,7 +49,8 @@ class Summary(TypedDict):
     mean_center_error: float | None
 
 
-def _score(pred: Box | None, gt: Box | None) -> tuple[float | None, float | None]:
+def score_frame(pred: Box | None, gt: Box | None) -> tuple[float | None, float | None]:
+    """One frame's ``(overlap, centre_error)`` by the rules of :func:`frame_scores`."""
     if gt is None or not gt.is_valid():
         return None, None
     if pred is None or not pred.is_valid():
@@ -68,7 +69,7 @@ def frame_scores(
     target is present scores IoU 0 and centre error ``inf``.
     """
     padded = list(gt[: len(pred)]) + [None] * (len(pred) - len(gt))
-    scores = [_score(p, g) for p, g in zip(pred, padded, strict=True)]
+    scores = [score_frame(p, g) for p, g in zip(pred, padded, strict=True)]
     return [s[0] for s in scores], [s[1] for s in scores]
 
 

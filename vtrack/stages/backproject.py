@@ -31,6 +31,7 @@ import numpy as np
 
 from vtrack.errors import InputError
 from vtrack.geometry import Box, Window
+from vtrack.histograms import hue_histogram
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -53,18 +54,6 @@ def box_mean(image: np.ndarray, window: Window, box: Box) -> float:
     """Mean of ``image`` (an image of ``window``) over the box's pixels inside it; 0 if none."""
     part = box_slices(window, box)
     return 0.0 if part is None else float(cv2.mean(image[part])[0])
-
-
-def hue_histogram(
-    feature: np.ndarray, mask: np.ndarray | None, bins: int, levels: int
-) -> np.ndarray:
-    """Counts of the feature values ``0 .. levels - 1`` in ``bins`` equal bins (S0 eq. 3).
-
-    Only pixels where ``mask`` is non-zero are counted (all of them when ``mask`` is None).
-    Returns a float32 array of length ``bins``.
-    """
-    # S0 eq. 3: histogram[hue] = histogram[hue] + 1 for every pixel of the box
-    return cv2.calcHist([feature], [0], mask, [bins], [0, levels]).ravel()
 
 
 def bp_mass(ctx: TrackContext, box: Box) -> float:

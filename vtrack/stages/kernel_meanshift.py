@@ -47,9 +47,9 @@ import numpy as np
 from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.histograms import bhattacharyya
 from vtrack.params import Param
 from vtrack.stages.base import OCCLUDED, TRACKING, Stage, TrackContext, register
-from vtrack.stages.particle import bhattacharyya
 
 ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 

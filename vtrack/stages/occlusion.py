@@ -44,8 +44,9 @@ import cv2
 import numpy as np
 
 from vtrack.geometry import Box, Window
+from vtrack.histograms import bhattacharyya, hue_histogram
 from vtrack.params import Param
-from vtrack.stages.backproject import box_slices, bp_mass, hue_histogram
+from vtrack.stages.backproject import box_slices, bp_mass
 from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
 
 
@@ -64,12 +65,6 @@ def best_box(likelihood: np.ndarray, window: Window, target: Box) -> Box:
     return Box.from_center(
         window.x0 + int(left) + w / 2.0, window.y0 + int(top) + h / 2.0, target.w, target.h
     )
-
-
-def bhattacharyya(p: np.ndarray, q: np.ndarray) -> float:
-    """``sum_u sqrt(p_u q_u)`` of two histograms, each normalised to sum 1 (0 if one is empty)."""
-    total = float(p.sum()) * float(q.sum())
-    return float(np.sqrt(p * q).sum() / np.sqrt(total)) if total > 0 else 0.0
 
 
 @register

@@ -33,33 +33,12 @@ import numpy as np
 from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.histograms import bhattacharyya_rows, hue_histogram
 from vtrack.params import Param
 from vtrack.stages.base import LOST, TRACKING, Stage, TrackContext, register
 
 #: Levels of the 8-bit hue of ``COLOR_BGR2HSV_FULL`` (0..255 spans 0..360 degrees).
 HUE_LEVELS = 256
-
-
-def hue_histogram(hsv: np.ndarray, bins: int) -> np.ndarray:
-    """Counts of the hue channel of a ``COLOR_BGR2HSV_FULL`` image in ``bins`` equal bins.
-
-    Bin ``u`` holds the hue values ``v`` with ``v * bins // 256 == u``.
-    """
-    counts = cv2.calcHist([hsv], [0], None, [bins], [0, HUE_LEVELS])
-    return counts.ravel().astype(np.float64)
-
-
-def bhattacharyya(p: np.ndarray, q: np.ndarray) -> float:
-    """Bhattacharyya coefficient ``sum_u sqrt(p_u q_u)`` of two histograms, each normalised to
-    sum 1 here; 1.0 means identical distributions, 0.0 no common bin (or an empty histogram)."""
-    return float(bhattacharyya_rows(p[np.newaxis], q)[0])
-
-
-def bhattacharyya_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """:func:`bhattacharyya` of each row of ``p`` (shape (n, bins)) with ``q``, at once."""
-    totals = np.sqrt(p.sum(axis=1) * q.sum())
-    overlap = np.sqrt(p * q).sum(axis=1)
-    return np.divide(overlap, totals, out=np.zeros_like(overlap), where=totals > 0)
 
 
 def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
@@ -171,7 +150,8 @@ class ParticleFilter(Stage):
                 f"{frame.width}x{frame.height} frame"
             )
         # S1 item 1: target feature = hue histogram of the first frame's box.
-        self._target = hue_histogram(hue_windows(frame, [window])[0], self.bins)
+        first = hue_windows(frame, [window])[0]
+        self._target = hue_histogram(first, None, self.bins, HUE_LEVELS).astype(np.float64)
         # S1 item 3: q[H] per 8-bit hue value, for the centroid weights (cv2.LUT table).
         bin_of_hue = np.arange(HUE_LEVELS) * self.bins // HUE_LEVELS
         self._q_of_hue = (self._target / self._target.sum())[bin_of_hue].astype(np.float32)
@@ -195,7 +175,8 @@ class ParticleFilter(Stage):
         windows, near = self._scatter(ctx)
         hsvs = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
         # S1 items 3-4: each particle's hue histogram and its Bhattacharyya weight.
-        histograms = np.array([hue_histogram(hsv, self.bins) for hsv in hsvs])
+        histograms = np.array([hue_histogram(hsv, None, self.bins, HUE_LEVELS) for hsv in hsvs],
+                              np.float64)
         weights = bhattacharyya_rows(histograms, self._target)
         best = int(np.argmax(weights))
         weight = float(weights[best])
