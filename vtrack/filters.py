@@ -17,7 +17,8 @@ is ``I2 (x) M`` for the per-axis ``M``, so the numbers are exactly those of two 
 filters, at half the Python overhead.
 
 Time is counted in ``dt`` units; with ``dt = 1`` (the documents' frame step) velocities are in
-pixels per frame.
+pixels per frame. :func:`transition` gives a model's matrices for another step, so a filter can
+follow the actual time between frames (``filter.F, filter.B = transition(...)``).
 """
 
 from __future__ import annotations
@@ -124,7 +125,7 @@ def constant_velocity(
     S0 eq. 11, 13: ``Q = q I`` and ``R = r`` (the paper: ``Q = I``, ``R = 1``). The initial
     covariance is not given: ``P0 = p0 I`` (large, so the first measurements dominate).
     """
-    F = np.array([[1.0, dt], [0.0, 1.0]])
+    F = _axis_transition("cv", dt)
     H = np.array([[1.0, 0.0]])
     x, y = point
     return _per_axis(F, H, q * np.eye(2), r, p0 * np.eye(2), np.array([x, 0.0]),
@@ -149,7 +150,7 @@ def constant_acceleration(
     if len(points) != 3:
         raise ValueError(f"constant_acceleration needs the first three points, got {len(points)}")
     T = dt
-    F = np.array([[1.0, T, T * T / 2 if kinematic else T * T], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
+    F = _axis_transition("ca", T, kinematic)
     H = np.array([[1.0, 0.0, 0.0]])
     W = np.diag([0.0, 0.0, q])
     velocity = [1 / (2 * T), -4 / (2 * T), 3 / (2 * T)] if kinematic else [0.0, -1 / T, 1 / T]
@@ -172,11 +173,32 @@ def gravity(
     ``(x, y)``. S4 eq. 13: ``P(1) = p0 I`` (the paper: 100 I). Q and R are not given in the
     paper: ``Q = q I``, ``R = r I``.
     """
-    A = np.eye(4)
-    A[0, 2] = A[1, 3] = dt
+    A, B = transition("gravity", dt)
     H = np.eye(2, 4)
     x, y = point
     return KalmanFilter(
         F=A, H=H, Q=q * np.eye(4), R=r * np.eye(2), x=np.array([x, y, 0.0, 0.0]),
-        P=p0 * np.eye(4), B=np.array([[0.0], [0.0], [0.0], [dt]]), u=np.array([g]),
+        P=p0 * np.eye(4), B=B, u=np.array([g]),
     )
+
+
+
+def _axis_transition(model: str, dt: float, kinematic: bool = False) -> np.ndarray:
+    """One axis's state transition for a step of ``dt``: S0 eq. 8 (``cv``), S2 eq. 14 (``ca``)."""
+    if model == "cv":
+        return np.array([[1.0, dt], [0.0, 1.0]])
+    square = dt * dt / 2 if kinematic else dt * dt  # S2 eq. 14 prints T^2
+    return np.array([[1.0, dt, square], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+
+
+def transition(
+    model: str, dt: float, kinematic: bool = False
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The state transition ``F`` and control matrix ``B`` (None without one) of the filter that
+    :func:`constant_velocity` (``"cv"``), :func:`constant_acceleration` (``"ca"``) or
+    :func:`gravity` (``"gravity"``) builds, for a step of ``dt``."""
+    if model == "gravity":
+        A = np.eye(4)
+        A[0, 2] = A[1, 3] = dt
+        return A, np.array([[0.0], [0.0], [0.0], [dt]])
+    return np.kron(np.eye(2), _axis_transition(model, dt, kinematic)), None

@@ -13,6 +13,12 @@ The filter math and the three motion models live in :mod:`vtrack.filters`:
   "document"`` starts from ``(w/2, 0, 0, 0)`` (``w`` the image width) corrected by the first
   measurement, ``"first_measurement"`` starts at the first measurement at rest.
 
+The models' time step ``T`` is ``dt`` frames (``timebase = "frame"``, S0 and S4: velocities in
+pixels per frame) or the time between the last two frames' timestamps (``timebase = "seconds"``,
+S2's "time interval between frames": velocities in pixels per second). The next frame's
+interval is not known when it is predicted, so a change of frame rate reaches the model one
+frame late.
+
 Each frame: if ``ctx.measurement`` is a box, the filter is updated with its centre; otherwise it
 coasts. The frame's box is the measurement (``output = "measurement"``: the mean-shift result is
 the position, the filter only places the next window) or the filtered centre (``"filtered"``);
@@ -27,7 +33,14 @@ frame's search started from; empty when there was none).
 
 from __future__ import annotations
 
-from vtrack.filters import KalmanFilter, Point, constant_acceleration, constant_velocity, gravity
+from vtrack.filters import (
+    KalmanFilter,
+    Point,
+    constant_acceleration,
+    constant_velocity,
+    gravity,
+    transition,
+)
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -56,7 +69,16 @@ class Kalman(Stage):
         Param("r", float, 1.0, "measurement noise variance R (S0, S2: 1)", min=1e-9),
         Param("p0", float, 100.0, "initial covariance P0 = p0 I (cv, gravity; S4: 100)",
               min=0.0),
-        Param("dt", float, 1.0, "time step between frames in the models' unit (1 = a frame)",
+        Param(
+            "timebase", str, "frame",
+            "unit of the models' time step T: frame = dt frames per frame (S0, S4); seconds = "
+            "the time between the last two frames from their timestamps, so velocities are in "
+            "pixels per second and T follows a changing frame rate (S2: 'T is the time interval "
+            "between frames')",
+            choices=("frame", "seconds"),
+        ),
+        Param("dt", float, 1.0,
+              "timebase = frame: time step between frames in the models' unit (1 = a frame)",
               min=1e-9),
         Param("kinematic", bool, False,
               "ca: use T^2/2 in A instead of the T^2 printed in S2 eq. 14"),
@@ -79,6 +101,7 @@ class Kalman(Stage):
     q: float
     r: float
     p0: float
+    timebase: str
     dt: float
     kinematic: bool
     g: float
@@ -88,9 +111,16 @@ class Kalman(Stage):
         """Forget any previous run, then take the first frame's box as the first measurement."""
         self._filter: KalmanFilter | None = None
         self._points: list[Point] = []  # ca: positions until the filter can start
+        # T of the models: fixed, or (timebase = seconds) the latest positive interval between
+        # two frames' timestamps, None until there is one. The filter's matrices are for T_filter.
+        self._step: float | None = self.dt if self.timebase == "frame" else None
+        self._filter_step: float | None = None
+        self._last_time: float | None = None
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
+        if self.timebase == "seconds":
+            self._time(ctx.frame.time_s)
         if ctx.prediction is not None:
             ctx.extras["pred_cx"] = ctx.prediction.cx
             ctx.extras["pred_cy"] = ctx.prediction.cy
@@ -102,25 +132,43 @@ class Kalman(Stage):
             ctx.box = box
         elif self._filter is not None and ctx.box is not None:
             ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior
-        if self._filter is None or ctx.box is None:
+        if self._filter is None or ctx.box is None or self._step is None:
             ctx.prediction = None
             return
+        if self._step != self._filter_step:  # timebase = seconds: the frame interval changed
+            self._filter.F, self._filter.B = transition(self.model, self._step, self.kinematic)
+            self._filter_step = self._step
         self._filter.predict()
         ctx.prediction = ctx.box.moved_to(*self._filter.position())
 
+    def _time(self, time_s: float) -> None:
+        """timebase = seconds: take T from this frame's timestamp and the previous one's (an
+        interval that is not positive, from a broken timestamp, keeps the previous T)."""
+        if self._last_time is not None and time_s > self._last_time:
+            self._step = time_s - self._last_time
+        self._last_time = time_s
+
     def _correct(self, point: Point, width: int) -> None:
         """Update the filter with a measured centre, creating it when it does not exist yet."""
+        # Until timebase = seconds has seen two frames T is unknown; cv and gravity start at
+        # rest, where T does not matter, and get their matrices before their first prediction.
+        step = self._step or 1.0
         if self._filter is not None:
             self._filter.update(point)
-        elif self.model == "cv":
-            self._filter = constant_velocity(point, self.q, self.r, self.p0, self.dt)
+            return
+        self._filter_step = self._step
+        if self.model == "cv":
+            self._filter = constant_velocity(point, self.q, self.r, self.p0, step)
         elif self.model == "gravity":
             start = (width / 2.0, 0.0) if self.init == "document" else point
-            self._filter = gravity(start, self.q, self.r, self.p0, self.dt, self.g)
+            self._filter = gravity(start, self.q, self.r, self.p0, step, self.g)
             if self.init == "document":
                 self._filter.update(point)  # S4: X(1) = (w/2, 0, 0, 0), corrected by y(1)
         else:
             self._points.append(point)
-            if len(self._points) == 3:
-                self._filter = constant_acceleration(self._points, self.q, self.r, self.dt,
-                                                     self.kinematic)
+            if len(self._points) < 3:
+                self._filter_step = None
+                return
+            # S2: S3 and V3 from the first three positions, with T the latest interval.
+            self._filter = constant_acceleration(self._points, self.q, self.r, step,
+                                                 self.kinematic)
