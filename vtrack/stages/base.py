@@ -131,6 +131,11 @@ class Stage:
     def step(self, ctx: TrackContext) -> None:
         raise NotImplementedError
 
+    def prepare(self, ctx: TrackContext) -> None:
+        """Called on every frame after the first, before any stage's ``step``, once the new
+        frame is in ``ctx.frame``: a stage whose output for this frame depends on the frame's
+        timestamp (a predictor) can revise it here. Default: nothing."""
+
 
 _REGISTRY: dict[str, type[Stage]] = {}
 

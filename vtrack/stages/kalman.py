@@ -15,9 +15,10 @@ The filter math and the three motion models live in :mod:`vtrack.filters`:
 
 The models' time step ``T`` is ``dt`` frames (``timebase = "frame"``, S0 and S4: velocities in
 pixels per frame) or the time between the last two frames' timestamps (``timebase = "seconds"``,
-S2's "time interval between frames": velocities in pixels per second). The next frame's
-interval is not known when it is predicted, so a change of frame rate reaches the model one
-frame late.
+S2's "time interval between frames": velocities in pixels per second). The next frame is
+predicted with the last interval; when it arrives after another interval (a change of frame
+rate, as in S2's fig. 1 where the sampling drops from 5 to 2 frames per second), the prediction
+is made again for its actual time before any stage uses it (``prepare``).
 
 Each frame: if ``ctx.measurement`` is a box, the filter is updated with its centre; otherwise it
 coasts. The frame's box is the measurement (``output = "measurement"``: the mean-shift result is
@@ -32,6 +33,8 @@ frame's search started from; empty when there was none).
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from vtrack.filters import (
     KalmanFilter,
@@ -116,7 +119,21 @@ class Kalman(Stage):
         self._step: float | None = self.dt if self.timebase == "frame" else None
         self._filter_step: float | None = None
         self._last_time: float | None = None
+        self._posterior: tuple[np.ndarray, np.ndarray] | None = None  # before the last predict
         self.step(ctx)
+
+    def prepare(self, ctx: TrackContext) -> None:
+        """timebase = seconds: if this frame came after another interval than the one its
+        prediction assumed, predict again from the last posterior with the actual interval."""
+        if self.timebase != "seconds" or self._posterior is None or self._last_time is None:
+            return
+        interval = ctx.frame.time_s - self._last_time
+        if interval <= 0 or interval == self._filter_step or ctx.box is None:
+            return
+        assert self._filter is not None  # a posterior exists only once the filter does
+        self._filter.x, self._filter.P = (a.copy() for a in self._posterior)
+        self._predict(interval)
+        ctx.prediction = ctx.box.moved_to(*self._filter.position())
 
     def step(self, ctx: TrackContext) -> None:
         if self.timebase == "seconds":
@@ -135,11 +152,18 @@ class Kalman(Stage):
         if self._filter is None or ctx.box is None or self._step is None:
             ctx.prediction = None
             return
-        if self._step != self._filter_step:  # timebase = seconds: the frame interval changed
-            self._filter.F, self._filter.B = transition(self.model, self._step, self.kinematic)
-            self._filter_step = self._step
-        self._filter.predict()
+        if self.timebase == "seconds":
+            self._posterior = (self._filter.x.copy(), self._filter.P.copy())
+        self._predict(self._step)
         ctx.prediction = ctx.box.moved_to(*self._filter.position())
+
+    def _predict(self, step: float) -> None:
+        """Advance the filter by ``step`` (retiming its matrices when the step changed)."""
+        assert self._filter is not None
+        if step != self._filter_step:  # timebase = seconds: the frame interval changed
+            self._filter.F, self._filter.B = transition(self.model, step, self.kinematic)
+            self._filter_step = step
+        self._filter.predict()
 
     def _time(self, time_s: float) -> None:
         """timebase = seconds: take T from this frame's timestamp and the previous one's (an
