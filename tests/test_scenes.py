@@ -57,8 +57,10 @@ def test_different_seeds_give_different_frames():
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
 def test_every_scenario_renders_with_consistent_truth(name, scene_factory):
-    scene = scene_factory(name, width=160, height=120, frames=60)
-    assert len(scene) == len(scene.boxes) == len(scene.visibility) == len(scene.tracks) == 60
+    # `accelerate` crosses the frame over the clip, so at 160 px it fits 16 frames at most.
+    frames = 16 if name == "accelerate" else 60
+    scene = scene_factory(name, width=160, height=120, frames=frames)
+    assert len(scene) == len(scene.boxes) == len(scene.visibility) == len(scene.tracks) == frames
     first = scene.frame(0)
     assert first.dtype == np.uint8 and first.shape == (120, 160, 3)
     assert all(0.0 <= v <= 1.0 for v in scene.visibility)
@@ -150,6 +152,39 @@ def test_jump_is_larger_than_the_target_and_motion_is_smooth_otherwise(scene_fac
     size = max(scene.boxes[k].w, scene.boxes[k].h)
     assert steps[k - 1] > size
     assert max(steps[: k - 1] + steps[k:]) < 0.25 * size
+
+
+def test_accelerate_speeds_up_at_a_constant_rate_past_the_target_width(scene_factory):
+    scene = scene_factory("accelerate", width=640, frames=25)
+    fast = scene.events["fast"]
+    centres = np.array([centre(b) for b in scene.boxes])
+    steps = np.hypot(*np.diff(centres, axis=0).T)
+    assert np.allclose(np.diff(steps), 2 * steps[0])  # from rest: the same speed-up every frame
+    width = scene.boxes[0].w
+    assert steps[fast - 2] <= width < steps[fast - 1]  # frame `fast` is the first one that far
+    assert len(scene) - fast >= 5
+    assert all(v == 1.0 for v in scene.visibility)  # always fully in the frame
+    for i in (0, fast, len(scene) - 1):  # the pixels follow the truth
+        cx, cy, _ = measured(scene.frame(i), scene.boxes[i])
+        assert math.hypot(cx - scene.boxes[i].cx, cy - scene.boxes[i].cy) < 0.5
+
+
+def test_accelerate_refuses_a_clip_too_long_for_the_frame():
+    with pytest.raises(ConfigError, match="accelerate.*at most 16 frames"):
+        make_scene("accelerate", width=160, height=120, frames=60)
+
+
+def test_cover_hides_the_target_at_once_for_18_frames(scene_factory):
+    scene = scene_factory("cover")
+    start, end = scene.events["occluded"]
+    assert end - start == 18
+    hidden = set(range(start, end))
+    assert all((v == 0.0) == (i in hidden) for i, v in enumerate(scene.visibility))
+    assert all(v in (0.0, 1.0) for v in scene.visibility)  # no partial occlusion
+    for i in (start, end - 1):
+        assert not target_mask(scene.frame(i)).any()
+    steps = np.diff([centre(b) for b in scene.boxes], axis=0)
+    assert np.allclose(steps, steps[0])  # constant velocity through the occlusion
 
 
 def test_scale_doubles_the_target(scene_factory):

@@ -306,6 +306,40 @@ class Pillar:
         image[:, self.x0 : self.x1] = self.texture
 
 
+class Panel:
+    """A flat foreground rectangle ``window`` of one BGR ``colour``, in front only on the frames
+    ``[start, end)`` (absent on the others): something that hides a target at once."""
+
+    track_id = None
+
+    def __init__(self, window: Window, colour: tuple[int, int, int], start: int, end: int) -> None:
+        self.window, self.colour, self.start, self.end = window, colour, start, end
+
+    def _shown(self, index: int) -> bool:
+        return self.start <= index < self.end
+
+    def box(self, index: int) -> Box:
+        return self.window.as_box()
+
+    def region(self, index: int) -> Window:
+        return self.window
+
+    def coverage(self, index: int, region: Window) -> np.ndarray:
+        if not self._shown(index):
+            return np.zeros((region.height, region.width))
+        cols = np.arange(region.x0, region.x1)
+        rows = np.arange(region.y0, region.y1)
+        inside_x = (cols >= self.window.x0) & (cols < self.window.x1)
+        inside_y = (rows >= self.window.y0) & (rows < self.window.y1)
+        return (inside_y[:, None] & inside_x[None, :]).astype(np.float64)
+
+    def draw(self, image: np.ndarray, index: int) -> None:
+        height, width = image.shape[:2]
+        clipped = self.window.as_box().window(width, height)
+        if self._shown(index) and clipped is not None:
+            image[clipped.slices] = self.colour
+
+
 def pillar_texture(
     rng: np.random.Generator, height: int, width: int, grey: float = 92.0
 ) -> np.ndarray:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.errors import ConfigError
+from vtrack.geometry import Window
 from vtrack.scenes.render import (
     CAMERA,
     FLOOR,
@@ -25,6 +26,7 @@ from vtrack.scenes.render import (
     Compositor,
     Ellipse,
     GlowPaint,
+    Panel,
     PanningBackground,
     Pillar,
     SensorNoise,
@@ -178,6 +180,68 @@ def _jump(spec: SceneSpec) -> Scene:
     sprites = [_target(spec, looks, cx, cy, ax, ay)]
     compositor = Compositor(background, sprites, SensorNoise(NOISE_SIGMA), spec.seed)
     return assemble(spec, compositor, lambda truth: {"jump": k})
+
+
+def _accelerate(spec: SceneSpec) -> Scene:
+    motion, looks = spec.rng(0), spec.rng(1)
+    w, h, n = spec.width, spec.height, spec.frames
+    short = min(w, h)
+    # The document's 32x20 target at 240 px; from rest at a constant acceleration, crossing the
+    # frame over the clip, so that its displacement between frames grows by the same amount each
+    # frame until it exceeds its width: a motion the constant-acceleration predictor describes.
+    ax, ay, margin = short / 15, short / 24, 0.05 * short
+    travel = w - 2 * (ax + margin)
+    slope = motion.uniform(-0.15, 0.15)
+    slope = float(np.clip(slope, -(h / 2 - ay - margin) / travel, (h / 2 - ay - margin) / travel))
+    distance = travel * (np.arange(n, dtype=np.float64) / max(n - 1, 1)) ** 2
+    direction = 1.0 if motion.random() < 0.5 else -1.0
+    start = ax + margin if direction > 0 else w - ax - margin
+    cx = start + direction * distance
+    cy = h / 2 + slope * distance
+    steps = np.hypot(np.diff(cx), np.diff(cy))
+    fast = np.flatnonzero(steps > 2 * ax)
+    if fast.size == 0:
+        longest = max(k for k in range(3, n + 1) if travel * (2 * k - 3) / (k - 1) ** 2 > 2 * ax)
+        raise ConfigError(
+            f"scenario 'accelerate' at {w}x{h}: in {n} frames the target never moves more than "
+            f"its width between two frames; ask for at most {longest} frames or a wider frame"
+        )
+    background = _paper(spec, looks)
+    sprites = [_target(spec, looks, cx, cy, ax, ay)]
+    compositor = Compositor(background, sprites, SensorNoise(NOISE_SIGMA), spec.seed)
+    return assemble(spec, compositor, lambda truth: {"fast": int(fast[0]) + 1})
+
+
+def _cover(spec: SceneSpec) -> Scene:
+    motion, looks = spec.rng(0), spec.rng(1)
+    w, h, n = spec.width, spec.height, spec.frames
+    ax, ay = _axes(spec)
+    # Constant velocity across the frame; from mid-clip a flat white panel in front hides the
+    # target at once for HIDDEN_FRAMES frames, with no partial occlusion before or after.
+    x_start, x_end = ax + 0.05 * w + 1, w - ax - 0.05 * w - 1
+    cx = x_start + (x_end - x_start) * _phase(spec)
+    if motion.random() < 0.5:
+        cx = cx[::-1].copy()
+    y0, y1 = motion.uniform(0.4, 0.6, 2) * h
+    cy = y0 + (y1 - y0) * _phase(spec)
+    start = n // 2
+    end = start + HIDDEN_FRAMES
+    # The panel covers the whole hidden path and two target sizes around it, so no window near
+    # the path holds any of the target on those frames.
+    left, right = cx[start:end].min() - 4 * ax, cx[start:end].max() + 4 * ax
+    top, bottom = cy[start:end].min() - 4 * ay, cy[start:end].max() + 4 * ay
+    panel = Window(math.floor(left), math.floor(top), math.ceil(right), math.ceil(bottom))
+    sprites = [
+        _target(spec, looks, cx, cy, ax, ay),
+        Panel(panel, (250, 250, 250), start, end),
+    ]
+
+    def events(truth: Truth) -> dict[str, Any]:
+        in_frame, visible = _fractions(truth, 1)
+        return {"occluded": _first_run((visible == 0.0) & (in_frame > 0.0))}
+
+    compositor = Compositor(_paper(spec, looks), sprites, SensorNoise(NOISE_SIGMA), spec.seed)
+    return assemble(spec, compositor, events)
 
 
 def _scale(spec: SceneSpec) -> Scene:
@@ -377,6 +441,21 @@ SCENARIOS: dict[str, Scenario] = {
             "a displacement of 2.5 target widths between two frames, smooth otherwise",
             '"jump": first frame after the jump',
             _jump,
+        ),
+        Scenario(
+            "accelerate",
+            "speeds up from rest at a constant rate until it moves more than its width a frame",
+            '"fast": first frame more than a target width from the previous one',
+            _accelerate,
+            width=640,
+            frames=25,
+        ),
+        Scenario(
+            "cover",
+            "constant velocity; a flat panel hides the target at once for 18 frames mid-clip",
+            '"occluded": (start, end) frames fully hidden (18; no partial occlusion)',
+            _cover,
+            min_frames=60,
         ),
         Scenario(
             "scale",
