@@ -88,8 +88,9 @@ def load_clip(seq: Sequence) -> Clip:
 
 
 def scene_clip(name: str, seed: int) -> Clip:
-    """The generated scene ``name`` drawn with ``seed`` at 320x240, 150 frames, 30 fps."""
-    scene = make_scene(name, seed=seed, width=320, height=240, frames=150, fps=30)
+    """The generated scene ``name`` drawn with ``seed`` at its default size and length (320x240,
+    150 frames for most; ``accelerate`` 640x240, 25 frames), 30 fps."""
+    scene = make_scene(name, seed=seed, fps=30)
     return Clip(name, list(scene.frames()), scene.boxes)
 
 
