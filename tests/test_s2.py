@@ -180,17 +180,21 @@ def test_rides_through_an_18_frame_sudden_full_occlusion(seed: int) -> None:
     assert back.max() > 0.5, np.round(back, 2)
 
 
-def test_t_in_seconds_does_not_follow_a_curving_target() -> None:
-    # The price of the shipped T in seconds: its nearly constant acceleration falls more than D
-    # behind the curvy path of the `smooth` scene, and the failure logic rejects good mean-shift
-    # results there (on every seed), where T = 1 frame accepts every frame.
+def test_the_shipped_predictor_and_threshold_follow_a_curving_target() -> None:
+    # The stiff predictor of T in seconds lags a curving target by up to ~25 px, mostly inside
+    # the shipped D (0.4 of the box's width + height, 29 px for this 41x31 target): on the
+    # curvy `smooth` scene S2 calls at most a few frames an occlusion (measured 0-3 of 150) and
+    # recovers. A fixed D of 20 px (the document's 30x20 case applied to every size) calls that
+    # lag an occlusion on 19-75 frames and the box drifts off (mean IoU 0.24-0.38 lower).
+    fixed_d = ("kernel_meanshift.distance_unit=px", "kernel_meanshift.distance=20")
     for seed in range(3):
         scene = make_scene("smooth", seed=seed, width=320, height=240, fps=FPS)
-        frames = as_frames(list(scene.frames()))
-        seconds_t = track(frames, scene.boxes[0])
-        frame_t = track(frames, scene.boxes[0], T_ONE_FRAME)
-        assert {r.extras["decision"] for r in frame_t} == {"accept"}
-        assert {r.extras["decision"] for r in seconds_t} != {"accept"}
+        frames = list(scene.as_frames())
+        shipped = track(frames, scene.boxes[0])
+        fixed = track(frames, scene.boxes[0], *fixed_d)
+        assert [r.extras["decision"] for r in shipped].count("occlusion") <= 5
+        assert [r.extras["decision"] for r in fixed].count("occlusion") >= 15
+        assert overlaps(shipped, scene.boxes).mean() > overlaps(fixed, scene.boxes).mean() + 0.15
 
 
 def kalman_predictions(times: list[float], xs: list[float], *settings: str) -> np.ndarray:
@@ -256,12 +260,13 @@ def test_rides_through_an_18_frame_sudden_full_occlusion_with_t_one_frame() -> N
 @pytest.mark.xfail(strict=True, reason=(
     "not reproduced behind a slab, with either reading of T, although the slab's grey is unlike "
     "the target's: for the 10 frames of partial occlusion before the target is fully hidden, "
-    "mean shift follows its visible part and, r staying <= D = 20 px, is accepted and fed to the "
+    "mean shift follows its visible part and, r staying <= D, is accepted and fed to the "
     "predictor (S2 sec. 5 (1); the document has no other test, and does not use rho), which "
     "learns that the target slows down at the slab's edge. With T in seconds the occlusion "
-    "branch is taken on 5 to 15 of the 15 hidden frames and the box coasts too slowly (41 to 65 "
-    "px off on the last hidden frame); with T = 1 frame the prediction stops with the visible "
-    "part (on 3 seeds of 6 the occlusion branch is never taken; 96 to 694 px off). No seed is "
+    "branch is taken on 0 to 15 of the 15 hidden frames (never on 2 seeds of 6: the box stays "
+    "at the edge, on background of the model) and the box ends 41 to 110 px off; with T = 1 "
+    "frame the prediction stops with the visible part (the branch is taken on 0 to 3 frames; "
+    "96 to 134 px off). No seed is "
     "back on the target within 5 frames of its reappearance"))
 @pytest.mark.parametrize("t", ["kalman.timebase=seconds", T_ONE_FRAME])
 def test_rides_through_a_15_frame_full_occlusion_behind_a_slab(t: str) -> None:
@@ -318,7 +323,7 @@ def test_shipped_config_is_the_documented_chain() -> None:
     assert meanshift.settings() == {
         "feature": "gray16", "bins": 16, "kernel": "pyramid", "weights": "ratio",
         "similarity": "intersection", "max_iterations": 20, "epsilon": 1.0, "scale_step": 0.1,
-        "scale_smoothing": 0.1, "failure_logic": True, "distance": 20.0,
+        "scale_smoothing": 0.1, "failure_logic": True, "distance": 0.4, "distance_unit": "box",
         "occluded_update": "prediction",
     }
     assert kalman.settings()["model"] == "ca"

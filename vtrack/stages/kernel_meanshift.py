@@ -142,9 +142,14 @@ class KernelMeanShift(Stage):
         Param("failure_logic", bool, True,
               "compare with the Kalman prediction: accept / fast motion (rerun from the "
               "prediction) / full occlusion (S2 sec. 5)"),
-        Param("distance", float, 20.0,
-              "threshold D in pixels on r = |x_ms - x_pred| + |y_ms - y_pred| (S2 eq. 17)",
+        Param("distance", float, 0.4,
+              "threshold D on r = |x_ms - x_pred| + |y_ms - y_pred| (S2 eq. 17), in "
+              "`distance_unit`s (S2 fig. 1(d): 18 <= D < 23 px for a 30x20 target, 0.4 box)",
               min=0.0),
+        Param("distance_unit", str, "box",
+              "unit of `distance`: box = the current box's width + height (D = 20 px for the "
+              "document's 30x20 target, and in proportion for others), px = pixels",
+              choices=("box", "px")),
         Param("occluded_update", str, "prediction",
               "what the predictor is fed on a full-occlusion frame: prediction = the frame's "
               "position, which is the prediction (S2 sec. 5 (2)(2) with eq. 14: the predictor "
@@ -169,6 +174,7 @@ class KernelMeanShift(Stage):
     scale_smoothing: float
     failure_logic: bool
     distance: float
+    distance_unit: str
     occluded_update: str
 
     def start(self, ctx: TrackContext) -> None:
@@ -200,14 +206,16 @@ class KernelMeanShift(Stage):
         """Track one frame: search from the last position, then the S2 sec. 5 decision."""
         assert ctx.box is not None
         frame, prediction = ctx.frame, ctx.prediction
+        limit = self.distance * sum(self._box_size()) if self.distance_unit == "box" else (
+            self.distance)  # D, in pixels, for the box as it was on the last frame
         found = self._search(frame, ctx.box.cx, ctx.box.cy)
         iterations = found.iterations
         decision = ACCEPT
-        if self.failure_logic and prediction is not None and _r(found, prediction) > self.distance:
+        if self.failure_logic and prediction is not None and _r(found, prediction) > limit:
             # S2 sec. 5 (2): r > D, rerun the search starting at the prediction -> r'
             found = self._search(frame, prediction.cx, prediction.cy)
             iterations += found.iterations
-            decision = FAST_MOTION if _r(found, prediction) <= self.distance else OCCLUSION
+            decision = FAST_MOTION if _r(found, prediction) <= limit else OCCLUSION
         if decision == OCCLUSION:
             # S2 sec. 5 (2)(2): full occlusion, the position is the prediction (the next frame
             # starts there) and the scale is kept. Eq. 14 runs on every frame's position x_(k-1),
