@@ -34,6 +34,8 @@ frame's search started from; empty when there was none).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from vtrack.filters import (
@@ -115,7 +117,8 @@ class Kalman(Stage):
         self._filter: KalmanFilter | None = None
         self._points: list[Point] = []  # ca: positions until the filter can start
         # T of the models: fixed, or (timebase = seconds) the latest positive interval between
-        # two frames' timestamps, None until there is one. The filter's matrices are for T_filter.
+        # two frames' timestamps, None until there is one. The filter's matrices are for
+        # _filter_step.
         self._step: float | None = self.dt if self.timebase == "frame" else None
         self._filter_step: float | None = None
         self._last_time: float | None = None
@@ -128,7 +131,7 @@ class Kalman(Stage):
         if self.timebase != "seconds" or self._posterior is None or self._last_time is None:
             return
         interval = ctx.frame.time_s - self._last_time
-        if interval <= 0 or interval == self._filter_step or ctx.box is None:
+        if interval <= 0 or _same_step(interval, self._filter_step) or ctx.box is None:
             return
         assert self._filter is not None  # a posterior exists only once the filter does
         self._filter.x, self._filter.P = (a.copy() for a in self._posterior)
@@ -160,7 +163,7 @@ class Kalman(Stage):
     def _predict(self, step: float) -> None:
         """Advance the filter by ``step`` (retiming its matrices when the step changed)."""
         assert self._filter is not None
-        if step != self._filter_step:  # timebase = seconds: the frame interval changed
+        if not _same_step(step, self._filter_step):  # timebase = seconds: another interval
             self._filter.F, self._filter.B = transition(self.model, step, self.kinematic)
             self._filter_step = step
         self._filter.predict()
@@ -169,7 +172,9 @@ class Kalman(Stage):
         """timebase = seconds: take T from this frame's timestamp and the previous one's (an
         interval that is not positive, from a broken timestamp, keeps the previous T)."""
         if self._last_time is not None and time_s > self._last_time:
-            self._step = time_s - self._last_time
+            interval = time_s - self._last_time
+            if not _same_step(interval, self._step):
+                self._step = interval
         self._last_time = time_s
 
     def _correct(self, point: Point, width: int) -> None:
@@ -196,3 +201,9 @@ class Kalman(Stage):
             # S2: S3 and V3 from the first three positions, with T the latest interval.
             self._filter = constant_acceleration(self._points, self.q, self.r, step,
                                                  self.kinematic)
+
+
+def _same_step(a: float, b: float | None) -> bool:
+    """Whether two frame intervals are the same up to timestamp rounding (constant frame rate
+    timestamps i / fps differ in their last bits)."""
+    return b is not None and math.isclose(a, b, rel_tol=1e-6)
