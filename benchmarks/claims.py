@@ -5,7 +5,8 @@
 Prints, as Markdown for ``benchmarks/RESULTS.md``:
 
 1. S1's claims (patent CN105869186A): :func:`claims_s1.s1_claims` over ``--seeds`` seeds, its
-   table and verdicts as ``claims_s1.py`` prints them, and one sentence per claim.
+   table and verdicts as ``claims_s1.py`` prints them, and one sentence per claim; then leaving
+   and coming back (:mod:`claims_s1_return`) over the same seeds.
 2. S2's claims (Di & Zhu 2008): :func:`claims_s2.s2_claims` (generated scenes over ``--seeds``
    seeds, real sequences, 1080p cost), its tables, and one sentence per claim. ``claims_s2.py``
    prints no verdicts; the rules used here are :func:`s2_motion_verdict` and
@@ -32,6 +33,7 @@ import statistics
 import sys
 
 import claims_s1
+import claims_s1_return
 import claims_s2
 from claims_s1 import CLAIMED_REDUCTION, EQUAL_WITHIN, claim_1, claim_2, s1_claims, s1_cost
 from claims_s2 import DOCUMENT_COST, TRACKERS, s2_claims
@@ -126,10 +128,14 @@ def s2_sentences(success: list[dict], cost: list[dict], seeds: int) -> list[str]
     real = sorted({r["sequence"] for r in success} - set(claims_s2.SCENES))
     lines = [
         f"- **Fast motion** (follows a jump larger than the target that plain mean shift loses), "
-        f"`jump` scene, 2.5 target widths in one frame, {seeds} seeds: "
+        f"{seeds} seeds: `accelerate` scene (speeds up past its width per frame, which the "
+        f"predictor anticipates): {s2_motion_verdict(success, 'accelerate')}; `jump` scene "
+        f"(2.5 target widths in one frame out of a slow wobble, which no predictor anticipates): "
         f"{s2_motion_verdict(success, 'jump')}.",
-        f"- **Full occlusion** (rides through ~13 hidden frames), `occlusion` scene, >= 18 "
-        f"hidden frames, {seeds} seeds: {s2_motion_verdict(success, 'occlusion')}.",
+        f"- **Full occlusion** (rides through ~13 hidden frames), {seeds} seeds: `cover` scene "
+        f"(hidden at once for 18 frames): {s2_motion_verdict(success, 'cover')}; `occlusion` "
+        f"scene (behind a slab, partly hidden before and after >= 18 hidden frames): "
+        f"{s2_motion_verdict(success, 'occlusion')}.",
         f"- **Cost** (200 us - 1 ms per frame, 32x20 target, DSP): 1080p I420 here "
         f"{s2_cost_verdict(doc)}.",
     ]
@@ -239,6 +245,11 @@ def main() -> None:
     _print(claims_s1.claims_table(rows) + [""] + claims_s1.claims_summary(rows) + [""])
     _print(s1_sentences(rows) + [""])
     _print(claims_s1.cost_table(s1_cost()) + [""])
+    _print(f"S1 leaving and coming back (`leave_return` scene, {args.seeds} seeds; delays: "
+           "median [min..max] frames):\n")
+    returns = claims_s1_return.return_rows(args.seeds)
+    _print(claims_s1_return.return_table(returns) + [""])
+    _print(claims_s1_return.return_sentences(returns) + [""])
 
     _print(f"### S2 claims (Di & Zhu 2008), generated scenes over {args.seeds} seeds\n")
     measured = s2_claims(args.seeds)
