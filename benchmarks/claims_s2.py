@@ -172,7 +172,8 @@ def success_table(rows: list[dict]) -> list[str]:
     tracker ("fail" where the tracker refused the clip, scored 0), then the mean AUC over the
     real sequences."""
     labels = [label for label, _, _ in TRACKERS]
-    lines = ["| sequence | seeds | " + " | ".join(labels) + " |",
+    lines = ["Cells: mean IoU / AUC (OTB success, 21 thresholds).", "",
+             "| sequence | seeds | " + " | ".join(labels) + " |",
              "|---|---:|" + "---:|" * len(labels)]
     sequences = list(dict.fromkeys(row["sequence"] for row in rows))
     for sequence in sequences:
