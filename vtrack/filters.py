@@ -182,7 +182,6 @@ def gravity(
     )
 
 
-
 def _axis_transition(model: str, dt: float, kinematic: bool = False) -> np.ndarray:
     """One axis's state transition for a step of ``dt``: S0 eq. 8 (``cv``), S2 eq. 14 (``ca``)."""
     if model == "cv":

@@ -206,8 +206,9 @@ class KernelMeanShift(Stage):
         """Track one frame: search from the last position, then the S2 sec. 5 decision."""
         assert ctx.box is not None
         frame, prediction = ctx.frame, ctx.prediction
-        limit = self.distance * sum(self._box_size()) if self.distance_unit == "box" else (
-            self.distance)  # D, in pixels, for the box as it was on the last frame
+        limit = self.distance  # D in pixels; in box units, for the box of the last frame
+        if self.distance_unit == "box":
+            limit *= sum(self._box_size())
         found = self._search(frame, ctx.box.cx, ctx.box.cy)
         iterations = found.iterations
         decision = ACCEPT
