@@ -19,6 +19,9 @@ What the document claims and where it is checked here:
   reappears at once (the ``cover`` scene); with T = 1 frame it is not (strict xfail). Behind a
   slab, where partial occlusion comes first, it is reproduced with neither (strict xfail,
   reasons in the tests);
+- the failure logic's threshold D, which the document does not print, is the 20 px of its
+  worked 30x20 case (fig. 1(d)) kept in proportion to the box: a curving target's normal lag
+  behind the predictor stays inside it, where a fixed 20 px calls it an occlusion;
 - scale change (fig. 3(d) shows a zoom out): the box follows a x2 shrink; a x2 growth is not
   followed with the pyramid kernel (strict xfail) but is with the Epanechnikov kernel.
 """
