@@ -130,27 +130,54 @@ def test_leaving_the_frame_is_reported_lost_and_the_return_reacquired(seed: int)
     assert _reacquired(scene, results, back) >= _fully_in_view(scene, back) - 10
 
 
+#: Particles over the whole frame while lost in the re-acquisition test (not the document's 8):
+#: ~1.2% of positions pass on this clip, so a frame finds the target with probability ~54%.
+LOST_PARTICLES = 64
+
+
 @pytest.mark.parametrize("seed", range(5))
-def test_32_particles_reacquire_within_10_frames_of_the_target_being_back_in_view(
+def test_more_lost_particles_reacquire_within_10_frames_of_the_target_being_back_in_view(
     seed: int,
 ) -> None:
-    scene, results = _leave_return(seed, ("particle.particles=32",))
+    # "Back" as the document's test sees it: the weight must reach 0.9 x the weight before the
+    # loss, which a partly visible target cannot (S1 item 6), so count from fully in view.
+    scene, results = _leave_return(seed, (f"particle.lost_particles={LOST_PARTICLES}",))
     _, back = scene.events["leave"]
     assert _reacquired(scene, results, back) <= _fully_in_view(scene, back) + 10
 
 
+def test_lost_particles_only_change_the_search_while_lost() -> None:
+    overrides = ("particle.draw_particles=true",)
+    scene, shipped = _leave_return(0, overrides)
+    _, more = _leave_return(0, (*overrides, f"particle.lost_particles={LOST_PARTICLES}"))
+    first_lost = next(i for i, r in enumerate(shipped) if r.state == LOST)
+
+    def particle_count(result: FrameResult) -> int:
+        return next(len(boxes) for kind, boxes in result.overlays if kind == "particles")
+
+    # Identical up to the loss (same random draws); then every frame after a lost one is
+    # searched with 64 whole-frame particles instead of 8.
+    assert [(r.box, r.state, r.score) for r in more[: first_lost + 1]] == [
+        (r.box, r.state, r.score) for r in shipped[: first_lost + 1]
+    ]
+    expected = [LOST_PARTICLES if before.state == LOST else 8 for before in more[:-1]]
+    assert [particle_count(r) for r in more[1:]] == expected
+    assert LOST_PARTICLES in expected and 8 in expected[first_lost + 1 :]  # lost, then found
+    assert {particle_count(r) for r in shipped[1:]} == {8}
+
+
 @pytest.mark.xfail(
     strict=True,
-    reason="S1's own rule: re-acquisition needs w >= 0.9 x the weight before the loss, i.e. "
-    "most of the target in view, and this clip's target needs ~20 frames to come fully back; "
-    "then only 1.2% of particle positions pass, so 8 particles spread over the frame find it on "
-    "9% of frames (benchmarks/claims_s1_return.py: 13-54 frames after the first frame back)",
+    reason="S1's own search: while lost its 8 particles are scattered uniformly over the frame "
+    "and only ~1.2% of positions pass 0.9 x the weight before the loss, so a frame finds the "
+    "returned target with probability ~9% (expected wait 11 frames; seeds 3 and 4 wait 33 and "
+    "22 frames after it is fully in view; benchmarks/claims_s1_return.py)",
 )
-@pytest.mark.parametrize("seed", range(5))
-def test_document_defaults_reacquire_within_10_frames_of_the_first_frame_back(seed: int) -> None:
-    scene, results = _leave_return(seed)
-    _, back = scene.events["leave"]
-    assert _reacquired(scene, results, back) <= back + 10
+def test_document_defaults_reacquire_within_10_frames_of_the_target_being_back_in_view() -> None:
+    for seed in range(5):
+        scene, results = _leave_return(seed)
+        _, back = scene.events["leave"]
+        assert _reacquired(scene, results, back) <= _fully_in_view(scene, back) + 10
 
 
 def test_smooth_motion_is_tracked_with_a_small_centre_error() -> None:

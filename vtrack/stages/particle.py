@@ -6,7 +6,8 @@ One stage runs the document's whole per-frame loop (ALGORITHMS.md S1 items 1-7; 
 1. the target model is the hue histogram of the first frame's box;
 2. ``particles`` boxes of the target's size are scattered: while tracked, ``near_share`` of them
    around the last position and the rest over the whole frame; while lost, all of them over the
-   whole frame;
+   whole frame (``lost_particles`` of them, when set, instead of ``particles``: not the
+   document's, it shortens the wait for re-acquisition);
 3. each particle's hue pixels give its hue histogram and its centroid weighted by the target
    histogram (CamShift's centroid, ``c = sum (x, y) q[H] / sum q[H]``); only the best
    particle's centroid is ever output, so only that one is computed (the FPGA computes all of
@@ -74,6 +75,16 @@ class ParticleFilter(Stage):
     params = (
         Param("particles", int, 8, "number of particles per frame (S1 embodiment: 8)", min=1),
         Param(
+            "lost_particles",
+            int,
+            0,
+            "particles scattered over the whole frame while lost; 0: as many as `particles` "
+            "(S1). Not the document's: a frame finds the returned target with probability "
+            "1 - (1 - p)^N for N particles, p the share of positions that pass the threshold "
+            "(~1% for a target 1/60 of the frame: 8 particles wait ~11 frames, 64 about 2)",
+            min=0,
+        ),
+        Param(
             "near_share",
             float,
             0.75,
@@ -130,6 +141,7 @@ class ParticleFilter(Stage):
     columns = ("weight_ratio", "reference_weight", "particle_cx", "particle_cy")
 
     particles: int
+    lost_particles: int
     near_share: float
     spread: float
     bins: int
@@ -211,20 +223,23 @@ class ParticleFilter(Stage):
     def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int]:
         """Particle windows of the target's pixel size, inside the frame (S1 item 2).
 
-        Returns the windows and how many of them (the first ones) were scattered near the last
-        position: ``near_share * particles`` rounded to the nearest integer while tracked, none
-        while lost. The box size is rounded to whole pixels.
+        While tracked there are ``particles`` windows and the first ``near_share * particles``
+        (rounded to the nearest integer) are scattered near the last position; while lost there
+        are ``lost_particles`` (or ``particles`` when 0), none near. Returns the windows and how
+        many are near. The box size is rounded to whole pixels.
         """
         frame, rng = ctx.frame, ctx.rng
         assert ctx.box is not None
         pw, ph = self._pixels
         size = np.array([pw, ph], dtype=np.float64)
-        near = round(self.near_share * self.particles) if ctx.state != LOST else 0
+        lost = ctx.state == LOST
+        count = (self.lost_particles or self.particles) if lost else self.particles
+        near = 0 if lost else round(self.near_share * self.particles)
         offsets = rng.uniform(-self.spread, self.spread, (near, 2)) * self._size
         near_corners = np.array([ctx.box.cx, ctx.box.cy]) + offsets - size / 2.0
         # S1 item 2: a few particles (all of them while lost) uniformly over the whole frame.
         room = np.array([frame.width - pw, frame.height - ph], dtype=np.float64)
-        far_corners = rng.uniform(0.0, 1.0, (self.particles - near, 2)) * room
+        far_corners = rng.uniform(0.0, 1.0, (count - near, 2)) * room
         corners = np.clip(np.rint(np.vstack([near_corners, far_corners])), 0, room).astype(int)
         windows = [Window(int(x), int(y), int(x) + pw, int(y) + ph) for x, y in corners]
         return windows, near
