@@ -143,7 +143,9 @@ def test_more_lost_particles_reacquire_within_10_frames_of_the_target_being_back
     # loss, which a partly visible target cannot (S1 item 6), so count from fully in view.
     scene, results = _leave_return(seed, (f"particle.lost_particles={LOST_PARTICLES}",))
     _, back = scene.events["leave"]
-    assert _reacquired(scene, results, back) <= _fully_in_view(scene, back) + 10
+    found = _reacquired(scene, results, back)
+    assert found <= _fully_in_view(scene, back) + 10
+    assert all(r.state == TRACKING for r in results[found:])  # and it stays found
 
 
 def test_lost_particles_only_change_the_search_while_lost() -> None:
