@@ -15,8 +15,10 @@ Prints, as Markdown for ``benchmarks/RESULTS.md``:
    (OTB success, 21 thresholds), precision at 20 px and mean IoU of the shipped ``s0``, ``s1``,
    ``s2`` and ``camshift`` configs, each run by the same code path as ``vtrack run``
    (:func:`common.run_sequence`). S1 is stochastic: its scores are the mean over seeds
-   0 .. ``--accuracy-seeds``-1; the others are deterministic (seed 0). Skipped, with a message,
-   when there is no data folder.
+   0 .. ``--accuracy-seeds``-1; the others are deterministic (seed 0). Then the same for the
+   :data:`OPTIONS` that are not the documents' (S1 with 64 particles while lost, S2 with the
+   Epanechnikov kernel) against their shipped configs. Skipped, with a message, when there is
+   no data folder.
 4. Per-frame cost at 1080p: the generated ``benchmark`` scene (1920x1080, 120 frames, 60 fps)
    converted to I420 frames (how decoded video reaches the pipeline) before anything is timed,
    tracked by each config; microseconds per frame of tracking work per stage as the pipeline
@@ -49,6 +51,12 @@ from vtrack.scenes import make_scene
 
 #: The compared trackers (shipped configs).
 CONFIGS = ("s0", "s1", "s2", "camshift")
+#: Options that are not the documents' (README), each measured against its shipped config:
+#: (label, config, overrides).
+OPTIONS = (
+    ("s1, 64 lost particles", "s1", ("particle.lost_particles=64",)),
+    ("s2, Epanechnikov", "s2", ("kernel_meanshift.kernel=epanechnikov",)),
+)
 #: Mean IoU from which a tracker counts as following the target through a clip (OTB's usual
 #: success overlap); used by the S2 motion/occlusion verdicts.
 FOLLOWS_FROM = 0.5
@@ -151,21 +159,30 @@ def s2_sentences(success: list[dict], cost: list[dict], seeds: int) -> list[str]
 # ------------------------------------------------------------------------------ accuracy
 
 
-def _runs(seq: Sequence, config: str, seeds: int) -> list[RunSummary] | str:
-    """The runs of ``config`` on ``seq`` (one per seed), or why the tracker refused it."""
+def _runs(seq: Sequence, config: str, seeds: int,
+          overrides: tuple[str, ...] = ()) -> list[RunSummary] | str:
+    """The runs of ``config`` (with ``overrides``) on ``seq``, one per seed, or why the tracker
+    refused it."""
     try:
-        runs = [run_sequence(seq, config, seed) for seed in range(seeds)]
+        runs = [run_sequence(seq, config, seed, list(overrides)) for seed in range(seeds)]
     except VtrackError as exc:  # e.g. a hue tracker on grey footage: scores 0
         return str(exc)
     failed = [r.error for r in runs if r.status != "complete"]
     return failed[0] or "incomplete run" if failed else runs
 
 
-def accuracy(accuracy_seeds: int) -> list[str]:
-    """The accuracy table (and a table of lost/occluded frames) on the real sequences."""
+def _seeds(config: str, accuracy_seeds: int) -> int:
+    """S1 is stochastic: the mean of ``accuracy_seeds`` runs; the others are deterministic."""
+    return accuracy_seeds if config == "s1" else 1
+
+
+def accuracy(accuracy_seeds: int) -> tuple[list[str], dict[tuple[str, str], float]]:
+    """The accuracy table (and a table of lost/occluded frames) on the real sequences, and the
+    AUC of each (config, sequence) (0 for a failed run)."""
     sequences = single_target_sequences()
     if not sequences:
-        return ["No benchmark sequences found (../shared/data or $VTRACK_DATA): accuracy skipped."]
+        return ["No benchmark sequences found (../shared/data or $VTRACK_DATA): accuracy "
+                "skipped."], {}
     lines = [
         "| sequence | " + " | ".join(f"{c} AUC | {c} P@20 | {c} mIoU" for c in CONFIGS) + " |",
         "|---|" + "---:|" * (3 * len(CONFIGS)),
@@ -173,23 +190,25 @@ def accuracy(accuracy_seeds: int) -> list[str]:
     lost_lines = ["| sequence | frames | " + " | ".join(f"{c} lost / occluded" for c in CONFIGS)
                   + " |", "|---|---:|" + "---:|" * len(CONFIGS)]
     scores: dict[str, list[tuple[float, float, float]]] = {c: [] for c in CONFIGS}
+    aucs: dict[tuple[str, str], float] = {}
     failures = []
     for seq in sequences:
         cells, lost = [], []
         for config in CONFIGS:
-            runs = _runs(seq, config, accuracy_seeds if config == "s1" else 1)
+            runs = _runs(seq, config, _seeds(config, accuracy_seeds))
             if isinstance(runs, str):
                 failures.append(f"- fail: {seq.name} [{config}]: {runs}")
                 scores[config].append((0.0, 0.0, 0.0))
+                aucs[(config, seq.name)] = 0.0
                 cells += ["fail"] * 3
                 lost.append("fail")
                 continue
             auc, p20, iou = (statistics.mean(getattr(r, key) or 0.0 for r in runs)
                              for key in ("auc", "precision20", "mean_overlap"))
             scores[config].append((auc, p20, iou))
+            aucs[(config, seq.name)] = auc
             cells += [f"{auc:.3f}", f"{p20:.3f}", f"{iou:.3f}"]
-            lost.append(f"{statistics.mean(r.frames_lost for r in runs):.0f} / "
-                        f"{statistics.mean(r.frames_occluded for r in runs):.0f}")
+            lost.append(_lost_occluded(runs))
         lines.append(f"| {seq.name} | " + " | ".join(cells) + " |")
         lost_lines.append(f"| {seq.name} | {len(read_boxes(seq.groundtruth, origin=1))} | "
                           + " | ".join(lost) + " |")
@@ -197,7 +216,39 @@ def accuracy(accuracy_seeds: int) -> list[str]:
              for i in range(3)]
     lines.append("| **mean** (a failed run counts 0) | " + " | ".join(means) + " |")
     return [*lines, "", *failures, "", "Frames with no box claimed (lost) / occluded (box "
-            "coasting on the prediction); S1: mean over seeds:", "", *lost_lines]
+            "coasting on the prediction); S1: mean over seeds:", "", *lost_lines], aucs
+
+
+def _lost_occluded(runs: list[RunSummary]) -> str:
+    return (f"{statistics.mean(r.frames_lost for r in runs):.0f} / "
+            f"{statistics.mean(r.frames_occluded for r in runs):.0f}")
+
+
+def options(accuracy_seeds: int, shipped: dict[tuple[str, str], float]) -> list[str]:
+    """AUC of each of :data:`OPTIONS` against its shipped config (``shipped``: the AUCs of
+    :func:`accuracy`) on every real sequence, with the option's lost / occluded frames."""
+    sequences = single_target_sequences()
+    if not sequences or not shipped:
+        return []
+    lines = ["| sequence | " + " | ".join(f"{config} AUC | {label} AUC | {label} lost / occluded"
+                                          for label, config, _ in OPTIONS) + " |",
+             "|---|" + "---:|" * (3 * len(OPTIONS))]
+    totals: dict[str, list[float]] = {label: [] for label, _, _ in OPTIONS}
+    for seq in sequences:
+        cells = []
+        for label, config, overrides in OPTIONS:
+            runs = _runs(seq, config, _seeds(config, accuracy_seeds), overrides)
+            auc = 0.0 if isinstance(runs, str) else statistics.mean(r.auc or 0.0 for r in runs)
+            totals[label].append(auc)
+            cells += [f"{shipped[(config, seq.name)]:.3f}", f"{auc:.3f}",
+                      "fail" if isinstance(runs, str) else _lost_occluded(runs)]
+        lines.append(f"| {seq.name} | " + " | ".join(cells) + " |")
+    means = []
+    for label, config, _ in OPTIONS:
+        base = statistics.mean(shipped[(config, seq.name)] for seq in sequences)
+        means += [f"**{base:.3f}**", f"**{statistics.mean(totals[label]):.3f}**", ""]
+    lines.append("| **mean** | " + " | ".join(means) + " |")
+    return lines
 
 
 # ---------------------------------------------------------------------------------- cost
@@ -259,7 +310,12 @@ def main() -> None:
     _print([DOCUMENT_COST, ""] + s2_sentences(success, s2_cost, args.seeds) + [""])
 
     _print(f"### Accuracy on the real sequences (S1: mean of {args.accuracy_seeds} seeds)\n")
-    _print(accuracy(args.accuracy_seeds) + [""])
+    table, shipped = accuracy(args.accuracy_seeds)
+    _print(table + [""])
+    if shipped:
+        _print(f"Options that are not the documents' (README; S1: mean of {args.accuracy_seeds} "
+               "seeds):\n")
+        _print(options(args.accuracy_seeds, shipped) + [""])
 
     _print(f"### Cost per frame at 1080p (I420, 120 frames, median of {args.rounds} rounds)\n")
     _print(cost(args.rounds))
