@@ -181,11 +181,15 @@ class Kalman(Stage):
         """Update the filter with a measured centre, creating it when it does not exist yet."""
         # Until timebase = seconds has seen two frames T is unknown; cv and gravity start at
         # rest, where T does not matter, and get their matrices before their first prediction.
-        step = self._step or 1.0
         if self._filter is not None:
             self._filter.update(point)
             return
-        self._filter_step = self._step
+        if self.model == "ca":
+            self._points.append(point)
+            if len(self._points) < 3:
+                return
+        step = self._step or 1.0
+        self._filter_step = self._step  # None: the matrices are retimed before the first predict
         if self.model == "cv":
             self._filter = constant_velocity(point, self.q, self.r, self.p0, step)
         elif self.model == "gravity":
@@ -194,10 +198,6 @@ class Kalman(Stage):
             if self.init == "document":
                 self._filter.update(point)  # S4: X(1) = (w/2, 0, 0, 0), corrected by y(1)
         else:
-            self._points.append(point)
-            if len(self._points) < 3:
-                self._filter_step = None
-                return
             # S2: S3 and V3 from the first three positions, with T the latest interval.
             self._filter = constant_acceleration(self._points, self.q, self.r, step,
                                                  self.kinematic)
