@@ -18,7 +18,7 @@ from vtrack.annotate import (
 from vtrack.geometry import Box, Window
 from vtrack.io.planes import i420_planes, rotate_i420
 from vtrack.pipeline import FrameResult
-from vtrack.stages.base import Track
+from vtrack.stages.base import Track, TrackState, TrackStatus
 
 W, H = 320, 240
 
@@ -33,7 +33,7 @@ GREY = int(blank()[0, 0])  # the background's luma
 BOX = Box(100, 80, 60, 50)
 
 
-def result(index: int = 0, box: Box | None = BOX, state: str = "tracking",
+def result(index: int = 0, box: Box | None = BOX, state: TrackState = TrackState.TRACKING,
            **kwargs) -> FrameResult:
     return FrameResult(index, index / 30, box, state, 1.0, None, **kwargs)
 
@@ -70,14 +70,14 @@ def test_box_and_centre_are_drawn_in_all_planes_and_nothing_else_changes():
 def test_lost_draws_caption_top_right_and_no_box():
     annotator = Annotator(W, H)
     buf = blank()
-    annotator.draw(buf, result(box=None, state="lost"))
+    annotator.draw(buf, result(box=None, state=TrackState.LOST))
     y = planes(buf)[0]
     assert (y[:15, W - 40 :] != GREY).any()  # the caption, top right
     assert (y[:15, :60] == GREY).all()  # nothing top left
     assert (y[30:, :] == GREY).all()  # no box
 
 
-@pytest.mark.parametrize("state", ["tracking", "occluded"])
+@pytest.mark.parametrize("state", [TrackState.TRACKING, TrackState.OCCLUDED])
 def test_state_caption_top_left(state):
     buf = blank()
     Annotator(W, H).draw(buf, result(state=state))
@@ -108,8 +108,8 @@ def test_confirmed_tracks_get_stable_colours_and_ids():
     for i in range(3):
         buf = blank()
         annotator.draw(buf, result(i, box=None, tracks=[
-            Track(3, Box(40 + 5 * i, 40, 30, 60), 0.9, "confirmed"),
-            Track(4, Box(200, 150, 30, 30), 0.2, "tentative"),
+            Track(3, Box(40 + 5 * i, 40, 30, 60), 0.9, TrackStatus.CONFIRMED),
+            Track(4, Box(200, 150, 30, 30), 0.2, TrackStatus.TENTATIVE),
         ]))
     y, u, _ = planes(buf)
     colour = TRACK_PALETTE[3 % len(TRACK_PALETTE)]

@@ -24,7 +24,7 @@ import numpy as np
 from vtrack.geometry import Box, Window
 from vtrack.io.planes import i420_planes
 from vtrack.pipeline import FrameResult
-from vtrack.stages.base import LOST, OCCLUDED
+from vtrack.stages.base import TrackState, TrackStatus
 
 
 class Yuv(NamedTuple):
@@ -182,7 +182,7 @@ class Annotator:
             elif kind == "particles":
                 canvas.dots(_centres(payload), PARTICLES)
         box = result.box
-        colour = OCCLUDED_BOX if result.state == OCCLUDED else TRACKED
+        colour = OCCLUDED_BOX if result.state == TrackState.OCCLUDED else TRACKED
         self.trail.append(_point(box.cx, box.cy) if _drawable(box) else None)
         for run in self._runs(self.trail):
             canvas.polyline(run, colour, max(1, t // 2))
@@ -206,7 +206,7 @@ class Annotator:
     def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> None:
         t = self.thickness
         for track in result.tracks:
-            if track.state != "confirmed" or not _drawable(track.box):
+            if track.state != TrackStatus.CONFIRMED or not _drawable(track.box):
                 continue
             colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
             b = track.box
@@ -226,8 +226,10 @@ class Annotator:
         t = self.thickness
         (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
         pad = 2 * t + 2
-        x0 = canvas.width - w - 2 * pad if state == LOST else 0
-        colour = {LOST: LOST_TEXT, OCCLUDED: OCCLUDED_BOX}.get(state, TRACKED)
+        x0 = canvas.width - w - 2 * pad if state == TrackState.LOST else 0
+        colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
+            state, TRACKED
+        )
         canvas.rectangle((x0, 0), (x0 + w + 2 * pad, h + baseline + 2 * pad), CAPTION_BACKGROUND,
                          -1)
         canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, t)

@@ -51,7 +51,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.pipeline import FrameResult, Pipeline
-from vtrack.stages.base import LOST, OCCLUDED
+from vtrack.stages.base import TrackState, TrackStatus
 
 #: Columns every single-target ``track.csv`` starts with (DESIGN.md contract).
 TRACK_COLUMNS = (
@@ -229,7 +229,7 @@ class _MultiTargetRows:
     def rows(self, result: FrameResult) -> list[list[Any]]:
         rows = []
         for track in result.tracks:
-            if track.state != "confirmed":
+            if track.state != TrackStatus.CONFIRMED:
                 continue
             self.tracks.setdefault(result.index, []).append((track.id, track.box))
             b = track.box
@@ -284,7 +284,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
 
     status, error = STATUS_COMPLETE, None
     failure: Exception | None = None
-    states = {OCCLUDED: 0, LOST: 0}
+    states = {TrackState.OCCLUDED: 0, TrackState.LOST: 0}
     frames = 0
     started = time.perf_counter()
     try:
@@ -324,8 +324,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         frames=frames,
         seconds=seconds,
         fps=frames / seconds if seconds > 0 else 0.0,
-        frames_occluded=states[OCCLUDED],
-        frames_lost=states[LOST],
+        frames_occluded=states[TrackState.OCCLUDED],
+        frames_lost=states[TrackState.LOST],
         error=error,
     )
     if frames == 0 and status == STATUS_COMPLETE:
