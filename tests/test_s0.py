@@ -21,6 +21,7 @@ from vtrack.filters import constant_acceleration, constant_velocity, gravity
 from vtrack.frame import BgrFrame, I420Frame
 from vtrack.geometry import Box, Window, iou
 from vtrack.io import open_source
+from vtrack.overlays import SearchWindow
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import Scene
 from vtrack.stages.backproject import BackProject, box_mean, bp_mass
@@ -171,7 +172,7 @@ def test_hue_stage_converts_only_the_clipped_search_window() -> None:
     expected = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)[5:25, 130:160, 0]
     assert np.array_equal(ctx.feature, expected)
     assert ctx.feature_levels == 256 and ctx.feature_mask is None
-    assert ctx.overlays == [("window", Box(130, 5, 30, 20))]
+    assert ctx.overlays == [SearchWindow(Box(130, 5, 30, 20))]
     ctx.new_frame(ctx.frame)
     ctx.search_growth = 2.0
     Hue(search_scale=2.0).step(ctx)

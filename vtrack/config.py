@@ -78,6 +78,19 @@ class Config:
         return Config(self.name, self.source, self.description, stages)
 
 
+def config_from_resolved(data: dict[str, Any]) -> Config:
+    """The config :meth:`Config.resolved` described (every parameter set explicitly)."""
+    stages = [
+        {"name": stage["name"], **{k: v for k, v in stage.items() if k != "name"}}
+        for stage in data["stages"]
+    ]
+    config = parse_config(
+        {"name": data["name"], "description": data["description"], "stage": stages},
+        str(data["source"]),
+    )
+    return config
+
+
 def shipped_configs() -> dict[str, Path]:
     """The configurations shipped with vtrack, by name."""
     folder = resources.files("vtrack.configs")

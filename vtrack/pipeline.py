@@ -16,6 +16,7 @@ import numpy as np
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
+from vtrack.overlays import Overlay
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 
@@ -31,7 +32,7 @@ class FrameResult:
     prediction: Box | None
     extras: dict[str, Any] = field(default_factory=dict)
     tracks: list[Track] = field(default_factory=list)
-    overlays: list[tuple[str, Any]] = field(default_factory=list)
+    overlays: list[Overlay] = field(default_factory=list)
     #: The frame this result is about (writers take its pixels from here); the pipeline always
     #: sets it, results built by hand (e.g. to test drawing) may leave it out.
     frame: Frame | None = None

@@ -34,6 +34,7 @@ import numpy as np
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.overlays import Overlay
 from vtrack.params import Param
 
 
@@ -140,8 +141,8 @@ class TrackContext:
     tracks: list[Track] = field(default_factory=list)
     #: Measurements from detection stages (multi-target): boxes with extra attributes.
     detections: list[Any] = field(default_factory=list)
-    #: Extra things to draw (e.g. particles): list of (kind, payload) for the annotator.
-    overlays: list[tuple[str, Any]] = field(default_factory=list)
+    #: Extra things to draw (search window, particles) for the annotator.
+    overlays: list[Overlay] = field(default_factory=list)
 
     def new_frame(self, frame: Frame) -> None:
         self.frame = frame

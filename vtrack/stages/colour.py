@@ -13,7 +13,7 @@ Pipeline contract of stage ``hue``:
 - writes ``ctx.window`` (the search window: ``search_scale`` x the target box x
   ``search_growth``, centred on the search centre, clipped to the frame; or the whole frame with
   ``full_frame``), ``ctx.feature`` (uint8 hue of the window, values ``0 .. levels - 1``) and the
-  overlay ``("window", Box)``;
+  overlay ``SearchWindow``;
 - ``ctx.search_box``: the target-sized box this frame's search starts from (the search centre);
 - ``ctx.feature_levels``: how many values the feature takes (256 or 180);
 - ``ctx.feature_mask``: uint8 array of the window's shape, 255 where saturation >= ``sat_min``
@@ -26,6 +26,7 @@ from __future__ import annotations
 import cv2
 
 from vtrack.geometry import Box, Window
+from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -126,4 +127,4 @@ class Hue(Stage):
         ctx.search_box = center
         ctx.feature_levels = HUE_LEVELS[self.hue_scale]
         ctx.feature_mask = mask
-        ctx.overlays.append(("window", window.as_box()))
+        ctx.overlays.append(SearchWindow(window.as_box()))

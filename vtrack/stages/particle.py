@@ -35,6 +35,7 @@ from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya_rows, hue_histogram
+from vtrack.overlays import Particles
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -219,7 +220,7 @@ class ParticleFilter(Stage):
             particle_cy=centre[1],
         )
         if self.draw_particles:
-            ctx.overlays.append(("particles", [w.as_box() for w in windows]))
+            ctx.overlays.append(Particles(tuple(w.as_box() for w in windows)))
 
     def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int]:
         """Particle windows of the target's pixel size, inside the frame (S1 item 2).
