@@ -92,9 +92,11 @@ class MotionModel(ABC):
 
     def transition(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`matrices` for ``dt``; the last step's when ``dt`` equals it up to rounding."""
-        if self._matrices is None or not same_step(dt, self._dt):
-            self._dt, self._matrices = dt, self.matrices(dt)
-        return self._matrices
+        matrices = self._matrices
+        if matrices is None or (dt != self._dt and not same_step(dt, self._dt)):
+            self._dt = dt
+            matrices = self._matrices = self.matrices(dt)
+        return matrices
 
     def predict(self, state: GaussianState, dt: float) -> GaussianState:
         """The state ``dt`` later. S0 eq. 10-11 / S4 eq. 5-6: ``x = F x + B u``,
