@@ -40,7 +40,7 @@ from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
-from vtrack.geometry import Box
+from vtrack.geometry import MIN_BOX_SIDE, Box
 from vtrack.io import (
     CsvWriter,
     RawFormat,
@@ -137,13 +137,20 @@ def versions() -> dict[str, str]:
 
 
 def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
-    if not box.is_valid():
-        raise ConfigError(f"{where}: the box {tuple(box)} is empty (width and height must be > 0)")
-    if box.window(width, height) is None:
+    """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
+    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
+    shown = tuple(float(f"{v:.6g}") for v in box)
+    if not all(math.isfinite(v) for v in box) or box.w <= 0 or box.h <= 0:
+        raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
+    if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
         raise ConfigError(
-            f"{where}: the box {tuple(round(v, 2) for v in box)} lies outside the "
-            f"{width}x{height} frame"
+            f"{where}: the box {shown} is smaller than {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} "
+            "pixels, too small to track"
         )
+    if box.w > width or box.h > height:
+        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame")
+    if box.window(width, height) is None:
+        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")
 
 
 class _AtomicFrames:

@@ -18,6 +18,7 @@ import numpy as np
 
 from vtrack.errors import InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
 from vtrack.io.source import InputInfo, Source
 
@@ -53,6 +54,14 @@ def read_image(path: Path) -> np.ndarray:
     """
     try:
         with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise StopIteration
+            codec = container.streams.video[0].codec_context
+            # Bounded before the decoder allocates the picture (the size is in the header).
+            too_big = codec.width and codec.height and frame_size_problem(codec.width,
+                                                                          codec.height)
+            if too_big:
+                raise InputError(f"{path}: {too_big}")
             picture = next(container.decode(video=0))
             if picture.format.name.startswith(("gray", "ya")):
                 return picture.to_ndarray(format="gray")

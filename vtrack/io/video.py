@@ -23,6 +23,7 @@ import numpy as np
 
 from vtrack.errors import InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, I420Frame
+from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.source import InputInfo, Source
@@ -134,6 +135,10 @@ class VideoSource(Source):
         self._container = container
         self._stream = stream = container.streams.video[0]
         stream.thread_type = "AUTO"
+        # Bounded before the decoder allocates a picture (the size is in the stream header).
+        too_big = frame_size_problem(stream.codec_context.width, stream.codec_context.height)
+        if too_big and stream.codec_context.width and stream.codec_context.height:
+            raise InputError(f"{path}: {too_big}")
         self._decoded = container.decode(stream)
         try:
             self._first = next(self._decoded)

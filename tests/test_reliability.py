@@ -1,0 +1,109 @@
+"""Hostile values and damaged inputs, run as a user runs them (``python -m vtrack`` subprocesses
+on small generated clips): issue 11 items 5, 7, 9 and 11."""
+
+from __future__ import annotations
+
+import struct
+import subprocess
+import zlib
+from pathlib import Path
+
+import pytest
+from test_cli import assert_one_line_error, vtrack
+
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H, FRAMES = 64, 48, 20
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A 64x48 clip of 20 frames and its ground truth."""
+    folder = tmp_path_factory.mktemp("tiny")
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+    clip, gt = folder / "tiny.mp4", folder / "tiny.gt.txt"
+    write_video(scene, clip)
+    write_groundtruth(scene, gt)
+    return clip, gt
+
+
+def refused(result: subprocess.CompletedProcess, *needles: str) -> str:
+    """Exit 2 (refused before tracking) with one error line naming every needle."""
+    line = assert_one_line_error(result, *needles)
+    assert result.returncode == 2, result.stderr.decode()
+    return line
+
+
+# --- item 5: values that passed validation and crashed later ---------------------------------
+
+INIT = "10,10,12,10"
+
+
+@pytest.mark.parametrize(("args", "needles"), [
+    (("--init", "0,0,1e308,1e308"), ("--init", "larger than the 64x48 frame")),
+    (("--init", "0,0,0.001,0.001"), ("--init", "smaller than 4x4 pixels")),
+    (("--init", "0,0,100000,100000", "-c", "s2"), ("--init", "larger than the 64x48 frame")),
+    (("--init", INIT, "--set", "hue.search_scale=1e308"),
+     ("hue", "search_scale", "range 1 to 16")),
+    (("--init", INIT, "--set", "kalman.q=1e308"), ("kalman", "'q'", "range 0 to 1e+06")),
+    (("--init", INIT, "--set", "kalman.q=nan"), ("kalman", "'q'", "finite", "range")),
+    (("--init", INIT, "-c", "camshift", "--set", "meanshift.iterations=2147483648"),
+     ("meanshift", "iterations", "range 1 to 100", "2147483648")),
+    (("--init", INIT, "-c", "s1", "--set", "particle.particles=2147483648"),
+     ("particle", "particles", "range 1 to 1024")),
+    (("--init", INIT, "-c", "s1", "--set", "particle.spread=1e308"),
+     ("particle", "spread", "range 0 to 10")),
+    (("--init", INIT, "-c", "s1", "--set", f"particle.history={2**63}"),
+     ("particle", "history", "range 1 to 1000")),
+    (("-c", "s3", "--set", "mht.initial=1e308"), ("mht", "initial", "range 0 to 1e+06")),
+    (("-c", "s3", "--set", "mht.max_hypotheses=1000000"),
+     ("mht", "max_hypotheses", "range 1 to 64")),
+])
+def test_hostile_values_are_refused_in_one_line(tiny, tmp_path: Path, args, needles) -> None:
+    clip, _ = tiny
+    refused(vtrack("run", str(clip), *args, "--no-video", "-o", str(tmp_path / "o")), *needles)
+    assert not (tmp_path / "o" / "run.json").exists()
+
+
+def test_ground_truth_with_a_huge_first_box_is_refused(tiny, tmp_path: Path) -> None:
+    clip, gt = tiny
+    lines = gt.read_text().splitlines()
+    for first in ("0,0,1e308,1e308", "0,0,500,500", "1,1,2,2"):
+        bad = tmp_path / "bad.txt"
+        bad.write_text("\n".join([first, *lines[1:]]) + "\n")
+        refused(vtrack("run", str(clip), "--gt", str(bad), "-o", str(tmp_path / "o")),
+                "bad.txt")
+    # A damaged box later in the file is refused too (it overflowed the drawing).
+    bad.write_text("\n".join([*lines[:5], "1e308,1e308,1e308,1e308", *lines[6:]]) + "\n")
+    refused(vtrack("run", str(clip), "--gt", str(bad), "-o", str(tmp_path / "o")),
+            "bad.txt", "line 6")
+
+
+def test_raw_frames_too_large_are_refused_before_reading(tmp_path: Path) -> None:
+    result = vtrack("run", "-", "--raw", "100000x100000", "--init", INIT, "-o",
+                    str(tmp_path / "o"), stdin=b"")
+    refused(result, "--raw", "16384x16384")
+
+
+def _png_header_only(path: Path, width: int, height: int) -> None:
+    """A PNG whose header says ``width`` x ``height`` (a few bytes of pixels follow)."""
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                     + chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b""))
+
+
+def test_oversized_image_and_video_are_refused_from_their_header(tmp_path: Path) -> None:
+    folder = tmp_path / "seq" / "img"
+    folder.mkdir(parents=True)
+    _png_header_only(folder / "0001.png", 17000, 8)
+    refused(vtrack("run", str(tmp_path / "seq"), "--init", "1,1,5,5", "-o", str(tmp_path / "a")),
+            "0001.png", "17000x8", "16384x16384")
+    y4m = tmp_path / "wide.y4m"
+    y4m.write_bytes(b"YUV4MPEG2 W17000 H8 F30:1 C420jpeg\nFRAME\n" + bytes(17000 * 12))
+    refused(vtrack("run", str(y4m), "--init", "1,1,5,5", "-o", str(tmp_path / "b")),
+            "wide.y4m", "17000x8", "16384x16384")
