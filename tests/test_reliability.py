@@ -3,6 +3,8 @@ on small generated clips): issue 11 items 5, 7, 9 and 11."""
 
 from __future__ import annotations
 
+import csv
+import json
 import struct
 import subprocess
 import zlib
@@ -11,7 +13,7 @@ from pathlib import Path
 import pytest
 from test_cli import assert_one_line_error, vtrack
 
-from vtrack.scenes import make_scene, write_groundtruth, write_video
+from vtrack.scenes import make_scene, write_clip, write_groundtruth, write_video
 
 W, H, FRAMES = 64, 48, 20
 
@@ -107,3 +109,41 @@ def test_oversized_image_and_video_are_refused_from_their_header(tmp_path: Path)
     y4m.write_bytes(b"YUV4MPEG2 W17000 H8 F30:1 C420jpeg\nFRAME\n" + bytes(17000 * 12))
     refused(vtrack("run", str(y4m), "--init", "1,1,5,5", "-o", str(tmp_path / "b")),
             "wide.y4m", "17000x8", "16384x16384")
+
+
+# --- item 9: --fps ---------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tiny_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The tiny scene as an OTB image folder (img/0001.jpg ... and groundtruth_rect.txt)."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+    out = tmp_path_factory.mktemp("folder") / "seq"
+    write_clip(scene, out, fmt="images")
+    return out
+
+
+@pytest.mark.parametrize("fps", ["0", "-5", "nan", "inf"])
+def test_non_positive_fps_is_refused(tiny, tmp_path: Path, fps: str) -> None:
+    clip, _ = tiny
+    refused(vtrack("run", "-", "--raw", f"{W}x{H}", "--fps", fps, "--init", INIT, "-o",
+                   str(tmp_path / "a"), stdin=bytes(W * H * 3)), "--fps")
+    refused(vtrack("run", str(clip), "--fps", fps, "--init", INIT, "-o", str(tmp_path / "b")),
+            "--fps")
+
+
+def test_fps_sets_the_time_of_image_folder_frames(tiny_folder, tmp_path: Path) -> None:
+    gt = tiny_folder / "groundtruth_rect.txt"
+    result = vtrack("run", str(tiny_folder), "--fps", "8", "--gt", str(gt), "--no-video", "-o",
+                    str(tmp_path / "o"))
+    assert result.returncode == 0, result.stderr.decode()
+    with (tmp_path / "o" / "track.csv").open() as handle:
+        times = [float(row["time_s"]) for row in csv.DictReader(handle)]
+    assert times == pytest.approx([i / 8 for i in range(FRAMES)])
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["input"]["fps"] == 8.0
+
+
+def test_fps_is_refused_for_a_video_file(tiny, tmp_path: Path) -> None:
+    clip, _ = tiny
+    refused(vtrack("run", str(clip), "--fps", "10", "--init", INIT, "-o", str(tmp_path / "o")),
+            "--fps", "tiny.mp4", "timestamps")

@@ -77,6 +77,8 @@ class RunRequest:
     gt_path: Path | None = None
     gt_origin: int = 0
     raw: RawFormat | None = None
+    #: Frame rate of an image folder (None: 30); refused for a video file (raw: in ``raw``).
+    fps: float | None = None
     video: bool = True
     preset: str = "ultrafast"
     crf: int = 23
@@ -272,7 +274,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
             "or --gt FILE"
         )
 
-    source: Source = open_source(request.input, request.raw)
+    source: Source = open_source(request.input, request.raw, fps=request.fps)
     info = source.info
     if init_box is not None:
         _check_init_box(init_box, info.width, info.height, "--init" if request.init_box else

@@ -16,8 +16,8 @@ Every number a stage takes has a declared range, shown after its help below. A v
 or one that is not finite (NaN, inf), is refused before anything runs with one line naming the
 stage, the parameter and the range (exit code 2). Frames are at most
 {MAX_FRAME_SIDE}x{MAX_FRAME_SIDE} pixels (checked from the file's header or `--raw WxH` before a
-frame is allocated). An initial box (`--init` or the first ground-truth box) must be finite, at least
-{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} pixels, no larger than the frame and overlap it.
+frame is allocated). An initial box (`--init` or the first ground-truth box) must be finite,
+at least {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} pixels, no larger than the frame and overlap it.
 
 Per frame, with N the frame's pixels, every config stays within these bounds:
 
