@@ -10,6 +10,8 @@ import subprocess
 import zlib
 from pathlib import Path
 
+import av
+import numpy as np
 import pytest
 from test_cli import assert_one_line_error, vtrack
 
@@ -147,3 +149,63 @@ def test_fps_is_refused_for_a_video_file(tiny, tmp_path: Path) -> None:
     clip, _ = tiny
     refused(vtrack("run", str(clip), "--fps", "10", "--init", INIT, "-o", str(tmp_path / "o")),
             "--fps", "tiny.mp4", "timestamps")
+
+
+# --- item 7: damage in the middle of a file --------------------------------------------------
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_random_bytes_in_the_middle_of_an_mp4_are_skipped(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=2, width=160, height=120, frames=120, fps=30.0)
+    clip, gt = tmp_path / "clip.mp4", tmp_path / "clip.gt.txt"
+    write_video(scene, clip)
+    write_groundtruth(scene, gt)
+    data = bytearray(clip.read_bytes())
+    size = min(20_000, len(data) // 8)  # 20 KB, as reported, or an eighth of a small file
+    middle = len(data) // 2
+    data[middle : middle + size] = np.random.default_rng(0).bytes(size)
+    damaged = tmp_path / "damaged.mp4"
+    damaged.write_bytes(bytes(data))
+
+    result = vtrack("run", str(damaged), "--gt", str(gt), "-o", str(tmp_path / "o"))
+    stderr = result.stderr.decode()
+    assert result.returncode == 0, stderr
+    assert "Traceback" not in stderr
+    warnings = [line for line in stderr.splitlines() if line.startswith("vtrack: warning")]
+    assert len(warnings) == 1 and "damaged.mp4" in warnings[0] and "skipped" in warnings[0]
+    record = json.loads((tmp_path / "o" / "run.json").read_text())
+    skipped = record["summary"]["frames_skipped"]
+    rows = _rows(tmp_path / "o" / "track.csv")
+    assert record["status"] == "complete" and skipped > 0
+    assert f"skipped {skipped}" in result.stdout.decode()
+    # Tracking went on past the damage to the end of the clip, and every frame kept its place:
+    # the tracked frames and the skipped ones make up the whole clip.
+    frames = [int(row["frame"]) for row in rows]
+    assert len(rows) + skipped == len(scene) and frames[-1] == len(scene) - 1
+    assert frames == sorted(set(frames))
+    assert all(float(row["time_s"]) == pytest.approx(int(row["frame"]) / 30.0, abs=1e-3)
+               for row in rows)
+    with av.open(str(tmp_path / "o" / "annotated.mp4")) as written:
+        assert sum(1 for _ in written.decode(video=0)) == len(rows)
+
+
+def test_an_unreadable_image_in_a_folder_is_skipped(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+    folder = tmp_path / "seq"
+    write_clip(scene, folder, fmt="images")
+    images = sorted((folder / "img").iterdir())
+    images[7].write_bytes(b"not an image at all")
+    result = vtrack("run", str(folder), "--gt", str(folder / "groundtruth_rect.txt"),
+                    "--no-video", "-o", str(tmp_path / "o"))
+    stderr = result.stderr.decode()
+    assert result.returncode == 0, stderr
+    warnings = [line for line in stderr.splitlines() if line.startswith("vtrack: warning")]
+    assert len(warnings) == 1 and images[7].name in warnings[0] and "frame 7" in warnings[0]
+    rows = _rows(tmp_path / "o" / "track.csv")
+    assert [int(row["frame"]) for row in rows] == [i for i in range(FRAMES) if i != 7]
+    record = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert record["status"] == "complete" and record["summary"]["frames_skipped"] == 1

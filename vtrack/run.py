@@ -103,6 +103,8 @@ class RunSummary:
     precision20: float | None = None
     frames_occluded: int = 0
     frames_lost: int = 0
+    #: Frames of the input that could not be decoded and were skipped (damaged file).
+    frames_skipped: int = 0
     error: str | None = None
     warnings: list[str] = field(default_factory=list)
     mot: dict[str, Any] | None = None
@@ -120,6 +122,8 @@ class RunSummary:
         else:
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
+        if self.frames_skipped:
+            parts.append(f"skipped {self.frames_skipped} undecodable")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
         head = f"{self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
@@ -216,6 +220,7 @@ class _SingleTargetRows:
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
+        self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
         self.boxes.append(box)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
@@ -335,7 +340,9 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         fps=frames / seconds if seconds > 0 else 0.0,
         frames_occluded=states[OCCLUDED],
         frames_lost=states[LOST],
+        frames_skipped=source.frames_skipped,
         error=error,
+        warnings=list(source.warnings),
     )
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
@@ -346,12 +353,13 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
-        if len(gt) != frames and status == STATUS_COMPLETE:
-            side = "fewer" if len(gt) < frames else "more"
+        span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
+        if len(gt) != span and status == STATUS_COMPLETE:
+            side = "fewer" if len(gt) < span else "more"
             note = (
-                f"{request.gt_path}: ground truth has {len(gt)} boxes for {frames} frames "
+                f"{request.gt_path}: ground truth has {len(gt)} boxes for {span} frames "
                 f"({side}); " + ("overlap is empty from frame "
-                                 f"{len(gt)} on" if len(gt) < frames else "extra boxes ignored")
+                                 f"{len(gt)} on" if len(gt) < span else "extra boxes ignored")
             )
             summary.warnings.append(note)
     elif isinstance(formatter, _MultiTargetRows) and mot_gt is not None:
