@@ -209,3 +209,41 @@ def test_an_unreadable_image_in_a_folder_is_skipped(tmp_path: Path) -> None:
     assert [int(row["frame"]) for row in rows] == [i for i in range(FRAMES) if i != 7]
     record = json.loads((tmp_path / "o" / "run.json").read_text())
     assert record["status"] == "complete" and record["summary"]["frames_skipped"] == 1
+
+
+# --- item 11: vtrack report --gt and runs of other inputs ------------------------------------
+
+
+def test_report_gt_is_only_used_for_runs_of_its_length(tmp_path: Path) -> None:
+    runs, truths = {}, {}
+    for name, frames in (("short", 20), ("long", 30)):
+        scene = make_scene("smooth", seed=3, width=W, height=H, frames=frames, fps=30.0)
+        clip, gt = tmp_path / f"{name}.mp4", tmp_path / f"{name}.gt.txt"
+        write_video(scene, clip)
+        write_groundtruth(scene, gt)
+        first = gt.read_text().splitlines()[0]
+        runs[name], truths[name] = tmp_path / "runs" / name, gt
+        result = vtrack("run", str(clip), "--init", first, "--no-video", "-q", "-o",
+                        str(runs[name]))
+        assert result.returncode == 0, result.stderr.decode()
+
+    def scored(report: Path) -> dict[str, str]:
+        return {row["input"]: row["ground_truth"] for row in _rows(report / "summary.csv")}
+
+    # One plain file for both: the run of the other length is not scored, and a warning names
+    # the run, its input and the file.
+    result = vtrack("report", str(tmp_path / "runs"), "--gt", str(truths["long"]), "-o",
+                    str(tmp_path / "r1"))
+    stderr = result.stderr.decode()
+    assert result.returncode == 0, stderr
+    assert scored(tmp_path / "r1") == {"long": str(truths["long"]), "short": ""}
+    (warning,) = [line for line in stderr.splitlines() if "not scored" in line]
+    assert str(runs["short"]) in warning and "short" in warning
+    assert "long.gt.txt has 30 boxes for its 20 frames" in warning and "--gt short=" in warning
+
+    # One file per input: each run scored against its own.
+    result = vtrack("report", str(tmp_path / "runs"), "--gt", f"short={truths['short']}",
+                    "--gt", f"long={truths['long']}", "-o", str(tmp_path / "r2"))
+    assert result.returncode == 0, result.stderr.decode()
+    assert "warning" not in result.stderr.decode()
+    assert scored(tmp_path / "r2") == {name: str(path) for name, path in truths.items()}
