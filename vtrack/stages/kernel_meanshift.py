@@ -252,6 +252,8 @@ class KernelMeanShift(Stage):
         # S2 step 7 / note 2: s_k = 0.1 s_best + 0.9 s_(k-1)
         gamma = self.scale_smoothing
         scale = gamma * best.scale + (1.0 - gamma) * self._scale
+        # Bounded work and memory (docs/stages.md, Limits): the box never outgrows the frame.
+        scale = min(scale, frame.width / self._size0[0], frame.height / self._size0[1])
         return _Search(best.cx, best.cy, scale, best.rho, iterations)
 
     def _converge(self, frame: Frame, cx: float, cy: float, scale: float) -> _Search:
