@@ -11,7 +11,6 @@ every run) and few, so the whole file takes seconds.
 from __future__ import annotations
 
 import math
-import time
 import tracemalloc
 from functools import cache
 
@@ -34,10 +33,6 @@ PIXELS = WIDTH * HEIGHT
 #: pixel) plus the particle filter's histograms (4 x 1024 particles x 256 bins x 8 bytes).
 #: Python's own bookkeeping (particle windows, hypotheses) gets a fixed allowance of 4 MiB.
 MEMORY_BOUND = 32 * PIXELS + 4 * 1024 * 256 * 8 + 4 * 2**20
-#: The documented work at this size is at most ~10^8 pixel operations a frame (1024 particle
-#: windows of the whole frame; 100 iterations x 3 bandwidths x 2 searches): well under a second
-#: of CPU on any machine. CPU time, not wall-clock, so a busy machine does not fail the test.
-CPU_SECONDS_BOUND = 2.0
 
 
 def _numeric(cls: type) -> list[Param]:
@@ -93,7 +88,8 @@ def _value(param: Param) -> st.SearchStrategy[tuple[str, bool]]:
 
 
 def _run_bounded(config: Config, multi: bool) -> None:
-    """Track the tiny clip; per frame, traced memory and CPU time within the bounds."""
+    """Track the tiny clip; per frame, traced memory within the documented bound (work per frame
+    is bounded by the declared parameter ranges; no timing threshold in a unit test)."""
     frames, init = _frames(multi)
     pipeline = Pipeline(config.build(), seed=0)
     results = pipeline.track(iter(frames), Box(*init) if init else None)
@@ -102,15 +98,12 @@ def _run_bounded(config: Config, multi: bool) -> None:
         while True:
             base = tracemalloc.get_traced_memory()[0]
             tracemalloc.reset_peak()
-            cpu = time.process_time()
             try:
                 result = next(results)
             except StopIteration:
                 break
-            spent = time.process_time() - cpu
             peak = tracemalloc.get_traced_memory()[1] - base
             assert peak <= MEMORY_BOUND, f"frame {result.index}: {peak} bytes traced"
-            assert spent <= CPU_SECONDS_BOUND, f"frame {result.index}: {spent:.2f} s of CPU"
     except VtrackError:
         pass  # the project's own errors (e.g. a target the model cannot describe) are allowed
     finally:
