@@ -176,19 +176,21 @@ def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
         assert "\n" not in message
 
 
-def test_corrupt_packets_mid_stream_are_partial(tmp_path):
+def test_corrupt_packets_mid_stream_are_skipped(tmp_path):
+    """Issue 11 item 7: damage in the middle is skipped as ffmpeg skips it; the frames after it
+    keep their places and the source counts what was lost."""
     whole = write_video(tmp_path / "clip.mp4", pictures(40), options={"movflags": "faststart"})
     data = bytearray(whole.read_bytes())
     mid = len(data) // 2
     data[mid : mid + 3000] = np.random.default_rng(1).integers(0, 256, 3000, np.uint8).tobytes()
     broken = tmp_path / "broken.mp4"
     broken.write_bytes(bytes(data))
-    count = 0
-    with open_source(str(broken)) as source, pytest.raises(PartialInputError) as err:
-        for _ in source:
-            count += 1
-    assert 0 < count == err.value.frames_done < 40
-    assert str(err.value).startswith(f"{broken}: decoding stopped at frame {count} (")
+    with open_source(str(broken)) as source:
+        got = [frame.index for frame in source]
+        skipped = source.frames_skipped
+    assert skipped > 0 and len(got) + skipped == 40 and got[-1] == 39
+    assert got == sorted(set(got))
+    assert len(source.warnings) == 1 and str(broken) in source.warnings[0]
 
 
 def test_truncated_mp4_with_index_at_the_end_cannot_be_opened(tmp_path):

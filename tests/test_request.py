@@ -31,6 +31,7 @@ OTHER: dict[str, Any] = {
     "gt_path": Path("other.gt.txt"),
     "gt_origin": 1,
     "raw": RawFormat(160, 120, "bgr24", 30.0),
+    "fps": 12.5,
     "video": True,
     "preset": "fast",
     "crf": 30,

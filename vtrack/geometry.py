@@ -10,6 +10,23 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+#: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
+#: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
+MAX_FRAME_SIDE = 16384
+MAX_FRAME_PIXELS = MAX_FRAME_SIDE * MAX_FRAME_SIDE
+#: Smallest initial box side: a mean-shift window or a histogram needs a few pixels.
+MIN_BOX_SIDE = 4.0
+
+
+def frame_size_problem(width: int, height: int) -> str | None:
+    """Why a ``width`` x ``height`` frame cannot be tracked (None: it can)."""
+    if width <= 0 or height <= 0:
+        return f"the frame size {width}x{height} is empty"
+    if width > MAX_FRAME_SIDE or height > MAX_FRAME_SIDE:
+        return (f"the frames are {width}x{height}; vtrack accepts at most "
+                f"{MAX_FRAME_SIDE}x{MAX_FRAME_SIDE}")
+    return None
+
 
 class Box(NamedTuple):
     """Axis-aligned box; ``(x, y)`` is the top-left corner."""

@@ -29,6 +29,24 @@ class Param:
     min: float | None = None
     max: float | None = None
 
+    def __post_init__(self) -> None:
+        """A numeric parameter must declare its valid range: every value a user can give is
+        then one the stage can run with in bounded time and memory (README, value ranges)."""
+        numeric = self.type in (int, float) and self.choices is None
+        if numeric and (self.min is None or self.max is None):
+            raise TypeError(f"parameter {self.name!r}: a number must declare min and max")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise TypeError(f"parameter {self.name!r}: min {self.min} > max {self.max}")
+
+    def range_text(self) -> str:
+        """The declared range as people write it: ``0 to 1000``, ``>= 1`` ..."""
+        low, high = self.min, self.max
+        if low is not None and high is not None:
+            return f"{_number(low)} to {_number(high)}"
+        if low is not None:
+            return f">= {_number(low)}"
+        return f"<= {_number(high)}" if high is not None else ""
+
     def validate(self, value: Any, where: str) -> Any:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
 
@@ -44,19 +62,20 @@ class Param:
                 f"{where}: parameter '{self.name}' must be {expected}, got {value!r}"
             )
         if self.type is float and not math.isfinite(value):
-            raise ConfigError(f"{where}: parameter '{self.name}' must be finite, got {value!r}")
+            raise ConfigError(
+                f"{where}: parameter '{self.name}' must be a finite number in the range "
+                f"{self.range_text()}, got {value!r}"
+            )
         if self.choices is not None and value not in self.choices:
             options = ", ".join(repr(c) for c in self.choices)
             raise ConfigError(
                 f"{where}: parameter '{self.name}' must be one of {options}, got {value!r}"
             )
-        if self.min is not None and value < self.min:
+        too_low = self.min is not None and value < self.min
+        if too_low or (self.max is not None and value > self.max):
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be >= {self.min}, got {value}"
-            )
-        if self.max is not None and value > self.max:
-            raise ConfigError(
-                f"{where}: parameter '{self.name}' must be <= {self.max}, got {value}"
+                f"{where}: parameter '{self.name}' must be in the range {self.range_text()}, "
+                f"got {_number(value)}"
             )
         return value
 
@@ -84,10 +103,16 @@ class Param:
         extra = []
         if self.choices is not None:
             extra.append("one of " + "|".join(str(c) for c in self.choices))
-        if self.min is not None:
-            extra.append(f">= {self.min}")
-        if self.max is not None:
-            extra.append(f"<= {self.max}")
+        if self.min is not None or self.max is not None:
+            extra.append(f"range {self.range_text()}")
         default = str(self.default).lower() if self.type is bool else repr(self.default)
         tail = f" ({'; '.join(extra)})" if extra else ""
         return f"{self.name} ({_TYPE_NAMES[self.type]}, default {default}): {self.help}{tail}"
+
+
+def _number(value: float) -> str:
+    """A bound or value for messages and docs: ``5``, ``0.25``, ``1e+06``, ``1e-09``."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        text = str(value)
+        return text if len(text) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
+    return f"{value:g}"

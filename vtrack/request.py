@@ -36,6 +36,8 @@ class RunRequest:
     gt_path: Path | None = None
     gt_origin: int = 0
     raw: RawFormat | None = None
+    #: Frame rate of an image folder (None: 30); refused for a video file (raw: in ``raw``).
+    fps: float | None = None
     video: bool = True
     preset: str = "ultrafast"
     crf: int = 23
@@ -53,6 +55,7 @@ class RunRequest:
             "gt": None if self.gt_path is None else str(self.gt_path),
             "gt_origin": self.gt_origin,
             "raw": None if self.raw is None else asdict(self.raw),
+            "fps": self.fps,
             "video": self.video,
             "preset": self.preset,
             "crf": self.crf,
@@ -72,6 +75,7 @@ class RunRequest:
             gt_path=None if data["gt"] is None else Path(data["gt"]),
             gt_origin=int(data["gt_origin"]),
             raw=None if data["raw"] is None else RawFormat(**data["raw"]),
+            fps=None if data.get("fps") is None else float(data["fps"]),
             video=bool(data["video"]),
             preset=str(data["preset"]),
             crf=int(data["crf"]),

@@ -38,7 +38,7 @@ from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
-from vtrack.geometry import Box
+from vtrack.geometry import MIN_BOX_SIDE, Box
 from vtrack.io import (
     CsvWriter,
     Source,
@@ -80,6 +80,8 @@ class RunSummary:
     precision20: float | None = None
     frames_occluded: int = 0
     frames_lost: int = 0
+    #: Frames of the input that could not be decoded and were skipped (damaged file).
+    frames_skipped: int = 0
     error: str | None = None
     warnings: list[str] = field(default_factory=list)
     mot: dict[str, Any] | None = None
@@ -97,6 +99,8 @@ class RunSummary:
         else:
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
+        if self.frames_skipped:
+            parts.append(f"skipped {self.frames_skipped} undecodable")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
         head = f"{self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
@@ -116,13 +120,20 @@ def versions() -> dict[str, str]:
 
 
 def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
-    if not box.is_valid():
-        raise ConfigError(f"{where}: the box {tuple(box)} is empty (width and height must be > 0)")
-    if box.window(width, height) is None:
+    """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
+    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
+    shown = tuple(float(f"{v:.6g}") for v in box)
+    if not all(math.isfinite(v) for v in box) or box.w <= 0 or box.h <= 0:
+        raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
+    if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
         raise ConfigError(
-            f"{where}: the box {tuple(round(v, 2) for v in box)} lies outside the "
-            f"{width}x{height} frame"
+            f"{where}: the box {shown} is smaller than {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} "
+            "pixels, too small to track"
         )
+    if box.w > width or box.h > height:
+        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame")
+    if box.window(width, height) is None:
+        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")
 
 
 class _AtomicFrames:
@@ -186,6 +197,7 @@ class _SingleTargetRows:
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
+        self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
         self.boxes.append(box)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
@@ -248,7 +260,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     -> record (metrics, summary, ``run.json``).
     """
     resolved = _resolve(request)
-    source: Source = open_source(request.input, request.raw)
+    source: Source = open_source(request.input, request.raw, fps=request.fps)
     info = source.info
     if resolved.init_box is not None:
         _check_init_box(resolved.init_box, info.width, info.height,
@@ -264,7 +276,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
                             info.fps or 30.0, preset=request.preset, crf=request.crf)
         annotator = Annotator(info.width, info.height, gt=resolved.gt)
     tracked = _track(request, resolved, source, formatter, csv, video, annotator, on_frame)
-    summary = _record(request, resolved, info, formatter, csv_name, tracked)
+    summary = _record(request, resolved, source, formatter, csv_name, tracked)
     if tracked.failure is not None:
         raise tracked.failure
     return summary
@@ -334,7 +346,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source,
     return out
 
 
-def _record(request: RunRequest, resolved: _Resolved, info: Any,
+def _record(request: RunRequest, resolved: _Resolved, source: Source,
             formatter: _SingleTargetRows | _MultiTargetRows, csv_name: str,
             tracked: _Tracked) -> RunSummary:
     """Metrics, the summary and ``run.json`` (written last, atomically)."""
@@ -350,7 +362,9 @@ def _record(request: RunRequest, resolved: _Resolved, info: Any,
         fps=frames / seconds if seconds > 0 else 0.0,
         frames_occluded=tracked.states[TrackState.OCCLUDED],
         frames_lost=tracked.states[TrackState.LOST],
+        frames_skipped=source.frames_skipped,
         error=error,
+        warnings=list(source.warnings),
     )
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
@@ -361,12 +375,13 @@ def _record(request: RunRequest, resolved: _Resolved, info: Any,
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
-        if len(gt) != frames and status == STATUS_COMPLETE:
-            side = "fewer" if len(gt) < frames else "more"
+        span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
+        if len(gt) != span and status == STATUS_COMPLETE:
+            side = "fewer" if len(gt) < span else "more"
             note = (
-                f"{request.gt_path}: ground truth has {len(gt)} boxes for {frames} frames "
+                f"{request.gt_path}: ground truth has {len(gt)} boxes for {span} frames "
                 f"({side}); " + ("overlap is empty from frame "
-                                 f"{len(gt)} on" if len(gt) < frames else "extra boxes ignored")
+                                 f"{len(gt)} on" if len(gt) < span else "extra boxes ignored")
             )
             summary.warnings.append(note)
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
@@ -378,7 +393,7 @@ def _record(request: RunRequest, resolved: _Resolved, info: Any,
         "error": error,
         "warnings": summary.warnings,
         "frames": frames,
-        "input": info.to_dict(),
+        "input": source.info.to_dict(),
         "request": request.to_dict(),
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
         "config": request.config.resolved(),

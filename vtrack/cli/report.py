@@ -14,19 +14,23 @@ from vtrack.report import DEFAULT_TITLE, build_report
 @click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path),
               default=Path("vtrack-report"), show_default=True, metavar="DIR",
               help="Report folder: index.html, plots/*.png, summary.md, summary.csv.")
-@click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="FILE",
+@click.option("--gt", "gt_specs", multiple=True, metavar="[INPUT=]FILE",
               help="Ground truth for single-target runs made without it (their track.csv "
-                   "boxes are scored against it).")
+                   "boxes are scored against it). INPUT=FILE gives the file of one input "
+                   "(its name as the report shows it, or its path); repeat for several. A run "
+                   "whose frame count differs from the file's boxes is not scored (a warning "
+                   "names it).")
 @click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
               help="1 for MATLAB-style 1-based --gt boxes (OTB).")
 @click.option("--title", default=DEFAULT_TITLE, show_default=True, help="Page title.")
 @click.option("--quiet", "-q", is_flag=True, help="No summary line.")
-def command(results: tuple[Path, ...], out_dir: Path, gt_path: Path | None, gt_origin: int,
-            title: str, quiet: bool) -> None:
+def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
+            gt_origin: int, title: str, quiet: bool) -> None:
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""
-    report = build_report(list(results), out_dir, gt=gt_path, gt_origin=gt_origin, title=title)
+    report = build_report(list(results), out_dir, gt=list(gt_specs), gt_origin=gt_origin,
+                          title=title)
     for warning in report.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:

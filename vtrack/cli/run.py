@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import click
 from tqdm import tqdm
 
 from vtrack.config import load_config
+from vtrack.errors import ConfigError
 from vtrack.evaluate.groundtruth import parse_box
 from vtrack.io import RawFormat
 from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
@@ -44,7 +46,10 @@ def default_out_dir(input_spec: str) -> Path:
               help="Input is raw frames of this size (from -, a FIFO or a file).")
 @click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
               default="bgr24", show_default=True, help="Pixel format of --raw input.")
-@click.option("--fps", type=float, default=None, help="Frame rate of --raw input (default 30).")
+@click.option("--fps", type=float, default=None,
+              help="Frame rate of --raw input or an image folder (default 30): time_s = frame "
+                   "index / fps. Refused for a video file, whose frames carry their own "
+                   "timestamps.")
 @click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
 @click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
@@ -65,6 +70,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
     """
     config = load_config(config_spec).with_overrides(list(overrides))
+    if fps is not None and not (math.isfinite(fps) and fps > 0):
+        raise ConfigError(f"--fps {fps:g}: must be a positive number of frames per second")
     raw = RawFormat.parse(raw_size, pix_fmt, fps or 30.0) if raw_size else None
     if raw is None and input_spec == "-":
         raise click.UsageError("reading frames from '-' needs --raw WxH (and --pix-fmt, --fps)")
@@ -76,6 +83,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         gt_path=gt_path,
         gt_origin=gt_origin,
         raw=raw,
+        fps=None if raw else fps,
         video=not no_video,
         preset=preset,
         crf=crf,

@@ -51,6 +51,11 @@ def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
     return lines
 
 
+#: Largest coordinate a ground-truth box may have: frames are at most 16384 pixels a side, so
+#: anything near this is a damaged file (and 1e308 would overflow the metrics and the drawing).
+MAX_COORDINATE = 1e6
+
+
 def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent.
 
@@ -60,7 +65,8 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     ``h <= 0`` (which includes the ``0,0,0,0`` UAV123/LaSOT write for out-of-view), means the
     target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
     from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
-    4 or 8 numbers, or an infinite number is an error, as are a missing, unreadable or empty file.
+    4 or 8 numbers, an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
+    missing, unreadable or empty file.
     """
     if origin not in (0, 1):
         raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
@@ -78,6 +84,11 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             continue
         if not all(math.isfinite(v) for v in values):
             raise InputError(f"{path} line {number}: infinite coordinate in {_quote(line)}")
+        if any(abs(v) > MAX_COORDINATE for v in values):
+            raise InputError(
+                f"{path} line {number}: coordinate beyond +-{MAX_COORDINATE:g} pixels in "
+                f"{_quote(line)}"
+            )
         if len(values) == 8:
             xs, ys = values[0::2], values[1::2]
             box = Box(min(xs), min(ys), max(xs) - min(xs), max(ys) - min(ys))

@@ -3,7 +3,8 @@
 Images are sorted by name with numbers compared as numbers (``2.png`` before ``10.png``) and
 decoded with PyAV in the reader thread. A sequence whose first image is grey becomes
 :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
-converted to match). There are no timestamps: ``time_s = index / fps``.
+converted to match). There are no timestamps: ``time_s = index / fps``. An image that cannot be
+decoded (after the first) is skipped with a warning; the frames after it keep their indices.
 """
 
 from __future__ import annotations
@@ -18,12 +19,15 @@ import numpy as np
 
 from vtrack.errors import InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
 from vtrack.io.source import InputInfo, Source
 
 IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
 #: Frame rate of an image sequence unless told otherwise.
 DEFAULT_FPS = 30.0
+#: Unreadable images named one warning line each; beyond them, one line gives the count.
+_NAMED_SKIPS = 3
 
 
 def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
@@ -53,6 +57,14 @@ def read_image(path: Path) -> np.ndarray:
     """
     try:
         with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise StopIteration
+            codec = container.streams.video[0].codec_context
+            # Bounded before the decoder allocates the picture (the size is in the header).
+            too_big = codec.width and codec.height and frame_size_problem(codec.width,
+                                                                          codec.height)
+            if too_big:
+                raise InputError(f"{path}: {too_big}")
             picture = next(container.decode(video=0))
             if picture.format.name.startswith(("gray", "ya")):
                 return picture.to_ndarray(format="gray")
@@ -74,6 +86,7 @@ class ImageFolderSource(Source):
         if not self._files:
             suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
             raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/")
+        self._skipped = 0
         self._first = read_image(self._files[0])
         height, width = self._first.shape[:2]
         fps = fps or DEFAULT_FPS
@@ -95,6 +108,10 @@ class ImageFolderSource(Source):
             )
         )
 
+    @property
+    def frames_skipped(self) -> int:
+        return self._skipped
+
     def _frames(self) -> Iterator[Frame]:
         fps = self.info.fps or DEFAULT_FPS
         size = self._first.shape[:2]
@@ -103,7 +120,10 @@ class ImageFolderSource(Source):
             try:
                 pixels = first if index == 0 else read_image(path)
             except InputError as exc:
-                raise PartialInputError(f"{exc} (stopped at frame {index})", index) from None
+                self._skipped += 1
+                if self._skipped <= _NAMED_SKIPS:
+                    self.warnings.append(f"{exc}; frame {index} skipped")
+                continue
             if pixels.shape[:2] != size:
                 raise PartialInputError(
                     f"{path}: image is {pixels.shape[1]}x{pixels.shape[0]}, the sequence is "
@@ -119,6 +139,9 @@ class ImageFolderSource(Source):
                 if pixels.ndim == 2:
                     pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
                 yield BgrFrame(index, time_s, pixels)
+        if self._skipped > _NAMED_SKIPS:
+            self.warnings.append(f"{self.info.path}: {self._skipped} unreadable images skipped "
+                                 f"in all (the first {_NAMED_SKIPS} are named above)")
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_image`."""

@@ -18,7 +18,8 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
     - ``spec`` a folder: an image sequence (``folder/img/*`` or ``folder/*``) at ``fps``
       (default 30) frames per second;
-    - anything else: a video file FFmpeg can open.
+    - anything else: a video file FFmpeg can open; its frames carry their own timestamps, so
+      ``fps`` is refused for it (ConfigError).
     """
     if raw is not None:
         return RawSource(spec, raw)
@@ -29,4 +30,9 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     check_input_path(spec)
     if os.path.isdir(spec):
         return ImageFolderSource(spec, fps=fps)
+    if fps is not None:
+        raise ConfigError(
+            f"--fps: {spec} is a video file, whose frames carry their own timestamps; --fps "
+            "applies to raw input and image folders only"
+        )
     return VideoSource(spec)

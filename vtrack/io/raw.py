@@ -28,6 +28,7 @@ import numpy as np
 
 from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
+from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason
 from vtrack.io.source import InputInfo, Source
 
@@ -60,6 +61,9 @@ class RawFormat:
         width, height = int(match[1]), int(match[2])
         if width <= 0 or height <= 0:
             raise ConfigError(f"--raw {size!r}: width and height must be positive")
+        too_big = frame_size_problem(width, height)
+        if too_big:
+            raise ConfigError(f"--raw {size!r}: {too_big}")
         if pix_fmt not in PIX_FMTS:
             raise ConfigError(f"--pix-fmt {pix_fmt!r}: expected one of {', '.join(PIX_FMTS)}")
         if pix_fmt == "yuv420p" and (width % 2 or height % 2):

@@ -63,8 +63,18 @@ class Source(Closing, ABC):
 
     def __init__(self, info: InputInfo) -> None:
         self.info = info
+        #: One line per problem the reader went past (e.g. an unreadable image it skipped);
+        #: filled by the reader thread, complete once iteration has ended.
+        self.warnings: list[str] = []
         self._prefetch: Prefetcher[Frame] | None = None
         self._closed = False
+
+    @property
+    def frames_skipped(self) -> int:
+        """Frames of the input that could not be decoded and were skipped (damage in the middle
+        of a file, an unreadable image); later frames keep their indices. Final once iteration
+        has ended."""
+        return 0
 
     @abstractmethod
     def _frames(self) -> Iterator[Frame]:

@@ -9,6 +9,13 @@ A display-matrix rotation (phone footage) is applied to the pixels and recorded 
 A truncated file often decodes "successfully" to fewer frames than its container promises;
 that is reported like a decoding error, as a :class:`~vtrack.errors.PartialInputError` after the
 good frames.
+
+Damage in the middle of a file is skipped as the ``ffmpeg`` command skips it: a packet the
+decoder refuses (``InvalidDataError``) is dropped and decoding goes on with the next one. The
+frames lost are counted (``frames_skipped``) and later frames keep their place in the stream:
+once a packet was dropped, a frame's index comes from its timestamp (``round(time_s * fps)``,
+never less than the next index), so ground truth stays aligned. Only a stream that really ends
+early is partial.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import numpy as np
 
 from vtrack.errors import InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, I420Frame
+from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.source import InputInfo, Source
@@ -133,8 +141,13 @@ class VideoSource(Source):
             raise InputError(f"{path}: no video stream (streams: {kinds})")
         self._container = container
         self._stream = stream = container.streams.video[0]
+        self._dropped = 0  # packets the decoder refused (damage in the middle of the file)
+        # Bounded before the decoder allocates a picture (the size is in the stream header).
+        too_big = frame_size_problem(stream.codec_context.width, stream.codec_context.height)
+        if too_big and stream.codec_context.width and stream.codec_context.height:
+            raise InputError(f"{path}: {too_big}")
         stream.thread_type = "AUTO"
-        self._decoded = container.decode(stream)
+        self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
         except StopIteration:
@@ -174,6 +187,23 @@ class VideoSource(Source):
             rotation=self._rotation,
         )
 
+    @property
+    def frames_skipped(self) -> int:
+        """Packets the decoder refused while decoding; once the stream has ended, every frame
+        place left empty after the damage (some pictures vanish without an error)."""
+        return self._dropped
+
+    def _decode(self) -> Iterator[av.VideoFrame]:
+        """Decoded frames in order, dropping packets the decoder refuses (damage in the middle
+        of the file: ffmpeg skips them the same way). A demuxer error still ends the stream."""
+        for packet in self._container.demux(self._stream):
+            try:
+                frames = packet.decode()
+            except av.error.InvalidDataError:
+                self._dropped += 1
+                continue
+            yield from frames
+
     def _promised_end_s(self) -> float | None:
         """Where the container says the video stream ends (seconds, stream clock), if it says.
 
@@ -194,7 +224,8 @@ class VideoSource(Source):
         first, self._first = self._first, None  # do not keep a decoded picture alive
         t0 = first.time
         tail = _Tail()
-        index = 0
+        index = yielded = 0
+        last_t: float | None = None
         even = info.width % 2 == 0 and info.height % 2 == 0
         try:
             for decoded in itertools.chain((first,), self._decoded):
@@ -206,8 +237,15 @@ class VideoSource(Source):
                         index,
                     )
                 t = decoded.time
+                if self._dropped and t is not None and last_t is not None and t <= last_t:
+                    continue  # a stale picture of the damaged stretch, out of order: its place
+                    # has passed, it counts as skipped
+                last_t = t
                 tail.add(t, decoded.is_corrupt)
                 time_s = index / fps if t is None or t0 is None else t - t0
+                if self._dropped and t is not None and t0 is not None:
+                    # Frames lost to damage keep their places (see the module docstring).
+                    index = max(index, round(time_s * fps))
                 if even and decoded.format.name in I420_FORMATS and self._rotation:
                     planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height,
                                          self._rotation)
@@ -222,10 +260,18 @@ class VideoSource(Source):
                         bgr = cv2.rotate(bgr, ROTATE_CODES[self._rotation])
                     yield BgrFrame(index, time_s, bgr)
                 index += 1
+                yielded += 1
         except av.FFmpegError as exc:
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
             ) from None
+        finally:
+            if self._dropped:  # every place left empty, also by pictures the decoder dropped
+                self._dropped = max(self._dropped, index - yielded)
+        if self.frames_skipped:
+            self.warnings.append(f"{info.path}: {self.frames_skipped} damaged frames could not be "
+                                 "decoded and were skipped")
+        tail.frames += self.frames_skipped  # skipped frames were in the file: not a shortfall
         shortfall = tail.shortfall(self._stream.frames, self._end_s, fps) or self._torn_packet()
         if shortfall:
             raise PartialInputError(

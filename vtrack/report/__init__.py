@@ -96,23 +96,34 @@ def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict
             {c: np.mean(v, axis=0) for c, v in precision.items()})
 
 
-def build_report(results: Sequence[Path], out_dir: Path, gt: Path | None = None,
+def build_report(results: Sequence[Path], out_dir: Path,
+                 gt: Path | str | Sequence[Path | str] | None = None,
                  gt_origin: int = 0, title: str = DEFAULT_TITLE) -> Report:
     """Read every run below ``results`` and write the report into ``out_dir``.
 
     ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
-    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes). A run folder that cannot be read is
+    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes): ``FILE`` or ``INPUT=FILE`` specs,
+    one or several; a run is scored only against a file of its own length (else a warning
+    names the run and the file). A run folder that cannot be read is
     left out with a warning. Raises InputError when nothing below ``results`` is a run (or a
     failed batch row) and OutputError when ``out_dir`` cannot be written.
     """
-    truth = GroundTruth.read(gt, gt_origin) if gt is not None else None
+    specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
+    truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
     warnings: list[str] = []
     runs: list[RunResult] = []
     for folder in run_folders(results):
         try:
-            runs.append(load_run(folder, truth))
+            runs.append(load_run(folder, truths))
         except InputError as exc:
             warnings.append(f"left out: {exc}")
+        else:
+            if runs[-1].note:
+                warnings.append(runs[-1].note)
+    for truth in truths:
+        if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
+            warnings.append(f"--gt {truth.input}={truth.path}: no run of input {truth.input} "
+                            "was scored with it")
     failed = failed_runs(results)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
@@ -125,7 +136,7 @@ def build_report(results: Sequence[Path], out_dir: Path, gt: Path | None = None,
     unscored = [r for r in single if r.overlaps is None]  # (not: failed before frame 1)
     if unscored:
         warnings.append(f"{len(unscored)} single-target run(s) have no ground truth; give "
-                        "--gt FILE to score runs of one input")
+                        "--gt FILE (or --gt INPUT=FILE per input) to score them")
 
     plot_dir = out_dir / "plots"
     try:

@@ -8,7 +8,10 @@ Per-frame scores of a single-target run are its ``track.csv`` boxes scored by
   column. If that file can no longer be read, the run's ``overlap`` and ``center_error`` columns
   are used as they are (rounded to 4 and 3 decimals; an empty ``center_error`` next to an
   overlap is a frame where the tracker claimed no box: infinite error);
-- otherwise the ``--gt`` file of the report.
+- otherwise the report's ``--gt`` file for the run's input (``--gt INPUT=FILE``), else its
+  plain ``--gt FILE``; a file whose box count differs from the run's frames is not used (the run
+  stays unscored and :attr:`RunResult.note` says why), so one input is never scored against
+  another's ground truth.
 
 Sequence scores (AUC, precision@20, mean IoU) come from :mod:`vtrack.evaluate.metrics` and
 nowhere else.
@@ -83,6 +86,8 @@ class RunResult:
     overlaps: list[float | None] | None = None
     errors: list[float | None] | None = None
     mot: dict[str, Any] = field(default_factory=dict)
+    #: Why the report's ``--gt`` was not used for this run (one line), if it was not.
+    note: str | None = None
 
     @cached_property
     def scores(self) -> Scores | None:
@@ -95,15 +100,49 @@ class RunResult:
 
 @dataclass(frozen=True)
 class GroundTruth:
-    """A ground-truth file given to the report (``--gt``), read once."""
+    """A ground-truth file given to the report (``--gt [INPUT=]FILE``), read once."""
 
     path: str
     boxes: list[Box | None]
+    #: The input it belongs to (``--gt INPUT=FILE``); None: any run that recorded none.
+    input: str | None = None
 
     @classmethod
-    def read(cls, path: Path, origin: int = 0) -> GroundTruth:
+    def read(cls, path: Path, origin: int = 0, input: str | None = None) -> GroundTruth:
         """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError)."""
-        return cls(str(path), read_boxes(path, origin=origin))
+        return cls(str(path), read_boxes(path, origin=origin), input)
+
+    @classmethod
+    def parse(cls, text: str, origin: int = 0) -> GroundTruth:
+        """``--gt FILE`` or ``--gt INPUT=FILE`` (INPUT: an input's name, as the report shows
+        it, or its path as given to ``vtrack run``). A file whose name holds ``=`` is a FILE."""
+        name, sep, path = text.partition("=")
+        if sep and name and path and not Path(text).exists():
+            return cls.read(Path(path), origin, name)
+        return cls.read(Path(text), origin)
+
+    def belongs_to(self, name: str, request: dict[str, Any]) -> bool:
+        """Whether this file is for the run of input ``name`` (True for a plain ``--gt``)."""
+        if self.input is None:
+            return True
+        given = str(request.get("input") or "").rstrip("/")
+        return self.input.rstrip("/") in (name, given, Path(given).name)
+
+    def misfit(self, frames: int, complete: bool) -> str | None:
+        """Why these boxes cannot be a run's ground truth: a complete run must have as many
+        frames as boxes, a run that stopped early no more (None: they fit)."""
+        boxes = len(self.boxes)
+        if frames > boxes or (complete and frames != boxes):
+            return f"{self.path} has {boxes} boxes for its {frames} frames"
+        return None
+
+
+def pick_ground_truth(truths: Sequence[GroundTruth], name: str,
+                      request: dict[str, Any]) -> GroundTruth | None:
+    """The ``--gt`` for the run of input ``name``: its own (``INPUT=FILE``) before a plain one."""
+    own = [t for t in truths if t.input is not None and t.belongs_to(name, request)]
+    plain = [t for t in truths if t.input is None]
+    return (own or plain or [None])[0]
 
 
 @dataclass(frozen=True)
@@ -160,6 +199,20 @@ def _rescored(rows: list[dict[str, str]], request: dict[str, Any]) -> FrameScore
     return min(candidates, key=lambda c: c[0])[1]
 
 
+def _with_skipped_frames(rows: list[dict[str, str]]) -> list[dict[str, str]]:
+    """One row per frame: frames the input skipped (damaged, no row in ``track.csv``) get an
+    empty row, a frame without a box or a score, so rows line up with the ground truth."""
+    if all(row.get("frame") == str(i) for i, row in enumerate(rows)):
+        return rows
+    filled: list[dict[str, str]] = []
+    for row in rows:
+        frame = int(row["frame"])
+        filled += [{"frame": str(i), "state": "skipped", "x": "", "overlap": "",
+                    "center_error": ""} for i in range(len(filled), frame)]
+        filled.append(row)
+    return filled
+
+
 def _boxes(rows: list[dict[str, str]]) -> list[Box | None]:
     return [None if row.get("x") in (None, "") else
             Box(float(row["x"]), float(row["y"]), float(row["w"]), float(row["h"]))
@@ -175,8 +228,9 @@ def _input_name(record: dict[str, Any], folder: Path) -> str:
     return path.stem if path.suffix else path.name
 
 
-def load_run(folder: Path, gt: GroundTruth | None = None) -> RunResult:
-    """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth.
+def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
+    """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
+    (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
 
     Raises InputError naming the file when ``run.json`` or the CSV cannot be read.
     """
@@ -205,15 +259,24 @@ def load_run(folder: Path, gt: GroundTruth | None = None) -> RunResult:
         result.mot = dict(record.get("metrics") or {})
         result.ground_truth = request.get("gt")
         return result
-    rows = _read_csv(folder / "track.csv")
     try:
+        rows = _with_skipped_frames(_read_csv(folder / "track.csv"))
         result.states = [row["state"] for row in rows]
         if request.get("gt"):
             result.ground_truth = str(request["gt"])
             result.overlaps, result.errors = _rescored(rows, request)
         elif gt is not None:
-            result.ground_truth = gt.path
-            result.overlaps, result.errors = metrics.frame_scores(_boxes(rows), gt.boxes)
+            truths = [gt] if isinstance(gt, GroundTruth) else list(gt)
+            truth = pick_ground_truth(truths, result.input, request)
+            # Frames the run spans: the last row's frame number (skipped frames included).
+            frames = int(rows[-1]["frame"]) + 1 if rows else 0
+            misfit = truth.misfit(frames, result.status == "complete") if truth else None
+            if misfit:
+                result.note = (f"{folder}: input {result.input} not scored: {misfit}; give "
+                               f"--gt {result.input}=FILE with its own ground truth")
+            elif truth is not None:
+                result.ground_truth = truth.path
+                result.overlaps, result.errors = metrics.frame_scores(_boxes(rows), truth.boxes)
     except (KeyError, ValueError, TypeError) as exc:
         raise InputError(f"{folder / 'track.csv'}: not a vtrack track.csv ({exc})") from None
     return result

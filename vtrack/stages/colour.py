@@ -57,7 +57,8 @@ class Hue(Stage):
     params = (
         Param(
             "search_scale", float, 2.0,
-            "search window size as a multiple of the target box", min=1.0,
+            "search window size as a multiple of the target box",
+            min=1.0, max=16.0,
         ),
         Param(
             "hue_scale", str, "full",

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from vtrack.geometry import Box
+from vtrack.geometry import MAX_FRAME_PIXELS, Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, register
 
@@ -125,7 +125,7 @@ class Background(Stage):
             30,
             "mean: frames averaged into the background (S4 eq. 1, N not given: 30, so that a "
             "target moving during them leaves only a faint ghost)",
-            min=1,
+            min=1, max=1000,
         ),
         Param(
             "threshold",
@@ -142,7 +142,7 @@ class Background(Stage):
             1,
             "size in pixels of a morphological opening of the foreground, removing specks "
             "(S4 1.2 'after simple processing'; 1 = none)",
-            min=1,
+            min=1, max=255,
         ),
         Param(
             "close",
@@ -150,21 +150,21 @@ class Background(Stage):
             1,
             "size in pixels of a morphological closing after the opening, joining the fragments "
             "of one target (S4 1.2 'after simple processing'; 1 = none)",
-            min=1,
+            min=1, max=255,
         ),
         Param(
             "history",
             int,
             500,
             "mog2: frames the mixture model remembers (OpenCV's default 500)",
-            min=1,
+            min=1, max=100000,
         ),
         Param(
             "var_threshold",
             float,
             16.0,
             "mog2: squared Mahalanobis distance to call a pixel foreground (OpenCV's default 16)",
-            min=0.0,
+            min=0.0, max=10000.0,
         ),
     )
     provides = _SEGMENTS
@@ -333,14 +333,16 @@ class Blobs(Stage):
     name = "blobs"
     summary = "connected components of the foreground -> detections (centroid, box, area, grey)"
     params = (
-        Param("min_area", int, 4, "smallest blob kept, in pixels (smaller: noise)", min=1),
-        Param("max_area", int, 0, "largest blob kept, in pixels (0: no limit)", min=0),
+        Param("min_area", int, 4, "smallest blob kept, in pixels (smaller: noise)",
+              min=1, max=MAX_FRAME_PIXELS),
+        Param("max_area", int, 0, "largest blob kept, in pixels (0: no limit)",
+              min=0, max=MAX_FRAME_PIXELS),
         Param(
             "max_blobs",
             int,
             100,
             "at most this many blobs per frame, the largest (bounds the trackers' work)",
-            min=1,
+            min=1, max=1000,
         ),
     )
     requires = _SEGMENTS

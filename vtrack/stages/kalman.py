@@ -63,10 +63,11 @@ class Kalman(Stage):
             choices=("measurement", "filtered"),
         ),
         Param("q", float, 1.0, "process noise: Q = q I (cv, gravity), W = diag(0,0,q) (ca)",
-              min=0.0),
-        Param("r", float, 1.0, "measurement noise variance R (S0, S2: 1)", min=1e-9),
+              min=0.0, max=1e6),
+        Param("r", float, 1.0, "measurement noise variance R (S0, S2: 1)",
+              min=1e-9, max=1e6),
         Param("p0", float, 100.0, "initial covariance P0 = p0 I (cv, gravity; S4: 100)",
-              min=0.0),
+              min=0.0, max=1e6),
         Param(
             "timebase", str, "frame",
             "unit of the models' time step T: frame = dt frames per frame (S0, S4); seconds = "
@@ -77,11 +78,12 @@ class Kalman(Stage):
         ),
         Param("dt", float, 1.0,
               "timebase = frame: time step between frames in the models' unit (1 = a frame)",
-              min=1e-9),
+              min=1e-9, max=100.0),
         Param("kinematic", bool, False,
               "ca: use T^2/2 in A instead of the T^2 printed in S2 eq. 14"),
         Param("g", float, 1.0,
-              "gravity: vertical acceleration in pixels per dt^2, downwards positive"),
+              "gravity: vertical acceleration in pixels per dt^2, downwards positive",
+              min=-1e4, max=1e4),
         Param(
             "init", str, "document",
             "gravity: document = start from (w/2, 0, 0, 0) as in S4; first_measurement = "

@@ -68,10 +68,14 @@ class KalmanTracks(Stage):
             "cv = constant velocity per axis (S0); ca = constant acceleration per axis (S2)",
             choices=tuple(MOTION_MODELS),
         ),
-        Param("q", float, 1.0, "process noise Q = q I (not given by S4: 1)", min=0.0),
-        Param("r", float, 1.0, "measurement noise R = r I (not given by S4: 1)", min=1e-9),
-        Param("p0", float, 100.0, "initial covariance P(1) = p0 I (S4 eq. 13: 100)", min=0.0),
-        Param("dt", float, 1.0, "time step between frames (S4's dt; 1 = a frame)", min=1e-9),
+        Param("q", float, 1.0, "process noise Q = q I (not given by S4: 1)",
+              min=0.0, max=1e6),
+        Param("r", float, 1.0, "measurement noise R = r I (not given by S4: 1)",
+              min=1e-9, max=1e6),
+        Param("p0", float, 100.0, "initial covariance P(1) = p0 I (S4 eq. 13: 100)",
+              min=0.0, max=1e6),
+        Param("dt", float, 1.0, "time step between frames (S4's dt; 1 = a frame)",
+              min=1e-9, max=100.0),
         Param(
             "g",
             float,
@@ -79,6 +83,7 @@ class KalmanTracks(Stage):
             "S4's gravity input: vertical acceleration in pixels per dt^2, downwards positive "
             "(0: constant velocity, for targets that do not fall; the generated bounce scene "
             "at 30 fps falls at 1 px/frame^2)",
+            min=-1e4, max=1e4,
         ),
         Param(
             "gate",
@@ -86,15 +91,16 @@ class KalmanTracks(Stage):
             20.0,
             "largest distance in pixels between a track's predicted centre and a measurement "
             "it may take",
-            min=1.0,
+            min=1.0, max=1e5,
         ),
-        Param("confirm", int, 3, "updates after which a track is confirmed", min=1),
+        Param("confirm", int, 3, "updates after which a track is confirmed",
+              min=1, max=1000),
         Param(
             "max_coast",
             int,
             15,
             "a confirmed track missing more frames in a row than this is deleted",
-            min=0,
+            min=0, max=100000,
         ),
     )
     requires = frozenset({"detections"})

@@ -129,10 +129,12 @@ class KernelMeanShift(Stage):
               choices=("intersection", "bhattacharyya")),
         Param("max_iterations", int, 20,
               "cap on mean-shift steps per bandwidth (the document iterates to convergence)",
-              min=1),
+              min=1, max=100,
+          ),
         Param("epsilon", float, 1.0,
               "convergence: stop when the centre moves less than this in x and in y (S2: 1 px)",
-              min=0.0),
+              min=0.0, max=100.0,
+          ),
         Param("scale_step", float, 0.1,
               "bandwidths tried each frame: (1 - step, 1, 1 + step) x the previous one "
               "(S2: 0.9, 1.0, 1.1); 0 keeps a fixed box (one search per frame)",
@@ -145,7 +147,8 @@ class KernelMeanShift(Stage):
         Param("distance", float, 0.4,
               "threshold D on r = |x_ms - x_pred| + |y_ms - y_pred| (S2 eq. 17), in "
               "`distance_unit`s (S2 fig. 1(d): 18 <= D < 23 px for a 30x20 target, 0.4 box)",
-              min=0.0),
+              min=0.0, max=1e5,
+          ),
         Param("distance_unit", str, "box",
               "unit of `distance`: box = the current box's width + height (D = 20 px for the "
               "document's 30x20 target, and in proportion for others), px = pixels",
@@ -249,6 +252,8 @@ class KernelMeanShift(Stage):
         # S2 step 7 / note 2: s_k = 0.1 s_best + 0.9 s_(k-1)
         gamma = self.scale_smoothing
         scale = gamma * best.scale + (1.0 - gamma) * self._scale
+        # Bounded work and memory (docs/stages.md, Limits): the box never outgrows the frame.
+        scale = min(scale, frame.width / self._size0[0], frame.height / self._size0[1])
         return _Search(best.cx, best.cy, scale, best.rho, iterations)
 
     def _converge(self, frame: Frame, cx: float, cy: float, scale: float) -> _Search:

@@ -109,11 +109,12 @@ class MeanShift(Stage):
         Param(
             "iterations", int, 1,
             "steps per frame at most (S0: 1, iterating between frames; tutorial CamShift: 10)",
-            min=1,
+            min=1, max=100,
         ),
         Param(
             "epsilon", float, 1.0,
-            "stop iterating within a frame once a step is shorter than this (pixels)", min=0.0,
+            "stop iterating within a frame once a step is shorter than this (pixels)",
+            min=0.0, max=100.0,
         ),
         Param(
             "normalization", str, "weighted",

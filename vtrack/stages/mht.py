@@ -171,7 +171,7 @@ class MultipleHypothesis(Stage):
             "association gate: largest distance in pixels between a track's prediction and a "
             "measurement (S3 2.3: the distance itself is the association measure; size not "
             "given: 20)",
-            min=1.0,
+            min=1.0, max=1e5,
         ),
         Param(
             "max_branches",
@@ -179,19 +179,21 @@ class MultipleHypothesis(Stage):
             3,
             "a branch continues with at most this many measurements of its gate, the nearest "
             "(bounds the branching; not in S3)",
-            min=1,
+            min=1, max=16,
         ),
-        Param("initial", float, 1.0, "P_R of a new track (S3 2.3, value not given: 1)", min=0.0),
+        Param("initial", float, 1.0, "P_R of a new track (S3 2.3, value not given: 1)",
+              min=0.0, max=1e6),
         Param("hit", float, 1.0, "P_R increment on an update (S3 2.3, value not given: 1)",
-              min=0.0),
+              min=0.0, max=1e6),
         Param("miss", float, 1.0, "P_R decrement on a frame without update (S3 2.3, not given: 1)",
-              min=0.0),
+              min=0.0, max=1e6),
         Param(
             "confirm",
             float,
             3.0,
             "a track is confirmed once its P_R reaches this (S3 2.3 confirmation threshold, "
             "value not given: 3 = a new track updated twice)",
+            min=-1e6, max=1e6,
         ),
         Param(
             "delete",
@@ -199,6 +201,7 @@ class MultipleHypothesis(Stage):
             0.5,
             "a branch whose P_R falls below this is deleted (S3 2.3 deletion threshold, value "
             "not given: 0.5 = a new track missed once)",
+            min=-1e6, max=1e6,
         ),
         Param(
             "max_coast",
@@ -206,7 +209,7 @@ class MultipleHypothesis(Stage):
             15,
             "a branch without measurement for more frames in a row than this is deleted (not "
             "in S3; must outlast targets merging into one blob when they cross)",
-            min=0,
+            min=0, max=100000,
         ),
         Param(
             "max_hypotheses",
@@ -214,7 +217,7 @@ class MultipleHypothesis(Stage):
             8,
             "hypotheses kept per frame, the best (bounds the work; S3 2.4 deletes low-P_H "
             "hypotheses without saying how many remain)",
-            min=1,
+            min=1, max=64,
         ),
         Param(
             "prune_margin",
@@ -222,7 +225,7 @@ class MultipleHypothesis(Stage):
             4.0,
             "hypotheses whose P_H is more than this below the best are deleted (S3 2.4, value "
             "not given: 4)",
-            min=0.0,
+            min=0.0, max=1e6,
         ),
         Param(
             "global_delete",
@@ -230,7 +233,7 @@ class MultipleHypothesis(Stage):
             0.5,
             "branches whose global confidence P_G (S3 eq. 7) is below this are deleted (value "
             "not given: 0.5)",
-            min=0.0,
+            min=0.0, max=1e6,
         ),
     )
     requires = frozenset({"detections"})

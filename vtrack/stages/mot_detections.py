@@ -44,6 +44,7 @@ class MotDetections(Stage):
             0.0,
             "detections with a confidence below this are dropped (DPM scores may be negative: "
             "lower it to keep them)",
+            min=-1e9, max=1e9,
         ),
     )
     provides = frozenset({"detections"})

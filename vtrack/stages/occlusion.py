@@ -85,23 +85,26 @@ class Occlusion(Stage):
             "threshold", float, 0.05,
             "hidden below this: bp_mass is the visible share of the target's colour, ~0 when "
             "fully hidden with a saturation mask (without one, grey's random hue: use ~0.15)",
-            min=0.0,
+            min=0.0, max=100.0,
         ),
         Param(
             "recover", float, 0.05,
             "tracking again at or above this (hysteresis, >= threshold; without a saturation "
             "mask the best box of a widened window reaches ~0.1 by chance: use ~0.25)",
-            min=0.0,
+            min=0.0, max=100.0,
         ),
         Param(
             "lost_after", int, 60,
-            "hidden frames after which the state is lost, not occluded (1 s at 60 fps)", min=1,
+            "hidden frames after which the state is lost, not occluded (1 s at 60 fps)",
+            min=1, max=100000,
         ),
         Param(
-            "growth", float, 1.1, "search window widening factor per hidden frame", min=1.0,
+            "growth", float, 1.1, "search window widening factor per hidden frame",
+            min=1.0, max=4.0,
         ),
         Param(
-            "max_growth", float, 3.0, "largest widening of the search window", min=1.0,
+            "max_growth", float, 3.0, "largest widening of the search window",
+            min=1.0, max=16.0,
         ),
     )
     requires = frozenset(

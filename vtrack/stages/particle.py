@@ -74,7 +74,8 @@ class ParticleFilter(Stage):
     name = "particle"
     summary = "S1 particle filter: hue histograms, centroid correction, tracked/lost state"
     params = (
-        Param("particles", int, 8, "number of particles per frame (S1 embodiment: 8)", min=1),
+        Param("particles", int, 8, "number of particles per frame (S1 embodiment: 8)",
+              min=1, max=1024),
         Param(
             "lost_particles",
             int,
@@ -83,7 +84,7 @@ class ParticleFilter(Stage):
             "(S1). Not the document's: a frame finds the returned target with probability "
             "1 - (1 - p)^N for N particles, p the share of positions that pass the threshold "
             "(~1% for a target 1/60 of the frame: 8 particles wait ~11 frames, 64 about 2)",
-            min=0,
+            min=0, max=1024,
         ),
         Param(
             "near_share",
@@ -101,7 +102,7 @@ class ParticleFilter(Stage):
             "near particles are offset uniformly by up to spread x the box width/height from "
             "the last position (in box sizes; not given by S1: 0.25 keeps the best of 6 near "
             "particles' weight >= 0.9 in 90% of frames on a still target)",
-            min=0.0,
+            min=0.0, max=10.0,
         ),
         Param(
             "bins",
@@ -133,7 +134,7 @@ class ParticleFilter(Stage):
             int,
             10,
             "tracked frames between the compared weights (S1 item 6: 10)",
-            min=1,
+            min=1, max=1000,
         ),
         Param("draw_particles", bool, False, "add the particle boxes to the drawing overlays"),
     )
