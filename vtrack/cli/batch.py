@@ -5,24 +5,16 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
-from tqdm import tqdm
 
-from vtrack.batch import (
-    DaskExecutor,
-    Executor,
-    LocalExecutor,
-    RunOptions,
-    cpu_count,
-    find_inputs,
-    plan,
-    run_batch,
-)
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
-from vtrack.config import DEFAULT_CONFIG, Config, load_config
 from vtrack.errors import ConfigError
+
+if TYPE_CHECKING:
+    from vtrack.config import Config
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -38,6 +30,8 @@ def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
+    from vtrack.config import DEFAULT_CONFIG, load_config
+
     configs: dict[str, Config] = {}
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec).with_overrides(list(overrides))
@@ -88,6 +82,21 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     complete are skipped (resume) unless --force. A failing input does not stop the others;
     the exit code is 1 if any failed.
     """
+    # imported here, not at the top: other commands start without them (Dask loads only
+    # inside DaskExecutor, with --scheduler)
+    from tqdm import tqdm
+
+    from vtrack.batch import (
+        DaskExecutor,
+        Executor,
+        LocalExecutor,
+        RunOptions,
+        cpu_count,
+        find_inputs,
+        plan,
+        run_batch,
+    )
+
     if scheduler and jobs is not None:
         raise click.UsageError("--jobs and --scheduler exclude each other")
     configs = _configs(config_specs, overrides)

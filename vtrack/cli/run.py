@@ -6,12 +6,6 @@ import sys
 from pathlib import Path
 
 import click
-from tqdm import tqdm
-
-from vtrack.config import load_config
-from vtrack.evaluate.groundtruth import parse_box
-from vtrack.io import RawFormat
-from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
@@ -64,6 +58,14 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     INPUT is a video file, an image-sequence folder (img/0001.jpg ...), or raw frames from
     '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
     """
+    # imported here, not at the top: `vtrack --help` and the other commands start without them
+    from tqdm import tqdm
+
+    from vtrack.config import load_config
+    from vtrack.evaluate.groundtruth import parse_box
+    from vtrack.io import RawFormat
+    from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
+
     config = load_config(config_spec).with_overrides(list(overrides))
     raw = RawFormat.parse(raw_size, pix_fmt, fps or 30.0) if raw_size else None
     if raw is None and input_spec == "-":

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import click
 
-from vtrack.config import load_config, shipped_configs
-from vtrack.stages.base import all_stages
-
 
 def stages_text(markdown: bool = False) -> str:
     """The stage reference (plain text for the terminal, or Markdown for docs/stages.md)."""
+    from vtrack.config import load_config, shipped_configs
+    from vtrack.stages.base import all_stages
+
     lines: list[str] = []
     if markdown:
         lines += ["# Stages and parameters", "",
