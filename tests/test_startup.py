@@ -40,7 +40,8 @@ def heavy(modules: set[str]) -> list[str]:
 
 
 @pytest.mark.parametrize("args", [["--version"], ["--help"], ["run", "--help"],
-                                  ["batch", "--help"], ["stages"], ["scene", "--help"]])
+                                  ["batch", "--help"], ["stages"], ["scene", "--help"],
+                                  ["select", "--help"], ["frame", "--help"]])
 def test_commands_that_do_not_plot_load_no_plotting_and_no_dask(args: list[str]) -> None:
     modules, stdout = loaded_modules(*args)
     assert stdout.strip(), "the command printed nothing: the probe did not run it"
