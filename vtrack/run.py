@@ -43,6 +43,7 @@ from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import Box
 from vtrack.io import (
     CsvWriter,
+    InputInfo,
     RawFormat,
     Source,
     VideoWriter,
@@ -238,10 +239,12 @@ class _MultiTargetRows:
         return rows
 
 
-def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> RunSummary:
+def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
+        on_open: Callable[[InputInfo], None] | None = None) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
 
-    ``on_frame(n)`` is called after each frame with the number of frames done (progress bars).
+    ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
+    progress bar); ``on_frame(n)`` after each frame with the number of frames done.
     """
     stages = request.config.build()
     pipeline = Pipeline(stages, seed=request.seed)
@@ -270,6 +273,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     if init_box is not None:
         _check_init_box(init_box, info.width, info.height, "--init" if request.init_box else
                         str(request.gt_path))
+    if on_open is not None:
+        on_open(info)
 
     formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
         pipeline.columns, gt)

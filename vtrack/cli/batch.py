@@ -96,6 +96,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         plan,
         run_batch,
     )
+    from vtrack.cli._progress import terminal
 
     if scheduler and jobs is not None:
         raise click.UsageError("--jobs and --scheduler exclude each other")
@@ -111,13 +112,16 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                  force=force)
     summary_path = out_dir / "summary.csv"
     outcomes = []
-    with tqdm(total=len(batch.order), unit="run", desc="batch", dynamic_ncols=True,
-              disable=quiet or not sys.stderr.isatty()) as bar:
+    # runs done / total with ETA; runs already complete (resume) start the bar, not its rate
+    known = len(batch.known)
+    with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
+              dynamic_ncols=True, disable=not terminal(quiet)) as bar:
         for outcome in run_batch(batch, executor, summary_path):
             outcomes.append(outcome)
             if not quiet:
                 bar.write(outcome.line(), file=sys.stdout)
-            bar.update()
+            if len(outcomes) > known:
+                bar.update()
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1

@@ -59,8 +59,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
     """
     # imported here, not at the top: `vtrack --help` and the other commands start without them
-    from tqdm import tqdm
-
+    from vtrack.cli._progress import FrameProgress, terminal
     from vtrack.config import load_config
     from vtrack.evaluate.groundtruth import parse_box
     from vtrack.io import RawFormat
@@ -84,10 +83,11 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         seed=seed,
         max_frames=max_frames,
     )
-    show_bar = not quiet and sys.stderr.isatty()
-    with tqdm(total=max_frames, unit="frame", disable=not show_bar, dynamic_ncols=True,
-              desc=Path(input_spec).name or input_spec) as bar:
-        summary = run(request, on_frame=lambda _n: bar.update())
+    progress = FrameProgress(terminal(quiet), max_frames)
+    try:
+        summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open)
+    finally:
+        progress.close()
     for warning in summary.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:
