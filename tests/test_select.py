@@ -111,7 +111,8 @@ class Select:
         self.process = subprocess.Popen([sys.executable, "-m", "vtrack", "select", *args],
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         self.lines: queue.Queue[str] = queue.Queue()
-        threading.Thread(target=self._read, daemon=True).start()
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
         line = self.lines.get(timeout=30)
         assert "http://127.0.0.1:" in line, line
         self.url = line[line.index("http://"):].split()[0]
@@ -122,7 +123,10 @@ class Select:
             self.lines.put(line)
 
     def finish(self) -> tuple[int, str, str]:
-        out, _ = self.process.communicate(timeout=30)
+        assert self.process.stdout is not None
+        self.process.wait(timeout=30)  # its few lines fit in the pipe's buffer
+        out = self.process.stdout.read()  # (not communicate(): the reader thread owns stderr)
+        self.reader.join(timeout=10)  # stderr read to its end
         err = []
         while not self.lines.empty():
             err.append(self.lines.get())
