@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import vtrack
 from vtrack.geometry import center_error
@@ -29,3 +30,40 @@ def test_track_a_path_and_frames_follow_the_target_alike(tmp_path: Path) -> None
     # the decoded clip differs from the rendered frames only by compression
     drift = [center_error(a.box, b.box) for a, b in zip(from_file, in_memory, strict=True)]
     assert np.median(drift) < 3.0
+
+
+def test_track_takes_plain_values_path_tuple_and_numpy_frames(tmp_path: Path) -> None:
+    """Issue 12 item 4: a pathlib.Path, a tuple box and NumPy BGR arrays give the same track
+    as the library's own types."""
+    scene = make_scene("smooth", seed=2, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    start = tuple(float(v) for v in scene.boxes[0])
+    typed = [r.box for r in vtrack.track(str(clip), "s0", vtrack.Box(*start))]
+    plain = [r.box for r in vtrack.track(clip, "s0", start)]  # pathlib.Path, tuple
+    assert plain == typed and len(plain) == 20
+    from_arrays = list(vtrack.track(scene.frames(), "s0", list(start)))
+    from_frames = list(vtrack.track(scene.as_frames(), "s0", vtrack.Box(*start)))
+    assert [r.box for r in from_arrays] == [r.box for r in from_frames]
+    assert [r.time_s for r in from_arrays] == [r.time_s for r in from_frames]
+    # a grey image is a frame too (for a grey tracker)
+    grey = [np.ascontiguousarray(f[:, :, 1]) for f in scene.frames()]
+    assert len(list(vtrack.track(grey, "s2", start))) == 20
+
+
+def test_track_rejects_values_it_cannot_use_with_a_clear_message() -> None:
+    frames = [np.zeros((48, 64, 3), np.uint8)] * 2
+    with pytest.raises(ValueError, match="4 numbers"):
+        list(vtrack.track(frames, "s0", (1, 2, 3)))
+    with pytest.raises(ValueError, match="positive"):
+        list(vtrack.track(frames, "s0", (1, 2, 0, 5)))
+    with pytest.raises(TypeError, match="frame 0.*float32"):
+        list(vtrack.track([np.zeros((48, 64, 3), np.float32)], "s0", (1, 2, 8, 8)))
+    with pytest.raises(TypeError, match="frame 1.*str"):
+        list(vtrack.track([frames[0], "frame.png"], "s2", (1, 2, 8, 8)))
+
+
+def test_frame_types_are_exported_and_construct_frames() -> None:
+    bgr = np.full((24, 32, 3), 90, np.uint8)
+    for frame in (vtrack.BgrFrame(0, 0.0, bgr), vtrack.GrayFrame(0, 0.0, bgr[:, :, 0].copy())):
+        assert isinstance(frame, vtrack.Frame) and (frame.width, frame.height) == (32, 24)
+    assert {"Box", "Frame", "BgrFrame", "GrayFrame", "I420Frame", "track"} <= set(vtrack.__all__)

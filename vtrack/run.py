@@ -41,6 +41,7 @@ from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import MIN_BOX_SIDE, Box
 from vtrack.io import (
     CsvWriter,
+    InputInfo,
     Source,
     VideoWriter,
     open_source,
@@ -252,10 +253,12 @@ class _Tracked:
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
 
 
-def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> RunSummary:
+def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
+        on_open: Callable[[InputInfo], None] | None = None) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
 
-    ``on_frame(n)`` is called after each frame with the number of frames done (progress bars).
+    ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
+    progress bar); ``on_frame(n)`` after each frame with the number of frames done.
     Resolve (chain, ground truth, initial box) -> track (the frame loop, writing as it goes)
     -> record (metrics, summary, ``run.json``).
     """
@@ -265,6 +268,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
     if resolved.init_box is not None:
         _check_init_box(resolved.init_box, info.width, info.height,
                         "--init" if request.init_box else str(request.gt_path))
+    if on_open is not None:
+        on_open(info)
     pipeline = resolved.pipeline
     formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
         pipeline.columns, resolved.gt)

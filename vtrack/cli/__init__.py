@@ -1,5 +1,8 @@
-"""The ``vtrack`` command. Each module of this package defines one click command as ``command``;
-the group collects them, so a command lives in one file and this file never changes for it.
+"""The ``vtrack`` command. Each module of this package defines one click command as ``command``,
+named like the module; the group finds them, so a command lives in one file and this file never
+changes for it. A command's module is imported only when that command (or the command list of
+``vtrack --help``) is asked for, and command modules import their heavy parts inside the command
+function: ``vtrack run --help`` never loads the report's plotting, Dask or the scene generator.
 
 User errors (:class:`~vtrack.errors.VtrackError`) become one line on stderr and exit code 2.
 """
@@ -17,7 +20,17 @@ from vtrack.errors import VtrackError
 
 
 class _Group(click.Group):
-    """A group that turns user errors into one line and a non-zero exit, never a traceback."""
+    """A group that loads a command's module on demand and turns user errors into one line and
+    a non-zero exit, never a traceback."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_"))
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.list_commands(ctx):
+            return None
+        command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
+        return command if isinstance(command, click.Command) else None
 
     def invoke(self, ctx: click.Context) -> object:
         try:
@@ -35,13 +48,3 @@ class _Group(click.Group):
 def main() -> None:
     """Classic real-time video object tracking: run a tracker over video, image sequences or raw
     streams; batch whole folders; report overlap against ground truth."""
-
-
-def _add_commands() -> None:
-    for module in pkgutil.iter_modules(__path__):
-        command = getattr(importlib.import_module(f"{__name__}.{module.name}"), "command", None)
-        if isinstance(command, click.Command):
-            main.add_command(command)
-
-
-_add_commands()

@@ -5,24 +5,16 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
-from tqdm import tqdm
 
-from vtrack.batch import (
-    DaskExecutor,
-    Executor,
-    LocalExecutor,
-    cpu_count,
-    find_inputs,
-    plan,
-    run_batch,
-)
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
-from vtrack.config import DEFAULT_CONFIG, Config, load_config
 from vtrack.errors import ConfigError
-from vtrack.request import RunRequest
+
+if TYPE_CHECKING:
+    from vtrack.config import Config
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -38,6 +30,8 @@ def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
+    from vtrack.config import DEFAULT_CONFIG, load_config
+
     configs: dict[str, Config] = {}
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec).with_overrides(list(overrides))
@@ -88,6 +82,22 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     complete are skipped (resume) unless --force. A failing input does not stop the others;
     the exit code is 1 if any failed.
     """
+    # imported here, not at the top: other commands start without them (Dask loads only
+    # inside DaskExecutor, with --scheduler)
+    from tqdm import tqdm
+
+    from vtrack.batch import (
+        DaskExecutor,
+        Executor,
+        LocalExecutor,
+        cpu_count,
+        find_inputs,
+        plan,
+        run_batch,
+    )
+    from vtrack.cli._progress import terminal
+    from vtrack.request import RunRequest
+
     if scheduler and jobs is not None:
         raise click.UsageError("--jobs and --scheduler exclude each other")
     configs = _configs(config_specs, overrides)
@@ -103,13 +113,16 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                  force=force)
     summary_path = out_dir / "summary.csv"
     outcomes = []
-    with tqdm(total=len(batch.order), unit="run", desc="batch", dynamic_ncols=True,
-              disable=quiet or not sys.stderr.isatty()) as bar:
+    # runs done / total with ETA; runs already complete (resume) start the bar, not its rate
+    known = len(batch.known)
+    with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
+              dynamic_ncols=True, disable=not terminal(quiet)) as bar:
         for outcome in run_batch(batch, executor, summary_path):
             outcomes.append(outcome)
             if not quiet:
                 bar.write(outcome.line(), file=sys.stdout)
-            bar.update()
+            if len(outcomes) > known:
+                bar.update()
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.report import DEFAULT_TITLE, build_report
+DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
 
 @click.command("report")
@@ -29,6 +29,8 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""
+    from vtrack.report import build_report  # plotting loads only for this command
+
     report = build_report(list(results), out_dir, gt=list(gt_specs), gt_origin=gt_origin,
                           title=title)
     for warning in report.warnings:

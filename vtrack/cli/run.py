@@ -7,13 +7,6 @@ import sys
 from pathlib import Path
 
 import click
-from tqdm import tqdm
-
-from vtrack.config import load_config
-from vtrack.errors import ConfigError
-from vtrack.evaluate.groundtruth import parse_box
-from vtrack.io import RawFormat
-from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
@@ -69,6 +62,14 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     INPUT is a video file, an image-sequence folder (img/0001.jpg ...), or raw frames from
     '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
     """
+    # imported here, not at the top: `vtrack --help` and the other commands start without them
+    from vtrack.cli._progress import FrameProgress, terminal
+    from vtrack.config import load_config
+    from vtrack.errors import ConfigError
+    from vtrack.evaluate.groundtruth import parse_box
+    from vtrack.io import RawFormat
+    from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
+
     config = load_config(config_spec).with_overrides(list(overrides))
     if fps is not None and not (math.isfinite(fps) and fps > 0):
         raise ConfigError(f"--fps {fps:g}: must be a positive number of frames per second")
@@ -90,10 +91,11 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         seed=seed,
         max_frames=max_frames,
     )
-    show_bar = not quiet and sys.stderr.isatty()
-    with tqdm(total=max_frames, unit="frame", disable=not show_bar, dynamic_ncols=True,
-              desc=Path(input_spec).name or input_spec) as bar:
-        summary = run(request, on_frame=lambda _n: bar.update())
+    progress = FrameProgress(terminal(quiet), max_frames)
+    try:
+        summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open)
+    finally:
+        progress.close()
     for warning in summary.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:

@@ -50,34 +50,48 @@ def _shade(axis, values: Sequence[object], value: object, colour: str, label: st
                      label=label if n == 0 else None)
 
 
-def overlap_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
-                 path: Path) -> Path:
-    """Overlap with the ground truth in % per frame; a panel per run (configuration) with the
-    frames it reported occluded or lost shaded, and frames without ground truth in grey."""
-    figure = Figure(figsize=(10, 0.6 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
+#: The y range of every 0..1 score axis (overlap over time, success and precision plots).
+SCORE_YLIM = (0.0, 1.02)
+
+
+def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]) -> Figure:
+    """Overlap (IoU, 0..1 like the success plot) with the ground truth per frame; a panel per
+    run (configuration) with the frames it reported occluded or lost shaded, and frames without
+    ground truth in grey. The shading legend sits above the panels, never over the data."""
+    figure = Figure(figsize=(10, 0.9 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
     axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
+    legend: dict[str, object] = {}
     for axis, run in zip(axes, runs, strict=True):
         overlaps = np.array([np.nan if o is None else o for o in run.overlaps or []], float)
         for state, (colour, label) in SHADES.items():
             _shade(axis, run.states, state, colour, label)
         _shade(axis, [o is None for o in run.overlaps or []], True, NO_GT_SHADE,
                "no ground truth")
-        axis.plot(np.arange(len(overlaps)), 100 * overlaps, color=palette[run.config], lw=1.2)
-        axis.set_ylim(0, 100)
+        axis.plot(np.arange(len(overlaps)), overlaps, color=palette[run.config], lw=1.2)
+        axis.set_ylim(*SCORE_YLIM)
         axis.set_xlim(-0.5, max(len(overlaps), 1) - 0.5)
-        axis.set_ylabel("overlap %")
+        axis.set_ylabel("overlap (IoU)")
         axis.set_title(run.config, loc="left", fontsize=10, color=palette[run.config])
         axis.grid(alpha=0.3)
-        if axis.get_legend_handles_labels()[0]:
-            axis.legend(loc="lower right", fontsize=8, ncols=3, framealpha=0.8)
+        for handle, label in zip(*axis.get_legend_handles_labels(), strict=True):
+            legend.setdefault(label, handle)
+    if legend:  # one legend for all panels, outside them (constrained layout makes room)
+        figure.legend(list(legend.values()), list(legend), loc="outside upper right",
+                      fontsize=8, ncols=len(legend), frameon=False)
     axes[-1].set_xlabel("frame")
     figure.suptitle(f"{name}: overlap with ground truth over time", fontsize=11)
-    figure.savefig(path)
+    return figure
+
+
+def overlap_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
+                 path: Path) -> Path:
+    """:func:`overlap_figure` saved as ``path``."""
+    overlap_figure(name, runs, palette).savefig(path)
     return path
 
 
-def curves_plot(title: str, success: Mapping[str, np.ndarray], precision: Mapping[str, np.ndarray],
-                palette: Mapping[str, str], path: Path) -> Path:
+def curves_figure(title: str, success: Mapping[str, np.ndarray],
+                  precision: Mapping[str, np.ndarray], palette: Mapping[str, str]) -> Figure:
     """Success plot and precision plot side by side, configurations ordered best first.
 
     ``success[config]`` holds the 21 success rates at :data:`OVERLAP_THRESHOLDS`, its legend the
@@ -99,12 +113,18 @@ def curves_plot(title: str, success: Mapping[str, np.ndarray], precision: Mappin
         (right, "location error threshold (px)", "Precision plot (at 20 px)", 50.0),
     ):
         axis.set_xlim(0, xmax)
-        axis.set_ylim(0, 1.02)
+        axis.set_ylim(*SCORE_YLIM)
         axis.set_xlabel(xlabel)
         axis.set_ylabel("success rate" if axis is left else "precision")
         axis.set_title(name, fontsize=10)
         axis.grid(alpha=0.3)
         axis.legend(loc="lower left" if axis is left else "lower right", fontsize=8)
     figure.suptitle(title, fontsize=11)
-    figure.savefig(path)
+    return figure
+
+
+def curves_plot(title: str, success: Mapping[str, np.ndarray], precision: Mapping[str, np.ndarray],
+                palette: Mapping[str, str], path: Path) -> Path:
+    """:func:`curves_figure` saved as ``path``."""
+    curves_figure(title, success, precision, palette).savefig(path)
     return path

@@ -82,6 +82,8 @@ class RunResult:
     multi_target: bool
     ground_truth: str | None = None
     error: str | None = None
+    #: Frames of the input as ``run.json`` recorded when it opened (exact or estimated).
+    input_frames: int | None = None
     states: list[str] = field(default_factory=list)
     overlaps: list[float | None] | None = None
     errors: list[float | None] | None = None
@@ -96,6 +98,10 @@ class RunResult:
         if not self.overlaps or self.errors is None:
             return None
         return Scores.of(self.overlaps, self.errors)
+
+
+def _int_or_none(value: object) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
 
 
 @dataclass(frozen=True)
@@ -254,6 +260,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         frames_lost=int(summary.get("frames_lost") or 0),
         multi_target=(folder / "tracks.csv").is_file(),
         error=record.get("error"),
+        input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
     )
     if result.multi_target:
         result.mot = dict(record.get("metrics") or {})

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from vtrack.report.runs import RunResult
+from vtrack.run import STATUS_INTERRUPTED, STATUS_PARTIAL
 
 #: Multi-target metrics shown first, in this order, when a run records them.
 MOT_ORDER = ("mota", "motp", "idf1", "id_switches", "fragmentations", "false_positives",
@@ -95,8 +96,20 @@ RESULT_COLUMNS = (
 RUN_LABELS = ["Input", "Config", "Status"]
 
 
+#: Statuses of runs that stopped before the end of their input (their results are partial).
+INCOMPLETE = (STATUS_PARTIAL, STATUS_INTERRUPTED)
+
+
+def status_text(run: RunResult) -> str:
+    """The run's status; one that stopped early says how far it got
+    (``partial: 40 of 60 frames``)."""
+    if run.status in INCOMPLETE and run.input_frames:
+        return f"{run.status}: {run.frames} of {run.input_frames} frames"
+    return run.status
+
+
 def _run_label(run: RunResult) -> list[str]:
-    return [run.input, run.config, run.status]
+    return [run.input, run.config, status_text(run)]
 
 
 def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
@@ -126,16 +139,23 @@ def _mean(values: Sequence[float | None]) -> float | None:
 
 
 def average_table(by_config: dict[str, list[RunResult]]) -> Table:
-    """One row per configuration: the mean of each score over its inputs with ground truth
-    (the AUC of the averaged success plot), the mean fps and the total of lost frames."""
+    """One row per configuration over the inputs it counts: the runs with ground truth (the
+    inputs of the "All inputs" plot), or, for a configuration without any, the runs that
+    tracked frames. Each score is the mean over those runs, fps their mean and lost frames
+    their total; a configuration whose counted runs include partial (or interrupted) ones says
+    how many."""
     table = Table(["Config"] + [c.title for c in AVERAGE_COLUMNS])
-    values = []
-    for runs in by_config.values():
-        scored = [_scores(r)[1:] for r in runs if r.scores is not None]
-        means = [_mean(column) for column in zip(*scored, strict=True)] if scored else [None] * 3
-        values.append([len(scored), *means, _mean([r.fps for r in runs]),
-                       sum(r.frames_lost for r in runs)])
-    _add_group(table, [[config] for config in by_config], values, AVERAGE_COLUMNS)
+    values, labels = [], []
+    for config, runs in by_config.items():
+        scored = [r for r in runs if r.scores is not None]
+        counted = scored or [r for r in runs if r.frames > 0]
+        scores = [_scores(r)[1:] for r in scored]
+        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 3
+        values.append([len(counted), *means, _mean([r.fps for r in counted]),
+                       sum(r.frames_lost for r in counted)])
+        partial = sum(r.status in INCOMPLETE for r in counted)
+        labels.append([f"{config} ({partial} partial)" if partial else config])
+    _add_group(table, labels, values, AVERAGE_COLUMNS)
     return table
 
 

@@ -1,0 +1,114 @@
+"""Progress you can read (issue 12 item 3): the bars as a user sees them in a terminal.
+
+Each command runs as a real subprocess whose stderr is a pseudo-terminal (``pty``), so tqdm
+draws exactly what it draws for a user; the captured text is checked for the total, the
+percentage and the ETA, and for the absence of any bar before an input error.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import pty
+import re
+import struct
+import subprocess
+import sys
+import termios
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+FRAMES = 24
+
+
+def in_terminal(*args: str, cwd: Path) -> tuple[int, str]:
+    """Run ``vtrack ARGS`` with stderr on a 120x40 pseudo-terminal; its exit code and what the
+    terminal received."""
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", *args], cwd=cwd,
+                               stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                               stderr=slave)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 65536)
+        except OSError:  # EIO: the child closed the terminal
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    return process.wait(timeout=60), b"".join(chunks).decode(errors="replace")
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("progress")
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=FRAMES, fps=30)
+    path = write_video(scene, folder / "walk.mp4")
+    write_groundtruth(scene, folder / "walk.gt.txt")
+    return path
+
+
+def test_run_bar_shows_total_percent_rate_and_eta(clip: Path, tmp_path: Path) -> None:
+    code, screen = in_terminal("run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")),
+                               "--no-video", "--out", "out", cwd=tmp_path)
+    assert code == 0, screen
+    assert f"{FRAMES}/{FRAMES}" in screen and "100%" in screen
+    # tqdm's "[elapsed<remaining, rate]": the ETA and the rate are there
+    assert re.search(r"\[\d\d:\d\d<\d\d:\d\d, +[\d.]+ ?frame/s\]", screen), screen
+    assert re.search(r"walk: +\d+%\|", screen), screen
+
+
+def test_run_bar_total_is_capped_by_frames(clip: Path, tmp_path: Path) -> None:
+    code, screen = in_terminal("run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")),
+                               "--no-video", "--frames", "10", "--out", "out", cwd=tmp_path)
+    assert code == 0, screen
+    assert "10/10" in screen and f"/{FRAMES}" not in screen
+
+
+def test_an_input_error_prints_no_bar(tmp_path: Path) -> None:
+    code, screen = in_terminal("run", "missing.mp4", "--init", "1,1,5,5", cwd=tmp_path)
+    assert code == 2
+    assert screen.strip() == "vtrack: error: missing.mp4: no such file"
+
+
+def test_a_box_outside_the_frame_prints_no_bar(clip: Path, tmp_path: Path) -> None:
+    code, screen = in_terminal("run", str(clip), "--init", "500,500,10,10", cwd=tmp_path)
+    assert code == 2
+    assert "frame/s" not in screen and "%|" not in screen and "0frame" not in screen
+    assert screen.strip().startswith("vtrack: error: --init")
+
+
+def test_batch_bar_shows_runs_done_of_total_with_eta(clip: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("a", "b"):
+        (folder / f"{name}.mp4").write_bytes(clip.read_bytes())
+        (folder / f"{name}.gt.txt").write_bytes(clip.with_suffix(".gt.txt").read_bytes())
+    args = ("batch", str(folder), "--no-video", "--jobs", "1", "--out", "res")
+    code, screen = in_terminal(*args, cwd=tmp_path)
+    assert code == 0, screen
+    assert "2/2" in screen and "100%" in screen
+    assert re.search(r"\[\d\d:\d\d<\d\d:\d\d", screen), screen
+    # a resumed batch starts the bar at the runs already complete
+    code, screen = in_terminal(*args, "--config", "s0", "--config", "s2", cwd=tmp_path)
+    assert code == 0, screen
+    assert "4/4" in screen and re.search(r"2/4", screen), screen
+
+
+def test_a_tracker_that_cannot_start_prints_no_bar(clip: Path, tmp_path: Path) -> None:
+    """S0 refuses a box with no colour on the first frame: the error comes alone."""
+    grey = tmp_path / "grey.mp4"
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=12, fps=30)
+    write_video(scene, grey)
+    code, screen = in_terminal("run", str(grey), "--init", "0,0,12,12", "--no-video",
+                               cwd=tmp_path)
+    assert code != 0, "the grey background corner should have no colour for S0"
+    assert "%|" not in screen and "frame/s" not in screen, screen
+    assert screen.strip().startswith("vtrack: error:")

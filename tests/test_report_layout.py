@@ -1,0 +1,106 @@
+"""Report details (issue 12 item 8) on real runs of generated clips: the shading legend does
+not cover the data, overlap over time uses the success plot's 0..1 scale, partial runs are
+marked partial, and the "All inputs" row counts only the inputs it lists."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from vtrack.report import build_report, plots
+from vtrack.report.runs import load_run
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H = 160, 120
+
+
+def vtrack_run(clip: Path, out: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "--no-video",
+                           "--quiet", "--out", str(out), *args], capture_output=True, text=True,
+                          timeout=120, check=False)
+
+
+def clip_with_gt(folder: Path, scenario: str, frames: int, ext: str = ".mp4"
+                 ) -> tuple[Path, Path]:
+    scene = make_scene(scenario, seed=0, width=W, height=H, frames=frames, fps=30)
+    clip = write_video(scene, folder / f"{scenario}{ext}")
+    return clip, write_groundtruth(scene, folder / f"{scenario}.gt.txt")
+
+
+@pytest.fixture(scope="module")
+def occluded_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("layout")
+    clip, gt = clip_with_gt(folder, "occlusion", 60)
+    done = vtrack_run(clip, folder / "run", "--gt", str(gt))
+    assert done.returncode == 0, done.stderr
+    return folder / "run"
+
+
+def test_overlap_plot_legend_is_outside_the_data_and_uses_the_success_scale(
+        occluded_run: Path) -> None:
+    run = load_run(occluded_run)
+    assert run.frames_occluded > 0, "the occlusion scene should make S0 report occlusion"
+    palette = plots.colours([run.config])
+    figure = plots.overlap_figure("occlusion", [run, run], palette)
+    curves = plots.curves_figure("occlusion", {run.config: run.scores.success},
+                                 {run.config: run.scores.precision}, palette)
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.draw(renderer)
+    (legend,) = figure.legends
+    assert "occluded" in [t.get_text() for t in legend.get_texts()]
+    box = legend.get_window_extent(renderer)
+    for axis in figure.axes:
+        assert not box.overlaps(axis.get_window_extent(renderer)), "legend covers a panel"
+        assert axis.get_legend() is None
+        assert axis.get_ylim() == curves.axes[0].get_ylim() == plots.SCORE_YLIM
+        (line,) = axis.get_lines()
+        values = [v for v in line.get_ydata() if v == v]
+        assert max(values) <= 1.0 + 1e-9 and values == [o for o in run.overlaps if o is not None]
+
+
+def table_rows(markdown: str, heading: str) -> list[list[str]]:
+    """Body rows of the first table after ``heading`` in summary.md (bold marks removed)."""
+    lines = markdown.split(heading, 1)[1].splitlines()
+    start = next(i for i, x in enumerate(lines) if x.startswith("|"))
+    end = next((i for i in range(start, len(lines)) if not lines[i].startswith("|")), len(lines))
+    return [[c.strip().strip("*") for c in x.strip("|").split("|")] for x in lines[start + 2:end]]
+
+
+def test_partial_runs_are_marked_and_averages_count_only_listed_inputs(
+        tmp_path: Path, occluded_run: Path) -> None:
+    # a partial run: the video is cut in half
+    clip, gt = clip_with_gt(tmp_path, "smooth", 90, ".mkv")
+    cut = tmp_path / "cut.mkv"
+    data = clip.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    done = vtrack_run(cut, tmp_path / "runs" / "cut", "--gt", str(gt), "-c", "s1")
+    assert done.returncode == 1, done.stderr
+    partial = json.loads((tmp_path / "runs" / "cut" / "run.json").read_text())
+    assert partial["status"] == "partial"
+    # a run without ground truth that loses its target: not scored, so not an average input
+    leave, leave_gt = clip_with_gt(tmp_path, "leave_return", 90)
+    first = leave_gt.read_text().splitlines()[0]
+    done = vtrack_run(leave, tmp_path / "runs" / "leave", "--init", first, "-c", "s1")
+    assert done.returncode == 0, done.stderr
+    unscored = json.loads((tmp_path / "runs" / "leave" / "run.json").read_text())
+    assert unscored["summary"]["frames_lost"] > 0, "S1 should lose the target that leaves"
+
+    report = build_report([tmp_path / "runs", occluded_run], tmp_path / "report")
+    markdown = report.markdown.read_text()
+    results = {row[0]: row for row in table_rows(markdown, "## Results per input")}
+    total = partial["input"]["frame_count"]
+    assert results["cut"][2] == f"partial: {partial['frames']} of {total} frames"
+    assert results["occlusion"][2] == "complete"
+    averages = {row[0]: row for row in table_rows(markdown, "## All inputs")}
+    assert set(averages) == {"s0", "s1 (1 partial)"}
+    s1 = averages["s1 (1 partial)"]
+    assert int(s1[1]) == 1  # the one s1 input with ground truth, as the plot counts it
+    assert int(s1[-1]) == partial["summary"]["frames_lost"]  # not the unscored run's
+    s0 = averages["s0"]
+    assert int(s0[-1]) == json.loads((occluded_run / "run.json").read_text())[
+        "summary"]["frames_lost"]

@@ -1,0 +1,244 @@
+"""Picking the first box without ground truth (issue 12 item 2): the sidecar file, ``vtrack
+frame``, and ``vtrack select`` driven through a real headless Chromium with real mouse drags.
+
+The browser test needs Debian's ``chromium`` and ``chromium-driver`` packages and the
+``selenium`` package (dev extra); it is skipped, saying which is missing, without them.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import shutil
+import subprocess
+import sys
+import threading
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vtrack.errors import InputError
+from vtrack.geometry import Box
+from vtrack.io.sidecar import format_box, read_sidecar, sidecar_path, write_sidecar
+from vtrack.scenes import make_scene, write_image_sequence, write_video
+
+W, H = 320, 240
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    scene = make_scene("smooth", seed=3, width=W, height=H, frames=12, fps=30)
+    return write_video(scene, tmp_path_factory.mktemp("select") / "clip.mp4")
+
+
+def test_sidecar_lives_beside_a_video_and_inside_a_folder(tmp_path: Path) -> None:
+    video = tmp_path / "walk.mp4"
+    video.write_bytes(b"")
+    folder = tmp_path / "Girl"
+    folder.mkdir()
+    assert sidecar_path(video) == tmp_path / "walk.init.txt"
+    assert sidecar_path(str(folder) + "/") == folder / "init.txt"
+    assert read_sidecar(video) is None and read_sidecar("-") is None
+    written = write_sidecar(video, Box(12.0, 30.5, 40.0, 22.25))
+    assert written.read_text() == "12,30.5,40,22.25\n"
+    assert read_sidecar(str(video)) == Box(12.0, 30.5, 40.0, 22.25)
+    write_sidecar(folder, Box(1, 2, 3, 4))
+    assert read_sidecar(folder) == Box(1, 2, 3, 4)
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temp left
+
+
+@pytest.mark.parametrize(("text", "box"), [("# my target\n\n 5 6 7 8\n", Box(5, 6, 7, 8)),
+                                           ("5,6,7,8  # drawn on frame 0\n", Box(5, 6, 7, 8)),
+                                           ("5\t6\t7\t8", Box(5, 6, 7, 8))])
+def test_sidecar_reads_what_people_write(tmp_path: Path, text: str, box: Box) -> None:
+    (tmp_path / "a.init.txt").write_text(text)
+    assert read_sidecar(tmp_path / "a.mp4") == box
+
+
+@pytest.mark.parametrize("text", ["", "1,2,3", "1,2,0,4", "a,b,c,d", "1,2,nan,4"])
+def test_a_malformed_sidecar_is_an_error_naming_the_file(tmp_path: Path, text: str) -> None:
+    (tmp_path / "a.init.txt").write_text(text)
+    with pytest.raises(InputError, match=r"a\.init\.txt"):
+        read_sidecar(tmp_path / "a.mp4")
+
+
+def test_format_box_is_what_init_takes() -> None:
+    assert format_box(Box(10.0, 20.0, 30.0, 40.0)) == "10,20,30,40"
+    assert format_box(Box(0.5, 1.25, 3.0, 4.126)) == "0.5,1.25,3,4.13"
+
+
+def vtrack(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=60, check=False)
+
+
+def test_frame_writes_the_frame_with_a_light_grid(clip: Path, tmp_path: Path) -> None:
+    out = tmp_path / "f.png"
+    done = vtrack("frame", str(clip), "--at", "4", "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    assert "frame 4" in done.stdout and f"{W}x{H}" in done.stdout
+    plain = tmp_path / "plain.png"
+    assert vtrack("frame", str(clip), "--at", "4", "-o", str(plain), "--no-grid",
+                  "--step", "20").returncode == 0
+    grid, frame = cv2.imread(str(out)).astype(int), cv2.imread(str(plain)).astype(int)
+    assert grid.shape == frame.shape == (H, W, 3)
+    # lines every 20 px are lighter than the frame, between them the frame is untouched
+    assert (grid[100, :, :] - frame[100, :, :]).mean() > 5  # a horizontal grid line (y=100)
+    assert np.abs(grid[110:118, 150:158] - frame[110:118, 150:158]).max() <= 2
+    # a frame past the end is one error line naming the input and its length
+    done = vtrack("frame", str(clip), "--at", "99", "-o", str(tmp_path / "x.png"))
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.startswith(f"vtrack: error: {clip}") and "0..11" in done.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_frame_of_a_sequence_folder_default_name(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "Seq")
+    done = vtrack("frame", str(folder) + "/", "--at", "2", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert cv2.imread(str(tmp_path / "Seq-frame2.png")).shape == (120, 160, 3)
+
+
+class Select:
+    """``vtrack select`` running in a subprocess; ``url`` is the page it printed."""
+
+    def __init__(self, *args: str) -> None:
+        self.process = subprocess.Popen([sys.executable, "-m", "vtrack", "select", *args],
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.lines: queue.Queue[str] = queue.Queue()
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+        line = self.lines.get(timeout=30)
+        assert "http://127.0.0.1:" in line, line
+        self.url = line[line.index("http://"):].split()[0]
+
+    def _read(self) -> None:
+        assert self.process.stderr is not None
+        for line in self.process.stderr:
+            self.lines.put(line)
+
+    def finish(self) -> tuple[int, str, str]:
+        assert self.process.stdout is not None
+        self.process.wait(timeout=30)  # its few lines fit in the pipe's buffer
+        out = self.process.stdout.read()  # (not communicate(): the reader thread owns stderr)
+        self.reader.join(timeout=10)  # stderr read to its end
+        err = []
+        while not self.lines.empty():
+            err.append(self.lines.get())
+        return self.process.returncode, out, "".join(err)
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+            self.process.wait()
+
+
+def post(url: str, data: dict) -> tuple[int, dict]:
+    request = urllib.request.Request(url, json.dumps(data).encode(),
+                                     {"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(request, timeout=10) as response:
+            return response.status, json.loads(response.read())
+    except urllib.error.HTTPError as exc:
+        return exc.code, json.loads(exc.read())
+
+
+def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> None:
+    """The page's server without a browser: info, frames, a rejected box, a confirmed one."""
+    sidecar_path(clip).unlink(missing_ok=True)
+    select = Select(str(clip), "--frame", "2")
+    try:
+        with urllib.request.urlopen(select.url + "info", timeout=10) as response:
+            info = json.loads(response.read())
+        assert (info["width"], info["height"], info["frame"]) == (W, H, 2)
+        with urllib.request.urlopen(select.url + "frame/11", timeout=10) as response:
+            jpeg = np.frombuffer(response.read(), np.uint8)
+        assert cv2.imdecode(jpeg, cv2.IMREAD_COLOR).shape == (H, W, 3)
+        with pytest.raises(urllib.error.HTTPError):
+            urllib.request.urlopen(select.url + "frame/12", timeout=10)
+        status, answer = post(select.url + "select", {"box": [300, 10, 50, 50], "frame": 0})
+        assert status == 400 and "not inside the 320x240 frame" in answer["error"]
+        assert not sidecar_path(clip).exists()
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 0})
+        assert status == 200 and answer["init"] == "10,20,30,40"
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == "--init 10,20,30,40"
+    assert read_sidecar(clip) == Box(10, 20, 30, 40)
+    assert "clip.init.txt" in err
+
+
+def test_select_a_frame_past_the_end_is_an_error(clip: Path) -> None:
+    done = vtrack("select", str(clip), "--frame", "50")
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.startswith(f"vtrack: error: {clip}") and "0..11" in done.stderr
+
+
+def _browser() -> tuple[str, str]:
+    """Chromium and its driver, or skip saying what is missing."""
+    pytest.importorskip("selenium", reason="selenium is not installed (pip install -e '.[dev]')")
+    binary = next(filter(None, map(shutil.which, ("chromium", "chromium-browser"))), None)
+    driver = shutil.which("chromedriver")
+    if binary is None or driver is None:
+        pytest.skip("no headless browser: install Debian's chromium and chromium-driver "
+                    "packages (apt-get install chromium chromium-driver)")
+    return binary, driver
+
+
+def test_select_in_a_real_browser_drag_a_box_and_confirm(tmp_path: Path) -> None:
+    binary, driver_path = _browser()
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    scene = make_scene("smooth", seed=5, width=W, height=H, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "Seq")
+    options = webdriver.ChromeOptions()
+    options.binary_location = binary
+    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                 "--no-first-run", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--window-size=900,700",
+                 f"--user-data-dir={tmp_path / 'profile'}"):
+        options.add_argument(flag)
+    select = Select(str(folder))
+    browser = webdriver.Chrome(service=Service(driver_path), options=options)
+    try:
+        wait = WebDriverWait(browser, 20)
+        browser.get(select.url)
+        image = browser.find_element(By.ID, "frame")
+        wait.until(lambda b: b.execute_script("return arguments[0].naturalWidth", image) == W)
+        # step forward and back: the page shows which frame it is on
+        browser.find_element(By.ID, "next").click()
+        wait.until(lambda b: b.find_element(By.ID, "where").text.startswith("frame 1 "))
+        browser.find_element(By.ID, "prev").click()
+        wait.until(lambda b: b.find_element(By.ID, "where").text.startswith("frame 0 "))
+        wait.until(lambda b: b.execute_script("return arguments[0].complete", image))
+        shown = image.rect  # CSS pixels; the 320x240 frame fits the window unscaled
+        assert round(shown["width"]) == W
+        # drag from image pixel (40, 50) to (130, 110) with real mouse actions (offsets are
+        # from the element's centre)
+        x0, y0 = 40 - W / 2, 50 - H / 2
+        (ActionChains(browser).move_to_element_with_offset(image, int(x0), int(y0))
+         .click_and_hold().move_by_offset(45, 30).move_by_offset(45, 30).release().perform())
+        typed = browser.find_element(By.ID, "init").get_attribute("value")
+        x, y, w, h = (int(v) for v in typed.split(","))
+        assert abs(x - 40) <= 1 and abs(y - 50) <= 1 and abs(w - 90) <= 1 and abs(h - 60) <= 1
+        browser.find_element(By.ID, "confirm").click()
+        wait.until(lambda b: b.find_element(By.TAG_NAME, "body").get_attribute("data-done"))
+        code, out, err = select.finish()
+    finally:
+        browser.quit()
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == f"--init {typed}"
+    assert (folder / "init.txt").read_text().strip() == typed
+    assert read_sidecar(folder) == Box(x, y, w, h)

@@ -1,0 +1,37 @@
+"""``vtrack frame INPUT --at N -o frame.png``: one frame with a pixel grid, to read a box off."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+
+@click.command("frame")
+@click.argument("input_spec", metavar="INPUT")
+@click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Frame number (0-based).")
+@click.option("--out", "-o", "out", type=click.Path(path_type=Path), metavar="FILE",
+              help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
+@click.option("--step", type=click.IntRange(min=2), default=None, metavar="PX",
+              help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
+@click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
+def command(input_spec: str, index: int, out: Path | None, step: int | None,
+            no_grid: bool) -> None:
+    """Write frame N of INPUT as an image with a light pixel grid and its scale (x along the
+    top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
+    from vtrack.errors import ConfigError, OutputError
+    from vtrack.picker.frames import encode_image, read_frame
+    from vtrack.picker.grid import draw_grid
+
+    out = out or Path(f"{Path(input_spec.rstrip('/')).stem or 'input'}-frame{index}.png")
+    ext = out.suffix.lower().replace(".jpeg", ".jpg")
+    if ext not in (".png", ".jpg"):
+        raise ConfigError(f"--out {out}: write a .png or .jpg image")
+    bgr = read_frame(input_spec, index)
+    image = bgr if no_grid else draw_grid(bgr, step)
+    try:
+        out.write_bytes(encode_image(image, ext))
+    except OSError as exc:
+        raise OutputError(f"{out}: cannot be written ({exc.strerror or exc})") from None
+    click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")

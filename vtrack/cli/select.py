@@ -1,0 +1,41 @@
+"""``vtrack select INPUT``: drag the target's first box in a browser page; print and save it."""
+
+from __future__ import annotations
+
+import click
+
+
+@click.command("select")
+@click.argument("input_spec", metavar="INPUT")
+@click.option("--frame", "frame", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Frame shown first (0-based); the page steps back and forth from it.")
+@click.option("--port", type=click.IntRange(0, 65535), default=0,
+              help="Port on 127.0.0.1 to serve the page on. Default: a free one (printed).")
+def command(input_spec: str, frame: int, port: int) -> None:
+    """Pick the target's first box by dragging it on a frame of INPUT in a browser.
+
+    Serves a page on 127.0.0.1 (over SSH: ssh -L PORT:127.0.0.1:PORT HOST, then open
+    http://127.0.0.1:PORT/ locally). On confirm, prints the --init value and writes it to the
+    sidecar file that vtrack run and vtrack batch read when no --init is given: NAME.init.txt
+    beside a video NAME.EXT, init.txt inside an image-sequence folder.
+    """
+    from vtrack.errors import InputError
+    from vtrack.io.sidecar import format_box
+    from vtrack.picker.frames import FrameStore
+    from vtrack.picker.server import SelectionServer
+
+    with FrameStore(input_spec) as store:
+        if store.get(frame) is None:
+            raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
+                             f"(frames 0..{store.decoded - 1})")
+        server = SelectionServer(input_spec, store, frame, port)
+        click.echo(f"vtrack select: drag a box around the target at {server.url}  "
+                   f"(Ctrl-C to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "
+                   "HOST)", err=True)
+        selection = server.wait()
+    if selection.frame != 0:
+        click.echo(f"vtrack: warning: the box was drawn on frame {selection.frame}; tracking "
+                   "starts at frame 0, so the target should be there on frame 0", err=True)
+    click.echo(f"--init {format_box(selection.box)}")
+    click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch use it "
+               "when no --init is given)", err=True)

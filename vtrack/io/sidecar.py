@@ -1,0 +1,90 @@
+"""The initial-box sidecar file: where a user leaves the target's first box for an input.
+
+``NAME.init.txt`` beside a video ``NAME.EXT``, ``init.txt`` inside an image-sequence folder; one
+line ``x,y,w,h`` (top-left corner, width, height) in 0-based pixel coordinates of the first
+frame, the same numbers ``--init`` takes. ``vtrack select`` writes it; ``vtrack run`` and
+``vtrack batch`` read it when no ``--init`` (and no ground truth) is given.
+
+Kept free of the video libraries so every command can use it cheaply.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+from pathlib import Path
+
+from vtrack.errors import InputError, OutputError
+from vtrack.geometry import Box
+
+VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
+SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
+
+
+def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
+    """Where the initial box of ``input_spec`` lives: ``FOLDER/init.txt`` for a folder,
+    ``DIR/NAME.init.txt`` for a file ``DIR/NAME.EXT``. The file need not exist."""
+    path = Path(input_spec)
+    if path.is_dir():
+        return path / SEQUENCE_SIDECAR
+    return path.with_name(VIDEO_SIDECAR.format(path.stem))
+
+
+def format_box(box: Box) -> str:
+    """``x,y,w,h`` as ``--init`` takes it; whole numbers without a decimal point."""
+    return ",".join(f"{round(v, 2):g}" for v in box)
+
+
+def parse_sidecar(text: str, where: str) -> Box:
+    """The box of a sidecar file's text: the first line that is not blank or a ``#`` comment,
+    4 numbers separated by commas, spaces or tabs, width and height > 0.
+
+    Raises InputError naming ``where`` otherwise.
+    """
+    lines = [line.split("#", 1)[0].strip() for line in text.splitlines()]
+    line = next((x for x in lines if x), "")
+    try:
+        values = [float(v) for v in line.replace(",", " ").split()]
+    except ValueError:
+        values = []
+    if len(values) != 4 or not all(math.isfinite(v) for v in values):
+        raise InputError(f"{where}: expected one line x,y,w,h, got {line!r}")
+    box = Box(*values)
+    if box.w <= 0 or box.h <= 0:
+        raise InputError(f"{where}: width and height must be positive, got {line!r}")
+    return box
+
+
+def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
+    """The initial box stored for ``input_spec``, or None when it has no sidecar file.
+
+    Raises InputError (naming the sidecar file) when the file exists but is unreadable or
+    malformed: a box the user left must not be silently ignored.
+    """
+    if os.fspath(input_spec) == "-":
+        return None
+    path = sidecar_path(input_spec)
+    if not path.is_file():
+        return None
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot be read ({getattr(exc, 'strerror', None) or exc})"
+                         ) from None
+    return parse_sidecar(text, str(path))
+
+
+def write_sidecar(input_spec: str | os.PathLike[str], box: Box) -> Path:
+    """Write ``box`` as the initial box of ``input_spec`` (replacing an earlier one, atomically)
+    and return the sidecar's path. Raises OutputError when it cannot be written."""
+    path = sidecar_path(input_spec)
+    temp = path.with_name(f".{path.name}.tmp")
+    try:
+        temp.write_text(format_box(box) + "\n", encoding="utf-8")
+        os.replace(temp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            temp.unlink(missing_ok=True)
+        raise OutputError(f"{path}: cannot be written ({exc.strerror or exc})") from None
+    return path

@@ -1,0 +1,112 @@
+"""The page of ``vtrack select``: one self-contained HTML document (no external files, works
+offline and through an SSH port forward). It shows a frame, lets the user drag a box with the
+mouse (or type it), step frames, and confirm; it talks to :mod:`.server` with ``fetch``."""
+
+PAGE = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8">
+<title>vtrack select</title>
+<style>
+ body { font: 14px system-ui, sans-serif; margin: 12px; background: #f4f4f4; color: #222; }
+ #bar { display: flex; gap: 8px; align-items: center; flex-wrap: wrap; margin-bottom: 8px; }
+ #stage { position: relative; display: inline-block; cursor: crosshair; user-select: none;
+          touch-action: none; line-height: 0; }
+ #frame { max-width: calc(100vw - 30px); max-height: calc(100vh - 110px); display: block; }
+ #box { position: absolute; border: 2px solid #ff2d55; background: rgba(255, 45, 85, .15);
+        box-sizing: border-box; display: none; pointer-events: none; }
+ #init { font-family: monospace; width: 14em; }
+ #status { color: #555; }
+ button { padding: 4px 10px; }
+ #confirm { font-weight: bold; }
+</style></head>
+<body>
+<div id="bar">
+ <button id="prev" title="previous frame (left arrow)">&#9664; prev</button>
+ <span id="where">frame 0</span>
+ <button id="next" title="next frame (right arrow)">next &#9654;</button>
+ <label>box x,y,w,h <input id="init" placeholder="drag on the image"></label>
+ <button id="confirm" disabled>Use this box</button>
+ <span id="status">Drag a box around the target.</span>
+</div>
+<div id="stage"><img id="frame" alt="frame" draggable="false"><div id="box"></div></div>
+<script>
+"use strict";
+const $ = (id) => document.getElementById(id);
+const img = $("frame"), boxDiv = $("box"), field = $("init"), stage = $("stage");
+let info = null, index = 0, box = null, start = null;
+
+function scale() { return img.naturalWidth / img.getBoundingClientRect().width; }
+function toImage(ev) {
+  const r = img.getBoundingClientRect(), s = scale();
+  const x = Math.min(Math.max(ev.clientX - r.left, 0), r.width);
+  const y = Math.min(Math.max(ev.clientY - r.top, 0), r.height);
+  return [x * s, y * s];
+}
+function show() {
+  if (!box || box[2] < 1 || box[3] < 1) { boxDiv.style.display = "none";
+    $("confirm").disabled = true; return; }
+  const s = scale();
+  boxDiv.style.left = box[0] / s + "px"; boxDiv.style.top = box[1] / s + "px";
+  boxDiv.style.width = box[2] / s + "px"; boxDiv.style.height = box[3] / s + "px";
+  boxDiv.style.display = "block"; $("confirm").disabled = false;
+}
+function setBox(b, fromField) {
+  box = b.map(Math.round);
+  if (!fromField) field.value = box.join(",");
+  show();
+}
+function load(i) {
+  fetch("frame/" + i).then((r) => {
+    if (!r.ok) { $("status").textContent = "no frame " + i; return null; }
+    return r.blob();
+  }).then((blob) => {
+    if (!blob) return;
+    index = i; img.src = URL.createObjectURL(blob);
+    const n = info.frames == null ? "?" : info.frames;
+    $("where").textContent = "frame " + i + " of 0.." + (n === "?" ? "?" : n - 1);
+  });
+}
+stage.addEventListener("pointerdown", (ev) => {
+  ev.preventDefault(); stage.setPointerCapture(ev.pointerId); start = toImage(ev);
+  setBox([start[0], start[1], 0, 0]);
+});
+stage.addEventListener("pointermove", (ev) => {
+  if (!start) return;
+  const p = toImage(ev);
+  setBox([Math.min(p[0], start[0]), Math.min(p[1], start[1]),
+          Math.abs(p[0] - start[0]), Math.abs(p[1] - start[1])]);
+});
+stage.addEventListener("pointerup", () => { start = null;
+  $("status").textContent = box && box[2] >= 1 ? "Confirm with 'Use this box'." :
+                            "Drag a box around the target."; });
+field.addEventListener("input", () => {
+  const v = field.value.split(",").map(Number);
+  if (v.length === 4 && v.every(Number.isFinite)) setBox(v, true);
+});
+img.addEventListener("load", show);
+window.addEventListener("resize", show);
+$("prev").onclick = () => { if (index > 0) load(index - 1); };
+$("next").onclick = () => load(index + 1);
+document.addEventListener("keydown", (ev) => {
+  if (ev.target === field) return;
+  if (ev.key === "ArrowLeft") $("prev").onclick();
+  if (ev.key === "ArrowRight") $("next").onclick();
+});
+$("confirm").onclick = () => {
+  fetch("select", { method: "POST", headers: { "Content-Type": "application/json" },
+                    body: JSON.stringify({ box: box, frame: index }) })
+    .then((r) => r.json()).then((res) => {
+      if (res.error) { $("status").textContent = res.error; return; }
+      $("status").textContent = "Done: --init " + res.init + " (saved in " + res.sidecar +
+                                "). You can close this page.";
+      document.body.dataset.done = res.init;
+      ["prev", "next", "confirm"].forEach((id) => { $(id).disabled = true; });
+    });
+};
+fetch("info").then((r) => r.json()).then((i) => {
+  info = i; document.title = "vtrack select: " + i.name;
+  if (i.box) setBox(i.box);
+  load(i.frame);
+});
+</script>
+</body></html>
+"""
