@@ -76,6 +76,8 @@ class HueBpFixed(Stage):
     hue_divider_bits: int
     sat_min: int
     val_min: int
+    #: The record of the current run (None before the first frame).
+    record: FixedRecord | None = None
 
     def start(self, ctx: TrackContext) -> None:
         """Frame 0: the window is the initial box; count the model over it (eq. 2-3)."""
@@ -84,7 +86,7 @@ class HueBpFixed(Stage):
             raise InputError(f"hue_bp_fixed: needs a valid initial box, got {box}")
         record = FixedRecord(model="s0", sat_min=self.sat_min, val_min=self.val_min,
                              hue_divider_bits=self.hue_divider_bits)
-        ctx.fixed = record
+        ctx.fixed = self.record = record  # the record is also the stage's (vtrack vectors)
         x, y, w, h, cx, cy = integer_window(box)
         record.size = (w, h)
         hue, mask = self._window(ctx, record, x, y, w, h, cx, cy)
