@@ -29,6 +29,7 @@ import numpy as np
 from vtrack.errors import ConfigError, InputError
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
+from vtrack.golden.s2 import gray8
 
 #: Largest --frames: a 1080p frame writes ~25 MB of hex text (rgb + hue + bp).
 MAX_FRAMES = 300
@@ -48,12 +49,6 @@ def hex_lines(*planes: np.ndarray) -> bytes:
         out[:, 2 * i : 2 * i + 2] = _HEX[plane.reshape(-1)]
     out[:, -1] = _NEWLINE
     return out.tobytes()
-
-
-def gray8(r: np.ndarray, g: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """S2's grey level from RGB in integers: ``(77 R + 150 G + 29 B + 128) >> 8`` (BT.601
-    weights in 8 fractional bits, rounded to nearest; 0..255)."""
-    return ((77 * r + 150 * g + 29 * b + 128) >> 8).astype(np.uint8)
 
 
 def fixed_stage(stages: list[Any], config_name: str) -> Any:
