@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import Box, Window
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
@@ -44,7 +44,10 @@ def integer_window(box: Box) -> tuple[int, int, int, int, int, int]:
 
 
 def _record(ctx: TrackContext) -> FixedRecord:
-    assert ctx.fixed is not None, "a fixed-point stage runs after hue_bp_fixed"
+    """The S0 record of ``hue_bp_fixed``; ConfigError in a chain without it (e.g. after S2's)."""
+    if ctx.fixed is None or ctx.fixed.model != "s0":
+        raise ConfigError("meanshift_fixed and kalman_f32 read the S0 record of hue_bp_fixed, "
+                          "which must be the last fixed-point stage before them")
     return ctx.fixed
 
 
@@ -179,8 +182,11 @@ class MeanShiftFixed(Stage):
               "while hidden the window widens by this / 1000 per frame (integer, floor), and "
               "the target's return is looked for at the target-sized box of largest sum_bp "
               "in it (not in S0; as the float s0's occlusion stage)", min=1000, max=4000),
+        Param("search_permille", int, 2000,
+              "while hidden the window starts at this size, permille of the target size (the "
+              "float s0's hue.search_scale = 2.0)", min=1000, max=10000),
         Param("max_growth_permille", int, 3000,
-              "largest window size while hidden, permille of the target size", min=1000,
+              "largest widening while hidden, permille of search_permille", min=1000,
               max=10000),
     )
     requires = frozenset({"window", "likelihood", "fixed"})
@@ -194,6 +200,7 @@ class MeanShiftFixed(Stage):
     recover_permille: int
     lost_after: int
     growth_permille: int
+    search_permille: int
     max_growth_permille: int
 
     def start(self, ctx: TrackContext) -> None:
@@ -232,8 +239,9 @@ class MeanShiftFixed(Stage):
             ctx.measurement = ctx.box = Box.from_center(cx, cy, w, h)
         else:
             # S0 item 7: the measurement is not used; the position is the window (prediction)
-            record.growth = min(record.growth * self.growth_permille // 1000,
-                                self.max_growth_permille)
+            record.growth = min(
+                max(record.growth, self.search_permille) * self.growth_permille // 1000,
+                self.search_permille * self.max_growth_permille // 1000)
             ctx.measurement = None
             ctx.box = Box(record.ref[0] - w // 2, record.ref[1] - h // 2, w, h)
 
