@@ -22,6 +22,7 @@ import sys
 from common import Clip, load_clip, machine, scene_clip, single_target_sequences, track_clip
 
 from vtrack.config import load_config
+from vtrack.errors import VtrackError
 from vtrack.geometry import Box, iou
 
 SCENES = ("smooth", "occlusion", "jump", "cover", "scale", "leave_return", "distractor",
@@ -59,8 +60,12 @@ def largest_centre_gap(a: list[Box | None], b: list[Box | None]) -> float:
 def measure(clip: Clip) -> dict[str, tuple[float, float, float]]:
     out = {}
     for pair, ((float_name, float_set), (fixed_name, fixed_set)) in PAIRS.items():
-        ref = track_clip(clip, load_config(float_name).with_overrides(float_set))
-        fixed = track_clip(clip, load_config(fixed_name).with_overrides(fixed_set))
+        try:
+            ref = track_clip(clip, load_config(float_name).with_overrides(float_set))
+            fixed = track_clip(clip, load_config(fixed_name).with_overrides(fixed_set))
+        except VtrackError:  # e.g. a grey target under the S/V mask: no model, no run
+            out[pair] = (math.nan, math.nan, math.nan)
+            continue
         out[pair] = (mean_iou(ref, clip.boxes), mean_iou(fixed, clip.boxes),
                      largest_centre_gap(ref, fixed))
     return out
@@ -81,14 +86,17 @@ def main() -> int:
         result = measure(clip)
         cells = []
         for pair, (ref, fixed, gap) in result.items():
+            if math.isnan(ref):
+                cells.append(" no model (grey) | | | |")
+                continue
             worst[pair] = max(worst[pair], abs(fixed - ref))
             means[pair].append((ref, fixed))
             cells.append(f" {ref:.3f} | {fixed:.3f} | {fixed - ref:+.3f} | {gap:.1f} |")
         print(f"| {clip.name} |" + "".join(cells), flush=True)
     cells = []
     for values in means.values():
-        ref = sum(v[0] for v in values) / len(values)
-        fixed = sum(v[1] for v in values) / len(values)
+        ref = sum(v[0] for v in values) / max(len(values), 1)
+        fixed = sum(v[1] for v in values) / max(len(values), 1)
         cells.append(f" **{ref:.3f}** | **{fixed:.3f}** | **{fixed - ref:+.3f}** | |")
     print("| **mean** |" + "".join(cells))
     print()
