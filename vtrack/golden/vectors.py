@@ -147,7 +147,7 @@ def manifest(record: FixedRecord, width: int, height: int, stages: list[Any],
                     "(int64 here; bits needed <= 8 + log2(n) + log2(w))",
             "step": "step = sum_bp_dx * 2^f / den, den = sum_bp (weighted) or n * 255 (paper), "
                     "f = step_frac_bits, rounded as meanshift_fixed.rounding; 0 if sum_bp = 0",
-            "kalman": "IEEE-754 binary32 per axis, eq. 10-17 in print order, additions left to "
+            "kalman": "IEEE-754 binary32 per axis, eq. 10-17 in print order, additions left "
                       "to right, round to nearest even, no FMA; columns k<axis>_<name> decimal "
                       "and k<axis>_<name>_hex (bit pattern); l1, l2, pm* = prior (eq. 10-12), "
                       "k1, k2 = gain (eq. 14), x, dx, p* = posterior (eq. 15-17)",
