@@ -22,7 +22,7 @@ def test_stage_reference_matches_the_declarations() -> None:
 def test_readme_configs_exist_and_set_up_commands_come_first() -> None:
     readme = (ROOT / "README.md").read_text()
     table = readme.split("### Trackers", 1)[1].split("\n\n", 1)[0]
-    listed = re.findall(r"^\| `(\w+)`", table, re.M)
+    listed = re.findall(r"^\| `([\w-]+)`", table, re.M)
     assert sorted(listed) == sorted(shipped_configs())
     blocks = re.findall(r"```bash\n(.*?)```", readme, re.S)
     assert "pip install ." in blocks[0] and "vtrack run samples/" in blocks[0]

@@ -77,7 +77,8 @@ def track(frames: FrameInput, config: str | os.PathLike[str] | Config = "s0",
     opened with :func:`vtrack.io.open_source`), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
     of :class:`Frame` or of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images, those timed at
-    ``fps``; ``config`` a shipped config name, a TOML path or a :class:`Config`; ``init_box`` the target's first box as a
+    ``fps``; ``config`` a shipped config name, a TOML path or a :class:`Config`; ``init_box``
+    the target's first box as a
     :class:`Box` or ``(x, y, w, h)`` (not needed by the detecting trackers s3/s4).
     """
     if isinstance(frames, RunRequest):

@@ -28,7 +28,7 @@ import pkgutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -37,6 +37,9 @@ from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import Overlay
 from vtrack.params import Param
+
+if TYPE_CHECKING:
+    from vtrack.golden.record import FixedRecord
 
 
 class TrackState(StrEnum):
@@ -147,6 +150,9 @@ class TrackContext:
     detections: list[Any] = field(default_factory=list)
     #: Extra things to draw (search window, particles) for the annotator.
     overlays: list[Overlay] = field(default_factory=list)
+    #: Fixed-point chains (s0-fixed, s2-fixed): model and this frame's integer/float32 values,
+    #: created by the chain's first stage (``provides = {"fixed"}``); see vtrack.golden.record.
+    fixed: FixedRecord | None = None
 
     def new_frame(self, frame: Frame) -> None:
         """Start ``frame``: reset the per-frame fields; ask the ``forecast`` for its prediction."""

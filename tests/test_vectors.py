@@ -1,0 +1,128 @@
+"""``vtrack vectors``: the files an HDL bench reads, consistent with the golden model, and
+``vtrack vectors check`` on the vectors themselves and on a copy with one byte changed."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vtrack.golden.s0 import hue8
+
+FRAMES = 4
+
+
+def vtrack(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          timeout=120, check=False, text=True)
+
+
+def readmemh(path: Path) -> np.ndarray:
+    """What $readmemh loads: one hex word per line."""
+    return np.array([int(line, 16) for line in path.read_text().split()], np.int64)
+
+
+@pytest.fixture(scope="module")
+def vectors(clip_factory, tmp_path_factory) -> tuple[Path, object]:
+    clip = clip_factory("smooth", frames=30)
+    box = clip.scene.boxes[0]
+    out = tmp_path_factory.mktemp("vectors") / "s0"
+    result = vtrack("vectors", str(clip.path), "--config", "s0-fixed", "--init",
+                    f"{box.x},{box.y},{box.w},{box.h}", "--frames", str(FRAMES), "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    return out, clip
+
+
+def test_files_are_readmemh_text_consistent_with_the_model(vectors) -> None:
+    out, clip = vectors
+    manifest = json.loads((out / "manifest.json").read_text())
+    width, height = manifest["files"]["rgb.hex"]["width"], manifest["files"]["rgb.hex"]["height"]
+    assert (width, height) == (320, 240)
+    hist = np.array(manifest["s0"]["histogram_counts"])
+    with (out / "trace.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["frame"]) for r in rows] == list(range(FRAMES))
+    for k in range(FRAMES):
+        folder = out / f"frame_{k:04d}"
+        rgb = readmemh(folder / "rgb.hex")
+        assert rgb.size == width * height and all(
+            len(line) == 6 for line in (folder / "rgb.hex").read_text().split()[:100])
+        r, g, b = rgb >> 16, (rgb >> 8) & 255, rgb & 255
+        hue = readmemh(folder / "hue.hex")
+        np.testing.assert_array_equal(hue, hue8(r, g, b))
+        assert (folder / "bp.hex").is_file() == (k >= 1)
+        if k == 0:
+            # the manifest's histogram is the count of the first frame's window's hues
+            x, y, w, h = (int(rows[0][c]) for c in ("win_x", "win_y", "win_w", "win_h"))
+            box = hue.reshape(height, width)[y : y + h, x : x + w]
+            np.testing.assert_array_equal(np.bincount(box.ravel(), minlength=256), hist)
+            continue
+        bp = readmemh(folder / "bp.hex")
+        np.testing.assert_array_equal(bp, hist[hue] * 255 // hist.max())  # eq. 4
+        # the trace's sums are the full-frame BP summed over the trace's window
+        row = rows[k]
+        x, y, w, h = (int(row[c]) for c in ("win_x", "win_y", "win_w", "win_h"))
+        part = bp.reshape(height, width)[y : y + h, x : x + w]
+        xs, ys = np.arange(x, x + w) - (x + w // 2), np.arange(y, y + h) - (y + h // 2)
+        assert int(part.sum()) == int(row["sum_bp"])
+        assert int((part * xs[None, :]).sum()) == int(row["sum_bp_dx"])
+        assert int((part * ys[:, None]).sum()) == int(row["sum_bp_dy"])
+        assert np.float32(row["kx_x"]).view(np.uint32) == int(row["kx_x_hex"], 16)
+
+
+def test_check_passes_on_the_vectors_and_names_one_changed_byte(vectors, tmp_path) -> None:
+    out, _ = vectors
+    same = vtrack("vectors", "check", str(out), str(out))
+    assert same.returncode == 0, same.stdout + same.stderr
+    # a dump with two files; one hex digit of one pixel of frame 2's BP changed
+    dump = tmp_path / "dump"
+    (dump / "frame_0002").mkdir(parents=True)
+    shutil.copy(out / "frame_0002" / "bp.hex", dump / "frame_0002" / "bp.hex")
+    shutil.copy(out / "trace.csv", dump / "trace.csv")
+    assert vtrack("vectors", "check", str(out), str(dump)).returncode == 0
+    path = dump / "frame_0002" / "bp.hex"
+    data = bytearray(path.read_bytes())
+    x, y = 37, 11
+    at = 3 * (y * 320 + x)
+    old = data[at : at + 2].decode()
+    data[at] = ord("a") if data[at] != ord("a") else ord("b")
+    path.write_bytes(bytes(data))
+    differ = vtrack("vectors", "check", str(out), str(dump))
+    assert differ.returncode == 1
+    lines = differ.stdout.splitlines()
+    assert len(lines) == 1, differ.stdout
+    new = data[at : at + 2].decode()
+    assert "frame_0002/bp.hex" in lines[0] and f"line {y * 320 + x + 1} (x={x}, y={y})" in lines[0]
+    assert f"expected {old}, got {new}" in lines[0]
+    # a trace column changed is named with its frame and column
+    with (dump / "trace.csv").open() as handle:
+        rows = list(csv.reader(handle))
+    column = rows[0].index("sum_bp")
+    rows[3][column] = str(int(rows[3][column]) + 1)  # row 0 is the header: frame 2
+    with (dump / "trace.csv").open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    differ = vtrack("vectors", "check", str(out), str(dump))
+    assert differ.returncode == 1
+    assert any("trace.csv" in line and "frame 2 column sum_bp" in line
+               for line in differ.stdout.splitlines()), differ.stdout
+
+
+def test_vectors_bad_input_is_one_line(vectors, tmp_path) -> None:
+    out, clip = vectors
+    too_many = vtrack("vectors", str(clip.path), "--init", "1,1,5,5", "--frames", "100000",
+                      "--out", str(tmp_path / "x"))
+    assert too_many.returncode == 2 and "--frames" in too_many.stderr
+    assert "Traceback" not in too_many.stderr
+    float_config = vtrack("vectors", str(clip.path), "--config", "s0", "--init", "1,1,5,5",
+                          "--out", str(tmp_path / "y"))
+    assert float_config.returncode == 2 and "fixed-point" in float_config.stderr
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    nothing = vtrack("vectors", "check", str(out), str(empty))
+    assert nothing.returncode == 2 and "none of the vector files" in nothing.stderr

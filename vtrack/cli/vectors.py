@@ -1,0 +1,96 @@
+"""``vtrack vectors INPUT ...`` (write test vectors) and ``vtrack vectors check DIR DUMP``.
+
+One group with a default action: when the first argument is not a subcommand name (``check``),
+the arguments are handed to the hidden ``generate`` command. So both forms of the issue work as
+written, ``vtrack vectors --help`` documents both, and an input literally named ``check`` is
+given as ``./check``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+
+class _DefaultGroup(click.Group):
+    """A group whose arguments go to ``generate`` unless they start with a subcommand name."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        if args and args[0] not in self.commands and args[0] not in ("-h", "--help"):
+            args = ["generate", *args]
+        return super().parse_args(ctx, args)
+
+
+@click.group("vectors", cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
+def command() -> None:
+    """Test vectors of the fixed-point golden models for an HDL simulation bench.
+
+    \b
+    vtrack vectors INPUT --config s0-fixed --init x,y,w,h --frames N --out DIR
+    vtrack vectors check DIR DUMP
+
+    The first writes DIR/frame_NNNN/{rgb,hue,bp}.hex ($readmemh text, one value per pixel),
+    DIR/trace.csv and DIR/manifest.json; the second compares a simulator's dump laid out the
+    same way (any subset of the files) with them: exit 0 when equal, 1 when not.
+    """
+
+
+@command.command("generate", hidden=True)
+@click.argument("input_spec", metavar="INPUT")
+@click.option("--config", "-c", "config_spec", default="s0-fixed", show_default=True,
+              metavar="NAME|FILE", help="A fixed-point config: s0-fixed or s2-fixed.")
+@click.option("--init", "init_text", required=True, metavar="x,y,w,h",
+              help="Initial box (top-left x, y, width, height).")
+@click.option("--frames", "count", type=int, default=10, show_default=True,
+              help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
+@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), required=True,
+              metavar="DIR", help="Output folder (created; existing vector files are replaced).")
+@click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
+              help="Override a stage parameter (repeatable).")
+def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_dir: Path,
+             overrides: tuple[str, ...]) -> None:
+    """Write the vectors of INPUT's first N frames."""
+    import itertools
+
+    from vtrack import __version__
+    from vtrack.config import load_config
+    from vtrack.errors import ConfigError
+    from vtrack.evaluate.groundtruth import parse_box
+    from vtrack.golden.vectors import MAX_FRAMES, fixed_stage
+    from vtrack.golden.vectors import generate as write_vectors
+    from vtrack.io import open_source
+    from vtrack.pipeline import Pipeline
+
+    if not 1 <= count <= MAX_FRAMES:
+        raise ConfigError(f"--frames {count}: must be 1..{MAX_FRAMES}")
+    config = load_config(config_spec).with_overrides(list(overrides))
+    stages = config.build()
+    fixed_stage(stages, config_spec)
+    init_box = parse_box(init_text)
+    source = open_source(input_spec)
+    frames = itertools.islice(iter(source), count)
+    extra = {"input": Path(input_spec).name, "config": config.name, "init": list(init_box),
+             "vtrack": __version__}
+    written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
+    click.echo(f"wrote {written} frame(s) of {config.name} vectors to {out_dir}")
+
+
+@command.command("check")
+@click.argument("vectors_dir", metavar="DIR", type=click.Path(path_type=Path))
+@click.argument("dump_dir", metavar="DUMP", type=click.Path(path_type=Path))
+def check(vectors_dir: Path, dump_dir: Path) -> None:
+    """Compare a simulator's DUMP (same layout, any subset of the files) with the vectors DIR."""
+    from vtrack.errors import InputError
+    from vtrack.golden.vectors import check as compare
+
+    lines, compared = compare(vectors_dir, dump_dir)
+    if compared == 0 and not lines:
+        raise InputError(f"{dump_dir}: holds none of the vector files (frame_NNNN/*.hex, "
+                         "trace.csv, iterations.csv)")
+    for line in lines:
+        click.echo(line)
+    if lines:
+        sys.exit(1)
+    click.echo(f"{compared} file(s) equal")

@@ -1,0 +1,290 @@
+"""Test vectors of the golden models for an HDL bench, and the comparison of a simulator's dump.
+
+Layout of ``DIR`` (``vtrack vectors INPUT --config s0-fixed|s2-fixed --out DIR``)::
+
+    DIR/manifest.json          formats, widths, roundings, frame size, config, input
+    DIR/trace.csv              one row per frame (S0: window, sums, step, Kalman float32 ...)
+    DIR/iterations.csv         S2 only: one row per mean-shift iteration
+    DIR/frame_0000/rgb.hex     one RRGGBB per pixel, raster order, the whole frame
+    DIR/frame_0000/hue.hex     S0: one HH per pixel (8-bit hue of eq. 1)
+    DIR/frame_0001/bp.hex      S0, frames >= 1: one HH per pixel (BP of eq. 4, 0 where masked)
+    DIR/frame_0000/gray.hex    S2: one HH per pixel (8-bit grey, BT.601 integer weights)
+
+Every ``.hex`` file is lower-case hex, one value per line, no address, no prefix: Verilog
+``$readmemh`` loads it as it is. The hex text is built with NumPy from a table of the 256
+two-character codes, never a Python loop per pixel.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vtrack.errors import ConfigError, InputError
+from vtrack.golden import s0
+from vtrack.golden.record import FixedRecord
+from vtrack.golden.s2 import gray8
+
+#: Largest --frames: a 1080p frame writes ~25 MB of hex text (rgb + hue + bp).
+MAX_FRAMES = 300
+#: How many differences per file ``check`` names.
+SHOWN = 3
+
+_HEX = np.frombuffer(b"".join(f"{i:02x}".encode() for i in range(256)), np.uint8).reshape(256, 2)
+_NEWLINE = ord("\n")
+
+
+def hex_lines(*planes: np.ndarray) -> bytes:
+    """The ``$readmemh`` text of one or more uint8 planes of the same shape: per pixel (raster
+    order) the planes' two hex digits side by side, then a newline (3 planes: ``RRGGBB``)."""
+    count = planes[0].size
+    out = np.empty((count, 2 * len(planes) + 1), np.uint8)
+    for i, plane in enumerate(planes):
+        out[:, 2 * i : 2 * i + 2] = _HEX[plane.reshape(-1)]
+    out[:, -1] = _NEWLINE
+    return out.tobytes()
+
+
+def fixed_stage(stages: list[Any], config_name: str) -> Any:
+    """The stage of the chain that owns the golden record (``hue_bp_fixed`` or
+    ``kernel_meanshift_int``); ConfigError when the config has none."""
+    for stage in stages:
+        if hasattr(stage, "record"):
+            return stage
+    raise ConfigError(
+        f"--config {config_name}: not a fixed-point config; vectors need s0-fixed or s2-fixed "
+        "(or a config with stage hue_bp_fixed or kernel_meanshift_int)"
+    )
+
+
+def _formats(record: FixedRecord, width: int, height: int) -> dict[str, Any]:
+    pixel = {"order": "raster: line = y * width + x", "width": width, "height": height,
+             "lines": width * height}
+    files: dict[str, Any] = {
+        "rgb.hex": {**pixel, "format": "RRGGBB, 24 bits, R in bits 23:16", "frames": "all"},
+    }
+    if record.model == "s0":
+        files["hue.hex"] = {**pixel, "format": "HH, 8 bits", "frames": "all",
+                            "value": "floor(H_deg * 255 / 360), H_deg the exact rational of eq. "
+                                     "1 (max == min -> 0; max ties R, G, B in that order)"}
+        files["bp.hex"] = {**pixel, "format": "HH, 8 bits", "frames": ">= 1",
+                           "value": "floor(hist[hue] * 255 / max) (eq. 4); 0 where masked"}
+    else:
+        files["gray.hex"] = {**pixel, "format": "HH, 8 bits", "frames": "all",
+                             "value": "(77 R + 150 G + 29 B + 128) >> 8"}
+    return files
+
+
+def write_frame(folder: Path, frame_bgr: np.ndarray, record: FixedRecord, index: int) -> None:
+    """The frame's ``.hex`` files (see the module docstring)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    r, g, b = s0.split_rgb(frame_bgr)
+    (folder / "rgb.hex").write_bytes(hex_lines(*(p.astype(np.uint8) for p in (r, g, b))))
+    if record.model == "s0":
+        hue = s0.hue8(r, g, b, record.hue_divider_bits)
+        (folder / "hue.hex").write_bytes(hex_lines(hue))
+        if index >= 1:
+            assert record.bp_lut is not None
+            bp = record.bp_lut[hue]
+            if record.sat_min or record.val_min:
+                bp = np.where(s0.sv_mask(r, g, b, record.sat_min, record.val_min), bp, 0)
+            (folder / "bp.hex").write_bytes(hex_lines(bp.astype(np.uint8)))
+    else:
+        (folder / "gray.hex").write_bytes(hex_lines(gray8(r, g, b)))
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ""
+    return str(value)
+
+
+class TraceWriter:
+    """A CSV whose columns are the first row's keys (every later row has the same keys)."""
+
+    def __init__(self, path: Path) -> None:
+        self._file = path.open("w", newline="", encoding="utf-8")
+        self._writer = csv.writer(self._file, lineterminator="\n")
+        self.columns: list[str] | None = None
+
+    def write(self, row: dict[str, Any]) -> None:
+        if self.columns is None:
+            self.columns = list(row)
+            self._writer.writerow(self.columns)
+        self._writer.writerow([_cell(row.get(c, "")) for c in self.columns])
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def manifest(record: FixedRecord, width: int, height: int, stages: list[Any],
+             extra: dict[str, Any]) -> dict[str, Any]:
+    """What ``manifest.json`` says: files, formats, widths, roundings, the chain's settings."""
+    data: dict[str, Any] = {
+        "model": record.model,
+        "files": _formats(record, width, height),
+        "stages": [{"name": s.name, **s.settings()} for s in stages],
+        **extra,
+    }
+    if record.model == "s0":
+        assert record.hist is not None
+        data["s0"] = {
+            "hue": "H8 = floor(17 * (60 * num + off * d) / (24 * d)), integer; eq. 1",
+            "histogram": f"256 counters of {stages[0].hist_bits} bits, saturating; "
+                         "over the first frame's integer box (eq. 2-3)",
+            "histogram_counts": [int(v) for v in record.hist],
+            "histogram_max": record.hist_max,
+            "bp": "floor(hist * 255 / max), 8 bits (eq. 4)",
+            "window": "x = c - w // 2, ref = x + w // 2 (c: centre pixel); the first frame's "
+                      "window is the initial box; pixels outside the frame are not summed",
+            "sums": "sum_bp, sum_bp_dx = sum bp (x - ref_x), sum_bp_dy: exact signed integers "
+                    "(int64 here; bits needed <= 8 + log2(n) + log2(w))",
+            "step": "step = sum_bp_dx * 2^f / den, den = sum_bp (weighted) or n * 255 (paper), "
+                    "f = step_frac_bits, rounded as meanshift_fixed.rounding; 0 if sum_bp = 0",
+            "kalman": "IEEE-754 binary32 per axis, eq. 10-17 in print order, additions left "
+                      "to right, round to nearest even, no FMA; columns k<axis>_<name> decimal "
+                      "and k<axis>_<name>_hex (bit pattern); l1, l2, pm* = prior (eq. 10-12), "
+                      "k1, k2 = gain (eq. 14), x, dx, p* = posterior (eq. 15-17)",
+            "prediction": "pred_x = floor(l1 + 0.5) in float32: the next window's centre pixel",
+            "box": "box_x, box_y, box_w, box_h: vtrack's box (pixel i covers [i, i+1)), "
+                   "centre = measured pixel + 0.5",
+        }
+    return data
+
+
+def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: Any,
+             out_dir: Path, extra: dict[str, Any]) -> int:
+    """Run the chain over ``frames`` and write the vectors to ``out_dir``; returns the number of
+    frames written."""
+    owner = fixed_stage(stages, str(extra.get("config")))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    trace = TraceWriter(out_dir / "trace.csv")
+    iterations: TraceWriter | None = None
+    count, size, record = 0, (0, 0), None
+    try:
+        for result in pipeline.track(frames, init_box):
+            record = owner.record
+            assert record is not None and result.frame is not None
+            frame = result.frame
+            size = (frame.width, frame.height)
+            write_frame(out_dir / f"frame_{count:04d}", frame.bgr(), record, count)
+            trace.write(record.trace)
+            if record.model == "s2":
+                if iterations is None:
+                    iterations = TraceWriter(out_dir / "iterations.csv")
+                for row in record.iterations:
+                    iterations.write(row)
+            count += 1
+    finally:
+        trace.close()
+        if iterations is not None:
+            iterations.close()
+    if record is None:
+        raise InputError(f"{extra.get('input')}: no frame decoded")
+    data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
+    (out_dir / "manifest.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    return count
+
+
+# --- check ---------------------------------------------------------------------------------------
+
+
+def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str | None:
+    got = got.lower()
+    if expected == got:
+        return None
+    want, have = expected.split(), got.split()
+    lines = []
+    n = min(len(want), len(have))
+    a = np.array(want[:n], dtype=object)
+    b = np.array(have[:n], dtype=object)
+    bad = np.flatnonzero(a != b)
+    for i in bad[:SHOWN]:
+        x, y = (int(i) % width, int(i) // width) if width else (0, 0)
+        lines.append(f"line {i + 1} (x={x}, y={y}): expected {want[i].decode()}, "
+                     f"got {have[i].decode()}")
+    total = len(bad)
+    if len(want) != len(have):
+        lines.append(f"{len(have)} lines, expected {len(want)}")
+        total += 1
+    if not total:
+        return None
+    return f"{name}: {len(bad)} differing value(s); " + "; ".join(lines)
+
+
+def _same_cell(a: str, b: str) -> bool:
+    if a == b:
+        return True
+    try:
+        return float(a) == float(b)
+    except ValueError:
+        return a.lower() == b.lower()
+
+
+def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
+    with expected.open(newline="", encoding="utf-8") as f:
+        want = list(csv.DictReader(f))
+    try:
+        with got.open(newline="", encoding="utf-8") as f:
+            have = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        return f"{name}: unreadable CSV ({exc})"
+    found: list[str] = []
+    total = 0
+    for i, (row_w, row_h) in enumerate(zip(want, have, strict=False)):
+        for column, value in row_h.items():
+            if column not in row_w:
+                continue  # a dump may hold extra columns
+            if not _same_cell(row_w[column], value or ""):
+                total += 1
+                if len(found) < SHOWN:
+                    frame = row_w.get("frame", str(i))
+                    found.append(f"frame {frame} column {column}: expected {row_w[column]}, "
+                                 f"got {value}")
+    if len(want) != len(have):
+        found.append(f"{len(have)} rows, expected {len(want)}")
+        total += 1
+    if not total:
+        return None
+    return f"{name}: {total} differing value(s); " + "; ".join(found)
+
+
+def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
+    """Compare every file of ``dump`` that the vectors also have (any subset of them).
+
+    Returns one line per differing file (naming frame, file, line with pixel x, y or trace
+    column, and both values for the first :data:`SHOWN` differences) and the number of files
+    compared. Files of ``dump`` the vectors do not have are reported too.
+    """
+    try:
+        info = json.loads((vectors / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{vectors}: not a vectors folder (manifest.json: {exc})") from None
+    width = int(info["files"]["rgb.hex"]["width"])
+    if not dump.is_dir():
+        raise InputError(f"{dump}: no such folder")
+    lines: list[str] = []
+    compared = 0
+    for path in sorted(dump.rglob("*")):
+        if not path.is_file() or path.suffix not in (".hex", ".csv"):
+            continue
+        rel = path.relative_to(dump)
+        name = rel.as_posix()
+        expected = vectors / rel
+        if not expected.is_file():
+            lines.append(f"{name}: not in the vectors")
+            continue
+        compared += 1
+        if path.suffix == ".hex":
+            diff = _hex_differences(name, expected.read_bytes(), path.read_bytes(), width)
+        else:
+            diff = _csv_differences(name, expected, path)
+        if diff is not None:
+            lines.append(diff)
+    return lines, compared
