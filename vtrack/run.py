@@ -204,10 +204,12 @@ class _SingleTargetRows:
         self.extras = extras
         self.gt = gt
         self.boxes: list[Box | None] = []
+        self.states: list[str] = []
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
         self.boxes.append(box)
+        self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
             overlap, error = score_frame(box, self.gt[result.index])
@@ -333,7 +335,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
-        metrics = summarize(formatter.boxes, gt)
+        metrics = summarize(formatter.boxes, gt, formatter.states)
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
