@@ -80,6 +80,7 @@ class Outcome:
     states: list[str] | None
     seconds: float | None
     note: str = ""
+    failed: bool = False  # the tracker refused or broke (counts 0), rather than n/a
 
     def scores(self, gt: list[Box | None]) -> tuple[float, ...]:
         """(AUC, P@20, mean IoU, tracking miss, miss flagged, fps); NaN where not computable."""
@@ -113,7 +114,7 @@ def run_vtrack(config: str, frames: list[Frame], init: Box) -> Outcome:
             boxes.append(result.box)
             states.append(result.state)
     except VtrackError as exc:  # e.g. a refusal: scores as lost from there on
-        return Outcome(None, None, None, f"{config}: {exc}")
+        return Outcome(None, None, None, f"{config}: {exc}", failed=True)
     return Outcome(boxes, states, time.perf_counter() - started)
 
 
@@ -232,7 +233,7 @@ def scenes_section(python: str | None, configs: list[str], seeds: int) -> None:
     trackers = [*configs, *OPENCV]
     names = [s.name for s in HARD_SCENARIOS]
     print(f"### Scenes: mean IoU over seeds 0..{seeds - 1} (320x240, 150 frames, parameters "
-          "randomised per seed)\n")
+          "randomised per seed; a refused run counts 0)\n")
     print("| scene | " + " | ".join(trackers) + " |")
     print("|---|" + "---:|" * len(trackers))
     all_means: dict[str, list[float]] = {t: [] for t in trackers}
@@ -244,7 +245,7 @@ def scenes_section(python: str | None, configs: list[str], seeds: int) -> None:
                 assert gt[0] is not None
                 outcomes = track_all(frames, Path(tmp), gt[0], python, configs)
             for t in trackers:
-                per[t].append(outcomes[t].scores(gt)[2])
+                per[t].append(0.0 if outcomes[t].failed else outcomes[t].scores(gt)[2])
         cells = []
         for t in trackers:
             value = _nanmean(per[t])
