@@ -78,8 +78,8 @@ def _add_group(table: Table, labels: list[list[str]], values: list[Values],
 
 def _scores(run: RunResult) -> Values:
     s = run.scores
-    return [None] * 4 if s is None else [s.frames_evaluated, s.auc, s.precision20,
-                                          s.mean_overlap]
+    return [None] * 6 if s is None else [s.frames_evaluated, s.auc, s.precision20,
+                                          s.mean_overlap, s.tracking_miss, s.miss_flagged]
 
 
 #: Per input x configuration: OTB scores, speed and lost frames.
@@ -89,6 +89,8 @@ RESULT_COLUMNS = (
     Column("AUC", 3),
     Column("Precision@20", 3),
     Column("Mean IoU", 3),
+    Column("Tracking miss", 3, False),
+    Column("Miss flagged", 3),
     Column("FPS", 1),
     Column("Lost frames", 0, False),
 )
@@ -115,6 +117,8 @@ AVERAGE_COLUMNS = (
     Column("AUC", 3),
     Column("Precision@20", 3),
     Column("Mean IoU", 3),
+    Column("Tracking miss", 3, False),
+    Column("Miss flagged", 3),
     Column("FPS", 1),
     Column("Lost frames", 0, False),
 )
@@ -132,7 +136,7 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
     values = []
     for runs in by_config.values():
         scored = [_scores(r)[1:] for r in runs if r.scores is not None]
-        means = [_mean(column) for column in zip(*scored, strict=True)] if scored else [None] * 3
+        means = [_mean(column) for column in zip(*scored, strict=True)] if scored else [None] * 5
         values.append([len(scored), *means, _mean([r.fps for r in runs]),
                        sum(r.frames_lost for r in runs)])
     _add_group(table, [[config] for config in by_config], values, AVERAGE_COLUMNS)
