@@ -52,7 +52,7 @@ from vtrack.scenes.render import (
     target_paint,
 )
 from vtrack.scenes.scene import SceneSpec, Truth, assemble
-from vtrack.stages.base import OCCLUDED, TrackContext, build_stage
+from vtrack.stages.base import OCCLUDED, TrackContext, TrackState, build_stage
 from vtrack.stages.kernel_meanshift import KernelMeanShift
 
 FPS = 30.0
@@ -101,7 +101,7 @@ def test_follows_displacements_larger_than_the_target(seed: int) -> None:
     assert "occlusion" not in decisions
     # ... and the box is on the target on every frame that moved more than the target's width.
     assert s2_iou[k:].min() > 0.5, np.round(s2_iou, 2)
-    assert all(r.state == "tracking" and 0.0 <= r.score <= 1.0 for r in s2)
+    assert all(r.state == TrackState.TRACKING and 0.0 <= r.score <= 1.0 for r in s2)
 
 
 def test_full_occlusion_takes_the_occlusion_branch_and_coasts_on_the_prediction() -> None:
@@ -210,9 +210,7 @@ def kalman_predictions(times: list[float], xs: list[float], *settings: str) -> n
     ctx = TrackContext(frame=BgrFrame(0, times[0], blank), rng=np.random.default_rng(0))
     predicted = []
     for i, (time_s, x) in enumerate(zip(times, xs, strict=True)):
-        ctx.new_frame(BgrFrame(i, time_s, blank))
-        if i > 0:
-            kalman.prepare(ctx)  # as Pipeline.track does before the steps
+        ctx.new_frame(BgrFrame(i, time_s, blank))  # the kalman stage's forecast: for time_s
         predicted.append(ctx.prediction.cx if ctx.prediction else math.nan)
         ctx.measurement = Box.from_center(x, 100.0, 10.0, 10.0)
         (kalman.start if i == 0 else kalman.step)(ctx)

@@ -16,7 +16,8 @@ import numpy as np
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
-from vtrack.stages.base import LOST, Stage, Track, TrackContext
+from vtrack.overlays import Overlay
+from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 
 @dataclass
@@ -26,12 +27,12 @@ class FrameResult:
     index: int
     time_s: float
     box: Box | None
-    state: str
+    state: TrackState
     score: float
     prediction: Box | None
     extras: dict[str, Any] = field(default_factory=dict)
     tracks: list[Track] = field(default_factory=list)
-    overlays: list[tuple[str, Any]] = field(default_factory=list)
+    overlays: list[Overlay] = field(default_factory=list)
     #: The frame this result is about (writers take its pixels from here); the pipeline always
     #: sets it, results built by hand (e.g. to test drawing) may leave it out.
     frame: Frame | None = None
@@ -46,7 +47,6 @@ class Pipeline:
         self.stages = stages
         self.seed = seed
         self.stage_seconds = {s.name: 0.0 for s in stages}
-        self._preparing = [s for s in stages if type(s).prepare is not Stage.prepare]
         self.frames_done = 0
 
     @property
@@ -55,7 +55,7 @@ class Pipeline:
 
     @property
     def needs_init_box(self) -> bool:
-        return all(s.needs_init_box for s in self.stages)
+        return any(s.needs_init_box for s in self.stages)
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -84,10 +84,6 @@ class Pipeline:
                     ctx.box = init_box  # the first frame's answer is the box we were given
             else:
                 ctx.new_frame(frame)
-                for stage in self._preparing:
-                    started = clock()
-                    stage.prepare(ctx)
-                    self.stage_seconds[stage.name] += clock() - started
                 for stage in self.stages:
                     started = clock()
                     stage.step(ctx)
@@ -97,7 +93,7 @@ class Pipeline:
                 index=frame.index,
                 time_s=frame.time_s,
                 frame=frame,
-                box=None if ctx.state == LOST else ctx.box,  # lost: no box is claimed
+                box=None if ctx.state == TrackState.LOST else ctx.box,  # lost: no box is claimed
                 state=ctx.state,
                 score=ctx.score,
                 prediction=ctx.prediction,
