@@ -188,6 +188,7 @@ class _SingleTargetRows:
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
         self.boxes.append(box)
+        self.states += [""] * (result.index - len(self.states))  # skipped frames: no state
         self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):

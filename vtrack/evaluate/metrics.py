@@ -148,7 +148,7 @@ def _misses(states: Sequence[str], overlaps: Sequence[float | None]) -> tuple[np
     values = np.asarray(overlaps, dtype=float)  # None -> NaN
     evaluated = ~np.isnan(values)
     missed = evaluated & (np.nan_to_num(values, nan=1.0) <= 0.0)
-    state = np.asarray(states, dtype=object)
+    state = np.asarray([str(s) for s in states])  # str: TrackState values are strings
     tracking = state == "tracking"
     flagged = np.isin(state, list(FLAGGED_STATES))
     return evaluated, missed, tracking, flagged
