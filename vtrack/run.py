@@ -195,11 +195,14 @@ class _SingleTargetRows:
         self.extras = extras
         self.gt = gt
         self.boxes: list[Box | None] = []
+        self.states: list[str] = []
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
         self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
         self.boxes.append(box)
+        self.states += [""] * (result.index - len(self.states))  # skipped frames: no state
+        self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
             overlap, error = score_frame(box, self.gt[result.index])
@@ -376,7 +379,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
-        metrics = summarize(formatter.boxes, gt)
+        metrics = summarize(formatter.boxes, gt, formatter.states)
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
