@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import signal
 import sys
 from pathlib import Path
@@ -22,7 +23,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
         path = Path(input_spec.rstrip("/") or "/")
         name = (path.stem if path.suffix else path.name) or "input"
     folder = Path("vtrack-out") / name
-    return folder / config if config else folder
+    # a config's own name (``name = "..."`` in its TOML) may hold characters a folder cannot
+    return folder / (re.sub(r"[^\w.+-]+", "_", config).strip(".") or "config") if config \
+        else folder
 
 
 @click.command("run")

@@ -99,7 +99,8 @@ class OutputFolder:
                 break
             os.close(fd)
         self._fd = fd
-        note = f"pid {os.getpid()}: vtrack {self.what} ({' '.join(sys.argv)})\n".encode()
+        command = " ".join(sys.argv[1:]) if len(sys.argv) > 1 else self.what
+        note = f"pid {os.getpid()}: vtrack {command}\n".encode()
         try:
             os.ftruncate(fd, 0)
             os.write(fd, note)
