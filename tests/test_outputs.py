@@ -361,3 +361,24 @@ def test_error_exits_leave_no_folders(clip: Clip, tmp_path: Path, args: tuple[st
         assert result.returncode == 2, result.stderr
         error_line(result.stderr)
         assert sorted(p.name for p in tmp_path.iterdir()) == [], list(tmp_path.rglob("*"))
+
+
+def test_batch_summary_counts_skipped_frames(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    shutil.copytree(clip_factory("smooth", width=W, height=H, frames=FRAMES, fmt="images").path,
+                    folder / "seq")
+    video = clip_factory("jump", width=W, height=H, frames=FRAMES)
+    shutil.copy(video.path, folder / "jump.mp4")
+    shutil.copy(video.gt, folder / "jump.gt.txt")
+    images = sorted((folder / "seq" / "img").iterdir())
+    for broken in (images[5], images[9]):
+        broken.write_bytes(b"not an image")
+    result = vtrack("batch", str(folder), "--no-video", "--jobs", "1", "--out",
+                    str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    rows = read_summary(tmp_path / "out")
+    for name, skipped in (("seq", 2), ("jump", 0)):
+        record = json.loads((tmp_path / "out" / name / "s0" / "run.json").read_text())
+        assert record["summary"]["frames_skipped"] == skipped
+        assert rows[name]["frames_skipped"] == str(skipped)
+        assert rows[name]["frames"] == str(FRAMES - skipped)
