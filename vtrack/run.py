@@ -291,7 +291,10 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """Track one input and write its outputs; see the module docstring for what is written.
 
     ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
-    progress bar); ``on_frame(n)`` after each frame with the number of frames done.
+    progress bar); ``on_frame(n)`` after each frame with the number of frames done. Called in
+    the main thread, it handles SIGINT and SIGTERM itself while it works: the run ends
+    ``interrupted`` (``summary.interrupted_by`` names the signal) and the caller decides how to
+    exit (``vtrack run``: 128 + the signal's number).
     Resolve (chain, ground truth, initial box) -> track (the frame loop, writing as it goes)
     -> record (metrics, summary, ``run.json``).
     """

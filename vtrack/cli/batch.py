@@ -29,8 +29,19 @@ def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
     return add
 
 
-def _terminate(signum: int, frame: object) -> None:
-    raise Interrupted(signum)
+class _StopOnce:
+    """SIGINT/SIGTERM handler of the batch process: the first signal stops the batch
+    (:class:`~vtrack.errors.Interrupted`); later ones are ignored, so the stop (a bounded grace
+    period for running jobs, then ``summary.csv``) is not cut short by a second Ctrl-C or a
+    scheduler that repeats its SIGTERM."""
+
+    def __init__(self) -> None:
+        self.stopping = False
+
+    def __call__(self, signum: int, frame: object) -> None:
+        if not self.stopping:
+            self.stopping = True
+            raise Interrupted(signum)
 
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
@@ -113,7 +124,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     summary_path = out_dir / "summary.csv"
     outcomes = []
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    stop = _StopOnce()
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         # the results folder is taken (created, checked, locked) before any job is planned
         with OutputFolder(out_dir, "batch"):
@@ -135,7 +147,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                     if len(outcomes) > known:
                         bar.update()
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1
