@@ -271,7 +271,8 @@ def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path)
     for frame in frames[:30]:
         process.stdin.write(frame.tobytes())
     process.stdin.flush()  # the rest never comes: the run waits for frame 30
-    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 20 for p in out.glob(".track.tmp*")),
+    # every frame sent is tracked (header + 30 rows) before the signal comes
+    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 30 for p in out.glob(".track.tmp*")),
              process, "rows")
     process.send_signal(signal.SIGTERM)
     _, stderr = process.communicate(timeout=60)

@@ -239,6 +239,7 @@ class _SingleTargetRows:
     def undo(self, result: FrameResult) -> None:
         """Forget ``result`` (its rows could not be written)."""
         del self.boxes[result.index:]
+        del self.states[result.index:]
 
 
 class _MultiTargetRows:
