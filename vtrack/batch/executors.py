@@ -8,8 +8,9 @@ import signal
 import uuid
 from collections import deque
 from collections.abc import Iterator, Sequence
-from contextlib import suppress
+from contextlib import contextmanager, suppress
 from dataclasses import replace
+from multiprocessing import forkserver
 from multiprocessing.connection import wait
 from typing import Protocol
 
@@ -51,8 +52,32 @@ def _context() -> multiprocessing.context.BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(["__main__", __name__])
+        with _safe_path():
+            forkserver.ensure_running()
         return context
     return multiprocessing.get_context("spawn")
+
+
+@contextmanager
+def _safe_path() -> Iterator[None]:
+    """Start child interpreters without the current folder first on ``sys.path``.
+
+    The fork server is ``python -c ...``, which puts ``''`` (the current folder) first on
+    ``sys.path`` and, on Python 3.11, never takes the parent's path: run from a folder that
+    holds a ``vtrack/`` folder (the folder of a clone), every worker imported that folder
+    instead of the installed package (issue 11 item 2). ``PYTHONSAFEPATH`` (Python >= 3.11)
+    keeps the child from adding it; the rest of ``sys.path`` (``PYTHONPATH``, site-packages,
+    editable installs) is unchanged.
+    """
+    saved = os.environ.get("PYTHONSAFEPATH")
+    os.environ["PYTHONSAFEPATH"] = "1"
+    try:
+        yield
+    finally:
+        if saved is None:
+            del os.environ["PYTHONSAFEPATH"]
+        else:
+            os.environ["PYTHONSAFEPATH"] = saved
 
 
 class _Worker:
