@@ -61,6 +61,10 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--scheduler-timeout", type=click.FloatRange(min=0.1), default=10.0,
               show_default=True, metavar="SECONDS", help="Give up connecting to --scheduler "
                                                          "after this long.")
+@click.option("--worker-timeout", type=click.FloatRange(min=0, min_open=True), default=60.0,
+              show_default=True, metavar="SECONDS",
+              help="With --scheduler and no worker connected: say so, wait this long for one, "
+                   "then give up (exit 2).")
 @click.option("--gt-origin", type=click.Choice(["auto", "0", "1"]), default="auto",
               show_default=True,
               help="Origin of ground-truth boxes. auto: 1 (OTB's MATLAB convention) for "
@@ -69,7 +73,8 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--force", is_flag=True,
               help="Run again input x config pairs whose results are already complete.")
 def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
-            jobs: int | None, scheduler: str | None, scheduler_timeout: float, gt_origin: str,
+            jobs: int | None, scheduler: str | None, scheduler_timeout: float,
+            worker_timeout: float, gt_origin: str,
             force: bool, overrides: tuple[str, ...], no_video: bool, preset: str, crf: int,
             seed: int, max_frames: int | None, quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
@@ -103,8 +108,12 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     configs = _configs(config_specs, overrides)
     inputs = find_inputs(folder, None if gt_origin == "auto" else int(gt_origin))
     workers = jobs or cpu_count()
-    executor: Executor = (DaskExecutor(scheduler, scheduler_timeout) if scheduler
-                          else LocalExecutor(workers))
+    executor: Executor
+    if scheduler:
+        executor = DaskExecutor(scheduler, scheduler_timeout)
+        executor.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
+    else:
+        executor = LocalExecutor(workers)
     out_dir = out_dir or default_out_dir(str(folder))
     settings = RunRequest(input=str(folder), out_dir=out_dir, config=next(iter(configs.values())),
                           video=not no_video, preset=preset, crf=crf, seed=seed,
