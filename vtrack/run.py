@@ -48,6 +48,7 @@ from vtrack.io import (
     prepare_output_dir,
     write_json,
 )
+from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
@@ -238,6 +239,9 @@ class _Resolved:
     gt: list[Box | None] | None  # single-target ground truth
     mot_gt: Any  # multi-target ground truth (MOTChallenge), read by the MOT metrics at the end
     init_box: Box | None
+    #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
+    #: a ground-truth file (None: no box).
+    init_from: str | None = None
 
 
 @dataclass
@@ -267,7 +271,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     info = source.info
     if resolved.init_box is not None:
         _check_init_box(resolved.init_box, info.width, info.height,
-                        "--init" if request.init_box else str(request.gt_path))
+                        resolved.init_from or "--init")
     if on_open is not None:
         on_open(info)
     pipeline = resolved.pipeline
@@ -297,19 +301,24 @@ def _resolve(request: RunRequest) -> _Resolved:
         mot_gt = read_mot(request.gt_path)
     elif request.gt_path is not None:
         gt = read_boxes(request.gt_path, origin=request.gt_origin)
-    init_box = request.init_box
+    # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
+    # says, vtrack.io.sidecar), else the first ground-truth box
+    init_box, init_from = request.init_box, request.init_from or "--init"
+    if init_box is None and pipeline.needs_init_box and request.raw is None:
+        init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
         if gt[0] is None:
             raise InputError(
                 f"{request.gt_path}: the first ground-truth box is empty; give --init x,y,w,h"
             )
-        init_box = gt[0]
+        init_box, init_from = gt[0], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         raise ConfigError(
-            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h "
-            "or --gt FILE"
+            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h, "
+            f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
+            "(vtrack select INPUT picks it)"
         )
-    return _Resolved(pipeline, gt, mot_gt, init_box)
+    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None)
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source,
@@ -401,6 +410,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
         "input": source.info.to_dict(),
         "request": request.to_dict(),
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
+        "init_from": resolved.init_from,
         "config": request.config.resolved(),
         "metrics": metrics,
         "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},
