@@ -59,6 +59,10 @@ class Box(NamedTuple):
     def is_valid(self) -> bool:
         return all(math.isfinite(v) for v in self) and self.w > 0 and self.h > 0
 
+    def text(self) -> str:
+        """``x,y,w,h`` as ``--init`` takes it (2 decimals at most): how a message shows a box."""
+        return ",".join(f"{round(v, 2):g}" for v in self)
+
     def outside(self, width: int, height: int) -> bool:
         """True when no part of the box lies in a ``width`` x ``height`` frame (a NaN box is
         outside too)."""

@@ -34,7 +34,7 @@ import numpy as np
 
 from vtrack import __version__
 from vtrack.annotate import Annotator
-from vtrack.errors import ConfigError, InputError, PartialInputError
+from vtrack.errors import ConfigError, InputError, PartialInputError, plural
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
@@ -87,24 +87,28 @@ class RunSummary:
     error: str | None = None
     warnings: list[str] = field(default_factory=list)
     mot: dict[str, Any] | None = None
+    #: A multi-target chain (tracks.csv): the single target's occluded/lost counts do not apply.
+    multi_target: bool = False
 
-    def line(self) -> str:
-        """The one-line summary printed at the end of ``vtrack run``."""
-        parts = [f"{self.frames} frames", f"{self.fps:.1f} fps"]
+    def line(self, label: str | None = None) -> str:
+        """The one-line summary printed at the end of ``vtrack run`` (headed by ``label``,
+        default the input)."""
+        parts = [plural(self.frames, "frame"), f"{self.fps:.1f} fps"]
         if self.mean_overlap is not None:
             parts.append(f"mean overlap {self.mean_overlap:.3f}")
             parts.append(f"AUC {self.auc:.3f}")
             parts.append(f"precision@20 {self.precision20:.3f}")
-        if self.mot:
+        if self.mot:  # a metric with no value (motp without a match) is left out
             parts += [f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
-                      for k, v in self.mot.items() if k in ("mota", "motp", "idf1", "id_switches")]
-        else:
+                      for k, v in self.mot.items()
+                      if k in ("mota", "motp", "idf1", "id_switches") and v is not None]
+        if not self.multi_target:  # one target's states; tracks have their own in tracks.csv
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
         if self.frames_skipped:
             parts.append(f"skipped {self.frames_skipped} undecodable")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
-        head = f"{self.input}{status}: "
+        head = f"{label or self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
 
 
@@ -377,6 +381,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
         frames_occluded=tracked.states[TrackState.OCCLUDED],
         frames_lost=tracked.states[TrackState.LOST],
         frames_skipped=source.frames_skipped,
+        multi_target=resolved.pipeline.multi_target,
         error=error,
         warnings=list(source.warnings),
     )
@@ -390,10 +395,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
-        if len(gt) != span and status == STATUS_COMPLETE:
+        stopped = request.max_frames is not None and span >= request.max_frames  # --frames N
+        if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (
-                f"{request.gt_path}: ground truth has {len(gt)} boxes for {span} frames "
+                f"{request.gt_path}: ground truth has {plural(len(gt), 'box', 'boxes')} for "
+                f"{plural(span, 'frame')} "
                 f"({side}); " + ("overlap is empty from frame "
                                  f"{len(gt)} on" if len(gt) < span else "extra boxes ignored")
             )
