@@ -109,6 +109,8 @@ def test_run_video_with_ground_truth(occlusion_clip, tmp_path: Path) -> None:
     assert record["metrics"]["auc"] == pytest.approx(
         np.mean([np.mean(np.array(overlaps_all(rows)) > t) for t in np.arange(21) / 20]),
         abs=1e-3)
+    tracking = [float(r["overlap"]) == 0.0 for r in rows if r["state"] == "tracking"]
+    assert record["metrics"]["tracking_miss"] == pytest.approx(np.mean(tracking))
     assert {"vtrack", "pyav", "opencv", "numpy"} <= set(record["versions"])
 
     assert decoded_frames(out / "annotated.mp4") == (120, W, H)

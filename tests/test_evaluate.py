@@ -13,6 +13,7 @@ from vtrack.evaluate import (
     ERROR_THRESHOLDS,
     OVERLAP_THRESHOLDS,
     auc,
+    flagged_miss_rate,
     frame_scores,
     mean_center_error,
     mean_overlap,
@@ -24,6 +25,7 @@ from vtrack.evaluate import (
     read_mot_detections,
     success_curve,
     summarize,
+    tracking_miss_rate,
 )
 from vtrack.geometry import Box, center_error, iou
 
@@ -157,6 +159,26 @@ def test_summarize_hand_computed():
     assert summary["auc"] == pytest.approx((7 * 2 / 3 + 13 / 3) / 21)
     assert summary["precision20"] == pytest.approx(2 / 3)
     assert summary["mean_center_error"] == pytest.approx(2.5)
+
+
+def test_state_honesty_hand_computed():
+    far = Box(50, 50, 10, 10)
+    pred = [G, far, far, None, far, G, far]
+    gt = [G, G, G, G, G, G, None]
+    states = ["tracking", "tracking", "occluded", "lost", "tracking", "occluded", "tracking"]
+    # Evaluated: frames 0-5 (frame 6 has no target). Misses: 1, 2, 3, 4 (IoU 0 or no box).
+    # Called tracking and evaluated: 0, 1, 4 -> 2 of 3 miss. Misses flagged: 2, 3 -> 2 of 4.
+    summary = summarize(pred, gt, states)
+    assert summary["tracking_miss"] == pytest.approx(2 / 3)
+    assert summary["miss_flagged"] == pytest.approx(2 / 4)
+    overlaps, _ = frame_scores(pred, gt)
+    assert tracking_miss_rate(states, overlaps) == pytest.approx(2 / 3)
+    assert flagged_miss_rate(states, overlaps) == pytest.approx(1 / 2)
+    # Nothing called tracking / nothing missed: not computable, JSON null in the summary.
+    assert math.isnan(tracking_miss_rate(["lost"], [0.0]))
+    assert summarize([G], [G], ["tracking"])["miss_flagged"] is None
+    with pytest.raises(ValueError, match="2 states for 1"):
+        flagged_miss_rate(["lost", "lost"], [0.0])
 
 
 def test_summarize_without_evaluated_frames_is_json_null():

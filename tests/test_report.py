@@ -89,6 +89,10 @@ def test_report_of_a_batch(batch_out: tuple[Path, Path], tmp_path: Path) -> None
         assert row["Precision@20"] == f"{precision_at(errors):.3f}"
         recorded = json.loads((batch / name / config / "run.json").read_text())["metrics"]
         assert row["AUC"] == f"{recorded['auc']:.3f}"
+        recorded_miss = recorded["tracking_miss"]  # honest-state measures, same as run.json
+        assert row["Tracking miss"] == ("—" if recorded_miss is None else f"{recorded_miss:.3f}")
+        flagged = recorded["miss_flagged"]
+        assert row["Miss flagged"] == ("—" if flagged is None else f"{flagged:.3f}")
     assert '<td class=" best">' in html  # best per column highlighted
     markdown = (report / "summary.md").read_text()
     assert "| occlusion | s0 |" in markdown and "plots/curves_all.png" in markdown

@@ -370,3 +370,139 @@ def test_cli_user_errors_are_config_errors(tmp_path, args, message):
     result = CliRunner().invoke(command, [*args[:1], str(tmp_path / args[1]), *args[2:]])
     assert isinstance(result.exception, ConfigError)
     assert message in str(result.exception)
+
+
+# ------------------------------------------------- randomised scenes (issue 14): properties
+
+HARD_SEEDS = (0, 1, 2, 3)
+
+
+def target_pixels(scene, index: int, inner: float = 0.8) -> np.ndarray:
+    """The BGR pixels well inside the target's ellipse on frame ``index`` (N x 3)."""
+    box = scene.boxes[index]
+    bgr = scene.frame(index)
+    ys, xs = np.mgrid[0 : scene.height, 0 : scene.width] + 0.5
+    u, v = (xs - box.cx) / (box.w / 2), (ys - box.cy) / (box.h / 2)
+    return bgr[u * u + v * v < inner * inner]
+
+
+@pytest.mark.parametrize("name", ["clip_ramp", "fast", "grow", "shrink", "crossing", "slab",
+                                  "exit_return", "grey"])
+def test_randomised_scenes_are_deterministic_and_vary_with_the_seed(name):
+    a = make_scene(name, seed=5, width=160, height=120, frames=60)
+    b = make_scene(name, seed=5, width=160, height=120, frames=60)
+    c = make_scene(name, seed=6, width=160, height=120, frames=60)
+    assert a.boxes == b.boxes and a.events == b.events
+    assert np.array_equal(a.frame(30), b.frame(30))
+    assert a.events["params"] != c.events["params"]
+    assert a.boxes != c.boxes
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_clip_ramp_clips_the_target_channels_and_darkens_it(seed):
+    scene = make_scene("clip_ramp", seed=seed, frames=60)
+    _, darkest, last, low, high = scene.events["gain"]
+    assert low <= 0.55 and high >= 1.3
+    first, dark, bright = (target_pixels(scene, i) for i in (0, darkest, last))
+    assert (first.max(axis=1) < 255).mean() > 0.9  # not clipped at the start
+    assert (bright.max(axis=1) == 255).mean() > 0.3  # clipped at the end
+    assert dark.max(axis=1).mean() < 0.6 * first.max(axis=1).mean()
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_fast_moves_more_than_1_2_widths_every_frame(seed):
+    scene = make_scene("fast", seed=seed, frames=60)
+    steps = [center_error(a, b) for a, b in zip(scene.boxes, scene.boxes[1:], strict=False)]
+    assert min(steps) >= 1.2 * scene.boxes[0].w
+    assert all(v == 1.0 for v in scene.visibility)  # always fully in view
+    # Smooth: steps vary by < 5% (chords of a curve), the direction turns by < 45 degrees.
+    assert max(steps) < 1.05 * min(steps)
+    d = np.diff([centre(b) for b in scene.boxes], axis=0)
+    cos = (d[1:] * d[:-1]).sum(axis=1) / np.hypot(*d[1:].T) / np.hypot(*d[:-1].T)
+    assert cos.min() > math.cos(math.radians(45))
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+@pytest.mark.parametrize("name", ["grow", "shrink"])
+def test_grow_and_shrink_change_the_size_three_times(name, seed):
+    scene = make_scene(name, seed=seed, frames=60)
+    first, last = scene.boxes[0], scene.boxes[-1]
+    ratio = last.w / first.w if name == "grow" else first.w / last.w
+    assert ratio >= 3.0
+    small, big = (0, len(scene) - 1) if name == "grow" else (len(scene) - 1, 0)
+    assert len(target_pixels(scene, big, 1.0)) / len(target_pixels(scene, small, 1.0)) > 8
+    assert all(v == 1.0 for v in scene.visibility)
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_crossing_twin_has_the_target_colours_and_passes_close(seed):
+    scene = make_scene("crossing", seed=seed, frames=60)
+    k = scene.events["closest"]
+    start, end = scene.events["distractor"]
+    assert start < k < end
+    box = scene.boxes[k]
+    hsv = cv2.cvtColor(scene.frame(k), cv2.COLOR_BGR2HSV)
+    colour = cv2.cvtColor(target_pixels(scene, k)[None], cv2.COLOR_BGR2HSV)[0]
+    hue = np.median(colour[:, 0])
+    hue_gap = np.minimum(np.abs(hsv[:, :, 0].astype(int) - hue),
+                         180 - np.abs(hsv[:, :, 0].astype(int) - hue))
+    alike = ((hsv[:, :, 1] > 100) & (hue_gap < 12)).astype(np.uint8)
+    count, _, stats, centroids = cv2.connectedComponentsWithStats(alike)
+    assert count - 1 >= 2
+    two = 1 + np.argsort(stats[1:, cv2.CC_STAT_AREA])[-2:]
+    areas = stats[two, cv2.CC_STAT_AREA]
+    assert areas.min() > 0.6 * areas.max()  # two same-coloured objects of about one size
+    # The twin is within half a target height of the target (edge to edge), never touching.
+    twin = max(two, key=lambda i: math.hypot(*(centroids[i] - centre(box))))
+    ty, th = stats[twin, cv2.CC_STAT_TOP], stats[twin, cv2.CC_STAT_HEIGHT]
+    gap = max(ty - (box.y + box.h), box.y - (ty + th))
+    assert 0 < gap <= 0.5 * box.h + 3
+    assert all(v == 1.0 for v in scene.visibility)
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_slab_hides_the_target_15_frames_with_partial_occlusion_around(seed):
+    scene = make_scene("slab", seed=seed, frames=90)
+    start, end = scene.events["occluded"]
+    vis = np.array(scene.visibility)
+    assert end - start >= 15 and (vis[start:end] == 0).all()
+    before, after = vis[:start], vis[end:]
+    assert before[0] == 1.0 and after[-1] == 1.0  # fully visible at both ends
+    assert ((before > 0) & (before < 1)).sum() >= 2  # partly hidden on the way in ...
+    assert ((after > 0) & (after < 1)).sum() >= 2  # ... and on the way out
+    slab = scene.frame((start + end) // 2)[:, :, :].astype(int)
+    box = scene.boxes[(start + end) // 2]
+    column = slab[:, int(box.cx)]
+    assert np.abs(column[:, 0] - column[:, 2]).mean() < 12  # a grey slab in front
+    steps = np.diff([centre(b) for b in scene.boxes], axis=0)
+    assert np.allclose(steps, steps[0])  # constant velocity
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_exit_return_truth_marks_out_and_partly_in_view(seed):
+    scene = make_scene("exit_return", seed=seed, frames=90)
+    gone, back_in = scene.events["leave"]
+    full = scene.events["back"]
+    assert back_in - gone >= 15
+    assert all(scene.boxes[i] is None for i in range(gone, back_in))
+    vis = np.array(scene.visibility)
+    assert 0 < vis[gone - 1] < 1 and 0 < vis[back_in] < 1  # partly in view at the edges
+    assert vis[full] == 1.0 and (vis[back_in:full] < 1).all() and (vis[full:] == 1.0).all()
+    assert len(scene) - full >= 20
+    assert vis[0] == 1.0
+    frame = scene.frame((gone + back_in) // 2)
+    assert not np.array_equal(frame, scene.frame(0))  # the scene goes on without the target
+
+
+@pytest.mark.parametrize("seed", HARD_SEEDS)
+def test_grey_target_on_grey_texture_has_no_colour_but_contrast(seed):
+    scene = make_scene("grey", seed=seed, frames=30)
+    bgr = scene.frame(10)
+    spread = bgr.max(axis=2).astype(int) - bgr.min(axis=2)
+    assert np.median(spread) <= 8  # only sensor noise between channels, everywhere
+    inside = target_pixels(scene, 10).mean()
+    box = scene.boxes[10]
+    ring = Box(box.x - box.w, box.y - box.h, 3 * box.w, 3 * box.h).window(scene.width,
+                                                                          scene.height)
+    assert abs(inside - bgr[ring.slices].mean()) > 15  # the target stands out in grey level
+    assert cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY).std() > 5  # textured background

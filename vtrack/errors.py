@@ -33,3 +33,24 @@ class PartialInputError(InputError):
     def __init__(self, message: str, frames_done: int) -> None:
         super().__init__(message)
         self.frames_done = frames_done
+
+
+class OutputBrokenError(OutputError):
+    """An output that could not be written part way (a full disk): what is on disk is whole
+    and ``run.json`` (when it could be written) says what is there. Exit code 1: tracking had
+    started."""
+
+    exit_code = 1
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT (Ctrl-C) or SIGTERM (``kill``, ``timeout``, ``docker stop``) while a run or batch
+    works: handled like Ctrl-C; the process exits ``128 + signum`` (130, 143)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + self.signum

@@ -7,12 +7,17 @@
   flushed as frames complete;
 - ``annotated.mp4`` unless ``video=False``;
 - ``run.json``, written last and atomically: its ``status`` says whether the run is
-  ``complete``, ``partial`` (the input broke part way; everything before was tracked) or
-  ``interrupted`` (Ctrl-C). A complete-looking file is complete: the CSV and video are written
-  under temporary names and renamed when closed.
+  ``complete``, ``partial`` (the input broke part way; everything before was tracked),
+  ``interrupted`` (Ctrl-C or SIGTERM) or ``failed`` (an output could not be written, e.g. a full
+  disk, or the tracker stopped on an error). A complete-looking file is complete: the CSV and
+  video are written under temporary names (unique to the process) and renamed when closed, then
+  checked (CSV rows, the video's frame count); ``outputs`` lists only files that passed.
 
-User errors raise :class:`~vtrack.errors.VtrackError` before anything is written; an input that
-breaks part way returns a summary with ``status = "partial"`` and the error message.
+The folder is taken with :class:`~vtrack.io.outdir.OutputFolder` (a lock: a second run on it is
+refused), only once the input has opened and the request is valid, and the files an earlier run
+left in it are replaced (only vtrack's own: ``RUN_OUTPUTS``). User errors raise
+:class:`~vtrack.errors.VtrackError` before anything is written (and leave no empty folder); an
+input that breaks part way returns a summary with ``status = "partial"`` and the error message.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import av
@@ -34,7 +40,15 @@ import numpy as np
 
 from vtrack import __version__
 from vtrack.annotate import Annotator
-from vtrack.errors import ConfigError, InputError, PartialInputError, plural
+from vtrack.errors import (
+    ConfigError,
+    InputError,
+    Interrupted,
+    OutputBrokenError,
+    OutputError,
+    PartialInputError,
+    plural,
+)
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
@@ -45,10 +59,11 @@ from vtrack.io import (
     Source,
     VideoWriter,
     open_source,
-    prepare_output_dir,
     write_json,
 )
+from vtrack.io.outdir import OutputFolder
 from vtrack.io.sidecar import read_sidecar, sidecar_path
+from vtrack.io.videowriter import verify_video
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
@@ -89,6 +104,8 @@ class RunSummary:
     mot: dict[str, Any] | None = None
     #: A multi-target chain (tracks.csv): the single target's occluded/lost counts do not apply.
     multi_target: bool = False
+    #: The signal that interrupted the run (``SIGINT``, ``SIGTERM``), if one did.
+    interrupted_by: str | None = None
 
     def line(self, label: str | None = None) -> str:
         """The one-line summary printed at the end of ``vtrack run`` (headed by ``label``,
@@ -142,33 +159,41 @@ def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
         raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")
 
 
-class _AtomicFrames:
-    """Delays Ctrl-C while one frame's outputs are written, so they never disagree.
+class _Signals:
+    """SIGINT and SIGTERM as Ctrl-C, never in the middle of one frame's outputs.
 
-    Outside ``writing()`` a SIGINT raises KeyboardInterrupt at once (e.g. while waiting for the
-    next frame); inside, it is held and raised when the frame's row and picture are both out.
-    Only installed in the main thread (signal handlers can only be set there).
+    Outside ``writing()`` a signal raises :class:`~vtrack.errors.Interrupted` at once (e.g.
+    while waiting for the next frame); inside, it is held and raised when the frame's row and
+    picture are both out. After :meth:`hold` (the outputs are being closed and recorded) signals
+    are only noted: the run finishes its records. Only installed in the main thread (signal
+    handlers can only be set there).
     """
 
-    def __init__(self) -> None:
-        self.pending = False
-        self.inside = False
-        self.previous: Any = None
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
-    def __enter__(self) -> _AtomicFrames:
+    def __init__(self) -> None:
+        self.pending: int | None = None
+        self.inside = False
+        self.previous: dict[int, Any] = {}
+
+    def __enter__(self) -> _Signals:
         if threading.current_thread() is threading.main_thread():
-            self.previous = signal.signal(signal.SIGINT, self._handle)
+            self.previous = {s: signal.signal(s, self._handle) for s in self.SIGNALS}
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        if self.previous is not None:
-            signal.signal(signal.SIGINT, self.previous)
+        for signum, handler in self.previous.items():
+            signal.signal(signum, handler)
 
     def _handle(self, signum: int, frame: object) -> None:
         if self.inside:
-            self.pending = True
+            self.pending = self.pending or signum
         else:
-            raise KeyboardInterrupt
+            raise Interrupted(signum)
+
+    def hold(self) -> None:
+        """From now on signals are only noted (``pending``), never raised."""
+        self.inside = True
 
     @contextmanager
     def writing(self) -> Iterator[None]:
@@ -178,7 +203,7 @@ class _AtomicFrames:
         finally:
             self.inside = False
         if self.pending:
-            raise KeyboardInterrupt
+            raise Interrupted(self.pending)
 
 
 def _limited(frames: Iterator, limit: int | None) -> Iterator:
@@ -200,11 +225,14 @@ class _SingleTargetRows:
         self.extras = extras
         self.gt = gt
         self.boxes: list[Box | None] = []
+        self.states: list[str] = []
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
         self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
         self.boxes.append(box)
+        self.states += [""] * (result.index - len(self.states))  # skipped frames: no state
+        self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
             overlap, error = score_frame(box, self.gt[result.index])
@@ -213,6 +241,10 @@ class _SingleTargetRows:
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
                overlap, error]
         return [row + [result.extras.get(column) for column in self.extras]]
+
+    def undo(self, result: FrameResult) -> None:
+        """Forget ``result`` (its rows could not be written)."""
+        del self.boxes[result.index:]
 
 
 class _MultiTargetRows:
@@ -233,6 +265,10 @@ class _MultiTargetRows:
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
         return rows
+
+    def undo(self, result: FrameResult) -> None:
+        """Forget ``result`` (its rows could not be written)."""
+        self.tracks.pop(result.index, None)
 
 
 @dataclass
@@ -255,6 +291,7 @@ class _Tracked:
     status: str = STATUS_COMPLETE
     error: str | None = None
     failure: Exception | None = None
+    signum: int | None = None
     frames: int = 0
     seconds: float = 0.0
     states: dict[TrackState, int] = field(
@@ -266,40 +303,69 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """Track one input and write its outputs; see the module docstring for what is written.
 
     ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
-    progress bar); ``on_frame(n)`` after each frame with the number of frames done.
+    progress bar); ``on_frame(n)`` after each frame with the number of frames done. Called in
+    the main thread, it handles SIGINT and SIGTERM itself while it works: the run ends
+    ``interrupted`` (``summary.interrupted_by`` names the signal) and the caller decides how to
+    exit (``vtrack run``: 128 + the signal's number).
     Resolve (chain, ground truth, initial box) -> track (the frame loop, writing as it goes)
     -> record (metrics, summary, ``run.json``).
     """
-    resolved = _resolve(request)
-    source: Source = open_source(request.input, request.raw, fps=request.fps)
-    info = source.info
-    if resolved.init_box is not None:
-        _check_init_box(resolved.init_box, info.width, info.height,
-                        resolved.init_from or "--init")
-    if on_open is not None:
-        on_open(info)
-    pipeline = resolved.pipeline
-    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
-        pipeline.columns, resolved.gt)
-    csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
-    csv = CsvWriter(request.out_dir / csv_name, formatter.columns)
-    video = annotator = None
-    if request.video:
-        video = VideoWriter(request.out_dir / "annotated.mp4", info.width, info.height,
-                            info.fps or 30.0, preset=request.preset, crf=request.crf)
-        annotator = Annotator(info.width, info.height, gt=resolved.gt)
-    tracked = _track(request, resolved, source, formatter, csv, video, annotator, on_frame)
-    summary = _record(request, resolved, source, formatter, csv_name, tracked)
+    with _Signals() as signals:
+        resolved = _resolve(request)
+        source: Source = open_source(request.input, request.raw, fps=request.fps)
+        try:
+            info = source.info
+            if resolved.init_box is not None:
+                _check_init_box(resolved.init_box, info.width, info.height,
+                                resolved.init_from or "--init")
+            with OutputFolder(request.out_dir) as folder:
+                folder.clear()
+                writers = _open_writers(request, resolved, info)
+                if on_open is not None:
+                    on_open(info)
+                tracked = _track(request, resolved, source, writers, signals, on_frame)
+                summary = _record(request, resolved, source, writers, tracked)
+        finally:
+            source.close()
     if tracked.failure is not None:
         raise tracked.failure
     return summary
 
 
+@dataclass
+class _Writers:
+    """A run's writers: the CSV (and its row formatter) and the annotated video."""
+
+    formatter: _SingleTargetRows | _MultiTargetRows
+    csv_name: str
+    csv: CsvWriter
+    video: VideoWriter | None = None
+    annotator: Annotator | None = None
+
+
+def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
+    pipeline = resolved.pipeline
+    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
+        pipeline.columns, resolved.gt)
+    csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
+    writers = _Writers(formatter, csv_name, CsvWriter(request.out_dir / csv_name,
+                                                      formatter.columns))
+    if request.video:
+        try:
+            writers.video = VideoWriter(request.out_dir / "annotated.mp4", info.width,
+                                        info.height, info.fps or 30.0, preset=request.preset,
+                                        crf=request.crf)
+        except BaseException:
+            writers.csv.abort()
+            raise
+        writers.annotator = Annotator(info.width, info.height, gt=resolved.gt)
+    return writers
+
+
 def _resolve(request: RunRequest) -> _Resolved:
     """Build the chain, read the ground truth and settle the initial box (user errors raise
-    before anything is written but the emptied output folder)."""
+    before the output folder is touched)."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
-    prepare_output_dir(request.out_dir)
     gt = mot_gt = None
     if request.gt_path is not None and pipeline.multi_target:
         mot_gt = read_mot(request.gt_path)
@@ -325,49 +391,111 @@ def _resolve(request: RunRequest) -> _Resolved:
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None)
 
 
-def _track(request: RunRequest, resolved: _Resolved, source: Source,
-           formatter: _SingleTargetRows | _MultiTargetRows, csv: CsvWriter,
-           video: VideoWriter | None, annotator: Annotator | None,
-           on_frame: Callable[[int], None] | None) -> _Tracked:
+def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
+           signals: _Signals, on_frame: Callable[[int], None] | None) -> _Tracked:
     """The signal-safe frame loop: each frame's CSV rows and picture are written together;
-    a broken input, Ctrl-C or a tracker error ends it with every output closed and valid."""
+    a broken input, Ctrl-C, SIGTERM, a full disk or a tracker error ends it with every output
+    closed, and whole."""
     out = _Tracked()
+    formatter, csv, video, annotator = (writers.formatter, writers.csv, writers.video,
+                                        writers.annotator)
     started = time.perf_counter()
     try:
-        with _AtomicFrames() as interrupts:
-            frames_in = _limited(iter(source), request.max_frames)
-            for result in resolved.pipeline.track(frames_in, resolved.init_box):
-                with interrupts.writing():
-                    for row in formatter.rows(result):
-                        csv.write(row)
-                    if video is not None and annotator is not None:
-                        assert result.frame is not None
-                        video.write(result.frame, lambda planes, r=result: annotator.draw(
-                            planes, r), time_s=result.time_s)
-                    if result.state in out.states:
-                        out.states[result.state] += 1
-                    out.frames += 1
-                if on_frame is not None:
-                    on_frame(out.frames)
+        frames_in = _limited(iter(source), request.max_frames)
+        for result in resolved.pipeline.track(frames_in, resolved.init_box):
+            with signals.writing():
+                rows = formatter.rows(result)
+                try:
+                    csv.write_rows(rows)
+                except OutputError:
+                    formatter.undo(result)
+                    raise
+                if result.state in out.states:
+                    out.states[result.state] += 1
+                out.frames += 1  # its row is on disk; a video error below loses only the video
+                if video is not None and annotator is not None:
+                    assert result.frame is not None
+                    video.write(result.frame, lambda planes, r=result: annotator.draw(
+                        planes, r), time_s=result.time_s)
+            if on_frame is not None:
+                on_frame(out.frames)
     except PartialInputError as exc:
         out.status, out.error = STATUS_PARTIAL, str(exc)
+    except Interrupted as exc:
+        out.status, out.signum = STATUS_INTERRUPTED, exc.signum
+        out.error = ("interrupted by the user" if exc.signum == signal.SIGINT
+                     else f"interrupted by {signal.Signals(exc.signum).name}")
     except KeyboardInterrupt:
         out.status, out.error = STATUS_INTERRUPTED, "interrupted by the user"
+    except OutputError as exc:  # a full disk part way: what is on disk is whole
+        out.status, out.error = STATUS_FAILED, str(exc)
+        out.failure = OutputBrokenError(str(exc))
     except Exception as exc:  # recorded in run.json, then raised again by run()
         out.status, out.error, out.failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
+        signals.hold()  # a signal now must not cut the closing and the records short
         out.seconds = time.perf_counter() - started
         source.close()
-        csv.close()
-        if video is not None:
-            video.close()
+        for writer in (csv, video):
+            if writer is None:
+                continue
+            try:
+                writer.close()
+            except OutputError as exc:
+                _fail(out, str(exc))
     return out
 
 
-def _record(request: RunRequest, resolved: _Resolved, source: Source,
-            formatter: _SingleTargetRows | _MultiTargetRows, csv_name: str,
+def _fail(out: _Tracked, message: str) -> None:
+    """Record an output that could not be written whole (the first such message is kept)."""
+    if out.failure is None:
+        out.failure = OutputBrokenError(message)
+        if out.status == STATUS_COMPLETE:
+            out.status, out.error = STATUS_FAILED, message
+        else:
+            out.error = f"{out.error}; {message}"
+
+
+def _count_rows(path: Path) -> int:
+    """Lines of a CSV file after its header."""
+    lines = 0
+    with path.open("rb") as handle:
+        while chunk := handle.read(1 << 20):
+            lines += chunk.count(b"\n")
+    return lines - 1
+
+
+def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked) -> list[str]:
+    """The outputs on disk that are whole: the CSV holds every row written, the video opens
+    and holds every picture written. Anything else is reported (``_fail``); a broken video is
+    removed."""
+    outputs = []
+    csv_path = request.out_dir / writers.csv_name
+    try:
+        rows = _count_rows(csv_path)
+    except OSError:
+        rows = None
+    if rows == writers.csv.rows:
+        outputs.append(writers.csv_name)
+    elif rows is not None or tracked.failure is None:
+        _fail(tracked, f"{csv_path}: holds {rows} rows, {writers.csv.rows} were written")
+    video = writers.video
+    if video is not None and video.path.exists():
+        problem = verify_video(video.path, video.frames_written)
+        if problem is None:
+            outputs.append(video.path.name)
+        else:
+            video.path.unlink(missing_ok=True)
+            _fail(tracked, f"{video.path}: {problem}; removed")
+    return outputs
+
+
+def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
             tracked: _Tracked) -> RunSummary:
-    """Metrics, the summary and ``run.json`` (written last, atomically)."""
+    """Metrics, the summary and ``run.json`` (written last, atomically; listing only the
+    outputs verified whole)."""
+    outputs = _verified_outputs(request, writers, tracked)
+    formatter = writers.formatter
     status, error, frames, seconds = tracked.status, tracked.error, tracked.frames, tracked.seconds
     gt = resolved.gt
     summary = RunSummary(
@@ -384,13 +512,14 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
         multi_target=resolved.pipeline.multi_target,
         error=error,
         warnings=list(source.warnings),
+        interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
     )
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
-        metrics = summarize(formatter.boxes, gt)
+        metrics = summarize(formatter.boxes, gt, formatter.states)
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
@@ -426,9 +555,13 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source,
             "fps": summary.fps,
             "stage_us_per_frame": resolved.pipeline.stage_microseconds_per_frame(),
         },
-        "outputs": [csv_name] + (["annotated.mp4"] if request.video else []),
+        "outputs": outputs,
         "versions": versions(),
         "command": sys.argv,
     }
-    write_json(request.out_dir / "run.json", record)
+    try:
+        write_json(request.out_dir / "run.json", record)
+    except OutputError as exc:
+        first = f"{tracked.error}; " if tracked.failure is not None else ""
+        tracked.failure = OutputBrokenError(f"{first}{exc}")
     return summary

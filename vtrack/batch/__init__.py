@@ -26,7 +26,9 @@ beside a video as 0-based (what ``vtrack scene`` writes). ``0`` or ``1`` forces 
 
 Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,
 ground truth, seed and output settings is skipped (status ``skipped``); anything else is run
-again from an emptied folder. Failure isolation: a job's user error (unreadable input, bad
+again, replacing the earlier run's files (only those: :data:`vtrack.io.outdir.RUN_OUTPUTS`).
+The results folder is locked for the whole batch (a second batch or run on it is refused) and
+each job's folder for its run. Failure isolation: a job's user error (unreadable input, bad
 ground truth) or crash is recorded in its row (status ``failed``); an input that breaks part way
 is ``partial``. A worker process that dies is retried once, then reported ``failed``.
 """

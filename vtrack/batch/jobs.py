@@ -11,7 +11,7 @@ from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 STATUS_SKIPPED = "skipped"
 #: ``summary.csv`` columns, in order.
 SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
-                   "frames_lost", "status", "error")
+                   "frames_lost", "frames_skipped", "status", "error")
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,7 @@ class Outcome:
             "auc": _round(s.auc, 4) if s else None,
             "precision20": _round(s.precision20, 4) if s else None,
             "frames_lost": s.frames_lost if s else None,
+            "frames_skipped": s.frames_skipped if s else None,
             "status": self.status,
             "error": self.error,
         }

@@ -18,20 +18,33 @@ from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
 
+def recorded_summary(request: RunRequest, since: float | None = None) -> RunSummary | None:
+    """The summary ``run.json`` in ``request.out_dir`` records for a run of exactly
+    ``request`` (every field, :meth:`RunRequest.same_run`), whatever its status; None if there
+    is none, it is another request's, or it was written before the time ``since``."""
+    path = request.out_dir / "run.json"
+    try:
+        if since is not None and path.stat().st_mtime < since:
+            return None
+        record = json.loads(path.read_text(encoding="utf-8"))
+        if not request.same_run(record["request"]):
+            return None
+        names = {f.name for f in fields(RunSummary)}
+        summary = RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
+        summary.status = record["status"]
+        return summary
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
 def completed_summary(request: RunRequest) -> RunSummary | None:
     """The summary of a finished run of exactly ``request`` in ``request.out_dir``, else None.
 
-    Finished means ``run.json`` (written last, atomically) says ``complete``; exactly means its
-    ``request`` is this one, every field (:meth:`RunRequest.same_run`).
+    Finished means ``run.json`` (written last, atomically, after its outputs were verified)
+    says ``complete``; exactly means its ``request`` is this one (:meth:`RunRequest.same_run`).
     """
-    try:
-        record = json.loads((request.out_dir / "run.json").read_text(encoding="utf-8"))
-        if record.get("status") != STATUS_COMPLETE or not request.same_run(record["request"]):
-            return None
-        names = {f.name for f in fields(RunSummary)}
-        return RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return None
+    summary = recorded_summary(request)
+    return summary if summary is not None and summary.status == STATUS_COMPLETE else None
 
 
 @dataclass

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import time
 from collections.abc import Iterable, Iterator
 from contextlib import closing
 from pathlib import Path
@@ -12,17 +13,22 @@ from typing import Any
 
 from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
-from vtrack.batch.plan import Plan
+from vtrack.batch.plan import Plan, recorded_summary
+from vtrack.io.files import remove_quietly, temp_path
 from vtrack.run import STATUS_INTERRUPTED
 
 
 def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[Outcome]:
     """Yield every outcome, known ones first, keeping ``summary_path`` current.
 
-    The summary has one row per input x config of the plan; if the batch stops early
-    (Ctrl-C), jobs without an outcome are written with the status ``interrupted``.
+    The summary has one row per input x config of the plan. If the batch stops early (Ctrl-C,
+    SIGTERM), the executor first lets running jobs finish or record themselves; a job whose
+    outcome did not arrive then gets the row of its own ``run.json`` when this batch wrote one
+    (a run that finished in the grace period is ``complete``), else the status
+    ``interrupted``: the summary agrees with the runs' records.
     """
     summary = SummaryWriter(summary_path, batch.order)
+    started = time.time()
     finished = False
     try:
         for outcome in batch.known:
@@ -35,6 +41,13 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[O
         finished = True
     finally:
         if not finished:
+            for job in batch.jobs:
+                if summary.rows.get((job.input, job.config)) is None:
+                    recorded = recorded_summary(job.request, since=started)
+                    if recorded is not None:
+                        summary.rows[(job.input, job.config)] = Outcome(
+                            job.input, job.config, recorded.status, recorded, recorded.error,
+                            job.attempt).row()
             summary.write(unfinished=STATUS_INTERRUPTED)
 
 
@@ -61,6 +74,10 @@ class SummaryWriter:
             elif unfinished is not None:
                 writer.writerow({"input": name, "config": config, "status": unfinished})
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = self.path.with_name(self.path.name + ".tmp")
-        temporary.write_text(buffer.getvalue(), encoding="utf-8")
-        os.replace(temporary, self.path)
+        temporary = temp_path(self.path)
+        try:
+            temporary.write_text(buffer.getvalue(), encoding="utf-8")
+            os.replace(temporary, self.path)
+        except BaseException:
+            remove_quietly(temporary)
+            raise

@@ -2,33 +2,38 @@
 
 from __future__ import annotations
 
-import shutil
+import contextlib
 import traceback
 from multiprocessing.connection import Connection
+from pathlib import Path
 
 import cv2
 
 from vtrack.batch.jobs import Job, Outcome
-from vtrack.errors import VtrackError
+from vtrack.errors import OutputError, VtrackError
+from vtrack.io.outdir import OutputFolder
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, run
 
 
 def execute(job: Job) -> Outcome:
-    """Run one job from an emptied results folder; never raises for a broken input or a bug.
+    """Run one job; never raises for a broken input or a bug.
 
-    This is what a worker process (local or Dask) calls. A user error becomes a ``failed``
-    outcome with its one-line message; an unexpected exception also leaves its traceback in
-    ``error.log`` in the job's folder.
+    This is what a worker process (local or Dask) calls. The run replaces what an earlier run
+    left in the job's folder (:func:`vtrack.run.run`); a job that fails before it starts
+    tracking removes those old results too, so no earlier ``run.json`` outlives it. A user
+    error becomes a ``failed`` outcome with its one-line message; an unexpected exception also
+    leaves its traceback in ``error.log`` in the job's folder.
     """
     cv2.setNumThreads(job.threads)
     out_dir = job.request.out_dir
-    shutil.rmtree(out_dir, ignore_errors=True)
     try:
         summary = run(job.request)
     except VtrackError as exc:
+        _discard(out_dir)
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
     except Exception as exc:  # a bug in one run must not take the batch down: record it
-        log = out_dir / "error.log"
+        _discard(out_dir)
+        log: Path | None = out_dir / "error.log"
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
             log.write_text(traceback.format_exc(), encoding="utf-8")
@@ -39,6 +44,13 @@ def execute(job: Job) -> Outcome:
                        error=f"internal error: {type(exc).__name__}: {exc}{where}",
                        attempt=job.attempt)
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
+
+
+def _discard(out_dir: Path) -> None:
+    """Remove an earlier run's outputs from ``out_dir`` (unless another run holds it)."""
+    if out_dir.is_dir():
+        with contextlib.suppress(OutputError), OutputFolder(out_dir) as folder:
+            folder.clear()
 
 
 def _serve(connection: Connection) -> None:

@@ -4,7 +4,8 @@ changes for it. A command's module is imported only when that command (or the co
 ``vtrack --help``) is asked for, and command modules import their heavy parts inside the command
 function: ``vtrack run --help`` never loads the report's plotting, Dask or the scene generator.
 
-User errors (:class:`~vtrack.errors.VtrackError`) become one line on stderr and exit code 2.
+User errors (:class:`~vtrack.errors.VtrackError`) become one line on stderr and exit code 2 (1
+for an output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it) 143.
 """
 
 from __future__ import annotations
@@ -38,9 +39,9 @@ class _Group(click.Group):
         except VtrackError as exc:
             click.echo(f"vtrack: error: {exc}", err=True)
             sys.exit(exc.exit_code)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM as errors.Interrupted
             click.echo("vtrack: interrupted", err=True)
-            sys.exit(130)
+            sys.exit(getattr(exc, "exit_code", 130))
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

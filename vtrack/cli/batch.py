@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -11,7 +12,7 @@ import click
 
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, Interrupted
 
 if TYPE_CHECKING:
     from vtrack.config import Config
@@ -26,6 +27,21 @@ def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
         return command
 
     return add
+
+
+class _StopOnce:
+    """SIGINT/SIGTERM handler of the batch process: the first signal stops the batch
+    (:class:`~vtrack.errors.Interrupted`); later ones are ignored, so the stop (a bounded grace
+    period for running jobs, then ``summary.csv``) is not cut short by a second Ctrl-C or a
+    scheduler that repeats its SIGTERM."""
+
+    def __init__(self) -> None:
+        self.stopping = False
+
+    def __call__(self, signum: int, frame: object) -> None:
+        if not self.stopping:
+            self.stopping = True
+            raise Interrupted(signum)
 
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
@@ -101,6 +117,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         run_batch,
     )
     from vtrack.cli._progress import terminal
+    from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
 
     if scheduler and jobs is not None:
@@ -108,30 +125,40 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     configs = _configs(config_specs, overrides)
     inputs = find_inputs(folder, None if gt_origin == "auto" else int(gt_origin))
     workers = jobs or cpu_count()
-    executor: Executor
-    if scheduler:
-        executor = DaskExecutor(scheduler, scheduler_timeout)
-        executor.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
-    else:
-        executor = LocalExecutor(workers)
     out_dir = out_dir or default_out_dir(str(folder))
-    settings = RunRequest(input=str(folder), out_dir=out_dir, config=next(iter(configs.values())),
-                          video=not no_video, preset=preset, crf=crf, seed=seed,
-                          max_frames=max_frames)
-    batch = plan(inputs, configs, out_dir, settings, threads=max(1, cpu_count() // workers),
-                 force=force)
     summary_path = out_dir / "summary.csv"
     outcomes = []
-    # runs done / total with ETA; runs already complete (resume) start the bar, not its rate
-    known = len(batch.known)
-    with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
-              dynamic_ncols=True, disable=not terminal(quiet)) as bar:
-        for outcome in run_batch(batch, executor, summary_path):
-            outcomes.append(outcome)
-            if not quiet:
-                bar.write(outcome.line(), file=sys.stdout)
-            if len(outcomes) > known:
-                bar.update()
+    # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does
+    stop = _StopOnce()
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        # the results folder is taken (created, checked, locked) before any job is planned
+        with OutputFolder(out_dir, "batch"):
+            executor: Executor
+            if scheduler:
+                dask = DaskExecutor(scheduler, scheduler_timeout)
+                dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
+                executor = dask
+            else:
+                executor = LocalExecutor(workers)
+            settings = RunRequest(input=str(folder), out_dir=out_dir,
+                                  config=next(iter(configs.values())), video=not no_video,
+                                  preset=preset, crf=crf, seed=seed, max_frames=max_frames)
+            batch = plan(inputs, configs, out_dir, settings,
+                         threads=max(1, cpu_count() // workers), force=force)
+            # runs done / total with ETA; runs already complete (resume) start the bar
+            known = len(batch.known)
+            with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
+                      dynamic_ncols=True, disable=not terminal(quiet)) as bar:
+                for outcome in run_batch(batch, executor, summary_path):
+                    outcomes.append(outcome)
+                    if not quiet:
+                        bar.write(outcome.line(), file=sys.stdout)
+                    if len(outcomes) > known:
+                        bar.update()
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import re
+import signal
 import sys
 from pathlib import Path
 
@@ -11,12 +13,19 @@ import click
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
 
-def default_out_dir(input_spec: str) -> Path:
-    """``./vtrack-out/<name>/``: name is the input's file or folder name (``stdin`` for -)."""
+def default_out_dir(input_spec: str, config: str | None = None) -> Path:
+    """``./vtrack-out/<name>/<config>/``: name is the input's file stem or folder name
+    (``stdin`` for -); config the config's name (a TOML file's stem). Without ``config``,
+    ``./vtrack-out/<name>/`` (a batch's results folder)."""
     if input_spec == "-":
-        return Path("vtrack-out") / "stdin"
-    path = Path(input_spec.rstrip("/"))
-    return Path("vtrack-out") / (path.stem if path.suffix else path.name)
+        name = "stdin"
+    else:
+        path = Path(input_spec.rstrip("/") or "/")
+        name = (path.stem if path.suffix else path.name) or "input"
+    folder = Path("vtrack-out") / name
+    # a config's own name (``name = "..."`` in its TOML) may hold characters a folder cannot
+    return folder / (re.sub(r"[^\w.+-]+", "_", config).strip(".") or "config") if config \
+        else folder
 
 
 @click.command("run")
@@ -32,7 +41,8 @@ def default_out_dir(input_spec: str) -> Path:
 @click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
               help="1 for MATLAB-style 1-based ground-truth boxes (OTB).")
 @click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
-              help="Output folder. Default: ./vtrack-out/<input name>/")
+              help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. Files an "
+                   "earlier run left there are replaced; other files are left alone.")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
               help="Override a stage parameter (repeatable). See `vtrack stages`.")
 @click.option("--raw", "raw_size", metavar="WxH",
@@ -78,7 +88,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         raise click.UsageError("reading frames from '-' needs --raw WxH (and --pix-fmt, --fps)")
     request = RunRequest(
         input=input_spec,
-        out_dir=out_dir or default_out_dir(input_spec),
+        out_dir=out_dir or default_out_dir(input_spec, config.name),
         config=config,
         init_box=parse_box(init_text) if init_text is not None else None,
         gt_path=gt_path,
@@ -103,7 +113,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     if summary.status == STATUS_INTERRUPTED:
         click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
                    err=True)
-        sys.exit(130)
+        sys.exit(128 + signal.Signals[summary.interrupted_by or "SIGINT"].value)
     if summary.status != STATUS_COMPLETE:
         click.echo(f"vtrack: error: {summary.error}; results up to there are in "
                    f"{summary.out_dir}", err=True)

@@ -7,9 +7,11 @@
 from vtrack.evaluate.groundtruth import parse_box, read_boxes, read_mot, read_mot_detections
 from vtrack.evaluate.metrics import (
     ERROR_THRESHOLDS,
+    FLAGGED_STATES,
     OVERLAP_THRESHOLDS,
     Summary,
     auc,
+    flagged_miss_rate,
     frame_scores,
     mean_center_error,
     mean_overlap,
@@ -18,13 +20,16 @@ from vtrack.evaluate.metrics import (
     score_frame,
     success_curve,
     summarize,
+    tracking_miss_rate,
 )
 
 __all__ = [
     "ERROR_THRESHOLDS",
+    "FLAGGED_STATES",
     "OVERLAP_THRESHOLDS",
     "Summary",
     "auc",
+    "flagged_miss_rate",
     "frame_scores",
     "mean_center_error",
     "mean_overlap",
@@ -37,4 +42,5 @@ __all__ = [
     "score_frame",
     "success_curve",
     "summarize",
+    "tracking_miss_rate",
 ]

@@ -13,7 +13,14 @@ Frames whose ground truth is absent (target out of view, or the ground truth end
 tracker's output) are not evaluated: they count neither for nor against the tracker (the OTB
 toolkit counts them in the denominator; we do not). A frame where the tracker claims no box
 (``lost``) while the target is present has IoU 0 and an infinite centre error, so it fails
-every threshold. Functions over a sequence take the per-frame lists of :func:`frame_scores`,
+every threshold.
+
+Honesty of the state (issue 14): a frame *misses* when the target is present and the tracker's
+box does not touch it (IoU 0, or no box). :func:`tracking_miss_rate` is the share of the frames
+the tracker calls ``tracking`` that miss; :func:`flagged_miss_rate` the share of missed frames
+it calls ``occluded`` or ``lost``. An honest tracker has the first low and the second high.
+
+Functions over a sequence take the per-frame lists of :func:`frame_scores`,
 ``None`` entries included, and return NaN when no frame is evaluated.
 """
 
@@ -21,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TypedDict
+from typing import NotRequired, TypedDict
 
 import numpy as np
 
@@ -47,6 +54,12 @@ class Summary(TypedDict):
     auc: float | None
     precision20: float | None
     mean_center_error: float | None
+    tracking_miss: NotRequired[float | None]
+    miss_flagged: NotRequired[float | None]
+
+
+#: States that say "my box may not be on the target" (the pipeline's ``occluded`` / ``lost``).
+FLAGGED_STATES = frozenset({"occluded", "lost"})
 
 
 def score_frame(pred: Box | None, gt: Box | None) -> tuple[float | None, float | None]:
@@ -128,23 +141,59 @@ def mean_center_error(errors: Sequence[float | None]) -> float:
     return float(values.mean()) if values.size else math.nan
 
 
+def _misses(states: Sequence[str], overlaps: Sequence[float | None]) -> tuple[np.ndarray, ...]:
+    """(evaluated, missed, tracking, flagged) boolean arrays over the frames of ``overlaps``."""
+    if len(states) != len(overlaps):
+        raise ValueError(f"{len(states)} states for {len(overlaps)} scored frames")
+    values = np.asarray(overlaps, dtype=float)  # None -> NaN
+    evaluated = ~np.isnan(values)
+    missed = evaluated & (np.nan_to_num(values, nan=1.0) <= 0.0)
+    state = np.asarray([str(s) for s in states])  # str: TrackState values are strings
+    tracking = state == "tracking"
+    flagged = np.isin(state, list(FLAGGED_STATES))
+    return evaluated, missed, tracking, flagged
+
+
+def tracking_miss_rate(states: Sequence[str], overlaps: Sequence[float | None]) -> float:
+    """Share of evaluated frames called ``tracking`` whose box misses the target (IoU 0);
+    NaN when no evaluated frame is called ``tracking``."""
+    evaluated, missed, tracking, _ = _misses(states, overlaps)
+    called = evaluated & tracking
+    return float((missed & called).sum() / called.sum()) if called.any() else math.nan
+
+
+def flagged_miss_rate(states: Sequence[str], overlaps: Sequence[float | None]) -> float:
+    """Share of missed frames (target present, IoU 0 or no box) called ``occluded`` or
+    ``lost``; NaN when no frame misses."""
+    _, missed, _, flagged = _misses(states, overlaps)
+    return float((missed & flagged).sum() / missed.sum()) if missed.any() else math.nan
+
+
 def _or_none(value: float) -> float | None:
     return None if math.isnan(value) else value
 
 
-def summarize(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> Summary:
+def summarize(
+    pred: Sequence[Box | None], gt: Sequence[Box | None], states: Sequence[str] | None = None
+) -> Summary:
     """One sequence's scores for ``vtrack run``'s summary, ``run.json`` and reports.
 
     Keys: ``frames_evaluated`` (frames with ground truth present), ``mean_overlap``, ``auc``,
     ``precision20`` (share of frames within 20 px) and ``mean_center_error`` (pixels, over frames
-    where the tracker claimed a box). A value that cannot be computed (no frame evaluated, or no
-    box claimed for the centre error) is None, so the dict is valid JSON as it is.
+    where the tracker claimed a box); with the per-frame ``states`` also ``tracking_miss``
+    (:func:`tracking_miss_rate`) and ``miss_flagged`` (:func:`flagged_miss_rate`). A value that
+    cannot be computed (no frame evaluated, or no box claimed for the centre error) is None, so
+    the dict is valid JSON as it is.
     """
     overlaps, errors = frame_scores(pred, gt)
-    return Summary(
+    summary = Summary(
         frames_evaluated=sum(o is not None for o in overlaps),
         mean_overlap=_or_none(mean_overlap(overlaps)),
         auc=_or_none(auc(overlaps)),
         precision20=_or_none(precision_at(errors)),
         mean_center_error=_or_none(mean_center_error(errors)),
     )
+    if states is not None:
+        summary["tracking_miss"] = _or_none(tracking_miss_rate(states, overlaps))
+        summary["miss_flagged"] = _or_none(flagged_miss_rate(states, overlaps))
+    return summary

@@ -1,12 +1,15 @@
 """CSV output (``track.csv``, ``tracks.csv``): compact numbers, rows on disk as they are written.
 
-Rows go to a temporary name (:func:`~vtrack.io.files.temp_path`) and are flushed one by one, so an
-interrupted run leaves whole rows; ``close()`` renames the file to its final name.
+Rows go to a temporary name (:func:`~vtrack.io.files.temp_path`) and reach the file one by one
+(unbuffered), so an interrupted run leaves whole rows, and a full disk cuts the file back to its
+last whole row; ``close()`` renames the file to its final name.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -16,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.errors import OutputError
-from vtrack.io.files import Closing, os_reason, temp_path
+from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
 
 #: Decimals of float columns: pixels to a thousandth, times/scores/overlaps to 4 places.
 DECIMALS: Mapping[str, int] = {"time_s": 4, "score": 4, "overlap": 4, "conf": 4}
@@ -37,7 +40,12 @@ def format_cell(value: Any, decimals: int = DEFAULT_DECIMALS) -> str:
 
 
 class CsvWriter(Closing):
-    """Write a header and rows to ``path``; each row is flushed as it is written."""
+    """Write a header and rows to ``path``; each row (or each frame's rows, :meth:`write_rows`)
+    reaches the file as it is written.
+
+    A write that fails (a full disk) raises OutputError and leaves the file cut back to its last
+    whole row, so the file always holds whole rows: :attr:`rows` of them after the header.
+    """
 
     def __init__(
         self, path: Path | str, columns: Sequence[str], decimals: Mapping[str, int] = DECIMALS
@@ -46,34 +54,69 @@ class CsvWriter(Closing):
         self.columns = tuple(columns)
         self._temp = temp_path(self.path)
         self._decimals = [decimals.get(c, DEFAULT_DECIMALS) for c in self.columns]
+        #: Rows on disk (header not counted).
+        self.rows = 0
+        self._size = 0  # bytes of whole rows on disk
+        self._closed = False
         try:
-            self._file = open(self._temp, "w", newline="", encoding="utf-8")  # noqa: SIM115
+            self._fd = os.open(self._temp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_CLOEXEC,
+                               0o644)
         except OSError as exc:
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
-        self._writer = csv.writer(self._file, lineterminator="\n")
-        self._write(self.columns)
+        self._text = io.StringIO()
+        self._writer = csv.writer(self._text, lineterminator="\n")
+        self._append([self.columns])
+        self.rows = 0
 
-    def _write(self, cells: Sequence[str]) -> None:
+    def _append(self, rows: Sequence[Sequence[str]]) -> None:
+        """Write ``rows`` whole or not at all (cut back on failure)."""
+        self._text.seek(0)
+        self._text.truncate()
+        self._writer.writerows(rows)
+        data = memoryview(self._text.getvalue().encode("utf-8"))
+        done = 0
         try:
-            self._writer.writerow(cells)
-            self._file.flush()
+            while done < len(data):
+                done += os.write(self._fd, data[done:])
         except OSError as exc:
+            with contextlib.suppress(OSError):
+                os.ftruncate(self._fd, self._size)
+                os.lseek(self._fd, self._size, os.SEEK_SET)
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
+        self._size += len(data)
+        self.rows += len(rows)
 
-    def write(self, row: Sequence[Any]) -> None:
-        """Append one row (one value per column) and flush it to the file."""
+    def _cells(self, row: Sequence[Any]) -> list[str]:
         if len(row) != len(self.columns):
             raise ValueError(f"{self.path}: row has {len(row)} values for {len(self.columns)} "
                              "columns")
-        self._write([format_cell(v, d) for v, d in zip(row, self._decimals, strict=True)])
+        return [format_cell(v, d) for v, d in zip(row, self._decimals, strict=True)]
+
+    def write(self, row: Sequence[Any]) -> None:
+        """Append one row (one value per column) to the file."""
+        self._append([self._cells(row)])
+
+    def write_rows(self, rows: Sequence[Sequence[Any]]) -> None:
+        """Append several rows (one frame's) together: all of them reach the file or none."""
+        if rows:
+            self._append([self._cells(row) for row in rows])
 
     def close(self) -> None:
         """Close the file and give it its final name. Safe to call twice."""
-        if self._file.closed:
+        if self._closed:
             return
-        self._file.close()
+        self._closed = True
         try:
+            os.close(self._fd)
             os.replace(self._temp, self.path)
         except OSError as exc:
+            remove_quietly(self._temp)
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
 
+    def abort(self) -> None:
+        """Close without a file: the temporary file is removed."""
+        if not self._closed:
+            self._closed = True
+            with contextlib.suppress(OSError):
+                os.close(self._fd)
+        remove_quietly(self._temp)

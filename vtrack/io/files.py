@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import secrets
 from pathlib import Path
 from typing import Self
 
@@ -40,11 +41,12 @@ def check_input_path(path: str) -> None:
 
 
 def temp_path(path: Path) -> Path:
-    """Where a writer writes ``path`` until it is complete: ``dir/.name.tmp.ext``.
+    """Where a writer writes ``path`` until it is complete: ``dir/.name.tmp-PID-RANDOM.ext``,
+    a name no other process (or other writer of this one) uses at the same time.
 
     The extension is kept so FFmpeg still picks the container format from the name.
     """
-    return path.with_name(f".{path.stem}.tmp{path.suffix}")
+    return path.with_name(f".{path.stem}.tmp-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
 
 
 def remove_quietly(path: Path) -> None:

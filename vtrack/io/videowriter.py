@@ -229,3 +229,20 @@ class VideoWriter(Closing):
     def frames_written(self) -> int:
         return self._frames
 
+
+
+def verify_video(path: Path | str, frames: int) -> str | None:
+    """None if ``path`` is a video that opens and holds ``frames`` pictures, else the reason.
+
+    Reads the container's index (the moov atom of an MP4), not the pictures; an index without
+    a frame count falls back to counting the packets.
+    """
+    try:
+        with av.open(str(path)) as container:
+            stream = container.streams.video[0]
+            found = stream.frames or sum(1 for p in container.demux(stream) if p.size)
+    except (av.FFmpegError, OSError, IndexError) as exc:
+        return f"does not open ({os_reason(exc)})"
+    if found != frames:
+        return f"holds {found} frames, {frames} were written"
+    return None

@@ -191,8 +191,8 @@ def render_markdown(page: Page) -> str:
 
 #: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
 CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
-               "mean_overlap", "mean_center_error", "fps", "frames_occluded", "frames_lost",
-               "ground_truth", "run")
+               "mean_overlap", "mean_center_error", "tracking_miss", "miss_flagged", "fps",
+               "frames_occluded", "frames_lost", "ground_truth", "run")
 
 
 def _cell(value: object) -> object:
@@ -209,8 +209,8 @@ def render_csv(runs: Sequence[RunResult]) -> str:
     writer.writerow(CSV_COLUMNS + tuple(mot_keys))
     for run in runs:
         s = run.scores
-        scores = ([s.frames_evaluated, s.auc, s.precision20, s.mean_overlap, s.mean_center_error]
-                  if s else [None] * 5)
+        scores = ([s.frames_evaluated, s.auc, s.precision20, s.mean_overlap, s.mean_center_error,
+                   s.tracking_miss, s.miss_flagged] if s else [None] * 7)
         row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
                run.frames_occluded, run.frames_lost, run.ground_truth,
                str(run.folder)] + [run.mot.get(k) for k in mot_keys]

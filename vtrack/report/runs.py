@@ -48,15 +48,23 @@ class Scores:
     mean_center_error: float
     success: np.ndarray
     precision: np.ndarray
+    tracking_miss: float = math.nan
+    miss_flagged: float = math.nan
 
     @classmethod
-    def of(cls, overlaps: Sequence[float | None], errors: Sequence[float | None]) -> Scores:
+    def of(cls, overlaps: Sequence[float | None], errors: Sequence[float | None],
+           states: Sequence[str] | None = None) -> Scores:
+        """Scores of per-frame overlaps and errors; with one state per frame also the honest-state
+        measures (:func:`~vtrack.evaluate.metrics.tracking_miss_rate`, ``flagged_miss_rate``)."""
+        honest = states is not None and len(states) == len(overlaps)
         return cls(
             frames_evaluated=sum(o is not None for o in overlaps),
             auc=metrics.auc(overlaps),
             precision20=metrics.precision_at(errors),
             mean_overlap=metrics.mean_overlap(overlaps),
             mean_center_error=metrics.mean_center_error(errors),
+            tracking_miss=metrics.tracking_miss_rate(states, overlaps) if honest else math.nan,
+            miss_flagged=metrics.flagged_miss_rate(states, overlaps) if honest else math.nan,
             success=metrics.success_curve(overlaps),
             precision=metrics.precision_curve(errors),
         )
@@ -97,7 +105,7 @@ class RunResult:
         stopped before their first frame."""
         if not self.overlaps or self.errors is None:
             return None
-        return Scores.of(self.overlaps, self.errors)
+        return Scores.of(self.overlaps, self.errors, self.states)
 
 
 def _int_or_none(value: object) -> int | None:

@@ -80,8 +80,8 @@ def _add_group(table: Table, labels: list[list[str]], values: list[Values],
 
 def _scores(run: RunResult) -> Values:
     s = run.scores
-    return [None] * 4 if s is None else [s.frames_evaluated, s.auc, s.precision20,
-                                          s.mean_overlap]
+    return [None] * 6 if s is None else [s.frames_evaluated, s.auc, s.precision20,
+                                          s.mean_overlap, s.tracking_miss, s.miss_flagged]
 
 
 #: Per input x configuration: OTB scores, speed and lost frames.
@@ -91,6 +91,8 @@ RESULT_COLUMNS = (
     Column("AUC", 3),
     Column("Precision@20", 3),
     Column("Mean IoU", 3),
+    Column("Tracking miss", 3, False),
+    Column("Miss flagged", 3),
     Column("FPS", 1),
     Column("Lost frames", 0, False),
 )
@@ -129,6 +131,8 @@ AVERAGE_COLUMNS = (
     Column("AUC", 3),
     Column("Precision@20", 3),
     Column("Mean IoU", 3),
+    Column("Tracking miss", 3, False),
+    Column("Miss flagged", 3),
     Column("FPS", 1),
     Column("Lost frames", 0, False),
 )
@@ -151,7 +155,7 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
         scored = [r for r in runs if r.scores is not None]
         counted = scored or [r for r in runs if r.frames > 0]
         scores = [_scores(r)[1:] for r in scored]
-        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 3
+        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 5
         values.append([len(counted), *means, _mean([r.fps for r in counted]),
                        sum(r.frames_lost for r in counted)])
         partial = sum(r.status in INCOMPLETE for r in counted)

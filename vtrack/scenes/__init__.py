@@ -9,9 +9,12 @@ Example::
     write_clip(scene, "clip.mp4")         # clip.mp4 + clip.gt.txt, as `vtrack scene` does
 
 Same (scenario, seed, size, frames, fps) -> bit-identical frames. Scenarios, their defaults and
-events: :data:`SCENARIOS`; ground-truth conventions: :class:`Scene` and :mod:`.writers`.
+events: :data:`SCENARIOS` (the randomised ones, :mod:`.hard`, draw looks and motion from
+:data:`RANGES`); ground-truth conventions: :class:`Scene` and :mod:`.writers`.
 """
 
+from vtrack.scenes import hard  # noqa: F401  (registers the randomised scenarios)
+from vtrack.scenes.hard import RANGES
 from vtrack.scenes.scenarios import SCENARIOS, Scenario, make_scene
 from vtrack.scenes.scene import Scene
 from vtrack.scenes.writers import (
@@ -29,6 +32,7 @@ from vtrack.scenes.writers import (
 
 __all__ = [
     "CLIP_FORMATS",
+    "RANGES",
     "RAW_PIX_FMTS",
     "SCENARIOS",
     "ClipFiles",

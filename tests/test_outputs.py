@@ -1,0 +1,384 @@
+"""Output folders under faults, as a user meets them: two runs at once, a full disk, a bad
+``--out``, SIGTERM/SIGINT, and the default folder ``vtrack-out/<stem>/<config>/``.
+
+Every case runs the real command in a subprocess on small generated clips; the full-disk cases
+mount a small tmpfs (we run as root in CI) and are skipped, saying why, where mounting is not
+permitted.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import av
+import pytest
+
+from vtrack.batch import SUMMARY_COLUMNS
+from vtrack.io.outdir import LOCK_NAME, OutputFolder
+
+if TYPE_CHECKING:
+    from conftest import Clip, ClipFactory
+
+W, H, FRAMES = 160, 120, 48
+
+
+def vtrack(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=120, check=False)
+
+
+def start(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "vtrack", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def error_line(stderr: str) -> str:
+    """The one ``vtrack: error:`` line of ``stderr`` (and no traceback)."""
+    assert "Traceback" not in stderr, stderr
+    lines = [line for line in stderr.splitlines() if line.startswith("vtrack: error:")]
+    assert len(lines) == 1, stderr
+    return lines[0]
+
+
+def csv_rows(path: Path) -> list[list[str]]:
+    """The rows after the header; every row has the header's number of fields."""
+    with path.open(newline="") as handle:
+        header, *rows = list(csv.reader(handle))
+    assert all(len(row) == len(header) for row in rows), "a cut row"
+    return rows
+
+
+def video_frames(path: Path) -> int:
+    with av.open(str(path)) as container:
+        return sum(1 for _ in container.decode(video=0))
+
+
+def assert_records_agree(out: Path) -> dict:
+    """run.json lists only files that exist and are whole; its frames are the CSV's rows."""
+    record = json.loads((out / "run.json").read_text())
+    for name in record["outputs"]:
+        assert (out / name).is_file(), name
+    assert "track.csv" in record["outputs"]
+    assert len(csv_rows(out / "track.csv")) == record["frames"]
+    if "annotated.mp4" in record["outputs"]:
+        assert video_frames(out / "annotated.mp4") == record["frames"]
+    else:
+        assert not (out / "annotated.mp4").exists()
+    assert not list(out.glob(".*.tmp*")), "temporary files left"
+    return record
+
+
+@pytest.fixture
+def clip(clip_factory: ClipFactory) -> Clip:
+    return clip_factory("smooth", width=W, height=H, frames=FRAMES)
+
+
+@pytest.fixture
+def inputs(tmp_path: Path, clip_factory: ClipFactory) -> Path:
+    """A batch folder of four short clips with ground truth."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for n, scenario in enumerate(("smooth", "jump", "distractor", "bounce")):
+        made = clip_factory(scenario, seed=n, width=W, height=H, frames=FRAMES)
+        shutil.copy(made.path, folder / f"{scenario}.mp4")
+        shutil.copy(made.gt, folder / f"{scenario}.gt.txt")
+    return folder
+
+
+def read_summary(out: Path) -> dict[str, dict[str, str]]:
+    with (out / "summary.csv").open(newline="") as handle:
+        reader = csv.DictReader(handle)
+        assert tuple(reader.fieldnames or ()) == SUMMARY_COLUMNS
+        return {row["input"]: row for row in reader}
+
+
+# --- one folder, one run at a time ------------------------------------------------------------
+
+
+def test_two_batches_into_one_folder_at_once(inputs: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ("batch", str(inputs), "-c", "s0", "-c", "camshift", "--jobs", "1", "--out", str(out))
+    first = start(*args)
+    deadline = time.monotonic() + 60
+    while not (out / LOCK_NAME).exists() and first.poll() is None \
+            and time.monotonic() < deadline:
+        time.sleep(0.02)
+    second = start(*args)  # while the first holds the folder
+    _, second_err = second.communicate(timeout=120)
+    first_running = first.poll() is None
+    _, first_err = first.communicate(timeout=120)
+    assert first.returncode == 0, first_err
+    if first_running:  # (the first batch outlives the second's start-up on any sane machine)
+        assert second.returncode == 2, second_err
+        line = error_line(second_err)
+        assert str(out) in line and "in use" in line and f"pid {first.pid}" in line
+    else:
+        assert second.returncode == 0, second_err
+    rows = read_summary(out)
+    assert {row["status"] for row in rows.values()} == {"complete"}
+    for name in ("smooth", "jump", "distractor", "bounce"):
+        for config in ("s0", "camshift"):
+            record = assert_records_agree(out / name / config)
+            assert record["status"] == "complete" and record["frames"] == FRAMES
+            assert sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
+    assert not (out / LOCK_NAME).exists()
+
+
+def test_a_folder_in_use_is_refused_and_a_killed_holder_releases_it(
+        clip: Clip, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    with OutputFolder(out):
+        result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out))
+        assert result.returncode == 2
+        line = error_line(result.stderr)
+        assert "in use by another vtrack" in line and f"pid {os.getpid()}" in line
+    assert not out.exists()  # created for the lock, removed empty
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from vtrack.io.outdir import OutputFolder;"
+         "f = OutputFolder(sys.argv[1]).__enter__(); print('held', flush=True); time.sleep(60)",
+         str(out)], stdout=subprocess.PIPE, text=True)
+    assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+    refused = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out))
+    assert refused.returncode == 2 and f"pid {holder.pid}" in error_line(refused.stderr)
+    holder.kill()  # SIGKILL: no clean-up runs, the kernel drops the lock
+    holder.wait()
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert assert_records_agree(out)["status"] == "complete"
+
+
+# --- a full disk ------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def small_disk(tmp_path: Path) -> Iterator[Path]:
+    """A 2 MiB tmpfs, unmounted afterwards; skipped where mounting is not permitted."""
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mount)],
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({done.stderr.strip() or 'not permitted'})")
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+def fill(disk: Path, leave: int) -> None:
+    """Fill ``disk`` up to ``leave`` free bytes."""
+    stats = os.statvfs(disk)
+    free = stats.f_bavail * stats.f_frsize
+    (disk / "filler").write_bytes(b"\0" * max(0, free - leave))
+
+
+@pytest.mark.parametrize("video", [False, True], ids=["no-video", "video"])
+def test_a_full_disk_is_one_line_exit_1_and_records_agree(
+        clip: Clip, small_disk: Path, video: bool) -> None:
+    # no-video: the CSV itself runs out of room (a 4 KiB page beside the lock file's: about
+    # 40 of its 48 rows);
+    # video: the video fills the disk, is removed, and run.json says what is left
+    fill(small_disk, leave=8192 if not video else 24 * 1024)
+    out = small_disk / "out"
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out),
+                    *(() if video else ("--no-video",)))
+    assert result.returncode == 1, result.stderr
+    line = error_line(result.stderr)
+    assert "No space left on device" in line
+    if (out / "run.json").exists():
+        record = assert_records_agree(out)
+        assert record["status"] == "failed"
+        assert record["frames"] < FRAMES or video  # (the video may fail only as it closes)
+        assert "No space left on device" in record["error"]
+    else:  # no room left for the record itself: the line says so
+        assert "run.json" in line
+        assert len(csv_rows(out / "track.csv")) < FRAMES
+    if video:  # room came back when the broken video was removed
+        assert "annotated.mp4" not in assert_records_agree(out)["outputs"]
+
+
+# --- a bad --out ------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def read_only_folder(tmp_path: Path) -> Iterator[Path]:
+    """A read-only file system (root writes anywhere else); skipped where mounting is not
+    permitted."""
+    mount = tmp_path / "ro"
+    mount.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(mount)],
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a read-only tmpfs here ({done.stderr.strip()})")
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+@pytest.mark.parametrize("command", ["batch", "run"])
+def test_a_bad_out_is_one_line_exit_2(clip: Clip, inputs: Path, tmp_path: Path,
+                                      command: str) -> None:
+    source = [str(inputs)] if command == "batch" else [str(clip.path), "--gt", str(clip.gt)]
+    a_file = tmp_path / "results.txt"
+    a_file.write_text("mine\n")
+    for out, needle in ((a_file, "not a folder"), (a_file / "sub", "")):
+        result = vtrack(command, *source, "--out", str(out))
+        assert result.returncode == 2, result.stderr
+        line = error_line(result.stderr)
+        assert str(out) in line and needle in line
+    assert a_file.read_text() == "mine\n"
+
+
+def test_batch_into_a_read_only_folder_is_one_line(inputs: Path,
+                                                   read_only_folder: Path) -> None:
+    result = vtrack("batch", str(inputs), "--out", str(read_only_folder / "out"))
+    assert result.returncode == 2, result.stderr
+    line = error_line(result.stderr)
+    assert str(read_only_folder / "out") in line and "Read-only file system" in line
+
+
+# --- signals ----------------------------------------------------------------------------------
+
+
+def wait_for(condition, process: subprocess.Popen, what: str) -> None:
+    deadline = time.monotonic() + 60
+    while not condition():
+        assert process.poll() is None, f"finished before {what}: {process.communicate()}"
+        assert time.monotonic() < deadline, f"no {what}"
+        time.sleep(0.01)
+
+
+def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    scene = clip_factory("smooth", width=W, height=H, frames=FRAMES).scene
+    frames = list(scene.frames())
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vtrack", "run", "-", "--raw", f"{W}x{H}", "--fps", "30",
+         "--init", ",".join(map(str, scene.boxes[0])), "--out", str(out)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdin is not None
+    for frame in frames[:30]:
+        process.stdin.write(frame.tobytes())
+    process.stdin.flush()  # the rest never comes: the run waits for frame 30
+    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 20 for p in out.glob(".track.tmp*")),
+             process, "rows")
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal.SIGTERM, stderr.decode()
+    assert "SIGTERM" in error_line(stderr.decode())
+    record = assert_records_agree(out)
+    assert record["status"] == "interrupted" and "SIGTERM" in record["error"]
+    assert record["frames"] == 30 and sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
+        inputs: Path, tmp_path: Path, signum: int) -> None:
+    out = tmp_path / "out"
+    process = start("batch", str(inputs), "-c", "s0", "-c", "camshift", "--jobs", "1",
+                    "--out", str(out))
+    # signal once a job is under way: its worker (which gets no signal) finishes it in the
+    # grace period, the batch stops before the rest
+    wait_for(lambda: any(out.glob("*/*/.track.tmp*")), process, "a job running")
+    process.send_signal(signum)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 128 + signum, stderr
+    assert "Traceback" not in stderr
+    with (out / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 8  # every input x config
+    statuses = []
+    for row in rows:
+        folder = out / row["input"] / row["config"]
+        if (folder / "run.json").exists():
+            record = assert_records_agree(folder)
+            assert row["status"] == record["status"], (row, record["status"])
+            assert row["frames"] == str(record["frames"])
+        else:
+            assert row["status"] == "interrupted", row
+        statuses.append(row["status"])
+    assert "interrupted" in statuses  # the batch did stop early
+    assert "complete" in statuses  # the job running at the signal finished in the grace
+
+
+# --- the default folder, replacing an earlier run ---------------------------------------------
+
+
+def test_default_folder_is_per_input_and_config(clip: Clip, tmp_path: Path) -> None:
+    (tmp_path / "mine.toml").write_text(
+        (Path(__file__).parents[1] / "vtrack" / "configs" / "camshift.toml").read_text()
+        .replace('name = "camshift"', ""))
+    for config, folder in (("s0", "s0"), ("camshift", "camshift"),
+                           (str(tmp_path / "mine.toml"), "mine")):
+        result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "-c", config,
+                        "--no-video", cwd=tmp_path)
+        assert result.returncode == 0, result.stderr
+        out = tmp_path / "vtrack-out" / clip.path.stem / folder
+        assert str(Path("vtrack-out") / clip.path.stem / folder) in result.stdout
+        assert json.loads((out / "run.json").read_text())["request"]["config"]["name"] \
+            == json.loads((out / "run.json").read_text())["config"]["name"]
+        assert len(csv_rows(out / "track.csv")) == FRAMES
+    assert sorted(p.name for p in (tmp_path / "vtrack-out" / clip.path.stem).iterdir()) == [
+        "camshift", "mine", "s0"]
+
+
+def test_a_second_run_replaces_only_vtracks_own_outputs(clip: Clip, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    first = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out))
+    assert first.returncode == 0, first.stderr
+    (out / "notes.txt").write_text("mine\n")
+    (out / ".annotated.tmp-1-dead.mp4").write_bytes(b"left by a killed run")
+    second = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out),
+                    "-c", "camshift", "--no-video", "--frames", "20")
+    assert second.returncode == 0, second.stderr
+    record = assert_records_agree(out)
+    assert record["outputs"] == ["track.csv"] and record["frames"] == 20
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "run.json", "track.csv"]
+    assert (out / "notes.txt").read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("args", [
+    ("missing.mp4",),
+    ("CLIP", "--init", "500,500,20,20"),
+    ("CLIP", "-c", "s1"),  # no --init and no --gt
+    ("CLIP", "--gt", "nothere.txt"),
+], ids=["no-input", "init-outside", "no-box", "no-gt-file"])
+def test_error_exits_leave_no_folders(clip: Clip, tmp_path: Path, args: tuple[str, ...]) -> None:
+    args = tuple(str(clip.path) if a == "CLIP" else a for a in args)
+    for out in ((), ("--out", str(tmp_path / "a" / "b" / "c"))):
+        result = vtrack("run", *args, *out, cwd=tmp_path)
+        assert result.returncode == 2, result.stderr
+        error_line(result.stderr)
+        assert sorted(p.name for p in tmp_path.iterdir()) == [], list(tmp_path.rglob("*"))
+
+
+def test_batch_summary_counts_skipped_frames(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    shutil.copytree(clip_factory("smooth", width=W, height=H, frames=FRAMES, fmt="images").path,
+                    folder / "seq")
+    video = clip_factory("jump", width=W, height=H, frames=FRAMES)
+    shutil.copy(video.path, folder / "jump.mp4")
+    shutil.copy(video.gt, folder / "jump.gt.txt")
+    images = sorted((folder / "seq" / "img").iterdir())
+    for broken in (images[5], images[9]):
+        broken.write_bytes(b"not an image")
+    result = vtrack("batch", str(folder), "--no-video", "--jobs", "1", "--out",
+                    str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    rows = read_summary(tmp_path / "out")
+    for name, skipped in (("seq", 2), ("jump", 0)):
+        record = json.loads((tmp_path / "out" / name / "s0" / "run.json").read_text())
+        assert record["summary"]["frames_skipped"] == skipped
+        assert rows[name]["frames_skipped"] == str(skipped)
+        assert rows[name]["frames"] == str(FRAMES - skipped)

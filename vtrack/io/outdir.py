@@ -1,0 +1,141 @@
+"""Output folders one run (or one batch) owns at a time.
+
+:class:`OutputFolder` is how ``vtrack run`` and ``vtrack batch`` take a folder: it creates it
+(parents too), takes its lock, and on leaving releases the lock and removes the folder again if
+the run left nothing in it (an error exit leaves no empty folders behind).
+
+The lock is ``fcntl.flock`` on ``.vtrack.lock`` inside the folder, held on an open file: the
+kernel releases it when the process ends however it ends (``kill -9`` included), so a stale lock
+never blocks anyone. A second run or batch on a folder in use is refused with one line naming the
+process that holds it (its pid and command line are written into the lock file).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Self
+
+from vtrack.errors import OutputError
+from vtrack.io.files import os_reason
+
+LOCK_NAME = ".vtrack.lock"
+#: Files a run writes into its folder; a new run removes these (and only these) first, with
+#: stale temporary files of them (``.NAME.tmp-*``) left by a killed run.
+RUN_OUTPUTS = ("run.json", "track.csv", "tracks.csv", "annotated.mp4", "error.log")
+
+
+def _holder(path: Path) -> str:
+    """Who holds the lock at ``path``, as written into it (``pid N: command``)."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace").strip()
+    except OSError:
+        text = ""
+    return text.splitlines()[0] if text else "another process"
+
+
+def _check_folder(folder: Path) -> None:
+    """Raise OutputError if ``folder`` (or a parent) is a file, or it cannot be created."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"{folder}: cannot write output here (a file, not a folder)") from None
+    except OSError as exc:
+        raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
+
+
+class OutputFolder:
+    """Take ``folder`` for one run or batch: ``with OutputFolder(path) as folder: ...``.
+
+    Entering creates the folder, checks a file can be written in it and takes its lock (or
+    raises OutputError: not writable, a file, or in use by another vtrack, naming the holder).
+    Leaving releases the lock and removes the folder (and the parents it created) when nothing
+    but the lock was left in it.
+    """
+
+    def __init__(self, folder: Path | str, what: str = "run") -> None:
+        self.folder = Path(folder)
+        self.what = what
+        self._fd: int | None = None
+        self._created: list[Path] = []
+
+    def __enter__(self) -> Self:
+        missing = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
+        _check_folder(self.folder)
+        self._created = missing  # deepest first: the order to remove them in
+        try:
+            self._lock()
+        except BaseException:
+            self._remove_if_empty()
+            raise
+        return self
+
+    def _lock(self) -> None:
+        path = self.folder / LOCK_NAME
+        while True:
+            try:
+                fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            except OSError as exc:
+                raise OutputError(
+                    f"{self.folder}: cannot write output here ({os_reason(exc)})") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                raise OutputError(
+                    f"{self.folder}: in use by another vtrack ({_holder(path)}); wait for it "
+                    "to finish or choose another --out") from None
+            # The holder before us may have removed the file between our open and our lock:
+            # then we locked a file nobody else will see. Only the file at ``path`` counts.
+            try:
+                same = os.fstat(fd).st_ino == os.stat(path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        self._fd = fd
+        command = " ".join(sys.argv[1:]) if len(sys.argv) > 1 else self.what
+        note = f"pid {os.getpid()}: vtrack {command}\n".encode()
+        try:
+            os.ftruncate(fd, 0)
+            os.write(fd, note)
+        except OSError:
+            pass  # a full disk: the lock holds anyway, only the note is missing
+
+    def clear(self, names: Iterable[str] = RUN_OUTPUTS) -> None:
+        """Remove what an earlier run left here: the files ``names`` and their stale
+        temporaries. Nothing else in the folder is touched."""
+        names = tuple(names)
+        for entry in self.folder.iterdir():
+            name = entry.name
+            stale = name in names or any(
+                name.startswith(f".{Path(n).stem}.tmp") and name.endswith(Path(n).suffix)
+                for n in names)
+            if stale and not entry.is_dir():
+                with contextlib.suppress(FileNotFoundError):
+                    entry.unlink()
+
+    def release(self) -> None:
+        """Release the lock (remove the lock file first, while it is still held)."""
+        if self._fd is None:
+            return
+        with contextlib.suppress(OSError):
+            (self.folder / LOCK_NAME).unlink()
+        os.close(self._fd)
+        self._fd = None
+
+    def _remove_if_empty(self) -> None:
+        for folder in self._created:
+            try:
+                folder.rmdir()
+            except OSError:
+                return  # not empty (or gone): keep it and every parent
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.release()
+        self._remove_if_empty()
