@@ -8,7 +8,11 @@ import pytest
 
 from vtrack.annotate import (
     GROUND_TRUTH,
+    LEGEND_MAX_SHARE,
+    LEGEND_ROWS,
+    OCCLUDED_BOX,
     PARTICLES,
+    PREDICTION,
     TRACK_PALETTE,
     TRACKED,
     WINDOW,
@@ -56,7 +60,7 @@ def test_colours_are_opencv_bt601_conversions():
 def test_box_and_centre_are_drawn_in_all_planes_and_nothing_else_changes():
     buf = blank()
     before = buf.copy()
-    Annotator(W, H).draw(buf, result())
+    Annotator(W, H, legend=False).draw(buf, result())
     y, u, v = planes(buf)
     y0, u0, v0 = planes(before)
     assert y[80:130, 100].tolist() == [TRACKED.y] * 50  # left edge, full resolution
@@ -69,7 +73,7 @@ def test_box_and_centre_are_drawn_in_all_planes_and_nothing_else_changes():
 
 
 def test_lost_draws_caption_top_right_and_no_box():
-    annotator = Annotator(W, H)
+    annotator = Annotator(W, H, legend=False)
     buf = blank()
     annotator.draw(buf, result(box=None, state=TrackState.LOST))
     y = planes(buf)[0]
@@ -125,7 +129,7 @@ def test_an_overlay_of_unknown_kind_is_an_error():
 
 def test_boxes_far_outside_or_invalid_are_harmless():
     buf = blank()
-    annotator = Annotator(W, H, gt=[Box(float("nan"), 0, 10, 10)])
+    annotator = Annotator(W, H, gt=[Box(float("nan"), 0, 10, 10)], legend=False)
     annotator.draw(buf, result(box=Box(-1e12, 5e11, 1e13, 3)))
     annotator.draw(buf, result(1, box=Box(10, 10, 0, 0)))
     y, u, v = planes(buf)
@@ -144,3 +148,68 @@ def test_rotate_i420_turns_every_plane():
     assert ty.shape == (W, H) and tu.shape == (W // 2, H // 2)
     assert (ty[-2:, :2] == 250).all() and tu[-1, 0] == 10
     np.testing.assert_array_equal(rotate_i420(rotate_i420(buf, W, H, 180), W, H, 180), buf)
+
+
+def test_the_prediction_is_a_thin_box_in_its_own_colour():
+    buf = blank()
+    Annotator(W, H, legend=False).draw(buf, FrameResult(0, 0.0, BOX, TrackState.TRACKING, 1.0,
+                                                        Box(200, 20, 40, 30)))
+    y, u, v = planes(buf)
+    assert y[35, 200] == PREDICTION.y and u[17, 100] == PREDICTION.u
+    assert y[35, 201] == GREY  # one pixel wide
+
+
+def legend_block(y: np.ndarray) -> np.ndarray:
+    """The bottom-left rows the legend may use."""
+    return y[H - int(LEGEND_MAX_SHARE * H):, : W // 2]
+
+
+def test_legend_and_frame_number_bottom_left():
+    annotator = Annotator(W, H, gt=[BOX] * 3)
+    shown = []
+    for index in (0, 7):
+        buf = blank()
+        annotator.draw(buf, result(index))
+        y, u, v = planes(buf)
+        block = legend_block(y)
+        assert (block == 16).any()  # the legend's black background
+        # each colour's swatch is there, luma and chroma (chroma at half resolution)
+        legend = annotator.legend
+        assert legend is not None and legend.rows == (
+            "box", "occluded", "prediction", "search window", "ground truth")
+        ph, pw = legend.y.shape
+        corner_u = u[legend.y0 // 2:(legend.y0 + ph) // 2, : pw // 2]
+        for colour in (TRACKED, OCCLUDED_BOX, PREDICTION, WINDOW, GROUND_TRUTH):
+            assert ((np.abs(corner_u.astype(int) - colour.u) <= 2).sum()) >= 4, colour
+        shown.append(y[legend.y0:legend.y0 + legend.row, :pw].copy())
+    assert (shown[0] != shown[1]).any()  # the frame number changed
+    without_gt = Annotator(W, H).legend
+    assert without_gt is not None and "ground truth" not in without_gt.rows
+
+
+def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, tmp_path):
+    """Decode a real annotated.mp4: the legend's colours are in the bottom-left corner of
+    every frame and the frame-number row changes from frame to frame."""
+    import av
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=W, height=H, frames=16)
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["run", str(clip.path), "--gt", str(clip.gt), "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    legend = Annotator(W, H, gt=[BOX]).legend
+    assert legend is not None
+    ph, pw = legend.y.shape
+    with av.open(str(out / "annotated.mp4")) as container:
+        frames = [f.to_ndarray(format="bgr24") for f in container.decode(video=0)]
+    assert len(frames) == 16
+    for bgr in (frames[2], frames[12]):
+        corner = bgr[legend.y0:legend.y0 + ph, :pw].astype(int)
+        assert (corner.max(axis=2) < 40).mean() > 0.5  # mostly the black background
+        for _, colour in LEGEND_ROWS:
+            near = np.abs(corner - colour).max(axis=2) < 60
+            assert near.sum() >= 6, colour
+    rows = [f[legend.y0:legend.y0 + legend.row, :pw].astype(int) for f in (frames[2], frames[12])]
+    assert np.abs(rows[0] - rows[1]).max() > 120  # "frame 2" vs "frame 12": white vs black

@@ -232,3 +232,39 @@ def test_scheduler_without_dask_says_how_to_install(inputs: Path, tmp_path: Path
     line = one_error_line(batch(str(inputs), "--scheduler", "tcp://127.0.0.1:8786",
                                 "--out", str(tmp_path)))
     assert "pip install 'vtrack[dask]'" in line
+
+
+LAUNCHER = """
+import sys
+
+from vtrack.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())
+"""
+
+
+@pytest.mark.parametrize("shadow", ["namespace", "package"])
+def test_batch_from_a_folder_holding_a_vtrack_folder(inputs: Path, tmp_path: Path,
+                                                     shadow: str) -> None:
+    """Run as the installed ``vtrack`` script is (its folder first on sys.path, not the current
+    folder) from a folder holding a ``vtrack/`` folder: workers import the installed package."""
+    here = tmp_path / "clone-parent"
+    (here / "vtrack").mkdir(parents=True)
+    if shadow == "package":  # imports cleanly, but is not vtrack (no __version__, no cli)
+        (here / "vtrack" / "__init__.py").write_text("SHADOW = True\n")
+    (here / "in").mkdir()
+    for name in ("smooth", "jump"):
+        shutil.copy(inputs / f"{name}.mp4", here / "in")
+        shutil.copy(inputs / f"{name}.gt.txt", here / "in")
+    launcher = tmp_path / "bin" / "vtrack-launcher.py"
+    launcher.parent.mkdir()
+    launcher.write_text(LAUNCHER)
+    result = subprocess.run(
+        [sys.executable, str(launcher), "batch", "in", "--jobs", "2", "--no-video",
+         "--out", "out"], cwd=here, capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "ImportError" not in result.stderr and "Traceback" not in result.stderr
+    rows = summary(here / "out")
+    assert set(rows) == {("smooth", "s0"), ("jump", "s0")}
+    assert all(row["status"] == "complete" for row in rows.values())

@@ -37,6 +37,7 @@ OTHER: dict[str, Any] = {
     "crf": 30,
     "seed": 7,
     "max_frames": 5,
+    "init_from": "other.init.txt",
 }
 
 

@@ -7,8 +7,14 @@ and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
 What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack.overlays`:
 ``SearchWindow`` as a thin rectangle, ``Particles`` as small dots; another kind is a
 ``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
-confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), and
-the state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box).
+confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), the
+state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box), and
+bottom-left the frame number (0-based, ``track.csv``'s ``frame``) above a legend of the colours.
+The prediction (where the next search starts, single target) is a thin box.
+
+The legend is rendered once per video into a small I420 patch and copied into each frame; only
+the frame number is drawn per frame, on the patch's black top row (luma only: white on black
+has neutral chroma).
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ LOST_TEXT = Yuv.from_bgr(40, 40, 255)  # red
 GROUND_TRUTH = Yuv.from_bgr(0, 220, 0)  # green
 WINDOW = Yuv.from_bgr(255, 255, 0)  # cyan
 PARTICLES = Yuv.from_bgr(255, 0, 255)  # magenta
+PREDICTION = Yuv.from_bgr(255, 128, 64)  # light blue
 CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
 TRACK_PALETTE = tuple(
     Yuv.from_bgr(*bgr)
@@ -149,6 +156,67 @@ def _draw_overlay(canvas: Canvas, overlay: Overlay) -> None:
             raise TypeError(f"annotate: no drawing for overlay {overlay!r}")
 
 
+#: The legend's rows, top to bottom: what each colour means (README, "Outputs").
+LEGEND_ROWS: tuple[tuple[str, tuple[int, int, int]], ...] = (
+    ("box", (0, 255, 255)),
+    ("occluded", (0, 165, 255)),
+    ("prediction", (255, 128, 64)),
+    ("search window", (255, 255, 0)),
+    ("ground truth", (0, 220, 0)),
+)
+#: The legend is left out (the frame number stays) when it would be taller than this share
+#: of the frame: on tiny frames it would hide what it explains.
+LEGEND_MAX_SHARE = 0.4
+
+
+class Legend:
+    """The bottom-left block: a row for the frame number, then one row per colour.
+
+    Rendered once (BGR, converted to I420 with OpenCV) into ``y``, ``u``, ``v`` patches;
+    :meth:`draw` copies them into a frame's planes and writes the frame number.
+    """
+
+    def __init__(self, width: int, height: int, font_scale: float, ground_truth: bool) -> None:
+        self.scale = max(0.3, font_scale * 0.6)
+        rows = [(label, bgr) for label, bgr in LEGEND_ROWS
+                if ground_truth or label != "ground truth"]
+        (text_w, text_h), base = cv2.getTextSize("search window", FONT, self.scale, 1)
+        self.row = text_h + base + 3
+        self.pad = 3
+        swatch = 3 * self.row // 2
+        pw = _even(self.pad * 3 + swatch + text_w)
+        full = _even(self.pad * 2 + self.row * (len(rows) + 1))
+        ph = full if full <= LEGEND_MAX_SHARE * height else _even(self.pad * 2 + self.row)
+        rows = rows if ph == full else []
+        self.rows = tuple(label for label, _ in rows)
+        pw, ph = min(pw, width - width % 2), min(ph, height - height % 2)
+        self.x0, self.y0 = 0, _even(height - ph) if height - ph >= 0 else 0
+        patch = np.zeros((ph, pw, 3), np.uint8)
+        for n, (label, bgr) in enumerate(rows, start=1):
+            mid = self.pad + n * self.row + self.row // 2
+            cv2.rectangle(patch, (self.pad, mid - 2), (self.pad + swatch, mid + 1), bgr, -1)
+            cv2.putText(patch, label, (2 * self.pad + swatch, mid + text_h // 2), FONT,
+                        self.scale, bgr, 1, cv2.LINE_AA)
+        i420 = cv2.cvtColor(patch, cv2.COLOR_BGR2YUV_I420)
+        self.y, self.u, self.v = (p.copy() for p in i420_planes(i420, pw, ph))
+        self.text_h = text_h
+
+    def draw(self, canvas: Canvas, index: int) -> None:
+        """Copy the legend into the bottom-left corner and write ``frame INDEX`` on top."""
+        ph, pw = self.y.shape
+        x0, y0 = self.x0, self.y0
+        canvas.y[y0:y0 + ph, x0:x0 + pw] = self.y
+        canvas.u[y0 // 2:(y0 + ph) // 2, x0 // 2:(x0 + pw) // 2] = self.u
+        canvas.v[y0 // 2:(y0 + ph) // 2, x0 // 2:(x0 + pw) // 2] = self.v
+        corner = canvas.y[y0:y0 + self.pad + self.row, x0:x0 + pw]  # a view: drawn in place
+        cv2.putText(corner, f"frame {index}", (self.pad, self.pad + self.text_h), FONT,
+                    self.scale, 235, 1, cv2.LINE_AA)
+
+
+def _even(n: int) -> int:
+    return n - n % 2
+
+
 class Annotator:
     """Draws one :class:`~vtrack.pipeline.FrameResult` per frame into an I420 buffer.
 
@@ -163,6 +231,7 @@ class Annotator:
         height: int,
         gt: Sequence[Box | None] | None = None,
         trail: int = 30,
+        legend: bool = True,
     ) -> None:
         scale = max(width, height * 16 / 9) / 1280.0  # 1.0 at 720p, 1.5 at 1080p
         self.thickness = max(1, round(2 * scale))
@@ -172,6 +241,7 @@ class Annotator:
         self.track_trail = max(2, trail // 2)
         self._tracks: dict[int, deque[tuple[int, int]]] = {}
         self._last_seen: dict[int, int] = {}
+        self.legend = Legend(width, height, self.font_scale, gt is not None) if legend else None
 
     def draw(self, i420_buffer: np.ndarray, result: FrameResult) -> None:
         """Draw ``result`` into ``i420_buffer`` (an ``(h * 3 // 2, w)`` I420 array) in place."""
@@ -183,6 +253,8 @@ class Annotator:
                 canvas.rectangle(*_corners(gt_box), GROUND_TRUTH, t)
         for overlay in result.overlays:
             _draw_overlay(canvas, overlay)
+        if _drawable(result.prediction) and not result.tracks:
+            canvas.rectangle(*_corners(result.prediction), PREDICTION, 1)
         box = result.box
         colour = OCCLUDED_BOX if result.state == TrackState.OCCLUDED else TRACKED
         self.trail.append(_point(box.cx, box.cy) if _drawable(box) else None)
@@ -193,6 +265,8 @@ class Annotator:
             canvas.circle(_point(box.cx, box.cy), t + 1, colour)
         self._draw_tracks(canvas, result)
         self._caption(canvas, result.state)
+        if self.legend is not None:
+            self.legend.draw(canvas, result.index)
 
     @staticmethod
     def _runs(points: Iterable[tuple[int, int] | None]) -> list[list[tuple[int, int]]]:

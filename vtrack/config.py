@@ -102,14 +102,18 @@ def shipped_configs() -> dict[str, Path]:
 
 
 def load_config(spec: str | Path | None = None) -> Config:
-    """Load a config from a path, or a shipped one by name (default: S0)."""
+    """Load a shipped config by name (default: S0), or a config file by path.
+
+    A shipped name (``s2``) always means the shipped config, even when a file of that name is in
+    the current folder: give such a file as a path (``./s2``) or with ``.toml``.
+    """
     spec = DEFAULT_CONFIG if spec is None else spec
     path = Path(spec)
-    if not path.is_file():
-        shipped = shipped_configs()
-        if str(spec) in shipped:
-            path = shipped[str(spec)]
-        elif path.is_dir():
+    shipped = shipped_configs()
+    if str(spec) in shipped:
+        path = shipped[str(spec)]
+    elif not path.is_file():
+        if path.is_dir():
             raise ConfigError(f"{spec}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
             raise ConfigError(f"{spec}: config file not found")

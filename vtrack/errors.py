@@ -3,6 +3,12 @@
 from __future__ import annotations
 
 
+def plural(count: int, noun: str, nouns: str | None = None) -> str:
+    """``1 frame``, ``2 frames``: a count and its noun for a user message (``nouns``: the plural
+    when it is not ``noun + "s"``)."""
+    return f"{count} {noun}" if count == 1 else f"{count} {nouns or noun + 's'}"
+
+
 class VtrackError(Exception):
     """A problem with what the user gave us (input, config, options). ``str()`` is the message."""
 

@@ -59,6 +59,17 @@ class Box(NamedTuple):
     def is_valid(self) -> bool:
         return all(math.isfinite(v) for v in self) and self.w > 0 and self.h > 0
 
+    def text(self) -> str:
+        """``x,y,w,h`` as ``--init`` takes it (2 decimals at most): how a message shows a box."""
+        return ",".join(f"{round(v, 2):g}" for v in self)
+
+    def outside(self, width: int, height: int) -> bool:
+        """True when no part of the box lies in a ``width`` x ``height`` frame (a NaN box is
+        outside too)."""
+        inside = (self.x < width and self.x + self.w > 0
+                  and self.y < height and self.y + self.h > 0)
+        return not inside
+
     def window(self, width: int, height: int) -> Window | None:
         """The integer pixels this box covers inside a ``width`` x ``height`` frame, or None."""
         x0 = max(int(math.floor(self.x)), 0)

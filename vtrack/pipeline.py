@@ -19,6 +19,13 @@ from vtrack.geometry import Box
 from vtrack.overlays import Overlay
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
+#: A box that lies entirely outside the frame for more than this many frames in a row is
+#: reported ``lost`` (no box is claimed) until it overlaps the frame again: a predictor coasting
+#: away (S2 at x = -457996 in a 640x480 frame, issue 11 item 8) is not a target still tracked.
+#: One rule for every single-target tracker, applied to the output; the stages keep their own
+#: state. README and docs/architecture.md state it.
+OFF_FRAME_FRAMES = 10
+
 
 @dataclass
 class FrameResult:
@@ -72,6 +79,7 @@ class Pipeline:
             raise ConfigError("this tracker needs an initial box (--init x,y,w,h or --gt FILE)")
         ctx: TrackContext | None = None
         clock = time.perf_counter
+        off_frame = 0  # frames in a row the box has been entirely outside the frame
         for frame in frames:
             if ctx is None:
                 ctx = TrackContext(frame=frame, rng=np.random.default_rng(self.seed), box=init_box)
@@ -89,12 +97,19 @@ class Pipeline:
                     stage.step(ctx)
                     self.stage_seconds[stage.name] += clock() - started
             self.frames_done += 1
+            state = ctx.state
+            if ctx.box is not None and ctx.box.outside(frame.width, frame.height):
+                off_frame += 1
+                if off_frame > OFF_FRAME_FRAMES:
+                    state = TrackState.LOST
+            else:
+                off_frame = 0
             yield FrameResult(
                 index=frame.index,
                 time_s=frame.time_s,
                 frame=frame,
-                box=None if ctx.state == TrackState.LOST else ctx.box,  # lost: no box is claimed
-                state=ctx.state,
+                box=None if state == TrackState.LOST else ctx.box,  # lost: no box is claimed
+                state=state,
                 score=ctx.score,
                 prediction=ctx.prediction,
                 extras=ctx.extras,

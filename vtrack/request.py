@@ -23,7 +23,8 @@ from vtrack.io import RawFormat
 class RunRequest:
     """Everything one run needs. Paths are used as given (the CLI resolves defaults).
 
-    ``init_box`` None takes the first ground-truth box (single-target configs); ``gt_origin`` 1
+    ``init_box`` None takes the input's sidecar box (``NAME.init.txt``, :mod:`vtrack.io.sidecar`)
+    or else the first ground-truth box (single-target configs); ``gt_origin`` 1
     reads 1-based (MATLAB) ground-truth boxes; ``raw`` describes raw-frame input (None: a video
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
     seeds the stochastic stages; ``max_frames`` stops early.
@@ -43,6 +44,9 @@ class RunRequest:
     crf: int = 23
     seed: int = 0
     max_frames: int | None = None
+    #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
+    #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
+    init_from: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``run.json``'s ``"request"``): the config as its resolved chain
@@ -61,6 +65,7 @@ class RunRequest:
             "crf": self.crf,
             "seed": self.seed,
             "max_frames": self.max_frames,
+            "init_from": self.init_from,
         }
 
     @classmethod
@@ -81,6 +86,7 @@ class RunRequest:
             crf=int(data["crf"]),
             seed=int(data["seed"]),
             max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
+            init_from=data.get("init_from"),
         )
 
     def same_run(self, recorded: Any) -> bool:

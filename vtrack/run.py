@@ -47,6 +47,7 @@ from vtrack.errors import (
     OutputBrokenError,
     OutputError,
     PartialInputError,
+    plural,
 )
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
@@ -61,6 +62,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.outdir import OutputFolder
+from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.io.videowriter import verify_video
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
@@ -100,26 +102,30 @@ class RunSummary:
     error: str | None = None
     warnings: list[str] = field(default_factory=list)
     mot: dict[str, Any] | None = None
+    #: A multi-target chain (tracks.csv): the single target's occluded/lost counts do not apply.
+    multi_target: bool = False
     #: The signal that interrupted the run (``SIGINT``, ``SIGTERM``), if one did.
     interrupted_by: str | None = None
 
-    def line(self) -> str:
-        """The one-line summary printed at the end of ``vtrack run``."""
-        parts = [f"{self.frames} frames", f"{self.fps:.1f} fps"]
+    def line(self, label: str | None = None) -> str:
+        """The one-line summary printed at the end of ``vtrack run`` (headed by ``label``,
+        default the input)."""
+        parts = [plural(self.frames, "frame"), f"{self.fps:.1f} fps"]
         if self.mean_overlap is not None:
             parts.append(f"mean overlap {self.mean_overlap:.3f}")
             parts.append(f"AUC {self.auc:.3f}")
             parts.append(f"precision@20 {self.precision20:.3f}")
-        if self.mot:
+        if self.mot:  # a metric with no value (motp without a match) is left out
             parts += [f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
-                      for k, v in self.mot.items() if k in ("mota", "motp", "idf1", "id_switches")]
-        else:
+                      for k, v in self.mot.items()
+                      if k in ("mota", "motp", "idf1", "id_switches") and v is not None]
+        if not self.multi_target:  # one target's states; tracks have their own in tracks.csv
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
         if self.frames_skipped:
             parts.append(f"skipped {self.frames_skipped} undecodable")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
-        head = f"{self.input}{status}: "
+        head = f"{label or self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
 
 
@@ -274,6 +280,9 @@ class _Resolved:
     gt: list[Box | None] | None  # single-target ground truth
     mot_gt: Any  # multi-target ground truth (MOTChallenge), read by the MOT metrics at the end
     init_box: Box | None
+    #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
+    #: a ground-truth file (None: no box).
+    init_from: str | None = None
 
 
 @dataclass
@@ -309,7 +318,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             info = source.info
             if resolved.init_box is not None:
                 _check_init_box(resolved.init_box, info.width, info.height,
-                                "--init" if request.init_box else str(request.gt_path))
+                                resolved.init_from or "--init")
             with OutputFolder(request.out_dir) as folder:
                 folder.clear()
                 writers = _open_writers(request, resolved, info)
@@ -363,19 +372,24 @@ def _resolve(request: RunRequest) -> _Resolved:
         mot_gt = read_mot(request.gt_path)
     elif request.gt_path is not None:
         gt = read_boxes(request.gt_path, origin=request.gt_origin)
-    init_box = request.init_box
+    # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
+    # says, vtrack.io.sidecar), else the first ground-truth box
+    init_box, init_from = request.init_box, request.init_from or "--init"
+    if init_box is None and pipeline.needs_init_box and request.raw is None:
+        init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
         if gt[0] is None:
             raise InputError(
                 f"{request.gt_path}: the first ground-truth box is empty; give --init x,y,w,h"
             )
-        init_box = gt[0]
+        init_box, init_from = gt[0], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         raise ConfigError(
-            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h "
-            "or --gt FILE"
+            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h, "
+            f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
+            "(vtrack select INPUT picks it)"
         )
-    return _Resolved(pipeline, gt, mot_gt, init_box)
+    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None)
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -496,6 +510,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         frames_occluded=tracked.states[TrackState.OCCLUDED],
         frames_lost=tracked.states[TrackState.LOST],
         frames_skipped=source.frames_skipped,
+        multi_target=resolved.pipeline.multi_target,
         error=error,
         warnings=list(source.warnings),
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
@@ -510,10 +525,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
-        if len(gt) != span and status == STATUS_COMPLETE:
+        stopped = request.max_frames is not None and span >= request.max_frames  # --frames N
+        if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (
-                f"{request.gt_path}: ground truth has {len(gt)} boxes for {span} frames "
+                f"{request.gt_path}: ground truth has {plural(len(gt), 'box', 'boxes')} for "
+                f"{plural(span, 'frame')} "
                 f"({side}); " + ("overlap is empty from frame "
                                  f"{len(gt)} on" if len(gt) < span else "extra boxes ignored")
             )
@@ -530,6 +547,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "input": source.info.to_dict(),
         "request": request.to_dict(),
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
+        "init_from": resolved.init_from,
         "config": request.config.resolved(),
         "metrics": metrics,
         "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},

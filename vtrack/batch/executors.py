@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import os
 import signal
+import sys
 import uuid
 from collections import deque
-from collections.abc import Iterator, Sequence
-from contextlib import suppress
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager, suppress
 from dataclasses import replace
+from multiprocessing import forkserver
 from multiprocessing.connection import wait
-from typing import Protocol
+from typing import Any, Protocol
 
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.batch.worker import _serve, execute
@@ -51,8 +54,32 @@ def _context() -> multiprocessing.context.BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(["__main__", __name__])
+        with _safe_path():
+            forkserver.ensure_running()
         return context
     return multiprocessing.get_context("spawn")
+
+
+@contextmanager
+def _safe_path() -> Iterator[None]:
+    """Start child interpreters without the current folder first on ``sys.path``.
+
+    The fork server is ``python -c ...``, which puts ``''`` (the current folder) first on
+    ``sys.path`` and, on Python 3.11, never takes the parent's path: run from a folder that
+    holds a ``vtrack/`` folder (the folder of a clone), every worker imported that folder
+    instead of the installed package (issue 11 item 2). ``PYTHONSAFEPATH`` (Python >= 3.11)
+    keeps the child from adding it; the rest of ``sys.path`` (``PYTHONPATH``, site-packages,
+    editable installs) is unchanged.
+    """
+    saved = os.environ.get("PYTHONSAFEPATH")
+    os.environ["PYTHONSAFEPATH"] = "1"
+    try:
+        yield
+    finally:
+        if saved is None:
+            del os.environ["PYTHONSAFEPATH"]
+        else:
+            os.environ["PYTHONSAFEPATH"] = saved
 
 
 class _Worker:
@@ -158,16 +185,43 @@ class DaskExecutor:
     def __init__(self, address: str, timeout_s: float = 10) -> None:
         try:
             from distributed import Client
+            from distributed.comm import parse_address
+            from distributed.comm.registry import get_backend
         except ImportError:
             raise VtrackError(
                 "--scheduler needs Dask distributed: pip install 'vtrack[dask]'") from None
+        self.address = address
         try:
-            self.client = Client(address, timeout=timeout_s, set_as_default=False)
+            get_backend(parse_address(address)[0])  # a bad scheme fails here, before a Client
+            with _quiet_client_teardown():
+                self.client = Client(address, timeout=timeout_s, set_as_default=False)
         except (OSError, TimeoutError, ValueError) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise VtrackError(
                 f"--scheduler {address}: cannot reach the Dask scheduler ({reason})"
             ) from None
+
+    def wait_for_workers(self, timeout_s: float | None,
+                         say: Callable[[str], None] = lambda line: None) -> None:
+        """Return once at least one worker is connected to the scheduler; if none is, ``say``
+        so (one line) and wait up to ``timeout_s`` seconds (None: for ever). On expiry the
+        client is closed and a :class:`VtrackError` names the scheduler and the wait."""
+        if self.client.scheduler_info().get("workers"):
+            return
+        limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
+        say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
+            f"--worker-timeout)")
+        try:
+            self.client.wait_for_workers(1, timeout=timeout_s)
+        except TimeoutError:
+            self.close()
+            raise VtrackError(f"--scheduler {self.address}: no Dask worker connected within "
+                              f"{_seconds(timeout_s or 0)} (--worker-timeout)") from None
+
+    def close(self) -> None:
+        """Disconnect; nothing is printed if the scheduler is already gone."""
+        with _quiet_client_teardown(), suppress(Exception):
+            self.client.close()
 
     def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
         from distributed import as_completed
@@ -185,8 +239,32 @@ class DaskExecutor:
                     yield Outcome(job.input, job.config, STATUS_FAILED,
                                   error=f"Dask: {type(exc).__name__}: {exc}")
         finally:
-            self.client.cancel(list(futures))
-            self.client.close()
+            with suppress(Exception):
+                self.client.cancel(list(futures))
+            self.close()
+
+
+def _seconds(value: float) -> str:
+    return f"{value:g} s"
+
+
+@contextmanager
+def _quiet_client_teardown() -> Iterator[None]:
+    """Collect a Dask ``Client`` that failed to connect (or was closed) here, without the
+    ``Exception ignored in Client.__del__`` traceback its finaliser prints when it cannot
+    reach the scheduler: the user already has the one-line error."""
+    hook = sys.unraisablehook
+
+    def ignore_client(unraisable: Any) -> None:
+        if "Client" not in repr(getattr(unraisable, "object", "")):
+            hook(unraisable)
+
+    sys.unraisablehook = ignore_client
+    try:
+        yield
+    finally:
+        gc.collect()
+        sys.unraisablehook = hook
 
 
 def cpu_count() -> int:

@@ -46,7 +46,7 @@ class Outcome:
         if self.status == STATUS_FAILED or self.summary is None:
             line = f"{self.input} [{self.config}]: {self.status}: {self.error}"
         else:
-            line = self.summary.line()
+            line = self.summary.line(f"{self.input} [{self.config}]")
         if self.status == STATUS_SKIPPED:
             line += " (skipped: already complete)"
         if self.attempt > 1:

@@ -11,8 +11,8 @@ from vtrack.batch.discover import SEQUENCE_GT, SEQUENCE_INIT, VIDEO_GT, VIDEO_IN
 from vtrack.batch.jobs import STATUS_SKIPPED, Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError
-from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.geometry import Box
+from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.pipeline import Pipeline
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
@@ -79,13 +79,13 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                 gt_path, gt_origin = item.groundtruth, item.gt_origin
             result.order.append((item.name, label))
             try:
-                init = (_init_box(item, label) if gt_path is None
-                        and pipelines[label].needs_init_box else None)
+                init = _init_box(item, label, gt_path) if pipelines[label].needs_init_box else None
             except InputError as exc:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=str(exc)))
                 continue
             request = replace(settings, input=str(item.path), out_dir=out_dir / item.name / label,
-                              config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin)
+                              config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin,
+                              init_from=None if init is None else str(sidecar_path(item.path)))
             done = None if force else completed_summary(request)
             if done is not None:
                 result.known.append(Outcome(item.name, label, STATUS_SKIPPED, done))
@@ -94,16 +94,17 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     return result
 
 
-def _init_box(item: BatchInput, config: str) -> Box:
-    """The first box of an input without single-target ground truth, from its init file."""
-    if item.init is None:
+def _init_box(item: BatchInput, config: str, gt_path: Path | None) -> Box | None:
+    """The first box of an input from its sidecar file (``NAME.init.txt``, ``init.txt`` in a
+    sequence folder: 0-based pixels whatever ``--gt-origin`` says, as ``vtrack run`` reads it);
+    None when it has none but has ground truth (the run takes its first box). Raises
+    InputError when there is neither, or the sidecar is malformed."""
+    box = read_sidecar(item.path)
+    if box is None and gt_path is None:
         if item.path.is_dir():
             names = (*SEQUENCE_GT, SEQUENCE_INIT)
         else:
             names = tuple(p.format(item.path.stem) for p in (*VIDEO_GT, VIDEO_INIT))
         raise InputError(f"{item.path}: config '{config}' tracks a given target, but there is "
                          f"no ground truth or initial box ({', '.join(names)})")
-    box = read_boxes(item.init, origin=item.gt_origin)[0]
-    if box is None:
-        raise InputError(f"{item.init}: the initial box is empty")
     return box

@@ -77,6 +77,10 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--scheduler-timeout", type=click.FloatRange(min=0.1), default=10.0,
               show_default=True, metavar="SECONDS", help="Give up connecting to --scheduler "
                                                          "after this long.")
+@click.option("--worker-timeout", type=click.FloatRange(min=0, min_open=True), default=60.0,
+              show_default=True, metavar="SECONDS",
+              help="With --scheduler and no worker connected: say so, wait this long for one, "
+                   "then give up (exit 2).")
 @click.option("--gt-origin", type=click.Choice(["auto", "0", "1"]), default="auto",
               show_default=True,
               help="Origin of ground-truth boxes. auto: 1 (OTB's MATLAB convention) for "
@@ -85,7 +89,8 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--force", is_flag=True,
               help="Run again input x config pairs whose results are already complete.")
 def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
-            jobs: int | None, scheduler: str | None, scheduler_timeout: float, gt_origin: str,
+            jobs: int | None, scheduler: str | None, scheduler_timeout: float,
+            worker_timeout: float, gt_origin: str,
             force: bool, overrides: tuple[str, ...], no_video: bool, preset: str, crf: int,
             seed: int, max_frames: int | None, quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
@@ -129,8 +134,13 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     try:
         # the results folder is taken (created, checked, locked) before any job is planned
         with OutputFolder(out_dir, "batch"):
-            executor: Executor = (DaskExecutor(scheduler, scheduler_timeout) if scheduler
-                                  else LocalExecutor(workers))
+            executor: Executor
+            if scheduler:
+                dask = DaskExecutor(scheduler, scheduler_timeout)
+                dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
+                executor = dask
+            else:
+                executor = LocalExecutor(workers)
             settings = RunRequest(input=str(folder), out_dir=out_dir,
                                   config=next(iter(configs.values())), video=not no_video,
                                   preset=preset, crf=crf, seed=seed, max_frames=max_frames)

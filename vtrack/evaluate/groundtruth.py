@@ -77,6 +77,12 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             values = [float(t) for t in tokens]
         except ValueError:
             values = []
+        if len(values) in (9, 10) and values[0] == int(values[0]) and values[1] == int(values[1]):
+            # MOTChallenge: frame,id,x,y,w,h,conf,x,y,z (Milan et al. 2016, MOT16 sec. 3.3)
+            raise InputError(
+                f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
+                "for many targets; a single-target config reads x,y,w,h per frame: use a "
+                "multi-target config (--config s3 or --config s4_multi)")
         if len(values) not in (4, 8):
             raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got {_quote(line)}")
         if any(math.isnan(v) for v in values):

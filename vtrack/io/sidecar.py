@@ -33,7 +33,7 @@ def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
 
 def format_box(box: Box) -> str:
     """``x,y,w,h`` as ``--init`` takes it; whole numbers without a decimal point."""
-    return ",".join(f"{round(v, 2):g}" for v in box)
+    return box.text()
 
 
 def parse_sidecar(text: str, where: str) -> Box:

@@ -28,7 +28,7 @@ import av
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError, PartialInputError
+from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
@@ -98,7 +98,7 @@ class _Tail:
             covered = self.last_time + 1.0 / fps
             reaches_end = covered >= end_s - max(_END_SLACK_S, _END_SLACK_FRAMES / fps)
         if listed and self.frames < listed and not reaches_end:
-            return f"the container lists {listed} frames"
+            return f"the container lists {plural(listed, 'frame')}"
         if not listed and reaches_end is False:
             return (f"{covered - self.first_time:.2f} s of the "
                     f"{end_s - self.first_time:.2f} s the container promises")
@@ -107,7 +107,8 @@ class _Tail:
         period = 1.0 / fps
         regular = self.frames >= 3 and self.regular_gap <= 1.2 * period
         if regular and self.last_gap > 1.5 * period:
-            return f"{round(self.last_gap / period) - 1} frames missing before the last one"
+            missing = plural(round(self.last_gap / period) - 1, "frame")
+            return f"{missing} missing before the last one"
         return None
 
 

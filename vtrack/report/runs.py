@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.batch import STATUS_FAILED, SUMMARY_COLUMNS
-from vtrack.errors import InputError
+from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.geometry import Box
@@ -147,7 +147,8 @@ class GroundTruth:
         frames as boxes, a run that stopped early no more (None: they fit)."""
         boxes = len(self.boxes)
         if frames > boxes or (complete and frames != boxes):
-            return f"{self.path} has {boxes} boxes for its {frames} frames"
+            return (f"{self.path} has {plural(boxes, 'box', 'boxes')} for its "
+                    f"{plural(frames, 'frame')}")
         return None
 
 

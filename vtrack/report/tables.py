@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from vtrack.errors import plural
 from vtrack.report.runs import RunResult
 from vtrack.run import STATUS_INTERRUPTED, STATUS_PARTIAL
 
@@ -106,7 +107,7 @@ def status_text(run: RunResult) -> str:
     """The run's status; one that stopped early says how far it got
     (``partial: 40 of 60 frames``)."""
     if run.status in INCOMPLETE and run.input_frames:
-        return f"{run.status}: {run.frames} of {run.input_frames} frames"
+        return f"{run.status}: {run.frames} of {plural(run.input_frames, 'frame')}"
     return run.status
 
 

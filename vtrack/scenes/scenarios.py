@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, plural
 from vtrack.geometry import Window
 from vtrack.scenes.render import (
     CAMERA,
@@ -203,8 +203,9 @@ def _accelerate(spec: SceneSpec) -> Scene:
     if fast.size == 0:
         longest = max(k for k in range(3, n + 1) if travel * (2 * k - 3) / (k - 1) ** 2 > 2 * ax)
         raise ConfigError(
-            f"scenario 'accelerate' at {w}x{h}: in {n} frames the target never moves more than "
-            f"its width between two frames; ask for at most {longest} frames or a wider frame"
+            f"scenario 'accelerate' at {w}x{h}: in {plural(n, 'frame')} the target never moves "
+            f"more than its width between two frames; ask for at most {plural(longest, 'frame')} "
+            "or a wider frame"
         )
     background = _paper(spec, looks)
     sprites = [_target(spec, looks, cx, cy, ax, ay)]

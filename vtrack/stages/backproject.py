@@ -100,7 +100,8 @@ class BackProject(Stage):
         box = ctx.box
         part = None if box is None or not box.is_valid() else box_slices(ctx.window, box)
         if box is None or part is None:
-            raise InputError(f"backproject: the initial box {box} covers no pixel of the frame")
+            shown = box.text() if box is not None else None
+            raise InputError(f"backproject: the initial box {shown} covers no pixel of the frame")
         levels = ctx.feature_levels
         mask = ctx.feature_mask
         part_mask = None if mask is None else mask[part]
@@ -108,7 +109,7 @@ class BackProject(Stage):
         top = float(hist.max())
         if top == 0:
             raise InputError(
-                f"backproject: no pixel of the initial box {box} passes the hue stage's "
+                f"backproject: no pixel of the initial box {box.text()} passes the hue stage's "
                 "saturation/value mask: the target has no colour for a hue tracker (grey footage? "
                 "try --config s2, or lower hue.sat_min / hue.val_min)"
             )

@@ -87,7 +87,8 @@ class HueBpFixed(Stage):
         """Frame 0: the window is the initial box; count the model over it (eq. 2-3)."""
         box = ctx.box
         if box is None or not box.is_valid():
-            raise InputError(f"hue_bp_fixed: needs a valid initial box, got {box}")
+            shown = box.text() if box is not None else None
+            raise InputError(f"hue_bp_fixed: needs a valid initial box, got {shown}")
         record = FixedRecord(model="s0", sat_min=self.sat_min, val_min=self.val_min,
                              hue_divider_bits=self.hue_divider_bits)
         ctx.fixed = self.record = record  # the record is also the stage's (vtrack vectors)

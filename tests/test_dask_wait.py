@@ -1,0 +1,105 @@
+"""`vtrack batch --scheduler`: no worker connected (say so, wait, give up after
+--worker-timeout) and an unreachable scheduler (one line, no finaliser traceback). Loopback only."""
+
+from __future__ import annotations
+
+import shutil
+import socket
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pytest
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+distributed = pytest.importorskip("distributed")
+
+
+def vtrack(*args: str, **kwargs: object) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=120, check=False, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory, clip_factory: ClipFactory) -> Path:
+    clip = clip_factory("smooth", width=160, height=120, frames=24)
+    folder = tmp_path_factory.mktemp("dask-in")
+    shutil.copy(clip.path, folder / "smooth.mp4")
+    shutil.copy(clip.gt, folder / "smooth.gt.txt")
+    return folder
+
+
+def closed_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]  # closed when the block ends: nothing listens there
+
+
+def assert_one_error(result: subprocess.CompletedProcess[str], *words: str) -> list[str]:
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr and "Exception ignored" not in result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    errors = [line for line in lines if line.startswith("vtrack: error: ")]
+    assert len(errors) == 1, result.stderr
+    for word in words:
+        assert word in errors[0]
+    return lines
+
+
+def test_no_worker_says_it_waits_and_gives_up(folder: Path, tmp_path: Path) -> None:
+    with distributed.LocalCluster(n_workers=0, host="127.0.0.1", dashboard_address=None,
+                                  processes=True) as cluster:
+        result = vtrack("batch", str(folder), "--scheduler", cluster.scheduler_address,
+                        "--worker-timeout", "1", "--no-video", "--out", str(tmp_path / "out"))
+    lines = assert_one_error(result, cluster.scheduler_address, "no Dask worker", "1 s")
+    assert lines[0].startswith("vtrack: waiting for a Dask worker")
+    assert len(lines) == 2
+    assert not (tmp_path / "out" / "summary.csv").exists()  # nothing ran, nothing recorded
+
+
+def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
+                                                             tmp_path: Path) -> None:
+    scheduler = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+         "--port", str(closed_port()), "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    worker = None
+    try:
+        address = ""
+        for line in scheduler.stderr:  # "Scheduler at:   tcp://127.0.0.1:PORT"
+            if "Scheduler at" in line:
+                address = line.split()[-1]
+                break
+        assert address.startswith("tcp://127.0.0.1:")
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--worker-timeout", "90", "--no-video", "--out", str(tmp_path / "out")],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert batch.stderr is not None
+        first = batch.stderr.readline()
+        assert first.startswith("vtrack: waiting for a Dask worker") and "90 s" in first
+        worker = subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
+             "--nthreads", "1", "--no-dashboard"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        out, err = batch.communicate(timeout=120)
+        assert batch.returncode == 0, first + err
+        assert "1 runs (1 complete)" in out
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.terminate()
+                process.wait(timeout=30)
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:{port}", "foo://127.0.0.1:{port}"])
+def test_an_unreachable_scheduler_is_one_line_without_a_finaliser_traceback(
+        folder: Path, tmp_path: Path, address: str) -> None:
+    address = address.format(port=closed_port())
+    result = vtrack("batch", str(folder), "--scheduler", address, "--scheduler-timeout", "1",
+                    "--out", str(tmp_path / "out"))
+    lines = assert_one_error(result, address)
+    assert len(lines) == 1

@@ -1,0 +1,133 @@
+"""Messages and summaries a user reads (issue 12 item 6): MOTChallenge ground truth given to a
+single-target config, shipped config names not shadowed by files, no ground-truth warning with
+--frames, batch lines naming the config, multi-target summaries, no reprs, singular counts."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pytest
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+from vtrack.config import load_config, shipped_configs
+from vtrack.errors import InputError
+from vtrack.frame import BgrFrame
+from vtrack.geometry import Box
+from vtrack.pipeline import Pipeline
+from vtrack.run import RunSummary
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+W, H = 160, 120
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, list(args))
+
+
+def one_error(result: Result) -> str:
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
+    return lines[0]
+
+
+def test_motchallenge_ground_truth_for_one_target_names_the_multi_target_configs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    clip = clip_factory("multi", width=W, height=H, frames=60)
+    assert clip.mot is not None
+    line = one_error(vtrack("run", str(clip.path), "--gt", str(clip.mot), "--no-video",
+                            "-o", str(tmp_path / "out")))
+    assert str(clip.mot) in line and "MOTChallenge" in line
+    assert "s3" in line and "s4_multi" in line
+
+
+def test_a_file_named_like_a_shipped_config_does_not_shadow_it(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=10)
+    toml = (shipped_configs()["camshift"].read_text()
+            .replace('name = "camshift"', 'name = "mine"'))
+    assert 'name = "mine"' in toml
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s2").write_text(toml)
+    (tmp_path / "s0.toml").write_text(toml)
+    names = {}
+    for spec in ("s2", "./s2", "s0.toml", "s0"):
+        out = tmp_path / f"out-{spec.replace('/', '_')}"
+        result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "-c", spec, "--no-video",
+                        "-o", str(out))
+        assert result.exit_code == 0, result.output
+        names[spec] = json.loads((out / "run.json").read_text())["summary"]["config"]
+    assert names == {"s2": "s2", "./s2": "mine", "s0.toml": "mine", "s0": "s0"}
+
+
+def test_frames_with_longer_ground_truth_does_not_warn(clip_factory: ClipFactory,
+                                                       tmp_path: Path) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    stopped = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--frames", "5",
+                     "--no-video", "-o", str(tmp_path / "a"))
+    assert stopped.exit_code == 0 and "warning" not in stopped.stderr, stopped.stderr
+    # ground truth longer than the whole clip is still worth a warning
+    longer = tmp_path / "longer.gt.txt"
+    lines = clip.gt.read_text().splitlines()
+    longer.write_text("\n".join(lines + lines[-3:]) + "\n")
+    full = vtrack("run", str(clip.path), "--gt", str(longer), "--no-video",
+                  "-o", str(tmp_path / "b"))
+    assert full.exit_code == 0 and "23 boxes for 20 frames" in full.stderr, full.stderr
+
+
+def test_counts_of_one_are_singular(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    one = tmp_path / "one.gt.txt"
+    one.write_text(clip.gt.read_text().splitlines()[0] + "\n")
+    result = vtrack("run", str(clip.path), "--gt", str(one), "--frames", "1", "--no-video",
+                    "-o", str(tmp_path / "a"))
+    assert result.exit_code == 0, result.output
+    assert ": 1 frame, " in result.stdout and "1 frames" not in result.output
+    fewer = vtrack("run", str(clip.path), "--gt", str(one), "--no-video",
+                   "-o", str(tmp_path / "b"))
+    assert "has 1 box for 20 frames" in fewer.stderr, fewer.stderr
+
+
+def test_a_box_in_a_message_is_x_y_w_h_not_a_repr() -> None:
+    frame = BgrFrame(0, 0.0, np.full((H, W, 3), 128, np.uint8))
+    pipeline = Pipeline(load_config("s0").build())
+    with pytest.raises(InputError) as error:
+        next(pipeline.track([frame], Box(-100, -100, 20.5, 10)))
+    assert "Box(" not in str(error.value) and "-100,-100,20.5,10" in str(error.value)
+
+
+def test_batch_lines_name_the_config(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=12)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "clip.mp4")
+    shutil.copy(clip.gt, folder / "clip.gt.txt")
+    result = vtrack("batch", str(folder), "-c", "s0", "-c", "camshift", "--jobs", "1",
+                    "--no-video", "--out", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.stdout.splitlines() if line.startswith("clip")]
+    assert sorted(line.split(":")[0] for line in lines) == ["clip [camshift]", "clip [s0]"]
+
+
+def test_multi_target_summaries_show_only_multi_target_numbers(clip_factory: ClipFactory,
+                                                                tmp_path: Path) -> None:
+    clip = clip_factory("multi", width=W, height=H, frames=60)
+    result = vtrack("run", str(clip.path), "-c", "s3", "--no-video", "-o", str(tmp_path / "a"))
+    assert result.exit_code == 0, result.output
+    assert "occluded" not in result.stdout and "lost" not in result.stdout
+    scored = vtrack("run", str(clip.path), "-c", "s3", "--gt", str(clip.mot), "--no-video",
+                    "-o", str(tmp_path / "b"))
+    assert "mota" in scored.stdout and "occluded" not in scored.stdout
+    # a metric without a value (MOTP when nothing matched) is left out, not printed as None
+    summary = RunSummary("clip.mp4", "out", "s3", "complete", 60, 1.0, 60.0,
+                         mot={"mota": -1.0, "motp": None, "idf1": 0.0, "id_switches": 0},
+                         multi_target=True)
+    assert "None" not in summary.line() and "motp" not in summary.line()
+    assert "mota -1.000" in summary.line()

@@ -1,0 +1,144 @@
+"""The sidecar initial box (``NAME.init.txt`` beside a video, ``init.txt`` in a sequence
+folder) starts `vtrack run` and `vtrack batch` when no --init is given (issue 12 item 2):
+0-based pixels in both, whatever --gt-origin says; run.json records where the box came from."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pytest
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+from vtrack.geometry import Box
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+W, H, FRAMES = 160, 120, 20
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, list(args))
+
+
+def first_box(scene_box: Box | None, dx: float = 0.0) -> Box:
+    assert scene_box is not None
+    return Box(round(scene_box.x + dx, 2), round(scene_box.y, 2), round(scene_box.w, 2),
+               round(scene_box.h, 2))
+
+
+def text(box: Box) -> str:
+    return ",".join(f"{v:g}" for v in box)
+
+
+def first_row(out: Path) -> Box:
+    with (out / "track.csv").open(newline="") as handle:
+        row = next(csv.DictReader(handle))
+    return Box(*(float(row[k]) for k in ("x", "y", "w", "h")))
+
+
+def record(out: Path) -> dict:
+    return json.loads((out / "run.json").read_text())
+
+
+@pytest.fixture()
+def video(clip_factory: ClipFactory, tmp_path: Path) -> tuple[Path, Box]:
+    """A video with no ground truth beside it, and its sidecar box."""
+    clip = clip_factory("smooth", width=W, height=H, frames=FRAMES)
+    path = tmp_path / "footage" / "clip.mp4"
+    path.parent.mkdir()
+    shutil.copy(clip.path, path)
+    box = first_box(clip.scene.boxes[0])
+    (path.parent / "clip.init.txt").write_text(text(box) + "\n")
+    return path, box
+
+
+@pytest.fixture()
+def sequence(clip_factory: ClipFactory, tmp_path: Path) -> tuple[Path, Box]:
+    """An OTB folder (1-based ground truth inside) whose init.txt holds a box 3 px to the right
+    of the first ground-truth box, in 0-based pixels."""
+    clip = clip_factory("smooth", width=W, height=H, frames=FRAMES, fmt="images")
+    folder = tmp_path / "footage" / "seq"
+    shutil.copytree(clip.path, folder)
+    box = first_box(clip.scene.boxes[0], dx=3)
+    (folder / "init.txt").write_text(f"# picked by hand\n{text(box)}\n")
+    return folder, box
+
+
+def test_run_starts_from_the_sidecar_without_init_or_gt(video: tuple[Path, Box],
+                                                        tmp_path: Path) -> None:
+    path, box = video
+    out = tmp_path / "out"
+    result = vtrack("run", str(path), "--no-video", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert first_row(out) == box
+    data = record(out)
+    assert data["init"] == list(box)
+    assert data["init_from"] == str(path.with_name("clip.init.txt"))
+
+
+def test_run_reads_a_sequence_sidecar_in_0_based_pixels_whatever_gt_origin(
+        sequence: tuple[Path, Box], tmp_path: Path) -> None:
+    folder, box = sequence
+    out = tmp_path / "out"
+    result = vtrack("run", str(folder), "--gt", str(folder / "groundtruth_rect.txt"),
+                    "--gt-origin", "1", "--no-video", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert first_row(out) == box  # not shifted by the ground truth's 1-based origin
+    assert record(out)["init_from"] == str(folder / "init.txt")
+    # --init still wins over the sidecar
+    other = Box(box.x - 3, box.y, box.w, box.h)
+    again = vtrack("run", str(folder), "--init", text(other), "--no-video", "-o", str(out))
+    assert again.exit_code == 0, again.output
+    assert first_row(out) == other and record(out)["init_from"] == "--init"
+
+
+def test_a_malformed_sidecar_is_one_line(video: tuple[Path, Box], tmp_path: Path) -> None:
+    path, _ = video
+    sidecar = path.with_name("clip.init.txt")
+    sidecar.write_text("10,20,thirty\n")
+    result = vtrack("run", str(path), "--no-video", "-o", str(tmp_path / "out"))
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [
+        line for line in result.stderr.strip().splitlines() if line.startswith("vtrack: error: ")]
+    assert str(sidecar) in result.stderr and "x,y,w,h" in result.stderr
+
+
+def test_without_any_box_the_error_names_the_sidecar(video: tuple[Path, Box],
+                                                     tmp_path: Path) -> None:
+    path, _ = video
+    path.with_name("clip.init.txt").unlink()
+    result = vtrack("run", str(path), "--no-video", "-o", str(tmp_path / "out"))
+    assert result.exit_code == 2
+    assert "clip.init.txt" in result.stderr and "vtrack select" in result.stderr
+
+
+def test_batch_tracks_a_folder_of_footage_without_ground_truth(
+        video: tuple[Path, Box], sequence: tuple[Path, Box], tmp_path: Path) -> None:
+    (path, video_box), (folder, sequence_box) = video, sequence
+    (folder / "groundtruth_rect.txt").unlink()  # no ground truth at all
+    out = tmp_path / "out"
+    result = vtrack("batch", str(path.parent), "--jobs", "1", "--no-video", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    with (out / "summary.csv").open(newline="") as handle:
+        rows = {row["input"]: row for row in csv.DictReader(handle)}
+    assert {name: row["status"] for name, row in rows.items()} == {
+        "clip": "complete", "seq": "complete"}
+    for name, box, sidecar in (("clip", video_box, path.with_name("clip.init.txt")),
+                               ("seq", sequence_box, folder / "init.txt")):
+        assert first_row(out / name / "s0") == box
+        data = record(out / name / "s0")
+        assert data["init"] == list(box) and data["init_from"] == str(sidecar)
+    # a changed sidecar is a different run: resume tracks it again
+    moved = Box(video_box.x + 2, *video_box[1:])
+    path.with_name("clip.init.txt").write_text(text(moved) + "\n")
+    again = vtrack("batch", str(path.parent), "--jobs", "1", "--no-video", "--out", str(out))
+    with (out / "summary.csv").open(newline="") as handle:
+        rows = {row["input"]: row for row in csv.DictReader(handle)}
+    assert rows["clip"]["status"] == "complete" and rows["seq"]["status"] == "skipped"
+    assert first_row(out / "clip" / "s0") == moved, again.output
