@@ -22,7 +22,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -30,6 +30,9 @@ from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.params import Param
+
+if TYPE_CHECKING:
+    from vtrack.stages.robust_model import RobustTarget
 
 TRACKING, OCCLUDED, LOST = "tracking", "occluded", "lost"
 STATES = (TRACKING, OCCLUDED, LOST)
@@ -83,6 +86,8 @@ class TrackContext:
     overlays: list[tuple[str, Any]] = field(default_factory=list)
     #: Shared long-lived values stages publish for later stages (target model, initial mass ...).
     memory: dict[str, Any] = field(default_factory=dict)
+    #: The ``robust`` tracker's shared state (model, working images, uncertainty), long-lived.
+    robust: RobustTarget | None = None
 
     def new_frame(self, frame: Frame) -> None:
         self.frame = frame

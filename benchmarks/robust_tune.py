@@ -1,0 +1,127 @@
+"""Tune and ablate the ``robust`` tracker on every real single-target sequence, in memory.
+
+    python benchmarks/robust_tune.py                 # per-sequence table and the mean
+    python benchmarks/robust_tune.py --ablate        # mean AUC with each part switched off
+    python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
+
+Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
+precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
+share whose box misses the target, IoU 0; of the frames whose box misses, the share called
+``occluded`` or ``lost``) and the tracking work in microseconds per frame (the chain's stages,
+frames held in memory as BGR). Tune on the mean over all sequences, never on one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+from dataclasses import dataclass
+
+from common import Clip, load_clip, single_target_sequences
+
+from vtrack.config import load_config
+from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
+from vtrack.frame import BgrFrame
+from vtrack.pipeline import Pipeline
+from vtrack.stages.base import TRACKING
+
+#: The ablation table: (label, --set overrides) with one part of robust switched off each.
+ABLATIONS = (
+    ("robust", []),
+    ("no surroundings (S0 back-projection)", ["robust_model.surroundings=false"]),
+    ("no template (colour only)", ["robust_model.template=false"]),
+    ("hue only (1 sat bin, 1 grey bin)", ["robust_model.sat_bins=1", "robust_model.grey_bins=1"]),
+    ("no scale", ["robust_search.scale=false"]),
+    ("no update", ["robust_failure.update=false"]),
+    ("no re-detection", ["robust_failure.redetect=false"]),
+    ("fixed window (no adaptive)", ["robust_model.adaptive_window=false"]),
+    ("never occluded (no failure logic)", ["robust_failure.occlude_below=0",
+                                           "robust_failure.recover_at=0"]),
+)
+
+
+@dataclass
+class Result:
+    auc: float
+    precision: float
+    miou: float
+    false_tracking: float  # share of tracking frames with IoU 0
+    flagged: float  # share of missing frames called occluded/lost
+    us_per_frame: float
+
+
+def evaluate(clip: Clip, overrides: list[str]) -> Result:
+    """Run ``robust`` with ``overrides`` on ``clip`` and score it."""
+    config = load_config("robust").with_overrides(overrides)
+    pipeline = Pipeline(config.build(), seed=0)
+    frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
+    assert clip.boxes[0] is not None
+    results = list(pipeline.track(frames, clip.boxes[0]))
+    boxes = [r.box for r in results]
+    overlaps, errors = frame_scores(boxes, clip.boxes)
+    tracking = misses = false_tracking = flagged = 0
+    for result, overlap in zip(results, overlaps, strict=True):
+        if overlap is None:
+            continue
+        missed = overlap <= 0.0
+        if result.state == TRACKING:
+            tracking += 1
+            false_tracking += missed
+        if missed:
+            misses += 1
+            flagged += result.state != TRACKING
+    work = sum(pipeline.stage_microseconds_per_frame().values())
+    return Result(
+        auc(overlaps), precision_at(errors, 20), mean_overlap(overlaps),
+        false_tracking / tracking if tracking else 0.0,
+        flagged / misses if misses else 1.0, work,
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ablate", action="store_true", help="mean AUC with each part off")
+    parser.add_argument("--set", action="append", default=[], dest="overrides",
+                        help="stage.param=value applied to every run")
+    parser.add_argument("--only", action="append", default=[], help="sequence names")
+    args = parser.parse_args()
+    sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
+    if not sequences:
+        print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
+        return
+    variants = ABLATIONS if args.ablate else (("robust", []),)
+    table: dict[str, list[Result]] = {label: [] for label, _ in variants}
+    if not args.ablate:
+        print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+    for seq in sequences:
+        clip = load_clip(seq)
+        for label, overrides in variants:
+            result = evaluate(clip, overrides + args.overrides)
+            table[label].append(result)
+            if not args.ablate:
+                print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
+                      f"{result.miou:.3f} | {result.false_tracking:.1%} | "
+                      f"{result.flagged:.1%} | {result.us_per_frame:.0f} |")
+                sys.stdout.flush()
+        del clip
+    if args.ablate:
+        base = statistics.mean(r.auc for r in table["robust"])
+        print("| variant | mean AUC | change |")
+        print("|---|---:|---:|")
+        for label, results in table.items():
+            mean = statistics.mean(r.auc for r in results)
+            print(f"| {label} | {mean:.3f} | {mean - base:+.3f} |")
+        return
+    results = table["robust"]
+
+    def mean(key: str) -> float:
+        return statistics.mean(getattr(r, key) for r in results)
+
+    print(f"| **mean** | **{mean('auc'):.3f}** | {mean('precision'):.3f} | {mean('miou'):.3f} | "
+          f"{mean('false_tracking'):.1%} | {mean('flagged'):.1%} | {mean('us_per_frame'):.0f} |")
+
+
+if __name__ == "__main__":
+    main()

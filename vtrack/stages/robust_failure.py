@@ -1,0 +1,108 @@
+"""The ``robust`` tracker's failure logic: tracking / occluded / lost, gated model update.
+
+Third link of the ``robust`` chain (it runs before ``robust_motion``, which it tells whether to
+update or coast, as S0's ``occlusion`` runs before ``kalman``). The signal is the fused score of
+the found box relative to the reference confidence (``ctx.score``, 0..1): the running mean of
+the fused score over confident frames, so "0.5" means "half as target-like as the target usually
+looks", whatever the target (Bolme et al., "Visual object tracking using adaptive correlation
+filters", CVPR 2010, stop trusting MOSSE's peak the same way, by its peak-to-sidelobe ratio).
+
+- ``tracking`` while the score stays at or above ``occlude_below``; below it the measurement is
+  withheld (the Kalman filter coasts, the box follows the prediction: S0 item 7) and the state
+  is ``occluded``; after ``lost_after`` hidden frames it is ``lost``: no box is claimed (issue
+  item 7), and with ``redetect`` the next frames search the whole frame at a coarse resolution
+  (``robust_model.lost_pixels``) with a flat motion prior.
+- A hidden target is taken back when the score of the best box reaches ``recover_at``
+  (hysteresis against flicker).
+- Model update (issue item 6, ``update``): on tracking frames whose score is at least
+  ``update_above`` the colour histograms and the template are blended towards the box
+  (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's learning rates); nothing is
+  learnt while occluded or lost, so an occluder is not learnt as the target.
+
+Pipeline contract of stage ``robust_failure``: reads ``ctx.score``, ``ctx.measurement``,
+``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``, ``ctx.measurement`` / ``ctx.box``
+(None / the prediction while hidden), ``ctx.robust`` (hidden count, reference confidence,
+whether the next frame searches the whole frame) and the extra ``confidence``.
+"""
+
+from __future__ import annotations
+
+from vtrack.params import Param
+from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
+
+
+@register
+class RobustFailure(Stage):
+    """Occluded / lost from the relative fused score; confidence-gated model update."""
+
+    name = "robust_failure"
+    summary = ("robust: occluded below a relative confidence, lost after a while (no box, "
+               "whole-frame re-detection), model update only on confident frames")
+    params = (
+        Param("occlude_below", float, 0.5,
+              "tracking frames whose relative score falls below this are occluded",
+              min=0.0, max=1.0),
+        Param("recover_at", float, 0.65,
+              "a hidden target is taken back at or above this relative score (>= "
+              "occlude_below)", min=0.0, max=1.0),
+        Param("lost_after", int, 15, "hidden frames after which the state is lost",
+              min=1, max=100000),
+        Param("redetect", bool, True,
+              "while lost, search the whole frame (coarse) for the target"),
+        Param("update", bool, True, "follow slow appearance change on confident frames"),
+        Param("update_above", float, 0.7, "relative score needed to update the model",
+              min=0.0, max=1.0),
+        Param("rate_hist", float, 0.04, "histogram learning rate (Staple: 0.04)",
+              min=0.0, max=1.0),
+        Param("rate_template", float, 0.01, "template learning rate (Staple: 0.01)",
+              min=0.0, max=1.0),
+        Param("rate_reference", float, 0.05,
+              "learning rate of the reference confidence on confident frames",
+              min=0.0, max=1.0),
+    )
+    requires = frozenset({"score", "measurement", "prediction", "robust"})
+    provides = frozenset({"state", "measurement", "box"})
+    columns = ("confidence",)
+
+    # Set from the parameters by Stage.__init__.
+    occlude_below: float
+    recover_at: float
+    lost_after: int
+    redetect: bool
+    update: bool
+    update_above: float
+    rate_hist: float
+    rate_template: float
+    rate_reference: float
+
+    def start(self, ctx: TrackContext) -> None:
+        """The first frame's box is the target: tracking."""
+        ctx.state = TRACKING
+        assert ctx.robust is not None
+        ctx.robust.hidden = 0
+        ctx.robust.search_all = False
+        ctx.extras["confidence"] = 1.0
+
+    def step(self, ctx: TrackContext) -> None:
+        target = ctx.robust
+        assert target is not None
+        score = ctx.score
+        ctx.extras["confidence"] = score
+        level = self.occlude_below if ctx.state == TRACKING else max(self.recover_at,
+                                                                     self.occlude_below)
+        if score >= level and ctx.measurement is not None:
+            ctx.state = TRACKING
+            target.hidden = 0
+            target.search_all = False
+            if self.update and score >= self.update_above:
+                target.learn(ctx.measurement, self.rate_hist, self.rate_template)
+                raw = score * target.reference
+                target.reference += self.rate_reference * (raw - target.reference)
+            return
+        target.hidden += 1
+        ctx.state = LOST if target.hidden > self.lost_after else OCCLUDED
+        target.search_all = ctx.state == LOST and self.redetect
+        # S0 item 7: while hidden the measurement is not used and the box is the prediction
+        ctx.measurement = None
+        if ctx.prediction is not None:
+            ctx.box = ctx.prediction

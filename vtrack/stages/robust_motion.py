@@ -1,0 +1,95 @@
+"""The ``robust`` tracker's motion model: a Kalman filter that also says how unsure it is.
+
+Last link of the ``robust`` chain. The filter is S0's constant-velocity model per axis (S0 eq.
+8-17, :func:`vtrack.filters.constant_velocity`) with noises in proportion to the target's size
+(a filter tuned in pixels is too stiff for a big target and too loose for a small one): process
+noise ``q = (q_rel d)^2``, measurement noise ``r = (r_rel d)^2``, ``P0 = (p0_rel d)^2 I``, ``d``
+the first box's diagonal.
+
+Besides the next frame's predicted box (``ctx.prediction``) it publishes the predicted centre's
+uncertainty per axis, ``sigma = sqrt(P_xx + e_x^2)``, where ``e`` is the running RMS of the
+innovations (measurement minus prediction; the innovation-based adaptive estimate of Mehra,
+IEEE TAC 1970): a linear filter's ``P`` does not see that the target moves more erratically than
+modelled, its innovations do. ``robust_model`` sizes the next search window from it (issue item
+4). While hidden the filter coasts and ``P`` grows, so the window widens; a target taken back
+after being lost restarts the filter at the re-found box (its jump is not a velocity).
+
+Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
+``ctx.state``, ``ctx.robust``; writes ``ctx.box`` (the prediction while coasting),
+``ctx.prediction`` and ``ctx.robust.sigma``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vtrack.filters import KalmanFilter, constant_velocity
+from vtrack.params import Param
+from vtrack.stages.base import LOST, TRACKING, Stage, TrackContext, register
+
+
+@register
+class RobustMotion(Stage):
+    """Constant-velocity Kalman filter with size-relative noise; predicts box and uncertainty."""
+
+    name = "robust_motion"
+    summary = ("robust: constant-velocity Kalman filter (S0 6) with noise relative to the "
+               "target size; predicts the next centre and its uncertainty")
+    params = (
+        Param("q_rel", float, 0.05, "process noise std per frame, in target diagonals",
+              min=0.0, max=10.0),
+        Param("r_rel", float, 0.05, "measurement noise std, in target diagonals",
+              min=1e-6, max=10.0),
+        Param("p0_rel", float, 0.5, "initial uncertainty std, in target diagonals",
+              min=0.0, max=10.0),
+        Param("innovation_rate", float, 0.3,
+              "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
+    )
+    requires = frozenset({"measurement", "box", "state", "robust"})
+    provides = frozenset({"box", "prediction", "robust"})
+
+    # Set from the parameters by Stage.__init__.
+    q_rel: float
+    r_rel: float
+    p0_rel: float
+    innovation_rate: float
+
+    def start(self, ctx: TrackContext) -> None:
+        assert ctx.box is not None
+        self._diag = math.hypot(ctx.box.w, ctx.box.h)
+        self._filter = self._new((ctx.box.cx, ctx.box.cy))
+        self._rms = np.zeros(2)
+        self._was = TRACKING
+        self._predict(ctx)
+
+    def _new(self, point: tuple[float, float]) -> KalmanFilter:
+        d = self._diag
+        return constant_velocity(point, q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
+                                 p0=(self.p0_rel * d) ** 2)
+
+    def step(self, ctx: TrackContext) -> None:
+        box = ctx.measurement
+        if box is not None:
+            z = np.array([box.cx, box.cy])
+            if self._was == LOST:
+                self._filter = self._new((box.cx, box.cy))  # re-found: a jump, not a velocity
+                self._rms[:] = 0.0
+            else:
+                error = z - np.array(self._filter.position())
+                self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
+                                    + self.innovation_rate * error ** 2)
+                self._filter.update(z)
+        elif ctx.box is not None:
+            ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior
+        self._was = ctx.state
+        self._predict(ctx)
+
+    def _predict(self, ctx: TrackContext) -> None:
+        assert ctx.robust is not None and ctx.box is not None
+        self._filter.predict()
+        ctx.prediction = ctx.box.moved_to(*self._filter.position())
+        P = self._filter.P
+        ctx.robust.sigma = (math.sqrt(P[0, 0] + self._rms[0] ** 2),
+                            math.sqrt(P[2, 2] + self._rms[1] ** 2))
