@@ -325,6 +325,7 @@ class RobustModel(Stage):
         if self.template:
             target.template = target.grey[part].astype(np.float32)
         target.learn(box, 1.0, 1.0)
+        target.likelihood = ctx.likelihood = target.model.likelihood(target.bins)
         self._maps(ctx, box)
         start = target.to_working(box.x, box.y)
         target.reference = max(target.placement_score(round(start[0]), round(start[1])), 1e-3)

@@ -43,6 +43,9 @@ from vtrack.stages.base import Stage, TrackContext, register
 from vtrack.stages.meanshift import mean_shift
 from vtrack.stages.robust_model import RobustTarget, box_means
 
+#: Share of the map's peak below which placements do not pull the mean shift.
+PEAK_SHARE = 0.8
+
 
 def motion_prior(
     shape: tuple[int, int], size: tuple[int, int], center: tuple[float, float],
@@ -157,10 +160,11 @@ class RobustSearch(Stage):
         peak = float(weighted.flat[peak_index])
         if peak <= 0:
             return predicted
-        # mean shift on the part of the map above half its peak: the mode, not a broad centroid
-        weights = cv2.threshold(weighted, 0.5 * peak, 0, cv2.THRESH_TOZERO)[1]
+        # mean shift on the map's excess over PEAK_SHARE of its peak, with a kernel a quarter of
+        # the box: it converges on the mode, not on the centroid of a broad hill
+        weights = cv2.threshold(weighted, PEAK_SHARE * peak, 0, cv2.THRESH_TOZERO)[1]
         grid = Window(0, 0, cols, rows)
-        kernel = (max(size[0] / 2.0, 2.0), max(size[1] / 2.0, 2.0))
+        kernel = (max(size[0] / 4.0, 3.0), max(size[1] / 4.0, 3.0))
         starts = [(peak_index % cols + 0.5, peak_index // cols + 0.5),
                   (predicted[0] + 0.5, predicted[1] + 0.5)]
         best, best_value = (starts[0][0] - 0.5, starts[0][1] - 0.5), -1.0
