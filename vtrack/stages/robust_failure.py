@@ -45,7 +45,7 @@ class RobustFailure(Stage):
         Param("recover_at", float, 0.65,
               "a hidden target is taken back at or above this relative score (>= "
               "occlude_below)", min=0.0, max=1.0),
-        Param("lost_after", int, 15, "hidden frames after which the state is lost",
+        Param("lost_after", int, 45, "hidden frames after which the state is lost",
               min=1, max=100000),
         Param("redetect", bool, True,
               "while lost, search the whole frame (coarse) for the target"),

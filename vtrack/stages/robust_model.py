@@ -349,10 +349,20 @@ class RobustModel(Stage):
         else:
             sigma = target.sigma if self.adaptive_window else (0.0, 0.0)
             window = place_window(center, frame, padding, sigma, self.n_sigma, self.max_window)
-        cols = max(int(round(window.width * scale)), 1)
-        rows = max(int(round(window.height * scale)), 1)
-        method = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
-        bgr = cv2.resize(frame.bgr(window), (cols, rows), interpolation=method)
+        if scale < 1:
+            # downscale by a whole factor k (pixel k x k averages: OpenCV's fast INTER_AREA
+            # path), the window trimmed to a multiple of k
+            k = max(math.ceil(1 / scale - 1e-9), 1)
+            cols, rows = max(window.width // k, 1), max(window.height // k, 1)
+            window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
+                            window.y0 + min(rows * k, window.height))
+            bgr = frame.bgr(window)
+            if k > 1:
+                bgr = cv2.resize(bgr, (cols, rows), interpolation=cv2.INTER_AREA)
+        else:
+            cols = max(int(round(window.width * scale)), 1)
+            rows = max(int(round(window.height * scale)), 1)
+            bgr = cv2.resize(frame.bgr(window), (cols, rows), interpolation=cv2.INTER_LINEAR)
         target.window = window
         target.sx, target.sy = cols / window.width, rows / window.height
         target.bins = target.model.quantise(bgr)

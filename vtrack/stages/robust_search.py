@@ -160,11 +160,11 @@ class RobustSearch(Stage):
         peak = float(weighted.flat[peak_index])
         if peak <= 0:
             return predicted
-        # mean shift on the map's excess over PEAK_SHARE of its peak, with a kernel a quarter of
-        # the box: it converges on the mode, not on the centroid of a broad hill
+        # mean shift on the map's values above PEAK_SHARE of its peak, with a 3 x 3 kernel: it
+        # climbs to the mode (sub-pixel), not to the centroid of a broad, lopsided hill
         weights = cv2.threshold(weighted, PEAK_SHARE * peak, 0, cv2.THRESH_TOZERO)[1]
         grid = Window(0, 0, cols, rows)
-        kernel = (max(size[0] / 4.0, 3.0), max(size[1] / 4.0, 3.0))
+        kernel = (3.0, 3.0)
         starts = [(peak_index % cols + 0.5, peak_index // cols + 0.5),
                   (predicted[0] + 0.5, predicted[1] + 0.5)]
         best, best_value = (starts[0][0] - 0.5, starts[0][1] - 0.5), -1.0
