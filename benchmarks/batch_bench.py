@@ -31,13 +31,13 @@ from vtrack.batch import (
     DaskExecutor,
     Executor,
     LocalExecutor,
-    RunOptions,
     cpu_count,
     find_inputs,
     plan,
     run_batch,
 )
 from vtrack.config import load_config
+from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
@@ -61,7 +61,9 @@ def make_clips(count: int, frames: int, width: int, height: int) -> Path:
 def time_batch(folder: Path, executor: Executor, workers: int) -> float:
     """Seconds for one whole batch of ``folder`` (S0, with video), every input run."""
     with tempfile.TemporaryDirectory() as out:
-        batch = plan(find_inputs(folder), {"s0": load_config("s0")}, Path(out), RunOptions(),
+        s0 = load_config("s0")
+        settings = RunRequest(input=str(folder), out_dir=Path(out), config=s0)
+        batch = plan(find_inputs(folder), {"s0": s0}, Path(out), settings,
                      threads=max(1, cpu_count() // workers), force=True)
         started = time.perf_counter()
         outcomes = list(run_batch(batch, executor, Path(out) / "summary.csv"))

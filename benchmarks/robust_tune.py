@@ -24,7 +24,7 @@ from vtrack.config import load_config
 from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
 from vtrack.frame import BgrFrame
 from vtrack.pipeline import Pipeline
-from vtrack.stages.base import TRACKING
+from vtrack.stages.base import TrackState
 
 #: The ablation table: (label, --set overrides) with one part of robust switched off each.
 ABLATIONS = (
@@ -65,12 +65,12 @@ def evaluate(clip: Clip, overrides: list[str]) -> Result:
         if overlap is None:
             continue
         missed = overlap <= 0.0
-        if result.state == TRACKING:
+        if result.state == TrackState.TRACKING:
             tracking += 1
             false_tracking += missed
         if missed:
             misses += 1
-            flagged += result.state != TRACKING
+            flagged += result.state != TrackState.TRACKING
     work = sum(pipeline.stage_microseconds_per_frame().values())
     return Result(
         auc(overlaps), precision_at(errors, 20), mean_overlap(overlaps),

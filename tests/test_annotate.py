@@ -17,8 +17,9 @@ from vtrack.annotate import (
 )
 from vtrack.geometry import Box, Window
 from vtrack.io.planes import i420_planes, rotate_i420
+from vtrack.overlays import Particles, SearchWindow
 from vtrack.pipeline import FrameResult
-from vtrack.stages.base import Track
+from vtrack.stages.base import Track, TrackState, TrackStatus
 
 W, H = 320, 240
 
@@ -33,7 +34,7 @@ GREY = int(blank()[0, 0])  # the background's luma
 BOX = Box(100, 80, 60, 50)
 
 
-def result(index: int = 0, box: Box | None = BOX, state: str = "tracking",
+def result(index: int = 0, box: Box | None = BOX, state: TrackState = TrackState.TRACKING,
            **kwargs) -> FrameResult:
     return FrameResult(index, index / 30, box, state, 1.0, None, **kwargs)
 
@@ -70,14 +71,14 @@ def test_box_and_centre_are_drawn_in_all_planes_and_nothing_else_changes():
 def test_lost_draws_caption_top_right_and_no_box():
     annotator = Annotator(W, H)
     buf = blank()
-    annotator.draw(buf, result(box=None, state="lost"))
+    annotator.draw(buf, result(box=None, state=TrackState.LOST))
     y = planes(buf)[0]
     assert (y[:15, W - 40 :] != GREY).any()  # the caption, top right
     assert (y[:15, :60] == GREY).all()  # nothing top left
     assert (y[30:, :] == GREY).all()  # no box
 
 
-@pytest.mark.parametrize("state", ["tracking", "occluded"])
+@pytest.mark.parametrize("state", [TrackState.TRACKING, TrackState.OCCLUDED])
 def test_state_caption_top_left(state):
     buf = blank()
     Annotator(W, H).draw(buf, result(state=state))
@@ -88,12 +89,11 @@ def test_state_caption_top_left(state):
 def test_ground_truth_overlays_and_trail():
     gt = [Box(20, 150, 40, 40)] * 10
     annotator = Annotator(W, H, gt=gt, trail=5)
-    particles = [Box(200, 200, 10, 10), Box(250, 30, 4, 4)]
+    particles = (Box(200, 200, 10, 10), Box(250, 30, 4, 4))
     for i in range(4):  # the box moves right 10 px per frame
         buf = blank()
         annotator.draw(buf, result(i, Box(100 + 10 * i, 80, 60, 50), overlays=[
-            ("window", Window(90, 60, 230, 150)), ("particles", particles),
-            ("unknown", object()),
+            SearchWindow(Window(90, 60, 230, 150).as_box()), Particles(particles),
         ]))
     y, u, v = planes(buf)
     assert y[160, 20] == GROUND_TRUTH.y and u[80, 10] == GROUND_TRUTH.u
@@ -108,8 +108,8 @@ def test_confirmed_tracks_get_stable_colours_and_ids():
     for i in range(3):
         buf = blank()
         annotator.draw(buf, result(i, box=None, tracks=[
-            Track(3, Box(40 + 5 * i, 40, 30, 60), 0.9, "confirmed"),
-            Track(4, Box(200, 150, 30, 30), 0.2, "tentative"),
+            Track(3, Box(40 + 5 * i, 40, 30, 60), 0.9, TrackStatus.CONFIRMED),
+            Track(4, Box(200, 150, 30, 30), 0.2, TrackStatus.TENTATIVE),
         ]))
     y, u, _ = planes(buf)
     colour = TRACK_PALETTE[3 % len(TRACK_PALETTE)]
@@ -118,11 +118,20 @@ def test_confirmed_tracks_get_stable_colours_and_ids():
     assert (y[140:190, 190:240] == GREY).all()  # tentative tracks are not drawn
 
 
+def test_an_overlay_of_unknown_kind_is_an_error():
+    with pytest.raises(TypeError, match="overlay"):
+        Annotator(W, H).draw(blank(), result(overlays=[("window", Box(1, 1, 5, 5))]))
+
+
 def test_boxes_far_outside_or_invalid_are_harmless():
     buf = blank()
     annotator = Annotator(W, H, gt=[Box(float("nan"), 0, 10, 10)])
     annotator.draw(buf, result(box=Box(-1e12, 5e11, 1e13, 3)))
     annotator.draw(buf, result(1, box=Box(10, 10, 0, 0)))
+    y, u, v = planes(buf)
+    # only the state caption (top left) was drawn: no box, centre, trail or ground truth
+    assert (y[20:, :] == GREY).all() and (y[:, 80:] == GREY).all()
+    assert (y[:15, :60] != GREY).any()
 
 
 def test_rotate_i420_turns_every_plane():

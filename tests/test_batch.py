@@ -4,7 +4,6 @@ Dask, and the one-line errors."""
 from __future__ import annotations
 
 import csv
-import os
 import shutil
 import subprocess
 import sys
@@ -16,7 +15,7 @@ import cv2
 import pytest
 from click.testing import CliRunner, Result
 
-from vtrack.batch import CRASH_ENV, SUMMARY_COLUMNS, find_inputs
+from vtrack.batch import SUMMARY_COLUMNS, find_inputs
 from vtrack.cli import main
 from vtrack.scenes import make_scene, write_groundtruth
 
@@ -141,6 +140,30 @@ def test_batch_records_failures_resumes_and_forces(inputs: Path, tmp_path: Path)
     assert third.exit_code == 1
 
 
+CRASHING_LAUNCHER = """
+import os
+import sys
+
+import vtrack.batch
+
+_execute = vtrack.batch.execute
+
+
+def execute(job):
+    if job.input == "smooth" and job.attempt == 1:
+        os._exit(3)  # the worker process dies mid-batch
+    return _execute(job)
+
+
+vtrack.batch.execute = execute
+
+if __name__ == "__main__":
+    from vtrack.cli import main
+
+    sys.exit(main())
+"""
+
+
 def test_a_killed_worker_is_retried_without_duplicates(inputs: Path, tmp_path: Path) -> None:
     folder = tmp_path / "in"
     folder.mkdir()
@@ -148,10 +171,13 @@ def test_a_killed_worker_is_retried_without_duplicates(inputs: Path, tmp_path: P
         shutil.copy(inputs / f"{name}.mp4", folder)
         shutil.copy(inputs / f"{name}.gt.txt", folder)
     out = tmp_path / "out"
-    env = {**os.environ, CRASH_ENV: "smooth"}
+    # The batch runs from a launcher whose worker processes die (a real os._exit) on their
+    # first attempt at "smooth": worker processes import the launcher as their main module.
+    launcher = tmp_path / "launcher.py"
+    launcher.write_text(CRASHING_LAUNCHER)
     result = subprocess.run(
-        [sys.executable, "-m", "vtrack", "batch", str(folder), "--jobs", "2", "--no-video",
-         "--out", str(out)], capture_output=True, text=True, env=env, timeout=120, check=False)
+        [sys.executable, str(launcher), "batch", str(folder), "--jobs", "2", "--no-video",
+         "--out", str(out)], capture_output=True, text=True, timeout=120, check=False)
     assert result.returncode == 0, result.stderr
     rows = summary(out)
     assert set(rows) == {("smooth", "s0"), ("jump", "s0")}

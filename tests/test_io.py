@@ -31,6 +31,7 @@ from vtrack.io import (
 from vtrack.io.files import temp_path
 from vtrack.io.threads import Prefetcher
 from vtrack.pipeline import FrameResult
+from vtrack.stages.base import TrackState
 
 W, H = 160, 120
 
@@ -505,8 +506,9 @@ def test_annotated_video_shows_box_and_lost_caption_without_touching_the_input(t
     out = tmp_path / "annotated.mp4"
     with VideoWriter(out, W, H, 30.0) as writer:
         for i in range(6):
-            state = "lost" if i == 5 else "tracking"
-            result = FrameResult(i, i / 30, None if state == "lost" else box, state, 1.0, None)
+            state = TrackState.LOST if i == 5 else TrackState.TRACKING
+            lost = state == TrackState.LOST
+            result = FrameResult(i, i / 30, None if lost else box, state, 1.0, None)
             writer.write(source, lambda buf, r=result: annotator.draw(buf, r))
     np.testing.assert_array_equal(source, original)
     frames = decode_all(out)

@@ -20,6 +20,12 @@ def test_track_a_path_and_frames_follow_the_target_alike(tmp_path: Path) -> None
     for results in (from_file, in_memory):
         errors = [center_error(r.box, gt) for r, gt in zip(results, scene.boxes, strict=True)]
         assert np.mean(errors) < 10.0 and max(errors) < 25.0
+    # a run request gives the same results as the path it names, up to its frame limit
+    request = vtrack.RunRequest(str(clip), tmp_path / "unused", vtrack.load_config("s0"),
+                                init_box=scene.boxes[0], max_frames=12)
+    from_request = list(vtrack.track(request))
+    assert [(r.index, r.box) for r in from_request] == [(r.index, r.box) for r in from_file[:12]]
+    assert not (tmp_path / "unused").exists()  # nothing is written
     # the decoded clip differs from the rendered frames only by compression
     drift = [center_error(a.box, b.box) for a, b in zip(from_file, in_memory, strict=True)]
     assert np.median(drift) < 3.0

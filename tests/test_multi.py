@@ -27,9 +27,8 @@ from vtrack.geometry import Box, center_error, iou
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import Scene
 from vtrack.stages import detect
-from vtrack.stages.base import Stage, TrackContext, build_stage
+from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, build_stage
 from vtrack.stages.detect import (
-    CANDIDATE_GREY,
     AdaptiveThreshold,
     Background,
     Blobs,
@@ -213,7 +212,7 @@ def run_stages(stages: list[Stage], frames: list[np.ndarray]) -> list[TrackConte
         ctx.new_frame(GrayFrame(index, index / 30, grey))
         for stage in stages:
             (stage.start if index == 0 else stage.step)(ctx)
-        snapshots.append(TrackContext(**{**ctx.__dict__, "memory": dict(ctx.memory)}))
+        snapshots.append(TrackContext(**ctx.__dict__))
     return snapshots
 
 
@@ -228,7 +227,7 @@ def frame_with(spots: list[tuple[int, int, int, int]], base: int = 20) -> np.nda
 def test_mean_background_detects_nothing_while_learning_then_the_difference() -> None:
     frames = [frame_with([]) for _ in range(3)] + [frame_with([(10, 20, 5, 60)])]
     after = run_stages([Background(frames=3, threshold=40.0), Blobs()], frames)
-    assert all(ctx.likelihood is None and not ctx.detections for ctx in after[:3])
+    assert all(not ctx.likelihood.any() and not ctx.detections for ctx in after[:3])
     assert after[3].detections == [Detection(Box(10, 20, 5, 5), 12.0, 22.0, 25.0, 60.0)]
     # |60 - 20| = 40 >= Th is foreground; 59 is not.
     frames[3] = frame_with([(10, 20, 5, 59)])
@@ -250,7 +249,7 @@ def test_adaptive_threshold_follows_the_last_candidates_grey() -> None:
     frames = [frame_with([(5, 5, 6, 180), (40, 30, 6, 120)])] * 2
     first, second = run_stages([AdaptiveThreshold(offset=20.0, median=1), Blobs()], frames)
     assert len(first.detections) == 2  # threshold 100 (initial): both
-    assert first.memory[CANDIDATE_GREY] == pytest.approx(150.0)
+    assert first.candidate_grey == pytest.approx(150.0)
     assert [d.grey for d in second.detections] == [180.0]  # threshold 150 - 20 = 130
     kept = second.likelihood
     assert kept is not None and kept[7, 7] == 180 and kept[0, 0] == 0  # pixels keep their grey
@@ -306,14 +305,14 @@ def test_opening_and_closing_clean_the_background_foreground() -> None:
 def test_largest_blob_is_the_measurement_and_sets_the_state() -> None:
     ctx = TrackContext(frame=GrayFrame(0, 0.0, frame_with([])), rng=np.random.default_rng(0))
     LargestBlob().step(ctx)
-    assert ctx.measurement is None and ctx.state == "lost"
+    assert ctx.measurement is None and ctx.state == TrackState.LOST
     ctx.detections = [Detection(Box(0, 0, 2, 2), 1, 1, 4), Detection(Box(10, 10, 4, 2), 12.5,
                                                                        11, 8)]
     LargestBlob().step(ctx)
-    assert ctx.measurement == Box(10.5, 10, 4, 2) and ctx.state == "tracking"
+    assert ctx.measurement == Box(10.5, 10, 4, 2) and ctx.state == TrackState.TRACKING
     ctx.box, ctx.detections = ctx.measurement, []
     LargestBlob().step(ctx)
-    assert ctx.state == "occluded"
+    assert ctx.state == TrackState.OCCLUDED
 
 
 # --- the MHT's predictor and bounded work -------------------------------------------------------
@@ -359,7 +358,7 @@ def crossing(frames: int = 60, merged: int = 8) -> list[list[tuple[float, float]
 
 
 def id_near(tracks: list, point: tuple[float, float]) -> int | None:
-    near = [t.id for t in tracks if t.state == "confirmed"
+    near = [t.id for t in tracks if t.state == TrackStatus.CONFIRMED
             and math.hypot(t.box.cx - point[0], t.box.cy - point[1]) < 3]
     return near[0] if len(near) == 1 else None
 
@@ -387,11 +386,11 @@ def test_kalman_tracks_confirm_and_delete_by_counts() -> None:
     stage = KalmanTracks(confirm=3, max_coast=2)
     path = [[(10.0 + k, 10.0)] for k in range(4)] + [[]] * 4 + [[(60.0, 60.0)], []]
     out = feed(stage, path)
-    assert [t.state for t in out[1]] == ["tentative"]
-    assert [(t.id, t.state) for t in out[2]] == [(1, "confirmed")]
-    assert [t.state for t in out[5]] == ["coasting"]  # 2 misses: still kept
+    assert [t.state for t in out[1]] == [TrackStatus.TENTATIVE]
+    assert [(t.id, t.state) for t in out[2]] == [(1, TrackStatus.CONFIRMED)]
+    assert [t.state for t in out[5]] == [TrackStatus.COASTING]  # 2 misses: still kept
     assert out[6] == []  # 3 misses > max_coast: deleted
-    assert [(t.id, t.state) for t in out[8]] == [(2, "tentative")]  # a new id
+    assert [(t.id, t.state) for t in out[8]] == [(2, TrackStatus.TENTATIVE)]  # a new id
     assert out[9] == []  # a tentative track dies on its first miss
 
 
@@ -409,7 +408,7 @@ def matched_ids(scene: Scene, results: list[FrameResult]) -> dict[int, dict[int,
     for result in results:
         for gid, box in scene.tracks[result.index]:
             for t in result.tracks:
-                if t.state == "confirmed" and iou(t.box, box) >= 0.3:
+                if t.state == TrackStatus.CONFIRMED and iou(t.box, box) >= 0.3:
                     ids.setdefault(gid, {})[result.index] = t.id
     return ids
 
@@ -444,7 +443,7 @@ def test_no_identity_switch_where_two_targets_cross(multi_run) -> None:
         after = {ids[gid][f] for f in range(cross + 10, cross + 20) if f in ids[gid]}
         assert len(before) == 1 and before == after, gid
     gt = {i: frame for i, frame in enumerate(scene.tracks)}
-    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == TrackStatus.CONFIRMED]
                  for r in results}
     assert evaluate_mot(gt, confirmed, len(scene))["id_switches"] == 0
 
@@ -504,7 +503,7 @@ def test_mot_detections_feed_the_trackers(tmp_path, scene_factory) -> None:
     assert all(d.score == 0.9 and d.area == d.box.area for d in ctx.detections)
     results = list(Pipeline([MotDetections(path=str(det)), MultipleHypothesis()]).track(
         scene.as_frames()))
-    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+    confirmed = {r.index: [(t.id, t.box) for t in r.tracks if t.state == TrackStatus.CONFIRMED]
                  for r in results}
     scores = evaluate_mot(dict(enumerate(scene.tracks)), confirmed, len(scene))
     assert scores["mota"] > 0.9 and scores["id_switches"] == 0

@@ -21,10 +21,11 @@ from vtrack.filters import constant_acceleration, constant_velocity, gravity
 from vtrack.frame import BgrFrame, I420Frame
 from vtrack.geometry import Box, Window, iou
 from vtrack.io import open_source
+from vtrack.overlays import SearchWindow
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import Scene
 from vtrack.stages.backproject import BackProject, box_mean, bp_mass
-from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext
+from vtrack.stages.base import Stage, TargetModel, TrackContext, TrackState
 from vtrack.stages.colour import Hue
 from vtrack.stages.kalman import Kalman
 from vtrack.stages.meanshift import MeanShift, mean_shift
@@ -170,8 +171,8 @@ def test_hue_stage_converts_only_the_clipped_search_window() -> None:
     assert ctx.window == Window(130, 5, 160, 25)  # 40 x 20 around the box, cut at the border
     expected = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)[5:25, 130:160, 0]
     assert np.array_equal(ctx.feature, expected)
-    assert ctx.memory["feature_levels"] == 256 and ctx.memory["feature_mask"] is None
-    assert ctx.overlays == [("window", Box(130, 5, 30, 20))]
+    assert ctx.feature_levels == 256 and ctx.feature_mask is None
+    assert ctx.overlays == [SearchWindow(Box(130, 5, 30, 20))]
     ctx.new_frame(ctx.frame)
     ctx.search_growth = 2.0
     Hue(search_scale=2.0).step(ctx)
@@ -184,12 +185,12 @@ def test_hue_stage_opencv_scale_mask_and_full_frame() -> None:
     ctx = context(bgr, Box(30, 20, 20, 20))
     hue = Hue(hue_scale="opencv", sat_min=60, val_min=32, full_frame=True, mask_model_only=True)
     hue.start(ctx)
-    assert ctx.window == Window(0, 0, 80, 60) and ctx.memory["feature_levels"] == 180
+    assert ctx.window == Window(0, 0, 80, 60) and ctx.feature_levels == 180
     assert ctx.feature.max() < 180
-    mask = ctx.memory["feature_mask"]
+    mask = ctx.feature_mask
     assert not mask[:, :40].any() and mask[:, 40:].all()
     hue.step(ctx)  # the tutorial masks the model only
-    assert ctx.memory["feature_mask"] is None
+    assert ctx.feature_mask is None
 
 
 def test_backprojection_is_hist_times_255_over_max() -> None:
@@ -204,7 +205,7 @@ def test_backprojection_is_hist_times_255_over_max() -> None:
     # S0 eq. 4, rounded like cv2.calcBackProject
     expected = np.rint(hist[feature] * 255 / hist.max()).astype(np.uint8)
     assert np.array_equal(ctx.likelihood, expected)
-    assert ctx.memory["bp_initial"] == pytest.approx(expected[15:45, 20:60].mean())
+    assert ctx.target_model.bp_initial == pytest.approx(expected[15:45, 20:60].mean())
     assert bp_mass(ctx, Box(20, 15, 40, 30)) == pytest.approx(1.0)
 
 
@@ -254,14 +255,15 @@ def test_meanshift_stage_writes_box_measurement_and_extras() -> None:
     likelihood, window = blob_likelihood()
     ctx = context(np.zeros((400, 400, 3), np.uint8), Box(145, 240, 20, 20))
     ctx.window, ctx.likelihood = window, likelihood
-    ctx.memory.update(search_box=ctx.box, bp_initial=255.0, bp_background=0.0)
+    ctx.search_box = ctx.box
+    ctx.target_model = TargetModel(np.ones(256), bp_initial=255.0, bp_background=0.0)
     MeanShift().step(ctx)
     assert ctx.measurement == ctx.box == Box(147.5, 240, 20, 20)
     # the new box covers 21 pixel columns (147..167), 18 of them on the blob
     assert ctx.extras == {"iterations": 1, "bp_mass": pytest.approx(18 / 21)}
     assert ctx.score == pytest.approx(18 / 21)
     camshift = MeanShift(method="camshift", iterations=10)
-    ctx.box = ctx.memory["search_box"] = Box(140, 235, 20, 20)
+    ctx.box = ctx.search_box = Box(140, 235, 20, 20)
     camshift.step(ctx)
     assert iou(ctx.box, Box(150, 240, 20, 20)) > 0.6  # CamShift also adapts the size
 
@@ -358,15 +360,15 @@ def visible_iou(results: list[FrameResult], scene: Scene) -> float:
 def hidden_span(results: list[FrameResult]) -> tuple[int, int]:
     """First frame not tracking, first frame tracking again after it."""
     states = [r.state for r in results]
-    start = states.index(OCCLUDED)
-    return start, start + states[start:].index(TRACKING)
+    start = states.index(TrackState.OCCLUDED)
+    return start, start + states[start:].index(TrackState.TRACKING)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_s0_stays_on_a_smoothly_moving_target(scene_factory, seed: int) -> None:
     scene = scene_factory("smooth", seed=seed, frames=FRAMES)
     results = track(scene, "s0")
-    assert {r.state for r in results} == {TRACKING}
+    assert {r.state for r in results} == {TrackState.TRACKING}
     assert visible_iou(results, scene) >= 0.9
     assert {"iterations", "bp_mass", "pred_cx", "pred_cy"} <= set(results[-1].extras)
 
@@ -376,7 +378,7 @@ def assert_rides_through(results: list[FrameResult], scene: Scene, frames: int) 
     (coasting, not lost); the state switches within ``frames`` of the true span's ends."""
     start, end = scene.events["occluded"]
     assert visible_iou(results, scene) >= 0.7
-    assert all(r.state == OCCLUDED and r.box is not None for r in results[start:end])
+    assert all(r.state == TrackState.OCCLUDED and r.box is not None for r in results[start:end])
     first, last = hidden_span(results)
     assert abs(first - start) <= frames and abs(last - end) <= frames, (first, last, start, end)
 
@@ -428,6 +430,6 @@ def test_lost_after_a_long_absence_and_found_again(scene_factory) -> None:
     start, end = scene.events["leave"]
     results = track(scene, "s0", "occlusion.lost_after=10")
     states = [r.state for r in results]
-    assert LOST in states[start:end]
-    assert all(r.box is None for r in results if r.state == LOST)
-    assert states[-1] == TRACKING and iou(results[-1].box, scene.boxes[-1]) > 0.5
+    assert TrackState.LOST in states[start:end]
+    assert all(r.box is None for r in results if r.state == TrackState.LOST)
+    assert states[-1] == TrackState.TRACKING and iou(results[-1].box, scene.boxes[-1]) > 0.5

@@ -16,14 +16,17 @@ from vtrack.config import load_config
 from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box, center_error
+from vtrack.overlays import Particles
 from vtrack.params import Param
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import Scene, make_scene
-from vtrack.stages.base import LOST, TRACKING, build_stage
+from vtrack.stages.base import TrackState, build_stage
 from vtrack.stages.particle import ParticleFilter
 
 FPS = 30.0
 RED, BLUE = (0, 0, 255), (255, 0, 0)  # BGR; hue 0 and 240 degrees: no common hue bin
+
+TRACKING, LOST = TrackState.TRACKING, TrackState.LOST
 
 
 @cache
@@ -155,7 +158,7 @@ def test_lost_particles_only_change_the_search_while_lost() -> None:
     first_lost = next(i for i, r in enumerate(shipped) if r.state == LOST)
 
     def particle_count(result: FrameResult) -> int:
-        return next(len(boxes) for kind, boxes in result.overlays if kind == "particles")
+        return next(len(o.boxes) for o in result.overlays if isinstance(o, Particles))
 
     # Identical up to the loss (same random draws); then every frame after a lost one is
     # searched with 64 whole-frame particles instead of 8.

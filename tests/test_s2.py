@@ -52,7 +52,7 @@ from vtrack.scenes.render import (
     target_paint,
 )
 from vtrack.scenes.scene import SceneSpec, Truth, assemble
-from vtrack.stages.base import OCCLUDED, TrackContext, build_stage
+from vtrack.stages.base import OCCLUDED, TrackContext, TrackState, build_stage
 from vtrack.stages.kernel_meanshift import KernelMeanShift
 
 FPS = 30.0
@@ -101,7 +101,7 @@ def test_follows_displacements_larger_than_the_target(seed: int) -> None:
     assert "occlusion" not in decisions
     # ... and the box is on the target on every frame that moved more than the target's width.
     assert s2_iou[k:].min() > 0.5, np.round(s2_iou, 2)
-    assert all(r.state == "tracking" and 0.0 <= r.score <= 1.0 for r in s2)
+    assert all(r.state == TrackState.TRACKING and 0.0 <= r.score <= 1.0 for r in s2)
 
 
 def test_full_occlusion_takes_the_occlusion_branch_and_coasts_on_the_prediction() -> None:

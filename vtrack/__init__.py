@@ -10,6 +10,8 @@ The library in one call::
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
+from itertools import islice
+from pathlib import Path
 
 __version__ = "0.1.0"
 
@@ -18,25 +20,31 @@ from vtrack.frame import Frame  # noqa: E402
 from vtrack.geometry import Box  # noqa: E402
 from vtrack.io import open_source  # noqa: E402
 from vtrack.pipeline import FrameResult, Pipeline  # noqa: E402
+from vtrack.request import RunRequest  # noqa: E402
 
 
-def track(frames: str | Iterable[Frame], config: str | Config = "s0",
+def track(frames: str | RunRequest | Iterable[Frame], config: str | Config = "s0",
           init_box: Box | None = None, seed: int = 0) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``.
 
     ``frames`` is an input path (video file or image folder, opened with
-    :func:`vtrack.io.open_source`) or any iterable of :class:`Frame`; ``config`` a shipped
-    config name, a TOML path or a :class:`Config`; ``init_box`` the target's first box (not
-    needed by the detecting trackers s3/s4).
+    :func:`vtrack.io.open_source`), a :class:`RunRequest` (its input, raw format, config,
+    initial box, seed and frame limit; nothing is written) or any iterable of :class:`Frame`;
+    ``config`` a shipped config name, a TOML path or a :class:`Config`; ``init_box`` the
+    target's first box (not needed by the detecting trackers s3/s4).
     """
-    chain = config if isinstance(config, Config) else load_config(config)
-    pipeline = Pipeline(chain.build(), seed=seed)
     if isinstance(frames, str):
-        with open_source(frames) as source:
-            yield from pipeline.track(source, init_box)
-    else:
-        yield from pipeline.track(frames, init_box)
+        chain = config if isinstance(config, Config) else load_config(config)
+        frames = RunRequest(frames, Path(), chain, init_box=init_box, seed=seed)
+    if isinstance(frames, RunRequest):
+        request = frames
+        pipeline = Pipeline(request.config.build(), seed=request.seed)
+        with open_source(request.input, request.raw) as source:
+            yield from pipeline.track(islice(source, request.max_frames), request.init_box)
+        return
+    chain = config if isinstance(config, Config) else load_config(config)
+    yield from Pipeline(chain.build(), seed=seed).track(frames, init_box)
 
 
-__all__ = ["Box", "Config", "Frame", "FrameResult", "Pipeline", "load_config", "open_source",
-           "track", "__version__"]
+__all__ = ["Box", "Config", "Frame", "FrameResult", "Pipeline", "RunRequest", "load_config",
+           "open_source", "track", "__version__"]

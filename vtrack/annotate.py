@@ -4,11 +4,11 @@ Every shape is drawn twice: on the Y plane at full resolution with the colour's 
 half-size U and V planes at half coordinates with its chroma. The frame is never converted to BGR
 and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
 
-What is drawn: the ground-truth box (if given), the stage overlays (``("window", Box | Window)``
-as a thin search window, ``("particles", boxes or (x, y) points)`` as small dots; other kinds are
-ignored), the trajectory of the last ``trail`` centres, the tracked box and its centre, confirmed
-multi-target tracks (a stable colour and a short trail per id, the id as text), and the state
-caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box).
+What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack.overlays`:
+``SearchWindow`` as a thin rectangle, ``Particles`` as small dots; another kind is a
+``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
+confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), and
+the state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box).
 """
 
 from __future__ import annotations
@@ -16,15 +16,16 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Sequence
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
-from vtrack.geometry import Box, Window
+from vtrack.geometry import Box
 from vtrack.io.planes import i420_planes
+from vtrack.overlays import Overlay, Particles, SearchWindow
 from vtrack.pipeline import FrameResult
-from vtrack.stages.base import LOST, OCCLUDED
+from vtrack.stages.base import TrackState, TrackStatus
 
 
 class Yuv(NamedTuple):
@@ -127,18 +128,25 @@ class Canvas:
         self.v[cy, cx] = colour.v
 
 
-def _centres(payload: Any) -> np.ndarray:
-    """An (N, 2) array of points from boxes (x, y, w, h) or points (x, y)."""
-    arr = np.asarray(list(payload) if not isinstance(payload, np.ndarray) else payload, float)
-    if arr.ndim != 2 or arr.shape[0] == 0:
-        return np.empty((0, 2))
-    if arr.shape[1] >= 4:
-        return arr[:, :2] + arr[:, 2:4] / 2.0
-    return arr[:, :2]
+def _centres(boxes: Sequence[Box]) -> np.ndarray:
+    """The centres of boxes as an (N, 2) array of x, y."""
+    arr = np.asarray(boxes, float).reshape(-1, 4)
+    return arr[:, :2] + arr[:, 2:4] / 2.0
 
 
 def _drawable(box: Box | None) -> bool:
     return box is not None and all(math.isfinite(v) for v in box) and box.w > 0 and box.h > 0
+
+
+def _draw_overlay(canvas: Canvas, overlay: Overlay) -> None:
+    """Draw one stage overlay; a kind this function does not know is a TypeError."""
+    match overlay:
+        case SearchWindow(box):
+            canvas.rectangle(*_corners(box), WINDOW, 1)
+        case Particles(boxes):
+            canvas.dots(_centres(boxes), PARTICLES)
+        case _:
+            raise TypeError(f"annotate: no drawing for overlay {overlay!r}")
 
 
 class Annotator:
@@ -173,16 +181,10 @@ class Annotator:
             gt_box = self.gt[result.index]
             if _drawable(gt_box):
                 canvas.rectangle(*_corners(gt_box), GROUND_TRUTH, t)
-        for kind, payload in result.overlays:
-            if payload is None:
-                continue
-            if kind == "window":
-                box = payload.as_box() if isinstance(payload, Window) else Box(*payload)
-                canvas.rectangle(*_corners(box), WINDOW, 1)
-            elif kind == "particles":
-                canvas.dots(_centres(payload), PARTICLES)
+        for overlay in result.overlays:
+            _draw_overlay(canvas, overlay)
         box = result.box
-        colour = OCCLUDED_BOX if result.state == OCCLUDED else TRACKED
+        colour = OCCLUDED_BOX if result.state == TrackState.OCCLUDED else TRACKED
         self.trail.append(_point(box.cx, box.cy) if _drawable(box) else None)
         for run in self._runs(self.trail):
             canvas.polyline(run, colour, max(1, t // 2))
@@ -206,7 +208,7 @@ class Annotator:
     def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> None:
         t = self.thickness
         for track in result.tracks:
-            if track.state != "confirmed" or not _drawable(track.box):
+            if track.state != TrackStatus.CONFIRMED or not _drawable(track.box):
                 continue
             colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
             b = track.box
@@ -226,8 +228,10 @@ class Annotator:
         t = self.thickness
         (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
         pad = 2 * t + 2
-        x0 = canvas.width - w - 2 * pad if state == LOST else 0
-        colour = {LOST: LOST_TEXT, OCCLUDED: OCCLUDED_BOX}.get(state, TRACKED)
+        x0 = canvas.width - w - 2 * pad if state == TrackState.LOST else 0
+        colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
+            state, TRACKED
+        )
         canvas.rectangle((x0, 0), (x0 + w + 2 * pad, h + baseline + 2 * pad), CAPTION_BACKGROUND,
                          -1)
         canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, t)

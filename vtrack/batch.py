@@ -43,7 +43,7 @@ import uuid
 from collections import deque
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import closing, suppress
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import dataclass, fields, replace
 from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Any, Protocol
@@ -84,8 +84,6 @@ STATUS_SKIPPED = "skipped"
 #: ``summary.csv`` columns, in order.
 SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
                    "frames_lost", "status", "error")
-#: Test hook: a worker running the input of this name exits abruptly on its first attempt.
-CRASH_ENV = "VTRACK_TEST_CRASH_INPUT"
 #: How often a job whose worker process died is started again before it is reported failed.
 RETRIES = 1
 
@@ -105,17 +103,6 @@ class BatchInput:
     mot_groundtruth: Path | None = None
     init: Path | None = None
     gt_origin: int = 0
-
-
-@dataclass(frozen=True)
-class RunOptions:
-    """The per-run settings a batch shares with ``vtrack run`` (see :class:`RunRequest`)."""
-
-    video: bool = True
-    preset: str = "ultrafast"
-    crf: int = 23
-    seed: int = 0
-    max_frames: int | None = None
 
 
 @dataclass(frozen=True)
@@ -240,35 +227,15 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
 
 # --- planning --------------------------------------------------------------------------------
 
-def _recorded_request(request: RunRequest) -> dict[str, Any]:
-    """The part of ``run.json``'s ``request`` that must match for a result to be reused."""
-    return {
-        "input": request.input,
-        "gt": str(request.gt_path) if request.gt_path else None,
-        "seed": request.seed,
-        "video": request.video,
-        "preset": request.preset,
-        "crf": request.crf,
-        "max_frames": request.max_frames,
-    }
-
-
 def completed_summary(request: RunRequest) -> RunSummary | None:
     """The summary of a finished run of exactly ``request`` in ``request.out_dir``, else None.
 
-    Finished means ``run.json`` (written last, atomically) says ``complete``; exactly means it
-    records the same input, ground truth, initial box (when one is given), seed, video settings
-    and resolved stage chain.
+    Finished means ``run.json`` (written last, atomically) says ``complete``; exactly means its
+    ``request`` is this one, every field (:meth:`RunRequest.same_run`).
     """
     try:
         record = json.loads((request.out_dir / "run.json").read_text(encoding="utf-8"))
-        if record.get("status") != STATUS_COMPLETE:
-            return None
-        wanted_stages = json.loads(json.dumps(request.config.resolved()["stages"]))
-        recorded = {k: record["request"].get(k) for k in _recorded_request(request)}
-        if recorded != _recorded_request(request) or record["config"]["stages"] != wanted_stages:
-            return None
-        if request.init_box is not None and record["request"]["init"] != list(request.init_box):
+        if record.get("status") != STATUS_COMPLETE or not request.same_run(record["request"]):
             return None
         names = {f.name for f in fields(RunSummary)}
         return RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
@@ -287,8 +254,11 @@ class Plan:
 
 
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,
-         options: RunOptions, threads: int = 1, force: bool = False) -> Plan:
+         settings: RunRequest, threads: int = 1, force: bool = False) -> Plan:
     """What to do for every input x config, results in ``out_dir/<input>/<config>/``.
+
+    Each job's request is ``settings`` (what ``vtrack batch`` was given: video, preset, crf,
+    seed, max_frames) with the input, output folder, config and ground truth of the job.
 
     Known outcomes: ``skipped`` for results complete from an earlier batch (unless ``force``),
     ``failed`` for a single-target config on an input with neither ground truth nor a readable
@@ -310,9 +280,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             except InputError as exc:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=str(exc)))
                 continue
-            request = RunRequest(input=str(item.path), out_dir=out_dir / item.name / label,
-                                 config=config, init_box=init, gt_path=gt_path,
-                                 gt_origin=gt_origin, **asdict(options))
+            request = replace(settings, input=str(item.path), out_dir=out_dir / item.name / label,
+                              config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin)
             done = None if force else completed_summary(request)
             if done is not None:
                 result.known.append(Outcome(item.name, label, STATUS_SKIPPED, done))
@@ -345,13 +314,11 @@ def execute(job: Job) -> Outcome:
     outcome with its one-line message; an unexpected exception also leaves its traceback in
     ``error.log`` in the job's folder.
     """
-    if os.environ.get(CRASH_ENV) == job.input and job.attempt == 1:
-        os._exit(3)  # test hook (tests/test_batch.py): a worker process dying mid-batch
     cv2.setNumThreads(job.threads)
     out_dir = job.request.out_dir
     shutil.rmtree(out_dir, ignore_errors=True)
     try:
-        summary = run(replace(job.request, progress=False))
+        summary = run(job.request)
     except VtrackError as exc:
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
     except Exception as exc:  # a bug in one run must not take the batch down: record it

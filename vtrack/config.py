@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.errors import ConfigError
-from vtrack.stages.base import PIPELINE_PROVIDES, Stage, build_stage, stage_class
+from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
 DEFAULT_CONFIG = "s0"
 
@@ -76,6 +76,19 @@ class Config:
             for values in matches:
                 values[param_name] = value
         return Config(self.name, self.source, self.description, stages)
+
+
+def config_from_resolved(data: dict[str, Any]) -> Config:
+    """The config :meth:`Config.resolved` described (every parameter set explicitly)."""
+    stages = [
+        {"name": stage["name"], **{k: v for k, v in stage.items() if k != "name"}}
+        for stage in data["stages"]
+    ]
+    config = parse_config(
+        {"name": data["name"], "description": data["description"], "stage": stages},
+        str(data["source"]),
+    )
+    return config
 
 
 def shipped_configs() -> dict[str, Path]:
@@ -146,7 +159,8 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
 
 
 def check_chain(config: Config) -> None:
-    """Reject a chain in which a stage reads a context field no earlier stage provides."""
+    """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
+    value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`)."""
     available = set(PIPELINE_PROVIDES)
     for name, _ in config.stages:
         cls = stage_class(name, config.source)
@@ -156,4 +170,6 @@ def check_chain(config: Config) -> None:
                 f"{config.source}: stage '{name}' needs {', '.join(sorted(missing))}, "
                 "which no earlier stage provides (check the order of the chain)"
             )
+        for provided in cls.provides:  # what an older value was computed from is stale now
+            available -= DERIVED.get(provided, frozenset()) - cls.provides
         available |= cls.provides

@@ -39,10 +39,6 @@ class Box(NamedTuple):
         """The same size, centred on ``(cx, cy)``."""
         return Box.from_center(cx, cy, self.w, self.h)
 
-    def scaled(self, factor: float) -> Box:
-        """The same centre, both sides multiplied by ``factor``."""
-        return Box.from_center(self.cx, self.cy, self.w * factor, self.h * factor)
-
     def is_valid(self) -> bool:
         return all(math.isfinite(v) for v in self) and self.w > 0 and self.h > 0
 

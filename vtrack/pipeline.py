@@ -16,7 +16,8 @@ import numpy as np
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
-from vtrack.stages.base import LOST, Stage, Track, TrackContext
+from vtrack.overlays import Overlay
+from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 
 @dataclass
@@ -26,12 +27,12 @@ class FrameResult:
     index: int
     time_s: float
     box: Box | None
-    state: str
+    state: TrackState
     score: float
     prediction: Box | None
     extras: dict[str, Any] = field(default_factory=dict)
     tracks: list[Track] = field(default_factory=list)
-    overlays: list[tuple[str, Any]] = field(default_factory=list)
+    overlays: list[Overlay] = field(default_factory=list)
     #: The frame this result is about (writers take its pixels from here); the pipeline always
     #: sets it, results built by hand (e.g. to test drawing) may leave it out.
     frame: Frame | None = None
@@ -55,7 +56,7 @@ class Pipeline:
 
     @property
     def needs_init_box(self) -> bool:
-        return all(s.needs_init_box for s in self.stages)
+        return any(s.needs_init_box for s in self.stages)
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -97,7 +98,7 @@ class Pipeline:
                 index=frame.index,
                 time_s=frame.time_s,
                 frame=frame,
-                box=None if ctx.state == LOST else ctx.box,  # lost: no box is claimed
+                box=None if ctx.state == TrackState.LOST else ctx.box,  # lost: no box is claimed
                 state=ctx.state,
                 score=ctx.score,
                 prediction=ctx.prediction,

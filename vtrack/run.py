@@ -26,7 +26,6 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import av
@@ -35,7 +34,6 @@ import numpy as np
 
 from vtrack import __version__
 from vtrack.annotate import Annotator
-from vtrack.config import Config
 from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
@@ -43,7 +41,6 @@ from vtrack.evaluate.mot import evaluate_mot
 from vtrack.geometry import Box
 from vtrack.io import (
     CsvWriter,
-    RawFormat,
     Source,
     VideoWriter,
     open_source,
@@ -51,7 +48,8 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.pipeline import FrameResult, Pipeline
-from vtrack.stages.base import LOST, OCCLUDED
+from vtrack.request import RunRequest
+from vtrack.stages.base import TrackState, TrackStatus
 
 #: Columns every single-target ``track.csv`` starts with (DESIGN.md contract).
 TRACK_COLUMNS = (
@@ -64,25 +62,6 @@ STATUS_COMPLETE, STATUS_PARTIAL, STATUS_INTERRUPTED = "complete", "partial", "in
 #: The tracker stopped on an error that is not the input's (e.g. a target with no colour for a
 #: hue model): outputs up to there are valid, ``run.json`` says so, and the error is re-raised.
 STATUS_FAILED = "failed"
-
-
-@dataclass
-class RunRequest:
-    """Everything one run needs. Paths are used as given (the CLI resolves defaults)."""
-
-    input: str
-    out_dir: Path
-    config: Config
-    init_box: Box | None = None
-    gt_path: Path | None = None
-    gt_origin: int = 0
-    raw: RawFormat | None = None
-    video: bool = True
-    preset: str = "ultrafast"
-    crf: int = 23
-    seed: int = 0
-    max_frames: int | None = None
-    progress: bool = False
 
 
 @dataclass
@@ -229,7 +208,7 @@ class _MultiTargetRows:
     def rows(self, result: FrameResult) -> list[list[Any]]:
         rows = []
         for track in result.tracks:
-            if track.state != "confirmed":
+            if track.state != TrackStatus.CONFIRMED:
                 continue
             self.tracks.setdefault(result.index, []).append((track.id, track.box))
             b = track.box
@@ -284,7 +263,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
 
     status, error = STATUS_COMPLETE, None
     failure: Exception | None = None
-    states = {OCCLUDED: 0, LOST: 0}
+    states = {TrackState.OCCLUDED: 0, TrackState.LOST: 0}
     frames = 0
     started = time.perf_counter()
     try:
@@ -324,8 +303,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         frames=frames,
         seconds=seconds,
         fps=frames / seconds if seconds > 0 else 0.0,
-        frames_occluded=states[OCCLUDED],
-        frames_lost=states[LOST],
+        frames_occluded=states[TrackState.OCCLUDED],
+        frames_lost=states[TrackState.LOST],
         error=error,
     )
     if frames == 0 and status == STATUS_COMPLETE:
@@ -355,17 +334,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         "warnings": summary.warnings,
         "frames": frames,
         "input": info.to_dict(),
-        "request": {
-            "input": request.input,
-            "init": list(init_box) if init_box is not None else None,
-            "gt": str(request.gt_path) if request.gt_path else None,
-            "gt_origin": request.gt_origin,
-            "seed": request.seed,
-            "video": request.video,
-            "preset": request.preset,
-            "crf": request.crf,
-            "max_frames": request.max_frames,
-        },
+        "request": request.to_dict(),
+        "init": list(init_box) if init_box is not None else None,
         "config": request.config.resolved(),
         "metrics": metrics,
         "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},

@@ -13,7 +13,6 @@ from vtrack.batch import (
     DaskExecutor,
     Executor,
     LocalExecutor,
-    RunOptions,
     cpu_count,
     find_inputs,
     plan,
@@ -23,6 +22,7 @@ from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.config import DEFAULT_CONFIG, Config, load_config
 from vtrack.errors import ConfigError
+from vtrack.request import RunRequest
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -96,9 +96,10 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     executor: Executor = (DaskExecutor(scheduler, scheduler_timeout) if scheduler
                           else LocalExecutor(workers))
     out_dir = out_dir or default_out_dir(str(folder))
-    options = RunOptions(video=not no_video, preset=preset, crf=crf, seed=seed,
-                         max_frames=max_frames)
-    batch = plan(inputs, configs, out_dir, options, threads=max(1, cpu_count() // workers),
+    settings = RunRequest(input=str(folder), out_dir=out_dir, config=next(iter(configs.values())),
+                          video=not no_video, preset=preset, crf=crf, seed=seed,
+                          max_frames=max_frames)
+    batch = plan(inputs, configs, out_dir, settings, threads=max(1, cpu_count() // workers),
                  force=force)
     summary_path = out_dir / "summary.csv"
     outcomes = []

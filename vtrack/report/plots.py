@@ -18,11 +18,11 @@ from matplotlib.figure import Figure
 
 from vtrack.evaluate.metrics import ERROR_THRESHOLDS, OVERLAP_THRESHOLDS, PRECISION_THRESHOLD_PX
 from vtrack.report.runs import RunResult
-from vtrack.stages.base import LOST, OCCLUDED
+from vtrack.stages.base import TrackState
 
 DPI = 100
 #: Shading of the frames a tracker reported occluded / lost, and of frames not evaluated.
-SHADES = {OCCLUDED: ("#f5a623", "occluded"), LOST: ("#d0021b", "lost")}
+SHADES = {TrackState.OCCLUDED: ("#f5a623", "occluded"), TrackState.LOST: ("#d0021b", "lost")}
 NO_GT_SHADE = "#9b9b9b"
 
 

@@ -10,13 +10,14 @@ values are rounded to the nearest integer, as ``cv2.calcBackProject`` does.
 
 Pipeline contract of stage ``backproject``:
 
-- reads ``ctx.window``, ``ctx.feature`` and, from ``ctx.memory``, ``"feature_levels"`` (how many
-  values the feature takes, default 256) and ``"feature_mask"`` (0 = pixel not valid, or None);
+- reads ``ctx.window``, ``ctx.feature`` with ``ctx.feature_levels`` (how many values the feature
+  takes) and ``ctx.feature_mask`` (0 = pixel not valid, or None), which come with the feature;
 - writes ``ctx.likelihood`` (uint8 back-projection of the window; masked pixels are 0);
-- on the first frame publishes in ``ctx.memory``: ``"hue_model"`` (float64 histogram, ``bins``
-  counts of the initial box's valid pixels) and ``"bp_initial"`` (mean back-projection inside the
-  initial box, 0..255) and ``"bp_background"`` (mean back-projection of the rest of the first
-  window, at most half ``bp_initial``): the references of the ``bp_mass`` signal (:func:`bp_mass`).
+- on the first frame sets ``ctx.target_model`` (:class:`~vtrack.stages.base.TargetModel`): the
+  histogram (float64, ``bins`` counts of the initial box's valid pixels), ``bp_initial`` (mean
+  back-projection inside the initial box, 0..255) and ``bp_background`` (mean back-projection of
+  the rest of the first window, at most half ``bp_initial``): the references of the ``bp_mass``
+  signal (:func:`bp_mass`).
 
 The helpers :func:`box_slices`, :func:`box_mean`, :func:`hue_histogram` and :func:`bp_mass` are
 shared with the mean-shift and occlusion stages.
@@ -33,7 +34,7 @@ from vtrack.errors import InputError
 from vtrack.geometry import Box, Window
 from vtrack.histograms import hue_histogram
 from vtrack.params import Param
-from vtrack.stages.base import Stage, TrackContext, register
+from vtrack.stages.base import Stage, TargetModel, TrackContext, register
 
 
 def box_slices(window: Window, box: Box) -> tuple[slice, slice] | None:
@@ -62,14 +63,15 @@ def bp_mass(ctx: TrackContext, box: Box) -> float:
     ``(mean BP in box - background) / (mean BP in initial box - background)``, where the means
     run over the box's pixels in the search window and ``background`` is the first frame's mean
     BP in the search window around the initial box, at most half the initial mean
-    (``ctx.memory["bp_initial"]``, ``["bp_background"]``). 1 on the first frame; about the
+    (``ctx.target_model``). 1 on the first frame; about the
     fraction of the target's colour still seen, 0 when the box shows no more of it than the
     surroundings did. The background term removes the floor that hue noise of grey pixels (any
     hue at low saturation) gives without a saturation mask, which differs from scene to scene.
     """
-    assert ctx.likelihood is not None and ctx.window is not None
-    background = ctx.memory["bp_background"]
-    contrast = ctx.memory["bp_initial"] - background
+    model = ctx.target_model
+    assert ctx.likelihood is not None and ctx.window is not None and model is not None
+    background = model.bp_background
+    contrast = model.bp_initial - background
     return (box_mean(ctx.likelihood, ctx.window, box) - background) / contrast
 
 
@@ -86,8 +88,8 @@ class BackProject(Stage):
             min=1, max=256,
         ),
     )
-    requires = frozenset({"window", "feature"})
-    provides = frozenset({"likelihood"})
+    requires = frozenset({"window", "feature", "feature_levels", "feature_mask"})
+    provides = frozenset({"likelihood", "target_model"})
 
     # Set from the parameters by Stage.__init__.
     bins: int
@@ -99,8 +101,8 @@ class BackProject(Stage):
         part = None if box is None or not box.is_valid() else box_slices(ctx.window, box)
         if box is None or part is None:
             raise InputError(f"backproject: the initial box {box} covers no pixel of the frame")
-        levels = ctx.memory.get("feature_levels", 256)
-        mask = ctx.memory.get("feature_mask")
+        levels = ctx.feature_levels
+        mask = ctx.feature_mask
         part_mask = None if mask is None else mask[part]
         hist = hue_histogram(ctx.feature[part], part_mask, self.bins, levels).astype(np.float64)
         top = float(hist.max())
@@ -115,24 +117,22 @@ class BackProject(Stage):
         values = np.arange(levels)
         self._lut = np.zeros(256, np.uint8)
         self._lut[:levels] = np.rint(hist[values * self.bins // levels] * 255.0 / top)
-        ctx.memory["hue_model"] = hist
         self.step(ctx)
         assert ctx.likelihood is not None
         inside = ctx.likelihood[part]
         outside = ctx.likelihood.size - inside.size
         total = float(cv2.sumElems(ctx.likelihood)[0])
         initial = float(cv2.mean(inside)[0])
-        ctx.memory["bp_initial"] = initial
         background = (total - initial * inside.size) / outside if outside else 0.0
         # capped at half the initial mass, so the signal keeps a scale (and is 1 on frame 0)
         # even when the surroundings are as target-coloured as the target
-        ctx.memory["bp_background"] = min(background, initial / 2.0)
+        ctx.target_model = TargetModel(hist, initial, min(background, initial / 2.0))
 
     def step(self, ctx: TrackContext) -> None:
         """Back-project the window: one table look-up per pixel (S0 eq. 4)."""
         assert ctx.feature is not None
         likelihood = cv2.LUT(ctx.feature, self._lut)
-        mask = ctx.memory.get("feature_mask")
+        mask = ctx.feature_mask
         if mask is not None:
             np.bitwise_and(likelihood, mask, out=likelihood)  # masked pixels -> 0
         ctx.likelihood = likelihood

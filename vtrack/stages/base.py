@@ -7,8 +7,12 @@ stage class declares, once:
 - ``name``: the key used in configs (``[[stage]] name = "meanshift"``) and ``--set name.param=``;
 - ``summary``: one line for ``vtrack stages``;
 - ``params``: its :class:`~vtrack.params.Param` declarations (validation, CLI, docs);
-- ``requires`` / ``provides``: context fields it reads / writes, so an impossible chain (a stage
-  before the one that produces its input) is rejected when the config is loaded;
+- ``requires`` / ``provides``: names of the :class:`TrackContext` fields it reads / writes, so
+  an impossible chain (a stage before the one that produces its input) is rejected when the
+  config is loaded. Every value stages share is a typed field of the context (no free-form
+  dict): a stage that needs another stage's value names that field in ``requires``, and
+  :func:`vtrack.config.check_chain` refuses the chain unless an earlier stage ``provides`` it
+  (``PIPELINE_PROVIDES`` are there from the start);
 - ``columns``: extra ``track.csv`` columns it fills through ``ctx.extras``.
 
 Lifecycle: ``start(ctx)`` once on the first frame (``ctx.box`` holds the initial box, may be None
@@ -22,6 +26,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -29,16 +34,45 @@ import numpy as np
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.overlays import Overlay
 from vtrack.params import Param
 
 if TYPE_CHECKING:
     from vtrack.stages.robust_model import RobustTarget
 
-TRACKING, OCCLUDED, LOST = "tracking", "occluded", "lost"
-STATES = (TRACKING, OCCLUDED, LOST)
+
+class TrackState(StrEnum):
+    """State of the single target (``track.csv``'s ``state`` column is the value)."""
+
+    TRACKING = "tracking"
+    OCCLUDED = "occluded"
+    #: No box is claimed: the output box is None, nothing is drawn, the metrics count a failure.
+    LOST = "lost"
+
+
+class TrackStatus(StrEnum):
+    """State of one track of a multi-target tracker (``tracks.csv``'s ``state`` column)."""
+
+    #: Not confirmed yet.
+    TENTATIVE = "tentative"
+    #: Confirmed and measured this frame: the only tracks written to ``tracks.csv`` and drawn.
+    CONFIRMED = "confirmed"
+    #: Confirmed, predicted only this frame.
+    COASTING = "coasting"
+
+
+TRACKING, OCCLUDED, LOST = TrackState.TRACKING, TrackState.OCCLUDED, TrackState.LOST
 
 #: Context fields the pipeline itself provides before the first stage runs.
-PIPELINE_PROVIDES = frozenset({"frame", "box", "prediction", "state", "rng"})
+PIPELINE_PROVIDES = frozenset({"frame", "box", "prediction", "state", "rng", "search_growth"})
+
+#: Fields computed from another field: a stage that sets the key field without setting these
+#: leaves them describing an older value, so later stages may not read them (a new search
+#: window has no back-projection until a stage makes one).
+DERIVED: dict[str, frozenset[str]] = {
+    "window": frozenset({"feature", "feature_levels", "feature_mask", "likelihood"}),
+    "feature": frozenset({"feature_levels", "feature_mask", "likelihood"}),
+}
 
 
 @dataclass
@@ -48,7 +82,24 @@ class Track:
     id: int
     box: Box
     confidence: float
-    state: str  # "tentative" | "confirmed" | "coasting" ...; only confirmed tracks are drawn
+    state: TrackStatus
+
+
+@dataclass(frozen=True)
+class TargetModel:
+    """What a colour tracker learnt about its target on the first frame (S0 items 2-3), built by
+    ``backproject`` and read by ``meanshift`` and ``occlusion``.
+
+    ``histogram``: float64 counts of the initial box's valid feature values, ``bins`` long;
+    ``bp_initial``: mean back-projection (0..255) inside the initial box; ``bp_background``:
+    mean back-projection of the rest of the first search window, at most ``bp_initial / 2``.
+    The last two are the references of the ``bp_mass`` signal
+    (:func:`vtrack.stages.backproject.bp_mass`).
+    """
+
+    histogram: np.ndarray
+    bp_initial: float
+    bp_background: float
 
 
 @dataclass
@@ -61,17 +112,28 @@ class TrackContext:
     box: Box | None = None
     #: Where this frame's search starts: set by a predictor on the previous frame (None: use box).
     prediction: Box | None = None
-    #: tracking | occluded | lost.
-    state: str = TRACKING
+    state: TrackState = TrackState.TRACKING
     #: Tracker-specific quality of this frame's estimate (similarity, weight, bp mass ...).
     score: float = float("nan")
     #: Multiplier on the search window, raised by occlusion/lost logic while the target is away.
     search_growth: float = 1.0
+    #: The target's model, from the first frame (``backproject``); None before it is built.
+    target_model: TargetModel | None = None
+    #: Mean grey of the detections ``blobs`` found in the last frame (None: none), fed back to
+    #: ``threshold`` for the next frame (S3 item 1). Read from the previous frame, so optional.
+    candidate_grey: float | None = None
     # --- per frame, reset by new_frame -------------------------------------------------------
     #: Search window of this frame (integer pixels inside the frame).
     window: Window | None = None
     #: Feature image of ``window`` (hue 0..255, quantised grey ...), same shape as the window.
     feature: np.ndarray | None = None
+    #: How many values ``feature`` takes (256, or 180 for OpenCV's hue); part of ``feature``.
+    feature_levels: int = 256
+    #: uint8 image of ``window``: 0 where ``feature`` is not valid (e.g. grey pixels have no
+    #: hue), 255 elsewhere; None = every pixel valid. Part of ``feature``.
+    feature_mask: np.ndarray | None = None
+    #: The target-sized box this frame's search starts from (``hue``: the search centre).
+    search_box: Box | None = None
     #: Target likelihood of ``window`` (back-projection, 0..255 uint8 or float weights).
     likelihood: np.ndarray | None = None
     #: This frame's measurement of the target (None: nothing to feed the filter).
@@ -82,10 +144,8 @@ class TrackContext:
     tracks: list[Track] = field(default_factory=list)
     #: Measurements from detection stages (multi-target): boxes with extra attributes.
     detections: list[Any] = field(default_factory=list)
-    #: Extra things to draw (e.g. particles): list of (kind, payload) for the annotator.
-    overlays: list[tuple[str, Any]] = field(default_factory=list)
-    #: Shared long-lived values stages publish for later stages (target model, initial mass ...).
-    memory: dict[str, Any] = field(default_factory=dict)
+    #: Extra things to draw (search window, particles) for the annotator.
+    overlays: list[Overlay] = field(default_factory=list)
     #: The ``robust`` tracker's shared state (model, working images, uncertainty), long-lived.
     robust: RobustTarget | None = None
 
@@ -93,6 +153,9 @@ class TrackContext:
         self.frame = frame
         self.window = None
         self.feature = None
+        self.feature_levels = 256
+        self.feature_mask = None
+        self.search_box = None
         self.likelihood = None
         self.measurement = None
         self.extras = {}
@@ -118,7 +181,8 @@ class Stage:
     columns: ClassVar[tuple[str, ...]] = ()
     #: True for stages that produce ``ctx.tracks`` (multi-target output: ``tracks.csv``).
     multi_target: ClassVar[bool] = False
-    #: True when the chain can start without an initial box (detecting trackers).
+    #: False when the stage can start without an initial box (detecting trackers, and stages
+    #: that read ``ctx.box`` only if it is set). A chain needs one when any of its stages does.
     needs_init_box: ClassVar[bool] = True
 
     def __init__(self, **values: Any) -> None:

@@ -13,13 +13,12 @@ Pipeline contract of stage ``hue``:
 - writes ``ctx.window`` (the search window: ``search_scale`` x the target box x
   ``search_growth``, centred on the search centre, clipped to the frame; or the whole frame with
   ``full_frame``), ``ctx.feature`` (uint8 hue of the window, values ``0 .. levels - 1``) and the
-  overlay ``("window", Box)``;
-- publishes in ``ctx.memory`` (per frame, overwritten every frame):
-  ``"search_box"``: the target-sized box this frame's search starts from (the search centre);
-  ``"feature_levels"``: how many values the feature takes (256 or 180);
-  ``"feature_mask"``: uint8 array of the window's shape, 255 where saturation >= ``sat_min`` and
-  value >= ``val_min``, 0 elsewhere; None when no pixel is masked (both thresholds 0) or when
-  ``mask_model_only`` leaves later frames unmasked.
+  overlay ``SearchWindow``;
+- ``ctx.search_box``: the target-sized box this frame's search starts from (the search centre);
+- ``ctx.feature_levels``: how many values the feature takes (256 or 180);
+- ``ctx.feature_mask``: uint8 array of the window's shape, 255 where saturation >= ``sat_min``
+  and value >= ``val_min``, 0 elsewhere; None when no pixel is masked (both thresholds 0) or
+  when ``mask_model_only`` leaves later frames unmasked.
 """
 
 from __future__ import annotations
@@ -27,6 +26,7 @@ from __future__ import annotations
 import cv2
 
 from vtrack.geometry import Box, Window
+from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -84,8 +84,8 @@ class Hue(Stage):
             "convert the whole frame every frame, not just the search window (tutorial CamShift)",
         ),
     )
-    requires = frozenset({"frame", "box", "prediction"})
-    provides = frozenset({"window", "feature"})
+    requires = frozenset({"frame", "box", "prediction", "search_growth"})
+    provides = frozenset({"window", "feature", "feature_levels", "feature_mask", "search_box"})
 
     # Set from the parameters by Stage.__init__.
     search_scale: float
@@ -124,7 +124,7 @@ class Hue(Stage):
         else:
             hue, mask = cv2.extractChannel(hsv, 0), None
         ctx.feature = hue
-        ctx.memory["search_box"] = center
-        ctx.memory["feature_levels"] = HUE_LEVELS[self.hue_scale]
-        ctx.memory["feature_mask"] = mask
-        ctx.overlays.append(("window", window.as_box()))
+        ctx.search_box = center
+        ctx.feature_levels = HUE_LEVELS[self.hue_scale]
+        ctx.feature_mask = mask
+        ctx.overlays.append(SearchWindow(window.as_box()))

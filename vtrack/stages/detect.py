@@ -26,12 +26,21 @@ import numpy as np
 
 from vtrack.geometry import Box
 from vtrack.params import Param
-from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, register
 
-#: ``ctx.memory`` key: mean grey of the candidates ``blobs`` found in the last frame (S3 item 1).
-CANDIDATE_GREY = "candidate_grey"
+#: What a segmenting stage hands over: the whole frame's grey image (256 levels, every pixel
+#: valid) and its foreground.
+_SEGMENTS = frozenset({"window", "feature", "feature_levels", "feature_mask", "likelihood"})
 
-_SEGMENTS = frozenset({"window", "feature", "likelihood"})
+
+def _whole_grey_frame(ctx: TrackContext) -> np.ndarray:
+    """Set the whole frame's grey image as this frame's window and feature; return it."""
+    grey = ctx.frame.gray()
+    ctx.window = ctx.frame.full_window()
+    ctx.feature = grey
+    ctx.feature_levels = 256
+    ctx.feature_mask = None
+    return grey
 
 
 @dataclass(frozen=True)
@@ -52,16 +61,12 @@ class Detection:
     score: float = math.nan
 
 
-#: States of the tracks of multi-target stages (``Track.state``); run.py writes only confirmed.
-TENTATIVE, CONFIRMED, COASTING = "tentative", "confirmed", "coasting"
-
-
-def track_state(confirmed: bool, updated: bool) -> str:
+def track_state(confirmed: bool, updated: bool) -> TrackStatus:
     """``confirmed`` (confirmed and measured this frame), ``coasting`` (confirmed, predicted
     only) or ``tentative`` (not confirmed yet)."""
     if not confirmed:
-        return TENTATIVE
-    return CONFIRMED if updated else COASTING
+        return TrackStatus.TENTATIVE
+    return TrackStatus.CONFIRMED if updated else TrackStatus.COASTING
 
 
 def centroids(detections: list[Detection]) -> np.ndarray:
@@ -98,6 +103,9 @@ class Background(Stage):
     it learns continuously over ``history`` frames, so it follows lighting changes and absorbs
     ghosts and objects that stop; it detects from the second frame on (on the first, everything
     is new), ``var_threshold`` replaces ``threshold``, and shadows are not detected.
+
+    Every frame gets a foreground ``ctx.likelihood``: while nothing can be detected (the mean's
+    learning frames, MOG2's first frame) it is empty (all 0).
     """
 
     name = "background"
@@ -172,18 +180,19 @@ class Background(Stage):
             self._mog2 = cv2.createBackgroundSubtractorMOG2(
                 history=self.history, varThreshold=self.var_threshold, detectShadows=False
             )
-            self._mog2.apply(ctx.frame.gray())  # the first frame only starts the model
+            grey = _whole_grey_frame(ctx)
+            self._mog2.apply(grey)  # the first frame only starts the model
+            ctx.likelihood = np.zeros_like(grey)  # nothing detected yet
             return
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
-        grey = ctx.frame.gray()
-        ctx.window = ctx.frame.full_window()
-        ctx.feature = grey
+        grey = _whole_grey_frame(ctx)
         if self._mog2 is not None:
             mask = self._mog2.apply(grey)
         elif self._background is None:
             self._learn(grey)
+            ctx.likelihood = np.zeros_like(grey)  # nothing detected while learning
             return
         else:
             difference = cv2.absdiff(grey, self._background)
@@ -259,12 +268,10 @@ class AdaptiveThreshold(Stage):
     needs_init_box = False
 
     def step(self, ctx: TrackContext) -> None:
-        grey = ctx.frame.gray()
-        level = self.threshold(ctx.memory.get(CANDIDATE_GREY))
+        grey = _whole_grey_frame(ctx)
+        level = self.threshold(ctx.candidate_grey)
         # S3 section 2.1: below the threshold -> 0, the rest keeps its grey.
         kept = cv2.threshold(grey, math.ceil(level) - 1, 0, cv2.THRESH_TOZERO)[1]
-        ctx.window = ctx.frame.full_window()
-        ctx.feature = grey
         ctx.likelihood = kept if self.median == 1 else cv2.medianBlur(kept, self.median)
 
     def threshold(self, candidate_grey: float | None) -> float:
@@ -337,13 +344,12 @@ class Blobs(Stage):
         ),
     )
     requires = _SEGMENTS
-    provides = frozenset({"detections"})
+    provides = frozenset({"detections", "candidate_grey"})
     needs_init_box = False
 
     def step(self, ctx: TrackContext) -> None:
-        ctx.memory.pop(CANDIDATE_GREY, None)
-        if ctx.likelihood is None or ctx.window is None or ctx.feature is None:
-            return  # the segmenting stage is still learning (background's first frames)
+        ctx.candidate_grey = None
+        assert ctx.likelihood is not None and ctx.window is not None and ctx.feature is not None
         found = []  # (area, part's x, part's y, part's labels, label, stats row, centroid)
         for px, py, part in foreground_regions(ctx.likelihood):
             count, labels, stats, centres = cv2.connectedComponentsWithStats(
@@ -359,10 +365,11 @@ class Blobs(Stage):
         if len(found) > self.max_blobs:
             found = sorted(found, key=lambda f: -f[0])[: self.max_blobs]
         x0, y0 = ctx.window.x0, ctx.window.y0
+        blobs = []
         for area, px, py, labels, label, (x, y, w, h, _), (cx, cy) in found:
             inside = labels[y : y + h, x : x + w] == label
             grey = ctx.feature[py + y : py + y + h, px + x : px + x + w][inside].mean()
-            ctx.detections.append(
+            blobs.append(
                 Detection(
                     Box(float(px + x + x0), float(py + y + y0), float(w), float(h)),
                     float(px + cx + x0),
@@ -371,9 +378,11 @@ class Blobs(Stage):
                     float(grey),
                 )
             )
+        blobs.sort(key=lambda d: (d.box.y, d.box.x))
+        ctx.detections.extend(blobs)
         ctx.detections.sort(key=lambda d: (d.box.y, d.box.x))
-        if ctx.detections:
-            ctx.memory[CANDIDATE_GREY] = float(np.mean([d.grey for d in ctx.detections]))
+        if blobs:  # S3 item 1: the mean grey of this stage's own candidates
+            ctx.candidate_grey = float(np.mean([d.grey for d in blobs]))
 
 
 @register
@@ -397,6 +406,6 @@ class LargestBlob(Stage):
         if ctx.detections:
             best = max(ctx.detections, key=lambda d: d.area)
             ctx.measurement = best.box.moved_to(best.cx, best.cy)
-            ctx.state = TRACKING
+            ctx.state = TrackState.TRACKING
         else:
-            ctx.state = LOST if ctx.box is None else OCCLUDED
+            ctx.state = TrackState.LOST if ctx.box is None else TrackState.OCCLUDED

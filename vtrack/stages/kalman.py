@@ -99,6 +99,7 @@ class Kalman(Stage):
     requires = frozenset({"measurement", "box", "prediction"})
     provides = frozenset({"box", "prediction"})
     columns = ("pred_cx", "pred_cy")
+    needs_init_box = False  # reads ctx.box only when it is set (S4: no box until a detection)
 
     # Set from the parameters by Stage.__init__.
     model: str

@@ -49,7 +49,7 @@ from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya
 from vtrack.params import Param
-from vtrack.stages.base import OCCLUDED, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 
@@ -198,7 +198,7 @@ class KernelMeanShift(Stage):
         self._q = sample.hist
         self._q_norm = sample.hist / sample.hist.sum()  # q_u / C
         ctx.measurement = box
-        ctx.state = TRACKING
+        ctx.state = TrackState.TRACKING
         ctx.score = 1.0
         ctx.extras.update(decision=ACCEPT, scale=1.0, iterations=0)
 
@@ -225,12 +225,12 @@ class KernelMeanShift(Stage):
             assert prediction is not None
             ctx.box = Box.from_center(prediction.cx, prediction.cy, *self._box_size())
             ctx.measurement = ctx.box if self.occluded_update == "prediction" else None
-            ctx.state = OCCLUDED
+            ctx.state = TrackState.OCCLUDED
         else:
             self._scale = found.scale
             ctx.box = Box.from_center(found.cx, found.cy, *self._box_size())
             ctx.measurement = ctx.box
-            ctx.state = TRACKING
+            ctx.state = TrackState.TRACKING
         ctx.score = found.rho
         ctx.extras.update(decision=decision, scale=self._scale, iterations=iterations)
 

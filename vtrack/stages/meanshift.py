@@ -29,8 +29,8 @@ window the OpenCV tutorial feeds into the next frame), so the box size adapts.
 
 Pipeline contract of stage ``meanshift``:
 
-- reads ``ctx.window``, ``ctx.likelihood`` and, from ``ctx.memory``,
-  ``"search_box"`` (where the search starts, from the hue stage) and ``"bp_initial"``;
+- reads ``ctx.window``, ``ctx.likelihood``, ``ctx.search_box`` (where the search starts, from
+  the hue stage) and ``ctx.target_model`` (the references of ``bp_mass``);
 - writes ``ctx.measurement`` and ``ctx.box`` (the new box: the mean-shift result is the position
   unless a later stage - occlusion, kalman - decides otherwise), ``ctx.score`` (= ``bp_mass``)
   and the extras ``iterations`` (mean-shift steps taken; empty for camshift, which does not
@@ -128,7 +128,7 @@ class MeanShift(Stage):
             choices=("target", "window"),
         ),
     )
-    requires = frozenset({"window", "likelihood"})
+    requires = frozenset({"window", "likelihood", "search_box", "target_model"})
     provides = frozenset({"measurement", "box", "score"})
     columns = ("iterations", "bp_mass")
 
@@ -147,8 +147,8 @@ class MeanShift(Stage):
         ctx.extras["bp_mass"] = 1.0
 
     def step(self, ctx: TrackContext) -> None:
-        assert ctx.window is not None and ctx.likelihood is not None
-        start: Box = ctx.memory["search_box"]
+        start = ctx.search_box
+        assert ctx.window is not None and ctx.likelihood is not None and start is not None
         if self.method == "camshift":
             box = self._camshift(ctx.likelihood, ctx.window, start)
         else:

@@ -31,9 +31,10 @@ States:
 Pipeline contract of stage ``occlusion`` (it runs BEFORE ``kalman``, which it tells whether to
 update or coast):
 
-- reads ``ctx.measurement``, ``ctx.window``, ``ctx.likelihood`` and, for ``similarity``,
-  ``ctx.feature`` and ``ctx.memory["hue_model"]``, ``["feature_mask"]``, ``["feature_levels"]``;
-  ``ctx.memory["search_box"]`` (where the search started: the prediction, or the held box);
+- reads ``ctx.measurement``, ``ctx.window``, ``ctx.likelihood``, ``ctx.target_model`` (the
+  ``bp_mass`` references; the model histogram for ``similarity``, with ``ctx.feature``,
+  ``ctx.feature_mask``, ``ctx.feature_levels``) and ``ctx.search_box`` (where the search
+  started: the prediction, or the held box);
 - writes ``ctx.state``, ``ctx.score`` (the signal), ``ctx.search_growth`` and ``ctx.measurement``
   / ``ctx.box``: None / the search box while hidden, the re-found box on recovery.
 """
@@ -47,7 +48,7 @@ from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya, hue_histogram
 from vtrack.params import Param
 from vtrack.stages.backproject import box_slices, bp_mass
-from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 
 def best_box(likelihood: np.ndarray, window: Window, target: Box) -> Box:
@@ -103,8 +104,11 @@ class Occlusion(Stage):
             "max_growth", float, 3.0, "largest widening of the search window", min=1.0,
         ),
     )
-    requires = frozenset({"measurement", "window", "likelihood"})
-    provides = frozenset({"measurement", "box", "state", "score"})
+    requires = frozenset(
+        {"measurement", "window", "feature", "feature_levels", "feature_mask", "likelihood",
+         "search_box", "target_model"}
+    )
+    provides = frozenset({"measurement", "box", "state", "score", "search_growth"})
 
     # Set from the parameters by Stage.__init__.
     signal: str
@@ -116,45 +120,46 @@ class Occlusion(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """The first frame's box is the target: tracking."""
-        ctx.state = TRACKING
+        ctx.state = TrackState.TRACKING
         ctx.search_growth = 1.0
         self._hidden = 0  # consecutive hidden frames
 
     def step(self, ctx: TrackContext) -> None:
-        assert ctx.window is not None and ctx.likelihood is not None
-        if ctx.state == TRACKING:
+        search_box = ctx.search_box
+        assert ctx.window is not None and ctx.likelihood is not None and search_box is not None
+        if ctx.state == TrackState.TRACKING:
             candidate = ctx.measurement
             level = self.threshold
         else:
-            candidate = best_box(ctx.likelihood, ctx.window, ctx.memory["search_box"])
+            candidate = best_box(ctx.likelihood, ctx.window, search_box)
             level = max(self.recover, self.threshold)
         value = 0.0 if candidate is None else self._signal(ctx, candidate)
         ctx.score = value
         if value >= level:
-            ctx.state = TRACKING
+            ctx.state = TrackState.TRACKING
             ctx.search_growth = 1.0
             ctx.measurement = ctx.box = candidate
             self._hidden = 0
             return
         self._hidden += 1
-        ctx.state = LOST if self._hidden > self.lost_after else OCCLUDED
+        ctx.state = TrackState.LOST if self._hidden > self.lost_after else TrackState.OCCLUDED
         ctx.search_growth = min(ctx.search_growth * self.growth, self.max_growth)
         # S0 item 7: under full occlusion the measurement is not used; the position is the
         # prediction (the search box), so the window does not drift away
         ctx.measurement = None
-        ctx.box = ctx.memory["search_box"]
+        ctx.box = search_box
 
     def _signal(self, ctx: TrackContext, box: Box) -> float:
         if self.signal == "bp_mass":
             return bp_mass(ctx, box)
-        assert ctx.window is not None and ctx.feature is not None
+        assert ctx.window is not None and ctx.feature is not None and ctx.target_model is not None
         part = box_slices(ctx.window, box)
         if part is None:
             return 0.0
-        model: np.ndarray = ctx.memory["hue_model"]
-        mask = ctx.memory.get("feature_mask")
-        levels = ctx.memory.get("feature_levels", 256)
+        model = ctx.target_model.histogram
+        mask = ctx.feature_mask
         seen = hue_histogram(
-            ctx.feature[part], None if mask is None else mask[part], model.size, levels
+            ctx.feature[part], None if mask is None else mask[part], model.size,
+            ctx.feature_levels,
         )
         return bhattacharyya(seen, model)

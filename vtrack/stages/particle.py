@@ -35,8 +35,9 @@ from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya_rows, hue_histogram
+from vtrack.overlays import Particles
 from vtrack.params import Param
-from vtrack.stages.base import LOST, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 #: Levels of the 8-bit hue of ``COLOR_BGR2HSV_FULL`` (0..255 spans 0..360 degrees).
 HUE_LEVELS = 256
@@ -177,7 +178,7 @@ class ParticleFilter(Stage):
         # weights are stored, later frames with the oldest one. This is the patent's own start
         # ([0047]: the first tracked frame's weight fills the whole shift register).
         self._weights: deque[float] = deque(maxlen=self.history)
-        ctx.state = TRACKING
+        ctx.state = TrackState.TRACKING
         ctx.score = 1.0  # the target box against its own histogram
 
     def step(self, ctx: TrackContext) -> None:
@@ -204,12 +205,13 @@ class ParticleFilter(Stage):
         if tracked:
             self._weights.append(weight)  # tracking (or re-acquired): the history resumes
             ctx.box = Box.from_center(point[0], point[1], *self._size)
-            ctx.state = TRACKING
-        elif ctx.state != LOST:
+            ctx.state = TrackState.TRACKING
+        elif ctx.state != TrackState.LOST:
             # S1 item 6: entering lost freezes the history at the weight `history` frames before
             # the loss ([0047]: it replaces the other nine entries; this frame is not stored).
             self._weights.extend([reference] * self.history)
-            ctx.state = LOST  # ctx.box keeps the last tracked box; the pipeline outputs none
+            # ctx.box keeps the last tracked box; the pipeline outputs none
+            ctx.state = TrackState.LOST
         ctx.score = weight
         ctx.extras.update(
             weight_ratio=weight / reference if reference > 0 else float("nan"),
@@ -218,7 +220,7 @@ class ParticleFilter(Stage):
             particle_cy=centre[1],
         )
         if self.draw_particles:
-            ctx.overlays.append(("particles", [w.as_box() for w in windows]))
+            ctx.overlays.append(Particles(tuple(w.as_box() for w in windows)))
 
     def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int]:
         """Particle windows of the target's pixel size, inside the frame (S1 item 2).
@@ -232,7 +234,7 @@ class ParticleFilter(Stage):
         assert ctx.box is not None
         pw, ph = self._pixels
         size = np.array([pw, ph], dtype=np.float64)
-        lost = ctx.state == LOST
+        lost = ctx.state == TrackState.LOST
         count = (self.lost_particles or self.particles) if lost else self.particles
         near = 0 if lost else round(self.near_share * self.particles)
         offsets = rng.uniform(-self.spread, self.spread, (near, 2)) * self._size

@@ -28,7 +28,7 @@ whether the next frame searches the whole frame) and the extra ``confidence``.
 from __future__ import annotations
 
 from vtrack.params import Param
-from vtrack.stages.base import LOST, OCCLUDED, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 
 @register
@@ -77,7 +77,7 @@ class RobustFailure(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """The first frame's box is the target: tracking."""
-        ctx.state = TRACKING
+        ctx.state = TrackState.TRACKING
         assert ctx.robust is not None
         ctx.robust.hidden = 0
         ctx.robust.search_all = False
@@ -88,10 +88,11 @@ class RobustFailure(Stage):
         assert target is not None
         score = ctx.score
         ctx.extras["confidence"] = score
-        level = self.occlude_below if ctx.state == TRACKING else max(self.recover_at,
-                                                                     self.occlude_below)
+        level = self.occlude_below
+        if ctx.state != TrackState.TRACKING:
+            level = max(self.recover_at, self.occlude_below)  # hysteresis
         if score >= level and ctx.measurement is not None:
-            ctx.state = TRACKING
+            ctx.state = TrackState.TRACKING
             target.hidden = 0
             target.search_all = False
             if self.update and score >= self.update_above:
@@ -100,8 +101,8 @@ class RobustFailure(Stage):
                 target.reference += self.rate_reference * (raw - target.reference)
             return
         target.hidden += 1
-        ctx.state = LOST if target.hidden > self.lost_after else OCCLUDED
-        target.search_all = ctx.state == LOST and self.redetect
+        ctx.state = TrackState.LOST if target.hidden > self.lost_after else TrackState.OCCLUDED
+        target.search_all = ctx.state == TrackState.LOST and self.redetect
         # S0 item 7: while hidden the measurement is not used and the box is the prediction
         ctx.measurement = None
         if ctx.prediction is not None:

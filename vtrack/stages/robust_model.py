@@ -34,8 +34,8 @@ Pipeline contract of stage ``robust_model``: reads ``ctx.frame``, ``ctx.box``,
 target is lost: then the whole frame is searched at a coarse resolution, issue item 7); writes
 ``ctx.window`` (the search window, frame pixels), ``ctx.likelihood`` (the window's per-pixel
 target likelihood 0..1 at the working resolution), ``ctx.robust`` (created on the first frame:
-the model, and this frame's working images and placement score maps) and the ``("window",
-Box)`` overlay.
+the model, and this frame's working images and placement score maps) and the search-window
+overlay.
 """
 
 from __future__ import annotations
@@ -48,6 +48,7 @@ import numpy as np
 
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -372,7 +373,7 @@ class RobustModel(Stage):
         target.likelihood = target.model.likelihood(target.bins)
         ctx.window = window
         ctx.likelihood = target.likelihood
-        ctx.overlays.append(("window", window.as_box()))
+        ctx.overlays.append(SearchWindow(window.as_box()))
 
     def _maps(self, ctx: TrackContext, box: Box) -> None:
         """Placement score maps for a box of ``box``'s size: colour box mean, NCC, fused."""

@@ -27,7 +27,7 @@ import numpy as np
 
 from vtrack.filters import KalmanFilter, constant_velocity
 from vtrack.params import Param
-from vtrack.stages.base import LOST, TRACKING, Stage, TrackContext, register
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 
 @register
@@ -61,7 +61,7 @@ class RobustMotion(Stage):
         self._diag = math.hypot(ctx.box.w, ctx.box.h)
         self._filter = self._new((ctx.box.cx, ctx.box.cy))
         self._rms = np.zeros(2)
-        self._was = TRACKING
+        self._was = TrackState.TRACKING
         self._predict(ctx)
 
     def _new(self, point: tuple[float, float]) -> KalmanFilter:
@@ -73,7 +73,7 @@ class RobustMotion(Stage):
         box = ctx.measurement
         if box is not None:
             z = np.array([box.cx, box.cy])
-            if self._was == LOST:
+            if self._was == TrackState.LOST:
                 self._filter = self._new((box.cx, box.cy))  # re-found: a jump, not a velocity
                 self._rms[:] = 0.0
             else:

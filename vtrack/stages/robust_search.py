@@ -41,7 +41,7 @@ from vtrack.geometry import Box, Window
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 from vtrack.stages.meanshift import mean_shift
-from vtrack.stages.robust_model import RobustTarget, box_means
+from vtrack.stages.robust_model import RobustTarget
 
 #: Share of the map's peak below which placements do not pull the mean shift.
 PEAK_SHARE = 0.8

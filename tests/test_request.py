@@ -1,0 +1,86 @@
+"""One run request: ``run.json`` records it whole, and batch's resume reuses a result only for
+exactly the same request."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from dataclasses import fields, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from click.testing import CliRunner
+
+from vtrack.batch import completed_summary
+from vtrack.cli import main
+from vtrack.config import load_config
+from vtrack.geometry import Box
+from vtrack.io import RawFormat
+from vtrack.request import RunRequest
+from vtrack.run import STATUS_COMPLETE, run
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+#: Another value for every field of RunRequest.
+OTHER: dict[str, Any] = {
+    "input": "other.mp4",
+    "out_dir": None,  # a copy of the results folder, see below
+    "config": load_config("camshift"),
+    "init_box": Box(1, 2, 30, 40),
+    "gt_path": Path("other.gt.txt"),
+    "gt_origin": 1,
+    "raw": RawFormat(160, 120, "bgr24", 30.0),
+    "video": True,
+    "preset": "fast",
+    "crf": 30,
+    "seed": 7,
+    "max_frames": 5,
+}
+
+
+def test_changing_any_field_of_the_request_makes_resume_run_again(
+    clip_factory: ClipFactory, tmp_path: Path
+) -> None:
+    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    request = RunRequest(input=str(clip.path), out_dir=tmp_path / "a", config=load_config("s0"),
+                         gt_path=clip.gt, video=False, max_frames=12)
+    assert run(request).status == STATUS_COMPLETE
+    assert completed_summary(request) is not None  # the same request: reused
+    assert {f.name for f in fields(RunRequest)} == set(OTHER)  # a new field needs a value here
+    for name, value in OTHER.items():
+        if name == "out_dir":  # the same results, moved: recorded for another folder
+            value = tmp_path / "b"
+            shutil.copytree(request.out_dir, value)
+        changed = replace(request, **{name: value})
+        assert changed != request, name
+        assert completed_summary(changed) is None, name
+
+
+def test_the_request_round_trips_through_its_dict() -> None:
+    request = RunRequest(input="clip.mp4", out_dir=Path("out"), config=load_config("s2"),
+                         init_box=Box(1.5, 2, 30, 40), gt_path=Path("gt.txt"), gt_origin=1,
+                         raw=RawFormat(64, 48, "gray", 25.0), video=False, seed=3,
+                         max_frames=9)
+    again = RunRequest.from_dict(request.to_dict())
+    assert again.to_dict() == request.to_dict()
+    assert again.config.resolved() == request.config.resolved()
+
+
+def test_batch_runs_again_when_only_the_ground_truth_origin_changed(
+    clip_factory: ClipFactory, tmp_path: Path
+) -> None:
+    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "smooth.mp4")
+    shutil.copy(clip.gt, folder / "smooth.gt.txt")
+    out = tmp_path / "out"
+    statuses = []
+    for origin in ("0", "1", "1"):
+        result = CliRunner().invoke(main, ["batch", str(folder), "--jobs", "1", "--no-video",
+                                           "--gt-origin", origin, "--out", str(out)])
+        assert result.exit_code == 0, result.output
+        with (out / "summary.csv").open(newline="") as handle:
+            statuses.append(next(csv.DictReader(handle))["status"])
+    assert statuses == ["complete", "complete", "skipped"]

@@ -1,0 +1,84 @@
+"""The one description of a run: what ``vtrack run``, ``vtrack batch``, ``vtrack.track`` and
+``run.json`` share.
+
+:class:`RunRequest` is built by the CLI (``vtrack run``; ``vtrack batch`` builds one per input x
+config from a template), recorded in ``run.json`` as ``"request"`` through :meth:`to_dict`, read
+back with :meth:`from_dict`, and compared whole by batch's resume test (:meth:`same_run`): a
+result is reused only if every field of the request that made it is the same.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from vtrack.config import Config, config_from_resolved
+from vtrack.geometry import Box
+from vtrack.io import RawFormat
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """Everything one run needs. Paths are used as given (the CLI resolves defaults).
+
+    ``init_box`` None takes the first ground-truth box (single-target configs); ``gt_origin`` 1
+    reads 1-based (MATLAB) ground-truth boxes; ``raw`` describes raw-frame input (None: a video
+    file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
+    seeds the stochastic stages; ``max_frames`` stops early.
+    """
+
+    input: str
+    out_dir: Path
+    config: Config
+    init_box: Box | None = None
+    gt_path: Path | None = None
+    gt_origin: int = 0
+    raw: RawFormat | None = None
+    video: bool = True
+    preset: str = "ultrafast"
+    crf: int = 23
+    seed: int = 0
+    max_frames: int | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (``run.json``'s ``"request"``): the config as its resolved chain
+        (every parameter, defaults included), paths as strings, boxes as lists."""
+        return {
+            "input": self.input,
+            "out_dir": str(self.out_dir),
+            "config": self.config.resolved(),
+            "init": None if self.init_box is None else list(self.init_box),
+            "gt": None if self.gt_path is None else str(self.gt_path),
+            "gt_origin": self.gt_origin,
+            "raw": None if self.raw is None else asdict(self.raw),
+            "video": self.video,
+            "preset": self.preset,
+            "crf": self.crf,
+            "seed": self.seed,
+            "max_frames": self.max_frames,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RunRequest:
+        """The request :meth:`to_dict` described (KeyError/ValueError/ConfigError if it is not
+        one)."""
+        return cls(
+            input=str(data["input"]),
+            out_dir=Path(data["out_dir"]),
+            config=config_from_resolved(data["config"]),
+            init_box=None if data["init"] is None else Box(*map(float, data["init"])),
+            gt_path=None if data["gt"] is None else Path(data["gt"]),
+            gt_origin=int(data["gt_origin"]),
+            raw=None if data["raw"] is None else RawFormat(**data["raw"]),
+            video=bool(data["video"]),
+            preset=str(data["preset"]),
+            crf=int(data["crf"]),
+            seed=int(data["seed"]),
+            max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
+        )
+
+    def same_run(self, recorded: Any) -> bool:
+        """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request."""
+        return json.loads(json.dumps(self.to_dict())) == recorded
