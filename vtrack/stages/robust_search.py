@@ -100,6 +100,10 @@ class RobustSearch(Stage):
         Param("scale_step", float, 1.05, "ratio between the sizes tried", min=1.001, max=1.5),
         Param("scale_rate", float, 0.6, "share of the way to the best size moved per frame",
               min=0.0, max=1.0),
+        Param("scale_cue", str, "fused",
+              "what scores a size: fused = Staple's mix of colour contrast and template NCC; "
+              "colour = colour contrast only; template = NCC only",
+              choices=("fused", "colour", "template")),
         Param("ring", float, 1.6,
               "the contrast ring reaches this multiple of the box (shrink-bias guard)",
               min=1.05, max=4.0),
@@ -115,6 +119,7 @@ class RobustSearch(Stage):
     scale: bool
     scale_step: float
     scale_rate: float
+    scale_cue: str
     ring: float
 
     def start(self, ctx: TrackContext) -> None:
@@ -187,10 +192,15 @@ class RobustSearch(Stage):
         factors = (1.0 / self.scale_step, 1.0, self.scale_step)
         for k in factors:
             kw, kh = max(int(round(w * k)), 2), max(int(round(h * k)), 2)
-            score = target.gamma * contrast(table, cx, cy, kw, kh, self.ring)
+            colour = contrast(table, cx, cy, kw, kh, self.ring)
             template = target.template_at(kw, kh)
-            if template is not None and target.gamma < 1.0:
-                score += (1 - target.gamma) * _ncc_near(grey, template, cx, cy)
+            if template is None or target.gamma >= 1.0 or self.scale_cue == "colour":
+                score = colour
+            elif self.scale_cue == "template":
+                score = _ncc_near(grey, template, cx, cy)
+            else:
+                score = target.gamma * colour + (1 - target.gamma) * _ncc_near(
+                    grey, template, cx, cy)
             scores.append(score)
         best = int(np.argmax(scores))
         return 1.0 + self.scale_rate * (factors[best] - 1.0)
