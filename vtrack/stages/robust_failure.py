@@ -10,7 +10,8 @@ filters", CVPR 2010, stop trusting MOSSE's peak the same way, by its peak-to-sid
 - ``tracking`` while the score stays at or above ``occlude_below``; below it the measurement is
   withheld (the Kalman filter coasts, the box follows the prediction: S0 item 7) and the state
   is ``occluded``; after ``lost_after`` hidden frames it is ``lost``: no box is claimed (issue
-  item 7), and with ``redetect`` the next frames search the whole frame at a coarse resolution
+  item 7), at once when the coasted box is mostly outside the frame (the target left the
+  view), and with ``redetect`` the next frames search the whole frame at a coarse resolution
   (``robust_model.lost_pixels``) with a flat motion prior.
 - A hidden target is taken back when the score of the best box reaches ``recover_at``
   (hysteresis against flicker).
@@ -27,6 +28,7 @@ whether the next frame searches the whole frame) and the extra ``confidence``.
 
 from __future__ import annotations
 
+from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -60,7 +62,7 @@ class RobustFailure(Stage):
               "learning rate of the reference confidence on confident frames",
               min=0.0, max=1.0),
     )
-    requires = frozenset({"score", "measurement", "prediction", "robust"})
+    requires = frozenset({"frame", "score", "measurement", "prediction", "robust"})
     provides = frozenset({"state", "measurement", "box"})
     columns = ("confidence",)
 
@@ -101,9 +103,21 @@ class RobustFailure(Stage):
                 target.reference += self.rate_reference * (raw - target.reference)
             return
         target.hidden += 1
-        ctx.state = TrackState.LOST if target.hidden > self.lost_after else TrackState.OCCLUDED
-        target.search_all = ctx.state == TrackState.LOST and self.redetect
         # S0 item 7: while hidden the measurement is not used and the box is the prediction
         ctx.measurement = None
         if ctx.prediction is not None:
             ctx.box = ctx.prediction
+        gone = ctx.box is not None and _inside_share(ctx.box, ctx.frame.width,
+                                                     ctx.frame.height) < 0.5
+        # lost after lost_after hidden frames, or at once when the coasted box has left the
+        # view (the target went out, or the prediction is wrong: no box to claim either way)
+        lost = target.hidden > self.lost_after or gone
+        ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
+        target.search_all = lost and self.redetect
+
+
+def _inside_share(box: Box, width: int, height: int) -> float:
+    """Share of ``box``'s area inside a ``width`` x ``height`` frame."""
+    w = min(box.x + box.w, width) - max(box.x, 0.0)
+    h = min(box.y + box.h, height) - max(box.y, 0.0)
+    return max(w, 0.0) * max(h, 0.0) / box.area if box.area > 0 else 0.0

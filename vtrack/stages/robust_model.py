@@ -55,7 +55,12 @@ from vtrack.stages.base import Stage, TrackContext, register
 #: Saturation / value (0..255) below which a pixel counts as grey: it goes to a value bin.
 #: The OpenCV CamShift tutorial's hue-validity thresholds (S >= 60, V >= 32), S0 uses the same.
 GREY_SAT, GREY_VAL = 60, 32
+#: Distractors: local maxima of the colour score at least this share of the target's, at most
+#: this many (DAT sec. 3.2).
+DISTRACTOR_SHARE, DISTRACTOR_COUNT = 0.5, 3
 DOWNSCALE = cv2.INTER_LINEAR
+#: Bin of the working pixels outside the frame (no colour bin reaches it: likelihood 0).
+OUTSIDE = 255
 
 
 @dataclass
@@ -66,8 +71,13 @@ class ColourModel:
     sat_bins: int
     grey_bins: int
     surroundings: bool
+    #: Weight of the object-vs-surroundings likelihood against the object-vs-distractors one
+    #: (DAT's lambda_p); 1 = no distractor term.
+    surround_weight: float = 1.0
     object_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     surround_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: Histogram of the distractors seen so far (empty until there was one).
+    distractor_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: bin -> target likelihood 0..1 (float32, 256 entries for ``cv2.LUT``).
     table: np.ndarray = field(default_factory=lambda: np.zeros(256, np.float32))
 
@@ -107,16 +117,22 @@ class ColourModel:
         total = smooth.sum()
         return smooth / total if total > 0 else smooth
 
-    def set(self, object_hist: np.ndarray, surround_hist: np.ndarray) -> None:
+    def set(self, object_hist: np.ndarray, surround_hist: np.ndarray,
+            distractor_hist: np.ndarray | None = None) -> None:
         """Adopt new histograms and rebuild the likelihood table."""
         self.object_hist, self.surround_hist = object_hist, surround_hist
+        if distractor_hist is not None:
+            self.distractor_hist = distractor_hist
         table = np.zeros(256, np.float64)
         if self.surroundings:
             # Possegger et al. 2015, eq. 2 with equal priors: H_O / (H_O + H_S); unseen -> 0.5
-            total = object_hist + surround_hist
-            table[: self.bins] = np.divide(
-                object_hist, total, out=np.full(self.bins, 0.5), where=total > 1e-12
-            )
+            likelihood = _ratio(object_hist, surround_hist)
+            if self.distractor_hist.size and self.surround_weight < 1.0:
+                # DAT sec. 3.2: the same ratio against the distractors' histogram, mixed in
+                # with weight 1 - lambda_p
+                likelihood = self.surround_weight * likelihood + (
+                    1 - self.surround_weight) * _ratio(object_hist, self.distractor_hist)
+            table[: self.bins] = likelihood
         else:
             top = object_hist.max()
             table[: self.bins] = object_hist / top if top > 0 else 0.0  # S0 eq. 4, scaled 0..1
@@ -140,8 +156,11 @@ class RobustTarget:
     #: Uncertainty (1 sigma, frame pixels) of the predicted centre per axis.
     sigma: tuple[float, float] = (0.0, 0.0)
     # --- this frame's working images (set by robust_model) ----------------------------------
-    #: Search window in frame pixels, and the scale factors frame -> working pixels per axis.
+    #: Search window in frame pixels (clipped to the frame); the frame position of the working
+    #: images' top-left corner (the region may reach beyond the frame); the scale factors
+    #: frame -> working pixels per axis.
     window: Window = Window(0, 0, 1, 1)
+    origin: tuple[float, float] = (0.0, 0.0)
     sx: float = 1.0
     sy: float = 1.0
     bins: np.ndarray | None = None  # joint colour bin per working pixel
@@ -162,11 +181,11 @@ class RobustTarget:
 
     def to_working(self, x: float, y: float) -> tuple[float, float]:
         """Frame coordinates -> working-image coordinates of this frame's window."""
-        return (x - self.window.x0) * self.sx, (y - self.window.y0) * self.sy
+        return (x - self.origin[0]) * self.sx, (y - self.origin[1]) * self.sy
 
     def to_frame(self, x: float, y: float) -> tuple[float, float]:
         """Working-image coordinates -> frame coordinates."""
-        return self.window.x0 + x / self.sx, self.window.y0 + y / self.sy
+        return self.origin[0] + x / self.sx, self.origin[1] + y / self.sy
 
     def placement_score(self, px: int, py: int) -> float:
         """The fused score of the placement with top-left working pixel ``(px, py)``."""
@@ -207,13 +226,29 @@ class RobustTarget:
         obj = self.model.histogram(self.bins, inside)
         # DAT's surrounding region: the window around the box (Possegger et al. 2015, sec. 3.1)
         ring = self.model.histogram(self.bins, cv2.bitwise_not(inside))
-        if rate_hist >= 1.0 or self.model.object_hist.size == 0:
-            self.model.set(obj, ring)
-        else:
-            self.model.set(
-                (1 - rate_hist) * self.model.object_hist + rate_hist * obj,
-                (1 - rate_hist) * self.model.surround_hist + rate_hist * ring,
-            )
+        distractors = None
+        if self.model.surround_weight < 1.0 and self.colour_map is not None:
+            mask = distractor_mask(self.colour_map, self.size, (part[1].start, part[0].start),
+                                   DISTRACTOR_SHARE, DISTRACTOR_COUNT)
+            if mask is not None and mask.shape == self.bins.shape:
+                distractors = self.model.histogram(self.bins, cv2.bitwise_and(
+                    mask, cv2.bitwise_not(inside)))
+        old = self.model
+        if rate_hist >= 1.0 or old.object_hist.size == 0:
+            self.model.set(obj, ring, distractors)
+            return self._learn_template(part, rate_template)
+        if distractors is not None and old.distractor_hist.size:
+            distractors = (1 - rate_hist) * old.distractor_hist + rate_hist * distractors
+        self.model.set(
+            (1 - rate_hist) * old.object_hist + rate_hist * obj,
+            (1 - rate_hist) * old.surround_hist + rate_hist * ring,
+            distractors,
+        )
+        self._learn_template(part, rate_template)
+
+    def _learn_template(self, part: tuple[slice, slice], rate_template: float) -> None:
+        """Blend the template towards the grey patch ``part`` at ``rate_template``."""
+        assert self.grey is not None
         if self.template is None or rate_template <= 0:
             return
         patch = self.grey[part].astype(np.float32)
@@ -226,6 +261,35 @@ class RobustTarget:
                             dst=self.template)
 
 
+def _ratio(target: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Per bin ``target / (target + other)``, 0.5 where neither has mass (DAT eq. 2)."""
+    total = target + other
+    return np.divide(target, total, out=np.full(target.size, 0.5), where=total > 1e-12)
+
+
+def distractor_mask(colour_map: np.ndarray, size: tuple[int, int], target: tuple[int, int],
+                    share: float, count: int) -> np.ndarray | None:
+    """Mask (uint8, the working image's shape) of up to ``count`` distractors: local maxima of
+    the colour placement map at least ``share`` of the target's value, not overlapping the
+    target's placement (DAT sec. 3.2: target-like regions of the surroundings). None if none."""
+    w, h = size
+    rows, cols = colour_map.shape
+    tx, ty = min(max(target[0], 0), cols - 1), min(max(target[1], 0), rows - 1)
+    level = share * float(colour_map[ty, tx])
+    peaks = colour_map >= cv2.dilate(colour_map, np.ones((h, w), np.uint8))
+    peaks &= colour_map >= level
+    ys, xs = np.nonzero(peaks)
+    far = (np.abs(xs - tx) >= w) | (np.abs(ys - ty) >= h)
+    xs, ys = xs[far], ys[far]
+    if xs.size == 0:
+        return None
+    order = np.argsort(colour_map[ys, xs])[::-1][:count]
+    mask = np.zeros((rows + h - 1, cols + w - 1), np.uint8)
+    for x, y in zip(xs[order], ys[order], strict=True):
+        mask[y : y + h, x : x + w] = 255
+    return mask
+
+
 def working_scale(box: Box, size: float, upscale: float) -> float:
     """Frame -> working pixels factor that makes ``box`` about ``size`` x ``size`` in area."""
     return min(size / math.sqrt(max(box.w * box.h, 1.0)), upscale)
@@ -234,17 +298,16 @@ def working_scale(box: Box, size: float, upscale: float) -> float:
 def place_window(
     center: Box, frame: Frame, padding: float, sigma: tuple[float, float], n_sigma: float,
     max_factor: float,
-) -> Window:
-    """The search window: ``padding`` x the box plus ``n_sigma`` predicted-centre standard
-    deviations each side (issue item 4: sized from the predictor's uncertainty), at most
-    ``max_factor`` x the box, clipped to the frame and never smaller than the box would be."""
+) -> tuple[float, float, float, float]:
+    """The search region ``(x0, y0, x1, y1)`` in frame pixels, NOT clipped to the frame:
+    ``padding`` x the box plus ``n_sigma`` predicted-centre standard deviations each side
+    (issue item 4: sized from the predictor's uncertainty), at most ``max_factor`` x the box,
+    centred on the box moved inside the frame (so the region always overlaps it)."""
     half_w = min(padding * center.w / 2 + n_sigma * sigma[0], max_factor * center.w / 2)
     half_h = min(padding * center.h / 2 + n_sigma * sigma[1], max_factor * center.h / 2)
     cx = min(max(center.cx, 0.0), float(frame.width))
     cy = min(max(center.cy, 0.0), float(frame.height))
-    window = Box.from_center(cx, cy, 2 * half_w, 2 * half_h).window(frame.width, frame.height)
-    assert window is not None
-    return window
+    return cx - half_w, cy - half_h, cx + half_w, cy + half_h
 
 
 def box_means(image: np.ndarray, w: int, h: int) -> np.ndarray:
@@ -274,6 +337,12 @@ class RobustModel(Stage):
         Param("surroundings", bool, True,
               "likelihood H_O / (H_O + H_S) against the box's surroundings (DAT eq. 2); "
               "false: H_O / max H_O (S0's back-projection)"),
+        Param("distractors", bool, False,
+              "also weigh the target's colours against target-like regions of the window "
+              "(DAT's distractor-aware model)"),
+        Param("surround_weight", float, 0.5,
+              "with distractors: weight of the surroundings likelihood against the "
+              "distractors' (DAT's lambda_p)", min=0.0, max=1.0),
         Param("template", bool, True,
               "fuse a grey NCC template score with the colour score (Staple)"),
         Param("gamma", float, 0.3,
@@ -301,6 +370,8 @@ class RobustModel(Stage):
     sat_bins: int
     grey_bins: int
     surroundings: bool
+    distractors: bool
+    surround_weight: float
     template: bool
     gamma: float
     padding: float
@@ -317,7 +388,9 @@ class RobustModel(Stage):
         if box is None or not box.is_valid() or box.window(ctx.frame.width,
                                                            ctx.frame.height) is None:
             raise InputError(f"robust_model: the initial box {box} covers no pixel of the frame")
-        model = ColourModel(self.hue_bins, self.sat_bins, self.grey_bins, self.surroundings)
+        weight = self.surround_weight if self.distractors and self.surroundings else 1.0
+        model = ColourModel(self.hue_bins, self.sat_bins, self.grey_bins, self.surroundings,
+                            weight)
         target = RobustTarget(model=model, template=None, gamma=self.gamma if self.template
                               else 1.0)
         ctx.robust = target
@@ -346,11 +419,17 @@ class RobustModel(Stage):
         frame = ctx.frame
         scale = working_scale(center, self.working_size, self.upscale)
         if lost:
-            window = frame.full_window()
+            # the whole frame, and half a box beyond it: a target coming back into view is
+            # found while still partly outside
+            mx, my = center.w / 2, center.h / 2
+            region = (-mx, -my, frame.width + mx, frame.height + my)
             scale = min(scale, math.sqrt(self.lost_pixels / (frame.width * frame.height)))
         else:
             sigma = target.sigma if self.adaptive_window else (0.0, 0.0)
-            window = place_window(center, frame, padding, sigma, self.n_sigma, self.max_window)
+            region = place_window(center, frame, padding, sigma, self.n_sigma, self.max_window)
+        window = Box(region[0], region[1], region[2] - region[0],
+                     region[3] - region[1]).window(frame.width, frame.height)
+        assert window is not None  # the region is centred inside the frame
         if scale < 1:
             # downscale by a whole factor k, the window trimmed to a multiple of k; bilinear
             # (2 x 2 averages, exact k x k averages for k = 2): INTER_AREA costs ~5x more at
@@ -366,11 +445,25 @@ class RobustModel(Stage):
             cols = max(int(round(window.width * scale)), 1)
             rows = max(int(round(window.height * scale)), 1)
             bgr = cv2.resize(frame.bgr(window), (cols, rows), interpolation=cv2.INTER_LINEAR)
+        sx, sy = cols / window.width, rows / window.height
+        bins = target.model.quantise(bgr)
+        grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+        # The part of the region outside the frame, in working pixels: a target leaving the
+        # view can be followed out (its box partly outside), and seen to go. Outside pixels
+        # get the OUTSIDE bin (likelihood 0) and the grey of the nearest border pixel.
+        left = max(int(round((window.x0 - region[0]) * sx)), 0)
+        top = max(int(round((window.y0 - region[1]) * sy)), 0)
+        right = max(int(round((region[2] - window.x1) * sx)), 0)
+        bottom = max(int(round((region[3] - window.y1) * sy)), 0)
+        if left or top or right or bottom:
+            bins = cv2.copyMakeBorder(bins, top, bottom, left, right, cv2.BORDER_CONSTANT,
+                                      value=OUTSIDE)
+            grey = cv2.copyMakeBorder(grey, top, bottom, left, right, cv2.BORDER_REPLICATE)
         target.window = window
-        target.sx, target.sy = cols / window.width, rows / window.height
-        target.bins = target.model.quantise(bgr)
-        target.grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
-        target.likelihood = target.model.likelihood(target.bins)
+        target.origin = (window.x0 - left / sx, window.y0 - top / sy)
+        target.sx, target.sy = sx, sy
+        target.bins, target.grey = bins, grey
+        target.likelihood = target.model.likelihood(bins)
         ctx.window = window
         ctx.likelihood = target.likelihood
         ctx.overlays.append(SearchWindow(window.as_box()))

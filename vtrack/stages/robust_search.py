@@ -22,7 +22,9 @@ colour *contrast* of the box, its mean likelihood minus that of the ring around 
 term is the guard against the shrink bias of histogram similarity (a box inside the target keeps
 a high mean likelihood, but its ring then lies on the target too; cf. Ning et al., "Robust mean
 shift tracking with corrected background-weighted histogram", IET CV 2012, on background pixels
-inside the box). The size moves ``scale_rate`` of the way towards the best one each frame.
+inside the box). A size other than the current one has its score multiplied by
+``scale_penalty`` (SiamFC's scale penalty, Bertinetto et al., ECCV-W 2016), so weak evidence does
+not make the size drift; it moves ``scale_rate`` of the way towards the best one each frame.
 
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust`` (maps, window, motion
 uncertainty), ``ctx.prediction``, ``ctx.box``, ``ctx.state``; writes ``ctx.measurement`` and
@@ -104,6 +106,10 @@ class RobustSearch(Stage):
               "what scores a size: fused = Staple's mix of colour contrast and template NCC; "
               "colour = colour contrast only; template = NCC only",
               choices=("fused", "colour", "template")),
+        Param("scale_penalty", float, 0.99,
+              "score factor of the sizes other than the current one (Bertinetto et al., "
+              "SiamFC 2016: 0.9745): damps the drift of the size on weak evidence",
+              min=0.5, max=1.0),
         Param("ring", float, 1.6,
               "the contrast ring reaches this multiple of the box (shrink-bias guard)",
               min=1.05, max=4.0),
@@ -120,6 +126,7 @@ class RobustSearch(Stage):
     scale_step: float
     scale_rate: float
     scale_cue: str
+    scale_penalty: float
     ring: float
 
     def start(self, ctx: TrackContext) -> None:
@@ -201,6 +208,8 @@ class RobustSearch(Stage):
             else:
                 score = target.gamma * colour + (1 - target.gamma) * _ncc_near(
                     grey, template, cx, cy)
+            if k != 1.0 and score > 0:
+                score *= self.scale_penalty  # SiamFC's scale penalty: a change must earn it
             scores.append(score)
         best = int(np.argmax(scores))
         return 1.0 + self.scale_rate * (factors[best] - 1.0)
