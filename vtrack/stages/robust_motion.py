@@ -4,7 +4,9 @@ Last link of the ``robust`` chain. The filter is S0's constant-velocity model pe
 8-17, :func:`vtrack.filters.constant_velocity`) with noises in proportion to the target's size
 (a filter tuned in pixels is too stiff for a big target and too loose for a small one): process
 noise ``q = (q_rel d)^2``, measurement noise ``r = (r_rel d)^2``, ``P0 = (p0_rel d)^2 I``, ``d``
-the first box's diagonal.
+the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard deviation
+``/ score^2``): the less the found box looks like the target (``ctx.score``), the less it moves
+the filter.
 
 Besides the next frame's predicted box (``ctx.prediction``) it publishes the predicted centre's
 uncertainty per axis, ``sigma = sqrt(P_xx + e_x^2)``, where ``e`` is the running RMS of the
@@ -29,6 +31,9 @@ from vtrack.filters import KalmanFilter, constant_velocity
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
+#: Floor of the confidence that scales the measurement noise (R is at most 100x its value).
+MIN_CONFIDENCE = 0.1
+
 
 @register
 class RobustMotion(Stage):
@@ -47,7 +52,7 @@ class RobustMotion(Stage):
         Param("innovation_rate", float, 0.3,
               "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
     )
-    requires = frozenset({"measurement", "box", "state", "robust"})
+    requires = frozenset({"measurement", "box", "state", "score", "robust"})
     provides = frozenset({"box", "prediction", "robust"})
 
     # Set from the parameters by Stage.__init__.
@@ -66,6 +71,7 @@ class RobustMotion(Stage):
 
     def _new(self, point: tuple[float, float]) -> KalmanFilter:
         d = self._diag
+        self._r = (self.r_rel * d) ** 2
         return constant_velocity(point, q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
                                  p0=(self.p0_rel * d) ** 2)
 
@@ -80,6 +86,11 @@ class RobustMotion(Stage):
                 error = z - np.array(self._filter.position())
                 self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
                                     + self.innovation_rate * error ** 2)
+                # a measurement is as trustworthy as the match it came from: its standard
+                # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
+                # biased centre does not become a velocity before it is hidden
+                confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
+                self._filter.R = self._r * np.eye(2) / confidence**4
                 self._filter.update(z)
         elif ctx.box is not None:
             ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior

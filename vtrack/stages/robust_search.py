@@ -99,6 +99,9 @@ class RobustSearch(Stage):
         Param("epsilon", float, 0.05, "converged once a step is shorter (working pixels)",
               min=0.0, max=10.0),
         Param("scale", bool, True, "estimate the scale every frame"),
+        Param("scale_above", float, 0.7,
+              "the size is estimated only when the relative score is at least this",
+              min=0.0, max=1.0),
         Param("scale_step", float, 1.05, "ratio between the sizes tried", min=1.001, max=1.5),
         Param("scale_rate", float, 0.6, "share of the way to the best size moved per frame",
               min=0.0, max=1.0),
@@ -123,6 +126,7 @@ class RobustSearch(Stage):
     iterations: int
     epsilon: float
     scale: bool
+    scale_above: float
     scale_step: float
     scale_rate: float
     scale_cue: str
@@ -151,16 +155,18 @@ class RobustSearch(Stage):
             weighted = fused * motion_prior(fused.shape, (w, h), (pcx, pcy), sigma)
         px, py = self._locate(weighted, (w, h), (pcx - w / 2.0, pcy - h / 2.0))
         cx, cy = px + w / 2.0, py + h / 2.0
+        ix, iy = int(round(px)), int(round(py))
+        score = min(max(target.placement_score(ix, iy) / target.reference, 0.0), 1.0)
         bw, bh = ctx.box.w, ctx.box.h
-        if self.scale:
+        if self.scale and score >= self.scale_above:
+            # sizes are measured on a clearly seen target only: a partly covered one would
+            # shrink the box to its visible part
             factor = self._scale(target, cx, cy, w, h)
             bw, bh = bw * factor, bh * factor
         fx, fy = target.to_frame(cx, cy)
         box = Box.from_center(fx, fy, bw, bh)
-        ix, iy = int(round(px)), int(round(py))
-        score = target.placement_score(ix, iy)
         ctx.measurement = ctx.box = box
-        ctx.score = min(max(score / target.reference, 0.0), 1.0)
+        ctx.score = score
         ctx.extras["ncc"] = _at(target.template_map, ix, iy)
         ctx.extras["colour"] = _at(target.colour_map, ix, iy)
 
