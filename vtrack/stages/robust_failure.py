@@ -31,6 +31,7 @@ from __future__ import annotations
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.robust_model import RobustTarget
 
 
 @register
@@ -47,11 +48,14 @@ class RobustFailure(Stage):
         Param("recover_at", float, 0.65,
               "a hidden target is taken back at or above this relative score (>= "
               "occlude_below)", min=0.0, max=1.0),
-        Param("lost_after", int, 45, "hidden frames after which the state is lost",
+        Param("lost_after", int, 90, "hidden frames after which the state is lost",
               min=1, max=100000),
         Param("redetect", bool, True,
               "while lost, search the whole frame (coarse) for the target"),
         Param("update", bool, True, "follow slow appearance change on confident frames"),
+        Param("update_rule", str, "score",
+              "what must reach update_above: score = this frame's score; min = each cue "
+              "relative to its usual value", choices=("score", "min")),
         Param("update_above", float, 0.7, "relative score needed to update the model",
               min=0.0, max=1.0),
         Param("rate_hist", float, 0.04, "histogram learning rate (Staple: 0.04)",
@@ -72,6 +76,7 @@ class RobustFailure(Stage):
     lost_after: int
     redetect: bool
     update: bool
+    update_rule: str
     update_above: float
     rate_hist: float
     rate_template: float
@@ -97,10 +102,12 @@ class RobustFailure(Stage):
             ctx.state = TrackState.TRACKING
             target.hidden = 0
             target.search_all = False
-            if self.update and score >= self.update_above:
+            if self.update and self._learnable(target, score):
                 target.learn(ctx.measurement, self.rate_hist, self.rate_template)
-                raw = score * target.reference
-                target.reference += self.rate_reference * (raw - target.reference)
+                rate = self.rate_reference
+                target.references = tuple(  # type: ignore[assignment]
+                    (1 - rate) * r + rate * v
+                    for r, v in zip(target.references, target.cues, strict=True))
             return
         target.hidden += 1
         # S0 item 7: while hidden the measurement is not used and the box is the prediction
@@ -114,6 +121,14 @@ class RobustFailure(Stage):
         lost = target.hidden > self.lost_after or gone
         ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
         target.search_all = lost and self.redetect
+
+    def _learnable(self, target: RobustTarget, score: float) -> bool:
+        """Whether this tracking frame may update the model: its score (``update_rule =
+        score``) or BOTH cues relative to their usual values (``min``: a target being covered
+        slowly keeps a fair fused score while one cue already sees the occluder) reach
+        ``update_above``."""
+        value = score if self.update_rule == "score" else target.confidence(target.cues, "min")
+        return value >= self.update_above
 
 
 def _inside_share(box: Box, width: int, height: int) -> float:

@@ -172,8 +172,10 @@ class RobustTarget:
     colour_map: np.ndarray | None = None
     template_map: np.ndarray | None = None
     fused: np.ndarray | None = None
-    #: Reference confidence: the running mean of the fused score on confident frames.
-    reference: float = 1.0
+    #: Reference values of the template (NCC) and colour scores: their running means on
+    #: confident frames (robust_failure); and this frame's values at the found box.
+    references: tuple[float, float] = (1.0, 1.0)
+    cues: tuple[float, float] = (1.0, 1.0)
     #: Frames hidden in a row, and whether the next frame searches the whole frame
     #: (robust_failure: lost with re-detection on).
     hidden: int = 0
@@ -187,11 +189,31 @@ class RobustTarget:
         """Working-image coordinates -> frame coordinates."""
         return self.origin[0] + x / self.sx, self.origin[1] + y / self.sy
 
-    def placement_score(self, px: int, py: int) -> float:
-        """The fused score of the placement with top-left working pixel ``(px, py)``."""
-        assert self.fused is not None
-        rows, cols = self.fused.shape
-        return float(self.fused[min(max(py, 0), rows - 1), min(max(px, 0), cols - 1)])
+    def cues_at(self, px: int, py: int) -> tuple[float, float]:
+        """The template (NCC; 1 without a template) and colour scores of a placement."""
+        assert self.colour_map is not None
+        colour = _clamped(self.colour_map, px, py)
+        ncc = 1.0 if self.template_map is None else _clamped(self.template_map, px, py)
+        return ncc, colour
+
+    def confidence(self, cues: tuple[float, float], rule: str) -> float:
+        """How target-like a placement with these cue values is, 0..1 (1: as usual).
+
+        Each cue relative to its reference (capped at 1), then ``fused``: Staple's linear mix
+        ``(1 - gamma) r_tmpl + gamma r_hist``; ``geometric``: ``r_tmpl^(1 - gamma) *
+        r_hist^gamma``; ``min``: the lower of the two (a box must look right to both cues).
+        """
+        rt, rc = (min(max(v, 0.0) / max(r, 1e-6), 1.0)
+                  for v, r in zip(cues, self.references, strict=True))
+        if self.template_map is None or self.gamma >= 1.0:
+            return rc
+        if rule == "min":
+            return min(rt, rc)
+        if rule == "geometric":
+            return rt ** (1 - self.gamma) * rc**self.gamma
+        if rule == "balanced":
+            return math.sqrt(rt * rc)
+        return (1 - self.gamma) * rt + self.gamma * rc
 
     def template_at(self, w: int, h: int) -> np.ndarray | None:
         """The template resized to ``w`` x ``h`` working pixels (None without a template)."""
@@ -259,6 +281,12 @@ class RobustTarget:
         else:
             cv2.addWeighted(self.template, 1 - rate_template, current, rate_template, 0,
                             dst=self.template)
+
+
+def _clamped(image: np.ndarray, x: int, y: int) -> float:
+    """``image[y, x]`` with the indices clamped into the image."""
+    rows, cols = image.shape
+    return float(image[min(max(y, 0), rows - 1), min(max(x, 0), cols - 1)])
 
 
 def _ratio(target: np.ndarray, other: np.ndarray) -> np.ndarray:
@@ -402,8 +430,8 @@ class RobustModel(Stage):
         target.learn(box, 1.0, 1.0)
         target.likelihood = ctx.likelihood = target.model.likelihood(target.bins)
         self._maps(ctx, box)
-        start = target.to_working(box.x, box.y)
-        target.reference = max(target.placement_score(round(start[0]), round(start[1])), 1e-3)
+        x, y = (round(v) for v in target.to_working(box.x, box.y))
+        target.references = target.cues_at(x, y)
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust

@@ -98,6 +98,10 @@ class RobustSearch(Stage):
               min=1, max=200),
         Param("epsilon", float, 0.05, "converged once a step is shorter (working pixels)",
               min=0.0, max=10.0),
+        Param("confidence", str, "geometric",
+              "the score: each cue relative to its usual value, then fused = Staple's linear "
+              "mix, geometric = weighted geometric mean, min = the lower (both must agree)",
+              choices=("fused", "geometric", "balanced", "min")),
         Param("scale", bool, True, "estimate the scale every frame"),
         Param("scale_above", float, 0.7,
               "the size is estimated only when the relative score is at least this",
@@ -125,6 +129,7 @@ class RobustSearch(Stage):
     prior_sigma: float
     iterations: int
     epsilon: float
+    confidence: str
     scale: bool
     scale_above: float
     scale_step: float
@@ -156,7 +161,8 @@ class RobustSearch(Stage):
         px, py = self._locate(weighted, (w, h), (pcx - w / 2.0, pcy - h / 2.0))
         cx, cy = px + w / 2.0, py + h / 2.0
         ix, iy = int(round(px)), int(round(py))
-        score = min(max(target.placement_score(ix, iy) / target.reference, 0.0), 1.0)
+        target.cues = target.cues_at(ix, iy)
+        score = target.confidence(target.cues, self.confidence)
         bw, bh = ctx.box.w, ctx.box.h
         if self.scale and score >= self.scale_above:
             # sizes are measured on a clearly seen target only: a partly covered one would
@@ -167,8 +173,8 @@ class RobustSearch(Stage):
         box = Box.from_center(fx, fy, bw, bh)
         ctx.measurement = ctx.box = box
         ctx.score = score
-        ctx.extras["ncc"] = _at(target.template_map, ix, iy)
-        ctx.extras["colour"] = _at(target.colour_map, ix, iy)
+        ctx.extras["ncc"] = target.cues[0] if target.template_map is not None else float("nan")
+        ctx.extras["colour"] = target.cues[1]
 
     def _locate(self, weighted: np.ndarray, size: tuple[int, int],
                 predicted: tuple[float, float]) -> tuple[float, float]:
@@ -236,9 +242,3 @@ def _ncc_near(grey: np.ndarray, template: np.ndarray, cx: float, cy: float,
     response = cv2.matchTemplate(patch, template, cv2.TM_CCOEFF_NORMED)
     return float(np.nan_to_num(response).max())
 
-
-def _at(image: np.ndarray | None, x: int, y: int) -> float:
-    if image is None:
-        return float("nan")
-    rows, cols = image.shape
-    return float(image[min(max(y, 0), rows - 1), min(max(x, 0), cols - 1)])
