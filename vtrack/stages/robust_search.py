@@ -47,6 +47,8 @@ from vtrack.stages.robust_model import RobustTarget
 
 #: Share of the map's peak below which placements do not pull the mean shift.
 PEAK_SHARE = 0.8
+#: Confidence margin by which the window's best placement overrides the motion prior's choice.
+CLEARLY_BETTER = 0.1
 
 
 def motion_prior(
@@ -102,6 +104,9 @@ class RobustSearch(Stage):
               "the score: each cue relative to its usual value, then fused = Staple's linear "
               "mix, geometric = weighted geometric mean, min = the lower (both must agree)",
               choices=("fused", "geometric", "balanced", "min")),
+        Param("relocate_below", float, 0.5,
+              "when the motion prior's choice scores below this, the window's best placement "
+              "is taken if it scores clearly higher (0: never)", min=0.0, max=1.0),
         Param("scale", bool, True, "estimate the scale every frame"),
         Param("scale_above", float, 0.7,
               "the size is estimated only when the relative score is at least this",
@@ -130,6 +135,7 @@ class RobustSearch(Stage):
     iterations: int
     epsilon: float
     confidence: str
+    relocate_below: float
     scale: bool
     scale_above: float
     scale_step: float
@@ -159,10 +165,20 @@ class RobustSearch(Stage):
             sigma = (side + target.sigma[0] * target.sx, side + target.sigma[1] * target.sy)
             weighted = fused * motion_prior(fused.shape, (w, h), (pcx, pcy), sigma)
         px, py = self._locate(weighted, (w, h), (pcx - w / 2.0, pcy - h / 2.0))
-        cx, cy = px + w / 2.0, py + h / 2.0
         ix, iy = int(round(px)), int(round(py))
         target.cues = target.cues_at(ix, iy)
         score = target.confidence(target.cues, self.confidence)
+        if weighted is not fused and score < self.relocate_below:
+            # the prior's choice does not look like the target: a placement elsewhere in the
+            # window that looks clearly more like it wins (a motion faster than the predictor
+            # expected, or a prediction that went astray)
+            peak = int(np.argmax(fused))
+            qx, qy = peak % fused.shape[1], peak // fused.shape[1]
+            cues = target.cues_at(qx, qy)
+            other = target.confidence(cues, self.confidence)
+            if other > score + CLEARLY_BETTER:
+                px, py, ix, iy, score, target.cues = qx, qy, qx, qy, other, cues
+        cx, cy = px + w / 2.0, py + h / 2.0
         bw, bh = ctx.box.w, ctx.box.h
         if self.scale and score >= self.scale_above:
             # sizes are measured on a clearly seen target only: a partly covered one would
