@@ -4,6 +4,7 @@
     python benchmarks/robust_tune.py --ablate        # mean AUC with each part switched off
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
+    python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
 
 Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
 precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
@@ -20,13 +21,14 @@ import statistics
 import sys
 from dataclasses import dataclass
 
-from common import Clip, load_clip, single_target_sequences
+from common import Clip, load_clip, single_target_sequences, to_frame
 
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
 from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
 from vtrack.frame import BgrFrame
 from vtrack.pipeline import Pipeline
+from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackState
 
 #: The ablation table: (label, --set overrides) with one part of robust switched off each.
@@ -90,15 +92,43 @@ def share(part: int, whole: int) -> str:
     return f"{part / whole:.1%}" if whole else "-"
 
 
+def speed(rounds: int = 3) -> None:
+    """Tracking work (the chain's stages, microseconds per frame) of robust and s0 on the same
+    1080p60 I420 frames of the camera-like ``benchmark`` scene, median of ``rounds`` runs."""
+    scene = make_scene("benchmark", seed=0, width=1920, height=1080, frames=120, fps=60)
+    frames = [to_frame(i, 60, bgr) for i, bgr in enumerate(scene.frames())]
+    box = scene.boxes[0]
+    assert box is not None
+    print(f"1920x1080 I420, {len(frames)} frames, target {box.w:.0f}x{box.h:.0f}; median of "
+          f"{rounds} rounds\n")
+    print("| config | us per frame | x s0 |")
+    print("|---|---:|---:|")
+    work: dict[str, float] = {}
+    for name in ("s0", "robust"):
+        runs = []
+        for _ in range(rounds):
+            pipeline = Pipeline(load_config(name).build(), seed=0)
+            for _ in pipeline.track(frames, box):
+                pass
+            runs.append(sum(pipeline.stage_microseconds_per_frame().values()))
+        work[name] = statistics.median(runs)
+        print(f"| {name} | {work[name]:.0f} | {work[name] / work['s0']:.2f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ablate", action="store_true", help="mean AUC with each part off")
     parser.add_argument("--set", action="append", default=[], dest="overrides",
                         help="stage.param=value applied to every run")
     parser.add_argument("--only", action="append", default=[], help="sequence names")
+    parser.add_argument("--speed", action="store_true",
+                        help="tracking work per 1080p frame, robust against s0")
     parser.add_argument("--config", default="robust",
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
+    if args.speed:
+        speed()
+        return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if not sequences:
         print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
