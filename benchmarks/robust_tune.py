@@ -5,6 +5,7 @@
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
     python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
+    python benchmarks/robust_tune.py --scenes        # generated scenes, robust and s0
 
 Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
 precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
@@ -21,7 +22,14 @@ import statistics
 import sys
 from dataclasses import dataclass
 
-from common import Clip, load_clip, single_target_sequences, to_frame
+from common import (
+    Clip,
+    load_clip,
+    scene_clip,
+    single_target_sequences,
+    to_frame,
+    track_clip,
+)
 
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
@@ -115,12 +123,35 @@ def speed(rounds: int = 3) -> None:
         print(f"| {name} | {work[name]:.0f} | {work[name] / work['s0']:.2f} |")
 
 
+SCENES = ("smooth", "occlusion", "lighting", "distractor", "leave_return", "scale", "accelerate",
+          "cover", "jump", "bounce")
+
+
+def scenes(seeds: tuple[int, ...] = (0, 1, 2)) -> None:
+    """Mean IoU of robust and s0 on each generated scene of this project, per seed."""
+    print("| scene | " + " | ".join(f"{c} (seeds {', '.join(map(str, seeds))})"
+                                     for c in ("robust", "s0")) + " |")
+    print("|---|---|---|")
+    for name in SCENES:
+        cells = []
+        for config in ("robust", "s0"):
+            values = []
+            for seed in seeds:
+                clip = scene_clip(name, seed)
+                overlaps, _ = frame_scores(track_clip(clip, load_config(config)), clip.boxes)
+                values.append(mean_overlap(overlaps))
+            cells.append(" ".join(f"{v:.2f}" for v in values))
+        print(f"| {name} | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ablate", action="store_true", help="mean AUC with each part off")
     parser.add_argument("--set", action="append", default=[], dest="overrides",
                         help="stage.param=value applied to every run")
     parser.add_argument("--only", action="append", default=[], help="sequence names")
+    parser.add_argument("--scenes", action="store_true",
+                        help="mean IoU on the generated scenes, robust against s0")
     parser.add_argument("--speed", action="store_true",
                         help="tracking work per 1080p frame, robust against s0")
     parser.add_argument("--config", default="robust",
@@ -128,6 +159,9 @@ def main() -> None:
     args = parser.parse_args()
     if args.speed:
         speed()
+        return
+    if args.scenes:
+        scenes()
         return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if not sequences:
