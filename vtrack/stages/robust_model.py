@@ -58,7 +58,6 @@ GREY_SAT, GREY_VAL = 60, 32
 #: Distractors: local maxima of the colour score at least this share of the target's, at most
 #: this many (DAT sec. 3.2).
 DISTRACTOR_SHARE, DISTRACTOR_COUNT = 0.5, 3
-DOWNSCALE = cv2.INTER_LINEAR
 #: Bin of the working pixels outside the frame (no colour bin reaches it: likelihood 0).
 OUTSIDE = 255
 
@@ -80,6 +79,7 @@ class ColourModel:
     distractor_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: bin -> target likelihood 0..1 (float32, 256 entries for ``cv2.LUT``).
     table: np.ndarray = field(default_factory=lambda: np.zeros(256, np.float32))
+    _luts: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
 
     @property
     def bins(self) -> int:
@@ -89,18 +89,25 @@ class ColourModel:
         """The joint bin (uint8) of every pixel of a BGR image.
 
         Saturated pixels: ``hue_bin * sat_bins + sat_bin``; grey pixels (S < 60 or V < 32):
-        ``hue_bins * sat_bins + value_bin``.
+        ``hue_bins * sat_bins + value_bin``. Table look-ups per channel (no per-pixel Python).
         """
-        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)
-        h = hsv[..., 0].astype(np.uint16)
-        s = hsv[..., 1].astype(np.uint16)
-        v = hsv[..., 2].astype(np.uint16)
-        colour = (h * self.hue_bins >> 8) * self.sat_bins + (
-            (s - GREY_SAT).clip(0) * self.sat_bins // (256 - GREY_SAT)
-        )
-        grey = self.hue_bins * self.sat_bins + (v * self.grey_bins >> 8)
-        chromatic = (s >= GREY_SAT) & (v >= GREY_VAL)
-        return np.where(chromatic, colour, grey).astype(np.uint8)
+        hue_lut, sat_lut, grey_lut = self._tables()
+        h, s, v = cv2.split(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL))
+        colour = cv2.add(cv2.LUT(h, hue_lut), cv2.LUT(s, sat_lut))
+        chromatic = cv2.bitwise_and(cv2.compare(s, GREY_SAT, cv2.CMP_GE),
+                                    cv2.compare(v, GREY_VAL, cv2.CMP_GE))
+        return cv2.copyTo(colour, chromatic, cv2.LUT(v, grey_lut))
+
+    def _tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Channel value -> part of the joint bin: hue, saturation (coloured pixels), value
+        (grey pixels); built once."""
+        if self._luts is None:
+            levels = np.arange(256)
+            hue = (levels * self.hue_bins >> 8) * self.sat_bins
+            sat = np.clip(levels - GREY_SAT, 0, None) * self.sat_bins // (256 - GREY_SAT)
+            grey = self.hue_bins * self.sat_bins + (levels * self.grey_bins >> 8)
+            self._luts = tuple(t.astype(np.uint8) for t in (hue, sat, grey))  # type: ignore
+        return self._luts  # type: ignore[return-value]
 
     def histogram(self, bins: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         """Normalised, smoothed histogram of a bin image (soft binning, see the module doc)."""
@@ -283,6 +290,11 @@ class RobustTarget:
                             dst=self.template)
 
 
+def _even(n: int) -> int:
+    """``n`` rounded down to an even number, at least 2 (I420 planes halve exactly)."""
+    return max(n - n % 2, 2)
+
+
 def _clamped(image: np.ndarray, x: int, y: int) -> float:
     """``image[y, x]`` with the indices clamped into the image."""
     rows, cols = image.shape
@@ -461,18 +473,21 @@ class RobustModel(Stage):
         if scale < 1:
             # downscale by a whole factor k, the window trimmed to a multiple of k; bilinear
             # (2 x 2 averages, exact k x k averages for k = 2): INTER_AREA costs ~5x more at
-            # k = 3 and the model and the template are sampled the same way
+            # k = 3 and the model and the template are sampled the same way. A decoded frame
+            # resizes its planes before the colour conversion (Frame.bgr_resized)
             k = max(math.ceil(1 / scale - 1e-9), 1)
-            cols, rows = max(window.width // k, 1), max(window.height // k, 1)
-            window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
-                            window.y0 + min(rows * k, window.height))
-            bgr = frame.bgr(window)
-            if k > 1:
-                bgr = cv2.resize(bgr, (cols, rows), interpolation=DOWNSCALE)
+            if k == 1:
+                cols, rows = window.width, window.height
+                bgr = frame.bgr(window)
+            else:
+                cols, rows = _even(window.width // k), _even(window.height // k)
+                window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
+                                window.y0 + min(rows * k, window.height))
+                bgr = frame.bgr_resized(window, cols, rows)
         else:
-            cols = max(int(round(window.width * scale)), 1)
-            rows = max(int(round(window.height * scale)), 1)
-            bgr = cv2.resize(frame.bgr(window), (cols, rows), interpolation=cv2.INTER_LINEAR)
+            cols = _even(int(round(window.width * scale)))
+            rows = _even(int(round(window.height * scale)))
+            bgr = frame.bgr_resized(window, cols, rows)
         sx, sy = cols / window.width, rows / window.height
         bins = target.model.quantise(bgr)
         grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
