@@ -45,11 +45,6 @@ class Frame(ABC):
     def bgr(self, window: Window | None = None) -> np.ndarray:
         """The window (default: whole frame) as a ``uint8`` BGR array of shape (h, w, 3)."""
 
-    def bgr_resized(self, window: Window, cols: int, rows: int) -> np.ndarray:
-        """The window as a ``uint8`` BGR array resized (bilinear) to ``rows`` x ``cols``: what
-        ``cv2.resize(self.bgr(window), (cols, rows))`` gives, converted where it is cheapest."""
-        return cv2.resize(self.bgr(window), (cols, rows), interpolation=cv2.INTER_LINEAR)
-
     @abstractmethod
     def gray(self, window: Window | None = None) -> np.ndarray:
         """The window (default: whole frame) as a ``uint8`` grey (luma) array of shape (h, w)."""
@@ -138,23 +133,6 @@ class I420Frame(Frame):
         pv[:] = self.v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
         return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
-
-    def bgr_resized(self, window: Window, cols: int, rows: int) -> np.ndarray:
-        """Resize the Y, U and V planes of the window first, convert the small result: a
-        downscaled window never becomes a full-resolution BGR image (even ``cols``/``rows``
-        keep the planes' geometry exact; odd ones fall back to convert-then-resize)."""
-        if cols % 2 or rows % 2:
-            return super().bgr_resized(window, cols, rows)
-        packed = np.empty((rows * 3 // 2, cols), np.uint8)
-        py, pu, pv = i420_planes(packed, cols, rows)
-        linear = cv2.INTER_LINEAR
-        py[:] = cv2.resize(self.y[window.slices], (cols, rows), interpolation=linear)
-        # the chroma samples covering the window (each covers 2 x 2 pixels)
-        chroma = (slice(window.y0 // 2, (window.y1 + 1) // 2),
-                  slice(window.x0 // 2, (window.x1 + 1) // 2))
-        pu[:] = cv2.resize(self.u[chroma], (cols // 2, rows // 2), interpolation=linear)
-        pv[:] = cv2.resize(self.v[chroma], (cols // 2, rows // 2), interpolation=linear)
-        return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
 
     def gray(self, window: Window | None = None) -> np.ndarray:
         return self.y if window is None else self.y[window.slices]

@@ -58,6 +58,7 @@ GREY_SAT, GREY_VAL = 60, 32
 #: Distractors: local maxima of the colour score at least this share of the target's, at most
 #: this many (DAT sec. 3.2).
 DISTRACTOR_SHARE, DISTRACTOR_COUNT = 0.5, 3
+DOWNSCALE = cv2.INTER_LINEAR
 #: Bin of the working pixels outside the frame (no colour bin reaches it: likelihood 0).
 OUTSIDE = 255
 
@@ -290,11 +291,6 @@ class RobustTarget:
                             dst=self.template)
 
 
-def _even(n: int) -> int:
-    """``n`` rounded down to an even number, at least 2 (I420 planes halve exactly)."""
-    return max(n - n % 2, 2)
-
-
 def _clamped(image: np.ndarray, x: int, y: int) -> float:
     """``image[y, x]`` with the indices clamped into the image."""
     rows, cols = image.shape
@@ -473,21 +469,18 @@ class RobustModel(Stage):
         if scale < 1:
             # downscale by a whole factor k, the window trimmed to a multiple of k; bilinear
             # (2 x 2 averages, exact k x k averages for k = 2): INTER_AREA costs ~5x more at
-            # k = 3 and the model and the template are sampled the same way. A decoded frame
-            # resizes its planes before the colour conversion (Frame.bgr_resized)
+            # k = 3 and the model and the template are sampled the same way
             k = max(math.ceil(1 / scale - 1e-9), 1)
-            if k == 1:
-                cols, rows = window.width, window.height
-                bgr = frame.bgr(window)
-            else:
-                cols, rows = _even(window.width // k), _even(window.height // k)
-                window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
-                                window.y0 + min(rows * k, window.height))
-                bgr = frame.bgr_resized(window, cols, rows)
+            cols, rows = max(window.width // k, 1), max(window.height // k, 1)
+            window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
+                            window.y0 + min(rows * k, window.height))
+            bgr = frame.bgr(window)
+            if k > 1:
+                bgr = cv2.resize(bgr, (cols, rows), interpolation=DOWNSCALE)
         else:
-            cols = _even(int(round(window.width * scale)))
-            rows = _even(int(round(window.height * scale)))
-            bgr = frame.bgr_resized(window, cols, rows)
+            cols = max(int(round(window.width * scale)), 1)
+            rows = max(int(round(window.height * scale)), 1)
+            bgr = cv2.resize(frame.bgr(window), (cols, rows), interpolation=cv2.INTER_LINEAR)
         sx, sy = cols / window.width, rows / window.height
         bins = target.model.quantise(bgr)
         grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
