@@ -41,6 +41,7 @@ from vtrack.evaluate import frame_scores, mean_center_error
 from vtrack.frame import Frame
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
+from vtrack.stages.base import TrackState
 
 #: Generated scenes the claims are measured on.
 SCENES = ("smooth", "distractor", "leave_return")
@@ -121,9 +122,9 @@ def s1_claims(seeds: int = 10) -> list[dict]:
 #: (label, overrides, states measured) of the per-frame cost rows; more lost particles change
 #: nothing while tracked.
 COST_VARIANTS = (
-    ("8 particles", (), ("tracking", "lost")),
-    ("32 particles", ("particle.particles=32",), ("tracking", "lost")),
-    ("8 particles, 64 while lost", ("particle.lost_particles=64",), ("lost",)),
+    ("8 particles", (), (TrackState.TRACKING, TrackState.LOST)),
+    ("32 particles", ("particle.particles=32",), (TrackState.TRACKING, TrackState.LOST)),
+    ("8 particles, 64 while lost", ("particle.lost_particles=64",), (TrackState.LOST,)),
 )
 
 
@@ -137,7 +138,7 @@ def s1_cost(repeats: int = 300) -> dict[str, float]:
     for label, overrides, states in COST_VARIANTS:
         for state in states:
             # threshold 0 never loses the target; threshold 1 loses it on the first dip
-            threshold = 0.0 if state == "tracking" else 1.0
+            threshold = 0.0 if state == TrackState.TRACKING else 1.0
             config = load_config("s1").with_overrides(
                 [*overrides, f"particle.threshold={threshold}"]
             )

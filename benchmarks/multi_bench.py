@@ -36,7 +36,7 @@ from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import Box, iou
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import make_scene
-from vtrack.stages.base import Stage, TrackContext
+from vtrack.stages.base import Stage, TrackContext, TrackStatus
 
 #: (label, config, --set overrides) of the trackers on pixels.
 TRACKERS = [
@@ -62,7 +62,7 @@ COLUMNS = ("MOTA", "IDF1", "ID sw.", "FP", "FN", "MT", "ML", "ids")
 
 def confirmed(results: list[FrameResult]) -> dict[int, list[tuple[int, Box]]]:
     """What ``tracks.csv`` holds: the confirmed tracks of each frame."""
-    return {r.index: [(t.id, t.box) for t in r.tracks if t.state == "confirmed"]
+    return {r.index: [(t.id, t.box) for t in r.tracks if t.state == TrackStatus.CONFIRMED]
             for r in results}
 
 
@@ -249,7 +249,7 @@ def cost(frames: int = 40, repeats: int = 3) -> None:
                     timing = {**pipeline.stage_microseconds_per_frame(), "total": wall}
                     best = {k: min(v, best.get(k, v)) for k, v in timing.items()}
                 cells = [f"{best[n]:.0f}" if n in best else "" for n in (*names, "total")]
-                written = sum(t.state == "confirmed" for t in results[-1].tracks)
+                written = sum(t.state == TrackStatus.CONFIRMED for t in results[-1].tracks)
                 print(f"| {targets} | {clutter} | {label} | " + " | ".join(cells)
                       + f" | {written} |")
     print()

@@ -144,9 +144,9 @@ CRASHING_LAUNCHER = """
 import os
 import sys
 
-import vtrack.batch
+import vtrack.batch.worker
 
-_execute = vtrack.batch.execute
+_execute = vtrack.batch.worker.execute
 
 
 def execute(job):
@@ -155,7 +155,7 @@ def execute(job):
     return _execute(job)
 
 
-vtrack.batch.execute = execute
+vtrack.batch.worker.execute = execute  # what the worker loop (_serve) calls
 
 if __name__ == "__main__":
     from vtrack.cli import main

@@ -372,6 +372,18 @@ def test_identities_survive_two_targets_merging_into_one_blob(stage: Stage) -> N
     assert None not in before and len(set(before)) == 2 and before == after
 
 
+@pytest.mark.parametrize("model", ["cv", "ca", "gravity"])
+def test_kalman_tracks_follow_an_accelerating_target_with_any_motion_model(model: str) -> None:
+    # x = 10 + 0.1 k^2: every model keeps one confirmed identity on it; the models that know
+    # acceleration (ca; gravity only vertically) predict it closer than constant velocity.
+    path = [[(10.0 + 0.1 * k * k, 40.0)] for k in range(25)]
+    stage = KalmanTracks(model=model, gate=20.0)
+    out = feed(stage, path)
+    assert {t.id for tracks in out[3:] for t in tracks} == {1}
+    assert all(t.state == TrackStatus.CONFIRMED for t in out[-1])
+    assert out[-1][0].box.cx == pytest.approx(path[-1][0][0], abs=3.0)
+
+
 def test_mht_work_stays_bounded_in_clutter() -> None:
     rng = np.random.default_rng(0)
     stage = MultipleHypothesis(max_hypotheses=4, max_branches=2)

@@ -17,7 +17,13 @@ import pytest
 
 from vtrack.config import load_config, parse_config
 from vtrack.errors import ConfigError, InputError
-from vtrack.filters import constant_acceleration, constant_velocity, gravity
+from vtrack.filters import (
+    MOTION_MODELS,
+    constant_acceleration,
+    constant_velocity,
+    gravity,
+    motion_model,
+)
 from vtrack.frame import BgrFrame, I420Frame
 from vtrack.geometry import Box, Window, iou
 from vtrack.io import open_source
@@ -119,6 +125,20 @@ def test_gravity_model_follows_a_falling_ball() -> None:
             kf.update(truth(t))
     assert max(errors["gravity"][10:]) < 0.05
     assert min(errors["cv"][10:]) > 0.5  # a constant velocity lags behind an acceleration
+
+
+@pytest.mark.parametrize("name", sorted(MOTION_MODELS))
+def test_a_motion_model_predicts_a_new_state_by_any_step(name: str) -> None:
+    model = motion_model(name, g=0.0)  # S4's discrete gravity input is not step-additive
+    start = model.initiate([(10.0, 20.0), (12.0, 21.0), (14.0, 22.0)][-model.points:], 1.0)
+    x0, p0 = start.x.copy(), start.P.copy()
+    one, two = model.predict(start, 1.0), model.predict(start, 2.0)
+    assert np.array_equal(start.x, x0) and np.array_equal(start.P, p0)  # states are values
+    assert model.predict(one, 1.0).x == pytest.approx(two.x)  # 1 + 1 = 2 for a linear model
+    assert np.trace(two.P) > np.trace(one.P) > np.trace(start.P)  # uncertainty grows
+    fixed = model.update(one, model.position(one))
+    assert model.position(fixed) == pytest.approx(model.position(one))
+    assert np.trace(fixed.P) < np.trace(one.P)
 
 
 def test_gravity_stage_starts_from_the_documents_initial_state() -> None:

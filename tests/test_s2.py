@@ -210,9 +210,7 @@ def kalman_predictions(times: list[float], xs: list[float], *settings: str) -> n
     ctx = TrackContext(frame=BgrFrame(0, times[0], blank), rng=np.random.default_rng(0))
     predicted = []
     for i, (time_s, x) in enumerate(zip(times, xs, strict=True)):
-        ctx.new_frame(BgrFrame(i, time_s, blank))
-        if i > 0:
-            kalman.prepare(ctx)  # as Pipeline.track does before the steps
+        ctx.new_frame(BgrFrame(i, time_s, blank))  # the kalman stage's forecast: for time_s
         predicted.append(ctx.prediction.cx if ctx.prediction else math.nan)
         ctx.measurement = Box.from_center(x, 100.0, 10.0, 10.0)
         (kalman.start if i == 0 else kalman.step)(ctx)

@@ -1,15 +1,21 @@
-"""Linear Kalman filters and the motion models of the documents (S0, S2, S4).
+"""Linear Kalman filtering with the motion models of the documents (S0, S2, S4).
 
-:class:`KalmanFilter` is the textbook filter (``predict(u)`` / ``update(z)``) on small NumPy
-matrices. The constructors build the three point-motion models of ``ALGORITHMS.md``; each
-returns a filter whose measurement is a point ``(x, y)`` (a box centre) and whose
-:meth:`KalmanFilter.position` is the filter's current ``(x, y)``, so a tracker can hold one per
-target whatever the model:
+The shape follows Stone Soup's split of a tracker's filter into a transition model and a
+predictor/updater on immutable Gaussian states: a :class:`MotionModel` knows its matrices for a
+time step ``dt`` and predicts a :class:`GaussianState` by ``dt`` (:meth:`MotionModel.predict`)
+or corrects it with a measured point (:meth:`MotionModel.update`); nothing is re-timed in
+place. The three models of ``ALGORITHMS.md``, by name in :data:`MOTION_MODELS`
+(:func:`motion_model` builds one):
 
-- :func:`constant_velocity` - S0 item 6 (Liu et al. 2022, eq. 8-17): per axis ``(x, dx)``;
-- :func:`constant_acceleration` - S2 item 8 (Di & Zhu 2008, eq. 14-16): per axis
+- ``cv``, :class:`ConstantVelocity` - S0 item 6 (Liu et al. 2022, eq. 8-17): per axis
+  ``(x, dx)``;
+- ``ca``, :class:`ConstantAcceleration` - S2 item 8 (Di & Zhu 2008, eq. 14-16): per axis
   ``(x, v, a)``, started from the first three positions;
-- :func:`gravity` - S4 item 3 (Gan 2018, eq. 11-13): ``(x, y, ux, vy)`` with a gravity input.
+- ``gravity``, :class:`Gravity` - S4 item 3 (Gan 2018, eq. 11-13): ``(x, y, ux, vy)`` with a
+  gravity input.
+
+Every model measures a point ``(x, y)`` (a box centre), and :meth:`MotionModel.position` is a
+state's ``(x, y)``, so a tracker can hold one state per target whatever the model.
 
 S0 and S2 filter each axis independently. Their two per-axis filters are run here as one
 block-diagonal filter (state ``(x, dx, y, dy)`` or ``(x, vx, ax, y, vy, ay)``): every matrix
@@ -17,13 +23,21 @@ is ``I2 (x) M`` for the per-axis ``M``, so the numbers are exactly those of two 
 filters, at half the Python overhead.
 
 Time is counted in ``dt`` units; with ``dt = 1`` (the documents' frame step) velocities are in
-pixels per frame. :func:`transition` gives a model's matrices for another step, so a filter can
-follow the actual time between frames (``filter.F, filter.B = transition(...)``).
+pixels per frame. A model keeps the matrices of the last step it was asked for and reuses them
+for a step equal up to timestamp rounding (``i / fps`` timestamps differ in their last bits).
+
+:class:`KalmanFilter` (a model with its current state, ``predict()``/``update(z)`` in place) and
+the constructors :func:`constant_velocity`, :func:`constant_acceleration`, :func:`gravity` are
+kept for code that wants one mutable filter.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -37,105 +51,121 @@ def _is_diagonal(S: np.ndarray) -> bool:
     return all(value == 0.0 for i, row in enumerate(rows) for j, value in enumerate(row) if i != j)
 
 
-class KalmanFilter:
-    """A linear Kalman filter ``x' = F x + B u + w``, ``z = H x + v`` (``w ~ Q``, ``v ~ R``).
+def same_step(a: float, b: float | None) -> bool:
+    """Whether two time steps are the same up to timestamp rounding."""
+    return b is not None and math.isclose(a, b, rel_tol=1e-6)
 
-    ``x`` is the state estimate and ``P`` its covariance; ``u`` is a constant control input used
-    when :meth:`predict` is called without one (None: no input).
-    """
 
-    __slots__ = ("F", "H", "Q", "R", "B", "u", "x", "P")
+@dataclass(frozen=True)
+class GaussianState:
+    """A state estimate ``x`` with its covariance ``P`` (never changed in place)."""
 
-    def __init__(
-        self,
-        F: np.ndarray,
-        H: np.ndarray,
-        Q: np.ndarray,
-        R: np.ndarray,
-        x: np.ndarray,
-        P: np.ndarray,
-        B: np.ndarray | None = None,
-        u: np.ndarray | None = None,
-    ) -> None:
-        self.F = np.asarray(F, np.float64)
-        self.H = np.asarray(H, np.float64)
-        self.Q = np.asarray(Q, np.float64)
-        self.R = np.asarray(R, np.float64)
-        self.x = np.asarray(x, np.float64)
-        self.P = np.asarray(P, np.float64)
-        self.B = None if B is None else np.asarray(B, np.float64)
-        self.u = None if u is None else np.asarray(u, np.float64)
+    x: np.ndarray
+    P: np.ndarray
 
-    def predict(self, u: np.ndarray | None = None) -> np.ndarray:
-        """Advance one step and return the prior state.
 
-        S0 eq. 10-11 / S4 eq. 5-6: ``x = F x + B u``, ``P = F P F^T + Q``.
-        """
-        control = self.u if u is None else np.asarray(u, np.float64)
-        self.x = self.F @ self.x
-        if self.B is not None and control is not None:
-            self.x += self.B @ control
-        self.P = self.F @ self.P @ self.F.T + self.Q
-        return self.x
+class MotionModel(ABC):
+    """A linear motion model measured as a point: ``x' = F(dt) x + B(dt) u + w`` (``w ~ Q``),
+    ``z = H x + v`` (``v ~ R``); ``u`` a constant control input (None: none)."""
 
-    def update(self, z: Sequence[float] | np.ndarray) -> np.ndarray:
-        """Correct the state with the measurement ``z`` and return the posterior state.
+    #: Name in configs (``model = "cv"``).
+    name: ClassVar[str]
+    #: Measured positions needed to start a state (:meth:`initiate`).
+    points: ClassVar[int] = 1
+
+    H: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    u: np.ndarray | None = None
+
+    def __init__(self) -> None:
+        self._dt: float | None = None
+        self._matrices: tuple[np.ndarray, np.ndarray | None] | None = None
+
+    @abstractmethod
+    def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
+        """The state transition ``F`` and control matrix ``B`` (None: no input) for ``dt``."""
+
+    @abstractmethod
+    def initiate(self, points: Sequence[Point], dt: float = 1.0) -> GaussianState:
+        """The first state, from the first :attr:`points` measured positions."""
+
+    def transition(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`matrices` for ``dt``; the last step's when ``dt`` equals it up to rounding."""
+        matrices = self._matrices
+        if matrices is None or (dt != self._dt and not same_step(dt, self._dt)):
+            self._dt = dt
+            matrices = self._matrices = self.matrices(dt)
+        return matrices
+
+    def predict(self, state: GaussianState, dt: float) -> GaussianState:
+        """The state ``dt`` later. S0 eq. 10-11 / S4 eq. 5-6: ``x = F x + B u``,
+        ``P = F P F^T + Q``."""
+        F, B = self.transition(dt)
+        x = F @ state.x
+        if B is not None and self.u is not None:
+            x += B @ self.u
+        return GaussianState(x, F @ state.P @ F.T + self.Q)
+
+    def update(self, state: GaussianState, z: Sequence[float] | np.ndarray) -> GaussianState:
+        """``state`` corrected by the measured point ``z``.
 
         S0 eq. 13-17 / S4 eq. 7-10: ``K = P H^T (H P H^T + R)^-1``, ``x = x + K (z - H x)``,
         ``P = (I - K H) P``.
         """
-        PHt = self.P @ self.H.T
-        S = self.H @ PHt + self.R
+        H, P = self.H, state.P
+        PHt = P @ H.T
+        S = H @ PHt + self.R
         # In the three models the measured coordinates are independent (per-axis blocks,
         # diagonal R), so S is diagonal and S^-1 is the reciprocal of its diagonal: the same
         # numbers as np.linalg.inv, without a general inversion every frame.
         gain = PHt * (1.0 / np.diagonal(S)) if _is_diagonal(S) else PHt @ np.linalg.inv(S)
-        self.x = self.x + gain @ (np.asarray(z, np.float64) - self.H @ self.x)
-        self.P = self.P - gain @ self.H @ self.P
-        return self.x
+        x = state.x + gain @ (np.asarray(z, np.float64) - H @ state.x)
+        return GaussianState(x, P - gain @ H @ P)
 
-    def position(self) -> Point:
-        """The measured quantity of the current state, ``H x``, as an ``(x, y)`` point."""
-        px, py = self.H @ self.x
+    def position(self, state: GaussianState) -> Point:
+        """The measured quantity of ``state``, ``H x``, as an ``(x, y)`` point."""
+        px, py = self.H @ state.x
         return float(px), float(py)
 
 
-def _per_axis(
-    F: np.ndarray, H: np.ndarray, Q: np.ndarray, R: float, P: np.ndarray, xs: np.ndarray,
-    ys: np.ndarray,
-) -> KalmanFilter:
-    """One block-diagonal filter running the per-axis model ``(F, H, Q, R, P)`` on x and y."""
-    pair = np.eye(2)
-    return KalmanFilter(
-        F=np.kron(pair, F),
-        H=np.kron(pair, H),
-        Q=np.kron(pair, Q),
-        R=R * pair,
-        x=np.concatenate([xs, ys]),
-        P=np.kron(pair, P),
-    )
+def _axis_transition(model: str, dt: float, kinematic: bool = False) -> np.ndarray:
+    """One axis's state transition for a step of ``dt``: S0 eq. 8 (``cv``), S2 eq. 14 (``ca``)."""
+    if model == "cv":
+        return np.array([[1.0, dt], [0.0, 1.0]])
+    square = dt * dt / 2 if kinematic else dt * dt  # S2 eq. 14 prints T^2
+    return np.array([[1.0, dt, square], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
 
 
-def constant_velocity(
-    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0
-) -> KalmanFilter:
-    """S0 item 6: per axis state ``(x, dx)``, started at ``point`` at rest.
+_PAIR = np.eye(2)
+
+
+class ConstantVelocity(MotionModel):
+    """S0 item 6: per axis state ``(x, dx)``, started at the first point at rest.
 
     S0 eq. 8-9: ``F = [[1, dt], [0, 1]]`` (the paper's ``dt = 1`` frame), ``H = [1, 0]``;
     S0 eq. 11, 13: ``Q = q I`` and ``R = r`` (the paper: ``Q = I``, ``R = 1``). The initial
     covariance is not given: ``P0 = p0 I`` (large, so the first measurements dominate).
     """
-    F = _axis_transition("cv", dt)
-    H = np.array([[1.0, 0.0]])
-    x, y = point
-    return _per_axis(F, H, q * np.eye(2), r, p0 * np.eye(2), np.array([x, 0.0]),
-                     np.array([y, 0.0]))
+
+    name = "cv"
+
+    def __init__(self, q: float = 1.0, r: float = 1.0, p0: float = 100.0) -> None:
+        super().__init__()
+        self.H = np.kron(_PAIR, np.array([[1.0, 0.0]]))
+        self.Q = np.kron(_PAIR, q * np.eye(2))
+        self.R = r * _PAIR
+        self.P0 = np.kron(_PAIR, p0 * np.eye(2))
+
+    def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
+        return np.kron(_PAIR, _axis_transition("cv", dt)), None
+
+    def initiate(self, points: Sequence[Point], dt: float = 1.0) -> GaussianState:
+        x, y = points[0]
+        return GaussianState(np.array([x, 0.0, y, 0.0]), self.P0)
 
 
-def constant_acceleration(
-    points: Sequence[Point], q: float = 1.0, r: float = 1.0, dt: float = 1.0,
-    kinematic: bool = False,
-) -> KalmanFilter:
+class ConstantAcceleration(MotionModel):
     """S2 item 8: per axis ``(position, velocity, acceleration)`` from the first three points.
 
     S2 eq. 14-16: ``A = [[1, T, T^2], [0, 1, T], [0, 0, 1]]`` as printed (``kinematic``: the
@@ -147,57 +177,133 @@ def constant_acceleration(
     ``kinematic``, ``v`` is the parabola's velocity at the third point,
     ``(3 x3 - 4 x2 + x1) / (2T)``, so that ``x + T v + T^2 a / 2`` is exact too.
     """
-    if len(points) != 3:
-        raise ValueError(f"constant_acceleration needs the first three points, got {len(points)}")
-    T = dt
-    F = _axis_transition("ca", T, kinematic)
-    H = np.array([[1.0, 0.0, 0.0]])
-    W = np.diag([0.0, 0.0, q])
-    velocity = [1 / (2 * T), -4 / (2 * T), 3 / (2 * T)] if kinematic else [0.0, -1 / T, 1 / T]
-    J = np.array([[0.0, 0.0, 1.0], velocity, [1 / T**2, -2 / T**2, 1 / T**2]])
-    V3 = r * J @ J.T + W  # S2: the document's V3 (as printed) for kinematic = False
-    track = np.asarray(points, np.float64)  # rows: frames 1, 2, 3; columns: x, y
-    return _per_axis(F, H, W, r, V3, J @ track[:, 0], J @ track[:, 1])
+
+    name = "ca"
+    points = 3
+
+    def __init__(self, q: float = 1.0, r: float = 1.0, kinematic: bool = False) -> None:
+        super().__init__()
+        self.q, self.r, self.kinematic = q, r, kinematic
+        self.H = np.kron(_PAIR, np.array([[1.0, 0.0, 0.0]]))
+        self.W = np.diag([0.0, 0.0, q])
+        self.Q = np.kron(_PAIR, self.W)
+        self.R = r * _PAIR
+
+    def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
+        return np.kron(_PAIR, _axis_transition("ca", dt, self.kinematic)), None
+
+    def initiate(self, points: Sequence[Point], dt: float = 1.0) -> GaussianState:
+        if len(points) != 3:
+            raise ValueError(f"the ca model starts from three points, got {len(points)}")
+        T, r = dt, self.r
+        velocity = ([1 / (2 * T), -4 / (2 * T), 3 / (2 * T)] if self.kinematic
+                    else [0.0, -1 / T, 1 / T])
+        J = np.array([[0.0, 0.0, 1.0], velocity, [1 / T**2, -2 / T**2, 1 / T**2]])
+        V3 = r * J @ J.T + self.W  # S2: the document's V3 (as printed) for kinematic = False
+        track = np.asarray(points, np.float64)  # rows: frames 1, 2, 3; columns: x, y
+        return GaussianState(np.concatenate([J @ track[:, 0], J @ track[:, 1]]),
+                             np.kron(_PAIR, V3))
 
 
-def gravity(
-    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0,
-    g: float = 1.0,
-) -> KalmanFilter:
-    """S4 item 3: state ``(x, y, ux, vy)`` at ``point``, constant velocity plus gravity.
+class Gravity(MotionModel):
+    """S4 item 3: state ``(x, y, ux, vy)``, constant velocity plus gravity.
 
     S4 eq. 11: ``X(k+1) = A X(k) + B u`` with ``A`` the constant-velocity matrix for step
     ``dt`` and the gravity input on the vertical velocity, ``B u = (0, 0, 0, g dt)`` (the
     paper prints ``g/dt``; the two agree at the default ``dt = 1``, ``g dt`` is the
     kinematic one). ``y`` grows downwards, so ``g > 0`` pulls down. S4 eq. 12: ``H`` picks
     ``(x, y)``. S4 eq. 13: ``P(1) = p0 I`` (the paper: 100 I). Q and R are not given in the
-    paper: ``Q = q I``, ``R = r I``.
+    paper: ``Q = q I``, ``R = r I``. Started at the first point at rest.
     """
-    A, B = transition("gravity", dt)
-    H = np.eye(2, 4)
-    x, y = point
-    return KalmanFilter(
-        F=A, H=H, Q=q * np.eye(4), R=r * np.eye(2), x=np.array([x, y, 0.0, 0.0]),
-        P=p0 * np.eye(4), B=B, u=np.array([g]),
-    )
 
+    name = "gravity"
 
-def _axis_transition(model: str, dt: float, kinematic: bool = False) -> np.ndarray:
-    """One axis's state transition for a step of ``dt``: S0 eq. 8 (``cv``), S2 eq. 14 (``ca``)."""
-    if model == "cv":
-        return np.array([[1.0, dt], [0.0, 1.0]])
-    square = dt * dt / 2 if kinematic else dt * dt  # S2 eq. 14 prints T^2
-    return np.array([[1.0, dt, square], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+    def __init__(self, q: float = 1.0, r: float = 1.0, p0: float = 100.0,
+                 g: float = 1.0) -> None:
+        super().__init__()
+        self.H = np.eye(2, 4)
+        self.Q = q * np.eye(4)
+        self.R = r * np.eye(2)
+        self.P0 = p0 * np.eye(4)
+        self.u = np.array([g], np.float64)
 
-
-def transition(
-    model: str, dt: float, kinematic: bool = False
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """The state transition ``F`` and control matrix ``B`` (None without one) of the filter that
-    :func:`constant_velocity` (``"cv"``), :func:`constant_acceleration` (``"ca"``) or
-    :func:`gravity` (``"gravity"``) builds, for a step of ``dt``."""
-    if model == "gravity":
+    def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray | None]:
         A = np.eye(4)
         A[0, 2] = A[1, 3] = dt
         return A, np.array([[0.0], [0.0], [0.0], [dt]])
-    return np.kron(np.eye(2), _axis_transition(model, dt, kinematic)), None
+
+    def initiate(self, points: Sequence[Point], dt: float = 1.0) -> GaussianState:
+        x, y = points[0]
+        return GaussianState(np.array([x, y, 0.0, 0.0]), self.P0)
+
+
+#: The motion models by config name.
+MOTION_MODELS: dict[str, type[MotionModel]] = {
+    m.name: m for m in (ConstantVelocity, ConstantAcceleration, Gravity)
+}
+
+
+def motion_model(name: str, q: float = 1.0, r: float = 1.0, p0: float = 100.0,
+                 kinematic: bool = False, g: float = 1.0) -> MotionModel:
+    """The model ``name`` (:data:`MOTION_MODELS`) with the parameters it uses (the others are
+    ignored: ``p0`` is not the ca model's, ``kinematic`` only ca's, ``g`` only gravity's)."""
+    makers: dict[str, Callable[[], MotionModel]] = {
+        "cv": lambda: ConstantVelocity(q, r, p0),
+        "ca": lambda: ConstantAcceleration(q, r, kinematic),
+        "gravity": lambda: Gravity(q, r, p0, g),
+    }
+    return makers[name]()
+
+
+class KalmanFilter:
+    """One mutable filter: a :class:`MotionModel`, its current state and a fixed step ``dt``."""
+
+    def __init__(self, model: MotionModel, state: GaussianState, dt: float = 1.0) -> None:
+        self.model, self.state, self.dt = model, state, dt
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.state.x
+
+    @property
+    def P(self) -> np.ndarray:
+        return self.state.P
+
+    def predict(self) -> np.ndarray:
+        """Advance by ``dt`` and return the prior state."""
+        self.state = self.model.predict(self.state, self.dt)
+        return self.state.x
+
+    def update(self, z: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Correct the state with the measured point ``z`` and return the posterior state."""
+        self.state = self.model.update(self.state, z)
+        return self.state.x
+
+    def position(self) -> Point:
+        return self.model.position(self.state)
+
+
+def constant_velocity(
+    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0
+) -> KalmanFilter:
+    """A :class:`ConstantVelocity` filter started at ``point`` (S0 item 6)."""
+    model = ConstantVelocity(q, r, p0)
+    return KalmanFilter(model, model.initiate([point], dt), dt)
+
+
+def constant_acceleration(
+    points: Sequence[Point], q: float = 1.0, r: float = 1.0, dt: float = 1.0,
+    kinematic: bool = False,
+) -> KalmanFilter:
+    """A :class:`ConstantAcceleration` filter started from the first three points (S2 item 8)."""
+    model = ConstantAcceleration(q, r, kinematic)
+    return KalmanFilter(model, model.initiate(points, dt), dt)
+
+
+def gravity(
+    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0,
+    g: float = 1.0,
+) -> KalmanFilter:
+    """A :class:`Gravity` filter started at ``point`` (S4 item 3)."""
+    model = Gravity(q, r, p0, g)
+    return KalmanFilter(model, model.initiate([point], dt), dt)

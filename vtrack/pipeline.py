@@ -47,7 +47,6 @@ class Pipeline:
         self.stages = stages
         self.seed = seed
         self.stage_seconds = {s.name: 0.0 for s in stages}
-        self._preparing = [s for s in stages if type(s).prepare is not Stage.prepare]
         self.frames_done = 0
 
     @property
@@ -85,10 +84,6 @@ class Pipeline:
                     ctx.box = init_box  # the first frame's answer is the box we were given
             else:
                 ctx.new_frame(frame)
-                for stage in self._preparing:
-                    started = clock()
-                    stage.prepare(ctx)
-                    self.stage_seconds[stage.name] += clock() - started
                 for stage in self.stages:
                     started = clock()
                     stage.step(ctx)

@@ -217,15 +217,64 @@ class _MultiTargetRows:
         return rows
 
 
+@dataclass
+class _Resolved:
+    """What a request resolves to before any frame is tracked."""
+
+    pipeline: Pipeline
+    gt: list[Box | None] | None  # single-target ground truth
+    mot_gt: Any  # multi-target ground truth (MOTChallenge), read by the MOT metrics at the end
+    init_box: Box | None
+
+
+@dataclass
+class _Tracked:
+    """How the frame loop ended."""
+
+    status: str = STATUS_COMPLETE
+    error: str | None = None
+    failure: Exception | None = None
+    frames: int = 0
+    seconds: float = 0.0
+    states: dict[TrackState, int] = field(
+        default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
+
+
 def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
 
     ``on_frame(n)`` is called after each frame with the number of frames done (progress bars).
+    Resolve (chain, ground truth, initial box) -> track (the frame loop, writing as it goes)
+    -> record (metrics, summary, ``run.json``).
     """
-    stages = request.config.build()
-    pipeline = Pipeline(stages, seed=request.seed)
+    resolved = _resolve(request)
+    source: Source = open_source(request.input, request.raw)
+    info = source.info
+    if resolved.init_box is not None:
+        _check_init_box(resolved.init_box, info.width, info.height,
+                        "--init" if request.init_box else str(request.gt_path))
+    pipeline = resolved.pipeline
+    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
+        pipeline.columns, resolved.gt)
+    csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
+    csv = CsvWriter(request.out_dir / csv_name, formatter.columns)
+    video = annotator = None
+    if request.video:
+        video = VideoWriter(request.out_dir / "annotated.mp4", info.width, info.height,
+                            info.fps or 30.0, preset=request.preset, crf=request.crf)
+        annotator = Annotator(info.width, info.height, gt=resolved.gt)
+    tracked = _track(request, resolved, source, formatter, csv, video, annotator, on_frame)
+    summary = _record(request, resolved, info, formatter, csv_name, tracked)
+    if tracked.failure is not None:
+        raise tracked.failure
+    return summary
+
+
+def _resolve(request: RunRequest) -> _Resolved:
+    """Build the chain, read the ground truth and settle the initial box (user errors raise
+    before anything is written but the emptied output folder)."""
+    pipeline = Pipeline(request.config.build(), seed=request.seed)
     prepare_output_dir(request.out_dir)
-    # Multi-target ground truth (MOTChallenge) is read by the MOT metrics at the end.
     gt = mot_gt = None
     if request.gt_path is not None and pipeline.multi_target:
         mot_gt = read_mot(request.gt_path)
@@ -243,33 +292,21 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
             f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h "
             "or --gt FILE"
         )
+    return _Resolved(pipeline, gt, mot_gt, init_box)
 
-    source: Source = open_source(request.input, request.raw)
-    info = source.info
-    if init_box is not None:
-        _check_init_box(init_box, info.width, info.height, "--init" if request.init_box else
-                        str(request.gt_path))
 
-    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
-        pipeline.columns, gt)
-    csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
-    csv = CsvWriter(request.out_dir / csv_name, formatter.columns)
-    video = None
-    annotator = None
-    if request.video:
-        video = VideoWriter(request.out_dir / "annotated.mp4", info.width, info.height,
-                            info.fps or 30.0, preset=request.preset, crf=request.crf)
-        annotator = Annotator(info.width, info.height, gt=gt)
-
-    status, error = STATUS_COMPLETE, None
-    failure: Exception | None = None
-    states = {TrackState.OCCLUDED: 0, TrackState.LOST: 0}
-    frames = 0
+def _track(request: RunRequest, resolved: _Resolved, source: Source,
+           formatter: _SingleTargetRows | _MultiTargetRows, csv: CsvWriter,
+           video: VideoWriter | None, annotator: Annotator | None,
+           on_frame: Callable[[int], None] | None) -> _Tracked:
+    """The signal-safe frame loop: each frame's CSV rows and picture are written together;
+    a broken input, Ctrl-C or a tracker error ends it with every output closed and valid."""
+    out = _Tracked()
     started = time.perf_counter()
     try:
         with _AtomicFrames() as interrupts:
             frames_in = _limited(iter(source), request.max_frames)
-            for result in pipeline.track(frames_in, init_box):
+            for result in resolved.pipeline.track(frames_in, resolved.init_box):
                 with interrupts.writing():
                     for row in formatter.rows(result):
                         csv.write(row)
@@ -277,24 +314,32 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
                         assert result.frame is not None
                         video.write(result.frame, lambda planes, r=result: annotator.draw(
                             planes, r), time_s=result.time_s)
-                    if result.state in states:
-                        states[result.state] += 1
-                    frames += 1
+                    if result.state in out.states:
+                        out.states[result.state] += 1
+                    out.frames += 1
                 if on_frame is not None:
-                    on_frame(frames)
+                    on_frame(out.frames)
     except PartialInputError as exc:
-        status, error = STATUS_PARTIAL, str(exc)
+        out.status, out.error = STATUS_PARTIAL, str(exc)
     except KeyboardInterrupt:
-        status, error = STATUS_INTERRUPTED, "interrupted by the user"
-    except Exception as exc:  # recorded in run.json, then raised again below
-        status, error, failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
+        out.status, out.error = STATUS_INTERRUPTED, "interrupted by the user"
+    except Exception as exc:  # recorded in run.json, then raised again by run()
+        out.status, out.error, out.failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
-        seconds = time.perf_counter() - started
+        out.seconds = time.perf_counter() - started
         source.close()
         csv.close()
         if video is not None:
             video.close()
+    return out
 
+
+def _record(request: RunRequest, resolved: _Resolved, info: Any,
+            formatter: _SingleTargetRows | _MultiTargetRows, csv_name: str,
+            tracked: _Tracked) -> RunSummary:
+    """Metrics, the summary and ``run.json`` (written last, atomically)."""
+    status, error, frames, seconds = tracked.status, tracked.error, tracked.frames, tracked.seconds
+    gt = resolved.gt
     summary = RunSummary(
         input=request.input,
         out_dir=str(request.out_dir),
@@ -303,8 +348,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         frames=frames,
         seconds=seconds,
         fps=frames / seconds if seconds > 0 else 0.0,
-        frames_occluded=states[TrackState.OCCLUDED],
-        frames_lost=states[TrackState.LOST],
+        frames_occluded=tracked.states[TrackState.OCCLUDED],
+        frames_lost=tracked.states[TrackState.LOST],
         error=error,
     )
     if frames == 0 and status == STATUS_COMPLETE:
@@ -324,8 +369,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
                                  f"{len(gt)} on" if len(gt) < frames else "extra boxes ignored")
             )
             summary.warnings.append(note)
-    elif isinstance(formatter, _MultiTargetRows) and mot_gt is not None:
-        summary.mot = evaluate_mot(mot_gt, formatter.tracks, frames)
+    elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
+        summary.mot = evaluate_mot(resolved.mot_gt, formatter.tracks, frames)
         metrics = dict(summary.mot)
 
     record = {
@@ -335,21 +380,18 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None) -> R
         "frames": frames,
         "input": info.to_dict(),
         "request": request.to_dict(),
-        "init": list(init_box) if init_box is not None else None,
+        "init": list(resolved.init_box) if resolved.init_box is not None else None,
         "config": request.config.resolved(),
         "metrics": metrics,
         "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},
         "timing": {
             "seconds": seconds,
             "fps": summary.fps,
-            "stage_us_per_frame": pipeline.stage_microseconds_per_frame(),
+            "stage_us_per_frame": resolved.pipeline.stage_microseconds_per_frame(),
         },
         "outputs": [csv_name] + (["annotated.mp4"] if request.video else []),
         "versions": versions(),
         "command": sys.argv,
     }
     write_json(request.out_dir / "run.json", record)
-    if failure is not None:
-        raise failure
     return summary
-

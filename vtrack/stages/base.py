@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -112,6 +113,9 @@ class TrackContext:
     box: Box | None = None
     #: Where this frame's search starts: set by a predictor on the previous frame (None: use box).
     prediction: Box | None = None
+    #: Set by a predictor whose prediction depends on when the next frame comes: the prediction
+    #: for a frame. :meth:`new_frame` replaces ``prediction`` with ``forecast(frame)``.
+    forecast: Callable[[Frame], Box | None] | None = None
     state: TrackState = TrackState.TRACKING
     #: Tracker-specific quality of this frame's estimate (similarity, weight, bp mass ...).
     score: float = float("nan")
@@ -150,7 +154,10 @@ class TrackContext:
     robust: RobustTarget | None = None
 
     def new_frame(self, frame: Frame) -> None:
+        """Start ``frame``: reset the per-frame fields; ask the ``forecast`` for its prediction."""
         self.frame = frame
+        if self.forecast is not None:
+            self.prediction = self.forecast(frame)
         self.window = None
         self.feature = None
         self.feature_levels = 256
@@ -200,10 +207,6 @@ class Stage:
     def step(self, ctx: TrackContext) -> None:
         raise NotImplementedError
 
-    def prepare(self, ctx: TrackContext) -> None:
-        """Called on every frame after the first, before any stage's ``step``, once the new
-        frame is in ``ctx.frame``: a stage whose output for this frame depends on the frame's
-        timestamp (a predictor) can revise it here. Default: nothing."""
 
 
 _REGISTRY: dict[str, type[Stage]] = {}

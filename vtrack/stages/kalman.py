@@ -1,6 +1,7 @@
 """Kalman filtering of the target centre: places the next search window, rides through occlusion.
 
-The filter math and the three motion models live in :mod:`vtrack.filters`:
+The filter math and the three motion models live in :mod:`vtrack.filters` (``model`` names one
+of :data:`vtrack.filters.MOTION_MODELS`):
 
 - ``cv``: S0 item 6 (Liu et al. 2022, eq. 8-17): per axis ``(x, dx)``, ``F = [[1,1],[0,1]]``,
   ``H = [1,0]``, ``Q = q I`` (S0: I), ``R = r`` (S0: 1), ``P0 = p0 I`` (not given; 100 I);
@@ -16,9 +17,10 @@ The filter math and the three motion models live in :mod:`vtrack.filters`:
 The models' time step ``T`` is ``dt`` frames (``timebase = "frame"``, S0 and S4: velocities in
 pixels per frame) or the time between the last two frames' timestamps (``timebase = "seconds"``,
 S2's "time interval between frames": velocities in pixels per second). The next frame is
-predicted with the last interval; when it arrives after another interval (a change of frame
-rate, as in S2's fig. 1 where the sampling drops from 5 to 2 frames per second), the prediction
-is made again for its actual time before any stage uses it (``prepare``).
+predicted with the last interval; with ``timebase = "seconds"`` the stage also leaves
+``ctx.forecast``, so that a frame that arrives after another interval (a change of frame rate,
+as in S2's fig. 1 where the sampling drops from 5 to 2 frames per second) is predicted for its
+actual time before any stage uses the prediction.
 
 Each frame: if ``ctx.measurement`` is a box, the filter is updated with its centre; otherwise it
 coasts. The frame's box is the measurement (``output = "measurement"``: the mean-shift result is
@@ -34,18 +36,9 @@ frame's search started from; empty when there was none).
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
-from vtrack.filters import (
-    KalmanFilter,
-    Point,
-    constant_acceleration,
-    constant_velocity,
-    gravity,
-    transition,
-)
+from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, Point, motion_model, same_step
+from vtrack.frame import Frame
+from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 
@@ -61,7 +54,7 @@ class Kalman(Stage):
             "model", str, "cv",
             "cv = constant velocity per axis (S0); ca = constant acceleration per axis (S2); "
             "gravity = (x, y, ux, vy) with gravity input (S4)",
-            choices=("cv", "ca", "gravity"),
+            choices=tuple(MOTION_MODELS),
         ),
         Param(
             "output", str, "measurement",
@@ -97,7 +90,7 @@ class Kalman(Stage):
         ),
     )
     requires = frozenset({"measurement", "box", "prediction"})
-    provides = frozenset({"box", "prediction"})
+    provides = frozenset({"box", "prediction", "forecast"})
     columns = ("pred_cx", "pred_cy")
     needs_init_box = False  # reads ctx.box only when it is set (S4: no box until a detection)
 
@@ -115,96 +108,76 @@ class Kalman(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Forget any previous run, then take the first frame's box as the first measurement."""
-        self._filter: KalmanFilter | None = None
-        self._points: list[Point] = []  # ca: positions until the filter can start
-        # T of the models: fixed, or (timebase = seconds) the latest positive interval between
-        # two frames' timestamps, None until there is one. The filter's matrices are for
-        # _filter_step.
+        self._model: MotionModel = motion_model(self.model, self.q, self.r, self.p0,
+                                                self.kinematic, self.g)
+        self._state: GaussianState | None = None  # the last frame's posterior (None: no filter)
+        self._prior: GaussianState | None = None  # this frame's prior, if one was predicted
+        self._points: list[Point] = []  # positions until the model can start (ca: three)
+        # T: fixed, or (timebase = seconds) the latest interval between two frames' timestamps
+        # (None until there is one); and the time of the last frame.
         self._step: float | None = self.dt if self.timebase == "frame" else None
-        self._filter_step: float | None = None
-        self._last_time: float | None = None
-        self._posterior: tuple[np.ndarray, np.ndarray] | None = None  # before the last predict
+        self._time: float | None = None
+        self._box: Box | None = None  # the box the last prediction was centred for
         self.step(ctx)
-
-    def prepare(self, ctx: TrackContext) -> None:
-        """timebase = seconds: if this frame came after another interval than the one its
-        prediction assumed, predict again from the last posterior with the actual interval."""
-        if self.timebase != "seconds" or self._posterior is None or self._last_time is None:
-            return
-        interval = ctx.frame.time_s - self._last_time
-        if interval <= 0 or _same_step(interval, self._filter_step) or ctx.box is None:
-            return
-        assert self._filter is not None  # a posterior exists only once the filter does
-        self._filter.x, self._filter.P = (a.copy() for a in self._posterior)
-        self._predict(interval)
-        ctx.prediction = ctx.box.moved_to(*self._filter.position())
 
     def step(self, ctx: TrackContext) -> None:
         if self.timebase == "seconds":
-            self._time(ctx.frame.time_s)
+            self._retime(ctx.frame.time_s)
         if ctx.prediction is not None:
             ctx.extras["pred_cx"] = ctx.prediction.cx
             ctx.extras["pred_cy"] = ctx.prediction.cy
+        state = self._prior if self._prior is not None else self._state
         box = ctx.measurement
         if box is not None:
-            self._correct((box.cx, box.cy), ctx.frame.width)
-            if self.output == "filtered" and self._filter is not None:
-                box = box.moved_to(*self._filter.position())
+            state = self._correct(state, (box.cx, box.cy), ctx.frame.width)
+            if self.output == "filtered" and state is not None:
+                box = box.moved_to(*self._model.position(state))
             ctx.box = box
-        elif self._filter is not None and ctx.box is not None:
-            ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior
-        if self._filter is None or ctx.box is None or self._step is None:
+        elif state is not None and ctx.box is not None:
+            ctx.box = ctx.box.moved_to(*self._model.position(state))  # coast: this frame's prior
+        self._state, self._prior, self._box = state, None, ctx.box
+        ctx.forecast = None
+        if state is None or ctx.box is None or self._step is None:
             ctx.prediction = None
             return
+        self._prior = self._model.predict(state, self._step)
+        ctx.prediction = ctx.box.moved_to(*self._model.position(self._prior))
         if self.timebase == "seconds":
-            self._posterior = (self._filter.x.copy(), self._filter.P.copy())
-        self._predict(self._step)
-        ctx.prediction = ctx.box.moved_to(*self._filter.position())
+            ctx.forecast = self._forecast
 
-    def _predict(self, step: float) -> None:
-        """Advance the filter by ``step`` (retiming its matrices when the step changed)."""
-        assert self._filter is not None
-        if not _same_step(step, self._filter_step):  # timebase = seconds: another interval
-            self._filter.F, self._filter.B = transition(self.model, step, self.kinematic)
-            self._filter_step = step
-        self._filter.predict()
+    def _forecast(self, frame: Frame) -> Box | None:
+        """timebase = seconds: the prediction for ``frame``, from the last posterior and the
+        actual interval (the one published assumed the last interval again)."""
+        assert self._state is not None and self._box is not None and self._time is not None
+        interval = frame.time_s - self._time
+        if interval > 0:  # a broken timestamp keeps the prediction made with the last T
+            self._prior = self._model.predict(self._state, interval)
+        assert self._prior is not None
+        return self._box.moved_to(*self._model.position(self._prior))
 
-    def _time(self, time_s: float) -> None:
+    def _retime(self, time_s: float) -> None:
         """timebase = seconds: take T from this frame's timestamp and the previous one's (an
         interval that is not positive, from a broken timestamp, keeps the previous T)."""
-        if self._last_time is not None and time_s > self._last_time:
-            interval = time_s - self._last_time
-            if not _same_step(interval, self._step):
+        if self._time is not None and time_s > self._time:
+            interval = time_s - self._time
+            if not same_step(interval, self._step):
                 self._step = interval
-        self._last_time = time_s
+        self._time = time_s
 
-    def _correct(self, point: Point, width: int) -> None:
-        """Update the filter with a measured centre, creating it when it does not exist yet."""
-        # Until timebase = seconds has seen two frames T is unknown; cv and gravity start at
-        # rest, where T does not matter, and get their matrices before their first prediction.
-        if self._filter is not None:
-            self._filter.update(point)
-            return
-        if self.model == "ca":
-            self._points.append(point)
-            if len(self._points) < 3:
-                return
-        step = self._step or 1.0
-        self._filter_step = self._step  # None: the matrices are retimed before the first predict
-        if self.model == "cv":
-            self._filter = constant_velocity(point, self.q, self.r, self.p0, step)
-        elif self.model == "gravity":
-            start = (width / 2.0, 0.0) if self.init == "document" else point
-            self._filter = gravity(start, self.q, self.r, self.p0, step, self.g)
-            if self.init == "document":
-                self._filter.update(point)  # S4: X(1) = (w/2, 0, 0, 0), corrected by y(1)
-        else:
-            # S2: S3 and V3 from the first three positions, with T the latest interval.
-            self._filter = constant_acceleration(self._points, self.q, self.r, step,
-                                                 self.kinematic)
-
-
-def _same_step(a: float, b: float | None) -> bool:
-    """Whether two frame intervals are the same up to timestamp rounding (constant frame rate
-    timestamps i / fps differ in their last bits)."""
-    return b is not None and math.isclose(a, b, rel_tol=1e-6)
+    def _correct(self, state: GaussianState | None, point: Point,
+                 width: int) -> GaussianState | None:
+        """``state`` updated with a measured centre; the first state once the model can start
+        (None until then)."""
+        if state is not None:
+            return self._model.update(state, point)
+        self._points.append(point)
+        if len(self._points) < self._model.points:
+            return None
+        # S2: S3 and V3 from the first three positions, with T the latest interval (until
+        # timebase = seconds has seen two frames T is unknown; cv and gravity start at rest,
+        # where T does not matter).
+        if self.model == "gravity" and self.init == "document":
+            # S4: X(1) = (w/2, 0, 0, 0), corrected by y(1)
+            start = self._model.initiate([(width / 2.0, 0.0)])
+            return self._model.update(start, point)
+        return self._model.initiate(self._points[-self._model.points:], self._step or 1.0)

@@ -2,9 +2,11 @@
 
 S4 (Gan 2018) tracks one ball: background subtraction gives the measurement, a Kalman filter
 with state ``(x, y, ux, vy)`` (S4 eq. 11-13) smooths and predicts it. The ``kalman_tracks``
-stage runs that filter (:func:`vtrack.filters.gravity`; ``g = 0`` leaves S4's constant-velocity
-matrices without the gravity input) for every target the detector reports
-(``ctx.detections``), which is what S4's method becomes with several targets:
+stage runs that filter (``model = "gravity"``, :class:`vtrack.filters.Gravity`; ``g = 0``
+leaves S4's constant-velocity matrices without the gravity input), or any other motion model
+of :data:`vtrack.filters.MOTION_MODELS` (``cv``, S0's; ``ca``, S2's, started from one position
+at rest: three equal positions), for every target the detector reports (``ctx.detections``),
+which is what S4's method becomes with several targets:
 
 1. every track's filter predicts this frame (S4 eq. 5-6);
 2. association by global nearest neighbour: the (track, measurement) pairs whose distance
@@ -34,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vtrack.filters import KalmanFilter, gravity
+from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_model
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
@@ -44,7 +46,7 @@ from vtrack.stages.detect import Detection, centroids, pairwise_distances, track
 @dataclass(eq=False)
 class _KalmanTrack:
     id: int
-    filter: KalmanFilter
+    state: GaussianState
     size: tuple[float, float]  # last measured width, height
     age: int = 1  # frames since creation, this one included
     hits: int = 1  # frames with a measurement
@@ -60,6 +62,12 @@ class KalmanTracks(Stage):
     name = "kalman_tracks"
     summary = "S4 per track: a Kalman filter per detected target, nearest-neighbour association"
     params = (
+        Param(
+            "model", str, "gravity",
+            "motion model of every track: gravity = S4's (x, y, ux, vy) with gravity input g; "
+            "cv = constant velocity per axis (S0); ca = constant acceleration per axis (S2)",
+            choices=tuple(MOTION_MODELS),
+        ),
         Param("q", float, 1.0, "process noise Q = q I (not given by S4: 1)", min=0.0),
         Param("r", float, 1.0, "measurement noise R = r I (not given by S4: 1)", min=1e-9),
         Param("p0", float, 100.0, "initial covariance P(1) = p0 I (S4 eq. 13: 100)", min=0.0),
@@ -96,20 +104,22 @@ class KalmanTracks(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Forget any previous run (no track), then track this frame."""
+        self._model: MotionModel = motion_model(self.model, self.q, self.r, self.p0, g=self.g)
         self._tracks: list[_KalmanTrack] = []
         self._ids = itertools.count(1)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
         detections: list[Detection] = ctx.detections
+        model = self._model
         for track in self._tracks:
-            track.filter.predict()  # S4 eq. 5-6
+            track.state = model.predict(track.state, self.dt)  # S4 eq. 5-6
             track.age += 1
         matches = self._associate(detections)
         updated = set()
         for row, column in matches:
             track, detection = self._tracks[row], detections[column]
-            track.filter.update((detection.cx, detection.cy))  # S4 eq. 7-10
+            track.state = model.update(track.state, (detection.cx, detection.cy))  # S4 eq. 7-10
             track.size = (detection.box.w, detection.box.h)
             track.hits += 1
             track.misses = 0
@@ -130,7 +140,7 @@ class KalmanTracks(Stage):
         ctx.tracks = [
             Track(
                 t.id,
-                Box.from_center(*t.filter.position(), *t.size),
+                Box.from_center(*model.position(t.state), *t.size),
                 t.hits / t.age,
                 track_state(t.confirmed, id(t) in updated),
             )
@@ -138,16 +148,18 @@ class KalmanTracks(Stage):
         ]
 
     def _start(self, detection: Detection) -> _KalmanTrack:
-        kalman = gravity((detection.cx, detection.cy), self.q, self.r, self.p0, self.dt, self.g)
+        point = (detection.cx, detection.cy)
+        state = self._model.initiate([point] * self._model.points, self.dt)
         return _KalmanTrack(
-            next(self._ids), kalman, (detection.box.w, detection.box.h),
+            next(self._ids), state, (detection.box.w, detection.box.h),
             confirmed=self.confirm <= 1,
         )
 
     def _associate(self, detections: list[Detection]) -> list[tuple[int, int]]:
         """Global nearest neighbour: gated (track, measurement) pairs, by the track's misses in
         a row, then shortest first."""
-        predicted = np.array([t.filter.position() for t in self._tracks], float).reshape(-1, 2)
+        predicted = np.array([self._model.position(t.state) for t in self._tracks],
+                             float).reshape(-1, 2)
         distances = pairwise_distances(predicted, centroids(detections))
         rows, columns = np.nonzero(distances <= self.gate)
         misses = np.array([t.misses for t in self._tracks], int)

@@ -1,0 +1,61 @@
+"""Folders of inputs: every input x configuration, in parallel, resumable, failure-isolated.
+
+``vtrack batch`` is :func:`find_inputs` (``discover``) -> :func:`plan` (``plan``: what to run,
+what is already done) -> :func:`run_batch` (``summary``) through a :class:`LocalExecutor` or
+:class:`DaskExecutor` (``executors``), whose workers call :func:`execute` (``worker``); jobs and
+outcomes are in ``jobs``. Each job is one :func:`vtrack.run.run` writing the files of
+``vtrack run`` into ``OUT/<input>/<config>/``; ``OUT/summary.csv`` has one row per input x
+config and is rewritten (atomically) as each job finishes.
+
+Inputs (:func:`find_inputs`), looked for directly inside the folder:
+
+- video files (by suffix, :data:`VIDEO_SUFFIXES`), with ground truth beside them:
+  ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
+  (MOTChallenge, for multi-target configs);
+- sequence folders (OTB layout: an ``img/`` folder), with ground truth inside them:
+  ``groundtruth_rect.txt`` or ``groundtruth.txt`` (single target) and ``groundtruth_mot.txt``,
+  ``gt.txt`` or ``gt/gt.txt`` (MOTChallenge).
+
+An input without single-target ground truth still runs: detecting (multi-target) configs need
+nothing, single-target ones take their first box from ``name.init.txt`` beside the video or
+``init.txt`` in the sequence folder (one ``x,y,w,h`` line); its ``track.csv`` then has no overlap.
+
+Ground-truth origin (``gt_origin=None``, the CLI's ``--gt-origin auto``): a sequence folder's
+file is read as OTB's 1-based MATLAB boxes (OTB, VOT, UAV123 and LaSOT ship them that way), a file
+beside a video as 0-based (what ``vtrack scene`` writes). ``0`` or ``1`` forces one origin on all.
+
+Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,
+ground truth, seed and output settings is skipped (status ``skipped``); anything else is run
+again from an emptied folder. Failure isolation: a job's user error (unreadable input, bad
+ground truth) or crash is recorded in its row (status ``failed``); an input that breaks part way
+is ``partial``. A worker process that dies is retried once, then reported ``failed``.
+"""
+
+from __future__ import annotations
+
+from vtrack.batch.discover import (
+    SEQUENCE_GT,
+    SEQUENCE_INIT,
+    SEQUENCE_MOT_GT,
+    VIDEO_GT,
+    VIDEO_INIT,
+    VIDEO_MOT_GT,
+    VIDEO_SUFFIXES,
+    BatchInput,
+    find_inputs,
+    is_sequence_folder,
+)
+from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor, cpu_count
+from vtrack.batch.jobs import STATUS_SKIPPED, SUMMARY_COLUMNS, Job, Outcome
+from vtrack.batch.plan import Plan, completed_summary, plan
+from vtrack.batch.summary import SummaryWriter, run_batch
+from vtrack.batch.worker import execute
+from vtrack.run import STATUS_FAILED
+
+__all__ = [
+    "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT", "SEQUENCE_MOT_GT", "STATUS_FAILED", "STATUS_SKIPPED",
+    "SUMMARY_COLUMNS", "VIDEO_GT", "VIDEO_INIT", "VIDEO_MOT_GT", "VIDEO_SUFFIXES", "BatchInput",
+    "DaskExecutor", "Executor", "Job", "LocalExecutor", "Outcome", "Plan", "SummaryWriter",
+    "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder", "plan",
+    "run_batch",
+]

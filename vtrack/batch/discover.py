@@ -1,0 +1,100 @@
+"""Finding the inputs of a batch folder and their ground truth (see :mod:`vtrack.batch`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from vtrack.errors import InputError
+
+#: File suffixes taken as video inputs (anything else beside them is ignored).
+VIDEO_SUFFIXES = frozenset({
+    ".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".ts", ".mts", ".m2ts", ".mpg", ".mpeg",
+    ".flv", ".wmv", ".ogv", ".3gp", ".y4m", ".h264", ".264", ".h265", ".hevc", ".mjpeg",
+})
+#: Single-target ground truth inside a sequence folder, first found wins.
+SEQUENCE_GT = ("groundtruth_rect.txt", "groundtruth.txt")
+#: MOTChallenge ground truth inside a sequence folder, first found wins.
+SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
+#: Single-target ground truth beside ``name.mp4`` (``{}`` is the name), first found wins.
+VIDEO_GT = ("{}.gt.txt", "{}.txt")
+#: MOTChallenge ground truth beside ``name.mp4``.
+VIDEO_MOT_GT = ("{}.mot.txt",)
+#: Initial box of an input without single-target ground truth (video, sequence folder).
+VIDEO_INIT, SEQUENCE_INIT = "{}.init.txt", "init.txt"
+
+
+@dataclass(frozen=True)
+class BatchInput:
+    """One input of a batch folder: its unique name (the results folder), path and ground truth.
+
+    ``groundtruth`` is for single-target configs, ``mot_groundtruth`` for multi-target ones;
+    ``init`` holds the first box when there is no ``groundtruth``; ``gt_origin`` is the origin
+    of the boxes of ``groundtruth`` and ``init`` (see the module docstring).
+    """
+
+    name: str
+    path: Path
+    groundtruth: Path | None = None
+    mot_groundtruth: Path | None = None
+    init: Path | None = None
+    gt_origin: int = 0
+
+
+def _first(folder: Path, names: Iterable[str]) -> Path | None:
+    return next((folder / n for n in names if (folder / n).is_file()), None)
+
+
+def _sequence(folder: Path, gt_origin: int | None) -> BatchInput:
+    return BatchInput(
+        name=folder.name,
+        path=folder,
+        groundtruth=_first(folder, SEQUENCE_GT),
+        mot_groundtruth=_first(folder, SEQUENCE_MOT_GT),
+        init=_first(folder, [SEQUENCE_INIT]),
+        gt_origin=1 if gt_origin is None else gt_origin,
+    )
+
+
+def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
+    stem = path.stem
+    return BatchInput(
+        name=name,
+        path=path,
+        groundtruth=_first(path.parent, (p.format(stem) for p in VIDEO_GT)),
+        mot_groundtruth=_first(path.parent, (p.format(stem) for p in VIDEO_MOT_GT)),
+        init=_first(path.parent, [VIDEO_INIT.format(stem)]),
+        gt_origin=0 if gt_origin is None else gt_origin,
+    )
+
+
+def is_sequence_folder(path: Path) -> bool:
+    """An OTB-style image-sequence folder: it holds an ``img/`` folder."""
+    return (path / "img").is_dir()
+
+
+def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
+    """Every input directly inside ``folder`` (or ``folder`` itself if it is a sequence folder),
+    sorted by name, with the ground truth found beside or inside each (module docstring).
+
+    Inputs are named after their file stem (folder name for sequences); videos whose stem is
+    taken twice (``a.mp4`` and ``a.avi`` or a folder ``a/``) keep their full file names.
+    Raises InputError when ``folder`` is not a folder or holds no input.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: not a folder")
+    if is_sequence_folder(folder):
+        return [_sequence(folder.resolve(), gt_origin)]
+    entries = sorted(folder.resolve().iterdir())
+    videos = [p for p in entries if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES]
+    found = [_sequence(p, gt_origin) for p in entries if p.is_dir() and is_sequence_folder(p)]
+    taken = [item.name for item in found] + [p.stem for p in videos]
+    found += [_video(p, p.stem if taken.count(p.stem) == 1 else p.name, gt_origin)
+              for p in videos]
+    if not found:
+        raise InputError(
+            f"{folder}: no inputs (video files or sequence folders with an img/ folder)"
+        )
+    return sorted(found, key=lambda i: i.name)

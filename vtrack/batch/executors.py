@@ -1,0 +1,196 @@
+"""Where jobs run: long-lived local worker processes, or a Dask cluster."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import uuid
+from collections import deque
+from collections.abc import Iterator, Sequence
+from contextlib import suppress
+from dataclasses import replace
+from multiprocessing.connection import wait
+from typing import Protocol
+
+from vtrack.batch.jobs import Job, Outcome
+from vtrack.batch.worker import _serve, execute
+from vtrack.errors import VtrackError
+from vtrack.run import STATUS_FAILED
+
+#: How often a job whose worker process died is started again before it is reported failed.
+RETRIES = 1
+
+
+class Executor(Protocol):
+    """Runs jobs somewhere and yields one outcome per job, in completion order."""
+
+    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]: ...
+
+
+def _died(job: Job, how: str) -> Outcome:
+    times = "once" if job.attempt == 1 else f"{job.attempt} times"
+    return Outcome(job.input, job.config, STATUS_FAILED,
+                   error=f"the worker process died ({how}), {times}", attempt=job.attempt)
+
+
+def _exit_reason(code: int | None) -> str:
+    if code is not None and code < 0:
+        try:
+            return signal.Signals(-code).name
+        except ValueError:
+            return f"signal {-code}"
+    return f"exit code {code}"
+
+
+def _context() -> multiprocessing.context.BaseContext:
+    """Fork-server processes where the platform has them (a fork of an interpreter that has
+    already imported vtrack and the main script: fast to start, and safe, it runs no threads);
+    spawn elsewhere. Preloading ``__main__`` keeps each child from running the main script
+    again (multiprocessing's main-module fix-up)."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(["__main__", __name__])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
+class _Worker:
+    """A long-lived local worker process, its end of the pipe, and the job it is running."""
+
+    def __init__(self, context: multiprocessing.context.BaseContext) -> None:
+        self.connection, theirs = context.Pipe()
+        self.process = context.Process(target=_serve, args=(theirs,), daemon=True,
+                                       name="vtrack batch worker")
+        self.process.start()
+        theirs.close()  # the worker holds the only other end: EOF here when it dies
+        self.job: Job | None = None
+
+    def start(self, job: Job) -> bool:
+        """Hand ``job`` to the worker; False if it is gone."""
+        self.job = job
+        try:
+            self.connection.send(job)
+        except OSError:
+            return False
+        return True
+
+    def result(self) -> Outcome | None:
+        """The outcome of the running job, or None if the worker died first."""
+        try:
+            return self.connection.recv()
+        except (EOFError, OSError):
+            return None
+
+    def stop(self, grace_s: float = 5) -> None:
+        """Ask the worker to finish; a job still running (interrupted, it is writing its
+        ``run.json``) gets ``grace_s``, then the process is terminated."""
+        with suppress(OSError):
+            self.connection.send(None)
+        self.process.join(grace_s)
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join()
+        self.connection.close()
+
+
+class LocalExecutor:
+    """At most ``workers`` long-lived worker processes, each running one job at a time.
+
+    Unlike a ``ProcessPoolExecutor`` (which breaks entirely, ``BrokenProcessPool``, when one of
+    its workers dies), every worker has its own pipe and the executor knows which job each one
+    runs: a worker that dies (killed, segfault) costs only that job, which is started again on
+    a fresh worker :data:`RETRIES` times and then reported ``failed``; the other workers carry
+    on. Workers stay alive between jobs, so a job starts warm (imports, codec and OpenCV set-up
+    are done once per worker, not once per job).
+    """
+
+    def __init__(self, workers: int) -> None:
+        self.workers = max(1, workers)
+
+    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
+        context = _context()
+        pending = deque(jobs)
+        workers: list[_Worker] = []
+        try:
+            while pending or workers:
+                while pending and len(workers) < self.workers:
+                    workers.append(_Worker(context))
+                lost = []  # workers found dead, with the job they had
+                for worker in workers:
+                    if worker.job is None and pending and not worker.start(pending.popleft()):
+                        lost.append(worker)
+                busy = {w.connection: w for w in workers if w.job is not None and w not in lost}
+                for connection in wait(list(busy)) if busy else ():
+                    worker = busy[connection]
+                    outcome = worker.result()
+                    if outcome is None:
+                        lost.append(worker)
+                    else:
+                        worker.job = None
+                        yield outcome
+                for worker in lost:
+                    workers.remove(worker)
+                    worker.stop()
+                    job = worker.job
+                    if job.attempt <= RETRIES:
+                        pending.appendleft(replace(job, attempt=job.attempt + 1))
+                    else:
+                        yield _died(job, _exit_reason(worker.process.exitcode))
+                if not pending and all(w.job is None for w in workers):
+                    return
+        finally:
+            for worker in workers:
+                worker.stop()
+
+
+class DaskExecutor:
+    """Jobs as tasks on an existing Dask distributed scheduler (``pip install vtrack[dask]``).
+
+    Connects when created (so a wrong address fails before anything runs) and disconnects at
+    the end of :meth:`run`: one run per executor. Only the small :class:`Job` objects travel;
+    workers read inputs by path and write results to the output path, which they must share
+    with this machine. Dask reschedules a task whose worker died; once the scheduler's
+    ``allowed-failures`` is exceeded it gives up and the job is reported ``failed``. Each job
+    uses one OpenCV thread: the cluster already runs one job per worker thread.
+    """
+
+    def __init__(self, address: str, timeout_s: float = 10) -> None:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise VtrackError(
+                "--scheduler needs Dask distributed: pip install 'vtrack[dask]'") from None
+        try:
+            self.client = Client(address, timeout=timeout_s, set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise VtrackError(
+                f"--scheduler {address}: cannot reach the Dask scheduler ({reason})"
+            ) from None
+
+    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
+        from distributed import as_completed
+
+        batch = uuid.uuid4().hex[:8]
+        futures = {self.client.submit(execute, replace(job, threads=1), pure=False,
+                                      key=f"vtrack-{batch}-{n}-{job.input}-{job.config}"): job
+                   for n, job in enumerate(jobs)}
+        try:
+            for future in as_completed(futures, loop=self.client.loop):
+                job = futures[future]
+                try:
+                    yield future.result()
+                except Exception as exc:  # KilledWorker, lost connection: report, carry on
+                    yield Outcome(job.input, job.config, STATUS_FAILED,
+                                  error=f"Dask: {type(exc).__name__}: {exc}")
+        finally:
+            self.client.cancel(list(futures))
+            self.client.close()
+
+
+def cpu_count() -> int:
+    """Cores this process may use."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1

@@ -1,0 +1,74 @@
+"""What travels between the planner, the workers and the summary: jobs and their outcomes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from vtrack.request import RunRequest
+from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
+
+STATUS_SKIPPED = "skipped"
+#: ``summary.csv`` columns, in order.
+SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
+                   "frames_lost", "status", "error")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One input x config: what a worker needs (paths and settings, never frames)."""
+
+    input: str
+    config: str
+    request: RunRequest
+    threads: int = 1
+    attempt: int = 1
+
+
+@dataclass
+class Outcome:
+    """What became of a job: a status of ``vtrack.run`` or ``failed`` / ``skipped``."""
+
+    input: str
+    config: str
+    status: str
+    summary: RunSummary | None = None
+    error: str | None = None
+    #: Which attempt this is: 2 after a worker process died running the job.
+    attempt: int = 1
+
+    @property
+    def ok(self) -> bool:
+        return self.status in (STATUS_COMPLETE, STATUS_SKIPPED)
+
+    def line(self) -> str:
+        """One line for the terminal: the run's summary line, or what went wrong."""
+        if self.status == STATUS_FAILED or self.summary is None:
+            line = f"{self.input} [{self.config}]: {self.status}: {self.error}"
+        else:
+            line = self.summary.line()
+        if self.status == STATUS_SKIPPED:
+            line += " (skipped: already complete)"
+        if self.attempt > 1:
+            line += f" (attempt {self.attempt}: a worker process died on this job before)"
+        return line
+
+    def row(self) -> dict[str, Any]:
+        """This job's ``summary.csv`` row (:data:`SUMMARY_COLUMNS`)."""
+        s = self.summary
+        return {
+            "input": self.input,
+            "config": self.config,
+            "frames": s.frames if s else None,
+            "fps": _round(s.fps, 1) if s else None,
+            "mean_overlap": _round(s.mean_overlap, 4) if s else None,
+            "auc": _round(s.auc, 4) if s else None,
+            "precision20": _round(s.precision20, 4) if s else None,
+            "frames_lost": s.frames_lost if s else None,
+            "status": self.status,
+            "error": self.error,
+        }
+
+
+def _round(value: float | None, digits: int) -> float | None:
+    return None if value is None else round(value, digits)

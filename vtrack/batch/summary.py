@@ -1,0 +1,66 @@
+"""``OUT/summary.csv`` kept current while a batch runs."""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Iterable, Iterator
+from contextlib import closing
+from pathlib import Path
+from typing import Any
+
+from vtrack.batch.executors import Executor
+from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
+from vtrack.batch.plan import Plan
+from vtrack.run import STATUS_INTERRUPTED
+
+
+def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[Outcome]:
+    """Yield every outcome, known ones first, keeping ``summary_path`` current.
+
+    The summary has one row per input x config of the plan; if the batch stops early
+    (Ctrl-C), jobs without an outcome are written with the status ``interrupted``.
+    """
+    summary = SummaryWriter(summary_path, batch.order)
+    finished = False
+    try:
+        for outcome in batch.known:
+            summary.add(outcome)
+            yield outcome
+        with closing(executor.run(batch.jobs)) as outcomes:
+            for outcome in outcomes:
+                summary.add(outcome)
+                yield outcome
+        finished = True
+    finally:
+        if not finished:
+            summary.write(unfinished=STATUS_INTERRUPTED)
+
+
+class SummaryWriter:
+    """``OUT/summary.csv``: one row per input x config in plan order, rewritten atomically
+    (temporary file + rename) each time an outcome arrives, so it is never half written."""
+
+    def __init__(self, path: Path, order: Iterable[tuple[str, str]]) -> None:
+        self.path = path
+        self.rows: dict[tuple[str, str], dict[str, Any] | None] = dict.fromkeys(order)
+
+    def add(self, outcome: Outcome) -> None:
+        self.rows[(outcome.input, outcome.config)] = outcome.row()
+        self.write()
+
+    def write(self, unfinished: str | None = None) -> None:
+        """Write the file; jobs without an outcome get the status ``unfinished`` (or no row)."""
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, SUMMARY_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        for (name, config), row in self.rows.items():
+            if row is not None:
+                writer.writerow(row)
+            elif unfinished is not None:
+                writer.writerow({"input": name, "config": config, "status": unfinished})
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = self.path.with_name(self.path.name + ".tmp")
+        temporary.write_text(buffer.getvalue(), encoding="utf-8")
+        os.replace(temporary, self.path)
