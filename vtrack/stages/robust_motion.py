@@ -1,7 +1,7 @@
 """The ``robust`` tracker's motion model: a Kalman filter that also says how unsure it is.
 
 Last link of the ``robust`` chain. The filter is S0's constant-velocity model per axis (S0 eq.
-8-17, :func:`vtrack.filters.constant_velocity`) with noises in proportion to the target's size
+8-17, :class:`vtrack.filters.ConstantVelocity`) with noises in proportion to the target's size
 (a filter tuned in pixels is too stiff for a big target and too loose for a small one): process
 noise ``q = (q_rel d)^2``, measurement noise ``r = (r_rel d)^2``, ``P0 = (p0_rel d)^2 I``, ``d``
 the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard deviation
@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from vtrack.filters import KalmanFilter, constant_velocity
+from vtrack.filters import ConstantVelocity
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -63,44 +63,46 @@ class RobustMotion(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         assert ctx.box is not None
-        self._diag = math.hypot(ctx.box.w, ctx.box.h)
-        self._filter = self._new((ctx.box.cx, ctx.box.cy))
+        d = math.hypot(ctx.box.w, ctx.box.h)
+        # S0 item 6's model (vtrack.filters), noises in proportion to the first box's diagonal
+        self._model = ConstantVelocity(q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
+                                       p0=(self.p0_rel * d) ** 2)
+        self._r = self._model.R.copy()
+        self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._rms = np.zeros(2)
         self._was = TrackState.TRACKING
         self._predict(ctx)
 
-    def _new(self, point: tuple[float, float]) -> KalmanFilter:
-        d = self._diag
-        self._r = (self.r_rel * d) ** 2
-        return constant_velocity(point, q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
-                                 p0=(self.p0_rel * d) ** 2)
+    def _position(self) -> tuple[float, float]:
+        return self._model.position(self._state)
 
     def step(self, ctx: TrackContext) -> None:
         box = ctx.measurement
         if box is not None:
             z = np.array([box.cx, box.cy])
             if self._was == TrackState.LOST:
-                self._filter = self._new((box.cx, box.cy))  # re-found: a jump, not a velocity
+                # re-found: a jump, not a velocity
+                self._state = self._model.initiate([(box.cx, box.cy)])
                 self._rms[:] = 0.0
             else:
-                error = z - np.array(self._filter.position())
+                error = z - np.array(self._position())
                 self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
                                     + self.innovation_rate * error ** 2)
                 # a measurement is as trustworthy as the match it came from: its standard
                 # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
                 # biased centre does not become a velocity before it is hidden
                 confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
-                self._filter.R = self._r * np.eye(2) / confidence**4
-                self._filter.update(z)
+                self._model.R = self._r / confidence**4
+                self._state = self._model.update(self._state, z)
         elif ctx.box is not None:
-            ctx.box = ctx.box.moved_to(*self._filter.position())  # coast: this frame's prior
+            ctx.box = ctx.box.moved_to(*self._position())  # coast: this frame's prior
         self._was = ctx.state
         self._predict(ctx)
 
     def _predict(self, ctx: TrackContext) -> None:
         assert ctx.robust is not None and ctx.box is not None
-        self._filter.predict()
-        ctx.prediction = ctx.box.moved_to(*self._filter.position())
-        P = self._filter.P
+        self._state = self._model.predict(self._state, 1.0)
+        ctx.prediction = ctx.box.moved_to(*self._position())
+        P = self._state.P
         ctx.robust.sigma = (math.sqrt(P[0, 0] + self._rms[0] ** 2),
                             math.sqrt(P[2, 2] + self._rms[1] ** 2))
