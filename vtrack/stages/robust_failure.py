@@ -1,11 +1,12 @@
 """The ``robust`` tracker's failure logic: tracking / occluded / lost, gated model update.
 
 Third link of the ``robust`` chain (it runs before ``robust_motion``, which it tells whether to
-update or coast, as S0's ``occlusion`` runs before ``kalman``). The signal is the fused score of
-the found box relative to the reference confidence (``ctx.score``, 0..1): the running mean of
-the fused score over confident frames, so "0.5" means "half as target-like as the target usually
-looks", whatever the target (Bolme et al., "Visual object tracking using adaptive correlation
-filters", CVPR 2010, stop trusting MOSSE's peak the same way, by its peak-to-sidelobe ratio).
+update or coast, as S0's ``occlusion`` runs before ``kalman``). The signal is ``ctx.score``
+(0..1, from ``robust_search``): each cue of the found box (template NCC, colour) relative to its
+usual value, the running mean of that cue over confident frames, combined; so "0.5" means "half
+as target-like as the target usually looks", whatever the target (Bolme et al., "Visual object
+tracking using adaptive correlation filters", CVPR 2010, stop trusting MOSSE's peak the same
+way, by its peak-to-sidelobe ratio).
 
 - ``tracking`` while the score stays at or above ``occlude_below``; below it the measurement is
   withheld (the Kalman filter coasts, the box follows the prediction: S0 item 7) and the state
@@ -15,15 +16,17 @@ filters", CVPR 2010, stop trusting MOSSE's peak the same way, by its peak-to-sid
   (``robust_model.lost_pixels``) with a flat motion prior.
 - A hidden target is taken back when the score of the best box reaches ``recover_at``
   (hysteresis against flicker).
-- Model update (issue item 6, ``update``): on tracking frames whose score is at least
-  ``update_above`` the colour histograms and the template are blended towards the box
-  (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's learning rates); nothing is
-  learnt while occluded or lost, so an occluder is not learnt as the target.
+- Model update (issue item 6, ``update``): on tracking frames whose score (``update_rule =
+  score``) or both cues (``min``) reach ``update_above`` the colour histograms and the template
+  are blended towards the box (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's
+  learning rates) and the usual cue values move ``rate_reference`` towards this frame's;
+  nothing is learnt while occluded or lost, so an occluder is not learnt as the target.
 
-Pipeline contract of stage ``robust_failure``: reads ``ctx.score``, ``ctx.measurement``,
-``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``, ``ctx.measurement`` / ``ctx.box``
-(None / the prediction while hidden), ``ctx.robust`` (hidden count, reference confidence,
-whether the next frame searches the whole frame) and the extra ``confidence``.
+Pipeline contract of stage ``robust_failure``: reads ``ctx.frame`` (its size), ``ctx.score``,
+``ctx.measurement``, ``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``,
+``ctx.measurement`` / ``ctx.box`` (None / the prediction while hidden), ``ctx.robust`` (hidden
+count, usual cue values, whether the next frame searches the whole frame) and the extra
+``confidence``.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from vtrack.stages.robust_model import RobustTarget
 
 @register
 class RobustFailure(Stage):
-    """Occluded / lost from the relative fused score; confidence-gated model update."""
+    """Occluded / lost from the relative score; confidence-gated model update."""
 
     name = "robust_failure"
     summary = ("robust: occluded below a relative confidence, lost after a while (no box, "

@@ -18,7 +18,11 @@ back-projection, and makes them hold on footage they were never tuned for:
   ``P(x in O | b) = H_O(b) / (H_O(b) + H_S(b))`` (Possegger et al. 2015, eq. 2) with ``H_S`` the
   histogram of the ring around the box; a colour the surroundings share scores ~0.5 or less,
   colours never seen score 0.5 (DAT's choice for unseen bins). ``surroundings = false`` gives
-  the S0 back-projection ``H_O(b) / max H_O`` (ablation).
+  the S0 back-projection ``H_O(b) / max H_O`` (ablation). ``distractors = true`` adds DAT's
+  distractor-aware term (the same ratio against target-like regions of the window, mixed with
+  weight ``1 - surround_weight``); it did not improve the real sequences, so it is off.
+- **A window that may reach beyond the frame**: the part outside has likelihood 0, so a target
+  leaving the view is followed out and seen to go (``robust_failure`` then says ``lost``).
 - **A non-colour cue** (issue item 3): normalised cross-correlation of a grey template of the
   target over the window (``cv2.matchTemplate``, ``TM_CCOEFF_NORMED``), fused with the colour
   score per box placement as Staple does (Bertinetto et al., CVPR 2016, eq. 2:

@@ -9,11 +9,19 @@ window). Localisation (issue item 4):
   prior the same way, Possegger et al., CVPR 2015, sec. 3.3); while the target is lost the prior
   is flat (re-detection over the whole frame, issue item 7);
 - mean shift iterated to convergence (Comaniciu, Ramesh, Meer, TPAMI 2003; S0 eq. 6-7 in its
-  weighted form, :func:`vtrack.stages.meanshift.mean_shift`) on the prior-weighted map's upper
-  half (values above half its peak), started from the prediction and from the map's peak: the
-  peak start keeps motion faster than a target width per frame inside the search, the
-  prediction start keeps a nearby mode when two are equal; the start whose mode scores higher
-  wins.
+  weighted form, :func:`vtrack.stages.meanshift.mean_shift`) on the prior-weighted map's top
+  (values above 0.8 of its peak, 3 x 3 kernel: sub-pixel mode), started from the prediction
+  and from the map's peak: the peak start keeps motion faster than a target width per frame
+  inside the search, the prediction start keeps a nearby mode when two are equal; the start
+  whose mode scores higher wins;
+- relocation: when that mode does not look like the target (score below ``relocate_below``),
+  the window's best placement without the prior is taken if its score is clearly higher.
+
+Score (issue item 8): each cue at the found placement (template NCC, colour box mean)
+relative to its usual value (:attr:`RobustTarget.references`, learnt by ``robust_failure``),
+capped at 1, combined by ``confidence``: ``geometric`` (default) ``r_tmpl^(1 - gamma) *
+r_hist^gamma``, ``fused`` Staple's linear mix, ``balanced`` or ``min``. Sizes are estimated only
+on frames whose score reaches ``scale_above``.
 
 Scale (issue item 5, ``scale = true``): the box is tried at ``1 / scale_step``, 1 and
 ``scale_step`` times its size around the found centre; each size is scored by Staple's fusion of
@@ -27,9 +35,9 @@ inside the box). A size other than the current one has its score multiplied by
 not make the size drift; it moves ``scale_rate`` of the way towards the best one each frame.
 
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust`` (maps, window, motion
-uncertainty), ``ctx.prediction``, ``ctx.box``, ``ctx.state``; writes ``ctx.measurement`` and
-``ctx.box`` (the found box), ``ctx.score`` (the fused score there relative to the reference
-confidence, 0..1; ``robust_failure`` decides what it means) and the extras ``ncc``, ``colour``.
+uncertainty, usual cue values), ``ctx.prediction``, ``ctx.box``; writes ``ctx.measurement`` and
+``ctx.box`` (the found box), ``ctx.score`` (0..1, see above; ``robust_failure`` decides what it
+means), ``ctx.robust.cues`` and the extras ``ncc``, ``colour`` (the raw cue values).
 """
 
 from __future__ import annotations
