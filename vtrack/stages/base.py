@@ -40,6 +40,7 @@ from vtrack.params import Param
 
 if TYPE_CHECKING:
     from vtrack.golden.record import FixedRecord
+    from vtrack.stages.robust_model import RobustTarget
 
 
 class TrackState(StrEnum):
@@ -153,6 +154,8 @@ class TrackContext:
     #: Fixed-point chains (s0-fixed, s2-fixed): model and this frame's integer/float32 values,
     #: created by the chain's first stage (``provides = {"fixed"}``); see vtrack.golden.record.
     fixed: FixedRecord | None = None
+    #: The ``robust`` tracker's shared state (model, working images, uncertainty), long-lived.
+    robust: RobustTarget | None = None
 
     def new_frame(self, frame: Frame) -> None:
         """Start ``frame``: reset the per-frame fields; ask the ``forecast`` for its prediction."""

@@ -1,0 +1,218 @@
+"""Tune and ablate the ``robust`` tracker on every real single-target sequence, in memory.
+
+    python benchmarks/robust_tune.py                 # per-sequence table and the mean
+    python benchmarks/robust_tune.py --ablate        # mean AUC with each part switched off
+    python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
+    python benchmarks/robust_tune.py --config s0     # another config, scored the same way
+    python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
+    python benchmarks/robust_tune.py --scenes        # generated scenes, robust and s0
+
+Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
+precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
+share whose box misses the target, IoU 0; of the frames whose box misses, the share called
+``occluded`` or ``lost``; the mean row pools the frames of all sequences) and the tracking
+work in microseconds per frame (the chain's stages, frames held in memory as BGR). Tune on the
+mean over all sequences, never on one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+from dataclasses import dataclass
+
+from common import (
+    Clip,
+    load_clip,
+    scene_clip,
+    single_target_sequences,
+    to_frame,
+    track_clip,
+)
+
+from vtrack.config import load_config
+from vtrack.errors import VtrackError
+from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
+from vtrack.frame import BgrFrame
+from vtrack.pipeline import Pipeline
+from vtrack.scenes import make_scene
+from vtrack.stages.base import TrackState
+
+#: The ablation table: (label, --set overrides) with one part of robust switched off each.
+ABLATIONS = (
+    ("robust", []),
+    ("no surroundings (S0 back-projection H_O / max)", ["robust_model.surroundings=false"]),
+    ("with DAT distractors", ["robust_model.distractors=true"]),
+    ("no template (colour only)", ["robust_model.template=false"]),
+    ("hue only (1 saturation bin, 1 grey bin)",
+     ["robust_model.sat_bins=1", "robust_model.grey_bins=1"]),
+    ("no adaptive window (padding x box)", ["robust_model.adaptive_window=false"]),
+    ("no relocation in the window", ["robust_search.relocate_below=0"]),
+    ("linear (Staple) confidence", ["robust_search.confidence=fused"]),
+    ("no scale", ["robust_search.scale=false"]),
+    ("no update", ["robust_failure.update=false"]),
+    ("no re-detection", ["robust_failure.redetect=false"]),
+    ("no failure logic (never occluded)", ["robust_failure.occlude_below=0",
+                                           "robust_failure.recover_at=0"]),
+)
+
+
+@dataclass
+class Result:
+    auc: float
+    precision: float
+    miou: float
+    tracking: int  # frames called tracking (ground truth present)
+    false_tracking: int  # ... of which the box misses (IoU 0)
+    misses: int  # frames whose box misses (IoU 0, or no box while the target is present)
+    flagged: int  # ... of which called occluded or lost
+    us_per_frame: float
+
+
+def evaluate(clip: Clip, overrides: list[str], name: str = "robust") -> Result:
+    """Run config ``name`` with ``overrides`` on ``clip`` and score it."""
+    config = load_config(name).with_overrides(overrides)
+    pipeline = Pipeline(config.build(), seed=0)
+    frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
+    assert clip.boxes[0] is not None
+    results = list(pipeline.track(frames, clip.boxes[0]))
+    boxes = [r.box for r in results]
+    overlaps, errors = frame_scores(boxes, clip.boxes)
+    tracking = misses = false_tracking = flagged = 0
+    for result, overlap in zip(results, overlaps, strict=True):
+        if overlap is None:
+            continue
+        missed = overlap <= 0.0
+        if result.state == TrackState.TRACKING:
+            tracking += 1
+            false_tracking += missed
+        if missed:
+            misses += 1
+            flagged += result.state != TrackState.TRACKING
+    work = sum(pipeline.stage_microseconds_per_frame().values())
+    return Result(auc(overlaps), precision_at(errors, 20), mean_overlap(overlaps),
+                  tracking, false_tracking, misses, flagged, work)
+
+
+def share(part: int, whole: int) -> str:
+    """``part / whole`` as a percentage, ``-`` when ``whole`` is 0."""
+    return f"{part / whole:.1%}" if whole else "-"
+
+
+def speed(rounds: int = 7) -> None:
+    """Tracking work (the chain's stages, microseconds per frame) of robust and s0 on the same
+    1080p60 I420 frames of the camera-like ``benchmark`` scene: per stage the fastest of
+    ``rounds`` runs (the machine's other load only ever adds time), summed."""
+    scene = make_scene("benchmark", seed=0, width=1920, height=1080, frames=120, fps=60)
+    frames = [to_frame(i, 60, bgr) for i, bgr in enumerate(scene.frames())]
+    box = scene.boxes[0]
+    assert box is not None
+    print(f"1920x1080 I420, {len(frames)} frames, target {box.w:.0f}x{box.h:.0f}; per stage "
+          f"the fastest of {rounds} runs\n")
+    print("| config | us per frame | x s0 | stages (us) |")
+    print("|---|---:|---:|---|")
+    work: dict[str, float] = {}
+    for name in ("s0", "robust"):
+        fastest: dict[str, float] = {}
+        for _ in range(rounds):
+            pipeline = Pipeline(load_config(name).build(), seed=0)
+            for _ in pipeline.track(frames, box):
+                pass
+            for stage, us in pipeline.stage_microseconds_per_frame().items():
+                fastest[stage] = min(fastest.get(stage, math.inf), us)
+        work[name] = sum(fastest.values())
+        stages = ", ".join(f"{stage} {us:.0f}" for stage, us in fastest.items())
+        print(f"| {name} | {work[name]:.0f} | {work[name] / work['s0']:.2f} | {stages} |")
+
+
+SCENES = ("smooth", "occlusion", "lighting", "distractor", "leave_return", "scale", "accelerate",
+          "cover", "jump", "bounce")
+
+
+def scenes(seeds: tuple[int, ...] = (0, 1, 2)) -> None:
+    """Mean IoU of robust and s0 on each generated scene of this project, per seed."""
+    print("| scene | " + " | ".join(f"{c} (seeds {', '.join(map(str, seeds))})"
+                                     for c in ("robust", "s0")) + " |")
+    print("|---|---|---|")
+    for name in SCENES:
+        cells = []
+        for config in ("robust", "s0"):
+            values = []
+            for seed in seeds:
+                clip = scene_clip(name, seed)
+                overlaps, _ = frame_scores(track_clip(clip, load_config(config)), clip.boxes)
+                values.append(mean_overlap(overlaps))
+            cells.append(" ".join(f"{v:.2f}" for v in values))
+        print(f"| {name} | " + " | ".join(cells) + " |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ablate", action="store_true", help="mean AUC with each part off")
+    parser.add_argument("--set", action="append", default=[], dest="overrides",
+                        help="stage.param=value applied to every run")
+    parser.add_argument("--only", action="append", default=[], help="sequence names")
+    parser.add_argument("--scenes", action="store_true",
+                        help="mean IoU on the generated scenes, robust against s0")
+    parser.add_argument("--speed", action="store_true",
+                        help="tracking work per 1080p frame, robust against s0")
+    parser.add_argument("--config", default="robust",
+                        help="another shipped config to score the same way (e.g. s0)")
+    args = parser.parse_args()
+    if args.speed:
+        speed()
+        return
+    if args.scenes:
+        scenes()
+        return
+    sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
+    if not sequences:
+        print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
+        return
+    variants = ABLATIONS if args.ablate else (("robust", []),)
+    table: dict[str, list[Result]] = {label: [] for label, _ in variants}
+    if not args.ablate:
+        print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+    for seq in sequences:
+        clip = load_clip(seq)
+        for label, overrides in variants:
+            try:
+                result = evaluate(clip, overrides + args.overrides, args.config)
+            except VtrackError as exc:  # e.g. a hue tracker refusing a grey target: scores 0
+                print(f"{seq.name}: {exc}", file=sys.stderr)
+                present = sum(box is not None for box in clip.boxes)
+                result = Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
+            table[label].append(result)
+            if not args.ablate:
+                print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
+                      f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
+                      f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
+                sys.stdout.flush()
+        del clip
+    if args.ablate:
+        base = statistics.mean(r.auc for r in table["robust"])
+        print("| variant | mean AUC | change |")
+        print("|---|---:|---:|")
+        for label, results in table.items():
+            mean = statistics.mean(r.auc for r in results)
+            print(f"| {label} | {mean:.3f} | {mean - base:+.3f} |")
+        return
+    results = table["robust"]
+
+    def mean(key: str) -> float:
+        return statistics.mean(getattr(r, key) for r in results)
+
+    def total(key: str) -> int:
+        return sum(getattr(r, key) for r in results)
+
+    # the honest-state shares pooled over all frames of all sequences
+    print(f"| **mean** | **{mean('auc'):.3f}** | {mean('precision'):.3f} | {mean('miou'):.3f} | "
+          f"{share(total('false_tracking'), total('tracking'))} | "
+          f"{share(total('flagged'), total('misses'))} | {mean('us_per_frame'):.0f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,141 @@
+"""The ``robust`` tracker's failure logic: tracking / occluded / lost, gated model update.
+
+Third link of the ``robust`` chain (it runs before ``robust_motion``, which it tells whether to
+update or coast, as S0's ``occlusion`` runs before ``kalman``). The signal is ``ctx.score``
+(0..1, from ``robust_search``): each cue of the found box (template NCC, colour) relative to its
+usual value, the running mean of that cue over confident frames, combined; so "0.5" means "half
+as target-like as the target usually looks", whatever the target (Bolme et al., "Visual object
+tracking using adaptive correlation filters", CVPR 2010, stop trusting MOSSE's peak the same
+way, by its peak-to-sidelobe ratio).
+
+- ``tracking`` while the score stays at or above ``occlude_below``; below it the measurement is
+  withheld (the Kalman filter coasts, the box follows the prediction: S0 item 7) and the state
+  is ``occluded``; after ``lost_after`` hidden frames it is ``lost``: no box is claimed (issue
+  item 7), at once when the coasted box is mostly outside the frame (the target left the
+  view), and with ``redetect`` the next frames search the whole frame at a coarse resolution
+  (``robust_model.lost_pixels``) with a flat motion prior.
+- A hidden target is taken back when the score of the best box reaches ``recover_at``
+  (hysteresis against flicker).
+- Model update (issue item 6, ``update``): on tracking frames whose score (``update_rule =
+  score``) or both cues (``min``) reach ``update_above`` the colour histograms and the template
+  are blended towards the box (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's
+  learning rates) and the usual cue values move ``rate_reference`` towards this frame's;
+  nothing is learnt while occluded or lost, so an occluder is not learnt as the target.
+
+Pipeline contract of stage ``robust_failure``: reads ``ctx.frame`` (its size), ``ctx.score``,
+``ctx.measurement``, ``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``,
+``ctx.measurement`` / ``ctx.box`` (None / the prediction while hidden), ``ctx.robust`` (hidden
+count, usual cue values, whether the next frame searches the whole frame) and the extra
+``confidence``.
+"""
+
+from __future__ import annotations
+
+from vtrack.geometry import Box
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.robust_model import RobustTarget
+
+
+@register
+class RobustFailure(Stage):
+    """Occluded / lost from the relative score; confidence-gated model update."""
+
+    name = "robust_failure"
+    summary = ("robust: occluded below a relative confidence, lost after a while (no box, "
+               "whole-frame re-detection), model update only on confident frames")
+    params = (
+        Param("occlude_below", float, 0.5,
+              "tracking frames whose relative score falls below this are occluded",
+              min=0.0, max=1.0),
+        Param("recover_at", float, 0.65,
+              "a hidden target is taken back at or above this relative score (>= "
+              "occlude_below)", min=0.0, max=1.0),
+        Param("lost_after", int, 90, "hidden frames after which the state is lost",
+              min=1, max=100000),
+        Param("redetect", bool, True,
+              "while lost, search the whole frame (coarse) for the target"),
+        Param("update", bool, True, "follow slow appearance change on confident frames"),
+        Param("update_rule", str, "score",
+              "what must reach update_above: score = this frame's score; min = each cue "
+              "relative to its usual value", choices=("score", "min")),
+        Param("update_above", float, 0.7, "relative score needed to update the model",
+              min=0.0, max=1.0),
+        Param("rate_hist", float, 0.04, "histogram learning rate (Staple: 0.04)",
+              min=0.0, max=1.0),
+        Param("rate_template", float, 0.01, "template learning rate (Staple: 0.01)",
+              min=0.0, max=1.0),
+        Param("rate_reference", float, 0.05,
+              "learning rate of the reference confidence on confident frames",
+              min=0.0, max=1.0),
+    )
+    requires = frozenset({"frame", "score", "measurement", "prediction", "robust"})
+    provides = frozenset({"state", "measurement", "box"})
+    columns = ("confidence",)
+
+    # Set from the parameters by Stage.__init__.
+    occlude_below: float
+    recover_at: float
+    lost_after: int
+    redetect: bool
+    update: bool
+    update_rule: str
+    update_above: float
+    rate_hist: float
+    rate_template: float
+    rate_reference: float
+
+    def start(self, ctx: TrackContext) -> None:
+        """The first frame's box is the target: tracking."""
+        ctx.state = TrackState.TRACKING
+        assert ctx.robust is not None
+        ctx.robust.hidden = 0
+        ctx.robust.search_all = False
+        ctx.extras["confidence"] = 1.0
+
+    def step(self, ctx: TrackContext) -> None:
+        target = ctx.robust
+        assert target is not None
+        score = ctx.score
+        ctx.extras["confidence"] = score
+        level = self.occlude_below
+        if ctx.state != TrackState.TRACKING:
+            level = max(self.recover_at, self.occlude_below)  # hysteresis
+        if score >= level and ctx.measurement is not None:
+            ctx.state = TrackState.TRACKING
+            target.hidden = 0
+            target.search_all = False
+            if self.update and self._learnable(target, score):
+                target.learn(ctx.measurement, self.rate_hist, self.rate_template)
+                rate = self.rate_reference
+                target.references = tuple(  # type: ignore[assignment]
+                    (1 - rate) * r + rate * v
+                    for r, v in zip(target.references, target.cues, strict=True))
+            return
+        target.hidden += 1
+        # S0 item 7: while hidden the measurement is not used and the box is the prediction
+        ctx.measurement = None
+        if ctx.prediction is not None:
+            ctx.box = ctx.prediction
+        gone = ctx.box is not None and _inside_share(ctx.box, ctx.frame.width,
+                                                     ctx.frame.height) < 0.5
+        # lost after lost_after hidden frames, or at once when the coasted box has left the
+        # view (the target went out, or the prediction is wrong: no box to claim either way)
+        lost = target.hidden > self.lost_after or gone
+        ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
+        target.search_all = lost and self.redetect
+
+    def _learnable(self, target: RobustTarget, score: float) -> bool:
+        """Whether this tracking frame may update the model: its score (``update_rule =
+        score``) or BOTH cues relative to their usual values (``min``: a target being covered
+        slowly keeps a fair fused score while one cue already sees the occluder) reach
+        ``update_above``."""
+        value = score if self.update_rule == "score" else target.confidence(target.cues, "min")
+        return value >= self.update_above
+
+
+def _inside_share(box: Box, width: int, height: int) -> float:
+    """Share of ``box``'s area inside a ``width`` x ``height`` frame."""
+    w = min(box.x + box.w, width) - max(box.x, 0.0)
+    h = min(box.y + box.h, height) - max(box.y, 0.0)
+    return max(w, 0.0) * max(h, 0.0) / box.area if box.area > 0 else 0.0

@@ -1,0 +1,108 @@
+"""The ``robust`` tracker's motion model: a Kalman filter that also says how unsure it is.
+
+Last link of the ``robust`` chain. The filter is S0's constant-velocity model per axis (S0 eq.
+8-17, :class:`vtrack.filters.ConstantVelocity`) with noises in proportion to the target's size
+(a filter tuned in pixels is too stiff for a big target and too loose for a small one): process
+noise ``q = (q_rel d)^2``, measurement noise ``r = (r_rel d)^2``, ``P0 = (p0_rel d)^2 I``, ``d``
+the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard deviation
+``/ score^2``): the less the found box looks like the target (``ctx.score``), the less it moves
+the filter.
+
+Besides the next frame's predicted box (``ctx.prediction``) it publishes the predicted centre's
+uncertainty per axis, ``sigma = sqrt(P_xx + e_x^2)``, where ``e`` is the running RMS of the
+innovations (measurement minus prediction; the innovation-based adaptive estimate of Mehra,
+IEEE TAC 1970): a linear filter's ``P`` does not see that the target moves more erratically than
+modelled, its innovations do. ``robust_model`` sizes the next search window from it (issue item
+4). While hidden the filter coasts and ``P`` grows, so the window widens; a target taken back
+after being lost restarts the filter at the re-found box (its jump is not a velocity).
+
+Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
+``ctx.state``, ``ctx.robust``; writes ``ctx.box`` (the prediction while coasting),
+``ctx.prediction`` and ``ctx.robust.sigma``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vtrack.filters import ConstantVelocity
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TrackContext, TrackState, register
+
+#: Floor of the confidence that scales the measurement noise (R is at most 100x its value).
+MIN_CONFIDENCE = 0.1
+
+
+@register
+class RobustMotion(Stage):
+    """Constant-velocity Kalman filter with size-relative noise; predicts box and uncertainty."""
+
+    name = "robust_motion"
+    summary = ("robust: constant-velocity Kalman filter (S0 6) with noise relative to the "
+               "target size; predicts the next centre and its uncertainty")
+    params = (
+        Param("q_rel", float, 0.05, "process noise std per frame, in target diagonals",
+              min=0.0, max=10.0),
+        Param("r_rel", float, 0.05, "measurement noise std, in target diagonals",
+              min=1e-6, max=10.0),
+        Param("p0_rel", float, 0.5, "initial uncertainty std, in target diagonals",
+              min=0.0, max=10.0),
+        Param("innovation_rate", float, 0.3,
+              "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
+    )
+    requires = frozenset({"measurement", "box", "state", "score", "robust"})
+    provides = frozenset({"box", "prediction", "robust"})
+
+    # Set from the parameters by Stage.__init__.
+    q_rel: float
+    r_rel: float
+    p0_rel: float
+    innovation_rate: float
+
+    def start(self, ctx: TrackContext) -> None:
+        assert ctx.box is not None
+        d = math.hypot(ctx.box.w, ctx.box.h)
+        # S0 item 6's model (vtrack.filters), noises in proportion to the first box's diagonal
+        self._model = ConstantVelocity(q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
+                                       p0=(self.p0_rel * d) ** 2)
+        self._r = self._model.R.copy()
+        self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
+        self._rms = np.zeros(2)
+        self._was = TrackState.TRACKING
+        self._predict(ctx)
+
+    def _position(self) -> tuple[float, float]:
+        return self._model.position(self._state)
+
+    def step(self, ctx: TrackContext) -> None:
+        box = ctx.measurement
+        if box is not None:
+            z = np.array([box.cx, box.cy])
+            if self._was == TrackState.LOST:
+                # re-found: a jump, not a velocity
+                self._state = self._model.initiate([(box.cx, box.cy)])
+                self._rms[:] = 0.0
+            else:
+                error = z - np.array(self._position())
+                self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
+                                    + self.innovation_rate * error ** 2)
+                # a measurement is as trustworthy as the match it came from: its standard
+                # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
+                # biased centre does not become a velocity before it is hidden
+                confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
+                self._model.R = self._r / confidence**4
+                self._state = self._model.update(self._state, z)
+        elif ctx.box is not None:
+            ctx.box = ctx.box.moved_to(*self._position())  # coast: this frame's prior
+        self._was = ctx.state
+        self._predict(ctx)
+
+    def _predict(self, ctx: TrackContext) -> None:
+        assert ctx.robust is not None and ctx.box is not None
+        self._state = self._model.predict(self._state, 1.0)
+        ctx.prediction = ctx.box.moved_to(*self._position())
+        P = self._state.P
+        ctx.robust.sigma = (math.sqrt(P[0, 0] + self._rms[0] ** 2),
+                            math.sqrt(P[2, 2] + self._rms[1] ** 2))
