@@ -17,6 +17,7 @@ from click.testing import CliRunner, Result
 
 from vtrack.batch import SUMMARY_COLUMNS, find_inputs
 from vtrack.cli import main
+from vtrack.config import DEFAULT_CONFIG
 from vtrack.scenes import make_scene, write_groundtruth
 
 if TYPE_CHECKING:
@@ -180,7 +181,7 @@ def test_a_killed_worker_is_retried_without_duplicates(inputs: Path, tmp_path: P
          "--out", str(out)], capture_output=True, text=True, timeout=120, check=False)
     assert result.returncode == 0, result.stderr
     rows = summary(out)
-    assert set(rows) == {("smooth", "s0"), ("jump", "s0")}
+    assert set(rows) == {("smooth", DEFAULT_CONFIG), ("jump", DEFAULT_CONFIG)}
     assert all(row["status"] == "complete" for row in rows.values())
     assert "attempt 2" in result.stdout  # the crash hook did kill the first attempt
 
@@ -202,7 +203,7 @@ def test_dask_gives_the_same_tracks_as_the_local_pool(inputs: Path, tmp_path: Pa
     assert remote.exit_code == 0, remote.output
     assert summary(tmp_path / "dask").keys() == summary(tmp_path / "local").keys()
     for name in ("smooth", "jump", "seq"):
-        tracks = [(tmp_path / side / name / "s0" / "track.csv").read_text()
+        tracks = [(tmp_path / side / name / DEFAULT_CONFIG / "track.csv").read_text()
                   for side in ("local", "dask")]
         assert tracks[0] == tracks[1]
 
@@ -266,5 +267,5 @@ def test_batch_from_a_folder_holding_a_vtrack_folder(inputs: Path, tmp_path: Pat
     assert result.returncode == 0, result.stderr
     assert "ImportError" not in result.stderr and "Traceback" not in result.stderr
     rows = summary(here / "out")
-    assert set(rows) == {("smooth", "s0"), ("jump", "s0")}
+    assert set(rows) == {("smooth", DEFAULT_CONFIG), ("jump", DEFAULT_CONFIG)}
     assert all(row["status"] == "complete" for row in rows.values())

@@ -78,7 +78,7 @@ def smooth_scene():
 def test_run_video_with_ground_truth(occlusion_clip, tmp_path: Path) -> None:
     clip, gt, scene = occlusion_clip
     out = tmp_path / "out"
-    result = vtrack("run", str(clip), "--gt", str(gt), "--out", str(out))
+    result = vtrack("run", str(clip), "-c", "s0", "--gt", str(gt), "--out", str(out))
     assert result.returncode == 0, result.stderr.decode()
     summary = result.stdout.decode().strip().splitlines()[-1]
     assert "120 frames" in summary and "mean overlap" in summary and str(out) in summary
@@ -127,7 +127,7 @@ def test_run_image_folder_and_set_override(smooth_scene, tmp_path: Path) -> None
     out = tmp_path / "out"
     gt_file = next(folder.glob("groundtruth*.txt"))
     result = vtrack("run", str(folder), "--gt", str(gt_file), "--gt-origin", "1", "--out", str(out),
-                    "--no-video",
+                    "--no-video", "-c", "s0",
                     "--set", "meanshift.iterations=5")
     assert result.returncode == 0, result.stderr.decode()
     rows = read_csv(out / "track.csv")

@@ -24,6 +24,7 @@ import av
 import pytest
 
 from vtrack.batch import SUMMARY_COLUMNS
+from vtrack.config import DEFAULT_CONFIG
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
 
 if TYPE_CHECKING:
@@ -379,7 +380,7 @@ def test_batch_summary_counts_skipped_frames(clip_factory: ClipFactory, tmp_path
     assert result.returncode == 0, result.stderr
     rows = read_summary(tmp_path / "out")
     for name, skipped in (("seq", 2), ("jump", 0)):
-        record = json.loads((tmp_path / "out" / name / "s0" / "run.json").read_text())
+        record = json.loads((tmp_path / "out" / name / DEFAULT_CONFIG / "run.json").read_text())
         assert record["summary"]["frames_skipped"] == skipped
         assert rows[name]["frames_skipped"] == str(skipped)
         assert rows[name]["frames"] == str(FRAMES - skipped)

@@ -107,7 +107,7 @@ def test_a_tracker_that_cannot_start_prints_no_bar(clip: Path, tmp_path: Path) -
     grey = tmp_path / "grey.mp4"
     scene = make_scene("smooth", seed=1, width=160, height=120, frames=12, fps=30)
     write_video(scene, grey)
-    code, screen = in_terminal("run", str(grey), "--init", "0,0,12,12", "--no-video",
+    code, screen = in_terminal("run", str(grey), "-c", "s0", "--init", "0,0,12,12", "--no-video",
                                cwd=tmp_path)
     assert code != 0, "the grey background corner should have no colour for S0"
     assert "%|" not in screen and "frame/s" not in screen, screen

@@ -36,7 +36,7 @@ def clip_with_gt(folder: Path, scenario: str, frames: int, ext: str = ".mp4"
 def occluded_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("layout")
     clip, gt = clip_with_gt(folder, "occlusion", 60)
-    done = vtrack_run(clip, folder / "run", "--gt", str(gt))
+    done = vtrack_run(clip, folder / "run", "--gt", str(gt), "-c", "s0")
     assert done.returncode == 0, done.stderr
     return folder / "run"
 

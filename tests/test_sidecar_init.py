@@ -14,6 +14,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 from vtrack.cli import main
+from vtrack.config import DEFAULT_CONFIG
 from vtrack.geometry import Box
 
 if TYPE_CHECKING:
@@ -131,8 +132,8 @@ def test_batch_tracks_a_folder_of_footage_without_ground_truth(
         "clip": "complete", "seq": "complete"}
     for name, box, sidecar in (("clip", video_box, path.with_name("clip.init.txt")),
                                ("seq", sequence_box, folder / "init.txt")):
-        assert first_row(out / name / "s0") == box
-        data = record(out / name / "s0")
+        assert first_row(out / name / DEFAULT_CONFIG) == box
+        data = record(out / name / DEFAULT_CONFIG)
         assert data["init"] == list(box) and data["init_from"] == str(sidecar)
     # a changed sidecar is a different run: resume tracks it again
     moved = Box(video_box.x + 2, *video_box[1:])
@@ -141,4 +142,4 @@ def test_batch_tracks_a_folder_of_footage_without_ground_truth(
     with (out / "summary.csv").open(newline="") as handle:
         rows = {row["input"]: row for row in csv.DictReader(handle)}
     assert rows["clip"]["status"] == "complete" and rows["seq"]["status"] == "skipped"
-    assert first_row(out / "clip" / "s0") == moved, again.output
+    assert first_row(out / "clip" / DEFAULT_CONFIG) == moved, again.output

@@ -68,7 +68,7 @@ def as_frames(items: Iterable[Frame] | Iterable[np.ndarray], fps: float = 30.0) 
                             f"{item.shape}")
 
 
-def track(frames: FrameInput, config: str | os.PathLike[str] | Config = "s0",
+def track(frames: FrameInput, config: str | os.PathLike[str] | Config = "robust",
           init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0
           ) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``.

@@ -27,7 +27,7 @@ from typing import Any
 from vtrack.errors import ConfigError
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
-DEFAULT_CONFIG = "s0"
+DEFAULT_CONFIG = "robust"
 
 
 @dataclass
