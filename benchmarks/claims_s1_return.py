@@ -36,7 +36,7 @@ from vtrack.geometry import Window, center_error
 from vtrack.histograms import bhattacharyya_rows, hue_histogram
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.scenes import Scene, make_scene
-from vtrack.stages.base import LOST, TRACKING
+from vtrack.stages.base import TrackState
 from vtrack.stages.particle import HUE_LEVELS, hue_windows
 
 #: (label, overrides, particles scattered while lost) of the compared settings: the patent's
@@ -76,12 +76,12 @@ def leave_and_return(scene: Scene, results: list[FrameResult]) -> dict:
     out, back = scene.events["leave"]
     states = [r.state for r in results]
     leave = None
-    if states[out] == LOST:
+    if states[out] == TrackState.LOST:
         first = out
-        while first > 0 and states[first - 1] == LOST:
+        while first > 0 and states[first - 1] == TrackState.LOST:
             first -= 1
         leave = first - out
-    found = next((i for i in range(back, len(results)) if states[i] == TRACKING), None)
+    found = next((i for i in range(back, len(results)) if states[i] == TrackState.TRACKING), None)
     full = _fully_in_view(scene, back)
     wrong = False
     if found is not None:
@@ -109,7 +109,8 @@ class ReacquisitionTest:
         self.size = (start.width, start.height)
         first = hue_windows(frames[0], [start])[0]
         self.target = hue_histogram(first, None, self.bins, HUE_LEVELS).astype(np.float64)
-        reference = next(r for r in results if r.state == LOST).extras["reference_weight"]
+        lost = next(r for r in results if r.state == TrackState.LOST)
+        reference = lost.extras["reference_weight"]
         self.cut = settings["threshold"] * reference
         self.frames = frames
 

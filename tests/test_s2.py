@@ -52,7 +52,7 @@ from vtrack.scenes.render import (
     target_paint,
 )
 from vtrack.scenes.scene import SceneSpec, Truth, assemble
-from vtrack.stages.base import OCCLUDED, TrackContext, TrackState, build_stage
+from vtrack.stages.base import TrackContext, TrackState, build_stage
 from vtrack.stages.kernel_meanshift import KernelMeanShift
 
 FPS = 30.0
@@ -111,7 +111,7 @@ def test_full_occlusion_takes_the_occlusion_branch_and_coasts_on_the_prediction(
     assert [r.extras["decision"] for r in results[:start]] == ["accept"] * start
     for previous, current in zip(results[start - 1 : end - 1], results[start:end], strict=True):
         assert current.extras["decision"] == "occlusion"
-        assert current.state == OCCLUDED
+        assert current.state == TrackState.OCCLUDED
         # S2 sec. 5 (2)(2): the position is the prediction, and the next frame starts there.
         assert previous.prediction is not None and current.box is not None
         assert current.box.cx == pytest.approx(previous.prediction.cx)

@@ -63,8 +63,6 @@ class TrackStatus(StrEnum):
     COASTING = "coasting"
 
 
-TRACKING, OCCLUDED, LOST = TrackState.TRACKING, TrackState.OCCLUDED, TrackState.LOST
-
 #: Context fields the pipeline itself provides before the first stage runs.
 PIPELINE_PROVIDES = frozenset({"frame", "box", "prediction", "state", "rng", "search_growth"})
 
