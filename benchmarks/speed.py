@@ -111,9 +111,13 @@ def make_clip(frames: int) -> tuple[Path, Path]:
 
 
 def _env() -> dict[str, str]:
-    """The environment of every timed process: this checkout first on ``PYTHONPATH``."""
-    return dict(os.environ, PYTHONPATH=os.pathsep.join(
+    """The environment of every timed process: this checkout first on ``PYTHONPATH``, and
+    bytecode caches used as a default Python uses them (an inherited PYTHONDONTWRITEBYTECODE
+    would make every vtrack process compile its modules again: not what a user's install does)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
 
 
 def _timed(argv: list[str], what: str, **kwargs: object) -> tuple[float, str]:
