@@ -1,18 +1,29 @@
-"""Speed at 1080p60: vtrack against PyAV decode-only and a PyAV transcode, in one run.
+"""Speed at 1080p60, whole processes as a user runs them: vtrack against PyAV decode-only and a
+PyAV transcode, measured in the same run.
 
-    python benchmarks/speed.py [--frames 600] [--rounds 3]
+    python benchmarks/speed.py [--frames 600] [--rounds 5] [--config s0 ...] [--preset ultrafast]
 
 Generates (once, cached in benchmarks/_work/) a 1920x1080 60 fps H.264 clip of camera-like
-footage with the project's scene generator, then measures in alternating rounds:
+footage with the project's scene generator (`vtrack scene benchmark`), then times whole
+processes, start-up included, each started the way a user starts it:
 
-- PyAV decode only (``thread_type = "AUTO"``, frames not converted);
-- ``vtrack run --no-video`` (S0, in-process: reader thread, pipeline, CSV, run.json);
-- ``vtrack run`` with annotated video, at the ultrafast and veryfast presets;
-- a PyAV transcode (decode + libx264 encode, same encoder settings) at the same presets;
-- raw bgr24 1080p frames from a pipe through ``vtrack run - --raw 1920x1080``.
+- baseline A: a decode-only Python process (imports av, numpy, cv2, click, tqdm; decodes the clip
+  with ``thread_type = "AUTO"``, frames not converted);
+- ``vtrack run CLIP --no-video --config C --init BOX --out DIR`` (``python -m vtrack``, this
+  checkout first on ``PYTHONPATH``), per config;
+- baseline B: a PyAV transcode process (same imports; decode + libx264 encode with vtrack's
+  writer settings: yuv420p, crf 23, the preset, encoder ``thread_type = "FRAME"``, 90 kHz clock);
+- ``vtrack run CLIP --config C --init BOX --out DIR --preset P`` (annotated video), per config;
+- raw bgr24 1080p frames piped by a Python producer process into
+  ``vtrack run - --raw 1920x1080 --pix-fmt bgr24 --fps 60 --no-video`` (the producer renders its
+  frames before the clock starts; the consumer's whole process is timed).
 
-Reports medians and the ratios the targets are stated in, plus S0's per-stage microseconds per
-frame, and prints a Markdown table (paste it into benchmarks/RESULTS.md). Machines here are shared
+fps = frames / whole-process wall time. Rounds alternate every measurement (A, vtrack, B, vtrack,
+raw pipe; then again), the first round is a warm-up and is dropped; the table gives medians and the
+median (min-max) of the per-round ratios (vtrack's fps over its baseline's fps in the same
+round), plus the in-process loop fps and the per-stage microseconds per frame that each vtrack
+run wrote to its run.json. The tracker is started on the
+clip's first ground-truth box (the benchmark target, ~129x98 at 1080p). Machines here are shared
 and noisy: only ratios measured in the same run mean much.
 """
 
@@ -28,13 +39,63 @@ import tempfile
 import time
 from pathlib import Path
 
-import av
+from common import REPO, machine
 
-from vtrack.config import load_config
-from vtrack.run import RunRequest, run, versions
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 WORK = Path(__file__).resolve().parent / "_work"
+LIBRARIES = "import av, numpy, cv2, click, tqdm"
+
+# Baseline A: what a user's minimal PyAV script does to read every frame of the clip.
+DECODE = f"""
+import sys
+{LIBRARIES}
+with av.open(sys.argv[1]) as container:
+    stream = container.streams.video[0]
+    stream.thread_type = "AUTO"
+    print(sum(1 for _ in container.decode(stream)))
+"""
+
+# Baseline B: decode + encode with the settings of vtrack's annotated-video writer.
+TRANSCODE = f"""
+import sys
+from fractions import Fraction
+{LIBRARIES}
+clip, out_path, preset = sys.argv[1:4]
+clock = Fraction(1, 90000)
+n = 0
+with av.open(clip) as source, av.open(out_path, "w") as sink:
+    stream = source.streams.video[0]
+    stream.thread_type = "AUTO"
+    out = sink.add_stream("libx264", rate=Fraction(stream.average_rate).limit_denominator(1001))
+    out.width, out.height, out.pix_fmt = stream.width, stream.height, "yuv420p"
+    out.codec_context.time_base = out.time_base = clock
+    out.codec_context.thread_type = "FRAME"
+    out.options = {{"preset": preset, "crf": "23"}}
+    for frame in source.decode(stream):
+        frame.pts, frame.time_base = round(frame.time / clock), clock
+        for packet in out.encode(frame):
+            sink.mux(packet)
+        n += 1
+    for packet in out.encode():
+        sink.mux(packet)
+print(n)
+"""
+
+# Raw-pipe producer: renders 60 benchmark frames, says "ready" on stderr, then writes frames.
+PRODUCER = r"""
+import sys
+from vtrack.scenes import make_scene
+n = int(sys.argv[1])
+scene = make_scene("benchmark", seed=0, width=1920, height=1080, frames=60, fps=60)
+frames = [f.tobytes() for f in scene.frames()]
+sys.stderr.write("ready\n")
+sys.stderr.flush()
+out = sys.stdout.buffer
+for i in range(n):
+    out.write(frames[i % len(frames)])
+out.flush()
+"""
 
 
 def make_clip(frames: int) -> tuple[Path, Path]:
@@ -49,130 +110,205 @@ def make_clip(frames: int) -> tuple[Path, Path]:
     return clip, gt
 
 
-def decode_only(clip: Path) -> float:
-    with av.open(str(clip)) as container:
-        stream = container.streams.video[0]
-        stream.thread_type = "AUTO"
-        started = time.perf_counter()
-        n = sum(1 for _ in container.decode(stream))
-    return n / (time.perf_counter() - started)
+def _env() -> dict[str, str]:
+    """The environment of every timed process: this checkout first on ``PYTHONPATH``, and
+    bytecode caches used as a default Python uses them (an inherited PYTHONDONTWRITEBYTECODE
+    would make every vtrack process compile its modules again: not what a user's install does)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
 
 
-def transcode(clip: Path, preset: str) -> float:
-    with tempfile.TemporaryDirectory() as tmp, av.open(str(clip)) as source:
-        stream = source.streams.video[0]
-        stream.thread_type = "AUTO"
-        with av.open(str(Path(tmp) / "out.mp4"), "w") as sink:
-            out = sink.add_stream("libx264", rate=stream.average_rate)
-            out.width, out.height, out.pix_fmt = stream.width, stream.height, "yuv420p"
-            out.options = {"preset": preset, "crf": "23"}
-            out.thread_type = "FRAME"
-            started = time.perf_counter()
-            n = 0
-            tick = 1 / stream.average_rate
-            for frame in source.decode(stream):
-                frame.pts, frame.time_base = n, tick  # restamp as the encoder's 1/fps ticks
-                for packet in out.encode(frame):
-                    sink.mux(packet)
-                n += 1
-            for packet in out.encode():
-                sink.mux(packet)
-            return n / (time.perf_counter() - started)
+def _timed(argv: list[str], what: str, **kwargs: object) -> tuple[float, str]:
+    """Wall time of a whole process and its stdout; raises with its stderr if it fails."""
+    started = time.perf_counter()
+    done = subprocess.run(argv, capture_output=True, text=True, check=False, env=_env(),
+                          **kwargs)  # type: ignore[call-overload]
+    seconds = time.perf_counter() - started
+    if done.returncode != 0:
+        raise RuntimeError(f"{what} failed ({done.returncode}): {done.stderr.strip()[-2000:]}")
+    return seconds, done.stdout
 
 
-def vtrack_run(clip: Path, gt: Path, video: bool, preset: str = "ultrafast") -> tuple[float, dict]:
+def python_baseline(script: str, args: list[str], frames: int, what: str) -> float:
+    """Seconds of a ``python -c SCRIPT ARGS`` process that prints how many frames it handled."""
+    seconds, out = _timed([sys.executable, "-c", script, *args], what)
+    if int(out.split()[-1]) != frames:
+        raise RuntimeError(f"{what}: handled {out.split()[-1]} frames, expected {frames}")
+    return seconds
+
+
+def vtrack_run(args: list[str], frames: int, what: str, **kwargs: object) -> tuple[float, dict]:
+    """Seconds of a ``python -m vtrack run ARGS --out DIR`` process and the run.json it wrote."""
     with tempfile.TemporaryDirectory() as tmp:
-        request = RunRequest(input=str(clip), out_dir=Path(tmp), config=load_config("s0"),
-                             gt_path=gt, video=video, preset=preset)
-        started = time.perf_counter()
-        summary = run(request)
-        seconds = time.perf_counter() - started
+        seconds, _ = _timed([sys.executable, "-m", "vtrack", "run", *args, "--out", tmp], what,
+                            **kwargs)
         record = json.loads((Path(tmp) / "run.json").read_text())
-    assert summary.status == "complete", summary.error
-    return summary.frames / seconds, record
+    if record["status"] != "complete" or record["frames"] != frames:
+        raise RuntimeError(f"{what}: {record['status']} after {record['frames']} frames "
+                           f"({record['error']})")
+    return seconds, record
 
 
-PRODUCER = r"""
-import sys, numpy as np
-from vtrack.scenes import make_scene
-w, h, n = 1920, 1080, int(sys.argv[1])
-frames = [f.tobytes() for _, f in zip(range(60), make_scene("benchmark", seed=0, width=w, height=h,
-          frames=60, fps=60).frames())]
-out = sys.stdout.buffer
-for i in range(n):
-    out.write(frames[i % len(frames)])
-out.flush()
-"""
-
-
-def raw_pipe(frames: int, init: str) -> float:
-    """fps of ``vtrack run -`` reading raw bgr24 1080p from a pipe (producer in another process)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        producer = subprocess.Popen([sys.executable, "-c", PRODUCER, str(frames)],
-                                    stdout=subprocess.PIPE)
-        consumer = subprocess.run(
-            [sys.executable, "-m", "vtrack", "run", "-", "--raw", "1920x1080", "--pix-fmt",
-             "bgr24", "--fps", "60", "--init", init, "--no-video", "--out", tmp],
-            stdin=producer.stdout, capture_output=True, text=True, check=False)
+def raw_pipe(frames: int, args: list[str], what: str) -> tuple[float, dict]:
+    """Seconds of the ``vtrack run -`` process reading raw bgr24 1080p from a producer process
+    (started once the producer has rendered its frames) and the run.json it wrote."""
+    producer = subprocess.Popen([sys.executable, "-c", PRODUCER, str(frames)], env=_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        assert producer.stderr is not None
+        if producer.stderr.readline().strip() != b"ready":
+            raise RuntimeError(f"raw-pipe producer failed: {producer.stderr.read().decode()}")
+        return vtrack_run(["-", "--raw", "1920x1080", "--pix-fmt", "bgr24", "--fps", "60",
+                           *args], frames, what, stdin=producer.stdout)
+    finally:
+        if producer.stdout is not None:
+            producer.stdout.close()
         producer.wait()
-        if consumer.returncode != 0:
-            raise RuntimeError(consumer.stderr)
-        return json.loads((Path(tmp) / "run.json").read_text())["timing"]["fps"]
+
+
+def _spread(values: list[float], digits: int = 2) -> str:
+    """``median (min-max)``."""
+    return (f"{statistics.median(values):.{digits}f} "
+            f"({min(values):.{digits}f}-{max(values):.{digits}f})")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--frames", type=int, default=600)
-    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--frames", type=int, default=600,
+                        help="clip length (default 600 = 10 s of 1080p60)")
+    parser.add_argument("--rounds", type=int, default=5,
+                        help="measured rounds (one more warm-up round is run and dropped)")
+    parser.add_argument("--config", action="append", dest="configs", metavar="NAME|FILE",
+                        help="tracker config given to `vtrack run --config` (repeatable; "
+                             "default s0)")
+    parser.add_argument("--preset", action="append", dest="presets", metavar="PRESET",
+                        help="x264 preset of the annotated video and the transcode (repeatable; "
+                             "default ultrafast)")
+    parser.add_argument("--no-raw", action="store_true", help="skip the raw-pipe measurement")
     args = parser.parse_args()
+    configs: list[str] = args.configs or ["s0"]
+    presets: list[str] = args.presets or ["ultrafast"]
     clip, gt = make_clip(args.frames)
-    init = ",".join(f"{v:.1f}" for v in map(float, gt.read_text().splitlines()[0].split(",")))
-    size_mb = clip.stat().st_size * 8 / 1e6
-    bitrate = size_mb / (args.frames / 60)
+    first = [float(v) for v in gt.read_text().splitlines()[0].split(",")]
+    init = ",".join(f"{v:.1f}" for v in first)
+    bitrate = clip.stat().st_size * 8 / 1e6 / (args.frames / 60)
+    n = args.frames
 
-    samples: dict[str, list[float]] = {}
-    stage_us: dict[str, float] = {}
-    for _ in range(args.rounds):
-        # Alternate every measurement within a round so drift hits them alike.
-        samples.setdefault("decode", []).append(decode_only(clip))
-        fps, record = vtrack_run(clip, gt, video=False)
-        samples.setdefault("run_novideo", []).append(fps)
-        stage_us = record["timing"]["stage_us_per_frame"]
-        for preset in ("ultrafast", "veryfast"):
-            samples.setdefault(f"transcode_{preset}", []).append(transcode(clip, preset))
-            samples.setdefault(f"run_video_{preset}", []).append(
-                vtrack_run(clip, gt, video=True, preset=preset)[0])
-        samples.setdefault("raw_pipe", []).append(raw_pipe(args.frames, init))
-    med = {k: statistics.median(v) for k, v in samples.items()}
+    seconds: dict[str, list[float]] = {}
+    ratios: dict[str, list[float]] = {}
+    loop_fps: dict[str, list[float]] = {}
+    stage_us: dict[str, dict[str, list[float]]] = {c: {} for c in configs}
 
-    v = versions()
-    print(f"Command: `python benchmarks/speed.py --frames {args.frames} --rounds {args.rounds}`  ")
-    print(f"Machine: {os.cpu_count()} cores, {v['platform']}; Python {v['python']}, "
-          f"PyAV {v['pyav']} (libavcodec {v['ffmpeg']}), OpenCV {v['opencv']}, "
-          f"NumPy {v['numpy']}  ")
-    print(f"Clip: 1920x1080, 60 fps, {args.frames} frames, H.264 crf 23, {bitrate:.1f} Mb/s; "
-          f"median of {args.rounds} alternating rounds\n")
-    rows = [
-        ("PyAV decode only", med["decode"], "1.00x decode", ""),
-        ("vtrack run --no-video (S0)", med["run_novideo"],
-         f"{med['run_novideo'] / med['decode']:.2f}x decode", ">= 0.9x and >= 60 fps"),
-    ]
-    for preset in ("ultrafast", "veryfast"):
-        t, r = med[f"transcode_{preset}"], med[f"run_video_{preset}"]
-        rows.append((f"PyAV transcode, {preset}", t, f"{t / med['decode']:.2f}x decode", ""))
-        target = ">= 0.85x and >= 60 fps" if preset == "ultrafast" else "(report only)"
-        rows.append((f"vtrack run with video, {preset}", r, f"{r / t:.2f}x transcode", target))
-    rows.append(("vtrack run - --raw 1920x1080 bgr24 (pipe)", med["raw_pipe"], "", ">= 60 fps"))
-    print("| measurement | fps (median) | ratio | target |")
-    print("|---|---:|---:|---|")
-    for name, fps, ratio, target in rows:
-        print(f"| {name} | {fps:.1f} | {ratio} | {target} |")
-    print("\nS0 per-stage cost (µs per frame, from run.json of the --no-video run):\n")
-    print("| stage | µs/frame |")
-    print("|---|---:|")
-    for name, us in stage_us.items():
-        print(f"| {name} | {us:.0f} |")
+    def keep(key: str, value: float, round_: int) -> None:
+        if round_ > 0:  # round 0 warms the file cache and the imports: dropped
+            seconds.setdefault(key, []).append(value)
+
+    with tempfile.TemporaryDirectory() as scratch:
+        for round_ in range(args.rounds + 1):
+            # Alternate every measurement within a round so drift hits them alike.
+            decode = python_baseline(DECODE, [str(clip)], n, "decode-only process")
+            keep("decode", decode, round_)
+            for config in configs:
+                key = f"novideo:{config}"
+                t, record = vtrack_run([str(clip), "--no-video", "--config", config,
+                                        "--init", init], n, f"vtrack run --no-video ({config})")
+                keep(key, t, round_)
+                if round_ > 0:
+                    ratios.setdefault(key, []).append(decode / t)  # fps ratio, same round
+                    loop_fps.setdefault(key, []).append(record["timing"]["fps"])
+                    for stage, us in record["timing"]["stage_us_per_frame"].items():
+                        stage_us[config].setdefault(stage, []).append(us)
+            for preset in presets:
+                out = str(Path(scratch) / "transcode.mp4")
+                transcode = python_baseline(TRANSCODE, [str(clip), out, preset], n,
+                                            f"transcode process ({preset})")
+                keep(f"transcode:{preset}", transcode, round_)
+                for config in configs:
+                    key = f"video:{config}:{preset}"
+                    t, record = vtrack_run([str(clip), "--config", config, "--init", init,
+                                            "--preset", preset], n,
+                                           f"vtrack run with video ({config}, {preset})")
+                    keep(key, t, round_)
+                    if round_ > 0:
+                        ratios.setdefault(key, []).append(transcode / t)
+                        loop_fps.setdefault(key, []).append(record["timing"]["fps"])
+            if not args.no_raw:
+                for config in configs:
+                    key = f"raw:{config}"
+                    t, record = raw_pipe(n, ["--no-video", "--config", config, "--init", init],
+                                         f"vtrack run - --raw ({config})")
+                    keep(key, t, round_)
+                    if round_ > 0:
+                        loop_fps.setdefault(key, []).append(record["timing"]["fps"])
+
+    def row(name: str, key: str, ratio: str, target: str) -> str:
+        s = statistics.median(seconds[key])
+        loop = f"{statistics.median(loop_fps[key]):.0f}" if key in loop_fps else ""
+        return f"| {name} | {s:.2f} | {n / s:.1f} | {ratio} | {target} | {loop} |"
+
+    print(f"Command: `python benchmarks/speed.py --frames {n} --rounds {args.rounds}"
+          + "".join(f" --config {c}" for c in configs)
+          + "".join(f" --preset {p}" for p in presets)
+          + (" --no-raw" if args.no_raw else "") + "`  ")
+    print(f"{machine()}  ")
+    print(f"Clip: `vtrack scene benchmark`, 1920x1080, 60 fps, {n} frames, H.264 crf 23, "
+          f"{bitrate:.1f} Mb/s; init box {init} ({first[2]:.0f}x{first[3]:.0f})  ")
+    print(f"Whole processes, start-up included; fps = frames / wall time. Median of {args.rounds} "
+          "rounds alternating every measurement (a first warm-up round dropped); ratio = median "
+          "(min-max) of the per-round ratios (each run against its baseline run of the same "
+          "round). Loop fps: the tracking loop alone, from run.json.\n")
+    print("| process | wall s (median) | fps | ratio to baseline | target | loop fps |")
+    print("|---|---:|---:|---:|---|---:|")
+    print(row("A: decode-only Python process (baseline)", "decode", "1.00", ""))
+    for config in configs:
+        key = f"novideo:{config}"
+        print(row(f"`vtrack run CLIP --no-video --config {config}`", key,
+                  f"{_spread(ratios[key])}x A", ">= 0.9x"))
+    for preset in presets:
+        print(row(f"B: PyAV transcode process, {preset} (baseline)", f"transcode:{preset}",
+                  "1.00", ""))
+        for config in configs:
+            key = f"video:{config}:{preset}"
+            target = ">= 0.85x" if preset == "ultrafast" else "(report only)"
+            print(row(f"`vtrack run CLIP --config {config} --preset {preset}` (annotated video)",
+                      key, f"{_spread(ratios[key])}x B", target))
+    if not args.no_raw:
+        for config in configs:
+            print(row(f"`vtrack run - --raw 1920x1080 --no-video --config {config}` "
+                      "(raw bgr24 pipe from a Python producer)", f"raw:{config}", "",
+                      ">= 60 fps"))
+
+    print("\nProcesses timed (CLIP = the clip above, BOX = its first ground-truth box):\n")
+    print("```")
+    print(f'A: python -c "{LIBRARIES}; <decode CLIP, thread_type AUTO>"')
+    print("   python -m vtrack run CLIP --no-video --config C --init BOX --out DIR")
+    print(f'B: python -c "{LIBRARIES}; <decode CLIP + libx264 -preset P -crf 23, '
+          'thread_type FRAME>"')
+    print("   python -m vtrack run CLIP --config C --init BOX --out DIR --preset P")
+    if not args.no_raw:
+        print("   <python producer> | python -m vtrack run - --raw 1920x1080 --pix-fmt bgr24 "
+              "--fps 60 --no-video --config C --init BOX --out DIR")
+    print("```")
+
+    print("\nTracking work per 1080p frame (µs, median over the --no-video runs' run.json; "
+          "wall time on the main thread while the decoder's threads share the cores):\n")
+    print("| stage | " + " | ".join(configs) + " |")
+    print("|---|" + "---:|" * len(configs))
+    stages = list(dict.fromkeys(s for c in configs for s in stage_us[c]))
+    for stage in stages:
+        cells = [f"{statistics.median(stage_us[c][stage]):.0f}" if stage in stage_us[c] else ""
+                 for c in configs]
+        print(f"| {stage} | " + " | ".join(cells) + " |")
+    totals = [sum(statistics.median(v) for v in stage_us[c].values()) for c in configs]
+    print("| **total** | " + " | ".join(f"**{t:.0f}**" for t in totals) + " |")
+    print(f"\nTarget box {first[2]:.0f}x{first[3]:.0f}; issue 14's aim for `robust`: a total "
+          "<= 1000 µs per 1080p frame for a ~140x100 target.")
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except RuntimeError as exc:  # a timed process failed: say which and why, no traceback
+        sys.exit(f"speed.py: {exc}")

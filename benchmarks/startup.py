@@ -51,6 +51,7 @@ def measure(rounds: int) -> tuple[list[float], dict[str, list[float]]]:
     """Wall times of the baseline and of each command, ``rounds`` alternating rounds."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # bytecode caches as a default Python uses them
     baseline: list[float] = []
     times: dict[str, list[float]] = {name: [] for name, _ in COMMANDS}
     with tempfile.TemporaryDirectory() as cwd:

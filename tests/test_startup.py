@@ -75,3 +75,28 @@ def test_import_vtrack_is_lazy_and_its_names_still_resolve() -> None:
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=60, check=True)
     assert done.stdout.split() == ["False", "False", "3", "[]"]
+
+
+def test_run_loads_only_the_stages_of_its_chain(clip_factory, tmp_path) -> None:
+    clip = clip_factory("smooth", frames=10)
+    out = tmp_path / "out"
+    modules, stdout = loaded_modules("run", str(clip.path), "--config", "s0", "--gt",
+                                     str(clip.gt), "--no-video", "--out", str(out), "-q")
+    stages = {m.removeprefix("vtrack.stages.") for m in modules if m.startswith("vtrack.stages.")}
+    chain = [s["name"] for s in json.loads((out / "run.json").read_text())["config"]["stages"]]
+    assert chain == ["hue", "backproject", "meanshift", "occlusion", "kalman"]
+    # hue lives in colour.py; every other s0 stage in the module of its own name
+    assert stages == {"base", "colour", "backproject", "meanshift", "occlusion", "kalman"}
+    assert not {m for m in modules if m.startswith("vtrack.golden")}
+
+
+def test_an_unknown_stage_still_lists_every_stage() -> None:
+    from vtrack.errors import ConfigError
+    from vtrack.stages.base import all_stages, stage_class
+
+    with pytest.raises(ConfigError) as caught:
+        stage_class("no_such_stage", "test.toml")
+    names = all_stages()
+    assert {"hue", "kalman", "particle", "hue_bp_fixed"} <= set(names)
+    assert f"known stages: {', '.join(names)}" in str(caught.value)
+    assert stage_class("hue", "test.toml") is names["hue"]

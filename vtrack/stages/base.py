@@ -236,13 +236,28 @@ def all_stages() -> dict[str, type[Stage]]:
     return dict(sorted(_REGISTRY.items()))
 
 
+def _find_stage(name: str) -> None:
+    """Import modules of ``vtrack.stages`` until one registers ``name``: first the module named
+    like the stage, then the others in order. A run imports only the stages of its chain (each
+    module costs start-up time); :func:`all_stages` still imports every one."""
+    import vtrack.stages as package
+
+    modules = sorted(m.name for m in pkgutil.iter_modules(package.__path__))
+    for module in sorted(modules, key=lambda m: m != name):  # stable: `name` first
+        importlib.import_module(f"{package.__name__}.{module}")
+        if name in _REGISTRY:
+            return
+
+
 def stage_class(name: str, where: str) -> type[Stage]:
-    stages = all_stages()
-    if name not in stages:
+    """The stage class registered as ``name``; a ConfigError listing every stage otherwise."""
+    if name not in _REGISTRY:
+        _find_stage(name)
+    if name not in _REGISTRY:
         raise ConfigError(
-            f"{where}: unknown stage {name!r} (known stages: {', '.join(stages)})"
+            f"{where}: unknown stage {name!r} (known stages: {', '.join(all_stages())})"
         )
-    return stages[name]
+    return _REGISTRY[name]
 
 
 def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
