@@ -111,7 +111,7 @@ class BackProject(Stage):
             raise InputError(
                 f"backproject: no pixel of the initial box {box.text()} passes the hue stage's "
                 "saturation/value mask: the target has no colour for a hue tracker (grey footage? "
-                "try --config s2, or lower hue.sat_min / hue.val_min)"
+                "try --config robust or s2, or lower hue.sat_min / hue.val_min)"
             )
         # S0 eq. 4: CalcBackData = histogram[hue] * 255 / max, as a table hue value -> BP
         # (256 entries for cv2.LUT; values >= levels never occur and map to 0)
