@@ -54,8 +54,12 @@ ABLATIONS = (
     ("no scale", ["robust_search.scale=false"]),
     ("no update", ["robust_failure.update=false"]),
     ("no re-detection", ["robust_failure.redetect=false"]),
+    ("no cue agreement (fused score only)", ["robust_failure.agree_below=0"]),
+    ("with LMCF trend freeze (learn at >= 0.9 x mean score)",
+     ["robust_failure.trend_ratio=0.9"]),
     ("no failure logic (never occluded)", ["robust_failure.occlude_below=0",
-                                           "robust_failure.recover_at=0"]),
+                                           "robust_failure.recover_at=0",
+                                           "robust_failure.agree_below=0"]),
 )
 
 
@@ -212,6 +216,13 @@ def main() -> None:
     print(f"| **mean** | **{mean('auc'):.3f}** | {mean('precision'):.3f} | {mean('miou'):.3f} | "
           f"{share(total('false_tracking'), total('tracking'))} | "
           f"{share(total('flagged'), total('misses'))} | {mean('us_per_frame'):.0f} |")
+    # ... and averaged over the sequences (each sequence weighs the same; sequences without
+    # such frames left out), so one long sequence cannot carry the pooled share
+    per_tracking = [r.false_tracking / r.tracking for r in results if r.tracking]
+    per_flagged = [r.flagged / r.misses for r in results if r.misses]
+    print(f"| mean per sequence | | | | "
+          f"{statistics.mean(per_tracking):.1%} | {statistics.mean(per_flagged):.1%} | |"
+          if per_tracking and per_flagged else "")
 
 
 if __name__ == "__main__":
