@@ -21,6 +21,13 @@ way, by its peak-to-sidelobe ratio).
   are blended towards the box (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's
   learning rates) and the usual cue values move ``rate_reference`` towards this frame's;
   nothing is learnt while occluded or lost, so an occluder is not learnt as the target.
+  ``trend_ratio`` (off by default) also stops learning while the score is below that share of
+  its running mean (LMCF, Wang et al. CVPR 2017): it froze Car4's model through its lighting
+  change (mean AUC 0.546 -> 0.48 on the real sequences), so it is only an option.
+- Cue agreement (``agree_below``): a box is ``tracking`` only while BOTH cues, template and
+  colour, reach that share of their usual values; a fair fused score carried by one cue alone
+  (a box on an occluder with the target's grey texture, or on a same-coloured background) is
+  not the target.
 
 Pipeline contract of stage ``robust_failure``: reads ``ctx.frame`` (its size), ``ctx.score``,
 ``ctx.measurement``, ``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``,
@@ -68,6 +75,13 @@ class RobustFailure(Stage):
         Param("rate_reference", float, 0.05,
               "learning rate of the reference confidence on confident frames",
               min=0.0, max=1.0),
+        Param("trend_ratio", float, 0.0,
+              "the model and the usual cue values learn only while the score is at least "
+              "this share of its running mean over learning frames (LMCF's high-confidence "
+              "update, Wang et al. CVPR 2017; 0: off)", min=0.0, max=1.0),
+        Param("agree_below", float, 0.5,
+              "occluded as soon as either cue (template, colour) falls below this share of "
+              "its usual value: both cues must see the target (0: off)", min=0.0, max=1.0),
     )
     requires = frozenset({"frame", "score", "measurement", "prediction", "robust"})
     provides = frozenset({"state", "measurement", "box"})
@@ -84,6 +98,8 @@ class RobustFailure(Stage):
     rate_hist: float
     rate_template: float
     rate_reference: float
+    trend_ratio: float
+    agree_below: float
 
     def start(self, ctx: TrackContext) -> None:
         """The first frame's box is the target: tracking."""
@@ -92,6 +108,7 @@ class RobustFailure(Stage):
         ctx.robust.hidden = 0
         ctx.robust.search_all = False
         ctx.extras["confidence"] = 1.0
+        self._usual = 1.0  # running mean of the score over learning frames (trend_ratio)
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
@@ -101,7 +118,7 @@ class RobustFailure(Stage):
         level = self.occlude_below
         if ctx.state != TrackState.TRACKING:
             level = max(self.recover_at, self.occlude_below)  # hysteresis
-        if score >= level and ctx.measurement is not None:
+        if score >= level and ctx.measurement is not None and self._agree(target):
             ctx.state = TrackState.TRACKING
             target.hidden = 0
             target.search_all = False
@@ -111,6 +128,9 @@ class RobustFailure(Stage):
                 target.references = tuple(  # type: ignore[assignment]
                     (1 - rate) * r + rate * v
                     for r, v in zip(target.references, target.cues, strict=True))
+            # the score's running mean over all tracking frames (LMCF's historical mean): a
+            # lasting change of appearance lowers it and learning resumes
+            self._usual = (1 - self.rate_reference) * self._usual + self.rate_reference * score
             return
         target.hidden += 1
         # S0 item 7: while hidden the measurement is not used and the box is the prediction
@@ -131,7 +151,21 @@ class RobustFailure(Stage):
         slowly keeps a fair fused score while one cue already sees the occluder) reach
         ``update_above``."""
         value = score if self.update_rule == "score" else target.confidence(target.cues, "min")
-        return value >= self.update_above
+        # LMCF (Wang et al., "Large Margin Object Tracking with Circulant Feature Maps", CVPR
+        # 2017, sec. 3.3): update only when the response is at least beta x its historical
+        # mean, so a target being covered slowly (a falling score still above update_above)
+        # does not teach the model and the usual values the occluder
+        return value >= self.update_above and score >= self.trend_ratio * self._usual
+
+    def _agree(self, target: RobustTarget) -> bool:
+        """Whether both cues see the target: each at least ``agree_below`` of its usual value.
+        The template and colour cues fail in different ways (Bertinetto et al., Staple, CVPR
+        2016, sec. 1): a box on an occluder that shares the target's texture or grey level
+        keeps a fair fused score while one cue has collapsed; that is not the target."""
+        if self.agree_below <= 0:
+            return True
+        return all(v >= self.agree_below * max(r, 1e-6)
+                   for v, r in zip(target.cues, target.references, strict=True))
 
 
 def _inside_share(box: Box, width: int, height: int) -> float:
