@@ -45,6 +45,13 @@ class Frame(ABC):
     def bgr(self, window: Window | None = None) -> np.ndarray:
         """The window (default: whole frame) as a ``uint8`` BGR array of shape (h, w, 3)."""
 
+    def bgr_sampled(self, window: Window, k: int) -> np.ndarray:
+        """The centre pixel of every ``k`` x ``k`` block of ``window`` (``k`` odd), as BGR:
+        ``bgr(window)[o::k, o::k]`` with ``o = (k - 1) // 2``, the same values (what
+        ``cv2.resize`` with ``INTER_LINEAR`` gives at an odd whole factor)."""
+        o = (k - 1) // 2
+        return np.ascontiguousarray(self.bgr(window)[o::k, o::k])
+
     @abstractmethod
     def gray(self, window: Window | None = None) -> np.ndarray:
         """The window (default: whole frame) as a ``uint8`` grey (luma) array of shape (h, w)."""
@@ -133,6 +140,31 @@ class I420Frame(Frame):
         pv[:] = self.v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
         return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
+
+    def bgr_sampled(self, window: Window, k: int) -> np.ndarray:
+        """Only the sampled pixels are converted (1 / k^2 of the window). Each keeps its own
+        chroma sample, so they go through 4:2:2 (YUY2: one chroma pair per two pixels, the
+        second pixel a copy, dropped after); OpenCV converts 4:2:2 and 4:2:0 with the same
+        BT.601 integer arithmetic, so the values equal those of :meth:`bgr` (checked over all
+        256^3 Y, U, V triples)."""
+        o = (k - 1) // 2
+        rows = np.arange(window.y0 + o, window.y1, k)
+        cols = np.arange(window.x0 + o, window.x1, k)
+        if rows.size == 0 or cols.size == 0:
+            return np.empty((rows.size, cols.size, 3), np.uint8)
+        luma = np.ascontiguousarray(
+            self.y[window.y0 + o : window.y1 : k, window.x0 + o : window.x1 : k])
+        # chroma of each sampled pixel, from the window's part of the U and V planes
+        r0, c0 = rows[0] // 2, cols[0] // 2
+        half_rows, half_cols = rows // 2 - r0, cols // 2 - c0
+        u, v = (plane[r0 : half_rows[-1] + r0 + 1, c0 : half_cols[-1] + c0 + 1]
+                .take(half_rows, axis=0).take(half_cols, axis=1) for plane in (self.u, self.v))
+        packed = cv2.merge([luma, u, luma, v])  # Y0 U Y1 V: one YUY2 pair per pixel
+        pairs = cv2.cvtColor(packed.reshape(rows.size, cols.size * 2, 2),
+                             cv2.COLOR_YUV2BGR_YUY2)
+        # every other pixel: nearest-neighbour halving takes column 2 j exactly (a NumPy
+        # strided copy of 3-byte pixels costs ~4x more)
+        return cv2.resize(pairs, (cols.size, rows.size), interpolation=cv2.INTER_NEAREST)
 
     def gray(self, window: Window | None = None) -> np.ndarray:
         return self.y if window is None else self.y[window.slices]

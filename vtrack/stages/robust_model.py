@@ -485,9 +485,14 @@ class RobustModel(Stage):
             cols, rows = max(window.width // k, 1), max(window.height // k, 1)
             window = Window(window.x0, window.y0, window.x0 + min(cols * k, window.width),
                             window.y0 + min(rows * k, window.height))
-            bgr = frame.bgr(window)
-            if k > 1:
-                bgr = cv2.resize(bgr, (cols, rows), interpolation=DOWNSCALE)
+            if k >= 3 and k % 2 and window.width == cols * k and window.height == rows * k:
+                # at an odd whole factor the bilinear resize samples the centre pixel of each
+                # k x k block: convert only those (same values, 1 / k^2 of the work)
+                bgr = frame.bgr_sampled(window, k)
+            else:
+                bgr = frame.bgr(window)
+                if k > 1:
+                    bgr = cv2.resize(bgr, (cols, rows), interpolation=DOWNSCALE)
         else:
             cols = max(int(round(window.width * scale)), 1)
             rows = max(int(round(window.height * scale)), 1)
