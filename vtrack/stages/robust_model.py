@@ -84,7 +84,7 @@ class ColourModel:
     distractor_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: bin -> target likelihood 0..1 (float32, 256 entries for ``cv2.LUT``).
     table: np.ndarray = field(default_factory=lambda: np.zeros(256, np.float32))
-    _luts: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
+    _luts: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def bins(self) -> int:
@@ -96,33 +96,41 @@ class ColourModel:
         Saturated pixels: ``hue_bin * sat_bins + sat_bin``; grey pixels (S < 60 or V < 32):
         ``hue_bins * sat_bins + value_bin``. Table look-ups per channel (no per-pixel Python).
         """
-        hue_lut, sat_lut, grey_lut = self._tables()
-        h, s, v = cv2.split(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL))
-        colour = cv2.add(cv2.LUT(h, hue_lut), cv2.LUT(s, sat_lut))
-        chromatic = cv2.bitwise_and(cv2.compare(s, GREY_SAT, cv2.CMP_GE),
-                                    cv2.compare(v, GREY_VAL, cv2.CMP_GE))
-        return cv2.copyTo(colour, chromatic, cv2.LUT(v, grey_lut))
+        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)
+        hue, sat, grey = cv2.split(cv2.LUT(hsv, self._tables()))  # one look-up per channel
+        chromatic = cv2.inRange(hsv, (0, GREY_SAT, GREY_VAL), (255, 255, 255))
+        return cv2.copyTo(cv2.add(hue, sat), chromatic, grey)
 
-    def _tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Channel value -> part of the joint bin: hue, saturation (coloured pixels), value
-        (grey pixels); built once."""
+    def _tables(self) -> np.ndarray:
+        """Channel value -> part of the joint bin, as one 3-channel ``cv2.LUT`` table (256 x 1
+        x 3) for an HSV image: hue, saturation (coloured pixels), value (grey pixels); built
+        once."""
         if self._luts is None:
             levels = np.arange(256)
             hue = (levels * self.hue_bins >> 8) * self.sat_bins
             sat = np.clip(levels - GREY_SAT, 0, None) * self.sat_bins // (256 - GREY_SAT)
             grey = self.hue_bins * self.sat_bins + (levels * self.grey_bins >> 8)
-            self._luts = tuple(t.astype(np.uint8) for t in (hue, sat, grey))  # type: ignore
-        return self._luts  # type: ignore[return-value]
+            self._luts = np.stack([hue, sat, grey], axis=-1).astype(np.uint8).reshape(256, 1, 3)
+        return self._luts
 
     def histogram(self, bins: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         """Normalised, smoothed histogram of a bin image (soft binning, see the module doc)."""
-        counts = cv2.calcHist([bins], [0], mask, [self.bins], [0, self.bins]).ravel()
+        return self.smoothed(self.counts(bins, mask))
+
+    def counts(self, bins: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+        """Pixel count per joint bin (float32 holding whole numbers: sums and differences of
+        counts are exact)."""
+        return cv2.calcHist([bins], [0], mask, [self.bins], [0, self.bins]).ravel()
+
+    def smoothed(self, counts: np.ndarray) -> np.ndarray:
+        """Counts -> normalised histogram, smoothed over neighbouring bins."""
         counts = counts.astype(np.float64)
         colour = counts[: self.hue_bins * self.sat_bins].reshape(self.hue_bins, self.sat_bins)
         grey = counts[self.hue_bins * self.sat_bins :]
         # [1 2 1] / 4 over neighbouring hue bins (circular) and value bins: each pixel also
         # counts for the bins next to its own, so a lighting shift of a bin costs little
-        colour = (2 * colour + np.roll(colour, 1, 0) + np.roll(colour, -1, 0)) / 4
+        wrapped = np.concatenate([colour[-1:], colour, colour[:1]])  # np.roll by 1 and -1
+        colour = (2 * colour + wrapped[:-2] + wrapped[2:]) / 4
         padded = np.concatenate([grey[:1], grey, grey[-1:]])
         grey = (padded[:-2] + 2 * grey + padded[2:]) / 4
         smooth = np.concatenate([colour.ravel(), grey])
@@ -178,6 +186,10 @@ class RobustTarget:
     bins: np.ndarray | None = None  # joint colour bin per working pixel
     grey: np.ndarray | None = None  # grey level per working pixel
     likelihood: np.ndarray | None = None  # per-pixel target likelihood 0..1
+    #: Integral image (float64) of ``likelihood`` and ``grey`` as float32, set by _maps for
+    #: robust_search (computed once a frame).
+    integral: np.ndarray | None = None
+    grey32: np.ndarray | None = None
     #: Box size in working pixels this frame's maps are for (the placements' size).
     size: tuple[int, int] = (1, 1)
     #: Placement score maps (top-left corner of a ``size`` box at each working pixel).
@@ -255,13 +267,15 @@ class RobustTarget:
         part = self.box_part(box)
         if part is None:
             return
-        inside = np.zeros(self.bins.shape, np.uint8)
-        inside[part] = 255
-        obj = self.model.histogram(self.bins, inside)
-        # DAT's surrounding region: the window around the box (Possegger et al. 2015, sec. 3.1)
-        ring = self.model.histogram(self.bins, cv2.bitwise_not(inside))
+        inside = self.model.counts(self.bins[part])
+        obj = self.model.smoothed(inside)
+        # DAT's surrounding region: the window around the box (Possegger et al. 2015, sec. 3.1),
+        # counted as the whole window's counts less the box's (no masks)
+        ring = self.model.smoothed(self.model.counts(self.bins) - inside)
         distractors = None
         if self.model.surround_weight < 1.0 and self.colour_map is not None:
+            inside = np.zeros(self.bins.shape, np.uint8)
+            inside[part] = 255
             mask = distractor_mask(self.colour_map, self.size, (part[1].start, part[0].start),
                                    DISTRACTOR_SHARE, DISTRACTOR_COUNT)
             if mask is not None and mask.shape == self.bins.shape:
@@ -353,9 +367,16 @@ def place_window(
 def box_means(image: np.ndarray, w: int, h: int) -> np.ndarray:
     """Mean of ``image`` over every ``w`` x ``h`` placement (top-left at each pixel), from one
     integral image: shape ``(rows - h + 1, cols - w + 1)``."""
-    table = cv2.integral(image, sdepth=cv2.CV_64F)
-    sums = table[h:, w:] - table[:-h, w:] - table[h:, :-w] + table[:-h, :-w]
-    return (sums / (w * h)).astype(np.float32)
+    return integral_box_means(cv2.integral(image, sdepth=cv2.CV_64F), w, h)
+
+
+def integral_box_means(table: np.ndarray, w: int, h: int) -> np.ndarray:
+    """:func:`box_means` from the image's integral ``table`` (float64)."""
+    sums = table[h:, w:] - table[:-h, w:]  # in place from here: no temporaries, same order
+    sums -= table[h:, :-w]
+    sums += table[:-h, :-w]
+    sums /= w * h
+    return sums.astype(np.float32)
 
 
 @register
@@ -526,23 +547,27 @@ class RobustModel(Stage):
         assert target is not None and target.likelihood is not None and target.grey is not None
         w = max(int(round(box.w * target.sx)), 2)
         h = max(int(round(box.h * target.sy)), 2)
-        likelihood, grey = target.likelihood, target.grey
+        likelihood = target.likelihood
+        grey = target.grey32 = target.grey.astype(np.float32)
+        table = cv2.integral(likelihood, sdepth=cv2.CV_64F)
+        target.integral = table
         rows, cols = grey.shape
         if rows < h + 1 or cols < w + 1:  # window clipped by the frame border: pad it
             bottom, right = max(h + 1 - rows, 0), max(w + 1 - cols, 0)
             likelihood = cv2.copyMakeBorder(likelihood, 0, bottom, 0, right,
                                             cv2.BORDER_CONSTANT, value=0)
             grey = cv2.copyMakeBorder(grey, 0, bottom, 0, right, cv2.BORDER_REPLICATE)
+            table = cv2.integral(likelihood, sdepth=cv2.CV_64F)
         target.size = (w, h)
         # Staple eq. 2-3: f_hist = mean per-pixel likelihood over the box (integral image)
-        target.colour_map = box_means(likelihood, w, h)
+        target.colour_map = integral_box_means(table, w, h)
         template = target.template_at(w, h)
         if template is None or target.gamma >= 1.0:
             target.template_map = None
             target.fused = target.colour_map
             return
-        ncc = cv2.matchTemplate(grey.astype(np.float32), template, cv2.TM_CCOEFF_NORMED)
-        np.nan_to_num(ncc, copy=False)
+        ncc = cv2.matchTemplate(grey, template, cv2.TM_CCOEFF_NORMED)
+        cv2.patchNaNs(ncc, 0.0)  # NaN -> 0; infinities are clipped below as before
         np.clip(ncc, 0.0, 1.0, out=ncc)
         target.template_map = ncc
         # Staple eq. 2: f = (1 - gamma) f_tmpl + gamma f_hist

@@ -55,6 +55,7 @@ from vtrack.stages.robust_model import RobustTarget
 
 #: Share of the map's peak below which placements do not pull the mean shift.
 PEAK_SHARE = 0.8
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 #: Confidence margin by which the window's best placement overrides the motion prior's choice.
 CLEARLY_BETTER = 0.1
 
@@ -228,9 +229,8 @@ class RobustSearch(Stage):
 
     def _scale(self, target: RobustTarget, cx: float, cy: float, w: int, h: int) -> float:
         """Size factor for the box this frame (1 = unchanged), see the module doc."""
-        assert target.likelihood is not None and target.grey is not None
-        table = cv2.integral(target.likelihood, sdepth=cv2.CV_64F)
-        grey = target.grey
+        assert target.integral is not None and target.grey32 is not None
+        table, grey = target.integral, target.grey32  # the likelihood's integral, from _maps
         scores = []
         factors = (1.0 / self.scale_step, 1.0, self.scale_step)
         for k in factors:
@@ -253,7 +253,8 @@ class RobustSearch(Stage):
 
 def _ncc_near(grey: np.ndarray, template: np.ndarray, cx: float, cy: float,
               margin: int = 2) -> float:
-    """Best NCC of ``template`` centred within ``margin`` pixels of ``(cx, cy)``."""
+    """Best NCC of ``template`` centred within ``margin`` pixels of ``(cx, cy)`` (``grey``:
+    float32)."""
     th, tw = template.shape
     rows, cols = grey.shape
     x0 = int(round(cx - tw / 2)) - margin
@@ -262,7 +263,8 @@ def _ncc_near(grey: np.ndarray, template: np.ndarray, cx: float, cy: float,
     x1c, y1c = min(x0 + tw + 2 * margin, cols), min(y0 + th + 2 * margin, rows)
     if x1c - x0c < tw or y1c - y0c < th:
         return 0.0
-    patch = grey[y0c:y1c, x0c:x1c].astype(np.float32)
-    response = cv2.matchTemplate(patch, template, cv2.TM_CCOEFF_NORMED)
-    return float(np.nan_to_num(response).max())
+    response = cv2.matchTemplate(grey[y0c:y1c, x0c:x1c], template, cv2.TM_CCOEFF_NORMED)
+    best = float(cv2.patchNaNs(response, 0.0).max())
+    # as np.nan_to_num: an infinity counts as the largest finite float32
+    return math.copysign(FLOAT32_MAX, best) if math.isinf(best) else best
 
