@@ -129,6 +129,25 @@ def test_i420_windows_of_decoded_frame_match_full_conversion(tmp_path):
         np.testing.assert_array_equal(frame.gray(window), full_gray[window.slices])
 
 
+
+def test_sampled_windows_equal_converted_then_resized(tmp_path):
+    """frame.bgr_sampled (robust_model's odd-factor path) gives exactly the pixels of a full
+    conversion followed by the bilinear resize it replaces, on decoded frames and on random
+    Y, U, V values (every chroma combination the window's sampled pixels can meet)."""
+    clip = write_video(tmp_path / "clip.mp4", pictures(2))
+    rng = np.random.default_rng(0)
+    noise = I420Frame(0, 0.0, rng.integers(0, 256, (96 * 3 // 2, 128), dtype=np.uint8))
+    for frame in (read_all(str(clip))[1], noise):
+        for k in (3, 5):
+            for x0, y0, cols, rows in ((0, 0, 9, 7), (3, 5, 4, 3), (1, 2, 1, 1), (8, 0, 12, 9)):
+                window = Window(x0, y0, x0 + cols * k, y0 + rows * k)
+                full = frame.bgr(window)
+                sampled = frame.bgr_sampled(window, k)
+                np.testing.assert_array_equal(sampled, full[k // 2 :: k, k // 2 :: k])
+                np.testing.assert_array_equal(
+                    sampled, cv2.resize(full, (cols, rows), interpolation=cv2.INTER_LINEAR))
+
+
 def test_variable_frame_rate_timestamps(tmp_path):
     times = [0.0, 0.040, 0.050, 0.200, 0.210, 0.500, 0.533, 1.000]
     clip = write_video(tmp_path / "vfr.mp4", pictures(len(times)), times=times)
