@@ -81,8 +81,26 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
     scene = scene_factory("smooth", 1)
     for switch in ("robust_model.surroundings=false", "robust_model.template=false",
                    "robust_model.adaptive_window=false", "robust_search.scale=false",
-                   "robust_failure.update=false", "robust_failure.redetect=false"):
+                   "robust_failure.update=false", "robust_failure.redetect=false",
+                   "robust_failure.hold=false", "robust_failure.hold_search=false",
+                   "robust_failure.hold_learn=false"):
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
+
+
+def test_stale_template_is_not_an_occlusion(scene_factory) -> None:
+    """The camera-like benchmark scene (target visible on every frame, its template going stale
+    as it turns): with the hold, fewer frames are called hidden and the box stays closer than
+    when the template alone can declare an occlusion (the coast-and-freeze deadlock)."""
+    scene = scene_factory("benchmark", 0, width=320, height=180, frames=200, fps=60.0)
+    assert min(scene.visibility) > 0.5
+    held, coasted = track(scene), track(scene, ["robust_failure.hold=false"])
+
+    def hidden(results: list[FrameResult]) -> int:
+        return sum(r.state != TrackState.TRACKING for r in results)
+
+    assert hidden(coasted) > 0, "the scene no longer shows the stale-template deadlock"
+    assert hidden(held) < hidden(coasted)
+    assert overlap(scene, held) > overlap(scene, coasted)
 
 
 def test_score_says_box_on_target(scene_factory) -> None:

@@ -28,6 +28,24 @@ way, by its peak-to-sidelobe ratio).
   colour, reach that share of their usual values; a fair fused score carried by one cue alone
   (a box on an occluder with the target's grey texture, or on a same-coloured background) is
   not the target.
+- Stale-template hold (``hold``): a TRACKING target whose template cue alone has fallen (the
+  agreement test or the fused score fails) stays ``tracking`` while the colour cue still reaches
+  ``hold_colour`` of its usual value AND the measurement lies inside the motion gate
+  (Mahalanobis distance of the innovation in the predictor's uncertainty at most ``hold_gate``:
+  Bar-Shalom, Li, Kirubarajan, "Estimation with Applications to Tracking and Navigation", 2001,
+  sec. 5.4, validation gate; 3.03 is the 99% gate of a 2-D innovation). A template that went
+  stale while the target turned is one cue disagreeing, not evidence that the target is gone;
+  coasting there (and freezing the model) let the box drift off in a straight line and never
+  recover. Held frames never take a hidden target back (that needs ``recover_at``).
+- After a held frame the next one is localised on the colour map alone (``hold_search``): the
+  stale template otherwise pulls the fused map's mode onto a placement half off the target
+  whose background happens to match it (a re-check of the window by the cue that still sees
+  the target, instead of the straight-line coast).
+- Held frames, and tracking frames below ``update_above`` that pass the same colour-and-motion
+  test, blend the template only, at ``hold_rate`` (``hold_learn``; Staple and DSST learn every
+  frame at a fixed rate, Bertinetto et al. 2016 eq. 5, Danelljan et al. BMVC 2014: the
+  deadlock came from the hard ``update_above`` gate); the colour model and the usual cue values
+  are not touched, so the hold cannot teach the colour cue what it then relies on.
 
 Pipeline contract of stage ``robust_failure``: reads ``ctx.frame`` (its size), ``ctx.score``,
 ``ctx.measurement``, ``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``,
@@ -82,6 +100,23 @@ class RobustFailure(Stage):
         Param("agree_below", float, 0.5,
               "occluded as soon as either cue (template, colour) falls below this share of "
               "its usual value: both cues must see the target (0: off)", min=0.0, max=1.0),
+        Param("hold", bool, True,
+              "keep a tracking target tracking while the colour cue is confident and the "
+              "measurement is inside the motion gate, even when the template cue disagrees"),
+        Param("hold_colour", float, 0.95,
+              "share of its usual value the colour cue must reach for the hold",
+              min=0.0, max=1.0),
+        Param("hold_gate", float, 3.0,
+              "largest Mahalanobis distance of the measured centre from the prediction "
+              "(in the predictor's sigma per axis) for the hold", min=0.0, max=100.0),
+        Param("hold_search", bool, True,
+              "after a held frame, localise on the colour map alone (the stale template "
+              "no longer pulls the box off the target)"),
+        Param("hold_learn", bool, True,
+              "on held frames, and on tracking frames below update_above that pass the hold "
+              "test, blend the template (only) towards the box at hold_rate"),
+        Param("hold_rate", float, 0.01,
+              "template learning rate on held frames (Staple: 0.01)", min=0.0, max=1.0),
     )
     requires = frozenset({"frame", "score", "measurement", "prediction", "robust"})
     provides = frozenset({"state", "measurement", "box"})
@@ -100,6 +135,12 @@ class RobustFailure(Stage):
     rate_reference: float
     trend_ratio: float
     agree_below: float
+    hold: bool
+    hold_colour: float
+    hold_gate: float
+    hold_search: bool
+    hold_learn: bool
+    hold_rate: float
 
     def start(self, ctx: TrackContext) -> None:
         """The first frame's box is the target: tracking."""
@@ -107,6 +148,7 @@ class RobustFailure(Stage):
         assert ctx.robust is not None
         ctx.robust.hidden = 0
         ctx.robust.search_all = False
+        ctx.robust.colour_only = False
         ctx.extras["confidence"] = 1.0
         self._usual = 1.0  # running mean of the score over learning frames (trend_ratio)
 
@@ -118,7 +160,9 @@ class RobustFailure(Stage):
         level = self.occlude_below
         if ctx.state != TrackState.TRACKING:
             level = max(self.recover_at, self.occlude_below)  # hysteresis
-        if score >= level and ctx.measurement is not None and self._agree(target):
+        was_tracking = ctx.state == TrackState.TRACKING
+        target.colour_only = False
+        if ctx.measurement is not None and score >= level and self._agree(target):
             ctx.state = TrackState.TRACKING
             target.hidden = 0
             target.search_all = False
@@ -128,9 +172,20 @@ class RobustFailure(Stage):
                 target.references = tuple(  # type: ignore[assignment]
                     (1 - rate) * r + rate * v
                     for r, v in zip(target.references, target.cues, strict=True))
+            elif self.update and self.hold_learn and self._held(ctx, target):
+                # medium confidence, colour and motion agree: the template follows slowly
+                target.learn_template(ctx.measurement, self.hold_rate)
             # the score's running mean over all tracking frames (LMCF's historical mean): a
             # lasting change of appearance lowers it and learning resumes
             self._usual = (1 - self.rate_reference) * self._usual + self.rate_reference * score
+            return
+        if was_tracking and ctx.measurement is not None and self._held(ctx, target):
+            # one stale cue is not evidence that the target is gone: follow the measurement
+            # (the state stays tracking), localise the next frame on colour
+            target.hidden = 0
+            target.colour_only = self.hold_search
+            if self.update and self.hold_learn:
+                target.learn_template(ctx.measurement, self.hold_rate)
             return
         target.hidden += 1
         # S0 item 7: while hidden the measurement is not used and the box is the prediction
@@ -156,6 +211,21 @@ class RobustFailure(Stage):
         # mean, so a target being covered slowly (a falling score still above update_above)
         # does not teach the model and the usual values the occluder
         return value >= self.update_above and score >= self.trend_ratio * self._usual
+
+    def _held(self, ctx: TrackContext, target: RobustTarget) -> bool:
+        """Whether a tracking target whose template cue disagrees is still plainly there: the
+        colour cue at ``hold_colour`` of its usual value and the measured centre inside the
+        ``hold_gate`` validation gate around the prediction (Bar-Shalom et al. 2001, sec.
+        5.4; the predictor's sigma per axis, ``ctx.robust.sigma``)."""
+        if not self.hold or ctx.measurement is None or ctx.prediction is None:
+            return False
+        colour, usual = target.cues[1], target.references[1]
+        if colour < self.hold_colour * max(usual, 1e-6):
+            return False
+        sx, sy = (max(s, 1e-6) for s in target.sigma)
+        dx = (ctx.measurement.cx - ctx.prediction.cx) / sx
+        dy = (ctx.measurement.cy - ctx.prediction.cy) / sy
+        return dx * dx + dy * dy <= self.hold_gate ** 2
 
     def _agree(self, target: RobustTarget) -> bool:
         """Whether both cues see the target: each at least ``agree_below`` of its usual value.

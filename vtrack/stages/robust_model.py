@@ -204,6 +204,9 @@ class RobustTarget:
     #: (robust_failure: lost with re-detection on).
     hidden: int = 0
     search_all: bool = False
+    #: Whether the next frame localises on the colour map alone (robust_failure's hold: the
+    #: template is stale, the colour cue and the motion agree).
+    colour_only: bool = False
 
     def to_working(self, x: float, y: float) -> tuple[float, float]:
         """Frame coordinates -> working-image coordinates of this frame's window."""
@@ -293,6 +296,13 @@ class RobustTarget:
             distractors,
         )
         self._learn_template(part, rate_template)
+
+    def learn_template(self, box: Box, rate_template: float) -> None:
+        """Blend only the template towards this frame's ``box`` at ``rate_template`` (the
+        colour histograms are left as they are)."""
+        part = self.box_part(box)
+        if part is not None:
+            self._learn_template(part, rate_template)
 
     def _learn_template(self, part: tuple[slice, slice], rate_template: float) -> None:
         """Blend the template towards the grey patch ``part`` at ``rate_template``."""

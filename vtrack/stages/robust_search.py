@@ -165,6 +165,8 @@ class RobustSearch(Stage):
         assert target is not None and target.fused is not None and ctx.box is not None
         center = ctx.prediction if ctx.prediction is not None else ctx.box
         fused = target.fused
+        if target.colour_only and target.colour_map is not None:
+            fused = target.colour_map  # the template is stale (robust_failure's hold)
         w, h = target.size
         pcx, pcy = target.to_working(center.cx, center.cy)
         if target.search_all:
