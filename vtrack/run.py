@@ -145,7 +145,7 @@ def versions() -> dict[str, str]:
 def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
     """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
     ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
-    shown = tuple(float(f"{v:.6g}") for v in box)
+    shown = box.text()
     if not all(math.isfinite(v) for v in box) or box.w <= 0 or box.h <= 0:
         raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
     if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
