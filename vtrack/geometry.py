@@ -8,6 +8,7 @@ already clipped to the frame, used to cut the part of a frame a stage works on.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
@@ -120,3 +121,21 @@ def iou(a: Box, b: Box) -> float:
 def center_error(a: Box, b: Box) -> float:
     """Euclidean distance between the two boxes' centres, in pixels."""
     return math.hypot(a.cx - b.cx, a.cy - b.cy)
+
+
+def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
+                   error: type[Exception]) -> Box:
+    """The box ``x, y, w, h`` of 4 number texts: all finite, ``w, h > 0``. Otherwise raises
+    ``error`` naming ``where`` and showing ``shown`` (what the user wrote): "expected
+    ``expected``" when the numbers are not 4 finite ones, else that width and height must be
+    positive. One rule for ``--init`` and sidecar files."""
+    try:
+        values = [float(part) for part in parts]
+    except ValueError:
+        values = []
+    if len(values) != 4 or not all(math.isfinite(v) for v in values):
+        raise error(f"{where}: expected {expected}, got {shown!r}")
+    box = Box(*values)
+    if box.w <= 0 or box.h <= 0:
+        raise error(f"{where}: width and height must be positive, got {shown!r}")
+    return box

@@ -14,7 +14,7 @@ from os import PathLike
 from pathlib import Path
 
 from vtrack.errors import ConfigError, InputError
-from vtrack.geometry import Box
+from vtrack.geometry import Box, box_from_parts
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
 _SEPARATORS = re.compile(r"[,\s]+")
@@ -189,13 +189,4 @@ def parse_box(text: str) -> Box:
 
     Spaces around the numbers are allowed. Raises ConfigError naming ``--init`` otherwise.
     """
-    try:
-        values = [float(part) for part in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise ConfigError(f"--init: expected x,y,w,h, got {text!r}")
-    box = Box(*values)
-    if box.w <= 0 or box.h <= 0:
-        raise ConfigError(f"--init: width and height must be positive, got {text!r}")
-    return box
+    return box_from_parts(text.split(","), "--init", "x,y,w,h", text, ConfigError)

@@ -11,12 +11,11 @@ Kept free of the video libraries so every command can use it cheaply.
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 from pathlib import Path
 
 from vtrack.errors import InputError, OutputError
-from vtrack.geometry import Box
+from vtrack.geometry import Box, box_from_parts
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
@@ -44,16 +43,8 @@ def parse_sidecar(text: str, where: str) -> Box:
     """
     lines = [line.split("#", 1)[0].strip() for line in text.splitlines()]
     line = next((x for x in lines if x), "")
-    try:
-        values = [float(v) for v in line.replace(",", " ").split()]
-    except ValueError:
-        values = []
-    if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise InputError(f"{where}: expected one line x,y,w,h, got {line!r}")
-    box = Box(*values)
-    if box.w <= 0 or box.h <= 0:
-        raise InputError(f"{where}: width and height must be positive, got {line!r}")
-    return box
+    return box_from_parts(line.replace(",", " ").split(), where, "one line x,y,w,h", line,
+                          InputError)
 
 
 def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
