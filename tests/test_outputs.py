@@ -8,6 +8,7 @@ permitted.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -161,19 +162,26 @@ def test_a_folder_in_use_is_refused_and_a_killed_holder_releases_it(
 # --- a full disk ------------------------------------------------------------------------------
 
 
-@pytest.fixture
-def small_disk(tmp_path: Path) -> Iterator[Path]:
-    """A 2 MiB tmpfs, unmounted afterwards; skipped where mounting is not permitted."""
-    mount = tmp_path / "disk"
+@contextlib.contextmanager
+def tmpfs(mount: Path, options: str, what: str) -> Iterator[Path]:
+    """A tmpfs mounted at ``mount`` with ``options``, unmounted afterwards; the test is skipped
+    where mounting is not permitted."""
     mount.mkdir()
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mount)],
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(mount)],
                           capture_output=True, text=True, check=False)
     if done.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here ({done.stderr.strip() or 'not permitted'})")
+        pytest.skip(f"cannot mount {what} here ({done.stderr.strip() or 'not permitted'})")
     try:
         yield mount
     finally:
         subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+@pytest.fixture
+def small_disk(tmp_path: Path) -> Iterator[Path]:
+    """A 2 MiB tmpfs."""
+    with tmpfs(tmp_path / "disk", "size=2m", "a tmpfs") as mount:
+        yield mount
 
 
 def fill(disk: Path, leave: int) -> None:
@@ -213,18 +221,9 @@ def test_a_full_disk_is_one_line_exit_1_and_records_agree(
 
 @pytest.fixture
 def read_only_folder(tmp_path: Path) -> Iterator[Path]:
-    """A read-only file system (root writes anywhere else); skipped where mounting is not
-    permitted."""
-    mount = tmp_path / "ro"
-    mount.mkdir()
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(mount)],
-                          capture_output=True, text=True, check=False)
-    if done.returncode != 0:
-        pytest.skip(f"cannot mount a read-only tmpfs here ({done.stderr.strip()})")
-    try:
+    """A read-only file system (root writes anywhere else)."""
+    with tmpfs(tmp_path / "ro", "ro,size=64k", "a read-only tmpfs") as mount:
         yield mount
-    finally:
-        subprocess.run(["umount", "-l", str(mount)], check=False)
 
 
 @pytest.mark.parametrize("command", ["batch", "run"])
