@@ -107,15 +107,17 @@ class MotionModel(ABC):
             x += B @ self.u
         return GaussianState(x, F @ state.P @ F.T + self.Q)
 
-    def update(self, state: GaussianState, z: Sequence[float] | np.ndarray) -> GaussianState:
-        """``state`` corrected by the measured point ``z``.
+    def update(self, state: GaussianState, z: Sequence[float] | np.ndarray,
+               R: np.ndarray | None = None) -> GaussianState:
+        """``state`` corrected by the measured point ``z`` (with the measurement noise ``R`` of
+        this measurement; default: the model's).
 
         S0 eq. 13-17 / S4 eq. 7-10: ``K = P H^T (H P H^T + R)^-1``, ``x = x + K (z - H x)``,
         ``P = (I - K H) P``.
         """
         H, P = self.H, state.P
         PHt = P @ H.T
-        S = H @ PHt + self.R
+        S = H @ PHt + (self.R if R is None else R)
         # In the three models the measured coordinates are independent (per-axis blocks,
         # diagonal R), so S is diagonal and S^-1 is the reciprocal of its diagonal: the same
         # numbers as np.linalg.inv, without a general inversion every frame.

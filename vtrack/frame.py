@@ -95,6 +95,12 @@ class GrayFrame(Frame):
     def gray(self, window: Window | None = None) -> np.ndarray:
         return self._gray if window is None else self._gray[window.slices]
 
+    def bgr_sampled(self, window: Window, k: int) -> np.ndarray:
+        """As :meth:`Frame.bgr_sampled`, converting only the sampled pixels."""
+        o = (k - 1) // 2
+        sampled = self._gray[window.y0 + o:window.y1:k, window.x0 + o:window.x1:k]
+        return cv2.cvtColor(np.ascontiguousarray(sampled), cv2.COLOR_GRAY2BGR)
+
     def i420(self) -> np.ndarray:
         out = np.full((self.height * 3 // 2, self.width), 128, np.uint8)
         out[: self.height] = self._gray

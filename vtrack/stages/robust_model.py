@@ -52,6 +52,7 @@ import numpy as np
 
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
+from vtrack.histograms import hue_histogram
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
@@ -120,7 +121,7 @@ class ColourModel:
     def counts(self, bins: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         """Pixel count per joint bin (float32 holding whole numbers: sums and differences of
         counts are exact)."""
-        return cv2.calcHist([bins], [0], mask, [self.bins], [0, self.bins]).ravel()
+        return hue_histogram(bins, mask, self.bins, self.bins)
 
     def smoothed(self, counts: np.ndarray) -> np.ndarray:
         """Counts -> normalised histogram, smoothed over neighbouring bins."""
@@ -176,17 +177,15 @@ class RobustTarget:
     #: Uncertainty (1 sigma, frame pixels) of the predicted centre per axis.
     sigma: tuple[float, float] = (0.0, 0.0)
     # --- this frame's working images (set by robust_model) ----------------------------------
-    #: Search window in frame pixels (clipped to the frame); the frame position of the working
-    #: images' top-left corner (the region may reach beyond the frame); the scale factors
-    #: frame -> working pixels per axis.
-    window: Window = Window(0, 0, 1, 1)
+    #: The frame position of the working images' top-left corner (the search region may reach
+    #: beyond the frame; the window itself is ``ctx.window``); the scale factors frame ->
+    #: working pixels per axis.
     origin: tuple[float, float] = (0.0, 0.0)
     sx: float = 1.0
     sy: float = 1.0
     bins: np.ndarray | None = None  # joint colour bin per working pixel
     grey: np.ndarray | None = None  # grey level per working pixel
-    likelihood: np.ndarray | None = None  # per-pixel target likelihood 0..1
-    #: Integral image (float64) of ``likelihood`` and ``grey`` as float32, set by _maps for
+    #: Integral image (float64) of ``ctx.likelihood`` and ``grey`` as float32, set by _maps for
     #: robust_search (computed once a frame).
     integral: np.ndarray | None = None
     grey32: np.ndarray | None = None
@@ -374,14 +373,9 @@ def place_window(
     return cx - half_w, cy - half_h, cx + half_w, cy + half_h
 
 
-def box_means(image: np.ndarray, w: int, h: int) -> np.ndarray:
-    """Mean of ``image`` over every ``w`` x ``h`` placement (top-left at each pixel), from one
-    integral image: shape ``(rows - h + 1, cols - w + 1)``."""
-    return integral_box_means(cv2.integral(image, sdepth=cv2.CV_64F), w, h)
-
-
 def integral_box_means(table: np.ndarray, w: int, h: int) -> np.ndarray:
-    """:func:`box_means` from the image's integral ``table`` (float64)."""
+    """Mean of an image over every ``w`` x ``h`` placement (top-left at each pixel), from its
+    integral ``table`` (float64): shape ``(rows - h + 1, cols - w + 1)``."""
     sums = table[h:, w:] - table[:-h, w:]  # in place from here: no temporaries, same order
     sums -= table[h:, :-w]
     sums += table[:-h, :-w]
@@ -476,7 +470,7 @@ class RobustModel(Stage):
         if self.template:
             target.template = target.grey[part].astype(np.float32)
         target.learn(box, 1.0, 1.0)
-        target.likelihood = ctx.likelihood = target.model.likelihood(target.bins)
+        ctx.likelihood = target.model.likelihood(target.bins)
         self._maps(ctx, box)
         x, y = (round(v) for v in target.to_working(box.x, box.y))
         target.references = target.cues_at(x, y)
@@ -484,7 +478,7 @@ class RobustModel(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None and ctx.box is not None
-        center = ctx.prediction if ctx.prediction is not None else ctx.box
+        center = ctx.search_center
         self._convert(ctx, center, self.padding, lost=target.search_all)
         self._maps(ctx, ctx.box)
 
@@ -542,22 +536,20 @@ class RobustModel(Stage):
             bins = cv2.copyMakeBorder(bins, top, bottom, left, right, cv2.BORDER_CONSTANT,
                                       value=OUTSIDE)
             grey = cv2.copyMakeBorder(grey, top, bottom, left, right, cv2.BORDER_REPLICATE)
-        target.window = window
         target.origin = (window.x0 - left / sx, window.y0 - top / sy)
         target.sx, target.sy = sx, sy
         target.bins, target.grey = bins, grey
-        target.likelihood = target.model.likelihood(bins)
         ctx.window = window
-        ctx.likelihood = target.likelihood
+        ctx.likelihood = target.model.likelihood(bins)
         ctx.overlays.append(SearchWindow(window.as_box()))
 
     def _maps(self, ctx: TrackContext, box: Box) -> None:
         """Placement score maps for a box of ``box``'s size: colour box mean, NCC, fused."""
         target = ctx.robust
-        assert target is not None and target.likelihood is not None and target.grey is not None
+        assert target is not None and ctx.likelihood is not None and target.grey is not None
         w = max(int(round(box.w * target.sx)), 2)
         h = max(int(round(box.h * target.sy)), 2)
-        likelihood = target.likelihood
+        likelihood = ctx.likelihood
         grey = target.grey32 = target.grey.astype(np.float32)
         table = cv2.integral(likelihood, sdepth=cv2.CV_64F)
         target.integral = table

@@ -67,7 +67,6 @@ class RobustMotion(Stage):
         # S0 item 6's model (vtrack.filters), noises in proportion to the first box's diagonal
         self._model = ConstantVelocity(q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
                                        p0=(self.p0_rel * d) ** 2)
-        self._r = self._model.R.copy()
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._rms = np.zeros(2)
         self._was = TrackState.TRACKING
@@ -92,8 +91,8 @@ class RobustMotion(Stage):
                 # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
                 # biased centre does not become a velocity before it is hidden
                 confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
-                self._model.R = self._r / confidence**4
-                self._state = self._model.update(self._state, z)
+                self._state = self._model.update(self._state, z,
+                                                 R=self._model.R / confidence**4)
         elif ctx.box is not None:
             ctx.box = ctx.box.moved_to(*self._position())  # coast: this frame's prior
         self._was = ctx.state

@@ -163,7 +163,7 @@ class RobustSearch(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None and target.fused is not None and ctx.box is not None
-        center = ctx.prediction if ctx.prediction is not None else ctx.box
+        center = ctx.search_center
         fused = target.fused
         if target.colour_only and target.colour_map is not None:
             fused = target.colour_map  # the template is stale (robust_failure's hold)
