@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import time
 import traceback
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -10,6 +11,7 @@ from pathlib import Path
 import cv2
 
 from vtrack.batch.jobs import Job, Outcome
+from vtrack.batch.plan import recorded_summary
 from vtrack.errors import OutputError, VtrackError
 from vtrack.io.outdir import OutputFolder
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, run
@@ -20,19 +22,21 @@ def execute(job: Job) -> Outcome:
 
     This is what a worker process (local or Dask) calls. The run replaces what an earlier run
     left in the job's folder (:func:`vtrack.run.run`); a job that fails before it starts
-    tracking removes those old results too, so no earlier ``run.json`` outlives it. A user
+    tracking removes those old results too, so no earlier ``run.json`` outlives it, while one
+    that fails part way keeps the records its run wrote (as ``vtrack run`` does). A user
     error becomes a ``failed`` outcome with its one-line message; an unexpected exception also
     leaves its traceback in ``error.log`` in the job's folder.
     """
     cv2.setNumThreads(job.threads)
     out_dir = job.request.out_dir
+    started = time.time()
     try:
         summary = run(job.request)
     except VtrackError as exc:
-        _discard(out_dir)
+        _discard(job, started)
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
     except Exception as exc:  # a bug in one run must not take the batch down: record it
-        _discard(out_dir)
+        _discard(job, started)
         log: Path | None = out_dir / "error.log"
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
@@ -46,9 +50,11 @@ def execute(job: Job) -> Outcome:
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
 
 
-def _discard(out_dir: Path) -> None:
-    """Remove an earlier run's outputs from ``out_dir`` (unless another run holds it)."""
-    if out_dir.is_dir():
+def _discard(job: Job, started: float) -> None:
+    """Remove an earlier run's outputs from the job's folder (unless another run holds it),
+    unless this job's run recorded itself there since ``started`` (it failed part way)."""
+    out_dir = job.request.out_dir
+    if out_dir.is_dir() and recorded_summary(job.request, since=started) is None:
         with contextlib.suppress(OutputError), OutputFolder(out_dir) as folder:
             folder.clear()
 
