@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 import time
 from collections.abc import Iterable, Iterator
 from contextlib import closing
@@ -14,7 +13,7 @@ from typing import Any
 from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
 from vtrack.batch.plan import Plan, recorded_summary
-from vtrack.io.files import remove_quietly, temp_path
+from vtrack.io.files import write_text_atomic
 from vtrack.run import STATUS_INTERRUPTED
 
 
@@ -74,10 +73,4 @@ class SummaryWriter:
             elif unfinished is not None:
                 writer.writerow({"input": name, "config": config, "status": unfinished})
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = temp_path(self.path)
-        try:
-            temporary.write_text(buffer.getvalue(), encoding="utf-8")
-            os.replace(temporary, self.path)
-        except BaseException:
-            remove_quietly(temporary)
-            raise
+        write_text_atomic(self.path, buffer.getvalue())

@@ -56,16 +56,30 @@ def remove_quietly(path: Path) -> None:
 
 
 def prepare_output_dir(folder: Path) -> Path:
-    """Create ``folder`` (and parents) and check a file can be written in it.
+    """Create ``folder`` (and parents) and return it.
 
-    Raises OutputError naming the folder and the reason (a parent is a file, read-only file
-    system, permission denied ...). Call it before decoding anything.
+    Raises OutputError naming the folder and the reason (it or a parent is a file, read-only
+    file system, permission denied ...). Whether a file can be written in an existing folder is
+    for the caller's first write to find (:class:`vtrack.io.outdir.OutputFolder` takes a lock
+    file in it).
     """
-    probe = folder / ".vtrack-write-test"
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        probe.write_bytes(b"")
-        probe.unlink()
+    except FileExistsError:
+        raise OutputError(f"{folder}: cannot write output here (a file, not a folder)") from None
     except OSError as exc:
         raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
     return folder
+
+
+def write_text_atomic(path: Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file renamed when complete (readers never
+    see a half-written file) and return ``path``; OutputError naming it if it cannot be."""
+    temp = temp_path(path)
+    try:
+        temp.write_text(text, encoding="utf-8")
+        os.replace(temp, path)
+    except OSError as exc:
+        remove_quietly(temp)
+        raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+    return path

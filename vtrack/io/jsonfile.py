@@ -5,14 +5,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vtrack.errors import OutputError
-from vtrack.io.files import os_reason, remove_quietly, temp_path
+from vtrack.io.files import write_text_atomic
 
 
 def to_jsonable(value: Any) -> Any:
@@ -39,13 +37,4 @@ def to_jsonable(value: Any) -> Any:
 
 def write_json(path: Path | str, data: Any) -> None:
     """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``), indented."""
-    path = Path(path)
-    temp = temp_path(path)
-    text = json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n"
-    try:
-        with open(temp, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(temp, path)
-    except OSError as exc:
-        remove_quietly(temp)
-        raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+    write_text_atomic(Path(path), json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n")

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Self
 
 from vtrack.errors import OutputError
-from vtrack.io.files import os_reason
+from vtrack.io.files import os_reason, prepare_output_dir
 
 LOCK_NAME = ".vtrack.lock"
 #: Files a run writes into its folder; a new run removes these (and only these) first, with
@@ -36,16 +36,6 @@ def _holder(path: Path) -> str:
     except OSError:
         text = ""
     return text.splitlines()[0] if text else "another process"
-
-
-def _check_folder(folder: Path) -> None:
-    """Raise OutputError if ``folder`` (or a parent) is a file, or it cannot be created."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise OutputError(f"{folder}: cannot write output here (a file, not a folder)") from None
-    except OSError as exc:
-        raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
 
 
 class OutputFolder:
@@ -65,7 +55,7 @@ class OutputFolder:
 
     def __enter__(self) -> Self:
         missing = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
-        _check_folder(self.folder)
+        prepare_output_dir(self.folder)
         self._created = missing  # deepest first: the order to remove them in
         try:
             self._lock()

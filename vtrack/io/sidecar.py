@@ -4,18 +4,16 @@
 line ``x,y,w,h`` (top-left corner, width, height) in 0-based pixel coordinates of the first
 frame, the same numbers ``--init`` takes. ``vtrack select`` writes it; ``vtrack run`` and
 ``vtrack batch`` read it when no ``--init`` (and no ground truth) is given.
-
-Kept free of the video libraries so every command can use it cheaply.
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 from pathlib import Path
 
-from vtrack.errors import InputError, OutputError
+from vtrack.errors import InputError
 from vtrack.geometry import Box, box_from_parts
+from vtrack.io.files import write_text_atomic
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
@@ -69,13 +67,4 @@ def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
 def write_sidecar(input_spec: str | os.PathLike[str], box: Box) -> Path:
     """Write ``box`` as the initial box of ``input_spec`` (replacing an earlier one, atomically)
     and return the sidecar's path. Raises OutputError when it cannot be written."""
-    path = sidecar_path(input_spec)
-    temp = path.with_name(f".{path.name}.tmp")
-    try:
-        temp.write_text(format_box(box) + "\n", encoding="utf-8")
-        os.replace(temp, path)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            temp.unlink(missing_ok=True)
-        raise OutputError(f"{path}: cannot be written ({exc.strerror or exc})") from None
-    return path
+    return write_text_atomic(sidecar_path(input_spec), format_box(box) + "\n")

@@ -28,6 +28,7 @@ import numpy as np
 
 from vtrack import __version__
 from vtrack.errors import InputError, OutputError
+from vtrack.io.files import write_text_atomic
 from vtrack.report import pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
 
@@ -191,9 +192,9 @@ def build_report(results: Sequence[Path], out_dir: Path,
     )
     return Report(
         out_dir=out_dir,
-        index=pages.write_atomic(out_dir / "index.html", pages.render_html(page)),
-        markdown=pages.write_atomic(out_dir / "summary.md", pages.render_markdown(page)),
-        csv=pages.write_atomic(out_dir / "summary.csv", pages.render_csv(runs)),
+        index=write_text_atomic(out_dir / "index.html", pages.render_html(page)),
+        markdown=write_text_atomic(out_dir / "summary.md", pages.render_markdown(page)),
+        csv=write_text_atomic(out_dir / "summary.csv", pages.render_csv(runs)),
         plots=written,
         runs=runs,
         warnings=warnings,

@@ -7,7 +7,6 @@ import csv
 import html
 import io
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,14 +70,6 @@ class Page:
     mot: Table | None
     failed: list[FailedRun]
     sections: list[Section]
-
-
-def write_atomic(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file renamed when complete."""
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(text, encoding="utf-8")
-    os.replace(temporary, path)
-    return path
 
 
 def _footer(page: Page) -> str:
