@@ -19,9 +19,12 @@ from vtrack.config import load_config, parse_config
 from vtrack.errors import ConfigError, InputError
 from vtrack.filters import (
     MOTION_MODELS,
-    constant_acceleration,
-    constant_velocity,
-    gravity,
+    ConstantAcceleration,
+    ConstantVelocity,
+    GaussianState,
+    Gravity,
+    MotionModel,
+    Point,
     motion_model,
 )
 from vtrack.frame import BgrFrame, I420Frame
@@ -39,6 +42,50 @@ from vtrack.stages.occlusion import Occlusion, best_box, bhattacharyya
 
 OURS: tuple[type[Stage], ...] = (Hue, BackProject, MeanShift, Occlusion, Kalman)
 FRAMES = 150  # the scenarios' default length: a 32-frame full occlusion in "occlusion"
+
+
+class KalmanFilter:
+    """One mutable filter for these tests: a motion model, its current state, a fixed step."""
+
+    def __init__(self, model: MotionModel, state: GaussianState, dt: float = 1.0) -> None:
+        self.model, self.state, self.dt = model, state, dt
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.state.x
+
+    @property
+    def P(self) -> np.ndarray:
+        return self.state.P
+
+    def predict(self) -> np.ndarray:
+        self.state = self.model.predict(self.state, self.dt)
+        return self.state.x
+
+    def update(self, z) -> np.ndarray:
+        self.state = self.model.update(self.state, z)
+        return self.state.x
+
+    def position(self) -> Point:
+        return self.model.position(self.state)
+
+
+def constant_velocity(point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0,
+                      dt: float = 1.0) -> KalmanFilter:
+    model = ConstantVelocity(q, r, p0)
+    return KalmanFilter(model, model.initiate([point], dt), dt)
+
+
+def constant_acceleration(points, q: float = 1.0, r: float = 1.0, dt: float = 1.0,
+                          kinematic: bool = False) -> KalmanFilter:
+    model = ConstantAcceleration(q, r, kinematic)
+    return KalmanFilter(model, model.initiate(points, dt), dt)
+
+
+def gravity(point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0,
+            g: float = 1.0) -> KalmanFilter:
+    model = Gravity(q, r, p0, g)
+    return KalmanFilter(model, model.initiate([point], dt), dt)
 
 
 def context(bgr: np.ndarray, box: Box) -> TrackContext:

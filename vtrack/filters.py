@@ -25,10 +25,6 @@ filters, at half the Python overhead.
 Time is counted in ``dt`` units; with ``dt = 1`` (the documents' frame step) velocities are in
 pixels per frame. A model keeps the matrices of the last step it was asked for and reuses them
 for a step equal up to timestamp rounding (``i / fps`` timestamps differ in their last bits).
-
-:class:`KalmanFilter` (a model with its current state, ``predict()``/``update(z)`` in place) and
-the constructors :func:`constant_velocity`, :func:`constant_acceleration`, :func:`gravity` are
-kept for code that wants one mutable filter.
 """
 
 from __future__ import annotations
@@ -255,57 +251,3 @@ def motion_model(name: str, q: float = 1.0, r: float = 1.0, p0: float = 100.0,
         "gravity": lambda: Gravity(q, r, p0, g),
     }
     return makers[name]()
-
-
-class KalmanFilter:
-    """One mutable filter: a :class:`MotionModel`, its current state and a fixed step ``dt``."""
-
-    def __init__(self, model: MotionModel, state: GaussianState, dt: float = 1.0) -> None:
-        self.model, self.state, self.dt = model, state, dt
-
-    @property
-    def x(self) -> np.ndarray:
-        return self.state.x
-
-    @property
-    def P(self) -> np.ndarray:
-        return self.state.P
-
-    def predict(self) -> np.ndarray:
-        """Advance by ``dt`` and return the prior state."""
-        self.state = self.model.predict(self.state, self.dt)
-        return self.state.x
-
-    def update(self, z: Sequence[float] | np.ndarray) -> np.ndarray:
-        """Correct the state with the measured point ``z`` and return the posterior state."""
-        self.state = self.model.update(self.state, z)
-        return self.state.x
-
-    def position(self) -> Point:
-        return self.model.position(self.state)
-
-
-def constant_velocity(
-    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0
-) -> KalmanFilter:
-    """A :class:`ConstantVelocity` filter started at ``point`` (S0 item 6)."""
-    model = ConstantVelocity(q, r, p0)
-    return KalmanFilter(model, model.initiate([point], dt), dt)
-
-
-def constant_acceleration(
-    points: Sequence[Point], q: float = 1.0, r: float = 1.0, dt: float = 1.0,
-    kinematic: bool = False,
-) -> KalmanFilter:
-    """A :class:`ConstantAcceleration` filter started from the first three points (S2 item 8)."""
-    model = ConstantAcceleration(q, r, kinematic)
-    return KalmanFilter(model, model.initiate(points, dt), dt)
-
-
-def gravity(
-    point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt: float = 1.0,
-    g: float = 1.0,
-) -> KalmanFilter:
-    """A :class:`Gravity` filter started at ``point`` (S4 item 3)."""
-    model = Gravity(q, r, p0, g)
-    return KalmanFilter(model, model.initiate([point], dt), dt)
