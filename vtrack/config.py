@@ -80,15 +80,10 @@ class Config:
 
 def config_from_resolved(data: dict[str, Any]) -> Config:
     """The config :meth:`Config.resolved` described (every parameter set explicitly)."""
-    stages = [
-        {"name": stage["name"], **{k: v for k, v in stage.items() if k != "name"}}
-        for stage in data["stages"]
-    ]
-    config = parse_config(
-        {"name": data["name"], "description": data["description"], "stage": stages},
+    return parse_config(
+        {"name": data["name"], "description": data["description"], "stage": data["stages"]},
         str(data["source"]),
     )
-    return config
 
 
 def shipped_configs() -> dict[str, Path]:
@@ -102,7 +97,7 @@ def shipped_configs() -> dict[str, Path]:
 
 
 def load_config(spec: str | Path | None = None) -> Config:
-    """Load a shipped config by name (default: S0), or a config file by path.
+    """Load a shipped config by name (default: ``DEFAULT_CONFIG``) or a config file by path.
 
     A shipped name (``s2``) always means the shipped config, even when a file of that name is in
     the current folder: give such a file as a path (``./s2``) or with ``.toml``.

@@ -39,13 +39,12 @@ class Param:
             raise TypeError(f"parameter {self.name!r}: min {self.min} > max {self.max}")
 
     def range_text(self) -> str:
-        """The declared range as people write it: ``0 to 1000``, ``>= 1`` ..."""
-        low, high = self.min, self.max
-        if low is not None and high is not None:
-            return f"{_number(low)} to {_number(high)}"
-        if low is not None:
-            return f">= {_number(low)}"
-        return f"<= {_number(high)}" if high is not None else ""
+        """The declared range as people write it (``0 to 1000``); empty for a parameter without
+        one (non-numeric, or numeric with choices: ``__post_init__`` requires both bounds of the
+        others)."""
+        if self.min is None or self.max is None:
+            return ""
+        return f"{_number(self.min)} to {_number(self.max)}"
 
     def validate(self, value: Any, where: str) -> Any:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
