@@ -51,6 +51,16 @@ from vtrack.stages.backproject import box_slices, bp_mass
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 
+def best_placement(image: np.ndarray, w: int, h: int) -> tuple[int, int, float]:
+    """``(left, top, sum)`` of the ``w`` x ``h`` placement of largest sum in ``image`` (the
+    first in raster order on ties), every placement scored at once from one integral image
+    (float64: exact for integer images below 2^53, no int32 overflow on large windows)."""
+    table = cv2.integral(image, sdepth=cv2.CV_64F)
+    sums = table[h:, w:] - table[:-h, w:] - table[h:, :-w] + table[:-h, :-w]
+    top, left = np.unravel_index(int(np.argmax(sums)), sums.shape)
+    return int(left), int(top), float(sums[top, left])
+
+
 def best_box(likelihood: np.ndarray, window: Window, target: Box) -> Box:
     """The box of ``target``'s size inside ``window`` with the largest back-projection sum.
 
@@ -60,12 +70,9 @@ def best_box(likelihood: np.ndarray, window: Window, target: Box) -> Box:
     rows, cols = likelihood.shape
     w = min(max(round(target.w), 1), cols)
     h = min(max(round(target.h), 1), rows)
-    table = cv2.integral(likelihood)
-    sums = table[h:, w:] - table[:-h, w:] - table[h:, :-w] + table[:-h, :-w]
-    top, left = np.unravel_index(int(np.argmax(sums)), sums.shape)
-    return Box.from_center(
-        window.x0 + int(left) + w / 2.0, window.y0 + int(top) + h / 2.0, target.w, target.h
-    )
+    left, top, _ = best_placement(likelihood, w, h)
+    return Box.from_center(window.x0 + left + w / 2.0, window.y0 + top + h / 2.0,
+                           target.w, target.h)
 
 
 @register

@@ -34,6 +34,7 @@ from vtrack.golden.record import FixedRecord
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.occlusion import best_placement
 
 
 def integer_window(box: Box) -> tuple[int, int, int, int, int, int]:
@@ -112,11 +113,8 @@ class HueBpFixed(Stage):
         width, height = ctx.frame.width, ctx.frame.height
         # the target size, widened (in permille) while the target is hidden
         w, h = (max(side * record.growth // 1000, 1) for side in record.size)
-        if ctx.prediction is not None:
-            centre = ctx.prediction
-            cx, cy = math.floor(centre.cx), math.floor(centre.cy)
-        else:
-            cx, cy = integer_window(ctx.box)[4:]
+        centre = ctx.search_center
+        cx, cy = math.floor(centre.cx), math.floor(centre.cy)
         # a centre outside the frame is moved to its nearest pixel (the window keeps looking at
         # the border the target left by)
         cx, cy = min(max(cx, 0), width - 1), min(max(cy, 0), height - 1)
@@ -258,16 +256,12 @@ class MeanShiftFixed(Stage):
 
     def _best_box(self, ctx: TrackContext, record: FixedRecord) -> tuple[tuple[int, int], int]:
         """Centre pixel and sum_bp of the target-sized box of largest sum_bp in the window
-        (first in raster order on ties), from an int64 summed-area table."""
+        (first in raster order on ties), from an exact summed-area table."""
         assert record.bp is not None and ctx.window is not None
         rows, cols = record.bp.shape
         w, h = min(record.size[0], cols), min(record.size[1], rows)
-        table = np.zeros((rows + 1, cols + 1), np.int64)
-        table[1:, 1:] = record.bp.astype(np.int64).cumsum(0).cumsum(1)
-        sums = table[h:, w:] - table[:-h, w:] - table[h:, :-w] + table[:-h, :-w]
-        top, left = np.unravel_index(int(np.argmax(sums)), sums.shape)
-        centre = (ctx.window.x0 + int(left) + w // 2, ctx.window.y0 + int(top) + h // 2)
-        return centre, int(sums[top, left])
+        left, top, total = best_placement(record.bp, w, h)
+        return (ctx.window.x0 + left + w // 2, ctx.window.y0 + top + h // 2), int(total)
 
     def _visible(self, ctx: TrackContext, record: FixedRecord, mass: int) -> bool:
         """Hysteresis on 1000 sum_bp against permille x the first frame's sum_bp."""
