@@ -92,7 +92,6 @@ class KernelMeanShiftInt(Stage):
         self._s = 1000
         self._pos = (math.floor(box.cx), math.floor(box.cy))
         self._frame_bins = None
-        self._frame_index = 0
         model = self._sample(ctx.frame, *self._pos, 10000)
         if model is None:
             raise InputError(f"initial box {tuple(box)} is outside the frame")
@@ -110,8 +109,7 @@ class KernelMeanShiftInt(Stage):
         record = ctx.fixed = self.record
         assert record is not None
         record.iterations = []
-        self._frame_index = ctx.frame.index
-        self._frame_bins = None
+        self._frame_bins = None  # this frame's grey bins, made on the first sample
         prediction = ctx.prediction
         pred = None if prediction is None else (math.floor(prediction.cx),
                                                   math.floor(prediction.cy))
@@ -170,7 +168,7 @@ class KernelMeanShiftInt(Stage):
             steps += 1
             table = s2.weights(self._q, smp.hist, self.weight_frac_bits)  # step 4
             dx, dy, total, sx, sy = s2.shift(smp, table, self.rounding)  # step 5
-            row = {"frame": self._frame_index, "search": search, "s_t": s_t, "iteration": steps,
+            row = {"frame": frame.index, "search": search, "s_t": s_t, "iteration": steps,
                    "x": x, "y": y, "c_prime": smp.total, "sum_w": total, "sum_w_dx": sx,
                    "sum_w_dy": sy, "new_x": x + dx, "new_y": y + dy, "rho": ""}
             assert self.record is not None
@@ -185,12 +183,12 @@ class KernelMeanShiftInt(Stage):
         return (x, y), rho, steps
 
     def _sample(self, frame: Frame, x: int, y: int, s_t: int) -> s2.Sample | None:
-        if self._frame_bins is None or self._frame_bins[0] is not frame:
+        if self._frame_bins is None:
             # the grey bins of the whole frame (cheap next to the loop; a window-only read
             # would re-convert overlapping windows every iteration)
             r, g, b = split_rgb(frame.bgr())
-            self._frame_bins = (frame, (s2.gray8(r, g, b).astype(np.int64) * self.bins) >> 8)
-        return s2.sample(self._frame_bins[1], x, y, *self._h, s_t, self.bins)
+            self._frame_bins = (s2.gray8(r, g, b).astype(np.int64) * self.bins) >> 8
+        return s2.sample(self._frame_bins, x, y, *self._h, s_t, self.bins)
 
     def _box_size(self) -> tuple[float, float]:
         return self._size0[0] * self._s / 1000, self._size0[1] * self._s / 1000
