@@ -47,13 +47,19 @@ class Yuv(NamedTuple):
         return cls(int(i420[0, 0]), int(i420[2, 0]), int(i420[2, 1]))
 
 
-TRACKED = Yuv.from_bgr(0, 255, 255)  # yellow
-OCCLUDED_BOX = Yuv.from_bgr(0, 165, 255)  # orange
+# BGR of the colours the legend explains (one definition for the drawing and the legend)
+TRACKED_BGR = (0, 255, 255)  # yellow
+OCCLUDED_BGR = (0, 165, 255)  # orange
+GROUND_TRUTH_BGR = (0, 220, 0)  # green
+WINDOW_BGR = (255, 255, 0)  # cyan
+PREDICTION_BGR = (255, 128, 64)  # light blue
+TRACKED = Yuv.from_bgr(*TRACKED_BGR)
+OCCLUDED_BOX = Yuv.from_bgr(*OCCLUDED_BGR)
 LOST_TEXT = Yuv.from_bgr(40, 40, 255)  # red
-GROUND_TRUTH = Yuv.from_bgr(0, 220, 0)  # green
-WINDOW = Yuv.from_bgr(255, 255, 0)  # cyan
+GROUND_TRUTH = Yuv.from_bgr(*GROUND_TRUTH_BGR)
+WINDOW = Yuv.from_bgr(*WINDOW_BGR)
 PARTICLES = Yuv.from_bgr(255, 0, 255)  # magenta
-PREDICTION = Yuv.from_bgr(255, 128, 64)  # light blue
+PREDICTION = Yuv.from_bgr(*PREDICTION_BGR)
 CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
 TRACK_PALETTE = tuple(
     Yuv.from_bgr(*bgr)
@@ -158,11 +164,11 @@ def _draw_overlay(canvas: Canvas, overlay: Overlay) -> None:
 
 #: The legend's rows, top to bottom: what each colour means (README, "Outputs").
 LEGEND_ROWS: tuple[tuple[str, tuple[int, int, int]], ...] = (
-    ("box", (0, 255, 255)),
-    ("occluded", (0, 165, 255)),
-    ("prediction", (255, 128, 64)),
-    ("search window", (255, 255, 0)),
-    ("ground truth", (0, 220, 0)),
+    ("box", TRACKED_BGR),
+    ("occluded", OCCLUDED_BGR),
+    ("prediction", PREDICTION_BGR),
+    ("search window", WINDOW_BGR),
+    ("ground truth", GROUND_TRUTH_BGR),
 )
 #: The legend is left out (the frame number stays) when it would be taller than this share
 #: of the frame: on tiny frames it would hide what it explains.
@@ -190,7 +196,7 @@ class Legend:
         rows = rows if ph == full else []
         self.rows = tuple(label for label, _ in rows)
         pw, ph = min(pw, width - width % 2), min(ph, height - height % 2)
-        self.x0, self.y0 = 0, _even(height - ph) if height - ph >= 0 else 0
+        self.y0 = _even(height - ph)  # the left edge: x = 0
         patch = np.zeros((ph, pw, 3), np.uint8)
         for n, (label, bgr) in enumerate(rows, start=1):
             mid = self.pad + n * self.row + self.row // 2
@@ -204,11 +210,11 @@ class Legend:
     def draw(self, canvas: Canvas, index: int) -> None:
         """Copy the legend into the bottom-left corner and write ``frame INDEX`` on top."""
         ph, pw = self.y.shape
-        x0, y0 = self.x0, self.y0
-        canvas.y[y0:y0 + ph, x0:x0 + pw] = self.y
-        canvas.u[y0 // 2:(y0 + ph) // 2, x0 // 2:(x0 + pw) // 2] = self.u
-        canvas.v[y0 // 2:(y0 + ph) // 2, x0 // 2:(x0 + pw) // 2] = self.v
-        corner = canvas.y[y0:y0 + self.pad + self.row, x0:x0 + pw]  # a view: drawn in place
+        y0 = self.y0
+        canvas.y[y0:y0 + ph, :pw] = self.y
+        canvas.u[y0 // 2:(y0 + ph) // 2, :pw // 2] = self.u
+        canvas.v[y0 // 2:(y0 + ph) // 2, :pw // 2] = self.v
+        corner = canvas.y[y0:y0 + self.pad + self.row, :pw]  # a view: drawn in place
         cv2.putText(corner, f"frame {index}", (self.pad, self.pad + self.text_h), FONT,
                     self.scale, 235, 1, cv2.LINE_AA)
 
