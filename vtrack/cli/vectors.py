@@ -56,7 +56,7 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
 
     from vtrack import __version__
     from vtrack.config import load_config
-    from vtrack.errors import ConfigError
+    from vtrack.errors import ConfigError, plural
     from vtrack.evaluate.groundtruth import parse_box
     from vtrack.golden.vectors import MAX_FRAMES, fixed_stage
     from vtrack.golden.vectors import generate as write_vectors
@@ -69,12 +69,12 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     stages = config.build()
     fixed_stage(stages, config_spec)
     init_box = parse_box(init_text)
-    source = open_source(input_spec)
-    frames = itertools.islice(iter(source), count)
     extra = {"input": Path(input_spec).name, "config": config.name, "init": list(init_box),
              "vtrack": __version__}
-    written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
-    click.echo(f"wrote {written} frame(s) of {config.name} vectors to {out_dir}")
+    with open_source(input_spec) as source:
+        frames = itertools.islice(iter(source), count)
+        written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
+    click.echo(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
 
 
 @command.command("check")
