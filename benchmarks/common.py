@@ -111,6 +111,16 @@ def to_frame(index: int, fps: float, bgr: np.ndarray, layout: str = "I420") -> F
     return BgrFrame(index, index / fps, bgr)
 
 
+def process_env() -> dict[str, str]:
+    """The environment of every timed process: this checkout first on ``PYTHONPATH``, and
+    bytecode caches used as a default Python uses them (an inherited PYTHONDONTWRITEBYTECODE
+    would make every vtrack process compile its modules again: not what a user's install does)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
 def machine() -> str:
     """One line naming this machine and the versions that shape a measurement."""
     v = versions()

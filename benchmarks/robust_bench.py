@@ -18,7 +18,7 @@ Prints Markdown:
    AUC (OTB success, 21 thresholds), precision at 20 px, mean IoU, the share of frames called
    ``tracking`` whose box misses the target (IoU 0), the share of missed frames (IoU 0 or no
    box) called ``occluded``/``lost`` (:mod:`vtrack.evaluate.metrics`), and tracking fps, for
-   ``robust`` (when the config exists), ``s0``, ``s1``, ``s2``, ``s4``, ``camshift`` and OpenCV's
+   ``robust``, ``s0``, ``s1``, ``s2``, ``s4``, ``camshift`` and OpenCV's
    meanShift tutorial, MIL, KCF and CSRT. Then the means over the sequences, and each tracker's
    tracking fps as a multiple of CSRT's on the same frames (median over sequences).
 2. Scenes: mean IoU per randomised scene of :mod:`vtrack.scenes.hard` over ``--seeds`` seeds
@@ -64,8 +64,8 @@ from vtrack.scenes import make_scene
 from vtrack.scenes.hard import HARD_SCENARIOS
 
 HERE = Path(__file__).resolve().parent
-#: vtrack configs compared (``robust`` is added first when it exists).
-CONFIGS = ("s0", "s1", "s2", "s4", "camshift")
+#: vtrack configs compared.
+CONFIGS = ("robust", "s0", "s1", "s2", "s4", "camshift")
 #: OpenCV trackers run by ``opencv_trackers.py``; the first two need no contrib.
 OPENCV = ("meanshift", "MIL", "KCF", "CSRT")
 NEEDS_CONTRIB = ("KCF", "CSRT")
@@ -92,15 +92,6 @@ class Outcome:
                 metrics.tracking_miss_rate(self.states, overlaps),
                 metrics.flagged_miss_rate(self.states, overlaps),
                 len(self.boxes) / self.seconds if self.seconds > 0 else math.nan)
-
-
-def vtrack_configs() -> list[str]:
-    """``robust`` (when this vtrack has it) then :data:`CONFIGS`."""
-    try:
-        load_config("robust")
-    except VtrackError:
-        return list(CONFIGS)
-    return ["robust", *CONFIGS]
 
 
 def run_vtrack(config: str, frames: list[Frame], init: Box) -> Outcome:
@@ -283,7 +274,7 @@ def main() -> None:
     parser.add_argument("--no-sequences", action="store_true")
     parser.add_argument("--no-scenes", action="store_true")
     args = parser.parse_args()
-    configs = vtrack_configs()
+    configs = list(CONFIGS)
     print("Command: `python benchmarks/robust_bench.py " + " ".join(
         a if not a.startswith("/") else "PATH" for a in sys.argv[1:]) + "`\n")
     print(machine() + "\n")

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -39,8 +38,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from common import REPO, machine
+from common import machine, process_env
 
+from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 WORK = Path(__file__).resolve().parent / "_work"
@@ -110,20 +110,10 @@ def make_clip(frames: int) -> tuple[Path, Path]:
     return clip, gt
 
 
-def _env() -> dict[str, str]:
-    """The environment of every timed process: this checkout first on ``PYTHONPATH``, and
-    bytecode caches used as a default Python uses them (an inherited PYTHONDONTWRITEBYTECODE
-    would make every vtrack process compile its modules again: not what a user's install does)."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    return env
-
-
 def _timed(argv: list[str], what: str, **kwargs: object) -> tuple[float, str]:
     """Wall time of a whole process and its stdout; raises with its stderr if it fails."""
     started = time.perf_counter()
-    done = subprocess.run(argv, capture_output=True, text=True, check=False, env=_env(),
+    done = subprocess.run(argv, capture_output=True, text=True, check=False, env=process_env(),
                           **kwargs)  # type: ignore[call-overload]
     seconds = time.perf_counter() - started
     if done.returncode != 0:
@@ -154,7 +144,7 @@ def vtrack_run(args: list[str], frames: int, what: str, **kwargs: object) -> tup
 def raw_pipe(frames: int, args: list[str], what: str) -> tuple[float, dict]:
     """Seconds of the ``vtrack run -`` process reading raw bgr24 1080p from a producer process
     (started once the producer has rendered its frames) and the run.json it wrote."""
-    producer = subprocess.Popen([sys.executable, "-c", PRODUCER, str(frames)], env=_env(),
+    producer = subprocess.Popen([sys.executable, "-c", PRODUCER, str(frames)], env=process_env(),
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         assert producer.stderr is not None
@@ -191,7 +181,8 @@ def main() -> None:
     configs: list[str] = args.configs or ["s0"]
     presets: list[str] = args.presets or ["ultrafast"]
     clip, gt = make_clip(args.frames)
-    first = [float(v) for v in gt.read_text().splitlines()[0].split(",")]
+    first = read_boxes(gt)[0]
+    assert first is not None
     init = ",".join(f"{v:.1f}" for v in first)
     bitrate = clip.stat().st_size * 8 / 1e6 / (args.frames / 60)
     n = args.frames

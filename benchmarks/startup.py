@@ -20,9 +20,9 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+from common import process_env
+
 BASELINE = "import av, numpy, cv2, click, tqdm"
 TARGET = 1.5
 
@@ -49,9 +49,7 @@ def _time(argv: list[str], cwd: str, env: dict[str, str]) -> float:
 
 def measure(rounds: int) -> tuple[list[float], dict[str, list[float]]]:
     """Wall times of the baseline and of each command, ``rounds`` alternating rounds."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
-    env.pop("PYTHONDONTWRITEBYTECODE", None)  # bytecode caches as a default Python uses them
+    env = process_env()
     baseline: list[float] = []
     times: dict[str, list[float]] = {name: [] for name, _ in COMMANDS}
     with tempfile.TemporaryDirectory() as cwd:
