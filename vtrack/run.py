@@ -146,7 +146,7 @@ def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
     """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
     ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
     shown = box.text()
-    if not all(math.isfinite(v) for v in box) or box.w <= 0 or box.h <= 0:
+    if not box.is_valid():
         raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
     if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
         raise ConfigError(
@@ -338,7 +338,6 @@ class _Writers:
     """A run's writers: the CSV (and its row formatter) and the annotated video."""
 
     formatter: _SingleTargetRows | _MultiTargetRows
-    csv_name: str
     csv: CsvWriter
     video: VideoWriter | None = None
     annotator: Annotator | None = None
@@ -349,8 +348,7 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
     formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
         pipeline.columns, resolved.gt)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
-    writers = _Writers(formatter, csv_name, CsvWriter(request.out_dir / csv_name,
-                                                      formatter.columns))
+    writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
     if request.video:
         try:
             writers.video = VideoWriter(request.out_dir / "annotated.mp4", info.width,
@@ -471,13 +469,13 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     and holds every picture written. Anything else is reported (``_fail``); a broken video is
     removed."""
     outputs = []
-    csv_path = request.out_dir / writers.csv_name
+    csv_path = writers.csv.path
     try:
         rows = _count_rows(csv_path)
     except OSError:
         rows = None
     if rows == writers.csv.rows:
-        outputs.append(writers.csv_name)
+        outputs.append(csv_path.name)
     elif rows is not None or tracked.failure is None:
         _fail(tracked, f"{csv_path}: holds {rows} rows, {writers.csv.rows} were written")
     video = writers.video
