@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import re
 import signal
 import sys
@@ -75,15 +74,13 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     # imported here, not at the top: `vtrack --help` and the other commands start without them
     from vtrack.cli._progress import FrameProgress, terminal
     from vtrack.config import load_config
-    from vtrack.errors import ConfigError
     from vtrack.evaluate.groundtruth import parse_box
     from vtrack.io import RawFormat
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
     config = load_config(config_spec).with_overrides(list(overrides))
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise ConfigError(f"--fps {fps:g}: must be a positive number of frames per second")
-    raw = RawFormat.parse(raw_size, pix_fmt, fps or 30.0) if raw_size else None
+    # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
+    raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
     if raw is None and input_spec == "-":
         raise click.UsageError("reading frames from '-' needs --raw WxH (and --pix-fmt, --fps)")
     request = RunRequest(

@@ -7,7 +7,7 @@ import os
 from vtrack.errors import ConfigError
 from vtrack.io.files import check_input_path
 from vtrack.io.images import ImageFolderSource
-from vtrack.io.raw import RawFormat, RawSource
+from vtrack.io.raw import RawFormat, RawSource, checked_fps
 from vtrack.io.source import Source
 from vtrack.io.video import VideoSource
 
@@ -19,8 +19,10 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     - ``spec`` a folder: an image sequence (``folder/img/*`` or ``folder/*``) at ``fps``
       (default 30) frames per second;
     - anything else: a video file FFmpeg can open; its frames carry their own timestamps, so
-      ``fps`` is refused for it (ConfigError).
+      ``fps`` is refused for it (ConfigError). A given ``fps`` must be a frame rate (> 0).
     """
+    if fps is not None:
+        checked_fps(fps)
     if raw is not None:
         return RawSource(spec, raw)
     if spec == "-":

@@ -40,6 +40,13 @@ PIPE_BYTES = 1 << 20
 _RING_SLACK = 3
 
 
+def checked_fps(fps: float) -> float:
+    """``fps`` if it is a frame rate (finite, > 0); ConfigError naming ``--fps`` otherwise."""
+    if not (math.isfinite(fps) and fps > 0):
+        raise ConfigError(f"--fps {fps:g}: must be a positive number of frames per second")
+    return float(fps)
+
+
 @dataclass(frozen=True)
 class RawFormat:
     """Layout of raw input frames: ``width x height`` pixels of ``pix_fmt`` at ``fps``."""
@@ -68,9 +75,7 @@ class RawFormat:
             raise ConfigError(f"--pix-fmt {pix_fmt!r}: expected one of {', '.join(PIX_FMTS)}")
         if pix_fmt == "yuv420p" and (width % 2 or height % 2):
             raise ConfigError(f"--raw {size!r}: yuv420p frames need an even width and height")
-        if not (math.isfinite(fps) and fps > 0):
-            raise ConfigError(f"--fps {fps!r}: must be a positive number")
-        return cls(width, height, pix_fmt, float(fps))
+        return cls(width, height, pix_fmt, checked_fps(fps))
 
     @property
     def shape(self) -> tuple[int, ...]:
