@@ -49,6 +49,12 @@ def temp_path(path: Path) -> Path:
     return path.with_name(f".{path.stem}.tmp-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
 
 
+def is_temp_of(name: str, final: str) -> bool:
+    """Whether a file called ``name`` is (or was) a :func:`temp_path` of a file ``final``."""
+    final_path = Path(final)
+    return name.startswith(f".{final_path.stem}.tmp") and name.endswith(final_path.suffix)
+
+
 def remove_quietly(path: Path) -> None:
     """Delete a temporary file if it is there (a failure to delete is not worth reporting)."""
     with contextlib.suppress(OSError):

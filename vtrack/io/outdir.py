@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Self
 
 from vtrack.errors import OutputError
-from vtrack.io.files import os_reason, prepare_output_dir
+from vtrack.io.files import is_temp_of, os_reason, prepare_output_dir
 
 LOCK_NAME = ".vtrack.lock"
 #: Files a run writes into its folder; a new run removes these (and only these) first, with
@@ -103,9 +103,7 @@ class OutputFolder:
         names = tuple(names)
         for entry in self.folder.iterdir():
             name = entry.name
-            stale = name in names or any(
-                name.startswith(f".{Path(n).stem}.tmp") and name.endswith(Path(n).suffix)
-                for n in names)
+            stale = name in names or any(is_temp_of(name, n) for n in names)
             if stale and not entry.is_dir():
                 with contextlib.suppress(FileNotFoundError):
                     entry.unlink()
