@@ -68,6 +68,18 @@ def sv_mask(r: np.ndarray, g: np.ndarray, b: np.ndarray, sat_min: int, val_min: 
     return sat_ok & (hi >= val_min)
 
 
+def optional_mask(r: np.ndarray, g: np.ndarray, b: np.ndarray, sat_min: int, val_min: int
+                  ) -> np.ndarray | None:
+    """:func:`sv_mask`, or None when both thresholds are 0 (no mask: every pixel counts)."""
+    return sv_mask(r, g, b, sat_min, val_min) if sat_min or val_min else None
+
+
+def back_project(lut: np.ndarray, hue: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    """Eq. 4 per pixel, ``BP = lut[hue]`` (uint8), 0 where ``mask`` is False."""
+    bp = lut[hue]  # one table look-up per pixel
+    return bp if mask is None else np.where(mask, bp, 0).astype(np.uint8)
+
+
 def histogram(hue: np.ndarray, mask: np.ndarray | None, bits: int) -> np.ndarray:
     """Eq. 2-3: 256 counters of ``bits`` bits (``reg[19:0] histogram_cnt[255:0]``: 20),
     ``histogram[hue] += 1`` per (unmasked) pixel, saturating at ``2^bits - 1``. int64."""

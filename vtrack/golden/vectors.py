@@ -91,10 +91,9 @@ def write_frame(folder: Path, frame_bgr: np.ndarray, record: FixedRecord, index:
         (folder / "hue.hex").write_bytes(hex_lines(hue))
         if index >= 1:
             assert record.bp_lut is not None
-            bp = record.bp_lut[hue]
-            if record.sat_min or record.val_min:
-                bp = np.where(s0.sv_mask(r, g, b, record.sat_min, record.val_min), bp, 0)
-            (folder / "bp.hex").write_bytes(hex_lines(bp.astype(np.uint8)))
+            mask = s0.optional_mask(r, g, b, record.sat_min, record.val_min)
+            bp = s0.back_project(record.bp_lut, hue, mask)
+            (folder / "bp.hex").write_bytes(hex_lines(bp))
     else:
         (folder / "gray.hex").write_bytes(hex_lines(gray8(r, g, b)))
 

@@ -100,7 +100,7 @@ class HueBpFixed(Stage):
         record.hist_max = int(record.hist.max())
         if record.hist_max == 0:
             raise InputError(
-                f"hue_bp_fixed: no pixel of the initial box {tuple(box)} passes the S/V mask "
+                f"hue_bp_fixed: no pixel of the initial box {box.text()} passes the S/V mask "
                 "(lower hue_bp_fixed.sat_min / val_min)"
             )
         record.bp_lut = s0.bp_table(record.hist)
@@ -134,9 +134,7 @@ class HueBpFixed(Stage):
         record.ref = (x + w // 2, y + h // 2)
         r, g, b = s0.split_rgb(frame.bgr(window))
         hue = s0.hue8(r, g, b, self.hue_divider_bits)  # eq. 1
-        mask = None
-        if self.sat_min or self.val_min:
-            mask = s0.sv_mask(r, g, b, self.sat_min, self.val_min)
+        mask = s0.optional_mask(r, g, b, self.sat_min, self.val_min)
         ctx.window = window
         ctx.feature = hue
         ctx.overlays.append(SearchWindow(window.as_box()))
@@ -146,11 +144,7 @@ class HueBpFixed(Stage):
     def _backproject(self, ctx: TrackContext, record: FixedRecord, hue: np.ndarray,
                      mask: np.ndarray | None) -> None:
         assert record.bp_lut is not None
-        bp = record.bp_lut[hue]  # eq. 4, one table look-up per pixel
-        if mask is not None:
-            bp = np.where(mask, bp, 0).astype(np.uint8)
-        record.bp = bp
-        ctx.likelihood = bp
+        record.bp = ctx.likelihood = s0.back_project(record.bp_lut, hue, mask)  # eq. 4
 
 
 @register
