@@ -32,6 +32,7 @@ from vtrack.scenes.render import (
     SurfacePaint,
     make_background,
     pillar_texture,
+    target_paint,
 )
 from vtrack.scenes.scenarios import (
     NOISE_SIGMA,
@@ -43,6 +44,7 @@ from vtrack.scenes.scenarios import (
     _full,
     _lissajous,
     _phase,
+    _target,
 )
 from vtrack.scenes.scene import Scene, SceneSpec, Truth, assemble
 
@@ -94,9 +96,9 @@ def random_paint(looks: np.random.Generator, params: dict[str, Any]) -> SurfaceP
     vals = [_draw(looks, "value") for _ in range(2)]
     first = _hsv_to_bgr(hue, sats[0], vals[0])
     second = _hsv_to_bgr(hue + spread, sats[1], vals[1])
-    p0, p1, p2, p3 = (float(x) for x in looks.uniform(0.0, 2.0, 4))
+    paint = target_paint(looks, first, second)
     params.update(hue=hue, hue_spread=spread, first=first, second=second)
-    return SurfacePaint(first, second, (p0, p1, p2, p3))
+    return paint
 
 
 def random_background(
@@ -150,7 +152,7 @@ def _clip_ramp(spec: SceneSpec) -> Scene:
     gain = np.interp(_phase(spec), [0.0, knee, 1.0], [1.0, low, high])
     params.update(gain_low=low, gain_high=high, knee=knee)
     background = random_background(spec, looks, params)
-    target = Ellipse(cx, cy, _full(spec, ax), _full(spec, ay), random_paint(looks, params), 1)
+    target = _target(spec, looks, cx, cy, ax, ay, random_paint(looks, params))
     compositor = _compose(spec, background, [target], gain)
     darkest = int(np.argmin(gain))
     return assemble(spec, compositor, lambda truth: _with_params(
@@ -191,7 +193,7 @@ def _fast(spec: SceneSpec) -> Scene:
     # target never overlaps its own previous position.
     cx, cy = _constant_speed_loop(spec, motion, ax, ay, speed * 2 * ax)
     background = random_background(spec, looks, params)
-    target = Ellipse(cx, cy, _full(spec, ax), _full(spec, ay), random_paint(looks, params), 1)
+    target = _target(spec, looks, cx, cy, ax, ay, random_paint(looks, params))
     return assemble(spec, _compose(spec, background, [target]),
                     lambda truth: _with_params(params, speed=speed))
 
@@ -248,10 +250,9 @@ def _crossing(spec: SceneSpec) -> Scene:
     twin_cx = 2 * cx[closest] - cx
     twin_cy = cy + (separation if below else -separation)
     paint = random_paint(looks, params)
-    phases = tuple(float(x) for x in looks.uniform(0.0, 2.0, 4))
-    twin_paint = SurfacePaint(paint.first, paint.second, phases)  # type: ignore[arg-type]
+    twin_paint = target_paint(looks, paint.first, paint.second)
     twin = Ellipse(twin_cx, twin_cy, _full(spec, tx), _full(spec, ty), twin_paint, None)
-    target = Ellipse(cx, cy, _full(spec, ax), _full(spec, ay), paint, 1)
+    target = _target(spec, looks, cx, cy, ax, ay, paint)
     background = random_background(spec, looks, params)
 
     def events(truth: Truth) -> dict[str, Any]:
@@ -287,7 +288,7 @@ def _slab(spec: SceneSpec) -> Scene:
     params.update(hidden=hidden, speed_px=speed, slab_width=slab, slab_grey=grey)
     background = random_background(spec, looks, params)
     sprites = [
-        Ellipse(cx, cy, _full(spec, ax), _full(spec, ay), random_paint(looks, params), 1),
+        _target(spec, looks, cx, cy, ax, ay, random_paint(looks, params)),
         Pillar(x0, pillar_texture(looks, h, slab, grey)),
     ]
 
@@ -342,8 +343,8 @@ def _exit_return(spec: SceneSpec) -> Scene:
     params.update(out_frames=out_frames, exit_side=exit_side, entry_side=entry_side,
                   speed_px=speed)
     background = random_background(spec, looks, params)
-    target = Ellipse(path[:, 0].copy(), path[:, 1].copy(), _full(spec, ax), _full(spec, ay),
-                     random_paint(looks, params), 1)
+    target = _target(spec, looks, path[:, 0].copy(), path[:, 1].copy(), ax, ay,
+                     random_paint(looks, params))
 
     def events(truth: Truth) -> dict[str, Any]:
         in_frame, _ = _fractions(truth, 1)
@@ -367,10 +368,9 @@ def _grey(spec: SceneSpec) -> Scene:
     contrast = _draw(looks, "grey_contrast") * (1 if looks.random() < 0.5 else -1)
     level = float(np.clip(params["background_mean"] + contrast, 30.0, 235.0))
     other = float(np.clip(level + looks.uniform(-30.0, 30.0), 20.0, 245.0))
-    phases = tuple(float(x) for x in looks.uniform(0.0, 2.0, 4))
-    paint = SurfacePaint((level,) * 3, (other,) * 3, phases)  # type: ignore[arg-type]
+    paint = target_paint(looks, (level,) * 3, (other,) * 3)
     params.update(grey_contrast=contrast, level=level, other=other)
-    target = Ellipse(cx, cy, _full(spec, ax), _full(spec, ay), paint, 1)
+    target = _target(spec, looks, cx, cy, ax, ay, paint)
     return assemble(spec, _compose(spec, background, [target]),
                     lambda truth: _with_params(params))
 

@@ -176,10 +176,11 @@ TARGET_RED = (35.0, 40.0, 215.0)
 TARGET_ORANGE = (25.0, 110.0, 240.0)
 
 
-def target_paint(rng: np.random.Generator) -> SurfacePaint:
-    """The standard red/orange target texture with random phases."""
+def target_paint(rng: np.random.Generator, first: tuple[float, float, float] = TARGET_RED,
+                 second: tuple[float, float, float] = TARGET_ORANGE) -> SurfacePaint:
+    """A two-colour target texture with random phases (default: the standard red/orange)."""
     p0, p1, p2, p3 = (float(x) for x in rng.uniform(0.0, 2.0, 4))
-    return SurfacePaint(TARGET_RED, TARGET_ORANGE, (p0, p1, p2, p3))
+    return SurfacePaint(first, second, (p0, p1, p2, p3))
 
 
 @dataclass(frozen=True)

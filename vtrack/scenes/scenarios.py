@@ -31,6 +31,7 @@ from vtrack.scenes.render import (
     Pillar,
     SensorNoise,
     StaticBackground,
+    SurfacePaint,
     make_background,
     pillar_texture,
     target_paint,
@@ -93,11 +94,12 @@ def _target(
     cy: np.ndarray,
     ax: np.ndarray | float,
     ay: np.ndarray | float,
+    paint: SurfacePaint | None = None,
 ) -> Ellipse:
-    """The red/orange textured target, track id 1."""
+    """The textured target, track id 1: ``paint``, or the red/orange one drawn from ``looks``."""
     ax_arr = ax if isinstance(ax, np.ndarray) else _full(spec, ax)
     ay_arr = ay if isinstance(ay, np.ndarray) else _full(spec, ay)
-    return Ellipse(cx, cy, ax_arr, ay_arr, target_paint(looks), track_id=1)
+    return Ellipse(cx, cy, ax_arr, ay_arr, paint or target_paint(looks), track_id=1)
 
 
 def _first_run(mask: np.ndarray) -> tuple[int, int] | None:
