@@ -18,7 +18,7 @@ from vtrack.config import Config, load_config
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import Box
-from vtrack.pipeline import Pipeline
+from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.run import RunRequest, RunSummary, run, versions
 from vtrack.scenes import make_scene
 
@@ -94,13 +94,19 @@ def scene_clip(name: str, seed: int) -> Clip:
     return Clip(name, list(scene.frames()), scene.boxes)
 
 
-def track_clip(clip: Clip, config: Config, seed: int = 0) -> list[Box | None]:
-    """The boxes ``config`` claims on every frame of ``clip`` (30 fps BGR frames, tracker seeded
-    with ``seed``), started on the first ground-truth box; None where it claims none."""
+def clip_results(clip: Clip, config: Config, seed: int = 0) -> tuple[Pipeline, list[FrameResult]]:
+    """The pipeline and its result on every frame of ``clip`` (30 fps BGR frames, tracker
+    seeded with ``seed``), started on the first ground-truth box."""
     pipeline = Pipeline(config.build(), seed=seed)
     frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
     assert clip.boxes[0] is not None
-    return [result.box for result in pipeline.track(frames, clip.boxes[0])]
+    return pipeline, list(pipeline.track(frames, clip.boxes[0]))
+
+
+def track_clip(clip: Clip, config: Config, seed: int = 0) -> list[Box | None]:
+    """The boxes ``config`` claims on every frame of ``clip`` (see :func:`clip_results`); None
+    where it claims none."""
+    return [result.box for result in clip_results(clip, config, seed)[1]]
 
 
 def to_frame(index: int, fps: float, bgr: np.ndarray, layout: str = "I420") -> Frame:

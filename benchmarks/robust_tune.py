@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 from common import (
     Clip,
+    clip_results,
     load_clip,
     scene_clip,
     single_target_sequences,
@@ -36,7 +37,6 @@ from common import (
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
 from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
-from vtrack.frame import BgrFrame
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackState
@@ -82,11 +82,7 @@ class Result:
 
 def evaluate(clip: Clip, overrides: list[str], name: str = "robust") -> Result:
     """Run config ``name`` with ``overrides`` on ``clip`` and score it."""
-    config = load_config(name).with_overrides(overrides)
-    pipeline = Pipeline(config.build(), seed=0)
-    frames = (BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames))
-    assert clip.boxes[0] is not None
-    results = list(pipeline.track(frames, clip.boxes[0]))
+    pipeline, results = clip_results(clip, load_config(name).with_overrides(overrides))
     boxes = [r.box for r in results]
     overlaps, errors = frame_scores(boxes, clip.boxes)
     tracking = misses = false_tracking = flagged = 0
