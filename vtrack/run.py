@@ -26,10 +26,9 @@ import math
 import platform
 import signal
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,6 +46,7 @@ from vtrack.errors import (
     OutputBrokenError,
     OutputError,
     PartialInputError,
+    handling_stop_signals,
     plural,
 )
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
@@ -169,21 +169,17 @@ class _Signals:
     handlers can only be set there).
     """
 
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
     def __init__(self) -> None:
         self.pending: int | None = None
         self.inside = False
-        self.previous: dict[int, Any] = {}
+        self._handlers = ExitStack()
 
     def __enter__(self) -> _Signals:
-        if threading.current_thread() is threading.main_thread():
-            self.previous = {s: signal.signal(s, self._handle) for s in self.SIGNALS}
+        self._handlers.enter_context(handling_stop_signals(self._handle))
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        for signum, handler in self.previous.items():
-            signal.signal(signum, handler)
+        self._handlers.close()
 
     def _handle(self, signum: int, frame: object) -> None:
         if self.inside:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -12,7 +11,7 @@ import click
 
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
-from vtrack.errors import ConfigError, Interrupted
+from vtrack.errors import ConfigError, Interrupted, handling_stop_signals
 
 if TYPE_CHECKING:
     from vtrack.config import Config
@@ -128,37 +127,31 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / "summary.csv"
     outcomes = []
-    # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does
-    stop = _StopOnce()
-    previous = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        # the results folder is taken (created, checked, locked) before any job is planned
-        with OutputFolder(out_dir, "batch"):
-            executor: Executor
-            if scheduler:
-                dask = DaskExecutor(scheduler, scheduler_timeout)
-                dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
-                executor = dask
-            else:
-                executor = LocalExecutor(workers)
-            settings = RunRequest(input=str(folder), out_dir=out_dir,
-                                  config=next(iter(configs.values())), video=not no_video,
-                                  preset=preset, crf=crf, seed=seed, max_frames=max_frames)
-            batch = plan(inputs, configs, out_dir, settings,
-                         threads=max(1, cpu_count() // workers), force=force)
-            # runs done / total with ETA; runs already complete (resume) start the bar
-            known = len(batch.known)
-            with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
-                      dynamic_ncols=True, disable=not terminal(quiet)) as bar:
-                for outcome in run_batch(batch, executor, summary_path):
-                    outcomes.append(outcome)
-                    if not quiet:
-                        bar.write(outcome.line(), file=sys.stdout)
-                    if len(outcomes) > known:
-                        bar.update()
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+    # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
+    # is taken (created, checked, locked) before any job is planned
+    with handling_stop_signals(_StopOnce()), OutputFolder(out_dir, "batch"):
+        executor: Executor
+        if scheduler:
+            dask = DaskExecutor(scheduler, scheduler_timeout)
+            dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
+            executor = dask
+        else:
+            executor = LocalExecutor(workers)
+        settings = RunRequest(input=str(folder), out_dir=out_dir,
+                              config=next(iter(configs.values())), video=not no_video,
+                              preset=preset, crf=crf, seed=seed, max_frames=max_frames)
+        batch = plan(inputs, configs, out_dir, settings,
+                     threads=max(1, cpu_count() // workers), force=force)
+        # runs done / total with ETA; runs already complete (resume) start the bar
+        known = len(batch.known)
+        with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
+                  dynamic_ncols=True, disable=not terminal(quiet)) as bar:
+            for outcome in run_batch(batch, executor, summary_path):
+                outcomes.append(outcome)
+                if not quiet:
+                    bar.write(outcome.line(), file=sys.stdout)
+                if len(outcomes) > known:
+                    bar.update()
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1
