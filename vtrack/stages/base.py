@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import Overlay
@@ -198,6 +198,15 @@ class Stage:
         """``values`` are validated (see :func:`build_stage`); missing ones take defaults."""
         for param in self.params:
             setattr(self, param.name, values.get(param.name, param.default))
+
+    def initial_box(self, ctx: TrackContext) -> Box:
+        """The first frame's box this stage starts from; InputError naming the stage when there
+        is none or it is not a finite box of positive size."""
+        box = ctx.box
+        if box is None or not box.is_valid():
+            shown = box.text() if box is not None else None
+            raise InputError(f"{self.name} needs a valid initial box, got {shown}")
+        return box
 
     def settings(self) -> dict[str, Any]:
         return {p.name: getattr(self, p.name) for p in self.params}

@@ -182,10 +182,7 @@ class KernelMeanShift(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Build the target model on the first frame's box (S2 algorithm step 1)."""
-        box = ctx.box
-        if box is None or not box.is_valid():
-            shown = box.text() if box is not None else None
-            raise InputError(f"kernel_meanshift needs a valid initial box, got {shown}")
+        box = self.initial_box(ctx)
         # S2 sec. 6.1: m levels of an 8-bit value, b(X) = value * m / 256
         self._lut = (np.arange(_LEVELS) * self.bins // _LEVELS).astype(np.intp)
         # Trying 1.0 first and replacing only on a strictly larger rho keeps the scale on ties

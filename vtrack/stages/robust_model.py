@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import hue_histogram
@@ -452,12 +453,10 @@ class RobustModel(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Build the model from the first frame's box and its surroundings."""
-        from vtrack.errors import InputError
-
-        box = ctx.box
-        if box is None or not box.is_valid() or box.window(ctx.frame.width,
-                                                           ctx.frame.height) is None:
-            raise InputError(f"robust_model: the initial box {box} covers no pixel of the frame")
+        box = self.initial_box(ctx)
+        if box.window(ctx.frame.width, ctx.frame.height) is None:
+            raise InputError(f"robust_model: the initial box {box.text()} covers no pixel of "
+                             "the frame")
         weight = self.surround_weight if self.distractors and self.surroundings else 1.0
         model = ColourModel(self.hue_bins, self.sat_bins, self.grey_bins, self.surroundings,
                             weight)

@@ -86,10 +86,7 @@ class HueBpFixed(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Frame 0: the window is the initial box; count the model over it (eq. 2-3)."""
-        box = ctx.box
-        if box is None or not box.is_valid():
-            shown = box.text() if box is not None else None
-            raise InputError(f"hue_bp_fixed: needs a valid initial box, got {shown}")
+        box = self.initial_box(ctx)
         record = FixedRecord(model="s0", sat_min=self.sat_min, val_min=self.val_min,
                              hue_divider_bits=self.hue_divider_bits)
         ctx.fixed = self.record = record  # the record is also the stage's (vtrack vectors)

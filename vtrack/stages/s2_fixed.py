@@ -82,10 +82,7 @@ class KernelMeanShiftInt(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         """Step 1: the model q_u, C over the initial box, centre pixel, h = size // 2, s = 1000."""
-        box = ctx.box
-        if box is None or not box.is_valid():
-            shown = box.text() if box is not None else None
-            raise InputError(f"kernel_meanshift_int needs a valid initial box, got {shown}")
+        box = self.initial_box(ctx)
         self.record = ctx.fixed = FixedRecord(model="s2")
         self._size0 = (box.w, box.h)
         self._h = (max(round(box.w), 1) // 2, max(round(box.h), 1) // 2)
