@@ -138,6 +138,10 @@ def _axis_transition(model: str, dt: float, kinematic: bool = False) -> np.ndarr
 _PAIR = np.eye(2)
 
 
+#: Positions of dx and dy in a constant-velocity state ``(x, dx, y, dy)``.
+_CV_VELOCITY = [1, 3]
+
+
 class ConstantVelocity(MotionModel):
     """S0 item 6: per axis state ``(x, dx)``, started at the first point at rest.
 
@@ -161,6 +165,16 @@ class ConstantVelocity(MotionModel):
     def initiate(self, points: Sequence[Point], dt: float = 1.0) -> GaussianState:
         x, y = points[0]
         return GaussianState(np.array([x, 0.0, y, 0.0]), self.P0)
+
+    def velocity(self, state: GaussianState) -> np.ndarray:
+        """The ``(dx, dy)`` of ``state`` (a new array)."""
+        return state.x[_CV_VELOCITY].copy()
+
+    def with_velocity(self, state: GaussianState, velocity: np.ndarray) -> GaussianState:
+        """``state`` with its velocity replaced by ``velocity`` (covariance unchanged)."""
+        x = state.x.copy()
+        x[_CV_VELOCITY] = velocity
+        return GaussianState(x, state.P)
 
 
 class ConstantAcceleration(MotionModel):

@@ -19,8 +19,9 @@ way, by its peak-to-sidelobe ratio).
 - Model update (issue item 6, ``update``): on tracking frames whose score (``update_rule =
   score``) or both cues (``min``) reach ``update_above`` the colour histograms and the template
   are blended towards the box (:meth:`vtrack.stages.robust_model.RobustTarget.learn`, Staple's
-  learning rates) and the usual cue values move ``rate_reference`` towards this frame's;
-  nothing is learnt while occluded or lost, so an occluder is not learnt as the target.
+  learning rates) and the usual cue values move ``rate_reference`` towards this frame's, never
+  below ``reference_floor`` of the first frame's values; nothing is learnt while occluded or
+  lost, so an occluder is not learnt as the target.
   ``trend_ratio`` (off by default) also stops learning while the score is below that share of
   its running mean (LMCF, Wang et al. CVPR 2017): it froze Car4's model through its lighting
   change (mean AUC 0.546 -> 0.48 on the real sequences), so it is only an option.
@@ -41,6 +42,20 @@ way, by its peak-to-sidelobe ratio).
   stale template otherwise pulls the fused map's mode onto a placement half off the target
   whose background happens to match it (a re-check of the window by the cue that still sees
   the target, instead of the straight-line coast).
+- Colour contrast (``ctx.robust.contrast``, from ``robust_search``): the found box's mean
+  likelihood minus that of the ring around it, against its value on the first frame
+  (``first_contrast``). Unlike the cues it is not relative to usual values that learning moves,
+  so it cannot drift with them: a box that slid slowly off its target onto an occluder or bare
+  background has lost it, whatever its score (the discriminability of a colour feature between
+  the target and its surroundings, Collins, Liu, Leordeanu, "Online selection of
+  discriminative tracking features", TPAMI 2005; the object-vs-surroundings ratio of DAT).
+  Nothing is learnt below ``learn_contrast`` of it, and a box below ``unseen_contrast`` of it
+  whose colour cue is also below its usual value does not show the target (occluded).
+  Without these, a target covered slowly by a grey slab taught the model and the usual values
+  the slab edge, and the box stayed on the slab with a score of 1, ``tracking``.
+- A hidden target coming back into view is taken back on colour alone (``recover_colour``):
+  colour cue and contrast near their usual and first values, inside the motion gate (anywhere
+  while lost); the template, learnt on the whole target, matches a half-visible one badly.
 - Held frames, and tracking frames below ``update_above`` that pass the same colour-and-motion
   test, blend the template only, at ``hold_rate`` (``hold_learn``; Staple and DSST learn every
   frame at a fixed rate, Bertinetto et al. 2016 eq. 5, Danelljan et al. BMVC 2014: the
@@ -48,10 +63,10 @@ way, by its peak-to-sidelobe ratio).
   are not touched, so the hold cannot teach the colour cue what it then relies on.
 
 Pipeline contract of stage ``robust_failure``: reads ``ctx.frame`` (its size), ``ctx.score``,
-``ctx.measurement``, ``ctx.prediction``, ``ctx.robust``; writes ``ctx.state``,
-``ctx.measurement`` / ``ctx.box`` (None / the prediction while hidden), ``ctx.robust`` (hidden
-count, usual cue values, whether the next frame searches the whole frame) and the extra
-``confidence``.
+``ctx.measurement``, ``ctx.prediction``, ``ctx.robust`` (cues, usual values, contrast); writes
+``ctx.state``, ``ctx.measurement`` / ``ctx.box`` (None / the prediction while hidden),
+``ctx.robust`` (hidden count, usual cue values, whether the next frame searches the whole frame)
+and the extra ``confidence``.
 """
 
 from __future__ import annotations
@@ -93,6 +108,9 @@ class RobustFailure(Stage):
         Param("rate_reference", float, 0.05,
               "learning rate of the reference confidence on confident frames",
               min=0.0, max=1.0),
+        Param("reference_floor", float, 0.75,
+              "the usual cue values never fall below this share of the first frame's",
+              min=0.0, max=1.0),
         Param("trend_ratio", float, 0.0,
               "the model and the usual cue values learn only while the score is at least "
               "this share of its running mean over learning frames (LMCF's high-confidence "
@@ -117,6 +135,17 @@ class RobustFailure(Stage):
               "test, blend the template (only) towards the box at hold_rate"),
         Param("hold_rate", float, 0.01,
               "template learning rate on held frames (Staple: 0.01)", min=0.0, max=1.0),
+        Param("learn_contrast", float, 0.5,
+              "the model and the usual cue values learn only while the box's colour contrast "
+              "is at least this share of the first frame's (0: off)", min=0.0, max=1.0),
+        Param("unseen_contrast", float, 0.25,
+              "a box whose colour contrast is below this share of the first frame's, with "
+              "its colour cue below its usual value, does not show the target (0: off)",
+              min=0.0, max=1.0),
+        Param("recover_colour", float, 0.8,
+              "a hidden target is also taken back when its colour cue and colour contrast "
+              "reach this share of their usual and first values, inside the motion gate "
+              "(anywhere while lost; 0: off)", min=0.0, max=1.0),
     )
     requires = frozenset({"frame", "score", "measurement", "prediction", "robust"})
     provides = frozenset({"state", "measurement", "box"})
@@ -133,6 +162,7 @@ class RobustFailure(Stage):
     rate_hist: float
     rate_template: float
     rate_reference: float
+    reference_floor: float
     trend_ratio: float
     agree_below: float
     hold: bool
@@ -141,6 +171,9 @@ class RobustFailure(Stage):
     hold_search: bool
     hold_learn: bool
     hold_rate: float
+    learn_contrast: float
+    unseen_contrast: float
+    recover_colour: float
 
     def start(self, ctx: TrackContext) -> None:
         """The first frame's box is the target: tracking."""
@@ -151,6 +184,7 @@ class RobustFailure(Stage):
         ctx.robust.colour_only = False
         ctx.extras["confidence"] = 1.0
         self._usual = 1.0  # running mean of the score over learning frames (trend_ratio)
+        self._first = ctx.robust.references  # the cue values on the first frame
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
@@ -162,16 +196,23 @@ class RobustFailure(Stage):
             level = max(self.recover_at, self.occlude_below)  # hysteresis
         was_tracking = ctx.state == TrackState.TRACKING
         target.colour_only = False
-        if ctx.measurement is not None and score >= level and self._agree(target):
+        seen = self._seen(target)
+        if ctx.measurement is not None and (
+                (score >= level and self._agree(target) and seen)
+                or (not was_tracking and self._emerging(ctx, target))):
             ctx.state = TrackState.TRACKING
             target.hidden = 0
             target.search_all = False
             if self.update and self._learnable(target, score):
                 target.learn(ctx.measurement, self.rate_hist, self.rate_template)
                 rate = self.rate_reference
+                # the usual values follow slow change, down to reference_floor of what the
+                # target scored at the start: a box scoring half of that is not "as usual",
+                # however slowly it got there (a partly covered target, a drifting box)
                 target.references = tuple(  # type: ignore[assignment]
-                    (1 - rate) * r + rate * v
-                    for r, v in zip(target.references, target.cues, strict=True))
+                    max((1 - rate) * r + rate * v, self.reference_floor * first)
+                    for r, v, first in zip(target.references, target.cues, self._first,
+                                           strict=True))
             elif self.update and self.hold_learn and self._held(ctx, target):
                 # medium confidence, colour and motion agree: the template follows slowly
                 target.learn_template(ctx.measurement, self.hold_rate)
@@ -179,7 +220,7 @@ class RobustFailure(Stage):
             # lasting change of appearance lowers it and learning resumes
             self._usual = (1 - self.rate_reference) * self._usual + self.rate_reference * score
             return
-        if was_tracking and ctx.measurement is not None and self._held(ctx, target):
+        if was_tracking and seen and ctx.measurement is not None and self._held(ctx, target):
             # one stale cue is not evidence that the target is gone: follow the measurement
             # (the state stays tracking), localise the next frame on colour
             target.hidden = 0
@@ -210,7 +251,13 @@ class RobustFailure(Stage):
         # 2017, sec. 3.3): update only when the response is at least beta x its historical
         # mean, so a target being covered slowly (a falling score still above update_above)
         # does not teach the model and the usual values the occluder
-        return value >= self.update_above and score >= self.trend_ratio * self._usual
+        # and only while the box stands out from its surroundings in colour about as the
+        # target did: the usual values follow the cues, so a box sliding slowly off its target
+        # (each frame a little less target-like, each frame learnt) would otherwise drag them
+        # down until bare background scored as usual; the contrast is measured against the
+        # box's own ring with the current model and does not follow them down
+        return (value >= self.update_above and score >= self.trend_ratio * self._usual
+                and target.contrast >= self.learn_contrast * target.first_contrast)
 
     def _held(self, ctx: TrackContext, target: RobustTarget) -> bool:
         """Whether a tracking target whose template cue disagrees is still plainly there: the
@@ -221,6 +268,32 @@ class RobustFailure(Stage):
             return False
         colour, usual = target.cues[1], target.references[1]
         if colour < self.hold_colour * max(usual, 1e-6):
+            return False
+        return self._gated(ctx, target)
+
+    def _seen(self, target: RobustTarget) -> bool:
+        """Whether the found box shows the target's colours against its surroundings: its
+        colour contrast at least ``unseen_contrast`` of the first frame's, or its colour cue at
+        its usual value (a grey target on a background of its own grey keeps its usual colour
+        score but little contrast; that is not evidence that it is gone)."""
+        return (target.contrast >= self.unseen_contrast * target.first_contrast
+                or target.cues[1] >= target.references[1])
+
+    def _emerging(self, ctx: TrackContext, target: RobustTarget) -> bool:
+        """Whether a hidden target is coming back into view: the colour cue and the colour
+        contrast of the found box at ``recover_colour`` of their usual and first values, inside
+        the motion gate (anywhere while lost). A target coming out from behind an occluder
+        shows its colours well before the template, learnt on the whole target, matches it
+        again."""
+        return (self.recover_colour > 0
+                and target.cues[1] >= self.recover_colour * target.references[1]
+                and target.contrast >= self.recover_colour * target.first_contrast
+                and (ctx.state == TrackState.LOST or self._gated(ctx, target)))
+
+    def _gated(self, ctx: TrackContext, target: RobustTarget) -> bool:
+        """Whether the measured centre lies inside the ``hold_gate`` validation gate around
+        the prediction (Bar-Shalom et al. 2001, sec. 5.4; the predictor's sigma per axis)."""
+        if ctx.measurement is None or ctx.prediction is None:
             return False
         sx, sy = (max(s, 1e-6) for s in target.sigma)
         dx = (ctx.measurement.cx - ctx.prediction.cx) / sx

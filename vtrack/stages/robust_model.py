@@ -200,6 +200,10 @@ class RobustTarget:
     #: confident frames (robust_failure); and this frame's values at the found box.
     references: tuple[float, float] = (1.0, 1.0)
     cues: tuple[float, float] = (1.0, 1.0)
+    #: Colour contrast of the found box: its mean likelihood minus that of the ring around it
+    #: (robust_search); and its value on the first frame, at the box the model was built on.
+    contrast: float = 1.0
+    first_contrast: float = 1.0
     #: Frames hidden in a row, and whether the next frame searches the whole frame
     #: (robust_failure: lost with re-detection on).
     hidden: int = 0

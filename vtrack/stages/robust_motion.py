@@ -24,6 +24,7 @@ Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.b
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
@@ -51,6 +52,15 @@ class RobustMotion(Stage):
               min=0.0, max=10.0),
         Param("innovation_rate", float, 0.3,
               "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
+        Param("rewind_frames", int, 30,
+              "when a tracked target becomes hidden, coast from the last confident frame if "
+              "it is at most this many frames back (0: coast from the current state)",
+              min=0, max=10000),
+        Param("rewind_above", float, 0.9,
+              "a tracking frame is confident at this score or above", min=0.0, max=1.0),
+        Param("velocity_frames", int, 10,
+              "the coasting velocity is the mean displacement of the measured centre over the "
+              "last this many confident frames (1: the filter's own)", min=1, max=1000),
     )
     requires = frozenset({"measurement", "box", "state", "score", "robust"})
     provides = frozenset({"box", "prediction", "robust"})
@@ -60,6 +70,9 @@ class RobustMotion(Stage):
     r_rel: float
     p0_rel: float
     innovation_rate: float
+    rewind_frames: int
+    rewind_above: float
+    velocity_frames: int
 
     def start(self, ctx: TrackContext) -> None:
         assert ctx.box is not None
@@ -70,6 +83,10 @@ class RobustMotion(Stage):
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._rms = np.zeros(2)
         self._was = TrackState.TRACKING
+        # the state on the last confident frame (its velocity the running mean over confident
+        # frames) and that frame's index: where a target that becomes hidden coasts from
+        self._confident = (self._state, ctx.frame.index)
+        self._centres: deque[tuple[int, float, float]] = deque(maxlen=self.velocity_frames)
         self._predict(ctx)
 
     def _position(self) -> tuple[float, float]:
@@ -83,6 +100,7 @@ class RobustMotion(Stage):
                 # re-found: a jump, not a velocity
                 self._state = self._model.initiate([(box.cx, box.cy)])
                 self._rms[:] = 0.0
+                self._centres.clear()
             else:
                 error = z - np.array(self._position())
                 self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
@@ -93,10 +111,32 @@ class RobustMotion(Stage):
                 confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
                 self._state = self._model.update(self._state, z,
                                                  R=self._model.R / confidence**4)
+            if ctx.state == TrackState.TRACKING and ctx.score >= self.rewind_above:
+                self._remember(ctx.frame.index, box.cx, box.cy)
         elif ctx.box is not None:
+            if self._was == TrackState.TRACKING:
+                state, index = self._confident
+                age = ctx.frame.index - index
+                if 0 < age <= self.rewind_frames:
+                    # just hidden: the frames since the last confident one measured a target
+                    # being covered (its visible part, further and further back); coast from
+                    # before them
+                    self._state = self._model.predict(state, float(age))
             ctx.box = ctx.box.moved_to(*self._position())  # coast: this frame's prior
         self._was = ctx.state
         self._predict(ctx)
+
+    def _remember(self, index: int, cx: float, cy: float) -> None:
+        """Keep the state of confident frame ``index`` (measured centre ``cx, cy``), its
+        velocity replaced by the mean displacement over the last ``velocity_frames`` confident
+        frames: the filter's own velocity follows the measurement noise, and starts at rest."""
+        self._centres.append((index, cx, cy))
+        first, last = self._centres[0], self._centres[-1]
+        state = self._state
+        if last[0] > first[0]:
+            velocity = np.array([last[1] - first[1], last[2] - first[2]]) / (last[0] - first[0])
+            state = self._model.with_velocity(state, velocity)
+        self._confident = (state, index)
 
     def _predict(self, ctx: TrackContext) -> None:
         assert ctx.robust is not None and ctx.box is not None

@@ -23,6 +23,10 @@ capped at 1, combined by ``confidence``: ``geometric`` (default) ``r_tmpl^(1 - g
 r_hist^gamma``, ``fused`` Staple's linear mix, ``balanced`` or ``min``. Sizes are estimated only
 on frames whose score reaches ``scale_above``.
 
+Colour contrast (for ``robust_failure``): the found box's mean likelihood minus that of the ring
+``ring`` times its size around it (:func:`contrast`), in ``ctx.robust.contrast``; the first
+frame's value, at the box the model was built on, is ``ctx.robust.first_contrast``.
+
 Scale (issue item 5, ``scale = true``): the box is tried at ``1 / scale_step``, 1 and
 ``scale_step`` times its size around the found centre; each size is scored by Staple's fusion of
 the template's NCC (the template resized to that size: a three-level template pyramid) and the
@@ -37,7 +41,8 @@ not make the size drift; it moves ``scale_rate`` of the way towards the best one
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust`` (maps, window, motion
 uncertainty, usual cue values), ``ctx.prediction``, ``ctx.box``; writes ``ctx.measurement`` and
 ``ctx.box`` (the found box), ``ctx.score`` (0..1, see above; ``robust_failure`` decides what it
-means), ``ctx.robust.cues`` and the extras ``ncc``, ``colour`` (the raw cue values).
+means), ``ctx.robust.cues`` and ``ctx.robust.contrast``, and the extras ``ncc``, ``colour``
+(the raw cue values).
 """
 
 from __future__ import annotations
@@ -120,6 +125,10 @@ class RobustSearch(Stage):
         Param("scale_above", float, 0.7,
               "the size is estimated only when the relative score is at least this",
               min=0.0, max=1.0),
+        Param("scale_contrast", float, 0.6,
+              "the box shrinks only while its colour contrast is at least this share of the "
+              "first frame's (a partly covered target would shrink it to its visible part; "
+              "0: off)", min=0.0, max=1.0),
         Param("scale_step", float, 1.05, "ratio between the sizes tried", min=1.001, max=1.5),
         Param("scale_rate", float, 0.6, "share of the way to the best size moved per frame",
               min=0.0, max=1.0),
@@ -132,7 +141,8 @@ class RobustSearch(Stage):
               "SiamFC 2016: 0.9745): damps the drift of the size on weak evidence",
               min=0.5, max=1.0),
         Param("ring", float, 1.6,
-              "the contrast ring reaches this multiple of the box (shrink-bias guard)",
+              "the contrast ring reaches this multiple of the box (the scale's shrink-bias "
+              "guard, and the failure logic's colour contrast)",
               min=1.05, max=4.0),
     )
     requires = frozenset({"robust", "prediction", "box"})
@@ -147,6 +157,7 @@ class RobustSearch(Stage):
     relocate_below: float
     scale: bool
     scale_above: float
+    scale_contrast: float
     scale_step: float
     scale_rate: float
     scale_cue: str
@@ -157,6 +168,11 @@ class RobustSearch(Stage):
         """The first frame's box is the measurement, with full confidence."""
         ctx.measurement = ctx.box
         ctx.score = 1.0
+        target = ctx.robust
+        assert target is not None and target.integral is not None and ctx.box is not None
+        cx, cy = target.to_working(ctx.box.cx, ctx.box.cy)
+        target.contrast = target.first_contrast = contrast(
+            target.integral, cx, cy, *target.size, self.ring)
         ctx.extras["ncc"] = 1.0
         ctx.extras["colour"] = 1.0
 
@@ -190,12 +206,17 @@ class RobustSearch(Stage):
             if other > score + CLEARLY_BETTER:
                 px, py, ix, iy, score, target.cues = qx, qy, qx, qy, other, cues
         cx, cy = px + w / 2.0, py + h / 2.0
+        target.contrast = contrast(target.integral, cx, cy, w, h, self.ring)
         bw, bh = ctx.box.w, ctx.box.h
         if self.scale and score >= self.scale_above:
             # sizes are measured on a clearly seen target only: a partly covered one would
             # shrink the box to its visible part
             factor = self._scale(target, cx, cy, w, h)
-            bw, bh = bw * factor, bh * factor
+            if factor >= 1.0 or target.contrast >= self.scale_contrast * target.first_contrast:
+                # ... and its score may stay fair while the usual cue values follow it down:
+                # a box shrinks only while its colour contrast holds (an undersized box, its
+                # ring on the target, has a low contrast too: it may always grow)
+                bw, bh = bw * factor, bh * factor
         fx, fy = target.to_frame(cx, cy)
         box = Box.from_center(fx, fy, bw, bh)
         ctx.measurement = ctx.box = box
