@@ -1,12 +1,13 @@
 """Tune and ablate the ``robust`` tracker on every real single-target sequence, in memory.
 
     python benchmarks/robust_tune.py                 # per-sequence table and the mean
-    python benchmarks/robust_tune.py --ablate        # mean AUC with each part switched off
+    python benchmarks/robust_tune.py --ablate        # each part switched off: AUC, state, scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
     python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
     python benchmarks/robust_tune.py --scenes        # generated scenes, robust and s0
     python benchmarks/robust_tune.py --hard          # randomised hard scenes, seeds 0-8
+    python benchmarks/robust_tune.py --hard --frames 90 --size 480x360   # other geometry
 
 Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
 precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
@@ -62,9 +63,19 @@ ABLATIONS = (
     ("hold without template adaptation", ["robust_failure.hold_learn=false"]),
     ("with LMCF trend freeze (learn at >= 0.9 x mean score)",
      ["robust_failure.trend_ratio=0.9"]),
+    ("no contrast gate on learning", ["robust_failure.learn_contrast=0"]),
+    ("no unseen-contrast test (tracking on a box without contrast)",
+     ["robust_failure.unseen_contrast=0"]),
+    ("no floor on the usual cue values", ["robust_failure.reference_floor=0"]),
+    ("no colour recovery of an emerging target", ["robust_failure.recover_colour=0"]),
+    ("no shrink guard (box shrinks whatever its contrast)", ["robust_search.scale_contrast=0"]),
+    ("coast from the current state (no rewind)", ["robust_motion.rewind_frames=0"]),
+    ("coast at the filter's velocity (not the mean displacement)",
+     ["robust_motion.velocity_frames=1"]),
     ("no failure logic (never occluded)", ["robust_failure.occlude_below=0",
                                            "robust_failure.recover_at=0",
-                                           "robust_failure.agree_below=0"]),
+                                           "robust_failure.agree_below=0",
+                                           "robust_failure.unseen_contrast=0"]),
 )
 
 
@@ -154,22 +165,38 @@ def scenes(seeds: tuple[int, ...] = (0, 1, 2)) -> None:
 
 
 HARD = ("slab", "exit_return", "clip_ramp", "fast", "grow", "shrink", "crossing", "grey")
+#: The ablation's scene columns: the slab passed slowly (partly covered ~40% of the clip), and
+#: every hard scene at the tests' length and size.
+SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES, HARD_SEEDS = range(6), 200, 3
 
 
-def hard(overrides: list[str], seeds: range = range(9)) -> None:
-    """Mean IoU of robust (with ``overrides``) on each randomised hard scene, per seed
-    (120 frames, 320x240: the parameters are drawn per seed, the tests use seeds 0-2)."""
+def hard_means(overrides: list[str], seeds: range, frames: int = 120,
+               size: tuple[int, int] | None = None,
+               names: tuple[str, ...] = HARD) -> dict[str, list[float]]:
+    """Per randomised hard scene, robust's (with ``overrides``) mean IoU on each seed."""
     config = load_config("robust").with_overrides(overrides)
-    print(f"| scene | seeds {seeds.start}-{seeds.stop - 1} | mean | min |")
-    print("|---|---|---:|---:|")
-    for name in HARD:
-        values = []
+    width, height = size or (None, None)
+    means: dict[str, list[float]] = {}
+    for name in names:
         for seed in seeds:
-            scene = make_scene(name, seed=seed, frames=120)
+            scene = make_scene(name, seed=seed, frames=frames, width=width, height=height)
             overlaps, _ = frame_scores(track_clip(Clip(name, list(scene.frames()),
                                                        list(scene.boxes)), config),
                                        scene.boxes)
-            values.append(mean_overlap(overlaps))
+            means.setdefault(name, []).append(mean_overlap(overlaps))
+    return means
+
+
+def hard(overrides: list[str], seeds: range, frames: int,
+         size: tuple[int, int] | None) -> None:
+    """Mean IoU of robust (with ``overrides``) on each randomised hard scene, per seed (the
+    parameters are drawn per seed; the tests use seeds 0-2 at 120 frames, 320x240)."""
+    where = f"{size[0]}x{size[1]}" if size else "320x240"
+    print(f"| scene ({where}, {frames} frames) | seeds {seeds.start}-{seeds.stop - 1} | mean "
+          "| min |")
+    print("|---|---|---:|---:|")
+    for name in HARD:
+        values = hard_means(overrides, seeds, frames, size, (name,))[name]
         print(f"| {name} | {' '.join(f'{v:.2f}' for v in values)} | "
               f"{statistics.mean(values):.3f} | {min(values):.2f} |")
         sys.stdout.flush()
@@ -184,7 +211,10 @@ def main() -> None:
     parser.add_argument("--scenes", action="store_true",
                         help="mean IoU on the generated scenes, robust against s0")
     parser.add_argument("--hard", action="store_true",
-                        help="mean IoU on the randomised hard scenes, seeds 0-8")
+                        help="mean IoU on the randomised hard scenes (--seeds, --frames, --size)")
+    parser.add_argument("--seeds", type=int, default=9, help="--hard: seeds 0..N-1")
+    parser.add_argument("--frames", type=int, default=120, help="--hard: frames per scene")
+    parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
     parser.add_argument("--speed", action="store_true",
                         help="tracking work per 1080p frame, robust against s0")
     parser.add_argument("--config", default="robust",
@@ -197,7 +227,8 @@ def main() -> None:
         scenes()
         return
     if args.hard:
-        hard(args.overrides)
+        size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+        hard(args.overrides, range(args.seeds), args.frames, size)  # type: ignore[arg-type]
         return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if not sequences:
@@ -226,11 +257,23 @@ def main() -> None:
         del clip
     if args.ablate:
         base = statistics.mean(r.auc for r in table["robust"])
-        print("| variant | mean AUC | change |")
-        print("|---|---:|---:|")
-        for label, results in table.items():
+        print("| variant | mean AUC | change | tracking & miss | miss & flagged | "
+              f"slow slab ({len(SLOW_SLAB_SEEDS)} seeds, {SLOW_SLAB_FRAMES} frames) | "
+              f"hard scenes (seeds 0-{HARD_SEEDS - 1}) |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        for label, overrides in variants:
+            results = table[label]
             mean = statistics.mean(r.auc for r in results)
-            print(f"| {label} | {mean:.3f} | {mean - base:+.3f} |")
+            slab = hard_means(overrides + args.overrides, SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES,
+                              names=("slab",))["slab"]
+            kinds = hard_means(overrides + args.overrides, range(HARD_SEEDS))
+            false_tracking = share(sum(r.false_tracking for r in results),
+                                   sum(r.tracking for r in results))
+            flagged = share(sum(r.flagged for r in results), sum(r.misses for r in results))
+            print(f"| {label} | {mean:.3f} | {mean - base:+.3f} | {false_tracking} | {flagged} "
+                  f"| {statistics.mean(slab):.3f} | "
+                  f"{statistics.mean(v for values in kinds.values() for v in values):.3f} |")
+            sys.stdout.flush()
         return
     results = table["robust"]
 

@@ -16,6 +16,16 @@ modelled, its innovations do. ``robust_model`` sizes the next search window from
 4). While hidden the filter coasts and ``P`` grows, so the window widens; a target taken back
 after being lost restarts the filter at the re-found box (its jump is not a velocity).
 
+Where a hidden target coasts from: a target covered slowly from one side is measured further
+and further back (its visible part) on the frames before it is hidden, and the filter learns
+that it slows down, so it would coast at the wrong speed. The filter keeps its state on the last
+confident frame (``rewind_above``), with the velocity replaced by the mean displacement of the
+measured centre over the last ``velocity_frames`` confident frames (the filter's own velocity
+follows the measurement noise, and starts at rest); on the frame the target becomes hidden it
+coasts from that state, predicted to this frame, if it is at most ``rewind_frames`` back: the
+recent past re-estimated once later evidence says its measurements were bad, in the spirit of
+fixed-lag smoothing (our choice; measured in benchmarks/RESULTS.md section 8).
+
 Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
 ``ctx.state``, ``ctx.robust``; writes ``ctx.box`` (the prediction while coasting),
 ``ctx.prediction`` and ``ctx.robust.sigma``.
@@ -28,7 +38,7 @@ from collections import deque
 
 import numpy as np
 
-from vtrack.filters import ConstantVelocity
+from vtrack.filters import ConstantVelocity, GaussianState
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -85,7 +95,7 @@ class RobustMotion(Stage):
         self._was = TrackState.TRACKING
         # the state on the last confident frame (its velocity the running mean over confident
         # frames) and that frame's index: where a target that becomes hidden coasts from
-        self._confident = (self._state, ctx.frame.index)
+        self._confident: tuple[GaussianState, int] | None = None
         self._centres: deque[tuple[int, float, float]] = deque(maxlen=self.velocity_frames)
         self._predict(ctx)
 
@@ -101,6 +111,7 @@ class RobustMotion(Stage):
                 self._state = self._model.initiate([(box.cx, box.cy)])
                 self._rms[:] = 0.0
                 self._centres.clear()
+                self._confident = None
             else:
                 error = z - np.array(self._position())
                 self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
@@ -115,7 +126,7 @@ class RobustMotion(Stage):
                 self._remember(ctx.frame.index, box.cx, box.cy)
         elif ctx.box is not None:
             if self._was == TrackState.TRACKING:
-                state, index = self._confident
+                state, index = self._confident or (self._state, ctx.frame.index)
                 age = ctx.frame.index - index
                 if 0 < age <= self.rewind_frames:
                     # just hidden: the frames since the last confident one measured a target
@@ -129,14 +140,17 @@ class RobustMotion(Stage):
     def _remember(self, index: int, cx: float, cy: float) -> None:
         """Keep the state of confident frame ``index`` (measured centre ``cx, cy``), its
         velocity replaced by the mean displacement over the last ``velocity_frames`` confident
-        frames: the filter's own velocity follows the measurement noise, and starts at rest."""
+        frames: the filter's own velocity follows the measurement noise, and starts at rest
+        (so nothing is kept before two confident frames give a displacement; ``velocity_frames =
+        1``: the filter's state as it is)."""
+        if self.velocity_frames == 1:
+            self._confident = (self._state, index)
+            return
         self._centres.append((index, cx, cy))
         first, last = self._centres[0], self._centres[-1]
-        state = self._state
         if last[0] > first[0]:
             velocity = np.array([last[1] - first[1], last[2] - first[2]]) / (last[0] - first[0])
-            state = self._model.with_velocity(state, velocity)
-        self._confident = (state, index)
+            self._confident = (self._model.with_velocity(self._state, velocity), index)
 
     def _predict(self, ctx: TrackContext) -> None:
         assert ctx.robust is not None and ctx.box is not None
