@@ -34,9 +34,12 @@ colour *contrast* of the box, its mean likelihood minus that of the ring around 
 term is the guard against the shrink bias of histogram similarity (a box inside the target keeps
 a high mean likelihood, but its ring then lies on the target too; cf. Ning et al., "Robust mean
 shift tracking with corrected background-weighted histogram", IET CV 2012, on background pixels
-inside the box). A size other than the current one has its score multiplied by
-``scale_penalty`` (SiamFC's scale penalty, Bertinetto et al., ECCV-W 2016), so weak evidence does
-not make the size drift; it moves ``scale_rate`` of the way towards the best one each frame.
+inside the box). The smaller size has its score multiplied by ``scale_penalty`` (SiamFC's scale
+penalty, Bertinetto et al., ECCV-W 2016, which penalises both sizes): shrinking is the risky
+direction (the shrink bias, a partly covered target), while a box that lost size must regain it
+on equal evidence (penalising growth too kept boxes undersized: `grow` 0.83 -> 0.86 mean IoU,
+real mean AUC 0.592 -> 0.602); the size moves ``scale_rate`` of the way towards the best one each
+frame.
 
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust`` (maps, window, motion
 uncertainty, usual cue values), ``ctx.prediction``, ``ctx.box``; writes ``ctx.measurement`` and
@@ -137,8 +140,8 @@ class RobustSearch(Stage):
               "colour = colour contrast only; template = NCC only",
               choices=("fused", "colour", "template")),
         Param("scale_penalty", float, 0.99,
-              "score factor of the sizes other than the current one (Bertinetto et al., "
-              "SiamFC 2016: 0.9745): damps the drift of the size on weak evidence",
+              "score factor of the smaller size tried (Bertinetto et al., SiamFC 2016, "
+              "penalise both: 0.9745): a box shrinks only on better evidence",
               min=0.5, max=1.0),
         Param("ring", float, 1.6,
               "the contrast ring reaches this multiple of the box (the scale's shrink-bias "
@@ -268,7 +271,10 @@ class RobustSearch(Stage):
                 score = target.gamma * colour + (1 - target.gamma) * _ncc_near(
                     grey, template, cx, cy)
             if k != 1.0 and score > 0:
-                score *= self.scale_penalty  # SiamFC's scale penalty: a change must earn it
+                # SiamFC's scale penalty, on the smaller size only: shrinking is the risky
+                # direction (histogram shrink bias, a partly covered target) and must earn it; a
+                # box that lost size must be able to regain it on equal evidence
+                score *= self.scale_penalty if k < 1.0 else 1.0
             scores.append(score)
         best = int(np.argmax(scores))
         return 1.0 + self.scale_rate * (factors[best] - 1.0)
