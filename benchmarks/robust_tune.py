@@ -63,6 +63,7 @@ ABLATIONS = (
     ("hold without template adaptation", ["robust_failure.hold_learn=false"]),
     ("with LMCF trend freeze (learn at >= 0.9 x mean score)",
      ["robust_failure.trend_ratio=0.9"]),
+    ("no contrast gate on learning", ["robust_failure.learn_contrast=0"]),
     ("no unseen-contrast test (tracking on a box without contrast)",
      ["robust_failure.unseen_contrast=0"]),
     ("no floor on the usual cue values", ["robust_failure.reference_floor=0"]),

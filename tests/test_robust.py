@@ -83,7 +83,7 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
                    "robust_model.adaptive_window=false", "robust_search.scale=false",
                    "robust_failure.update=false", "robust_failure.redetect=false",
                    "robust_failure.hold=false", "robust_failure.hold_search=false",
-                   "robust_failure.hold_learn=false",
+                   "robust_failure.hold_learn=false", "robust_failure.learn_contrast=0",
                    "robust_failure.unseen_contrast=0", "robust_failure.recover_colour=0",
                    "robust_failure.reference_floor=0", "robust_search.scale_contrast=0",
                    "robust_motion.rewind_frames=0"):

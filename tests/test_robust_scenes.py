@@ -93,7 +93,8 @@ def test_robust_is_not_tracking_on_the_slab():
     the slab's edge (score 1 on bare background); the colour contrast against the first frame
     and the floor of the usual values stop that."""
     honest = false_tracking(slab_runs())
-    unguarded = false_tracking(slab_runs(("robust_failure.unseen_contrast=0",
+    unguarded = false_tracking(slab_runs(("robust_failure.learn_contrast=0",
+                                          "robust_failure.unseen_contrast=0",
                                           "robust_failure.reference_floor=0")))
     assert honest <= 0.05
     assert unguarded > honest + 0.05, (honest, unguarded)

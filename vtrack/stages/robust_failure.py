@@ -49,11 +49,10 @@ way, by its peak-to-sidelobe ratio).
   background has lost it, whatever its score (the discriminability of a colour feature between
   the target and its surroundings, Collins, Liu, Leordeanu, "Online selection of
   discriminative tracking features", TPAMI 2005; the object-vs-surroundings ratio of DAT).
-  A box below ``unseen_contrast`` of it whose colour cue is also below its usual value does
-  not show the target (occluded). Without it and the floor under the usual values, a target
-  covered slowly by a grey slab taught the model and the usual values the slab edge, and the
-  box stayed on the slab with a score of 1, ``tracking``. (Gating learning on the contrast as
-  well changed nothing measurable once these two were in: not kept.)
+  Nothing is learnt below ``learn_contrast`` of it, and a box below ``unseen_contrast`` of it
+  whose colour cue is also below its usual value does not show the target (occluded).
+  Without these, a target covered slowly by a grey slab taught the model and the usual values
+  the slab edge, and the box stayed on the slab with a score of 1, ``tracking``.
 - A hidden target coming back into view is taken back on colour alone (``recover_colour``):
   colour cue and contrast near their usual and first values, inside the motion gate (anywhere
   while lost); the template, learnt on the whole target, matches a half-visible one badly.
@@ -136,6 +135,9 @@ class RobustFailure(Stage):
               "test, blend the template (only) towards the box at hold_rate"),
         Param("hold_rate", float, 0.01,
               "template learning rate on held frames (Staple: 0.01)", min=0.0, max=1.0),
+        Param("learn_contrast", float, 0.5,
+              "the model and the usual cue values learn only while the box's colour contrast "
+              "is at least this share of the first frame's (0: off)", min=0.0, max=1.0),
         Param("unseen_contrast", float, 0.25,
               "a box whose colour contrast is below this share of the first frame's, with "
               "its colour cue below its usual value, does not show the target (0: off)",
@@ -169,6 +171,7 @@ class RobustFailure(Stage):
     hold_search: bool
     hold_learn: bool
     hold_rate: float
+    learn_contrast: float
     unseen_contrast: float
     recover_colour: float
 
@@ -248,7 +251,13 @@ class RobustFailure(Stage):
         # 2017, sec. 3.3): update only when the response is at least beta x its historical
         # mean, so a target being covered slowly (a falling score still above update_above)
         # does not teach the model and the usual values the occluder
-        return value >= self.update_above and score >= self.trend_ratio * self._usual
+        # and only while the box stands out from its surroundings in colour about as the
+        # target did: the usual values follow the cues, so a box sliding slowly off its target
+        # (each frame a little less target-like, each frame learnt) would otherwise drag them
+        # down until bare background scored as usual; the contrast is measured against the
+        # box's own ring with the current model and does not follow them down
+        return (value >= self.update_above and score >= self.trend_ratio * self._usual
+                and target.contrast >= self.learn_contrast * target.first_contrast)
 
     def _held(self, ctx: TrackContext, target: RobustTarget) -> bool:
         """Whether a tracking target whose template cue disagrees is still plainly there: the
