@@ -184,7 +184,6 @@ class RobustFailure(Stage):
         ctx.robust.colour_only = False
         ctx.extras["confidence"] = 1.0
         self._usual = 1.0  # running mean of the score over learning frames (trend_ratio)
-        self._first = ctx.robust.references  # the cue values on the first frame
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
@@ -211,7 +210,7 @@ class RobustFailure(Stage):
                 # however slowly it got there (a partly covered target, a drifting box)
                 target.references = tuple(  # type: ignore[assignment]
                     max((1 - rate) * r + rate * v, self.reference_floor * first)
-                    for r, v, first in zip(target.references, target.cues, self._first,
+                    for r, v, first in zip(target.references, target.cues, target.first_cues,
                                            strict=True))
             elif self.update and self.hold_learn and self._held(ctx, target):
                 # medium confidence, colour and motion agree: the template follows slowly

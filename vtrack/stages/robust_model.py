@@ -200,6 +200,8 @@ class RobustTarget:
     #: confident frames (robust_failure); and this frame's values at the found box.
     references: tuple[float, float] = (1.0, 1.0)
     cues: tuple[float, float] = (1.0, 1.0)
+    #: The cue values at the first frame's box (robust_failure's floor under the usual values).
+    first_cues: tuple[float, float] = (1.0, 1.0)
     #: Colour contrast of the found box: its mean likelihood minus that of the ring around it
     #: (robust_search); and its value on the first frame, at the box the model was built on.
     contrast: float = 1.0
@@ -476,7 +478,7 @@ class RobustModel(Stage):
         ctx.likelihood = target.model.likelihood(target.bins)
         self._maps(ctx, box)
         x, y = (round(v) for v in target.to_working(box.x, box.y))
-        target.references = target.cues_at(x, y)
+        target.references = target.first_cues = target.cues_at(x, y)
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust

@@ -125,8 +125,8 @@ class RobustMotion(Stage):
             if ctx.state == TrackState.TRACKING and ctx.score >= self.rewind_above:
                 self._remember(ctx.frame.index, box.cx, box.cy)
         elif ctx.box is not None:
-            if self._was == TrackState.TRACKING:
-                state, index = self._confident or (self._state, ctx.frame.index)
+            if self._was == TrackState.TRACKING and self._confident is not None:
+                state, index = self._confident
                 age = ctx.frame.index - index
                 if 0 < age <= self.rewind_frames:
                     # just hidden: the frames since the last confident one measured a target

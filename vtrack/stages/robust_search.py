@@ -261,7 +261,8 @@ class RobustSearch(Stage):
         factors = (1.0 / self.scale_step, 1.0, self.scale_step)
         for k in factors:
             kw, kh = max(int(round(w * k)), 2), max(int(round(h * k)), 2)
-            colour = contrast(table, cx, cy, kw, kh, self.ring)
+            # the current size's contrast is the found box's, measured by step()
+            colour = target.contrast if k == 1.0 else contrast(table, cx, cy, kw, kh, self.ring)
             template = target.template_at(kw, kh)
             if template is None or target.gamma >= 1.0 or self.scale_cue == "colour":
                 score = colour
@@ -270,11 +271,11 @@ class RobustSearch(Stage):
             else:
                 score = target.gamma * colour + (1 - target.gamma) * _ncc_near(
                     grey, template, cx, cy)
-            if k != 1.0 and score > 0:
+            if k < 1.0 and score > 0:
                 # SiamFC's scale penalty, on the smaller size only: shrinking is the risky
                 # direction (histogram shrink bias, a partly covered target) and must earn it; a
                 # box that lost size must be able to regain it on equal evidence
-                score *= self.scale_penalty if k < 1.0 else 1.0
+                score *= self.scale_penalty
             scores.append(score)
         best = int(np.argmax(scores))
         return 1.0 + self.scale_rate * (factors[best] - 1.0)
