@@ -193,7 +193,7 @@ def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[
     ctx = None
     for frame in frames:
         if ctx is None:
-            ctx = TrackContext(frame=frame, rng=np.random.default_rng(0))
+            ctx = TrackContext(frame=frame, seed=0)
         ctx.new_frame(frame)
         for stage in stages:
             (stage.start if frame.index == 0 else stage.step)(ctx)

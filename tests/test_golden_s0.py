@@ -138,7 +138,7 @@ def test_bp_and_window_sums_recomputed_pixel_by_pixel(scene_factory) -> None:
 
 def run_chain(stages, frames, box: Box):
     """The chain frame by frame as the pipeline runs it; yields the context after each frame."""
-    ctx = TrackContext(frame=frames[0], rng=np.random.default_rng(0), box=box)
+    ctx = TrackContext(frame=frames[0], seed=0, box=box)
     ctx.new_frame(frames[0])
     for stage in stages:
         stage.start(ctx)

@@ -10,6 +10,7 @@ scene (4 small bright blobs: two cross through the same point and merge into one
 from __future__ import annotations
 
 import csv
+import dataclasses
 import itertools
 import json
 import math
@@ -206,13 +207,13 @@ def test_the_shipped_configs_load_and_need_no_initial_box(name: str) -> None:
 
 def run_stages(stages: list[Stage], frames: list[np.ndarray]) -> list[TrackContext]:
     """Run stages over grey frames; a snapshot of the context after each frame."""
-    ctx = TrackContext(frame=GrayFrame(0, 0.0, frames[0]), rng=np.random.default_rng(0))
+    ctx = TrackContext(frame=GrayFrame(0, 0.0, frames[0]), seed=0)
     snapshots = []
     for index, grey in enumerate(frames):
         ctx.new_frame(GrayFrame(index, index / 30, grey))
         for stage in stages:
             (stage.start if index == 0 else stage.step)(ctx)
-        snapshots.append(TrackContext(**ctx.__dict__))
+        snapshots.append(dataclasses.replace(ctx))
     return snapshots
 
 
@@ -303,7 +304,7 @@ def test_opening_and_closing_clean_the_background_foreground() -> None:
 
 
 def test_largest_blob_is_the_measurement_and_sets_the_state() -> None:
-    ctx = TrackContext(frame=GrayFrame(0, 0.0, frame_with([])), rng=np.random.default_rng(0))
+    ctx = TrackContext(frame=GrayFrame(0, 0.0, frame_with([])), seed=0)
     LargestBlob().step(ctx)
     assert ctx.measurement is None and ctx.state == TrackState.LOST
     ctx.detections = [Detection(Box(0, 0, 2, 2), 1, 1, 4), Detection(Box(10, 10, 4, 2), 12.5,
@@ -330,7 +331,7 @@ def test_quadratic_predictor_is_s3_eq_6_with_constant_velocity_fallbacks() -> No
 def points_frame(index: int, points: list[tuple[float, float]]) -> TrackContext:
     """A context whose detections are 6x6 boxes centred on ``points``."""
     ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((4, 4), np.uint8)),
-                       rng=np.random.default_rng(0))
+                       seed=0)
     ctx.detections = [Detection(Box.from_center(x, y, 6, 6), x, y, 36.0) for x, y in points]
     return ctx
 

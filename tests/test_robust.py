@@ -24,7 +24,7 @@ from vtrack.request import RunRequest
 from vtrack.run import run
 from vtrack.scenes import Scene
 from vtrack.stages.base import TrackState
-from vtrack.stages.robust_model import ColourModel
+from vtrack.stages.robust_model import GREY_SAT, GREY_VAL, ColourModel
 
 SEEDS = (0, 1)
 
@@ -150,6 +150,42 @@ def test_surroundings_likelihood_tells_target_from_background() -> None:
     grey_bin = int(bins[5, 5])
     assert grey_bin >= model.hue_bins * model.sat_bins  # a value bin
     assert likelihood[5, 5] < 0.1
+
+
+@pytest.mark.parametrize("bins", [(16, 4, 16), (48, 4, 32), (7, 3, 5)])
+def test_joint_bins_follow_their_definition_for_every_hsv_value(
+        bins: tuple[int, int, int]) -> None:
+    """The table look-ups of ``quantise_hsv`` give, for all 256^3 H, S, V triples, the bin the
+    docstring defines: ``hue_bin * sat_bins + sat_bin`` for a saturated pixel, ``hue_bins *
+    sat_bins + value_bin`` for a grey one (S < GREY_SAT or V < GREY_VAL)."""
+    hue_bins, sat_bins, grey_bins = bins
+    model = ColourModel(hue_bins, sat_bins, grey_bins, surroundings=True)
+    h, s, v = (a.astype(np.int64) for a in np.meshgrid(
+        np.arange(256), np.arange(256), np.arange(256), indexing="ij"))
+    hsv = np.stack([h, s, v], axis=-1).astype(np.uint8).reshape(256 * 256, 256, 3)
+    grey = (s < GREY_SAT) | (v < GREY_VAL)
+    expected = np.where(
+        grey, hue_bins * sat_bins + (v * grey_bins >> 8),
+        (h * hue_bins >> 8) * sat_bins + (s - GREY_SAT) * sat_bins // (256 - GREY_SAT))
+    assert np.array_equal(model.quantise_hsv(hsv), expected.reshape(256 * 256, 256))
+
+
+@pytest.mark.parametrize("bins", [(16, 4, 16), (2, 1, 1), (5, 3, 2)])
+def test_soft_binning_spreads_each_count_to_its_neighbours(bins: tuple[int, int, int]) -> None:
+    """Each pixel counts 1/2 for its bin and 1/4 for each neighbour: hue neighbours wrap round
+    the circle, value bins at the ends keep their outer quarter; the result sums to 1."""
+    hue_bins, sat_bins, grey_bins = bins
+    model = ColourModel(hue_bins, sat_bins, grey_bins, surroundings=True)
+    rng = np.random.default_rng(0)
+    counts = rng.integers(0, 50, model.bins).astype(np.float32)
+    colour = counts[: hue_bins * sat_bins].reshape(hue_bins, sat_bins).astype(np.float64)
+    grey = counts[hue_bins * sat_bins :].astype(np.float64)
+    expected_colour = (2 * colour + np.roll(colour, 1, axis=0) + np.roll(colour, -1, axis=0)) / 4
+    left, right = np.r_[grey[:1], grey[:-1]], np.r_[grey[1:], grey[-1:]]
+    expected = np.r_[expected_colour.ravel(), (left + 2 * grey + right) / 4]
+    smoothed = model.smoothed(counts)
+    assert smoothed.sum() == pytest.approx(1.0)
+    assert np.allclose(smoothed, expected / expected.sum(), rtol=1e-12, atol=0)
 
 
 @pytest.mark.parametrize("override", [

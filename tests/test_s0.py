@@ -89,7 +89,7 @@ def gravity(point: Point, q: float = 1.0, r: float = 1.0, p0: float = 100.0, dt:
 
 
 def context(bgr: np.ndarray, box: Box) -> TrackContext:
-    ctx = TrackContext(frame=BgrFrame(0, 0.0, bgr), rng=np.random.default_rng(0), box=box)
+    ctx = TrackContext(frame=BgrFrame(0, 0.0, bgr), seed=0, box=box)
     ctx.new_frame(ctx.frame)
     return ctx
 

@@ -207,7 +207,7 @@ def kalman_predictions(times: list[float], xs: list[float], *settings: str) -> n
                     if n == "kalman"]
     kalman = build_stage("kalman", values, "test")
     blank = np.zeros((8, 8, 3), np.uint8)
-    ctx = TrackContext(frame=BgrFrame(0, times[0], blank), rng=np.random.default_rng(0))
+    ctx = TrackContext(frame=BgrFrame(0, times[0], blank), seed=0)
     predicted = []
     for i, (time_s, x) in enumerate(zip(times, xs, strict=True)):
         ctx.new_frame(BgrFrame(i, time_s, blank))  # the kalman stage's forecast: for time_s

@@ -11,8 +11,6 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
@@ -82,7 +80,7 @@ class Pipeline:
         off_frame = 0  # frames in a row the box has been entirely outside the frame
         for frame in frames:
             if ctx is None:
-                ctx = TrackContext(frame=frame, rng=np.random.default_rng(self.seed), box=init_box)
+                ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
                 ctx.new_frame(frame)
                 for stage in self.stages:
                     started = clock()

@@ -138,7 +138,8 @@ def versions() -> dict[str, str]:
         "opencv": cv2.__version__,
         "pyav": av.__version__,
         "ffmpeg": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
-        "platform": platform.platform(),
+        # not platform.platform(): it runs `uname -p` in a subprocess (~4 ms of every run)
+        "platform": f"{platform.system()}-{platform.release()}-{platform.machine()}",
     }
 
 

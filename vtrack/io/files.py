@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import secrets
 from pathlib import Path
 from typing import Self
 
@@ -46,7 +45,7 @@ def temp_path(path: Path) -> Path:
 
     The extension is kept so FFmpeg still picks the container format from the name.
     """
-    return path.with_name(f".{path.stem}.tmp-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
+    return path.with_name(f".{path.stem}.tmp-{os.getpid()}-{os.urandom(4).hex()}{path.suffix}")
 
 
 def is_temp_of(name: str, final: str) -> bool:

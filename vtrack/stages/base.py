@@ -107,7 +107,8 @@ class TrackContext:
     """Per-run state shared by the stages; per-frame fields are reset by ``new_frame``."""
 
     frame: Frame
-    rng: np.random.Generator
+    #: Seed of :attr:`rng`.
+    seed: int = 0
     #: Current estimate of the target box (single-target). The pipeline's output for the frame.
     box: Box | None = None
     #: Where this frame's search starts: set by a predictor on the previous frame (None: use box).
@@ -154,6 +155,17 @@ class TrackContext:
     fixed: FixedRecord | None = None
     #: The ``robust`` tracker's shared state (model, working images, uncertainty), long-lived.
     robust: RobustTarget | None = None
+
+    _rng: np.random.Generator | None = field(default=None, init=False, repr=False)
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The run's random generator (particle filters), made from :attr:`seed` on first
+        use: a run that draws nothing does not pay for importing NumPy's random module
+        (~9 ms of start-up)."""
+        if self._rng is None:
+            self._rng = np.random.default_rng(self.seed)
+        return self._rng
 
     def new_frame(self, frame: Frame) -> None:
         """Start ``frame``: reset the per-frame fields; ask the ``forecast`` for its prediction."""

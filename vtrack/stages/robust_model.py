@@ -86,33 +86,46 @@ class ColourModel:
     distractor_hist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: bin -> target likelihood 0..1 (float32, 256 entries for ``cv2.LUT``).
     table: np.ndarray = field(default_factory=lambda: np.zeros(256, np.float32))
-    _luts: np.ndarray | None = field(default=None, repr=False)
+    _luts: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = field(
+        default=None, repr=False)
+    _spreading: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def bins(self) -> int:
         return self.hue_bins * self.sat_bins + self.grey_bins
 
     def quantise(self, bgr: np.ndarray) -> np.ndarray:
-        """The joint bin (uint8) of every pixel of a BGR image.
+        """The joint bin (uint8) of every pixel of a BGR image (:meth:`quantise_hsv`)."""
+        return self.quantise_hsv(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL))
+
+    def quantise_hsv(self, hsv: np.ndarray) -> np.ndarray:
+        """The joint bin (uint8) of every pixel of an HSV image (``COLOR_BGR2HSV_FULL``).
 
         Saturated pixels: ``hue_bin * sat_bins + sat_bin``; grey pixels (S < 60 or V < 32):
-        ``hue_bins * sat_bins + value_bin``. Table look-ups per channel (no per-pixel Python).
+        ``hue_bins * sat_bins + value_bin``. One table look-up per channel, no per-pixel
+        Python: the saturation and value tables send a grey pixel's colour part to 255
+        (uint8 additions saturate), and every value bin lies above every colour bin, so the
+        smaller of the colour part and the value bin is the pixel's bin.
         """
-        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)
-        hue, sat, grey = cv2.split(cv2.LUT(hsv, self._tables()))  # one look-up per channel
-        chromatic = cv2.inRange(hsv, (0, GREY_SAT, GREY_VAL), (255, 255, 255))
-        return cv2.copyTo(cv2.add(hue, sat), chromatic, grey)
+        hue, sat, value = cv2.split(hsv)
+        hue_part, sat_part, grey_flag, value_bin = self._tables()
+        colour = cv2.add(cv2.add(cv2.LUT(hue, hue_part), cv2.LUT(sat, sat_part)),
+                         cv2.LUT(value, grey_flag))
+        return cv2.min(colour, cv2.LUT(value, value_bin))
 
-    def _tables(self) -> np.ndarray:
-        """Channel value -> part of the joint bin, as one 3-channel ``cv2.LUT`` table (256 x 1
-        x 3) for an HSV image: hue, saturation (coloured pixels), value (grey pixels); built
-        once."""
+    def _tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Channel value -> part of the joint bin (uint8 ``cv2.LUT`` tables, built once): hue
+        -> ``hue_bin * sat_bins``; saturation -> ``sat_bin`` (255 below ``GREY_SAT``); value
+        -> 255 below ``GREY_VAL`` (else 0); value -> its value bin."""
         if self._luts is None:
             levels = np.arange(256)
             hue = (levels * self.hue_bins >> 8) * self.sat_bins
-            sat = np.clip(levels - GREY_SAT, 0, None) * self.sat_bins // (256 - GREY_SAT)
+            sat = np.where(levels >= GREY_SAT,
+                           (levels - GREY_SAT) * self.sat_bins // (256 - GREY_SAT), 255)
+            dark = np.where(levels >= GREY_VAL, 0, 255)
             grey = self.hue_bins * self.sat_bins + (levels * self.grey_bins >> 8)
-            self._luts = np.stack([hue, sat, grey], axis=-1).astype(np.uint8).reshape(256, 1, 3)
+            self._luts = (hue.astype(np.uint8), sat.astype(np.uint8), dark.astype(np.uint8),
+                          grey.astype(np.uint8))
         return self._luts
 
     def histogram(self, bins: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
@@ -125,19 +138,23 @@ class ColourModel:
         return hue_histogram(bins, mask, self.bins, self.bins)
 
     def smoothed(self, counts: np.ndarray) -> np.ndarray:
-        """Counts -> normalised histogram, smoothed over neighbouring bins."""
-        counts = counts.astype(np.float64)
+        """Counts -> normalised histogram, smoothed over neighbouring bins (:meth:`spread`)."""
+        if self._spreading is None:  # the spread is linear: one matrix product per histogram
+            self._spreading = np.stack([self.spread(unit) for unit in np.eye(self.bins)])
+        smooth = counts.astype(np.float64) @ self._spreading
+        total = smooth.sum()
+        return smooth / total if total > 0 else smooth
+
+    def spread(self, counts: np.ndarray) -> np.ndarray:
+        """[1 2 1] / 4 over neighbouring hue bins (circular) and value bins: each pixel also
+        counts for the bins next to its own, so a lighting shift of a bin costs little."""
         colour = counts[: self.hue_bins * self.sat_bins].reshape(self.hue_bins, self.sat_bins)
         grey = counts[self.hue_bins * self.sat_bins :]
-        # [1 2 1] / 4 over neighbouring hue bins (circular) and value bins: each pixel also
-        # counts for the bins next to its own, so a lighting shift of a bin costs little
         wrapped = np.concatenate([colour[-1:], colour, colour[:1]])  # np.roll by 1 and -1
         colour = (2 * colour + wrapped[:-2] + wrapped[2:]) / 4
         padded = np.concatenate([grey[:1], grey, grey[-1:]])
         grey = (padded[:-2] + 2 * grey + padded[2:]) / 4
-        smooth = np.concatenate([colour.ravel(), grey])
-        total = smooth.sum()
-        return smooth / total if total > 0 else smooth
+        return np.concatenate([colour.ravel(), grey])
 
     def set(self, object_hist: np.ndarray, surround_hist: np.ndarray,
             distractor_hist: np.ndarray | None = None) -> None:
@@ -360,6 +377,14 @@ def distractor_mask(colour_map: np.ndarray, size: tuple[int, int], target: tuple
     return mask
 
 
+def ncc_map(image: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """Normalised cross-correlation (``TM_CCOEFF_NORMED``) of ``template`` at every placement
+    in ``image`` (float32 both), 0..1: a flat patch (NaN) and anti-correlation count as 0."""
+    ncc = cv2.matchTemplate(image, template, cv2.TM_CCOEFF_NORMED)
+    cv2.patchNaNs(ncc, 0.0)
+    return np.clip(ncc, 0.0, 1.0, out=ncc)
+
+
 def working_scale(box: Box, size: float, upscale: float) -> float:
     """Frame -> working pixels factor that makes ``box`` about ``size`` x ``size`` in area."""
     return min(size / math.sqrt(max(box.w * box.h, 1.0)), upscale)
@@ -573,9 +598,6 @@ class RobustModel(Stage):
             target.template_map = None
             target.fused = target.colour_map
             return
-        ncc = cv2.matchTemplate(grey, template, cv2.TM_CCOEFF_NORMED)
-        cv2.patchNaNs(ncc, 0.0)  # NaN -> 0; infinities are clipped below as before
-        np.clip(ncc, 0.0, 1.0, out=ncc)
-        target.template_map = ncc
+        ncc = target.template_map = ncc_map(grey, template)
         # Staple eq. 2: f = (1 - gamma) f_tmpl + gamma f_hist
         target.fused = cv2.addWeighted(ncc, 1 - target.gamma, target.colour_map, target.gamma, 0)

@@ -42,9 +42,6 @@ from vtrack.filters import ConstantVelocity, GaussianState
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
-#: Floor of the confidence that scales the measurement noise (R is at most 100x its value).
-MIN_CONFIDENCE = 0.1
-
 
 @register
 class RobustMotion(Stage):
@@ -60,6 +57,11 @@ class RobustMotion(Stage):
               min=1e-6, max=10.0),
         Param("p0_rel", float, 0.5, "initial uncertainty std, in target diagonals",
               min=0.0, max=10.0),
+        Param("min_trust", float, 0.1,
+              "floor of the score that scales a measurement's noise (R / score^4): a "
+              "measurement the failure logic keeps (a held frame) is never ignored outright, "
+              "so the uncertainty and the search window do not grow without bound while it "
+              "is followed", min=0.01, max=1.0),
         Param("innovation_rate", float, 0.3,
               "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
         Param("rewind_frames", int, 30,
@@ -79,6 +81,7 @@ class RobustMotion(Stage):
     q_rel: float
     r_rel: float
     p0_rel: float
+    min_trust: float
     innovation_rate: float
     rewind_frames: int
     rewind_above: float
@@ -119,7 +122,7 @@ class RobustMotion(Stage):
                 # a measurement is as trustworthy as the match it came from: its standard
                 # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
                 # biased centre does not become a velocity before it is hidden
-                confidence = min(max(ctx.score, MIN_CONFIDENCE), 1.0)
+                confidence = min(max(ctx.score, self.min_trust), 1.0)
                 self._state = self._model.update(self._state, z,
                                                  R=self._model.R / confidence**4)
             if ctx.state == TrackState.TRACKING and ctx.score >= self.rewind_above:

@@ -59,11 +59,12 @@ from vtrack.geometry import Box, Window
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 from vtrack.stages.meanshift import mean_shift
-from vtrack.stages.robust_model import RobustTarget
+from vtrack.stages.robust_model import RobustTarget, ncc_map
 
 #: Share of the map's peak below which placements do not pull the mean shift.
 PEAK_SHARE = 0.8
-FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: Placements either side of the found one over which each size's NCC is maximised.
+NEAR = 2
 #: Confidence margin by which the window's best placement overrides the motion prior's choice.
 CLEARLY_BETTER = 0.1
 
@@ -261,16 +262,21 @@ class RobustSearch(Stage):
         factors = (1.0 / self.scale_step, 1.0, self.scale_step)
         for k in factors:
             kw, kh = max(int(round(w * k)), 2), max(int(round(h * k)), 2)
-            # the current size's contrast is the found box's, measured by step()
+            # the current size's contrast and NCCs are the found box's, measured by step()
+            # and robust_model
             colour = target.contrast if k == 1.0 else contrast(table, cx, cy, kw, kh, self.ring)
-            template = target.template_at(kw, kh)
-            if template is None or target.gamma >= 1.0 or self.scale_cue == "colour":
+            if target.template_map is None or self.scale_cue == "colour":
                 score = colour
-            elif self.scale_cue == "template":
-                score = _ncc_near(grey, template, cx, cy)
             else:
-                score = target.gamma * colour + (1 - target.gamma) * _ncc_near(
-                    grey, template, cx, cy)
+                x0, y0 = int(round(cx - kw / 2)), int(round(cy - kh / 2))
+                if k == 1.0:
+                    ncc = _best_near(target.template_map, x0, y0)
+                else:
+                    template = target.template_at(kw, kh)
+                    assert template is not None
+                    ncc = _ncc_near(grey, template, x0, y0)
+                score = ncc if self.scale_cue == "template" else (
+                    target.gamma * colour + (1 - target.gamma) * ncc)
             if k < 1.0 and score > 0:
                 # SiamFC's scale penalty, on the smaller size only: shrinking is the risky
                 # direction (histogram shrink bias, a partly covered target) and must earn it; a
@@ -281,20 +287,20 @@ class RobustSearch(Stage):
         return 1.0 + self.scale_rate * (factors[best] - 1.0)
 
 
-def _ncc_near(grey: np.ndarray, template: np.ndarray, cx: float, cy: float,
-              margin: int = 2) -> float:
-    """Best NCC of ``template`` centred within ``margin`` pixels of ``(cx, cy)`` (``grey``:
-    float32)."""
+def _best_near(scores: np.ndarray, x0: int, y0: int, margin: int = NEAR) -> float:
+    """Best of a placement map within ``margin`` placements of ``(x0, y0)`` (0 if none)."""
+    near = scores[max(y0 - margin, 0) : y0 + margin + 1, max(x0 - margin, 0) : x0 + margin + 1]
+    return float(near.max()) if near.size else 0.0
+
+
+def _ncc_near(grey: np.ndarray, template: np.ndarray, x0: int, y0: int,
+              margin: int = NEAR) -> float:
+    """Best NCC (:func:`ncc_map`) of ``template`` with its top-left corner within ``margin``
+    pixels of ``(x0, y0)`` (``grey``: float32); 0 if it fits nowhere there."""
     th, tw = template.shape
     rows, cols = grey.shape
-    x0 = int(round(cx - tw / 2)) - margin
-    y0 = int(round(cy - th / 2)) - margin
-    x0c, y0c = max(x0, 0), max(y0, 0)
-    x1c, y1c = min(x0 + tw + 2 * margin, cols), min(y0 + th + 2 * margin, rows)
+    x0c, y0c = max(x0 - margin, 0), max(y0 - margin, 0)
+    x1c, y1c = min(x0 + margin + tw, cols), min(y0 + margin + th, rows)
     if x1c - x0c < tw or y1c - y0c < th:
         return 0.0
-    response = cv2.matchTemplate(grey[y0c:y1c, x0c:x1c], template, cv2.TM_CCOEFF_NORMED)
-    best = float(cv2.patchNaNs(response, 0.0).max())
-    # as np.nan_to_num: an infinity counts as the largest finite float32
-    return math.copysign(FLOAT32_MAX, best) if math.isinf(best) else best
-
+    return float(ncc_map(grey[y0c:y1c, x0c:x1c], template).max())
