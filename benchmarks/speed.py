@@ -256,7 +256,7 @@ def main() -> None:
     for config in configs:
         key = f"novideo:{config}"
         print(row(f"`vtrack run CLIP --no-video --config {config}`", key,
-                  f"{_spread(ratios[key])}x A", ">= 0.9x"))
+                  f"{_spread(ratios[key], 3)}x A", ">= 0.9x"))
     for preset in presets:
         print(row(f"B: PyAV transcode process, {preset} (baseline)", f"transcode:{preset}",
                   "1.00", ""))
@@ -264,7 +264,7 @@ def main() -> None:
             key = f"video:{config}:{preset}"
             target = ">= 0.85x" if preset == "ultrafast" else "(report only)"
             print(row(f"`vtrack run CLIP --config {config} --preset {preset}` (annotated video)",
-                      key, f"{_spread(ratios[key])}x B", target))
+                      key, f"{_spread(ratios[key], 3)}x B", target))
     if not args.no_raw:
         for config in configs:
             print(row(f"`vtrack run - --raw 1920x1080 --no-video --config {config}` "

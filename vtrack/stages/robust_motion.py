@@ -5,8 +5,8 @@ Last link of the ``robust`` chain. The filter is S0's constant-velocity model pe
 (a filter tuned in pixels is too stiff for a big target and too loose for a small one): process
 noise ``q = (q_rel d)^2``, measurement noise ``r = (r_rel d)^2``, ``P0 = (p0_rel d)^2 I``, ``d``
 the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard deviation
-``/ score^2``): the less the found box looks like the target (``ctx.score``), the less it moves
-the filter.
+``/ score^2``, the score floored at ``min_trust``): the less the found box looks like the target
+(``ctx.score``), the less it moves the filter.
 
 Besides the next frame's predicted box (``ctx.prediction``) it publishes the predicted centre's
 uncertainty per axis, ``sigma = sqrt(P_xx + e_x^2)``, where ``e`` is the running RMS of the
@@ -58,10 +58,10 @@ class RobustMotion(Stage):
         Param("p0_rel", float, 0.5, "initial uncertainty std, in target diagonals",
               min=0.0, max=10.0),
         Param("min_trust", float, 0.1,
-              "floor of the score that scales a measurement's noise (R / score^4): a "
-              "measurement the failure logic keeps (a held frame) is never ignored outright, "
-              "so the uncertainty and the search window do not grow without bound while it "
-              "is followed", min=0.01, max=1.0),
+              "floor of the score that scales a measurement's noise (R / score^4; 0.1: at "
+              "most 10^4 R): the lower, the less a held frame's low-scoring measurement moves "
+              "the filter, and the more its uncertainty (and the search window) grows while "
+              "the hold lasts", min=0.01, max=1.0),
         Param("innovation_rate", float, 0.3,
               "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
         Param("rewind_frames", int, 30,

@@ -262,8 +262,8 @@ class RobustSearch(Stage):
         factors = (1.0 / self.scale_step, 1.0, self.scale_step)
         for k in factors:
             kw, kh = max(int(round(w * k)), 2), max(int(round(h * k)), 2)
-            # the current size's contrast and NCCs are the found box's, measured by step()
-            # and robust_model
+            # the current size's contrast and NCC are the found box's (measured by step() and
+            # in robust_model's map)
             colour = target.contrast if k == 1.0 else contrast(table, cx, cy, kw, kh, self.ring)
             if target.template_map is None or self.scale_cue == "colour":
                 score = colour
