@@ -263,12 +263,9 @@ class RobustFailure(Stage):
         colour cue at ``hold_colour`` of its usual value and the measured centre inside the
         ``hold_gate`` validation gate around the prediction (Bar-Shalom et al. 2001, sec.
         5.4; the predictor's sigma per axis, ``ctx.robust.sigma``)."""
-        if not self.hold or ctx.measurement is None or ctx.prediction is None:
-            return False
         colour, usual = target.cues[1], target.references[1]
-        if colour < self.hold_colour * max(usual, 1e-6):
-            return False
-        return self._gated(ctx, target)
+        return (self.hold and colour >= self.hold_colour * max(usual, 1e-6)
+                and self._gated(ctx, target))
 
     def _seen(self, target: RobustTarget) -> bool:
         """Whether the found box shows the target's colours against its surroundings: its

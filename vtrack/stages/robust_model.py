@@ -150,8 +150,7 @@ class ColourModel:
         counts for the bins next to its own, so a lighting shift of a bin costs little."""
         colour = counts[: self.hue_bins * self.sat_bins].reshape(self.hue_bins, self.sat_bins)
         grey = counts[self.hue_bins * self.sat_bins :]
-        wrapped = np.concatenate([colour[-1:], colour, colour[:1]])  # np.roll by 1 and -1
-        colour = (2 * colour + wrapped[:-2] + wrapped[2:]) / 4
+        colour = (2 * colour + np.roll(colour, 1, 0) + np.roll(colour, -1, 0)) / 4
         padded = np.concatenate([grey[:1], grey, grey[-1:]])
         grey = (padded[:-2] + 2 * grey + padded[2:]) / 4
         return np.concatenate([colour.ravel(), grey])
