@@ -9,6 +9,8 @@ processes, start-up included, each started the way a user starts it:
 
 - baseline A: a decode-only Python process (imports av, numpy, cv2, click, tqdm; decodes the clip
   with ``thread_type = "AUTO"``, frames not converted);
+- A': the same with the decoder's frame threads set as vtrack sets them (at least 8; FFmpeg's own
+  choice is 3 on two cores), to show what vtrack's tracking costs against an equal decoder;
 - ``vtrack run CLIP --no-video --config C --init BOX --out DIR`` (``python -m vtrack``, this
   checkout first on ``PYTHONPATH``), per config;
 - baseline B: a PyAV transcode process (same imports; decode + libx264 encode with vtrack's
@@ -31,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -41,6 +44,7 @@ from pathlib import Path
 from common import machine, process_env
 
 from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.io.video import decoder_threads
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 WORK = Path(__file__).resolve().parent / "_work"
@@ -55,6 +59,11 @@ with av.open(sys.argv[1]) as container:
     stream.thread_type = "AUTO"
     print(sum(1 for _ in container.decode(stream)))
 """
+
+# A': the same, with as many frame threads as vtrack's reader gives the decoder.
+DECODE_THREADS = DECODE.replace(
+    'stream.thread_type = "AUTO"',
+    'stream.thread_type = "AUTO"\n    stream.codec_context.thread_count = int(sys.argv[2])')
 
 # Baseline B: decode + encode with the settings of vtrack's annotated-video writer.
 TRANSCODE = f"""
@@ -186,6 +195,8 @@ def main() -> None:
     init = ",".join(f"{v:.1f}" for v in first)
     bitrate = clip.stat().st_size * 8 / 1e6 / (args.frames / 60)
     n = args.frames
+    cores = len(os.sched_getaffinity(0))
+    threads = decoder_threads(1920, 1080, cores)
 
     seconds: dict[str, list[float]] = {}
     ratios: dict[str, list[float]] = {}
@@ -201,6 +212,9 @@ def main() -> None:
             # Alternate every measurement within a round so drift hits them alike.
             decode = python_baseline(DECODE, [str(clip)], n, "decode-only process")
             keep("decode", decode, round_)
+            decode_threads = python_baseline(DECODE_THREADS, [str(clip), str(threads)], n,
+                                             "decode-only process (vtrack's threads)")
+            keep("decode_threads", decode_threads, round_)
             for config in configs:
                 key = f"novideo:{config}"
                 t, record = vtrack_run([str(clip), "--no-video", "--config", config,
@@ -208,6 +222,7 @@ def main() -> None:
                 keep(key, t, round_)
                 if round_ > 0:
                     ratios.setdefault(key, []).append(decode / t)  # fps ratio, same round
+                    ratios.setdefault(f"{key}:threads", []).append(decode_threads / t)
                     loop_fps.setdefault(key, []).append(record["timing"]["fps"])
                     for stage, us in record["timing"]["stage_us_per_frame"].items():
                         stage_us[config].setdefault(stage, []).append(us)
@@ -257,6 +272,12 @@ def main() -> None:
         key = f"novideo:{config}"
         print(row(f"`vtrack run CLIP --no-video --config {config}`", key,
                   f"{_spread(ratios[key], 3)}x A", ">= 0.9x"))
+    print(row(f"A': A with the decoder's {threads} frame threads as vtrack sets them ({cores} "
+              "cores)", "decode_threads", "", ""))
+    for config in configs:
+        key = f"novideo:{config}"
+        print(row(f"`vtrack run CLIP --no-video --config {config}` against A'", key,
+                  f"{_spread(ratios[f'{key}:threads'], 3)}x A'", "(what tracking costs)"))
     for preset in presets:
         print(row(f"B: PyAV transcode process, {preset} (baseline)", f"transcode:{preset}",
                   "1.00", ""))
@@ -274,6 +295,7 @@ def main() -> None:
     print("\nProcesses timed (CLIP = the clip above, BOX = its first ground-truth box):\n")
     print("```")
     print(f'A: python -c "{LIBRARIES}; <decode CLIP, thread_type AUTO>"')
+    print(f'A\': python -c "{LIBRARIES}; <decode CLIP, thread_type AUTO, thread_count {threads}>"')
     print("   python -m vtrack run CLIP --no-video --config C --init BOX --out DIR")
     print(f'B: python -c "{LIBRARIES}; <decode CLIP + libx264 -preset P -crf 23, '
           'thread_type FRAME>"')

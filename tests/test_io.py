@@ -30,6 +30,7 @@ from vtrack.io import (
 )
 from vtrack.io.files import temp_path
 from vtrack.io.threads import Prefetcher
+from vtrack.io.video import DECODER_PICTURE_BUDGET, MIN_DECODER_THREADS, decoder_threads
 from vtrack.pipeline import FrameResult
 from vtrack.stages.base import TrackState
 
@@ -115,6 +116,31 @@ def test_video_writer_output_decodes_to_same_count_and_size(tmp_path):
     assert [f.time_s for f in frames] == pytest.approx([i / 30 for i in range(12)])
     # The encoded pictures are close to the originals (lossy, crf 23).
     assert np.abs(frames[5].bgr().astype(int) - pictures(12)[5]).mean() < 6
+
+
+def test_decoder_threads_raise_ffmpegs_choice_within_the_picture_budget():
+    assert decoder_threads(1920, 1080, 2) == MIN_DECODER_THREADS  # FFmpeg alone: 3
+    assert decoder_threads(1920, 1080, 1) == MIN_DECODER_THREADS
+    assert decoder_threads(1920, 1080, 12) == 13  # FFmpeg's own choice is more already
+    assert decoder_threads(1920, 1080, 64) == 16
+    eight_k = decoder_threads(7680, 4320, 2)
+    assert 3 <= eight_k < MIN_DECODER_THREADS
+    assert eight_k * 7680 * 4320 * 3 // 2 <= DECODER_PICTURE_BUDGET
+    assert decoder_threads(16384, 16384, 2) == 3  # one picture is over the budget: FFmpeg's
+    assert decoder_threads(0, 0, 2) == MIN_DECODER_THREADS  # size not in the stream header
+
+
+def test_video_decoded_with_more_threads_gives_the_same_pictures(tmp_path):
+    clip = write_video(tmp_path / "clip.mp4", pictures(30))
+    with open_source(str(clip)) as source:
+        threads = source._stream.codec_context.thread_count
+        frames = [f.i420() for f in source]
+    assert threads == decoder_threads(W, H, len(os.sched_getaffinity(0)))
+    with av.open(str(clip)) as container:  # one thread
+        expected = [f.to_ndarray(format="yuv420p") for f in container.decode(video=0)]
+    assert len(frames) == len(expected) == 30
+    for got, want in zip(frames, expected, strict=True):
+        np.testing.assert_array_equal(got, want)
 
 
 def test_i420_windows_of_decoded_frame_match_full_conversion(tmp_path):

@@ -21,6 +21,7 @@ early is partial.
 from __future__ import annotations
 
 import itertools
+import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -41,6 +42,15 @@ I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
 _END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
+#: Fewest frame threads the decoder gets. FFmpeg's own choice is one per core and one more (3 on
+#: two cores), which leaves the cores idle while frames wait for their reference pictures; with
+#: 8 in flight the decoder keeps the cores busy beside the tracker (benchmarks/RESULTS.md:
+#: a decode-only process ~9% faster, `run --no-video` ~7% faster on two cores).
+MIN_DECODER_THREADS = 8
+#: ... but no more threads than this many bytes of decoded pictures hold (8K: fewer than 8).
+DECODER_PICTURE_BUDGET = 256 << 20
+#: FFmpeg's cap on the threads it picks by itself.
+_FFMPEG_AUTO_MAX = 16
 
 
 def plane_views(frame: av.VideoFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -50,6 +60,23 @@ def plane_views(frame: av.VideoFrame) -> tuple[np.ndarray, np.ndarray, np.ndarra
         rows = np.frombuffer(plane, np.uint8)[: plane.line_size * plane.height]
         views.append(rows.reshape(plane.height, plane.line_size)[:, : plane.width])
     return views[0], views[1], views[2]
+
+
+def decoder_threads(width: int, height: int, cores: int) -> int:
+    """Frame threads to decode ``width`` x ``height`` pictures on ``cores`` cores: FFmpeg's
+    own choice (one per core and one more, at most 16), raised to :data:`MIN_DECODER_THREADS`
+    as far as :data:`DECODER_PICTURE_BUDGET` allows one yuv420p picture per thread."""
+    auto = min(cores + 1, _FFMPEG_AUTO_MAX) if cores > 1 else 1
+    affordable = DECODER_PICTURE_BUDGET // max(width * height * 3 // 2, 1)
+    return max(auto, min(MIN_DECODER_THREADS, affordable))
+
+
+def _cores() -> int:
+    """Cores this process may run on (what FFmpeg counts too)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
 
 
 def _quarter_turns(degrees: float) -> int:
@@ -148,6 +175,8 @@ class VideoSource(Source):
         if too_big and stream.codec_context.width and stream.codec_context.height:
             raise InputError(f"{path}: {too_big}")
         stream.thread_type = "AUTO"
+        stream.codec_context.thread_count = decoder_threads(
+            stream.codec_context.width, stream.codec_context.height, _cores())
         self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
