@@ -106,6 +106,9 @@ def test_run_video_with_ground_truth(occlusion_clip, tmp_path: Path) -> None:
     assert record["input"]["width"] == W and record["input"]["height"] == H
     assert set(record["timing"]["stage_us_per_frame"]) == {
         "hue", "backproject", "meanshift", "occlusion", "kalman"}
+    # the loop thread's CPU clock: some work per frame, never more than the loop's wall time
+    loop_cpu_s = record["timing"]["loop_cpu_us_per_frame"] * 120 / 1e6
+    assert 0 < loop_cpu_s <= record["timing"]["seconds"]
     assert record["metrics"]["auc"] == pytest.approx(
         np.mean([np.mean(np.array(overlaps_all(rows)) > t) for t in np.arange(21) / 20]),
         abs=1e-3)

@@ -292,6 +292,9 @@ class _Tracked:
     signum: int | None = None
     frames: int = 0
     seconds: float = 0.0
+    #: CPU time of the frame loop's own thread (tracking, CSV rows, hand-over to the writers;
+    #: not the decoder's and encoder's threads, nor the time others had the core).
+    cpu_seconds: float = 0.0
     states: dict[TrackState, int] = field(
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
 
@@ -395,7 +398,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     out = _Tracked()
     formatter, csv, video, annotator = (writers.formatter, writers.csv, writers.video,
                                         writers.annotator)
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.thread_time()
     try:
         frames_in = _limited(iter(source), request.max_frames)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
@@ -431,6 +434,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     finally:
         signals.hold()  # a signal now must not cut the closing and the records short
         out.seconds = time.perf_counter() - started
+        out.cpu_seconds = time.thread_time() - cpu_started
         source.close()
         for writer in (csv, video):
             if writer is None:
@@ -550,6 +554,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             "seconds": seconds,
             "fps": summary.fps,
             "stage_us_per_frame": resolved.pipeline.stage_microseconds_per_frame(),
+            "loop_cpu_us_per_frame": 1e6 * tracked.cpu_seconds / frames if frames else None,
         },
         "outputs": outputs,
         "versions": versions(),
