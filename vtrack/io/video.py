@@ -42,10 +42,11 @@ I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
 _END_SLACK_FRAMES, _END_SLACK_S = 3, 0.5
-#: Fewest frame threads the decoder gets. FFmpeg's own choice is one per core and one more (3 on
-#: two cores), which leaves the cores idle while frames wait for their reference pictures; with
-#: 8 in flight the decoder keeps the cores busy beside the tracker (benchmarks/RESULTS.md:
-#: a decode-only process ~9% faster, `run --no-video` ~7% faster on two cores).
+#: Fewest frame threads the decoder gets on a machine of two cores or more. FFmpeg's own choice
+#: is one per core and one more (3 on two cores), which leaves the cores idle while frames wait
+#: for their reference pictures; with 8 in flight the decoder keeps the cores busy beside the
+#: tracker (benchmarks/RESULTS.md section 1, two cores: a decode-only process 5-10% faster,
+#: `run --no-video` ~8% faster).
 MIN_DECODER_THREADS = 8
 #: ... but no more threads than this many bytes of decoded pictures hold (8K: fewer than 8).
 DECODER_PICTURE_BUDGET = 256 << 20
@@ -64,9 +65,12 @@ def plane_views(frame: av.VideoFrame) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 def decoder_threads(width: int, height: int, cores: int) -> int:
     """Frame threads to decode ``width`` x ``height`` pictures on ``cores`` cores: FFmpeg's
-    own choice (one per core and one more, at most 16), raised to :data:`MIN_DECODER_THREADS`
-    as far as :data:`DECODER_PICTURE_BUDGET` allows one yuv420p picture per thread."""
-    auto = min(cores + 1, _FFMPEG_AUTO_MAX) if cores > 1 else 1
+    own choice (one per core and one more, at most 16; one on a single core, where there is no
+    idle core to fill), raised to :data:`MIN_DECODER_THREADS` as far as
+    :data:`DECODER_PICTURE_BUDGET` allows one yuv420p picture per thread."""
+    if cores <= 1:
+        return 1
+    auto = min(cores + 1, _FFMPEG_AUTO_MAX)
     affordable = DECODER_PICTURE_BUDGET // max(width * height * 3 // 2, 1)
     return max(auto, min(MIN_DECODER_THREADS, affordable))
 
