@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -45,6 +44,7 @@ from common import machine, process_env
 
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.io.video import decoder_threads
+from vtrack.machine import cpu_count
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 WORK = Path(__file__).resolve().parent / "_work"
@@ -195,7 +195,7 @@ def main() -> None:
     init = ",".join(f"{v:.1f}" for v in first)
     bitrate = clip.stat().st_size * 8 / 1e6 / (args.frames / 60)
     n = args.frames
-    cores = len(os.sched_getaffinity(0))
+    cores = cpu_count()
     threads = decoder_threads(1920, 1080, cores)
 
     seconds: dict[str, list[float]] = {}

@@ -47,11 +47,12 @@ from vtrack.batch.discover import (
     find_inputs,
     is_sequence_folder,
 )
-from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor, cpu_count
+from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor
 from vtrack.batch.jobs import STATUS_SKIPPED, SUMMARY_COLUMNS, Job, Outcome
 from vtrack.batch.plan import Plan, completed_summary, plan
 from vtrack.batch.summary import SummaryWriter, run_batch
 from vtrack.batch.worker import execute
+from vtrack.machine import cpu_count
 from vtrack.run import STATUS_FAILED
 
 __all__ = [

@@ -265,10 +265,3 @@ def _quiet_client_teardown() -> Iterator[None]:
     finally:
         gc.collect()
         sys.unraisablehook = hook
-
-
-def cpu_count() -> int:
-    """Cores this process may use."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1

@@ -21,7 +21,6 @@ early is partial.
 from __future__ import annotations
 
 import itertools
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -35,6 +34,7 @@ from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.source import InputInfo, Source
+from vtrack.machine import cpu_count
 
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
@@ -73,14 +73,6 @@ def decoder_threads(width: int, height: int, cores: int) -> int:
     auto = min(cores + 1, _FFMPEG_AUTO_MAX)
     affordable = DECODER_PICTURE_BUDGET // max(width * height * 3 // 2, 1)
     return max(auto, min(MIN_DECODER_THREADS, affordable))
-
-
-def _cores() -> int:
-    """Cores this process may run on (what FFmpeg counts too)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
 
 
 def _quarter_turns(degrees: float) -> int:
@@ -180,7 +172,7 @@ class VideoSource(Source):
             raise InputError(f"{path}: {too_big}")
         stream.thread_type = "AUTO"
         stream.codec_context.thread_count = decoder_threads(
-            stream.codec_context.width, stream.codec_context.height, _cores())
+            stream.codec_context.width, stream.codec_context.height, cpu_count())
         self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
