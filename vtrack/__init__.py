@@ -31,6 +31,7 @@ _EXPORTS = {
     "FrameResult": "vtrack.pipeline",
     "Pipeline": "vtrack.pipeline",
     "RunRequest": "vtrack.request",
+    "Tracker": "vtrack.tracker",
 }
 
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads these
@@ -41,6 +42,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads t
     from vtrack.io import open_source
     from vtrack.pipeline import FrameResult, Pipeline
     from vtrack.request import RunRequest
+    from vtrack.tracker import Tracker
 
 
 def __getattr__(name: str) -> Any:
@@ -58,4 +60,5 @@ def __dir__() -> list[str]:
 
 
 __all__ = ["BgrFrame", "Box", "Config", "Frame", "FrameResult", "GrayFrame", "I420Frame",
-           "Pipeline", "RunRequest", "load_config", "open_source", "track", "__version__"]
+           "Pipeline", "RunRequest", "Tracker", "load_config", "open_source", "track",
+           "__version__"]

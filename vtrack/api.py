@@ -9,89 +9,52 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from itertools import islice
+from typing import Any
 
 import numpy as np
 
-from vtrack.config import Config, load_config
-from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.config import Config
+from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.io import open_source
-from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.pipeline import FrameResult
 from vtrack.request import RunRequest
+from vtrack.tracker import Tracker, as_box
 
 FrameInput = str | os.PathLike[str] | RunRequest | Iterable[Frame] | Iterable[np.ndarray]
 BoxInput = Box | Sequence[float]
 
 
-def as_box(box: BoxInput) -> Box:
-    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)``; ValueError otherwise.
-
-    Width and height must be positive: a box with no area cannot be tracked.
-    """
-    if isinstance(box, Box):
-        values = tuple(box)
-    else:
-        try:
-            values = tuple(float(v) for v in box)
-        except (TypeError, ValueError):
-            raise ValueError(f"init_box: expected (x, y, w, h) numbers, got {box!r}") from None
-    if len(values) != 4:
-        raise ValueError(f"init_box: expected 4 numbers (x, y, w, h), got {len(values)}")
-    if not (values[2] > 0 and values[3] > 0):
-        raise ValueError(f"init_box: width and height must be positive, got {values[2]:g}x"
-                         f"{values[3]:g}")
-    return Box(*values)
-
-
-def as_frames(items: Iterable[Frame] | Iterable[np.ndarray], fps: float = 30.0) -> Iterator[Frame]:
-    """Frames from :class:`Frame` objects or NumPy images, lazily, in order.
-
-    A ``HxWx3`` uint8 array is a BGR image (OpenCV's order) and a ``HxW`` uint8 array a grey
-    image; array frames are numbered from 0 and timed ``index / fps`` seconds.
-    """
-    for index, item in enumerate(items):
-        if isinstance(item, Frame):
-            yield item
-            continue
-        if not isinstance(item, np.ndarray):
-            raise TypeError(f"frame {index}: expected a vtrack.Frame or a NumPy image, got "
-                            f"{type(item).__name__}")
-        if item.dtype != np.uint8:
-            raise TypeError(f"frame {index}: expected uint8 pixels, got {item.dtype}")
-        time_s = index / fps
-        if item.ndim == 3 and item.shape[2] == 3:
-            yield BgrFrame(index, time_s, np.ascontiguousarray(item))
-        elif item.ndim == 2:
-            yield GrayFrame(index, time_s, np.ascontiguousarray(item))
-        else:
-            raise TypeError(f"frame {index}: expected an HxWx3 BGR or HxW grey image, got shape "
-                            f"{item.shape}")
-
-
 def track(frames: FrameInput, config: str | os.PathLike[str] | Config = "robust",
-          init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0
-          ) -> Iterator[FrameResult]:
-    """Yield one :class:`FrameResult` per frame of ``frames``.
+          init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0,
+          keep_frames: bool = False) -> Iterator[FrameResult]:
+    """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
     ``frames`` is an input path (``str`` or ``pathlib.Path``: a video file or an image folder,
     opened with :func:`vtrack.io.open_source`), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
-    of :class:`Frame` or of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images, those timed at
-    ``fps``; ``config`` a shipped config name, a TOML path or a :class:`Config`; ``init_box``
-    the target's first box as a
-    :class:`Box` or ``(x, y, w, h)`` (not needed by the detecting trackers s3/s4).
+    of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images (timed at
+    ``fps``) or of ``av.VideoFrame``; ``config`` a shipped config name, a TOML path or a
+    :class:`Config`; ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)``
+    (not needed by the detecting trackers s3/s4). Results hold their decoded frame only with
+    ``keep_frames=True``.
     """
     if isinstance(frames, RunRequest):
         request = frames
-        pipeline = Pipeline(request.config.build(), seed=request.seed)
+        tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
         with open_source(request.input, request.raw, fps=request.fps) as source:
-            yield from pipeline.track(islice(source, request.max_frames), request.init_box)
+            yield from _run(tracker, islice(source, request.max_frames), request.init_box)
         return
-    chain = config if isinstance(config, Config) else load_config(os.fspath(config))
     box = None if init_box is None else as_box(init_box)
-    pipeline = Pipeline(chain.build(), seed=seed)
+    tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)
     if isinstance(frames, str | os.PathLike):
         with open_source(os.fspath(frames)) as source:
-            yield from pipeline.track(source, box)
+            yield from _run(tracker, source, box)
     else:
-        yield from pipeline.track(as_frames(frames, fps), box)
+        yield from _run(tracker, frames, box)
+
+
+def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:
+    """``tracker.init`` on the first frame, ``update`` on the rest."""
+    for n, frame in enumerate(frames):
+        yield tracker.init(frame, box) if n == 0 else tracker.update(frame)

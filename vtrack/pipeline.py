@@ -73,47 +73,59 @@ class Pipeline:
 
     def track(self, frames: Iterable[Frame], init_box: Box | None = None) -> Iterator[FrameResult]:
         """Yield one result per frame. ``init_box`` is required unless the chain detects targets."""
+        self.begin(init_box)
+        for frame in frames:
+            yield self.process(frame)
+
+    def begin(self, init_box: Box | None = None) -> None:
+        """Start a new track: the next frame given to :meth:`process` is the first, and
+        ``init_box`` is the target's box in it (required unless the chain detects targets)."""
         if init_box is None and self.needs_init_box:
             raise ConfigError("this tracker needs an initial box (--init x,y,w,h or --gt FILE)")
-        ctx: TrackContext | None = None
+        self._init_box = init_box
+        self._ctx: TrackContext | None = None
+        self._off_frame = 0  # frames in a row the box has been entirely outside the frame
+
+    def process(self, frame: Frame) -> FrameResult:
+        """Track ``frame`` (the next frame after :meth:`begin`) and return what is said about it."""
         clock = time.perf_counter
-        off_frame = 0  # frames in a row the box has been entirely outside the frame
-        for frame in frames:
-            if ctx is None:
-                ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
-                ctx.new_frame(frame)
-                for stage in self.stages:
-                    started = clock()
-                    stage.start(ctx)
-                    self.stage_seconds[stage.name] += clock() - started
-                if init_box is not None:
-                    ctx.box = init_box  # the first frame's answer is the box we were given
-            else:
-                ctx.new_frame(frame)
-                for stage in self.stages:
-                    started = clock()
-                    stage.step(ctx)
-                    self.stage_seconds[stage.name] += clock() - started
-            self.frames_done += 1
-            state = ctx.state
-            if ctx.box is not None and ctx.box.outside(frame.width, frame.height):
-                off_frame += 1
-                if off_frame > OFF_FRAME_FRAMES:
-                    state = TrackState.LOST
-            else:
-                off_frame = 0
-            yield FrameResult(
-                index=frame.index,
-                time_s=frame.time_s,
-                frame=frame,
-                box=None if state == TrackState.LOST else ctx.box,  # lost: no box is claimed
-                state=state,
-                score=ctx.score,
-                prediction=ctx.prediction,
-                extras=ctx.extras,
-                tracks=ctx.tracks,
-                overlays=ctx.overlays,
-            )
+        ctx = self._ctx
+        if ctx is None:
+            init_box = self._init_box
+            ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
+            ctx.new_frame(frame)
+            for stage in self.stages:
+                started = clock()
+                stage.start(ctx)
+                self.stage_seconds[stage.name] += clock() - started
+            if init_box is not None:
+                ctx.box = init_box  # the first frame's answer is the box we were given
+        else:
+            ctx.new_frame(frame)
+            for stage in self.stages:
+                started = clock()
+                stage.step(ctx)
+                self.stage_seconds[stage.name] += clock() - started
+        self.frames_done += 1
+        state = ctx.state
+        if ctx.box is not None and ctx.box.outside(frame.width, frame.height):
+            self._off_frame += 1
+            if self._off_frame > OFF_FRAME_FRAMES:
+                state = TrackState.LOST
+        else:
+            self._off_frame = 0
+        return FrameResult(
+            index=frame.index,
+            time_s=frame.time_s,
+            frame=frame,
+            box=None if state == TrackState.LOST else ctx.box,  # lost: no box is claimed
+            state=state,
+            score=ctx.score,
+            prediction=ctx.prediction,
+            extras=ctx.extras,
+            tracks=ctx.tracks,
+            overlays=ctx.overlays,
+        )
 
     def stage_microseconds_per_frame(self) -> dict[str, float]:
         n = max(self.frames_done, 1)

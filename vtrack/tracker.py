@@ -1,0 +1,140 @@
+"""``vtrack.Tracker``: one frame in, one result out, as OpenCV's and norfair's trackers work.
+
+``Tracker(config, **params).init(frame, box)`` then ``update(frame)`` for each next frame; frames
+are NumPy BGR (``HxWx3``) or grey (``HxW``) uint8 images, :class:`vtrack.Frame` objects or PyAV
+``av.VideoFrame`` objects. The same chain of stages as ``vtrack run`` runs on them, so a frame
+gives the same box, state and score here as in ``track.csv``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from vtrack.config import Config, load_config
+from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.geometry import Box
+from vtrack.pipeline import FrameResult, Pipeline
+
+#: A frame as :meth:`Tracker.update` takes it.
+FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported only if used)
+
+
+def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
+    """``item`` as a :class:`Frame` numbered ``index``: a Frame as it is; a uint8 ``HxWx3`` BGR
+    or ``HxW`` grey array timed ``index / fps``; an ``av.VideoFrame`` converted to BGR and timed
+    by its own timestamp (``index / fps`` if it has none). TypeError for anything else."""
+    if isinstance(item, Frame):
+        return item
+    time_s = index / fps
+    if not isinstance(item, np.ndarray):
+        to_ndarray = getattr(item, "to_ndarray", None)
+        if to_ndarray is None or type(item).__module__.split(".")[0] != "av":
+            raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
+                            f"av.VideoFrame, got {type(item).__name__}")
+        if item.time is not None:
+            time_s = float(item.time)
+        return BgrFrame(index, time_s, to_ndarray(format="bgr24"))
+    if item.dtype != np.uint8:
+        raise TypeError(f"frame {index}: expected uint8 pixels, got {item.dtype}")
+    if item.ndim == 3 and item.shape[2] == 3:
+        return BgrFrame(index, time_s, np.ascontiguousarray(item))
+    if item.ndim == 2:
+        return GrayFrame(index, time_s, np.ascontiguousarray(item))
+    raise TypeError(f"frame {index}: expected an HxWx3 BGR or HxW grey image, got shape "
+                    f"{item.shape}")
+
+
+def as_box(box: Box | Any) -> Box:
+    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)``; ValueError otherwise.
+
+    Width and height must be positive: a box with no area cannot be tracked.
+    """
+    if isinstance(box, Box):
+        values = tuple(box)
+    else:
+        try:
+            values = tuple(float(v) for v in box)
+        except (TypeError, ValueError):
+            raise ValueError(f"init_box: expected (x, y, w, h) numbers, got {box!r}") from None
+    if len(values) != 4:
+        raise ValueError(f"init_box: expected 4 numbers (x, y, w, h), got {len(values)}")
+    if not (values[2] > 0 and values[3] > 0):
+        raise ValueError(f"init_box: width and height must be positive, got {values[2]:g}x"
+                         f"{values[3]:g}")
+    return Box(*values)
+
+
+class Tracker:
+    """A per-frame tracker over any shipped or own config.
+
+    ``params`` override the config's parameters as ``--set`` does, keyed ``"stage.param"``
+    or ``stage__param`` (``Tracker("s0", meanshift__iterations=10)``). Results are
+    :class:`FrameResult`: ``box`` (None while lost), ``state``, ``score``, ``extras`` and, for
+    the multi-target configs (s3, s4_multi), ``tracks``. A result keeps its decoded frame only
+    with ``keep_frames=True``, so memory stays flat over any number of frames.
+    """
+
+    def __init__(self, config: str | os.PathLike[str] | Config = "robust", *, seed: int = 0,
+                 fps: float = 30.0, keep_frames: bool = False, **params: Any) -> None:
+        chain = config if isinstance(config, Config) else load_config(os.fspath(config))
+        if params:
+            chain = chain.with_overrides(
+                [f"{key.replace('__', '.', 1)}={_toml_value(value)}"
+                 for key, value in params.items()])
+        if not fps > 0:
+            raise ValueError(f"fps: must be positive, got {fps!r}")
+        self.config = chain
+        self.seed = seed
+        self.fps = fps
+        self.keep_frames = keep_frames
+        self._pipeline: Pipeline | None = None
+        self._index = 0
+
+    @property
+    def multi_target(self) -> bool:
+        """True for the configs that detect and return several tracks (no initial box)."""
+        return self._new_pipeline().multi_target
+
+    def _new_pipeline(self) -> Pipeline:
+        return Pipeline(self.config.build(), seed=self.seed)
+
+    def init(self, frame: FrameLike, box: Box | Any = None) -> FrameResult:
+        """Start tracking at ``frame`` with the target's box ``(x, y, w, h)`` in it (None for
+        the detecting configs); returns that frame's result (its box is ``box``)."""
+        pipeline = self._new_pipeline()
+        pipeline.begin(None if box is None else as_box(box))
+        self._pipeline, self._index = pipeline, 0
+        return self._process(frame)
+
+    def update(self, frame: FrameLike) -> FrameResult:
+        """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
+        if self._pipeline is None:
+            pipeline = self._new_pipeline()
+            pipeline.begin(None)  # ValueError-like ConfigError if the config needs a box
+            self._pipeline, self._index = pipeline, 0
+        return self._process(frame)
+
+    def reset(self) -> None:
+        """Forget the target: the next call must be :meth:`init` (or ``update`` for the
+        detecting configs), which starts from fresh stages."""
+        self._pipeline, self._index = None, 0
+
+    def _process(self, item: FrameLike) -> FrameResult:
+        assert self._pipeline is not None
+        result = self._pipeline.process(as_frame(item, self._index, self.fps))
+        self._index += 1
+        if not self.keep_frames:
+            result.frame = None
+        return result
+
+
+def _toml_value(value: Any) -> str:
+    """A Python value as the TOML literal ``--set`` takes."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(value)
