@@ -47,6 +47,8 @@ class RunRequest:
     #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
     #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
     init_from: str | None = None
+    #: ``--stream``: write a flushed JSON line per frame to this path, or ``-`` for stdout.
+    stream: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``run.json``'s ``"request"``): the config as its resolved chain
@@ -66,6 +68,7 @@ class RunRequest:
             "seed": self.seed,
             "max_frames": self.max_frames,
             "init_from": self.init_from,
+            "stream": self.stream,
         }
 
     @classmethod
@@ -87,6 +90,7 @@ class RunRequest:
             seed=int(data["seed"]),
             max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
             init_from=data.get("init_from"),
+            stream=data.get("stream"),
         )
 
     def same_run(self, recorded: Any) -> bool:

@@ -63,6 +63,7 @@ from vtrack.io import (
 )
 from vtrack.io.outdir import OutputFolder
 from vtrack.io.sidecar import read_sidecar, sidecar_path
+from vtrack.io.stream import StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
@@ -341,6 +342,7 @@ class _Writers:
     csv: CsvWriter
     video: VideoWriter | None = None
     annotator: Annotator | None = None
+    stream: StreamWriter | None = None  # --stream: a JSON line per frame
 
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
@@ -358,6 +360,14 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
             writers.csv.abort()
             raise
         writers.annotator = Annotator(info.width, info.height, gt=resolved.gt)
+    if request.stream is not None:
+        try:
+            writers.stream = StreamWriter(request.stream, pipeline.multi_target)
+        except BaseException:
+            writers.csv.abort()
+            if writers.video is not None:
+                writers.video.abort()
+            raise
     return writers
 
 
@@ -412,6 +422,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                 if result.state in out.states:
                     out.states[result.state] += 1
                 out.frames += 1  # its row is on disk; a video error below loses only the video
+                if writers.stream is not None:
+                    writers.stream.write(result)
                 if video is not None and annotator is not None:
                     assert result.frame is not None
                     video.write(result.frame, lambda planes, r=result: annotator.draw(
@@ -436,7 +448,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.seconds = time.perf_counter() - started
         out.cpu_seconds = time.thread_time() - cpu_started
         source.close()
-        for writer in (csv, video):
+        for writer in (csv, video, writers.stream):
             if writer is None:
                 continue
             try:

@@ -61,11 +61,16 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames.")
+@click.option("--stream", "stream", metavar="FILE|-", default=None,
+              help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
+                   "score, extras), flushed as each frame is done; '-' is stdout (the summary "
+                   "line then goes to stderr).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
 def command(input_spec: str, config_spec: str | None, init_text: str | None,
             gt_path: Path | None, gt_origin: int, out_dir: Path | None, overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
-            crf: int, seed: int, max_frames: int | None, quiet: bool) -> None:
+            crf: int, seed: int, max_frames: int | None, stream: str | None,
+            quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
 
     INPUT is a video file, an image-sequence folder (img/0001.jpg ...), or raw frames from
@@ -97,6 +102,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         crf=crf,
         seed=seed,
         max_frames=max_frames,
+        stream=stream,
     )
     progress = FrameProgress(terminal(quiet), max_frames)
     try:
@@ -106,7 +112,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     for warning in summary.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:
-        click.echo(summary.line())
+        click.echo(summary.line(), err=stream == "-")
     if summary.status == STATUS_INTERRUPTED:
         click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
                    err=True)

@@ -1,0 +1,82 @@
+"""``vtrack run --stream FILE|-``: a flushed JSON line per frame, as the frame is done."""
+
+from __future__ import annotations
+
+import csv
+import json
+import select
+import subprocess
+import sys
+from pathlib import Path
+
+from vtrack.io.csvfile import format_cell
+from vtrack.scenes import make_scene, write_raw, write_video
+
+W, H = 160, 120
+
+
+def _vtrack(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          timeout=120, check=False, text=True)
+
+
+def test_stream_on_stdout_matches_the_csv_and_the_summary_goes_to_stderr(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    done = _vtrack("run", str(clip), "--config", "s0", "--init", box, "--no-video",
+                   "--out", str(out), "--stream", "-")
+    assert done.returncode == 0, done.stderr
+    lines = [json.loads(line) for line in done.stdout.splitlines()]
+    assert "20 frames" in done.stderr  # the summary line
+    with (out / "track.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [line["frame"] for line in lines] == [int(r["frame"]) for r in rows] == list(range(20))
+    for line, row in zip(lines, rows, strict=True):
+        assert set(line) == {"frame", "time_s", "x", "y", "w", "h", "state", "score", "extras"}
+        assert line["state"] == row["state"]
+        for key in ("x", "y", "w", "h", "time_s"):
+            assert format_cell(line[key], 4 if key == "time_s" else 3) == row[key]
+        assert format_cell(line["score"], 4) == row["score"]
+    # a file target, for a multi-target config: the confirmed tracks of tracks.csv
+    multi = make_scene("multi", seed=2, width=W, height=H, frames=60, fps=30)
+    clip = write_video(multi, tmp_path / "multi.mp4")
+    done = _vtrack("run", str(clip), "--config", "s3", "--no-video", "--out",
+                   str(tmp_path / "m"), "--stream", str(tmp_path / "m.jsonl"))
+    assert done.returncode == 0, done.stderr
+    assert "frames" in done.stdout
+    lines = [json.loads(t) for t in (tmp_path / "m.jsonl").read_text().splitlines()]
+    assert len(lines) == 60
+    with (tmp_path / "m" / "tracks.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    streamed = [(line["frame"] + 1, t["id"]) for line in lines for t in line["tracks"]]
+    assert streamed == [(int(r["frame"]), int(r["id"])) for r in rows] and streamed
+
+
+def test_each_line_arrives_while_the_input_is_still_open(tmp_path: Path) -> None:
+    """Raw frames fed one at a time on stdin: each frame's line can be read before the next
+    frame is sent (the run is still going), so a reader follows the target live."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    raw = write_raw(scene, tmp_path / "clip.bgr").read_bytes()
+    size = W * H * 3
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    proc = subprocess.Popen([sys.executable, "-m", "vtrack", "run", "-", "--raw", f"{W}x{H}",
+                             "--config", "s0", "--init", box, "--no-video", "--out",
+                             str(tmp_path / "out"), "--stream", "-", "-q"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    assert proc.stdin is not None and proc.stdout is not None
+    try:
+        for index in range(10):
+            proc.stdin.write(raw[index * size:(index + 1) * size])
+            proc.stdin.flush()
+            ready, _, _ = select.select([proc.stdout], [], [], 60)  # a bound, not a measure
+            assert ready, f"no line for frame {index} while the input stays open"
+            assert json.loads(proc.stdout.readline())["frame"] == index
+        proc.stdin.close()
+        assert proc.wait(timeout=60) == 0
+        assert proc.stdout.read() == b""
+    finally:
+        proc.kill()
+        proc.wait()
