@@ -38,6 +38,7 @@ OTHER: dict[str, Any] = {
     "seed": 7,
     "max_frames": 5,
     "init_from": "other.init.txt",
+    "stream": "other.jsonl",
 }
 
 
