@@ -73,8 +73,9 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
 
-    INPUT is a video file, an image-sequence folder (img/0001.jpg ...), or raw frames from
-    '-' (stdin), a FIFO or a file with --raw WxH --pix-fmt FMT --fps N.
+    INPUT is a video file, an image-sequence folder (img/0001.jpg ...), a container on '-'
+    (stdin: vtrack run - < clip.mp4), or raw frames from '-', a FIFO or a file with
+    --raw WxH --pix-fmt FMT --fps N.
     """
     # imported here, not at the top: `vtrack --help` and the other commands start without them
     from vtrack.cli._progress import FrameProgress, terminal
@@ -86,8 +87,6 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     config = load_config(config_spec).with_overrides(list(overrides))
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
     raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
-    if raw is None and input_spec == "-":
-        raise click.UsageError("reading frames from '-' needs --raw WxH (and --pix-fmt, --fps)")
     request = RunRequest(
         input=input_spec,
         out_dir=out_dir or default_out_dir(input_spec, config.name),

@@ -18,6 +18,7 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
     - ``spec`` a folder: an image sequence (``folder/img/*`` or ``folder/*``) at ``fps``
       (default 30) frames per second;
+    - ``-`` without ``raw``: a container on stdin (``vtrack run - < clip.mp4``, or piped);
     - anything else: a video file FFmpeg can open; its frames carry their own timestamps, so
       ``fps`` is refused for it (ConfigError). A given ``fps`` must be a frame rate (> 0).
     """
@@ -25,10 +26,11 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
         checked_fps(fps)
     if raw is not None:
         return RawSource(spec, raw)
-    if spec == "-":
-        raise ConfigError(
-            "-: reading frames from stdin needs their format: --raw WxH --pix-fmt FMT --fps N"
-        )
+    if spec == "-":  # a container on stdin (a pipe or a redirected file), probed as ffmpeg does
+        if fps is not None:
+            raise ConfigError("--fps: a container on stdin carries its own timestamps; --fps "
+                              "applies to raw input (--raw WxH) and image folders only")
+        return VideoSource(spec)
     check_input_path(spec)
     if os.path.isdir(spec):
         return ImageFolderSource(spec, fps=fps)

@@ -21,6 +21,7 @@ early is partial.
 from __future__ import annotations
 
 import itertools
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -140,7 +141,9 @@ class VideoSource(Source):
 
     def __init__(self, path: str) -> None:
         try:
-            container = av.open(path)
+            # ``-``: the container on stdin, through Python's file object so that FFmpeg may
+            # seek in a redirected file (``< clip.mp4``) and reads a pipe as a stream
+            container = av.open(sys.stdin.buffer if path == "-" else path)
         except PermissionError:
             raise InputError(f"{path}: cannot be read (permission denied)") from None
         except FileNotFoundError:
@@ -202,7 +205,7 @@ class VideoSource(Source):
         return InputInfo(
             path=path,
             kind="video",
-            name=Path(path).stem,
+            name="stdin" if path == "-" else Path(path).stem,
             width=width,
             height=height,
             fps=fps,
