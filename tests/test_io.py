@@ -270,8 +270,8 @@ def test_bad_inputs_raise_input_error_naming_them(tmp_path):
     empty.mkdir()
     with pytest.raises(InputError, match=r"empty: no images"):
         open_source(str(empty))
-    with pytest.raises(ConfigError, match="--raw"):
-        open_source("-")
+    with pytest.raises(ConfigError, match="--fps: a container on stdin"):
+        open_source("-", fps=25)  # "-" without --raw is a container (tests/test_live_inputs.py)
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads files regardless of permissions")

@@ -152,7 +152,7 @@ class VideoSource(Source):
             raise InputError(
                 f"{path}: not a video FFmpeg can decode ({os_reason(exc)})"
             ) from None
-        except OSError as exc:
+        except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         try:
             info = self._open(path, container)
