@@ -12,6 +12,11 @@ from vtrack.io.source import Source
 from vtrack.io.video import VideoSource
 
 
+def is_url(spec: str) -> bool:
+    """True when ``spec`` names a network input (``scheme://...``) rather than a path."""
+    return "://" in spec and spec.split("://", 1)[0].lower().isalpha()
+
+
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None) -> Source:
     """Open an input and decode its first frame; raise InputError if that is impossible.
 
@@ -30,6 +35,11 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
         if fps is not None:
             raise ConfigError("--fps: a container on stdin carries its own timestamps; --fps "
                               "applies to raw input (--raw WxH) and image folders only")
+        return VideoSource(spec)
+    if is_url(spec):
+        if fps is not None:
+            raise ConfigError(f"--fps: {spec} carries its own timestamps; --fps applies to raw "
+                              "input and image folders only")
         return VideoSource(spec)
     check_input_path(spec)
     if os.path.isdir(spec):

@@ -136,6 +136,25 @@ class _Tail:
         return None
 
 
+#: Seconds a network input may take to open, and to deliver data once open, before the run
+#: gives up with one line naming it (FFmpeg's own default is to wait for ever).
+NETWORK_TIMEOUT_S = 10.0
+
+
+def _open_container(path: str) -> av.container.InputContainer:
+    """``path`` opened by FFmpeg: ``-`` is stdin, ``scheme://`` a network input (with
+    :data:`NETWORK_TIMEOUT_S`; ``srt://`` refused: the wheel's FFmpeg has no SRT)."""
+    if path == "-":
+        return av.open(sys.stdin.buffer)
+    if "://" not in path:
+        return av.open(path)
+    scheme = path.split("://", 1)[0].lower()
+    if scheme == "srt":
+        raise InputError(f"{path}: srt:// is not in the FFmpeg that PyAV's wheel ships; relay "
+                         "it, e.g. ffmpeg -i srt://... -c copy -f mpegts udp://127.0.0.1:5000")
+    return av.open(path, timeout=(NETWORK_TIMEOUT_S, NETWORK_TIMEOUT_S))
+
+
 class VideoSource(Source):
     """A video file (anything FFmpeg opens), decoded with frame threads in a reader thread."""
 
@@ -143,15 +162,14 @@ class VideoSource(Source):
         try:
             # ``-``: the container on stdin, through Python's file object so that FFmpeg may
             # seek in a redirected file (``< clip.mp4``) and reads a pipe as a stream
-            container = av.open(sys.stdin.buffer if path == "-" else path)
+            container = _open_container(path)
         except PermissionError:
             raise InputError(f"{path}: cannot be read (permission denied)") from None
         except FileNotFoundError:
             raise InputError(f"{path}: no such file") from None
         except av.FFmpegError as exc:
-            raise InputError(
-                f"{path}: not a video FFmpeg can decode ({os_reason(exc)})"
-            ) from None
+            what = "cannot be opened" if "://" in path else "not a video FFmpeg can decode"
+            raise InputError(f"{path}: {what} ({os_reason(exc)})") from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         try:
