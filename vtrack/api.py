@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config
+from vtrack.configs import DEFAULT_CONFIG
 from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.io import open_source
@@ -25,7 +26,7 @@ FrameInput = str | os.PathLike[str] | RunRequest | Iterable[Frame] | Iterable[np
 BoxInput = Box | Sequence[float]
 
 
-def track(frames: FrameInput, config: str | os.PathLike[str] | Config = "robust",
+def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_CONFIG,
           init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0,
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.

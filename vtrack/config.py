@@ -24,10 +24,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
-
-DEFAULT_CONFIG = "robust"
 
 
 @dataclass

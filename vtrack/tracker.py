@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config, load_config
+from vtrack.configs import DEFAULT_CONFIG
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import Box
 from vtrack.pipeline import FrameResult, Pipeline
@@ -77,7 +78,7 @@ class Tracker:
     with ``keep_frames=True``, so memory stays flat over any number of frames.
     """
 
-    def __init__(self, config: str | os.PathLike[str] | Config = "robust", *, seed: int = 0,
+    def __init__(self, config: str | os.PathLike[str] | Config = DEFAULT_CONFIG, *, seed: int = 0,
                  fps: float = 30.0, keep_frames: bool = False, **params: Any) -> None:
         chain = config if isinstance(config, Config) else load_config(os.fspath(config))
         if params:

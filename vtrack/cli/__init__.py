@@ -4,8 +4,9 @@ changes for it. A command's module is imported only when that command (or the co
 ``vtrack --help``) is asked for, and command modules import their heavy parts inside the command
 function: ``vtrack run --help`` never loads the report's plotting, Dask or the scene generator.
 
-User errors (:class:`~vtrack.errors.VtrackError`) become one line on stderr and exit code 2 (1
-for an output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it) 143.
+User errors (:class:`~vtrack.errors.VtrackError`) and click's usage errors (an unknown option, a
+value out of range) become one line on stderr, ``vtrack: error: ...``, and exit code 2 (1 for an
+output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it) 143.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 import sys
+from typing import Any
 
 import click
 
@@ -32,6 +34,25 @@ class _Group(click.Group):
             return None
         command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
         return command if isinstance(command, click.Command) else None
+
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        """As click's ``main``, but a usage error is one ``vtrack: error:`` line naming the
+        command's ``--help``, like every other error of vtrack."""
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except click.UsageError as exc:
+            where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+            click.echo(f"vtrack: error: {exc.format_message()}{where}", err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            click.echo(f"vtrack: error: {exc.format_message()}", err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            click.echo("vtrack: interrupted", err=True)
+            sys.exit(130)
+        sys.exit(code if isinstance(code, int) else 0)
 
     def invoke(self, ctx: click.Context) -> object:
         try:

@@ -11,6 +11,7 @@ import click
 
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
+from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, Interrupted, handling_stop_signals
 
 if TYPE_CHECKING:
@@ -45,7 +46,7 @@ class _StopOnce:
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
-    from vtrack.config import DEFAULT_CONFIG, load_config
+    from vtrack.config import load_config
 
     configs: dict[str, Config] = {}
     for spec in specs or (DEFAULT_CONFIG,):
@@ -64,7 +65,7 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.argument("folder", type=click.Path(path_type=Path))
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
               help="Tracker config, a TOML file or a shipped name; repeat to run every input "
-                   "with each. Default: s0.")
+                   f"with each. Default: {DEFAULT_CONFIG}.")
 @click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import click
 
+from vtrack.configs import DEFAULT_CONFIG
+
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
 
@@ -31,9 +33,10 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.argument("input_spec", metavar="INPUT")
 @click.option("--config", "-c", "config_spec", default=None, metavar="FILE|NAME",
               help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
-                   "Default: s0.")
+                   f"Default: {DEFAULT_CONFIG}.")
 @click.option("--init", "init_text", metavar="x,y,w,h",
-              help="Initial box (top-left x, y, width, height). Default: first --gt box.")
+              help="Initial box (top-left x, y, width, height). Default: the input's sidecar box "
+                   "(NAME.init.txt, written by vtrack select), else the first --gt box.")
 @click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="FILE",
               help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
                    "multi-target configs): fills overlap and center_error.")

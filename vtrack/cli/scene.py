@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.errors import ConfigError
-from vtrack.scenes import CLIP_FORMATS, SCENARIOS, make_scene, write_clip
+from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*$")
 
@@ -48,8 +48,10 @@ def _scenario_list() -> str:
     "--pix-fmt",
     help="mp4: encoder pixel format [yuv420p]; raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
-@click.option("--crf", type=int, default=23, show_default=True, help="x264 quality (mp4).")
-@click.option("--preset", default="medium", show_default=True, help="x264 preset (mp4).")
+@click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
+              help="x264 quality of mp4 output (lower is better and larger).")
+@click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
+              help="x264 preset of mp4 output.")
 def command(
     name: str,
     out: Path,

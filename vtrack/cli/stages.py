@@ -39,11 +39,46 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 """
 
 
-def stages_text(markdown: bool = False) -> str:
-    """The stage reference (plain text for the terminal, or Markdown for docs/stages.md)."""
+def _plain(name: str, cls: type) -> list[str]:
+    """One stage's plain-text entry: its summary, a line per parameter, its CSV columns."""
+    lines = [f"{name}: {cls.summary}"] + [f"    {p.describe()}" for p in cls.params]
+    if cls.columns:
+        lines.append(f"    csv columns: {', '.join(cls.columns)}")
+    return lines
+
+
+def _selected(names: tuple[str, ...]) -> list[str]:
+    """The stages ``names`` ask for: a stage by its name, a shipped config as its chain.
+    ConfigError for a name that is neither."""
+    from vtrack.config import load_config, shipped_configs
+    from vtrack.errors import ConfigError
+    from vtrack.stages.base import all_stages
+
+    known, configs = all_stages(), shipped_configs()
+    chosen: list[str] = []
+    for name in names:
+        if name in known:
+            chosen.append(name)
+        elif name in configs:
+            chosen += [stage for stage, _ in load_config(name).stages]
+        else:
+            raise ConfigError(f"{name}: not a stage or a shipped config (stages: "
+                              f"{', '.join(known)}; configs: {', '.join(sorted(configs))})")
+    return list(dict.fromkeys(chosen))
+
+
+def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
+    """The stage reference (plain text for the terminal, or Markdown for docs/stages.md);
+    with ``names`` (stages or shipped configs), only those stages' parameters."""
     from vtrack.config import load_config, shipped_configs
     from vtrack.stages.base import all_stages
 
+    if names:
+        stages = all_stages()
+        lines = []
+        for name in _selected(names):
+            lines += _plain(name, stages[name])
+        return "\n".join(lines)
     lines: list[str] = []
     if markdown:
         lines += ["# Stages and parameters", "",
@@ -57,10 +92,7 @@ def stages_text(markdown: bool = False) -> str:
                 lines += ["", "CSV columns: " + ", ".join(f"`{c}`" for c in cls.columns)]
             lines.append("")
         else:
-            lines.append(f"{name}: {cls.summary}")
-            lines += [f"    {p.describe()}" for p in cls.params]
-            if cls.columns:
-                lines.append(f"    csv columns: {', '.join(cls.columns)}")
+            lines += _plain(name, cls)
     if markdown:
         lines += ["## Shipped configs", ""]
     else:
@@ -74,7 +106,11 @@ def stages_text(markdown: bool = False) -> str:
 
 
 @click.command("stages")
+@click.argument("names", nargs=-1, metavar="[STAGE|CONFIG]...")
 @click.option("--markdown", is_flag=True, help="Print Markdown (the source of docs/stages.md).")
-def command(markdown: bool) -> None:
-    """List the stages, their parameters (type, default, help) and the shipped configs."""
-    click.echo(stages_text(markdown))
+def command(names: tuple[str, ...], markdown: bool) -> None:
+    """List the stages, their parameters (type, default, help) and the shipped configs; with
+    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0), only those stages."""
+    if names and markdown:
+        raise click.UsageError("--markdown prints the whole reference; give no names with it")
+    click.echo(stages_text(markdown, names))

@@ -19,6 +19,7 @@ from vtrack.scenes.scene import Scene
 from vtrack.scenes.writers import (
     CLIP_FORMATS,
     RAW_PIX_FMTS,
+    X264_PRESETS,
     ClipFiles,
     sidecar,
     write_clip,
@@ -34,6 +35,7 @@ __all__ = [
     "RANGES",
     "RAW_PIX_FMTS",
     "SCENARIOS",
+    "X264_PRESETS",
     "ClipFiles",
     "Scenario",
     "Scene",
