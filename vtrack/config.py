@@ -25,7 +25,8 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
+from vtrack.io.limits import CONFIG_BYTES, read_text_bounded
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
 
@@ -118,11 +119,9 @@ def load_config(spec: str | Path | None = None) -> Config:
             )
     where = str(spec)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot read config ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{where}: config is not UTF-8 text") from None
+        data = tomllib.loads(read_text_bounded(path, CONFIG_BYTES, "config"))
+    except InputError as exc:
+        raise ConfigError(str(exc).replace(str(path), where, 1)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{where}: not valid TOML ({exc})") from None
     return parse_config(data, where, default_name=path.stem)

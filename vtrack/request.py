@@ -17,6 +17,7 @@ from typing import Any
 from vtrack.config import Config, config_from_resolved
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
+from vtrack.io.identity import file_identity
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,11 @@ class RunRequest:
             init_from=data.get("init_from"),
             stream=data.get("stream"),
         )
+
+    def file_identities(self) -> dict[str, Any]:
+        """The identity (:func:`~vtrack.io.identity.file_identity`) of the input and the ground
+        truth as they are now: ``run.json`` records it, batch's resume compares it."""
+        return {"input": file_identity(self.input), "gt": file_identity(self.gt_path)}
 
     def same_run(self, recorded: Any) -> bool:
         """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request."""

@@ -46,6 +46,7 @@ from vtrack.errors import (
     OutputBrokenError,
     OutputError,
     PartialInputError,
+    VtrackError,
     handling_stop_signals,
     plural,
 )
@@ -61,6 +62,7 @@ from vtrack.io import (
     open_source,
     write_json,
 )
+from vtrack.io.identity import sizes
 from vtrack.io.outdir import OutputFolder
 from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.io.stream import StreamWriter
@@ -216,7 +218,8 @@ def _fmt(value: float | None) -> float | None:
 
 
 class _SingleTargetRows:
-    """Formats single-target results as ``track.csv`` rows and keeps the boxes for metrics."""
+    """Formats single-target results as ``track.csv`` rows and, with ground truth, keeps the
+    boxes and states for the metrics (without it nothing grows with the run's length)."""
 
     def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None) -> None:
         self.columns = TRACK_COLUMNS + extras
@@ -227,10 +230,11 @@ class _SingleTargetRows:
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
-        self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
-        self.boxes.append(box)
-        self.states += [""] * (result.index - len(self.states))  # skipped frames: no state
-        self.states.append(result.state)
+        if self.gt is not None:  # kept for the metrics only: without ground truth, nothing
+            self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
+            self.boxes.append(box)
+            self.states += [""] * (result.index - len(self.states))  # skipped: no state
+            self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
             overlap, error = score_frame(box, self.gt[result.index])
@@ -247,11 +251,13 @@ class _SingleTargetRows:
 
 
 class _MultiTargetRows:
-    """Formats multi-target results as MOTChallenge rows (1-based frames) plus ``state``."""
+    """Formats multi-target results as MOTChallenge rows (1-based frames) plus ``state``; with
+    ground truth (``keep``) it keeps the confirmed boxes for the MOT metrics."""
 
     columns = MOT_COLUMNS
 
-    def __init__(self) -> None:
+    def __init__(self, keep: bool) -> None:
+        self.keep = keep
         self.tracks: dict[int, list[tuple[int, Box]]] = {}
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
@@ -259,7 +265,8 @@ class _MultiTargetRows:
         for track in result.tracks:
             if track.state != TrackStatus.CONFIRMED:
                 continue
-            self.tracks.setdefault(result.index, []).append((track.id, track.box))
+            if self.keep:
+                self.tracks.setdefault(result.index, []).append((track.id, track.box))
             b = track.box
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
@@ -281,6 +288,8 @@ class _Resolved:
     #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
     #: a ground-truth file (None: no box).
     init_from: str | None = None
+    #: The input's and ground truth's identity when the run started (run.json ``identity``).
+    identity: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass
@@ -298,6 +307,13 @@ class _Tracked:
     cpu_seconds: float = 0.0
     states: dict[TrackState, int] = field(
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
+
+    @property
+    def untouched(self) -> bool:
+        """The run stopped on a user error before its first frame was out (the tracker refused
+        the target, exit 2): the folder is left as it was, no record is written."""
+        return (self.frames == 0 and isinstance(self.failure, VtrackError)
+                and not isinstance(self.failure, OutputError))
 
 
 def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
@@ -321,12 +337,13 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
                 _check_init_box(resolved.init_box, info.width, info.height,
                                 resolved.init_from or "--init")
             with OutputFolder(request.out_dir) as folder:
-                folder.clear()
+                folder.clear(temporaries_only=True)
                 writers = _open_writers(request, resolved, info)
                 if on_open is not None:
                     on_open(info)
-                tracked = _track(request, resolved, source, writers, signals, on_frame)
-                summary = _record(request, resolved, source, writers, tracked)
+                tracked = _track(request, resolved, source, writers, signals, on_frame, folder)
+                if not tracked.untouched:
+                    summary = _record(request, resolved, source, writers, tracked)
         finally:
             source.close()
     if tracked.failure is not None:
@@ -347,7 +364,8 @@ class _Writers:
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
     pipeline = resolved.pipeline
-    formatter = _MultiTargetRows() if pipeline.multi_target else _SingleTargetRows(
+    formatter = _MultiTargetRows(resolved.mot_gt is not None) if pipeline.multi_target \
+        else _SingleTargetRows(
         pipeline.columns, resolved.gt)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
     writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
@@ -397,14 +415,18 @@ def _resolve(request: RunRequest) -> _Resolved:
             f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
             "(vtrack select INPUT picks it)"
         )
-    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None)
+    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
+                     request.file_identities())
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
-           signals: _Signals, on_frame: Callable[[int], None] | None) -> _Tracked:
+           signals: _Signals, on_frame: Callable[[int], None] | None,
+           folder: OutputFolder) -> _Tracked:
     """The signal-safe frame loop: each frame's CSV rows and picture are written together;
     a broken input, Ctrl-C, SIGTERM, a full disk or a tracker error ends it with every output
-    closed, and whole."""
+    closed, and whole. The outputs are written under temporary names: only then do they
+    replace what an earlier run left in ``folder`` (:meth:`OutputFolder.clear`), unless the
+    run is :attr:`_Tracked.untouched` (then they are dropped and the folder is as it was)."""
     out = _Tracked()
     formatter, csv, video, annotator = (writers.formatter, writers.csv, writers.video,
                                         writers.annotator)
@@ -448,6 +470,12 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.seconds = time.perf_counter() - started
         out.cpu_seconds = time.thread_time() - cpu_started
         source.close()
+        if out.untouched:
+            for dropped in (csv, video):
+                if dropped is not None:
+                    dropped.abort()
+        else:
+            folder.clear()
         for writer in (csv, video, writers.stream):
             if writer is None:
                 continue
@@ -549,6 +577,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
         summary.mot = evaluate_mot(resolved.mot_gt, formatter.tracks, frames)
         metrics = dict(summary.mot)
+        past = [f for f in resolved.mot_gt if f >= frames]
+        if past and status == STATUS_COMPLETE and request.max_frames is None:
+            summary.warnings.append(
+                f"{request.gt_path}: ground truth has boxes in "
+                f"{plural(len(past), 'frame')} past the input's {plural(frames, 'frame')} "
+                f"(up to frame {max(past) + 1}); they are not evaluated")
 
     record = {
         "status": status,
@@ -569,6 +603,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             "loop_cpu_us_per_frame": 1e6 * tracked.cpu_seconds / frames if frames else None,
         },
         "outputs": outputs,
+        "output_bytes": sizes(request.out_dir, outputs),
+        "identity": resolved.identity,
         "versions": versions(),
         "command": sys.argv,
     }

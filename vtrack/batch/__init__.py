@@ -25,8 +25,10 @@ file is read as OTB's 1-based MATLAB boxes (OTB, VOT, UAV123 and LaSOT ship them
 beside a video as 0-based (what ``vtrack scene`` writes). ``0`` or ``1`` forces one origin on all.
 
 Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,
-ground truth, seed and output settings is skipped (status ``skipped``); anything else is run
-again, replacing the earlier run's files (only those: :data:`vtrack.io.outdir.RUN_OUTPUTS`).
+ground truth, seed and output settings is skipped (status ``skipped``) while it still stands:
+every output it lists has its recorded size and the input and ground truth the identity it
+recorded (size and modification time, :mod:`vtrack.io.identity`). Anything else is run again,
+replacing the earlier run's files (only those: :data:`vtrack.io.outdir.RUN_OUTPUTS`).
 The results folder is locked for the whole batch (a second batch or run on it is refused) and
 each job's folder for its run. Failure isolation: a job's user error (unreadable input, bad
 ground truth) or crash is recorded in its row (status ``failed``); an input that breaks part way

@@ -69,6 +69,23 @@ def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
     )
 
 
+def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
+    """A distinct name per video: its stem, or its full file name where stems (or another
+    input's name) clash. Switching a clashing name to the full one may make it clash with
+    another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated until nothing clashes (full file
+    names in one folder are distinct, so this ends)."""
+    names = {path: path.stem for path in videos}
+    while True:
+        counts: dict[str, int] = {}
+        for name in [*taken, *names.values()]:
+            counts[name] = counts.get(name, 0) + 1
+        clashing = [p for p, name in names.items() if counts[name] > 1 and name != p.name]
+        if not clashing:
+            return names
+        for path in clashing:
+            names[path] = path.name
+
+
 def is_sequence_folder(path: Path) -> bool:
     """An OTB-style image-sequence folder: it holds an ``img/`` folder."""
     return (path / "img").is_dir()
@@ -79,7 +96,8 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     sorted by name, with the ground truth found beside or inside each (module docstring).
 
     Inputs are named after their file stem (folder name for sequences); videos whose stem is
-    taken twice (``a.mp4`` and ``a.avi`` or a folder ``a/``) keep their full file names.
+    taken twice (``a.mp4`` and ``a.avi``, a folder ``a/``, or ``a.mp4`` and ``a.mp4.mkv``) keep
+    their full file names, so every input has a results folder of its own.
     Raises InputError when ``folder`` is not a folder or holds no input.
     """
     folder = Path(folder)
@@ -90,9 +108,8 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     entries = sorted(folder.resolve().iterdir())
     videos = [p for p in entries if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES]
     found = [_sequence(p, gt_origin) for p in entries if p.is_dir() and is_sequence_folder(p)]
-    taken = [item.name for item in found] + [p.stem for p in videos]
-    found += [_video(p, p.stem if taken.count(p.stem) == 1 else p.name, gt_origin)
-              for p in videos]
+    found += [_video(p, name, gt_origin) for p, name in _video_names(
+        videos, {item.name for item in found}).items()]
     if not found:
         raise InputError(
             f"{folder}: no inputs (video files or sequence folders with an img/ folder)"

@@ -6,45 +6,72 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 from vtrack.batch.discover import SEQUENCE_GT, SEQUENCE_INIT, VIDEO_GT, VIDEO_INIT, BatchInput
 from vtrack.batch.jobs import STATUS_SKIPPED, Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError
 from vtrack.geometry import Box
+from vtrack.io.files import folder_name
+from vtrack.io.identity import outputs_intact
+from vtrack.io.limits import RECORD_BYTES, read_bounded
 from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.pipeline import Pipeline
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
 
-def recorded_summary(request: RunRequest, since: float | None = None) -> RunSummary | None:
-    """The summary ``run.json`` in ``request.out_dir`` records for a run of exactly
-    ``request`` (every field, :meth:`RunRequest.same_run`), whatever its status; None if there
-    is none, it is another request's, or it was written before the time ``since``."""
+def _record(request: RunRequest, since: float | None = None) -> dict[str, Any] | None:
+    """The ``run.json`` in ``request.out_dir`` if it records a run of exactly ``request``
+    (:meth:`RunRequest.same_run`) and was written at or after the time ``since``; else None."""
     path = request.out_dir / "run.json"
     try:
         if since is not None and path.stat().st_mtime < since:
             return None
-        record = json.loads(path.read_text(encoding="utf-8"))
-        if not request.same_run(record["request"]):
-            return None
-        names = {f.name for f in fields(RunSummary)}
-        summary = RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
-        summary.status = record["status"]
-        return summary
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        record = json.loads(read_bounded(path, RECORD_BYTES).decode("utf-8"))
+        return record if request.same_run(record["request"]) else None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, InputError):
         return None
 
 
+def _summary(record: dict[str, Any]) -> RunSummary | None:
+    try:
+        names = {f.name for f in fields(RunSummary)}
+        summary = RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
+        summary.status = record["status"]
+    except (KeyError, TypeError, AttributeError):
+        return None
+    return summary
+
+
+def recorded_summary(request: RunRequest, since: float | None = None) -> RunSummary | None:
+    """The summary ``run.json`` in ``request.out_dir`` records for a run of exactly
+    ``request`` (every field, :meth:`RunRequest.same_run`), whatever its status; None if there
+    is none, it is another request's, or it was written before the time ``since``."""
+    record = _record(request, since)
+    return None if record is None else _summary(record)
+
+
 def completed_summary(request: RunRequest) -> RunSummary | None:
-    """The summary of a finished run of exactly ``request`` in ``request.out_dir``, else None.
+    """The summary of a finished run of exactly ``request`` in ``request.out_dir`` that still
+    stands, else None.
 
     Finished means ``run.json`` (written last, atomically, after its outputs were verified)
-    says ``complete``; exactly means its ``request`` is this one (:meth:`RunRequest.same_run`).
+    says ``complete``; exactly means its ``request`` is this one (:meth:`RunRequest.same_run`);
+    still stands means its input and ground truth have the identity it recorded (size and
+    modification time, :mod:`vtrack.io.identity`) and every output it lists is there with the
+    size it recorded.
     """
-    summary = recorded_summary(request)
-    return summary if summary is not None and summary.status == STATUS_COMPLETE else None
+    record = _record(request)
+    if record is None or record.get("status") != STATUS_COMPLETE:
+        return None
+    csv_name = "tracks.csv" if record.get("summary", {}).get("multi_target") else "track.csv"
+    required = [csv_name] + (["annotated.mp4"] if request.video else [])
+    if (record.get("identity") != request.file_identities()
+            or not outputs_intact(request.out_dir, record, required)):
+        return None
+    return _summary(record)
 
 
 @dataclass
@@ -59,7 +86,9 @@ class Plan:
 
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,
          settings: RunRequest, threads: int = 1, force: bool = False) -> Plan:
-    """What to do for every input x config, results in ``out_dir/<input>/<config>/``.
+    """What to do for every input x config, results in ``out_dir/<input>/<config>/`` (each
+    name made one safe folder name, :func:`~vtrack.io.files.folder_name`: a config named
+    ``../x`` or ``/tmp/x`` still writes inside ``out_dir``).
 
     Each job's request is ``settings`` (what ``vtrack batch`` was given: video, preset, crf,
     seed, max_frames) with the input, output folder, config and ground truth of the job.
@@ -83,7 +112,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             except InputError as exc:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=str(exc)))
                 continue
-            request = replace(settings, input=str(item.path), out_dir=out_dir / item.name / label,
+            folder = out_dir / folder_name(item.name, "input") / folder_name(label)
+            request = replace(settings, input=str(item.path), out_dir=folder,
                               config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin,
                               init_from=None if init is None else str(sidecar_path(item.path)))
             done = None if force else completed_summary(request)

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from vtrack.cli._paths import OUT_PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
@@ -47,16 +48,19 @@ class _StopOnce:
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
     from vtrack.config import load_config
+    from vtrack.io.files import folder_name
 
     configs: dict[str, Config] = {}
+    folders: dict[str, Config] = {}
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec).with_overrides(list(overrides))
-        if config.name in configs:
+        other = configs.get(config.name) or folders.get(folder_name(config.name))
+        if other is not None:
             raise ConfigError(
-                f"--config {spec}: another config is also named '{config.name}' "
-                f"({configs[config.name].source}); results are kept per name, rename one"
+                f"--config {spec}: another config has the results folder of '{config.name}' "
+                f"({other.source}); results are kept per name, rename one"
             )
-        configs[config.name] = config
+        configs[config.name] = folders[folder_name(config.name)] = config
     return configs
 
 
@@ -66,7 +70,7 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
               help="Tracker config, a TOML file or a shipped name; repeat to run every input "
                    f"with each. Default: {DEFAULT_CONFIG}.")
-@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
+@click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,

@@ -6,12 +6,14 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._paths import OUT_PATH
+
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
 
 @click.command("report")
 @click.argument("results", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path),
+@click.option("--out", "-o", "out_dir", type=OUT_PATH,
               default=Path("vtrack-report"), show_default=True, metavar="DIR",
               help="Report folder: index.html, plots/*.png, summary.md, summary.csv.")
 @click.option("--gt", "gt_specs", multiple=True, metavar="[INPUT=]FILE",

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import re
 import signal
 import sys
 from pathlib import Path
 
 import click
 
+from vtrack.cli._paths import OUT_PATH
 from vtrack.configs import DEFAULT_CONFIG
 
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
@@ -23,10 +23,11 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
     else:
         path = Path(input_spec.rstrip("/") or "/")
         name = (path.stem if path.suffix else path.name) or "input"
+    from vtrack.io.files import folder_name
+
     folder = Path("vtrack-out") / name
     # a config's own name (``name = "..."`` in its TOML) may hold characters a folder cannot
-    return folder / (re.sub(r"[^\w.+-]+", "_", config).strip(".") or "config") if config \
-        else folder
+    return folder / folder_name(config) if config else folder
 
 
 @click.command("run")
@@ -42,7 +43,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "multi-target configs): fills overlap and center_error.")
 @click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
               help="1 for MATLAB-style 1-based ground-truth boxes (OTB).")
-@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), metavar="DIR",
+@click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
               help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. Files an "
                    "earlier run left there are replaced; other files are left alone.")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._paths import OUT_PATH
+
 
 class _DefaultGroup(click.Group):
     """A group whose arguments go to ``generate`` unless they start with a subcommand name."""
@@ -45,7 +47,7 @@ def command() -> None:
               help="Initial box (top-left x, y, width, height).")
 @click.option("--frames", "count", type=int, default=10, show_default=True,
               help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
-@click.option("--out", "-o", "out_dir", type=click.Path(path_type=Path), required=True,
+@click.option("--out", "-o", "out_dir", type=OUT_PATH, required=True,
               metavar="DIR", help="Output folder (created; existing vector files are replaced).")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
               help="Override a stage parameter (repeatable).")

@@ -11,10 +11,10 @@ import math
 import re
 from collections.abc import Iterator
 from os import PathLike
-from pathlib import Path
 
 from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import Box, box_from_parts
+from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
 _SEPARATORS = re.compile(r"[,\s]+")
@@ -36,13 +36,9 @@ def _tokens(line: str) -> list[str]:
 
 
 def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
-    """The file's lines without trailing blank lines; InputError if unreadable or empty."""
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read {what} file: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: {what} file is not text") from None
+    """The file's lines without trailing blank lines; InputError if unreadable, larger than
+    :data:`~vtrack.io.limits.GROUND_TRUTH_BYTES`, not UTF-8 or empty."""
+    text = read_text_bounded(path, GROUND_TRUTH_BYTES, f"{what} file")
     lines = text.splitlines()
     while lines and not lines[-1].strip():
         lines.pop()
@@ -152,9 +148,11 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
 
     Frames without kept rows are not keys; keys are ascending, rows keep file order. Frame 1 of
     the file is key 0; boxes are taken as written (MOTChallenge's top-left corner). Blank lines
-    are skipped. For ``det.txt`` files use :func:`read_mot_detections`.
+    are skipped. Two kept rows for one (frame, id) are an error: a target is in one place at a
+    time. For ``det.txt`` files use :func:`read_mot_detections`.
     """
     frames: dict[int, list[tuple[int, Box]]] = {}
+    seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
@@ -164,7 +162,12 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
             continue
         box = Box(*values[2:6])
         if box.w > 0 and box.h > 0:
-            frames.setdefault(frame, []).append((int(values[1]), box))
+            target = int(values[1])
+            first = seen.setdefault((frame, target), number)
+            if first != number:
+                raise InputError(f"{path} line {number}: frame {frame + 1} has a second box for "
+                                 f"id {target} (the first is on line {first})")
+            frames.setdefault(frame, []).append((target, box))
     return dict(sorted(frames.items()))
 
 

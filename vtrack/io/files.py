@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 from pathlib import Path
 from typing import Self
 
@@ -37,6 +38,13 @@ def check_input_path(path: str) -> None:
         raise InputError(f"{path}: no such file (broken link)")
     if not os.access(path, os.R_OK):
         raise InputError(f"{path}: cannot be read (permission denied)")
+
+
+def folder_name(text: str, fallback: str = "config") -> str:
+    """``text`` as one safe folder name: characters other than letters, digits and ``._+-``
+    become ``_`` (so ``/``, ``..`` and absolute paths cannot lead anywhere else), leading and
+    trailing dots are dropped; ``fallback`` when nothing is left (``.``, ``..``, empty)."""
+    return re.sub(r"[^\w.+-]+", "_", text).strip(".") or fallback
 
 
 def temp_path(path: Path) -> Path:

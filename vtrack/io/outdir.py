@@ -97,13 +97,18 @@ class OutputFolder:
         except OSError:
             pass  # a full disk: the lock holds anyway, only the note is missing
 
-    def clear(self, names: Iterable[str] = RUN_OUTPUTS) -> None:
-        """Remove what an earlier run left here: the files ``names`` and their stale
-        temporaries. Nothing else in the folder is touched."""
+    def clear(self, names: Iterable[str] = RUN_OUTPUTS, temporaries_only: bool = False) -> None:
+        """Remove what an earlier run left here: the files ``names`` (``run.json`` first, so no
+        record outlives its outputs) and their stale temporaries, or with ``temporaries_only``
+        just those (temporaries of another process: this one's are still being written).
+        Nothing else in the folder is touched."""
         names = tuple(names)
-        for entry in self.folder.iterdir():
+        mine = f".tmp-{os.getpid()}-"
+        entries = sorted(self.folder.iterdir(), key=lambda e: e.name != "run.json")
+        for entry in entries:
             name = entry.name
-            stale = name in names or any(is_temp_of(name, n) for n in names)
+            temporary = any(is_temp_of(name, n) for n in names) and mine not in name
+            stale = temporary or (name in names and not temporaries_only)
             if stale and not entry.is_dir():
                 with contextlib.suppress(FileNotFoundError):
                     entry.unlink()

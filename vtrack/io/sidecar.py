@@ -14,6 +14,7 @@ from pathlib import Path
 from vtrack.errors import InputError
 from vtrack.geometry import Box, box_from_parts
 from vtrack.io.files import write_text_atomic
+from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
@@ -56,12 +57,7 @@ def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
     path = sidecar_path(input_spec)
     if not path.is_file():
         return None
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot be read ({getattr(exc, 'strerror', None) or exc})"
-                         ) from None
-    return parse_sidecar(text, str(path))
+    return parse_sidecar(read_text_bounded(path, SIDECAR_BYTES, "box file"), str(path))
 
 
 def write_sidecar(input_spec: str | os.PathLike[str], box: Box) -> Path:

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from vtrack import __version__
+from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError
 from vtrack.io.files import write_text_atomic
 from vtrack.report import pages, plots, tables
@@ -97,6 +98,23 @@ def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict
             {c: np.mean(v, axis=0) for c, v in precision.items()})
 
 
+def _refuse_batch_folder(out_dir: Path) -> None:
+    """Raise OutputError when ``out_dir`` holds a batch's ``summary.csv`` (the report's own
+    ``summary.csv`` would replace it) or a run's ``run.json``."""
+    summary = out_dir / "summary.csv"
+    try:
+        with summary.open(encoding="utf-8", errors="replace") as handle:
+            header = handle.readline(4096).strip()
+    except OSError:
+        header = ""
+    if header == ",".join(SUMMARY_COLUMNS):
+        raise OutputError(f"--out {out_dir}: holds a batch's summary.csv, which the report "
+                          "would replace; choose another folder for the report")
+    if (out_dir / "run.json").exists():
+        raise OutputError(f"--out {out_dir}: is a run's results folder; choose another folder "
+                          "for the report")
+
+
 def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
                  gt_origin: int = 0, title: str = DEFAULT_TITLE) -> Report:
@@ -107,8 +125,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
     one or several; a run is scored only against a file of its own length (else a warning
     names the run and the file). A run folder that cannot be read is
     left out with a warning. Raises InputError when nothing below ``results`` is a run (or a
-    failed batch row) and OutputError when ``out_dir`` cannot be written.
+    failed batch row) and OutputError when ``out_dir`` cannot be written, holds a batch's
+    ``summary.csv`` or is a run's folder.
     """
+    _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
     truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
     warnings: list[str] = []
@@ -128,8 +148,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
     failed = failed_runs(results)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
+        if warnings:
+            raise InputError(f"{named}: no run to report; {warnings[0]}")
         raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
-                         "folders)" + (f"; {warnings[0]}" if warnings else ""))
+                         "folders)")
     _distinct_labels(runs)
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]

@@ -35,6 +35,7 @@ from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.geometry import Box
+from vtrack.io.identity import sizes
 
 
 @dataclass(frozen=True)
@@ -243,11 +244,26 @@ def _input_name(record: dict[str, Any], folder: Path) -> str:
     return path.stem if path.suffix else path.name
 
 
+def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
+    """Raise InputError when the run's CSV is not the size its ``run.json`` recorded (records
+    from before sizes were recorded are checked by their row count only)."""
+    recorded = (record.get("output_bytes") or {}).get(name)
+    if recorded is None:
+        return
+    found = sizes(folder, [name]).get(name)
+    if found != recorded:
+        held = "is missing" if found is None else f"holds {found} bytes"
+        raise InputError(f"{folder / name}: {held}, run.json records {recorded} (cut or edited "
+                         "after the run); not scored")
+
+
 def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
     """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
     (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
 
-    Raises InputError naming the file when ``run.json`` or the CSV cannot be read.
+    Raises InputError naming the file when ``run.json`` or the CSV cannot be read, or the CSV
+    is not what the run wrote (another size than recorded, or another number of rows than
+    the frames recorded: cut or edited).
     """
     record_path = folder / "run.json"
     try:
@@ -272,11 +288,18 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
     )
     if result.multi_target:
+        _check_whole(folder, record, "tracks.csv")
         result.mot = dict(record.get("metrics") or {})
         result.ground_truth = request.get("gt")
         return result
+    _check_whole(folder, record, "track.csv")
     try:
-        rows = _with_skipped_frames(_read_csv(folder / "track.csv"))
+        written = _read_csv(folder / "track.csv")
+        if len(written) != result.frames:
+            raise InputError(f"{folder / 'track.csv'}: holds {plural(len(written), 'row')}, "
+                             f"run.json records {plural(result.frames, 'frame')} (cut or "
+                             "edited after the run); not scored")
+        rows = _with_skipped_frames(written)
         result.states = [row["state"] for row in rows]
         if request.get("gt"):
             result.ground_truth = str(request["gt"])

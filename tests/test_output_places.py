@@ -1,0 +1,105 @@
+"""Issue 21 items 5, 6 and 7: files are written only where they belong. A batch config's
+`name` cannot lead outside `--out`; inputs whose stems clash keep results folders of their own;
+`--out ""` is refused; `vtrack report` never replaces a batch's `summary.csv`."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import pytest
+from test_cli import assert_one_line_error, vtrack
+
+from vtrack.batch import find_inputs
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H, FRAMES = 64, 48, 20
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    folder = tmp_path_factory.mktemp("places")
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+    write_video(scene, folder / "occ.mp4")
+    write_groundtruth(scene, folder / "occ.gt.txt")
+    return folder / "occ.mp4", folder / "occ.gt.txt"
+
+
+def one_input(folder: Path, clip: tuple[Path, Path], name: str = "occ.mp4") -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copy(clip[0], folder / name)
+    shutil.copy(clip[1], folder / f"{Path(name).stem}.gt.txt")
+    return folder
+
+
+@pytest.mark.parametrize("name", ["/tmp/victim", "../../../x", ".", "..", "a/b", ""])
+def test_a_config_name_stays_one_folder_inside_out(clip, tmp_path: Path, name: str) -> None:
+    folder = one_input(tmp_path / "in", clip)
+    config = tmp_path / "mine.toml"
+    shipped = (Path(__file__).parents[1] / "vtrack" / "configs" / "s0.toml").read_text()
+    body = shipped.replace('name = "s0"', f"name = {name!r}".replace("'", '"'), 1)
+    config.write_text(body)
+    out = tmp_path / "deep" / "er" / "out"
+    victim = Path("/tmp/victim")
+    existed = victim.exists()
+
+    def outside() -> list[Path]:
+        return sorted(p for p in tmp_path.rglob("*") if out not in (p, *p.parents)
+                      and p not in out.parents)
+
+    before = outside()
+    result = vtrack("batch", str(folder), "-c", str(config), "--no-video", "-o", str(out))
+    assert result.returncode == 0, result.stderr.decode()
+    written = [p for p in out.rglob("track.csv")]
+    assert len(written) == 1, written
+    run_dir = written[0].parent
+    assert run_dir.parent == out / "occ" and run_dir.name not in ("", ".", "..")
+    assert outside() == before
+    assert victim.exists() == existed
+
+
+def test_clashing_stems_get_folders_of_their_own(clip, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    for name in ("a.mp4", "a.avi", "a.mp4.mkv"):
+        one_input(folder, clip, name)
+    (folder / "a.gt.txt").write_text(clip[1].read_text())
+    (folder / "a.mp4.gt.txt").write_text(clip[1].read_text())
+    names = [item.name for item in find_inputs(folder)]
+    assert sorted(names) == ["a.avi", "a.mp4", "a.mp4.mkv"]
+    out = tmp_path / "out"
+    for _ in range(2):  # and a resume keeps all three
+        result = vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(out))
+        assert result.returncode == 0, result.stderr.decode()
+        with (out / "summary.csv").open() as handle:
+            rows = list(csv.DictReader(handle))
+        assert sorted(r["input"] for r in rows) == sorted(names)
+        assert all((out / n / "s0" / "track.csv").is_file() for n in names)
+
+
+@pytest.mark.parametrize("command", ["run", "batch", "report", "frame"])
+def test_an_empty_out_is_refused(clip, tmp_path: Path, command: str) -> None:
+    work = tmp_path / "cwd"
+    work.mkdir()
+    (work / "track.csv").write_text("mine\n")
+    target = {"run": str(clip[0]), "batch": str(clip[0].parent), "frame": str(clip[0]),
+              "report": str(tmp_path)}[command]
+    extra = ["--gt", str(clip[1])] if command == "run" else []
+    result = vtrack(command, target, *extra, "--out", "", cwd=work)
+    assert_one_line_error(result, "--out", "empty")
+    assert result.returncode == 2
+    assert sorted(p.name for p in work.iterdir()) == ["track.csv"]
+    assert (work / "track.csv").read_text() == "mine\n"
+
+
+def test_report_does_not_replace_a_batch_summary(clip, tmp_path: Path) -> None:
+    folder = one_input(tmp_path / "in", clip)
+    out = tmp_path / "results"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(out)).returncode == 0
+    kept = (out / "summary.csv").read_bytes()
+    result = vtrack("report", str(out), "--out", str(out))
+    assert_one_line_error(result, "summary.csv", "another folder")
+    assert (out / "summary.csv").read_bytes() == kept
+    result = vtrack("report", str(out), "--out", str(out / "occ" / "s0"))
+    assert_one_line_error(result, "run's results folder")
+    assert vtrack("report", str(out), "--out", str(tmp_path / "rep")).returncode == 0

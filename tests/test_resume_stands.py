@@ -1,0 +1,78 @@
+"""Issue 21 item 1: `vtrack batch` resumes a result only while it still stands: its outputs are
+there whole and its input and ground truth are the files it was made from (run as a user runs
+it, on a small generated clip)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+from test_cli import vtrack
+
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H, FRAMES = 64, 48, 20
+
+
+@pytest.fixture
+def folder(tmp_path: Path) -> Path:
+    """A batch folder holding one clip ``occ.mp4`` and its ground truth."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+    write_video(scene, folder / "occ.mp4")
+    write_groundtruth(scene, folder / "occ.gt.txt")
+    return folder
+
+
+def resume(folder: Path, out: Path) -> str:
+    """Run the batch (s0, with video) and return its line for occ."""
+    result = vtrack("batch", str(folder), "-c", "s0", "-o", str(out), "-j", "1")
+    assert result.returncode == 0, result.stderr.decode()
+    return result.stdout.decode()
+
+
+def test_an_untouched_result_is_skipped(folder: Path, tmp_path: Path) -> None:
+    out = tmp_path / "r"
+    resume(folder, out)
+    record = json.loads((out / "occ" / "s0" / "run.json").read_text())
+    assert record["identity"]["input"]["size"] == (folder / "occ.mp4").stat().st_size
+    assert record["identity"]["gt"]["size"] == (folder / "occ.gt.txt").stat().st_size
+    assert set(record["output_bytes"]) == {"track.csv", "annotated.mp4"}
+    assert "skipped: already complete" in resume(folder, out)
+
+
+@pytest.mark.parametrize("change", ["rm_csv", "cut_csv", "rm_video", "edit_gt", "new_input"])
+def test_a_result_that_no_longer_stands_is_run_again(folder: Path, tmp_path: Path,
+                                                     change: str) -> None:
+    out = tmp_path / "r"
+    resume(folder, out)
+    run_dir = out / "occ" / "s0"
+    if change == "rm_csv":
+        (run_dir / "track.csv").unlink()
+    elif change == "cut_csv":
+        data = (run_dir / "track.csv").read_bytes()
+        (run_dir / "track.csv").write_bytes(data[: len(data) // 2])
+    elif change == "rm_video":
+        (run_dir / "annotated.mp4").unlink()
+    elif change == "edit_gt":
+        gt = folder / "occ.gt.txt"
+        lines = gt.read_text().splitlines()
+        lines[5] = "1,1,10,10"
+        gt.write_text("\n".join(lines) + "\n")
+    else:  # another video of the same name (the scene at another quality), its mtime set back
+        stat = (folder / "occ.mp4").stat()
+        other = make_scene("smooth", seed=1, width=W, height=H, frames=FRAMES, fps=30.0)
+        write_video(other, tmp_path / "other.mp4", crf=40)
+        shutil.copy(tmp_path / "other.mp4", folder / "occ.mp4")
+        os.utime(folder / "occ.mp4", ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    line = resume(folder, out)
+    assert "skipped" not in line, line
+    assert (run_dir / "track.csv").is_file() and (run_dir / "annotated.mp4").is_file()
+    record = json.loads((run_dir / "run.json").read_text())
+    assert record["status"] == "complete"
+    assert record["identity"]["gt"]["size"] == (folder / "occ.gt.txt").stat().st_size
+    assert "skipped: already complete" in resume(folder, out)

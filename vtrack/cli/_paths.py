@@ -1,0 +1,24 @@
+"""Path options shared by the commands that write files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+
+class OutPath(click.Path):
+    """A ``click.Path`` that refuses an empty value: ``--out ""`` would otherwise mean the
+    current folder and replace the outputs an earlier run left there."""
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and not value.strip():
+            self.fail("empty; give a folder or file name ('.' for the current folder)",
+                      param, ctx)
+        return super().convert(value, param, ctx)
+
+
+#: The type of every ``--out`` option.
+OUT_PATH = OutPath(path_type=Path)

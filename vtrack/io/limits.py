@@ -1,0 +1,52 @@
+"""Reading a small file whole, with a ceiling: ``--gt /dev/zero`` or a 40 GB file given as
+ground truth must be one line, not a memory error.
+
+Every text file vtrack reads whole (ground truth, sidecar boxes, configs, ``run.json``) goes
+through :func:`read_bounded` with its own ceiling; the ceilings are far above any real file of
+that kind.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from vtrack.errors import InputError
+from vtrack.io.files import os_reason
+
+#: Ground truth: MOT20's largest ``gt.txt`` is ~40 MB; OTB/LaSOT files are under 1 MB.
+GROUND_TRUTH_BYTES = 256 << 20
+#: A sidecar ``NAME.init.txt`` holds one line.
+SIDECAR_BYTES = 64 << 10
+#: A config TOML (the shipped ones are ~2 KB).
+CONFIG_BYTES = 1 << 20
+#: A ``run.json`` record (a few KB; its config and warnings bound it).
+RECORD_BYTES = 64 << 20
+
+
+def _mb(limit: int) -> str:
+    return f"{limit / (1 << 20):g} MB" if limit >= 1 << 20 else f"{limit >> 10} KB"
+
+
+def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> bytes:
+    """The bytes of ``path`` if it holds at most ``limit`` of them. Raises InputError naming
+    the file when it cannot be read or is larger (a device or pipe that never ends included:
+    at most ``limit + 1`` bytes are read)."""
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read {what} ({os_reason(exc)})") from None
+    if len(data) > limit:
+        raise InputError(f"{path}: larger than {_mb(limit)}, too large for a {what}")
+    return data
+
+
+def read_text_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> str:
+    """:func:`read_bounded` as UTF-8 text, a leading byte-order mark dropped (Windows editors
+    write one). InputError when the bytes are not UTF-8."""
+    data = read_bounded(path, limit, what)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{Path(path)}: {what} is not text (not UTF-8)") from None
