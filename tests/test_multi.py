@@ -22,7 +22,7 @@ from click.testing import CliRunner
 from vtrack.cli import main
 from vtrack.config import load_config
 from vtrack.errors import ConfigError, InputError
-from vtrack.evaluate.mot import evaluate_mot, linear_assignment, mot_summary
+from vtrack.evaluate.mot import evaluate_mot, mot_summary
 from vtrack.frame import GrayFrame
 from vtrack.geometry import Box, center_error, iou
 from vtrack.pipeline import FrameResult, Pipeline
@@ -45,32 +45,6 @@ OURS: tuple[type[Stage], ...] = (
     MotDetections,
 )
 MULTI_FRAMES = 150  # the multi scenario's default length: the crossing is at frame 74
-
-# --- the assignment solver ---------------------------------------------------------------------
-
-
-@pytest.mark.parametrize(("rows", "cols"), [(1, 1), (3, 3), (4, 2), (2, 5), (5, 5), (0, 3)])
-def test_linear_assignment_finds_the_minimum_of_every_assignment(rows: int, cols: int) -> None:
-    rng = np.random.default_rng(rows * 10 + cols)
-    for trial in range(20):
-        cost = rng.integers(0, 9, (rows, cols)).astype(float) if trial % 2 else rng.random(
-            (rows, cols))
-        r, c = linear_assignment(cost)
-        assert len(r) == min(rows, cols) and len(set(r)) == len(r) and len(set(c)) == len(c)
-        assert list(r) == sorted(r)
-        if rows <= cols:
-            best = min(sum(cost[i, p[i]] for i in range(rows))
-                       for p in itertools.permutations(range(cols), rows))
-        else:
-            best = min(sum(cost[p[j], j] for j in range(cols))
-                       for p in itertools.permutations(range(rows), cols))
-        assert cost[r, c].sum() == pytest.approx(best)
-
-
-def test_linear_assignment_rejects_non_finite_costs() -> None:
-    with pytest.raises(ValueError):
-        linear_assignment(np.array([[1.0, np.inf]]))
-
 
 # --- CLEAR MOT and identity measures, hand-computed ---------------------------------------------
 

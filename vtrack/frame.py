@@ -52,6 +52,10 @@ class Frame(ABC):
         o = (k - 1) // 2
         return np.ascontiguousarray(self.bgr(window)[o::k, o::k])
 
+    def bgr_resized(self, width: int, height: int) -> np.ndarray:
+        """The whole frame shrunk (area averaging) to ``width`` x ``height``, as BGR."""
+        return cv2.resize(self.bgr(), (width, height), interpolation=cv2.INTER_AREA)
+
     @abstractmethod
     def gray(self, window: Window | None = None) -> np.ndarray:
         """The window (default: whole frame) as a ``uint8`` grey (luma) array of shape (h, w)."""
@@ -171,6 +175,17 @@ class I420Frame(Frame):
         # every other pixel: nearest-neighbour halving takes column 2 j exactly (a NumPy
         # strided copy of 3-byte pixels costs ~4x more)
         return cv2.resize(pairs, (cols.size, rows.size), interpolation=cv2.INTER_NEAREST)
+
+    def bgr_resized(self, width: int, height: int) -> np.ndarray:
+        """As :meth:`Frame.bgr_resized`, shrinking the planes before converting (the full-size
+        frame is never converted: at 1080p that conversion alone costs ~3 ms)."""
+        ew, eh = width + width % 2, height + height % 2  # I420 needs an even size
+        packed = np.empty((eh * 3 // 2, ew), np.uint8)
+        for target, plane in zip(i420_planes(packed, ew, eh), (self.y, self.u, self.v),
+                                 strict=True):
+            cv2.resize(plane, (target.shape[1], target.shape[0]), dst=target,
+                       interpolation=cv2.INTER_AREA)
+        return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)[:height, :width]
 
     def gray(self, window: Window | None = None) -> np.ndarray:
         return self.y if window is None else self.y[window.slices]

@@ -19,9 +19,9 @@
   ``IDF1 = 2 IDTP / (ground-truth boxes + track boxes)``, ``IDP = IDTP / track boxes``,
   ``IDR = IDTP / ground-truth boxes``.
 
-These are the definitions py-motmetrics implements; the assignment is done here by a small
-Hungarian solver (:func:`linear_assignment`), so neither SciPy nor py-motmetrics (which calls
-``np.asfarray``, gone in NumPy 2) is needed.
+These are the definitions py-motmetrics implements; the assignments are SciPy's
+``linear_sum_assignment`` (the solver py-motmetrics uses), so py-motmetrics itself (which calls
+``np.asfarray``, gone in NumPy 2) is not needed.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from os import PathLike
 from typing import Any
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from vtrack.evaluate.groundtruth import read_mot
 from vtrack.geometry import Box, iou
@@ -45,64 +46,6 @@ MOSTLY_LOST = 0.2
 
 #: Boxes per frame: ``{0-based frame: [(id, box), ...]}`` (ground truth or tracker output).
 FrameBoxes = Mapping[int, Sequence[tuple[int, Box]]]
-
-
-def linear_assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Minimum-cost assignment of rows to columns (Kuhn-Munkres with potentials, O(n^2 m)).
-
-    ``cost`` is a finite 2-D array; a rectangular one gets ``min(rows, columns)`` pairs. Returns
-    ``(rows, cols)`` index arrays, sorted by row, like ``scipy.optimize.linear_sum_assignment``.
-    Forbidden pairs are the caller's business: give them a cost so large that any assignment
-    using one is worse than any assignment that does not, and drop them afterwards.
-    """
-    matrix = np.asarray(cost, dtype=float)
-    if matrix.ndim != 2:
-        raise ValueError(f"cost must be a 2-D array, got shape {matrix.shape}")
-    if not np.isfinite(matrix).all():
-        raise ValueError("cost must be finite")
-    transposed = matrix.shape[0] > matrix.shape[1]
-    c = matrix.T if transposed else matrix
-    n, m = c.shape
-    if n == 0:
-        return np.zeros(0, np.intp), np.zeros(0, np.intp)
-    # Shortest augmenting paths with row potentials u and column potentials v; column 0 is a
-    # virtual start column; owner[j] is the 1-based row holding column j (0: free).
-    u = np.zeros(n + 1)
-    v = np.zeros(m + 1)
-    owner = np.zeros(m + 1, np.intp)
-    way = np.zeros(m + 1, np.intp)
-    for row in range(1, n + 1):
-        owner[0] = row
-        j0 = 0
-        slack = np.full(m + 1, np.inf)
-        used = np.zeros(m + 1, bool)
-        while True:
-            used[j0] = True
-            i0 = owner[j0]
-            free = ~used[1:]
-            reduced = c[i0 - 1] - u[i0] - v[1:]
-            better = free & (reduced < slack[1:])
-            slack[1:][better] = reduced[better]
-            way[1:][better] = j0
-            candidates = np.where(free, slack[1:], np.inf)
-            j1 = int(np.argmin(candidates)) + 1
-            delta = candidates[j1 - 1]
-            u[owner[used]] += delta
-            v[used] -= delta
-            slack[1:][free] -= delta
-            j0 = j1
-            if owner[j0] == 0:
-                break
-        while j0:  # flip the augmenting path
-            j1 = way[j0]
-            owner[j0] = owner[j1]
-            j0 = j1
-    cols = np.flatnonzero(owner[1:])
-    rows = owner[1:][cols] - 1
-    if transposed:
-        rows, cols = cols, rows
-    order = np.argsort(rows)
-    return rows[order], cols[order]
 
 
 def _iou_matrix(a: Sequence[Box], b: Sequence[Box]) -> np.ndarray:
@@ -165,7 +108,7 @@ def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int) -> dict[str, A
         sub_allowed = allowed[np.ix_(rest_o, rest_h)]
         if sub_allowed.any():
             cost = _forbidding(1.0 - overlap[np.ix_(rest_o, rest_h)], sub_allowed)
-            for r, c in zip(*linear_assignment(cost), strict=True):
+            for r, c in zip(*linear_sum_assignment(cost), strict=True):
                 if not sub_allowed[r, c]:
                     continue
                 i, j = int(rest_o[r]), int(rest_h[c])
@@ -217,7 +160,7 @@ def _identity_scores(
         col = {h: j for j, h in enumerate(hids)}
         for (o, h), n in pair_frames.items():
             counts[row[o], col[h]] = n
-        rows, cols = linear_assignment(-counts)  # maximise the identity true positives
+        rows, cols = linear_sum_assignment(-counts)  # maximise the identity true positives
         idtp = int(counts[rows, cols].sum())
     return {
         "idf1": _ratio(2 * idtp, gt_boxes + hyp_boxes),

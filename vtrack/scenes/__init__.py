@@ -13,6 +13,7 @@ events: :data:`SCENARIOS` (the randomised ones, :mod:`.hard`, draw looks and mot
 :data:`RANGES`); ground-truth conventions: :class:`Scene` and :mod:`.writers`.
 """
 
+from vtrack.scenes import pedestrians  # noqa: F401 (registers the pedestrians scenario)
 from vtrack.scenes.hard import RANGES  # (importing .hard registers the randomised scenarios)
 from vtrack.scenes.scenarios import SCENARIOS, Scenario, make_scene
 from vtrack.scenes.scene import Scene

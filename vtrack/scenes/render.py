@@ -282,6 +282,31 @@ class Ellipse:
         image[clipped.slices] = np.clip(np.rint(patch), 0, 255).astype(np.uint8)
 
 
+class Shade(Ellipse):
+    """A cast shadow: an ellipse that darkens what is under it to ``factor`` of its brightness
+    (colour kept), with a soft rim; scenery (no track id)."""
+
+    def __init__(self, cx: np.ndarray, cy: np.ndarray, ax: np.ndarray, ay: np.ndarray,
+                 factor: float) -> None:
+        super().__init__(cx, cy, ax, ay, GlowPaint(0.0), track_id=None)
+        self.factor = factor
+
+    def coverage(self, index: int, region: Window) -> np.ndarray:
+        """A shadow hides nothing: what is under it stays visible."""
+        return np.zeros((region.height, region.width))
+
+    def draw(self, image: np.ndarray, index: int) -> None:
+        height, width = image.shape[:2]
+        clipped = self.region(index).as_box().window(width, height)
+        if clipped is None:
+            return
+        u, v = self._local(index, clipped)
+        soft = np.clip(1.0 - np.sqrt(u * u + v * v), 0.0, 0.25) * 4.0  # full inside 3/4
+        gain = (1.0 - (1.0 - self.factor) * soft).astype(np.float32)[..., None]
+        patch = image[clipped.slices].astype(np.float32) * gain
+        image[clipped.slices] = np.clip(np.rint(patch), 0, 255).astype(np.uint8)
+
+
 class Pillar:
     """A static full-height foreground slab over columns ``[x0, x1)`` with its own texture."""
 

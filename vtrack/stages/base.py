@@ -70,7 +70,8 @@ PIPELINE_PROVIDES = frozenset({"frame", "box", "prediction", "state", "rng", "se
 #: leaves them describing an older value, so later stages may not read them (a new search
 #: window has no back-projection until a stage makes one).
 DERIVED: dict[str, frozenset[str]] = {
-    "window": frozenset({"feature", "feature_levels", "feature_mask", "likelihood"}),
+    "window": frozenset({"feature", "feature_levels", "feature_mask", "likelihood",
+                         "feature_scale"}),
     "feature": frozenset({"feature_levels", "feature_mask", "likelihood"}),
 }
 
@@ -83,6 +84,17 @@ class Track:
     box: Box
     confidence: float
     state: TrackStatus
+
+
+@dataclass(frozen=True)
+class TargetShape:
+    """The usual shape of a scene's confirmed targets, as a multi-target tracker measured it:
+    ``aspect`` = median height / width, ``area`` = median box area in pixels, from ``samples``
+    measured boxes."""
+
+    aspect: float
+    area: float
+    samples: int
 
 
 @dataclass(frozen=True)
@@ -126,6 +138,10 @@ class TrackContext:
     #: Mean grey of the detections ``blobs`` found in the last frame (None: none), fed back to
     #: ``threshold`` for the next frame (S3 item 1). Read from the previous frame, so optional.
     candidate_grey: float | None = None
+    #: What a multi-target tracker has learnt about its confirmed targets' shape (None: nothing
+    #: yet), fed back to the stages that group blobs into targets on the next frame. Read from
+    #: the previous frame, so optional.
+    target_shape: TargetShape | None = None
     # --- per frame, reset by new_frame -------------------------------------------------------
     #: Search window of this frame (integer pixels inside the frame).
     window: Window | None = None
@@ -140,6 +156,9 @@ class TrackContext:
     search_box: Box | None = None
     #: Target likelihood of ``window`` (back-projection, 0..255 uint8 or float weights).
     likelihood: np.ndarray | None = None
+    #: Frame pixels per pixel of ``feature`` and ``likelihood`` (a segmenting stage that works
+    #: on a reduced image sets it above 1). Part of ``window``.
+    feature_scale: float = 1.0
     #: This frame's measurement of the target (None: nothing to feed the filter).
     measurement: Box | None = None
     #: Values of the stage-declared extra CSV columns for this frame.
@@ -178,6 +197,7 @@ class TrackContext:
         self.feature_mask = None
         self.search_box = None
         self.likelihood = None
+        self.feature_scale = 1.0
         self.measurement = None
         self.extras = {}
         self.tracks = []

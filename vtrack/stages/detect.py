@@ -30,16 +30,19 @@ from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, reg
 
 #: What a segmenting stage hands over: the whole frame's grey image (256 levels, every pixel
 #: valid) and its foreground.
-_SEGMENTS = frozenset({"window", "feature", "feature_levels", "feature_mask", "likelihood"})
+_SEGMENTS = frozenset({"window", "feature", "feature_levels", "feature_mask", "likelihood",
+                       "feature_scale"})
 
 
-def _whole_grey_frame(ctx: TrackContext) -> np.ndarray:
-    """Set the whole frame's grey image as this frame's window and feature; return it."""
-    grey = ctx.frame.gray()
+def _whole_grey_frame(ctx: TrackContext, reduced: np.ndarray | None = None) -> np.ndarray:
+    """Set the whole frame's grey image as this frame's window and feature; return it.
+    ``reduced``: that image shrunk (``ctx.feature_scale`` = frame width / its width)."""
+    grey = ctx.frame.gray() if reduced is None else reduced
     ctx.window = ctx.frame.full_window()
     ctx.feature = grey
     ctx.feature_levels = 256
     ctx.feature_mask = None
+    ctx.feature_scale = ctx.frame.width / grey.shape[1]
     return grey
 
 
@@ -86,7 +89,8 @@ def _foreground_at_least(image: np.ndarray, level: float) -> np.ndarray:
 
 @register
 class Background(Stage):
-    """S4 background subtraction: ``B`` = mean of the first frames, foreground ``|D - B| >= Th``.
+    """S4 background subtraction: ``B`` = mean of the first frames, foreground ``|D - B| >= Th``;
+    or an adaptive model (MOG2, KNN) for real scenes.
 
     ``method = "mean"`` is the document's: the first ``frames`` frames are averaged into ``B``
     (S4 eq. 1, kept as grey levels 0..255) and **nothing is detected during those frames**; from
@@ -99,25 +103,34 @@ class Background(Stage):
     opening with an ``open`` x ``open`` ellipse removes specks, a closing with a ``close`` x
     ``close`` ellipse joins the fragments of one target (both off by default).
 
-    ``method = "mog2"`` uses OpenCV's adaptive Gaussian-mixture background (Zivkovic 2004):
-    it learns continuously over ``history`` frames, so it follows lighting changes and absorbs
-    ghosts and objects that stop; it detects from the second frame on (on the first, everything
-    is new), ``var_threshold`` replaces ``threshold``, and shadows are not detected.
+    ``method = "mog2"`` uses OpenCV's adaptive Gaussian-mixture background (Zivkovic 2004),
+    ``method = "knn"`` its K-nearest-neighbours one (Zivkovic & van der Heijden 2006): they learn
+    continuously over ``history`` frames, so they follow lighting changes and absorb ghosts and
+    objects that stop; they detect from the second frame on (on the first, everything is new).
+    ``shadows`` turns on their shadow test (a pixel darker than the background by a ratio
+    between ``shadow_ratio`` and 1, with its colour kept, is a shadow) and removes the shadows
+    from the foreground; ``colour`` models the BGR image instead of the grey one (the shadow
+    test then also checks the colour).
+
+    ``max_pixels`` (0: off) makes the foreground at a reduced resolution: the frame is shrunk
+    (area averaging) to at most that many pixels, and ``likelihood``/``feature`` are that
+    reduced image (``ctx.feature_scale`` frame pixels per pixel; ``blobs`` maps back). The
+    morphology sizes stay in frame pixels.
 
     Every frame gets a foreground ``ctx.likelihood``: while nothing can be detected (the mean's
-    learning frames, MOG2's first frame) it is empty (all 0).
+    learning frames, the adaptive models' first frame) it is empty (all 0).
     """
 
     name = "background"
-    summary = "S4 background subtraction (mean of the first frames, or MOG2) -> foreground"
+    summary = "S4 background subtraction (mean of the first frames, or MOG2/KNN) -> foreground"
     params = (
         Param(
             "method",
             str,
             "mean",
             "mean: S4's fixed background, mean of the first `frames` frames (no detection "
-            "during them); mog2: OpenCV's adaptive mixture model, for changing backgrounds",
-            choices=("mean", "mog2"),
+            "during them); mog2, knn: OpenCV's adaptive models, for changing backgrounds",
+            choices=("mean", "mog2", "knn"),
         ),
         Param(
             "frames",
@@ -140,23 +153,23 @@ class Background(Stage):
             "open",
             int,
             1,
-            "size in pixels of a morphological opening of the foreground, removing specks "
-            "(S4 1.2 'after simple processing'; 1 = none)",
+            "size in frame pixels of a morphological opening of the foreground, removing "
+            "specks (S4 1.2 'after simple processing'; 1 = none)",
             min=1, max=255,
         ),
         Param(
             "close",
             int,
             1,
-            "size in pixels of a morphological closing after the opening, joining the fragments "
-            "of one target (S4 1.2 'after simple processing'; 1 = none)",
+            "size in frame pixels of a morphological closing after the opening, joining the "
+            "fragments of one target (S4 1.2 'after simple processing'; 1 = none)",
             min=1, max=255,
         ),
         Param(
             "history",
             int,
             500,
-            "mog2: frames the mixture model remembers (OpenCV's default 500)",
+            "mog2, knn: frames the model remembers (OpenCV's default 500)",
             min=1, max=100000,
         ),
         Param(
@@ -165,6 +178,43 @@ class Background(Stage):
             16.0,
             "mog2: squared Mahalanobis distance to call a pixel foreground (OpenCV's default 16)",
             min=0.0, max=10000.0,
+        ),
+        Param(
+            "dist2_threshold",
+            float,
+            400.0,
+            "knn: squared distance to the nearest samples to call a pixel foreground (OpenCV's "
+            "default 400)",
+            min=0.0, max=1e6,
+        ),
+        Param(
+            "shadows",
+            bool,
+            False,
+            "mog2, knn: detect shadows (darker, same colour) and remove them from the foreground",
+        ),
+        Param(
+            "shadow_ratio",
+            float,
+            0.5,
+            "mog2, knn: a pixel is a shadow when it is between this share of the background's "
+            "brightness and the background's (OpenCV's tau, default 0.5; higher: only light "
+            "shadows, so dark clothes on a light ground stay foreground)",
+            min=0.0, max=1.0,
+        ),
+        Param(
+            "colour",
+            bool,
+            False,
+            "mog2, knn: model the colour image, not the grey one (a colour input only)",
+        ),
+        Param(
+            "max_pixels",
+            int,
+            0,
+            "make the foreground on the frame shrunk to at most this many pixels (0: full "
+            "resolution); cost falls with it, targets must stay several pixels across",
+            min=0, max=MAX_FRAME_PIXELS,
         ),
     )
     provides = _SEGMENTS
@@ -175,21 +225,41 @@ class Background(Stage):
         self._sum: np.ndarray | None = None
         self._seen = 0
         self._background: np.ndarray | None = None
-        self._mog2: cv2.BackgroundSubtractorMOG2 | None = None
-        if self.method == "mog2":
-            self._mog2 = cv2.createBackgroundSubtractorMOG2(
-                history=self.history, varThreshold=self.var_threshold, detectShadows=False
-            )
-            grey = _whole_grey_frame(ctx)
-            self._mog2.apply(grey)  # the first frame only starts the model
-            ctx.likelihood = np.zeros_like(grey)  # nothing detected yet
+        self._model: cv2.BackgroundSubtractor | None = None
+        frame = ctx.frame
+        pixels = frame.width * frame.height
+        shrink = math.sqrt(self.max_pixels / pixels) if 0 < self.max_pixels < pixels else 1.0
+        self._size = ((frame.width, frame.height) if shrink == 1.0 else  # even: I420 halves it
+                      (max(2, 2 * round(frame.width * shrink / 2)),
+                       max(2, 2 * round(frame.height * shrink / 2))))
+        self._kernels = [
+            (operation, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+            for size, operation in ((self.open, cv2.MORPH_OPEN), (self.close, cv2.MORPH_CLOSE))
+            if (k := max(1, round(size * self._size[0] / frame.width))) > 1
+        ]
+        if self.method == "mean":
+            self.step(ctx)
             return
-        self.step(ctx)
+        if self.method == "mog2":
+            model = cv2.createBackgroundSubtractorMOG2(
+                history=self.history, varThreshold=self.var_threshold,
+                detectShadows=self.shadows)
+        else:
+            model = cv2.createBackgroundSubtractorKNN(
+                history=self.history, dist2Threshold=self.dist2_threshold,
+                detectShadows=self.shadows)
+        model.setShadowThreshold(self.shadow_ratio)
+        self._model = model
+        grey, image = self._images(ctx)
+        model.apply(image)  # the first frame only starts the model
+        ctx.likelihood = np.zeros_like(grey)  # nothing detected yet
 
     def step(self, ctx: TrackContext) -> None:
-        grey = _whole_grey_frame(ctx)
-        if self._mog2 is not None:
-            mask = self._mog2.apply(grey)
+        grey, image = self._images(ctx)
+        if self._model is not None:
+            mask = self._model.apply(image)
+            if self.shadows:  # shadows are 127, the foreground 255
+                mask = cv2.threshold(mask, 127, 255, cv2.THRESH_BINARY)[1]
         elif self._background is None:
             self._learn(grey)
             ctx.likelihood = np.zeros_like(grey)  # nothing detected while learning
@@ -197,11 +267,24 @@ class Background(Stage):
         else:
             difference = cv2.absdiff(grey, self._background)
             mask = _foreground_at_least(difference, self.threshold)  # S4 eq. 2
-        for size, operation in ((self.open, cv2.MORPH_OPEN), (self.close, cv2.MORPH_CLOSE)):
-            if size > 1:
-                kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
-                mask = cv2.morphologyEx(mask, operation, kernel)
+        for operation, kernel in self._kernels:
+            mask = cv2.morphologyEx(mask, operation, kernel)
         ctx.likelihood = mask
+
+    def _images(self, ctx: TrackContext) -> tuple[np.ndarray, np.ndarray]:
+        """This frame's grey image (also set as ``ctx.feature``) and the image the model
+        learns (the grey one, or BGR with ``colour``), both at the working size."""
+        frame = ctx.frame
+        if self._size == (frame.width, frame.height):
+            grey = _whole_grey_frame(ctx)
+            colour = frame.bgr() if self.colour and self.method != "mean" else None
+        else:
+            colour = (frame.bgr_resized(*self._size) if self.colour and self.method != "mean"
+                      else None)
+            grey = (cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY) if colour is not None
+                    else cv2.resize(frame.gray(), self._size, interpolation=cv2.INTER_AREA))
+            _whole_grey_frame(ctx, grey)
+        return grey, grey if colour is None else colour
 
     def _learn(self, grey: np.ndarray) -> None:
         """Add one frame to the mean background (S4 eq. 1); finish it after ``frames`` frames."""
@@ -325,7 +408,9 @@ class Blobs(Stage):
     8-connected components of ``ctx.likelihood`` (non-zero = foreground) with ``min_area`` <=
     area <= ``max_area`` pixels; at most ``max_blobs`` of them, the largest, so a cluttered frame
     costs a bounded amount downstream. Only the parts of the frame that hold foreground are
-    labelled (see :func:`foreground_regions`). Publishes the candidates' mean grey for
+    labelled (see :func:`foreground_regions`). A foreground made at a reduced resolution
+    (``ctx.feature_scale`` > 1) is mapped back: boxes, centroids and areas are in frame
+    pixels. Publishes the candidates' mean grey for
     ``threshold``'s next frame (S3 item 1). Detections are ordered by their box's top edge, then
     its left edge.
     """
@@ -353,16 +438,18 @@ class Blobs(Stage):
         ctx.candidate_grey = None
         assert ctx.likelihood is not None and ctx.window is not None and ctx.feature is not None
         found = []  # (area, part's x, part's y, part's labels, label, stats row, centroid)
+        scale = ctx.feature_scale
+        pixel_area = scale * scale
         for px, py, part in foreground_regions(ctx.likelihood):
             count, labels, stats, centres = cv2.connectedComponentsWithStats(
                 part, connectivity=8, ltype=cv2.CV_32S
             )
-            areas = stats[1:count, cv2.CC_STAT_AREA]
+            areas = stats[1:count, cv2.CC_STAT_AREA] * pixel_area
             keep = areas >= self.min_area
             if self.max_area:
                 keep &= areas <= self.max_area
             for label in np.flatnonzero(keep) + 1:
-                found.append((int(areas[label - 1]), px, py, labels, label, stats[label],
+                found.append((float(areas[label - 1]), px, py, labels, label, stats[label],
                               centres[label]))
         if len(found) > self.max_blobs:
             found = sorted(found, key=lambda f: -f[0])[: self.max_blobs]
@@ -371,15 +458,13 @@ class Blobs(Stage):
         for area, px, py, labels, label, (x, y, w, h, _), (cx, cy) in found:
             inside = labels[y : y + h, x : x + w] == label
             grey = ctx.feature[py + y : py + y + h, px + x : px + x + w][inside].mean()
-            blobs.append(
-                Detection(
-                    Box(float(px + x + x0), float(py + y + y0), float(w), float(h)),
-                    float(px + cx + x0),
-                    float(py + cy + y0),
-                    float(area),
-                    float(grey),
-                )
-            )
+            if scale != 1.0:  # pixel j of the reduced image covers [j s, (j + 1) s)
+                box = Box((px + x) * scale + x0, (py + y) * scale + y0, w * scale, h * scale)
+                cx, cy = (px + cx + 0.5) * scale - 0.5, (py + cy + 0.5) * scale - 0.5
+            else:
+                box = Box(float(px + x + x0), float(py + y + y0), float(w), float(h))
+                cx, cy = px + cx, py + cy
+            blobs.append(Detection(box, float(cx + x0), float(cy + y0), area, float(grey)))
         blobs.sort(key=lambda d: (d.box.y, d.box.x))
         ctx.detections.extend(blobs)
         ctx.detections.sort(key=lambda d: (d.box.y, d.box.x))

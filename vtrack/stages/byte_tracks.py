@@ -1,0 +1,249 @@
+"""Many targets through missed and false detections: ``byte_tracks``.
+
+The association of ByteTrack (Zhang et al., "ByteTrack: Multi-Object Tracking by Associating
+Every Detection Box", ECCV 2022) over a Kalman filter per track with the project's motion
+models (:data:`vtrack.filters.MOTION_MODELS`, on the box centre; the size is smoothed apart):
+
+1. every track's filter predicts this frame; its predicted box is the predicted centre with
+   its smoothed size;
+2. **first pass**: detections scoring at least ``high`` against the confirmed tracks (measured
+   or coasting), by an optimal assignment (``scipy.optimize.linear_sum_assignment``) on
+   ``1 - IoU`` of predicted and detected boxes. A pair may match only inside the motion gate
+   (squared Mahalanobis distance of the detected centre from the predicted one, under the
+   filter's innovation covariance, at most ``gate``) and with IoU >= ``iou``; a gated pair
+   without that overlap (small or fast targets) may still match at a cost above every
+   overlapping pair's, ``1 + d^2 / gate``;
+3. **second pass** (ByteTrack's): detections scoring between ``low`` and ``high`` (a person
+   half hidden, a blob cut by the background model) against the confirmed tracks left, with
+   IoU >= ``low_iou``: they continue tracks, never start one;
+4. tentative tracks against the high-score detections left, as in 2;
+5. every high-score detection still left starts a tentative track.
+
+Life of a track: tentative -> confirmed after ``confirm`` measured frames (a tentative track
+missing a frame is deleted) -> coasting while unmeasured (it keeps its identity through short
+occlusions and is matched again as in 2, its gate widening with its uncertainty) -> deleted
+after more than ``max_coast`` frames in a row without a measurement, or once its box has left
+the frame.
+
+The measurement noise of a detection grows with its size (``noise`` x the square root of its
+box area, in pixels, as DeepSORT scales it by height): a person's centre from background
+subtraction is off by several pixels, a small hot spot's by one.
+
+Output (``ctx.tracks``): every track; ``confirmed`` (confirmed and measured this frame: written
+to ``tracks.csv`` and drawn), ``coasting`` or ``tentative``; the box is the filtered centre
+with the smoothed size, the confidence the score of its last detection. Ids start at 1, one per
+track created, never reused. ``ctx.target_shape``: the median aspect and area of the boxes
+confirmed tracks were measured with (the last ``SHAPE_SAMPLES``), for ``group_blobs``.
+Work per frame: ``O(T M)`` for ``T`` tracks and ``M`` detections, and an assignment.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_model
+from vtrack.geometry import Box
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TargetShape, Track, TrackContext, register
+from vtrack.stages.detect import Detection, track_state
+
+#: Boxes of confirmed tracks remembered for the learnt shape (``ctx.target_shape``).
+SHAPE_SAMPLES = 500
+#: The cost of a pair that may not match (above any allowed pair's: at most 1 + 1).
+_FORBIDDEN = 1e6
+
+
+@dataclass(eq=False)
+class _Track:
+    id: int
+    state: GaussianState
+    size: tuple[float, float]  # smoothed width, height
+    score: float  # of the last detection it was measured with
+    hits: int = 1  # frames with a measurement
+    misses: int = 0  # frames in a row without one
+    confirmed: bool = False
+
+
+def iou_matrix(a: list[Box], b: list[Box]) -> np.ndarray:
+    """IoU of every box of ``a`` with every box of ``b``: ``(len(a), len(b))``."""
+    if not a or not b:
+        return np.zeros((len(a), len(b)))
+    p = np.array(a, float).reshape(-1, 1, 4)
+    q = np.array(b, float).reshape(1, -1, 4)
+    w = np.minimum(p[..., 0] + p[..., 2], q[..., 0] + q[..., 2]) - np.maximum(p[..., 0],
+                                                                             q[..., 0])
+    h = np.minimum(p[..., 1] + p[..., 3], q[..., 1] + q[..., 3]) - np.maximum(p[..., 1],
+                                                                             q[..., 1])
+    inter = np.clip(w, 0, None) * np.clip(h, 0, None)
+    union = p[..., 2] * p[..., 3] + q[..., 2] * q[..., 3] - inter
+    return np.where(union > 0, inter / np.where(union > 0, union, 1), 0.0)
+
+
+def assign(cost: np.ndarray) -> list[tuple[int, int]]:
+    """The minimum-cost assignment of rows to columns without forbidden pairs (cost >=
+    ``_FORBIDDEN``)."""
+    if cost.size == 0:
+        return []
+    rows, cols = linear_sum_assignment(cost)
+    return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] < _FORBIDDEN]
+
+
+@register
+class ByteTracks(Stage):
+    """ByteTrack's two-pass association over a Kalman filter per track (see the module
+    docstring)."""
+
+    name = "byte_tracks"
+    summary = ("many targets: a Kalman filter per track, IoU + motion-gated optimal matching, "
+               "ByteTrack's second pass over low-score detections")
+    params = (
+        Param("model", str, "cv",
+              "motion model of every track's centre: cv = constant velocity (S0), ca = "
+              "constant acceleration (S2), gravity = S4's (with g = 0)",
+              choices=tuple(MOTION_MODELS)),
+        Param("q", float, 1.0, "process noise Q = q I, pixels^2 per frame", min=0.0, max=1e6),
+        Param("noise", float, 0.05,
+              "measurement noise: a detected centre's standard deviation as a share of the "
+              "square root of its box area", min=1e-4, max=10.0),
+        Param("p0", float, 100.0, "initial covariance of a new track's state, P0 = p0 I",
+              min=0.0, max=1e6),
+        Param("high", float, 0.5,
+              "detections scoring at least this are matched first and may start tracks",
+              min=0.0, max=1.0),
+        Param("low", float, 0.1,
+              "detections scoring from this up to `high` only continue confirmed tracks "
+              "(ByteTrack's second pass); lower ones are ignored", min=0.0, max=1.0),
+        Param("iou", float, 0.2,
+              "least IoU of a predicted and a detected box for a match of the first pass",
+              min=0.0, max=1.0),
+        Param("low_iou", float, 0.5,
+              "least IoU for a match of the second pass (low-score detections)",
+              min=0.0, max=1.0),
+        Param("gate", float, 9.21,
+              "largest squared Mahalanobis distance of a detected centre from a predicted one "
+              "(9.21: 99% of chi-square with 2 degrees of freedom)", min=0.1, max=1e6),
+        Param("confirm", int, 3, "measured frames after which a track is confirmed",
+              min=1, max=1000),
+        Param("max_coast", int, 30,
+              "a confirmed track unmeasured for more frames in a row than this is deleted",
+              min=0, max=100000),
+        Param("size_smoothing", float, 0.3,
+              "weight of a new measurement in a track's smoothed width and height "
+              "(1: the last detection's)", min=0.0, max=1.0),
+    )
+    requires = frozenset({"detections"})
+    provides = frozenset({"tracks", "target_shape"})
+    multi_target = True
+    needs_init_box = False
+
+    def start(self, ctx: TrackContext) -> None:
+        """Forget any previous run (no track, nothing learnt), then track this frame."""
+        self._model: MotionModel = motion_model(self.model, self.q, 1.0, self.p0, g=0.0)
+        self._tracks: list[_Track] = []
+        self._ids = itertools.count(1)
+        self._aspects: deque[float] = deque(maxlen=SHAPE_SAMPLES)
+        self._areas: deque[float] = deque(maxlen=SHAPE_SAMPLES)
+        ctx.target_shape = None
+        self.step(ctx)
+
+    def step(self, ctx: TrackContext) -> None:
+        model = self._model
+        for track in self._tracks:
+            track.state = model.predict(track.state, 1.0)
+        detections: list[Detection] = ctx.detections
+        high = [i for i, d in enumerate(detections) if d.score >= self.high]
+        low = [i for i, d in enumerate(detections) if self.low <= d.score < self.high]
+        confirmed = [t for t in self._tracks if t.confirmed]
+        tentative = [t for t in self._tracks if not t.confirmed]
+        matched: dict[int, int] = {}  # id(track) -> detection index
+        for tracks, candidates, least, gated in (
+            (confirmed, high, self.iou, True),
+            (confirmed, low, self.low_iou, False),
+            (tentative, high, self.iou, True),
+        ):
+            tracks = [t for t in tracks if id(t) not in matched]
+            candidates = [i for i in candidates if i not in matched.values()]
+            cost = self._cost(tracks, [detections[i] for i in candidates], least, gated)
+            for row, col in assign(cost):
+                matched[id(tracks[row])] = candidates[col]
+        kept = []
+        for track in self._tracks:
+            index = matched.get(id(track))
+            if index is not None:
+                self._update(track, detections[index])
+            else:
+                track.misses += 1
+            coasting_on = track.confirmed and track.misses <= self.max_coast
+            box = self._box(track)
+            if (index is not None or coasting_on) and not box.outside(ctx.frame.width,
+                                                                      ctx.frame.height):
+                kept.append(track)
+        used = set(matched.values())
+        updated = {id(t) for t in kept if id(t) in matched}
+        for index in high:
+            if index not in used:
+                track = self._start(detections[index])
+                kept.append(track)
+                updated.add(id(track))
+        self._tracks = kept
+        if self._areas:
+            ctx.target_shape = TargetShape(float(np.median(self._aspects)),
+                                           float(np.median(self._areas)), len(self._areas))
+        ctx.tracks = [Track(t.id, self._box(t), t.score, track_state(t.confirmed,
+                                                                     id(t) in updated))
+                      for t in self._tracks]
+
+    def _box(self, track: _Track) -> Box:
+        return Box.from_center(*self._model.position(track.state), *track.size)
+
+    def _noise(self, box: Box) -> np.ndarray:
+        """The measurement noise covariance of a detection (or predicted box) ``box``."""
+        std = max(1.0, self.noise * float(np.sqrt(box.area)))
+        return np.eye(2) * std * std
+
+    def _cost(self, tracks: list[_Track], detections: list[Detection], least: float,
+              gated: bool) -> np.ndarray:
+        """Cost of each (track, detection) pair: ``1 - IoU`` when the pair is inside the motion
+        gate with IoU >= ``least``; with ``gated``, ``1 + d^2 / gate`` for a pair inside the
+        gate with less overlap; ``_FORBIDDEN`` otherwise."""
+        if not tracks or not detections:
+            return np.zeros((len(tracks), len(detections)))
+        predicted = [self._box(t) for t in tracks]
+        overlap = iou_matrix(predicted, [d.box for d in detections])
+        centres = np.array([(d.box.cx, d.box.cy) for d in detections], float)
+        distance = np.empty_like(overlap)
+        H = self._model.H
+        for row, (track, box) in enumerate(zip(tracks, predicted, strict=True)):
+            S = H @ track.state.P @ H.T + self._noise(box)
+            offset = centres - (H @ track.state.x)
+            distance[row] = np.einsum("ij,jk,ik->i", offset, np.linalg.inv(S), offset)
+        inside = distance <= self.gate
+        cost = np.full(overlap.shape, _FORBIDDEN)
+        if gated:
+            cost = np.where(inside, 1.0 + distance / self.gate, cost)
+        return np.where(inside & (overlap >= least) & (overlap > 0), 1.0 - overlap, cost)
+
+    def _update(self, track: _Track, detection: Detection) -> None:
+        box = detection.box
+        track.state = self._model.update(track.state, (box.cx, box.cy), self._noise(box))
+        a = self.size_smoothing
+        track.size = (track.size[0] + a * (box.w - track.size[0]),
+                      track.size[1] + a * (box.h - track.size[1]))
+        track.score = detection.score
+        track.hits += 1
+        track.misses = 0
+        track.confirmed = track.confirmed or track.hits >= self.confirm
+        if track.confirmed and detection.score >= self.high:
+            self._aspects.append(box.h / box.w)
+            self._areas.append(box.area)
+
+    def _start(self, detection: Detection) -> _Track:
+        box = detection.box
+        state = self._model.initiate([(box.cx, box.cy)] * self._model.points, 1.0)
+        return _Track(next(self._ids), state, (box.w, box.h), detection.score,
+                      confirmed=self.confirm <= 1)

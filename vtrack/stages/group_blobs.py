@@ -1,0 +1,202 @@
+"""Blobs grouped into target-sized detections, each with a score: ``group_blobs``.
+
+Background subtraction on real footage does not give one blob per target: a person in clothes
+the colour of the ground falls apart into head, torso and legs, and two people walking side by
+side are one blob. ``group_blobs`` turns ``blobs``' connected components into one detection per
+target, using what a target of the scene looks like - its usual height/width ratio (the
+``aspect``, given, then learnt from the tracker's confirmed targets) and, once learnt, its
+usual area:
+
+1. **merge**: two detections one above the other (their columns overlap by at least half the
+   narrower one's width) whose vertical gap is at most ``merge_gap`` of their joint height are
+   one target when the joint box is not taller than ``1.5 aspect`` widths (fragments of one
+   person; repeated until nothing merges);
+2. **split**: a detection wider than ``split`` targets of its height (``w > split h /
+   aspect``) holds ``n = round(w aspect / h)`` targets side by side; it is cut at the columns
+   of least foreground near its ``n``-ths where these are valleys (at most ``VALLEY`` of the
+   fullest column: a solid blob is not cut), and each part gets the box of its own foreground;
+3. **score** (0..1): how target-like each detection is, the product of its fill (foreground
+   share of its box, full at 0.5 and above), its shape (1 at the usual aspect, 0.5 at a factor
+   of two from it) and, once an area is learnt, its size (full from half the usual area). A
+   detection whose shape is more than ``max_shape`` times off, or smaller than ``min_share``
+   of the usual area, is dropped.
+
+A multi-target tracker after this stage (``byte_tracks``) matches high-score detections first
+and uses low-score ones only to continue existing tracks (ByteTrack's second pass).
+
+What is learnt comes from ``ctx.target_shape`` (the tracker's median over the boxes its
+confirmed tracks were measured with, from the previous frame); the given ``aspect`` counts as
+``PRIOR_SAMPLES`` samples, so it gives way as the scene shows its targets. Work per frame: at
+most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs (``blobs.max_blobs`` bounds
+``M``), and one column profile per blob that is split.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from vtrack.geometry import Box
+from vtrack.params import Param
+from vtrack.stages.base import Stage, TargetShape, TrackContext, register
+from vtrack.stages.detect import Detection
+
+#: The given aspect weighs as many measured boxes as this when mixed with the learnt one.
+PRIOR_SAMPLES = 50
+#: A detection's fill (foreground share of its box) scores 1 from this value on ...
+FULL_FILL = 0.5
+#: ... and its size from this share of the usual area on.
+FULL_SIZE = 0.5
+#: A blob is cut only at a column holding at most this share of its fullest column's foreground.
+VALLEY = 0.9
+
+
+def usual_shape(aspect: float, learnt: TargetShape | None) -> tuple[float, float | None]:
+    """The aspect to group with (the given ``aspect`` mixed with the learnt one, by their
+    weights) and the usual area (None before anything was learnt)."""
+    if learnt is None or learnt.samples == 0:
+        return aspect, None
+    weight = learnt.samples / (learnt.samples + PRIOR_SAMPLES)
+    mixed = math.exp((1 - weight) * math.log(aspect) + weight * math.log(learnt.aspect))
+    return mixed, learnt.area
+
+
+def shape_score(box: Box, aspect: float) -> float:
+    """1 when ``box``'s height/width is ``aspect``, 0.5 at a factor of two either way."""
+    return 2.0 ** -abs(math.log2(box.h / box.w / aspect))
+
+
+def _merged(a: Detection, b: Detection) -> Detection:
+    x0, y0 = min(a.box.x, b.box.x), min(a.box.y, b.box.y)
+    x1 = max(a.box.x + a.box.w, b.box.x + b.box.w)
+    y1 = max(a.box.y + a.box.h, b.box.y + b.box.h)
+    box = Box(x0, y0, x1 - x0, y1 - y0)
+    return Detection(box, box.cx, box.cy, a.area + b.area, math.nan)
+
+
+def stacked_pairs(boxes: list[Box], gap: float, aspect: float) -> np.ndarray:
+    """Which pairs of ``boxes`` are fragments of one target one above the other: their columns
+    overlap by half the narrower's width, the vertical gap between them is at most ``gap`` of
+    their joint height and the joint box is at most ``1.5 aspect`` widths tall. A symmetric
+    ``(n, n)`` bool matrix, False on the diagonal."""
+    b = np.array(boxes, float).reshape(-1, 4)
+    x0, y0, x1, y1 = b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
+    across = np.minimum.outer(x1, x1) - np.maximum.outer(x0, x0)
+    between = np.maximum.outer(y0, y0) - np.minimum.outer(y1, y1)
+    tall = np.maximum.outer(y1, y1) - np.minimum.outer(y0, y0)
+    wide = np.maximum.outer(x1, x1) - np.minimum.outer(x0, x0)
+    pairs = ((across >= 0.5 * np.minimum.outer(b[:, 2], b[:, 2])) & (between <= gap * tall)
+             & (tall <= 1.5 * aspect * wide))
+    np.fill_diagonal(pairs, False)
+    return pairs
+
+
+def merge_fragments(detections: list[Detection], gap: float, aspect: float) -> list[Detection]:
+    """Detections with stacked fragments (:func:`stacked_pairs`) merged, one pair at a time
+    until no pair is left (at most ``M`` rounds of ``M^2`` NumPy comparisons)."""
+    found = list(detections)
+    while len(found) > 1:
+        pairs = np.argwhere(np.triu(stacked_pairs([d.box for d in found], gap, aspect)))
+        if not len(pairs):
+            break
+        i, j = (int(k) for k in pairs[0])
+        found[i] = _merged(found[i], found[j])
+        del found[j]
+    return found
+
+
+def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
+                       scale: float) -> list[Detection]:
+    """``detection`` cut into up to ``parts`` side by side, at the columns of least foreground
+    of ``mask`` (``scale`` frame pixels per mask pixel) within a quarter part of its equal
+    divisions, where that column holds at most ``VALLEY`` of the fullest column's foreground
+    (a solid blob is not cut); each part gets the box and the pixel count of its own
+    foreground."""
+    b = detection.box
+    x0, y0 = max(0, math.floor(b.x / scale)), max(0, math.floor(b.y / scale))
+    x1 = min(mask.shape[1], math.ceil((b.x + b.w) / scale))
+    y1 = min(mask.shape[0], math.ceil((b.y + b.h) / scale))
+    inside = mask[y0:y1, x0:x1] > 0
+    if inside.shape[1] < 2 * parts:
+        return [detection]
+    profile = inside.sum(axis=0)
+    width = inside.shape[1] / parts
+    cuts = [0]
+    for k in range(1, parts):
+        lo, hi = round(k * width - width / 4), round(k * width + width / 4) + 1
+        cut = lo + int(np.argmin(profile[lo:hi]))
+        if profile[cut] <= VALLEY * profile.max():
+            cuts.append(cut)
+    if len(cuts) == 1:
+        return [detection]
+    cuts.append(inside.shape[1])
+    pieces = []
+    for c0, c1 in zip(cuts[:-1], cuts[1:], strict=True):
+        rows = np.flatnonzero(inside[:, c0:c1].any(axis=1))
+        if c1 <= c0 or rows.size == 0:
+            continue
+        box = Box((x0 + c0) * scale, (y0 + rows[0]) * scale, (c1 - c0) * scale,
+                  (rows[-1] - rows[0] + 1) * scale)
+        area = float(inside[rows[0]:rows[-1] + 1, c0:c1].sum()) * scale * scale
+        pieces.append(Detection(box, box.cx, box.cy, area, math.nan))
+    return pieces
+
+
+@register
+class GroupBlobs(Stage):
+    """Blobs -> one scored detection per target: fragments merged, side-by-side targets split,
+    shapes unlike the scene's targets dropped (see the module docstring)."""
+
+    name = "group_blobs"
+    summary = ("blobs -> target-sized detections: fragments merged, side-by-side targets "
+               "split, each scored 0..1")
+    params = (
+        Param("aspect", float, 2.5,
+              "usual height / width of a target before the scene teaches it (a walking person "
+              "~2.5; 1 for round or square targets)", min=0.05, max=20.0),
+        Param("learn", bool, True,
+              "learn the aspect and usual area from the tracker's confirmed targets "
+              "(ctx.target_shape); false: only the given aspect"),
+        Param("merge_gap", float, 0.3,
+              "fragments one above the other are merged when their gap is at most this share "
+              "of their joint height (0: touching only)", min=0.0, max=1.0),
+        Param("split", float, 1.6,
+              "a detection wider than this many targets of its height is split into targets "
+              "side by side (0: never split)", min=0.0, max=100.0),
+        Param("max_shape", float, 3.0,
+              "detections whose height/width is more than this factor from the usual aspect "
+              "are dropped", min=1.0, max=100.0),
+        Param("min_share", float, 0.15,
+              "once an area is learnt, detections smaller than this share of it are dropped",
+              min=0.0, max=1.0),
+    )
+    requires = frozenset({"detections", "likelihood", "feature_scale"})
+    provides = frozenset({"detections"})
+    needs_init_box = False
+
+    def step(self, ctx: TrackContext) -> None:
+        aspect, area = usual_shape(self.aspect, ctx.target_shape if self.learn else None)
+        found = merge_fragments(ctx.detections, self.merge_gap, aspect)
+        grouped: list[Detection] = []
+        for detection in found:
+            b = detection.box
+            parts = round(b.w * aspect / b.h)
+            if self.split and b.w * aspect > self.split * b.h and parts >= 2:
+                assert ctx.likelihood is not None
+                grouped.extend(split_side_by_side(detection, parts, ctx.likelihood,
+                                                  ctx.feature_scale))
+            else:
+                grouped.append(detection)
+        scored = []
+        for detection in grouped:
+            b = detection.box
+            shape = shape_score(b, aspect)
+            size = 1.0 if area is None else min(1.0, b.area / (FULL_SIZE * area))
+            small = area is not None and b.area < self.min_share * area
+            if shape < 1.0 / self.max_shape or small:
+                continue
+            fill = min(1.0, detection.area / b.area / FULL_FILL)
+            scored.append(replace(detection, score=fill * shape * size))
+        ctx.detections = sorted(scored, key=lambda d: (d.box.y, d.box.x))
