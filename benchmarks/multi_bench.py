@@ -28,10 +28,11 @@ from typing import Any
 import cv2
 import numpy as np
 from common import data_dir
+from scipy.optimize import linear_sum_assignment
 
 from vtrack.config import Config, load_config, parse_config
 from vtrack.evaluate.groundtruth import read_mot, read_mot_detections
-from vtrack.evaluate.mot import MATCH_IOU, evaluate_mot, linear_assignment
+from vtrack.evaluate.mot import MATCH_IOU, evaluate_mot
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import Box, iou
 from vtrack.pipeline import FrameResult, Pipeline
@@ -139,7 +140,7 @@ def detection_scores(gt: dict[int, list[tuple[int, Box]]], found: dict[int, list
         total_found += len(boxes)
         if truth and boxes:
             overlap = np.array([[iou(t, b) for b in boxes] for t in truth])
-            rows, cols = linear_assignment(-overlap)
+            rows, cols = linear_sum_assignment(-overlap)
             hits += int((overlap[rows, cols] >= MATCH_IOU).sum())
     return hits / max(total_found, 1), hits / max(total_gt, 1), total_found
 

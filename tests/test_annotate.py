@@ -213,3 +213,27 @@ def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, t
             assert near.sum() >= 6, colour
     rows = [f[legend.y0:legend.y0 + legend.row, :pw].astype(int) for f in (frames[2], frames[12])]
     assert np.abs(rows[0] - rows[1]).max() > 120  # "frame 2" vs "frame 12": white vs black
+
+
+def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
+    """No single-target TRACKING caption: the caption counts the confirmed tracks, the legend
+    has the per-id colours, each track is drawn in its id's colour, ground truth thin green."""
+    tracks = [Track(1, Box(40, 60, 30, 70), 0.9, TrackStatus.CONFIRMED),
+              Track(2, Box(200, 60, 30, 70), 0.9, TrackStatus.CONFIRMED),
+              Track(3, Box(120, 60, 30, 70), 0.9, TrackStatus.COASTING)]
+    truth = {0: [(7, Box(20, 150, 40, 40))]}
+    annotator = Annotator(W, H, multi_target=True, gt_tracks=truth)
+    assert annotator.legend is not None and annotator.legend.rows == ("track id", "ground truth")
+    buf = blank()
+    annotator.draw(buf, result(box=None, tracks=tracks))
+    y, u, v = planes(buf)
+    for track in tracks[:2]:
+        colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
+        assert y[int(track.box.y) + 35, int(track.box.x)] == colour.y
+    assert (y[95, 120:150] == GREY).all()  # the coasting track is not drawn
+    assert y[170, 20] == GROUND_TRUTH.y
+    single = blank()
+    Annotator(W, H).draw(single, result(box=None))
+    caption = (slice(0, 14), slice(0, 80))
+    assert not np.array_equal(y[caption], planes(single)[0][caption])  # "2 TRACKS", not TRACKING
+    assert Annotator(W, H, multi_target=True).legend.rows == ("track id",)

@@ -12,6 +12,10 @@ state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no
 bottom-left the frame number (0-based, ``track.csv``'s ``frame``) above a legend of the colours.
 The prediction (where the next search starts, single target) is a thin box.
 
+A multi-target run (``multi_target``) has no single target: its caption counts the tracks shown
+(``3 TRACKS``), its legend explains the per-id colours (and the ground truth, thin green boxes
+of every object when given), and no single-target box, trail or prediction is drawn.
+
 The legend is rendered once per video into a small I420 patch and copied into each frame; only
 the frame number is drawn per frame, on the patch's black top row (luma only: white on black
 has neutral chroma).
@@ -21,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import NamedTuple
 
 import cv2
@@ -61,13 +65,11 @@ WINDOW = Yuv.from_bgr(*WINDOW_BGR)
 PARTICLES = Yuv.from_bgr(255, 0, 255)  # magenta
 PREDICTION = Yuv.from_bgr(*PREDICTION_BGR)
 CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
-TRACK_PALETTE = tuple(
-    Yuv.from_bgr(*bgr)
-    for bgr in (
-        (255, 128, 0), (0, 200, 255), (180, 0, 255), (0, 255, 128), (255, 0, 128),
-        (128, 255, 0), (0, 128, 255), (255, 255, 255), (160, 160, 255), (255, 160, 160),
-    )
+TRACK_PALETTE_BGR = (
+    (255, 128, 0), (0, 200, 255), (180, 0, 255), (0, 255, 128), (255, 0, 128),
+    (128, 255, 0), (0, 128, 255), (255, 255, 255), (160, 160, 255), (255, 160, 160),
 )
+TRACK_PALETTE = tuple(Yuv.from_bgr(*bgr) for bgr in TRACK_PALETTE_BGR)
 FONT = cv2.FONT_HERSHEY_SIMPLEX
 #: Coordinates are clipped to this far outside the frame before drawing (cv2 needs int32).
 _MARGIN = 1 << 15
@@ -162,13 +164,19 @@ def _draw_overlay(canvas: Canvas, overlay: Overlay) -> None:
             raise TypeError(f"annotate: no drawing for overlay {overlay!r}")
 
 
+BGR = tuple[int, int, int]
 #: The legend's rows, top to bottom: what each colour means (README, "Outputs").
-LEGEND_ROWS: tuple[tuple[str, tuple[int, int, int]], ...] = (
-    ("box", TRACKED_BGR),
-    ("occluded", OCCLUDED_BGR),
-    ("prediction", PREDICTION_BGR),
-    ("search window", WINDOW_BGR),
-    ("ground truth", GROUND_TRUTH_BGR),
+LEGEND_ROWS: tuple[tuple[str, tuple[BGR, ...]], ...] = (
+    ("box", (TRACKED_BGR,)),
+    ("occluded", (OCCLUDED_BGR,)),
+    ("prediction", (PREDICTION_BGR,)),
+    ("search window", (WINDOW_BGR,)),
+    ("ground truth", (GROUND_TRUTH_BGR,)),
+)
+#: A multi-target run's legend rows (the swatch shows the first colours of the palette).
+MULTI_LEGEND_ROWS: tuple[tuple[str, tuple[BGR, ...]], ...] = (
+    ("track id", TRACK_PALETTE_BGR[:4]),
+    ("ground truth", (GROUND_TRUTH_BGR,)),
 )
 #: The legend is left out (the frame number stays) when it would be taller than this share
 #: of the frame: on tiny frames it would hide what it explains.
@@ -182,9 +190,10 @@ class Legend:
     :meth:`draw` copies them into a frame's planes and writes the frame number.
     """
 
-    def __init__(self, width: int, height: int, font_scale: float, ground_truth: bool) -> None:
+    def __init__(self, width: int, height: int, font_scale: float, ground_truth: bool,
+                 multi_target: bool = False) -> None:
         self.scale = max(0.3, font_scale * 0.6)
-        rows = [(label, bgr) for label, bgr in LEGEND_ROWS
+        rows = [(label, bgr) for label, bgr in (MULTI_LEGEND_ROWS if multi_target else LEGEND_ROWS)
                 if ground_truth or label != "ground truth"]
         (text_w, text_h), base = cv2.getTextSize("search window", FONT, self.scale, 1)
         self.row = text_h + base + 3
@@ -198,11 +207,14 @@ class Legend:
         pw, ph = min(pw, width - width % 2), min(ph, height - height % 2)
         self.y0 = _even(height - ph)  # the left edge: x = 0
         patch = np.zeros((ph, pw, 3), np.uint8)
-        for n, (label, bgr) in enumerate(rows, start=1):
+        for n, (label, colours) in enumerate(rows, start=1):
             mid = self.pad + n * self.row + self.row // 2
-            cv2.rectangle(patch, (self.pad, mid - 2), (self.pad + swatch, mid + 1), bgr, -1)
+            edges = np.linspace(self.pad, self.pad + swatch, len(colours) + 1).round().astype(int)
+            for x0, x1, bgr in zip(edges[:-1], edges[1:], colours, strict=True):
+                cv2.rectangle(patch, (int(x0), mid - 2), (int(x1), mid + 1), bgr, -1)
             cv2.putText(patch, label, (2 * self.pad + swatch, mid + text_h // 2), FONT,
-                        self.scale, bgr, 1, cv2.LINE_AA)
+                        self.scale, colours[0] if len(colours) == 1 else (235, 235, 235), 1,
+                        cv2.LINE_AA)
         i420 = cv2.cvtColor(patch, cv2.COLOR_BGR2YUV_I420)
         self.y, self.u, self.v = (p.copy() for p in i420_planes(i420, pw, ph))
         self.text_h = text_h
@@ -228,6 +240,8 @@ class Annotator:
 
     Keeps the trajectory (last ``trail`` centres) and per-track trails between calls, so call
     ``draw`` once per frame, in order. ``gt`` is the ground truth by frame index (None = none).
+    ``multi_target``: the results are a multi-target tracker's (caption, legend and drawing as
+    the module says); ``gt_tracks`` its ground truth, ``{frame: [(id, box), ...]}``.
     ``width``/``height`` set line widths and text size; the planes' size comes from the buffer.
     """
 
@@ -238,6 +252,8 @@ class Annotator:
         gt: Sequence[Box | None] | None = None,
         trail: int = 30,
         legend: bool = True,
+        multi_target: bool = False,
+        gt_tracks: Mapping[int, Sequence[tuple[int, Box]]] | None = None,
     ) -> None:
         scale = max(width, height * 16 / 9) / 1280.0  # 1.0 at 720p, 1.5 at 1080p
         self.thickness = max(1, round(2 * scale))
@@ -247,11 +263,18 @@ class Annotator:
         self.track_trail = max(2, trail // 2)
         self._tracks: dict[int, deque[tuple[int, int]]] = {}
         self._last_seen: dict[int, int] = {}
-        self.legend = Legend(width, height, self.font_scale, gt is not None) if legend else None
+        self.multi_target = multi_target
+        self.gt_tracks = gt_tracks
+        truth = gt_tracks is not None if multi_target else gt is not None
+        self.legend = (Legend(width, height, self.font_scale, truth, multi_target) if legend
+                       else None)
 
     def draw(self, i420_buffer: np.ndarray, result: FrameResult) -> None:
         """Draw ``result`` into ``i420_buffer`` (an ``(h * 3 // 2, w)`` I420 array) in place."""
         canvas = Canvas(i420_buffer)
+        if self.multi_target:
+            self._draw_multi(canvas, result)
+            return
         t = self.thickness
         if self.gt is not None and result.index < len(self.gt):
             gt_box = self.gt[result.index]
@@ -270,7 +293,23 @@ class Annotator:
             canvas.rectangle(*_corners(box), colour, t)
             canvas.circle(_point(box.cx, box.cy), t + 1, colour)
         self._draw_tracks(canvas, result)
-        self._caption(canvas, result.state)
+        colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
+            result.state, TRACKED)
+        self._caption(canvas, result.state, colour, right=result.state == TrackState.LOST)
+        if self.legend is not None:
+            self.legend.draw(canvas, result.index)
+
+    def _draw_multi(self, canvas: Canvas, result: FrameResult) -> None:
+        """A multi-target frame: ground truth, the confirmed tracks, their count, the legend."""
+        if self.gt_tracks is not None:
+            for _, box in self.gt_tracks.get(result.index, ()):
+                if _drawable(box):
+                    canvas.rectangle(*_corners(box), GROUND_TRUTH, 1)
+        for overlay in result.overlays:
+            _draw_overlay(canvas, overlay)
+        self._draw_tracks(canvas, result)
+        shown = sum(t.state == TrackStatus.CONFIRMED and _drawable(t.box) for t in result.tracks)
+        self._caption(canvas, f"{shown} track" + ("" if shown == 1 else "s"), TRACKED)
         if self.legend is not None:
             self.legend.draw(canvas, result.index)
 
@@ -303,15 +342,13 @@ class Annotator:
         for track_id in stale:
             del self._tracks[track_id], self._last_seen[track_id]
 
-    def _caption(self, canvas: Canvas, state: str) -> None:
-        text = state.upper()
+    def _caption(self, canvas: Canvas, caption: str, colour: Yuv, right: bool = False) -> None:
+        """``caption`` in capitals on black, top-left (``right``: top-right)."""
+        text = caption.upper()
         t = self.thickness
         (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
         pad = 2 * t + 2
-        x0 = canvas.width - w - 2 * pad if state == TrackState.LOST else 0
-        colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
-            state, TRACKED
-        )
+        x0 = canvas.width - w - 2 * pad if right else 0
         canvas.rectangle((x0, 0), (x0 + w + 2 * pad, h + baseline + 2 * pad), CAPTION_BACKGROUND,
                          -1)
         canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, t)

@@ -377,7 +377,9 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
         except BaseException:
             writers.csv.abort()
             raise
-        writers.annotator = Annotator(info.width, info.height, gt=resolved.gt)
+        writers.annotator = Annotator(info.width, info.height, gt=resolved.gt,
+                                      multi_target=pipeline.multi_target,
+                                      gt_tracks=resolved.mot_gt)
     if request.stream is not None:
         try:
             writers.stream = StreamWriter(request.stream, pipeline.multi_target)

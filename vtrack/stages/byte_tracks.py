@@ -107,17 +107,18 @@ class ByteTracks(Stage):
               "constant acceleration (S2), gravity = S4's (with g = 0)",
               choices=tuple(MOTION_MODELS)),
         Param("q", float, 1.0, "process noise Q = q I, pixels^2 per frame", min=0.0, max=1e6),
-        Param("noise", float, 0.05,
+        Param("noise", float, 0.1,
               "measurement noise: a detected centre's standard deviation as a share of the "
               "square root of its box area", min=1e-4, max=10.0),
         Param("p0", float, 100.0, "initial covariance of a new track's state, P0 = p0 I",
               min=0.0, max=1e6),
         Param("high", float, 0.5,
-              "detections scoring at least this are matched first and may start tracks",
-              min=0.0, max=1.0),
+              "detections scoring at least this are matched first and may start tracks "
+              "(group_blobs scores 0..1; a det.txt's detector has its own scale)",
+              min=-1e6, max=1e6),
         Param("low", float, 0.1,
               "detections scoring from this up to `high` only continue confirmed tracks "
-              "(ByteTrack's second pass); lower ones are ignored", min=0.0, max=1.0),
+              "(ByteTrack's second pass); lower ones are ignored", min=-1e6, max=1e6),
         Param("iou", float, 0.2,
               "least IoU of a predicted and a detected box for a match of the first pass",
               min=0.0, max=1.0),

@@ -180,6 +180,15 @@ class Background(Stage):
             min=0.0, max=10000.0,
         ),
         Param(
+            "background_ratio",
+            float,
+            0.9,
+            "mog2: the background is the most frequent colours of a pixel making up this share "
+            "of its history (OpenCV's default 0.9); lower: a target that stays over a pixel for "
+            "more than 1 minus this of the history still is not learnt as background",
+            min=0.01, max=1.0,
+        ),
+        Param(
             "dist2_threshold",
             float,
             400.0,
@@ -249,6 +258,8 @@ class Background(Stage):
                 history=self.history, dist2Threshold=self.dist2_threshold,
                 detectShadows=self.shadows)
         model.setShadowThreshold(self.shadow_ratio)
+        if self.method == "mog2":
+            model.setBackgroundRatio(self.background_ratio)
         self._model = model
         grey, image = self._images(ctx)
         model.apply(image)  # the first frame only starts the model
