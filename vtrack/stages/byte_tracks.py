@@ -69,12 +69,11 @@ class _Track:
     confirmed: bool = False
 
 
-def iou_matrix(a: list[Box], b: list[Box]) -> np.ndarray:
-    """IoU of every box of ``a`` with every box of ``b``: ``(len(a), len(b))``."""
-    if not a or not b:
-        return np.zeros((len(a), len(b)))
-    p = np.array(a, float).reshape(-1, 1, 4)
-    q = np.array(b, float).reshape(1, -1, 4)
+def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """IoU of every box of ``a`` with every box of ``b`` (``(N, 4)`` and ``(M, 4)`` arrays of
+    x, y, w, h): ``(N, M)``."""
+    p = np.asarray(a, float).reshape(-1, 1, 4)
+    q = np.asarray(b, float).reshape(1, -1, 4)
     w = np.minimum(p[..., 0] + p[..., 2], q[..., 0] + q[..., 2]) - np.maximum(p[..., 0],
                                                                              q[..., 0])
     h = np.minimum(p[..., 1] + p[..., 3], q[..., 1] + q[..., 3]) - np.maximum(p[..., 1],
@@ -202,11 +201,6 @@ class ByteTracks(Stage):
     def _box(self, track: _Track) -> Box:
         return Box.from_center(*self._model.position(track.state), *track.size)
 
-    def _noise(self, box: Box) -> np.ndarray:
-        """The measurement noise covariance of a detection (or predicted box) ``box``."""
-        std = max(1.0, self.noise * float(np.sqrt(box.area)))
-        return np.eye(2) * std * std
-
     def _cost(self, tracks: list[_Track], detections: list[Detection], least: float,
               gated: bool) -> np.ndarray:
         """Cost of each (track, detection) pair: ``1 - IoU`` when the pair is inside the motion
@@ -214,24 +208,39 @@ class ByteTracks(Stage):
         gate with less overlap; ``_FORBIDDEN`` otherwise."""
         if not tracks or not detections:
             return np.zeros((len(tracks), len(detections)))
-        predicted = [self._box(t) for t in tracks]
-        overlap = iou_matrix(predicted, [d.box for d in detections])
-        centres = np.array([(d.box.cx, d.box.cy) for d in detections], float)
-        distance = np.empty_like(overlap)
         H = self._model.H
-        for row, (track, box) in enumerate(zip(tracks, predicted, strict=True)):
-            S = H @ track.state.P @ H.T + self._noise(box)
-            offset = centres - (H @ track.state.x)
-            distance[row] = np.einsum("ij,jk,ik->i", offset, np.linalg.inv(S), offset)
+        x = np.array([t.state.x for t in tracks])  # (T, n)
+        P = np.array([t.state.P for t in tracks])  # (T, n, n)
+        sizes = np.array([t.size for t in tracks])  # (T, 2)
+        predicted = x @ H.T  # (T, 2) centres
+        boxes = np.concatenate([predicted - sizes / 2, sizes], axis=1)
+        overlap = iou_matrix(boxes, np.array([d.box for d in detections], float))
+        # innovation covariance S = H P H^T + R per track, R from the predicted box's size
+        S = np.einsum("ij,tjk,lk->til", H, P, H)
+        S[:, 0, 0] += self._variance(sizes)
+        S[:, 1, 1] += self._variance(sizes)
+        a, b, c, d = S[:, 0, 0], S[:, 0, 1], S[:, 1, 0], S[:, 1, 1]
+        det = a * d - b * c
+        offset = (np.array([(q.box.cx, q.box.cy) for q in detections])[None, :, :]
+                  - predicted[:, None, :])  # (T, M, 2)
+        ox, oy = offset[..., 0], offset[..., 1]
+        distance = ((d[:, None] * ox - (b + c)[:, None] * oy) * ox
+                    + a[:, None] * oy * oy) / det[:, None]  # offset^T S^-1 offset
         inside = distance <= self.gate
         cost = np.full(overlap.shape, _FORBIDDEN)
         if gated:
             cost = np.where(inside, 1.0 + distance / self.gate, cost)
         return np.where(inside & (overlap >= least) & (overlap > 0), 1.0 - overlap, cost)
 
+    def _variance(self, sizes: np.ndarray) -> np.ndarray:
+        """Measurement variance of a detected centre for boxes of ``sizes`` ((N, 2) widths and
+        heights): ``(noise sqrt(w h))^2``, at least 1 pixel^2."""
+        return np.maximum(1.0, self.noise * np.sqrt(sizes[:, 0] * sizes[:, 1])) ** 2
+
     def _update(self, track: _Track, detection: Detection) -> None:
         box = detection.box
-        track.state = self._model.update(track.state, (box.cx, box.cy), self._noise(box))
+        variance = float(self._variance(np.array([[box.w, box.h]]))[0])
+        track.state = self._model.update(track.state, (box.cx, box.cy), np.eye(2) * variance)
         a = self.size_smoothing
         track.size = (track.size[0] + a * (box.w - track.size[0]),
                       track.size[1] + a * (box.h - track.size[1]))

@@ -34,15 +34,16 @@ _SEGMENTS = frozenset({"window", "feature", "feature_levels", "feature_mask", "l
                        "feature_scale"})
 
 
-def _whole_grey_frame(ctx: TrackContext, reduced: np.ndarray | None = None) -> np.ndarray:
+def _whole_grey_frame(ctx: TrackContext, shrunk: np.ndarray | None = None,
+                      k: int = 1) -> np.ndarray:
     """Set the whole frame's grey image as this frame's window and feature; return it.
-    ``reduced``: that image shrunk (``ctx.feature_scale`` = frame width / its width)."""
-    grey = ctx.frame.gray() if reduced is None else reduced
+    ``shrunk``: that image shrunk by the whole factor ``k`` (``ctx.feature_scale``)."""
+    grey = ctx.frame.gray() if shrunk is None else shrunk
     ctx.window = ctx.frame.full_window()
     ctx.feature = grey
     ctx.feature_levels = 256
     ctx.feature_mask = None
-    ctx.feature_scale = ctx.frame.width / grey.shape[1]
+    ctx.feature_scale = float(k)
     return grey
 
 
@@ -112,10 +113,11 @@ class Background(Stage):
     from the foreground; ``colour`` models the BGR image instead of the grey one (the shadow
     test then also checks the colour).
 
-    ``max_pixels`` (0: off) makes the foreground at a reduced resolution: the frame is shrunk
-    (area averaging) to at most that many pixels, and ``likelihood``/``feature`` are that
-    reduced image (``ctx.feature_scale`` frame pixels per pixel; ``blobs`` maps back). The
-    morphology sizes stay in frame pixels.
+    ``max_pixels`` (0: off) makes the foreground at a reduced resolution: the frame is halved
+    (each pixel the mean of a 2 x 2 block; halving is ~20x cheaper than any other shrink) until
+    at most that many pixels are left, ``k`` times in each direction, and
+    ``likelihood``/``feature`` are that reduced image (``ctx.feature_scale = k`` frame pixels
+    per pixel; ``blobs`` maps back). The morphology sizes stay in frame pixels.
 
     Every frame gets a foreground ``ctx.likelihood``: while nothing can be detected (the mean's
     learning frames, the adaptive models' first frame) it is empty (all 0).
@@ -221,8 +223,9 @@ class Background(Stage):
             "max_pixels",
             int,
             0,
-            "make the foreground on the frame shrunk to at most this many pixels (0: full "
-            "resolution); cost falls with it, targets must stay several pixels across",
+            "make the foreground on the frame halved until at most this many pixels are left "
+            "(0: full resolution); cost falls with it, targets must stay several pixels "
+            "across",
             min=0, max=MAX_FRAME_PIXELS,
         ),
     )
@@ -237,14 +240,14 @@ class Background(Stage):
         self._model: cv2.BackgroundSubtractor | None = None
         frame = ctx.frame
         pixels = frame.width * frame.height
-        shrink = math.sqrt(self.max_pixels / pixels) if 0 < self.max_pixels < pixels else 1.0
-        self._size = ((frame.width, frame.height) if shrink == 1.0 else  # even: I420 halves it
-                      (max(2, 2 * round(frame.width * shrink / 2)),
-                       max(2, 2 * round(frame.height * shrink / 2))))
+        self._shrink = 1  # halved until at most max_pixels are left (and at least 2 x 2)
+        while (self.max_pixels and pixels > self.max_pixels * self._shrink ** 2
+               and min(frame.width, frame.height) >= 4 * self._shrink):
+            self._shrink *= 2
         self._kernels = [
             (operation, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
             for size, operation in ((self.open, cv2.MORPH_OPEN), (self.close, cv2.MORPH_CLOSE))
-            if (k := max(1, round(size * self._size[0] / frame.width))) > 1
+            if (k := max(1, round(size / self._shrink))) > 1
         ]
         if self.method == "mean":
             self.step(ctx)
@@ -285,16 +288,16 @@ class Background(Stage):
     def _images(self, ctx: TrackContext) -> tuple[np.ndarray, np.ndarray]:
         """This frame's grey image (also set as ``ctx.feature``) and the image the model
         learns (the grey one, or BGR with ``colour``), both at the working size."""
-        frame = ctx.frame
-        if self._size == (frame.width, frame.height):
+        frame, k = ctx.frame, self._shrink
+        in_colour = self.colour and self.method != "mean"
+        if k == 1:
             grey = _whole_grey_frame(ctx)
-            colour = frame.bgr() if self.colour and self.method != "mean" else None
+            colour = frame.bgr() if in_colour else None
         else:
-            colour = (frame.bgr_resized(*self._size) if self.colour and self.method != "mean"
-                      else None)
+            colour = frame.bgr_shrunk(k) if in_colour else None
             grey = (cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY) if colour is not None
-                    else cv2.resize(frame.gray(), self._size, interpolation=cv2.INTER_AREA))
-            _whole_grey_frame(ctx, grey)
+                    else frame.gray_shrunk(k))
+            _whole_grey_frame(ctx, grey, k)
         return grey, grey if colour is None else colour
 
     def _learn(self, grey: np.ndarray) -> None:
