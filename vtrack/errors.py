@@ -33,6 +33,10 @@ class OutputError(VtrackError):
     """An output location that cannot be written."""
 
 
+class FolderInUseError(OutputError):
+    """An output folder another vtrack process holds (its lock): nothing was written."""
+
+
 class PartialInputError(InputError):
     """The input broke part way; everything before ``frames_done`` was tracked and written."""
 

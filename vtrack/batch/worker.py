@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import contextlib
+import os
+import select
+import signal
+import threading
 import time
 import traceback
 from multiprocessing.connection import Connection
@@ -12,9 +16,12 @@ import cv2
 
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.batch.plan import recorded_summary
-from vtrack.errors import OutputError, VtrackError
+from vtrack.errors import FolderInUseError, OutputError, VtrackError
 from vtrack.io.outdir import OutputFolder
-from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, run
+from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
+
+#: How long a job waits for its folder while another vtrack holds it (seconds).
+LOCK_WAIT_S = 15.0
 
 
 def execute(job: Job) -> Outcome:
@@ -31,7 +38,7 @@ def execute(job: Job) -> Outcome:
     out_dir = job.request.out_dir
     started = time.time()
     try:
-        summary = run(job.request)
+        summary = _run_when_free(job)
     except VtrackError as exc:
         _discard(job, started)
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
@@ -50,6 +57,40 @@ def execute(job: Job) -> Outcome:
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
 
 
+def _run_when_free(job: Job) -> RunSummary:
+    """:func:`vtrack.run.run`, waiting up to :data:`LOCK_WAIT_S` for the job's folder while
+    another vtrack holds it (a worker of a batch that was just killed, finishing its frame and
+    its record): then the run replaces what that one recorded."""
+    deadline = time.monotonic() + LOCK_WAIT_S
+    while True:
+        try:
+            return run(job.request)
+        except FolderInUseError:
+            if time.monotonic() >= deadline:
+                raise
+            time.sleep(0.2)
+
+
+def _die_with_parent(connection: Connection) -> None:
+    """Stop this worker process when the batch process goes away, however it ends (``kill
+    -9`` included): a thread waits for the batch's end of ``connection`` to close, then
+    sends this process SIGTERM, so a running job ends ``interrupted`` as on Ctrl-C (its
+    outputs whole, its ``run.json`` written) and the process exits. Linux only
+    (``POLLRDHUP``); elsewhere the worker stops at its next job."""
+    hang_up = getattr(select, "POLLRDHUP", None)
+    if hang_up is None:
+        return
+    poller = select.poll()
+    poller.register(connection.fileno(), hang_up)
+
+    def watch() -> None:
+        while not poller.poll():
+            pass
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="vtrack parent watch", daemon=True).start()
+
+
 def _discard(job: Job, started: float) -> None:
     """Remove an earlier run's outputs from the job's folder (unless another run holds it),
     unless this job's run recorded itself there since ``started`` (it failed part way)."""
@@ -60,7 +101,9 @@ def _discard(job: Job, started: float) -> None:
 
 
 def _serve(connection: Connection) -> None:
-    """A local worker process: run each job received, send back its outcome; stop at None."""
+    """A local worker process: run each job received, send back its outcome; stop at None
+    (or when the batch process is gone, :func:`_die_with_parent`)."""
+    _die_with_parent(connection)
     try:
         while (job := connection.recv()) is not None:
             try:

@@ -20,7 +20,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Self
 
-from vtrack.errors import OutputError
+from vtrack.errors import FolderInUseError, OutputError
 from vtrack.io.files import is_temp_of, os_reason, prepare_output_dir
 
 LOCK_NAME = ".vtrack.lock"
@@ -42,7 +42,8 @@ class OutputFolder:
     """Take ``folder`` for one run or batch: ``with OutputFolder(path) as folder: ...``.
 
     Entering creates the folder, checks a file can be written in it and takes its lock (or
-    raises OutputError: not writable, a file, or in use by another vtrack, naming the holder).
+    raises OutputError: not writable, a file, or in use by another vtrack, naming the holder:
+    :class:`~vtrack.errors.FolderInUseError`).
     Leaving releases the lock and removes the folder (and the parents it created) when nothing
     but the lock was left in it.
     """
@@ -76,7 +77,7 @@ class OutputFolder:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 os.close(fd)
-                raise OutputError(
+                raise FolderInUseError(
                     f"{self.folder}: in use by another vtrack ({_holder(path)}); wait for it "
                     "to finish or choose another --out") from None
             # The holder before us may have removed the file between our open and our lock:
