@@ -155,3 +155,26 @@ def test_every_numeric_parameter_declares_a_range() -> None:
         for param in _numeric(cls):
             assert param.min is not None and param.max is not None
             assert param.min <= param.default <= param.max, (cls.name, param.name)
+
+
+@settings(max_examples=200, derandomize=True, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.text(max_size=40))
+def test_any_config_name_plans_one_folder_inside_the_results(tmp_path, name: str) -> None:
+    """Issue 21 item 5: whatever a config's ``name`` holds (``/``, ``..``, NUL, nothing), the
+    batch plans its results one folder below the input's, inside ``--out``."""
+    from dataclasses import replace
+
+    from vtrack.batch import BatchInput, plan
+    from vtrack.request import RunRequest
+
+    config = replace(load_config("s4"), name=name)
+    out = tmp_path / "out"
+    item = BatchInput(name="clip", path=tmp_path / "clip.mp4")
+    settings_ = RunRequest(input="", out_dir=out, config=config)
+    batch = plan([item], {name: config}, out, settings_)
+    (job,) = batch.jobs
+    folder = job.request.out_dir
+    assert folder.parent == out.resolve() / "clip"
+    assert folder.name not in ("", ".", "..") and "/" not in folder.name
+    assert "\x00" not in folder.name

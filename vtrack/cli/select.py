@@ -14,8 +14,9 @@ import click
 def command(input_spec: str, frame: int, port: int) -> None:
     """Pick the target's first box by dragging it on a frame of INPUT in a browser.
 
-    Serves a page on 127.0.0.1 (over SSH: ssh -L PORT:127.0.0.1:PORT HOST, then open
-    http://127.0.0.1:PORT/ locally). On confirm, prints the --init value and writes it to the
+    Serves a page on 127.0.0.1 at a URL with a per-session secret path, printed when it
+    starts (over SSH: ssh -L PORT:127.0.0.1:PORT HOST, then open that URL locally). On
+    confirm, prints the --init value and writes it to the
     sidecar file that vtrack run and vtrack batch read when no --init is given: NAME.init.txt
     beside a video NAME.EXT, init.txt inside an image-sequence folder.
     """

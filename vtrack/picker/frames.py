@@ -1,13 +1,16 @@
 """Frames of an input by index, for pages that step back and forth through it.
 
-An input can be read only forward, once; :class:`FrameStore` decodes as far as the highest
-frame asked for and keeps every decoded frame encoded (JPEG by default, ~20x smaller than the
-pixels), so stepping back costs nothing and nothing is decoded twice.
+An input can be read only forward; :class:`FrameStore` decodes as far as the frame asked for and
+keeps the most recently used frames encoded (JPEG by default, ~20x smaller than the pixels) up
+to a byte budget, so stepping back and forth near a frame costs nothing, while memory stays
+bounded whatever the input's length and size: a frame that was dropped from the cache is
+decoded again, reopening the input.
 """
 
 from __future__ import annotations
 
 import threading
+from collections import OrderedDict
 from collections.abc import Iterator
 
 import cv2
@@ -28,43 +31,75 @@ def encode_image(bgr: np.ndarray, ext: str = ".jpg", quality: int = 92) -> bytes
     return data.tobytes()
 
 
+#: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
+CACHE_BYTES = 64 << 20
+
+
 class FrameStore:
     """Encoded frames of one input, decoded on demand up to the highest index asked for.
 
-    Safe to use from several threads (a page's requests). ``close()`` releases the input.
+    At most ``cache_bytes`` of encoded frames are kept (least recently used dropped first;
+    the frame asked for is always returned). Safe to use from several threads (a page's
+    requests). ``close()`` releases the input.
     """
 
-    def __init__(self, input_spec: str, ext: str = ".jpg") -> None:
+    def __init__(self, input_spec: str, ext: str = ".jpg",
+                 cache_bytes: int = CACHE_BYTES) -> None:
+        self._spec = input_spec
         self._source: Source = open_source(input_spec)
         self.info: InputInfo = self._source.info
         self._frames: Iterator[Frame] = iter(self._source)
-        self._encoded: list[bytes] = []
-        self._ended = False
+        self._next = 0  # index of the next frame the input yields
+        self._end: int | None = None  # the frame count, once the end was reached
+        self._cache: OrderedDict[int, bytes] = OrderedDict()
+        self._budget = cache_bytes
+        self.cached_bytes = 0
         self._ext = ext
         self._lock = threading.Lock()
 
     @property
     def decoded(self) -> int:
-        """Frames decoded so far."""
-        return len(self._encoded)
+        """Frames decoded so far (from the start of the input)."""
+        return self._next if self._end is None else self._end
 
     @property
     def count(self) -> int | None:
         """The number of frames: exact once the end was reached, else the input's estimate."""
-        return len(self._encoded) if self._ended else self.info.frame_count
+        return self._end if self._end is not None else self.info.frame_count
 
     def get(self, index: int) -> bytes | None:
         """Frame ``index`` (0-based) encoded, or None when the input has no such frame."""
-        if index < 0:
+        if index < 0 or (self._end is not None and index >= self._end):
             return None
         with self._lock:
-            while len(self._encoded) <= index and not self._ended:
+            if index in self._cache:
+                self._cache.move_to_end(index)
+                return self._cache[index]
+            if index < self._next:  # dropped from the cache: read the input again
+                self._rewind()
+            data = None
+            while self._next <= index:
                 frame = next(self._frames, None)
                 if frame is None:
-                    self._ended = True
-                    break
-                self._encoded.append(encode_image(frame.bgr(), self._ext))
-            return self._encoded[index] if index < len(self._encoded) else None
+                    self._end = self._next
+                    return None
+                data = encode_image(frame.bgr(), self._ext)
+                self._keep(self._next, data)
+                self._next += 1
+            return data
+
+    def _keep(self, index: int, data: bytes) -> None:
+        self._cache[index] = data
+        self.cached_bytes += len(data)
+        while self.cached_bytes > self._budget and len(self._cache) > 1:
+            _, dropped = self._cache.popitem(last=False)
+            self.cached_bytes -= len(dropped)
+
+    def _rewind(self) -> None:
+        self._source.close()
+        self._source = open_source(self._spec)
+        self._frames = iter(self._source)
+        self._next = 0
 
     def close(self) -> None:
         self._source.close()

@@ -1,21 +1,33 @@
 """The local web page of ``vtrack select`` (stdlib ``http.server``, no extra dependency).
 
-Routes: ``GET /`` the page (:mod:`.page`), ``GET /info`` the input's name, size, frame count,
-start frame and any box already saved, ``GET /frame/N`` frame N as JPEG, ``POST /select``
-``{"box": [x, y, w, h], "frame": N}`` which validates the box, writes the sidecar file and ends
-the selection. The server listens on 127.0.0.1 only (reach it from elsewhere with an SSH port
-forward), on a free port unless one is asked for.
+Routes, under a per-session secret path ``/TOKEN/`` (the URL the command prints): ``GET`` the
+page (:mod:`.page`), ``GET info`` the input's name, size, frame count, start frame and any box
+already saved, ``GET frame/N`` frame N as JPEG, ``POST select`` ``{"box": [x, y, w, h],
+"frame": N}`` which validates the box, writes the sidecar file and ends the selection. The
+server listens on 127.0.0.1 only (reach it from elsewhere with an SSH port forward), on a free
+port unless one is asked for.
+
+What another web page in the user's browser could try is refused: a ``Host`` other than
+127.0.0.1 / localhost (DNS rebinding) and an ``Origin`` other than the page's own are answered
+403, a path without the token 404; a body over :data:`MAX_BODY` bytes, a ``Content-Length``
+that is not a small number, a frame number or box value out of range or of the wrong type, JSON
+nested too deep or not UTF-8 are answered 400 with a one-line JSON error. Nothing a request
+holds reaches the terminal.
 """
 
 from __future__ import annotations
 
+import hmac
 import json
 import math
+import re
+import secrets
 import threading
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 from vtrack.errors import ConfigError, VtrackError
 from vtrack.geometry import Box
@@ -24,6 +36,48 @@ from vtrack.picker.frames import FrameStore
 from vtrack.picker.page import PAGE
 
 HOST = "127.0.0.1"
+#: Host names a request may carry (with any port): the loopback the server listens on.
+LOCAL_HOSTS = frozenset({"127.0.0.1", "localhost"})
+#: Largest request body (a box is ~40 bytes).
+MAX_BODY = 4096
+#: Largest frame number a request may ask for (nine digits).
+MAX_FRAME = 999_999_999
+#: Largest box value (frames are at most 16384 pixels a side).
+MAX_COORDINATE = 1e6
+
+
+class _Refused(Exception):
+    """A request answered with ``status`` and the one-line ``message``."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def _local(authority: str) -> bool:
+    """Whether ``host[:port]`` names the loopback (any port)."""
+    try:
+        return (urlsplit(f"//{authority}").hostname or "") in LOCAL_HOSTS
+    except ValueError:
+        return False
+
+
+def _box_values(values: Any) -> list[float]:
+    """Four finite numbers (JSON numbers, not booleans) within +-``MAX_COORDINATE``."""
+    if not isinstance(values, list) or len(values) != 4:
+        raise ConfigError("expected a box [x, y, w, h]")
+    numbers = []
+    for value in values:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ConfigError("expected a box of four numbers [x, y, w, h]")
+        try:
+            number = float(value)
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number) or abs(number) > MAX_COORDINATE:
+            raise ConfigError(f"box values must be finite and within +-{MAX_COORDINATE:g}")
+        numbers.append(number)
+    return numbers
 
 
 @dataclass(frozen=True)
@@ -45,14 +99,16 @@ class SelectionServer:
         self.selection: Selection | None = None
         self._done = threading.Event()
         self._saved = read_sidecar(input_spec)
+        self.token = secrets.token_urlsafe(16)
         try:
             self._httpd = ThreadingHTTPServer((HOST, port), self._handler())
         except OSError as exc:
             raise ConfigError(f"--port {port}: cannot listen on {HOST}:{port} "
                               f"({exc.strerror or exc})") from None
         self._httpd.daemon_threads = True
+        self._httpd.handle_error = lambda request, address: None  # a dropped connection
         self.port = self._httpd.server_address[1]
-        self.url = f"http://{HOST}:{self.port}/"
+        self.url = f"http://{HOST}:{self.port}/{self.token}/"
         self._thread = threading.Thread(target=self._httpd.serve_forever, name="vtrack-select",
                                         daemon=True)
 
@@ -64,11 +120,7 @@ class SelectionServer:
 
     def select(self, body: dict[str, Any]) -> Selection:
         """Validate a confirmed box (inside the frame, positive size), write the sidecar."""
-        values = body.get("box")
-        if (not isinstance(values, list) or len(values) != 4
-                or not all(isinstance(v, int | float) and math.isfinite(v) for v in values)):
-            raise ConfigError(f"expected a box [x, y, w, h], got {values!r}")
-        box = Box(*(float(v) for v in values))
+        box = Box(*_box_values(body.get("box")))
         width, height = self.store.info.width, self.store.info.height
         if box.w < 1 or box.h < 1:
             raise ConfigError("the box is empty: drag a box around the target")
@@ -76,8 +128,8 @@ class SelectionServer:
             raise ConfigError(f"the box {format_box(box)} is not inside the {width}x{height} "
                               "frame")
         frame = body.get("frame")
-        return Selection(box, frame if isinstance(frame, int) else self.frame,
-                         write_sidecar(self.input_spec, box))
+        valid = isinstance(frame, int) and not isinstance(frame, bool) and 0 <= frame <= MAX_FRAME
+        return Selection(box, frame if valid else self.frame, write_sidecar(self.input_spec, box))
 
     def wait(self) -> Selection:
         """Serve until a box is confirmed; return it. Ctrl-C raises KeyboardInterrupt."""
@@ -93,55 +145,101 @@ class SelectionServer:
 
     def _handler(self) -> type[BaseHTTPRequestHandler]:
         server = self
+        frame_route = re.compile(r"frame/(\d{1,9})")
 
         class Handler(BaseHTTPRequestHandler):
             def log_message(self, format: str, *args: Any) -> None:  # noqa: A002
                 pass  # the terminal shows the URL and the result, not every request
+
+            def send_error(self, code: int, message: str | None = None,
+                           explain: str | None = None) -> None:
+                # http.server's own refusals (a request line too long, a bad header): the same
+                # one-line JSON as ours, nothing on the terminal
+                self.close_connection = True
+                self._json({"error": message or "bad request"}, code)
 
             def _send(self, status: int, body: bytes, kind: str) -> None:
                 self.send_response(status)
                 self.send_header("Content-Type", kind)
                 self.send_header("Content-Length", str(len(body)))
                 self.send_header("Cache-Control", "no-store")
+                self.send_header("X-Content-Type-Options", "nosniff")
                 self.end_headers()
                 self.wfile.write(body)
 
             def _json(self, data: Any, status: int = 200) -> None:
                 self._send(status, json.dumps(data).encode(), "application/json")
 
-            def do_GET(self) -> None:  # noqa: N802 (http.server's name)
+            def _route(self) -> str:
+                """The path below the token, after the Host/Origin checks (_Refused)."""
+                if not _local(self.headers.get("Host") or ""):
+                    raise _Refused(403, "this page answers only to 127.0.0.1 and localhost")
+                origin = self.headers.get("Origin")
+                if origin is not None and not (origin.startswith("http://")
+                                               and _local(origin[7:])):
+                    raise _Refused(403, "requests from other sites are refused")
+                if self.headers.get("Sec-Fetch-Site") == "cross-site":
+                    raise _Refused(403, "requests from other sites are refused")
                 path = self.path.split("?", 1)[0]
-                if path == "/":
+                head, _, rest = path.lstrip("/").partition("/")
+                if not hmac.compare_digest(head.encode(), server.token.encode()):
+                    raise _Refused(404, "not found: open the URL vtrack select printed")
+                return rest
+
+            def _answer(self, respond: Any) -> None:
+                try:
+                    respond(self._route())
+                except _Refused as exc:
+                    self._json({"error": str(exc)}, exc.status)
+                except VtrackError as exc:
+                    self._json({"error": str(exc)}, 400)
+                except Exception as exc:  # never a traceback on the user's terminal
+                    self._json({"error": f"internal error: {type(exc).__name__}"}, 500)
+
+            def do_GET(self) -> None:  # noqa: N802 (http.server's name)
+                self._answer(self._get)
+
+            def do_POST(self) -> None:  # noqa: N802
+                self._answer(self._post)
+
+            def _get(self, route: str) -> None:
+                frame = frame_route.fullmatch(route)
+                if route == "":
                     self._send(200, PAGE.encode(), "text/html; charset=utf-8")
-                elif path == "/info":
+                elif route == "info":
                     self._json(server.info())
-                elif path.startswith("/frame/") and path[7:].isdigit():
-                    try:
-                        data = server.store.get(int(path[7:]))
-                    except VtrackError as exc:
-                        self._json({"error": str(exc)}, 500)
-                        return
+                elif frame is not None:
+                    data = server.store.get(int(frame.group(1)))
                     if data is None:
-                        self._json({"error": f"no frame {path[7:]}"}, 404)
+                        self._json({"error": f"no frame {int(frame.group(1))}"}, 404)
                     else:
                         self._send(200, data, "image/jpeg")
                 else:
-                    self._json({"error": "not found"}, 404)
+                    raise _Refused(404, "not found")
 
-            def do_POST(self) -> None:  # noqa: N802
-                if self.path != "/select" or server._done.is_set():
-                    self._json({"error": "not found"}, 404)
-                    return
-                try:
-                    length = int(self.headers.get("Content-Length") or 0)
-                    body = json.loads(self.rfile.read(length) or b"{}")
-                    selection = server.select(body if isinstance(body, dict) else {})
-                except (ValueError, VtrackError) as exc:
-                    self._json({"error": str(exc)}, 400)
-                    return
+            def _post(self, route: str) -> None:
+                if route != "select" or server._done.is_set():
+                    raise _Refused(404, "not found")
+                if (self.headers.get("Content-Type") or "").split(";")[0] != "application/json":
+                    raise _Refused(415, "expected Content-Type: application/json")
+                body = self._body()
+                selection = server.select(body if isinstance(body, dict) else {})
                 server.selection = selection
                 self._json({"init": format_box(selection.box),
                             "sidecar": selection.sidecar.name})
                 server._done.set()
+
+            def _body(self) -> Any:
+                """The request's JSON body, read only when small (_Refused otherwise)."""
+                length = (self.headers.get("Content-Length") or "0").strip()
+                if not re.fullmatch(r"\d{1,9}", length):
+                    raise _Refused(400, "Content-Length must be a byte count")
+                if int(length) > MAX_BODY:
+                    self.close_connection = True
+                    raise _Refused(413, f"the request body is over {MAX_BODY} bytes")
+                try:
+                    return json.loads(self.rfile.read(int(length)).decode("utf-8") or "{}")
+                except (ValueError, RecursionError):
+                    raise _Refused(400, "the request body is not JSON") from None
 
         return Handler
