@@ -337,6 +337,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
                 _check_init_box(resolved.init_box, info.width, info.height,
                                 resolved.init_from or "--init")
             with OutputFolder(request.out_dir) as folder:
+                folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
                 writers = _open_writers(request, resolved, info)
                 if on_open is not None:
@@ -360,6 +361,12 @@ class _Writers:
     video: VideoWriter | None = None
     annotator: Annotator | None = None
     stream: StreamWriter | None = None  # --stream: a JSON line per frame
+
+
+def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
+    """The files this run writes into its folder."""
+    csv_name = "tracks.csv" if resolved.pipeline.multi_target else "track.csv"
+    return [csv_name, "run.json"] + (["annotated.mp4"] if request.video else [])
 
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:

@@ -30,6 +30,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
+from vtrack.io.files import prepare_output_dir
 
 #: Largest --frames: a 1080p frame writes ~25 MB of hex text (rgb + hue + bp).
 MAX_FRAMES = 300
@@ -162,7 +163,7 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
     """Run the chain over ``frames`` and write the vectors to ``out_dir``; returns the number of
     frames written."""
     owner = fixed_stage(stages, str(extra.get("config")))
-    out_dir.mkdir(parents=True, exist_ok=True)
+    prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
     trace = TraceWriter(out_dir / "trace.csv")
     iterations: TraceWriter | None = None
     count, size, record = 0, (0, 0), None
@@ -194,6 +195,17 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
 # --- check ---------------------------------------------------------------------------------------
 
 
+#: Longest value of a dump shown in a difference line (a damaged file may hold a 10 MB line).
+_VALUE_SHOWN = 16
+
+
+def _shown(token: bytes | str) -> str:
+    """A value of a dump as text for a message: undecodable bytes escaped, cut short."""
+    head = token[:_VALUE_SHOWN]
+    text = head.decode("ascii", "backslashreplace") if isinstance(head, bytes) else head
+    return text + "..." if len(token) > _VALUE_SHOWN else text
+
+
 def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str | None:
     got = got.lower()
     if expected == got:
@@ -206,8 +218,8 @@ def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str 
     bad = np.flatnonzero(a != b)
     for i in bad[:SHOWN]:
         x, y = (int(i) % width, int(i) // width) if width else (0, 0)
-        lines.append(f"line {i + 1} (x={x}, y={y}): expected {want[i].decode()}, "
-                     f"got {have[i].decode()}")
+        lines.append(f"line {i + 1} (x={x}, y={y}): expected {_shown(want[i])}, "
+                     f"got {_shown(have[i])}")
     total = len(bad)
     if len(want) != len(have):
         lines.append(f"{len(have)} lines, expected {len(want)}")
@@ -245,7 +257,7 @@ def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
                 if len(found) < SHOWN:
                     frame = row_w.get("frame", str(i))
                     found.append(f"frame {frame} column {column}: expected {row_w[column]}, "
-                                 f"got {value}")
+                                 f"got {_shown(value or '')}")
     if len(want) != len(have):
         found.append(f"{len(have)} rows, expected {len(want)}")
         total += 1

@@ -114,6 +114,13 @@ class OutputFolder:
                 with contextlib.suppress(FileNotFoundError):
                     entry.unlink()
 
+    def refuse_folders(self, names: Iterable[str]) -> None:
+        """Raise OutputError when one of the files ``names`` to be written here is a folder."""
+        for name in names:
+            if (self.folder / name).is_dir():
+                raise OutputError(f"{self.folder / name}: is a folder, where vtrack writes a "
+                                  "file; move it away or choose another --out")
+
     def release(self) -> None:
         """Release the lock (remove the lock file first, while it is still held)."""
         if self._fd is None:

@@ -40,10 +40,18 @@ PIPE_BYTES = 1 << 20
 _RING_SLACK = 3
 
 
+#: Frame rates vtrack takes (``--fps``): a frame every 100 s to a high-speed camera's 10,000
+#: a second. Beyond them times overflow the video writer's time base (1e12) or become infinite
+#: (1e-308).
+MIN_FPS, MAX_FPS = 0.01, 10_000.0
+
+
 def checked_fps(fps: float) -> float:
-    """``fps`` if it is a frame rate (finite, > 0); ConfigError naming ``--fps`` otherwise."""
-    if not (math.isfinite(fps) and fps > 0):
-        raise ConfigError(f"--fps {fps:g}: must be a positive number of frames per second")
+    """``fps`` if it is a frame rate from :data:`MIN_FPS` to :data:`MAX_FPS`; ConfigError
+    naming ``--fps`` otherwise."""
+    if not (math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
+        raise ConfigError(f"--fps {fps:g}: must be a frame rate from {MIN_FPS:g} to "
+                          f"{MAX_FPS:g} frames per second")
     return float(fps)
 
 

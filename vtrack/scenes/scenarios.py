@@ -18,6 +18,7 @@ import numpy as np
 
 from vtrack.errors import ConfigError, plural
 from vtrack.geometry import Window
+from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.scenes.render import (
     CAMERA,
     FLOOR,
@@ -40,6 +41,8 @@ from vtrack.scenes.scene import Scene, SceneSpec, Truth, assemble
 
 #: Fewest pixels a scene may have across / down.
 MIN_WIDTH, MIN_HEIGHT = 64, 48
+#: Largest scene (8K UHD): a frame is rendered whole in float32, ~400 MB at this size.
+MAX_WIDTH, MAX_HEIGHT = 7680, 4320
 #: Sensor noise (grey levels, std) of the ordinary scenes.
 NOISE_SIGMA = 3.0
 #: Fewest frames the target spends fully hidden (occlusion) or fully out of view (leave_return).
@@ -526,7 +529,8 @@ def make_scene(
 
     The same arguments always give bit-identical frames and identical ground truth. Raises
     :class:`~vtrack.errors.ConfigError` for an unknown name (listing the valid ones), a seed
-    below 0, a frame smaller than 64x48, too few frames for the scenario or a rate <= 0.
+    below 0, a frame smaller than 64x48 or larger than 7680x4320, too few frames for the
+    scenario or a rate outside :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``.
     """
     scenario = SCENARIOS.get(name)
     if scenario is None:
@@ -541,14 +545,15 @@ def make_scene(
     )
     if spec.seed < 0:
         raise ConfigError(f"scene seed {spec.seed}: must be 0 or more")
-    if spec.width < MIN_WIDTH or spec.height < MIN_HEIGHT:
+    if not (MIN_WIDTH <= spec.width <= MAX_WIDTH and MIN_HEIGHT <= spec.height <= MAX_HEIGHT):
         raise ConfigError(
-            f"scene size {spec.width}x{spec.height}: must be at least {MIN_WIDTH}x{MIN_HEIGHT}"
+            f"scene size {spec.width}x{spec.height}: must be from {MIN_WIDTH}x{MIN_HEIGHT} to "
+            f"{MAX_WIDTH}x{MAX_HEIGHT}"
         )
     if spec.frames < scenario.min_frames:
         raise ConfigError(
             f"scenario {name!r} needs at least {scenario.min_frames} frames, got {spec.frames}"
         )
-    if not spec.fps > 0 or not math.isfinite(spec.fps):
-        raise ConfigError(f"scene fps {spec.fps}: must be a positive number")
+    if not (math.isfinite(spec.fps) and MIN_FPS <= spec.fps <= MAX_FPS):
+        raise ConfigError(f"scene fps {spec.fps:g}: must be from {MIN_FPS:g} to {MAX_FPS:g}")
     return scenario.build(spec)
