@@ -7,6 +7,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import time
 import uuid
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -23,6 +24,8 @@ from vtrack.run import STATUS_FAILED
 
 #: How often a job whose worker process died is started again before it is reported failed.
 RETRIES = 1
+#: How often a Dask batch checks that the scheduler still has a worker (seconds).
+WORKER_POLL_S = 1.0
 
 
 class Executor(Protocol):
@@ -191,11 +194,13 @@ class DaskExecutor:
             raise VtrackError(
                 "--scheduler needs Dask distributed: pip install 'vtrack[dask]'") from None
         self.address = address
+        self.worker_timeout_s: float | None = None
         try:
             get_backend(parse_address(address)[0])  # a bad scheme fails here, before a Client
+            _probe(address, timeout_s)
             with _quiet_client_teardown():
                 self.client = Client(address, timeout=timeout_s, set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise VtrackError(
                 f"--scheduler {address}: cannot reach the Dask scheduler ({reason})"
@@ -206,6 +211,7 @@ class DaskExecutor:
         """Return once at least one worker is connected to the scheduler; if none is, ``say``
         so (one line) and wait up to ``timeout_s`` seconds (None: for ever). On expiry the
         client is closed and a :class:`VtrackError` names the scheduler and the wait."""
+        self.worker_timeout_s = timeout_s
         if self.client.scheduler_info().get("workers"):
             return
         limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
@@ -224,24 +230,77 @@ class DaskExecutor:
             self.client.close()
 
     def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
+        """Submit every job and yield outcomes as they finish. When no worker has been
+        connected for the worker timeout (:meth:`wait_for_workers`; every worker died), the
+        jobs still pending are cancelled and reported ``failed``, naming the scheduler."""
         from distributed import as_completed
 
         batch = uuid.uuid4().hex[:8]
         futures = {self.client.submit(execute, replace(job, threads=1), pure=False,
                                       key=f"vtrack-{batch}-{n}-{job.input}-{job.config}"): job
                    for n, job in enumerate(jobs)}
+        finished = as_completed(futures, loop=self.client.loop)
+        seen = checked = time.monotonic()
         try:
-            for future in as_completed(futures, loop=self.client.loop):
-                job = futures[future]
-                try:
-                    yield future.result()
-                except Exception as exc:  # KilledWorker, lost connection: report, carry on
-                    yield Outcome(job.input, job.config, STATUS_FAILED,
-                                  error=f"Dask: {type(exc).__name__}: {exc}")
+            while not finished.is_empty():
+                if finished.has_ready():
+                    for future in finished.next_batch(block=False):
+                        yield self._outcome(future, futures[future])
+                    continue
+                time.sleep(0.05)
+                now = time.monotonic()
+                if now - checked < WORKER_POLL_S:
+                    continue
+                checked = now
+                if self.client.scheduler_info().get("workers"):
+                    seen = now
+                elif self.worker_timeout_s is not None and now - seen > self.worker_timeout_s:
+                    for future, job in futures.items():
+                        if not future.done():
+                            yield Outcome(job.input, job.config, STATUS_FAILED, error=(
+                                f"Dask: no worker connected to {self.address} for "
+                                f"{_seconds(self.worker_timeout_s)} (--worker-timeout)"))
+                    return
         finally:
             with suppress(Exception):
                 self.client.cancel(list(futures))
             self.close()
+
+    @staticmethod
+    def _outcome(future: Any, job: Job) -> Outcome:
+        try:
+            return future.result()
+        except Exception as exc:  # KilledWorker, lost connection: report, carry on
+            return Outcome(job.input, job.config, STATUS_FAILED,
+                           error=f"Dask: {type(exc).__name__}: {exc}")
+
+
+def _probe(address: str, timeout_s: float) -> None:
+    """Ask the scheduler at ``address`` who it is, within ``timeout_s`` in all (connecting,
+    the handshake, the answer): a peer that accepts and stays silent, or a port that is not a
+    scheduler's (the dashboard's HTTP), raises TimeoutError or OSError here, before a Client
+    (whose own timeout does not cover them) exists."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def identity() -> None:
+        comm = await connect(address, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            reply = await comm.read()
+        finally:
+            comm.abort()
+        if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+            raise OSError("not a Dask scheduler")
+
+    async def bounded() -> None:
+        try:
+            await asyncio.wait_for(identity(), timeout_s)
+        except TimeoutError:
+            raise TimeoutError(f"no answer within {_seconds(timeout_s)}") from None
+
+    asyncio.run(bounded())
 
 
 def _seconds(value: float) -> str:

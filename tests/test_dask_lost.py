@@ -1,0 +1,116 @@
+"""Issue 21 item 14: `vtrack batch --scheduler` honours --scheduler-timeout whatever the peer
+does (accepts and stays silent, is the dashboard's HTTP port, is no address at all), and gives
+up, with its summary, when every worker is gone for --worker-timeout. Loopback only."""
+
+from __future__ import annotations
+
+import csv
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+distributed = pytest.importorskip("distributed")
+
+
+def vtrack(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=120, check=False)
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("dask-lost")
+    scene = make_scene("smooth", seed=1, width=320, height=240, frames=600, fps=30.0)
+    write_video(scene, folder / "a.mp4", preset="veryfast")
+    write_groundtruth(scene, folder / "a.gt.txt")
+    return folder
+
+
+def one_error(result: subprocess.CompletedProcess[str], *words: str) -> str:
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr and "Exception ignored" not in result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.startswith("vtrack: error")]
+    assert len(errors) == 1, result.stderr
+    for word in words:
+        assert word in errors[0], errors[0]
+    return errors[0]
+
+
+def test_a_silent_peer_times_out(folder: Path, tmp_path: Path) -> None:
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(8)
+        accepted: list[socket.socket] = []
+        thread = threading.Thread(target=lambda: accepted.append(server.accept()[0]),
+                                  daemon=True)
+        thread.start()
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        result = vtrack("batch", str(folder), "--scheduler", address, "--scheduler-timeout", "2",
+                        "-o", str(tmp_path / "out"))
+        for peer in accepted:
+            peer.close()
+    one_error(result, address, "no answer within 2 s")
+
+
+def test_a_malformed_address_is_one_line(folder: Path, tmp_path: Path) -> None:
+    one_error(vtrack("batch", str(folder), "--scheduler", "tcp://[::zz]:x",
+                     "--scheduler-timeout", "2", "-o", str(tmp_path / "out")), "[::zz]")
+
+
+def start(command: list[str]) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", *command], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def test_the_dashboard_port_and_a_batch_whose_workers_all_die(folder: Path,
+                                                              tmp_path: Path) -> None:
+    with socket.socket() as a, socket.socket() as b:
+        a.bind(("127.0.0.1", 0))
+        b.bind(("127.0.0.1", 0))
+        port, dashboard = a.getsockname()[1], b.getsockname()[1]
+    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
+                       str(port), "--dashboard-address", f"127.0.0.1:{dashboard}"])
+    worker = batch = None
+    try:
+        assert scheduler.stderr is not None
+        for line in scheduler.stderr:
+            if "Scheduler at" in line:
+                break
+        time.sleep(1)  # the dashboard starts right after
+        one_error(vtrack("batch", str(folder), "--scheduler", f"tcp://127.0.0.1:{dashboard}",
+                         "--scheduler-timeout", "2", "-o", str(tmp_path / "x")),
+                  str(dashboard))
+        worker = start(["distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}", "--nthreads",
+                        "1", "--no-nanny", "--no-dashboard"])
+        out = tmp_path / "out"
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler",
+             f"tcp://127.0.0.1:{port}", "--worker-timeout", "2", "--preset", "slow",
+             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 90
+        while not list((out / "a").glob("*/.track.tmp-*.csv")):
+            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
+            time.sleep(0.05)
+        worker.send_signal(signal.SIGKILL)
+        worker.wait()
+        stdout, stderr = batch.communicate(timeout=60)
+    finally:
+        for process in (batch, worker, scheduler):
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
+    assert batch.returncode == 1, stderr
+    assert "Traceback" not in stderr
+    assert "no worker connected" in stderr and "--worker-timeout" in stderr
+    with (out / "summary.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["status"] for row in rows] == ["failed"]
+    assert "no worker connected" in rows[0]["error"]
