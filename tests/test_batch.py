@@ -128,7 +128,7 @@ def test_batch_records_failures_resumes_and_forces(inputs: Path, tmp_path: Path)
     assert second.exit_code == 1
     rows = summary(out)
     for key in good:
-        assert rows[key]["status"] == "skipped"
+        assert rows[key]["status"] == "complete"
         assert rows[key]["auc"] == first_rows[key]["auc"]
         assert (out / key[0] / key[1] / "run.json").stat().st_mtime_ns == stamps[key]
     assert rows[("truncated", "s0")]["status"] == "partial"  # not complete: run again

@@ -349,3 +349,23 @@ def test_parse_box_rejects_malformed(text):
 def test_parse_box_rejects_empty_box(text):
     with pytest.raises(ConfigError, match="--init: width and height must be positive"):
         parse_box(text)
+
+
+def test_success_rates_and_normalised_precision_by_hand() -> None:
+    from vtrack.evaluate.metrics import (
+        normalized_center_errors,
+        normalized_precision,
+        success_rate,
+    )
+
+    overlaps = [0.9, 0.6, 0.5, 0.1, None]
+    assert success_rate(overlaps, 0.5) == pytest.approx(2 / 4)  # strictly above, None skipped
+    assert success_rate(overlaps, 0.75) == pytest.approx(1 / 4)
+    assert math.isnan(success_rate([None], 0.5))
+    gt = [Box(0, 0, 40, 20), Box(0, 0, 40, 20), None, Box(0, 0, 40, 20)]
+    pred = [Box(4, 0, 40, 20), Box(0, 6, 40, 20), Box(0, 0, 1, 1), None]
+    errors = normalized_center_errors(pred, gt)
+    assert errors[0] == pytest.approx(0.1) and errors[1] == pytest.approx(0.3)
+    assert errors[2] is None and errors[3] == math.inf
+    # thresholds 0, 0.01, ..., 0.5: 0.1 passes 41 of 51, 0.3 passes 21, inf none
+    assert normalized_precision(errors) == pytest.approx((41 + 21) / 51 / 3)

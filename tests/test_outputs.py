@@ -340,8 +340,14 @@ def test_a_second_run_replaces_only_vtracks_own_outputs(clip: Clip, tmp_path: Pa
     assert first.returncode == 0, first.stderr
     (out / "notes.txt").write_text("mine\n")
     (out / ".annotated.tmp-1-dead.mp4").write_bytes(b"left by a killed run")
+    refused = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out),
+                     "-c", "camshift", "--no-video", "--frames", "20")
+    assert refused.returncode == 2
+    assert error_line(refused.stderr) == (
+        f"vtrack: error: {out}: holds the results of an earlier run (run.json, track.csv, "
+        "annotated.mp4); give --overwrite (-y) to replace them, or another --out")
     second = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out),
-                    "-c", "camshift", "--no-video", "--frames", "20")
+                    "-c", "camshift", "--no-video", "--frames", "20", "-y")
     assert second.returncode == 0, second.stderr
     record = assert_records_agree(out)
     assert record["outputs"] == ["track.csv"] and record["frames"] == 20

@@ -63,3 +63,295 @@ def test_stages_takes_stage_and_config_names() -> None:
     assert [line.split(":")[0] for line in chain.splitlines() if not line.startswith(" ")] == [
         "hue", "backproject", "meanshift", "occlusion", "kalman"]
     assert "not a stage or a shipped config" in one_error_line(vtrack("stages", "nope"))
+
+
+def test_a_missing_input_is_named_before_what_else_is_missing(tmp_path: Path) -> None:
+    line = one_error_line(vtrack("run", "nothere.mp4", cwd=tmp_path))
+    assert line == "vtrack: error: nothere.mp4: no such file"
+
+
+def test_single_target_ground_truth_for_s3_says_it_needs_mot(clip_factory, tmp_path) -> None:
+    clip = clip_factory("smooth", frames=10)
+    line = one_error_line(vtrack("run", str(clip.path), "-c", "s3", "--gt", str(clip.gt),
+                                 cwd=tmp_path))
+    assert "expected at least 6 numbers" in line and "MOTChallenge" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_tracker_that_cannot_start_leaves_no_folder(clip_factory, tmp_path: Path) -> None:
+    clip = clip_factory("grey", frames=10)
+    box = clip.gt.read_text().splitlines()[0]
+    line = one_error_line(vtrack("run", str(clip.path), "--init", box, "-c", "camshift",
+                                 cwd=tmp_path))
+    assert "no colour for a hue tracker" in line
+    assert not (tmp_path / "vtrack-out").exists()
+    # an earlier run's results in the folder stay as they were
+    out = tmp_path / "kept"
+    assert vtrack("run", str(clip.path), "--init", box, "-o", str(out), "--no-video",
+                  cwd=tmp_path).returncode == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    one_error_line(vtrack("run", str(clip.path), "--init", box, "-c", "camshift", "-o",
+                          str(out), "-y", cwd=tmp_path))
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_gt_origin_is_the_same_option_in_run_batch_and_report() -> None:
+    import importlib
+
+    declared = []
+    for name in ("run", "batch", "report"):
+        command = importlib.import_module(f"vtrack.cli.{name}").command
+        param = next(p for p in command.params if p.name == "gt_origin")
+        declared.append((param.opts, param.help, param.default, list(param.type.choices)))
+    assert declared[0] == declared[1] == declared[2]
+    assert declared[0][2:] == ("auto", ["auto", "0", "1"])
+    assert "[auto|0|1]" in vtrack("report", "--help").stdout
+
+
+def test_an_otb_folder_scene_writes_is_scored_with_its_own_file(clip_factory, tmp_path) -> None:
+    clip = clip_factory("smooth", frames=12, fmt="images")
+    assert clip.gt.name == "groundtruth_rect.txt"
+    overlaps = {}
+    for origin in ("auto", "1", "0"):
+        out = tmp_path / origin
+        result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--gt-origin", origin,
+                        "--no-video", "-q", "-o", str(out))
+        assert result.returncode == 0, result.stderr
+        import json
+
+        overlaps[origin] = json.loads((out / "run.json").read_text())["metrics"]["mean_overlap"]
+    assert overlaps["auto"] == overlaps["1"] != overlaps["0"]
+
+
+def test_a_same_named_input_does_not_replace_results_silently(clip_factory, tmp_path) -> None:
+    clip = clip_factory("smooth", frames=10)
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "clip.mp4").write_bytes(clip.path.read_bytes())
+    first = vtrack("run", "a/clip.mp4", "--gt", str(clip.gt), "--no-video", "-q", cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    out = tmp_path / "vtrack-out" / "clip" / DEFAULT_CONFIG
+    before = (out / "run.json").read_bytes()
+    line = one_error_line(vtrack("run", "b/clip.mp4", "--gt", str(clip.gt), cwd=tmp_path))
+    assert "holds the results of an earlier run" in line and "--overwrite (-y)" in line
+    assert (out / "run.json").read_bytes() == before
+    again = vtrack("run", "b/clip.mp4", "--gt", str(clip.gt), "--no-video", "-q", "-y",
+                   cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert (out / "run.json").read_bytes() != before
+
+
+def test_start_tracks_from_a_later_frame(clip_factory, tmp_path: Path) -> None:
+    import csv
+    import json
+
+    import av
+
+    clip = clip_factory("smooth", frames=40)
+    out = tmp_path / "out"
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--start", "25", "-q",
+                    "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    with (out / "track.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["frame"]) for r in rows] == list(range(25, 40))
+    record = json.loads((out / "run.json").read_text())
+    assert record["init"] == pytest.approx(
+        [float(v) for v in clip.gt.read_text().splitlines()[25].split(",")])
+    assert record["request"]["start"] == 25
+    assert record["metrics"]["frames_evaluated"] == 15 and record["metrics"]["auc"] > 0.8
+    with av.open(str(out / "annotated.mp4")) as container:
+        frames = list(container.decode(video=0))
+    assert len(frames) == 15 and frames[0].time == 0
+    # past the end, and without a box for that frame: one line, nothing written
+    line = one_error_line(vtrack("run", str(clip.path), "--gt", str(clip.gt), "--start", "40",
+                                 "-o", str(tmp_path / "late")))
+    assert "ground-truth box of frame 40 is missing" in line
+    line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
+                                 "40", "-o", str(tmp_path / "late")))
+    assert line.endswith("has no frame 40 (frames are numbered from 0)")
+    line = one_error_line(vtrack("run", str(clip.path), "--start", "5", "-o",
+                                 str(tmp_path / "late")))
+    assert "needs the target's box in frame 5" in line
+    assert not (tmp_path / "late").exists()
+
+
+def test_progress_lines_when_stderr_is_not_a_terminal(clip_factory, tmp_path: Path) -> None:
+    import re
+
+    clip = clip_factory("smooth", frames=12)
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--frames", "10",
+                    "--stats-period", "0", "-o", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    lines = result.stderr.splitlines()
+    name = clip.path.stem
+    assert [int(m.group(1)) for line in lines
+            if (m := re.fullmatch(rf"{name}: (\d+)/10 frames \(\d+%\), [\d.]+ fps, [\d:?]+ left",
+                                  line))] == list(range(1, 11)), lines
+    assert "\r" not in result.stderr  # no bar drawn into a log
+    quiet = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "-q", "-y",
+                   "--stats-period", "0", "-o", str(tmp_path / "out"))
+    assert quiet.returncode == 0 and quiet.stderr == ""
+
+
+def test_batch_summary_keeps_earlier_configs_and_resumed_rows_say_complete(
+        clip_factory, tmp_path: Path) -> None:
+    import csv
+    import shutil
+
+    clip = clip_factory("smooth", frames=12)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "walk.mp4")
+    shutil.copy(clip.gt, folder / "walk.gt.txt")
+
+    def rows() -> dict[tuple[str, str], str]:
+        with (tmp_path / "res" / "summary.csv").open(newline="") as handle:
+            return {(r["input"], r["config"]): r["status"] for r in csv.DictReader(handle)}
+
+    common = ("--no-video", "--jobs", "1", "-q", "--out", str(tmp_path / "res"))
+    assert vtrack("batch", str(folder), "-c", "s0", *common).returncode == 0
+    assert vtrack("batch", str(folder), "-c", "robust", *common).returncode == 0
+    assert rows() == {("walk", "s0"): "complete", ("walk", "robust"): "complete"}
+    again = vtrack("batch", str(folder), "-c", "robust", "-c", "s0", "--no-video", "--jobs",
+                   "1", "--out", str(tmp_path / "res"))
+    assert again.returncode == 0, again.stderr
+    assert rows() == {("walk", "s0"): "complete", ("walk", "robust"): "complete"}
+    assert "2 runs (2 complete; 2 of them complete before, not run again)" in again.stdout
+
+
+def test_batch_start_is_recorded_per_run(clip_factory, tmp_path: Path) -> None:
+    import csv
+    import shutil
+
+    clip = clip_factory("smooth", frames=20)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "walk.mp4")
+    shutil.copy(clip.gt, folder / "walk.gt.txt")
+    out = tmp_path / "res"
+    done = vtrack("batch", str(folder), "--start", "8", "--no-video", "--jobs", "1", "-q",
+                  "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    with (out / "walk" / DEFAULT_CONFIG / "track.csv").open(newline="") as handle:
+        assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(range(8, 20))
+
+
+@pytest.fixture(scope="module")
+def report_runs(clip_factory, tmp_path_factory) -> tuple[Path, object]:
+    """A batch of s0, s1 and robust on two generated clips (no ground truth recorded in one)."""
+    import shutil
+
+    root = tmp_path_factory.mktemp("report")
+    folder = root / "in"
+    folder.mkdir()
+    for scenario in ("occlusion", "leave_return"):
+        clip = clip_factory(scenario, frames=90)
+        shutil.copy(clip.path, folder / f"{scenario}.mp4")
+        shutil.copy(clip.gt, folder / f"{scenario}.gt.txt")
+    done = vtrack("batch", str(folder), "-c", "s0", "-c", "s1", "-c", "robust", "--jobs", "1",
+                  "-q", "--out", str(root / "results"))
+    assert done.returncode == 0, done.stderr
+    return root, clip_factory("occlusion", frames=90)
+
+
+def test_report_explains_its_columns_and_ranks_only_what_ranks(report_runs) -> None:
+    import html
+    import re
+
+    root, _ = report_runs
+    done = vtrack("report", str(root / "results"), "-q", "--out", str(root / "report"))
+    assert done.returncode == 0, done.stderr
+    page = (root / "report" / "index.html").read_text()
+    assert page.count('<table class="sortable">') >= 2 and "<script>" in page
+    for title in ("Tracking miss", "Miss flagged", "Lost frames"):
+        assert re.search(rf'<th title="[^"]+">{title}</th>', page), title
+    assert "honest" in html.unescape(page.split("<footer>")[1])
+    # the columns that describe a run mark no best cell
+    table = page.split('id="results"')[1].split("</table>")[0]
+    header = re.findall(r"<th[^>]*>([^<]+)</th>", table)
+    for row in re.findall(r"<tr[^>]*>(.*?)</tr>", table)[1:]:
+        cells = re.findall(r'<td class="([^"]*)"', row)
+        for column in ("Miss flagged", "Lost frames", "Frames"):
+            assert "best" not in cells[header.index(column)], (column, row)
+
+
+def test_report_gt_scores_a_run_made_with_frames(clip_factory, tmp_path: Path) -> None:
+    clip = clip_factory("smooth", frames=30)
+    box = clip.gt.read_text().splitlines()[0]
+    for start, name in ((0, "head"), (10, "middle")):
+        args = ["--start", str(start)] if start else []
+        line = clip.gt.read_text().splitlines()[start]
+        done = vtrack("run", str(clip.path), "--init", line if start else box, "--frames", "12",
+                      *args, "--no-video", "-q", "-o", str(tmp_path / name))
+        assert done.returncode == 0, done.stderr
+    done = vtrack("report", str(tmp_path / "head"), str(tmp_path / "middle"), "--gt",
+                  str(clip.gt), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0 and "not scored" not in done.stderr, done.stderr
+    import csv
+
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["frames_evaluated"]) for r in rows] == [12, 12]
+    assert all(float(r["auc"]) > 0.8 for r in rows), rows
+
+
+def test_report_without_ground_truth_shows_state_and_score_over_time(clip_factory,
+                                                                     tmp_path: Path) -> None:
+    import cv2
+
+    clip = clip_factory("occlusion", frames=90)
+    box = clip.gt.read_text().splitlines()[0]
+    for config in ("robust", "s0"):
+        done = vtrack("run", str(clip.path), "--init", box, "-c", config, "--no-video", "-q",
+                      "-o", str(tmp_path / config))
+        assert done.returncode == 0, done.stderr
+    done = vtrack("report", str(tmp_path / "robust"), str(tmp_path / "s0"), "-q", "-o",
+                  str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    page = (tmp_path / "report" / "index.html").read_text()
+    plots = list((tmp_path / "report" / "plots").glob("state_*.png"))
+    assert len(plots) == 1 and f'src="plots/{plots[0].name}"' in page
+    assert "nothing to plot" not in page
+    image = cv2.imread(str(plots[0]))
+    assert image.shape[0] > 250  # two panels
+
+
+def test_report_shows_failure_frames_of_every_config_side_by_side(report_runs) -> None:
+    import cv2
+
+    root, _ = report_runs
+    done = vtrack("report", str(root / "results"), "-q", "--out", str(root / "failures"))
+    assert done.returncode == 0, done.stderr
+    page = (root / "failures" / "index.html").read_text()
+    thumbnails = sorted((root / "failures" / "plots").glob("failures_*.png"))
+    assert thumbnails, list((root / "failures" / "plots").iterdir())
+    for path in thumbnails:
+        assert f'src="plots/{path.name}"' in page
+        image = cv2.imread(str(path))
+        assert image.shape[1] >= 3 * 300  # a column per config (s0, s1, robust)
+
+
+def test_batch_replaces_results_of_other_settings_only_with_overwrite(clip_factory,
+                                                                      tmp_path: Path) -> None:
+    import csv
+    import shutil
+
+    clip = clip_factory("smooth", frames=12)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "walk.mp4")
+    shutil.copy(clip.gt, folder / "walk.gt.txt")
+    common = ("batch", str(folder), "-c", "s0", "--no-video", "--jobs", "1", "-q", "--out",
+              str(tmp_path / "res"))
+    assert vtrack(*common).returncode == 0
+    record = tmp_path / "res" / "walk" / "s0" / "run.json"
+    before = record.read_bytes()
+    refused = vtrack(*common, "--set", "meanshift.iterations=5")
+    assert refused.returncode == 1 and "made with other settings" in refused.stderr
+    assert record.read_bytes() == before
+    replaced = vtrack(*common, "--set", "meanshift.iterations=5", "-y")
+    assert replaced.returncode == 0, replaced.stderr
+    with (tmp_path / "res" / "summary.csv").open(newline="") as handle:
+        assert [r["status"] for r in csv.DictReader(handle)] == ["complete"]
+    assert record.read_bytes() != before

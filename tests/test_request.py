@@ -37,6 +37,7 @@ OTHER: dict[str, Any] = {
     "crf": 30,
     "seed": 7,
     "max_frames": 5,
+    "start": 3,
     "init_from": "other.init.txt",
     "stream": "other.jsonl",
 }
@@ -82,8 +83,9 @@ def test_batch_runs_again_when_only_the_ground_truth_origin_changed(
     statuses = []
     for origin in ("0", "1", "1"):
         result = CliRunner().invoke(main, ["batch", str(folder), "--jobs", "1", "--no-video",
-                                           "--gt-origin", origin, "--out", str(out)])
+                                           "--gt-origin", origin, "--out", str(out), "-y"])
         assert result.exit_code == 0, result.output
         with (out / "summary.csv").open(newline="") as handle:
             statuses.append(next(csv.DictReader(handle))["status"])
-    assert statuses == ["complete", "complete", "skipped"]
+        statuses.append("not run again" in result.output)
+    assert statuses == ["complete", False, "complete", False, "complete", True]

@@ -42,7 +42,7 @@ def test_an_untouched_result_is_skipped(folder: Path, tmp_path: Path) -> None:
     assert record["identity"]["input"]["size"] == (folder / "occ.mp4").stat().st_size
     assert record["identity"]["gt"]["size"] == (folder / "occ.gt.txt").stat().st_size
     assert set(record["output_bytes"]) == {"track.csv", "annotated.mp4"}
-    assert "skipped: already complete" in resume(folder, out)
+    assert "already complete: not run again" in resume(folder, out)
 
 
 @pytest.mark.parametrize("change", ["rm_csv", "cut_csv", "rm_video", "edit_gt", "new_input"])
@@ -70,9 +70,9 @@ def test_a_result_that_no_longer_stands_is_run_again(folder: Path, tmp_path: Pat
         shutil.copy(tmp_path / "other.mp4", folder / "occ.mp4")
         os.utime(folder / "occ.mp4", ns=(stat.st_atime_ns, stat.st_mtime_ns))
     line = resume(folder, out)
-    assert "skipped" not in line, line
+    assert "not run again" not in line, line
     assert (run_dir / "track.csv").is_file() and (run_dir / "annotated.mp4").is_file()
     record = json.loads((run_dir / "run.json").read_text())
     assert record["status"] == "complete"
     assert record["identity"]["gt"]["size"] == (folder / "occ.gt.txt").stat().st_size
-    assert "skipped: already complete" in resume(folder, out)
+    assert "already complete: not run again" in resume(folder, out)

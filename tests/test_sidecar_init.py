@@ -94,7 +94,8 @@ def test_run_reads_a_sequence_sidecar_in_0_based_pixels_whatever_gt_origin(
     assert record(out)["init_from"] == str(folder / "init.txt")
     # --init still wins over the sidecar
     other = Box(box.x - 3, box.y, box.w, box.h)
-    again = vtrack("run", str(folder), "--init", text(other), "--no-video", "-o", str(out))
+    again = vtrack("run", str(folder), "--init", text(other), "--no-video", "-y", "-o",
+                   str(out))
     assert again.exit_code == 0, again.output
     assert first_row(out) == other and record(out)["init_from"] == "--init"
 
@@ -138,8 +139,11 @@ def test_batch_tracks_a_folder_of_footage_without_ground_truth(
     # a changed sidecar is a different run: resume tracks it again
     moved = Box(video_box.x + 2, *video_box[1:])
     path.with_name("clip.init.txt").write_text(text(moved) + "\n")
-    again = vtrack("batch", str(path.parent), "--jobs", "1", "--no-video", "--out", str(out))
+    refused = vtrack("batch", str(path.parent), "--jobs", "1", "--no-video", "--out", str(out))
+    assert refused.exit_code == 1 and "made with other settings" in refused.output
+    again = vtrack("batch", str(path.parent), "--jobs", "1", "--no-video", "--out", str(out),
+                   "--overwrite")
     with (out / "summary.csv").open(newline="") as handle:
         rows = {row["input"]: row for row in csv.DictReader(handle)}
-    assert rows["clip"]["status"] == "complete" and rows["seq"]["status"] == "skipped"
+    assert rows["clip"]["status"] == "complete" and rows["seq"]["status"] == "complete"
     assert first_row(out / "clip" / DEFAULT_CONFIG) == moved, again.output

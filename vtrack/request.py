@@ -28,7 +28,9 @@ class RunRequest:
     or else the first ground-truth box (single-target configs); ``gt_origin`` 1
     reads 1-based (MATLAB) ground-truth boxes; ``raw`` describes raw-frame input (None: a video
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
-    seeds the stochastic stages; ``max_frames`` stops early.
+    seeds the stochastic stages; ``start`` is the first frame tracked (the input's 0-based
+    frame number; the frames before it are decoded and skipped, as ``ffmpeg -ss`` skips time);
+    ``max_frames`` stops after that many tracked frames.
     """
 
     input: str
@@ -45,6 +47,7 @@ class RunRequest:
     crf: int = 23
     seed: int = 0
     max_frames: int | None = None
+    start: int = 0
     #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
     #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
     init_from: str | None = None
@@ -68,6 +71,7 @@ class RunRequest:
             "crf": self.crf,
             "seed": self.seed,
             "max_frames": self.max_frames,
+            "start": self.start,
             "init_from": self.init_from,
             "stream": self.stream,
         }
@@ -90,6 +94,7 @@ class RunRequest:
             crf=int(data["crf"]),
             seed=int(data["seed"]),
             max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
+            start=int(data.get("start", 0)),
             init_from=data.get("init_from"),
             stream=data.get("stream"),
         )

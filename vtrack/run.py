@@ -53,17 +53,19 @@ from vtrack.errors import (
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.evaluate.mot import evaluate_mot
+from vtrack.frame import Frame
 from vtrack.geometry import MIN_BOX_SIDE, Box
 from vtrack.io import (
     CsvWriter,
     InputInfo,
     Source,
     VideoWriter,
+    check_input,
     open_source,
     write_json,
 )
 from vtrack.io.identity import sizes
-from vtrack.io.outdir import OutputFolder
+from vtrack.io.outdir import OutputFolder, refuse_replacing
 from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.io.stream import StreamWriter
 from vtrack.io.videowriter import verify_video
@@ -206,6 +208,11 @@ class _Signals:
             raise Interrupted(self.pending)
 
 
+def _from(frames: Iterator[Frame], start: int) -> Iterator[Frame]:
+    """The frames numbered ``start`` and on (the earlier ones are decoded and dropped)."""
+    return frames if start == 0 else (f for f in frames if f.index >= start)
+
+
 def _limited(frames: Iterator, limit: int | None) -> Iterator:
     for n, frame in enumerate(frames):
         if limit is not None and n >= limit:
@@ -221,19 +228,23 @@ class _SingleTargetRows:
     """Formats single-target results as ``track.csv`` rows and, with ground truth, keeps the
     boxes and states for the metrics (without it nothing grows with the run's length)."""
 
-    def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None) -> None:
+    def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None,
+                 start: int = 0) -> None:
         self.columns = TRACK_COLUMNS + extras
         self.extras = extras
         self.gt = gt
+        #: ``boxes`` and ``states`` hold the frames from ``start`` on (``--start``).
+        self.start = start
         self.boxes: list[Box | None] = []
         self.states: list[str] = []
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
         if self.gt is not None:  # kept for the metrics only: without ground truth, nothing
-            self.boxes += [None] * (result.index - len(self.boxes))  # frames the input skipped
+            at = result.index - self.start
+            self.boxes += [None] * (at - len(self.boxes))  # frames the input skipped
             self.boxes.append(box)
-            self.states += [""] * (result.index - len(self.states))  # skipped: no state
+            self.states += [""] * (at - len(self.states))  # skipped: no state
             self.states.append(result.state)
         overlap = error = None
         if self.gt is not None and result.index < len(self.gt):
@@ -246,8 +257,8 @@ class _SingleTargetRows:
 
     def undo(self, result: FrameResult) -> None:
         """Forget ``result`` (its rows could not be written)."""
-        del self.boxes[result.index:]
-        del self.states[result.index:]
+        del self.boxes[result.index - self.start:]
+        del self.states[result.index - self.start:]
 
 
 class _MultiTargetRows:
@@ -317,8 +328,12 @@ class _Tracked:
 
 
 def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
-        on_open: Callable[[InputInfo], None] | None = None) -> RunSummary:
+        on_open: Callable[[InputInfo], None] | None = None, overwrite: bool = True
+        ) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
+
+    ``overwrite=False`` refuses (OutputError, before anything is tracked) a folder that holds
+    an earlier run's results (``vtrack run`` without ``--overwrite``).
 
     ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
     progress bar); ``on_frame(n)`` after each frame with the number of frames done. Called in
@@ -329,6 +344,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     -> record (metrics, summary, ``run.json``).
     """
     with _Signals() as signals:
+        check_input(request.input)  # a mistyped name first, before what else it lacks
         resolved = _resolve(request)
         source: Source = open_source(request.input, request.raw, fps=request.fps)
         try:
@@ -336,6 +352,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             if resolved.init_box is not None:
                 _check_init_box(resolved.init_box, info.width, info.height,
                                 resolved.init_from or "--init")
+            if not overwrite:
+                refuse_replacing(request.out_dir)
             with OutputFolder(request.out_dir) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
@@ -372,8 +390,7 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
     pipeline = resolved.pipeline
     formatter = _MultiTargetRows(resolved.mot_gt is not None) if pipeline.multi_target \
-        else _SingleTargetRows(
-        pipeline.columns, resolved.gt)
+        else _SingleTargetRows(pipeline.columns, resolved.gt, request.start)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
     writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
     if request.video:
@@ -404,21 +421,31 @@ def _resolve(request: RunRequest) -> _Resolved:
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     if request.gt_path is not None and pipeline.multi_target:
-        mot_gt = read_mot(request.gt_path)
+        try:
+            mot_gt = read_mot(request.gt_path)
+        except InputError as exc:
+            raise InputError(
+                f"{exc}; {request.config.name} tracks several targets and scores them against "
+                "MOTChallenge ground truth (gt.txt lines frame,id,x,y,w,h,...)") from None
     elif request.gt_path is not None:
         gt = read_boxes(request.gt_path, origin=request.gt_origin)
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
     # says, vtrack.io.sidecar), else the first ground-truth box
+    # (the sidecar holds frame 0's box: not for a run that starts later)
     init_box, init_from = request.init_box, request.init_from or "--init"
-    if init_box is None and pipeline.needs_init_box and request.raw is None:
+    start = request.start
+    if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
-        if gt[0] is None:
-            raise InputError(
-                f"{request.gt_path}: the first ground-truth box is empty; give --init x,y,w,h"
-            )
-        init_box, init_from = gt[0], str(request.gt_path)
+        if start >= len(gt) or gt[start] is None:
+            where = "first ground-truth box" if not start else f"ground-truth box of frame {start}"
+            raise InputError(f"{request.gt_path}: the {where} is "
+                             f"{'empty' if start < len(gt) else 'missing'}; give --init x,y,w,h")
+        init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
+        if start:
+            raise ConfigError(f"--start {start}: this tracker needs the target's box in frame "
+                              f"{start}: give --init x,y,w,h or --gt FILE")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h, "
             f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
@@ -439,9 +466,11 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     out = _Tracked()
     formatter, csv, video, annotator = (writers.formatter, writers.csv, writers.video,
                                         writers.annotator)
+    # with --start the video's clock starts at its first frame (as ffmpeg -ss makes it)
+    first_time: float | None = None if request.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
     try:
-        frames_in = _limited(iter(source), request.max_frames)
+        frames_in = _limited(_from(iter(source), request.start), request.max_frames)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)
@@ -457,10 +486,15 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     writers.stream.write(result)
                 if video is not None and annotator is not None:
                     assert result.frame is not None
+                    if first_time is None:
+                        first_time = result.time_s
                     video.write(result.frame, lambda planes, r=result: annotator.draw(
-                        planes, r), time_s=result.time_s)
+                        planes, r), time_s=result.time_s - first_time)
             if on_frame is not None:
                 on_frame(out.frames)
+        if out.frames == 0 and request.start:  # a user error: the folder stays as it was
+            raise InputError(f"--start {request.start}: {request.input} has no frame "
+                             f"{request.start} (frames are numbered from 0)")
     except PartialInputError as exc:
         out.status, out.error = STATUS_PARTIAL, str(exc)
     except Interrupted as exc:
@@ -567,7 +601,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
+    start = request.start
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
+        gt = gt[start:]  # the frames tracked (--start)
         metrics = summarize(formatter.boxes, gt, formatter.states)
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
@@ -578,15 +614,18 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             side = "fewer" if len(gt) < span else "more"
             note = (
                 f"{request.gt_path}: ground truth has {plural(len(gt), 'box', 'boxes')} for "
-                f"{plural(span, 'frame')} "
+                f"{plural(span, 'frame')}{f' from frame {start}' if start else ''} "
                 f"({side}); " + ("overlap is empty from frame "
-                                 f"{len(gt)} on" if len(gt) < span else "extra boxes ignored")
+                                 f"{start + len(gt)} on" if len(gt) < span
+                                 else "extra boxes ignored")
             )
             summary.warnings.append(note)
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
-        summary.mot = evaluate_mot(resolved.mot_gt, formatter.tracks, frames)
+        summary.mot = evaluate_mot(
+            {k - start: v for k, v in resolved.mot_gt.items() if k >= start},
+            {k - start: v for k, v in formatter.tracks.items()}, frames)
         metrics = dict(summary.mot)
-        past = [f for f in resolved.mot_gt if f >= frames]
+        past = [f for f in resolved.mot_gt if f >= start + frames]
         if past and status == STATUS_COMPLETE and request.max_frames is None:
             summary.warnings.append(
                 f"{request.gt_path}: ground truth has boxes in "

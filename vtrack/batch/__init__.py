@@ -25,10 +25,12 @@ file is read as OTB's 1-based MATLAB boxes (OTB, VOT, UAV123 and LaSOT ship them
 beside a video as 0-based (what ``vtrack scene`` writes). ``0`` or ``1`` forces one origin on all.
 
 Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,
-ground truth, seed and output settings is skipped (status ``skipped``) while it still stands:
-every output it lists has its recorded size and the input and ground truth the identity it
-recorded (size and modification time, :mod:`vtrack.io.identity`). Anything else is run again,
-replacing the earlier run's files (only those: :data:`vtrack.io.outdir.RUN_OUTPUTS`).
+ground truth, seed and output settings is not run again (its row says ``complete``, as its
+``run.json`` does) while it still stands: every output it lists has its recorded size and the
+input and ground truth the identity it recorded (size and modification time,
+:mod:`vtrack.io.identity`). Anything else is run again, replacing the earlier run's files (only
+those: :data:`vtrack.io.outdir.RUN_OUTPUTS`); results of a run with other settings only with
+``--overwrite``.
 The results folder is locked for the whole batch (a second batch or run on it is refused) and
 each job's folder for its run. Failure isolation: a job's user error (unreadable input, bad
 ground truth) or crash is recorded in its row (status ``failed``); an input that breaks part way
@@ -50,7 +52,7 @@ from vtrack.batch.discover import (
     is_sequence_folder,
 )
 from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor
-from vtrack.batch.jobs import STATUS_SKIPPED, SUMMARY_COLUMNS, Job, Outcome
+from vtrack.batch.jobs import SUMMARY_COLUMNS, Job, Outcome
 from vtrack.batch.plan import Plan, completed_summary, plan
 from vtrack.batch.summary import SummaryWriter, run_batch
 from vtrack.batch.worker import execute
@@ -58,7 +60,7 @@ from vtrack.machine import cpu_count
 from vtrack.run import STATUS_FAILED
 
 __all__ = [
-    "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT", "SEQUENCE_MOT_GT", "STATUS_FAILED", "STATUS_SKIPPED",
+    "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT", "SEQUENCE_MOT_GT", "STATUS_FAILED",
     "SUMMARY_COLUMNS", "VIDEO_GT", "VIDEO_INIT", "VIDEO_MOT_GT", "VIDEO_SUFFIXES", "BatchInput",
     "DaskExecutor", "Executor", "Job", "LocalExecutor", "Outcome", "Plan", "SummaryWriter",
     "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder", "plan",

@@ -7,14 +7,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError
+from vtrack.evaluate.groundtruth import SEQUENCE_GT
 
 #: File suffixes taken as video inputs (anything else beside them is ignored).
 VIDEO_SUFFIXES = frozenset({
     ".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".ts", ".mts", ".m2ts", ".mpg", ".mpeg",
     ".flv", ".wmv", ".ogv", ".3gp", ".y4m", ".h264", ".264", ".h265", ".hevc", ".mjpeg",
 })
-#: Single-target ground truth inside a sequence folder, first found wins.
-SEQUENCE_GT = ("groundtruth_rect.txt", "groundtruth.txt")
 #: MOTChallenge ground truth inside a sequence folder, first found wins.
 SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
 #: Single-target ground truth beside ``name.mp4`` (``{}`` is the name), first found wins.

@@ -8,7 +8,6 @@ from typing import Any
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
-STATUS_SKIPPED = "skipped"
 #: ``summary.csv`` columns, in order.
 SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
                    "frames_lost", "frames_skipped", "status", "error")
@@ -27,7 +26,8 @@ class Job:
 
 @dataclass
 class Outcome:
-    """What became of a job: a status of ``vtrack.run`` or ``failed`` / ``skipped``."""
+    """What became of a job: a status of ``vtrack.run`` or ``failed``; ``resumed`` when the
+    result was already complete from an earlier batch (no run)."""
 
     input: str
     config: str
@@ -36,10 +36,11 @@ class Outcome:
     error: str | None = None
     #: Which attempt this is: 2 after a worker process died running the job.
     attempt: int = 1
+    resumed: bool = False
 
     @property
     def ok(self) -> bool:
-        return self.status in (STATUS_COMPLETE, STATUS_SKIPPED)
+        return self.status == STATUS_COMPLETE
 
     def line(self) -> str:
         """One line for the terminal: the run's summary line, or what went wrong."""
@@ -47,8 +48,8 @@ class Outcome:
             line = f"{self.input} [{self.config}]: {self.status}: {self.error}"
         else:
             line = self.summary.line(f"{self.input} [{self.config}]")
-        if self.status == STATUS_SKIPPED:
-            line += " (skipped: already complete)"
+        if self.resumed:
+            line += " (already complete: not run again)"
         if self.attempt > 1:
             line += f" (attempt {self.attempt}: a worker process died on this job before)"
         return line

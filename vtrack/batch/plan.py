@@ -9,13 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.batch.discover import SEQUENCE_GT, SEQUENCE_INIT, VIDEO_GT, VIDEO_INIT, BatchInput
-from vtrack.batch.jobs import STATUS_SKIPPED, Job, Outcome
+from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
-from vtrack.errors import InputError
+from vtrack.errors import InputError, OutputError
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact
 from vtrack.io.limits import RECORD_BYTES, read_bounded
+from vtrack.io.outdir import refuse_replacing
 from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.pipeline import Pipeline
 from vtrack.request import RunRequest
@@ -85,7 +86,8 @@ class Plan:
 
 
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,
-         settings: RunRequest, threads: int = 1, force: bool = False) -> Plan:
+         settings: RunRequest, threads: int = 1, force: bool = False,
+         overwrite: bool = True) -> Plan:
     """What to do for every input x config, results in ``out_dir/<input>/<config>/`` (each
     name made one safe folder name, :func:`~vtrack.io.files.folder_name`: a config named
     ``../x`` or ``/tmp/x`` still writes inside ``out_dir``).
@@ -93,9 +95,12 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     Each job's request is ``settings`` (what ``vtrack batch`` was given: video, preset, crf,
     seed, max_frames) with the input, output folder, config and ground truth of the job.
 
-    Known outcomes: ``skipped`` for results complete from an earlier batch (unless ``force``),
+    Known outcomes: ``complete`` (``resumed``) for results complete from an earlier batch
+    (unless ``force``),
     ``failed`` for a single-target config on an input with neither ground truth nor a readable
-    initial box. ``threads`` is the number of OpenCV threads of each job.
+    initial box, and, unless ``overwrite``, for a folder holding the results of a run made
+    with other settings (as ``vtrack run`` without ``--overwrite``; the same run unfinished is
+    run again). ``threads`` is the number of OpenCV threads of each job.
     """
     result = Plan([], [], [])
     out_dir = out_dir.resolve()
@@ -117,8 +122,16 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                               config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin,
                               init_from=None if init is None else str(sidecar_path(item.path)))
             done = None if force else completed_summary(request)
+            if not overwrite and recorded_summary(request) is None:
+                try:
+                    refuse_replacing(request.out_dir)
+                except OutputError as exc:
+                    result.known.append(Outcome(item.name, label, STATUS_FAILED,
+                                                error=f"{exc} (made with other settings)"))
+                    continue
             if done is not None:
-                result.known.append(Outcome(item.name, label, STATUS_SKIPPED, done))
+                result.known.append(Outcome(item.name, label, STATUS_COMPLETE, done,
+                                            resumed=True))
             else:
                 result.jobs.append(Job(item.name, label, request, threads=threads))
     return result

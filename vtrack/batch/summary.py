@@ -50,13 +50,33 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[O
             summary.write(unfinished=STATUS_INTERRUPTED)
 
 
+def earlier_rows(path: Path) -> dict[tuple[str, str], dict[str, Any]]:
+    """The rows of an existing ``summary.csv`` by (input, config); none if it is missing or
+    cannot be read."""
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            return {(row["input"], row["config"]): {c: row.get(c) for c in SUMMARY_COLUMNS}
+                    for row in csv.DictReader(handle)}
+    except (OSError, KeyError, UnicodeDecodeError, csv.Error):
+        return {}
+
+
 class SummaryWriter:
-    """``OUT/summary.csv``: one row per input x config in plan order, rewritten atomically
-    (temporary file + rename) each time an outcome arrives, so it is never half written."""
+    """``OUT/summary.csv``: one row per input x config, rewritten atomically (temporary file +
+    rename) each time an outcome arrives, so it is never half written.
+
+    The rows of an earlier batch into the same folder (other configs, other inputs) are kept:
+    the summary covers every run in the folder, input by input, each input's configs in the
+    order they first ran."""
 
     def __init__(self, path: Path, order: Iterable[tuple[str, str]]) -> None:
         self.path = path
-        self.rows: dict[tuple[str, str], dict[str, Any] | None] = dict.fromkeys(order)
+        order = list(order)
+        planned, earlier = set(order), earlier_rows(path)
+        # input-major; sorted() is stable: each input's configs in the order they first ran
+        keys = sorted(dict.fromkeys([*earlier, *order]), key=lambda key: key[0])
+        self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
+            key: None if key in planned else earlier[key] for key in keys}
 
     def add(self, outcome: Outcome) -> None:
         self.rows[(outcome.input, outcome.config)] = outcome.row()

@@ -1,15 +1,21 @@
-"""Progress bars of the commands (tqdm on stderr, only in a terminal).
+"""Progress of the commands on stderr: a tqdm bar in a terminal, plain lines in a log.
 
 A bar appears only once there is progress to show: for ``vtrack run`` after the first frame is
 tracked (so an error opening the input or starting the tracker is never preceded by an empty
-bar), sized by the input's frame count (exact, or the container's duration x frame rate) and
-capped by ``--frames``. It shows done / total, percent,
-rate and ETA; without any count (a pipe) it shows frames done and the rate.
+bar), sized by the input's frame count (exact, or the container's duration x frame rate) less
+``--start``, and capped by ``--frames``. It shows done / total, percent, rate and ETA; without
+any count (a pipe) it shows frames done and the rate.
+
+When stderr is not a terminal (a log file, a pipe, a job scheduler) there is no bar: a plain
+line (:func:`progress_line`) is written every ``--stats-period`` seconds instead, as ``ffmpeg``
+does (``-stats_period``); ``--quiet`` silences both.
 """
 
 from __future__ import annotations
 
 import sys
+import time
+from datetime import timedelta
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -17,40 +23,87 @@ if TYPE_CHECKING:
 
     from vtrack.io import InputInfo
 
+#: Seconds between two progress lines when stderr is not a terminal.
+STATS_PERIOD = 10.0
+
 
 def terminal(quiet: bool) -> bool:
     """Whether to draw a bar: not ``--quiet`` and stderr is a terminal."""
     return not quiet and sys.stderr.isatty()
 
 
-class FrameProgress:
-    """``on_open`` / ``on_frame`` callbacks of :func:`vtrack.run.run` drawing a frame bar."""
+def progress_line(name: str, done: int, total: int | None, seconds: float,
+                  unit: str = "frames") -> str:
+    """``name: 120/600 frames (20%), 240.0 fps, 0:00:02 left`` (without a total: done and
+    rate only): one line of progress for a log."""
+    rate = done / seconds if seconds > 0 else 0.0
+    if not total:
+        return f"{name}: {done} {unit}, {rate:.1f} fps"
+    left = timedelta(seconds=round((total - done) / rate)) if rate > 0 else "?"
+    return (f"{name}: {done}/{total} {unit} ({100 * done / total:.0f}%), {rate:.1f} fps, "
+            f"{left} left")
 
-    def __init__(self, enabled: bool, max_frames: int | None) -> None:
-        self.enabled = enabled
+
+class ProgressLines:
+    """A line of progress at most every ``period`` seconds (the first after ``period``)."""
+
+    def __init__(self, name: str, total: int | None, period: float) -> None:
+        self.name, self.total, self.period = name, total, period
+        self.started = self.last = time.monotonic()
+
+    def update(self, done: int) -> None:
+        now = time.monotonic()
+        if now - self.last >= self.period:
+            self.last = now
+            total = max(self.total, done) if self.total else None
+            print(progress_line(self.name, done, total, now - self.started), file=sys.stderr,
+                  flush=True)
+
+
+class FrameProgress:
+    """``on_open`` / ``on_frame`` callbacks of :func:`vtrack.run.run`: a frame bar in a
+    terminal, progress lines every ``period`` seconds otherwise, nothing when ``quiet``."""
+
+    def __init__(self, quiet: bool, max_frames: int | None, start: int = 0,
+                 period: float = STATS_PERIOD) -> None:
+        self.quiet = quiet
         self.max_frames = max_frames
-        self.bar: tqdm | None = None
+        self.start = start  # frames skipped before tracking (--start)
+        self.period = period
+        self.bar: tqdm | ProgressLines | None = None
         self.info: InputInfo | None = None
 
     def on_open(self, info: InputInfo) -> None:
         self.info = info
 
+    def _total(self, info: InputInfo) -> int | None:
+        total = info.frame_count
+        if total is not None:
+            total = max(total - self.start, 0) or None
+        if self.max_frames is not None:
+            total = min(total, self.max_frames) if total else self.max_frames
+        return total
+
     def on_frame(self, done: int) -> None:
         if self.bar is None:
-            if not self.enabled or self.info is None:
+            if self.quiet or self.info is None:
                 return
-            from tqdm import tqdm
+            total = self._total(self.info)
+            if not terminal(self.quiet):
+                self.bar = ProgressLines(self.info.name, total, self.period)
+            else:
+                from tqdm import tqdm
 
-            total = self.info.frame_count
-            if self.max_frames is not None:
-                total = min(total, self.max_frames) if total else self.max_frames
-            self.bar = tqdm(total=total, unit="frame", desc=self.info.name, dynamic_ncols=True,
-                            file=sys.stderr)
+                self.bar = tqdm(total=total, unit="frame", desc=self.info.name,
+                                dynamic_ncols=True, file=sys.stderr)
+        if isinstance(self.bar, ProgressLines):
+            self.bar.update(done)
+            return
         if self.bar.total is not None and done > self.bar.total:  # the estimate was short
             self.bar.total = done
         self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
-        if self.bar is not None:
+        if self.bar is not None and not isinstance(self.bar, ProgressLines):
             self.bar.close()
-            self.bar = None
+        self.bar = None

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from vtrack.cli._options import gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
@@ -64,7 +65,7 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
     return configs
 
 
-@_run_options("overrides", "no_video", "preset", "crf", "seed", "max_frames", "quiet")
+@_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames", "quiet")
 @click.command("batch")
 @click.argument("folder", type=click.Path(path_type=Path))
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
@@ -85,18 +86,19 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
               show_default=True, metavar="SECONDS",
               help="With --scheduler and no worker connected: say so, wait this long for one, "
                    "then give up (exit 2).")
-@click.option("--gt-origin", type=click.Choice(["auto", "0", "1"]), default="auto",
-              show_default=True,
-              help="Origin of ground-truth boxes. auto: 1 (OTB's MATLAB convention) for "
-                   "groundtruth*.txt inside sequence folders, 0 for name.gt.txt / name.txt "
-                   "beside videos.")
+@gt_origin_option()
 @click.option("--force", is_flag=True,
               help="Run again input x config pairs whose results are already complete.")
+@click.option("--overwrite", "-y", is_flag=True,
+              help="Replace results that runs with other settings (another --set, --start, "
+                   "ground truth ...) left in DIR/<input>/<config>/; without it those pairs "
+                   "fail, naming the folder.")
 def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             jobs: int | None, scheduler: str | None, scheduler_timeout: float,
-            worker_timeout: float, gt_origin: str,
-            force: bool, overrides: tuple[str, ...], no_video: bool, preset: str, crf: int,
-            seed: int, max_frames: int | None, quiet: bool) -> None:
+            worker_timeout: float, gt_origin: int | None,
+            force: bool, overwrite: bool, overrides: tuple[str, ...], no_video: bool,
+            preset: str, crf: int,
+            seed: int, start: int, max_frames: int | None, quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
     of `vtrack run`) and DIR/summary.csv.
 
@@ -104,7 +106,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     name.mot.txt) and sequence folders holding img/ (ground truth inside: groundtruth_rect.txt
     or groundtruth.txt, MOTChallenge gt.txt). Without ground truth, single-target configs
     start from the box in name.init.txt (init.txt in a sequence folder). Results already
-    complete are skipped (resume) unless --force. A failing input does not stop the others;
+    complete are not run again (resume) unless --force; results of runs with other settings are
+    replaced only with --overwrite. A failing input does not stop the others;
     the exit code is 1 if any failed.
     """
     # imported here, not at the top: other commands start without them (Dask loads only
@@ -127,7 +130,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     if scheduler and jobs is not None:
         raise click.UsageError("--jobs and --scheduler exclude each other")
     configs = _configs(config_specs, overrides)
-    inputs = find_inputs(folder, None if gt_origin == "auto" else int(gt_origin))
+    inputs = find_inputs(folder, gt_origin)
     workers = jobs or cpu_count()
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / "summary.csv"
@@ -144,9 +147,11 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             executor = LocalExecutor(workers)
         settings = RunRequest(input=str(folder), out_dir=out_dir,
                               config=next(iter(configs.values())), video=not no_video,
-                              preset=preset, crf=crf, seed=seed, max_frames=max_frames)
+                              preset=preset, crf=crf, seed=seed, start=start,
+                              max_frames=max_frames)
         batch = plan(inputs, configs, out_dir, settings,
-                     threads=max(1, cpu_count() // workers), force=force)
+                     threads=max(1, cpu_count() // workers), force=force,
+                     overwrite=overwrite or force)
         # runs done / total with ETA; runs already complete (resume) start the bar
         known = len(batch.known)
         with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
@@ -162,6 +167,9 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         counts[outcome.status] = counts.get(outcome.status, 0) + 1
     if not quiet:
         tally = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
+        resumed = sum(outcome.resumed for outcome in outcomes)
+        if resumed:
+            tally += f"; {resumed} of them complete before, not run again"
         click.echo(f"{len(outcomes)} runs ({tally}) -> {summary_path}")
     failed = [o for o in outcomes if not o.ok]
     for outcome in failed:

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._options import gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
@@ -22,12 +23,11 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
                    "(its name as the report shows it, or its path); repeat for several. A run "
                    "whose frame count differs from the file's boxes is not scored (a warning "
                    "names it).")
-@click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
-              help="1 for MATLAB-style 1-based --gt boxes (OTB).")
+@gt_origin_option()
 @click.option("--title", default=DEFAULT_TITLE, show_default=True, help="Page title.")
 @click.option("--quiet", "-q", is_flag=True, help="No summary line.")
 def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
-            gt_origin: int, title: str, quiet: bool) -> None:
+            gt_origin: int | None, title: str, quiet: bool) -> None:
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""

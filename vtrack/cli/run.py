@@ -8,7 +8,9 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._options import gt_origin_option
 from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
 
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
@@ -41,11 +43,13 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="FILE",
               help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
                    "multi-target configs): fills overlap and center_error.")
-@click.option("--gt-origin", type=click.IntRange(0, 1), default=0, show_default=True,
-              help="1 for MATLAB-style 1-based ground-truth boxes (OTB).")
+@gt_origin_option()
 @click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
-              help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. Files an "
-                   "earlier run left there are replaced; other files are left alone.")
+              help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. A folder "
+                   "holding an earlier run's results is refused unless --overwrite.")
+@click.option("--overwrite", "-y", is_flag=True,
+              help="Replace the results an earlier run left in the output folder (its "
+                   "run.json, track.csv, annotated.mp4 ...; other files are left alone).")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
               help="Override a stage parameter (repeatable). See `vtrack stages`.")
 @click.option("--raw", "raw_size", metavar="WxH",
@@ -63,18 +67,27 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="x264 quality of annotated.mp4 (lower is better and larger).")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
+@click.option("--start", "start", type=click.IntRange(min=0), default=0, show_default=True,
+              metavar="FRAME", help="First frame to track (0-based, as track.csv numbers "
+              "them; like ffmpeg -ss, in frames): --init (default: the --gt box of that frame) "
+              "is the target's box in it. Earlier frames are decoded and skipped.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames.")
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
                    "line then goes to stderr).")
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
+@click.option("--stats-period", type=click.FloatRange(min=0), default=STATS_PERIOD,
+              show_default=True, metavar="SECONDS",
+              help="When stderr is not a terminal (a log): a progress line this often, instead "
+                   "of the bar (as ffmpeg's -stats_period).")
+@click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(input_spec: str, config_spec: str | None, init_text: str | None,
-            gt_path: Path | None, gt_origin: int, out_dir: Path | None, overrides: tuple[str, ...],
+            gt_path: Path | None, gt_origin: int | None, out_dir: Path | None, overwrite: bool,
+            overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
-            crf: int, seed: int, max_frames: int | None, stream: str | None,
-            quiet: bool) -> None:
+            crf: int, seed: int, start: int, max_frames: int | None, stream: str | None,
+            stats_period: float, quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
 
     INPUT is a video file, an image-sequence folder (img/0001.jpg ...), a container on '-'
@@ -82,9 +95,9 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     --raw WxH --pix-fmt FMT --fps N.
     """
     # imported here, not at the top: `vtrack --help` and the other commands start without them
-    from vtrack.cli._progress import FrameProgress, terminal
+    from vtrack.cli._progress import FrameProgress
     from vtrack.config import load_config
-    from vtrack.evaluate.groundtruth import parse_box
+    from vtrack.evaluate.groundtruth import gt_origin_of, parse_box
     from vtrack.io import RawFormat
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
@@ -97,7 +110,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         config=config,
         init_box=parse_box(init_text) if init_text is not None else None,
         gt_path=gt_path,
-        gt_origin=gt_origin,
+        gt_origin=0 if gt_path is None else gt_origin_of(gt_path, gt_origin),
         raw=raw,
         fps=None if raw else fps,
         video=not no_video,
@@ -105,11 +118,13 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         crf=crf,
         seed=seed,
         max_frames=max_frames,
+        start=start,
         stream=stream,
     )
-    progress = FrameProgress(terminal(quiet), max_frames)
+    progress = FrameProgress(quiet, max_frames, start, stats_period)
     try:
-        summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open)
+        summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
+                      overwrite=overwrite)
     finally:
         progress.close()
     for warning in summary.warnings:

@@ -35,8 +35,9 @@ def command(input_spec: str, frame: int, port: int) -> None:
                    "HOST)", err=True)
         selection = server.wait()
     if selection.frame != 0:
-        click.echo(f"vtrack: warning: the box was drawn on frame {selection.frame}; tracking "
-                   "starts at frame 0, so the target should be there on frame 0", err=True)
+        click.echo(f"vtrack: warning: the box was drawn on frame {selection.frame}; the saved "
+                   "box is used from frame 0: to track from this frame, run with --start "
+                   f"{selection.frame} --init {format_box(selection.box)}", err=True)
     click.echo(f"--init {format_box(selection.box)}")
     click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch use it "
                "when no --init is given)", err=True)

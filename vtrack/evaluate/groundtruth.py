@@ -11,6 +11,7 @@ import math
 import re
 from collections.abc import Iterator
 from os import PathLike
+from pathlib import Path
 
 from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import Box, box_from_parts
@@ -23,6 +24,20 @@ _SEPARATORS = re.compile(r"[,\s]+")
 MOT_PEDESTRIAN = 1
 
 _QUOTE_MAX = 60
+
+#: Single-target ground truth inside an OTB-style sequence folder (one holding ``img/``), first
+#: found wins. OTB, VOT, UAV123 and LaSOT ship these with MATLAB's 1-based boxes.
+SEQUENCE_GT = ("groundtruth_rect.txt", "groundtruth.txt")
+
+
+def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
+    """The origin to read ``path``'s boxes with: ``origin`` when given (0 or 1); for None
+    (``--gt-origin auto``) 1 when the file is a :data:`SEQUENCE_GT` name inside a sequence
+    folder (its folder holds ``img/``), else 0 (``vtrack scene``'s ``NAME.gt.txt``)."""
+    if origin is not None:
+        return origin
+    path = Path(path)
+    return 1 if path.name in SEQUENCE_GT and (path.parent / "img").is_dir() else 0
 
 
 def _quote(text: str) -> str:

@@ -45,6 +45,11 @@ ERROR_THRESHOLDS.setflags(write=False)
 #: The centre-error threshold of the precision score (OTB: 20 px).
 PRECISION_THRESHOLD_PX = 20.0
 
+#: Normalised precision thresholds (TrackingNet, Müller et al. ECCV 2018): centre error in
+#: units of the ground truth's size, 0 to 0.5.
+NORMALIZED_THRESHOLDS = np.arange(51) / 100
+NORMALIZED_THRESHOLDS.setflags(write=False)
+
 
 class Summary(TypedDict):
     """One sequence's scores; metric values are None when no frame is evaluated."""
@@ -107,6 +112,37 @@ def success_curve(overlaps: Sequence[float | None]) -> np.ndarray:
 def auc(overlaps: Sequence[float | None]) -> float:
     """Area under the success curve, OTB style: the mean of its 21 values."""
     return float(success_curve(overlaps).mean())
+
+
+def success_rate(overlaps: Sequence[float | None], threshold: float) -> float:
+    """Share of evaluated frames with IoU > ``threshold`` (GOT-10k's SR at 0.5 and 0.75)."""
+    values = _evaluated(overlaps)
+    return float((values > threshold).mean()) if values.size else math.nan
+
+
+def normalized_center_errors(
+    pred: Sequence[Box | None], gt: Sequence[Box | None]
+) -> list[float | None]:
+    """Per predicted frame, the centre error with x divided by the ground truth's width and y by
+    its height (TrackingNet); None where the ground truth is absent, ``inf`` where the tracker
+    claims no box, as :func:`frame_scores`."""
+    padded = list(gt[: len(pred)]) + [None] * (len(pred) - len(gt))
+    errors: list[float | None] = []
+    for p, g in zip(pred, padded, strict=True):
+        if g is None or not g.is_valid():
+            errors.append(None)
+        elif p is None or not p.is_valid():
+            errors.append(math.inf)
+        else:
+            errors.append(math.hypot((p.cx - g.cx) / g.w, (p.cy - g.cy) / g.h))
+    return errors
+
+
+def normalized_precision(errors: Sequence[float | None]) -> float:
+    """Area under the normalised precision curve: the mean over
+    :data:`NORMALIZED_THRESHOLDS` of the share of evaluated frames whose normalised centre
+    error is <= the threshold (NaN when no frame is evaluated)."""
+    return float(_rate(_evaluated(errors)[:, None] <= NORMALIZED_THRESHOLDS).mean())
 
 
 def mean_overlap(overlaps: Sequence[float | None]) -> float:

@@ -5,7 +5,7 @@ Decoding and encoding run in background threads so the tracker thread does only 
 
 from vtrack.io.csvfile import CsvWriter
 from vtrack.io.files import prepare_output_dir
-from vtrack.io.inputs import open_source
+from vtrack.io.inputs import check_input, open_source
 from vtrack.io.jsonfile import write_json
 from vtrack.io.raw import PIX_FMTS, RawFormat
 from vtrack.io.source import InputInfo, Source
@@ -18,6 +18,7 @@ __all__ = [
     "RawFormat",
     "Source",
     "VideoWriter",
+    "check_input",
     "open_source",
     "prepare_output_dir",
     "write_json",

@@ -17,6 +17,14 @@ def is_url(spec: str) -> bool:
     return "://" in spec and spec.split("://", 1)[0].lower().isalpha()
 
 
+def check_input(spec: str) -> None:
+    """Raise InputError when ``spec`` is a local path that does not exist or cannot be read
+    (``-`` and URLs are checked when they are opened). Cheap: callers check it first, so a
+    mistyped name is reported as that, not as whatever else is missing."""
+    if spec != "-" and not is_url(spec):
+        check_input_path(spec)
+
+
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None) -> Source:
     """Open an input and decode its first frame; raise InputError if that is impossible.
 

@@ -38,6 +38,23 @@ def _holder(path: Path) -> str:
     return text.splitlines()[0] if text else "another process"
 
 
+def earlier_results(folder: Path | str) -> list[str]:
+    """The files of :data:`RUN_OUTPUTS` an earlier run left in ``folder`` (none if it is not
+    a folder)."""
+    folder = Path(folder)
+    return [name for name in RUN_OUTPUTS if (folder / name).is_file()]
+
+
+def refuse_replacing(folder: Path | str) -> None:
+    """Raise OutputError when ``folder`` holds an earlier run's results (as ffmpeg without
+    ``-y`` will not replace a file): the user says ``--overwrite`` or picks another ``--out``."""
+    found = earlier_results(folder)
+    if found:
+        raise OutputError(
+            f"{folder}: holds the results of an earlier run ({', '.join(found)}); give "
+            "--overwrite (-y) to replace them, or another --out")
+
+
 class OutputFolder:
     """Take ``folder`` for one run or batch: ``with OutputFolder(path) as folder: ...``.
 

@@ -4,11 +4,14 @@
 folder ``index.html`` (opens from disk: PNG plots in ``plots/`` referenced relatively),
 ``summary.md`` and ``summary.csv``:
 
-- per input: overlap over time for each configuration with occluded / lost frames shaded, and
-  the OTB success plot (AUC in the legend) beside the precision plot (value at 20 px);
+- per input: overlap over time for each configuration with occluded / lost frames shaded (without
+  ground truth: the tracker's own score and state over time), the OTB success plot (AUC in the
+  legend) beside the precision plot (value at 20 px), and the frames where the trackers lost
+  the target, every configuration side by side (:mod:`.failures`);
 - over all inputs: the success and precision plots averaged over inputs;
-- tables of AUC / precision@20 / mean IoU / fps / lost frames per input and configuration and
-  averaged per configuration, best per column highlighted; multi-target runs get a table of the
+- sortable tables of AUC / precision@20 / success rates at 0.5 and 0.75 / normalised
+  precision / mean IoU / fps / lost frames per input and configuration and averaged per
+  configuration, best per column highlighted; multi-target runs get a table of the
   metrics their ``run.json`` records (MOTA, MOTP, IDF1, ID switches ...);
 - batch rows that failed without results, from the batch's ``summary.csv``.
 
@@ -30,7 +33,7 @@ from vtrack import __version__
 from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError
 from vtrack.io.files import write_text_atomic
-from vtrack.report import pages, plots, tables
+from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
 
 DEFAULT_TITLE = "vtrack report"
@@ -117,16 +120,16 @@ def _refuse_batch_folder(out_dir: Path) -> None:
 
 def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
-                 gt_origin: int = 0, title: str = DEFAULT_TITLE) -> Report:
+                 gt_origin: int | None = 0, title: str = DEFAULT_TITLE) -> Report:
     """Read every run below ``results`` and write the report into ``out_dir``.
 
     ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
-    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes): ``FILE`` or ``INPUT=FILE`` specs,
-    one or several; a run is scored only against a file of its own length (else a warning
-    names the run and the file). A run folder that cannot be read is
-    left out with a warning. Raises InputError when nothing below ``results`` is a run (or a
-    failed batch row) and OutputError when ``out_dir`` cannot be written, holds a batch's
-    ``summary.csv`` or is a run's folder.
+    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes, None to tell from each file's
+    place): ``FILE`` or ``INPUT=FILE`` specs, one or several; a run is scored only against a
+    file of its own length (else a warning names the run and the file). A run folder that
+    cannot be read is left out with a warning. Raises InputError when nothing below
+    ``results`` is a run (or a failed batch row) and OutputError when ``out_dir`` cannot be
+    written, holds a batch's ``summary.csv`` or is a run's folder.
     """
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
@@ -172,7 +175,11 @@ def build_report(results: Sequence[Path], out_dir: Path,
     sections = []
     for name, slug in _slugs(list(by_input)).items():
         scored = [r for r in by_input[name] if r.scores is not None]
+        unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
         figures = []
+        if unscored_here:
+            figures.append(plots.state_plot(name, unscored_here, palette,
+                                            plot_dir / f"state_{slug}.png"))
         if scored:
             figures.append(plots.overlap_plot(name, scored, palette,
                                               plot_dir / f"overlap_{slug}.png"))
@@ -180,6 +187,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
             if success:
                 figures.append(plots.curves_plot(name, success, precision, palette,
                                                  plot_dir / f"curves_{slug}.png"))
+            thumbnails, problem = failures.try_failure_plot(
+                name, scored, palette, plot_dir / f"failures_{slug}.png")
+            figures += [thumbnails] if thumbnails else []
+            warnings += [problem] if problem else []
         written += figures
         sections.append(pages.Section(name, f"input-{slug}",
                                       [p.relative_to(out_dir).as_posix() for p in figures]))

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from vtrack.report.runs import FailedRun, RunResult
-from vtrack.report.tables import Table
+from vtrack.report.tables import NOTES, Table
 
 #: The footer of every report: what the numbers mean (OTB conventions, vtrack.evaluate.metrics).
 DEFINITIONS = (
@@ -23,7 +23,11 @@ DEFINITIONS = (
     "ground truth is empty or marked absent (target out of view) are not evaluated; a frame "
     "where the tracker claims no box (lost) counts as a failure (overlap 0, infinite centre "
     "error). Averages over inputs are means of the per-input curves and scores. Best value per "
-    "column (among the configurations of an input, or among configurations) in bold."
+    "column (among the configurations of an input, or among configurations) in bold; columns "
+    "that describe rather than rank (frames, miss flagged, lost frames) mark none. Click a "
+    "column's header to sort by it; hover it for what it means. "
+    + " ".join(f"{title}: {note}." for title, note in NOTES.items()
+               if title in ("Tracking miss", "Miss flagged", "Lost frames"))
 )
 #: Added to the footer when multi-target runs are shown.
 MOT_DEFINITIONS = (
@@ -37,7 +41,10 @@ body { font: 14px/1.45 system-ui, -apple-system, "Segoe UI", sans-serif; color: 
        max-width: 1100px; margin: 24px auto; padding: 0 16px; }
 h1 { font-size: 24px; margin-bottom: 4px; } h2 { margin-top: 32px; border-bottom: 1px solid #ddd; }
 .meta { color: #666; margin-top: 0; } .warn { color: #9a5b00; }
+.scroll { overflow-x: auto; max-width: 100%; }
 table { border-collapse: collapse; margin: 12px 0; font-variant-numeric: tabular-nums; }
+th { cursor: pointer; user-select: none; } th[title] { text-decoration: underline dotted; }
+th[data-dir="asc"]::after { content: " \\25B2"; } th[data-dir="desc"]::after { content: " \\25BC"; }
 th, td { padding: 4px 10px; border-bottom: 1px solid #e5e5e5; text-align: right; }
 th { background: #f4f4f6; } td.label, th.label { text-align: left; }
 tr.group td { border-top: 2px solid #bbb; } td.best { font-weight: 700; background: #e6f4ea; }
@@ -82,10 +89,45 @@ def _e(text: object) -> str:
     return html.escape(str(text))
 
 
+#: Sorting by a click on a header (numbers as numbers, dashes last; a second click reverses).
+SORT_JS = """
+document.querySelectorAll("table.sortable").forEach(function (table) {
+  table.querySelectorAll("th").forEach(function (th, col) {
+    th.addEventListener("click", function () {
+      var dir = th.dataset.dir === "asc" ? "desc" : "asc";
+      table.querySelectorAll("th").forEach(function (h) { delete h.dataset.dir; });
+      th.dataset.dir = dir;
+      var body = table.tBodies[0], rows = Array.prototype.slice.call(body.rows);
+      function key(row) {
+        var text = row.cells[col].textContent.trim(), number = parseFloat(text);
+        return isNaN(number) ? text : number;
+      }
+      rows.sort(function (a, b) {
+        var x = key(a), y = key(b), sign = dir === "asc" ? 1 : -1;
+        if (typeof x === "number" && typeof y === "number") return sign * (x - y);
+        if (typeof x === "number") return -1;
+        if (typeof y === "number") return 1;
+        return sign * x.localeCompare(y);
+      });
+      rows.forEach(function (row) { row.classList.remove("group"); body.appendChild(row); });
+    });
+  });
+});
+"""
+
+
 def html_table(table: Table, labels: int) -> str:
-    """A table; the first ``labels`` columns are left-aligned text, best cells highlighted."""
-    head = "".join(f'<th class="label">{_e(h)}</th>' if n < labels else f"<th>{_e(h)}</th>"
-                   for n, h in enumerate(table.header))
+    """A sortable table (click a header) in a horizontally scrolling box; the first
+    ``labels`` columns are left-aligned text, best cells highlighted, headers with a note
+    carry it as their tooltip."""
+
+    def header(n: int, title: str) -> str:
+        note = table.notes.get(title)
+        attrs = (' class="label"' if n < labels else "") + (f' title="{_e(note)}"' if note
+                                                             else "")
+        return f"<th{attrs}>{_e(title)}</th>"
+
+    head = "".join(header(n, h) for n, h in enumerate(table.header))
     rows = []
     for index, row in enumerate(table.rows):
         cells = "".join(
@@ -95,7 +137,8 @@ def html_table(table: Table, labels: int) -> str:
         )
         group = ' class="group"' if index in table.groups[1:] else ""
         rows.append(f"<tr{group}>{cells}</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+    return (f'<div class="scroll"><table class="sortable"><thead><tr>{head}</tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table></div>")
 
 
 def _img(path: str, alt: str) -> str:
@@ -127,13 +170,13 @@ def render_html(page: Page) -> str:
         parts.append(f'<h2 id="{_e(section.anchor)}">{_e(section.name)}</h2>')
         parts += [_img(p, f"{section.name}: {Path(p).stem}") for p in section.plots]
         if not section.plots:
-            parts.append("<p>No ground truth: nothing to plot.</p>")
+            parts.append("<p>No frame tracked: nothing to plot.</p>")
     parts.append(f"<footer>{_e(_footer(page))}</footer>")
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
         f"<title>{_e(page.title)}</title>\n<style>{CSS}</style>\n</head>\n<body>\n"
-        + "\n".join(parts) + "\n</body>\n</html>\n"
+        + "\n".join(parts) + f"\n<script>{SORT_JS}</script>\n</body>\n</html>\n"
     )
 
 
@@ -182,6 +225,7 @@ def render_markdown(page: Page) -> str:
 
 #: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
 CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
+               "success50", "success75", "norm_precision",
                "mean_overlap", "mean_center_error", "tracking_miss", "miss_flagged", "fps",
                "frames_occluded", "frames_lost", "ground_truth", "run")
 
@@ -200,8 +244,9 @@ def render_csv(runs: Sequence[RunResult]) -> str:
     writer.writerow(CSV_COLUMNS + tuple(mot_keys))
     for run in runs:
         s = run.scores
-        scores = ([s.frames_evaluated, s.auc, s.precision20, s.mean_overlap, s.mean_center_error,
-                   s.tracking_miss, s.miss_flagged] if s else [None] * 7)
+        scores = ([s.frames_evaluated, s.auc, s.precision20, s.success50, s.success75,
+                   s.norm_precision, s.mean_overlap, s.mean_center_error, s.tracking_miss,
+                   s.miss_flagged] if s else [None] * 10)
         row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
                run.frames_occluded, run.frames_lost, run.ground_truth,
                str(run.folder)] + [run.mot.get(k) for k in mot_keys]

@@ -2,6 +2,8 @@
 
 - :func:`overlap_plot`: overlap (%) over time, one panel per configuration, occluded and lost
   frames shaded (the layout of S0's Fig. 20);
+- :func:`state_plot`: without ground truth, the tracker's own score over time with its
+  occluded and lost frames shaded, one panel per configuration;
 - :func:`curves_plot`: OTB success plot (AUC in the legend) beside the precision plot (value at
   20 px in the legend).
 
@@ -10,7 +12,7 @@ Every function writes one PNG and returns its path.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -54,23 +56,25 @@ def _shade(axis, values: Sequence[object], value: object, colour: str, label: st
 SCORE_YLIM = (0.0, 1.02)
 
 
-def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]) -> Figure:
-    """Overlap (IoU, 0..1 like the success plot) with the ground truth per frame; a panel per
-    run (configuration) with the frames it reported occluded or lost shaded, and frames without
-    ground truth in grey. The shading legend sits above the panels, never over the data."""
+def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], ylabel: str,
+            values: Callable[[RunResult], Sequence[float | None]],
+            absent: Callable[[RunResult], Sequence[bool]] | None = None) -> Figure:
+    """A panel per run (configuration): ``values`` per frame (0..1) over the frames it reported
+    occluded or lost (shaded), and frames where ``absent`` is true in grey (no ground truth).
+    The shading legend sits above the panels, never over the data."""
     figure = Figure(figsize=(10, 0.9 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
     axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
     legend: dict[str, object] = {}
     for axis, run in zip(axes, runs, strict=True):
-        overlaps = np.array([np.nan if o is None else o for o in run.overlaps or []], float)
+        series = np.array([np.nan if v is None else v for v in values(run)], float)
         for state, (colour, label) in SHADES.items():
             _shade(axis, run.states, state, colour, label)
-        _shade(axis, [o is None for o in run.overlaps or []], True, NO_GT_SHADE,
-               "no ground truth")
-        axis.plot(np.arange(len(overlaps)), overlaps, color=palette[run.config], lw=1.2)
+        if absent is not None:
+            _shade(axis, absent(run), True, NO_GT_SHADE, "no ground truth")
+        axis.plot(np.arange(len(series)), series, color=palette[run.config], lw=1.2)
         axis.set_ylim(*SCORE_YLIM)
-        axis.set_xlim(-0.5, max(len(overlaps), 1) - 0.5)
-        axis.set_ylabel("overlap (IoU)")
+        axis.set_xlim(-0.5, max(len(series), 1) - 0.5)
+        axis.set_ylabel(ylabel)
         axis.set_title(run.config, loc="left", fontsize=10, color=palette[run.config])
         axis.grid(alpha=0.3)
         for handle, label in zip(*axis.get_legend_handles_labels(), strict=True):
@@ -79,8 +83,26 @@ def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
         figure.legend(list(legend.values()), list(legend), loc="outside upper right",
                       fontsize=8, ncols=len(legend), frameon=False)
     axes[-1].set_xlabel("frame")
-    figure.suptitle(f"{name}: overlap with ground truth over time", fontsize=11)
+    figure.suptitle(title, fontsize=11)
     return figure
+
+
+def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]) -> Figure:
+    """Overlap (IoU, 0..1 like the success plot) with the ground truth per frame; a panel per
+    run (configuration) with the frames it reported occluded or lost shaded, and frames without
+    ground truth in grey."""
+    return _panels(f"{name}: overlap with ground truth over time", runs, palette,
+                   "overlap (IoU)", lambda run: run.overlaps or [],
+                   lambda run: [o is None for o in run.overlaps or []])
+
+
+def state_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
+               path: Path) -> Path:
+    """Without ground truth: each run's own score (0..1) per frame, its occluded and lost
+    frames shaded; saved as ``path``."""
+    _panels(f"{name}: tracker's score and state over time (no ground truth)", runs, palette,
+            "score", lambda run: run.confidence).savefig(path)
+    return path
 
 
 def overlap_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],

@@ -33,7 +33,7 @@ import numpy as np
 from vtrack.batch import STATUS_FAILED, SUMMARY_COLUMNS
 from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
-from vtrack.evaluate.groundtruth import read_boxes
+from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
 from vtrack.geometry import Box
 from vtrack.io.identity import sizes
 
@@ -51,12 +51,17 @@ class Scores:
     precision: np.ndarray
     tracking_miss: float = math.nan
     miss_flagged: float = math.nan
+    success50: float = math.nan
+    success75: float = math.nan
+    norm_precision: float = math.nan
 
     @classmethod
     def of(cls, overlaps: Sequence[float | None], errors: Sequence[float | None],
-           states: Sequence[str] | None = None) -> Scores:
+           states: Sequence[str] | None = None,
+           norm_errors: Sequence[float | None] | None = None) -> Scores:
         """Scores of per-frame overlaps and errors; with one state per frame also the honest-state
-        measures (:func:`~vtrack.evaluate.metrics.tracking_miss_rate`, ``flagged_miss_rate``)."""
+        measures (:func:`~vtrack.evaluate.metrics.tracking_miss_rate`, ``flagged_miss_rate``);
+        with the normalised centre errors the normalised precision."""
         honest = states is not None and len(states) == len(overlaps)
         return cls(
             frames_evaluated=sum(o is not None for o in overlaps),
@@ -66,6 +71,10 @@ class Scores:
             mean_center_error=metrics.mean_center_error(errors),
             tracking_miss=metrics.tracking_miss_rate(states, overlaps) if honest else math.nan,
             miss_flagged=metrics.flagged_miss_rate(states, overlaps) if honest else math.nan,
+            success50=metrics.success_rate(overlaps, 0.5),
+            success75=metrics.success_rate(overlaps, 0.75),
+            norm_precision=(math.nan if norm_errors is None
+                            else metrics.normalized_precision(norm_errors)),
             success=metrics.success_curve(overlaps),
             precision=metrics.precision_curve(errors),
         )
@@ -94,11 +103,22 @@ class RunResult:
     #: Frames of the input as ``run.json`` recorded when it opened (exact or estimated).
     input_frames: int | None = None
     states: list[str] = field(default_factory=list)
+    #: The tracker's own score per frame (``track.csv``'s ``score``; None where it has none).
+    confidence: list[float | None] = field(default_factory=list)
     overlaps: list[float | None] | None = None
     errors: list[float | None] | None = None
+    #: Centre errors in units of the ground truth's size (None: the boxes were not rescored).
+    norm_errors: list[float | None] | None = None
     mot: dict[str, Any] = field(default_factory=dict)
     #: Why the report's ``--gt`` was not used for this run (one line), if it was not.
     note: str | None = None
+    #: The input as the run opened it (``run.json``'s request; None for raw frames or stdin,
+    #: which cannot be read again), and the input's frame number of the run's first frame.
+    source: str | None = None
+    first_frame: int = 0
+    #: The tracker's box per frame (None: lost) and the ground truth's, when it was rescored.
+    boxes: list[Box | None] = field(default_factory=list)
+    truth: list[Box | None] | None = None
 
     @cached_property
     def scores(self) -> Scores | None:
@@ -106,7 +126,7 @@ class RunResult:
         stopped before their first frame."""
         if not self.overlaps or self.errors is None:
             return None
-        return Scores.of(self.overlaps, self.errors, self.states)
+        return Scores.of(self.overlaps, self.errors, self.states, self.norm_errors)
 
 
 def _int_or_none(value: object) -> int | None:
@@ -123,12 +143,13 @@ class GroundTruth:
     input: str | None = None
 
     @classmethod
-    def read(cls, path: Path, origin: int = 0, input: str | None = None) -> GroundTruth:
-        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError)."""
-        return cls(str(path), read_boxes(path, origin=origin), input)
+    def read(cls, path: Path, origin: int | None = 0, input: str | None = None) -> GroundTruth:
+        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError);
+        ``origin`` None: :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
+        return cls(str(path), read_boxes(path, origin=gt_origin_of(path, origin)), input)
 
     @classmethod
-    def parse(cls, text: str, origin: int = 0) -> GroundTruth:
+    def parse(cls, text: str, origin: int | None = 0) -> GroundTruth:
         """``--gt FILE`` or ``--gt INPUT=FILE`` (INPUT: an input's name, as the report shows
         it, or its path as given to ``vtrack run``). A file whose name holds ``=`` is a FILE."""
         name, sep, path = text.partition("=")
@@ -143,11 +164,12 @@ class GroundTruth:
         given = str(request.get("input") or "").rstrip("/")
         return self.input.rstrip("/") in (name, given, Path(given).name)
 
-    def misfit(self, frames: int, complete: bool) -> str | None:
-        """Why these boxes cannot be a run's ground truth: a complete run must have as many
-        frames as boxes, a run that stopped early no more (None: they fit)."""
-        boxes = len(self.boxes)
-        if frames > boxes or (complete and frames != boxes):
+    def misfit(self, frames: int, whole: bool, start: int = 0) -> str | None:
+        """Why these boxes cannot be a run's ground truth: a run over the whole input (from
+        ``start`` on) must have as many frames as boxes, a run that stopped early (``--frames``,
+        an error) no more (None: they fit)."""
+        boxes = len(self.boxes) - start
+        if frames > boxes or (whole and frames != boxes):
             return (f"{self.path} has {plural(boxes, 'box', 'boxes')} for its "
                     f"{plural(frames, 'frame')}")
         return None
@@ -198,33 +220,44 @@ def _recorded_scores(rows: list[dict[str, str]]) -> FrameScores:
     return overlaps, errors
 
 
-def _rescored(rows: list[dict[str, str]], request: dict[str, Any]) -> FrameScores:
-    """The run's boxes against the ground truth it recorded (see the module docstring)."""
+def _rescored(rows: list[dict[str, str]], request: dict[str, Any]
+              ) -> tuple[FrameScores, list[Box | None] | None]:
+    """The run's boxes against the ground truth it recorded (see the module docstring), and
+    those ground-truth boxes (None: the file could not be read, the recorded scores are used)."""
     recorded = _recorded_scores(rows)
     boxes = _boxes(rows)
+    start = _start(request)
     origins = [request["gt_origin"]] if "gt_origin" in request else [0, 1]
     candidates = []
     for origin in origins:
         try:
-            scores = metrics.frame_scores(boxes, read_boxes(request["gt"], origin=origin))
+            truth = read_boxes(request["gt"], origin=origin)[start:]
+            scores = metrics.frame_scores(boxes, truth)
         except InputError:
-            return recorded
+            return recorded, None
         distance = sum(abs(a - b) for a, b in zip(scores[0], recorded[0], strict=True)
                        if a is not None and b is not None)
-        candidates.append((distance, scores))
-    return min(candidates, key=lambda c: c[0])[1]
+        candidates.append((distance, scores, truth))
+    _, scores, truth = min(candidates, key=lambda c: c[0])
+    return scores, truth
 
 
-def _with_skipped_frames(rows: list[dict[str, str]]) -> list[dict[str, str]]:
-    """One row per frame: frames the input skipped (damaged, no row in ``track.csv``) get an
-    empty row, a frame without a box or a score, so rows line up with the ground truth."""
-    if all(row.get("frame") == str(i) for i, row in enumerate(rows)):
+def _start(request: dict[str, Any]) -> int:
+    """The first frame the run tracked (``--start``; 0 for records made before it existed)."""
+    return int(request.get("start") or 0)
+
+
+def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dict[str, str]]:
+    """One row per frame from ``start`` on: frames the input skipped (damaged, no row in
+    ``track.csv``) get an empty row, a frame without a box or a score, so rows line up with the
+    ground truth."""
+    if all(row.get("frame") == str(start + i) for i, row in enumerate(rows)):
         return rows
     filled: list[dict[str, str]] = []
     for row in rows:
         frame = int(row["frame"])
         filled += [{"frame": str(i), "state": "skipped", "x": "", "overlap": "",
-                    "center_error": ""} for i in range(len(filled), frame)]
+                    "center_error": ""} for i in range(start + len(filled), frame)]
         filled.append(row)
     return filled
 
@@ -299,23 +332,38 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             raise InputError(f"{folder / 'track.csv'}: holds {plural(len(written), 'row')}, "
                              f"run.json records {plural(result.frames, 'frame')} (cut or "
                              "edited after the run); not scored")
-        rows = _with_skipped_frames(written)
+        start = _start(request)
+        rows = _with_skipped_frames(written, start)
         result.states = [row["state"] for row in rows]
+        result.confidence = [_number(row.get("score")) for row in rows]
+        result.boxes, result.first_frame = _boxes(rows), start
+        if not request.get("raw") and request.get("input") not in (None, "-"):
+            result.source = str(request["input"])
         if request.get("gt"):
             result.ground_truth = str(request["gt"])
-            result.overlaps, result.errors = _rescored(rows, request)
+            (result.overlaps, result.errors), result.truth = _rescored(rows, request)
+            if result.truth is not None:
+                result.norm_errors = metrics.normalized_center_errors(result.boxes,
+                                                                      result.truth)
         elif gt is not None:
             truths = [gt] if isinstance(gt, GroundTruth) else list(gt)
             truth = pick_ground_truth(truths, result.input, request)
-            # Frames the run spans: the last row's frame number (skipped frames included).
-            frames = int(rows[-1]["frame"]) + 1 if rows else 0
-            misfit = truth.misfit(frames, result.status == "complete") if truth else None
+            # Frames the run spans (skipped frames included); one stopped by --frames N is
+            # scored on its N frames like one that stopped on an error
+            frames = len(rows)
+            limit = request.get("max_frames")
+            whole = result.status == "complete" and not (limit and frames >= limit)
+            misfit = truth.misfit(frames, whole, start) if truth else None
             if misfit:
                 result.note = (f"{folder}: input {result.input} not scored: {misfit}; give "
                                f"--gt {result.input}=FILE with its own ground truth")
             elif truth is not None:
                 result.ground_truth = truth.path
-                result.overlaps, result.errors = metrics.frame_scores(_boxes(rows), truth.boxes)
+                result.truth = truth.boxes[start:]
+                result.overlaps, result.errors = metrics.frame_scores(result.boxes,
+                                                                      result.truth)
+                result.norm_errors = metrics.normalized_center_errors(result.boxes,
+                                                                      result.truth)
     except (KeyError, ValueError, TypeError) as exc:
         raise InputError(f"{folder / 'track.csv'}: not a vtrack track.csv ({exc})") from None
     return result

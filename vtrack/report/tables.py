@@ -3,7 +3,10 @@
 A :class:`Table` is a header and rows of :class:`Cell`; a cell marked ``best`` holds the best
 value of its column within its group of rows (the configurations of one input, or all
 configurations in the averages table). Ties for best are all marked; a column whose values are
-all equal (or a group of one row) marks nothing.
+all equal (or a group of one row) marks nothing, and neither does a column that describes a
+run rather than ranks it (frame counts, lost frames: a tracker that never says ``lost`` has 0;
+miss flagged: honesty of the state, high also for a tracker that misses everything).
+Each column may carry a ``note``, shown as the header's tooltip.
 """
 
 from __future__ import annotations
@@ -31,20 +34,53 @@ class Cell:
 
 @dataclass
 class Table:
-    """``groups`` are the row indices where a new group (an input) starts."""
+    """``groups`` are the row indices where a new group (an input) starts; ``notes`` the
+    explanation of a header (by title), if it has one."""
 
     header: list[str]
     rows: list[list[Cell]] = field(default_factory=list)
     groups: list[int] = field(default_factory=list)
+    notes: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class Column:
-    """A numeric column: title, decimals shown, which way is better (None: neither)."""
+    """A numeric column: title, decimals shown, which way is better (None: neither, nothing
+    is marked best), and what it means (the header's tooltip)."""
 
     title: str
     digits: int
     higher_is_better: bool | None = True
+    note: str = ""
+
+
+#: What the less common columns mean (the tooltips, and the report's footer).
+NOTES = {
+    "Evaluated": "frames with ground truth present (the others are not scored)",
+    "SR0.5": "success rate at IoU 0.5: share of evaluated frames whose overlap is > 0.5 "
+             "(GOT-10k's SR0.50)",
+    "SR0.75": "success rate at IoU 0.75: share of evaluated frames whose overlap is > 0.75",
+    "Norm. precision": "normalised precision (TrackingNet): the centre error divided by the "
+                       "ground truth's width and height, area under its precision curve for "
+                       "thresholds 0 to 0.5",
+    "Tracking miss": "of the frames the tracker calls 'tracking', the share whose box misses "
+                     "the target (IoU 0): lower is better, a tracker should not claim a target "
+                     "it has lost",
+    "Miss flagged": "of the frames whose box misses the target (or that have no box while it "
+                    "is in view), the share the tracker itself calls 'occluded' or 'lost': how "
+                    "honest its state is, not how well it tracks (not ranked)",
+    "Lost frames": "frames the tracker called 'lost' (no box); 0 for trackers that never say "
+                   "lost (not ranked)",
+}
+
+
+def _column(title: str, digits: int, higher_is_better: bool | None = True) -> Column:
+    return Column(title, digits, higher_is_better, NOTES.get(title, ""))
+
+
+def _table(labels: list[str], columns: Sequence[Column]) -> Table:
+    return Table(labels + [c.title for c in columns],
+                 notes={c.title: c.note for c in columns if c.note})
 
 
 Values = list[float | None]
@@ -80,21 +116,25 @@ def _add_group(table: Table, labels: list[list[str]], values: list[Values],
 
 def _scores(run: RunResult) -> Values:
     s = run.scores
-    return [None] * 6 if s is None else [s.frames_evaluated, s.auc, s.precision20,
+    return [None] * 9 if s is None else [s.frames_evaluated, s.auc, s.precision20,
+                                          s.success50, s.success75, s.norm_precision,
                                           s.mean_overlap, s.tracking_miss, s.miss_flagged]
 
 
 #: Per input x configuration: OTB scores, speed and lost frames.
 RESULT_COLUMNS = (
-    Column("Frames", 0, None),
-    Column("Evaluated", 0, None),
-    Column("AUC", 3),
-    Column("Precision@20", 3),
-    Column("Mean IoU", 3),
-    Column("Tracking miss", 3, False),
-    Column("Miss flagged", 3),
-    Column("FPS", 1),
-    Column("Lost frames", 0, False),
+    _column("Frames", 0, None),
+    _column("Evaluated", 0, None),
+    _column("AUC", 3),
+    _column("Precision@20", 3),
+    _column("SR0.5", 3),
+    _column("SR0.75", 3),
+    _column("Norm. precision", 3),
+    _column("Mean IoU", 3),
+    _column("Tracking miss", 3, False),
+    _column("Miss flagged", 3, None),
+    _column("FPS", 1),
+    _column("Lost frames", 0, None),
 )
 RUN_LABELS = ["Input", "Config", "Status"]
 
@@ -117,7 +157,7 @@ def _run_label(run: RunResult) -> list[str]:
 
 def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
     """One row per input x configuration, best per column within each input."""
-    table = Table(RUN_LABELS + [c.title for c in RESULT_COLUMNS])
+    table = _table(RUN_LABELS, RESULT_COLUMNS)
     for runs in by_input:
         _add_group(table, [_run_label(r) for r in runs],
                    [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
@@ -127,14 +167,17 @@ def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
 
 #: Per configuration, over inputs: mean scores, mean fps, total lost frames.
 AVERAGE_COLUMNS = (
-    Column("Inputs", 0, None),
-    Column("AUC", 3),
-    Column("Precision@20", 3),
-    Column("Mean IoU", 3),
-    Column("Tracking miss", 3, False),
-    Column("Miss flagged", 3),
-    Column("FPS", 1),
-    Column("Lost frames", 0, False),
+    _column("Inputs", 0, None),
+    _column("AUC", 3),
+    _column("Precision@20", 3),
+    _column("SR0.5", 3),
+    _column("SR0.75", 3),
+    _column("Norm. precision", 3),
+    _column("Mean IoU", 3),
+    _column("Tracking miss", 3, False),
+    _column("Miss flagged", 3, None),
+    _column("FPS", 1),
+    _column("Lost frames", 0, None),
 )
 
 
@@ -149,13 +192,13 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
     tracked frames. Each score is the mean over those runs, fps their mean and lost frames
     their total; a configuration whose counted runs include partial (or interrupted) ones says
     how many."""
-    table = Table(["Config"] + [c.title for c in AVERAGE_COLUMNS])
+    table = _table(["Config"], AVERAGE_COLUMNS)
     values, labels = [], []
     for config, runs in by_config.items():
         scored = [r for r in runs if r.scores is not None]
         counted = scored or [r for r in runs if r.frames > 0]
         scores = [_scores(r)[1:] for r in scored]
-        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 5
+        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 8
         values.append([len(counted), *means, _mean([r.fps for r in counted]),
                        sum(r.frames_lost for r in counted)])
         partial = sum(r.status in INCOMPLETE for r in counted)
@@ -180,7 +223,7 @@ def mot_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
     ordered = [k for k in MOT_ORDER if k in keys] + sorted(keys - set(MOT_ORDER))
     columns = [Column("Frames", 0, None), *(_mot_column(k, runs) for k in ordered),
                Column("FPS", 1)]
-    table = Table(RUN_LABELS + [c.title for c in columns])
+    table = _table(RUN_LABELS, columns)
     for group in by_input:
         _add_group(table, [_run_label(r) for r in group],
                    [[r.frames, *(r.mot.get(k) for k in ordered), r.fps] for r in group],

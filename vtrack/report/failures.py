@@ -1,0 +1,121 @@
+"""Failure thumbnails: the frames where the trackers of one input lost the target, every
+configuration side by side, each with its own box and the ground truth's.
+
+For each scored run the first frame of each of its longest stretches of misses (target present,
+IoU 0 or no box) is taken (:func:`failure_frames`); the frames of all runs of the input are
+decoded once from the input the runs read, and drawn as a grid: a row per frame, a column per
+configuration, so the same moment is compared across trackers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+from vtrack.errors import VtrackError
+from vtrack.geometry import Box
+from vtrack.report.plots import DPI, runs_of
+from vtrack.report.runs import RunResult
+
+#: Failures taken per run, and frames (rows) shown per input at most.
+PER_RUN, MAX_ROWS = 3, 6
+#: Width of a thumbnail in pixels (frames are scaled down to it, never up).
+THUMB_WIDTH = 320
+
+
+def failure_frames(run: RunResult, limit: int = PER_RUN) -> list[int]:
+    """The input's frame numbers where the run's ``limit`` longest stretches of misses start
+    (longest first; ties by time)."""
+    missed = [o is not None and o <= 0 for o in run.overlaps or []]
+    stretches = [(end - start, start) for start, end, miss in runs_of(missed) if miss]
+    stretches.sort(key=lambda s: (-s[0], s[1]))
+    return [run.first_frame + start for _, start in stretches[:limit]]
+
+
+def _frames(source: str, wanted: set[int]) -> dict[int, np.ndarray]:
+    """The BGR pictures of the ``wanted`` frame numbers of ``source`` (decoded in one pass)."""
+    from vtrack.io import open_source
+
+    found: dict[int, np.ndarray] = {}
+    with open_source(source) as frames:
+        for frame in frames:
+            if frame.index in wanted:
+                found[frame.index] = frame.bgr().copy()
+            if len(found) == len(wanted) or frame.index >= max(wanted):
+                break
+    return found
+
+
+def _draw_box(axis, box: Box | None, scale: float, colour: str, dashed: bool = False,
+              width: float = 1.6) -> None:
+    if box is not None:
+        axis.add_patch(Rectangle((box.x * scale, box.y * scale), box.w * scale, box.h * scale,
+                                 fill=False, edgecolor=colour, lw=width,
+                                 ls="--" if dashed else "-"))
+
+
+def _draw_truth(axis, box: Box | None, scale: float) -> None:
+    """The ground truth in white on black, a colour no configuration gets."""
+    _draw_box(axis, box, scale, "black", width=3.0)
+    _draw_box(axis, box, scale, "white", width=1.2)
+
+
+def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
+                 path: Path) -> Path | None:
+    """The grid of failure frames of ``runs`` (one input) saved as ``path``; None when no run
+    misses the target. Raises InputError (a VtrackError) when the input cannot be read again."""
+    scored = [r for r in runs if r.truth is not None and r.overlaps]
+    rows = sorted({f for run in scored for f in failure_frames(run)})[:MAX_ROWS]
+    sources = [r.source for r in scored if r.source]
+    if not rows or not sources:
+        return None
+    pictures = _frames(sources[0], set(rows))
+    rows = [f for f in rows if f in pictures]
+    if not rows:
+        return None
+    height, width = pictures[rows[0]].shape[:2]
+    scale = min(1.0, THUMB_WIDTH / width)
+    cell = (THUMB_WIDTH / DPI * 1.05, height * scale / DPI * 1.05 + 0.3)
+    figure = Figure(figsize=(cell[0] * len(scored), cell[1] * len(rows) + 0.5), dpi=DPI,
+                    layout="constrained")
+    axes = figure.subplots(len(rows), len(scored), squeeze=False)
+    for r, frame in enumerate(rows):
+        picture = cv2.cvtColor(cv2.resize(pictures[frame], None, fx=scale, fy=scale,
+                                          interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
+        for c, run in enumerate(scored):
+            axis = axes[r, c]
+            axis.imshow(picture)
+            axis.set_axis_off()
+            at = frame - run.first_frame
+            if not 0 <= at < len(run.boxes):
+                axis.set_title(f"{run.config}, frame {frame}: not tracked", fontsize=8)
+                continue
+            assert run.truth is not None and run.overlaps is not None
+            truth = run.truth[at] if at < len(run.truth) else None
+            _draw_truth(axis, truth, scale)
+            _draw_box(axis, run.boxes[at], scale, palette[run.config],
+                      dashed=run.states[at] != "tracking")
+            overlap = run.overlaps[at]
+            said = run.states[at] or "skipped"
+            score = "no box" if run.boxes[at] is None else (
+                "—" if overlap is None else f"IoU {overlap:.2f}")
+            axis.set_title(f"{run.config}, frame {frame}: {score} ({said})", fontsize=8,
+                           color=palette[run.config])
+    figure.suptitle(f"{name}: where the trackers lost the target (white: ground truth; "
+                    "dashed: the tracker said occluded or lost)", fontsize=10)
+    figure.savefig(path)
+    return path
+
+
+def try_failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
+                     path: Path) -> tuple[Path | None, str | None]:
+    """:func:`failure_plot`, or (None, a warning) when the input cannot be read again."""
+    try:
+        return failure_plot(name, runs, palette, path), None
+    except VtrackError as exc:
+        return None, f"failure frames of {name} left out: {exc}"
