@@ -32,7 +32,8 @@ def test_a_run_refused_at_frame_0_leaves_the_folder_as_it_was(tmp_path: Path,
     assert first.returncode == 0, first.stderr.decode()
     before = snapshot(out)
     assert {"annotated.mp4", "track.csv", "run.json"} <= set(before)
-    again = vtrack("run", str(grey[0]), "--gt", str(grey[1]), "-c", "s0", *flags, "-o", str(out))
+    again = vtrack("run", str(grey[0]), "--gt", str(grey[1]), "-c", "s0", *flags, "-y", "-o",
+                   str(out))
     assert_one_line_error(again, "no colour")
     assert again.returncode == 2
     assert snapshot(out) == before

@@ -24,8 +24,9 @@ from vtrack.report.runs import RunResult
 
 #: Failures taken per run, and frames (rows) shown per input at most.
 PER_RUN, MAX_ROWS = 3, 6
-#: Width of a thumbnail in pixels (frames are scaled down to it, never up).
-THUMB_WIDTH = 320
+#: Width of a thumbnail in pixels (frames are scaled to it, small ones at most twice up), and
+#: the narrowest cell (room for its title).
+THUMB_WIDTH, MIN_CELL = 320, 270
 
 
 def failure_frames(run: RunResult, limit: int = PER_RUN) -> list[int]:
@@ -79,14 +80,15 @@ def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
     if not rows:
         return None
     height, width = pictures[rows[0]].shape[:2]
-    scale = min(1.0, THUMB_WIDTH / width)
-    cell = (THUMB_WIDTH / DPI * 1.05, height * scale / DPI * 1.05 + 0.3)
+    scale = min(2.0, THUMB_WIDTH / width)
+    cell = (max(width * scale, MIN_CELL) / DPI * 1.05, height * scale / DPI * 1.05 + 0.3)
     figure = Figure(figsize=(cell[0] * len(scored), cell[1] * len(rows) + 0.5), dpi=DPI,
                     layout="constrained")
     axes = figure.subplots(len(rows), len(scored), squeeze=False)
     for r, frame in enumerate(rows):
-        picture = cv2.cvtColor(cv2.resize(pictures[frame], None, fx=scale, fy=scale,
-                                          interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
+        picture = cv2.cvtColor(cv2.resize(
+            pictures[frame], None, fx=scale, fy=scale,
+            interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR), cv2.COLOR_BGR2RGB)
         for c, run in enumerate(scored):
             axis = axes[r, c]
             axis.imshow(picture)
