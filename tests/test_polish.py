@@ -355,3 +355,26 @@ def test_batch_replaces_results_of_other_settings_only_with_overwrite(clip_facto
     with (tmp_path / "res" / "summary.csv").open(newline="") as handle:
         assert [r["status"] for r in csv.DictReader(handle)] == ["complete"]
     assert record.read_bytes() != before
+
+
+def test_batch_progress_counts_frames_in_a_log(clip_factory, tmp_path: Path) -> None:
+    import re
+    import shutil
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for scenario in ("smooth", "jump"):
+        clip = clip_factory(scenario, frames=60)
+        shutil.copy(clip.path, folder / f"{scenario}.mp4")
+        shutil.copy(clip.gt, folder / f"{scenario}.gt.txt")
+    done = vtrack("batch", str(folder), "-c", "s0", "--jobs", "1", "--no-video",
+                  "--stats-period", "0", "--out", str(tmp_path / "res"))
+    assert done.returncode == 0, done.stderr
+    lines = [re.fullmatch(r"batch: (\d+)/(\d+) frames \(\d+%\), [\d.]+ fps, [\d:?]+ left, "
+                          r"(\d)/2 runs", line) for line in done.stderr.splitlines()]
+    assert lines and all(lines), done.stderr
+    frames = [int(m.group(1)) for m in lines]
+    assert frames == sorted(frames) and frames[-1] == 120
+    assert int(lines[-1].group(2)) == 120 and lines[-1].group(3) == "2"
+    # as soon as the first run opened its input: the frames of every run to do, estimated
+    assert (frames[0], int(lines[0].group(2)), lines[0].group(3)) == (0, 120, "0")

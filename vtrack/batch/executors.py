@@ -17,7 +17,7 @@ from multiprocessing import forkserver
 from multiprocessing.connection import wait
 from typing import Any, Protocol
 
-from vtrack.batch.jobs import Job, Outcome
+from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.batch.worker import _serve, execute
 from vtrack.errors import VtrackError
 from vtrack.run import STATUS_FAILED
@@ -105,8 +105,9 @@ class _Worker:
             return False
         return True
 
-    def result(self) -> Outcome | None:
-        """The outcome of the running job, or None if the worker died first."""
+    def result(self) -> Outcome | Progress | None:
+        """The next message about the running job: its progress, its outcome, or None if the
+        worker died first."""
         try:
             return self.connection.recv()
         except (EOFError, OSError):
@@ -135,8 +136,11 @@ class LocalExecutor:
     are done once per worker, not once per job).
     """
 
-    def __init__(self, workers: int) -> None:
+    def __init__(self, workers: int,
+                 on_progress: Callable[[Progress], None] | None = None) -> None:
         self.workers = max(1, workers)
+        #: Called with each running job's :class:`Progress` as its worker reports it.
+        self.on_progress = on_progress
 
     def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
         context = _context()
@@ -154,6 +158,10 @@ class LocalExecutor:
                 for connection in wait(list(busy)) if busy else ():
                     worker = busy[connection]
                     outcome = worker.result()
+                    if isinstance(outcome, Progress):
+                        if self.on_progress is not None:
+                            self.on_progress(outcome)
+                        continue
                     if outcome is None:
                         lost.append(worker)
                     else:

@@ -24,6 +24,17 @@ class Job:
     attempt: int = 1
 
 
+@dataclass(frozen=True)
+class Progress:
+    """A running job's frames done (and the input's frame count, when known), sent by a local
+    worker while it tracks so the batch's bar counts frames, not runs."""
+
+    input: str
+    config: str
+    frames: int
+    total: int | None = None
+
+
 @dataclass
 class Outcome:
     """What became of a job: a status of ``vtrack.run`` or ``failed``; ``resumed`` when the

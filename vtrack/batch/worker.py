@@ -9,14 +9,16 @@ import signal
 import threading
 import time
 import traceback
+from collections.abc import Callable
 from multiprocessing.connection import Connection
 from pathlib import Path
 
 import cv2
 
-from vtrack.batch.jobs import Job, Outcome
+from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.batch.plan import recorded_summary
 from vtrack.errors import FolderInUseError, OutputError, VtrackError
+from vtrack.io import InputInfo
 from vtrack.io.outdir import OutputFolder
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
 
@@ -24,7 +26,12 @@ from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
 LOCK_WAIT_S = 15.0
 
 
-def execute(job: Job) -> Outcome:
+#: Seconds between two progress messages of a running job.
+PROGRESS_PERIOD = 0.25
+Report = Callable[[Progress], None]
+
+
+def execute(job: Job, report: Report | None = None) -> Outcome:
     """Run one job; never raises for a broken input or a bug.
 
     This is what a worker process (local or Dask) calls. The run replaces what an earlier run
@@ -32,13 +39,14 @@ def execute(job: Job) -> Outcome:
     tracking removes those old results too, so no earlier ``run.json`` outlives it, while one
     that fails part way keeps the records its run wrote (as ``vtrack run`` does). A user
     error becomes a ``failed`` outcome with its one-line message; an unexpected exception also
-    leaves its traceback in ``error.log`` in the job's folder.
+    leaves its traceback in ``error.log`` in the job's folder. ``report`` receives the job's
+    :class:`Progress` at most every :data:`PROGRESS_PERIOD` seconds while it tracks.
     """
     cv2.setNumThreads(job.threads)
     out_dir = job.request.out_dir
     started = time.time()
     try:
-        summary = _run_when_free(job)
+        summary = _run_when_free(job, report)
     except VtrackError as exc:
         _discard(job, started)
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
@@ -57,14 +65,40 @@ def execute(job: Job) -> Outcome:
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
 
 
-def _run_when_free(job: Job) -> RunSummary:
+class _Reporter:
+    """``on_open`` / ``on_frame`` of one run, as :class:`Progress` messages to ``report``."""
+
+    def __init__(self, job: Job, report: Report) -> None:
+        self.job, self.report = job, report
+        self.total: int | None = None
+        self.last = time.monotonic()
+
+    def on_open(self, info: InputInfo) -> None:
+        self.total = info.frame_count
+        if self.total is not None:
+            self.total = max(self.total - self.job.request.start, 0)
+            if self.job.request.max_frames is not None:
+                self.total = min(self.total, self.job.request.max_frames)
+        self.report(Progress(self.job.input, self.job.config, 0, self.total))
+
+    def on_frame(self, done: int) -> None:
+        now = time.monotonic()
+        if now - self.last >= PROGRESS_PERIOD:
+            self.last = now
+            self.report(Progress(self.job.input, self.job.config, done, self.total))
+
+
+def _run_when_free(job: Job, report: Report | None = None) -> RunSummary:
     """:func:`vtrack.run.run`, waiting up to :data:`LOCK_WAIT_S` for the job's folder while
     another vtrack holds it (a worker of a batch that was just killed, finishing its frame and
     its record): then the run replaces what that one recorded."""
     deadline = time.monotonic() + LOCK_WAIT_S
+    progress = _Reporter(job, report) if report is not None else None
     while True:
         try:
-            return run(job.request)
+            if progress is None:
+                return run(job.request)
+            return run(job.request, on_frame=progress.on_frame, on_open=progress.on_open)
         except FolderInUseError:
             if time.monotonic() >= deadline:
                 raise
@@ -107,7 +141,7 @@ def _serve(connection: Connection) -> None:
     try:
         while (job := connection.recv()) is not None:
             try:
-                outcome = execute(job)
+                outcome = execute(job, connection.send)
             except KeyboardInterrupt:
                 outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted",
                                   attempt=job.attempt)

@@ -1,5 +1,8 @@
 """Progress of the commands on stderr: a tqdm bar in a terminal, plain lines in a log.
 
+``vtrack batch`` counts the frames of all its runs (:class:`BatchProgress`), as ``vtrack run``
+counts its input's (:class:`FrameProgress`).
+
 A bar appears only once there is progress to show: for ``vtrack run`` after the first frame is
 tracked (so an error opening the input or starting the tracker is never preceded by an empty
 bar), sized by the input's frame count (exact, or the container's duration x frame rate) less
@@ -21,6 +24,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from tqdm import tqdm
 
+    from vtrack.batch.jobs import Progress
     from vtrack.io import InputInfo
 
 #: Seconds between two progress lines when stderr is not a terminal.
@@ -51,13 +55,79 @@ class ProgressLines:
         self.name, self.total, self.period = name, total, period
         self.started = self.last = time.monotonic()
 
-    def update(self, done: int) -> None:
+    def update(self, done: int, note: str = "") -> None:
         now = time.monotonic()
         if now - self.last >= self.period:
             self.last = now
             total = max(self.total, done) if self.total else None
-            print(progress_line(self.name, done, total, now - self.started), file=sys.stderr,
-                  flush=True)
+            print(progress_line(self.name, done, total, now - self.started) + note,
+                  file=sys.stderr, flush=True)
+
+
+class BatchProgress:
+    """Frames tracked over a batch's runs (``vtrack batch``): a bar in a terminal, lines every
+    ``period`` seconds in a log, each with the runs finished. The total is the frame counts
+    the running and finished runs reported, plus their mean for each run not started yet.
+
+    ``on_progress`` takes a worker's :class:`~vtrack.batch.jobs.Progress`; ``finished`` a run's
+    frames when its outcome arrives (the only report of a run on a Dask cluster)."""
+
+    def __init__(self, quiet: bool, period: float = STATS_PERIOD) -> None:
+        self.quiet, self.period = quiet, period
+        self.runs = 0  # runs to do (set once the batch is planned)
+        self.done_runs = 0
+        self.frames: dict[tuple[str, str], tuple[int, int | None]] = {}
+        self.bar: tqdm | ProgressLines | None = None
+
+    def on_progress(self, progress: Progress) -> None:
+        self.frames[(progress.input, progress.config)] = (progress.frames, progress.total)
+        self._show()
+
+    def finished(self, input_name: str, config: str, frames: int) -> None:
+        self.frames[(input_name, config)] = (frames, frames)
+        self.done_runs += 1
+        self._show()
+
+    def write(self, line: str) -> None:
+        """A line on stdout that does not break the bar."""
+        if self.bar is not None and not isinstance(self.bar, ProgressLines):
+            self.bar.write(line, file=sys.stdout)
+        else:
+            print(line, flush=True)
+
+    def _total(self) -> int | None:
+        known = [total for _, total in self.frames.values() if total]
+        if not known:
+            return None
+        waiting = max(self.runs - len(self.frames), 0)
+        return round(sum(known) + waiting * sum(known) / len(known))
+
+    def _show(self) -> None:
+        if self.quiet:
+            return
+        total, done = self._total(), sum(done for done, _ in self.frames.values())
+        note = f", {self.done_runs}/{self.runs} runs"
+        if self.bar is None:
+            if terminal(self.quiet):
+                from tqdm import tqdm
+
+                self.bar = tqdm(total=total, unit="frame", desc="batch", dynamic_ncols=True,
+                                file=sys.stderr)
+            else:
+                self.bar = ProgressLines("batch", total, self.period)
+        if isinstance(self.bar, ProgressLines):
+            self.bar.total = total
+            self.bar.update(done, note)
+            return
+        self.bar.total = max(total or 0, done) or None
+        self.bar.n = done
+        self.bar.set_postfix_str(note.lstrip(", "), refresh=False)
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None and not isinstance(self.bar, ProgressLines):
+            self.bar.close()
+        self.bar = None
 
 
 class FrameProgress:

@@ -65,7 +65,8 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
     return configs
 
 
-@_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames", "quiet")
+@_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames",
+              "stats_period", "quiet")
 @click.command("batch")
 @click.argument("folder", type=click.Path(path_type=Path))
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
@@ -98,7 +99,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             worker_timeout: float, gt_origin: int | None,
             force: bool, overwrite: bool, overrides: tuple[str, ...], no_video: bool,
             preset: str, crf: int,
-            seed: int, start: int, max_frames: int | None, quiet: bool) -> None:
+            seed: int, start: int, max_frames: int | None, stats_period: float,
+            quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
     of `vtrack run`) and DIR/summary.csv.
 
@@ -112,8 +114,6 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     """
     # imported here, not at the top: other commands start without them (Dask loads only
     # inside DaskExecutor, with --scheduler)
-    from tqdm import tqdm
-
     from vtrack.batch import (
         DaskExecutor,
         Executor,
@@ -123,7 +123,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         plan,
         run_batch,
     )
-    from vtrack.cli._progress import terminal
+    from vtrack.cli._progress import BatchProgress
     from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
 
@@ -135,6 +135,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / "summary.csv"
     outcomes = []
+    progress = BatchProgress(quiet, stats_period)
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
     # is taken (created, checked, locked) before any job is planned
     with handling_stop_signals(_StopOnce()), OutputFolder(out_dir, "batch"):
@@ -144,7 +145,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
             executor = dask
         else:
-            executor = LocalExecutor(workers)
+            executor = LocalExecutor(workers, on_progress=progress.on_progress)
         settings = RunRequest(input=str(folder), out_dir=out_dir,
                               config=next(iter(configs.values())), video=not no_video,
                               preset=preset, crf=crf, seed=seed, start=start,
@@ -152,16 +153,19 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         batch = plan(inputs, configs, out_dir, settings,
                      threads=max(1, cpu_count() // workers), force=force,
                      overwrite=overwrite or force)
-        # runs done / total with ETA; runs already complete (resume) start the bar
-        known = len(batch.known)
-        with tqdm(total=len(batch.order), initial=known, unit="run", desc="batch",
-                  dynamic_ncols=True, disable=not terminal(quiet)) as bar:
+        # frames tracked over the runs to do (those complete before are not counted)
+        progress.runs = len(batch.jobs)
+        to_run = {(job.input, job.config) for job in batch.jobs}
+        try:
             for outcome in run_batch(batch, executor, summary_path):
                 outcomes.append(outcome)
                 if not quiet:
-                    bar.write(outcome.line(), file=sys.stdout)
-                if len(outcomes) > known:
-                    bar.update()
+                    progress.write(outcome.line())
+                if (outcome.input, outcome.config) in to_run:
+                    progress.finished(outcome.input, outcome.config,
+                                      outcome.summary.frames if outcome.summary else 0)
+        finally:
+            progress.close()
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1
