@@ -52,7 +52,6 @@ from vtrack.errors import (
 )
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
-from vtrack.evaluate.mot import evaluate_mot
 from vtrack.frame import Frame
 from vtrack.geometry import MIN_BOX_SIDE, Box
 from vtrack.io import (
@@ -621,6 +620,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             )
             summary.warnings.append(note)
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
+        from vtrack.evaluate.mot import evaluate_mot  # SciPy: only for MOT ground truth
+
         summary.mot = evaluate_mot(
             {k - start: v for k, v in resolved.mot_gt.items() if k >= start},
             {k - start: v for k, v in formatter.tracks.items()}, frames)
