@@ -150,10 +150,10 @@ import vtrack.batch.worker
 _execute = vtrack.batch.worker.execute
 
 
-def execute(job):
+def execute(job, *args):
     if job.input == "smooth" and job.attempt == 1:
         os._exit(3)  # the worker process dies mid-batch
-    return _execute(job)
+    return _execute(job, *args)
 
 
 vtrack.batch.worker.execute = execute  # what the worker loop (_serve) calls
