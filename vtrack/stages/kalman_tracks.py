@@ -102,6 +102,14 @@ class KalmanTracks(Stage):
             "a confirmed track missing more frames in a row than this is deleted",
             min=0, max=100000,
         ),
+        Param(
+            "max_tracks",
+            int,
+            1000,
+            "at most this many tracks are kept, those coasting longest dropped first (bounds "
+            "each frame's work and memory whatever max_coast lets live; not in S4)",
+            min=1, max=1000,
+        ),
     )
     requires = frozenset({"detections"})
     provides = frozenset({"tracks"})
@@ -143,6 +151,9 @@ class KalmanTracks(Stage):
             if column not in taken:
                 self._tracks.append(self._start(detection))
                 updated.add(id(self._tracks[-1]))
+        if len(self._tracks) > self.max_tracks:  # the longest coasting go first (stable)
+            kept = {id(t) for t in sorted(self._tracks, key=lambda t: t.misses)[:self.max_tracks]}
+            self._tracks = [t for t in self._tracks if id(t) in kept]
         ctx.tracks = [
             Track(
                 t.id,

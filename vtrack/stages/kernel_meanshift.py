@@ -57,6 +57,12 @@ ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 _LEVELS = 256
 
 
+#: Pixels one bandwidth's mean-shift steps may visit per frame, in frames (each step reads the
+#: window once): 20 steps over a box of up to a quarter of the frame stay exact; a larger box
+#: gets fewer steps (whole frame: 5), bounding a frame's work whatever max_iterations says.
+ITERATION_BUDGET = 5
+
+
 @lru_cache(maxsize=32)
 def kernel_grid(kernel: str, width: int, height: int) -> np.ndarray:
     """Kernel values at the pixel centres of a ``height`` x ``width`` window centred on the box.
@@ -257,8 +263,11 @@ class KernelMeanShift(Stage):
     def _converge(self, frame: Frame, cx: float, cy: float, scale: float) -> _Search:
         """Steps 3-6 at one bandwidth: mean-shift steps from (cx, cy) until it moves < epsilon."""
         sample = self._sample(frame, cx, cy, scale)
-        iterations = 0
-        while sample is not None and iterations < self.max_iterations:
+        iterations, limit = 0, self.max_iterations
+        if sample is not None:  # bounded work: at most ITERATION_BUDGET frames of pixels
+            area = sample.window.width * sample.window.height
+            limit = min(limit, max(1, ITERATION_BUDGET * frame.width * frame.height // area))
+        while sample is not None and iterations < limit:
             iterations += 1
             # S2 step 4: w_i = q_u / p_u(Y) for the bin u of pixel i (sec. 2.4: the square of
             # Comaniciu's eq. 9 weight); the undivided C/C' factor cancels in step 5

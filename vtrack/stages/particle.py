@@ -26,6 +26,7 @@ particles when that is smaller than converting each). Particle boxes always lie 
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import cv2
@@ -41,6 +42,11 @@ from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
 #: Levels of the 8-bit hue of ``COLOR_BGR2HSV_FULL`` (0..255 spans 0..360 degrees).
 HUE_LEVELS = 256
+
+
+#: Window pixels histogrammed per frame, in frames: 8 particles over a whole-frame box (S1's
+#: default count) stay exact; beyond, windows are sampled on a grid (bounded cost per frame).
+PIXEL_BUDGET = 8
 
 
 def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
@@ -189,8 +195,12 @@ class ParticleFilter(Stage):
         windows, near = self._scatter(ctx)
         hsvs = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
         # S1 items 3-4: each particle's hue histogram and its Bhattacharyya weight.
-        histograms = np.array([hue_histogram(hsv, None, self.bins, HUE_LEVELS) for hsv in hsvs],
-                              np.float64)
+        # Bounded work: past PIXEL_BUDGET frames' worth of window pixels (many particles over a
+        # large box), every window is counted on a grid of every stride-th pixel.
+        area = sum(w.width * w.height for w in windows)
+        stride = max(1, math.ceil(math.sqrt(area / (PIXEL_BUDGET * frame.width * frame.height))))
+        histograms = np.array([hue_histogram(hsv[::stride, ::stride], None, self.bins,
+                                             HUE_LEVELS) for hsv in hsvs], np.float64)
         weights = bhattacharyya_rows(histograms, self._target)
         best = int(np.argmax(weights))
         weight = float(weights[best])

@@ -1,0 +1,89 @@
+"""Issue 21 items 11 and 12: work and memory per frame stay bounded at every declared value.
+Multi-target runs keep no boxes for metrics without ground truth; `kalman_tracks` keeps at most
+`max_tracks` tracks; large morphology kernels, many particles over a large box and many kernel
+mean-shift steps over a large box are capped per frame, while the shipped configs' own values
+give exactly what they gave before."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import vtrack
+from vtrack.geometry import Box
+from vtrack.pipeline import FrameResult
+from vtrack.run import _MultiTargetRows
+from vtrack.scenes import make_scene
+from vtrack.stages.base import Track, TrackStatus
+from vtrack.stages.detect import MAX_KERNEL, _morphology
+from vtrack.stages.kernel_meanshift import ITERATION_BUDGET
+
+
+def specks(count: int, width: int = 160, height: int = 120) -> list[np.ndarray]:
+    """A black frame, then frames of 60 white 2x2 specks at new random places each."""
+    rng = np.random.default_rng(0)
+    frames = [np.zeros((height, width, 3), np.uint8)]
+    for _ in range(count - 1):
+        frame = np.zeros((height, width, 3), np.uint8)
+        for x, y in zip(rng.integers(0, width - 2, 60), rng.integers(0, height - 2, 60),
+                        strict=True):
+            frame[y:y + 2, x:x + 2] = 255
+        frames.append(frame)
+    return frames
+
+
+def test_tracks_are_capped_whatever_max_coast_lets_live() -> None:
+    tracker = vtrack.Tracker("s4_multi", background__frames=1, blobs__min_area=1,
+                             kalman_tracks__max_coast=100000, kalman_tracks__confirm=1,
+                             kalman_tracks__max_tracks=40)
+    frames = specks(30)
+    tracker.init(frames[0])
+    counts = [len(tracker.update(frame).tracks) for frame in frames[1:]]
+    assert max(counts) == 40  # the specks make far more; the cap holds every frame
+
+
+def test_without_ground_truth_no_boxes_are_kept_for_metrics() -> None:
+    track = Track(1, Box(1, 2, 3, 4), 1.0, TrackStatus.CONFIRMED)
+    kept, dropped = _MultiTargetRows(keep=True), _MultiTargetRows(keep=False)
+    for index in range(50):
+        result = FrameResult(index=index, time_s=index / 30, box=None, state="tracking",
+                             score=None, prediction=None, tracks=[track])
+        assert kept.rows(result) == dropped.rows(result)
+    assert len(kept.tracks) == 50 and dropped.tracks == {}
+
+
+@pytest.mark.parametrize("size", [3, 17, 31])
+def test_kernels_up_to_the_cap_are_cv2_morphology_exactly(size: int) -> None:
+    mask = (np.random.default_rng(size).random((120, 160)) > 0.8).astype(np.uint8) * 255
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+    for operation in (cv2.MORPH_OPEN, cv2.MORPH_CLOSE):
+        assert np.array_equal(_morphology(mask, operation, kernel, 1),
+                              cv2.morphologyEx(mask, operation, kernel))
+
+
+def test_a_larger_kernel_runs_on_a_shrunk_mask() -> None:
+    tracker = vtrack.Tracker("s4", background__open=255, background__close=255)
+    scene = make_scene("bounce", 0, 320, 240, 60, 30.0)
+    result = tracker.init(scene.frame(0))
+    stage = tracker._pipeline.stages[0]
+    assert all(kernel.shape[0] <= MAX_KERNEL for _, kernel, _ in stage._kernels)
+    assert [factor for _, _, factor in stage._kernels] == [9, 9]  # 255 / 9 = 28 <= 31
+    for index in range(1, 40):
+        result = tracker.update(scene.frame(index))
+    assert result.index == 39
+
+
+def test_kernel_mean_shift_steps_over_a_large_box_stop_at_the_budget() -> None:
+    scene = make_scene("smooth", 0, 160, 120, 30, 30.0)
+    steps = {}
+    for name, box in (("whole", (0, 0, 160, 120)), ("small", scene.boxes[0])):
+        tracker = vtrack.Tracker("s2", kernel_meanshift__max_iterations=100,
+                                 kernel_meanshift__epsilon=0, kernel_meanshift__bins=256,
+                                 kernel_meanshift__failure_logic=False)
+        tracker.init(scene.frame(0), box)
+        steps[name] = max(int(tracker.update(scene.frame(i)).extras["iterations"])
+                          for i in range(1, 10))
+    # three bandwidths, each within budget (the smallest, 0.9 of the box, gets one more step)
+    assert steps["whole"] <= 3 * (ITERATION_BUDGET + 1)
+    assert steps["small"] > 3 * (ITERATION_BUDGET + 1)  # a small box still steps as asked
