@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import json
 import socket
+import time
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -145,6 +146,36 @@ def test_fuzzed_requests_never_crash_the_handler(server: Select, path: bytes, pa
     assert status < 500, body
     if status != 200:
         error_line(body)
+
+
+def threads(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("Threads:"):
+            return int(line.split()[1])
+    raise AssertionError("no thread count")
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
+def test_idle_connections_are_bounded(server: Select) -> None:
+    from vtrack.picker.server import MAX_CONNECTIONS
+
+    parts = urlsplit(server.url)
+    before = threads(server.process.pid)
+    idle = [socket.create_connection((parts.hostname, parts.port), timeout=10)
+            for _ in range(3 * MAX_CONNECTIONS)]
+    try:
+        time.sleep(0.5)  # let the server accept them all
+        assert threads(server.process.pid) <= before + MAX_CONNECTIONS
+    finally:
+        for sock in idle:
+            sock.close()
+    status, deadline = 0, time.monotonic() + 20
+    while status != 200 and time.monotonic() < deadline:
+        try:
+            status = get(server.url, token(server.url) + "info")[0]
+        except (OSError, IndexError, ValueError):  # closed unanswered while slots were full
+            time.sleep(0.1)
+    assert status == 200  # the slots came back
 
 
 def test_after_all_that_a_box_is_still_taken_and_nothing_reached_the_terminal(

@@ -11,8 +11,9 @@ What another web page in the user's browser could try is refused: a ``Host`` oth
 127.0.0.1 / localhost (DNS rebinding) and an ``Origin`` other than the page's own are answered
 403, a path without the token 404; a body over :data:`MAX_BODY` bytes, a ``Content-Length``
 that is not a small number, a frame number or box value out of range or of the wrong type, JSON
-nested too deep or not UTF-8 are answered 400 with a one-line JSON error. Nothing a request
-holds reaches the terminal.
+nested too deep or not UTF-8 are answered 400 with a one-line JSON error. At most
+:data:`MAX_CONNECTIONS` connections are served at once, each closed after
+:data:`IDLE_TIMEOUT_S` idle. Nothing a request holds reaches the terminal.
 """
 
 from __future__ import annotations
@@ -44,6 +45,42 @@ MAX_BODY = 4096
 MAX_FRAME = 999_999_999
 #: Largest box value (frames are at most 16384 pixels a side).
 MAX_COORDINATE = 1e6
+
+
+#: Connections served at once (a page makes a few); more are closed unanswered.
+MAX_CONNECTIONS = 16
+#: Seconds a connection may stay idle (mid-request or between requests) before it is closed.
+IDLE_TIMEOUT_S = 10.0
+
+
+class _BoundedServer(ThreadingHTTPServer):
+    """A threading server with at most :data:`MAX_CONNECTIONS` connections (threads) at once,
+    and no traceback on the terminal for a connection that breaks."""
+
+    daemon_threads = True
+
+    def __init__(self, *args: Any) -> None:
+        self._slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+        super().__init__(*args)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        if not self._slots.acquire(blocking=False):
+            self.shutdown_request(request)  # too many at once: closed, unanswered
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        pass  # a dropped or timed-out connection: nothing for the user's terminal
 
 
 class _Refused(Exception):
@@ -101,12 +138,10 @@ class SelectionServer:
         self._saved = read_sidecar(input_spec)
         self.token = secrets.token_urlsafe(16)
         try:
-            self._httpd = ThreadingHTTPServer((HOST, port), self._handler())
+            self._httpd = _BoundedServer((HOST, port), self._handler())
         except OSError as exc:
             raise ConfigError(f"--port {port}: cannot listen on {HOST}:{port} "
                               f"({exc.strerror or exc})") from None
-        self._httpd.daemon_threads = True
-        self._httpd.handle_error = lambda request, address: None  # a dropped connection
         self.port = self._httpd.server_address[1]
         self.url = f"http://{HOST}:{self.port}/{self.token}/"
         self._thread = threading.Thread(target=self._httpd.serve_forever, name="vtrack-select",
@@ -148,6 +183,8 @@ class SelectionServer:
         frame_route = re.compile(r"frame/(\d{1,9})")
 
         class Handler(BaseHTTPRequestHandler):
+            timeout = IDLE_TIMEOUT_S  # a connection that sends nothing is closed
+
             def log_message(self, format: str, *args: Any) -> None:  # noqa: A002
                 pass  # the terminal shows the URL and the result, not every request
 
