@@ -12,7 +12,8 @@ usual area:
    one target when the joint box is not taller than ``1.5 aspect`` widths (fragments of one
    person; repeated until nothing merges);
 2. **split**: a detection wider than ``split`` targets of its height (``w > split h /
-   aspect``) holds ``n = round(w aspect / h)`` targets side by side; it is cut at the columns
+   aspect``) holds ``n = round(w aspect / h)`` targets side by side (up to ``MAX_PARTS``: a
+   flatter blob, a shadow or a low wall, is no row of targets); it is cut at the columns
    of least foreground near its ``n``-ths where these are valleys (at most ``VALLEY`` of the
    fullest column: a solid blob is not cut), and each part gets the box of its own foreground;
 3. **score** (0..1): how target-like each detection is, the product of its fill (foreground
@@ -49,6 +50,8 @@ PRIOR_SAMPLES = 50
 FULL_FILL = 0.5
 #: ... and its size from this share of the usual area on.
 FULL_SIZE = 0.5
+#: A blob is split into at most this many targets (a wider one is no row of targets).
+MAX_PARTS = 4
 #: A blob is cut only at a column holding at most this share of its fullest column's foreground.
 VALLEY = 0.9
 
@@ -183,7 +186,7 @@ class GroupBlobs(Stage):
         for detection in found:
             b = detection.box
             parts = round(b.w * aspect / b.h)
-            if self.split and b.w * aspect > self.split * b.h and parts >= 2:
+            if self.split and b.w * aspect > self.split * b.h and 2 <= parts <= MAX_PARTS:
                 assert ctx.likelihood is not None
                 grouped.extend(split_side_by_side(detection, parts, ctx.likelihood,
                                                   ctx.feature_scale))
