@@ -21,9 +21,9 @@ from vtrack.geometry import Box
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import Stage, TargetShape, TrackContext, TrackStatus
-from vtrack.stages.kalman_bytetrack import ByteTracks
 from vtrack.stages.detect import Background, Blobs, Detection
 from vtrack.stages.group_blobs import GroupBlobs
+from vtrack.stages.kalman_bytetrack import ByteTracks
 
 
 def run_stages(stages: list[Stage], frames: list[np.ndarray]) -> list[TrackContext]:
