@@ -8,13 +8,11 @@ the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard 
 ``/ score^2``, the score floored at ``min_trust``): the less the found box looks like the target
 (``ctx.score``), the less it moves the filter.
 
-Besides the next frame's predicted box (``ctx.prediction``) it publishes the predicted centre's
-uncertainty per axis, ``sigma = sqrt(P_xx + e_x^2)``, where ``e`` is the running RMS of the
-innovations (measurement minus prediction; the innovation-based adaptive estimate of Mehra,
-IEEE TAC 1970): a linear filter's ``P`` does not see that the target moves more erratically than
-modelled, its innovations do. ``robust_model`` sizes the next search window from it (issue item
-4). While hidden the filter coasts and ``P`` grows, so the window widens; a target taken back
-after being lost restarts the filter at the re-found box (its jump is not a velocity).
+The next frame's predicted box (``ctx.prediction``) centres ``robust_model``'s search region.
+While hidden the filter coasts; while lost it stands still at its last position (a lost
+target's velocity is not known), so re-detection searches around where it was last seen; a
+target taken back after being lost restarts the filter at the re-found box (its jump is not a
+velocity).
 
 Where a hidden target coasts from: a target covered slowly from one side is measured further
 and further back (its visible part) on the frames before it is hidden, and the filter learns
@@ -27,8 +25,8 @@ recent past re-estimated once later evidence says its measurements were bad, in 
 fixed-lag smoothing (our choice; measured in benchmarks/RESULTS.md section 8).
 
 Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
-``ctx.state``, ``ctx.robust``; writes ``ctx.box`` (the prediction while coasting),
-``ctx.prediction`` and ``ctx.robust.sigma``.
+``ctx.state``, ``ctx.score``; writes ``ctx.box`` (the prediction while coasting) and
+``ctx.prediction``.
 """
 
 from __future__ import annotations
@@ -62,8 +60,6 @@ class RobustMotion(Stage):
               "most 10^4 R): the lower, the less a held frame's low-scoring measurement moves "
               "the filter, and the more its uncertainty (and the search window) grows while "
               "the hold lasts", min=0.01, max=1.0),
-        Param("innovation_rate", float, 0.3,
-              "learning rate of the running RMS of the innovations", min=0.0, max=1.0),
         Param("rewind_frames", int, 30,
               "when a tracked target becomes hidden, coast from the last confident frame if "
               "it is at most this many frames back (0: coast from the current state)",
@@ -74,15 +70,14 @@ class RobustMotion(Stage):
               "the coasting velocity is the mean displacement of the measured centre over the "
               "last this many confident frames (1: the filter's own)", min=1, max=1000),
     )
-    requires = frozenset({"measurement", "box", "state", "score", "robust"})
-    provides = frozenset({"box", "prediction", "robust"})
+    requires = frozenset({"measurement", "box", "state", "score"})
+    provides = frozenset({"box", "prediction"})
 
     # Set from the parameters by Stage.__init__.
     q_rel: float
     r_rel: float
     p0_rel: float
     min_trust: float
-    innovation_rate: float
     rewind_frames: int
     rewind_above: float
     velocity_frames: int
@@ -94,7 +89,6 @@ class RobustMotion(Stage):
         self._model = ConstantVelocity(q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
-        self._rms = np.zeros(2)
         self._was = TrackState.TRACKING
         # the state on the last confident frame (its velocity the running mean over confident
         # frames) and that frame's index: where a target that becomes hidden coasts from
@@ -112,13 +106,9 @@ class RobustMotion(Stage):
             if self._was == TrackState.LOST:
                 # re-found: a jump, not a velocity
                 self._state = self._model.initiate([(box.cx, box.cy)])
-                self._rms[:] = 0.0
                 self._centres.clear()
                 self._confident = None
             else:
-                error = z - np.array(self._position())
-                self._rms = np.sqrt((1 - self.innovation_rate) * self._rms ** 2
-                                    + self.innovation_rate * error ** 2)
                 # a measurement is as trustworthy as the match it came from: its standard
                 # deviation grows as 1 / score^2 (R / score^4), so a partly covered target's
                 # biased centre does not become a velocity before it is hidden
@@ -156,9 +146,8 @@ class RobustMotion(Stage):
             self._confident = (self._model.with_velocity(self._state, velocity), index)
 
     def _predict(self, ctx: TrackContext) -> None:
-        assert ctx.robust is not None and ctx.box is not None
+        assert ctx.box is not None
+        if ctx.state == TrackState.LOST:
+            self._state = self._model.with_velocity(self._state, np.zeros(2))
         self._state = self._model.predict(self._state, 1.0)
         ctx.prediction = ctx.box.moved_to(*self._position())
-        P = self._state.P
-        ctx.robust.sigma = (math.sqrt(P[0, 0] + self._rms[0] ** 2),
-                            math.sqrt(P[2, 2] + self._rms[1] ** 2))

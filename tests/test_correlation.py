@@ -1,0 +1,164 @@
+"""The parts `robust` is built from (issue 20): fHOG, the correlation filter, its confidence
+measures, the colour histograms, DSST's scale filter and the fixed-size patch, each against
+what its paper promises, on generated images."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from vtrack.features.colour import ColourHistograms, box_mean
+from vtrack.features.dcf import CorrelationFilter, apce, gaussian_label, hann2d, psr, subpixel_peak
+from vtrack.features.fhog import CHANNELS, fhog
+from vtrack.features.patch import region_patch
+from vtrack.features.scale import ScaleFilter
+from vtrack.frame import BgrFrame, GrayFrame
+from vtrack.geometry import Window
+
+
+def texture(height: int, width: int, seed: int = 0) -> np.ndarray:
+    """A smooth random texture (uint8 BGR): gradients everywhere, no periodicity."""
+    rng = np.random.default_rng(seed)
+    noise = rng.integers(0, 256, (height // 4 + 1, width // 4 + 1, 3), dtype=np.uint8)
+    return cv2.resize(noise, (width, height), interpolation=cv2.INTER_CUBIC)
+
+
+def test_fhog_has_31_channels_per_cell_and_is_zero_on_a_flat_patch() -> None:
+    features = fhog(texture(64, 48), 4)
+    assert features.shape == (16, 12, CHANNELS)
+    assert features.dtype == np.float32
+    assert features.max() <= 0.5 + 1e-6 and features.min() >= 0
+    assert np.all(fhog(np.full((32, 32, 3), 90, np.uint8), 4) == 0)
+
+
+def test_fhog_follows_the_image_cell_by_cell() -> None:
+    """Shifting the image by one cell shifts the features by one cell (away from the borders)."""
+    image = texture(80, 80)
+    shifted = np.roll(image, 4, axis=1)
+    a, b = fhog(image, 4), fhog(shifted, 4)
+    assert np.allclose(a[2:-2, 2:-3], b[2:-2, 3:-2], atol=1e-5)
+
+
+def test_fhog_sees_orientation() -> None:
+    """Vertical stripes put their energy in the horizontal-gradient bins, horizontal ones in
+    the vertical-gradient bins."""
+    stripes = np.tile(((np.arange(64) // 4) % 2 * 255).astype(np.uint8), (64, 1))
+    vertical = fhog(stripes, 4)[..., 18:27].sum(axis=(0, 1))
+    horizontal = fhog(stripes.T.copy(), 4)[..., 18:27].sum(axis=(0, 1))
+    assert int(np.argmax(vertical)) == 0  # gradient along x: orientation bin 0
+    assert int(np.argmax(horizontal)) == 4  # gradient along y: 90 degrees of 180 in 9 bins
+
+
+@pytest.mark.parametrize("shift", [(0, 0), (3, -2), (-5, 4)])
+def test_filter_response_peaks_at_the_displacement(shift: tuple[int, int]) -> None:
+    """DSST eq. 6: a filter learnt on a sample responds to the sample moved by (dy, dx) with a
+    peak at (dy, dx) (wrapped)."""
+    rng = np.random.default_rng(1)
+    sample = rng.random((24, 30, 8)).astype(np.float32)
+    filt = CorrelationFilter(gaussian_label(24, 30, 1.5), lam=1e-3, rate=0.02)
+    filt.learn(sample)
+    response = filt.respond(np.roll(sample, shift, axis=(0, 1)))
+    peak = np.unravel_index(int(np.argmax(response)), response.shape)
+    assert (int(peak[0]), int(peak[1])) == (shift[0] % 24, shift[1] % 30)
+
+
+def test_filter_learns_at_its_rate() -> None:
+    """The running average moves ``rate`` of the way to a new sample's model."""
+    rng = np.random.default_rng(2)
+    a, b = rng.random((16, 16, 3)), rng.random((16, 16, 3))
+    label = gaussian_label(16, 16, 1.0)
+    filt, only_b = CorrelationFilter(label, 1e-3, 0.25), CorrelationFilter(label, 1e-3, 0.25)
+    filt.learn(a)
+    first = filt.numerator.copy()
+    filt.learn(b)
+    only_b.learn(b)
+    assert np.allclose(filt.numerator, 0.75 * first + 0.25 * only_b.numerator)
+
+
+def test_confidence_is_high_for_one_sharp_peak_and_low_for_clutter() -> None:
+    """APCE (LMCF eq. 7) and PSR (MOSSE) rank a single sharp peak over a noisy, many-peaked
+    response."""
+    sharp = np.fft.fftshift(gaussian_label(31, 31, 1.5))
+    rng = np.random.default_rng(3)
+    clutter = rng.random((31, 31)) * 0.6 + 0.4 * sharp
+    assert apce(sharp) > 5 * apce(clutter)
+    assert psr(sharp) > 7 > psr(clutter)
+    assert apce(np.zeros((8, 8))) == 0.0
+
+
+def test_subpixel_peak_finds_the_vertex_of_a_parabola() -> None:
+    rows = np.arange(9)[:, None]
+    cols = np.arange(9)[None, :]
+    response = -((rows - 4.3) ** 2) - (cols - 3.8) ** 2
+    r, c = subpixel_peak(response, 4, 4)
+    assert r == pytest.approx(4.3) and c == pytest.approx(3.8)
+
+
+def test_colour_likelihood_tells_the_target_from_its_surroundings() -> None:
+    """Staple eq. 12: a colour only the box has scores ~1, one mostly around it < 0.5."""
+    patch = np.zeros((60, 60, 3), np.uint8)
+    patch[:] = (0, 200, 0)  # green surroundings
+    patch[20:40, 20:40] = (0, 0, 220)  # red target ...
+    patch[20:40, 20:24] = (0, 200, 0)  # ... with a green strip
+    model = ColourHistograms(bins=32, inner_padding=0.0, rate=0.04)
+    model.learn(patch, (20, 20, 20, 20), first=True)
+    likelihood = model.likelihood(patch)
+    assert likelihood[30, 30] > 0.9
+    assert likelihood[50, 50] < 0.5
+    assert box_mean(likelihood, 16, 16)[30, 32] > box_mean(likelihood, 16, 16)[10, 10]
+
+
+def test_grey_patches_use_grey_level_bins() -> None:
+    patch = np.full((40, 40), 30, np.uint8)
+    patch[10:30, 10:30] = 220
+    model = ColourHistograms(bins=16, inner_padding=0.2, rate=0.04)
+    model.learn(patch, (10, 10, 20, 20), first=True)
+    assert model.object is not None and model.object.shape == (16,)
+    likelihood = model.likelihood(patch)
+    assert likelihood[20, 20] > 0.9 > 0.1 > likelihood[2, 2]
+
+
+@pytest.mark.parametrize("ratio", [0.9, 1.0, 1.1])
+def test_scale_filter_recovers_a_size_change(ratio: float) -> None:
+    """DSST: learnt on a target at one size, the filter names the ratio the target has grown
+    by (within one scale step)."""
+    image = texture(240, 320, seed=4)
+    scale = ScaleFilter(60, 40, scales=33, step=1.02, rate=0.025, model_area=512, cell=4)
+    frame = BgrFrame(0, 0.0, image)
+    scale.learn(scale.samples(frame, 160, 120, 60, 40), first=True)
+    # the same scene seen 1/ratio as large around the centre: the target grew by `ratio`
+    zoom = cv2.warpAffine(image, cv2.getRotationMatrix2D((160, 120), 0, ratio), (320, 240),
+                          flags=cv2.INTER_LINEAR)
+    found = scale.ratio(scale.samples(BgrFrame(1, 0.0, zoom), 160, 120, 60, 40))
+    assert found == pytest.approx(ratio, abs=0.025)
+
+
+def test_patch_inside_the_frame_is_its_pixels_and_edges_are_replicated() -> None:
+    image = texture(100, 120)
+    frame = BgrFrame(0, 0.0, image)
+    inside = region_patch(frame, 60, 50, 40, 20, 40, 20)
+    assert np.array_equal(inside, image[40:60, 40:80])
+    corner = region_patch(frame, 0, 0, 20, 20, 20, 20)
+    assert np.array_equal(corner[:10, :10], np.broadcast_to(image[0, 0], (10, 10, 3)))
+    assert np.array_equal(corner[10:, 10:], image[:10, :10])
+    grey = GrayFrame(0, 0.0, cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
+    assert region_patch(grey, 60, 50, 40, 20, 40, 20).shape == (20, 40)
+
+
+def test_patch_of_a_large_region_costs_its_output_size() -> None:
+    """A region 10x the patch: the patch is a faithful downsample (close to an area resize)."""
+    image = texture(1000, 1000, seed=5)
+    frame = BgrFrame(0, 0.0, image)
+    patch = region_patch(frame, 500, 500, 1000, 1000, 100, 100)
+    reference = cv2.resize(image, (100, 100), interpolation=cv2.INTER_AREA)
+    assert patch.shape == (100, 100, 3)
+    assert np.abs(patch.astype(int) - reference.astype(int)).mean() < 12
+    assert frame.full_window() == Window(0, 0, 1000, 1000)
+
+
+def test_cosine_window_is_zero_at_the_border_and_one_in_the_middle() -> None:
+    window = hann2d(9, 11)
+    assert window.shape == (9, 11, 1)
+    assert window[0].max() == 0 and window[:, 0].max() == 0
+    assert window[4, 5, 0] == pytest.approx(1.0)

@@ -1,0 +1,119 @@
+"""Discriminative correlation filters over multi-channel features, and the confidence of their
+responses.
+
+- :class:`CorrelationFilter`: the multi-channel filter of DSST (Danelljan et al., BMVC 2014,
+  eqs. 4-6; the same closed form as MOSSE, Bolme et al., CVPR 2010), learnt in the Fourier domain
+  with a running average of numerator and denominator (learning rate ``rate``, regulariser
+  ``lam``). Translation uses 2-D features (rows, cols, channels); scale uses 1-D ones (DSST's
+  scale filter: samples along the scale axis).
+- :func:`apce` (Wang et al., LMCF, CVPR 2017, eq. 7) and :func:`psr` (Bolme et al., MOSSE):
+  how sharp and unique a response's peak is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def hann(n: int) -> np.ndarray:
+    """Hann window of ``n`` samples (0 at both ends), float32."""
+    if n < 2:
+        return np.ones(n, np.float32)
+    return (0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / (n - 1))).astype(np.float32)
+
+
+def hann2d(rows: int, cols: int) -> np.ndarray:
+    """Separable 2-D Hann window (rows, cols, 1): the cosine window of KCF/DSST."""
+    return (hann(rows)[:, None] * hann(cols)[None, :])[..., None]
+
+
+def gaussian_label(rows: int, cols: int, sigma: float) -> np.ndarray:
+    """Desired response: a Gaussian of ``sigma`` cells with its peak at (0, 0), wrapped around
+    (KCF's circularly shifted label), so that a response's argmax is the displacement."""
+    dy = np.fft.ifftshift(np.arange(rows) - rows // 2)
+    dx = np.fft.ifftshift(np.arange(cols) - cols // 2)
+    return np.exp(-0.5 * (dy[:, None] ** 2 + dx[None, :] ** 2) / sigma**2).astype(np.float32)
+
+
+def gaussian_label_1d(n: int, sigma: float) -> np.ndarray:
+    """1-D Gaussian label of DSST's scale filter, peak at index 0 (wrapped)."""
+    d = np.fft.ifftshift(np.arange(n) - n // 2)
+    return np.exp(-0.5 * d**2 / sigma**2).astype(np.float32)
+
+
+class CorrelationFilter:
+    """A multi-channel correlation filter (DSST eqs. 4-6) along ``axes`` of its samples.
+
+    ``learn(x)`` folds sample ``x`` (features, channels last) into the model; ``respond(z)`` is
+    the filter's real response on ``z``, whose argmax (wrapped) is ``z``'s displacement from the
+    learnt samples.
+    """
+
+    def __init__(self, label: np.ndarray, lam: float, rate: float) -> None:
+        self.axes = tuple(range(label.ndim))
+        self.shape = label.shape
+        # real samples: half the spectrum carries everything (rfftn)
+        self.label_f = np.fft.rfftn(label, axes=self.axes)[..., None]
+        self.lam = lam
+        self.rate = rate
+        self.numerator: np.ndarray | None = None
+        self.denominator: np.ndarray | None = None
+
+    def _fft(self, x: np.ndarray) -> np.ndarray:
+        return np.fft.rfftn(x, axes=self.axes)
+
+    def learn(self, x: np.ndarray, rate: float | None = None) -> None:
+        """Update with sample ``x``; the first sample replaces the model (rate 1)."""
+        xf = self._fft(x)
+        numerator = np.conj(self.label_f) * xf
+        denominator = np.sum((xf * np.conj(xf)).real, axis=-1)
+        if self.numerator is None or self.denominator is None:
+            self.numerator, self.denominator = numerator, denominator
+            return
+        eta = self.rate if rate is None else rate
+        self.numerator = (1 - eta) * self.numerator + eta * numerator
+        self.denominator = (1 - eta) * self.denominator + eta * denominator
+
+    def respond(self, z: np.ndarray) -> np.ndarray:
+        """Response to sample ``z`` (same shape as the learnt ones), real, peak at (0, ...) for
+        no displacement."""
+        assert self.numerator is not None and self.denominator is not None
+        zf = self._fft(z)
+        filt = self.numerator / (self.denominator[..., None] + self.lam)
+        return np.fft.irfftn(np.sum(np.conj(filt) * zf, axis=-1), s=self.shape, axes=self.axes)
+
+
+def apce(response: np.ndarray) -> float:
+    """Average peak-to-correlation energy (LMCF eq. 7): |Fmax - Fmin|^2 / mean((F - Fmin)^2).
+    Large for one sharp peak, small for a flat or multi-peaked response."""
+    fmin = float(response.min())
+    spread = float(np.mean((response - fmin) ** 2))
+    if spread <= 0:
+        return 0.0
+    return (float(response.max()) - fmin) ** 2 / spread
+
+
+def psr(response: np.ndarray, exclude: int = 5) -> float:
+    """Peak-to-sidelobe ratio (MOSSE): (peak - mean) / std of the response outside the
+    (2*exclude+1)^2 window around the peak (a centred response)."""
+    r, c = np.unravel_index(int(np.argmax(response)), response.shape)
+    mask = np.ones(response.shape, bool)
+    mask[max(r - exclude, 0): r + exclude + 1, max(c - exclude, 0): c + exclude + 1] = False
+    side = response[mask]
+    if side.size < 2:
+        return 0.0
+    std = float(side.std())
+    return (float(response[r, c]) - float(side.mean())) / std if std > 0 else 0.0
+
+
+def subpixel_peak(response: np.ndarray, r: int, c: int) -> tuple[float, float]:
+    """Parabolic refinement of the peak at (r, c) along each axis (wrapped neighbours)."""
+    rows, cols = response.shape
+
+    def offset(minus: float, centre: float, plus: float) -> float:
+        denom = minus - 2 * centre + plus
+        return 0.0 if denom >= 0 else float(np.clip(0.5 * (minus - plus) / denom, -0.5, 0.5))
+
+    dr = offset(response[(r - 1) % rows, c], response[r, c], response[(r + 1) % rows, c])
+    dc = offset(response[r, (c - 1) % cols], response[r, c], response[r, (c + 1) % cols])
+    return r + dr, c + dc
