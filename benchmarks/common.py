@@ -34,6 +34,13 @@ def data_dir() -> Path | None:
     return None
 
 
+#: The data folder's check sequences (its README): measured to confirm a choice made on the
+#: others (the tune sequences), never to make it.
+CHECK_SEQUENCES = frozenset({
+    "DTB70_Surfing06", "LaSOT_airplane-1", "OTB_Freeman1", "OTB_KiteSurf", "OTB_Walking2",
+    "PTBTIR_airplane", "UAV123_bike1", "UAV123_group1_1", "VOTLT_yamaha", "VOT_bag"})
+
+
 @dataclass(frozen=True)
 class Sequence:
     """A single-target sequence: an ``img/`` folder and its ``groundtruth.txt`` (1-based boxes)."""

@@ -26,15 +26,18 @@ from vtrack.params import Param
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import all_stages
+from vtrack.stages.robust_model import REGIONS_PER_FRAME
 
 WIDTH, HEIGHT, FRAMES = 64, 48, 5
 PIXELS = WIDTH * HEIGHT
 #: docs/stages.md "Limits": beyond the frames themselves, a few frame-sized buffers (~32 bytes a
 #: pixel) plus the particle filter's histograms (4 x 1024 particles x 256 bins x 8 bytes).
 #: Python's own bookkeeping (particle windows, hypotheses) gets a fixed allowance of 4 MiB.
-#: The robust tracker's working window is bounded by its own declared pixel budget, whatever the
-#: frame (~40 bytes a working pixel for its maps), on top of the frame-sized buffers.
-ROBUST_PIXELS = next(p.max for p in all_stages()["robust_model"].params if p.name == "max_pixels")
+#: The robust tracker's search patches are bounded by its declared working size, whatever the
+#: frame (~40 bytes a working pixel for features, spectra and colour maps), one patch a frame
+#: plus the re-detection regions while lost, on top of the frame-sized buffers.
+_AREA = next(p.max for p in all_stages()["robust_model"].params if p.name == "working_area")
+ROBUST_PIXELS = int(_AREA) ** 2 * (1 + REGIONS_PER_FRAME)
 MEMORY_BOUND = 32 * PIXELS + 4 * 1024 * 256 * 8 + 4 * 2**20
 
 

@@ -75,12 +75,11 @@ def _normalise(hist: np.ndarray) -> np.ndarray:
     # Energy of the 2x2 block whose corner is cell (i, j) in each of the four directions.
     block = padded[:-1, :-1] + padded[1:, :-1] + padded[:-1, 1:] + padded[1:, 1:]
     norms = np.stack([block[:-1, :-1], block[:-1, 1:], block[1:, :-1], block[1:, 1:]], axis=-1)
-    inv = 1.0 / np.sqrt(norms + 1e-4)  # (rows, cols, 4)
-    out = np.zeros((rows, cols, CHANNELS), np.float32)
-    for k in range(4):
-        sens = np.minimum(hist * inv[..., k:k + 1], CLIP)
-        out[..., :18] += sens
-        out[..., 18:27] += np.minimum(insensitive * inv[..., k:k + 1], CLIP)
-        out[..., 27 + k] = 0.2357 * sens.sum(axis=2)
-    out[..., :27] *= 0.5
+    inv = (1.0 / np.sqrt(norms + 1e-4)).astype(np.float32)  # (rows, cols, 4)
+    # the 18 sensitive and 9 insensitive bins under each of the 4 normalisations, clipped
+    clipped = np.concatenate([hist, insensitive], axis=2)[..., None, :] * inv[..., :, None]
+    np.minimum(clipped, CLIP, out=clipped)
+    out = np.empty((rows, cols, CHANNELS), np.float32)
+    np.multiply(clipped.sum(axis=2), 0.5, out=out[..., :27])
+    np.multiply(clipped[..., :18].sum(axis=3), 0.2357, out=out[..., 27:])
     return out

@@ -16,7 +16,8 @@ peak value (Wang et al., CVPR 2017, eq. 7), goes to ``ctx.robust`` for ``robust_
 While lost, the region whose merged peak is highest wins.
 
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust``, ``ctx.likelihood``; writes
-``ctx.measurement`` and ``ctx.box`` (the found box), ``ctx.score``, ``ctx.robust`` (chosen region, confidence, scale filter).
+``ctx.measurement`` and ``ctx.box`` (the found box), ``ctx.score``, ``ctx.robust`` (chosen
+region, confidence, scale filter).
 """
 
 from __future__ import annotations
@@ -97,10 +98,14 @@ class RobustSearch(Stage):
         step = target.cell / region.factor
         cx = region.cx + (col - target.cols // 2) * step
         cy = region.cy + (row - target.rows // 2) * step
+        target.scale_samples = None
         if self.scale and target.scale_filter is not None:
             w, h = target.size
-            ratio = target.scale_filter.ratio(target.scale_filter.samples(ctx.frame, cx, cy, w, h))
+            samples = target.scale_filter.samples(ctx.frame, cx, cy, w, h)
+            ratio = target.scale_filter.ratio(samples)
             target.scale = float(np.clip(target.scale * ratio, self._min_scale, self._max_scale))
+            if target.size == (w, h):
+                target.scale_samples = (Box.from_center(cx, cy, w, h), samples)
         w, h = target.size
         ctx.measurement = ctx.box = Box.from_center(cx, cy, w, h)
         ctx.score = confidence(target)
@@ -126,7 +131,7 @@ class RobustSearch(Stage):
 def confidence(target: RobustTarget) -> float:
     """This frame's response against the usual ones: min(APCE / usual, peak / usual), at most
     1 (1 before anything has been learnt)."""
-    if target.learnt_frames == 0:
+    if target.tracked_frames == 0:
         return 1.0
     return float(min(target.apce / max(target.usual_apce, 1e-9),
                      target.peak / max(target.usual_peak, 1e-9), 1.0))
