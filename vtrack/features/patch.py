@@ -22,41 +22,41 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
                  out_w: int, out_h: int) -> np.ndarray:
     """The ``width`` x ``height`` region centred on (``cx``, ``cy``) (frame pixels, may reach
     past the frame), resampled to ``out_w`` x ``out_h``: uint8, (out_h, out_w, 3) BGR, or
-    (out_h, out_w) grey for a grey frame (its three BGR channels would be equal)."""
+    (out_h, out_w) grey for a grey frame (its three BGR channels would be equal). Work and
+    memory are bounded by the output and the frame, however large the region."""
     x0, y0 = cx - width / 2, cy - height / 2
-    ix0, iy0 = math.floor(x0), math.floor(y0)
-    ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
-    inside = Window(min(max(ix0, 0), frame.width - 1), min(max(iy0, 0), frame.height - 1),
-                    max(min(ix1, frame.width), 1), max(min(iy1, frame.height), 1))
-    if inside.x1 <= inside.x0:
-        inside = inside._replace(x1=inside.x0 + 1)
-    if inside.y1 <= inside.y0:
-        inside = inside._replace(y1=inside.y0 + 1)
+    step_x, step_y = width / out_w, height / out_h  # frame pixels per output pixel
+    inside = _overlap(frame, x0, y0, width, height)
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
-    # downscale, so an area resample still averages 2x2 or more), so a big target costs about
-    # its patch, not its area.
-    reduce = min(width / out_w, height / out_h) / 2
+    # downscale), then average down to the patch's resolution, so a big target costs about its
+    # patch, not its area.
+    reduce = min(step_x, step_y) / 2
     k = max(int((reduce - 1) // 2) * 2 + 1, 1) if reduce >= 3 else 1
     k = max(min(k, inside.width, inside.height), 1)
     if isinstance(frame, GrayFrame):
         pixels = frame.gray(inside)[k // 2::k, k // 2::k] if k > 1 else frame.gray(inside)
     else:
         pixels = frame.bgr_sampled(inside, k) if k > 1 else frame.bgr(inside)
-    pad = (max(inside.y0 - iy0, 0), max(iy1 - inside.y1, 0),
-           max(inside.x0 - ix0, 0), max(ix1 - inside.x1, 0))
-    if any(pad):
-        pad = tuple(-(-p // k) for p in pad)
-        pixels = cv2.copyMakeBorder(pixels, *pad, cv2.BORDER_REPLICATE)
-    # The sub-pixel offset of the region inside the cut pixels, then one resample.
-    sx = (ix1 - ix0) / pixels.shape[1]
-    sy = (iy1 - iy0) / pixels.shape[0]
-    scale_x, scale_y = width / sx / out_w, height / sy / out_h
-    off_x, off_y = (x0 - ix0) / sx, (y0 - iy0) / sy
-    matrix = np.array([[scale_x, 0.0, off_x + 0.5 * scale_x - 0.5],
-                       [0.0, scale_y, off_y + 0.5 * scale_y - 0.5]])
-    interpolation = cv2.INTER_AREA if min(scale_x, scale_y) > 1.5 else cv2.INTER_LINEAR
-    if interpolation == cv2.INTER_AREA and abs(off_x) < 1 and abs(off_y) < 1:
-        return cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)
+    target_w = max(round(inside.width / step_x), 1)
+    target_h = max(round(inside.height / step_y), 1)
+    if target_w * 1.5 < pixels.shape[1] or target_h * 1.5 < pixels.shape[0]:
+        pixels = cv2.resize(pixels, (target_w, target_h), interpolation=cv2.INTER_AREA)
+    # output pixel (u, v) shows frame point (x0 + (u + 0.5) step_x, ...); in `pixels`' units:
+    per_x = inside.width / pixels.shape[1]
+    per_y = inside.height / pixels.shape[0]
+    matrix = np.array([
+        [step_x / per_x, 0.0, (x0 - inside.x0 + 0.5 * step_x) / per_x - 0.5],
+        [0.0, step_y / per_y, (y0 - inside.y0 + 0.5 * step_y) / per_y - 0.5]])
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
+
+
+def _overlap(frame: Frame, x0: float, y0: float, width: float, height: float) -> Window:
+    """The frame's pixels the region covers (at least the nearest one, for a region entirely
+    outside the frame: its edge is what replication would show)."""
+    ix0 = min(max(math.floor(x0), 0), frame.width - 1)
+    iy0 = min(max(math.floor(y0), 0), frame.height - 1)
+    ix1 = max(min(math.ceil(x0 + width), frame.width), ix0 + 1)
+    iy1 = max(min(math.ceil(y0 + height), frame.height), iy0 + 1)
+    return Window(ix0, iy0, ix1, iy1)
