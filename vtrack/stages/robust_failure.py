@@ -4,8 +4,10 @@ Third link of the ``robust`` chain (before ``robust_motion``, which it tells whe
 or coast, as S0's ``occlusion`` runs before ``kalman``). Every decision follows the correlation
 filter's own response (``robust_search``), not a hand-set similarity:
 
-- **Occluded** when the response's peak-to-sidelobe ratio falls below ``hidden_psr``: Bolme et
-  al. (MOSSE, CVPR 2010) find PSR 20-60 while tracking and below 7 under occlusion or failure.
+- **Occluded** when the response's peak-to-sidelobe ratio falls below ``hidden_psr`` (Bolme et
+  al., MOSSE, CVPR 2010, find PSR 20-60 while tracking and below 7 under occlusion or failure),
+  or its peak below ``hidden_peak`` of its mean over the frames so far (Wang et al., LMCF, CVPR
+  2017: beta_2 = 0.45): a background texture can give a sharp peak, not a strong one.
   Nothing is learnt; the box stays on the response's peak (``coast``: it follows the motion
   model's prediction instead, S0 item 7, which suits a fixed camera but lowered the mean AUC
   on hand-held and panning footage). After ``lost_after`` such frames in a row, or at once when
@@ -47,6 +49,8 @@ class RobustFailure(Stage):
     params = (
         Param("hidden_psr", float, 7.0, "occluded below this peak-to-sidelobe ratio (MOSSE: 7)",
               min=0.0, max=100.0),
+        Param("hidden_peak", float, 0.45, "... or when the response's peak is below this share "
+              "of its mean so far (LMCF beta_2: 0.45; 0: never)", min=0.0, max=10.0),
         Param("lost_after", int, 30, "hidden frames in a row before the target is lost",
               min=0, max=100000),
         Param("coast", bool, False, "while occluded, the box follows the motion model's "
@@ -65,6 +69,7 @@ class RobustFailure(Stage):
     columns = ("confidence", "psr")
 
     hidden_psr: float
+    hidden_peak: float
     lost_after: int
     coast: bool
     redetect: bool
@@ -81,8 +86,11 @@ class RobustFailure(Stage):
         assert target is not None
         ctx.extras["confidence"] = ctx.score
         ctx.extras["psr"] = target.psr
-        sharp = target.psr >= self.hidden_psr
+        # LMCF's means are of the frames before this one
+        sharp = (target.psr >= self.hidden_psr
+                 and target.peak >= self.hidden_peak * target.usual_peak)
         strong = self._strong(target)
+        _remember(target)
         was = ctx.state
         if ctx.measurement is not None and sharp and (was == TrackState.TRACKING or strong):
             ctx.state = TrackState.TRACKING
@@ -90,7 +98,6 @@ class RobustFailure(Stage):
             ctx.search_growth = 1.0
             if self.update and strong:
                 target.learn(ctx.frame, ctx.measurement, self.rate)
-            _remember(target)
             return
         target.hidden_frames += 1
         if self.coast:
@@ -107,7 +114,7 @@ class RobustFailure(Stage):
     def _strong(self, target: RobustTarget) -> bool:
         """LMCF's test: APCE and peak at their shares of the usual values (always true before
         anything was learnt after the first frame)."""
-        if target.tracked_frames == 0:
+        if target.response_frames == 0:
             return True
         return (target.apce >= self.update_apce * target.usual_apce
                 and target.peak >= self.update_peak * target.usual_peak)
@@ -115,11 +122,12 @@ class RobustFailure(Stage):
 
 
 def _remember(target: RobustTarget) -> None:
-    """LMCF's historical means of APCE and peak: plain means over the frames tracked so far."""
-    n = target.tracked_frames + 1
+    """LMCF's historical means of APCE and peak: plain means over the frames so far (hidden
+    ones too, so that a lasting change of appearance is taken in, slowly)."""
+    n = target.response_frames + 1
     target.usual_apce += (target.apce - target.usual_apce) / n
     target.usual_peak += (target.peak - target.usual_peak) / n
-    target.tracked_frames = n
+    target.response_frames = n
 
 
 def _inside_share(box: Box, width: int, height: int) -> float:

@@ -96,14 +96,14 @@ class RobustTarget:
     #: The region chosen by ``robust_search`` and the peak there (frame pixels).
     chosen: Region | None = None
     #: Confidence of this frame's response (LMCF's APCE and peak) and their means over the
-    #: frames tracked so far (``robust_failure``).
+    #: frames so far (``robust_failure``).
     apce: float = 0.0
     peak: float = 0.0
     #: Peak-to-sidelobe ratio of this frame's response (MOSSE).
     psr: float = 0.0
     usual_apce: float = 0.0
     usual_peak: float = 0.0
-    tracked_frames: int = 0
+    response_frames: int = 0
     #: Frames hidden in a row (``robust_failure``).
     hidden_frames: int = 0
 

@@ -68,6 +68,7 @@ class RobustSearch(Stage):
     def start(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None and ctx.box is not None
+        ctx.score = 1.0  # the first frame's box is the target
         if self.scale:
             target.scale_filter = ScaleFilter(ctx.box.w, ctx.box.h, self.scales, self.scale_step,
                                               self.scale_rate, self.scale_area, target.cell)
@@ -131,7 +132,7 @@ class RobustSearch(Stage):
 def confidence(target: RobustTarget) -> float:
     """This frame's response against the usual ones: min(APCE / usual, peak / usual), at most
     1 (1 before anything has been learnt)."""
-    if target.tracked_frames == 0:
+    if target.response_frames == 0:
         return 1.0
     return float(min(target.apce / max(target.usual_apce, 1e-9),
                      target.peak / max(target.usual_peak, 1e-9), 1.0))
