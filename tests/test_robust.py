@@ -66,20 +66,10 @@ def test_grey_target_is_tracked_not_refused(scene_factory) -> None:
     assert overlap(scene, track(scene, grey=True)) >= 0.7
 
 
-#: LMCF's peak test (off by default: it lowered the check sequences' AUC) is what tells a target
-#: that left the view from the background the filter then peaks on.
-PEAK_TEST = "robust_failure.hidden_peak=0.45"
-
-
-@pytest.mark.parametrize("peak_test", [
-    pytest.param(False, marks=pytest.mark.xfail(
-        strict=True, reason="with the PSR test alone the filter keeps a sharp peak on the "
-                            "background the target left (issue 20, open)")),
-    True])
-def test_lost_target_claims_no_box(scene_factory, peak_test: bool) -> None:
+def test_lost_target_claims_no_box(scene_factory) -> None:
     """Out of the frame: lost (no box claimed) after occluded frames, tracking once back."""
     scene = scene_factory("leave_return", 0, frames=150)
-    results = track(scene, ["robust_failure.lost_after=5"] + ([PEAK_TEST] if peak_test else []))
+    results = track(scene, ["robust_failure.lost_after=5"])
     gone = [i for i, box in enumerate(scene.boxes) if box is None]
     assert gone, "the scene has frames with the target out of view"
     lost = [r for r in results if r.state == TrackState.LOST]
@@ -116,7 +106,7 @@ def test_score_says_box_on_target(scene_factory) -> None:
 def test_run_writes_empty_box_while_lost(clip_factory, tmp_path: Path) -> None:
     """Through ``vtrack run`` on a decoded H.264 clip: lost rows have empty box columns."""
     clip = clip_factory("leave_return", 0, frames=150)
-    config = load_config("robust").with_overrides(["robust_failure.lost_after=5", PEAK_TEST])
+    config = load_config("robust").with_overrides(["robust_failure.lost_after=5"])
     run(RunRequest(input=str(clip.path), out_dir=tmp_path, config=config, gt_path=clip.gt,
                    video=False))
     with open(tmp_path / "track.csv", newline="") as handle:
