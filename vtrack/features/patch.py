@@ -41,13 +41,8 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
     # downscale, so an area resample still averages 2x2 or more), so a big target costs about
     # its patch, not its area.
-    reduce = min(width / out_w, height / out_h) / 2
-    k = max(int((reduce - 1) // 2) * 2 + 1, 1) if reduce >= 3 else 1
-    k = max(min(k, inside.width, inside.height), 1)
-    if isinstance(frame, GrayFrame):
-        pixels = frame.gray(inside)[k // 2::k, k // 2::k] if k > 1 else frame.gray(inside)
-    else:
-        pixels = frame.bgr_sampled(inside, k) if k > 1 else frame.bgr(inside)
+    k = _subsampling(width / out_w, height / out_h, inside)
+    pixels = _sampled(frame, inside, k)
     pad = (max(inside.y0 - iy0, 0), max(iy1 - inside.y1, 0),
            max(inside.x0 - ix0, 0), max(ix1 - inside.x1, 0))
     if any(pad):
@@ -80,13 +75,8 @@ def _bounded_patch(frame: Frame, cx: float, cy: float, width: float, height: flo
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
     # downscale), then average down to the patch's resolution, so a big target costs about its
     # patch, not its area.
-    reduce = min(step_x, step_y) / 2
-    k = max(int((reduce - 1) // 2) * 2 + 1, 1) if reduce >= 3 else 1
-    k = max(min(k, inside.width, inside.height), 1)
-    if isinstance(frame, GrayFrame):
-        pixels = frame.gray(inside)[k // 2::k, k // 2::k] if k > 1 else frame.gray(inside)
-    else:
-        pixels = frame.bgr_sampled(inside, k) if k > 1 else frame.bgr(inside)
+    k = _subsampling(step_x, step_y, inside)
+    pixels = _sampled(frame, inside, k)
     target_w = max(round(inside.width / step_x), 1)
     target_h = max(round(inside.height / step_y), 1)
     if target_w * 1.5 < pixels.shape[1] or target_h * 1.5 < pixels.shape[0]:
@@ -110,3 +100,21 @@ def _overlap(frame: Frame, x0: float, y0: float, width: float, height: float) ->
     ix1 = max(min(math.ceil(x0 + width), frame.width), ix0 + 1)
     iy1 = max(min(math.ceil(y0 + height), frame.height), iy0 + 1)
     return Window(ix0, iy0, ix1, iy1)
+
+
+def _sampled(frame: Frame, inside: Window, k: int) -> np.ndarray:
+    """Every ``k``-th pixel (``k`` odd, the centre of each block) of the frame's ``inside``
+    window: grey for a grey frame, BGR otherwise."""
+    if isinstance(frame, GrayFrame):
+        grey = frame.gray(inside)
+        return grey[k // 2::k, k // 2::k] if k > 1 else grey
+    return frame.bgr_sampled(inside, k) if k > 1 else frame.bgr(inside)
+
+
+def _subsampling(step_x: float, step_y: float, inside: Window) -> int:
+    """The odd pixel step to read ``inside`` with when each output pixel spans ``step_x`` x
+    ``step_y`` frame pixels: at most half the downscale (an area resample still averages 2x2 or
+    more), 1 below a downscale of 6, never more than the window."""
+    reduce = min(step_x, step_y) / 2
+    k = max(int((reduce - 1) // 2) * 2 + 1, 1) if reduce >= 3 else 1
+    return max(min(k, inside.width, inside.height), 1)

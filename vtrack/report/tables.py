@@ -121,10 +121,8 @@ def _scores(run: RunResult) -> Values:
                                           s.mean_overlap, s.tracking_miss, s.miss_flagged]
 
 
-#: Per input x configuration: OTB scores, speed and lost frames.
-RESULT_COLUMNS = (
-    _column("Frames", 0, None),
-    _column("Evaluated", 0, None),
+#: The scores, speed and lost frames every results table shows after its count columns.
+SCORE_COLUMNS = (
     _column("AUC", 3),
     _column("Precision@20", 3),
     _column("SR0.5", 3),
@@ -135,6 +133,13 @@ RESULT_COLUMNS = (
     _column("Miss flagged", 3, None),
     _column("FPS", 1),
     _column("Lost frames", 0, None),
+)
+
+#: Per input x configuration: OTB scores, speed and lost frames.
+RESULT_COLUMNS = (
+    _column("Frames", 0, None),
+    _column("Evaluated", 0, None),
+    *SCORE_COLUMNS,
 )
 RUN_LABELS = ["Input", "Config", "Status"]
 
@@ -168,16 +173,7 @@ def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
 #: Per configuration, over inputs: mean scores, mean fps, total lost frames.
 AVERAGE_COLUMNS = (
     _column("Inputs", 0, None),
-    _column("AUC", 3),
-    _column("Precision@20", 3),
-    _column("SR0.5", 3),
-    _column("SR0.75", 3),
-    _column("Norm. precision", 3),
-    _column("Mean IoU", 3),
-    _column("Tracking miss", 3, False),
-    _column("Miss flagged", 3, None),
-    _column("FPS", 1),
-    _column("Lost frames", 0, None),
+    *SCORE_COLUMNS,
 )
 
 

@@ -242,20 +242,17 @@ class RobustModel(Stage):
         apart, as far out as ``ctx.search_growth`` regions (the same filter over a wider
         window; at most 8 more regions a frame, nearest first)."""
         reach = int(min(ctx.search_growth - 1, MAX_RINGS))
-        out = []
-        for ring in range(1, reach + 1):
-            for dy in range(-ring, ring + 1):
-                for dx in range(-ring, ring + 1):
-                    if max(abs(dx), abs(dy)) != ring:
-                        continue
-                    cx = centre.cx + dx * centre.width * 0.75
-                    cy = centre.cy + dy * centre.height * 0.75
-                    if 0 <= cx < ctx.frame.width and 0 <= cy < ctx.frame.height:
-                        out.append((ring, dx, dy, cx, cy))
+        offsets = sorted(((dx, dy) for dy in range(-reach, reach + 1)
+                          for dx in range(-reach, reach + 1) if (dx, dy) != (0, 0)),
+                         key=lambda d: max(abs(d[0]), abs(d[1])))  # nearest ring first
+        out = [(cx, cy) for cx, cy in ((centre.cx + dx * centre.width * 0.75,
+                                        centre.cy + dy * centre.height * 0.75)
+                                       for dx, dy in offsets)
+               if 0 <= cx < ctx.frame.width and 0 <= cy < ctx.frame.height]
         # a bounded cost per frame: the ring's regions are visited in turn over the frames
         if not out:
             return []
         start = (ctx.frame.index * REGIONS_PER_FRAME) % len(out)
         picked = (out + out)[start:start + min(REGIONS_PER_FRAME, len(out))]
-        return [target.region(ctx.frame, cx, cy) for _, _, _, cx, cy in picked]
+        return [target.region(ctx.frame, cx, cy) for cx, cy in picked]
 
