@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+
 import cv2
 import numpy as np
 import pytest
@@ -10,13 +12,13 @@ from vtrack.annotate import (
     GROUND_TRUTH,
     LEGEND_MAX_SHARE,
     LEGEND_ROWS,
-    OCCLUDED_BOX,
     PARTICLES,
     PREDICTION,
     TRACK_PALETTE,
     TRACKED,
     WINDOW,
     Annotator,
+    Legend,
     Yuv,
 )
 from vtrack.geometry import Box, Window
@@ -175,16 +177,63 @@ def test_legend_and_frame_number_bottom_left():
         assert (block == 16).any()  # the legend's black background
         # each colour's swatch is there, luma and chroma (chroma at half resolution)
         legend = annotator.legend
-        assert legend is not None and legend.rows == (
-            "box", "occluded", "prediction", "search window", "ground truth")
+        assert legend is not None and legend.rows == ("box", "ground truth")
         ph, pw = legend.y.shape
         corner_u = u[legend.y0 // 2:(legend.y0 + ph) // 2, : pw // 2]
-        for colour in (TRACKED, OCCLUDED_BOX, PREDICTION, WINDOW, GROUND_TRUTH):
+        for colour in (TRACKED, GROUND_TRUTH):
             assert ((np.abs(corner_u.astype(int) - colour.u) <= 2).sum()) >= 4, colour
         shown.append(y[legend.y0:legend.y0 + legend.row, :pw].copy())
     assert (shown[0] != shown[1]).any()  # the frame number changed
-    without_gt = Annotator(W, H).legend
-    assert without_gt is not None and "ground truth" not in without_gt.rows
+    without_gt = Annotator(W, H)
+    without_gt.draw(blank(), result())
+    assert without_gt.legend is not None and without_gt.legend.rows == ("box",)
+
+
+def test_the_legend_lists_what_this_run_drew_as_it_first_appears():
+    """Issue 22: the legend was the same for every tracker (a search window and a prediction
+    for trackers without them, no row for particles or LOST). Rows now appear with the first
+    frame that draws them, in one fixed order, and stay."""
+    annotator = Annotator(W, H)
+    frames = [
+        result(0, overlays=[Particles((Box(200, 200, 10, 10),))]),
+        result(1, box=None, state=TrackState.LOST),
+        result(2, state=TrackState.OCCLUDED, overlays=[SearchWindow(Box(90, 60, 140, 90))]),
+        FrameResult(3, 0.1, BOX, TrackState.TRACKING, 1.0, Box(200, 20, 40, 30)),
+    ]
+    rows = []
+    for frame in frames:
+        buf = blank()
+        annotator.draw(buf, frame)
+        assert annotator.legend is not None
+        rows.append(annotator.legend.rows)
+    assert rows == [
+        ("box", "particles"),
+        ("box", "lost (no box)", "particles"),
+        ("box", "occluded", "lost (no box)", "search window", "particles"),
+        ("box", "occluded", "lost (no box)", "prediction", "search window", "particles"),
+    ]
+    legend = annotator.legend
+    ph, pw = legend.y.shape
+    u = planes(buf)[1][legend.y0 // 2:(legend.y0 + ph) // 2, : pw // 2].astype(int)
+    for label in legend.rows:
+        colour = Yuv.from_bgr(*LEGEND_ROWS[label][0])
+        assert (np.abs(u - colour.u) <= 2).sum() >= 4, label
+    assert legend.y.size <= 0.1 * W * H  # 6 rows at 320x240: under a tenth of the frame
+
+
+@pytest.mark.parametrize(("width", "height", "size"), [(320, 240, 2), (1280, 720, 4),
+                                                       (1920, 1080, 6)])
+def test_particles_are_dots_that_grow_with_the_frame(width, height, size):
+    buf = cv2.cvtColor(np.full((height, width, 3), 100, np.uint8), cv2.COLOR_BGR2YUV_I420)
+    grey = int(buf[0, 0])
+    Annotator(width, height, legend=False).draw(buf, result(
+        box=None, state=TrackState.LOST, overlays=[Particles((Box(100, 100, 20, 20),))]))
+    y = i420_planes(buf, width, height)[0]
+    dot = np.argwhere(y[60:, :] == PARTICLES.y) + (60, 0)
+    assert len(dot) == size * size
+    assert np.ptp(dot[:, 0]) == size - 1 and np.ptp(dot[:, 1]) == size - 1
+    assert abs(dot[:, 0].mean() - 110) <= 1 and abs(dot[:, 1].mean() - 110) <= 1
+    assert (y[60:] != grey).sum() == size * size  # nothing else below the caption
 
 
 def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, tmp_path):
@@ -197,22 +246,32 @@ def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, t
 
     clip = clip_factory("smooth", width=W, height=H, frames=16)
     out = tmp_path / "out"
-    done = CliRunner().invoke(main, ["run", str(clip.path), "--gt", str(clip.gt), "-o", str(out)])
+    done = CliRunner().invoke(main, ["run", str(clip.path), "--gt", str(clip.gt), "-o", str(out),
+                                     "-c", "s1"])
     assert done.exit_code == 0, done.output
-    legend = Annotator(W, H, gt=[BOX]).legend
-    assert legend is not None
-    ph, pw = legend.y.shape
+    with (out / "track.csv").open() as f:
+        lost = [row["state"] == "lost" for row in csv.DictReader(f)]
     with av.open(str(out / "annotated.mp4")) as container:
         frames = [f.to_ndarray(format="bgr24") for f in container.decode(video=0)]
     assert len(frames) == 16
-    for bgr in (frames[2], frames[12]):
-        corner = bgr[legend.y0:legend.y0 + ph, :pw].astype(int)
+    font_scale = Annotator(W, H).font_scale
+    number_rows = []
+    for index in (2, 12):
+        # what s1 has drawn by then: its box, its particles (on by default), the ground truth,
+        # and the lost caption once it has been lost
+        drawn = ("box", "particles", "ground truth") + (
+            ("lost (no box)",) if any(lost[:index + 1]) else ())
+        legend = Legend(W, H, font_scale, drawn)
+        assert set(legend.rows) == set(drawn)
+        ph, pw = legend.y.shape
+        corner = frames[index][legend.y0:legend.y0 + ph, :pw].astype(int)
         assert (corner.max(axis=2) < 40).mean() > 0.5  # mostly the black background
-        for _, colour in LEGEND_ROWS:
+        for colour in (LEGEND_ROWS[label][0] for label in drawn):
             near = np.abs(corner - colour).max(axis=2) < 60
             assert near.sum() >= 6, colour
-    rows = [f[legend.y0:legend.y0 + legend.row, :pw].astype(int) for f in (frames[2], frames[12])]
-    assert np.abs(rows[0] - rows[1]).max() > 120  # "frame 2" vs "frame 12": white vs black
+        number_rows.append(corner[:legend.row, :, 1])
+    # "frame 2" vs "frame 12": white vs black
+    assert np.abs(number_rows[0] - number_rows[1]).max() > 120
 
 
 def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
@@ -223,9 +282,9 @@ def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
               Track(3, Box(120, 60, 30, 70), 0.9, TrackStatus.COASTING)]
     truth = {0: [(7, Box(20, 150, 40, 40))]}
     annotator = Annotator(W, H, multi_target=True, gt_tracks=truth)
-    assert annotator.legend is not None and annotator.legend.rows == ("track id", "ground truth")
     buf = blank()
     annotator.draw(buf, result(box=None, tracks=tracks))
+    assert annotator.legend is not None and annotator.legend.rows == ("track id", "ground truth")
     y, u, v = planes(buf)
     for track in tracks[:2]:
         colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
@@ -236,4 +295,6 @@ def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
     Annotator(W, H).draw(single, result(box=None))
     caption = (slice(0, 14), slice(0, 80))
     assert not np.array_equal(y[caption], planes(single)[0][caption])  # "2 TRACKS", not TRACKING
-    assert Annotator(W, H, multi_target=True).legend.rows == ("track id",)
+    without_truth = Annotator(W, H, multi_target=True)
+    without_truth.draw(blank(), result(box=None, tracks=tracks))
+    assert without_truth.legend.rows == ("track id",)

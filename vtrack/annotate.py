@@ -5,20 +5,23 @@ half-size U and V planes at half coordinates with its chroma. The frame is never
 and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
 
 What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack.overlays`:
-``SearchWindow`` as a thin rectangle, ``Particles`` as small dots; another kind is a
-``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
+``SearchWindow`` as a thin rectangle, ``Particles`` as dots sized like the lines; another kind
+is a ``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
 confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), the
 state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box), and
 bottom-left the frame number (0-based, ``track.csv``'s ``frame``) above a legend of the colours.
-The prediction (where the next search starts, single target) is a thin box.
+The prediction (where the next search starts, single target) is a thin box. The legend lists
+only what this run has drawn so far (a tracker without a search window has no such row; the
+``lost`` row appears with the first lost frame), so it differs between trackers.
 
 A multi-target run (``multi_target``) has no single target: its caption counts the tracks shown
 (``3 TRACKS``), its legend explains the per-id colours (and the ground truth, thin green boxes
 of every object when given), and no single-target box, trail or prediction is drawn.
 
-The legend is rendered once per video into a small I420 patch and copied into each frame; only
-the frame number is drawn per frame, on the patch's black top row (luma only: white on black
-has neutral chroma).
+Line widths, dots and text scale with the frame (1 px lines and the smallest text at 320x240).
+The legend is rendered into a small I420 patch when its rows change (at most once per kind of
+shape) and copied into each frame; only the frame number is drawn per frame, on the patch's black
+top row (luma only: white on black has neutral chroma).
 """
 
 from __future__ import annotations
@@ -59,10 +62,12 @@ WINDOW_BGR = (255, 255, 0)  # cyan
 PREDICTION_BGR = (255, 128, 64)  # light blue
 TRACKED = Yuv.from_bgr(*TRACKED_BGR)
 OCCLUDED_BOX = Yuv.from_bgr(*OCCLUDED_BGR)
-LOST_TEXT = Yuv.from_bgr(40, 40, 255)  # red
+LOST_BGR = (40, 40, 255)  # red
+PARTICLES_BGR = (255, 0, 255)  # magenta
+LOST_TEXT = Yuv.from_bgr(*LOST_BGR)
 GROUND_TRUTH = Yuv.from_bgr(*GROUND_TRUTH_BGR)
 WINDOW = Yuv.from_bgr(*WINDOW_BGR)
-PARTICLES = Yuv.from_bgr(255, 0, 255)  # magenta
+PARTICLES = Yuv.from_bgr(*PARTICLES_BGR)
 PREDICTION = Yuv.from_bgr(*PREDICTION_BGR)
 CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
 TRACK_PALETTE_BGR = (
@@ -127,20 +132,25 @@ class Canvas:
         cv2.putText(self.u, text, _half(origin), FONT, scale / 2, colour.u, half)
         cv2.putText(self.v, text, _half(origin), FONT, scale / 2, colour.v, half)
 
-    def dots(self, points: np.ndarray, colour: Yuv) -> None:
-        """2x2-pixel dots at ``points`` (an (N, 2) array of x, y); points outside are skipped."""
+    def dots(self, points: np.ndarray, colour: Yuv, size: int = 1) -> None:
+        """Square dots of ``2 * size`` pixels a side at ``points`` (an (N, 2) array of x, y),
+        each covering whole chroma samples; the parts of dots outside the frame are skipped."""
         if points.size == 0:
             return
         finite = np.isfinite(points).all(axis=1)
-        cells = (points[finite] // 2).astype(np.int64)  # one chroma sample = a 2x2 luma block
-        inside = ((cells[:, 0] >= 0) & (cells[:, 0] < self.width // 2)
-                  & (cells[:, 1] >= 0) & (cells[:, 1] < self.height // 2))
-        cx, cy = cells[inside, 0], cells[inside, 1]
-        for dy in (0, 1):
-            for dx in (0, 1):
-                self.y[2 * cy + dy, 2 * cx + dx] = colour.y
-        self.u[cy, cx] = colour.u
-        self.v[cy, cx] = colour.v
+        # one chroma sample = a 2x2 luma block; a dot is size x size chroma samples
+        cells = (points[finite] // 2).astype(np.int64) - size // 2
+        cw, ch = self.width // 2, self.height // 2
+        for oy in range(size):
+            for ox in range(size):
+                cx, cy = cells[:, 0] + ox, cells[:, 1] + oy
+                inside = (cx >= 0) & (cx < cw) & (cy >= 0) & (cy < ch)
+                cx, cy = cx[inside], cy[inside]
+                for dy in (0, 1):
+                    for dx in (0, 1):
+                        self.y[2 * cy + dy, 2 * cx + dx] = colour.y
+                self.u[cy, cx] = colour.u
+                self.v[cy, cx] = colour.v
 
 
 def _centres(boxes: Sequence[Box]) -> np.ndarray:
@@ -153,31 +163,34 @@ def _drawable(box: Box | None) -> bool:
     return box is not None and all(math.isfinite(v) for v in box) and box.w > 0 and box.h > 0
 
 
-def _draw_overlay(canvas: Canvas, overlay: Overlay) -> None:
-    """Draw one stage overlay; a kind this function does not know is a TypeError."""
+def _draw_overlay(canvas: Canvas, overlay: Overlay, thickness: int) -> str:
+    """Draw one stage overlay and return its legend row; a kind this function does not know is
+    a TypeError."""
     match overlay:
         case SearchWindow(box):
             canvas.rectangle(*_corners(box), WINDOW, 1)
+            return "search window"
         case Particles(boxes):
-            canvas.dots(_centres(boxes), PARTICLES)
+            canvas.dots(_centres(boxes), PARTICLES, thickness)
+            return "particles"
         case _:
             raise TypeError(f"annotate: no drawing for overlay {overlay!r}")
 
 
 BGR = tuple[int, int, int]
-#: The legend's rows, top to bottom: what each colour means (README, "Outputs").
-LEGEND_ROWS: tuple[tuple[str, tuple[BGR, ...]], ...] = (
-    ("box", (TRACKED_BGR,)),
-    ("occluded", (OCCLUDED_BGR,)),
-    ("prediction", (PREDICTION_BGR,)),
-    ("search window", (WINDOW_BGR,)),
-    ("ground truth", (GROUND_TRUTH_BGR,)),
-)
-#: A multi-target run's legend rows (the swatch shows the first colours of the palette).
-MULTI_LEGEND_ROWS: tuple[tuple[str, tuple[BGR, ...]], ...] = (
-    ("track id", TRACK_PALETTE_BGR[:4]),
-    ("ground truth", (GROUND_TRUTH_BGR,)),
-)
+#: Every legend row, in the order they are listed: what each colour means (README, "Outputs").
+#: A legend shows the rows of the shapes its run has drawn ("track id": the swatch shows the
+#: first colours of the palette).
+LEGEND_ROWS: dict[str, tuple[BGR, ...]] = {
+    "box": (TRACKED_BGR,),
+    "occluded": (OCCLUDED_BGR,),
+    "lost (no box)": (LOST_BGR,),
+    "track id": TRACK_PALETTE_BGR[:4],
+    "prediction": (PREDICTION_BGR,),
+    "search window": (WINDOW_BGR,),
+    "particles": (PARTICLES_BGR,),
+    "ground truth": (GROUND_TRUTH_BGR,),
+}
 #: The legend is left out (the frame number stays) when it would be taller than this share
 #: of the frame: on tiny frames it would hide what it explains.
 LEGEND_MAX_SHARE = 0.4
@@ -190,12 +203,14 @@ class Legend:
     :meth:`draw` copies them into a frame's planes and writes the frame number.
     """
 
-    def __init__(self, width: int, height: int, font_scale: float, ground_truth: bool,
-                 multi_target: bool = False) -> None:
+    def __init__(self, width: int, height: int, font_scale: float,
+                 labels: Iterable[str] = ()) -> None:
         self.scale = max(0.3, font_scale * 0.6)
-        rows = [(label, bgr) for label, bgr in (MULTI_LEGEND_ROWS if multi_target else LEGEND_ROWS)
-                if ground_truth or label != "ground truth"]
-        (text_w, text_h), base = cv2.getTextSize("search window", FONT, self.scale, 1)
+        shown = set(labels)
+        rows = [(label, bgr) for label, bgr in LEGEND_ROWS.items() if label in shown]
+        (text_w, text_h), base = cv2.getTextSize("frame 000000", FONT, self.scale, 1)
+        for label, _ in rows:
+            text_w = max(text_w, cv2.getTextSize(label, FONT, self.scale, 1)[0][0])
         self.row = text_h + base + 3
         self.pad = 3
         swatch = 3 * self.row // 2
@@ -265,25 +280,34 @@ class Annotator:
         self._last_seen: dict[int, int] = {}
         self.multi_target = multi_target
         self.gt_tracks = gt_tracks
-        truth = gt_tracks is not None if multi_target else gt is not None
-        self.legend = (Legend(width, height, self.font_scale, truth, multi_target) if legend
-                       else None)
+        self._size = (width, height)
+        self._drawn: set[str] = set()  # the legend rows of the shapes drawn so far
+        self.legend = Legend(width, height, self.font_scale) if legend else None
 
     def draw(self, i420_buffer: np.ndarray, result: FrameResult) -> None:
         """Draw ``result`` into ``i420_buffer`` (an ``(h * 3 // 2, w)`` I420 array) in place."""
         canvas = Canvas(i420_buffer)
-        if self.multi_target:
-            self._draw_multi(canvas, result)
-            return
+        drawn = self._draw_multi(canvas, result) if self.multi_target else self._draw_single(
+            canvas, result)
+        if self.legend is not None:
+            if not drawn <= self._drawn:
+                self._drawn |= drawn
+                self.legend = Legend(*self._size, self.font_scale, self._drawn)
+            self.legend.draw(canvas, result.index)
+
+    def _draw_single(self, canvas: Canvas, result: FrameResult) -> set[str]:
+        """A single-target frame; returns the legend rows of what it drew."""
         t = self.thickness
+        drawn: set[str] = set()
         if self.gt is not None and result.index < len(self.gt):
             gt_box = self.gt[result.index]
             if _drawable(gt_box):
                 canvas.rectangle(*_corners(gt_box), GROUND_TRUTH, t)
-        for overlay in result.overlays:
-            _draw_overlay(canvas, overlay)
+                drawn.add("ground truth")
+        drawn.update(_draw_overlay(canvas, overlay, t) for overlay in result.overlays)
         if _drawable(result.prediction) and not result.tracks:
             canvas.rectangle(*_corners(result.prediction), PREDICTION, 1)
+            drawn.add("prediction")
         box = result.box
         colour = OCCLUDED_BOX if result.state == TrackState.OCCLUDED else TRACKED
         self.trail.append(_point(box.cx, box.cy) if _drawable(box) else None)
@@ -292,26 +316,31 @@ class Annotator:
         if _drawable(box):
             canvas.rectangle(*_corners(box), colour, t)
             canvas.circle(_point(box.cx, box.cy), t + 1, colour)
-        self._draw_tracks(canvas, result)
+            drawn.add("occluded" if result.state == TrackState.OCCLUDED else "box")
+        if self._draw_tracks(canvas, result):
+            drawn.add("track id")
         colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
             result.state, TRACKED)
         self._caption(canvas, result.state, colour, right=result.state == TrackState.LOST)
-        if self.legend is not None:
-            self.legend.draw(canvas, result.index)
+        if result.state == TrackState.LOST:
+            drawn.add("lost (no box)")
+        return drawn
 
-    def _draw_multi(self, canvas: Canvas, result: FrameResult) -> None:
-        """A multi-target frame: ground truth, the confirmed tracks, their count, the legend."""
+    def _draw_multi(self, canvas: Canvas, result: FrameResult) -> set[str]:
+        """A multi-target frame: ground truth, the confirmed tracks, their count; returns the
+        legend rows of what it drew."""
+        drawn: set[str] = set()
         if self.gt_tracks is not None:
             for _, box in self.gt_tracks.get(result.index, ()):
                 if _drawable(box):
                     canvas.rectangle(*_corners(box), GROUND_TRUTH, 1)
-        for overlay in result.overlays:
-            _draw_overlay(canvas, overlay)
-        self._draw_tracks(canvas, result)
-        shown = sum(t.state == TrackStatus.CONFIRMED and _drawable(t.box) for t in result.tracks)
+                    drawn.add("ground truth")
+        drawn.update(_draw_overlay(canvas, overlay, self.thickness) for overlay in result.overlays)
+        shown = self._draw_tracks(canvas, result)
+        if shown:
+            drawn.add("track id")
         self._caption(canvas, f"{shown} track" + ("" if shown == 1 else "s"), TRACKED)
-        if self.legend is not None:
-            self.legend.draw(canvas, result.index)
+        return drawn
 
     @staticmethod
     def _runs(points: Iterable[tuple[int, int] | None]) -> list[list[tuple[int, int]]]:
@@ -324,8 +353,10 @@ class Annotator:
                 runs[-1].append(p)
         return [r for r in runs if len(r) > 1]
 
-    def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> None:
+    def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> int:
+        """Draw the confirmed tracks (box, id, trail); returns how many."""
         t = self.thickness
+        shown = 0
         for track in result.tracks:
             if track.state != TrackStatus.CONFIRMED or not _drawable(track.box):
                 continue
@@ -338,9 +369,11 @@ class Annotator:
             p0, p1 = _corners(b)
             canvas.rectangle(p0, p1, colour, t)
             canvas.text((p0[0], p0[1] - 2 * t), str(track.id), colour, self.font_scale * 0.8, t)
+            shown += 1
         stale = [i for i, seen in self._last_seen.items() if result.index - seen > self.track_trail]
         for track_id in stale:
             del self._tracks[track_id], self._last_seen[track_id]
+        return shown
 
     def _caption(self, canvas: Canvas, caption: str, colour: Yuv, right: bool = False) -> None:
         """``caption`` in capitals on black, top-left (``right``: top-right)."""

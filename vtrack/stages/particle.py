@@ -142,7 +142,7 @@ class ParticleFilter(Stage):
             "tracked frames between the compared weights (S1 item 6: 10)",
             min=1, max=1000,
         ),
-        Param("draw_particles", bool, False, "add the particle boxes to the drawing overlays"),
+        Param("draw_particles", bool, True, "add the particle boxes to the drawing overlays"),
     )
     requires = frozenset({"frame", "box"})
     provides = frozenset({"box", "state", "score"})
