@@ -1,6 +1,6 @@
 """OpenCV's own trackers on an image folder, for ``robust_bench.py`` (run in any Python with cv2).
 
-    python benchmarks/opencv_trackers.py FOLDER X,Y,W,H TRACKER [TRACKER ...]
+    python benchmarks/opencv_trackers.py FOLDER X,Y,W,H TRACKER [TRACKER ...] [--nano-models DIR]
 
 Reads every ``.jpg``/``.png`` of FOLDER (or FOLDER/img) in name order with ``cv2.imread`` (colour),
 starts each tracker on the 0-based box X,Y,W,H on the first frame and prints one JSON line per
@@ -15,10 +15,15 @@ separate venv and give that venv's python to ``robust_bench.py``) and ``meanshif
 meanShift tutorial ("Meanshift and Camshift", OpenCV docs): a 180-bin hue histogram of the
 first box over pixels with S >= 60 and V >= 32, normalised to 0..255, back-projected over the
 whole frame each frame, ``cv2.meanShift`` with criteria (EPS | COUNT, 10 iterations, 1 px).
+``Nano``: NanoTrack v2 through ``cv2.TrackerNano`` (OpenCV >= 4.7), a small Siamese network whose
+two ONNX files (``nanotrack_backbone_sim.onnx``, ``nanotrack_head_sim.onnx``, from the
+repository HonglinChu/SiamTrackers, folder ``NanoTrack/models/nanotrackv2/``) are read from
+``--nano-models DIR``; never a dependency of vtrack either.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
@@ -56,10 +61,29 @@ class MeanShiftTutorial:
         return True, self.window
 
 
-def make(name: str):
+#: NanoTrack v2's two ONNX files, in ``--nano-models``.
+NANO_FILES = ("nanotrack_backbone_sim.onnx", "nanotrack_head_sim.onnx")
+
+
+def make_nano(models: Path | None):
+    """NanoTrack v2 (``cv2.TrackerNano``) from the two ONNX files in ``models``."""
+    if not hasattr(cv2, "TrackerNano"):
+        raise LookupError(f"OpenCV {cv2.__version__} here has no TrackerNano (needs >= 4.7)")
+    if models is None or not all((models / f).is_file() for f in NANO_FILES):
+        raise LookupError("NanoTrack v2 needs --nano-models DIR holding "
+                          + " and ".join(NANO_FILES))
+    params = cv2.TrackerNano_Params()
+    params.backbone = str(models / NANO_FILES[0])
+    params.neckhead = str(models / NANO_FILES[1])
+    return cv2.TrackerNano_create(params)
+
+
+def make(name: str, nano_models: Path | None = None):
     """A fresh tracker with ``init(frame, box)`` and ``update(frame) -> (ok, box)``."""
     if name == "meanshift":
         return MeanShiftTutorial()
+    if name == "Nano":
+        return make_nano(nano_models)
     create = getattr(cv2, f"Tracker{name}_create", None)
     if create is None:
         legacy = getattr(cv2, "legacy", None)
@@ -70,9 +94,10 @@ def make(name: str):
     return create()
 
 
-def run(name: str, frames: list[np.ndarray], box: tuple[int, int, int, int]) -> dict:
+def run(name: str, frames: list[np.ndarray], box: tuple[int, int, int, int],
+        nano_models: Path | None = None) -> dict:
     """One tracker over ``frames``: boxes, ok flags and tracking seconds."""
-    tracker = make(name)
+    tracker = make(name, nano_models)
     started = time.perf_counter()
     tracker.init(frames[0], box)
     boxes: list[list[float] | None] = [list(map(float, box))]
@@ -86,15 +111,19 @@ def run(name: str, frames: list[np.ndarray], box: tuple[int, int, int, int]) -> 
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) < 3:
-        print(__doc__, file=sys.stderr)
-        return 2
-    frames = read_frames(Path(argv[0]))
-    x, y, w, h = (float(v) for v in argv[1].split(","))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", type=Path)
+    parser.add_argument("box", help="0-based X,Y,W,H on the first frame")
+    parser.add_argument("trackers", nargs="+")
+    parser.add_argument("--nano-models", type=Path, default=None,
+                        help="folder of NanoTrack v2's two ONNX files")
+    args = parser.parse_args(argv)
+    frames = read_frames(args.folder)
+    x, y, w, h = (float(v) for v in args.box.split(","))
     box = (round(x), round(y), max(round(w), 1), max(round(h), 1))
-    for name in argv[2:]:
+    for name in args.trackers:
         try:
-            print(json.dumps(run(name, frames, box)))
+            print(json.dumps(run(name, frames, box, args.nano_models)))
         except (LookupError, cv2.error) as exc:
             print(json.dumps({"tracker": name, "error": str(exc)}))
         sys.stdout.flush()
