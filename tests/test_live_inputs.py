@@ -1,17 +1,26 @@
-"""Inputs FFmpeg opens beyond a file path: a container on stdin, redirected or piped."""
+"""Inputs FFmpeg opens beyond a file path: a container on stdin (redirected or piped), a FIFO,
+HTTP, live streams over UDP and RTSP from a real-time sender, FFmpeg's own input options,
+capture devices. Every network test runs on loopback and is bounded in time."""
 
 from __future__ import annotations
 
+import csv
 import functools
 import http.server
+import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
 import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 
-from vtrack.scenes import make_scene, write_video
+import pytest
+
+from vtrack.scenes import make_scene, write_clip, write_video
 
 
 def _run(args: list[str], timeout: float = 120, **kwargs: object) -> subprocess.CompletedProcess:
@@ -99,5 +108,171 @@ def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path
         lines = done.stderr.decode().strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith(f"vtrack: error: {url}: cannot be opened")
     assert not (tmp_path / "o").exists()
+    quiet = f"udp://127.0.0.1:{port}"  # UDP has no connection to refuse: nothing comes
+    done = _run([quiet, "--init", "1,1,8,8", "--timeout", "1", "-o", str(tmp_path / "o")])
+    assert done.returncode != 0 and done.stderr.decode().strip() == (
+        f"vtrack: error: {quiet}: cannot be opened (nothing came within 1 s; --timeout "
+        "SECONDS waits longer)")
     done = _run(["srt://127.0.0.1:9000", "--init", "1,1,8,8"], timeout=60)
     assert done.returncode != 0 and b"srt:// is not in the FFmpeg" in done.stderr
+
+
+# -- live streams on loopback: a real-time sender (PyAV or ffmpeg) and vtrack receiving --------
+
+SENDER = [sys.executable, "-m", "vtrack.scenes.send"]
+
+
+def _free_port(kind: int = socket.SOCK_STREAM) -> int:
+    with socket.socket(socket.AF_INET, kind) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def _wait_for(condition: Callable[[], bool], what: str, receiver: subprocess.Popen,
+              limit_s: float = 60) -> None:
+    """Wait (bounded) until ``condition()`` holds; fail naming ``what`` if the receiver ended
+    first or the limit passed."""
+    deadline = time.monotonic() + limit_s
+    while not condition():
+        if receiver.poll() is not None:
+            raise AssertionError(f"vtrack ended before {what}: {receiver.stderr.read()!r}")
+        if time.monotonic() > deadline:
+            raise AssertionError(f"no {what} within {limit_s} s")
+        time.sleep(0.05)
+
+
+def _bound(port: int, table: str) -> bool:
+    """Whether a local socket is bound to ``port`` (``/proc/net/udp`` or ``tcp``, listening)."""
+    rows = Path(f"/proc/net/{table}").read_text().splitlines()[1:]
+    return any(row.split()[1].endswith(f":{port:04X}") and
+               (table == "udp" or row.split()[3] == "0A") for row in rows)
+
+
+def _live_clip(tmp_path: Path, frames: int) -> tuple[Path, str]:
+    """A 160x120 clip at 30 fps with a key frame every 10 frames (a receiver may join part
+    way), and its first box as --init takes it."""
+    scene = make_scene("smooth", seed=8, width=160, height=120, frames=frames, fps=30)
+    return (write_video(scene, tmp_path / "live.mp4", preset="veryfast", keyint=10),
+            ",".join(f"{v:g}" for v in scene.boxes[0]))
+
+
+def _receiver(args: list[str]) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "vtrack", "run", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open() as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_udp_stream_whose_sender_is_killed_ends_partial_with_whole_outputs(
+        tmp_path: Path) -> None:
+    """MPEG-TS over UDP sent in real time; the sender is killed mid-stream: the run ends
+    after --timeout with every output whole, run.json saying the stream stopped, live pacing
+    recorded (frames passed over, latency p50/p99) and the source's own frame numbers."""
+    clip, box = _live_clip(tmp_path, frames=300)
+    port = _free_port(socket.SOCK_DGRAM)
+    out, lines = tmp_path / "out", tmp_path / "lines.jsonl"
+    # the sender first: the receiver joins the stream at its next key frame, as on a network
+    sender = subprocess.Popen([*SENDER, str(clip), f"udp://127.0.0.1:{port}"])
+    receiver = _receiver([f"udp://127.0.0.1:{port}", "-c", "s2", "--init", box, "--timeout",
+                          "1", "--stream", str(lines), "-o", str(out)])
+    try:
+        _wait_for(lambda: lines.exists() and lines.read_bytes().count(b"\n") >= 15,
+                  "15 tracked frames", receiver)
+        sender.kill()
+        _, stderr = receiver.communicate(timeout=60)
+    finally:
+        for process in (sender, receiver):
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    assert receiver.returncode == 1, stderr
+    assert b"the stream stopped at frame" in stderr and b"no data for 1 s" in stderr, stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "partial" and "the stream stopped" in record["error"]
+    assert record["live"] is True and record["input"]["name"] == f"udp-127.0.0.1-{port}"
+    assert set(record["outputs"]) == {"track.csv", "annotated.mp4"}
+    rows = _rows(out / "track.csv")
+    assert 15 <= len(rows) == record["frames"] < 300
+    numbers = [int(r["frame"]) for r in rows]
+    assert numbers == sorted(set(numbers))
+    passed = record["summary"]["frames_passed"]
+    assert numbers[-1] - numbers[0] + 1 == len(rows) + passed  # the source's own numbers
+    latency = record["timing"]["latency"]
+    assert latency["frames"] == len(rows) and 0 < latency["p50_ms"] <= latency["p99_ms"]
+    assert [json.loads(line)["frame"] for line in lines.read_text().splitlines()] == numbers
+
+
+@pytest.mark.parametrize("sender_kind", ["pyav", "ffmpeg"])
+def test_rtsp_pushed_to_vtrack_listening_gives_every_frame(tmp_path: Path,
+                                                             sender_kind: str) -> None:
+    """``vtrack run rtsp://... --input-option rtsp_flags=listen`` (as ``ffmpeg -rtsp_flags
+    listen -i``) receives an RTSP stream pushed in real time, to its end: complete."""
+    if sender_kind == "ffmpeg" and shutil.which("ffmpeg") is None:
+        pytest.skip("no ffmpeg program on this machine (.ci/run installs Debian's); the PyAV "
+                    "sender covers RTSP")
+    clip, box = _live_clip(tmp_path, frames=45)
+    port = _free_port()
+    url = f"rtsp://127.0.0.1:{port}/live"
+    receiver = _receiver([url, "--input-option", "rtsp_flags=listen", "-c", "s2", "--init",
+                          box, "--no-video", "-o", str(tmp_path / "out")])
+    try:
+        _wait_for(lambda: _bound(port, "tcp"), "RTSP port listening", receiver)
+        send = ([*SENDER, str(clip), url, "rtsp"] if sender_kind == "pyav" else
+                ["ffmpeg", "-loglevel", "error", "-re", "-i", str(clip), "-c", "copy", "-f",
+                 "rtsp", url])
+        subprocess.run(send, check=True, timeout=60)
+        _, stderr = receiver.communicate(timeout=60)
+    finally:
+        if receiver.poll() is None:
+            receiver.kill()
+            receiver.wait()
+    assert receiver.returncode == 0, stderr
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert record["status"] == "complete" and record["live"] is True
+    rows = _rows(tmp_path / "out" / "track.csv")
+    assert len(rows) + record["summary"]["frames_passed"] == 45
+
+
+def test_format_and_input_options_reach_ffmpeg(tmp_path: Path) -> None:
+    """``--format rawvideo --input-option video_size=...`` (as ``ffmpeg -f rawvideo
+    -video_size ...``) reads raw frames through FFmpeg: the same track.csv as --raw."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=20, fps=30)
+    files = write_clip(scene, tmp_path / "frames.bgr", fmt="raw")
+    common = ["-c", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video"]
+    by_raw = _run([str(files.clip), "--raw", "160x120", *common, "-o", str(tmp_path / "a")])
+    assert by_raw.returncode == 0, by_raw.stderr
+    by_ffmpeg = _run([str(files.clip), "--format", "rawvideo", "--input-option",
+                      "video_size=160x120", "--input-option", "pixel_format=bgr24",
+                      "--input-option", "framerate=30", *common, "-o", str(tmp_path / "b")])
+    assert by_ffmpeg.returncode == 0, by_ffmpeg.stderr
+    expected = (tmp_path / "a" / "track.csv").read_bytes()
+    assert expected.count(b"\n") == 21
+    assert (tmp_path / "b" / "track.csv").read_bytes() == expected
+    for bad, needle in ((["--format", "nosuchformat"], b"--format nosuchformat: not a format"),
+                        (["--input-option", "novalue"], b"--input-option 'novalue': expected")):
+        done = _run([str(files.clip), *bad, *common, "-o", str(tmp_path / "c")])
+        assert done.returncode != 0 and needle in done.stderr and b"Traceback" not in \
+            done.stderr, done.stderr
+
+
+def test_a_stream_or_stdin_without_init_asks_for_init_not_a_sidecar(tmp_path: Path) -> None:
+    for spec in ("udp://127.0.0.1:9", "-"):
+        done = _run([spec, "-c", "s2", "-o", str(tmp_path / "o")], input=b"")
+        lines = done.stderr.decode().strip().splitlines()
+        assert done.returncode != 0 and len(lines) == 1, lines
+        assert "give --init x,y,w,h" in lines[0] and ".init.txt" not in lines[0], lines
+
+
+def test_a_capture_device_is_read_through_opencv(tmp_path: Path) -> None:
+    devices = sorted(Path("/dev").glob("video[0-9]*"))
+    if not devices:
+        pytest.skip("no V4L2 capture device (/dev/videoN) on this machine")
+    done = _run([str(devices[0]), "-c", "s2", "--init", "10,10,20,20", "--frames", "5",
+                 "--no-video", "-o", str(tmp_path / "cam")], timeout=60)
+    if done.returncode != 0 and b"cannot be opened as a V4L2" in done.stderr:
+        pytest.skip(f"{devices[0]} is not a camera that can be opened here")
+    assert done.returncode == 0, done.stderr
+    assert len(_rows(tmp_path / "cam" / "track.csv")) == 5

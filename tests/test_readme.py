@@ -33,6 +33,11 @@ SKIPPED = {
     "ffmpeg ": "needs the ffmpeg program (the same input is tested from a file in test_io.py)",
     "mkfifo": "needs a second program writing the FIFO (tests/test_live_inputs.py)",
     "http://": "needs a web server (tests/test_live_inputs.py)",
+    "udp://": "needs a live sender (tests/test_live_inputs.py)",
+    "rtsp://": "needs an RTSP camera or sender (tests/test_live_inputs.py)",
+    "tcp://": "needs a TCP sender (tests/test_live_inputs.py)",
+    "/dev/video": "needs a camera (tests/test_live_inputs.py)",
+    "drone.h264": "needs a raw H.264 recording (--format is tested in tests/test_live_inputs.py)",
     "--scheduler": "needs a Dask cluster (tests/test_dask_wait.py)",
 }
 

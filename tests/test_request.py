@@ -16,6 +16,7 @@ from vtrack.cli import main
 from vtrack.config import load_config
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
+from vtrack.io.video import FFmpegInput
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, run
 
@@ -40,6 +41,10 @@ OTHER: dict[str, Any] = {
     "start": 3,
     "init_from": "other.init.txt",
     "stream": "other.jsonl",
+    "ffmpeg": FFmpegInput(format="mpegts", options=(("probesize", "32"),), timeout_s=2.0,
+                          follow_s=1.0),
+    "live": True,
+    "video_out": "udp://127.0.0.1:5000",
 }
 
 
@@ -65,7 +70,8 @@ def test_the_request_round_trips_through_its_dict() -> None:
     request = RunRequest(input="clip.mp4", out_dir=Path("out"), config=load_config("s2"),
                          init_box=Box(1.5, 2, 30, 40), gt_path=Path("gt.txt"), gt_origin=1,
                          raw=RawFormat(64, 48, "gray", 25.0), video=False, seed=3,
-                         max_frames=9)
+                         max_frames=9, ffmpeg=FFmpegInput("h264", (("fflags", "nobuffer"),),
+                                                          3.0, 2.0), live=False)
     again = RunRequest.from_dict(request.to_dict())
     assert again.to_dict() == request.to_dict()
     assert again.config.resolved() == request.config.resolved()

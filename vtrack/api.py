@@ -43,7 +43,8 @@ def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_
     if isinstance(frames, RunRequest):
         request = frames
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
-        with open_source(request.input, request.raw, fps=request.fps) as source:
+        with open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
+                         live=request.live) as source:
             yield from _run(tracker, islice(source, request.max_frames), request.init_box)
         return
     box = None if init_box is None else as_box(init_box)

@@ -10,7 +10,7 @@ result is reused only if every field of the request that made it is the same.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +18,7 @@ from vtrack.config import Config, config_from_resolved
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
+from vtrack.io.video import FFmpegInput
 
 
 @dataclass(frozen=True)
@@ -53,6 +54,13 @@ class RunRequest:
     init_from: str | None = None
     #: ``--stream``: write a flushed JSON line per frame to this path, or ``-`` for stdout.
     stream: str | None = None
+    #: ``--format``, ``--input-option``, ``--timeout``, ``--follow``: how FFmpeg opens the input.
+    ffmpeg: FFmpegInput = field(default_factory=FFmpegInput)
+    #: ``--live``/``--no-live``: track only the newest frame when busy (None: for stream URLs
+    #: and capture devices, :func:`vtrack.io.specs.is_live`).
+    live: bool | None = None
+    #: ``--video-out URL``: the annotated video goes to this live output instead of a file.
+    video_out: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``run.json``'s ``"request"``): the config as its resolved chain
@@ -74,6 +82,9 @@ class RunRequest:
             "start": self.start,
             "init_from": self.init_from,
             "stream": self.stream,
+            "ffmpeg": {**asdict(self.ffmpeg), "options": dict(self.ffmpeg.options)},
+            "live": self.live,
+            "video_out": self.video_out,
         }
 
     @classmethod
@@ -97,6 +108,9 @@ class RunRequest:
             start=int(data.get("start", 0)),
             init_from=data.get("init_from"),
             stream=data.get("stream"),
+            ffmpeg=_ffmpeg_input(data.get("ffmpeg")),
+            live=data.get("live"),
+            video_out=data.get("video_out"),
         )
 
     def file_identities(self) -> dict[str, Any]:
@@ -107,3 +121,14 @@ class RunRequest:
     def same_run(self, recorded: Any) -> bool:
         """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request."""
         return json.loads(json.dumps(self.to_dict())) == recorded
+
+
+def _ffmpeg_input(data: dict[str, Any] | None) -> FFmpegInput:
+    """The :class:`FFmpegInput` :meth:`RunRequest.to_dict` recorded (the default if none)."""
+    if data is None:
+        return FFmpegInput()
+    follow = data.get("follow_s")
+    return FFmpegInput(format=data.get("format"),
+                       options=tuple((str(k), str(v)) for k, v in data["options"].items()),
+                       timeout_s=float(data["timeout_s"]),
+                       follow_s=None if follow is None else float(follow))

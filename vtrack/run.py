@@ -65,9 +65,10 @@ from vtrack.io import (
 )
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import OutputFolder, refuse_replacing
-from vtrack.io.sidecar import read_sidecar, sidecar_path
+from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.stream import StreamWriter
 from vtrack.io.videowriter import verify_video
+from vtrack.latency import Latencies
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
@@ -103,6 +104,9 @@ class RunSummary:
     frames_lost: int = 0
     #: Frames of the input that could not be decoded and were skipped (damaged file).
     frames_skipped: int = 0
+    #: A live source's frames passed over because a newer one arrived while the tracker was
+    #: busy (``--live``); track.csv keeps the source's frame numbers, with these left out.
+    frames_passed: int = 0
     error: str | None = None
     warnings: list[str] = field(default_factory=list)
     mot: dict[str, Any] | None = None
@@ -128,6 +132,8 @@ class RunSummary:
             parts.append(f"lost {self.frames_lost}")
         if self.frames_skipped:
             parts.append(f"skipped {self.frames_skipped} undecodable")
+        if self.frames_passed:
+            parts.append(f"skipped {self.frames_passed} while busy (live)")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
         head = f"{label or self.input}{status}: "
         return head + ", ".join(parts) + f" -> {self.out_dir}"
@@ -317,6 +323,8 @@ class _Tracked:
     cpu_seconds: float = 0.0
     states: dict[TrackState, int] = field(
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
+    #: Live sources: each frame's time from decoded to its result written.
+    latency: Latencies = field(default_factory=Latencies)
 
     @property
     def untouched(self) -> bool:
@@ -345,7 +353,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
         resolved = _resolve(request)
-        source: Source = open_source(request.input, request.raw, fps=request.fps)
+        source: Source = open_source(request.input, request.raw, fps=request.fps,
+                                     ffmpeg=request.ffmpeg, live=request.live)
         try:
             info = source.info
             if resolved.init_box is not None:
@@ -445,6 +454,10 @@ def _resolve(request: RunRequest) -> _Resolved:
         if start:
             raise ConfigError(f"--start {start}: this tracker needs the target's box in frame "
                               f"{start}: give --init x,y,w,h or --gt FILE")
+        if not has_sidecar(request.input):
+            raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
+                              f"--init x,y,w,h (or --gt FILE); {request.input} has no sidecar "
+                              "file to hold one")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h, "
             f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
@@ -489,6 +502,9 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                         first_time = result.time_s
                     video.write(result.frame, lambda planes, r=result: annotator.draw(
                         planes, r), time_s=result.time_s - first_time)
+            received = source.received
+            if received is not None:
+                out.latency.add(time.perf_counter() - received)
             if on_frame is not None:
                 on_frame(out.frames)
         if out.frames == 0 and request.start:  # a user error: the folder stays as it was
@@ -591,6 +607,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         frames_occluded=tracked.states[TrackState.OCCLUDED],
         frames_lost=tracked.states[TrackState.LOST],
         frames_skipped=source.frames_skipped,
+        frames_passed=source.frames_passed,
         multi_target=resolved.pipeline.multi_target,
         error=error,
         warnings=list(source.warnings),
@@ -650,7 +667,10 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             "fps": summary.fps,
             "stage_us_per_frame": resolved.pipeline.stage_microseconds_per_frame(),
             "loop_cpu_us_per_frame": 1e6 * tracked.cpu_seconds / frames if frames else None,
+            # live sources: frame decoded -> its row, stream line and picture handed over
+            "latency": tracked.latency.to_dict() if source.live else None,
         },
+        "live": source.live,
         "outputs": outputs,
         "output_bytes": sizes(request.out_dir, outputs),
         "identity": resolved.identity,

@@ -13,20 +13,19 @@ from vtrack.cli._paths import OUT_PATH
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
 
+#: ``--follow`` without a number: seconds a growing file may stay the same size before its end.
+FOLLOW_S = 5.0
 PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
 
 def default_out_dir(input_spec: str, config: str | None = None) -> Path:
     """``./vtrack-out/<name>/<config>/``: name is the input's file stem or folder name
-    (``stdin`` for -); config the config's name (a TOML file's stem). Without ``config``,
-    ``./vtrack-out/<name>/`` (a batch's results folder)."""
-    if input_spec == "-":
-        name = "stdin"
-    else:
-        path = Path(input_spec.rstrip("/") or "/")
-        name = (path.stem if path.suffix else path.name) or "input"
+    (``stdin`` for -, ``udp-127.0.0.1-5000`` for a URL); config the config's name (a TOML
+    file's stem). Without ``config``, ``./vtrack-out/<name>/`` (a batch's results folder)."""
     from vtrack.io.files import folder_name
+    from vtrack.io.specs import input_name
 
+    name = input_name(input_spec)
     folder = Path("vtrack-out") / name
     # a config's own name (``name = "..."`` in its TOML) may hold characters a folder cannot
     return folder / folder_name(config) if config else folder
@@ -60,6 +59,25 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Frame rate of --raw input or an image folder (default 30): time_s = frame "
                    "index / fps. Refused for a video file, whose frames carry their own "
                    "timestamps.")
+@click.option("--format", "-f", "input_format", metavar="NAME", default=None,
+              help="FFmpeg input format, for what probing cannot decide (as ffmpeg -f: "
+                   "mpegts, h264, mjpeg, rtsp ...).")
+@click.option("--input-option", "input_options", multiple=True, metavar="KEY=VALUE",
+              help="An FFmpeg demuxer or protocol option (as ffmpeg -KEY VALUE before -i; "
+                   "repeatable), e.g. rtsp_transport=tcp, probesize=32, fflags=nobuffer.")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.1, max=3600),
+              default=None, metavar="SECONDS",
+              help="A network input that does not open, or sends nothing, this long ends the "
+                   "run (recorded as partial once frames came). Default: 10.")
+@click.option("--live/--no-live", "live", default=None,
+              help="Keep up with the source: when a frame arrives while the tracker is busy, "
+                   "track the newest and count the skipped ones. Default: on for stream URLs "
+                   "(rtsp, rtp, udp, tcp) and capture devices, off for files, stdin and http.")
+@click.option("--follow", "follow_s", type=click.FloatRange(min=0, min_open=True),
+              is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
+              help=f"Read a file that is still being written, until it has not grown for "
+                   f"SECONDS (default {FOLLOW_S:g}), as tail -f (MPEG-TS, Matroska or "
+                   "fragmented MP4; a plain MP4 is readable only once finished).")
 @click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
 @click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
@@ -86,6 +104,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             gt_path: Path | None, gt_origin: int | None, out_dir: Path | None, overwrite: bool,
             overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
+            input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
+            live: bool | None, follow_s: float | None,
             crf: int, seed: int, start: int, max_frames: int | None, stream: str | None,
             stats_period: float, quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
@@ -99,6 +119,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     from vtrack.config import load_config
     from vtrack.evaluate.groundtruth import gt_origin_of, parse_box
     from vtrack.io import RawFormat
+    from vtrack.io.video import FFmpegInput
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
     config = load_config(config_spec).with_overrides(list(overrides))
@@ -120,6 +141,10 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         max_frames=max_frames,
         start=start,
         stream=stream,
+        ffmpeg=FFmpegInput(format=input_format, options=parse_options(input_options),
+                           follow_s=follow_s,
+                           **({} if timeout_s is None else {"timeout_s": timeout_s})),
+        live=live,
     )
     progress = FrameProgress(quiet, max_frames, start, stats_period)
     try:
@@ -139,3 +164,16 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         click.echo(f"vtrack: error: {summary.error}; results up to there are in "
                    f"{summary.out_dir}", err=True)
         sys.exit(1)
+
+
+def parse_options(pairs: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
+    """``--input-option KEY=VALUE`` values as (key, value) pairs; a UsageError naming the one
+    without ``=`` or a key."""
+    parsed = []
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip():
+            raise click.UsageError(f"--input-option {pair!r}: expected KEY=VALUE "
+                                   "(e.g. rtsp_transport=tcp)")
+        parsed.append((key.strip().lstrip("-"), value))
+    return tuple(parsed)

@@ -9,12 +9,8 @@ from vtrack.io.files import check_input_path
 from vtrack.io.images import ImageFolderSource
 from vtrack.io.raw import RawFormat, RawSource, checked_fps
 from vtrack.io.source import Source
-from vtrack.io.video import VideoSource
-
-
-def is_url(spec: str) -> bool:
-    """True when ``spec`` names a network input (``scheme://...``) rather than a path."""
-    return "://" in spec and spec.split("://", 1)[0].lower().isalpha()
+from vtrack.io.specs import device_number, is_live, is_url
+from vtrack.io.video import FFmpegInput, VideoSource
 
 
 def check_input(spec: str) -> None:
@@ -25,36 +21,48 @@ def check_input(spec: str) -> None:
         check_input_path(spec)
 
 
-def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None) -> Source:
+def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
+                ffmpeg: FFmpegInput | None = None, live: bool | None = None) -> Source:
     """Open an input and decode its first frame; raise InputError if that is impossible.
 
     - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
     - ``spec`` a folder: an image sequence (``folder/img/*`` or ``folder/*``) at ``fps``
       (default 30) frames per second;
+    - ``/dev/videoN``: a V4L2 capture device, through OpenCV (the PyAV wheel has no V4L2);
     - ``-`` without ``raw``: a container on stdin (``vtrack run - < clip.mp4``, or piped);
-    - anything else: a video file FFmpeg can open; its frames carry their own timestamps, so
-      ``fps`` is refused for it (ConfigError). A given ``fps`` must be a frame rate (> 0).
+    - anything else: a file, FIFO or URL FFmpeg can open (``ffmpeg`` says how); its frames
+      carry their own timestamps, so ``fps`` is refused for it (ConfigError). A given ``fps``
+      must be a frame rate (> 0).
+
+    ``live`` (None: :func:`is_live`) makes the source hand over only the newest frame when the
+    consumer is busy, counting those it passed over (:attr:`Source.frames_passed`).
     """
+    ffmpeg = ffmpeg or FFmpegInput()
+    live = is_live(spec) if live is None else live
     if fps is not None:
         checked_fps(fps)
     if raw is not None:
+        if live:
+            raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
+                              "sender back); give a container (e.g. -f mpegts) to skip frames")
         return RawSource(spec, raw)
-    if spec == "-":  # a container on stdin (a pipe or a redirected file), probed as ffmpeg does
-        if fps is not None:
-            raise ConfigError("--fps: a container on stdin carries its own timestamps; --fps "
-                              "applies to raw input (--raw WxH) and image folders only")
-        return VideoSource(spec)
-    if is_url(spec):
-        if fps is not None:
-            raise ConfigError(f"--fps: {spec} carries its own timestamps; --fps applies to raw "
-                              "input and image folders only")
-        return VideoSource(spec)
-    check_input_path(spec)
-    if os.path.isdir(spec):
-        return ImageFolderSource(spec, fps=fps)
+    device = device_number(spec)
+    if not (spec == "-" or is_url(spec)):
+        check_input_path(spec)
+        if os.path.isdir(spec):
+            return ImageFolderSource(spec, fps=fps)
     if fps is not None:
-        raise ConfigError(
-            f"--fps: {spec} is a video file, whose frames carry their own timestamps; --fps "
-            "applies to raw input and image folders only"
-        )
-    return VideoSource(spec)
+        what = ("a container on stdin carries its own timestamps" if spec == "-" else
+                f"{spec} is a video file, whose frames carry their own timestamps"
+                if device is None and not is_url(spec) else
+                f"{spec} carries its own timestamps")
+        raise ConfigError(f"--fps: {what}; --fps applies to raw input (--raw WxH) and image "
+                          "folders only")
+    if device is not None:
+        from vtrack.io.capture import CaptureSource
+
+        source: Source = CaptureSource(spec, device)
+    else:
+        source = VideoSource(spec, ffmpeg, live)
+    source.live = live
+    return source

@@ -15,6 +15,7 @@ from vtrack.errors import InputError
 from vtrack.geometry import Box, box_from_parts
 from vtrack.io.files import write_text_atomic
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
+from vtrack.io.specs import is_url
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
@@ -27,6 +28,15 @@ def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
     if path.is_dir():
         return path / SEQUENCE_SIDECAR
     return path.with_name(VIDEO_SIDECAR.format(path.stem))
+
+
+def has_sidecar(input_spec: str | os.PathLike[str]) -> bool:
+    """Whether ``input_spec`` can have a sidecar file: a file or folder, not stdin (``-``), a
+    URL, a FIFO or a device (whose box is given with ``--init``)."""
+    spec = os.fspath(input_spec)
+    if spec == "-" or is_url(spec):
+        return False
+    return not os.path.exists(spec) or os.path.isfile(spec) or os.path.isdir(spec)
 
 
 def format_box(box: Box) -> str:
@@ -52,7 +62,7 @@ def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
     Raises InputError (naming the sidecar file) when the file exists but is unreadable or
     malformed: a box the user left must not be silently ignored.
     """
-    if os.fspath(input_spec) == "-":
+    if not has_sidecar(input_spec):
         return None
     path = sidecar_path(input_spec)
     if not path.is_file():

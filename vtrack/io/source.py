@@ -15,7 +15,7 @@ from typing import Any, ClassVar, Literal
 
 from vtrack.frame import Frame
 from vtrack.io.files import Closing
-from vtrack.io.threads import Prefetcher
+from vtrack.io.threads import KeepingUp, Prefetcher
 
 InputKind = Literal["video", "images", "raw"]
 
@@ -60,13 +60,17 @@ class Source(Closing, ABC):
 
     #: Frames decoded ahead of the consumer.
     depth: ClassVar[int] = 4
+    #: A live source (:func:`~vtrack.io.open_source` ``live``): the reader never waits for the
+    #: consumer, who gets the frames it can keep up with; the others are passed over
+    #: (:class:`~vtrack.io.threads.KeepingUp`).
+    live: bool = False
 
     def __init__(self, info: InputInfo) -> None:
         self.info = info
         #: One line per problem the reader went past (e.g. an unreadable image it skipped);
         #: filled by the reader thread, complete once iteration has ended.
         self.warnings: list[str] = []
-        self._prefetch: Prefetcher[Frame] | None = None
+        self._prefetch: Prefetcher[Frame] | KeepingUp[Frame] | None = None
         self._closed = False
 
     @property
@@ -89,8 +93,23 @@ class Source(Closing, ABC):
             raise RuntimeError(f"{self.info.path}: the source is closed")
         if self._prefetch is not None:
             raise RuntimeError(f"{self.info.path}: a source can be iterated only once")
-        self._prefetch = Prefetcher(self._frames(), self.depth, f"vtrack-read:{self.info.name}")
+        name = f"vtrack-read:{self.info.name}"
+        self._prefetch = (KeepingUp(self._frames(), name, 1.0 / (self.info.fps or 30.0))
+                          if self.live
+                          else Prefetcher(self._frames(), self.depth, name))
         return iter(self._prefetch)
+
+    @property
+    def frames_passed(self) -> int:
+        """Live sources: frames decoded but passed over because the consumer could not have
+        kept up with them (their numbers are left out of the output). Always 0 otherwise."""
+        return self._prefetch.passed if isinstance(self._prefetch, KeepingUp) else 0
+
+    @property
+    def received(self) -> float | None:
+        """Live sources: when the frame last handed over was decoded (``perf_counter``), for
+        its latency; None otherwise."""
+        return self._prefetch.received if isinstance(self._prefetch, KeepingUp) else None
 
     def close(self) -> None:
         """Stop decoding and release the input. Safe to call twice and mid-stream."""

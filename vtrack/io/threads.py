@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
+from collections import deque
 from collections.abc import Iterator
 from typing import Generic, TypeVar
 
@@ -89,5 +91,103 @@ class Prefetcher(Generic[T]):
                 self._queue.get_nowait()
             except queue.Empty:
                 break
+        self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+
+class KeepingUp(Generic[T]):
+    """Iterate ``items`` (a live source) in a daemon thread that never waits for the consumer,
+    handing over what the consumer can still keep up with and passing over the rest.
+
+    Items wait in a queue of at most ``depth``. When the consumer asks for the next one, it
+    gets the oldest waiting item if it can work through everything waiting before the next
+    item is due (``period_s`` from now, at its measured time per item); otherwise the older
+    items are passed over until it can (the newest always stays). So a burst of items that
+    arrived together (several small frames in one network packet) is worked through, while a
+    consumer slower than the source always gets the newest and never falls behind.
+
+    ``passed`` counts the items passed over; ``received`` is when the item last handed over
+    was produced (``time.perf_counter()``). Memory stays flat whatever the consumer's pace. If
+    the producer raised, the consumer gets the items still waiting, then the exception.
+    """
+
+    def __init__(self, items: Iterator[T], name: str, period_s: float, depth: int = 8) -> None:
+        self._items = items
+        self._period_s = period_s
+        self._waiting: deque[tuple[object, float]] = deque()
+        self._depth = max(depth, 1)
+        self._ready = threading.Condition()
+        self._end: object | None = None  # _END or a _Failure once the producer has finished
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._produce, name=name, daemon=True)
+        self._started = False
+        self._busy_s = 0.0  # the consumer's time per item, a running mean
+        self.passed = 0
+        self.received = 0.0
+
+    def _produce(self) -> None:
+        end: object = _END
+        try:
+            for item in self._items:
+                if self._stop.is_set():
+                    return
+                with self._ready:
+                    if len(self._waiting) == self._depth:
+                        self._waiting.popleft()
+                        self.passed += 1
+                    self._waiting.append((item, time.perf_counter()))
+                    self._ready.notify()
+        except BaseException as exc:  # handed to the consumer, who decides what it means
+            end = _Failure(exc)
+        finally:
+            with self._ready:
+                self._end = end
+                self._ready.notify()
+            close = getattr(self._items, "close", None)
+            if close is not None:
+                close()
+
+    def _take(self) -> tuple[object, float] | None:
+        """The next item to hand over (None: the producer has ended), passing over the ones
+        the consumer could not work through in time. Called holding ``_ready``."""
+        while not self._waiting and self._end is None:
+            self._ready.wait(_POLL_S)
+        if not self._waiting:
+            return None
+        keep = max(1, int(self._period_s / self._busy_s)) if self._busy_s > 0 else self._depth
+        while len(self._waiting) > keep:
+            self._waiting.popleft()
+            self.passed += 1
+        return self._waiting.popleft()
+
+    def __iter__(self) -> Iterator[T]:
+        if not self._started:
+            self._started = True
+            self._thread.start()
+        first = True
+        while True:
+            with self._ready:
+                taken = self._take()
+                end = self._end
+            if taken is None:
+                if isinstance(end, _Failure):
+                    raise end.error
+                return
+            item, self.received = taken
+            started = time.perf_counter()
+            yield item  # type: ignore[misc]
+            busy = time.perf_counter() - started
+            if first:  # the first item also pays for starting up: not a measure of the pace
+                first = False
+            else:
+                self._busy_s = busy if self._busy_s == 0 else 0.8 * self._busy_s + 0.2 * busy
+
+    def close(self, timeout: float = 2.0) -> bool:
+        """Stop the producer; True once its thread has finished (or never started)."""
+        self._stop.set()
+        with self._ready:
+            self._waiting.clear()
+        if not self._started:
+            return True
         self._thread.join(timeout)
         return not self._thread.is_alive()

@@ -23,7 +23,8 @@ from __future__ import annotations
 import itertools
 import sys
 from collections.abc import Iterator
-from pathlib import Path
+from dataclasses import dataclass
+from typing import Any
 
 import av
 import cv2
@@ -33,8 +34,10 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
+from vtrack.io.follow import GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.source import InputInfo, Source
+from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
 
 #: Decoded layouts handed over as I420 planes without conversion.
@@ -141,45 +144,78 @@ class _Tail:
 NETWORK_TIMEOUT_S = 10.0
 
 
-def _open_container(path: str) -> av.container.InputContainer:
-    """``path`` opened by FFmpeg: ``-`` is stdin, ``scheme://`` a network input (with
-    :data:`NETWORK_TIMEOUT_S`; ``srt://`` refused: the wheel's FFmpeg has no SRT)."""
+@dataclass(frozen=True)
+class FFmpegInput:
+    """How FFmpeg opens an input, as ``ffmpeg``'s input options would say it.
+
+    ``format``: the demuxer (``ffmpeg -f``; None: probed); ``options``: demuxer/protocol
+    options (``ffmpeg -KEY VALUE``), as (key, value) pairs; ``timeout_s``: the most a network
+    input may take to open or to send more data; ``follow_s``: read a file that is still being
+    written until it has not grown for that many seconds (``tail -f``; None: up to its end).
+    """
+
+    format: str | None = None
+    options: tuple[tuple[str, str], ...] = ()
+    timeout_s: float = NETWORK_TIMEOUT_S
+    follow_s: float | None = None
+
+
+def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
+    """``path`` opened by FFmpeg as ``how`` says: ``-`` is stdin, ``scheme://`` a network
+    input (with ``how.timeout_s``; ``srt://`` refused: the wheel's FFmpeg has no SRT), a file
+    with ``how.follow_s`` read while it grows."""
+    if how.format is not None and how.format not in av.formats_available:
+        raise InputError(f"--format {how.format}: not a format PyAV's FFmpeg reads (ffmpeg "
+                         "-formats lists them; capture devices /dev/videoN need no --format)")
+    kwargs: dict[str, Any] = {"format": how.format, "options": dict(how.options)}
     if path == "-":
-        return av.open(sys.stdin.buffer)
+        return av.open(sys.stdin.buffer, **kwargs)
     if "://" not in path:
-        return av.open(path)
+        if how.follow_s is not None:
+            return av.open(GrowingFile(path, how.follow_s), **kwargs)
+        return av.open(path, **kwargs)
     scheme = path.split("://", 1)[0].lower()
     if scheme == "srt":
         raise InputError(f"{path}: srt:// is not in the FFmpeg that PyAV's wheel ships; relay "
                          "it, e.g. ffmpeg -i srt://... -c copy -f mpegts udp://127.0.0.1:5000")
-    return av.open(path, timeout=(NETWORK_TIMEOUT_S, NETWORK_TIMEOUT_S))
+    options = kwargs["options"]
+    if scheme == "rtsp" and "listen" in options.get("rtsp_flags", "") \
+            and "listen_timeout" not in options:  # FFmpeg's own default fails (ERANGE)
+        options["listen_timeout"] = str(max(1, round(how.timeout_s)))
+    return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
 
 
 class VideoSource(Source):
-    """A video file (anything FFmpeg opens), decoded with frame threads in a reader thread."""
+    """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
+    threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
 
-    def __init__(self, path: str) -> None:
+    def __init__(self, path: str, how: FFmpegInput | None = None, live: bool = False) -> None:
+        self._how = how = how or FFmpegInput()
         try:
             # ``-``: the container on stdin, through Python's file object so that FFmpeg may
             # seek in a redirected file (``< clip.mp4``) and reads a pipe as a stream
-            container = _open_container(path)
+            container = _open_container(path, how)
         except PermissionError:
             raise InputError(f"{path}: cannot be read (permission denied)") from None
         except FileNotFoundError:
             raise InputError(f"{path}: no such file") from None
+        except av.error.ExitError:  # the timeout's interrupt
+            raise InputError(f"{path}: cannot be opened (nothing came within "
+                             f"{how.timeout_s:g} s; --timeout SECONDS waits longer)") from None
         except av.FFmpegError as exc:
             what = "cannot be opened" if "://" in path else "not a video FFmpeg can decode"
             raise InputError(f"{path}: {what} ({os_reason(exc)})") from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         try:
-            info = self._open(path, container)
+            info = self._open(path, container, live)
         except BaseException:
             container.close()
             raise
         super().__init__(info)
 
-    def _open(self, path: str, container: av.container.InputContainer) -> InputInfo:
+    def _open(self, path: str, container: av.container.InputContainer, live: bool
+              ) -> InputInfo:
         """Pick the video stream, decode the first frame, describe the input."""
         if not container.streams.video:
             kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
@@ -192,7 +228,8 @@ class VideoSource(Source):
         if too_big and stream.codec_context.width and stream.codec_context.height:
             raise InputError(f"{path}: {too_big}")
         stream.thread_type = "AUTO"
-        stream.codec_context.thread_count = decoder_threads(
+        # a live source waits for no frame: one frame thread per core (each holds back a frame)
+        stream.codec_context.thread_count = cpu_count() if live else decoder_threads(
             stream.codec_context.width, stream.codec_context.height, cpu_count())
         self._decoded = self._decode()
         try:
@@ -223,7 +260,7 @@ class VideoSource(Source):
         return InputInfo(
             path=path,
             kind="video",
-            name="stdin" if path == "-" else Path(path).stem,
+            name=input_name(path),
             width=width,
             height=height,
             fps=fps,
@@ -308,6 +345,11 @@ class VideoSource(Source):
                     yield BgrFrame(index, time_s, bgr)
                 index += 1
                 yielded += 1
+        except av.error.ExitError:  # the timeout's interrupt: a network input went quiet
+            raise PartialInputError(
+                f"{info.path}: the stream stopped at frame {index} (no data for "
+                f"{self._how.timeout_s:g} s: the sender stopped or the network dropped it)",
+                index) from None
         except av.FFmpegError as exc:
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index

@@ -90,12 +90,15 @@ def write_video(
     codec: str = "libx264",
     pix_fmt: str = "yuv420p",
     progress: bool = False,
+    keyint: int | None = None,
 ) -> Path:
     """Encode every frame of ``scene`` to ``path`` (container from the suffix, e.g. ``.mp4``).
 
     Constant frame rate ``scene.fps``, exactly ``len(scene)`` frames, pts = frame index.
     ``crf`` / ``preset`` are passed to the encoder (x264 / x265 understand both). For yuv420p
-    the BGR -> I420 conversion is done by OpenCV (width and height must be even). The scene's
+    the BGR -> I420 conversion is done by OpenCV (width and height must be even). ``keyint``:
+    a key frame at least every that many frames (a stream a receiver may join part way; None:
+    the encoder's choice). The scene's
     frames are deterministic, the encoded bytes need not be (x264's mb-tree can vary slightly
     from run to run).
     """
@@ -114,7 +117,10 @@ def write_video(
         _need_even(scene, f"{path}: pixel format yuv420p")
     rate = Fraction(scene.fps).limit_denominator(1001)
     with _writing(path), av.open(str(path), "w") as container:
-        stream = container.add_stream(codec, rate=rate, options={"crf": str(crf), "preset": preset})
+        options = {"crf": str(crf), "preset": preset}
+        if keyint is not None:
+            options["g"] = str(keyint)
+        stream = container.add_stream(codec, rate=rate, options=options)
         stream.width, stream.height = scene.width, scene.height
         stream.pix_fmt = pix_fmt
         stream.thread_type = "FRAME"

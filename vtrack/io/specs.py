@@ -1,0 +1,50 @@
+"""What an input argument names: a URL, a capture device, a path; its short name and whether
+it is live. Plain string rules, no I/O beyond resolving a device link."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+from vtrack.io.files import folder_name
+
+#: URL schemes of live streams: frames come at the sender's pace and are not waited for
+#: (``--live``); ``http(s)://`` and files are read as fast as they are tracked.
+LIVE_SCHEMES = frozenset({"rtsp", "rtsps", "rtp", "udp", "tcp", "rtmp", "srt"})
+_DEVICE = re.compile(r"/dev/video(\d+)$")
+
+
+def is_url(spec: str) -> bool:
+    """True when ``spec`` names a network input (``scheme://...``) rather than a path."""
+    return "://" in spec and spec.split("://", 1)[0].lower().isalpha()
+
+
+def device_number(spec: str) -> int | None:
+    """N when ``spec`` is a V4L2 capture device ``/dev/videoN`` (or a link to one, such as
+    ``/dev/v4l/by-id/...``); None for anything else."""
+    if not spec.startswith("/dev/"):
+        return None
+    found = _DEVICE.match(os.path.realpath(spec))
+    return int(found.group(1)) if found else None
+
+
+def is_live(spec: str) -> bool:
+    """Whether ``spec`` is a live source by default: a stream URL (rtsp, rtp, udp, tcp, ...)
+    or a capture device. Its frames come at their own pace (see ``--live``)."""
+    if is_url(spec):
+        return spec.split("://", 1)[0].lower() in LIVE_SCHEMES
+    return device_number(spec) is not None
+
+
+def input_name(spec: str) -> str:
+    """A short name for ``spec`` (output folders, progress): a file's stem, a folder's name,
+    ``stdin`` for ``-``, ``udp-127.0.0.1-5000`` for a URL, ``video0`` for a device."""
+    if spec == "-":
+        return "stdin"
+    if is_url(spec):
+        scheme, rest = spec.split("://", 1)
+        rest = rest.split("?", 1)[0].strip("/")
+        return folder_name(f"{scheme}-{rest}".replace(":", "-").replace("/", "-"), "stream")
+    path = Path(spec.rstrip("/") or "/")
+    return (path.stem if path.suffix else path.name) or "input"
