@@ -43,14 +43,22 @@ def test_tracks_are_capped_whatever_max_coast_lets_live() -> None:
     assert max(counts) == 40  # the specks make far more; the cap holds every frame
 
 
-def test_without_ground_truth_no_boxes_are_kept_for_metrics() -> None:
+def test_no_boxes_are_kept_per_frame_with_or_without_ground_truth() -> None:
+    """Without ground truth nothing is scored; with it each frame is scored as it goes (the
+    scorer's counts grow with ids, not frames) and the run's measures come out at the end."""
     track = Track(1, Box(1, 2, 3, 4), 1.0, TrackStatus.CONFIRMED)
-    kept, dropped = _MultiTargetRows(keep=True), _MultiTargetRows(keep=False)
-    for index in range(50):
+    truth = {index: [(7, Box(1, 2, 3, 4))] for index in range(400)}
+    scored, plain = _MultiTargetRows(truth, 0), _MultiTargetRows(None, 0)
+    sizes = []
+    for index in range(400):
         result = FrameResult(index=index, time_s=index / 30, box=None, state="tracking",
                              score=None, prediction=None, tracks=[track])
-        assert kept.rows(result) == dropped.rows(result)
-    assert len(kept.tracks) == 50 and dropped.tracks == {}
+        assert scored.rows(result) == plain.rows(result)
+        if index in (49, 399):
+            sizes.append(sum(len(v) for v in vars(scored.score).values() if isinstance(v, dict)))
+    assert plain.score is None and sizes[0] == sizes[1]
+    measures = scored.mot(400)
+    assert measures["mota"] == 1.0 and measures["matches"] == 400
 
 
 @pytest.mark.parametrize("size", [3, 17, 31])

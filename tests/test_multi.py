@@ -520,6 +520,46 @@ def test_vtrack_run_s3_with_mot_ground_truth_and_no_init(tmp_path, clip_factory)
     assert metrics["mota"] > 0.85 and metrics["idf1"] > 0.9
 
 
+@pytest.mark.parametrize("start", [0, 40])
+def test_a_run_scores_as_it_goes_what_its_tracks_csv_scores(tmp_path, clip_factory,
+                                                           start) -> None:
+    """Issue 21 item 11: a multi-target run with ground truth scored its confirmed boxes only at
+    the end, keeping every frame's boxes until then. It now scores each frame as it goes
+    (MotScore): run.json's measures are those of its own tracks.csv scored afterwards."""
+    clip = clip_factory("multi", seed=1, frames=MULTI_FRAMES)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt",
+                                       str(clip.mot), "--no-video", "--out", str(out), "--quiet",
+                                       "--start", str(start)])
+    assert result.exit_code == 0, result.output
+    tracks: dict[int, list[tuple[int, Box]]] = {}
+    with open(out / "tracks.csv", newline="") as handle:
+        for row in csv.DictReader(handle):
+            box = Box(*(float(row[k]) for k in ("x", "y", "w", "h")))
+            tracks.setdefault(int(row["frame"]) - 1 - start, []).append((int(row["id"]), box))
+    from vtrack.evaluate.groundtruth import read_mot
+    gt = {k - start: v for k, v in read_mot(clip.mot).items() if k >= start}
+    expected = evaluate_mot(gt, tracks, MULTI_FRAMES - start)
+    metrics = json.loads((out / "run.json").read_text())["metrics"]
+    assert expected["id_switches"] + expected["misses"] > 0  # not a trivial score
+    for key, value in expected.items():
+        assert metrics[key] == pytest.approx(value, rel=1e-9), key
+
+
+def test_the_mot_score_keeps_nothing_per_frame() -> None:
+    """Its state grows with the ids and (object, track) pairs, not with the frames."""
+    from vtrack.evaluate.mot import MotScore
+
+    def size(frames: int) -> int:
+        score = MotScore()
+        for f in range(frames):
+            score.add([(1, Box(10 + f % 7, 10, 20, 20)), (2, Box(60, 60, 20, 20))],
+                      [(5, Box(11, 10, 20, 20)), (6, Box(200, 60, 20, 20))])
+        return sum(len(v) for v in vars(score).values() if isinstance(v, dict))
+
+    assert size(10) == size(2000)
+
+
 def test_vtrack_run_s4_needs_no_init(tmp_path, clip_factory) -> None:
     clip = clip_factory("bounce", seed=0, frames=90)
     out = tmp_path / "out"

@@ -27,11 +27,11 @@ import platform
 import signal
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import av
 import cv2
@@ -72,6 +72,9 @@ from vtrack.latency import Latencies
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
+
+if TYPE_CHECKING:
+    from vtrack.evaluate.mot import MotScore
 
 #: Columns every single-target ``track.csv`` starts with (DESIGN.md contract).
 TRACK_COLUMNS = (
@@ -268,29 +271,65 @@ class _SingleTargetRows:
 
 class _MultiTargetRows:
     """Formats multi-target results as MOTChallenge rows (1-based frames) plus ``state``; with
-    ground truth (``keep``) it keeps the confirmed boxes for the MOT metrics."""
+    ground truth (``gt``, MOTChallenge boxes by 0-based frame) it scores the confirmed boxes as
+    the run goes (:class:`~vtrack.evaluate.mot.MotScore`): no boxes of past frames are kept.
+    A frame is scored once the next frame's rows are written (until then :meth:`undo` may
+    withdraw it); :meth:`mot` scores the rest."""
 
     columns = MOT_COLUMNS
 
-    def __init__(self, keep: bool) -> None:
-        self.keep = keep
-        self.tracks: dict[int, list[tuple[int, Box]]] = {}
+    def __init__(self, gt: Mapping[int, Sequence[tuple[int, Box]]] | None, start: int) -> None:
+        self.gt = gt
+        self.score: MotScore | None = None
+        if gt is not None:
+            from vtrack.evaluate.mot import MotScore  # SciPy: only for MOT ground truth
+
+            self.score = MotScore()
+        self._start = self._next = start  # the first frame, the next frame to score
+        self._pending: tuple[int, list[tuple[int, Box]]] | None = None
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
-        rows = []
+        rows, boxes = [], []
         for track in result.tracks:
             if track.state != TrackStatus.CONFIRMED:
                 continue
-            if self.keep:
-                self.tracks.setdefault(result.index, []).append((track.id, track.box))
+            boxes.append((track.id, track.box))
             b = track.box
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
+        if self.score is not None:
+            self._score_pending()
+            self._pending = (result.index, boxes)
         return rows
 
     def undo(self, result: FrameResult) -> None:
         """Forget ``result`` (its rows could not be written)."""
-        self.tracks.pop(result.index, None)
+        if self._pending is not None and self._pending[0] == result.index:
+            self._pending = None
+
+    def mot(self, frames: int) -> dict[str, Any]:
+        """The MOT measures of the ``frames`` frames from the start (ground truth only where no
+        frame was tracked)."""
+        assert self.score is not None
+        self._score_pending()
+        self._score_until(self._start + frames)
+        return self.score.result(frames)
+
+    def _score_pending(self) -> None:
+        if self._pending is not None:
+            index, boxes = self._pending
+            self._score_until(index)
+            assert self.score is not None and self.gt is not None
+            self.score.add(self.gt.get(index, ()), boxes)
+            self._next = index + 1
+            self._pending = None
+
+    def _score_until(self, end: int) -> None:
+        """Score the frames from the next one to ``end`` (excluded) as frames without tracks."""
+        assert self.score is not None and self.gt is not None
+        for frame in range(self._next, end):
+            self.score.add(self.gt.get(frame, ()), ())
+        self._next = max(self._next, end)
 
 
 @dataclass
@@ -299,7 +338,7 @@ class _Resolved:
 
     pipeline: Pipeline
     gt: list[Box | None] | None  # single-target ground truth
-    mot_gt: Any  # multi-target ground truth (MOTChallenge), read by the MOT metrics at the end
+    mot_gt: dict[int, list[tuple[int, Box]]] | None  # multi-target ground truth (MOTChallenge)
     init_box: Box | None
     #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
     #: a ground-truth file (None: no box).
@@ -397,7 +436,7 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
     pipeline = resolved.pipeline
-    formatter = _MultiTargetRows(resolved.mot_gt is not None) if pipeline.multi_target \
+    formatter = _MultiTargetRows(resolved.mot_gt, request.start) if pipeline.multi_target \
         else _SingleTargetRows(pipeline.columns, resolved.gt, request.start)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
     writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
@@ -637,11 +676,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             )
             summary.warnings.append(note)
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
-        from vtrack.evaluate.mot import evaluate_mot  # SciPy: only for MOT ground truth
-
-        summary.mot = evaluate_mot(
-            {k - start: v for k, v in resolved.mot_gt.items() if k >= start},
-            {k - start: v for k, v in formatter.tracks.items()}, frames)
+        summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
         past = [f for f in resolved.mot_gt if f >= start + frames]
         if past and status == STATUS_COMPLETE and request.max_frames is None:

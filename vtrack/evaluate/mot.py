@@ -75,27 +75,40 @@ def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int) -> dict[str, A
     ``mostly_tracked``, ``partially_tracked``, ``mostly_lost``, ``gt_ids``, ``gt_boxes``,
     ``track_ids``, ``track_boxes`` and ``frames`` (ints). See the module docstring.
     """
-    last_match: dict[int, int] = {}  # object id -> track id it was last matched to
-    switches = false_positives = misses = 0
-    overlaps: list[float] = []
-    present: Counter[int] = Counter()  # frames each object is present
-    matched: Counter[int] = Counter()  # frames each object is matched
-    track_boxes: Counter[int] = Counter()
-    pair_frames: Counter[tuple[int, int]] = Counter()  # frames a pair overlaps enough (IDF1)
+    score = MotScore()
     for frame in range(frames):
-        objects = list(gt.get(frame, ()))
-        hyps = list(tracks.get(frame, ()))
+        score.add(gt.get(frame, ()), tracks.get(frame, ()))
+    return score.result(frames)
+
+
+class MotScore:
+    """:func:`evaluate_mot` one frame at a time: :meth:`add` each frame in order, then
+    :meth:`result`. It keeps counts per object, per track and per (object, track) pair that
+    overlapped, never per frame: a run scored while it tracks holds no boxes of past frames."""
+
+    def __init__(self) -> None:
+        self.last_match: dict[int, int] = {}  # object id -> track id it was last matched to
+        self.switches = self.false_positives = self.misses = self.matches = 0
+        self.overlap_sum = 0.0  # IoU summed over the matches (MOTP)
+        self.present: Counter[int] = Counter()  # frames each object is present
+        self.matched: Counter[int] = Counter()  # frames each object is matched
+        self.track_boxes: Counter[int] = Counter()
+        self.pair_frames: Counter[tuple[int, int]] = Counter()  # frames a pair overlaps (IDF1)
+
+    def add(self, objects: Sequence[tuple[int, Box]], hyps: Sequence[tuple[int, Box]]) -> None:
+        """Score the next frame: its ground truth ``objects`` and tracks ``hyps``, (id, box)."""
         oids = [o for o, _ in objects]
         hids = [h for h, _ in hyps]
-        present.update(oids)
-        track_boxes.update(hids)
+        self.present.update(oids)
+        self.track_boxes.update(hids)
         overlap = _iou_matrix([b for _, b in objects], [b for _, b in hyps])
         allowed = overlap >= MATCH_IOU
         for i, j in zip(*np.nonzero(allowed), strict=True):
-            pair_frames[oids[i], hids[j]] += 1
+            self.pair_frames[oids[i], hids[j]] += 1
         pairs: list[tuple[int, int]] = []
         free_o = np.ones(len(oids), bool)
         free_h = np.ones(len(hids), bool)
+        last_match = self.last_match
         # 1. Keep the correspondences made before while they still may be matched.
         for i, o in enumerate(oids):
             if o in last_match and last_match[o] in hids:
@@ -114,35 +127,41 @@ def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int) -> dict[str, A
                 i, j = int(rest_o[r]), int(rest_h[c])
                 o, h = oids[i], hids[j]
                 if o in last_match and last_match[o] != h:
-                    switches += 1
+                    self.switches += 1
                 last_match[o] = h
                 pairs.append((i, j))
                 free_o[i] = free_h[j] = False
-        matched.update(oids[i] for i, _ in pairs)
-        overlaps.extend(float(overlap[i, j]) for i, j in pairs)
-        misses += int(free_o.sum())
-        false_positives += int(free_h.sum())
+        self.matched.update(oids[i] for i, _ in pairs)
+        self.overlap_sum += sum(float(overlap[i, j]) for i, j in pairs)
+        self.matches += len(pairs)
+        self.misses += int(free_o.sum())
+        self.false_positives += int(free_h.sum())
 
-    gt_boxes = sum(present.values())
-    hyp_boxes = sum(track_boxes.values())
-    ratios = [matched[o] / present[o] for o in present]
-    return {
-        "mota": _ratio(gt_boxes - misses - false_positives - switches, gt_boxes),
-        "motp": float(np.mean(overlaps)) if overlaps else None,
-        **_identity_scores(pair_frames, list(present), list(track_boxes), gt_boxes, hyp_boxes),
-        "id_switches": switches,
-        "false_positives": false_positives,
-        "misses": misses,
-        "matches": len(overlaps),
-        "mostly_tracked": sum(r >= MOSTLY_TRACKED for r in ratios),
-        "partially_tracked": sum(MOSTLY_LOST <= r < MOSTLY_TRACKED for r in ratios),
-        "mostly_lost": sum(r < MOSTLY_LOST for r in ratios),
-        "gt_ids": len(present),
-        "gt_boxes": gt_boxes,
-        "track_ids": len(track_boxes),
-        "track_boxes": hyp_boxes,
-        "frames": frames,
-    }
+    def result(self, frames: int) -> dict[str, Any]:
+        """The measures of the frames added so far (``frames``: how many, for the record)."""
+        present, track_boxes = self.present, self.track_boxes
+        gt_boxes = sum(present.values())
+        hyp_boxes = sum(track_boxes.values())
+        ratios = [self.matched[o] / present[o] for o in present]
+        return {
+            "mota": _ratio(gt_boxes - self.misses - self.false_positives - self.switches,
+                           gt_boxes),
+            "motp": self.overlap_sum / self.matches if self.matches else None,
+            **_identity_scores(self.pair_frames, list(present), list(track_boxes), gt_boxes,
+                               hyp_boxes),
+            "id_switches": self.switches,
+            "false_positives": self.false_positives,
+            "misses": self.misses,
+            "matches": self.matches,
+            "mostly_tracked": sum(r >= MOSTLY_TRACKED for r in ratios),
+            "partially_tracked": sum(MOSTLY_LOST <= r < MOSTLY_TRACKED for r in ratios),
+            "mostly_lost": sum(r < MOSTLY_LOST for r in ratios),
+            "gt_ids": len(present),
+            "gt_boxes": gt_boxes,
+            "track_ids": len(track_boxes),
+            "track_boxes": hyp_boxes,
+            "frames": frames,
+        }
 
 
 def _identity_scores(
