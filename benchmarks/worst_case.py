@@ -9,6 +9,7 @@ resident set (``/usr/bin/time -f %M``). Ratios are against the config's default 
 
     python benchmarks/worst_case.py                       # the worst-case table (1280x720)
     python benchmarks/worst_case.py --memory              # 300 vs 3,600 frames, every config
+    python benchmarks/worst_case.py --config s1           # one config (repeatable)
 """
 
 from __future__ import annotations
@@ -65,9 +66,9 @@ WORST: dict[str, list[tuple[str, list[str], str | None, bool]]] = {
                  ("noise, 1000 blobs, coast 100000, gate 1e5",
                   ["blobs.max_blobs=1000", "kalman_tracks.max_coast=100000",
                    "kalman_tracks.gate=100000"], None, True)],
-    "robust": [("working size 256, 1e6 pixels, 200 iterations",
-                ["robust_model.working_size=256", "robust_model.max_pixels=1000000",
-                 "robust_search.iterations=200", "robust_search.epsilon=0"], None, False)],
+    "robust": [("working area 400, cell 2, 65 scales of 4096 px",
+                ["robust_model.working_area=400", "robust_model.cell=2",
+                 "robust_search.scales=65", "robust_search.scale_area=4096"], None, False)],
     "fixed_camera": [("noise, 1000 blobs, open/close 255",
                       ["blobs.max_blobs=1000", "blobs.min_area=1", "background.open=255",
                        "background.close=255", "background.max_pixels=0"], None, True)],
@@ -145,12 +146,12 @@ def scene_for(config: str) -> str:
     return "multi" if Pipeline(load_config(config).build()).multi_target else "smooth"
 
 
-def worst_table(frames: int) -> None:
+def worst_table(frames: int, configs: list[str]) -> None:
     print(f"Per frame at {WIDTH}x{HEIGHT}, {frames} frames, whole `vtrack run --no-video` "
           "processes fed raw bgr24 on stdin; ratios against the config's default in this run.\n")
     print("| config | case | ms/frame | x default | peak MB | note |")
     print("|---|---|---:|---:|---:|---|")
-    for config in sorted(shipped_configs()):
+    for config in configs:
         kind = scene_for(config)
         init = first_box(kind, WIDTH, HEIGHT) if kind == "smooth" else None
         base = run_case(config, [], init, kind, WIDTH, HEIGHT, frames)
@@ -164,12 +165,12 @@ def worst_table(frames: int) -> None:
                   f"{measured.peak_mb:.0f} | {measured.error or ''} |", flush=True)
 
 
-def memory_table(width: int, height: int) -> None:
+def memory_table(width: int, height: int, configs: list[str]) -> None:
     print(f"Peak resident memory of whole `vtrack run --no-video` processes at {width}x{height}, "
           "default parameters.\n")
     print("| config | 300 frames MB | 3,600 frames MB | growth MB |")
     print("|---|---:|---:|---:|")
-    for config in sorted(shipped_configs()):
+    for config in configs:
         kind = scene_for(config)
         init = first_box(kind, width, height) if kind == "smooth" else None
         short = run_case(config, [], init, kind, width, height, 300)
@@ -183,12 +184,15 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=40, help="frames per timing case")
     parser.add_argument("--memory", action="store_true", help="memory over 300 / 3,600 frames")
     parser.add_argument("--size", default="640x360", help="frame size of --memory")
+    parser.add_argument("--config", action="append", choices=sorted(shipped_configs()),
+                        help="only this config (repeatable; default: every shipped config)")
     args = parser.parse_args()
+    configs = args.config or sorted(shipped_configs())
     if args.memory:
         width, height = map(int, args.size.split("x"))
-        memory_table(width, height)
+        memory_table(width, height, configs)
     else:
-        worst_table(args.frames)
+        worst_table(args.frames, configs)
 
 
 if __name__ == "__main__":

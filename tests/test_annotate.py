@@ -95,7 +95,7 @@ def test_state_caption_top_left(state):
 def test_ground_truth_overlays_and_trail():
     gt = [Box(20, 150, 40, 40)] * 10
     annotator = Annotator(W, H, gt=gt, trail=5)
-    particles = (Box(200, 200, 10, 10), Box(250, 30, 4, 4))
+    particles = np.array([[205.0, 205.0], [252.0, 32.0]])  # centres
     for i in range(4):  # the box moves right 10 px per frame
         buf = blank()
         annotator.draw(buf, result(i, Box(100 + 10 * i, 80, 60, 50), overlays=[
@@ -195,7 +195,7 @@ def test_the_legend_lists_what_this_run_drew_as_it_first_appears():
     frame that draws them, in one fixed order, and stay."""
     annotator = Annotator(W, H)
     frames = [
-        result(0, overlays=[Particles((Box(200, 200, 10, 10),))]),
+        result(0, overlays=[Particles(np.array([[205.0, 205.0]]))]),
         result(1, box=None, state=TrackState.LOST),
         result(2, state=TrackState.OCCLUDED, overlays=[SearchWindow(Box(90, 60, 140, 90))]),
         FrameResult(3, 0.1, BOX, TrackState.TRACKING, 1.0, Box(200, 20, 40, 30)),
@@ -227,7 +227,7 @@ def test_particles_are_dots_that_grow_with_the_frame(width, height, size):
     buf = cv2.cvtColor(np.full((height, width, 3), 100, np.uint8), cv2.COLOR_BGR2YUV_I420)
     grey = int(buf[0, 0])
     Annotator(width, height, legend=False).draw(buf, result(
-        box=None, state=TrackState.LOST, overlays=[Particles((Box(100, 100, 20, 20),))]))
+        box=None, state=TrackState.LOST, overlays=[Particles(np.array([[110.0, 110.0]]))]))
     y = i420_planes(buf, width, height)[0]
     dot = np.argwhere(y[60:, :] == PARTICLES.y) + (60, 0)
     assert len(dot) == size * size

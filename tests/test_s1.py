@@ -158,7 +158,7 @@ def test_lost_particles_only_change_the_search_while_lost() -> None:
     first_lost = next(i for i, r in enumerate(shipped) if r.state == LOST)
 
     def particle_count(result: FrameResult) -> int:
-        return next(len(o.boxes) for o in result.overlays if isinstance(o, Particles))
+        return next(len(o.centres) for o in result.overlays if isinstance(o, Particles))
 
     # Identical up to the loss (same random draws); then every frame after a lost one is
     # searched with 64 whole-frame particles instead of 8.

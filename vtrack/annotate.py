@@ -153,12 +153,6 @@ class Canvas:
                 self.v[cy, cx] = colour.v
 
 
-def _centres(boxes: Sequence[Box]) -> np.ndarray:
-    """The centres of boxes as an (N, 2) array of x, y."""
-    arr = np.asarray(boxes, float).reshape(-1, 4)
-    return arr[:, :2] + arr[:, 2:4] / 2.0
-
-
 def _drawable(box: Box | None) -> bool:
     return box is not None and all(math.isfinite(v) for v in box) and box.w > 0 and box.h > 0
 
@@ -170,8 +164,8 @@ def _draw_overlay(canvas: Canvas, overlay: Overlay, thickness: int) -> str:
         case SearchWindow(box):
             canvas.rectangle(*_corners(box), WINDOW, 1)
             return "search window"
-        case Particles(boxes):
-            canvas.dots(_centres(boxes), PARTICLES, thickness)
+        case Particles(centres):
+            canvas.dots(centres, PARTICLES, thickness)
             return "particles"
         case _:
             raise TypeError(f"annotate: no drawing for overlay {overlay!r}")

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from vtrack.geometry import Box
 
 
@@ -19,11 +21,11 @@ class SearchWindow:
     box: Box
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Particles:
-    """Particle boxes, drawn as small dots at their centres."""
+    """Particle centres, an (N, 2) float array of x, y, drawn as small dots."""
 
-    boxes: tuple[Box, ...]
+    centres: np.ndarray
 
 
 #: Every overlay kind.

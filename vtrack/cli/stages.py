@@ -28,17 +28,18 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 - work: at most a fixed number of passes over N pixels per stage, times its declared cap:
   `meanshift.iterations` (<= 100); `kernel_meanshift.max_iterations` (<= 100, for each of 3
   bandwidths, twice when fast motion reruns the search), but the steps of one bandwidth read
-  at most {ITERATION_BUDGET} N pixels in all (a box larger than a quarter of the frame gets fewer
-  steps); `particle.particles` and `particle.lost_particles` (<= 1024 windows), whose
-  histograms count at most {PIXEL_BUDGET} N pixels in all (beyond, each window is sampled on a
-  grid); `background.open`/`close` (<= 255) apply kernels of at most {MAX_KERNEL} working
-  pixels (a larger one runs on the mask shrunk to fit); search windows are clipped to the frame
-  (`hue.search_scale` <= 16, widened by `occlusion.max_growth` <= 16);
+  at most {ITERATION_BUDGET} N pixels in all (a box larger than a tenth of the frame gets fewer
+  steps than the default 20); `particle.particles` and `particle.lost_particles` (<= 1024
+  windows), whose histograms count at most {PIXEL_BUDGET} N pixels in all (beyond, every n-th
+  row of each window); `background.open`/`close` (<= 255) apply kernels of at most
+  {MAX_KERNEL} working pixels (a larger one runs on the mask shrunk to fit); search windows
+  are clipped to the frame (`hue.search_scale` <= 16, widened by `occlusion.max_growth` <= 16);
 - multi-target work: at most `blobs.max_blobs` (<= 1000) detections a frame; `mht` keeps at
   most `max_hypotheses` (<= 64) hypotheses and extends each branch with at most `max_branches`
   (<= 16) measurements, searching a bounded number of combinations per hypothesis;
   `kalman_tracks` keeps at most `max_tracks` (<= 1000) tracks whatever `max_coast` allows;
-  multi-target runs keep the track boxes for their metrics only with ground truth;
+  multi-target runs keep no track boxes of past frames (with ground truth each frame is
+  scored as it goes);
 - memory: a few frame-sized buffers (at most ~32 N bytes beyond the decoded frames and the
   writers' queues), plus the particle filter's histograms (at most 4 x 1024 particles x 256
   bins x 8 bytes = 8 MiB) and the `robust` tracker's search patch, resampled to about

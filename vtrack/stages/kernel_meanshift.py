@@ -58,9 +58,10 @@ _LEVELS = 256
 
 
 #: Pixels one bandwidth's mean-shift steps may visit per frame, in frames (each step reads the
-#: window once): 20 steps over a box of up to a quarter of the frame stay exact; a larger box
-#: gets fewer steps (whole frame: 5), bounding a frame's work whatever max_iterations says.
-ITERATION_BUDGET = 5
+#: window once): 20 steps (the default) over a box of up to a tenth of the frame stay exact; a
+#: larger box gets fewer steps (whole frame: 2), bounding a frame's work whatever max_iterations
+#: and epsilon say (at 1280x720, about 10x the default box's frame at most).
+ITERATION_BUDGET = 2
 
 
 @lru_cache(maxsize=32)
@@ -190,7 +191,7 @@ class KernelMeanShift(Stage):
         """Build the target model on the first frame's box (S2 algorithm step 1)."""
         box = self.initial_box(ctx)
         # S2 sec. 6.1: m levels of an 8-bit value, b(X) = value * m / 256
-        self._lut = (np.arange(_LEVELS) * self.bins // _LEVELS).astype(np.intp)
+        self._lut = (np.arange(_LEVELS) * self.bins // _LEVELS).astype(np.uint8)
         # Trying 1.0 first and replacing only on a strictly larger rho keeps the scale on ties
         # (a window inside a uniform target scores the same at every bandwidth); the document's
         # order 9, 10, 11 with a strict "<" would keep 0.9 on ties and shrink the box.
@@ -275,7 +276,8 @@ class KernelMeanShift(Stage):
                               where=sample.hist > 0)
             if self.weights == "sqrt":
                 table = np.sqrt(table)  # S2 eq. 9
-            w = table[sample.bins]
+            # table[sample.bins], by OpenCV's lookup (a 256-entry table; the same values)
+            w = cv2.LUT(sample.bins, np.pad(table, (0, _LEVELS - table.size)))
             column_sums, row_sums = w.sum(axis=0), w.sum(axis=1)
             total = column_sums.sum()
             if total <= 0:  # no pixel of the window carries a model bin: no mean-shift vector
@@ -328,7 +330,7 @@ class KernelMeanShift(Stage):
             values = cv2.cvtColor(frame.bgr(window), cv2.COLOR_BGR2HSV_FULL)[:, :, 0]
         else:
             values = frame.gray(window)
-        bins = self._lut[values]  # b(X_i) of S2 eq. 1
+        bins = cv2.LUT(values, self._lut)  # b(X_i) of S2 eq. 1 (as self._lut[values])
         # S2 step 3 (eqs. 3 and 4): p_u(Y) = sum K(X_i*) [b(X_i) = u], undivided
         hist = np.bincount(bins.ravel(), weights=grid.ravel(), minlength=self.bins)
         if hist.sum() <= 0:

@@ -45,12 +45,13 @@ HUE_LEVELS = 256
 
 
 #: Window pixels histogrammed per frame, in frames: 8 particles over a whole-frame box (S1's
-#: default count) stay exact; beyond, windows are sampled on a grid (bounded cost per frame).
+#: default count) stay exact; beyond, windows are sampled (bounded cost per frame).
 PIXEL_BUDGET = 8
 
 
 def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
-    """The ``COLOR_BGR2HSV_FULL`` image of each window, converting only what is needed.
+    """The hue plane (channel 0 of ``COLOR_BGR2HSV_FULL``) of each window, converting only what
+    is needed.
 
     The bounding region of all windows is converted once when its area is at most the windows'
     total area (a cluster of overlapping particles); otherwise each window is converted alone.
@@ -64,12 +65,22 @@ def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
         max(w.y1 for w in windows),
     )
     if len(windows) > 1 and union.width * union.height <= sum(w.width * w.height for w in windows):
-        hsv = cv2.cvtColor(frame.bgr(union), cv2.COLOR_BGR2HSV_FULL)
+        hue = cv2.extractChannel(cv2.cvtColor(frame.bgr(union), cv2.COLOR_BGR2HSV_FULL), 0)
         return [
-            hsv[w.y0 - union.y0 : w.y1 - union.y0, w.x0 - union.x0 : w.x1 - union.x0]
+            hue[w.y0 - union.y0 : w.y1 - union.y0, w.x0 - union.x0 : w.x1 - union.x0]
             for w in windows
         ]
-    return [cv2.cvtColor(frame.bgr(w), cv2.COLOR_BGR2HSV_FULL) for w in windows]
+    return [cv2.extractChannel(cv2.cvtColor(frame.bgr(w), cv2.COLOR_BGR2HSV_FULL), 0)
+            for w in windows]
+
+
+def sampled_rows(windows: list[np.ndarray], budget: int) -> list[np.ndarray]:
+    """The windows themselves while their pixels total at most ``budget``; beyond, every n-th
+    row of each (whole rows: a row step keeps a view OpenCV reads without a copy), n the
+    smallest that brings the total within the budget."""
+    area = sum(w.size for w in windows)
+    step = max(1, math.ceil(area / budget))
+    return windows if step == 1 else [w[::step] for w in windows]
 
 
 @register
@@ -142,7 +153,8 @@ class ParticleFilter(Stage):
             "tracked frames between the compared weights (S1 item 6: 10)",
             min=1, max=1000,
         ),
-        Param("draw_particles", bool, True, "add the particle boxes to the drawing overlays"),
+        Param("draw_particles", bool, True,
+              "draw the particles (their centres, as dots) in annotated.mp4"),
     )
     requires = frozenset({"frame", "box"})
     provides = frozenset({"box", "state", "score"})
@@ -192,22 +204,21 @@ class ParticleFilter(Stage):
         """Scatter, score and correct the particles, output the best one, update the state."""
         frame = ctx.frame
         assert ctx.box is not None  # set by start and never cleared
-        windows, near = self._scatter(ctx)
-        hsvs = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
+        windows, near, corners = self._scatter(ctx)
+        hues = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
         # S1 items 3-4: each particle's hue histogram and its Bhattacharyya weight.
         # Bounded work: past PIXEL_BUDGET frames' worth of window pixels (many particles over a
-        # large box), every window is counted on a grid of every stride-th pixel.
-        area = sum(w.width * w.height for w in windows)
-        stride = max(1, math.ceil(math.sqrt(area / (PIXEL_BUDGET * frame.width * frame.height))))
-        histograms = np.array([hue_histogram(hsv[::stride, ::stride], None, self.bins,
-                                             HUE_LEVELS) for hsv in hsvs], np.float64)
+        # large box), every window is counted on every n-th row.
+        counted = sampled_rows(hues, PIXEL_BUDGET * frame.width * frame.height)
+        histograms = np.array([hue_histogram(hue, None, self.bins, HUE_LEVELS)
+                               for hue in counted], np.float64)
         weights = bhattacharyya_rows(histograms, self._target)
         best = int(np.argmax(weights))
         weight = float(weights[best])
         window = windows[best]
         centre = (window.x0 + window.width / 2.0, window.y0 + window.height / 2.0)
         # S1 item 5: output the best particle's centroid (its centre for the plain filter).
-        point = self._centroid(hsvs[best], window) if self.centroid_correction else centre
+        point = self._centroid(hues[best], window) if self.centroid_correction else centre
 
         # S1 item 6: tracked/lost ratio against the best weight `history` tracked frames ago
         # (while lost every stored weight is the frozen reference, so it is the oldest one too).
@@ -231,15 +242,16 @@ class ParticleFilter(Stage):
             particle_cy=centre[1],
         )
         if self.draw_particles:
-            ctx.overlays.append(Particles(tuple(w.as_box() for w in windows)))
+            ctx.overlays.append(Particles(corners + np.array(self._pixels) / 2.0))
 
-    def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int]:
+    def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int, np.ndarray]:
         """Particle windows of the target's pixel size, inside the frame (S1 item 2).
 
         While tracked there are ``particles`` windows and the first ``near_share * particles``
         (rounded to the nearest integer) are scattered near the last position; while lost there
-        are ``lost_particles`` (or ``particles`` when 0), none near. Returns the windows and how
-        many are near. The box size is rounded to whole pixels.
+        are ``lost_particles`` (or ``particles`` when 0), none near. Returns the windows, how
+        many are near, and their top-left corners as an (N, 2) array. The box size is rounded
+        to whole pixels.
         """
         frame, rng = ctx.frame, ctx.rng
         assert ctx.box is not None
@@ -254,13 +266,13 @@ class ParticleFilter(Stage):
         room = np.array([frame.width - pw, frame.height - ph], dtype=np.float64)
         far_corners = rng.uniform(0.0, 1.0, (count - near, 2)) * room
         corners = np.clip(np.rint(np.vstack([near_corners, far_corners])), 0, room).astype(int)
-        windows = [Window(int(x), int(y), int(x) + pw, int(y) + ph) for x, y in corners]
-        return windows, near
+        windows = [Window(x, y, x + pw, y + ph) for x, y in corners.tolist()]
+        return windows, near, corners
 
-    def _centroid(self, hsv: np.ndarray, window: Window) -> tuple[float, float]:
-        """``sum (x, y) q[H] / sum q[H]`` over the window's pixel centres (S1 item 3);
-        the window's centre when no pixel has a target hue."""
-        mass = cv2.LUT(cv2.extractChannel(hsv, 0), self._q_of_hue.reshape(1, HUE_LEVELS))
+    def _centroid(self, hue: np.ndarray, window: Window) -> tuple[float, float]:
+        """``sum (x, y) q[H] / sum q[H]`` over the window's pixel centres (S1 item 3), ``hue``
+        the window's hue plane; the window's centre when no pixel has a target hue."""
+        mass = cv2.LUT(hue, self._q_of_hue.reshape(1, HUE_LEVELS))
         moments = cv2.moments(mass)
         if moments["m00"] <= 0:
             return window.x0 + window.width / 2.0, window.y0 + window.height / 2.0
