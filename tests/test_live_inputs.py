@@ -276,3 +276,50 @@ def test_a_capture_device_is_read_through_opencv(tmp_path: Path) -> None:
         pytest.skip(f"{devices[0]} is not a camera that can be opened here")
     assert done.returncode == 0, done.stderr
     assert len(_rows(tmp_path / "cam" / "track.csv")) == 5
+
+
+def test_follow_reads_a_growing_file_to_the_end_of_its_writing(tmp_path: Path) -> None:
+    """``--follow 1`` on an MPEG-TS file another process is still writing (in 20 pieces, a
+    little at a time) tracks every frame it ends up holding: the finished file's track.csv."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=60, fps=30)
+    whole = write_video(scene, tmp_path / "whole.ts", preset="veryfast")
+    common = ["-c", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video"]
+    assert _run([str(whole), *common, "-o", str(tmp_path / "whole")]).returncode == 0
+    growing = tmp_path / "growing.ts"
+    growing.write_bytes(b"")
+    writer = subprocess.Popen([sys.executable, "-c", """if True:
+        import sys, time
+        data = open(sys.argv[1], 'rb').read()
+        step = len(data) // 20 + 1
+        with open(sys.argv[2], 'ab') as out:
+            for at in range(0, len(data), step):
+                out.write(data[at:at + step]); out.flush(); time.sleep(0.1)""",
+                               str(whole), str(growing)])
+    try:
+        done = _run([str(growing), "--follow", "1", *common, "-o", str(tmp_path / "grown")])
+    finally:
+        writer.wait(timeout=60)
+    assert done.returncode == 0, done.stderr
+    expected = (tmp_path / "whole" / "track.csv").read_bytes()
+    assert expected.count(b"\n") == 61
+    assert (tmp_path / "grown" / "track.csv").read_bytes() == expected
+
+
+def test_live_pacing_passes_over_what_a_slow_tracker_cannot_keep_up_with(
+        tmp_path: Path) -> None:
+    """``--live`` on a file (decoded as fast as it can be) with a tracker slower than that:
+    some frames are passed over and counted, the others keep their own numbers and times."""
+    scene = make_scene("smooth", seed=6, width=320, height=240, frames=90, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4", preset="veryfast")
+    init = ",".join(f"{v:g}" for v in scene.boxes[0])
+    # 1024 particles a frame: far slower than decoding a 320x240 frame (~100x)
+    done = _run([str(clip), "--live", "-c", "s1", "--set", "particle.particles=1024",
+                 "--init", init, "-o", str(tmp_path / "live")])
+    assert done.returncode == 0, done.stderr
+    record = json.loads((tmp_path / "live" / "run.json").read_text())
+    rows = _rows(tmp_path / "live" / "track.csv")
+    passed = record["summary"]["frames_passed"]
+    assert passed > 0 and len(rows) + passed == 90
+    assert f"skipped {passed} while busy (live)".encode() in done.stdout
+    assert all(float(r["time_s"]) == pytest.approx(int(r["frame"]) / 30, abs=1e-3) for r in rows)
+    assert record["timing"]["latency"]["frames"] == len(rows) == record["frames"]

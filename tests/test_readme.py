@@ -37,6 +37,7 @@ SKIPPED = {
     "rtsp://": "needs an RTSP camera or sender (tests/test_live_inputs.py)",
     "tcp://": "needs a TCP sender (tests/test_live_inputs.py)",
     "/dev/video": "needs a camera (tests/test_live_inputs.py)",
+    "--follow": "needs a program writing the file (tests/test_live_inputs.py)",
     "drone.h264": "needs a raw H.264 recording (--format is tested in tests/test_live_inputs.py)",
     "--scheduler": "needs a Dask cluster (tests/test_dask_wait.py)",
 }
