@@ -144,12 +144,38 @@ def test_multi_target_runs_get_a_metrics_table(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     html = (tmp_path / "report" / "index.html").read_text()
     header, rows = html_rows(html, 0)
-    assert header[3:] == ["Frames", "MOTA", "MOTP", "IDF1", "id switches", "FPS"]
+    assert header[3:] == ["Frames", "MOTA", "MOTP", "IDF1", "IDs", "FPS"]
     cells = {row[1]: row for row in rows}
     assert cells["mht"][4:8] == ["0.500", "0.750", "0.625", "2"]
     assert cells["blobs"][4:8] == ["—"] * 4
     assert "<img" not in html and not list((tmp_path / "report").rglob("*.png"))
     assert "CLEAR MOT" in html.split("<footer>")[1]
+
+
+def test_the_multi_target_table_ranks_each_metric_its_own_way(tmp_path: Path) -> None:
+    """Issue 22: every MOT metric was marked best when highest (mostly lost, track ids) and
+    the table repeated the frame count and derivable box counts, too wide for the page."""
+    common = {"frames": 1, "gt_boxes": 10, "gt_ids": 2, "matches": 8, "partially_tracked": 0}
+    write_multi_target_run(tmp_path / "runs" / "good", {
+        **common, "mota": 0.8, "misses": 2, "mostly_lost": 0, "mostly_tracked": 2,
+        "track_ids": 2, "track_boxes": 8})
+    write_multi_target_run(tmp_path / "runs" / "bad", {
+        **common, "mota": 0.1, "misses": 9, "mostly_lost": 2, "mostly_tracked": 0,
+        "track_ids": 7, "track_boxes": 15})
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    html = (tmp_path / "report" / "index.html").read_text()
+    header = html_rows(html, 0)[0]
+    assert header[3:] == ["Frames", "MOTA", "FN", "MT", "PT", "ML", "GT ids", "Tracks", "FPS"]
+    body = re.findall(r"<table[^>]*>(.*?)</table>", html, re.S)[0]
+    rows = {re.findall(r"<td[^>]*>(.*?)</td>", row)[1]: re.findall(r"<td([^>]*)>", row)
+            for row in re.findall(r"<tr[^>]*>(.*?)</tr>", body)[1:]}
+    best = {config: {header[n] for n, attrs in enumerate(cells) if "best" in attrs}
+            for config, cells in rows.items()}
+    assert best["good"] == {"MOTA", "FN", "MT", "ML"}  # fewer misses, fewer mostly lost
+    assert best["bad"] == set()  # more track ids is not better; equal FPS marks nothing
+    summary = (tmp_path / "report" / "summary.csv").read_text().splitlines()[0]
+    assert {"gt_boxes", "track_boxes", "matches"} <= set(summary.split(","))  # kept there
 
 
 def one_error_line(result: Result) -> str:

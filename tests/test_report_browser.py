@@ -13,6 +13,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import cv2
 import pytest
@@ -48,8 +49,9 @@ def report(clip_factory, tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root / "report"
 
 
-def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
-                                                                  tmp_path: Path) -> None:
+def _open(page: Path, tmp_path: Path) -> tuple[Any, Any]:
+    """Headless Chromium in a 1400x1000 window showing ``page``; returns the driver and
+    selenium's ``By``."""
     binary, driver_path = _browser()
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
@@ -61,8 +63,14 @@ def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
                  "--window-size=1400,1000", f"--user-data-dir={tmp_path / 'profile'}"):
         options.add_argument(flag)
     browser = webdriver.Chrome(service=Service(driver_path), options=options)
+    browser.get(page.as_uri())
+    return browser, By
+
+
+def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
+                                                                  tmp_path: Path) -> None:
+    browser, By = _open(report / "index.html", tmp_path)
     try:
-        browser.get((report / "index.html").as_uri())
         table = browser.find_element(By.CSS_SELECTOR, "#results + .scroll table")
         headers = table.find_elements(By.TAG_NAME, "th")
         column = [h.text for h in headers].index("AUC")
@@ -88,6 +96,57 @@ def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
         shot = tmp_path / "shot.png"
         browser.save_screenshot(str(shot))
         assert cv2.imread(str(shot)).std() > 10  # a page was drawn, not a blank
+    finally:
+        browser.quit()
+
+
+@pytest.fixture(scope="module")
+def multi_report(clip_factory, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A report of multi-target runs (three configs on one clip with MOTChallenge ground
+    truth) beside a single-target one."""
+    root = tmp_path_factory.mktemp("browser-multi-report")
+    folder = root / "in"
+    folder.mkdir()
+    multi = clip_factory("multi", frames=90)
+    shutil.copy(multi.path, folder / "multi.mp4")
+    shutil.copy(multi.mot, folder / "multi.mot.txt")
+    for command in (["batch", str(folder), "-c", "s3", "-c", "s4_multi", "-c", "fixed_camera",
+                     "--jobs", "1", "--no-video", "-q", "--out", str(root / "results")],
+                    ["report", str(root / "results"), "-q", "--out", str(root / "report")]):
+        done = subprocess.run([sys.executable, "-m", "vtrack", *command], capture_output=True,
+                              text=True, timeout=300, check=False)
+        assert done.returncode == 0, done.stderr
+    return root / "report"
+
+
+def test_the_multi_target_table_fits_a_1400_px_window_and_sorts(multi_report: Path,
+                                                                 tmp_path: Path) -> None:
+    """Issue 22: the multi-target table overflowed a 1400 px window. In headless Chromium at
+    1400 px it fits: no horizontal scrolling of the page nor of the table's own box, and a
+    click on a header sorts it."""
+    browser, By = _open(multi_report / "index.html", tmp_path)
+    try:
+        table = browser.find_element(By.CSS_SELECTOR, "#multi-target + .scroll table")
+        box = browser.find_element(By.CSS_SELECTOR, "#multi-target + .scroll")
+        assert browser.execute_script(
+            "return document.documentElement.scrollWidth <= window.innerWidth")
+        assert browser.execute_script(
+            "return arguments[0].scrollWidth <= arguments[0].clientWidth", box)
+        headers = table.find_elements(By.TAG_NAME, "th")
+        titles = [h.text for h in headers]
+        assert {"MOTA", "IDF1"} <= set(titles), titles
+        column = titles.index("MOTA")
+
+        def mota() -> list[float]:
+            rows = table.find_elements(By.CSS_SELECTOR, "tbody tr")
+            return [float(r.find_elements(By.TAG_NAME, "td")[column].text) for r in rows]
+
+        before = mota()
+        assert len(before) == 3
+        headers[column].click()
+        assert mota() == sorted(before)
+        headers[column].click()
+        assert mota() == sorted(before, reverse=True)
     finally:
         browser.quit()
 

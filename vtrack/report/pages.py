@@ -32,8 +32,10 @@ DEFINITIONS = (
 #: Added to the footer when multi-target runs are shown.
 MOT_DEFINITIONS = (
     "Multi-target runs show the CLEAR MOT and identity metrics (MOTA, MOTP, IDF1, ID switches "
-    "...) that vtrack run recorded in run.json against MOTChallenge ground truth; a dash means "
-    "the run had no ground truth."
+    "...) that vtrack run recorded in run.json against MOTChallenge ground truth, abbreviated "
+    "as MOTChallenge does (IDs: ID switches, FP: false positives, FN: misses, MT/PT/ML: mostly "
+    "tracked/partially tracked/mostly lost objects; hover a header); a dash means the run had "
+    "no ground truth. summary.csv holds every recorded metric."
 )
 
 CSS = """

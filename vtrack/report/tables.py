@@ -19,12 +19,33 @@ from vtrack.errors import plural
 from vtrack.report.runs import RunResult
 from vtrack.run import STATUS_INTERRUPTED, STATUS_PARTIAL
 
-#: Multi-target metrics shown first, in this order, when a run records them.
-MOT_ORDER = ("mota", "motp", "idf1", "id_switches", "fragmentations", "false_positives",
-             "misses", "precision", "recall")
-#: Multi-target metrics where lower is better (all others: higher, except unknown counts).
-MOT_LOWER_IS_BETTER = frozenset({"id_switches", "fragmentations", "false_positives", "misses"})
-
+#: Multi-target metrics the page shows, in this order, when a run records them: key ->
+#: (title as MOTChallenge abbreviates it, which way is better (None: not ranked), tooltip).
+#: Other recorded metrics follow, unranked, under their own names.
+MOT_COLUMNS: dict[str, tuple[str, bool | None, str]] = {
+    "mota": ("MOTA", True, "CLEAR MOT accuracy: 1 - (FN + FP + IDs) / ground-truth boxes"),
+    "motp": ("MOTP", True, "mean IoU of the matched (object, track) pairs"),
+    "idf1": ("IDF1", True, "identity F1: the share of boxes matched with the track identity "
+                           "paired with their object over the whole run"),
+    "idp": ("IDP", True, "identity precision: IDF1's matches over the track boxes"),
+    "idr": ("IDR", True, "identity recall: IDF1's matches over the ground-truth boxes"),
+    "id_switches": ("IDs", False, "identity switches: a matched object's track changed"),
+    "fragmentations": ("Frag", False, "a matched object's track interrupted"),
+    "false_positives": ("FP", False, "track boxes matched to no object"),
+    "misses": ("FN", False, "ground-truth boxes matched to no track (misses)"),
+    "precision": ("Prcn", True, "matched track boxes over all track boxes"),
+    "recall": ("Rcll", True, "matched ground-truth boxes over all ground-truth boxes"),
+    "mostly_tracked": ("MT", True, "objects matched in at least 80% of their frames"),
+    "partially_tracked": ("PT", None, "objects matched in 20% to 80% of their frames "
+                                      "(not ranked)"),
+    "mostly_lost": ("ML", False, "objects matched in less than 20% of their frames"),
+    "gt_ids": ("GT ids", None, "objects in the ground truth (not ranked)"),
+    "track_ids": ("Tracks", None, "track identities the tracker confirmed (not ranked)"),
+}
+#: Recorded but left off the page (summary.csv keeps them): the Frames column already shows
+#: ``frames``; the box counts follow from the others (ground-truth boxes = matches + FN,
+#: track boxes = matches + FP).
+MOT_HIDDEN = frozenset({"frames", "gt_boxes", "track_boxes", "matches"})
 
 @dataclass
 class Cell:
@@ -206,17 +227,18 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
 def _mot_column(key: str, runs: Sequence[RunResult]) -> Column:
     values = [r.mot[key] for r in runs if key in r.mot]
     digits = 0 if all(isinstance(v, int) for v in values) else 3
-    title = key.upper() if key in ("mota", "motp", "idf1") else key.replace("_", " ")
-    return Column(title, digits, key not in MOT_LOWER_IS_BETTER)
+    title, higher_is_better, note = MOT_COLUMNS.get(key, (key.replace("_", " "), None, ""))
+    return Column(title, digits, higher_is_better, note)
 
 
 def mot_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
     """Multi-target runs: the metrics their ``run.json`` records (MOTA, MOTP, IDF1, ID
-    switches, ...) per input x configuration; ``—`` where a run has none (no ground truth)."""
+    switches, ...; :data:`MOT_COLUMNS`) per input x configuration; ``—`` where a run has none
+    (no ground truth)."""
     runs = [r for group in by_input for r in group]
     keys = {k for r in runs for k, v in r.mot.items()
-            if isinstance(v, int | float) and not isinstance(v, bool)}
-    ordered = [k for k in MOT_ORDER if k in keys] + sorted(keys - set(MOT_ORDER))
+            if isinstance(v, int | float) and not isinstance(v, bool)} - MOT_HIDDEN
+    ordered = [k for k in MOT_COLUMNS if k in keys] + sorted(keys - set(MOT_COLUMNS))
     columns = [Column("Frames", 0, None), *(_mot_column(k, runs) for k in ordered),
                Column("FPS", 1)]
     table = _table(RUN_LABELS, columns)
