@@ -4,6 +4,7 @@ capture devices. Every network test runs on loopback and is bounded in time."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
 import http.server
@@ -323,3 +324,35 @@ def test_live_pacing_passes_over_what_a_slow_tracker_cannot_keep_up_with(
     assert f"skipped {passed} while busy (live)".encode() in done.stdout
     assert all(float(r["time_s"]) == pytest.approx(int(r["frame"]) / 30, abs=1e-3) for r in rows)
     assert record["timing"]["latency"]["frames"] == len(rows) == record["frames"]
+
+
+def test_video_out_sends_the_annotated_video_live_over_udp(tmp_path: Path) -> None:
+    """``--video-out udp://...``: every annotated picture arrives at a player listening there
+    (MPEG-TS, decoded here with PyAV); no annotated.mp4 is written."""
+    import av
+
+    clip, box = _live_clip(tmp_path, frames=45)
+    port = _free_port(socket.SOCK_DGRAM)
+    received: list[tuple[int, int]] = []
+
+    def watch() -> None:  # a player: what comes to the port, until it has been quiet 2 s
+        with (av.open(f"udp://127.0.0.1:{port}", timeout=(60, 2)) as stream,
+              contextlib.suppress(av.error.ExitError)):  # quiet for 2 s: the end
+            for picture in stream.decode(video=0):
+                received.append((picture.width, picture.height))
+
+    player = threading.Thread(target=watch, daemon=True)
+    player.start()
+    deadline = time.monotonic() + 30
+    while not _bound(port, "udp") and time.monotonic() < deadline:
+        time.sleep(0.05)
+    done = _run([str(clip), "-c", "s2", "--init", box, "--video-out",
+                 f"udp://127.0.0.1:{port}", "-o", str(tmp_path / "out")])
+    player.join(timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert received == [(160, 120)] * 45
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert record["outputs"] == ["track.csv"] and not (tmp_path / "out" / "annotated.mp4").exists()
+    refused = _run([str(clip), "--init", box, "--video-out", "annotated.ts"])
+    assert refused.returncode == 2 and b"--video-out annotated.ts: expected a URL" in \
+        refused.stderr

@@ -431,7 +431,8 @@ class _Writers:
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
     """The files this run writes into its folder."""
     csv_name = "tracks.csv" if resolved.pipeline.multi_target else "track.csv"
-    return [csv_name, "run.json"] + (["annotated.mp4"] if request.video else [])
+    return [csv_name, "run.json"] + (["annotated.mp4"] if request.video and
+                                     request.video_out is None else [])
 
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
@@ -444,7 +445,7 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
         try:
             writers.video = VideoWriter(request.out_dir / "annotated.mp4", info.width,
                                         info.height, info.fps or 30.0, preset=request.preset,
-                                        crf=request.crf)
+                                        crf=request.crf, url=request.video_out)
         except BaseException:
             writers.csv.abort()
             raise
@@ -617,7 +618,7 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     elif rows is not None or tracked.failure is None:
         _fail(tracked, f"{csv_path}: holds {rows} rows, {writers.csv.rows} were written")
     video = writers.video
-    if video is not None and video.path.exists():
+    if video is not None and video.url is None and video.path.exists():
         problem = verify_video(video.path, video.frames_written)
         if problem is None:
             outputs.append(video.path.name)

@@ -79,6 +79,10 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    f"SECONDS (default {FOLLOW_S:g}), as tail -f (MPEG-TS, Matroska or "
                    "fragmented MP4; a plain MP4 is readable only once finished).")
 @click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
+@click.option("--video-out", "video_out", metavar="URL", default=None,
+              help="Send the annotated video to this live output instead of annotated.mp4: "
+                   "udp://HOST:PORT or tcp://... as MPEG-TS, rtsp://... as RTSP, rtmp://... as "
+                   "FLV (watch it with ffplay, mpv or VLC).")
 @click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
 @click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
@@ -105,7 +109,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
             input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
-            live: bool | None, follow_s: float | None,
+            live: bool | None, follow_s: float | None, video_out: str | None,
             crf: int, seed: int, start: int, max_frames: int | None, stream: str | None,
             stats_period: float, quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
@@ -122,6 +126,11 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
     from vtrack.io.video import FFmpegInput
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
+    if video_out is not None and (no_video or "://" not in video_out):
+        raise click.UsageError(f"--video-out {video_out}: " + (
+            "the annotated video cannot go out with --no-video" if no_video else
+            "expected a URL (udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is "
+            "annotated.mp4 in --out"))
     config = load_config(config_spec).with_overrides(list(overrides))
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
     raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
@@ -145,6 +154,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
                            follow_s=follow_s,
                            **({} if timeout_s is None else {"timeout_s": timeout_s})),
         live=live,
+        video_out=video_out,
     )
     progress = FrameProgress(quiet, max_frames, start, stats_period)
     try:

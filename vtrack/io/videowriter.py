@@ -61,6 +61,10 @@ class VideoWriter(Closing):
 
     ``width`` and ``height`` are the input's; yuv420p needs even sizes, so an odd last row or
     column is left out of the video (``self.width``/``self.height`` are the encoded size).
+
+    With ``url`` the pictures go to that live output instead (``--video-out``: MPEG-TS over
+    ``udp://``/``tcp://``, RTSP to ``rtsp://``, FLV to ``rtmp://``), encoded for low latency
+    (x264 ``zerolatency``, slice threads); nothing is written to ``path``.
     """
 
     #: Output pictures in flight between the caller and the encoder thread.
@@ -75,12 +79,14 @@ class VideoWriter(Closing):
         preset: str = "ultrafast",
         crf: int = 23,
         codec: str = "libx264",
+        url: str | None = None,
     ) -> None:
         self.path = Path(path)
+        self.url = url
         self.width, self.height = width & ~1, height & ~1
         if self.width <= 0 or self.height <= 0:
             raise OutputError(f"{self.path}: cannot encode a {width}x{height} video")
-        self._temp = temp_path(self.path)
+        self._temp = temp_path(self.path) if url is None else None
         self._rate = Fraction(fps).limit_denominator(1001) if fps and fps > 0 else Fraction(30)
         self._container = self._open(preset, crf, codec)
         self._stream = self._container.streams.video[0]
@@ -100,13 +106,21 @@ class VideoWriter(Closing):
     def _open(self, preset: str, crf: int, codec: str) -> av.container.OutputContainer:
         """Open the encoder and create the temporary file: bad settings and unwritable places
         fail here (ConfigError / OutputError), not in the encoder thread."""
-        container = av.open(str(self._temp), "w")  # nothing touches the disk yet
+        live = self.url is not None
+        where = self.url if self.url is not None else str(self._temp)
+        try:  # a file: nothing touches the disk yet
+            container = av.open(where, "w", format=live_format(where) if live else None)
+        except (av.FFmpegError, OSError) as exc:  # a live output that cannot be reached
+            raise OutputError(f"--video-out {where}: cannot be opened ({os_reason(exc)})"
+                              ) from None
         try:
             stream = container.add_stream(codec, rate=self._rate)
             stream.width, stream.height, stream.pix_fmt = self.width, self.height, "yuv420p"
             stream.codec_context.time_base = stream.time_base = TIME_BASE
-            stream.codec_context.thread_type = "FRAME"  # +28% over slices (PERFORMANCE.md 2)
-            stream.options = {"preset": preset, "crf": str(crf)}
+            # frame threads: +28% over slices (PERFORMANCE.md 2), but each holds a picture back
+            stream.codec_context.thread_type = "SLICE" if live else "FRAME"
+            stream.options = {"preset": preset, "crf": str(crf),
+                              **({"tune": "zerolatency"} if live else {})}
             stream.codec_context.open()
         except (av.FFmpegError, ValueError) as exc:
             container.close()
@@ -117,8 +131,10 @@ class VideoWriter(Closing):
             container.start_encoding()  # creates the file and writes the header
         except (av.FFmpegError, OSError) as exc:
             container.close()
-            remove_quietly(self._temp)
-            raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
+            if self._temp is not None:
+                remove_quietly(self._temp)
+            raise OutputError(f"{self.url or self.path}: cannot write ({os_reason(exc)})"
+                              ) from None
         return container
 
     def _encode_loop(self) -> None:
@@ -148,7 +164,8 @@ class VideoWriter(Closing):
         """Raise the encoder thread's failure as an OutputError, once."""
         if self._error is not None and not self._error_reported:
             self._error_reported = True
-            raise OutputError(f"{self.path}: cannot write video ({os_reason(self._error)})")
+            raise OutputError(f"{self.url or self.path}: cannot write video "
+                              f"({os_reason(self._error)})")
 
     def _fill(self, buffer: np.ndarray, image: Frame | np.ndarray) -> None:
         """Copy (or convert) ``image`` into the I420 output ``buffer``."""
@@ -211,8 +228,11 @@ class VideoWriter(Closing):
             return
         self._finish(flush=True)
         if self._error is not None:
-            remove_quietly(self._temp)
+            if self._temp is not None:
+                remove_quietly(self._temp)
             self._raise_error()
+            return
+        if self._temp is None:  # a live output: nothing to rename
             return
         try:
             os.replace(self._temp, self.path)
@@ -223,12 +243,20 @@ class VideoWriter(Closing):
         """Stop without a video: nothing is renamed and the temporary file is removed."""
         if not self._closed:
             self._finish(flush=False)
-        remove_quietly(self._temp)
+        if self._temp is not None:
+            remove_quietly(self._temp)
 
     @property
     def frames_written(self) -> int:
         return self._frames
 
+
+
+def live_format(url: str) -> str:
+    """The container a live output ``url`` is sent as: RTSP to ``rtsp://``, FLV to
+    ``rtmp://``, MPEG-TS to anything else (``udp://``, ``tcp://`` ...)."""
+    scheme = url.split("://", 1)[0].lower()
+    return {"rtsp": "rtsp", "rtmp": "flv", "rtmps": "flv"}.get(scheme, "mpegts")
 
 
 def verify_video(path: Path | str, frames: int) -> str | None:
