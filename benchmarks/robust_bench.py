@@ -38,10 +38,11 @@ Prints Markdown:
 3. Tracking cost at 1080p: the ``benchmark`` scene (1920x1080, ``--hd-frames`` frames) per
    tracker.
 
-Every tracker gets the same decoded frames and the first ground-truth box, on one thread
-(``--threads``: OpenCV's thread pool here, and the thread variables of the peers' processes).
-vtrack's configs run in-process on the frames ``vtrack run`` would read (same reader), timed
-around the pipeline only (decoding excluded); the peers run in subprocesses
+Every tracker gets the same pixels (each image read with ``cv2.imread``, as ``robust_tune.py``
+reads them; ``vtrack run`` decodes JPEG with PyAV, whose pixels differ by a few levels) and the
+first ground-truth box, on one thread (``--threads``: OpenCV's thread pool here, and the thread
+variables of the peers' processes). vtrack's configs run in-process on the frames held in
+memory, timed around the pipeline only (decoding excluded); the peers run in subprocesses
 (``opencv_trackers.py``, ``peers/eco_runner.py``) timed around init + update only. The peers have
 no ``occluded``: an OpenCV tracker's frame whose update fails is ``lost`` (no box), every other
 frame ``tracking``; ECO-HC always claims a box. ``s3`` is not in the table: it is a multi-target
@@ -64,15 +65,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
-from common import CHECK_SEQUENCES, Sequence, machine, single_target_sequences
+from common import CHECK_SEQUENCES, Sequence, load_clip, machine, single_target_sequences
 
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
 from vtrack.evaluate import metrics
-from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.frame import BgrFrame, Frame
 from vtrack.geometry import Box
-from vtrack.io.inputs import open_source
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.scenes.hard import HARD_SCENARIOS
@@ -315,12 +314,9 @@ def sequences_section(peers: Peers, configs: list[str], only: list[str], details
 
 def sequence_scores(seq: Sequence, peers: Peers, configs: list[str],
                     notes: list[str]) -> dict[str, tuple[float, ...]]:
-    source = open_source(str(seq.folder))
-    try:
-        frames = list(source)
-    finally:
-        source.close()
-    gt = read_boxes(seq.groundtruth, origin=1)[: len(frames)]
+    clip = load_clip(seq)
+    frames: list[Frame] = [BgrFrame(i, i / 30.0, bgr) for i, bgr in enumerate(clip.frames)]
+    gt = clip.boxes
     assert gt[0] is not None
     outcomes = track_all(frames, seq.folder, gt[0], peers, configs)
     for name, outcome in outcomes.items():
