@@ -1,7 +1,8 @@
 """Tune and ablate the ``robust`` tracker on every real single-target sequence, in memory.
 
     python benchmarks/robust_tune.py                 # per-sequence table and the mean
-    python benchmarks/robust_tune.py --ablate        # each part switched off: AUC, state, scenes
+    python benchmarks/robust_tune.py --ablate --split check   # each part off, check sequences
+    python benchmarks/robust_tune.py --ablate --ablate-scenes # ... all 28, with the hard scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
     python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 from common import (
     CHECK_SEQUENCES,
     Clip,
+    Sequence,
     clip_results,
     load_clip,
     scene_clip,
@@ -45,19 +47,25 @@ from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackState
 
-#: The ablation table: (label, --set overrides) with one part of robust switched off each.
+#: The ablation: (column, what is off, --set overrides), one part of robust switched off each
+#: through its declared parameters. Parts without a switch: the correlation filter itself and
+#: the Kalman filter (robust_motion always runs; only its rewind can be turned off).
 ABLATIONS = (
-    ("robust", []),
-    ("no colour (filter only: merge 0, no histograms)",
+    ("robust", "nothing: the shipped config", []),
+    ("-colour", "colour histograms and their merge (fHOG filter only)",
      ["robust_model.colour=false", "robust_search.merge=0"]),
-    ("no grey-level channel (fHOG's 31 only)", ["robust_model.grey_channel=false"]),
-    ("no scale (DSST off)", ["robust_search.scale=false"]),
-    ("no update (first frame's model only)", ["robust_failure.update=false"]),
-    ("update every frame (no LMCF gate)",
-     ["robust_failure.update_apce=0", "robust_failure.update_peak=0"]),
-    ("never occluded (no PSR test)", ["robust_failure.hidden_psr=0"]),
-    ("no re-detection while lost", ["robust_failure.redetect=false"]),
-    ("coast from the current state (no rewind)", ["robust_motion.rewind_frames=0"]),
+    ("-grey", "the cells' grey-level channel (fHOG's 31 only)",
+     ["robust_model.grey_channel=false"]),
+    ("-scale", "DSST's scale filter (the first size kept)", ["robust_search.scale=false"]),
+    ("-motion", "the second search region at the Kalman prediction",
+     ["robust_model.motion_region=false"]),
+    ("-psr", "MOSSE's PSR test (never occluded by a flat response)",
+     ["robust_failure.hidden_psr=0"]),
+    ("-doubtful", "LMCF's doubtful label (a weak sharp peak called occluded)",
+     ["robust_failure.hidden_peak=0"]),
+    ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),
+    ("-update", "learning after the first frame", ["robust_failure.update=false"]),
+    ("-rewind", "coasting from the last confident frame", ["robust_motion.rewind_frames=0"]),
 )
 
 
@@ -191,12 +199,84 @@ def hard(overrides: list[str], seeds: range, frames: int,
         sys.stdout.flush()
 
 
+def usable(variants: tuple[tuple[str, str, list[str]], ...],
+           extra: list[str]) -> list[tuple[str, str, list[str]]]:
+    """The ablation variants whose overrides (with ``extra``) robust accepts; a line on stderr
+    for each one it does not (e.g. a parameter that was renamed or removed)."""
+    kept = []
+    for key, what, overrides in variants:
+        try:
+            load_config("robust").with_overrides(overrides + extra)
+        except VtrackError as exc:
+            print(f"ablation {key}: skipped ({exc})", file=sys.stderr)
+            continue
+        kept.append((key, what, overrides))
+    return kept
+
+
+def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool) -> None:
+    """Robust with each part off (:data:`ABLATIONS`) on ``sequences``: AUC per sequence and
+    variant, then per variant the means (all, tune, check), the honest-state shares pooled over
+    the frames and, with ``with_scenes``, the slow slab and hard scenes' mean IoU."""
+    try:
+        load_config("robust").with_overrides(extra)
+    except VtrackError as exc:
+        sys.exit(str(exc))
+    variants = usable(ABLATIONS, extra)
+    names = [seq.name for seq in sequences]
+    table: dict[str, list[Result]] = {key: [] for key, _, _ in variants}
+    for seq in sequences:
+        clip = load_clip(seq)
+        for key, _, overrides in variants:
+            table[key].append(evaluate(clip, overrides + extra))
+        print(f"<!-- {seq.name}: " + ", ".join(f"{key} {table[key][-1].auc:.3f}"
+                                               for key, _, _ in variants) + " -->")
+        sys.stdout.flush()
+        del clip
+    print("\n| sequence | " + " | ".join(key for key, _, _ in variants) + " |")
+    print("|---|" + "---:|" * len(variants))
+    for i, name in enumerate(names):
+        mark = " *" if name in CHECK_SEQUENCES else ""
+        print(f"| {name}{mark} | " + " | ".join(f"{table[key][i].auc:.3f}"
+                                               for key, _, _ in variants) + " |")
+    print("| **mean** | " + " | ".join(f"**{statistics.mean(r.auc for r in table[key]):.3f}**"
+                                        for key, _, _ in variants) + " |")
+    base = statistics.mean(r.auc for r in table["robust"]) if "robust" in table else math.nan
+    scene_head = (f" slow slab ({len(SLOW_SLAB_SEEDS)} seeds, {SLOW_SLAB_FRAMES} frames) | "
+                  f"hard scenes (seeds 0-{HARD_SEEDS - 1}) |" if with_scenes else "")
+    print("\n| variant | off | overrides | mean AUC | change | tune | check | tracking & miss "
+          "| miss & flagged |" + scene_head)
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if with_scenes else ""))
+    for key, what, overrides in variants:
+        results = table[key]
+        mean = statistics.mean(r.auc for r in results)
+        tune, check = split_means([r.auc for r in results], names)
+        false_tracking = share(sum(r.false_tracking for r in results),
+                               sum(r.tracking for r in results))
+        flagged = share(sum(r.flagged for r in results), sum(r.misses for r in results))
+        scenes_cells = ""
+        if with_scenes:
+            slab = hard_means(overrides + extra, SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES,
+                              names=("slab",))["slab"]
+            kinds = hard_means(overrides + extra, range(HARD_SEEDS))
+            scenes_cells = (f" {statistics.mean(slab):.3f} | "
+                            f"{statistics.mean(v for vs in kinds.values() for v in vs):.3f} |")
+        print(f"| {key} | {what} | {' '.join(f'`{o}`' for o in overrides) or '-'} | {mean:.3f} "
+              f"| {mean - base:+.3f} | {tune} | {check} | {false_tracking} | {flagged} |"
+              + scenes_cells)
+        sys.stdout.flush()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ablate", action="store_true", help="mean AUC with each part off")
     parser.add_argument("--set", action="append", default=[], dest="overrides",
                         help="stage.param=value applied to every run")
     parser.add_argument("--only", action="append", default=[], help="sequence names")
+    parser.add_argument("--split", choices=("all", "tune", "check"), default="all",
+                        help="the data's tune or check sequences only (default: all)")
+    parser.add_argument("--ablate-scenes", action="store_true",
+                        help="--ablate: also the slow slab and the hard scenes' mean IoU")
     parser.add_argument("--scenes", action="store_true",
                         help="mean IoU on the generated scenes, robust against s0")
     parser.add_argument("--hard", action="store_true",
@@ -225,54 +305,32 @@ def main() -> None:
         hard(args.overrides, seeds, args.frames, size)  # type: ignore[arg-type]
         return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
+    if args.split != "all":
+        check = args.split == "check"
+        sequences = [s for s in sequences if (s.name in CHECK_SEQUENCES) == check]
     if not sequences:
         print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
         return
-    variants = ABLATIONS if args.ablate else (("robust", []),)
-    table: dict[str, list[Result]] = {label: [] for label, _ in variants}
-    if not args.ablate:
-        print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
-        print("|---|---:|---:|---:|---:|---:|---:|")
+    if args.ablate:
+        ablate(sequences, args.overrides, args.ablate_scenes)
+        return
+    print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    results: list[Result] = []
     for seq in sequences:
         clip = load_clip(seq)
-        for label, overrides in variants:
-            try:
-                result = evaluate(clip, overrides + args.overrides, args.config)
-            except VtrackError as exc:  # e.g. a hue tracker refusing a grey target: scores 0
-                print(f"{seq.name}: {exc}", file=sys.stderr)
-                present = sum(box is not None for box in clip.boxes)
-                result = Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
-            table[label].append(result)
-            if not args.ablate:
-                print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
-                      f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
-                      f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
-                sys.stdout.flush()
+        try:
+            result = evaluate(clip, args.overrides, args.config)
+        except VtrackError as exc:  # e.g. a hue tracker refusing a grey target: scores 0
+            print(f"{seq.name}: {exc}", file=sys.stderr)
+            present = sum(box is not None for box in clip.boxes)
+            result = Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
+        results.append(result)
+        print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
+              f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
+              f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
+        sys.stdout.flush()
         del clip
-    if args.ablate:
-        names = [seq.name for seq in sequences]
-        base = statistics.mean(r.auc for r in table["robust"])
-        print("| variant | mean AUC | change | tune | check | tracking & miss | miss & flagged | "
-              f"slow slab ({len(SLOW_SLAB_SEEDS)} seeds, {SLOW_SLAB_FRAMES} frames) | "
-              f"hard scenes (seeds 0-{HARD_SEEDS - 1}) |")
-        print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-        for label, overrides in variants:
-            results = table[label]
-            mean = statistics.mean(r.auc for r in results)
-            tune, check = split_means([r.auc for r in results], names)
-            slab = hard_means(overrides + args.overrides, SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES,
-                              names=("slab",))["slab"]
-            kinds = hard_means(overrides + args.overrides, range(HARD_SEEDS))
-            false_tracking = share(sum(r.false_tracking for r in results),
-                                   sum(r.tracking for r in results))
-            flagged = share(sum(r.flagged for r in results), sum(r.misses for r in results))
-            print(f"| {label} | {mean:.3f} | {mean - base:+.3f} | {tune} | {check} "
-                  f"| {false_tracking} | {flagged} "
-                  f"| {statistics.mean(slab):.3f} | "
-                  f"{statistics.mean(v for values in kinds.values() for v in values):.3f} |")
-            sys.stdout.flush()
-        return
-    results = table["robust"]
 
     def mean(key: str) -> float:
         return statistics.mean(getattr(r, key) for r in results)
