@@ -2,7 +2,7 @@
 # Prepare ECO-HC (the public Python port StrangerZhang/pyECO) as an optional peer of
 # robust_bench.py, in its own venv, outside vtrack's environment (never a dependency of vtrack).
 #
-#   git clone https://github.com/StrangerZhang/pyECO PYECO_DIR
+#   (PYECO_DIR: a clone of the public GitHub repository StrangerZhang/pyECO; measured at 9179450)
 #   bash benchmarks/peers/setup_eco.sh PYECO_DIR VENV_DIR
 #   python benchmarks/robust_bench.py --eco-python VENV_DIR/bin/python --eco-dir PYECO_DIR ...
 #
