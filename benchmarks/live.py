@@ -5,8 +5,8 @@ A generated 1080p60 H.264 clip (MPEG-TS, a key frame every second) is sent to
 -i clip -c copy -f mpegts udp://...``); ``vtrack run udp://...`` receives it (live pacing on)
 with each config. Per run: frames tracked, frames passed over because the tracker was busy
 (``frames_passed``), latency p50/p99/max from ``run.json`` (frame decoded -> its row written),
-and the receiver's resident memory sampled every half second after its first frames (flat =
-no queue grows). The slow config (s1 with 1024 particles a frame) cannot keep up on purpose.
+and the receiver's resident memory at a quarter, half, three quarters and the end of the
+stream (flat = no queue grows). The slow config (s1 with 1024 particles a frame) cannot keep up on purpose.
 
     python benchmarks/live.py [--seconds 10]
 
@@ -63,7 +63,8 @@ def one_run(clip: Path, box: str, args: list[str], out: Path) -> dict:
     url = f"udp://127.0.0.1:{port}"
     env = process_env()
     receiver = subprocess.Popen([sys.executable, "-m", "vtrack", "run", url, "--init", box,
-                                 "--timeout", "3", "-q", "-o", str(out), "-y", *args], env=env)
+                                 "--timeout", "3", "-q", "-o", str(out), "-y", *args], env=env,
+                                stderr=subprocess.DEVNULL)  # ends partial: the sender stops
     time.sleep(2.0)  # the receiver is listening (a late start only joins at the next key frame)
     sender = subprocess.Popen([sys.executable, "-m", "vtrack.scenes.send", str(clip), url],
                               env=env)
@@ -74,12 +75,14 @@ def one_run(clip: Path, box: str, args: list[str], out: Path) -> dict:
         time.sleep(0.5)
     sender.wait()
     record = json.loads((out / "run.json").read_text())
-    steady = samples[len(samples) // 5:] or samples  # after the first frames
+    # at a quarter, half, three quarters and the end of the stream
+    marks = [samples[min(len(samples) - 1, len(samples) * q // 4)] for q in (1, 2, 3, 4)] \
+        if samples else []
     return {
         "frames": record["frames"],
         "passed": record["summary"]["frames_passed"],
         "latency": record["timing"]["latency"],
-        "rss": (min(steady), max(steady)) if steady else (None, None),
+        "rss": marks,
     }
 
 
@@ -91,20 +94,23 @@ def main() -> None:
         folder = Path(tmp)
         clip, box = make_clip(folder, args.seconds)
         sent = round(60 * args.seconds)
+        load = os.getloadavg()[0]
         print(machine())
         print()
         print(f"{sent} frames of 1920x1080 at 60 fps sent in real time over UDP (MPEG-TS)")
         print()
         print("| config | frames tracked | passed over (busy) | latency p50 / p99 / max ms | "
-              "receiver RSS MB (min-max while streaming) |")
+              "receiver RSS MB at 1/4, 1/2, 3/4, end of the stream |")
         print("|---|---|---|---|---|")
         for n, (label, run_args) in enumerate(RUNS):
             got = one_run(clip, box, run_args, folder / f"out{n}")
             lat = got["latency"]
-            low, high = got["rss"]
-            rss = "n/a" if low is None else f"{low:.0f}-{high:.0f}"
+            rss = " / ".join(f"{m:.0f}" for m in got["rss"]) or "n/a"
             print(f"| {label} | {got['frames']} | {got['passed']} | {lat['p50_ms']:.1f} / "
                   f"{lat['p99_ms']:.1f} / {lat['max_ms']:.1f} | {rss} |", flush=True)
+        print()
+        print("Load average (1 min) before and after: "
+              f"{load:.1f} / {os.getloadavg()[0]:.1f} (other processes share the cores)")
 
 
 if __name__ == "__main__":

@@ -31,8 +31,9 @@ def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
-    ``frames`` is an input path (``str`` or ``pathlib.Path``: a video file or an image folder,
-    opened with :func:`vtrack.io.open_source`), a :class:`RunRequest` (its input, raw format,
+    ``frames`` is an input (``str`` or ``pathlib.Path``: a video file, an image folder, a URL
+    or a capture device, opened with :func:`vtrack.io.open_source`; a live one hands over the
+    frames the tracker keeps up with), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
     of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images (timed at
     ``fps``) or of ``av.VideoFrame``; ``config`` a shipped config name, a TOML path or a
