@@ -6,7 +6,8 @@ A generated 1080p60 H.264 clip (MPEG-TS, a key frame every second) is sent to
 with each config. Per run: frames tracked, frames passed over because the tracker was busy
 (``frames_passed``), latency p50/p99/max from ``run.json`` (frame decoded -> its row written),
 and the receiver's resident memory at a quarter, half, three quarters and the end of the
-stream (flat = no queue grows). The slow config (s1 with 1024 particles a frame) cannot keep up on purpose.
+stream (flat = no queue grows). The slow config (s1 with 1024 particles a frame) cannot keep
+up, on purpose.
 
     python benchmarks/live.py [--seconds 10]
 
