@@ -356,3 +356,33 @@ def test_video_out_sends_the_annotated_video_live_over_udp(tmp_path: Path) -> No
     refused = _run([str(clip), "--init", box, "--video-out", "annotated.ts"])
     assert refused.returncode == 2 and b"--video-out annotated.ts: expected a URL" in \
         refused.stderr
+
+
+def test_keeping_up_works_through_a_burst_and_passes_over_for_a_slow_consumer() -> None:
+    """io.threads.KeepingUp: a burst a quick consumer can work through arrives whole; a
+    consumer slower than the source (period 1 ms, 20 ms an item) gets the newest item and
+    the rest are counted as passed over, none lost without a count."""
+    from vtrack.io.threads import KeepingUp
+
+    quick = KeepingUp(iter(range(6)), "burst", period_s=1 / 30)
+    assert list(quick) == list(range(6)) and quick.passed == 0
+    slow = KeepingUp(iter(range(50)), "slow", period_s=0.001, depth=4)
+    taken = []
+    for item in slow:
+        taken.append(item)
+        time.sleep(0.02)
+    assert taken[-1] == 49 and taken == sorted(taken)
+    assert len(taken) < 50 and len(taken) + slow.passed == 50
+
+
+def test_latency_percentiles_are_within_their_bins() -> None:
+    from vtrack.latency import Latencies
+
+    latencies = Latencies()
+    assert latencies.to_dict() == {"frames": 0, "p50_ms": None, "p99_ms": None, "max_ms": None}
+    for ms in range(1, 101):
+        latencies.add(ms / 1000)
+    got = latencies.to_dict()
+    assert got["frames"] == 100 and got["max_ms"] == 100
+    assert got["p50_ms"] == pytest.approx(50, rel=0.01)
+    assert got["p99_ms"] == pytest.approx(99, rel=0.01)
