@@ -237,6 +237,49 @@ def test_batch_start_is_recorded_per_run(clip_factory, tmp_path: Path) -> None:
         assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(range(8, 20))
 
 
+def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) -> None:
+    """``--start 0.5s`` starts at the first frame at or after 0.5 s (frame 15 at 30 fps): the
+    same track as ``--start 15``; run.json keeps the time as given and the frame it found;
+    a batch resumed with the same time reuses its runs; the report scores them from there."""
+    import json
+    import shutil
+
+    clip = clip_factory("smooth", frames=40)  # 30 fps
+    by_frame, by_time = tmp_path / "frame", tmp_path / "time"
+    for out, start in ((by_frame, "15"), (by_time, "0.5s")):
+        done = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--start", start, "-q",
+                      "--no-video", "-o", str(out))
+        assert done.returncode == 0, done.stderr
+    assert (by_time / "track.csv").read_bytes() == (by_frame / "track.csv").read_bytes()
+    record = json.loads((by_time / "run.json").read_text())
+    assert record["start_frame"] == 15
+    assert (record["request"]["start"], record["request"]["start_s"]) == (0, 0.5)
+    for bad in ("2.5x", "-1s", "nans", "1e99s"):
+        line = one_error_line(vtrack("run", str(clip.path), "--start", bad, "-o",
+                                     str(tmp_path / "bad")))
+        assert "--start" in line and "2.5s" in line, line
+    line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
+                                 "2s", "-o", str(tmp_path / "bad")))
+    assert line.endswith("--start 2s: " + f"{clip.path} has no frame 60 (frames are numbered "
+                         "from 0)")
+    assert not (tmp_path / "bad").exists()
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "walk.mp4")
+    shutil.copy(clip.gt, folder / "walk.gt.txt")
+    batch = ("batch", str(folder), "--start", "0.5s", "--no-video", "--jobs", "1",
+             "--out", str(tmp_path / "res"))
+    assert vtrack(*batch, "-q").returncode == 0
+    again = vtrack(*batch)
+    assert again.returncode == 0, again.stderr
+    assert "1 of them complete before, not run again" in again.stdout, again.stdout
+    report = vtrack("report", str(tmp_path / "res"), "-q", "--out", str(tmp_path / "report"))
+    assert report.returncode == 0, report.stderr
+    summary = (tmp_path / "report" / "summary.csv").read_text().splitlines()
+    assert summary[1].split(",")[4] == "25"  # frames_evaluated: frames 15..39
+
+
 @pytest.fixture(scope="module")
 def report_runs(clip_factory, tmp_path_factory) -> tuple[Path, object]:
     """A batch of s0, s1 and robust on two generated clips (no ground truth recorded in one)."""

@@ -10,11 +10,13 @@ result is reused only if every field of the request that made it is the same.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
+from vtrack.errors import InputError
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
@@ -31,6 +33,8 @@ class RunRequest:
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
     seeds the stochastic stages; ``start`` is the first frame tracked (the input's 0-based
     frame number; the frames before it are decoded and skipped, as ``ffmpeg -ss`` skips time);
+    ``start_s``, when set, gives it as a time instead (``--start 2.5s``): the first frame at or
+    after that many seconds at the input's frame rate (:meth:`start_frame`);
     ``max_frames`` stops after that many tracked frames.
     """
 
@@ -49,6 +53,7 @@ class RunRequest:
     seed: int = 0
     max_frames: int | None = None
     start: int = 0
+    start_s: float | None = None
     #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
     #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
     init_from: str | None = None
@@ -80,6 +85,7 @@ class RunRequest:
             "seed": self.seed,
             "max_frames": self.max_frames,
             "start": self.start,
+            "start_s": self.start_s,
             "init_from": self.init_from,
             "stream": self.stream,
             "ffmpeg": {**asdict(self.ffmpeg), "options": dict(self.ffmpeg.options)},
@@ -106,12 +112,28 @@ class RunRequest:
             seed=int(data["seed"]),
             max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
             start=int(data.get("start", 0)),
+            start_s=None if data.get("start_s") is None else float(data["start_s"]),
             init_from=data.get("init_from"),
             stream=data.get("stream"),
             ffmpeg=_ffmpeg_input(data.get("ffmpeg")),
             live=data.get("live"),
             video_out=data.get("video_out"),
         )
+
+    @property
+    def start_text(self) -> str:
+        """``--start`` as the user gave it (``75`` or ``2.5s``), for messages."""
+        return str(self.start) if self.start_s is None else f"{self.start_s:g}s"
+
+    def start_frame(self, fps: float | None) -> int:
+        """The first frame to track: ``start``, or for ``start_s`` the first frame at or after
+        that time at ``fps`` frames a second (InputError when the input has no frame rate)."""
+        if self.start_s is None:
+            return self.start
+        if fps is None or not math.isfinite(fps) or fps <= 0:
+            raise InputError(f"--start {self.start_text}: {self.input} has no frame rate to "
+                             "find that time by; give a frame number (--start N)")
+        return max(0, math.ceil(self.start_s * fps - 1e-6))
 
     def file_identities(self) -> dict[str, Any]:
         """The identity (:func:`~vtrack.io.identity.file_identity`) of the input and the ground

@@ -345,6 +345,8 @@ class _Resolved:
     init_from: str | None = None
     #: The input's and ground truth's identity when the run started (run.json ``identity``).
     identity: dict[str, Any] = field(default_factory=dict)
+    #: The first frame tracked (``--start``, a time found at the input's frame rate).
+    start: int = 0
 
 
 @dataclass
@@ -391,9 +393,16 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
-        resolved = _resolve(request)
-        source: Source = open_source(request.input, request.raw, fps=request.fps,
-                                     ffmpeg=request.ffmpeg, live=request.live)
+        # a start time (--start 2.5s) needs the input's frame rate: that input opens first
+        source: Source | None = _open(request) if request.start_s is not None else None
+        try:
+            resolved = _resolve(request, None if source is None else source.info.fps)
+            if source is None:
+                source = _open(request)
+        except BaseException:
+            if source is not None:
+                source.close()
+            raise
         try:
             info = source.info
             if resolved.init_box is not None:
@@ -417,6 +426,11 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     return summary
 
 
+def _open(request: RunRequest) -> Source:
+    return open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
+                       live=request.live)
+
+
 @dataclass
 class _Writers:
     """A run's writers: the CSV (and its row formatter) and the annotated video."""
@@ -437,8 +451,8 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
     pipeline = resolved.pipeline
-    formatter = _MultiTargetRows(resolved.mot_gt, request.start) if pipeline.multi_target \
-        else _SingleTargetRows(pipeline.columns, resolved.gt, request.start)
+    formatter = _MultiTargetRows(resolved.mot_gt, resolved.start) if pipeline.multi_target \
+        else _SingleTargetRows(pipeline.columns, resolved.gt, resolved.start)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
     writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
     if request.video:
@@ -463,9 +477,10 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
     return writers
 
 
-def _resolve(request: RunRequest) -> _Resolved:
-    """Build the chain, read the ground truth and settle the initial box (user errors raise
-    before the output folder is touched)."""
+def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
+    """Build the chain, read the ground truth, settle the first frame (``fps``: the input's
+    frame rate, for a start time) and the initial box (user errors raise before the output
+    folder is touched)."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     if request.gt_path is not None and pipeline.multi_target:
@@ -481,7 +496,7 @@ def _resolve(request: RunRequest) -> _Resolved:
     # says, vtrack.io.sidecar), else the first ground-truth box
     # (the sidecar holds frame 0's box: not for a run that starts later)
     init_box, init_from = request.init_box, request.init_from or "--init"
-    start = request.start
+    start = request.start_frame(fps)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
@@ -492,7 +507,8 @@ def _resolve(request: RunRequest) -> _Resolved:
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         if start:
-            raise ConfigError(f"--start {start}: this tracker needs the target's box in frame "
+            raise ConfigError(f"--start {request.start_text}: this tracker needs the target's "
+                              f"box in frame "
                               f"{start}: give --init x,y,w,h or --gt FILE")
         if not has_sidecar(request.input):
             raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
@@ -504,7 +520,7 @@ def _resolve(request: RunRequest) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
-                     request.file_identities())
+                     request.file_identities(), start)
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -519,10 +535,10 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     formatter, csv, video, annotator = (writers.formatter, writers.csv, writers.video,
                                         writers.annotator)
     # with --start the video's clock starts at its first frame (as ffmpeg -ss makes it)
-    first_time: float | None = None if request.start else 0.0
+    first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
     try:
-        frames_in = _limited(_from(iter(source), request.start), request.max_frames)
+        frames_in = _limited(_from(iter(source), resolved.start), request.max_frames)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)
@@ -547,9 +563,9 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                 out.latency.add(time.perf_counter() - received)
             if on_frame is not None:
                 on_frame(out.frames)
-        if out.frames == 0 and request.start:  # a user error: the folder stays as it was
-            raise InputError(f"--start {request.start}: {request.input} has no frame "
-                             f"{request.start} (frames are numbered from 0)")
+        if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
+            raise InputError(f"--start {request.start_text}: {request.input} has no frame "
+                             f"{resolved.start} (frames are numbered from 0)")
     except PartialInputError as exc:
         out.status, out.error = STATUS_PARTIAL, str(exc)
     except Interrupted as exc:
@@ -657,7 +673,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
-    start = request.start
+    start = resolved.start
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
         gt = gt[start:]  # the frames tracked (--start)
         metrics = summarize(formatter.boxes, gt, formatter.states)
@@ -693,6 +709,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "frames": frames,
         "input": source.info.to_dict(),
         "request": request.to_dict(),
+        "start_frame": resolved.start,
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
         "init_from": resolved.init_from,
         "config": request.config.resolved(),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -22,3 +23,31 @@ def gt_origin_option() -> Callable[[Any], Any]:
         help="Origin of ground-truth boxes: 1 for MATLAB-style 1-based boxes (OTB), 0 for "
              "0-based. auto: 1 for groundtruth_rect.txt or groundtruth.txt inside a sequence "
              "folder (one holding img/), else 0 (name.gt.txt beside a video).")
+
+
+class StartPoint(click.ParamType):
+    """``--start``: a 0-based frame number (``75``) or a time in seconds (``2.5s``, as
+    ``ffmpeg -ss``). Converts to ``(frame, seconds)``: ``(75, None)`` or ``(0, 2.5)``."""
+
+    name = "start"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> tuple[int, float | None]:
+        if isinstance(value, tuple):
+            return value
+        text = str(value).strip()
+        try:
+            if text.lower().endswith("s"):
+                seconds = float(text[:-1])
+                if math.isfinite(seconds) and 0 <= seconds <= MAX_START_S:
+                    return 0, seconds
+            elif text.isdigit():
+                return int(text), None
+        except ValueError:
+            pass
+        self.fail(f"{value!r}: expected a frame number (75) or a time in seconds (2.5s, at "
+                  f"most {MAX_START_S:g}s)", param, ctx)
+
+
+#: The latest start time ``--start Ts`` accepts (a year), so a frame number fits any rate.
+MAX_START_S = 366 * 24 * 3600.0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from datetime import timedelta
 from typing import TYPE_CHECKING
 
@@ -134,11 +135,13 @@ class FrameProgress:
     """``on_open`` / ``on_frame`` callbacks of :func:`vtrack.run.run`: a frame bar in a
     terminal, progress lines every ``period`` seconds otherwise, nothing when ``quiet``."""
 
-    def __init__(self, quiet: bool, max_frames: int | None, start: int = 0,
+    def __init__(self, quiet: bool, max_frames: int | None,
+                 start: Callable[[float | None], int] = lambda fps: 0,
                  period: float = STATS_PERIOD) -> None:
         self.quiet = quiet
         self.max_frames = max_frames
-        self.start = start  # frames skipped before tracking (--start)
+        #: frames skipped before tracking (--start), given the input's frame rate
+        self.start = start
         self.period = period
         self.bar: tqdm | ProgressLines | None = None
         self.info: InputInfo | None = None
@@ -149,7 +152,7 @@ class FrameProgress:
     def _total(self, info: InputInfo) -> int | None:
         total = info.frame_count
         if total is not None:
-            total = max(total - self.start, 0) or None
+            total = max(total - self.start(info.fps), 0) or None
         if self.max_frames is not None:
             total = min(total, self.max_frames) if total else self.max_frames
         return total

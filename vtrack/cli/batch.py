@@ -99,7 +99,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             worker_timeout: float, gt_origin: int | None,
             force: bool, overwrite: bool, overrides: tuple[str, ...], no_video: bool,
             preset: str, crf: int,
-            seed: int, start: int, max_frames: int | None, stats_period: float,
+            seed: int, start: tuple[int, float | None], max_frames: int | None,
+            stats_period: float,
             quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
     of `vtrack run`) and DIR/summary.csv.
@@ -148,7 +149,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             executor = LocalExecutor(workers, on_progress=progress.on_progress)
         settings = RunRequest(input=str(folder), out_dir=out_dir,
                               config=next(iter(configs.values())), video=not no_video,
-                              preset=preset, crf=crf, seed=seed, start=start,
+                              preset=preset, crf=crf, seed=seed, start=start[0],
+                              start_s=start[1],
                               max_frames=max_frames)
         batch = plan(inputs, configs, out_dir, settings,
                      threads=max(1, cpu_count() // workers), force=force,

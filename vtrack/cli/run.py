@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import gt_origin_option
+from vtrack.cli._options import StartPoint, gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
@@ -89,10 +89,11 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="x264 quality of annotated.mp4 (lower is better and larger).")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
-@click.option("--start", "start", type=click.IntRange(min=0), default=0, show_default=True,
-              metavar="FRAME", help="First frame to track (0-based, as track.csv numbers "
-              "them; like ffmpeg -ss, in frames): --init (default: the --gt box of that frame) "
-              "is the target's box in it. Earlier frames are decoded and skipped.")
+@click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
+              metavar="N|Ts", help="First frame to track: a 0-based frame number N "
+              "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame at "
+              "or after it, at the input's frame rate). --init (default: the --gt box of that "
+              "frame) is the target's box in it. Earlier frames are decoded and skipped.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames.")
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
@@ -110,7 +111,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
             input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
             live: bool | None, follow_s: float | None, video_out: str | None,
-            crf: int, seed: int, start: int, max_frames: int | None, stream: str | None,
+            crf: int, seed: int, start: tuple[int, float | None], max_frames: int | None,
+            stream: str | None,
             stats_period: float, quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
 
@@ -148,7 +150,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         crf=crf,
         seed=seed,
         max_frames=max_frames,
-        start=start,
+        start=start[0],
+        start_s=start[1],
         stream=stream,
         ffmpeg=FFmpegInput(format=input_format, options=parse_options(input_options),
                            follow_s=follow_s,
@@ -156,7 +159,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         live=live,
         video_out=video_out,
     )
-    progress = FrameProgress(quiet, max_frames, start, stats_period)
+    progress = FrameProgress(quiet, max_frames, request.start_frame, stats_period)
     try:
         summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
                       overwrite=overwrite)

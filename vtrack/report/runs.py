@@ -220,13 +220,12 @@ def _recorded_scores(rows: list[dict[str, str]]) -> FrameScores:
     return overlaps, errors
 
 
-def _rescored(rows: list[dict[str, str]], request: dict[str, Any]
+def _rescored(rows: list[dict[str, str]], request: dict[str, Any], start: int
               ) -> tuple[FrameScores, list[Box | None] | None]:
     """The run's boxes against the ground truth it recorded (see the module docstring), and
     those ground-truth boxes (None: the file could not be read, the recorded scores are used)."""
     recorded = _recorded_scores(rows)
     boxes = _boxes(rows)
-    start = _start(request)
     origins = [request["gt_origin"]] if "gt_origin" in request else [0, 1]
     candidates = []
     for origin in origins:
@@ -242,9 +241,12 @@ def _rescored(rows: list[dict[str, str]], request: dict[str, Any]
     return scores, truth
 
 
-def _start(request: dict[str, Any]) -> int:
-    """The first frame the run tracked (``--start``; 0 for records made before it existed)."""
-    return int(request.get("start") or 0)
+def _start(record: dict[str, Any]) -> int:
+    """The first frame the run tracked (``--start``, a time already found as a frame; 0 for
+    records made before it existed)."""
+    if record.get("start_frame") is not None:
+        return int(record["start_frame"])
+    return int((record.get("request") or {}).get("start") or 0)
 
 
 def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dict[str, str]]:
@@ -332,7 +334,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             raise InputError(f"{folder / 'track.csv'}: holds {plural(len(written), 'row')}, "
                              f"run.json records {plural(result.frames, 'frame')} (cut or "
                              "edited after the run); not scored")
-        start = _start(request)
+        start = _start(record)
         rows = _with_skipped_frames(written, start)
         result.states = [row["state"] for row in rows]
         result.confidence = [_number(row.get("score")) for row in rows]
@@ -341,7 +343,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             result.source = str(request["input"])
         if request.get("gt"):
             result.ground_truth = str(request["gt"])
-            (result.overlaps, result.errors), result.truth = _rescored(rows, request)
+            (result.overlaps, result.errors), result.truth = _rescored(rows, request, start)
             if result.truth is not None:
                 result.norm_errors = metrics.normalized_center_errors(result.boxes,
                                                                       result.truth)
