@@ -47,7 +47,7 @@ h1 { font-size: 24px; margin-bottom: 4px; } h2 { margin-top: 32px; border-bottom
 table { border-collapse: collapse; margin: 12px 0; font-variant-numeric: tabular-nums; }
 th { cursor: pointer; user-select: none; } th[title] { text-decoration: underline dotted; }
 th[data-dir="asc"]::after { content: " \\25B2"; } th[data-dir="desc"]::after { content: " \\25BC"; }
-th, td { padding: 4px 10px; border-bottom: 1px solid #e5e5e5; text-align: right; }
+th, td { padding: 4px 8px; border-bottom: 1px solid #e5e5e5; text-align: right; }
 th { background: #f4f4f6; } td.label, th.label { text-align: left; }
 tr.group td { border-top: 2px solid #bbb; } td.best { font-weight: 700; background: #e6f4ea; }
 img { max-width: 100%; display: block; margin: 8px 0; }
