@@ -1,9 +1,10 @@
 """Resident memory of ``vtrack.track`` over a long run: flat, since results keep no frame.
 
-``list(vtrack.track(frames, ...))`` over N generated 640x360 BGR frames (one scene, replayed),
-config robust; RSS (from /proc/self/statm) after every tenth of the run, once results drop their
-frames (the default) and once with ``keep_frames=True`` (at most 1000 frames) for comparison,
-each in its own process.
+``vtrack.track(frames, ...)`` over N generated 640x360 BGR frames (one scene, replayed), config
+robust; RSS (from /proc/self/statm) after every tenth of the run: once with the caller keeping no
+result (a stream of results), once keeping every result in a list (results drop their frames:
+the default), and once with ``keep_frames=True`` (at most 1000 frames) for comparison, each in
+its own process.
 
     python benchmarks/track_memory.py [--frames 10000]
 
@@ -26,7 +27,7 @@ def rss_mb() -> float:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
-def measure(frames: int, keep: bool) -> list[float]:
+def measure(frames: int, keep: bool, hold: bool = True) -> list[float]:
     import vtrack
     from vtrack.scenes import make_scene
 
@@ -40,7 +41,8 @@ def measure(frames: int, keep: bool) -> list[float]:
     results, marks = [], []
     for n, result in enumerate(vtrack.track(replay(), "robust", scene.boxes[0],
                                             keep_frames=keep), start=1):
-        results.append(result)
+        if hold:
+            results.append(result)
         if n % (frames // 10) == 0:
             marks.append(rss_mb())
     return marks
@@ -49,19 +51,22 @@ def measure(frames: int, keep: bool) -> list[float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=10000)
-    parser.add_argument("--child", choices=["drop", "keep"])
+    parser.add_argument("--child", choices=["drop", "keep", "none"])
     args = parser.parse_args()
     if args.child:
-        print(" ".join(f"{m:.0f}" for m in measure(args.frames, args.child == "keep")))
+        marks = measure(args.frames, args.child == "keep", hold=args.child != "none")
+        print(" ".join(f"{m:.0f}" for m in marks))
         return
     print("| results | RSS MB after each tenth of the run |")
     print("|---|---|")
-    for child, frames in (("drop", args.frames), ("keep", min(args.frames, 1000))):
+    labels = {"none": "results not kept by the caller (a stream of results)",
+              "drop": "keep_frames=False (default), every result kept in a list",
+              "keep": "keep_frames=True (1000 frames at most: ~0.7 MB each)"}
+    for child, frames in (("none", args.frames), ("drop", args.frames),
+                          ("keep", min(args.frames, 1000))):
         out = subprocess.run([sys.executable, __file__, "--frames", str(frames),
                               "--child", child], capture_output=True, text=True, check=True)
-        label = ("keep_frames=False (default)" if child == "drop"
-                 else "keep_frames=True (1000 frames at most: ~0.7 MB each)")
-        print(f"| {label}, {frames} frames | {out.stdout.strip()} |")
+        print(f"| {labels[child]}, {frames} frames | {out.stdout.strip()} |")
 
 
 if __name__ == "__main__":

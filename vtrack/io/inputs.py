@@ -34,8 +34,9 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
       carry their own timestamps, so ``fps`` is refused for it (ConfigError). A given ``fps``
       must be a frame rate (> 0).
 
-    ``live`` (None: :func:`is_live`) makes the source hand over only the newest frame when the
-    consumer is busy, counting those it passed over (:attr:`Source.frames_passed`).
+    ``live`` (None: :func:`is_live`) makes the source hand over the frames its consumer keeps
+    up with and pass over the others, counted (:attr:`Source.frames_passed`,
+    :class:`~vtrack.io.threads.KeepingUp`).
     """
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
