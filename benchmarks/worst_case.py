@@ -83,17 +83,36 @@ class Measured:
     error: str | None = None
 
 
+def _played(count: int, length: int) -> Iterator[int]:
+    """The scene frame shown at each of ``count`` frames: played forward, back, forward ..."""
+    cycle = list(range(length)) + list(range(length - 2, 0, -1))
+    for n in range(count):
+        yield cycle[n % len(cycle)]
+
+
 def frames_of(kind: str, width: int, height: int, count: int) -> Iterator[bytes]:
     """``count`` BGR frames: a scene played back and forth, or noise (a few frames cycled)."""
     if kind == "noise":
         rng = np.random.default_rng(0)
         pool = [rng.integers(0, 256, (height, width, 3), np.uint8).tobytes() for _ in range(8)]
-    else:
-        scene = make_scene(kind, 0, width, height, 120, 30.0)
-        pool = [np.ascontiguousarray(bgr).tobytes() for bgr in scene.frames()]
-    cycle = pool + pool[-2:0:-1]
-    for n in range(count):
-        yield cycle[n % len(cycle)]
+        for n in range(count):
+            yield pool[n % len(pool)]
+        return
+    scene = make_scene(kind, 0, width, height, 120, 30.0)
+    pool = [np.ascontiguousarray(bgr).tobytes() for bgr in scene.frames()]
+    for index in _played(count, len(pool)):
+        yield pool[index]
+
+
+def write_mot_truth(path: Path, kind: str, width: int, height: int, count: int) -> Path:
+    """MOTChallenge ground truth of :func:`frames_of`'s ``count`` frames of scene ``kind``."""
+    scene = make_scene(kind, 0, width, height, 120, 30.0)
+    with path.open("w") as handle:
+        for n, index in enumerate(_played(count, len(scene))):
+            for track_id, box in scene.tracks[index]:
+                handle.write(f"{n + 1},{track_id},{box.x:.2f},{box.y:.2f},{box.w:.2f},"
+                             f"{box.h:.2f},1,-1,-1,-1\n")
+    return path
 
 
 def first_box(kind: str, width: int, height: int) -> str:
@@ -103,8 +122,9 @@ def first_box(kind: str, width: int, height: int) -> str:
 
 
 def run_case(config: str, overrides: list[str], init: str | None, kind: str, width: int,
-             height: int, frames: int) -> Measured:
-    """One ``vtrack run`` process on ``frames`` generated frames of ``kind``."""
+             height: int, frames: int, gt: Path | None = None) -> Measured:
+    """One ``vtrack run`` process on ``frames`` generated frames of ``kind`` (``gt``: its
+    ground truth)."""
     with tempfile.TemporaryDirectory() as out:
         # /usr/bin/time -f %M: the peak of vtrack's own process (wait4 on a child forked from
         # this one would count the frames this process holds before the exec)
@@ -115,6 +135,8 @@ def run_case(config: str, overrides: list[str], init: str | None, kind: str, wid
             command += ["--set", item]
         if init is not None:
             command += ["--init", init]
+        if gt is not None:
+            command += ["--gt", str(gt)]
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
         errors: list[bytes] = []
         reader = threading.Thread(target=lambda: errors.append(process.stderr.read()))
@@ -167,7 +189,7 @@ def worst_table(frames: int, configs: list[str]) -> None:
 
 def memory_table(width: int, height: int, configs: list[str]) -> None:
     print(f"Peak resident memory of whole `vtrack run --no-video` processes at {width}x{height}, "
-          "default parameters.\n")
+          "default parameters; multi-target configs also with MOTChallenge ground truth.\n")
     print("| config | 300 frames MB | 3,600 frames MB | growth MB |")
     print("|---|---:|---:|---:|")
     for config in configs:
@@ -177,6 +199,15 @@ def memory_table(width: int, height: int, configs: list[str]) -> None:
         long = run_case(config, [], init, kind, width, height, 3600)
         print(f"| {config} | {short.peak_mb:.0f} | {long.peak_mb:.0f} | "
               f"{long.peak_mb - short.peak_mb:+.0f} |", flush=True)
+        if kind != "multi":
+            continue
+        with tempfile.TemporaryDirectory() as folder:
+            peaks = [run_case(config, [], None, kind, width, height, count,
+                              write_mot_truth(Path(folder) / f"gt{count}.txt", kind, width,
+                                              height, count)).peak_mb
+                     for count in (300, 3600)]
+        print(f"| {config} with ground truth | {peaks[0]:.0f} | {peaks[1]:.0f} | "
+              f"{peaks[1] - peaks[0]:+.0f} |", flush=True)
 
 
 def main() -> None:

@@ -96,3 +96,25 @@ def test_mot_ground_truth_past_the_end_is_a_warning(multi, tmp_path: Path) -> No
     assert result.returncode == 0, stderr
     assert "vtrack: warning:" in stderr and "past the input's 60 frames" in stderr, stderr
     assert "up to frame 99" in stderr
+
+
+def test_a_bounded_read_holds_what_the_file_holds_not_the_limit(tmp_path: Path) -> None:
+    """Reading ground truth allocated its 256 MB ceiling at once (one read of limit + 1
+    bytes); it now reads in pieces, so a 40 KB file costs about 40 KB, and the ceiling holds."""
+    import tracemalloc
+
+    from vtrack.errors import InputError
+    from vtrack.io.limits import read_bounded
+
+    path = tmp_path / "gt.txt"
+    path.write_text("10,20,30,40\n" * 3500)
+    tracemalloc.start()
+    try:
+        data = read_bounded(path, 256 << 20, "ground truth")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert data == path.read_bytes()
+    assert peak < 4 << 20  # a few pieces, not the 256 MB ceiling
+    with pytest.raises(InputError, match="larger than 40 KB"):
+        read_bounded(path, 40 << 10, "ground truth")

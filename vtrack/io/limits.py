@@ -24,6 +24,10 @@ CONFIG_BYTES = 1 << 20
 RECORD_BYTES = 64 << 20
 
 
+#: Bytes read at a time (one read of ``limit + 1`` would allocate that much at once).
+_PIECE = 1 << 20
+
+
 def _mb(limit: int) -> str:
     return f"{limit / (1 << 20):g} MB" if limit >= 1 << 20 else f"{limit >> 10} KB"
 
@@ -31,15 +35,23 @@ def _mb(limit: int) -> str:
 def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> bytes:
     """The bytes of ``path`` if it holds at most ``limit`` of them. Raises InputError naming
     the file when it cannot be read or is larger (a device or pipe that never ends included:
-    at most ``limit + 1`` bytes are read)."""
+    at most ``limit + 1`` bytes are read, in pieces: memory grows with what the file holds,
+    not with ``limit``)."""
+    pieces: list[bytes] = []
+    size = 0
     try:
         with open(path, "rb") as handle:
-            data = handle.read(limit + 1)
+            while size <= limit:
+                piece = handle.read(min(_PIECE, limit + 1 - size))
+                if not piece:
+                    break
+                pieces.append(piece)
+                size += len(piece)
     except OSError as exc:
         raise InputError(f"{path}: cannot read {what} ({os_reason(exc)})") from None
-    if len(data) > limit:
+    if size > limit:
         raise InputError(f"{path}: larger than {_mb(limit)}, too large for a {what}")
-    return data
+    return b"".join(pieces)
 
 
 def read_text_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> str:
