@@ -9,11 +9,19 @@ import numpy as np
 import pytest
 
 from vtrack.features.colour import ColourHistograms, box_mean
-from vtrack.features.dcf import CorrelationFilter, apce, gaussian_label, hann2d, psr, subpixel_peak
+from vtrack.features.dcf import (
+    CorrelationFilter,
+    apce,
+    gaussian_label,
+    hann2d,
+    psr,
+    real_spectrum,
+    subpixel_peak,
+)
 from vtrack.features.fhog import CHANNELS, fhog
-from vtrack.features.patch import region_patch
+from vtrack.features.patch import ConvertedWindow, region_patch
 from vtrack.features.scale import ScaleFilter
-from vtrack.frame import BgrFrame, GrayFrame
+from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Window
 
 
@@ -114,7 +122,7 @@ def test_grey_patches_use_grey_level_bins() -> None:
     patch[10:30, 10:30] = 220
     model = ColourHistograms(bins=16, inner_padding=0.2, rate=0.04)
     model.learn(patch, (10, 10, 20, 20), first=True)
-    assert model.object is not None and model.object.shape == (16,)
+    assert model.object is not None and model.object.size == 16
     likelihood = model.likelihood(patch)
     assert likelihood[20, 20] > 0.9 > 0.1 > likelihood[2, 2]
 
@@ -162,3 +170,25 @@ def test_cosine_window_is_zero_at_the_border_and_one_in_the_middle() -> None:
     assert window.shape == (9, 11, 1)
     assert window[0].max() == 0 and window[:, 0].max() == 0
     assert window[4, 5, 0] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("axes, shape", [(2, (35, 40, 32)), (2, (34, 41, 3)), (1, (33, 744))])
+def test_real_spectrum_is_numpys_half_spectrum(axes: int, shape: tuple[int, ...]) -> None:
+    """OpenCV's DFT, sliced to half, gives what ``np.fft.rfftn`` gives (single precision)."""
+    x = np.random.default_rng(0).random(shape).astype(np.float32)
+    expected = np.fft.rfftn(x, axes=tuple(range(axes)))
+    assert np.allclose(real_spectrum(x, axes), expected, atol=1e-3 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("cx, cy, size", [(160, 120, 40), (3, 4, 30), (318, 238, 90),
+                                           (160, 120, 200)])
+def test_patches_cut_from_one_converted_window_are_the_frames_own(cx, cy, size) -> None:
+    """Regions inside a window converted once give the same pixels as converting each (the
+    scale filter's 33 samples), at the frame's edges and with every-k-th-pixel sampling too."""
+    frame = I420Frame(0, 0.0, cv2.cvtColor(texture(240, 320, seed=5), cv2.COLOR_BGR2YUV_I420))
+    converted = ConvertedWindow.around(frame, cx, cy, size * 1.4, size)
+    assert converted is not None
+    for f in (0.7, 0.85, 1.0):
+        alone = region_patch(frame, cx, cy, size * 1.4 * f, size * f, 13, 9)
+        cut = region_patch(frame, cx, cy, size * 1.4 * f, size * f, 13, 9, converted)
+        assert np.array_equal(alone, cut)

@@ -23,44 +23,48 @@ class ColourHistograms:
         self.bins = bins
         self.inner_padding = inner_padding
         self.rate = rate
-        self.shift = 8 - int(np.log2(bins))
         self.object: np.ndarray | None = None
         self.surroundings: np.ndarray | None = None
+        self.shift = 8 - int(np.log2(bins))
+        #: Per bin (flat), the object likelihood p_obj / (p_obj + p_bg) (eq. 12).
+        self._likelihood: np.ndarray | None = None
 
-    def bin_image(self, patch: np.ndarray) -> np.ndarray:
-        """Joint bin index of every pixel (grey patches: the grey level's bin)."""
-        q = np.right_shift(patch, self.shift).astype(np.int32)
-        if q.ndim == 2:
-            return q
-        return (q[..., 0] * self.bins + q[..., 1]) * self.bins + q[..., 2]
+    def _density(self, patch: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """Normalised joint histogram of the patch's pixels under ``mask`` (uint8, 0 = out)."""
+        channels = [0] if patch.ndim == 2 else [0, 1, 2]
+        hist = cv2.calcHist([patch], channels, mask, [self.bins] * len(channels),
+                            [0, 256] * len(channels))
+        return hist / max(float(hist.sum()), 1.0)
 
     def learn(self, patch: np.ndarray, box: tuple[float, float, float, float],
               first: bool = False) -> None:
         """Fold the patch's object (inside ``box`` = x, y, w, h in patch pixels, shrunk by the
         inner padding) and surroundings (outside ``box``) into the densities."""
-        index = self.bin_image(patch)
-        size = self.bins ** (1 if patch.ndim == 2 else 3)
         x, y, w, h = box
         pad = (w + h) / 2 * self.inner_padding
-        inner = _mask(index.shape, x + pad / 2, y + pad / 2, max(w - pad, 2), max(h - pad, 2))
-        outer = ~_mask(index.shape, x, y, w, h)
-        obj = np.bincount(index[inner], minlength=size).astype(np.float64)
-        bg = np.bincount(index[outer], minlength=size).astype(np.float64)
-        obj /= max(obj.sum(), 1.0)
-        bg /= max(bg.sum(), 1.0)
+        inner = _mask(patch.shape, x + pad / 2, y + pad / 2, max(w - pad, 2), max(h - pad, 2))
+        outer = 255 - _mask(patch.shape, x, y, w, h)
+        obj, bg = self._density(patch, inner), self._density(patch, outer)
         if first or self.object is None or self.surroundings is None:
             self.object, self.surroundings = obj, bg
-            return
-        self.object = (1 - self.rate) * self.object + self.rate * obj
-        self.surroundings = (1 - self.rate) * self.surroundings + self.rate * bg
+        else:
+            self.object = (1 - self.rate) * self.object + self.rate * obj
+            self.surroundings = (1 - self.rate) * self.surroundings + self.rate * bg
+        total = self.object + self.surroundings
+        self._likelihood = np.divide(self.object, total, out=np.zeros_like(total),
+                                     where=total > 0).ravel()
 
     def likelihood(self, patch: np.ndarray) -> np.ndarray:
         """Object likelihood of every pixel, float32 in 0..1 (Staple eq. 12)."""
-        assert self.object is not None and self.surroundings is not None
-        index = self.bin_image(patch)
-        obj = self.object[index]
-        total = obj + self.surroundings[index]
-        return np.divide(obj, total, out=np.zeros_like(obj), where=total > 0).astype(np.float32)
+        assert self._likelihood is not None
+        q = np.right_shift(patch, self.shift)
+        if q.ndim == 2:
+            return self._likelihood.take(q)
+        index = q[..., 0].astype(np.int32) * self.bins
+        index += q[..., 1]
+        index *= self.bins
+        index += q[..., 2]
+        return self._likelihood.take(index)
 
 
 def box_mean(likelihood: np.ndarray, w: float, h: float) -> np.ndarray:
@@ -70,6 +74,7 @@ def box_mean(likelihood: np.ndarray, w: float, h: float) -> np.ndarray:
 
 
 def _mask(shape: tuple[int, ...], x: float, y: float, w: float, h: float) -> np.ndarray:
-    mask = np.zeros(shape[:2], bool)
-    mask[max(int(y), 0): max(int(y + h) + 1, 0), max(int(x), 0): max(int(x + w) + 1, 0)] = True
+    """uint8 mask of ``shape[:2]``: 255 on the pixels of the box (x, y, w, h), 0 elsewhere."""
+    mask = np.zeros(shape[:2], np.uint8)
+    mask[max(int(y), 0): max(int(y + h) + 1, 0), max(int(x), 0): max(int(x + w) + 1, 0)] = 255
     return mask

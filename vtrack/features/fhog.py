@@ -25,29 +25,36 @@ CHANNELS = 31
 CLIP = 0.2
 
 
+def _channel_gradients(channel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centred differences ([-1, 0, 1]) along x and y of one channel, float32."""
+    return (cv2.Sobel(channel, cv2.CV_32F, 1, 0, ksize=1),
+            cv2.Sobel(channel, cv2.CV_32F, 0, 1, ksize=1))
+
+
 def _gradients(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gradient magnitude and angle (0..2*pi) of the strongest channel at every pixel (centred
-    differences, [-1, 0, 1])."""
-    img = patch.astype(np.float32)
-    gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=1)
-    gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=1)
-    mag2 = gx * gx + gy * gy
-    if img.ndim == 3:
-        m0, m1, m2 = mag2[..., 0], mag2[..., 1], mag2[..., 2]
-        first = (m0 >= m1) & (m0 >= m2)
-        second = ~first & (m1 >= m2)
-        gx = np.where(first, gx[..., 0], np.where(second, gx[..., 1], gx[..., 2]))
-        gy = np.where(first, gy[..., 0], np.where(second, gy[..., 1], gy[..., 2]))
-        mag2 = np.where(first, m0, np.where(second, m1, m2))
-    return np.sqrt(mag2), cv2.phase(gx, gy)
+    """Gradient magnitude and angle (0..2*pi) of the strongest channel at every pixel (the
+    first channel on a tie)."""
+    if patch.ndim == 2:
+        gx, gy = _channel_gradients(patch)
+        return cv2.cartToPolar(gx, gy)
+    best_x, best_y = _channel_gradients(patch[..., 0])
+    best_mag = cv2.magnitude(best_x, best_y)
+    for c in (1, 2):
+        gx, gy = _channel_gradients(patch[..., c])
+        mag = cv2.magnitude(gx, gy)
+        stronger = mag > best_mag
+        np.copyto(best_x, gx, where=stronger)
+        np.copyto(best_y, gy, where=stronger)
+        np.maximum(best_mag, mag, out=best_mag)
+    return best_mag, cv2.phase(best_x, best_y)
 
 
 @lru_cache(maxsize=32)
 def _cell_index(rows: int, cols: int, cell: int) -> np.ndarray:
-    """Per pixel of a (rows*cell, cols*cell) patch: its cell's index times the bin count."""
+    """Per pixel of a (rows*cell, cols*cell) patch: the index of its cell (row-major)."""
     r = np.arange(rows * cell) // cell
     c = np.arange(cols * cell) // cell
-    return ((r[:, None] * cols + c[None, :]) * SENSITIVE_BINS).astype(np.int64)
+    return (r[:, None] * cols + c[None, :]).astype(np.int32)
 
 
 def fhog(patch: np.ndarray, cell: int = 4) -> np.ndarray:
@@ -59,27 +66,36 @@ def fhog(patch: np.ndarray, cell: int = 4) -> np.ndarray:
         raise ValueError(f"fhog needs at least {cell}x{cell} pixels, got {width}x{height}")
     mag, angle = _gradients(patch[: rows * cell, : cols * cell])
     # Hard orientation bin per pixel (Dollar's fhog: softBin = -1), magnitude as weight, summed
-    # per cell in one bincount.
-    obin = np.minimum((angle * (SENSITIVE_BINS / (2 * np.pi))).astype(np.int64), SENSITIVE_BINS - 1)
-    index = _cell_index(rows, cols, cell) + obin
+    # per cell in one bincount; bins outermost, so that every later step runs on whole planes.
+    index = (angle * (SENSITIVE_BINS / (2 * np.pi))).astype(np.int32)
+    np.minimum(index, SENSITIVE_BINS - 1, out=index)
+    index *= rows * cols
+    index += _cell_index(rows, cols, cell)
     hist = np.bincount(index.ravel(), weights=mag.ravel(), minlength=rows * cols * SENSITIVE_BINS)
-    return _normalise(hist.reshape(rows, cols, SENSITIVE_BINS).astype(np.float32))
+    return _normalise(hist.reshape(SENSITIVE_BINS, rows, cols).astype(np.float32))
 
 
 def _normalise(hist: np.ndarray) -> np.ndarray:
-    """Felzenszwalb's block normalisation of an 18-bin cell histogram (rows, cols, 18)."""
-    rows, cols, _ = hist.shape
-    insensitive = hist[..., :9] + hist[..., 9:]
-    energy = np.einsum("ijk,ijk->ij", insensitive, insensitive)
+    """Felzenszwalb's block normalisation of an 18-bin cell histogram (18, rows, cols): the
+    (rows, cols, 31) features."""
+    _, rows, cols = hist.shape
+    bins = np.empty((27, rows, cols), np.float32)  # 18 sensitive, then 9 insensitive
+    bins[:18] = hist
+    np.add(hist[:9], hist[9:], out=bins[18:])
+    energy = np.einsum("kij,kij->ij", bins[18:], bins[18:])
     padded = np.pad(energy, 1, mode="edge")
     # Energy of the 2x2 block whose corner is cell (i, j) in each of the four directions.
     block = padded[:-1, :-1] + padded[1:, :-1] + padded[:-1, 1:] + padded[1:, 1:]
-    norms = np.stack([block[:-1, :-1], block[:-1, 1:], block[1:, :-1], block[1:, 1:]], axis=-1)
-    inv = (1.0 / np.sqrt(norms + 1e-4)).astype(np.float32)  # (rows, cols, 4)
-    # the 18 sensitive and 9 insensitive bins under each of the 4 normalisations, clipped
-    clipped = np.concatenate([hist, insensitive], axis=2)[..., None, :] * inv[..., :, None]
-    np.minimum(clipped, CLIP, out=clipped)
-    out = np.empty((rows, cols, CHANNELS), np.float32)
-    np.multiply(clipped.sum(axis=2), 0.5, out=out[..., :27])
-    np.multiply(clipped[..., :18].sum(axis=3), 0.2357, out=out[..., 27:])
-    return out
+    inv = 1.0 / np.sqrt(block + np.float32(1e-4))
+    out = np.zeros((CHANNELS, rows, cols), np.float32)
+    normalised = np.empty_like(bins)
+    # the 27 bins under each of the 4 normalisations, clipped: summed (27 channels), and the
+    # 18 sensitive ones summed per normalisation (4 texture channels)
+    for n, (dr, dc) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
+        np.multiply(bins, inv[dr:dr + rows, dc:dc + cols], out=normalised)
+        np.minimum(normalised, CLIP, out=normalised)
+        out[:27] += normalised
+        normalised[:18].sum(axis=0, out=out[27 + n])
+    out[:27] *= 0.5
+    out[27:] *= 0.2357
+    return out.transpose(1, 2, 0)

@@ -10,6 +10,7 @@ past the frame's edge is filled by replicating the edge, as those trackers do.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -21,14 +22,41 @@ from vtrack.geometry import Window
 FAR = 2.0
 
 
-def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float,
-                 out_w: int, out_h: int) -> np.ndarray:
-    """The ``width`` x ``height`` region centred on (``cx``, ``cy``) (frame pixels, may reach
-    past the frame), resampled to ``out_w`` x ``out_h``: uint8, (out_h, out_w, 3) BGR, or
-    (out_h, out_w) grey for a grey frame (its three BGR channels would be equal). Work and
-    memory are bounded by the patch and a few frames' worth of pixels."""
-    if width > FAR * frame.width or height > FAR * frame.height:
-        return _bounded_patch(frame, cx, cy, width, height, out_w, out_h)
+class ConvertedWindow(NamedTuple):
+    """A window of a frame already converted to BGR, for :func:`region_patch` to cut several
+    regions inside it from (each then converts nothing)."""
+
+    window: Window
+    bgr: np.ndarray
+
+    @classmethod
+    def around(cls, frame: Frame, cx: float, cy: float, width: float,
+               height: float) -> ConvertedWindow | None:
+        """The frame's pixels that the region (as :func:`region_patch` takes it) covers,
+        converted; None for a grey frame or a far region (nothing to save)."""
+        if isinstance(frame, GrayFrame) or width > FAR * frame.width \
+                or height > FAR * frame.height:
+            return None
+        window = _region_window(frame, cx, cy, width, height)[0]
+        return cls(window, frame.bgr(window))
+
+    def covers(self, window: Window) -> bool:
+        return (self.window.x0 <= window.x0 and self.window.y0 <= window.y0
+                and window.x1 <= self.window.x1 and window.y1 <= self.window.y1)
+
+    def sampled(self, window: Window, k: int) -> np.ndarray:
+        """``frame.bgr(window)`` (``k`` 1) or ``frame.bgr_sampled(window, k)``: the same
+        values, cut from the converted pixels."""
+        o = (k - 1) // 2
+        pixels = self.bgr[window.y0 - self.window.y0 + o: window.y1 - self.window.y0: k,
+                          window.x0 - self.window.x0 + o: window.x1 - self.window.x0: k]
+        return pixels if k == 1 else np.ascontiguousarray(pixels)
+
+
+def _region_window(frame: Frame, cx: float, cy: float, width: float,
+                   height: float) -> tuple[Window, int, int, int, int]:
+    """The frame's pixels a region covers (at least one), and the whole pixels the region
+    spans, ``ix0, iy0, ix1, iy1`` (which may reach past the frame)."""
     x0, y0 = cx - width / 2, cy - height / 2
     ix0, iy0 = math.floor(x0), math.floor(y0)
     ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
@@ -38,11 +66,26 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
         inside = inside._replace(x1=inside.x0 + 1)
     if inside.y1 <= inside.y0:
         inside = inside._replace(y1=inside.y0 + 1)
+    return inside, ix0, iy0, ix1, iy1
+
+
+def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float,
+                 out_w: int, out_h: int, converted: ConvertedWindow | None = None) -> np.ndarray:
+    """The ``width`` x ``height`` region centred on (``cx``, ``cy``) (frame pixels, may reach
+    past the frame), resampled to ``out_w`` x ``out_h``: uint8, (out_h, out_w, 3) BGR, or
+    (out_h, out_w) grey for a grey frame (its three BGR channels would be equal). Work and
+    memory are bounded by the patch and a few frames' worth of pixels. Pixels inside
+    ``converted`` are cut from it rather than converted again (the same values)."""
+    if width > FAR * frame.width or height > FAR * frame.height:
+        return _bounded_patch(frame, cx, cy, width, height, out_w, out_h)
+    x0, y0 = cx - width / 2, cy - height / 2
+    inside, ix0, iy0, ix1, iy1 = _region_window(frame, cx, cy, width, height)
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
     # downscale, so an area resample still averages 2x2 or more), so a big target costs about
     # its patch, not its area.
     k = _subsampling(width / out_w, height / out_h, inside)
-    pixels = _sampled(frame, inside, k)
+    pixels = (converted.sampled(inside, k) if converted is not None and converted.covers(inside)
+              else _sampled(frame, inside, k))
     pad = (max(inside.y0 - iy0, 0), max(iy1 - inside.y1, 0),
            max(inside.x0 - ix0, 0), max(ix1 - inside.x1, 0))
     if any(pad):

@@ -17,7 +17,7 @@ import numpy as np
 
 from vtrack.features.dcf import CorrelationFilter, gaussian_label_1d, hann
 from vtrack.features.fhog import fhog
-from vtrack.features.patch import region_patch
+from vtrack.features.patch import ConvertedWindow, region_patch
 from vtrack.frame import Frame
 
 #: DSST's label width: sqrt(n) / 4 samples.
@@ -45,9 +45,12 @@ class ScaleFilter:
         """(scales, features) samples of the target centred on (cx, cy) at ``width`` x
         ``height`` times each scale factor. The samples are laid side by side and described by
         one fHOG call (each is a whole number of cells wide, so no cell straddles two)."""
+        # the largest sample's pixels are converted once; every sample is cut from them
+        largest = float(self.factors.max())
+        converted = ConvertedWindow.around(frame, cx, cy, width * largest, height * largest)
         strip = np.concatenate(
-            [region_patch(frame, cx, cy, width * f, height * f, self.model_w, self.model_h)
-             for f in self.factors], axis=1)
+            [region_patch(frame, cx, cy, width * f, height * f, self.model_w, self.model_h,
+                          converted) for f in self.factors], axis=1)
         hog = fhog(strip, self.cell)
         rows, cols = self.model_h // self.cell, self.model_w // self.cell
         n = len(self.factors)

@@ -51,8 +51,8 @@ LABEL_SIGMA_FACTOR = 1 / 16
 
 @dataclass
 class Region:
-    """One search region of a frame and its patch: centre (frame pixels), size in frame pixels,
-    and the frame -> working pixels factor."""
+    """One search region of a frame: centre (frame pixels), size in frame pixels, the frame ->
+    working pixels factor, its patch and the spectrum of its filter features."""
 
     cx: float
     cy: float
@@ -60,7 +60,7 @@ class Region:
     height: float
     factor: float
     patch: np.ndarray
-    features: np.ndarray
+    spectrum: np.ndarray
 
     def window(self, frame: Frame) -> Window | None:
         return Box.from_center(self.cx, self.cy, self.width, self.height).window(
@@ -127,14 +127,15 @@ class RobustTarget:
         patch = region_patch(frame, cx, cy, width, height, self.cols * self.cell,
                              self.rows * self.cell)
         factor = self.cols * self.cell / width
-        return Region(cx, cy, width, height, factor, patch, self.features(patch))
+        return Region(cx, cy, width, height, factor, patch,
+                      self.translation.spectrum(self.features(patch)))
 
     def learn(self, frame: Frame, box: Box, rate: float, first: bool = False) -> None:
         """Fold the region around ``box`` into the filter (learning rate ``rate``), the colour
         histograms and the scale filter (their own rates): Staple's running averages;
         ``first``: replace."""
         region = self.region(frame, box.cx, box.cy)
-        self.translation.learn(region.features, 1.0 if first else rate)
+        self.translation.learn_spectrum(region.spectrum, 1.0 if first else rate)
         if self.colour is not None:
             w, h = box.w * region.factor, box.h * region.factor
             x = region.patch.shape[1] / 2 - w / 2

@@ -115,7 +115,7 @@ class RobustSearch(Stage):
                    likelihood: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """The filter's response on the region (centred: no displacement at the middle cell)
         and its merge with the colour response on the same cells."""
-        response = np.fft.fftshift(target.translation.respond(region.features))
+        response = np.fft.fftshift(target.translation.respond_spectrum(region.spectrum))
         if likelihood is None or self.merge == 0.0:
             return response, response
         w, h = target.size
