@@ -4,6 +4,9 @@ what its paper promises, on generated images."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import cv2
 import numpy as np
 import pytest
@@ -192,3 +195,15 @@ def test_patches_cut_from_one_converted_window_are_the_frames_own(cx, cy, size) 
         alone = region_patch(frame, cx, cy, size * 1.4 * f, size * f, 13, 9)
         cut = region_patch(frame, cx, cy, size * 1.4 * f, size * f, 13, 9, converted)
         assert np.array_equal(alone, cut)
+
+
+def test_fhog_is_the_same_on_a_process_first_call() -> None:
+    """The same patch gives the same features on the first call of a fresh process as later
+    (``cv2.magnitude`` did not: its first call rounded differently, and runs of one clip
+    differed)."""
+    code = ("import numpy as np, cv2; from vtrack.features.fhog import fhog; "
+            "p = cv2.GaussianBlur(np.random.default_rng(0).integers(0, 255, (64, 48, 3), "
+            "np.uint8), (5, 5), 2); print(np.array_equal(fhog(p), fhog(p)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "True"

@@ -33,20 +33,18 @@ def _channel_gradients(channel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _gradients(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gradient magnitude and angle (0..2*pi) of the strongest channel at every pixel (the
-    first channel on a tie)."""
-    if patch.ndim == 2:
-        gx, gy = _channel_gradients(patch)
-        return cv2.cartToPolar(gx, gy)
-    best_x, best_y = _channel_gradients(patch[..., 0])
-    best_mag = cv2.magnitude(best_x, best_y)
-    for c in (1, 2):
+    first channel on a tie). NumPy's square root, not ``cv2.magnitude``, whose first call in
+    a process rounds differently from the later ones."""
+    best_x, best_y = _channel_gradients(patch if patch.ndim == 2 else patch[..., 0])
+    best = best_x * best_x + best_y * best_y
+    for c in range(1, 1 if patch.ndim == 2 else patch.shape[2]):
         gx, gy = _channel_gradients(patch[..., c])
-        mag = cv2.magnitude(gx, gy)
-        stronger = mag > best_mag
+        energy = gx * gx + gy * gy
+        stronger = energy > best
         np.copyto(best_x, gx, where=stronger)
         np.copyto(best_y, gy, where=stronger)
-        np.maximum(best_mag, mag, out=best_mag)
-    return best_mag, cv2.phase(best_x, best_y)
+        np.maximum(best, energy, out=best)
+    return np.sqrt(best), cv2.phase(best_x, best_y)
 
 
 @lru_cache(maxsize=32)
