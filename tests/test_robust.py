@@ -46,13 +46,7 @@ def overlap(scene: Scene, results: list[FrameResult]) -> float:
     return mean_overlap(overlaps)
 
 
-@pytest.mark.parametrize("scenario", [
-    "smooth", "lighting", "distractor", "scale",
-    # issue 20's correlation filter sits on the occluder's edge for part of the cover (mean
-    # IoU 0.45-0.75 over seeds): a known gap, kept failing on purpose until it is closed
-    pytest.param("occlusion", marks=pytest.mark.xfail(
-        strict=True, reason="robust rebuilt on a correlation filter: below 0.7 behind the "
-                            "occluder (issue 20, open)"))])
+@pytest.mark.parametrize("scenario", ["smooth", "lighting", "distractor", "scale", "occlusion"])
 def test_robust_holds_on_generated_scenes(scene_factory, scenario: str) -> None:
     """Mean IoU >= 0.7 over two seeds on each kind of scene (the issue's bar)."""
     values = [overlap(scene, track(scene))
