@@ -206,6 +206,26 @@ def test_udp_stream_whose_sender_is_killed_ends_partial_with_whole_outputs(
     assert [json.loads(line)["frame"] for line in lines.read_text().splitlines()] == numbers
 
 
+def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) -> None:
+    """Sent in real time to a receiver already listening (``--no-live``: every frame tracked),
+    a UDP stream gives every frame, the ones the decoder still held when the stream went quiet
+    included; the run then ends partial, saying the stream stopped."""
+    clip, box = _live_clip(tmp_path, frames=45)
+    port = _free_port(socket.SOCK_DGRAM)
+    receiver = _receiver([f"udp://127.0.0.1:{port}", "--no-live", "-c", "s2", "--init", box,
+                          "--timeout", "1", "--no-video", "-o", str(tmp_path / "out")])
+    try:
+        _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)
+        subprocess.run([*SENDER, str(clip), f"udp://127.0.0.1:{port}"], check=True, timeout=60)
+        _, stderr = receiver.communicate(timeout=60)
+    finally:
+        if receiver.poll() is None:
+            receiver.kill()
+            receiver.wait()
+    assert receiver.returncode == 1 and b"the stream stopped at frame 45" in stderr, stderr
+    assert [int(r["frame"]) for r in _rows(tmp_path / "out" / "track.csv")] == list(range(45))
+
+
 @pytest.mark.parametrize("sender_kind", ["pyav", "ffmpeg"])
 def test_rtsp_pushed_to_vtrack_listening_gives_every_frame(tmp_path: Path,
                                                              sender_kind: str) -> None:

@@ -279,14 +279,20 @@ class VideoSource(Source):
 
     def _decode(self) -> Iterator[av.VideoFrame]:
         """Decoded frames in order, dropping packets the decoder refuses (damage in the middle
-        of the file: ffmpeg skips them the same way). A demuxer error still ends the stream."""
-        for packet in self._container.demux(self._stream):
-            try:
-                frames = packet.decode()
-            except av.error.InvalidDataError:
-                self._dropped += 1
-                continue
-            yield from frames
+        of the file: ffmpeg skips them the same way). A demuxer error still ends the stream;
+        a network input that went quiet (``ExitError``, the timeout) first hands over the
+        frames the decoder still holds (one per frame thread)."""
+        try:
+            for packet in self._container.demux(self._stream):
+                try:
+                    frames = packet.decode()
+                except av.error.InvalidDataError:
+                    self._dropped += 1
+                    continue
+                yield from frames
+        except av.error.ExitError:
+            yield from self._stream.decode(None)
+            raise
 
     def _promised_end_s(self) -> float | None:
         """Where the container says the video stream ends (seconds, stream clock), if it says.
