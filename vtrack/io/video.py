@@ -291,7 +291,9 @@ class VideoSource(Source):
                     continue
                 yield from frames
         except av.error.ExitError:
-            yield from self._stream.decode(None)
+            for frame in self._stream.decode(None):
+                frame.time_base = self._stream.time_base  # a flushed frame comes without one
+                yield frame
             raise
 
     def _promised_end_s(self) -> float | None:
