@@ -43,7 +43,7 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 - memory: a few frame-sized buffers (at most ~32 N bytes beyond the decoded frames and the
   writers' queues), plus the particle filter's histograms (at most 4 x 1024 particles x 256
   bins x 8 bytes = 8 MiB) and the `robust` tracker's search patch, resampled to about
-  `robust_model.working_area`^2 (<= 400^2) working pixels at ~40 bytes each, whatever the frame
+  `robust_model.working_area`^2 (<= 250^2) working pixels at ~40 bytes each, whatever the frame
   size (while lost, 8 more such patches a frame). tests/test_fuzz.py checks these bounds for
   every stage's parameters.
 """

@@ -157,10 +157,10 @@ class RobustModel(Stage):
                "features for the correlation filter and the colour likelihood (Staple)")
     params = (
         Param("working_area", int, 150, "side of the square whose area the search patch is "
-              "resampled to, in pixels (Staple: 150)", min=32, max=400),
+              "resampled to, in pixels (Staple: 150; ECO: up to 250)", min=32, max=250),
         Param("padding", float, 1.0, "search region = box + padding x the box's mean side "
               "(Staple: 1)", min=0.2, max=4.0),
-        Param("cell", int, 4, "fHOG cell size in working pixels (KCF/Staple: 4)", min=2, max=8),
+        Param("cell", int, 4, "fHOG cell size in working pixels (KCF/Staple: 4)", min=3, max=8),
         Param("grey_channel", bool, True, "add each cell's mean grey level to fHOG's 31 "
               "channels (Staple)"),
         Param("lam", float, 1e-3, "correlation filter regulariser lambda (DSST eq. 6)",

@@ -44,13 +44,13 @@ class RobustSearch(Stage):
         Param("merge", float, 0.3, "weight of the colour response against the filter's "
               "(Staple: 0.3; 0: filter only)", min=0.0, max=1.0),
         Param("scale", bool, True, "estimate the size (DSST's scale filter)"),
-        Param("scales", int, 33, "DSST scale samples", min=3, max=65),
+        Param("scales", int, 33, "DSST scale samples", min=3, max=49),
         Param("scale_step", float, 1.02, "ratio between neighbouring scale samples (DSST)",
               min=1.001, max=1.5),
         Param("scale_rate", float, 0.025, "scale filter's learning rate (DSST: 0.025)",
               min=0.0, max=1.0),
         Param("scale_area", int, 512, "pixels of a scale sample at most (DSST: 512)",
-              min=64, max=4096),
+              min=64, max=2048),
         Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side",
               min=1.0, max=1000.0),
     )
