@@ -168,14 +168,19 @@ def scene_for(config: str) -> str:
     return "multi" if Pipeline(load_config(config).build()).multi_target else "smooth"
 
 
+def scene_and_box(config: str, width: int, height: int) -> tuple[str, str | None]:
+    """The scene a config is timed on and, for a single-target one, its first box (--init)."""
+    kind = scene_for(config)
+    return kind, first_box(kind, width, height) if kind == "smooth" else None
+
+
 def worst_table(frames: int, configs: list[str]) -> None:
     print(f"Per frame at {WIDTH}x{HEIGHT}, {frames} frames, whole `vtrack run --no-video` "
           "processes fed raw bgr24 on stdin; ratios against the config's default in this run.\n")
     print("| config | case | ms/frame | x default | peak MB | note |")
     print("|---|---|---:|---:|---:|---|")
     for config in configs:
-        kind = scene_for(config)
-        init = first_box(kind, WIDTH, HEIGHT) if kind == "smooth" else None
+        kind, init = scene_and_box(config, WIDTH, HEIGHT)
         base = run_case(config, [], init, kind, WIDTH, HEIGHT, frames)
         print(f"| {config} | default | {base.ms_per_frame:.2f} | 1.0 | {base.peak_mb:.0f} | "
               f"{base.error or ''} |", flush=True)
@@ -193,8 +198,7 @@ def memory_table(width: int, height: int, configs: list[str]) -> None:
     print("| config | 300 frames MB | 3,600 frames MB | growth MB |")
     print("|---|---:|---:|---:|")
     for config in configs:
-        kind = scene_for(config)
-        init = first_box(kind, width, height) if kind == "smooth" else None
+        kind, init = scene_and_box(config, width, height)
         short = run_case(config, [], init, kind, width, height, 300)
         long = run_case(config, [], init, kind, width, height, 3600)
         print(f"| {config} | {short.peak_mb:.0f} | {long.peak_mb:.0f} | "

@@ -37,7 +37,7 @@ class ConvertedWindow(NamedTuple):
         if isinstance(frame, GrayFrame) or width > FAR * frame.width \
                 or height > FAR * frame.height:
             return None
-        window = _region_window(frame, cx, cy, width, height)[0]
+        window = _overlap(frame, cx - width / 2, cy - height / 2, width, height)
         return cls(window, frame.bgr(window))
 
     def covers(self, window: Window) -> bool:
@@ -53,22 +53,6 @@ class ConvertedWindow(NamedTuple):
         return pixels if k == 1 else np.ascontiguousarray(pixels)
 
 
-def _region_window(frame: Frame, cx: float, cy: float, width: float,
-                   height: float) -> tuple[Window, int, int, int, int]:
-    """The frame's pixels a region covers (at least one), and the whole pixels the region
-    spans, ``ix0, iy0, ix1, iy1`` (which may reach past the frame)."""
-    x0, y0 = cx - width / 2, cy - height / 2
-    ix0, iy0 = math.floor(x0), math.floor(y0)
-    ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
-    inside = Window(min(max(ix0, 0), frame.width - 1), min(max(iy0, 0), frame.height - 1),
-                    max(min(ix1, frame.width), 1), max(min(iy1, frame.height), 1))
-    if inside.x1 <= inside.x0:
-        inside = inside._replace(x1=inside.x0 + 1)
-    if inside.y1 <= inside.y0:
-        inside = inside._replace(y1=inside.y0 + 1)
-    return inside, ix0, iy0, ix1, iy1
-
-
 def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float,
                  out_w: int, out_h: int, converted: ConvertedWindow | None = None) -> np.ndarray:
     """The ``width`` x ``height`` region centred on (``cx``, ``cy``) (frame pixels, may reach
@@ -79,7 +63,10 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     if width > FAR * frame.width or height > FAR * frame.height:
         return _bounded_patch(frame, cx, cy, width, height, out_w, out_h)
     x0, y0 = cx - width / 2, cy - height / 2
-    inside, ix0, iy0, ix1, iy1 = _region_window(frame, cx, cy, width, height)
+    # the whole pixels the region spans (past the frame too) and those of the frame it covers
+    ix0, iy0 = math.floor(x0), math.floor(y0)
+    ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
+    inside = _overlap(frame, x0, y0, width, height)
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
     # downscale, so an area resample still averages 2x2 or more), so a big target costs about
     # its patch, not its area.
