@@ -40,9 +40,11 @@ def _gradients(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for c in range(1, 1 if patch.ndim == 2 else patch.shape[2]):
         gx, gy = _channel_gradients(patch[..., c])
         energy = gx * gx + gy * gy
-        stronger = energy > best
-        np.copyto(best_x, gx, where=stronger)
-        np.copyto(best_y, gy, where=stronger)
+        # OpenCV's masked copy: NumPy's ``copyto(..., where=)`` on this unpredictable mask
+        # took ~10x longer than the whole rest of the gradient
+        stronger = cv2.compare(energy, best, cv2.CMP_GT)
+        cv2.copyTo(gx, stronger, best_x)
+        cv2.copyTo(gy, stronger, best_y)
         np.maximum(best, energy, out=best)
     return np.sqrt(best), cv2.phase(best_x, best_y)
 
