@@ -135,7 +135,8 @@ def test_scale_filter_recovers_a_size_change(ratio: float) -> None:
     """DSST: learnt on a target at one size, the filter names the ratio the target has grown
     by (within one scale step)."""
     image = texture(240, 320, seed=4)
-    scale = ScaleFilter(60, 40, scales=33, step=1.02, rate=0.025, model_area=512, cell=4)
+    scale = ScaleFilter(60, 40, scales=17, step=1.02, rate=0.025, model_area=512, cell=4,
+                        interp_scales=33)
     frame = BgrFrame(0, 0.0, image)
     scale.learn(scale.samples(frame, 160, 120, 60, 40), first=True)
     # the same scene seen 1/ratio as large around the centre: the target grew by `ratio`

@@ -116,6 +116,12 @@ class RobustFailure(Stage):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
         target.hidden_frames += 1
+        # The size is not measured on a hidden target either: its scale samples show whatever
+        # hides it (an occluder grew the box by half in a few frames).
+        target.scale = target.previous_scale
+        if ctx.measurement is not None:
+            ctx.measurement = ctx.box = Box.from_center(ctx.measurement.cx, ctx.measurement.cy,
+                                                        *target.size)
         if self.coast:
             ctx.measurement = None  # S0 item 7: coast on the prediction
             if ctx.prediction is not None:

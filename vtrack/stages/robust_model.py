@@ -90,6 +90,9 @@ class RobustTarget:
     #: samples are what learning would take again.
     scale_filter: ScaleFilter | None = None
     scale_samples: tuple[Box, np.ndarray] | None = None
+    #: The size multiplier before this frame's scale estimate (``robust_failure`` keeps it when
+    #: the frame's response says the target is hidden).
+    previous_scale: float = 1.0
     #: This frame's regions: the first is centred on the search centre; while lost,
     #: ``robust_model`` adds more around it (re-detection).
     regions: list[Region] = field(default_factory=list)

@@ -8,7 +8,7 @@ Second link of the ``robust`` chain. On each region ``robust_model`` cut:
    (Staple section 4, its integral image);
 3. the merge ``(1 - merge) * filter + merge * colour`` (Staple eq. 21, merge factor 0.3), whose
    peak (refined to a fraction of a cell by a parabola) is the target's new centre;
-4. the target's size from DSST's scale filter at that centre (:mod:`vtrack.features.scale`).
+4. the target's size from fDSST's scale filter at that centre (:mod:`vtrack.features.scale`).
 
 The confidence of the filter's own response, LMCF's average peak-to-correlation energy and its
 peak value (Wang et al., CVPR 2017, eq. 7), goes to ``ctx.robust`` for ``robust_failure``;
@@ -35,17 +35,20 @@ from vtrack.stages.robust_model import Region, RobustTarget
 
 @register
 class RobustSearch(Stage):
-    """Correlation peak merged with the colour response (Staple); DSST scale."""
+    """Correlation peak merged with the colour response (Staple); fDSST scale."""
 
     name = "robust_search"
     summary = ("robust: peak of the fHOG correlation filter's response merged with the colour "
-               "response (Staple), then the size from DSST's scale filter")
+               "response (Staple), then the size from fDSST's scale filter")
     params = (
         Param("merge", float, 0.3, "weight of the colour response against the filter's "
               "(Staple: 0.3; 0: filter only)", min=0.0, max=1.0),
-        Param("scale", bool, True, "estimate the size (DSST's scale filter)"),
-        Param("scales", int, 33, "DSST scale samples", min=3, max=49),
-        Param("scale_step", float, 1.02, "ratio between neighbouring scale samples (DSST)",
+        Param("scale", bool, True, "estimate the size (fDSST's scale filter)"),
+        Param("scales", int, 17, "fDSST scale samples (17)", min=3, max=49),
+        Param("interp_scales", int, 33, "scales the response is interpolated to (fDSST: 33; "
+              "equal to scales: no interpolation, DSST)", min=3, max=99),
+        Param("scale_step", float, 1.02, "ratio between neighbouring (interpolated) scales "
+              "(DSST/fDSST: 1.02; the samples are interp_scales / scales steps apart)",
               min=1.001, max=1.5),
         Param("scale_rate", float, 0.025, "scale filter's learning rate (DSST: 0.025)",
               min=0.0, max=1.0),
@@ -60,6 +63,7 @@ class RobustSearch(Stage):
     merge: float
     scale: bool
     scales: int
+    interp_scales: int
     scale_step: float
     scale_rate: float
     scale_area: int
@@ -71,7 +75,8 @@ class RobustSearch(Stage):
         ctx.score = 1.0  # the first frame's box is the target
         if self.scale:
             target.scale_filter = ScaleFilter(ctx.box.w, ctx.box.h, self.scales, self.scale_step,
-                                              self.scale_rate, self.scale_area, target.cell)
+                                              self.scale_rate, self.scale_area, target.cell,
+                                              max(self.interp_scales, self.scales))
             target.scale_filter.learn(target.scale_filter.samples(
                 ctx.frame, ctx.box.cx, ctx.box.cy, ctx.box.w, ctx.box.h), first=True)
         self._min_scale = self.min_side / min(ctx.box.w, ctx.box.h)
@@ -100,6 +105,7 @@ class RobustSearch(Stage):
         cx = region.cx + (col - target.cols // 2) * step
         cy = region.cy + (row - target.rows // 2) * step
         target.scale_samples = None
+        target.previous_scale = target.scale
         if self.scale and target.scale_filter is not None:
             w, h = target.size
             samples = target.scale_filter.samples(ctx.frame, cx, cy, w, h)
