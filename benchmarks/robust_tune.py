@@ -2,6 +2,7 @@
 
     python benchmarks/robust_tune.py                 # per-sequence table and the mean
     python benchmarks/robust_tune.py --ablate --split check   # each part off, check sequences
+    python benchmarks/robust_tune.py --starts 5      # five starts a sequence (steadier means)
     python benchmarks/robust_tune.py --ablate --ablate-scenes # ... all 28, with the hard scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
@@ -23,6 +24,7 @@ data folder's split): decide on the first, confirm on the second, never on one s
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import statistics
 import sys
@@ -43,6 +45,7 @@ from common import (
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
 from vtrack.evaluate.metrics import auc, frame_scores, mean_overlap, precision_at
+from vtrack.geometry import Box
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackState
@@ -100,6 +103,32 @@ def evaluate(clip: Clip, overrides: list[str], name: str = "robust") -> Result:
     work = sum(pipeline.stage_microseconds_per_frame().values())
     return Result(auc(overlaps), precision_at(errors, 20), mean_overlap(overlaps),
                   tracking, false_tracking, misses, flagged, work)
+
+
+#: OTB's spatial robustness evaluation: the first box moved by this share of its size.
+START_SHIFT = 0.1
+
+
+def start_boxes(box: Box | None, starts: int) -> list[Box]:
+    """The given first box, then (``starts`` 5) the box moved by 10% of its size along each
+    diagonal: one start decides little, as rounding alone moves single sequences."""
+    assert box is not None
+    shifts = ((1, 1), (1, -1), (-1, 1), (-1, -1))[: starts - 1]
+    return [box] + [Box(box.x + sx * START_SHIFT * box.w, box.y + sy * START_SHIFT * box.h,
+                        box.w, box.h) for sx, sy in shifts]
+
+
+def combined(results: list[Result]) -> Result:
+    """Several starts' results as one: the scores' means, the frame counts' sums."""
+    def mean(key: str) -> float:
+        return statistics.mean(getattr(r, key) for r in results)
+
+    def total(key: str) -> int:
+        return sum(getattr(r, key) for r in results)
+
+    return Result(mean("auc"), mean("precision"), mean("miou"), total("tracking"),
+                  total("false_tracking"), total("misses"), total("flagged"),
+                  mean("us_per_frame"))
 
 
 def split_means(values: list[float], names: list[str]) -> tuple[str, str]:
@@ -290,6 +319,10 @@ def main() -> None:
     parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
     parser.add_argument("--speed", action="store_true",
                         help="tracking work per 1080p frame, robust against s0")
+    parser.add_argument("--starts", type=int, choices=(1, 5), default=1,
+                        help="runs per sequence: the given first box only, or also the box "
+                             "moved 10%% of its size along each diagonal (OTB's spatial "
+                             "robustness); the scores are the runs' means")
     parser.add_argument("--config", default="robust",
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
@@ -320,7 +353,9 @@ def main() -> None:
     for seq in sequences:
         clip = load_clip(seq)
         try:
-            result = evaluate(clip, args.overrides, args.config)
+            result = combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
+                                        args.overrides, args.config)
+                               for box in start_boxes(clip.boxes[0], args.starts)])
         except VtrackError as exc:  # e.g. a hue tracker refusing a grey target: scores 0
             print(f"{seq.name}: {exc}", file=sys.stderr)
             present = sum(box is not None for box in clip.boxes)

@@ -44,8 +44,8 @@ def run_robust(name: str, seed: int, frames: int = FRAMES, size: tuple[int, int]
 
 #: Scenes the correlation-filter rebuild of issue 20 does not hold yet (kept failing on purpose,
 #: strict, until it does): a target moving more than its own size a frame, the slab on the
-#: tests' seeds (0.67 on the slow slab; its unseen seeds 100-102 hold, 0.82), and a target
-#: leaving the view and coming back elsewhere.
+#: tests' seeds (the slow slab holds), and a target leaving the view and coming back elsewhere
+#: (seed 2 holds; 0 and 1 re-enter outside the regions searched).
 OPEN_GAP = pytest.mark.xfail(strict=True, reason="robust rebuilt on a correlation filter: "
                                                  "known gap of issue 20, open")
 HARD = ["clip_ramp", pytest.param("fast", marks=OPEN_GAP), "grow", "shrink", "crossing",
@@ -78,15 +78,14 @@ def slab_runs(overrides: tuple[str, ...] = ()):
             for seed in SLOW_SLAB["seeds"]]
 
 
-@OPEN_GAP
 def test_robust_follows_the_slow_slab():
     means = [mean_overlap(frame_scores(boxes, scene.boxes)[0])
              for scene, boxes, _ in slab_runs()]
     assert np.mean(means) >= 0.7, [round(m, 3) for m in means]
 
 
-@OPEN_GAP
-@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("seed", [pytest.param(0, marks=OPEN_GAP), pytest.param(1, marks=OPEN_GAP),
+                                  2])
 def test_robust_is_lost_while_out_and_back_within_10_frames(seed):
     scene, boxes, states = run_robust("exit_return", seed)
     gone, back_in = scene.events["leave"]
