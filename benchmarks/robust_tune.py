@@ -66,6 +66,8 @@ ABLATIONS = (
      ["robust_failure.hidden_psr=0"]),
     ("-doubtful", "LMCF's doubtful label (a weak sharp peak called occluded)",
      ["robust_failure.hidden_peak=0"]),
+    ("-apce", "LMCF's APCE test to take a hidden target back (PSR and peak only)",
+     ["robust_failure.retake_apce=0"]),
     ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),
     ("-rewind", "coasting from the last confident frame", ["robust_motion.rewind_frames=0"]),
