@@ -59,7 +59,7 @@ ABLATIONS = (
      ["robust_model.colour=false", "robust_search.merge=0"]),
     ("-grey", "the cells' grey-level channel (fHOG's 31 only)",
      ["robust_model.grey_channel=false"]),
-    ("-scale", "DSST's scale filter (the first size kept)", ["robust_search.scale=false"]),
+    ("-scale", "fDSST's scale filter (the first size kept)", ["robust_search.scale=false"]),
     ("-motion", "the second search region at the Kalman prediction",
      ["robust_model.motion_region=false"]),
     ("-psr", "MOSSE's PSR test (never occluded by a flat response)",
