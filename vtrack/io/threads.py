@@ -18,6 +18,10 @@ T = TypeVar("T")
 _END = object()
 #: How often a producer blocked on a full queue checks whether it was asked to stop (seconds).
 _POLL_S = 0.1
+#: A live consumer may fall this far behind the newest item before older items are passed
+#: over: a decoder hands frames over in bursts, and a consumer faster than the source on
+#: average works through a short burst in time (issue 23's latency aim: p99 under 50 ms).
+LATENCY_BUDGET_S = 0.05
 
 
 class _Failure:
@@ -100,11 +104,12 @@ class KeepingUp(Generic[T]):
     handing over what the consumer can still keep up with and passing over the rest.
 
     Items wait in a queue of at most ``depth``. When the consumer asks for the next one, it
-    gets the oldest waiting item if it can work through everything waiting before the next
-    item is due (``period_s`` from now, at its measured time per item); otherwise the older
-    items are passed over until it can (the newest always stays). So a burst of items that
-    arrived together (several small frames in one network packet) is worked through, while a
-    consumer slower than the source always gets the newest and never falls behind.
+    gets the oldest waiting item if it can work through everything waiting within
+    ``LATENCY_BUDGET_S`` (or the next item's period, if longer; at its measured time per item);
+    otherwise the older items are passed over until it can (the newest always stays). So a
+    burst of items that arrived together (several frames from a frame-threaded decoder, or
+    from one network packet) is worked through, while a consumer slower than the source
+    always gets the newest and never falls further behind than the budget.
 
     ``passed`` counts the items passed over; ``received`` is when the item last handed over
     was produced (``time.perf_counter()``). Memory stays flat whatever the consumer's pace. If
@@ -154,7 +159,8 @@ class KeepingUp(Generic[T]):
             self._ready.wait(_POLL_S)
         if not self._waiting:
             return None
-        keep = max(1, int(self._period_s / self._busy_s)) if self._busy_s > 0 else self._depth
+        budget = max(self._period_s, LATENCY_BUDGET_S)
+        keep = max(1, int(budget / self._busy_s)) if self._busy_s > 0 else self._depth
         while len(self._waiting) > keep:
             self._waiting.popleft()
             self.passed += 1
