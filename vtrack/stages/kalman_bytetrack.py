@@ -44,7 +44,6 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_model
 from vtrack.geometry import Box
@@ -88,6 +87,10 @@ def assign(cost: np.ndarray) -> list[tuple[int, int]]:
     ``_FORBIDDEN``)."""
     if cost.size == 0:
         return []
+    # imported here: SciPy's optimize costs ~0.2 s, which every other command (`vtrack stages`
+    # registers this stage) would pay at start-up
+    from scipy.optimize import linear_sum_assignment
+
     rows, cols = linear_sum_assignment(cost)
     return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] < _FORBIDDEN]
 
