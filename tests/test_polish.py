@@ -237,6 +237,41 @@ def test_batch_start_is_recorded_per_run(clip_factory, tmp_path: Path) -> None:
         assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(range(8, 20))
 
 
+def test_frames_also_takes_a_duration_like_ffmpeg_t(clip_factory, tmp_path: Path) -> None:
+    """``--frames 0.5s`` tracks the first 0.5 s from ``--start`` (15 frames at 30 fps): the
+    same track as ``--frames 15``; run.json keeps the duration as given; a batch takes it too;
+    a duration that is not one is a one-line error and nothing is written."""
+    import csv
+    import json
+    import shutil
+
+    clip = clip_factory("smooth", frames=40)  # 30 fps
+    by_count, by_time = tmp_path / "count", tmp_path / "time"
+    for out, frames in ((by_count, "15"), (by_time, "0.5s")):
+        done = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--start", "10",
+                      "--frames", frames, "-q", "--no-video", "-o", str(out))
+        assert done.returncode == 0, done.stderr
+    assert (by_time / "track.csv").read_bytes() == (by_count / "track.csv").read_bytes()
+    with (by_time / "track.csv").open(newline="") as handle:
+        assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(range(10, 25))
+    record = json.loads((by_time / "run.json").read_text())
+    assert (record["request"]["max_frames"], record["request"]["max_s"]) == (None, 0.5)
+    for bad in ("0", "0s", "-2", "2x", "nans", "1e99s"):
+        line = one_error_line(vtrack("run", str(clip.path), "--gt", str(clip.gt), "--frames",
+                                     bad, "-o", str(tmp_path / "bad")))
+        assert "--frames" in line and "10s" in line, line
+    assert not (tmp_path / "bad").exists()
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "walk.mp4")
+    shutil.copy(clip.gt, folder / "walk.gt.txt")
+    done = vtrack("batch", str(folder), "--frames", "1s", "--no-video", "--jobs", "1", "-q",
+                  "--out", str(tmp_path / "res"))
+    assert done.returncode == 0, done.stderr
+    with (tmp_path / "res" / "walk" / DEFAULT_CONFIG / "track.csv").open(newline="") as handle:
+        assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(range(30))
+
+
 def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) -> None:
     """``--start 0.5s`` starts at the first frame at or after 0.5 s (frame 15 at 30 fps): the
     same track as ``--start 15``; run.json keeps the time as given and the frame it found;

@@ -46,7 +46,8 @@ def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
         with open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
                          live=request.live) as source:
-            yield from _run(tracker, islice(source, request.max_frames), request.init_box)
+            yield from _run(tracker, islice(source, request.frame_limit(source.info.fps)),
+                            request.init_box)
         return
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)

@@ -35,7 +35,9 @@ class RunRequest:
     frame number; the frames before it are decoded and skipped, as ``ffmpeg -ss`` skips time);
     ``start_s``, when set, gives it as a time instead (``--start 2.5s``): the first frame at or
     after that many seconds at the input's frame rate (:meth:`start_frame`);
-    ``max_frames`` stops after that many tracked frames.
+    ``max_frames`` stops after that many tracked frames; ``max_s``, when set, gives that as a
+    duration instead (``--frames 10s``): the first ``ceil(max_s * fps)`` frames
+    (:meth:`frame_limit`).
     """
 
     input: str
@@ -54,6 +56,7 @@ class RunRequest:
     max_frames: int | None = None
     start: int = 0
     start_s: float | None = None
+    max_s: float | None = None
     #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
     #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
     init_from: str | None = None
@@ -86,6 +89,7 @@ class RunRequest:
             "max_frames": self.max_frames,
             "start": self.start,
             "start_s": self.start_s,
+            "max_s": self.max_s,
             "init_from": self.init_from,
             "stream": self.stream,
             "ffmpeg": {**asdict(self.ffmpeg), "options": dict(self.ffmpeg.options)},
@@ -113,6 +117,7 @@ class RunRequest:
             max_frames=None if data["max_frames"] is None else int(data["max_frames"]),
             start=int(data.get("start", 0)),
             start_s=None if data.get("start_s") is None else float(data["start_s"]),
+            max_s=None if data.get("max_s") is None else float(data["max_s"]),
             init_from=data.get("init_from"),
             stream=data.get("stream"),
             ffmpeg=_ffmpeg_input(data.get("ffmpeg")),
@@ -134,6 +139,17 @@ class RunRequest:
             raise InputError(f"--start {self.start_text}: {self.input} has no frame rate to "
                              "find that time by; give a frame number (--start N)")
         return max(0, math.ceil(self.start_s * fps - 1e-6))
+
+    def frame_limit(self, fps: float | None) -> int | None:
+        """How many frames to track at most (None: all): ``max_frames``, or for ``max_s`` the
+        frames of that many seconds at ``fps`` frames a second, at least one (InputError when
+        the input has no frame rate)."""
+        if self.max_s is None:
+            return self.max_frames
+        if fps is None or not math.isfinite(fps) or fps <= 0:
+            raise InputError(f"--frames {self.max_s:g}s: {self.input} has no frame rate to "
+                             "count that time by; give a number of frames (--frames N)")
+        return max(1, math.ceil(self.max_s * fps - 1e-6))
 
     def file_identities(self) -> dict[str, Any]:
         """The identity (:func:`~vtrack.io.identity.file_identity`) of the input and the ground

@@ -347,6 +347,8 @@ class _Resolved:
     identity: dict[str, Any] = field(default_factory=dict)
     #: The first frame tracked (``--start``, a time found at the input's frame rate).
     start: int = 0
+    #: How many frames to track at most (``--frames``, a duration counted at the frame rate).
+    max_frames: int | None = None
 
 
 @dataclass
@@ -393,8 +395,10 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
-        # a start time (--start 2.5s) needs the input's frame rate: that input opens first
-        source: Source | None = _open(request) if request.start_s is not None else None
+        # a time (--start 2.5s, --frames 10s) needs the input's frame rate: that input opens
+        # first
+        timed = request.start_s is not None or request.max_s is not None
+        source: Source | None = _open(request) if timed else None
         try:
             resolved = _resolve(request, None if source is None else source.info.fps)
             if source is None:
@@ -520,7 +524,7 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
-                     request.file_identities(), start)
+                     request.file_identities(), start, request.frame_limit(fps))
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -538,7 +542,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
     try:
-        frames_in = _limited(_from(iter(source), resolved.start), request.max_frames)
+        frames_in = _limited(_from(iter(source), resolved.start), resolved.max_frames)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)
@@ -681,7 +685,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
-        stopped = request.max_frames is not None and span >= request.max_frames  # --frames N
+        stopped = resolved.max_frames is not None and span >= resolved.max_frames  # --frames
         if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (
@@ -696,7 +700,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
         past = [f for f in resolved.mot_gt if f >= start + frames]
-        if past and status == STATUS_COMPLETE and request.max_frames is None:
+        if past and status == STATUS_COMPLETE and resolved.max_frames is None:
             summary.warnings.append(
                 f"{request.gt_path}: ground truth has boxes in "
                 f"{plural(len(past), 'frame')} past the input's {plural(frames, 'frame')} "

@@ -25,6 +25,23 @@ def gt_origin_option() -> Callable[[Any], Any]:
              "folder (one holding img/), else 0 (name.gt.txt beside a video).")
 
 
+def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | None:
+    """``"75"`` -> ``(75, None)``, ``"2.5s"`` -> ``(None, 2.5)``: a whole number of frames of at
+    least ``least``, or a time in seconds (at least 0, or above 0 when ``least`` is 1; at most
+    ``MAX_SECONDS``); None for anything else."""
+    try:
+        if text.lower().endswith("s"):
+            seconds = float(text[:-1])
+            if math.isfinite(seconds) and (seconds > 0 if least else seconds >= 0) \
+                    and seconds <= MAX_SECONDS:
+                return None, seconds
+        elif text.isdigit() and int(text) >= least:
+            return int(text), None
+    except ValueError:
+        pass
+    return None
+
+
 class StartPoint(click.ParamType):
     """``--start``: a 0-based frame number (``75``) or a time in seconds (``2.5s``, as
     ``ffmpeg -ss``). Converts to ``(frame, seconds)``: ``(75, None)`` or ``(0, 2.5)``."""
@@ -35,19 +52,31 @@ class StartPoint(click.ParamType):
                 ctx: click.Context | None) -> tuple[int, float | None]:
         if isinstance(value, tuple):
             return value
-        text = str(value).strip()
-        try:
-            if text.lower().endswith("s"):
-                seconds = float(text[:-1])
-                if math.isfinite(seconds) and 0 <= seconds <= MAX_START_S:
-                    return 0, seconds
-            elif text.isdigit():
-                return int(text), None
-        except ValueError:
-            pass
-        self.fail(f"{value!r}: expected a frame number (75) or a time in seconds (2.5s, at "
-                  f"most {MAX_START_S:g}s)", param, ctx)
+        parsed = _frames_or_seconds(str(value).strip(), least=0)
+        if parsed is None:
+            self.fail(f"{value!r}: expected a frame number (75) or a time in seconds (2.5s, at "
+                      f"most {MAX_SECONDS:g}s)", param, ctx)
+        frame, seconds = parsed
+        return frame or 0, seconds
 
 
-#: The latest start time ``--start Ts`` accepts (a year), so a frame number fits any rate.
-MAX_START_S = 366 * 24 * 3600.0
+class FrameSpan(click.ParamType):
+    """``--frames``: how many frames to track (``300``) or for how long (``10s``, as ``ffmpeg
+    -t``). Converts to ``(count, seconds)``: ``(300, None)`` or ``(None, 10.0)``."""
+
+    name = "frames"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> tuple[int | None, float | None]:
+        if isinstance(value, tuple):
+            return value
+        parsed = _frames_or_seconds(str(value).strip(), least=1)
+        if parsed is None:
+            self.fail(f"{value!r}: expected a number of frames (300, at least 1) or a duration "
+                      f"in seconds (10s, above 0 and at most {MAX_SECONDS:g}s)", param, ctx)
+        return parsed
+
+
+#: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
+#: any rate.
+MAX_SECONDS = 366 * 24 * 3600.0

@@ -99,7 +99,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             worker_timeout: float, gt_origin: int | None,
             force: bool, overwrite: bool, overrides: tuple[str, ...], no_video: bool,
             preset: str, crf: int,
-            seed: int, start: tuple[int, float | None], max_frames: int | None,
+            seed: int, start: tuple[int, float | None],
+            max_frames: tuple[int | None, float | None] | None,
             stats_period: float,
             quiet: bool) -> None:
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
@@ -151,7 +152,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                               config=next(iter(configs.values())), video=not no_video,
                               preset=preset, crf=crf, seed=seed, start=start[0],
                               start_s=start[1],
-                              max_frames=max_frames)
+                              max_frames=None if max_frames is None else max_frames[0],
+                              max_s=None if max_frames is None else max_frames[1])
         batch = plan(inputs, configs, out_dir, settings,
                      threads=max(1, cpu_count() // workers), force=force,
                      overwrite=overwrite or force)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import StartPoint, gt_origin_option
+from vtrack.cli._options import FrameSpan, StartPoint, gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
@@ -94,8 +94,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame at "
               "or after it, at the input's frame rate). --init (default: the --gt box of that "
               "frame) is the target's box in it. Earlier frames are decoded and skipped.")
-@click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None,
-              help="Stop after this many frames.")
+@click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
+              help="Stop after N frames, or after T seconds of the input at its frame rate "
+                   "(10s, like ffmpeg -t: the first ceil(T x fps) frames from --start).")
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
@@ -111,7 +112,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
             input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
             live: bool | None, follow_s: float | None, video_out: str | None,
-            crf: int, seed: int, start: tuple[int, float | None], max_frames: int | None,
+            crf: int, seed: int, start: tuple[int, float | None],
+            max_frames: tuple[int | None, float | None] | None,
             stream: str | None,
             stats_period: float, quiet: bool) -> None:
     """Track a target through INPUT and write track.csv, annotated.mp4 and run.json.
@@ -149,7 +151,8 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         preset=preset,
         crf=crf,
         seed=seed,
-        max_frames=max_frames,
+        max_frames=None if max_frames is None else max_frames[0],
+        max_s=None if max_frames is None else max_frames[1],
         start=start[0],
         start_s=start[1],
         stream=stream,
@@ -159,7 +162,7 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
         live=live,
         video_out=video_out,
     )
-    progress = FrameProgress(quiet, max_frames, request.start_frame, stats_period)
+    progress = FrameProgress(quiet, request.max_frames, request.start_frame, stats_period)
     try:
         summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
                       overwrite=overwrite)
