@@ -40,6 +40,7 @@ OTHER: dict[str, Any] = {
     "max_frames": 5,
     "start": 3,
     "start_s": 0.5,
+    "max_s": 0.3,
     "init_from": "other.init.txt",
     "stream": "other.jsonl",
     "ffmpeg": FFmpegInput(format="mpegts", options=(("probesize", "32"),), timeout_s=2.0,
