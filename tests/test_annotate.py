@@ -247,7 +247,7 @@ def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, t
     clip = clip_factory("smooth", width=W, height=H, frames=16)
     out = tmp_path / "out"
     done = CliRunner().invoke(main, ["run", str(clip.path), "--gt", str(clip.gt), "-o", str(out),
-                                     "-c", "s1"])
+                                     "-c", "s1", "--set", "particle.draw_particles=true"])
     assert done.exit_code == 0, done.output
     with (out / "track.csv").open() as f:
         lost = [row["state"] == "lost" for row in csv.DictReader(f)]
@@ -257,7 +257,7 @@ def test_an_annotated_clip_shows_the_legend_and_the_frame_number(clip_factory, t
     font_scale = Annotator(W, H).font_scale
     number_rows = []
     for index in (2, 12):
-        # what s1 has drawn by then: its box, its particles (on by default), the ground truth,
+        # what s1 has drawn by then: its box, its particles (asked for), the ground truth,
         # and the lost caption once it has been lost
         drawn = ("box", "particles", "ground truth") + (
             ("lost (no box)",) if any(lost[:index + 1]) else ())

@@ -153,8 +153,9 @@ class ParticleFilter(Stage):
             "tracked frames between the compared weights (S1 item 6: 10)",
             min=1, max=1000,
         ),
-        Param("draw_particles", bool, True,
-              "draw the particles (their centres, as dots) in annotated.mp4"),
+        Param("draw_particles", bool, False,
+              "draw the particles (their centres, as dots) in annotated.mp4 (S1 [0048]: the "
+              "display shows centroid, box and caption only)"),
     )
     requires = frozenset({"frame", "box"})
     provides = frozenset({"box", "state", "score"})
