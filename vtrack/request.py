@@ -135,10 +135,8 @@ class RunRequest:
         that time at ``fps`` frames a second (InputError when the input has no frame rate)."""
         if self.start_s is None:
             return self.start
-        if fps is None or not math.isfinite(fps) or fps <= 0:
-            raise InputError(f"--start {self.start_text}: {self.input} has no frame rate to "
-                             "find that time by; give a frame number (--start N)")
-        return max(0, math.ceil(self.start_s * fps - 1e-6))
+        return max(0, math.ceil(self.start_s * self._rate(fps, f"--start {self.start_text}",
+                                                          "--start N") - 1e-6))
 
     def frame_limit(self, fps: float | None) -> int | None:
         """How many frames to track at most (None: all): ``max_frames``, or for ``max_s`` the
@@ -146,10 +144,16 @@ class RunRequest:
         the input has no frame rate)."""
         if self.max_s is None:
             return self.max_frames
+        return max(1, math.ceil(self.max_s * self._rate(fps, f"--frames {self.max_s:g}s",
+                                                        "--frames N") - 1e-6))
+
+    def _rate(self, fps: float | None, option: str, instead: str) -> float:
+        """``fps``, or InputError naming ``option`` when the input has no frame rate to turn
+        its time into frames (``instead``: the option's form in frames)."""
         if fps is None or not math.isfinite(fps) or fps <= 0:
-            raise InputError(f"--frames {self.max_s:g}s: {self.input} has no frame rate to "
-                             "count that time by; give a number of frames (--frames N)")
-        return max(1, math.ceil(self.max_s * fps - 1e-6))
+            raise InputError(f"{option}: {self.input} has no frame rate to turn that time into "
+                             f"frames by; give frames ({instead})")
+        return fps
 
     def file_identities(self) -> dict[str, Any]:
         """The identity (:func:`~vtrack.io.identity.file_identity`) of the input and the ground

@@ -8,6 +8,10 @@ from typing import Any
 
 import click
 
+#: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
+#: any rate.
+MAX_SECONDS = 366 * 24 * 3600.0
+
 
 def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | None:
     return None if value == "auto" else int(value)
@@ -42,41 +46,42 @@ def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None]
     return None
 
 
-class StartPoint(click.ParamType):
-    """``--start``: a 0-based frame number (``75``) or a time in seconds (``2.5s``, as
-    ``ffmpeg -ss``). Converts to ``(frame, seconds)``: ``(75, None)`` or ``(0, 2.5)``."""
+class _FramesOrSeconds(click.ParamType):
+    """A number of frames (at least ``least``) or a time in seconds (``2.5s``); converts to
+    ``(frames, seconds)`` with the other None."""
 
-    name = "start"
-
-    def convert(self, value: Any, param: click.Parameter | None,
-                ctx: click.Context | None) -> tuple[int, float | None]:
-        if isinstance(value, tuple):
-            return value
-        parsed = _frames_or_seconds(str(value).strip(), least=0)
-        if parsed is None:
-            self.fail(f"{value!r}: expected a frame number (75) or a time in seconds (2.5s, at "
-                      f"most {MAX_SECONDS:g}s)", param, ctx)
-        frame, seconds = parsed
-        return frame or 0, seconds
-
-
-class FrameSpan(click.ParamType):
-    """``--frames``: how many frames to track (``300``) or for how long (``10s``, as ``ffmpeg
-    -t``). Converts to ``(count, seconds)``: ``(300, None)`` or ``(None, 10.0)``."""
-
-    name = "frames"
+    least: int
+    expected: str
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> tuple[int | None, float | None]:
         if isinstance(value, tuple):
             return value
-        parsed = _frames_or_seconds(str(value).strip(), least=1)
+        parsed = _frames_or_seconds(str(value).strip(), self.least)
         if parsed is None:
-            self.fail(f"{value!r}: expected a number of frames (300, at least 1) or a duration "
-                      f"in seconds (10s, above 0 and at most {MAX_SECONDS:g}s)", param, ctx)
+            self.fail(f"{value!r}: expected {self.expected}", param, ctx)
         return parsed
 
 
-#: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
-#: any rate.
-MAX_SECONDS = 366 * 24 * 3600.0
+class StartPoint(_FramesOrSeconds):
+    """``--start``: a 0-based frame number (``75``) or a time in seconds (``2.5s``, as
+    ``ffmpeg -ss``). Converts to ``(frame, seconds)``: ``(75, None)`` or ``(0, 2.5)``."""
+
+    name = "start"
+    least = 0
+    expected = f"a frame number (75) or a time in seconds (2.5s, at most {MAX_SECONDS:g}s)"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> tuple[int, float | None]:
+        frame, seconds = super().convert(value, param, ctx)
+        return frame or 0, seconds
+
+
+class FrameSpan(_FramesOrSeconds):
+    """``--frames``: how many frames to track (``300``) or for how long (``10s``, as ``ffmpeg
+    -t``). Converts to ``(count, seconds)``: ``(300, None)`` or ``(None, 10.0)``."""
+
+    name = "frames"
+    least = 1
+    expected = ("a number of frames (300, at least 1) or a duration in seconds (10s, above 0 "
+                f"and at most {MAX_SECONDS:g}s)")
