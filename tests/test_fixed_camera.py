@@ -100,6 +100,17 @@ def test_a_reduced_resolution_gives_boxes_in_frame_pixels() -> None:
     assert math.hypot(a.cx - b.cx, a.cy - b.cy) < 1.0 and b.area == pytest.approx(a.area, 0.1)
 
 
+@pytest.mark.parametrize("method, shape", [("mog2", (360, 640)), ("knn", (360, 640)),
+                                           ("mean", (720, 1280))])
+def test_the_adaptive_models_work_on_at_most_a_quarter_of_1080p(method: str, shape) -> None:
+    """``max_pixels=0`` (full resolution) on a 1280x720 frame: MOG2 and KNN still work on it
+    halved (at most 518,400 pixels: their work per frame stays bounded), S4's mean model on
+    every pixel, as its document does."""
+    frames = [ground(720, 1280)] * 2
+    (_, second) = run_stages([Background(method=method, max_pixels=0, frames=1)], frames)
+    assert second.likelihood.shape == shape
+
+
 # --- group_blobs --------------------------------------------------------------------------------
 
 

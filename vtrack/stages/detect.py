@@ -87,6 +87,10 @@ def pairwise_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 #: ~30 ms a frame at 1280x720); a larger one is applied to the mask shrunk by the factor that
 #: brings it to this size, and the result enlarged again (blocky edges, bounded cost).
 MAX_KERNEL = 31
+#: Pixels MOG2/KNN work on at most, whatever ``max_pixels`` says (a quarter of a 1080p frame,
+#: 960x540): their cost per pixel (several times the mean model's) must keep a frame's work
+#: bounded (issue 21: no declared value over 10x the default's work).
+ADAPTIVE_MAX_PIXELS = 1920 * 1080 // 4
 
 
 def _morphology(mask: np.ndarray, operation: int, kernel: np.ndarray,
@@ -133,7 +137,8 @@ class Background(Stage):
     from the foreground; ``colour`` models the BGR image instead of the grey one (the shadow
     test then also checks the colour).
 
-    ``max_pixels`` (0: off) makes the foreground at a reduced resolution: the frame is halved
+    ``max_pixels`` (0: off; MOG2 and KNN at most ``ADAPTIVE_MAX_PIXELS`` in any case) makes the
+    foreground at a reduced resolution: the frame is halved
     (each pixel the mean of a 2 x 2 block; halving is ~20x cheaper than any other shrink) until
     at most that many pixels are left, ``k`` times in each direction, and
     ``likelihood``/``feature`` are that reduced image (``ctx.feature_scale = k`` frame pixels
@@ -247,7 +252,8 @@ class Background(Stage):
             0,
             "make the foreground on the frame halved until at most this many pixels are left "
             "(0: full resolution); cost falls with it, targets must stay several pixels "
-            "across",
+            f"across. mog2 and knn work on at most {ADAPTIVE_MAX_PIXELS:,} pixels whatever "
+            "this says (a quarter of 1080p: their cost per pixel bounds a frame's work)",
             min=0, max=MAX_FRAME_PIXELS,
         ),
     )
@@ -262,8 +268,11 @@ class Background(Stage):
         self._model: cv2.BackgroundSubtractor | None = None
         frame = ctx.frame
         pixels = frame.width * frame.height
-        self._shrink = 1  # halved until at most max_pixels are left (and at least 2 x 2)
-        while (self.max_pixels and pixels > self.max_pixels * self._shrink ** 2
+        budget = self.max_pixels
+        if self.method != "mean":  # the adaptive models cost several times the mean's per pixel
+            budget = min(budget or ADAPTIVE_MAX_PIXELS, ADAPTIVE_MAX_PIXELS)
+        self._shrink = 1  # halved until at most the budget is left (and at least 2 x 2)
+        while (budget and pixels > budget * self._shrink ** 2
                and min(frame.width, frame.height) >= 4 * self._shrink):
             self._shrink *= 2
         self._kernels = [
