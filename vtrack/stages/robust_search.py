@@ -44,7 +44,7 @@ class RobustSearch(Stage):
         Param("merge", float, 0.3, "weight of the colour response against the filter's "
               "(Staple: 0.3; 0: filter only)", min=0.0, max=1.0),
         Param("scale", bool, True, "estimate the size (fDSST's scale filter)"),
-        Param("scales", int, 17, "fDSST scale samples (17)", min=3, max=49),
+        Param("scales", int, 17, "fDSST scale samples (17; DSST: 33)", min=3, max=33),
         Param("interp_scales", int, 33, "scales the response is interpolated to (fDSST: 33; "
               "equal to scales: no interpolation, DSST)", min=3, max=99),
         Param("scale_step", float, 1.02, "ratio between neighbouring (interpolated) scales "
