@@ -6,7 +6,7 @@
     python benchmarks/robust_tune.py --ablate --ablate-scenes # ... all 28, with the hard scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
-    python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0
+    python benchmarks/robust_tune.py --speed         # tracking work per 1080p frame vs s0 (+ --set)
     python benchmarks/robust_tune.py --scenes        # generated scenes, robust and s0
     python benchmarks/robust_tune.py --hard          # randomised hard scenes, seeds 0-8
     python benchmarks/robust_tune.py --hard --frames 90 --size 480x360   # other geometry
@@ -145,10 +145,11 @@ def share(part: int, whole: int) -> str:
     return f"{part / whole:.1%}" if whole else "-"
 
 
-def speed(rounds: int = 7) -> None:
+def speed(overrides: list[str], rounds: int = 7) -> None:
     """Tracking work (the chain's stages, microseconds per frame) of robust and s0 on the same
     1080p60 I420 frames of the camera-like ``benchmark`` scene: per stage the fastest of
-    ``rounds`` runs (the machine's other load only ever adds time), summed."""
+    ``rounds`` runs (the machine's other load only ever adds time), summed; with
+    ``overrides``, also robust with them (same run)."""
     scene = make_scene("benchmark", seed=0, width=1920, height=1080, frames=120, fps=60)
     frames = [to_frame(i, 60, bgr) for i, bgr in enumerate(scene.frames())]
     box = scene.boxes[0]
@@ -158,10 +159,13 @@ def speed(rounds: int = 7) -> None:
     print("| config | us per frame | x s0 | stages (us) |")
     print("|---|---:|---:|---|")
     work: dict[str, float] = {}
-    for name in ("s0", "robust"):
+    runs = [("s0", "s0", []), ("robust", "robust", [])]
+    if overrides:
+        runs.append(("robust " + " ".join(overrides), "robust", overrides))
+    for name, config, changes in runs:
         fastest: dict[str, float] = {}
         for _ in range(rounds):
-            pipeline = Pipeline(load_config(name).build(), seed=0)
+            pipeline = Pipeline(load_config(config).with_overrides(changes).build(), seed=0)
             for _ in pipeline.track(frames, box):
                 pass
             for stage, us in pipeline.stage_microseconds_per_frame().items():
@@ -329,7 +333,7 @@ def main() -> None:
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
     if args.speed:
-        speed()
+        speed(args.overrides)
         return
     if args.scenes:
         scenes()

@@ -19,6 +19,7 @@ from vtrack.features.dcf import (
     hann2d,
     psr,
     real_spectrum,
+    shift_spectrum,
     subpixel_peak,
 )
 from vtrack.features.fhog import CHANNELS, fhog
@@ -182,6 +183,32 @@ def test_real_spectrum_is_numpys_half_spectrum(axes: int, shape: tuple[int, ...]
     x = np.random.default_rng(0).random(shape).astype(np.float32)
     expected = np.fft.rfftn(x, axes=tuple(range(axes)))
     assert np.allclose(real_spectrum(x, axes), expected, atol=1e-3 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("dy, dx", [(2, -3), (-5, 7), (0, 1)])
+def test_shifted_spectrum_is_the_spectrum_of_the_moved_sample(dy: int, dx: int) -> None:
+    """ECO's shift in the Fourier domain: moving a sample's spectrum by whole cells gives the
+    spectrum of the sample rolled by those cells, its content at (dy, dx) now at (0, 0)."""
+    x = np.random.default_rng(1).random((12, 15, 3)).astype(np.float32)
+    moved = np.roll(x, (-dy, -dx), axis=(0, 1))
+    expected = real_spectrum(moved, 2)
+    assert np.allclose(shift_spectrum(real_spectrum(x, 2), dy, dx, 15), expected,
+                       atol=1e-4 * np.abs(expected).max())
+
+
+def test_filter_learnt_on_a_shifted_sample_peaks_at_the_target() -> None:
+    """A filter learnt from a sample whose target sits off centre, moved by the offset in the
+    Fourier domain, responds on the centred target as one learnt on it directly."""
+    rng = np.random.default_rng(2)
+    centred = rng.random((20, 24, 4)).astype(np.float32)
+    off = np.roll(centred, (3, -4), axis=(0, 1))  # the target 3 cells down, 4 left
+    direct = CorrelationFilter(gaussian_label(20, 24, 1.5), 1e-3, 0.0)
+    direct.learn(centred)
+    moved = CorrelationFilter(gaussian_label(20, 24, 1.5), 1e-3, 0.0)
+    moved.learn_spectrum(shift_spectrum(real_spectrum(off, 2), 3, -4, 24))
+    response = moved.respond(centred)
+    assert np.unravel_index(int(np.argmax(response)), response.shape) == (0, 0)
+    assert np.allclose(response, direct.respond(centred), atol=1e-3)
 
 
 @pytest.mark.parametrize("cx, cy, size", [(160, 120, 40), (3, 4, 30), (318, 238, 90),

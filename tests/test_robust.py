@@ -54,6 +54,27 @@ def test_robust_holds_on_generated_scenes(scene_factory, scenario: str) -> None:
     assert float(np.mean(values)) >= 0.7, values
 
 
+@pytest.mark.parametrize("scenario", ["smooth", "scale"])
+def test_learning_from_the_moved_sample_cuts_fewer_regions_and_still_follows(
+        scene_factory, monkeypatch, scenario: str) -> None:
+    """``shift_within`` (ECO's shortcut): near the chosen region's centre the filter learns
+    from that region's spectrum moved there, so fewer regions are cut and described a frame,
+    and the target is still followed."""
+    from vtrack.stages.robust_model import RobustTarget
+
+    cut = RobustTarget.region
+    scene = scene_factory(scenario, 0, frames=90)
+    counts, results = {}, {}
+    for within in (0.0, 1.0):
+        calls = []
+        monkeypatch.setattr(RobustTarget, "region",
+                            lambda self, *a, _calls=calls: _calls.append(1) or cut(self, *a))
+        results[within] = track(scene, [f"robust_model.shift_within={within}"])
+        counts[within] = len(calls)
+    assert counts[1.0] < 0.8 * counts[0.0], counts
+    assert overlap(scene, results[1.0]) >= 0.7
+
+
 def test_grey_target_is_tracked_not_refused(scene_factory) -> None:
     """Grey frames (no hue at all): fHOG and the grey-level histogram carry the target."""
     scene = scene_factory("smooth", 0)

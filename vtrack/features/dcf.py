@@ -115,6 +115,18 @@ def real_spectrum(x: np.ndarray, axes: int) -> np.ndarray:
     return out.transpose(1, 2, 0)
 
 
+def shift_spectrum(xf: np.ndarray, dy: float, dx: float, cols: int) -> np.ndarray:
+    """The spectrum (as :func:`real_spectrum` gives it, over the first two axes of a sample
+    ``cols`` wide) of that sample moved by (``dy``, ``dx``) cells, fractions too: the sample's
+    content at (``dy``, ``dx``) comes to (0, 0), circularly. ECO (Danelljan et al., CVPR 2017)
+    learns from the detection sample moved this way instead of cutting and describing the
+    region again at the found position."""
+    ky = np.fft.fftfreq(xf.shape[0])[:, None]
+    kx = (np.arange(xf.shape[1]) / cols)[None, :]
+    ramp = np.exp(2j * np.pi * (ky * dy + kx * dx)).astype(np.complex64)
+    return xf * ramp[..., None]
+
+
 def apce(response: np.ndarray) -> float:
     """Average peak-to-correlation energy (LMCF eq. 7): |Fmax - Fmin|^2 / mean((F - Fmin)^2).
     Large for one sharp peak, small for a flat or multi-peaked response."""

@@ -31,7 +31,7 @@ import numpy as np
 
 from vtrack.errors import InputError
 from vtrack.features.colour import ColourHistograms
-from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d
+from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
 from vtrack.features.patch import region_patch
 from vtrack.features.scale import ScaleFilter
@@ -82,6 +82,9 @@ class RobustTarget:
     rows: int
     cell: int
     grey_channel: bool
+    #: Learn from the chosen region moved in the Fourier domain (ECO) when the found centre is
+    #: at most this many cells from the region's centre (0: always cut the region again).
+    shift_within: float
     translation: CorrelationFilter
     cosine: np.ndarray
     colour: ColourHistograms | None
@@ -137,18 +140,36 @@ class RobustTarget:
         """Fold the region around ``box`` into the filter (learning rate ``rate``), the colour
         histograms and the scale filter (their own rates): Staple's running averages;
         ``first``: replace."""
-        region = self.region(frame, box.cx, box.cy)
-        self.translation.learn_spectrum(region.spectrum, 1.0 if first else rate)
+        region, spectrum = self._learning_sample(frame, box, first)
+        self.translation.learn_spectrum(spectrum, 1.0 if first else rate)
         if self.colour is not None:
             w, h = box.w * region.factor, box.h * region.factor
-            x = region.patch.shape[1] / 2 - w / 2
-            y = region.patch.shape[0] / 2 - h / 2
+            x = region.patch.shape[1] / 2 + (box.cx - region.cx) * region.factor - w / 2
+            y = region.patch.shape[0] / 2 + (box.cy - region.cy) * region.factor - h / 2
             self.colour.learn(region.patch, (x, y, w, h), first=first)
         if self.scale_filter is not None:
             cached = self.scale_samples
             samples = (cached[1] if cached is not None and cached[0] == box
                        else self.scale_filter.samples(frame, box.cx, box.cy, box.w, box.h))
             self.scale_filter.learn(samples, first=first)
+
+    def _learning_sample(self, frame: Frame, box: Box, first: bool) -> tuple[Region, np.ndarray]:
+        """The region to learn ``box`` from and its features' spectrum, centred on ``box``.
+        Near the chosen region's centre that is the chosen region's own spectrum moved there
+        (ECO, Danelljan et al., CVPR 2017: no new cut, features nor transform), when the found
+        centre is at most ``shift_within`` cells away: within a cell the moved sample differs
+        from a new cut only by less than a cell of the cosine window's placement. Farther, the
+        window's offset and the circular wrap matter with Staple's small padding (moving by
+        any distance lowered the check sequences' mean AUC, benchmarks/RESULTS.md section 8):
+        the region is cut again."""
+        region = self.chosen
+        if not first and region is not None:
+            step = self.cell / region.factor  # frame pixels a cell
+            dy, dx = (box.cy - region.cy) / step, (box.cx - region.cx) / step
+            if 0 < self.shift_within >= max(abs(dy), abs(dx)):
+                return region, shift_spectrum(region.spectrum, dy, dx, self.cols)
+        region = self.region(frame, box.cx, box.cy)
+        return region, region.spectrum
 
 
 @register
@@ -175,6 +196,10 @@ class RobustModel(Stage):
               "shrunk by this share of its mean side (Staple: 0.2)", min=0.0, max=0.9),
         Param("motion_region", bool, True, "also search a region centred on the motion "
               "model's prediction when it is more than a cell from the last box"),
+        Param("shift_within", float, 0.0, "learn from the chosen region's sample moved to the "
+              "found centre in the Fourier domain (ECO) when that is at most this many cells "
+              "away; farther, cut and describe the region again (0: always cut again)",
+              min=0.0, max=4.0),
         Param("colour_rate", float, 0.04, "colour histograms' learning rate (Staple: 0.04)",
               min=0.0, max=1.0),
     )
@@ -190,6 +215,7 @@ class RobustModel(Stage):
     bins: int
     inner_padding: float
     motion_region: bool
+    shift_within: float
     colour_rate: float
 
     def start(self, ctx: TrackContext) -> None:
@@ -207,6 +233,7 @@ class RobustModel(Stage):
         target = RobustTarget(
             base_w=box.w, base_h=box.h, scale=1.0, region_w=region_w, region_h=region_h,
             cols=cols, rows=rows, cell=self.cell, grey_channel=self.grey_channel,
+            shift_within=self.shift_within,
             translation=CorrelationFilter(gaussian_label(rows, cols, sigma), self.lam, 0.0),
             cosine=hann2d(rows, cols), colour=colour)
         target.learn(ctx.frame, box, 1.0, first=True)
