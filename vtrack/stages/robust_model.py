@@ -2,7 +2,8 @@
 
 First link of the ``robust`` chain (colour conversion -> likelihood -> search -> Kalman ->
 occlusion logic). The target is seen through a search region of the box plus ``padding`` of its
-mean side on every side (Staple: ``bg_area = target + (w + h) / 2``), resampled to a patch of
+mean side on every side (Staple: ``bg_area = target + (w + h) / 2``, padding 1; the config
+``robust`` uses KCF's 1.5), resampled to a patch of
 about ``working_area`` pixels (Staple's fixed area, 150^2), so the cost per frame does not
 depend on the frame's or the target's size. On that patch:
 
