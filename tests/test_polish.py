@@ -65,6 +65,32 @@ def test_stages_takes_stage_and_config_names() -> None:
     assert "not a stage or a shipped config" in one_error_line(vtrack("stages", "nope"))
 
 
+def test_stages_of_a_config_show_the_values_it_sets() -> None:
+    """``vtrack stages robust`` says where the config differs from a parameter's default (what
+    a run of that config uses); a stage named alone shows the defaults only."""
+    from vtrack.config import load_config
+    from vtrack.stages.base import all_stages
+
+    blocks: dict[str, list[str]] = {}
+    for line in vtrack("stages", "robust").stdout.splitlines():
+        if not line.startswith(" "):
+            current = blocks.setdefault(line.split(":")[0], [])
+        else:
+            current.append(line.strip())
+    for stage, settings in load_config("robust").stages:
+        for param in all_stages()[stage].params:
+            line = next(x for x in blocks[stage] if x.startswith(f"{param.name} ("))
+            value = settings.get(param.name, param.default)
+            if value == param.default:
+                assert "; robust sets" not in line
+            else:
+                shown = str(value).lower() if isinstance(value, bool) else str(value)
+                assert line.endswith(f"; robust sets {shown}"), line
+    assert any(x.startswith("padding (") and x.endswith("; robust sets 1.5")
+               for x in blocks["robust_model"])
+    assert "sets" not in vtrack("stages", "robust_model").stdout
+
+
 def test_a_missing_input_is_named_before_what_else_is_missing(tmp_path: Path) -> None:
     line = one_error_line(vtrack("run", "nothere.mp4", cwd=tmp_path))
     assert line == "vtrack: error: nothere.mp4: no such file"

@@ -49,45 +49,57 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 """
 
 
-def _plain(name: str, cls: type) -> list[str]:
-    """One stage's plain-text entry: its summary, a line per parameter, its CSV columns."""
-    lines = [f"{name}: {cls.summary}"] + [f"    {p.describe()}" for p in cls.params]
+def _plain(name: str, cls: type, config: str = "", settings: dict | None = None) -> list[str]:
+    """One stage's plain-text entry: its summary, a line per parameter, its CSV columns; with a
+    config's ``settings``, each parameter the config sets to other than its default says so."""
+    lines = [f"{name}: {cls.summary}"]
+    for param in cls.params:
+        line = f"    {param.describe()}"
+        value = (settings or {}).get(param.name, param.default)
+        if value != param.default:
+            line += f"; {config} sets {str(value).lower() if isinstance(value, bool) else value}"
+        lines.append(line)
     if cls.columns:
         lines.append(f"    csv columns: {', '.join(cls.columns)}")
     return lines
 
 
-def _selected(names: tuple[str, ...]) -> list[str]:
-    """The stages ``names`` ask for: a stage by its name, a shipped config as its chain.
-    ConfigError for a name that is neither."""
+def _selected(names: tuple[str, ...]) -> list[tuple[str, str, dict | None]]:
+    """The stages ``names`` ask for, as (stage, config, its settings there): a stage by its
+    name (no config), a shipped config as its chain. ConfigError for a name that is
+    neither."""
     from vtrack.config import load_config, shipped_configs
     from vtrack.errors import ConfigError
     from vtrack.stages.base import all_stages
 
     known, configs = all_stages(), shipped_configs()
-    chosen: list[str] = []
+    chosen: list[tuple[str, str, dict | None]] = []
     for name in names:
         if name in known:
-            chosen.append(name)
+            chosen.append((name, "", None))
         elif name in configs:
-            chosen += [stage for stage, _ in load_config(name).stages]
+            chosen += [(stage, name, settings) for stage, settings in load_config(name).stages]
         else:
             raise ConfigError(f"{name}: not a stage or a shipped config (stages: "
                               f"{', '.join(known)}; configs: {', '.join(sorted(configs))})")
-    return list(dict.fromkeys(chosen))
+    first: dict[str, tuple[str, str, dict | None]] = {}
+    for entry in chosen:  # a stage named twice is listed once, as first named
+        first.setdefault(entry[0], entry)
+    return list(first.values())
 
 
 def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
     """The stage reference (plain text for the terminal, or Markdown for docs/stages.md);
-    with ``names`` (stages or shipped configs), only those stages' parameters."""
+    with ``names`` (stages or shipped configs), only those stages' parameters, and for a
+    config the values it sets."""
     from vtrack.config import load_config, shipped_configs
     from vtrack.stages.base import all_stages
 
     if names:
         stages = all_stages()
         lines = []
-        for name in _selected(names):
-            lines += _plain(name, stages[name])
+        for name, config, settings in _selected(names):
+            lines += _plain(name, stages[name], config, settings)
         return "\n".join(lines)
     lines: list[str] = []
     if markdown:
@@ -120,7 +132,8 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
 @click.option("--markdown", is_flag=True, help="Print Markdown (the source of docs/stages.md).")
 def command(names: tuple[str, ...], markdown: bool) -> None:
     """List the stages, their parameters (type, default, help) and the shipped configs; with
-    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0), only those stages."""
+    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0), only those stages,
+    and for a CONFIG the values it sets."""
     if names and markdown:
         raise click.UsageError("--markdown prints the whole reference; give no names with it")
     click.echo(stages_text(markdown, names))
