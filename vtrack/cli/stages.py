@@ -44,7 +44,8 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
   writers' queues), plus the particle filter's histograms (at most 4 x 1024 particles x 256
   bins x 8 bytes = 8 MiB) and the `robust` tracker's search patch, resampled to about
   `robust_model.working_area`^2 (<= 250^2) working pixels at ~40 bytes each, whatever the frame
-  size (while lost, 8 more such patches a frame). tests/test_fuzz.py checks these bounds for
+  size (while lost, 8 more such patches a frame; with `robust_model.colour_redetect` one more and
+  a sample of the frame of at most 1920x1080/16 pixels). tests/test_fuzz.py checks these bounds for
   every stage's parameters.
 """
 

@@ -31,12 +31,12 @@ import cv2
 import numpy as np
 
 from vtrack.errors import InputError
-from vtrack.features.colour import ColourHistograms
+from vtrack.features.colour import ColourHistograms, box_mean
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
 from vtrack.features.patch import region_patch
 from vtrack.features.scale import ScaleFilter
-from vtrack.frame import Frame
+from vtrack.frame import Frame, GrayFrame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
@@ -46,6 +46,10 @@ from vtrack.stages.base import Stage, TrackContext, TrackState, register
 MAX_RINGS = 4
 #: Regions searched a frame while lost besides the centre one (the cost is bounded).
 REGIONS_PER_FRAME = 8
+#: Frame-wide colour re-detection: the frame is sampled every k-th pixel so that the target is
+#: about this many pixels a side, and to at most this many pixels (bounded work per frame).
+COARSE_TARGET_SIDE = 8
+MAX_COARSE_PIXELS = 1920 * 1080 // 16
 #: KCF/DSST/Staple's label width: sqrt(target area) / 16 (in working pixels).
 LABEL_SIGMA_FACTOR = 1 / 16
 
@@ -197,6 +201,9 @@ class RobustModel(Stage):
               "shrunk by this share of its mean side (Staple: 0.2)", min=0.0, max=0.9),
         Param("motion_region", bool, True, "also search a region centred on the motion "
               "model's prediction when it is more than a cell from the last box"),
+        Param("colour_redetect", bool, False, "while the target is lost, also search a region "
+              "centred where the colour histograms' likelihood, averaged over a target-sized "
+              "box, peaks in the whole frame (sampled coarsely)"),
         Param("shift_within", float, 0.0, "learn from the chosen region's sample moved to the "
               "found centre in the Fourier domain (ECO) when that is at most this many cells "
               "away; farther, cut and describe the region again (0: always cut again)",
@@ -216,6 +223,7 @@ class RobustModel(Stage):
     bins: int
     inner_padding: float
     motion_region: bool
+    colour_redetect: bool
     shift_within: float
     colour_rate: float
 
@@ -259,6 +267,9 @@ class RobustModel(Stage):
                 and math.hypot(predicted.cx - centre.cx, predicted.cy - centre.cy)
                 > target.cell / region.factor):
             target.regions.append(target.region(ctx.frame, predicted.cx, predicted.cy))
+        if (self.colour_redetect and ctx.state == TrackState.LOST
+                and target.colour is not None):
+            target.regions.append(target.region(ctx.frame, *_colour_peak(ctx.frame, target)))
         if ctx.search_growth > 1.0:
             target.regions.extend(self._around(ctx, target, region))
         target.chosen = None
@@ -288,3 +299,19 @@ class RobustModel(Stage):
         picked = (out + out)[start:start + min(REGIONS_PER_FRAME, len(out))]
         return [target.region(ctx.frame, cx, cy) for cx, cy in picked]
 
+
+def _colour_peak(frame: Frame, target: RobustTarget) -> tuple[float, float]:
+    """The frame point (x, y) where the colour likelihood averaged over a target-sized box is
+    highest, over the whole frame sampled every k-th pixel (k odd, the target about
+    ``COARSE_TARGET_SIDE`` samples a side, at most ``MAX_COARSE_PIXELS`` samples)."""
+    assert target.colour is not None
+    w, h = target.size
+    k = max(int(min(w, h) / COARSE_TARGET_SIDE), 1) | 1
+    while (frame.width // k) * (frame.height // k) > MAX_COARSE_PIXELS:
+        k += 2
+    whole, o = Window(0, 0, frame.width, frame.height), (k - 1) // 2
+    pixels = (np.ascontiguousarray(frame.gray(whole)[o::k, o::k]) if isinstance(frame, GrayFrame)
+              else frame.bgr_sampled(whole, k))
+    mean = box_mean(target.colour.likelihood(pixels), w / k, h / k)
+    r, c = np.unravel_index(int(np.argmax(mean)), mean.shape)
+    return o + c * k + 0.5, o + r * k + 0.5
