@@ -104,9 +104,13 @@ class Param:
             extra.append("one of " + "|".join(str(c) for c in self.choices))
         if self.min is not None or self.max is not None:
             extra.append(f"range {self.range_text()}")
-        default = str(self.default).lower() if self.type is bool else repr(self.default)
         tail = f" ({'; '.join(extra)})" if extra else ""
-        return f"{self.name} ({_TYPE_NAMES[self.type]}, default {default}): {self.help}{tail}"
+        return (f"{self.name} ({_TYPE_NAMES[self.type]}, default "
+                f"{self.value_text(self.default)}): {self.help}{tail}")
+
+    def value_text(self, value: Any) -> str:
+        """A value of this parameter as a config file writes it (``true``, ``1.5``)."""
+        return str(value).lower() if self.type is bool else repr(value)
 
 
 def _number(value: float) -> str:

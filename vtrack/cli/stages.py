@@ -58,7 +58,7 @@ def _plain(name: str, cls: type, config: str = "", settings: dict | None = None)
         line = f"    {param.describe()}"
         value = (settings or {}).get(param.name, param.default)
         if value != param.default:
-            line += f"; {config} sets {str(value).lower() if isinstance(value, bool) else value}"
+            line += f"; {config} sets {param.value_text(value)}"
         lines.append(line)
     if cls.columns:
         lines.append(f"    csv columns: {', '.join(cls.columns)}")

@@ -34,9 +34,9 @@ from vtrack.errors import InputError
 from vtrack.features.colour import ColourHistograms, box_mean
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
-from vtrack.features.patch import region_patch
+from vtrack.features.patch import region_patch, sampled_pixels
 from vtrack.features.scale import ScaleFilter
-from vtrack.frame import Frame, GrayFrame
+from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
@@ -171,7 +171,7 @@ class RobustTarget:
         if not first and region is not None:
             step = self.cell / region.factor  # frame pixels a cell
             dy, dx = (box.cy - region.cy) / step, (box.cx - region.cx) / step
-            if 0 < self.shift_within >= max(abs(dy), abs(dx)):
+            if self.shift_within > 0 and max(abs(dy), abs(dx)) <= self.shift_within:
                 return region, shift_spectrum(region.spectrum, dy, dx, self.cols)
         region = self.region(frame, box.cx, box.cy)
         return region, region.spectrum
@@ -309,9 +309,8 @@ def _colour_peak(frame: Frame, target: RobustTarget) -> tuple[float, float]:
     k = max(int(min(w, h) / COARSE_TARGET_SIDE), 1) | 1
     while (frame.width // k) * (frame.height // k) > MAX_COARSE_PIXELS:
         k += 2
-    whole, o = Window(0, 0, frame.width, frame.height), (k - 1) // 2
-    pixels = (np.ascontiguousarray(frame.gray(whole)[o::k, o::k]) if isinstance(frame, GrayFrame)
-              else frame.bgr_sampled(whole, k))
+    pixels = sampled_pixels(frame, Window(0, 0, frame.width, frame.height), k)
     mean = box_mean(target.colour.likelihood(pixels), w / k, h / k)
+    o = (k - 1) // 2  # sample (r, c) is frame pixel (o + r k, o + c k)
     r, c = np.unravel_index(int(np.argmax(mean)), mean.shape)
     return o + c * k + 0.5, o + r * k + 0.5
