@@ -17,7 +17,7 @@ from vtrack.run import _MultiTargetRows
 from vtrack.scenes import make_scene
 from vtrack.stages.base import Track, TrackStatus
 from vtrack.stages.detect import MAX_KERNEL, _morphology
-from vtrack.stages.kernel_meanshift import ITERATION_BUDGET
+from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE, sampling_stride
 
 
 def specks(count: int, width: int = 160, height: int = 120) -> list[np.ndarray]:
@@ -92,6 +92,29 @@ def test_kernel_mean_shift_steps_over_a_large_box_stop_at_the_budget() -> None:
         tracker.init(scene.frame(0), box)
         steps[name] = max(int(tracker.update(scene.frame(i)).extras["iterations"])
                           for i in range(1, 10))
-    # three bandwidths, each within budget (the smallest, 0.9 of the box, gets one more step)
+    # three bandwidths, each within budget (the smallest, 0.9 of the box, gets one more step);
+    # each step reads the whole-frame window on every second row and column
+    assert sampling_stride(160 * 120, 160 * 120) == 2
     assert steps["whole"] <= 3 * (ITERATION_BUDGET + 1)
     assert steps["small"] > 3 * (ITERATION_BUDGET + 1)  # a small box still steps as asked
+
+
+def test_fixed_kernel_mean_shift_over_a_whole_frame_box_stops_at_the_budget() -> None:
+    scene = make_scene("smooth", 0, 160, 120, 30, 30.0)
+    tracker = vtrack.Tracker("s2-fixed", kernel_meanshift_int__max_iterations=100,
+                             kernel_meanshift_int__failure_logic=False)
+    tracker.init(scene.frame(0), (0, 0, 160, 120))
+    steps = max(int(tracker.update(scene.frame(i)).extras["iterations"]) for i in range(1, 10))
+    assert 3 <= steps <= 3 * ITERATION_BUDGET
+
+
+@pytest.mark.parametrize("share", [0.01, 0.3, SAMPLED_ABOVE, 0.51, 1.0, 1.44, 4.0])
+def test_kernel_mean_shift_reads_at_most_its_share_of_the_frame(share: float) -> None:
+    frame_pixels = 1280 * 720
+    window_pixels = round(share * frame_pixels)
+    stride = sampling_stride(window_pixels, frame_pixels)
+    assert window_pixels / stride**2 <= SAMPLED_ABOVE * frame_pixels
+    # every pixel up to the bound (the real sequences' boxes), the coarsest grid no coarser
+    # than needed above it
+    assert (stride == 1) == (share <= SAMPLED_ABOVE)
+    assert stride == 1 or window_pixels / (stride - 1) ** 2 > SAMPLED_ABOVE * frame_pixels

@@ -10,7 +10,7 @@ def limits_text() -> str:
     checks them)."""
     from vtrack.geometry import MAX_FRAME_SIDE, MIN_BOX_SIDE
     from vtrack.stages.detect import MAX_KERNEL
-    from vtrack.stages.kernel_meanshift import ITERATION_BUDGET
+    from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE
     from vtrack.stages.particle import PIXEL_BUDGET
 
     return f"""\
@@ -27,12 +27,14 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 
 - work: at most a fixed number of passes over N pixels per stage, times its declared cap:
   `meanshift.iterations` (<= 100); `kernel_meanshift.max_iterations` (<= 100, for each of 3
-  bandwidths, twice when fast motion reruns the search), but the steps of one bandwidth read
-  at most {ITERATION_BUDGET} N pixels in all (a box larger than a tenth of the frame gets fewer
-  steps than the default 20); `particle.particles` and `particle.lost_particles` (<= 1024
-  windows), whose histograms count at most {PIXEL_BUDGET} N pixels in all (beyond, every n-th
-  row of each window); `background.open`/`close` (<= 255) apply kernels of at most
-  {MAX_KERNEL} working pixels (a larger one runs on the mask shrunk to fit); search windows
+  bandwidths, twice when fast motion reruns the search), but the steps of one bandwidth cover
+  at most {ITERATION_BUDGET} N pixels of window in all (a box larger than a tenth of the frame
+  gets fewer steps than the default 20), and a window over {SAMPLED_ABOVE:g} N is read on
+  every s-th row and column, to at most {SAMPLED_ABOVE:g} N; `particle.particles` and
+  `particle.lost_particles` (<= 1024 windows), whose histograms count at most
+  {PIXEL_BUDGET} N pixels in all (beyond, every n-th row of each window);
+  `background.open`/`close` (<= 255) apply kernels of at most {MAX_KERNEL} working pixels
+  (a larger one runs on the mask shrunk to fit); search windows
   are clipped to the frame (`hue.search_scale` <= 16, widened by `occlusion.max_growth` <= 16);
 - multi-target work: at most `blobs.max_blobs` (<= 1000) detections a frame; `mht` keeps at
   most `max_hypotheses` (<= 64) hypotheses and extends each branch with at most `max_branches`

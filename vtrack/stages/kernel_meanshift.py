@@ -57,11 +57,24 @@ ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 _LEVELS = 256
 
 
-#: Pixels one bandwidth's mean-shift steps may visit per frame, in frames (each step reads the
-#: window once): 20 steps (the default) over a box of up to a tenth of the frame stay exact; a
-#: larger box gets fewer steps (whole frame: 2), bounding a frame's work whatever max_iterations
-#: and epsilon say (at 1280x720, about 10x the default box's frame at most).
+#: Window area one bandwidth's mean-shift steps may cover per frame, in frames (each step covers
+#: its window once, reading every pixel up to SAMPLED_ABOVE of the frame): 20 steps (the
+#: default) over a box of up to a tenth of the frame stay exact; a larger box gets fewer steps
+#: (whole frame: 2), bounding a frame's work whatever max_iterations and epsilon say (at
+#: 1280x720, with SAMPLED_ABOVE, about 5x the default box's frame at most).
 ITERATION_BUDGET = 2
+
+#: Windows larger than this share of the frame read every s-th row and column, with the smallest
+#: stride s that brings them under it (a whole-frame box: every second row and column). Smaller
+#: windows, every box of the real sequences included, read every pixel as the document does.
+SAMPLED_ABOVE = 0.5
+
+
+def sampling_stride(window_pixels: int, frame_pixels: int) -> int:
+    """Read every s-th row and column of a window: 1 up to SAMPLED_ABOVE of the frame, else the
+    smallest s that brings the pixels read under it (bounded work per mean-shift step)."""
+    share = window_pixels / (SAMPLED_ABOVE * frame_pixels)
+    return 1 if share <= 1.0 else math.ceil(math.sqrt(share))
 
 
 @lru_cache(maxsize=32)
@@ -100,9 +113,11 @@ class _Search:
 
 @dataclass(frozen=True)
 class _Sample:
-    """One candidate window: where it is, the bin of each of its pixels, its histogram."""
+    """One candidate window: where it is, the bin of each pixel read (every ``stride``-th row
+    and column), its histogram."""
 
     window: Window
+    stride: int
     bins: np.ndarray
     hist: np.ndarray
 
@@ -265,7 +280,7 @@ class KernelMeanShift(Stage):
         """Steps 3-6 at one bandwidth: mean-shift steps from (cx, cy) until it moves < epsilon."""
         sample = self._sample(frame, cx, cy, scale)
         iterations, limit = 0, self.max_iterations
-        if sample is not None:  # bounded work: at most ITERATION_BUDGET frames of pixels
+        if sample is not None:  # bounded work: at most ITERATION_BUDGET frames of window area
             area = sample.window.width * sample.window.height
             limit = min(limit, max(1, ITERATION_BUDGET * frame.width * frame.height // area))
         while sample is not None and iterations < limit:
@@ -287,9 +302,9 @@ class KernelMeanShift(Stage):
             # (the pyramid's derivative is a constant-magnitude sign), so, as the document does,
             # every kernel steps with g = 1: the kernel shapes the histograms, the step is the
             # weighted mean of the window's pixel centres X_i.
-            window = sample.window
-            nx = float(column_sums @ (np.arange(window.x0, window.x1) + 0.5)) / total
-            ny = float(row_sums @ (np.arange(window.y0, window.y1) + 0.5)) / total
+            window, stride = sample.window, sample.stride
+            nx = float(column_sums @ (np.arange(window.x0, window.x1, stride) + 0.5)) / total
+            ny = float(row_sums @ (np.arange(window.y0, window.y1, stride) + 0.5)) / total
             # S2 step 6: go on while |dx| >= 1 or |dy| >= 1 pixel
             moved = abs(nx - cx) >= self.epsilon or abs(ny - cy) >= self.epsilon
             cx, cy = nx, ny
@@ -324,18 +339,27 @@ class KernelMeanShift(Stage):
             return None
         if reuse is not None and reuse.window == window:
             return reuse
+        stride = sampling_stride(window.width * window.height, frame.width * frame.height)
         grid = kernel_grid(self.kernel, width, height)
-        grid = grid[window.y0 - y0 : window.y1 - y0, window.x0 - x0 : window.x1 - x0]
+        grid = grid[window.y0 - y0 : window.y1 - y0 : stride,
+                    window.x0 - x0 : window.x1 - x0 : stride]
         if self.feature == "hue":
-            values = cv2.cvtColor(frame.bgr(window), cv2.COLOR_BGR2HSV_FULL)[:, :, 0]
+            values = cv2.cvtColor(_every(frame.bgr(window), stride),
+                                  cv2.COLOR_BGR2HSV_FULL)[:, :, 0]
         else:
-            values = frame.gray(window)
+            values = _every(frame.gray(window), stride)
         bins = cv2.LUT(values, self._lut)  # b(X_i) of S2 eq. 1 (as self._lut[values])
         # S2 step 3 (eqs. 3 and 4): p_u(Y) = sum K(X_i*) [b(X_i) = u], undivided
         hist = np.bincount(bins.ravel(), weights=grid.ravel(), minlength=self.bins)
         if hist.sum() <= 0:
             return None
-        return _Sample(window, bins, hist)
+        return _Sample(window, stride, bins, hist)
+
+
+def _every(pixels: np.ndarray, stride: int) -> np.ndarray:
+    """Every ``stride``-th row and column of ``pixels`` (the array itself for stride 1), laid
+    out as OpenCV reads it."""
+    return pixels if stride == 1 else np.ascontiguousarray(pixels[::stride, ::stride])
 
 
 def _r(found: _Search, prediction: Box) -> float:

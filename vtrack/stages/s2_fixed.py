@@ -28,6 +28,7 @@ from vtrack.golden.record import FixedRecord
 from vtrack.golden.s0 import split_rgb
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE
 
 ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 #: r of a search with no position (rho = 0): above any D (empty in the trace).
@@ -159,9 +160,14 @@ class KernelMeanShiftInt(Stage):
         """Steps 3-6 at scale ``s_t``: returns the converged pixel, its rho, the steps taken."""
         x, y = start
         smp = self._sample(frame, x, y, s_t)
-        steps = 0
+        steps, limit = 0, self.max_iterations
+        frame_pixels = frame.width * frame.height
+        if smp is not None and smp.bins.size > SAMPLED_ABOVE * frame_pixels:
+            # bounded work for a window over half the frame, as the float s2 (smaller windows,
+            # those of every real sequence, step as the DSP loop does, bit for bit)
+            limit = min(limit, max(1, ITERATION_BUDGET * frame_pixels // smp.bins.size))
         row: dict[str, object] = {}
-        while smp is not None and steps < self.max_iterations:
+        while smp is not None and steps < limit:
             steps += 1
             table = s2.weights(self._q, smp.hist, self.weight_frac_bits)  # step 4
             dx, dy, total, sx, sy = s2.shift(smp, table, self.rounding)  # step 5
