@@ -75,6 +75,35 @@ def test_filter_response_peaks_at_the_displacement(shift: tuple[int, int]) -> No
     assert (int(peak[0]), int(peak[1])) == (shift[0] % 24, shift[1] % 30)
 
 
+def test_wide_response_is_the_response_at_the_learnt_size() -> None:
+    rng = np.random.default_rng(3)
+    sample = rng.random((21, 25, 4)).astype(np.float32) * hann2d(21, 25)
+    filt = CorrelationFilter(gaussian_label(21, 25, 1.5), lam=1e-3, rate=0.02)
+    filt.learn(sample)
+    probe = rng.random((21, 25, 4)).astype(np.float32)
+    assert np.allclose(filt.respond_wide(probe), filt.respond(probe), atol=1e-5)
+
+
+@pytest.mark.parametrize("where", [(20, 30), (70, 130), (95, 15)])
+def test_wide_response_finds_the_target_anywhere_in_a_larger_image(where) -> None:
+    """A filter learnt on fHOG of a textured target, windowed as the tracker learns it, scores
+    the whole image: its peak plus the sample's centre cell is where the target is."""
+    cell, rows, cols = 4, 16, 20
+    image = texture(rows * cell * 8, cols * cell * 8, seed=4)  # 128 x 160 cells
+    target = texture(8 * cell, 10 * cell, seed=5)
+    cy, cx = where  # the target's centre cell
+    y0, x0 = (cy - 4) * cell, (cx - 5) * cell
+    image[y0:y0 + 8 * cell, x0:x0 + 10 * cell] = target
+    features = fhog(image, cell)
+    sample = features[cy - rows // 2: cy - rows // 2 + rows, cx - cols // 2: cx - cols // 2 + cols]
+    filt = CorrelationFilter(gaussian_label(rows, cols, 1.0), lam=1e-3, rate=0.02)
+    filt.learn(sample * hann2d(rows, cols))
+    response = filt.respond_wide(features)
+    r, c = np.unravel_index(int(np.argmax(response)), response.shape)
+    found = ((r + rows // 2) % features.shape[0], (c + cols // 2) % features.shape[1])
+    assert found == (cy, cx)
+
+
 def test_filter_learns_at_its_rate() -> None:
     """The running average moves ``rate`` of the way to a new sample's model."""
     rng = np.random.default_rng(2)

@@ -98,3 +98,18 @@ def test_robust_is_lost_while_out_and_back_within_10_frames(seed):
              if states[i] == "tracking" and overlaps[i] is not None and overlaps[i] > 0.5]
     assert found, states[full : full + GRACE + 1]
     assert all(s == "tracking" for s in states[found[0] : found[0] + GRACE])
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_the_filter_over_the_whole_frame_finds_a_target_that_re_enters_elsewhere(seed):
+    """Issue 20: while lost, the filter is run over the whole frame; a target that left and came
+    back anywhere is followed again, without the rings of regions around where it left."""
+    rings_off = ("robust_failure.redetect=false",)
+    found = {}
+    for wide in ("true", "false"):
+        wide_search = (f"robust_model.filter_redetect={wide}",)
+        scene, boxes, _ = run_robust("exit_return", seed, overrides=rings_off + wide_search)
+        overlaps, _ = frame_scores(boxes[-20:], scene.boxes[-20:])
+        found[wide] = mean_overlap(overlaps)
+    assert found["true"] >= 0.9
+    assert found["false"] < 0.5  # without it the target is not found again

@@ -60,6 +60,8 @@ class CorrelationFilter:
         self.numerator: np.ndarray | None = None
         self.denominator: np.ndarray | None = None
         self._filter: np.ndarray | None = None
+        #: The filter's kernel padded to a wide sample's size, transformed (respond_wide).
+        self._wide: np.ndarray | None = None
 
     def spectrum(self, x: np.ndarray) -> np.ndarray:
         """The Fourier transform of sample ``x`` along the filter's axes, half of it as
@@ -84,6 +86,7 @@ class CorrelationFilter:
             self.denominator = (1 - eta) * self.denominator + eta * denominator
         # the conjugate filter, as every response takes it (DSST eq. 6)
         self._filter = np.conj(self.numerator / (self.denominator[..., None] + self.lam))
+        self._wide = None
 
     def respond(self, z: np.ndarray) -> np.ndarray:
         """Response to sample ``z`` (same shape as the learnt ones), real, peak at (0, ...) for
@@ -95,6 +98,26 @@ class CorrelationFilter:
         assert self._filter is not None, "respond before learn"
         product = np.einsum("...k,...k->...", self._filter, zf)
         return np.fft.irfftn(product, s=self.shape, axes=self.axes)
+
+    def respond_wide(self, z: np.ndarray) -> np.ndarray:
+        """The response over a sample ``z`` larger than the learnt ones (2-D filters): the
+        filter's spatial kernel, zero-padded to ``z``'s size, convolved with it (circularly).
+        Index ``p`` scores a target centred at ``p`` plus the learnt samples' centre cell."""
+        assert self._filter is not None, "respond before learn"
+        if self._wide is None or self._wide.shape[0] != z.shape[0] \
+                or self._wide.shape[1] != z.shape[1] // 2 + 1:
+            rows, cols = self.shape
+            kernel = np.fft.irfftn(self._filter, s=self.shape, axes=(0, 1)).astype(np.float32)
+            padded = np.zeros(z.shape, np.float32)
+            # the kernel's wrapped offsets (negative ones at the end) keep their offsets
+            ys, xs = np.arange(rows), np.arange(cols)
+            ys = np.where(ys < (rows + 1) // 2, ys, ys - rows) % z.shape[0]
+            xs = np.where(xs < (cols + 1) // 2, xs, xs - cols) % z.shape[1]
+            padded[np.ix_(ys, xs)] = kernel
+            # kept until the filter learns again (it learns nothing while the target is lost)
+            self._wide = real_spectrum(padded, 2)
+        product = np.einsum("...k,...k->...", self._wide, real_spectrum(z, 2))
+        return np.fft.irfftn(product, s=z.shape[:2], axes=(0, 1))
 
 
 def real_spectrum(x: np.ndarray, axes: int) -> np.ndarray:

@@ -14,6 +14,10 @@ depend on the frame's or the target's size. On that patch:
 - the colour likelihood of every pixel against the surroundings (Staple's histograms,
   :mod:`vtrack.features.colour`): ``ctx.likelihood``.
 
+While the target is lost it cuts more regions for the same filter to score: a growing ring of
+them around the search centre, and (``filter_redetect``) one where the filter's response over
+the whole frame, scored at once in the Fourier domain at the filter's working scale, peaks.
+
 It holds the learnt models for the other links (``ctx.robust``, :class:`RobustTarget`); it
 learns nothing after the first frame itself: ``robust_failure`` decides when the models learn.
 
@@ -50,6 +54,10 @@ REGIONS_PER_FRAME = 8
 #: about this many pixels a side, and to at most this many pixels (bounded work per frame).
 COARSE_TARGET_SIDE = 8
 MAX_COARSE_PIXELS = 1920 * 1080 // 16
+#: Frame-wide re-detection with the filter: at most this many working pixels (width x height)
+#: are searched (a larger frame: a window of that area around the search centre).
+WIDE_WINDOW = (1024, 576)
+MAX_WIDE_PIXELS = WIDE_WINDOW[0] * WIDE_WINDOW[1]
 #: KCF/DSST/Staple's label width: sqrt(target area) / 16 (in working pixels).
 LABEL_SIGMA_FACTOR = 1 / 16
 
@@ -125,12 +133,16 @@ class RobustTarget:
 
     def features(self, patch: np.ndarray) -> np.ndarray:
         """Filter features of a patch: fHOG (+ the cells' mean grey), under the cosine window."""
+        return self.plain_features(patch) * self.cosine
+
+    def plain_features(self, patch: np.ndarray) -> np.ndarray:
+        """fHOG (+ the cells' mean grey) of a patch of any size, without the cosine window."""
         hog = fhog(patch, self.cell)
         if self.grey_channel:
             grey = patch if patch.ndim == 2 else cv2.cvtColor(patch, cv2.COLOR_BGR2GRAY)
-            means = cv2.resize(grey, (self.cols, self.rows), interpolation=cv2.INTER_AREA)
+            means = cv2.resize(grey, (hog.shape[1], hog.shape[0]), interpolation=cv2.INTER_AREA)
             hog = np.concatenate([hog, (means.astype(np.float32) / 255 - 0.5)[..., None]], axis=2)
-        return hog * self.cosine
+        return hog
 
     def region(self, frame: Frame, cx: float, cy: float) -> Region:
         """The search region centred on (cx, cy) at the current scale, its patch and features."""
@@ -204,6 +216,10 @@ class RobustModel(Stage):
         Param("colour_redetect", bool, False, "while the target is lost, also search a region "
               "centred where the colour histograms' likelihood, averaged over a target-sized "
               "box, peaks in the whole frame (sampled coarsely)"),
+        Param("filter_redetect", bool, False, "while the target is lost, also search a region "
+              "centred where the filter's response peaks over the whole frame, at the filter's "
+              f"working scale (a larger frame: a window of {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} "
+              "working pixels' area around the search centre)"),
         Param("shift_within", float, 0.0, "learn from the chosen region's sample moved to the "
               "found centre in the Fourier domain (ECO) when that is at most this many cells "
               "away; farther, cut and describe the region again (0: always cut again)",
@@ -224,6 +240,7 @@ class RobustModel(Stage):
     inner_padding: float
     motion_region: bool
     colour_redetect: bool
+    filter_redetect: bool
     shift_within: float
     colour_rate: float
 
@@ -270,6 +287,9 @@ class RobustModel(Stage):
         if (self.colour_redetect and ctx.state == TrackState.LOST
                 and target.colour is not None):
             target.regions.append(target.region(ctx.frame, *_colour_peak(ctx.frame, target)))
+        if self.filter_redetect and ctx.state == TrackState.LOST:
+            target.regions.append(target.region(ctx.frame, *_filter_peak(ctx.frame, target,
+                                                                         centre.cx, centre.cy)))
         if ctx.search_growth > 1.0:
             target.regions.extend(self._around(ctx, target, region))
         target.chosen = None
@@ -314,3 +334,27 @@ def _colour_peak(frame: Frame, target: RobustTarget) -> tuple[float, float]:
     o = (k - 1) // 2  # sample (r, c) is frame pixel (o + r k, o + c k)
     r, c = np.unravel_index(int(np.argmax(mean)), mean.shape)
     return o + c * k + 0.5, o + r * k + 0.5
+
+
+def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tuple[float, float]:
+    """The frame point (x, y) where the filter's response peaks over the whole frame, at the
+    filter's working scale (or over the window of at most ``MAX_WIDE_PIXELS`` working pixels
+    around (``cx``, ``cy``)): the "whole frame at a coarse scale" of a correlation tracker's
+    re-detection."""
+    cell = target.cell
+    factor = target.cols * cell / (target.region_w * target.scale)  # working px a frame px
+    shrink = min(1.0, math.sqrt(MAX_WIDE_PIXELS / (frame.width * frame.height * factor**2)))
+    # sizes the DFT is fast on (the window may reach a little past the frame: replicated)
+    cols = cv2.getOptimalDFTSize(max(int(frame.width * shrink * factor / cell), target.cols))
+    rows = cv2.getOptimalDFTSize(max(int(frame.height * shrink * factor / cell), target.rows))
+    width, height = cols * cell / factor, rows * cell / factor
+    # the window inside the frame where it can be, around the search centre
+    wx = min(max(cx, width / 2), max(frame.width - width / 2, width / 2))
+    wy = min(max(cy, height / 2), max(frame.height - height / 2, height / 2))
+    patch = region_patch(frame, wx, wy, width, height, cols * cell, rows * cell)
+    response = target.translation.respond_wide(target.plain_features(patch))
+    r, c = np.unravel_index(int(np.argmax(response)), response.shape)
+    # index p scores a target at p + the learnt samples' centre cell (wrapped)
+    row, col = (r + target.rows // 2) % rows, (c + target.cols // 2) % cols
+    step = cell / factor
+    return wx + (col - cols // 2) * step, wy + (row - rows // 2) * step
