@@ -72,6 +72,8 @@ ABLATIONS = (
     ("-apce", "LMCF's APCE test to take a hidden target back (PSR and peak only)",
      ["robust_failure.retake_apce=0"]),
     ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),
+    ("-wide", "the filter's frame-wide search while lost",
+     ["robust_model.filter_redetect=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),
     ("-rewind", "coasting from the last confident frame", ["robust_motion.rewind_frames=0"]),
 )

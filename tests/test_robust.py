@@ -156,31 +156,3 @@ def test_initial_box_outside_frame_is_a_user_error() -> None:
     frames = [BgrFrame(0, 0.0, np.zeros((48, 64, 3), np.uint8))]
     with pytest.raises(InputError, match="robust_model"):
         list(Pipeline(load_config("robust").build()).track(frames, Box(100, 100, 10, 10)))
-
-
-@pytest.mark.parametrize("grey", [False, True])
-def test_colour_redetection_finds_the_target_anywhere_in_the_frame(grey: bool) -> None:
-    """``colour_redetect``'s frame-wide search: where the learnt colour likelihood, averaged
-    over a target-sized box, peaks in a coarsely sampled frame is the target's place, however
-    far from where it was last seen (within a sampling step)."""
-    from types import SimpleNamespace
-
-    from vtrack.features.colour import ColourHistograms
-    from vtrack.stages.robust_model import _colour_peak
-
-    rng = np.random.default_rng(3)
-    background = rng.integers(60, 120, (480, 640, 3), dtype=np.uint8)
-    first, later = background.copy(), background.copy()
-    first[40:80, 50:90] = (40, 220, 250)  # a yellow 40x40 target (bright in grey too)
-    later[380:420, 530:570] = (40, 220, 250)  # the same target, far away
-    histograms = ColourHistograms(32, 0.2, 0.04)
-    patch = first[20:100, 30:110]
-    if grey:
-        patch = cv2.cvtColor(np.ascontiguousarray(patch), cv2.COLOR_BGR2GRAY)
-        frame = GrayFrame(1, 0.04, cv2.cvtColor(later, cv2.COLOR_BGR2GRAY))
-    else:
-        frame = BgrFrame(1, 0.04, later)
-    histograms.learn(np.ascontiguousarray(patch), (20, 20, 40, 40), first=True)
-    x, y = _colour_peak(frame, SimpleNamespace(size=(40.0, 40.0), colour=histograms))
-    step = int(40 / 8) | 1
-    assert abs(x - 550) <= step and abs(y - 400) <= step, (x, y)

@@ -48,9 +48,8 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
   bins x 8 bytes = 8 MiB) and the `robust` tracker's search patch, resampled to about
   `robust_model.working_area`^2 (<= 250^2) working pixels at ~40 bytes each, whatever the frame
   size (while lost, 8 more such patches a frame and, with `robust_model.filter_redetect`, one
-  window of at most {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} working pixels at ~100 bytes each; with
-  `robust_model.colour_redetect` one more patch and a sample of the frame of at most
-  1920x1080/16 pixels). tests/test_fuzz.py checks these bounds for every stage's parameters.
+  window of at most {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} working pixels at ~100 bytes each).
+  tests/test_fuzz.py checks these bounds for every stage's parameters.
 """
 
 

@@ -35,10 +35,10 @@ import cv2
 import numpy as np
 
 from vtrack.errors import InputError
-from vtrack.features.colour import ColourHistograms, box_mean
+from vtrack.features.colour import ColourHistograms
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
-from vtrack.features.patch import region_patch, sampled_pixels
+from vtrack.features.patch import region_patch
 from vtrack.features.scale import ScaleFilter
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
@@ -50,10 +50,6 @@ from vtrack.stages.base import Stage, TrackContext, TrackState, register
 MAX_RINGS = 4
 #: Regions searched a frame while lost besides the centre one (the cost is bounded).
 REGIONS_PER_FRAME = 8
-#: Frame-wide colour re-detection: the frame is sampled every k-th pixel so that the target is
-#: about this many pixels a side, and to at most this many pixels (bounded work per frame).
-COARSE_TARGET_SIDE = 8
-MAX_COARSE_PIXELS = 1920 * 1080 // 16
 #: Frame-wide re-detection with the filter: at most this many working pixels (width x height)
 #: are searched (a larger frame: a window of that area around the search centre).
 WIDE_WINDOW = (1024, 576)
@@ -213,9 +209,6 @@ class RobustModel(Stage):
               "shrunk by this share of its mean side (Staple: 0.2)", min=0.0, max=0.9),
         Param("motion_region", bool, True, "also search a region centred on the motion "
               "model's prediction when it is more than a cell from the last box"),
-        Param("colour_redetect", bool, False, "while the target is lost, also search a region "
-              "centred where the colour histograms' likelihood, averaged over a target-sized "
-              "box, peaks in the whole frame (sampled coarsely)"),
         Param("filter_redetect", bool, False, "while the target is lost, also search a region "
               "centred where the filter's response peaks over the whole frame, at the filter's "
               f"working scale (a larger frame: a window of {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} "
@@ -239,7 +232,6 @@ class RobustModel(Stage):
     bins: int
     inner_padding: float
     motion_region: bool
-    colour_redetect: bool
     filter_redetect: bool
     shift_within: float
     colour_rate: float
@@ -284,9 +276,6 @@ class RobustModel(Stage):
                 and math.hypot(predicted.cx - centre.cx, predicted.cy - centre.cy)
                 > target.cell / region.factor):
             target.regions.append(target.region(ctx.frame, predicted.cx, predicted.cy))
-        if (self.colour_redetect and ctx.state == TrackState.LOST
-                and target.colour is not None):
-            target.regions.append(target.region(ctx.frame, *_colour_peak(ctx.frame, target)))
         if self.filter_redetect and ctx.state == TrackState.LOST:
             target.regions.append(target.region(ctx.frame, *_filter_peak(ctx.frame, target,
                                                                          centre.cx, centre.cy)))
@@ -318,22 +307,6 @@ class RobustModel(Stage):
         start = (ctx.frame.index * REGIONS_PER_FRAME) % len(out)
         picked = (out + out)[start:start + min(REGIONS_PER_FRAME, len(out))]
         return [target.region(ctx.frame, cx, cy) for cx, cy in picked]
-
-
-def _colour_peak(frame: Frame, target: RobustTarget) -> tuple[float, float]:
-    """The frame point (x, y) where the colour likelihood averaged over a target-sized box is
-    highest, over the whole frame sampled every k-th pixel (k odd, the target about
-    ``COARSE_TARGET_SIDE`` samples a side, at most ``MAX_COARSE_PIXELS`` samples)."""
-    assert target.colour is not None
-    w, h = target.size
-    k = max(int(min(w, h) / COARSE_TARGET_SIDE), 1) | 1
-    while (frame.width // k) * (frame.height // k) > MAX_COARSE_PIXELS:
-        k += 2
-    pixels = sampled_pixels(frame, Window(0, 0, frame.width, frame.height), k)
-    mean = box_mean(target.colour.likelihood(pixels), w / k, h / k)
-    o = (k - 1) // 2  # sample (r, c) is frame pixel (o + r k, o + c k)
-    r, c = np.unravel_index(int(np.argmax(mean)), mean.shape)
-    return o + c * k + 0.5, o + r * k + 0.5
 
 
 def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tuple[float, float]:
