@@ -52,7 +52,7 @@ from vtrack.stages.base import TrackState
 
 #: The ablation: (column, what is off, --set overrides), one part of robust switched off each
 #: through its declared parameters. Parts without a switch: the correlation filter itself and
-#: the Kalman filter (robust_motion always runs; only its rewind can be turned off).
+#: the Kalman filter (robust_motion always runs).
 ABLATIONS = (
     ("robust", "nothing: the shipped config", []),
     ("-colour", "colour histograms and their merge (fHOG filter only)",
@@ -75,7 +75,6 @@ ABLATIONS = (
     ("-wide", "the filter's frame-wide search while lost",
      ["robust_model.filter_redetect=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),
-    ("-rewind", "coasting from the last confident frame", ["robust_motion.rewind_frames=0"]),
 )
 
 

@@ -112,7 +112,7 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
                    "robust_search.merge=0", "robust_search.scale=false",
                    "robust_failure.update=false", "robust_failure.redetect=false",
                    "robust_failure.update_apce=0", "robust_failure.hidden_psr=0",
-                   "robust_motion.rewind_frames=0"):
+                   "robust_model.filter_redetect=false", "robust_failure.coast=true"):
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
