@@ -60,8 +60,8 @@ class CorrelationFilter:
         self.numerator: np.ndarray | None = None
         self.denominator: np.ndarray | None = None
         self._filter: np.ndarray | None = None
-        #: The filter's kernel padded to a wide sample's size, transformed (respond_wide).
-        self._wide: np.ndarray | None = None
+        #: A wide sample's size and the filter's kernel padded to it, transformed (respond_wide).
+        self._wide: tuple[tuple[int, ...], np.ndarray] | None = None
 
     def spectrum(self, x: np.ndarray) -> np.ndarray:
         """The Fourier transform of sample ``x`` along the filter's axes, half of it as
@@ -104,20 +104,18 @@ class CorrelationFilter:
         filter's spatial kernel, zero-padded to ``z``'s size, convolved with it (circularly).
         Index ``p`` scores a target centred at ``p`` plus the learnt samples' centre cell."""
         assert self._filter is not None, "respond before learn"
-        if self._wide is None or self._wide.shape[0] != z.shape[0] \
-                or self._wide.shape[1] != z.shape[1] // 2 + 1:
-            rows, cols = self.shape
+        size = z.shape[:2]
+        if self._wide is None or self._wide[0] != size:
             kernel = np.fft.irfftn(self._filter, s=self.shape, axes=(0, 1)).astype(np.float32)
             padded = np.zeros(z.shape, np.float32)
             # the kernel's wrapped offsets (negative ones at the end) keep their offsets
-            ys, xs = np.arange(rows), np.arange(cols)
-            ys = np.where(ys < (rows + 1) // 2, ys, ys - rows) % z.shape[0]
-            xs = np.where(xs < (cols + 1) // 2, xs, xs - cols) % z.shape[1]
+            ys, xs = (np.rint(np.fft.fftfreq(n, 1 / n)).astype(int) % m
+                      for n, m in zip(self.shape, size, strict=True))
             padded[np.ix_(ys, xs)] = kernel
             # kept until the filter learns again (it learns nothing while the target is lost)
-            self._wide = real_spectrum(padded, 2)
-        product = np.einsum("...k,...k->...", self._wide, real_spectrum(z, 2))
-        return np.fft.irfftn(product, s=z.shape[:2], axes=(0, 1))
+            self._wide = (size, real_spectrum(padded, 2))
+        product = np.einsum("...k,...k->...", self._wide[1], real_spectrum(z, 2))
+        return np.fft.irfftn(product, s=size, axes=(0, 1))
 
 
 def real_spectrum(x: np.ndarray, axes: int) -> np.ndarray:

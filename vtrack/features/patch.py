@@ -72,7 +72,7 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     # its patch, not its area.
     k = _subsampling(width / out_w, height / out_h, inside)
     pixels = (converted.sampled(inside, k) if converted is not None and converted.covers(inside)
-              else sampled_pixels(frame, inside, k))
+              else _sampled(frame, inside, k))
     pad = (max(inside.y0 - iy0, 0), max(iy1 - inside.y1, 0),
            max(inside.x0 - ix0, 0), max(ix1 - inside.x1, 0))
     if any(pad):
@@ -106,7 +106,7 @@ def _bounded_patch(frame: Frame, cx: float, cy: float, width: float, height: flo
     # downscale), then average down to the patch's resolution, so a big target costs about its
     # patch, not its area.
     k = _subsampling(step_x, step_y, inside)
-    pixels = sampled_pixels(frame, inside, k)
+    pixels = _sampled(frame, inside, k)
     target_w = max(round(inside.width / step_x), 1)
     target_h = max(round(inside.height / step_y), 1)
     if target_w * 1.5 < pixels.shape[1] or target_h * 1.5 < pixels.shape[0]:
@@ -132,7 +132,7 @@ def _overlap(frame: Frame, x0: float, y0: float, width: float, height: float) ->
     return Window(ix0, iy0, ix1, iy1)
 
 
-def sampled_pixels(frame: Frame, inside: Window, k: int) -> np.ndarray:
+def _sampled(frame: Frame, inside: Window, k: int) -> np.ndarray:
     """Every ``k``-th pixel (``k`` odd, the centre of each block) of the frame's ``inside``
     window: grey for a grey frame, BGR otherwise."""
     if isinstance(frame, GrayFrame):

@@ -77,6 +77,12 @@ def sampling_stride(window_pixels: int, frame_pixels: int) -> int:
     return 1 if share <= 1.0 else math.ceil(math.sqrt(share))
 
 
+def step_limit(max_iterations: int, window_pixels: int, frame_pixels: int) -> int:
+    """Mean-shift steps one bandwidth may take: ``max_iterations``, fewer for a window so large
+    that its steps would cover more than ITERATION_BUDGET frames (at least one)."""
+    return min(max_iterations, max(1, ITERATION_BUDGET * frame_pixels // window_pixels))
+
+
 @lru_cache(maxsize=32)
 def kernel_grid(kernel: str, width: int, height: int) -> np.ndarray:
     """Kernel values at the pixel centres of a ``height`` x ``width`` window centred on the box.
@@ -281,8 +287,8 @@ class KernelMeanShift(Stage):
         sample = self._sample(frame, cx, cy, scale)
         iterations, limit = 0, self.max_iterations
         if sample is not None:  # bounded work: at most ITERATION_BUDGET frames of window area
-            area = sample.window.width * sample.window.height
-            limit = min(limit, max(1, ITERATION_BUDGET * frame.width * frame.height // area))
+            limit = step_limit(limit, sample.window.width * sample.window.height,
+                               frame.width * frame.height)
         while sample is not None and iterations < limit:
             iterations += 1
             # S2 step 4: w_i = q_u / p_u(Y) for the bin u of pixel i (sec. 2.4: the square of

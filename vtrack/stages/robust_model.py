@@ -140,13 +140,18 @@ class RobustTarget:
             hog = np.concatenate([hog, (means.astype(np.float32) / 255 - 0.5)[..., None]], axis=2)
         return hog
 
+    @property
+    def factor(self) -> float:
+        """Working pixels a frame pixel at the current scale (the search region's patch is
+        ``cols x cell`` working pixels across)."""
+        return self.cols * self.cell / (self.region_w * self.scale)
+
     def region(self, frame: Frame, cx: float, cy: float) -> Region:
         """The search region centred on (cx, cy) at the current scale, its patch and features."""
         width, height = self.region_w * self.scale, self.region_h * self.scale
         patch = region_patch(frame, cx, cy, width, height, self.cols * self.cell,
                              self.rows * self.cell)
-        factor = self.cols * self.cell / width
-        return Region(cx, cy, width, height, factor, patch,
+        return Region(cx, cy, width, height, self.factor, patch,
                       self.translation.spectrum(self.features(patch)))
 
     def learn(self, frame: Frame, box: Box, rate: float, first: bool = False) -> None:
@@ -315,7 +320,7 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
     around (``cx``, ``cy``)): the "whole frame at a coarse scale" of a correlation tracker's
     re-detection."""
     cell = target.cell
-    factor = target.cols * cell / (target.region_w * target.scale)  # working px a frame px
+    factor = target.factor
     shrink = min(1.0, math.sqrt(MAX_WIDE_PIXELS / (frame.width * frame.height * factor**2)))
     # sizes the DFT is fast on (the window may reach a little past the frame: replicated)
     cols = cv2.getOptimalDFTSize(max(int(frame.width * shrink * factor / cell), target.cols))

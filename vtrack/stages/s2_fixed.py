@@ -28,7 +28,7 @@ from vtrack.golden.record import FixedRecord
 from vtrack.golden.s0 import split_rgb
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
-from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE
+from vtrack.stages.kernel_meanshift import SAMPLED_ABOVE, step_limit
 
 ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
 #: r of a search with no position (rho = 0): above any D (empty in the trace).
@@ -165,7 +165,7 @@ class KernelMeanShiftInt(Stage):
         if smp is not None and smp.bins.size > SAMPLED_ABOVE * frame_pixels:
             # bounded work for a window over half the frame, as the float s2 (smaller windows,
             # those of every real sequence, step as the DSP loop does, bit for bit)
-            limit = min(limit, max(1, ITERATION_BUDGET * frame_pixels // smp.bins.size))
+            limit = step_limit(limit, smp.bins.size, frame_pixels)
         row: dict[str, object] = {}
         while smp is not None and steps < limit:
             steps += 1
