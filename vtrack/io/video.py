@@ -11,11 +11,14 @@ that is reported like a decoding error, as a :class:`~vtrack.errors.PartialInput
 good frames.
 
 Damage in the middle of a file is skipped as the ``ffmpeg`` command skips it: a packet the
-decoder refuses (``InvalidDataError``) is dropped and decoding goes on with the next one. The
-frames lost are counted (``frames_skipped``) and later frames keep their place in the stream:
-once a packet was dropped, a frame's index comes from its timestamp (``round(time_s * fps)``,
-never less than the next index), so ground truth stays aligned. Only a stream that really ends
-early is partial.
+decoder refuses (``InvalidDataError``) is dropped and decoding goes on with the next one. Damage
+also shows without an error: pictures the decoder marks as decoded with errors, and, in a
+constant-rate stream (its listed frame count is its duration times its rate), pictures that
+vanish, leaving a gap in the timestamps. The frames lost are counted (``frames_skipped``), those
+decoded with errors too (``frames_corrupt``), each kind with a warning, and later frames keep
+their place in the stream: once damage was seen, a frame's index comes from its timestamp
+(``round(time_s * fps)``, never less than the next index), so ground truth stays aligned, and a
+stale picture out of order is dropped. Only a stream that really ends early is partial.
 """
 
 from __future__ import annotations
@@ -129,7 +132,8 @@ class _Tail:
         if not listed and reaches_end is False:
             return (f"{covered - self.first_time:.2f} s of the "
                     f"{end_s - self.first_time:.2f} s the container promises")
-        if self.last_corrupt:
+        if self.last_corrupt and not (listed and self.frames >= listed):
+            # (with every listed frame there, it is damage, counted apart: not a cut-off end)
             return "the last frame is incomplete"
         period = 1.0 / fps
         regular = self.frames >= 3 and self.regular_gap <= 1.2 * period
@@ -223,6 +227,8 @@ class VideoSource(Source):
         self._container = container
         self._stream = stream = container.streams.video[0]
         self._dropped = 0  # packets the decoder refused (damage in the middle of the file)
+        self._corrupt = 0  # pictures the decoder marked as decoded with errors
+        self._damaged = False  # damage seen: frame indices come from timestamps from now on
         # Bounded before the decoder allocates a picture (the size is in the stream header).
         too_big = frame_size_problem(stream.codec_context.width, stream.codec_context.height)
         if too_big and stream.codec_context.width and stream.codec_context.height:
@@ -251,6 +257,10 @@ class VideoSource(Source):
         frame_count = stream.frames or None
         if frame_count is None and duration is not None and fps:
             frame_count = round(duration * fps)
+        # a gap in a constant-rate stream's timestamps is pictures lost (a variable-rate one
+        # may pause): its listed frame count is its duration times its rate
+        self._constant_rate = bool(stream.frames and duration and fps
+                                   and abs(stream.frames - duration * fps) <= 1)
 
         self._rotation = _quarter_turns(self._first.rotation)
         width, height = self._first.width, self._first.height
@@ -277,6 +287,12 @@ class VideoSource(Source):
         place left empty after the damage (some pictures vanish without an error)."""
         return self._dropped
 
+    @property
+    def frames_corrupt(self) -> int:
+        """Frames handed over that the decoder marked as decoded with errors (their pictures
+        may show damage)."""
+        return self._corrupt
+
     def _decode(self) -> Iterator[av.VideoFrame]:
         """Decoded frames in order, dropping packets the decoder refuses (damage in the middle
         of the file: ffmpeg skips them the same way). A demuxer error still ends the stream;
@@ -288,6 +304,7 @@ class VideoSource(Source):
                     frames = packet.decode()
                 except av.error.InvalidDataError:
                     self._dropped += 1
+                    self._damaged = True
                     continue
                 yield from frames
         except av.error.ExitError:
@@ -329,13 +346,19 @@ class VideoSource(Source):
                         index,
                     )
                 t = decoded.time
-                if self._dropped and t is not None and last_t is not None and t <= last_t:
+                if decoded.is_corrupt:
+                    self._damaged = True
+                elif (self._constant_rate and t is not None and last_t is not None
+                      and t - last_t > 1.5 / fps):
+                    self._damaged = True  # pictures vanished without an error
+                if self._damaged and t is not None and last_t is not None and t <= last_t:
                     continue  # a stale picture of the damaged stretch, out of order: its place
                     # has passed, it counts as skipped
                 last_t = t
                 tail.add(t, decoded.is_corrupt)
+                self._corrupt += decoded.is_corrupt
                 time_s = index / fps if t is None or t0 is None else t - t0
-                if self._dropped and t is not None and t0 is not None:
+                if self._damaged and t is not None and t0 is not None:
                     # Frames lost to damage keep their places (see the module docstring).
                     index = max(index, round(time_s * fps))
                 if even and decoded.format.name in I420_FORMATS and self._rotation:
@@ -363,11 +386,14 @@ class VideoSource(Source):
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
             ) from None
         finally:
-            if self._dropped:  # every place left empty, also by pictures the decoder dropped
+            if self._damaged:  # every place left empty, also by pictures the decoder dropped
                 self._dropped = max(self._dropped, index - yielded)
         if self.frames_skipped:
             self.warnings.append(f"{info.path}: {self.frames_skipped} damaged frames could not be "
                                  "decoded and were skipped")
+        if self.frames_corrupt:
+            self.warnings.append(f"{info.path}: {plural(self.frames_corrupt, 'frame')} decoded "
+                                 "with errors (damaged file: their pictures may be wrong)")
         tail.frames += self.frames_skipped  # skipped frames were in the file: not a shortfall
         shortfall = tail.shortfall(self._stream.frames, self._end_s, fps) or self._torn_packet()
         if shortfall:
