@@ -22,8 +22,9 @@ from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import Stage, TargetShape, TrackContext, TrackStatus
 from vtrack.stages.detect import Background, Blobs, Detection
+from vtrack.stages.detection_colours import DetectionColours
 from vtrack.stages.group_blobs import GroupBlobs
-from vtrack.stages.kalman_bytetrack import ByteTracks
+from vtrack.stages.kalman_bytetrack import ByteTracks, colour_distances
 
 
 def run_stages(stages: list[Stage], frames: list[np.ndarray]) -> list[TrackContext]:
@@ -61,7 +62,7 @@ def test_the_shipped_config_detects_by_itself_and_writes_tracks() -> None:
     pipeline = Pipeline(load_config("fixed_camera").build())
     assert not pipeline.needs_init_box and pipeline.multi_target
     assert [s.name for s in pipeline.stages] == ["background", "blobs", "group_blobs",
-                                                 "byte_tracks"]
+                                                 "detection_colours", "byte_tracks"]
 
 
 def test_knn_detects_from_the_second_frame() -> None:
@@ -159,20 +160,72 @@ def test_scores_and_limits_follow_the_learnt_shape() -> None:
     assert square[0].score < 0.5
 
 
+# --- detection_colours --------------------------------------------------------------------------
+
+
+def test_each_detection_gets_the_colours_of_its_own_foreground_pixels() -> None:
+    frame = ground(120, 160)
+    frame[20:60, 20:40] = (0, 0, 220)  # a red person
+    frame[20:60, 100:120] = (220, 0, 0)  # a blue one
+    frame[90:94, 70:74] = (0, 220, 0)  # a speck of 16 pixels
+    mask = np.zeros((120, 160), np.uint8)
+    mask[20:60, 20:40] = mask[20:60, 100:120] = mask[90:94, 70:74] = 255
+    ctx = TrackContext(frame=BgrFrame(0, 0.0, frame))
+    ctx.likelihood = mask
+    # boxes wider than the people: the ground around them must not count
+    ctx.detections = [Detection(Box(x, 10, 40, 60), x + 20, 40, 800) for x in (10, 90)]
+    ctx.detections.append(Detection(Box(66, 86, 12, 12), 72, 92, 16))
+    DetectionColours().step(ctx)
+    red, blue, speck = (d.colours for d in ctx.detections)
+    assert red is not None and blue is not None and speck is None  # 16 < min_pixels
+    assert red.sum() == pytest.approx(1) and red.max() == pytest.approx(1)  # one bin: no ground
+    assert np.argmax(red) != np.argmax(blue)
+    assert colour_distances([red], [blue, red]) == pytest.approx(np.array([[1.0, 0.0]]))
+    # at half resolution (a reduced foreground): the same bins
+    ctx.likelihood, ctx.feature_scale = mask[::2, ::2], 2.0
+    ctx.detections = [Detection(Box(10, 10, 40, 60), 30, 40, 800)]
+    DetectionColours(min_pixels=50).step(ctx)
+    assert np.argmax(ctx.detections[0].colours) == np.argmax(red)
+
+
 # --- byte_tracks --------------------------------------------------------------------------------
 
 
-def tracked(frames: list[list[tuple[Box, float]]], **params) -> list[list]:
-    """byte_tracks over given detections (box, score) per frame: each frame's tracks."""
+def tracked(frames: list[list[tuple[Box, float]]], colours: list[list] | None = None,
+            **params) -> list[list]:
+    """byte_tracks over given detections (box, score) per frame (and their colour histograms,
+    ``colours``): each frame's tracks."""
     stage = ByteTracks(**params)
     ctx = TrackContext(frame=BgrFrame(0, 0.0, ground(480, 640)))
     out = []
     for index, detections in enumerate(frames):
         ctx.new_frame(BgrFrame(index, index / 25, ctx.frame.bgr()))
-        ctx.detections = [Detection(b, b.cx, b.cy, b.area, score=s) for b, s in detections]
+        hues = colours[index] if colours else [None] * len(detections)
+        ctx.detections = [Detection(b, b.cx, b.cy, b.area, score=s, colours=h)
+                          for (b, s), h in zip(detections, hues, strict=True)]
         (stage.start if index == 0 else stage.step)(ctx)
         out.append(ctx.tracks)
     return out
+
+
+def test_the_colour_gate_keeps_a_hidden_persons_track_off_a_passer_by() -> None:
+    """A walker in red is hidden (no detection) while one in blue passes where the red one's
+    track predicts it: without the gate the red track takes the blue walker over; with it the
+    blue walker gets a track of its own and the red track coasts on."""
+    red, blue = np.eye(4)[0], np.eye(4)[3]
+    frames, colours = [], []
+    for i in range(16):
+        if i < 10:
+            frames.append([(walker(50 + 3 * i), 0.9)])
+            colours.append([red])
+        else:  # the red walker hidden; a blue one where it would be
+            frames.append([(walker(50 + 3 * i + 4), 0.9)])
+            colours.append([blue])
+    for gate, takes_over in ((1.0, True), (0.5, False)):
+        out = tracked(frames, colours, colour_gate=gate)
+        red_track = [t for t in out[-1] if t.id == 1]
+        assert (red_track[0].state == TrackStatus.CONFIRMED) == takes_over
+        assert ({t.id for t in out[-1]} == {1}) == takes_over
 
 
 def walker(x: float, step: float = 3.0) -> Box:

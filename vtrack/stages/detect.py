@@ -19,7 +19,7 @@ image) and ``ctx.likelihood`` (the foreground: 0 = background, anything else = f
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -53,8 +53,9 @@ class Detection:
 
     ``box`` is the bounding box (pixels), ``(cx, cy)`` the centroid (a blob's pixel centroid, a
     detector box's centre), ``area`` the pixel count (the box area for detector boxes), ``grey``
-    the mean grey of the blob's pixels (NaN when unknown) and ``score`` the detector's confidence
-    (NaN for blobs).
+    the mean grey of the blob's pixels (NaN when unknown), ``score`` the detector's confidence
+    (NaN for blobs) and ``colours`` the normalised colour histogram of its pixels (None until
+    ``detection_colours`` gives one).
     """
 
     box: Box
@@ -63,6 +64,7 @@ class Detection:
     area: float
     grey: float = math.nan
     score: float = math.nan
+    colours: np.ndarray | None = field(default=None, compare=False, repr=False)
 
 
 def track_state(confirmed: bool, updated: bool) -> TrackStatus:

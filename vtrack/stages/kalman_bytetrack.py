@@ -19,6 +19,16 @@ models (:data:`vtrack.filters.MOTION_MODELS`, on the box centre; the size is smo
 4. tentative tracks against the high-score detections left, as in 2;
 5. every high-score detection still left starts a tentative track.
 
+With ``colour_gate`` < 1, passes 2 and 4 also gate on colours, as DeepSORT (Wojke et al.,
+ICIP 2017, eq. 6) admits a pair only inside both its motion gate and its appearance gate, with
+a colour histogram for the network's embedding: a pair may match only when the Hellinger
+distance ``sqrt(1 - BC)`` between the detection's histogram (``detection_colours``) and the
+track's is at most ``colour_gate``. A track's histogram follows its high-score detections' as
+JDE/FairMOT follow embeddings (a moving average, momentum ``COLOUR_MOMENTUM``). So a track
+whose person is hidden does not take over a differently dressed person passing by, and two
+people who cross keep their identities when they come apart. The second pass stays on IoU only,
+as ByteTrack's: a low-score detection is a partly hidden target, whose colours mislead.
+
 Life of a track: tentative -> confirmed after ``confirm`` measured frames (a tentative track
 missing a frame is deleted) -> coasting while unmeasured (it keeps its identity through short
 occlusions and is matched again as in 2, its gate widening with its uncertainty) -> deleted
@@ -55,6 +65,8 @@ from vtrack.stages.detect import Detection, track_state
 SHAPE_SAMPLES = 500
 #: The cost of a pair that may not match (above any allowed pair's: at most 1 + 1).
 _FORBIDDEN = 1e6
+#: Weight of a track's colours against a new detection's (JDE/FairMOT's embedding momentum).
+COLOUR_MOMENTUM = 0.9
 
 
 @dataclass(eq=False)
@@ -63,6 +75,7 @@ class _Track:
     state: GaussianState
     size: tuple[float, float]  # smoothed width, height
     score: float  # of the last detection it was measured with
+    colours: np.ndarray | None = None  # colour histogram, moving average (appearance)
     hits: int = 1  # frames with a measurement
     misses: int = 0  # frames in a row without one
     confirmed: bool = False
@@ -80,6 +93,22 @@ def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     inter = np.clip(w, 0, None) * np.clip(h, 0, None)
     union = p[..., 2] * p[..., 3] + q[..., 2] * q[..., 3] - inter
     return np.where(union > 0, inter / np.where(union > 0, union, 1), 0.0)
+
+
+def colour_distances(tracks: list[np.ndarray | None],
+                     detections: list[np.ndarray | None]) -> np.ndarray:
+    """Hellinger distance ``sqrt(1 - BC)`` (BC: the Bhattacharyya coefficient) of every
+    track's colour histogram with every detection's, ``(T, M)`` in 0..1; 0 where either has
+    none (nothing to tell them apart by)."""
+    out = np.zeros((len(tracks), len(detections)))
+    rows = [i for i, h in enumerate(tracks) if h is not None]
+    cols = [j for j, h in enumerate(detections) if h is not None]
+    if rows and cols:
+        p = np.sqrt(np.array([tracks[i] for i in rows]))
+        q = np.sqrt(np.array([detections[j] for j in cols]))
+        coefficient = np.clip(p @ q.T, 0.0, 1.0)
+        out[np.ix_(rows, cols)] = np.sqrt(1.0 - coefficient)
+    return out
 
 
 def assign(cost: np.ndarray) -> list[tuple[int, int]]:
@@ -135,6 +164,10 @@ class ByteTracks(Stage):
         Param("max_coast", int, 30,
               "a confirmed track unmeasured for more frames in a row than this is deleted",
               min=0, max=100000),
+        Param("colour_gate", float, 1.0,
+              "largest colour distance (Hellinger, 0..1) of a track and a high-score detection "
+              "that may match (DeepSORT's appearance gate; needs detection_colours before this "
+              "stage; 1: no gate)", min=0.0, max=1.0),
         Param("size_smoothing", float, 0.3,
               "weight of a new measurement in a track's smoothed width and height "
               "(1: the last detection's)", min=0.0, max=1.0),
@@ -208,7 +241,8 @@ class ByteTracks(Stage):
               gated: bool) -> np.ndarray:
         """Cost of each (track, detection) pair: ``1 - IoU`` when the pair is inside the motion
         gate with IoU >= ``least``; with ``gated``, ``1 + d^2 / gate`` for a pair inside the
-        gate with less overlap; ``_FORBIDDEN`` otherwise."""
+        gate with less overlap, and only pairs inside the colour gate; ``_FORBIDDEN``
+        otherwise."""
         if not tracks or not detections:
             return np.zeros((len(tracks), len(detections)))
         H = self._model.H
@@ -233,6 +267,10 @@ class ByteTracks(Stage):
         cost = np.full(overlap.shape, _FORBIDDEN)
         if gated:
             cost = np.where(inside, 1.0 + distance / self.gate, cost)
+            if self.colour_gate < 1.0:  # DeepSORT eq. 6: both gates must admit the pair
+                inside &= colour_distances([t.colours for t in tracks],
+                                           [q.colours for q in detections]) <= self.colour_gate
+                cost = np.where(inside, cost, _FORBIDDEN)
         return np.where(inside & (overlap >= least) & (overlap > 0), 1.0 - overlap, cost)
 
     def _variance(self, sizes: np.ndarray) -> np.ndarray:
@@ -248,6 +286,9 @@ class ByteTracks(Stage):
         track.size = (track.size[0] + a * (box.w - track.size[0]),
                       track.size[1] + a * (box.h - track.size[1]))
         track.score = detection.score
+        if detection.colours is not None and detection.score >= self.high:
+            track.colours = (detection.colours if track.colours is None else COLOUR_MOMENTUM
+                             * track.colours + (1 - COLOUR_MOMENTUM) * detection.colours)
         track.hits += 1
         track.misses = 0
         track.confirmed = track.confirmed or track.hits >= self.confirm
@@ -259,4 +300,4 @@ class ByteTracks(Stage):
         box = detection.box
         state = self._model.initiate([(box.cx, box.cy)] * self._model.points, 1.0)
         return _Track(next(self._ids), state, (box.w, box.h), detection.score,
-                      confirmed=self.confirm <= 1)
+                      colours=detection.colours, confirmed=self.confirm <= 1)
