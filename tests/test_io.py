@@ -202,6 +202,41 @@ def test_display_rotation_is_applied(tmp_path):
     assert frame.bgr().shape == (W, H, 3)
 
 
+def test_full_range_video_keeps_its_colours_in_and_out(tmp_path):
+    """MJPEG (yuvj420p: full-range levels, as many cameras and phones record): the pixels the
+    trackers see, and the annotated video written from the frames, keep the picture's levels
+    instead of stretching them as video range would (16..235 taken for 0..255)."""
+    picture = pictures(1, 160, 120)[0]
+    picture[:, :40] = (10, 10, 10)  # dark and bright areas, where a stretch clips
+    picture[:, -40:] = (245, 245, 245)
+    clip = tmp_path / "clip.avi"
+    with av.open(str(clip), "w") as out:
+        stream = out.add_stream("mjpeg", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuvj420p"
+        for _ in range(3):
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(picture, format="bgr24")))
+        out.mux(stream.encode())
+    with open_source(str(clip)) as source:
+        frames = list(source)
+    frame = frames[0]
+    assert isinstance(frame, I420Frame) and frame.full_range
+    seen = frame.bgr().astype(int)
+    assert np.abs(seen - picture).mean() < 4
+    assert abs(seen.std() / picture.std() - 1) < 0.03
+    assert abs(seen[:, :40].mean() - 10) < 4 and abs(seen[:, -40:].mean() - 245) < 4
+    window = Window(7, 9, 101, 83)
+    assert np.array_equal(frame.bgr(window), frame.bgr()[window.slices])
+    assert np.array_equal(frame.bgr_sampled(window, 3), frame.bgr()[10:83:3, 8:101:3])
+    written = tmp_path / "out.mp4"
+    with VideoWriter(written, 160, 120, 25.0) as writer:
+        for f in frames:
+            writer.write(f)
+    with av.open(str(written)) as container:
+        back = next(container.decode(video=0)).to_ndarray(format="bgr24").astype(int)
+    assert np.abs(back - picture).mean() < 6
+    assert abs(back[:, :40].mean() - 10) < 5 and abs(back[:, -40:].mean() - 245) < 5
+
+
 def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
     frames = pictures(40)
     for name, kwargs in (("fast.mp4", {"options": {"movflags": "faststart"}}),

@@ -134,33 +134,61 @@ class GrayFrame(Frame):
         return out
 
 
+#: Full-range ("JPEG", yuvj420p) luma and chroma levels -> video range (luma 16..235, chroma
+#: 16..240 around 128), the range OpenCV's YUV -> BGR conversions take.
+_VIDEO_LUMA = np.round(16 + np.arange(256) * 219 / 255).astype(np.uint8)
+_VIDEO_CHROMA = np.round(128 + (np.arange(256) - 128) * 224 / 255).astype(np.uint8)
+
+
+def to_video_range(packed: np.ndarray, luma_rows: int) -> np.ndarray:
+    """A packed I420 buffer (its first ``luma_rows`` rows the Y plane, then U and V) moved from
+    full range to video range in place; returned."""
+    cv2.LUT(packed[:luma_rows], _VIDEO_LUMA, dst=packed[:luma_rows])
+    cv2.LUT(packed[luma_rows:], _VIDEO_CHROMA, dst=packed[luma_rows:])
+    return packed
+
+
 class I420Frame(Frame):
     """A frame held as its Y, U and V planes (decoded yuv420p video, raw yuv420p input).
 
     Build it from one packed ``(h * 3 // 2, w)`` I420 array (PyAV's ``to_ndarray()`` layout, raw
     yuv420p input), or with :meth:`from_planes` from three plane arrays, which may be strided
     views of a decoder's own buffers: nothing is copied until a window is asked for.
+    ``full_range``: the planes use the full 0..255 range (yuvj420p: MJPEG, many phones and
+    cameras) rather than video range; they are kept as decoded, and only the pixels converted
+    to BGR (and pictures written out) are moved to video range first, so colours are not
+    stretched.
     """
 
-    __slots__ = ("y", "u", "v")
+    __slots__ = ("y", "u", "v", "full_range")
 
-    def __init__(self, index: int, time_s: float, planes: np.ndarray) -> None:
+    def __init__(self, index: int, time_s: float, planes: np.ndarray,
+                 full_range: bool = False) -> None:
         width, height = planes.shape[1], planes.shape[0] * 2 // 3
         super().__init__(index, time_s, width, height)
         self.y, self.u, self.v = i420_planes(planes, width, height)
+        self.full_range = full_range
 
     @classmethod
     def from_planes(cls, index: int, time_s: float, y: np.ndarray, u: np.ndarray,
-                    v: np.ndarray) -> I420Frame:
+                    v: np.ndarray, full_range: bool = False) -> I420Frame:
         """A frame over existing planes (``y`` is (h, w), ``u`` and ``v`` (h/2, w/2)); no copy."""
         frame = cls.__new__(cls)
         Frame.__init__(frame, index, time_s, y.shape[1], y.shape[0])
         frame.y, frame.u, frame.v = y, u, v
+        frame.full_range = full_range
         return frame
+
+    def _converted(self, packed: np.ndarray, luma_rows: int) -> np.ndarray:
+        """BGR of a packed I420 buffer of this frame's pixels (moved to video range first when
+        the frame is full range)."""
+        if self.full_range:
+            to_video_range(packed, luma_rows)
+        return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
 
     def bgr(self, window: Window | None = None) -> np.ndarray:
         if window is None:
-            return cv2.cvtColor(self.i420(), cv2.COLOR_YUV2BGR_I420)
+            return self._converted(self.i420(), self.height)
         # Convert an even-aligned window on its own, then trim it to the one asked for.
         ex0, ey0 = window.x0 & ~1, window.y0 & ~1
         ex1 = min(window.x1 + (window.x1 & 1), self.width)
@@ -171,7 +199,7 @@ class I420Frame(Frame):
         py[:] = self.y[ey0:ey1, ex0:ex1]
         pu[:] = self.u[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
         pv[:] = self.v[ey0 // 2 : ey1 // 2, ex0 // 2 : ex1 // 2]
-        bgr = cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
+        bgr = self._converted(packed, eh)
         return bgr[window.y0 - ey0 : window.y1 - ey0, window.x0 - ex0 : window.x1 - ex0]
 
     def bgr_sampled(self, window: Window, k: int) -> np.ndarray:
@@ -192,6 +220,9 @@ class I420Frame(Frame):
         half_rows, half_cols = rows // 2 - r0, cols // 2 - c0
         u, v = (plane[r0 : half_rows[-1] + r0 + 1, c0 : half_cols[-1] + c0 + 1]
                 .take(half_rows, axis=0).take(half_cols, axis=1) for plane in (self.u, self.v))
+        if self.full_range:
+            luma, u, v = (cv2.LUT(p, lut) for p, lut in ((luma, _VIDEO_LUMA),
+                                                          (u, _VIDEO_CHROMA), (v, _VIDEO_CHROMA)))
         packed = cv2.merge([luma, u, luma, v])  # Y0 U Y1 V: one YUY2 pair per pixel
         pairs = cv2.cvtColor(packed.reshape(rows.size, cols.size * 2, 2),
                              cv2.COLOR_YUV2BGR_YUY2)
@@ -208,7 +239,7 @@ class I420Frame(Frame):
                                        (1, 2, 2), strict=True):
             tw, th = w // side, h // side
             target[:] = halved(plane[: th * k, : tw * k], k)
-        return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
+        return self._converted(packed, h)
 
     def gray(self, window: Window | None = None) -> np.ndarray:
         return self.y if window is None else self.y[window.slices]

@@ -1,7 +1,8 @@
 """Video files through PyAV: frames in their decoded layout, timestamps, rotation, truncation.
 
 yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no full-frame
-colour conversion); anything else is converted once to BGR. ``time_s`` is each frame's
+colour conversion; full-range levels are marked, ``full_range``, and moved to video range only
+where pixels are converted); anything else is converted once to BGR. ``time_s`` is each frame's
 presentation time relative to the first frame, so variable frame rate input keeps its timing.
 A display-matrix rotation (phone footage) is applied to the pixels and recorded in
 ``info.rotation``.
@@ -45,6 +46,14 @@ from vtrack.machine import cpu_count
 
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
+#: FFmpeg's AVCOL_RANGE_JPEG: a picture whose levels use the full 0..255 range.
+_FULL_RANGE = 2
+
+
+def full_range(decoded: av.VideoFrame) -> bool:
+    """Whether a decoded picture's levels are full range (yuvj420p, or flagged so)."""
+    return (decoded.format.name == "yuvj420p"
+            or getattr(decoded, "color_range", 0) == _FULL_RANGE)
 #: MPEG-TS packet sizes (plain, M2TS with timestamps, DVB with Reed-Solomon bytes).
 TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
@@ -364,11 +373,12 @@ class VideoSource(Source):
                 if even and decoded.format.name in I420_FORMATS and self._rotation:
                     planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height,
                                          self._rotation)
-                    yield I420Frame(index, time_s, planes)
+                    yield I420Frame(index, time_s, planes, full_range(decoded))
                 elif even and decoded.format.name in I420_FORMATS:
                     # Views of the decoder's own planes: no 3 MB copy per 1080p frame. Reading
                     # them is safe; the buffers live as long as the views (PyAV refcounts them).
-                    yield I420Frame.from_planes(index, time_s, *plane_views(decoded))
+                    yield I420Frame.from_planes(index, time_s, *plane_views(decoded),
+                                                full_range=full_range(decoded))
                 else:
                     bgr = decoded.to_ndarray(format="bgr24")
                     if self._rotation:

@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from vtrack.errors import ConfigError, OutputError
-from vtrack.frame import Frame, I420Frame
+from vtrack.frame import Frame, I420Frame, to_video_range
 from vtrack.geometry import Window
 from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
@@ -174,6 +174,8 @@ class VideoWriter(Closing):
         elif isinstance(image, I420Frame) and (image.width, image.height) == (
                 self.width, self.height):
             image.copy_planes_into(buffer)
+            if image.full_range:  # written as yuv420p: video range
+                to_video_range(buffer, self.height)
         else:  # BGR/grey pictures convert straight into the buffer; odd sizes lose a row/column
             window = Window(0, 0, self.width, self.height)
             cv2.cvtColor(image.bgr(window), cv2.COLOR_BGR2YUV_I420, dst=buffer)
