@@ -237,6 +237,39 @@ def test_full_range_video_keeps_its_colours_in_and_out(tmp_path):
     assert abs(back[:, :40].mean() - 10) < 5 and abs(back[:, -40:].mean() - 245) < 5
 
 
+def test_bt709_video_keeps_its_colours(tmp_path):
+    """HD video is usually BT.709 (and says so); OpenCV's conversions are BT.601's. The pixels
+    the trackers see match FFmpeg's own conversion of the tagged picture, saturated colours
+    too, in every way a frame converts its pixels."""
+    chart = np.zeros((128, 224, 3), np.uint8)
+    for i, colour in enumerate([(0, 0, 255), (0, 255, 0), (255, 0, 0), (0, 200, 255),
+                                (200, 50, 150), (128, 128, 128), (30, 90, 200)]):
+        chart[:, i * 32:(i + 1) * 32] = colour
+    clip = tmp_path / "hd.mp4"
+    with av.open(str(clip), "w") as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 224, 128, "yuv420p"
+        stream.codec_context.colorspace = 1  # tagged BT.709, as cameras tag HD
+        picture = av.VideoFrame.from_ndarray(chart, format="bgr24").reformat(
+            format="yuv420p", dst_colorspace="ITU709")
+        out.mux(stream.encode(picture))
+        out.mux(stream.encode())
+    with av.open(str(clip)) as container:
+        ffmpeg_bgr = next(container.decode(video=0)).to_ndarray(format="bgr24").astype(int)
+    assert np.abs(ffmpeg_bgr - chart).max() > 0  # (x264 is lossy: compare with FFmpeg's own)
+    with open_source(str(clip)) as source:
+        frame = next(iter(source))
+        assert isinstance(frame, I420Frame) and frame.bt709
+        seen = frame.bgr()
+        assert np.abs(seen.astype(int) - ffmpeg_bgr).max() <= 4
+        window = Window(5, 7, 201, 121)
+        assert np.array_equal(frame.bgr(window), seen[window.slices])
+        assert np.array_equal(frame.bgr_sampled(window, 3), seen[8:121:3, 6:201:3])
+        shrunk = frame.bgr_shrunk(2).astype(int)
+        half = cv2.resize(seen, (112, 64), interpolation=cv2.INTER_AREA).astype(int)
+        assert np.abs(shrunk - half)[2:-2, 2:-2].mean() < 3
+
+
 def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
     frames = pictures(40)
     for name, kwargs in (("fast.mp4", {"options": {"movflags": "faststart"}}),

@@ -140,6 +140,43 @@ _VIDEO_LUMA = np.round(16 + np.arange(256) * 219 / 255).astype(np.uint8)
 _VIDEO_CHROMA = np.round(128 + (np.arange(256) - 128) * 224 / 255).astype(np.uint8)
 
 
+def _rgb_to_ycbcr(kr: float, kb: float) -> np.ndarray:
+    """RGB -> (Y, Cb, Cr) of the standard with luma weights ``kr``, ``kb`` (normalised)."""
+    kg = 1 - kr - kb
+    return np.array([[kr, kg, kb],
+                     [-kr / (2 * (1 - kb)), -kg / (2 * (1 - kb)), 0.5],
+                     [0.5, -kg / (2 * (1 - kr)), -kb / (2 * (1 - kr))]])
+
+
+def _bt709_to_601_transforms() -> tuple[np.ndarray, np.ndarray]:
+    """OpenCV ``transform`` matrices on (U, V) code values for BT.709 -> BT.601 (the standard
+    OpenCV's conversions assume): the new (U, V), and luma's change + 128. Grey stays grey, so
+    chroma does not depend on luma; luma gains ``219 / 224`` of a chroma term (their code
+    ranges)."""
+    m = _rgb_to_ycbcr(0.299, 0.114) @ np.linalg.inv(_rgb_to_ycbcr(0.2126, 0.0722))
+    chroma, luma = m[1:, 1:], m[0, 1:] * 219 / 224
+    chroma_rows = np.hstack([chroma, (128 - 128 * chroma.sum(axis=1))[:, None]])
+    luma_row = np.hstack([luma, [128 - 128 * luma.sum()]])[None, :]
+    return chroma_rows.astype(np.float32), luma_row.astype(np.float32)
+
+
+_CHROMA_709_TO_601, _LUMA_CHANGE_709_TO_601 = _bt709_to_601_transforms()
+
+
+def bt709_to_601(luma: np.ndarray, u: np.ndarray, v: np.ndarray, upsample: bool) -> None:
+    """Video-range BT.709 planes (uint8) moved to BT.601 in place. ``upsample``: ``u`` and
+    ``v`` are 4:2:0 planes, each sample shared by a 2 x 2 block of ``luma`` (as OpenCV's
+    conversions pair them); else one chroma sample per luma sample (same shapes)."""
+    chroma = cv2.merge([u, v])
+    change = cv2.transform(chroma, _LUMA_CHANGE_709_TO_601)
+    if upsample:
+        change = cv2.resize(change, (luma.shape[1], luma.shape[0]),
+                            interpolation=cv2.INTER_NEAREST)
+    cv2.addWeighted(luma, 1.0, change, 1.0, -128.0, dst=luma)
+    new_u, new_v = cv2.split(cv2.transform(chroma, _CHROMA_709_TO_601))
+    u[:], v[:] = new_u, new_v
+
+
 def to_video_range(packed: np.ndarray, luma_rows: int) -> np.ndarray:
     """A packed I420 buffer (its first ``luma_rows`` rows the Y plane, then U and V) moved from
     full range to video range in place; returned."""
@@ -155,35 +192,38 @@ class I420Frame(Frame):
     yuv420p input), or with :meth:`from_planes` from three plane arrays, which may be strided
     views of a decoder's own buffers: nothing is copied until a window is asked for.
     ``full_range``: the planes use the full 0..255 range (yuvj420p: MJPEG, many phones and
-    cameras) rather than video range; they are kept as decoded, and only the pixels converted
-    to BGR (and pictures written out) are moved to video range first, so colours are not
-    stretched.
+    cameras) rather than video range; ``bt709``: their colours are BT.709's (most HD video)
+    rather than BT.601's. The planes are kept as decoded; only the pixels converted to BGR are
+    moved to video range and BT.601 first (what OpenCV's conversions take), and pictures
+    written out to video range, so colours are neither stretched nor shifted.
     """
 
-    __slots__ = ("y", "u", "v", "full_range")
+    __slots__ = ("y", "u", "v", "full_range", "bt709")
 
     def __init__(self, index: int, time_s: float, planes: np.ndarray,
-                 full_range: bool = False) -> None:
+                 full_range: bool = False, bt709: bool = False) -> None:
         width, height = planes.shape[1], planes.shape[0] * 2 // 3
         super().__init__(index, time_s, width, height)
         self.y, self.u, self.v = i420_planes(planes, width, height)
-        self.full_range = full_range
+        self.full_range, self.bt709 = full_range, bt709
 
     @classmethod
     def from_planes(cls, index: int, time_s: float, y: np.ndarray, u: np.ndarray,
-                    v: np.ndarray, full_range: bool = False) -> I420Frame:
+                    v: np.ndarray, full_range: bool = False, bt709: bool = False) -> I420Frame:
         """A frame over existing planes (``y`` is (h, w), ``u`` and ``v`` (h/2, w/2)); no copy."""
         frame = cls.__new__(cls)
         Frame.__init__(frame, index, time_s, y.shape[1], y.shape[0])
         frame.y, frame.u, frame.v = y, u, v
-        frame.full_range = full_range
+        frame.full_range, frame.bt709 = full_range, bt709
         return frame
 
     def _converted(self, packed: np.ndarray, luma_rows: int) -> np.ndarray:
-        """BGR of a packed I420 buffer of this frame's pixels (moved to video range first when
-        the frame is full range)."""
+        """BGR of a packed I420 buffer of this frame's pixels (moved to video range and BT.601
+        first where the frame is not)."""
         if self.full_range:
             to_video_range(packed, luma_rows)
+        if self.bt709:
+            bt709_to_601(*i420_planes(packed, packed.shape[1], luma_rows), upsample=True)
         return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
 
     def bgr(self, window: Window | None = None) -> np.ndarray:
@@ -223,6 +263,9 @@ class I420Frame(Frame):
         if self.full_range:
             luma, u, v = (cv2.LUT(p, lut) for p, lut in ((luma, _VIDEO_LUMA),
                                                           (u, _VIDEO_CHROMA), (v, _VIDEO_CHROMA)))
+        if self.bt709:  # each sample has its own chroma here
+            luma, u, v = (np.array(p, copy=True) for p in (luma, u, v))
+            bt709_to_601(luma, u, v, upsample=False)
         packed = cv2.merge([luma, u, luma, v])  # Y0 U Y1 V: one YUY2 pair per pixel
         pairs = cv2.cvtColor(packed.reshape(rows.size, cols.size * 2, 2),
                              cv2.COLOR_YUV2BGR_YUY2)

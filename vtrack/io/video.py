@@ -1,9 +1,10 @@
 """Video files through PyAV: frames in their decoded layout, timestamps, rotation, truncation.
 
 yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no full-frame
-colour conversion; full-range levels are marked, ``full_range``, and moved to video range only
-where pixels are converted); anything else is converted once to BGR. ``time_s`` is each frame's
-presentation time relative to the first frame, so variable frame rate input keeps its timing.
+colour conversion; full-range levels and BT.709 colours are marked, ``full_range`` and
+``bt709``, and moved to video range and BT.601 only where pixels are converted); anything else
+is converted once to BGR. ``time_s`` is each frame's presentation time relative to the first
+frame, so variable frame rate input keeps its timing.
 A display-matrix rotation (phone footage) is applied to the pixels and recorded in
 ``info.rotation``.
 
@@ -50,10 +51,20 @@ I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 _FULL_RANGE = 2
 
 
+#: FFmpeg's AVCOL_SPC_BT709: a picture whose colours are BT.709's (most HD video).
+_BT709 = 1
+
+
 def full_range(decoded: av.VideoFrame) -> bool:
     """Whether a decoded picture's levels are full range (yuvj420p, or flagged so)."""
     return (decoded.format.name == "yuvj420p"
             or getattr(decoded, "color_range", 0) == _FULL_RANGE)
+
+
+def bt709(decoded: av.VideoFrame) -> bool:
+    """Whether a decoded picture is flagged as BT.709 (untagged pictures are taken as BT.601,
+    as FFmpeg's own conversions take them)."""
+    return getattr(decoded, "colorspace", 0) == _BT709
 #: MPEG-TS packet sizes (plain, M2TS with timestamps, DVB with Reed-Solomon bytes).
 TS_PACKET_SIZES = (188, 192, 204)
 #: Slack when comparing the decoded length with the container's: a few frames or half a second.
@@ -373,12 +384,13 @@ class VideoSource(Source):
                 if even and decoded.format.name in I420_FORMATS and self._rotation:
                     planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height,
                                          self._rotation)
-                    yield I420Frame(index, time_s, planes, full_range(decoded))
+                    yield I420Frame(index, time_s, planes, full_range(decoded), bt709(decoded))
                 elif even and decoded.format.name in I420_FORMATS:
                     # Views of the decoder's own planes: no 3 MB copy per 1080p frame. Reading
                     # them is safe; the buffers live as long as the views (PyAV refcounts them).
                     yield I420Frame.from_planes(index, time_s, *plane_views(decoded),
-                                                full_range=full_range(decoded))
+                                                full_range=full_range(decoded),
+                                                bt709=bt709(decoded))
                 else:
                     bgr = decoded.to_ndarray(format="bgr24")
                     if self._rotation:
