@@ -177,7 +177,11 @@ def test_random_bytes_in_the_middle_of_an_mp4_are_skipped(tmp_path: Path) -> Non
     assert result.returncode == 0, stderr
     assert "Traceback" not in stderr
     warnings = [line for line in stderr.splitlines() if line.startswith("vtrack: warning")]
-    assert len(warnings) == 1 and "damaged.mp4" in warnings[0] and "skipped" in warnings[0]
+    # one line for the frames skipped; a second one when the decoder also handed over pictures
+    # decoded with errors (which ones it flags depends on its frame threads' timing)
+    assert 1 <= len(warnings) <= 2 and all("damaged.mp4" in w for w in warnings)
+    assert "skipped" in warnings[0]
+    assert all("decoded with errors" in w for w in warnings[1:])
     record = json.loads((tmp_path / "o" / "run.json").read_text())
     skipped = record["summary"]["frames_skipped"]
     rows = _rows(tmp_path / "o" / "track.csv")
