@@ -304,7 +304,10 @@ def test_corrupt_packets_mid_stream_are_skipped(tmp_path):
         skipped = source.frames_skipped
     assert skipped > 0 and len(got) + skipped == 40 and got[-1] == 39
     assert got == sorted(set(got))
-    assert len(source.warnings) == 1 and str(broken) in source.warnings[0]
+    # the skipped frames' line, and one for pictures decoded with errors if the decoder's frame
+    # threads flagged any
+    assert 1 <= len(source.warnings) <= 2 and all(str(broken) in w for w in source.warnings)
+    assert "skipped" in source.warnings[0]
 
 
 def test_scattered_damage_is_counted_and_frames_keep_their_places(tmp_path):
