@@ -69,6 +69,8 @@ ABLATIONS = (
      ["robust_failure.hidden_psr=0"]),
     ("-doubtful", "LMCF's doubtful label (a weak sharp peak called occluded)",
      ["robust_failure.hidden_peak=0"]),
+    ("-colourcheck", "the colour check before a doubtful frame is learnt",
+     ["robust_failure.doubtful_colour=0"]),
     ("-apce", "LMCF's APCE test to take a hidden target back (PSR and peak only)",
      ["robust_failure.retake_apce=0"]),
     ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),

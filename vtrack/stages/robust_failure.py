@@ -17,7 +17,12 @@ filter's own response (``robust_search``), not a hand-set similarity:
   al., LMCF, CVPR 2017: beta_2 = 0.45; a background texture can give a sharp peak, not a strong
   one) is called occluded too, but followed and learnt like a tracking frame, and it is no step
   towards lost: freezing the model there lowered the check sequences' mean AUC (0.606 ->
-  0.546); as a label only it raised the share of missed frames flagged from 19% to 53%.
+  0.546); as a label only it raised the share of missed frames flagged from 19% to 53%. With
+  ``doubtful_colour``, a doubtful frame is learnt only when the other learner agrees: the
+  colour response at the peak is at least that share of its mean so far (Staple's premise,
+  two complementary learners; the share is LMCF's beta_1 = 0.7). A target passing behind a
+  plain occluder gives doubtful peaks on the occluder's edge, whose colours are not the
+  target's: learnt, the edge became the target (generated `slab` and `occlusion` scenes).
 - A hidden or lost target is taken back only on a response LMCF would call confident: sharp
   (PSR at least ``hidden_psr``), strong (its peak at least ``hidden_peak`` of its mean so far,
   LMCF's beta_2) and with an APCE of at least ``retake_apce`` of its mean so far (LMCF's
@@ -64,6 +69,9 @@ class RobustFailure(Stage):
               "called occluded but still followed and learnt, and takes no hidden target back "
               "(LMCF beta_2: 0.45; 0: never)",
               min=0.0, max=10.0),
+        Param("doubtful_colour", float, 0.0, "a doubtful frame is learnt only when the colour "
+              "response at its peak is at least this share of its mean so far (LMCF beta_1: "
+              "0.7; 0: always, as a tracking frame)", min=0.0, max=10.0),
         Param("retake_apce", float, 0.0, "a hidden target is taken back only on a response "
               "whose APCE is at least this share of its mean so far (LMCF beta_1: 0.7; 0: "
               "sharp and strong suffice)", min=0.0, max=10.0),
@@ -86,6 +94,7 @@ class RobustFailure(Stage):
 
     hidden_psr: float
     hidden_peak: float
+    doubtful_colour: float
     retake_apce: float
     lost_after: int
     coast: bool
@@ -110,6 +119,7 @@ class RobustFailure(Stage):
         was = ctx.state
         retaken = target.hidden_frames == 0 or (
             not weak and target.apce >= self.retake_apce * target.usual_apce)
+        colour_peak, usual_colour = target.colour_peak, target.usual_colour
         _remember(target)
         if (ctx.measurement is not None and sharp and retaken
                 and (was == TrackState.TRACKING or strong)):
@@ -119,7 +129,9 @@ class RobustFailure(Stage):
             # tracking frame (freezing the model there lost more targets than it kept: the
             # check sequences' mean AUC 0.606 -> 0.546), and no step towards lost
             ctx.state = TrackState.OCCLUDED if weak else TrackState.TRACKING
-            if self.update and strong:
+            colour_disagrees = weak and (
+                colour_peak < self.doubtful_colour * usual_colour)
+            if self.update and strong and not colour_disagrees:
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
         target.hidden_frames += 1
@@ -151,11 +163,13 @@ class RobustFailure(Stage):
 
 
 def _remember(target: RobustTarget) -> None:
-    """LMCF's historical means of APCE and peak: plain means over the frames so far (hidden
-    ones too, so that a lasting change of appearance is taken in, slowly)."""
+    """LMCF's historical means of APCE and peak (and of the colour response at the peak):
+    plain means over the frames so far (hidden ones too, so that a lasting change of appearance
+    is taken in, slowly)."""
     n = target.response_frames + 1
     target.usual_apce += (target.apce - target.usual_apce) / n
     target.usual_peak += (target.peak - target.usual_peak) / n
+    target.usual_colour += (target.colour_peak - target.usual_colour) / n
     target.response_frames = n
 
 

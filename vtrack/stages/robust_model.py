@@ -116,8 +116,12 @@ class RobustTarget:
     peak: float = 0.0
     #: Peak-to-sidelobe ratio of this frame's response (MOSSE).
     psr: float = 0.0
+    #: The colour response (Staple's mean likelihood over a target-sized box) at the chosen
+    #: peak (1 without colour), and its mean so far.
+    colour_peak: float = 1.0
     usual_apce: float = 0.0
     usual_peak: float = 0.0
+    usual_colour: float = 0.0
     response_frames: int = 0
     #: Frames hidden in a row (``robust_failure``).
     hidden_frames: int = 0

@@ -11,7 +11,8 @@ Second link of the ``robust`` chain. On each region ``robust_model`` cut:
 4. the target's size from fDSST's scale filter at that centre (:mod:`vtrack.features.scale`).
 
 The confidence of the filter's own response, LMCF's average peak-to-correlation energy and its
-peak value (Wang et al., CVPR 2017, eq. 7), goes to ``ctx.robust`` for ``robust_failure``;
+peak value (Wang et al., CVPR 2017, eq. 7), and the colour response at the chosen peak go to
+``ctx.robust`` for ``robust_failure``;
 ``ctx.score`` is the smaller of the two relative to their usual values (1: as sure as usual).
 While lost, the region whose merged peak is highest wins.
 
@@ -86,17 +87,20 @@ class RobustSearch(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None
-        best: tuple[float, Region, np.ndarray, np.ndarray, tuple[float, float]] | None = None
+        best: tuple[float, Region, np.ndarray, float, tuple[float, float]] | None = None
         for i, region in enumerate(target.regions):
             likelihood = ctx.likelihood if i == 0 else (
                 target.colour.likelihood(region.patch) if target.colour is not None else None)
-            response, merged = self._responses(target, region, likelihood)
+            response, colour = self._responses(target, region, likelihood)
+            merged = response if colour is None else (
+                (1 - self.merge) * response + self.merge * colour)
             r, c = np.unravel_index(int(np.argmax(merged)), merged.shape)
             if best is None or merged[r, c] > best[0]:
-                best = (float(merged[r, c]), region, response, merged,
+                best = (float(merged[r, c]), region, response,
+                        1.0 if colour is None else float(colour[r, c]),
                         subpixel_peak(merged, int(r), int(c)))
         assert best is not None
-        _, region, response, _, (row, col) = best
+        _, region, response, target.colour_peak, (row, col) = best
         target.chosen = region
         target.apce, target.peak = apce(response), float(response.max())
         target.psr = psr(response)
@@ -117,13 +121,13 @@ class RobustSearch(Stage):
         ctx.measurement = ctx.box = Box.from_center(cx, cy, w, h)
         ctx.score = confidence(target)
 
-    def _responses(self, target: RobustTarget, region: Region,
-                   likelihood: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    def _responses(self, target: RobustTarget, region: Region, likelihood: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray | None]:
         """The filter's response on the region (centred: no displacement at the middle cell)
-        and its merge with the colour response on the same cells."""
+        and the colour response on the same cells (None without colour)."""
         response = np.fft.fftshift(target.translation.respond_spectrum(region.spectrum))
         if likelihood is None or self.merge == 0.0:
-            return response, response
+            return response, None
         w, h = target.size
         mean = box_mean(likelihood, w * region.factor, h * region.factor)
         # the cells' displacements, as working pixels of the patch
@@ -131,8 +135,7 @@ class RobustSearch(Stage):
                        * target.cell, 0, mean.shape[0] - 1)
         cols = np.clip(mean.shape[1] // 2 + (np.arange(target.cols) - target.cols // 2)
                        * target.cell, 0, mean.shape[1] - 1)
-        colour = mean[np.ix_(rows, cols)]
-        return response, (1 - self.merge) * response + self.merge * colour
+        return response, mean[np.ix_(rows, cols)]
 
 
 def confidence(target: RobustTarget) -> float:
