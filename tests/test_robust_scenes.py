@@ -43,8 +43,9 @@ def run_robust(name: str, seed: int, frames: int = FRAMES, size: tuple[int, int]
 
 
 #: Scenes the correlation-filter rebuild of issue 20 does not hold yet (kept failing on purpose,
-#: strict, until it does): a target moving more than its own size a frame, the wider slab of
-#: the larger scenes, and the return of seed 1 of the scene leaving the view.
+#: strict, until it does): a target moving more than its own size a frame, and the return of
+#: seed 1 of the scene leaving the view. (The wider slab of the larger scenes holds since a
+#: doubtful frame is learnt only when the colours agree.)
 OPEN_GAP = pytest.mark.xfail(strict=True, reason="robust rebuilt on a correlation filter: "
                                                  "known gap of issue 20, open")
 HARD = ["clip_ramp", "fast", "grow", "shrink", "crossing", "slab", "exit_return", "grey"]
@@ -53,7 +54,7 @@ GEOMETRIES = {
     "480x360x90": ((3, 4, 5), 90, (480, 360)),  # larger and shorter: faster motion, a wider slab
 }
 #: (scene, geometry) pairs issue 20 does not hold yet.
-OPEN_HARD = {("fast", "320x240x120"), ("fast", "480x360x90"), ("slab", "480x360x90")}
+OPEN_HARD = {("fast", "320x240x120"), ("fast", "480x360x90")}
 
 
 @pytest.mark.parametrize("name, seeds, frames, size", [
