@@ -14,7 +14,8 @@ import math
 import numpy as np
 import pytest
 
-from vtrack.config import load_config
+from vtrack.config import load_config, parse_config
+from vtrack.errors import ConfigError
 from vtrack.evaluate.mot import evaluate_mot
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box
@@ -206,6 +207,19 @@ def tracked(frames: list[list[tuple[Box, float]]], colours: list[list] | None = 
         (stage.start if index == 0 else stage.step)(ctx)
         out.append(ctx.tracks)
     return out
+
+
+def test_the_colour_gate_is_refused_without_the_stage_that_gives_the_colours() -> None:
+    gated = [{"name": "background"}, {"name": "blobs"},
+             {"name": "byte_tracks", "colour_gate": 0.5}]
+    with pytest.raises(ConfigError, match="colour_gate below 1 needs the detection_colours"):
+        parse_config({"stage": gated}, "gated")
+    plain = parse_config({"stage": [{"name": "background"}, {"name": "blobs"},
+                                    {"name": "byte_tracks"}]}, "plain")
+    with pytest.raises(ConfigError, match="detection_colours"):
+        plain.with_overrides(["byte_tracks.colour_gate=0.5"])
+    shipped = load_config("fixed_camera").with_overrides(["byte_tracks.colour_gate=0.3"])
+    assert dict(shipped.stages)["byte_tracks"]["colour_gate"] == 0.3
 
 
 def test_the_colour_gate_keeps_a_hidden_persons_track_off_a_passer_by() -> None:

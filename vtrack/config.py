@@ -75,7 +75,9 @@ class Config:
             value = declared[param_name].parse(raw.strip(), f"{where}: stage '{stage_name}'")
             for values in matches:
                 values[param_name] = value
-        return Config(self.name, self.source, self.description, stages)
+        config = Config(self.name, self.source, self.description, stages)
+        check_chain(config)
+        return config
 
 
 def config_from_resolved(data: dict[str, Any]) -> Config:
@@ -159,7 +161,8 @@ def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
     value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`)."""
     available = set(PIPELINE_PROVIDES)
-    for name, _ in config.stages:
+    before: list[str] = []
+    for name, values in config.stages:
         cls = stage_class(name, config.source)
         missing = cls.requires - available
         if missing:
@@ -167,6 +170,10 @@ def check_chain(config: Config) -> None:
                 f"{config.source}: stage '{name}' needs {', '.join(sorted(missing))}, "
                 "which no earlier stage provides (check the order of the chain)"
             )
+        problem = cls.chain_problem(values, before)
+        if problem:
+            raise ConfigError(f"{config.source}: stage '{name}': {problem}")
+        before.append(name)
         for provided in cls.provides:  # what an older value was computed from is stale now
             available -= DERIVED.get(provided, frozenset()) - cls.provides
         available |= cls.provides

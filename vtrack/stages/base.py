@@ -231,6 +231,12 @@ class Stage:
         for param in self.params:
             setattr(self, param.name, values.get(param.name, param.default))
 
+    @classmethod
+    def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
+        """Why this stage, with these explicitly set parameter ``values``, cannot come after the
+        stages named in ``before`` beyond what ``requires`` says (None: it can)."""
+        return None
+
     def initial_box(self, ctx: TrackContext) -> Box:
         """The first frame's box this stage starts from; InputError naming the stage when there
         is none or it is not a finite box of positive size."""

@@ -52,6 +52,7 @@ from __future__ import annotations
 import itertools
 from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -166,8 +167,8 @@ class ByteTracks(Stage):
               min=0, max=100000),
         Param("colour_gate", float, 1.0,
               "largest colour distance (Hellinger, 0..1) of a track and a high-score detection "
-              "that may match (DeepSORT's appearance gate; needs detection_colours before this "
-              "stage; 1: no gate)", min=0.0, max=1.0),
+              "that may match (DeepSORT's appearance gate; refused without detection_colours "
+              "before this stage; 1: no gate)", min=0.0, max=1.0),
         Param("size_smoothing", float, 0.3,
               "weight of a new measurement in a track's smoothed width and height "
               "(1: the last detection's)", min=0.0, max=1.0),
@@ -176,6 +177,13 @@ class ByteTracks(Stage):
     provides = frozenset({"tracks", "target_shape"})
     multi_target = True
     needs_init_box = False
+
+    @classmethod
+    def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
+        if values.get("colour_gate", 1.0) < 1.0 and "detection_colours" not in before:
+            return ("colour_gate below 1 needs the detection_colours stage before it (it gives "
+                    "each detection its colours; without it nothing would be gated)")
+        return None
 
     def start(self, ctx: TrackContext) -> None:
         """Forget any previous run (no track, nothing learnt), then track this frame."""
