@@ -177,12 +177,11 @@ def bt709_to_601(luma: np.ndarray, u: np.ndarray, v: np.ndarray, upsample: bool)
     u[:], v[:] = new_u, new_v
 
 
-def to_video_range(packed: np.ndarray, luma_rows: int) -> np.ndarray:
-    """A packed I420 buffer (its first ``luma_rows`` rows the Y plane, then U and V) moved from
-    full range to video range in place; returned."""
-    cv2.LUT(packed[:luma_rows], _VIDEO_LUMA, dst=packed[:luma_rows])
-    cv2.LUT(packed[luma_rows:], _VIDEO_CHROMA, dst=packed[luma_rows:])
-    return packed
+def to_video_range(luma: np.ndarray, u: np.ndarray, v: np.ndarray) -> None:
+    """Full-range Y, U and V planes (uint8, contiguous) moved to video range in place."""
+    cv2.LUT(luma, _VIDEO_LUMA, dst=luma)
+    for chroma in (u, v):
+        cv2.LUT(chroma, _VIDEO_CHROMA, dst=chroma)
 
 
 class I420Frame(Frame):
@@ -217,13 +216,19 @@ class I420Frame(Frame):
         frame.full_range, frame.bt709 = full_range, bt709
         return frame
 
-    def _converted(self, packed: np.ndarray, luma_rows: int) -> np.ndarray:
-        """BGR of a packed I420 buffer of this frame's pixels (moved to video range and BT.601
-        first where the frame is not)."""
+    def _to_opencv_levels(self, luma: np.ndarray, u: np.ndarray, v: np.ndarray,
+                          upsample: bool) -> None:
+        """Planes of this frame's pixels (uint8, contiguous, its own copies) moved in place to
+        video range and BT.601, what OpenCV's conversions take (``upsample``: 4:2:0 chroma,
+        else one chroma sample per luma sample)."""
         if self.full_range:
-            to_video_range(packed, luma_rows)
+            to_video_range(luma, u, v)
         if self.bt709:
-            bt709_to_601(*i420_planes(packed, packed.shape[1], luma_rows), upsample=True)
+            bt709_to_601(luma, u, v, upsample)
+
+    def _converted(self, packed: np.ndarray, luma_rows: int) -> np.ndarray:
+        """BGR of a packed I420 buffer of this frame's pixels (its own copy)."""
+        self._to_opencv_levels(*i420_planes(packed, packed.shape[1], luma_rows), upsample=True)
         return cv2.cvtColor(packed, cv2.COLOR_YUV2BGR_I420)
 
     def bgr(self, window: Window | None = None) -> np.ndarray:
@@ -260,12 +265,9 @@ class I420Frame(Frame):
         half_rows, half_cols = rows // 2 - r0, cols // 2 - c0
         u, v = (plane[r0 : half_rows[-1] + r0 + 1, c0 : half_cols[-1] + c0 + 1]
                 .take(half_rows, axis=0).take(half_cols, axis=1) for plane in (self.u, self.v))
-        if self.full_range:
-            luma, u, v = (cv2.LUT(p, lut) for p, lut in ((luma, _VIDEO_LUMA),
-                                                          (u, _VIDEO_CHROMA), (v, _VIDEO_CHROMA)))
-        if self.bt709:  # each sample has its own chroma here
+        if self.full_range or self.bt709:  # (luma may be a view of the decoder's plane)
             luma, u, v = (np.array(p, copy=True) for p in (luma, u, v))
-            bt709_to_601(luma, u, v, upsample=False)
+            self._to_opencv_levels(luma, u, v, upsample=False)
         packed = cv2.merge([luma, u, luma, v])  # Y0 U Y1 V: one YUY2 pair per pixel
         pairs = cv2.cvtColor(packed.reshape(rows.size, cols.size * 2, 2),
                              cv2.COLOR_YUV2BGR_YUY2)

@@ -175,7 +175,7 @@ class VideoWriter(Closing):
                 self.width, self.height):
             image.copy_planes_into(buffer)
             if image.full_range:  # written as yuv420p: video range
-                to_video_range(buffer, self.height)
+                to_video_range(*i420_planes(buffer, self.width, self.height))
         else:  # BGR/grey pictures convert straight into the buffer; odd sizes lose a row/column
             window = Window(0, 0, self.width, self.height)
             cv2.cvtColor(image.bgr(window), cv2.COLOR_BGR2YUV_I420, dst=buffer)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from vtrack.geometry import MAX_FRAME_PIXELS, Box
+from vtrack.geometry import MAX_FRAME_PIXELS, Box, Window
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, register
 
@@ -65,6 +65,15 @@ class Detection:
     grey: float = math.nan
     score: float = math.nan
     colours: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+
+def mask_window(box: Box, scale: float, shape: tuple[int, ...]) -> Window:
+    """The pixels of a foreground of ``shape`` (``scale`` frame pixels per pixel, as
+    ``ctx.feature_scale`` says) that cover ``box`` (frame pixels); empty when none do."""
+    x0, y0 = max(0, math.floor(box.x / scale)), max(0, math.floor(box.y / scale))
+    x1 = min(shape[1], math.ceil((box.x + box.w) / scale))
+    y1 = min(shape[0], math.ceil((box.y + box.h) / scale))
+    return Window(x0, y0, x1, y1)
 
 
 def track_state(confirmed: bool, updated: bool) -> TrackStatus:

@@ -9,16 +9,15 @@ hue x saturation x value (OpenCV's full-range HSV) in ``hue_bins`` x ``saturatio
 ``min_pixels`` foreground pixels gets none: so few pixels spread over 128 bins differ from frame
 to frame by more than two people's clothes do (small warm targets in the ``multi`` scene at
 640x480, ~20 pixels each, lost their tracks to a colour gate). ``byte_tracks`` compares it
-with each track's own (its ``appearance`` weight), as DeepSORT (Wojke et al., ICIP 2017) adds an
-appearance distance to the motion cost; a colour histogram is the classic appearance model of
-colour trackers (Comaniciu et al., CVPR 2000), with no network.
+with each track's own (its ``colour_gate``), as DeepSORT (Wojke et al., ICIP 2017) gates pairs
+on an appearance distance; a colour histogram is the classic appearance model of colour
+trackers (Comaniciu et al., CVPR 2000), with no network.
 
 Work per frame: each detection's box, at the foreground's resolution (``ctx.feature_scale``).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import cv2
@@ -27,7 +26,7 @@ import numpy as np
 from vtrack.geometry import Window
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
-from vtrack.stages.detect import Detection
+from vtrack.stages.detect import Detection, mask_window
 
 
 @register
@@ -36,7 +35,7 @@ class DetectionColours(Stage):
 
     name = "detection_colours"
     summary = ("each detection's colour histogram (HSV, its foreground pixels only), for "
-               "byte_tracks' appearance term")
+               "byte_tracks' colour gate")
     params = (
         Param("hue_bins", int, 8, "hue bins of the histogram", min=1, max=64),
         Param("saturation_bins", int, 4, "saturation bins", min=1, max=64),
@@ -62,16 +61,13 @@ class DetectionColours(Stage):
         """The normalised histogram of the detection's foreground pixels (None: it has none)."""
         mask, scale = ctx.likelihood, ctx.feature_scale
         assert mask is not None
-        b = detection.box
-        x0, y0 = max(0, math.floor(b.x / scale)), max(0, math.floor(b.y / scale))
-        x1 = min(mask.shape[1], math.ceil((b.x + b.w) / scale))
-        y1 = min(mask.shape[0], math.ceil((b.y + b.h) / scale))
-        if x1 <= x0 or y1 <= y0:
+        covered = mask_window(detection.box, scale, mask.shape)
+        if covered.width <= 0 or covered.height <= 0:
             return None
-        inside = np.ascontiguousarray(mask[y0:y1, x0:x1] > 0).astype(np.uint8)
-        window = Window(round(x0 * scale), round(y0 * scale),
-                        min(round(x1 * scale), ctx.frame.width),
-                        min(round(y1 * scale), ctx.frame.height))
+        inside = (mask[covered.slices] > 0).astype(np.uint8)
+        window = Window(round(covered.x0 * scale), round(covered.y0 * scale),
+                        min(round(covered.x1 * scale), ctx.frame.width),
+                        min(round(covered.y1 * scale), ctx.frame.height))
         pixels = ctx.frame.bgr(window)
         if pixels.shape[:2] != inside.shape:  # the frame's pixels at the foreground's resolution
             pixels = cv2.resize(pixels, (inside.shape[1], inside.shape[0]),

@@ -42,7 +42,7 @@ import numpy as np
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TargetShape, TrackContext, register
-from vtrack.stages.detect import Detection
+from vtrack.stages.detect import Detection, mask_window
 
 #: The given aspect weighs as many measured boxes as this when mixed with the learnt one.
 PRIOR_SAMPLES = 50
@@ -117,11 +117,9 @@ def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
     divisions, where that column holds at most ``VALLEY`` of the fullest column's foreground
     (a solid blob is not cut); each part gets the box and the pixel count of its own
     foreground."""
-    b = detection.box
-    x0, y0 = max(0, math.floor(b.x / scale)), max(0, math.floor(b.y / scale))
-    x1 = min(mask.shape[1], math.ceil((b.x + b.w) / scale))
-    y1 = min(mask.shape[0], math.ceil((b.y + b.h) / scale))
-    inside = mask[y0:y1, x0:x1] > 0
+    covered = mask_window(detection.box, scale, mask.shape)
+    x0, y0 = covered.x0, covered.y0
+    inside = mask[covered.slices] > 0
     if inside.shape[1] < 2 * parts:
         return [detection]
     profile = inside.sum(axis=0)

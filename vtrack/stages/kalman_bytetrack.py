@@ -58,6 +58,7 @@ import numpy as np
 
 from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_model
 from vtrack.geometry import Box
+from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TargetShape, Track, TrackContext, register
 from vtrack.stages.detect import Detection, track_state
@@ -103,12 +104,13 @@ def colour_distances(tracks: list[np.ndarray | None],
     none (nothing to tell them apart by)."""
     out = np.zeros((len(tracks), len(detections)))
     rows = [i for i, h in enumerate(tracks) if h is not None]
-    cols = [j for j, h in enumerate(detections) if h is not None]
-    if rows and cols:
-        p = np.sqrt(np.array([tracks[i] for i in rows]))
-        q = np.sqrt(np.array([detections[j] for j in cols]))
-        coefficient = np.clip(p @ q.T, 0.0, 1.0)
-        out[np.ix_(rows, cols)] = np.sqrt(1.0 - coefficient)
+    if not rows:
+        return out
+    known = np.array([tracks[i] for i in rows])
+    for j, histogram in enumerate(detections):
+        if histogram is not None:
+            coefficient = np.clip(bhattacharyya_rows(known, histogram), 0.0, 1.0)
+            out[rows, j] = np.sqrt(1.0 - coefficient)
     return out
 
 
@@ -180,7 +182,8 @@ class ByteTracks(Stage):
 
     @classmethod
     def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
-        if values.get("colour_gate", 1.0) < 1.0 and "detection_colours" not in before:
+        default = next(p.default for p in cls.params if p.name == "colour_gate")
+        if values.get("colour_gate", default) < 1.0 and "detection_colours" not in before:
             return ("colour_gate below 1 needs the detection_colours stage before it (it gives "
                     "each detection its colours; without it nothing would be gated)")
         return None
