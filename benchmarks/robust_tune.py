@@ -3,6 +3,7 @@
     python benchmarks/robust_tune.py                 # per-sequence table and the mean
     python benchmarks/robust_tune.py --ablate --split check   # each part off, check sequences
     python benchmarks/robust_tune.py --starts 5      # five starts a sequence (steadier means)
+    python benchmarks/robust_tune.py --starts 13     # OTB's spatial robustness set (steadiest)
     python benchmarks/robust_tune.py --ablate --ablate-scenes # ... all 28, with the hard scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
@@ -115,15 +116,21 @@ def evaluate(clip: Clip, overrides: list[str], name: str = "robust") -> Result:
 
 #: OTB's spatial robustness evaluation: the first box moved by this share of its size.
 START_SHIFT = 0.1
+#: OTB's scale variations of the first box (spatial robustness evaluation).
+START_SCALES = (0.8, 0.9, 1.1, 1.2)
 
 
 def start_boxes(box: Box | None, starts: int) -> list[Box]:
-    """The given first box, then (``starts`` 5) the box moved by 10% of its size along each
-    diagonal: one start decides little, as rounding alone moves single sequences."""
+    """The given first box; then (``starts`` 5) the box moved by 10% of its size along each
+    diagonal; then (``starts`` 13: OTB's spatial robustness evaluation, Wu, Lim and Yang,
+    CVPR 2013) also along each axis, and scaled by 0.8, 0.9, 1.1 and 1.2 about its centre.
+    One start decides little: rounding alone moves single sequences."""
     assert box is not None
-    shifts = ((1, 1), (1, -1), (-1, 1), (-1, -1))[: starts - 1]
-    return [box] + [Box(box.x + sx * START_SHIFT * box.w, box.y + sy * START_SHIFT * box.h,
-                        box.w, box.h) for sx, sy in shifts]
+    shifts = ((1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1))
+    moved = [Box(box.x + sx * START_SHIFT * box.w, box.y + sy * START_SHIFT * box.h,
+                 box.w, box.h) for sx, sy in shifts]
+    scaled = [Box.from_center(box.cx, box.cy, box.w * f, box.h * f) for f in START_SCALES]
+    return ([box] + moved + scaled)[:starts]
 
 
 def combined(results: list[Result]) -> Result:
@@ -331,10 +338,11 @@ def main() -> None:
     parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
     parser.add_argument("--speed", action="store_true",
                         help="tracking work per 1080p frame, robust against s0")
-    parser.add_argument("--starts", type=int, choices=(1, 5), default=1,
-                        help="runs per sequence: the given first box only, or also the box "
-                             "moved 10%% of its size along each diagonal (OTB's spatial "
-                             "robustness); the scores are the runs' means")
+    parser.add_argument("--starts", type=int, choices=(1, 5, 13), default=1,
+                        help="runs per sequence: the given first box only; 5: also the box "
+                             "moved 10%% of its size along each diagonal; 13: OTB's whole "
+                             "spatial robustness set (also moved along each axis, and scaled "
+                             "by 0.8-1.2); the scores are the runs' means")
     parser.add_argument("--config", default="robust",
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
