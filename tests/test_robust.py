@@ -25,7 +25,8 @@ from vtrack.run import run
 from vtrack.scenes import Scene
 from vtrack.stages.base import TrackState
 
-SEEDS = (0, 1)
+#: Six seeds: a scene's mean IoU over two moved by 0.03 with the FFT's rounding alone.
+SEEDS = range(6)
 
 
 def track(scene: Scene, overrides: list[str] | None = None, grey: bool = False
@@ -48,7 +49,7 @@ def overlap(scene: Scene, results: list[FrameResult]) -> float:
 
 @pytest.mark.parametrize("scenario", ["smooth", "lighting", "distractor", "scale", "occlusion"])
 def test_robust_holds_on_generated_scenes(scene_factory, scenario: str) -> None:
-    """Mean IoU >= 0.7 over two seeds on each kind of scene (the issue's bar)."""
+    """Mean IoU >= 0.7 over six seeds on each kind of scene (the issue's bar)."""
     values = [overlap(scene, track(scene))
               for scene in (scene_factory(scenario, seed, frames=150) for seed in SEEDS)]
     assert float(np.mean(values)) >= 0.7, values

@@ -120,20 +120,16 @@ class CorrelationFilter:
 
 def real_spectrum(x: np.ndarray, axes: int) -> np.ndarray:
     """``np.fft.rfftn(x, axes=range(axes))`` of a real sample with channels last (``axes`` 1:
-    along the first axis; 2: over the first two), in single precision with OpenCV's DFT, which
-    is several times faster than NumPy's on these small float32 arrays."""
-    flags = cv2.DFT_COMPLEX_OUTPUT
-    if axes == 1:  # every channel's 1-D transform in one call, as rows
+    along the first axis; 2: over the first two), in single precision. Along one axis every
+    channel goes through OpenCV's DFT in one call, as rows (several times faster than NumPy's
+    on these short float32 signals); over two, NumPy transforms all channels at once (2-3x
+    faster than OpenCV's DFT called channel by channel)."""
+    if axes == 1:
         rows = np.ascontiguousarray(x.reshape(x.shape[0], -1).T, dtype=np.float32)
-        full = cv2.dft(rows, flags=flags | cv2.DFT_ROWS)
+        full = cv2.dft(rows, flags=cv2.DFT_COMPLEX_OUTPUT | cv2.DFT_ROWS)
         half = full[:, : x.shape[0] // 2 + 1].view(np.complex64)[..., 0]
         return half.T.reshape((half.shape[1],) + x.shape[1:])
-    rows, cols = x.shape[:2]
-    out = np.empty((x.shape[2], rows, cols // 2 + 1), np.complex64)
-    for c in range(x.shape[2]):
-        full = cv2.dft(np.ascontiguousarray(x[..., c], dtype=np.float32), flags=flags)
-        out[c] = full[:, : cols // 2 + 1].view(np.complex64)[..., 0]
-    return out.transpose(1, 2, 0)
+    return np.fft.rfftn(np.asarray(x, np.float32), axes=(0, 1))
 
 
 def shift_spectrum(xf: np.ndarray, dy: float, dx: float, cols: int) -> np.ndarray:
