@@ -4,6 +4,7 @@
     python benchmarks/robust_tune.py --ablate --split check   # each part off, check sequences
     python benchmarks/robust_tune.py --starts 5      # five starts a sequence (steadier means)
     python benchmarks/robust_tune.py --starts 13     # OTB's spatial robustness set (steadiest)
+    python benchmarks/robust_tune.py --starts 13 --jobs 2   # ... sequences in two processes
     python benchmarks/robust_tune.py --ablate --ablate-scenes # ... all 28, with the hard scenes
     python benchmarks/robust_tune.py --set robust_failure.lost_after=30   # try a change
     python benchmarks/robust_tune.py --config s0     # another config, scored the same way
@@ -25,8 +26,10 @@ data folder's split): decide on the first, confirm on the second, never on one s
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import math
+import multiprocessing
 import statistics
 import sys
 from dataclasses import dataclass
@@ -131,6 +134,21 @@ def start_boxes(box: Box | None, starts: int) -> list[Box]:
                  box.w, box.h) for sx, sy in shifts]
     scaled = [Box.from_center(box.cx, box.cy, box.w * f, box.h * f) for f in START_SCALES]
     return ([box] + moved + scaled)[:starts]
+
+
+def sequence_result(task: tuple[Sequence, list[str], str, int]) -> Result:
+    """One sequence's score (its starts combined) under a config and overrides; a config that
+    refuses the sequence (e.g. a hue tracker on a grey target) scores 0."""
+    seq, overrides, config, starts = task
+    clip = load_clip(seq)
+    try:
+        return combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
+                                  overrides, config)
+                         for box in start_boxes(clip.boxes[0], starts)])
+    except VtrackError as exc:
+        print(f"{seq.name}: {exc}", file=sys.stderr)
+        present = sum(box is not None for box in clip.boxes)
+        return Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
 
 
 def combined(results: list[Result]) -> Result:
@@ -343,9 +361,14 @@ def main() -> None:
                              "moved 10%% of its size along each diagonal; 13: OTB's whole "
                              "spatial robustness set (also moved along each axis, and scaled "
                              "by 0.8-1.2); the scores are the runs' means")
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="sequences scored at once in worker processes (scores are the "
+                             "same; the us/frame column then also counts the other jobs)")
     parser.add_argument("--config", default="robust",
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
+    if not 1 <= args.jobs <= 64:
+        parser.error(f"--jobs {args.jobs}: give 1 to 64 worker processes")
     if args.speed:
         speed(args.overrides)
         return
@@ -370,22 +393,16 @@ def main() -> None:
     print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     results: list[Result] = []
-    for seq in sequences:
-        clip = load_clip(seq)
-        try:
-            result = combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
-                                        args.overrides, args.config)
-                               for box in start_boxes(clip.boxes[0], args.starts)])
-        except VtrackError as exc:  # e.g. a hue tracker refusing a grey target: scores 0
-            print(f"{seq.name}: {exc}", file=sys.stderr)
-            present = sum(box is not None for box in clip.boxes)
-            result = Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
-        results.append(result)
-        print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
-              f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
-              f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
-        sys.stdout.flush()
-        del clip
+    tasks = [(seq, args.overrides, args.config, args.starts) for seq in sequences]
+    with multiprocessing.Pool(args.jobs) if args.jobs > 1 else contextlib.nullcontext() as pool:
+        # in the sequences' order either way, each row as soon as it and those before are done
+        scored = pool.imap(sequence_result, tasks) if pool else map(sequence_result, tasks)
+        for seq, result in zip(sequences, scored, strict=True):
+            results.append(result)
+            print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
+                  f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
+                  f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
+            sys.stdout.flush()
 
     def mean(key: str) -> float:
         return statistics.mean(getattr(r, key) for r in results)
