@@ -280,10 +280,23 @@ def usable(variants: tuple[tuple[str, str, list[str]], ...],
     return kept
 
 
-def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool) -> None:
-    """Robust with each part off (:data:`ABLATIONS`) on ``sequences``: AUC per sequence and
-    variant, then per variant the means (all, tune, check), the honest-state shares pooled over
-    the frames and, with ``with_scenes``, the slow slab and hard scenes' mean IoU."""
+def ablation_row(task: tuple[Sequence, list[tuple[str, str, list[str]]], list[str], int]
+                 ) -> dict[str, Result]:
+    """One sequence's score under each variant (its starts combined)."""
+    seq, variants, extra, starts = task
+    clip = load_clip(seq)
+    return {key: combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
+                                    overrides + extra)
+                           for box in start_boxes(clip.boxes[0], starts)])
+            for key, _, overrides in variants}
+
+
+def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, starts: int = 1,
+           jobs: int = 1) -> None:
+    """Robust with each part off (:data:`ABLATIONS`) on ``sequences`` (each from ``starts``
+    first boxes, ``jobs`` sequences at once): AUC per sequence and variant, then per variant
+    the means (all, tune, check), the honest-state shares pooled over the frames and, with
+    ``with_scenes``, the slow slab and hard scenes' mean IoU."""
     try:
         load_config("robust").with_overrides(extra)
     except VtrackError as exc:
@@ -291,14 +304,15 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool) -> No
     variants = usable(ABLATIONS, extra)
     names = [seq.name for seq in sequences]
     table: dict[str, list[Result]] = {key: [] for key, _, _ in variants}
-    for seq in sequences:
-        clip = load_clip(seq)
-        for key, _, overrides in variants:
-            table[key].append(evaluate(clip, overrides + extra))
-        print(f"<!-- {seq.name}: " + ", ".join(f"{key} {table[key][-1].auc:.3f}"
-                                               for key, _, _ in variants) + " -->")
-        sys.stdout.flush()
-        del clip
+    tasks = [(seq, variants, extra, starts) for seq in sequences]
+    with multiprocessing.Pool(jobs) if jobs > 1 else contextlib.nullcontext() as pool:
+        rows = pool.imap(ablation_row, tasks) if pool else map(ablation_row, tasks)
+        for seq, row in zip(sequences, rows, strict=True):
+            for key, _, _ in variants:
+                table[key].append(row[key])
+            print(f"<!-- {seq.name}: " + ", ".join(f"{key} {row[key].auc:.3f}"
+                                                   for key, _, _ in variants) + " -->")
+            sys.stdout.flush()
     print("\n| sequence | " + " | ".join(key for key, _, _ in variants) + " |")
     print("|---|" + "---:|" * len(variants))
     for i, name in enumerate(names):
@@ -388,7 +402,7 @@ def main() -> None:
         print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
         return
     if args.ablate:
-        ablate(sequences, args.overrides, args.ablate_scenes)
+        ablate(sequences, args.overrides, args.ablate_scenes, args.starts, args.jobs)
         return
     print("| sequence | AUC | P@20 | mIoU | tracking & miss | miss & flagged | us/frame |")
     print("|---|---:|---:|---:|---:|---:|---:|")
