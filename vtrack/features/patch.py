@@ -95,9 +95,9 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
 
 def area_resized(pixels: np.ndarray, out_w: int, out_h: int) -> np.ndarray:
     """``cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)`` of uint8 pixels,
-    the same values, in a third less time: OpenCV averages areas in single precision either
-    way, and its single-precision input path is the faster one. (Whole reductions along both
-    axes take OpenCV's own integer path, which rounds halves up.)"""
+    the same values, in a sixth to a quarter less time: OpenCV averages areas in single
+    precision either way, and its single-precision input path is the faster one. (Whole
+    reductions along both axes take OpenCV's own integer path, which rounds halves up.)"""
     if pixels.shape[1] % out_w == 0 and pixels.shape[0] % out_h == 0:
         return cv2.resize(pixels, (out_w, out_h), interpolation=cv2.INTER_AREA)
     area = cv2.resize(pixels.astype(np.float32), (out_w, out_h), interpolation=cv2.INTER_AREA)
