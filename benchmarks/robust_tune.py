@@ -26,13 +26,14 @@ data folder's split): decide on the first, confirm on the second, never on one s
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import math
 import multiprocessing
 import statistics
 import sys
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TypeVar
 
 from common import (
     CHECK_SEQUENCES,
@@ -53,6 +54,9 @@ from vtrack.geometry import Box
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackState
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 #: The ablation: (column, what is off, --set overrides), one part of robust switched off each
 #: through its declared parameters. Parts without a switch: the correlation filter itself and
@@ -136,19 +140,35 @@ def start_boxes(box: Box | None, starts: int) -> list[Box]:
     return ([box] + moved + scaled)[:starts]
 
 
+def from_starts(clip: Clip, overrides: list[str], config: str, starts: int) -> Result:
+    """``clip`` scored under ``config`` with ``overrides`` from each of its ``starts`` first
+    boxes (:func:`start_boxes`), combined."""
+    return combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
+                              overrides, config)
+                     for box in start_boxes(clip.boxes[0], starts)])
+
+
 def sequence_result(task: tuple[Sequence, list[str], str, int]) -> Result:
     """One sequence's score (its starts combined) under a config and overrides; a config that
     refuses the sequence (e.g. a hue tracker on a grey target) scores 0."""
     seq, overrides, config, starts = task
     clip = load_clip(seq)
     try:
-        return combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
-                                  overrides, config)
-                         for box in start_boxes(clip.boxes[0], starts)])
+        return from_starts(clip, overrides, config, starts)
     except VtrackError as exc:
         print(f"{seq.name}: {exc}", file=sys.stderr)
         present = sum(box is not None for box in clip.boxes)
         return Result(0.0, 0.0, 0.0, 0, 0, present, 0, float("nan"))
+
+
+def in_order(score: Callable[[T], R], tasks: list[T], jobs: int) -> Iterator[R]:
+    """``score`` of every task, in the tasks' order, each as soon as it and those before are
+    done; ``jobs`` worker processes (1: here, one after another)."""
+    if jobs <= 1:
+        yield from map(score, tasks)
+        return
+    with multiprocessing.Pool(jobs) as pool:
+        yield from pool.imap(score, tasks)
 
 
 def combined(results: list[Result]) -> Result:
@@ -285,9 +305,7 @@ def ablation_row(task: tuple[Sequence, list[tuple[str, str, list[str]]], list[st
     """One sequence's score under each variant (its starts combined)."""
     seq, variants, extra, starts = task
     clip = load_clip(seq)
-    return {key: combined([evaluate(dataclasses.replace(clip, boxes=[box, *clip.boxes[1:]]),
-                                    overrides + extra)
-                           for box in start_boxes(clip.boxes[0], starts)])
+    return {key: from_starts(clip, overrides + extra, "robust", starts)
             for key, _, overrides in variants}
 
 
@@ -304,15 +322,13 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, start
     variants = usable(ABLATIONS, extra)
     names = [seq.name for seq in sequences]
     table: dict[str, list[Result]] = {key: [] for key, _, _ in variants}
-    tasks = [(seq, variants, extra, starts) for seq in sequences]
-    with multiprocessing.Pool(jobs) if jobs > 1 else contextlib.nullcontext() as pool:
-        rows = pool.imap(ablation_row, tasks) if pool else map(ablation_row, tasks)
-        for seq, row in zip(sequences, rows, strict=True):
-            for key, _, _ in variants:
-                table[key].append(row[key])
-            print(f"<!-- {seq.name}: " + ", ".join(f"{key} {row[key].auc:.3f}"
-                                                   for key, _, _ in variants) + " -->")
-            sys.stdout.flush()
+    rows = in_order(ablation_row, [(seq, variants, extra, starts) for seq in sequences], jobs)
+    for seq, row in zip(sequences, rows, strict=True):
+        for key, _, _ in variants:
+            table[key].append(row[key])
+        print(f"<!-- {seq.name}: " + ", ".join(f"{key} {row[key].auc:.3f}"
+                                               for key, _, _ in variants) + " -->")
+        sys.stdout.flush()
     print("\n| sequence | " + " | ".join(key for key, _, _ in variants) + " |")
     print("|---|" + "---:|" * len(variants))
     for i, name in enumerate(names):
@@ -408,15 +424,12 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|")
     results: list[Result] = []
     tasks = [(seq, args.overrides, args.config, args.starts) for seq in sequences]
-    with multiprocessing.Pool(args.jobs) if args.jobs > 1 else contextlib.nullcontext() as pool:
-        # in the sequences' order either way, each row as soon as it and those before are done
-        scored = pool.imap(sequence_result, tasks) if pool else map(sequence_result, tasks)
-        for seq, result in zip(sequences, scored, strict=True):
-            results.append(result)
-            print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
-                  f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
-                  f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
-            sys.stdout.flush()
+    for seq, result in zip(sequences, in_order(sequence_result, tasks, args.jobs), strict=True):
+        results.append(result)
+        print(f"| {seq.name} | {result.auc:.3f} | {result.precision:.3f} | "
+              f"{result.miou:.3f} | {share(result.false_tracking, result.tracking)} | "
+              f"{share(result.flagged, result.misses)} | {result.us_per_frame:.0f} |")
+        sys.stdout.flush()
 
     def mean(key: str) -> float:
         return statistics.mean(getattr(r, key) for r in results)
