@@ -84,6 +84,8 @@ ABLATIONS = (
     ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),
     ("-wide", "the filter's frame-wide search while lost",
      ["robust_model.filter_redetect=false"]),
+    ("-learnocc", "learning occluded frames whose colours agree (MOSSE: nothing learnt below "
+     "PSR 7)", ["robust_failure.learn_occluded=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),
 )
 

@@ -81,6 +81,31 @@ def test_a_doubtful_frame_is_learnt_only_when_the_colours_agree(scene_factory,
     assert learnt_doubtful[0.0] and not learnt_doubtful[10.0], learnt_doubtful
 
 
+def test_an_occluded_frame_is_learnt_only_with_learn_occluded_and_agreeing_colours(
+        scene_factory, monkeypatch) -> None:
+    """Below MOSSE's PSR of 7 a frame is occluded. With ``learn_occluded`` off nothing is
+    learnt there (every learnt frame has a PSR of 7 or more), even without a colour check; on,
+    such frames are learnt without a colour check, and none when no colour response can pass
+    it. (With the shipped check this scene's plain occluder is never learnt.)"""
+    from vtrack.stages.robust_model import RobustTarget
+
+    learn = RobustTarget.learn
+    scene = scene_factory("occlusion", 1, frames=150)
+    low_psr_learnt = {}
+    for learn_occluded, check in (("false", 0), ("true", 0), ("true", 10)):
+        overrides = [f"robust_failure.learn_occluded={learn_occluded}",
+                     f"robust_failure.doubtful_colour={check}"]
+        psrs: list[float] = []
+        monkeypatch.setattr(
+            RobustTarget, "learn",
+            lambda self, *a, _psrs=psrs, **k: _psrs.append(self.psr) or learn(self, *a, **k))
+        track(scene, overrides)
+        assert len(psrs) > 20, (overrides, len(psrs))
+        low_psr_learnt[" ".join(overrides)] = sum(p < 7.0 for p in psrs[1:])  # [0]: 1st frame
+    off, on, disagreeing = low_psr_learnt.values()
+    assert off == 0 and on > 0 and disagreeing == 0, low_psr_learnt
+
+
 @pytest.mark.parametrize("scenario", ["smooth", "scale"])
 def test_learning_from_the_moved_sample_cuts_fewer_regions_and_still_follows(
         scene_factory, monkeypatch, scenario: str) -> None:
@@ -130,7 +155,8 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
                    "robust_search.merge=0", "robust_search.scale=false",
                    "robust_failure.update=false", "robust_failure.redetect=false",
                    "robust_failure.update_apce=0", "robust_failure.hidden_psr=0",
-                   "robust_model.filter_redetect=false", "robust_failure.coast=true"):
+                   "robust_model.filter_redetect=false", "robust_failure.coast=true",
+                   "robust_failure.learn_occluded=false"):
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
