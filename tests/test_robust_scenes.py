@@ -49,13 +49,15 @@ def run_robust(name: str, seed: int, frames: int = FRAMES, size: tuple[int, int]
 OPEN_GAP = pytest.mark.xfail(strict=True, reason="robust rebuilt on a correlation filter: "
                                                  "known gap of issue 20, open")
 HARD = ["clip_ramp", "fast", "grow", "shrink", "crossing", "slab", "exit_return", "grey"]
-#: The benchmark tables' seeds (0-8) at the default size: one seed moves a mean over three by
-#: 0.07 (`slab` seed 0, whose occluder's colours are close to the target's: 0.66 -> 0.46 once
-#: occluded frames whose colours agree are learnt; seeds 0-8 0.751 -> 0.726, held-out seeds
-#: 100-111 0.723 -> 0.722, benchmarks/RESULTS.md section 8, eighth round).
-HARD_SEEDS = tuple(range(9))
+#: The slab's mean IoU spreads over 0.46-0.88 from seed to seed (the other hard scenes' over
+#: 0.92-0.99), so its bar at the default size is a mean over the benchmark tables' seeds 0-8:
+#: over three, seed 0 alone (an occluder coloured like the target, learnt while it hides the
+#: target: 0.66 -> 0.46 once occluded frames whose colours agree are learnt) moves it by 0.07
+#: (seeds 0-8 0.751 -> 0.726, held-out seeds 100-111 0.723 -> 0.722; benchmarks/RESULTS.md
+#: section 8, eighth round).
+SLAB_SEEDS = tuple(range(9))
 GEOMETRIES = {
-    "320x240x120": (HARD_SEEDS, FRAMES, None),
+    "320x240x120": (SEEDS, FRAMES, None),
     "480x360x90": ((3, 4, 5), 90, (480, 360)),  # larger and shorter: faster motion, a wider slab
 }
 #: (scene, geometry) pairs issue 20 does not hold yet.
@@ -67,6 +69,8 @@ OPEN_HARD = {("fast", "320x240x120"), ("fast", "480x360x90")}
                  marks=OPEN_GAP if (name, key) in OPEN_HARD else ())
     for key, geometry in GEOMETRIES.items() for name in HARD])
 def test_robust_follows_each_hard_scene(name, seeds, frames, size):
+    if name == "slab" and size is None:
+        seeds = SLAB_SEEDS
     means = []
     for seed in seeds:
         scene, boxes, _ = run_robust(name, seed, frames, size)
@@ -76,9 +80,9 @@ def test_robust_follows_each_hard_scene(name, seeds, frames, size):
 
 
 #: Behind the slab at 200 frames the target is slower: partly covered for ~40% of the clip.
-#: The tables' seeds, as above (seed 0: 0.73 -> 0.51 once occluded frames are learnt; seeds
-#: 0-11 0.785 -> 0.767, held-out seeds 100-111 0.744 -> 0.742).
-SLOW_SLAB = dict(seeds=HARD_SEEDS, frames=200)
+#: Seeds 0-8, as above (seed 0: 0.73 -> 0.51 once occluded frames are learnt; seeds 0-11
+#: 0.785 -> 0.767, held-out seeds 100-111 0.744 -> 0.742).
+SLOW_SLAB = dict(seeds=SLAB_SEEDS, frames=200)
 
 
 @functools.cache
