@@ -89,6 +89,31 @@ def test_shadows_are_removed_and_dark_clothes_kept(method: str) -> None:
     assert len(plain[-1].detections) == 2
 
 
+@pytest.mark.parametrize("method", ["mog2", "knn"])
+@pytest.mark.parametrize("brighter", [1.1, 1.25])
+def test_gain_keeps_a_global_change_of_light_out_of_the_foreground(method: str,
+                                                                   brighter: float) -> None:
+    """After the model has settled (200 frames), the whole scene brightens by 10-25% over 10
+    frames (exposure, a cloud), then a dark target steps in: the pixel models alone call most
+    of the ground foreground; with ``gain`` only the target is."""
+    base = ground(60, 80).astype(np.float64)
+    frames = []
+    for i in range(215):
+        frame = base * (1 + (brighter - 1) * min(max(i - 200, 0) / 10, 1.0))
+        if i >= 212:
+            frame[20:35, 30:38] = 30  # the target, dark whatever the light
+        frames.append(np.clip(frame, 0, 255).astype(np.uint8))
+    shares = {}
+    for gain in (False, True):
+        last = run_stages([Background(method=method, colour=True, gain=gain), Blobs()],
+                          frames)[-1]
+        shares[gain] = float(np.mean(last.likelihood > 0))
+        if gain:
+            assert [tuple(d.box) for d in last.detections] == [(30, 20, 8, 15)], shares
+    target_share = 8 * 15 / (60 * 80)
+    assert shares[False] > 0.5 and shares[True] <= target_share * 1.2, shares
+
+
 def test_a_reduced_resolution_gives_boxes_in_frame_pixels() -> None:
     frames = [ground(480, 640)] * 4
     frames[3] = frames[3].copy()

@@ -118,6 +118,13 @@ def _morphology(mask: np.ndarray, operation: int, kernel: np.ndarray,
     return cv2.resize(small, (width, height), interpolation=cv2.INTER_NEAREST)
 
 
+def _median_grey(image: np.ndarray) -> float:
+    """The median grey level of a uint8 grey or BGR image (from its 256-bin histogram)."""
+    grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    counts = np.cumsum(cv2.calcHist([grey], [0], None, [256], [0, 256]).ravel())
+    return float(np.searchsorted(counts, counts[-1] / 2))
+
+
 def _foreground_at_least(image: np.ndarray, level: float) -> np.ndarray:
     """255 where the uint8 ``image`` is >= ``level``, else 0 (one OpenCV pass)."""
     return cv2.threshold(image, math.ceil(level) - 1, 255, cv2.THRESH_BINARY)[1]
@@ -147,6 +154,13 @@ class Background(Stage):
     between ``shadow_ratio`` and 1, with its colour kept, is a shadow) and removes the shadows
     from the foreground; ``colour`` models the BGR image instead of the grey one (the shadow
     test then also checks the colour).
+
+    ``gain`` (MOG2, KNN) undoes a global change of exposure or light before the model sees the
+    frame: the frame is scaled by the ratio of the model's background image's median grey level
+    to its own (medians, so targets covering less than half the frame do not move them). The
+    pixel models alone call every pixel foreground when a camera's exposure or a cloud changes
+    the whole scene's brightness faster than they learn (Toyama et al., Wallflower, ICCV 1999,
+    add a frame level to pixel-level background models for such global changes).
 
     ``max_pixels`` (0: off; MOG2 and KNN at most ``ADAPTIVE_MAX_PIXELS`` in any case) makes the
     foreground at a reduced resolution: the frame is halved
@@ -258,6 +272,13 @@ class Background(Stage):
             "mog2, knn: model the colour image, not the grey one (a colour input only)",
         ),
         Param(
+            "gain",
+            bool,
+            False,
+            "mog2, knn: scale each frame by the ratio of the background's median grey level to "
+            "its own first, so a global change of exposure or light is not foreground",
+        ),
+        Param(
             "max_pixels",
             int,
             0,
@@ -314,6 +335,8 @@ class Background(Stage):
     def step(self, ctx: TrackContext) -> None:
         grey, image = self._images(ctx)
         if self._model is not None:
+            if self.gain:
+                image = self._gain_compensated(image)
             mask = self._model.apply(image)
             if self.shadows:  # shadows are 127, the foreground 255
                 mask = cv2.threshold(mask, 127, 255, cv2.THRESH_BINARY)[1]
@@ -342,6 +365,17 @@ class Background(Stage):
                     else frame.gray_shrunk(k))
             _whole_grey_frame(ctx, grey, k)
         return grey, grey if colour is None else colour
+
+    def _gain_compensated(self, image: np.ndarray) -> np.ndarray:
+        """``image`` scaled (saturating at 255) so that its median grey level is the
+        background's; unchanged while the model has no background yet (KNN's is black for its
+        first frames) or within half a percent."""
+        assert self._model is not None
+        background = _median_grey(self._model.getBackgroundImage())
+        ratio = background / max(_median_grey(image), 1.0)
+        if background < 1.0 or abs(ratio - 1.0) < 0.005:
+            return image
+        return cv2.convertScaleAbs(image, alpha=ratio)
 
     def _learn(self, grey: np.ndarray) -> None:
         """Add one frame to the mean background (S4 eq. 1); finish it after ``frames`` frames."""
