@@ -128,6 +128,7 @@ class RobustFailure(Stage):
         sharp = target.psr >= self.hidden_psr
         weak = target.peak < self.hidden_peak * target.usual_peak
         strong = self._strong(target)
+        may_learn = self.update and strong  # the models may learn this frame
         was = ctx.state
         retaken = target.hidden_frames == 0 or (
             not weak and target.apce >= self.retake_apce * target.usual_apce)
@@ -142,7 +143,7 @@ class RobustFailure(Stage):
             # tracking frame (freezing the model there lost more targets than it kept: the
             # check sequences' mean AUC 0.606 -> 0.546), and no step towards lost
             ctx.state = TrackState.OCCLUDED if weak else TrackState.TRACKING
-            if self.update and strong and not (weak and colour_disagrees):
+            if may_learn and not (weak and colour_disagrees):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
         target.hidden_frames += 1
@@ -160,8 +161,8 @@ class RobustFailure(Stage):
                                                      ctx.frame.height) < 0.5
         lost = target.hidden_frames > self.lost_after or gone or was == TrackState.LOST
         ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
-        if (self.learn_occluded and self.update and not lost and ctx.measurement is not None
-                and strong and not colour_disagrees):
+        if (may_learn and self.learn_occluded and not lost and ctx.measurement is not None
+                and not colour_disagrees):
             target.learn(ctx.frame, ctx.measurement, self.rate)
         if lost and self.redetect:
             ctx.search_growth = min(ctx.search_growth + 1.0, MAX_RINGS + 1.0)
