@@ -82,8 +82,10 @@ ABLATIONS = (
     ("-apce", "LMCF's APCE test to take a hidden target back (PSR and peak only)",
      ["robust_failure.retake_apce=0"]),
     ("-redetect", "the rings of regions searched while lost", ["robust_failure.redetect=false"]),
-    ("-wide", "the filter's frame-wide search while lost",
-     ["robust_model.filter_redetect=false"]),
+    ("-wide", "the frame-wide search (while lost, and after a frame whose colours are not "
+     "the target's)", ["robust_model.filter_redetect=false"]),
+    ("-colourwide", "the frame-wide search after a frame whose colours are not the target's "
+     "(only while lost)", ["robust_failure.redetect_on_colour=false"]),
     ("-learnocc", "learning occluded frames whose colours agree (MOSSE: nothing learnt below "
      "PSR 7)", ["robust_failure.learn_occluded=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),

@@ -8,6 +8,7 @@ parameter validation. The accuracy bars are the issue's (mean IoU >= 0.7 per sce
 from __future__ import annotations
 
 import csv
+from itertools import islice
 from pathlib import Path
 
 import cv2
@@ -29,17 +30,19 @@ from vtrack.stages.base import TrackState
 SEEDS = range(6)
 
 
-def track(scene: Scene, overrides: list[str] | None = None, grey: bool = False
-          ) -> list[FrameResult]:
-    """Run ``robust`` (with ``overrides``) over a scene's frames, BGR or converted to grey."""
+def track(scene: Scene, overrides: list[str] | None = None, grey: bool = False,
+          frames: int | None = None) -> list[FrameResult]:
+    """Run ``robust`` (with ``overrides``) over a scene's frames (its first ``frames``), BGR or
+    converted to grey."""
     config = load_config("robust").with_overrides(overrides or [])
-    frames = (
+    images = islice(scene.frames(), frames)
+    frames_in = (
         GrayFrame(i, i / scene.fps, cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)) if grey
         else BgrFrame(i, i / scene.fps, bgr)
-        for i, bgr in enumerate(scene.frames())
+        for i, bgr in enumerate(images)
     )
     assert scene.boxes[0] is not None
-    return list(Pipeline(config.build()).track(frames, scene.boxes[0]))
+    return list(Pipeline(config.build()).track(frames_in, scene.boxes[0]))
 
 
 def overlap(scene: Scene, results: list[FrameResult]) -> float:
@@ -156,7 +159,8 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
                    "robust_failure.update=false", "robust_failure.redetect=false",
                    "robust_failure.update_apce=0", "robust_failure.hidden_psr=0",
                    "robust_model.filter_redetect=false", "robust_failure.coast=true",
-                   "robust_failure.learn_occluded=false"):
+                   "robust_failure.learn_occluded=false",
+                   "robust_failure.redetect_on_colour=false"):
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
@@ -169,6 +173,28 @@ def test_score_says_box_on_target(scene_factory) -> None:
     assert np.all((scores >= 0) & (scores <= 1))
     visible = np.array(scene.visibility)
     assert scores[visible == 0.0].mean() < 0.5 * scores[visible >= 1.0].mean()
+
+
+def test_first_frame_score_says_whether_the_target_is_still_in_view(scene_factory) -> None:
+    """The first frame after the given box has no usual response yet: its score is the colour
+    response at the found peak against the given box's. A target that moved more than its own
+    size (``fast``) leaves the search region: a box that misses it scores low (it scored 1,
+    and moved the Kalman filter as a sure measurement would); one still on the target scores
+    near 1."""
+    from vtrack.geometry import iou
+
+    missed, held = [], []
+    for seed in SEEDS:
+        scene = scene_factory("fast", seed, frames=10)
+        first = track(scene, frames=2)[1]
+        assert first.box is not None and scene.boxes[1] is not None
+        if iou(first.box, scene.boxes[1]) == 0.0:
+            missed.append(first.score)
+        for scenario in ("smooth", "occlusion", "lighting"):
+            held.append(track(scene_factory(scenario, seed), frames=2)[1].score)
+    assert len(missed) >= 3, missed
+    assert max(missed) < 0.25, missed
+    assert min(held) > 0.8, held
 
 
 def test_run_writes_empty_box_while_lost(clip_factory, tmp_path: Path) -> None:

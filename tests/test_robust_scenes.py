@@ -64,6 +64,24 @@ GEOMETRIES = {
 OPEN_HARD = {("fast", "320x240x120"), ("fast", "480x360x90")}
 
 
+def test_a_target_faster_than_its_region_is_found_again_across_the_frame():
+    """``fast`` (a target moving 1.2-1.6 widths a frame) leaves the search region on the first
+    frame; the filter, which learnt the static background around it as context, keeps a sharp
+    peak there, but the colours at that peak are not the target's. With
+    ``redetect_on_colour`` the next frame searches the whole frame with the merged response
+    and the target is found again (seeds 0-5: 0.05 -> 0.60 mean IoU; still under the 0.7 bar,
+    OPEN_HARD)."""
+    means = {}
+    for on in ("true", "false"):
+        per_seed = []
+        for seed in range(6):
+            scene, boxes, _ = run_robust("fast", seed, overrides=(
+                f"robust_failure.redetect_on_colour={on}",))
+            per_seed.append(mean_overlap(frame_scores(boxes, scene.boxes)[0]))
+        means[on] = float(np.mean(per_seed))
+    assert means["true"] >= 0.45 and means["true"] >= means["false"] + 0.3, means
+
+
 @pytest.mark.parametrize("name, seeds, frames, size", [
     pytest.param(name, *geometry, id=f"{name}-{key}",
                  marks=OPEN_GAP if (name, key) in OPEN_HARD else ())

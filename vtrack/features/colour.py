@@ -67,6 +67,17 @@ class ColourHistograms:
         return self._likelihood.take(index)
 
 
+def cell_response(likelihood: np.ndarray, w: float, h: float, rows: int, cols: int,
+                  cell: int) -> np.ndarray:
+    """Staple's colour response on a grid of ``rows`` x ``cols`` cells of ``cell`` pixels
+    whose middle cell is the patch's middle: at each cell's displacement, the mean likelihood
+    over the ``w`` x ``h`` box centred there (cells past the patch read its edge)."""
+    mean = box_mean(likelihood, w, h)
+    ys = np.clip(mean.shape[0] // 2 + (np.arange(rows) - rows // 2) * cell, 0, mean.shape[0] - 1)
+    xs = np.clip(mean.shape[1] // 2 + (np.arange(cols) - cols // 2) * cell, 0, mean.shape[1] - 1)
+    return mean[np.ix_(ys, xs)]
+
+
 def box_mean(likelihood: np.ndarray, w: float, h: float) -> np.ndarray:
     """Mean of ``likelihood`` over the ``w`` x ``h`` box centred on every pixel (0 outside)."""
     size = (max(int(round(w)), 1), max(int(round(h)), 1))

@@ -15,8 +15,10 @@ depend on the frame's or the target's size. On that patch:
   :mod:`vtrack.features.colour`): ``ctx.likelihood``.
 
 While the target is lost it cuts more regions for the same filter to score: a growing ring of
-them around the search centre, and (``filter_redetect``) one where the filter's response over
-the whole frame, scored at once in the Fourier domain at the filter's working scale, peaks.
+them around the search centre, and (``filter_redetect``) one where the merged response over the
+whole frame (the filter's, scored at once in the Fourier domain at the filter's working scale,
+with the colour response, Staple's merge) peaks; that one also on a frame after one whose
+colours were not the target's (``robust_failure.redetect_on_colour``).
 
 It holds the learnt models for the other links (``ctx.robust``, :class:`RobustTarget`); it
 learns nothing after the first frame itself: ``robust_failure`` decides when the models learn.
@@ -35,7 +37,7 @@ import cv2
 import numpy as np
 
 from vtrack.errors import InputError
-from vtrack.features.colour import ColourHistograms
+from vtrack.features.colour import ColourHistograms, cell_response
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
 from vtrack.features.patch import region_patch
@@ -70,6 +72,9 @@ class Region:
     factor: float
     patch: np.ndarray
     spectrum: np.ndarray
+    #: Cut where the frame-wide response peaks while the target is not lost
+    #: (``robust_failure.redetect_on_colour``): it competes only with a usual peak or more.
+    far: bool = False
 
     def window(self, frame: Frame) -> Window | None:
         return Box.from_center(self.cx, self.cy, self.width, self.height).window(
@@ -117,14 +122,22 @@ class RobustTarget:
     #: Peak-to-sidelobe ratio of this frame's response (MOSSE).
     psr: float = 0.0
     #: The colour response (Staple's mean likelihood over a target-sized box) at the chosen
-    #: peak (1 without colour), and its mean so far.
+    #: peak (1 without colour), and its mean so far, whose first term is the response at the
+    #: given box on the first frame (``colour_frames`` terms; 0: no colour response).
     colour_peak: float = 1.0
     usual_apce: float = 0.0
     usual_peak: float = 0.0
     usual_colour: float = 0.0
     response_frames: int = 0
+    colour_frames: int = 0
     #: Frames hidden in a row (``robust_failure``).
     hidden_frames: int = 0
+    #: The next frame also searches where the merged response peaks over the whole frame
+    #: (``robust_failure.redetect_on_colour``: this frame's colours at the peak are not the
+    #: target's).
+    search_wide: bool = False
+    #: The colour response's weight in the merged response (``robust_search``; 0: none).
+    merge: float = 0.0
 
     @property
     def size(self) -> tuple[float, float]:
@@ -218,8 +231,10 @@ class RobustModel(Stage):
               "shrunk by this share of its mean side (Staple: 0.2)", min=0.0, max=0.9),
         Param("motion_region", bool, True, "also search a region centred on the motion "
               "model's prediction when it is more than a cell from the last box"),
-        Param("filter_redetect", bool, False, "while the target is lost, also search a region "
-              "centred where the filter's response peaks over the whole frame, at the filter's "
+        Param("filter_redetect", bool, False, "while the target is lost (and after a frame "
+              "whose colours are not the target's, robust_failure.redetect_on_colour), also "
+              "search a region centred where the merged response peaks over the whole frame, "
+              "at the filter's "
               f"working scale (a larger frame: a window of {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} "
               "working pixels' area around the search centre)"),
         Param("shift_within", float, 0.0, "learn from the chosen region's sample moved to the "
@@ -285,9 +300,11 @@ class RobustModel(Stage):
                 and math.hypot(predicted.cx - centre.cx, predicted.cy - centre.cy)
                 > target.cell / region.factor):
             target.regions.append(target.region(ctx.frame, predicted.cx, predicted.cy))
-        if self.filter_redetect and ctx.state == TrackState.LOST:
-            target.regions.append(target.region(ctx.frame, *_filter_peak(ctx.frame, target,
-                                                                         centre.cx, centre.cy)))
+        if self.filter_redetect and (ctx.state == TrackState.LOST or target.search_wide):
+            wide = target.region(ctx.frame, *_filter_peak(ctx.frame, target, centre.cx,
+                                                          centre.cy))
+            wide.far = ctx.state != TrackState.LOST
+            target.regions.append(wide)
         if ctx.search_growth > 1.0:
             target.regions.extend(self._around(ctx, target, region))
         target.chosen = None
@@ -319,10 +336,10 @@ class RobustModel(Stage):
 
 
 def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tuple[float, float]:
-    """The frame point (x, y) where the filter's response peaks over the whole frame, at the
-    filter's working scale (or over the window of at most ``MAX_WIDE_PIXELS`` working pixels
-    around (``cx``, ``cy``)): the "whole frame at a coarse scale" of a correlation tracker's
-    re-detection."""
+    """The frame point (x, y) where the merged response (the filter's and, with colour, the
+    colour response, Staple's merge) peaks over the whole frame, at the filter's working scale
+    (or over the window of at most ``MAX_WIDE_PIXELS`` working pixels around (``cx``,
+    ``cy``)): the "whole frame at a coarse scale" of a correlation tracker's re-detection."""
     cell = target.cell
     factor = target.factor
     shrink = min(1.0, math.sqrt(MAX_WIDE_PIXELS / (frame.width * frame.height * factor**2)))
@@ -335,8 +352,16 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
     wy = min(max(cy, height / 2), max(frame.height - height / 2, height / 2))
     patch = region_patch(frame, wx, wy, width, height, cols * cell, rows * cell)
     response = target.translation.respond_wide(target.plain_features(patch))
-    r, c = np.unravel_index(int(np.argmax(response)), response.shape)
-    # index p scores a target at p + the learnt samples' centre cell (wrapped)
-    row, col = (r + target.rows // 2) % rows, (c + target.cols // 2) % cols
+    # index p scores a target at p + the learnt samples' centre cell (wrapped): rolled, index
+    # p scores a target at p
+    response = np.roll(response, (target.rows // 2, target.cols // 2), axis=(0, 1))
+    if target.colour is not None and target.merge > 0:
+        # Staple's merge (eq. 21), as robust_search scores a region: the filter alone took
+        # static background, which it learnt as context, for a target that had moved away
+        w, h = target.size
+        colour = cell_response(target.colour.likelihood(patch), w * factor, h * factor, rows,
+                               cols, cell)
+        response = (1 - target.merge) * response + target.merge * colour
+    row, col = np.unravel_index(int(np.argmax(response)), response.shape)
     step = cell / factor
     return wx + (col - cols // 2) * step, wy + (row - rows // 2) * step

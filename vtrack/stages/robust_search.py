@@ -13,8 +13,12 @@ Second link of the ``robust`` chain. On each region ``robust_model`` cut:
 The confidence of the filter's own response, LMCF's average peak-to-correlation energy and its
 peak value (Wang et al., CVPR 2017, eq. 7), and the colour response at the chosen peak go to
 ``ctx.robust`` for ``robust_failure``;
-``ctx.score`` is the smaller of the two relative to their usual values (1: as sure as usual).
-While lost, the region whose merged peak is highest wins.
+``ctx.score`` is the smaller of the two relative to their usual values (1: as sure as usual;
+on the first frame after the given box, which has no usual values yet, the colour response
+against the given box's).
+The region whose merged peak is highest wins; a frame-wide candidate searched while the
+target is not lost (``robust_failure.redetect_on_colour``) competes only when its filter peak
+is at least the usual one (a far jump needs the target's usual strength).
 
 Pipeline contract of stage ``robust_search``: reads ``ctx.robust``, ``ctx.likelihood``; writes
 ``ctx.measurement`` and ``ctx.box`` (the found box), ``ctx.score``, ``ctx.robust`` (chosen
@@ -25,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vtrack.features.colour import box_mean
+from vtrack.features.colour import cell_response
 from vtrack.features.dcf import apce, psr, subpixel_peak
 from vtrack.features.scale import ScaleFilter
 from vtrack.geometry import Box
@@ -74,12 +78,21 @@ class RobustSearch(Stage):
         target = ctx.robust
         assert target is not None and ctx.box is not None
         ctx.score = 1.0  # the first frame's box is the target
+        target.merge = self.merge if target.colour is not None else 0.0
         if self.scale:
             target.scale_filter = ScaleFilter(ctx.box.w, ctx.box.h, self.scales, self.scale_step,
                                               self.scale_rate, self.scale_area, target.cell,
                                               max(self.interp_scales, self.scales))
             target.scale_filter.learn(target.scale_filter.samples(
                 ctx.frame, ctx.box.cx, ctx.box.cy, ctx.box.w, ctx.box.h), first=True)
+        if target.colour is not None and self.merge > 0:
+            # the colour response at the given box starts its mean (robust_failure's colour
+            # check and the first frame's confidence need a reference before any frame is seen)
+            region = target.region(ctx.frame, ctx.box.cx, ctx.box.cy)
+            _, colour = self._responses(target, region, target.colour.likelihood(region.patch))
+            assert colour is not None
+            target.usual_colour = float(colour[target.rows // 2, target.cols // 2])
+            target.colour_frames = 1
         self._min_scale = self.min_side / min(ctx.box.w, ctx.box.h)
         self._max_scale = max(min(ctx.frame.width / target.region_w,
                                   ctx.frame.height / target.region_h), 1.0)
@@ -92,6 +105,8 @@ class RobustSearch(Stage):
             likelihood = ctx.likelihood if i == 0 else (
                 target.colour.likelihood(region.patch) if target.colour is not None else None)
             response, colour = self._responses(target, region, likelihood)
+            if region.far and float(response.max()) < target.usual_peak:
+                continue  # a far candidate must look as much like the target as usual
             merged = response if colour is None else (
                 (1 - self.merge) * response + self.merge * colour)
             r, c = np.unravel_index(int(np.argmax(merged)), merged.shape)
@@ -129,19 +144,17 @@ class RobustSearch(Stage):
         if likelihood is None or self.merge == 0.0:
             return response, None
         w, h = target.size
-        mean = box_mean(likelihood, w * region.factor, h * region.factor)
-        # the cells' displacements, as working pixels of the patch
-        rows = np.clip(mean.shape[0] // 2 + (np.arange(target.rows) - target.rows // 2)
-                       * target.cell, 0, mean.shape[0] - 1)
-        cols = np.clip(mean.shape[1] // 2 + (np.arange(target.cols) - target.cols // 2)
-                       * target.cell, 0, mean.shape[1] - 1)
-        return response, mean[np.ix_(rows, cols)]
+        return response, cell_response(likelihood, w * region.factor, h * region.factor,
+                                       target.rows, target.cols, target.cell)
 
 
 def confidence(target: RobustTarget) -> float:
     """This frame's response against the usual ones: min(APCE / usual, peak / usual), at most
-    1 (1 before anything has been learnt)."""
+    1. On the first frame after the given box there are no usual APCE and peak yet: the colour
+    response against the given box's (1 without colour)."""
     if target.response_frames == 0:
-        return 1.0
+        if target.colour_frames == 0:
+            return 1.0
+        return float(min(target.colour_peak / max(target.usual_colour, 1e-9), 1.0))
     return float(min(target.apce / max(target.usual_apce, 1e-9),
                      target.peak / max(target.usual_peak, 1e-9), 1.0))
