@@ -139,6 +139,10 @@ class RobustTarget:
     #: The colour response's weight in the merged response (``robust_search``; 0: none).
     merge: float = 0.0
 
+    def merged(self, response: np.ndarray, colour: np.ndarray) -> np.ndarray:
+        """Staple's merge of the filter's response with the colour response (eq. 21)."""
+        return (1 - self.merge) * response + self.merge * colour
+
     @property
     def size(self) -> tuple[float, float]:
         """Current target size (frame pixels)."""
@@ -361,7 +365,7 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
         w, h = target.size
         colour = cell_response(target.colour.likelihood(patch), w * factor, h * factor, rows,
                                cols, cell)
-        response = (1 - target.merge) * response + target.merge * colour
+        response = target.merged(response, colour)
     row, col = np.unravel_index(int(np.argmax(response)), response.shape)
     step = cell / factor
     return wx + (col - cols // 2) * step, wy + (row - rows // 2) * step

@@ -85,7 +85,7 @@ class RobustSearch(Stage):
                                               max(self.interp_scales, self.scales))
             target.scale_filter.learn(target.scale_filter.samples(
                 ctx.frame, ctx.box.cx, ctx.box.cy, ctx.box.w, ctx.box.h), first=True)
-        if target.colour is not None and self.merge > 0:
+        if target.colour is not None and target.merge > 0:
             # the colour response at the given box starts its mean (robust_failure's colour
             # check and the first frame's confidence need a reference before any frame is seen)
             region = target.region(ctx.frame, ctx.box.cx, ctx.box.cy)
@@ -107,8 +107,7 @@ class RobustSearch(Stage):
             response, colour = self._responses(target, region, likelihood)
             if region.far and float(response.max()) < target.usual_peak:
                 continue  # a far candidate must look as much like the target as usual
-            merged = response if colour is None else (
-                (1 - self.merge) * response + self.merge * colour)
+            merged = response if colour is None else target.merged(response, colour)
             r, c = np.unravel_index(int(np.argmax(merged)), merged.shape)
             if best is None or merged[r, c] > best[0]:
                 best = (float(merged[r, c]), region, response,
