@@ -72,8 +72,6 @@ ABLATIONS = (
     ("-scale", "fDSST's scale filter (the first size kept)", ["robust_search.scale=false"]),
     ("-motion", "the second search region at the Kalman prediction",
      ["robust_model.motion_region=false"]),
-    ("-recentre", "the second reading of a peak in the region's outer half, centred on it",
-     ["robust_search.recentre=false"]),
     ("-shift", "ECO's moved learning sample (the region cut again at the found centre)",
      ["robust_model.shift_within=0"]),
     ("-kcfpad", "KCF's wider region (Staple's padding of 1)", ["robust_model.padding=1"]),

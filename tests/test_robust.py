@@ -160,8 +160,7 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
                    "robust_failure.update_apce=0", "robust_failure.hidden_psr=0",
                    "robust_model.filter_redetect=false", "robust_failure.coast=true",
                    "robust_failure.learn_occluded=false",
-                   "robust_failure.redetect_on_colour=false",
-                   "robust_search.recentre=false"):
+                   "robust_failure.redetect_on_colour=false"):
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 

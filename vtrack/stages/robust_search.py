@@ -7,12 +7,7 @@ Second link of the ``robust`` chain. On each region ``robust_model`` cut:
 2. the colour response: the mean colour likelihood over a target-sized box at each cell
    (Staple section 4, its integral image);
 3. the merge ``(1 - merge) * filter + merge * colour`` (Staple eq. 21, merge factor 0.3), whose
-   peak (refined to a fraction of a cell by a parabola) is the target's new centre; with
-   ``recentre``, a peak in the region's outer half, where KCF's cosine window weighs the
-   features by less than half, is read again (peak, confidence) in a region centred on it,
-   which wins when its merged peak is higher: a target found off centre (fast, found in the
-   region at the motion model's prediction) read where the window fades it scored low, was
-   called occluded, and the Kalman filter took no velocity from it;
+   peak (refined to a fraction of a cell by a parabola) is the target's new centre;
 4. the target's size from fDSST's scale filter at that centre (:mod:`vtrack.features.scale`).
 
 The confidence of the filter's own response, LMCF's average peak-to-correlation energy and its
@@ -42,10 +37,6 @@ from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 from vtrack.stages.robust_model import Region, RobustTarget
 
-#: A region's best peak: merged value, region, the filter's response, the colour response at
-#: the peak, and the peak (row, col) in cells, refined to a fraction of a cell.
-Candidate = tuple[float, Region, np.ndarray, float, tuple[float, float]]
-
 
 @register
 class RobustSearch(Stage):
@@ -68,8 +59,6 @@ class RobustSearch(Stage):
               min=0.0, max=1.0),
         Param("scale_area", int, 512, "pixels of a scale sample at most (DSST: 512)",
               min=64, max=2048),
-        Param("recentre", bool, False, "a peak where the region's cosine window weighs less "
-              "than half is read again in a region centred on it (its confidence too)"),
         Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side",
               min=1.0, max=1000.0),
     )
@@ -83,7 +72,6 @@ class RobustSearch(Stage):
     scale_step: float
     scale_rate: float
     scale_area: int
-    recentre: bool
     min_side: float
 
     def start(self, ctx: TrackContext) -> None:
@@ -112,22 +100,28 @@ class RobustSearch(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None
-        best = None
+        best: tuple[float, Region, np.ndarray, float, tuple[float, float]] | None = None
         for i, region in enumerate(target.regions):
-            likelihood = ctx.likelihood if i == 0 else None
-            best = self._better(target, region, likelihood, best)
+            likelihood = ctx.likelihood if i == 0 else (
+                target.colour.likelihood(region.patch) if target.colour is not None else None)
+            response, colour = self._responses(target, region, likelihood)
+            if region.far and float(response.max()) < target.usual_peak:
+                continue  # a far candidate must look as much like the target as usual
+            merged = response if colour is None else target.merged(response, colour)
+            r, c = np.unravel_index(int(np.argmax(merged)), merged.shape)
+            if best is None or merged[r, c] > best[0]:
+                best = (float(merged[r, c]), region, response,
+                        1.0 if colour is None else float(colour[r, c]),
+                        subpixel_peak(merged, int(r), int(c)))
         assert best is not None
-        if self.recentre and _windowed(target, best[4]):
-            # the cosine window weighs a peak in the region's outer half by less than half:
-            # its peak and confidence are read again in a region centred on it
-            cx, cy = _frame_point(target, best[1], best[4])
-            best = self._better(target, target.region(ctx.frame, cx, cy), None, best)
         _, region, response, target.colour_peak, (row, col) = best
         target.chosen = region
         target.apce, target.peak = apce(response), float(response.max())
         target.psr = psr(response)
         # the peak's offset from the region's centre, working -> frame pixels
-        cx, cy = _frame_point(target, region, (row, col))
+        step = target.cell / region.factor
+        cx = region.cx + (col - target.cols // 2) * step
+        cy = region.cy + (row - target.rows // 2) * step
         target.scale_samples = None
         target.previous_scale = target.scale
         if self.scale and target.scale_filter is not None:
@@ -141,23 +135,6 @@ class RobustSearch(Stage):
         ctx.measurement = ctx.box = Box.from_center(cx, cy, w, h)
         ctx.score = confidence(target)
 
-    def _better(self, target: RobustTarget, region: Region, likelihood: np.ndarray | None,
-                best: Candidate | None) -> Candidate | None:
-        """``region``'s merged peak if it is higher than ``best``'s (``likelihood``: the
-        region's colour likelihood if already computed), else ``best``."""
-        if likelihood is None and target.colour is not None:
-            likelihood = target.colour.likelihood(region.patch)
-        response, colour = self._responses(target, region, likelihood)
-        if region.far and float(response.max()) < target.usual_peak:
-            return best  # a far candidate must look as much like the target as usual
-        merged = response if colour is None else target.merged(response, colour)
-        r, c = np.unravel_index(int(np.argmax(merged)), merged.shape)
-        if best is not None and merged[r, c] <= best[0]:
-            return best
-        return (float(merged[r, c]), region, response,
-                1.0 if colour is None else float(colour[r, c]),
-                subpixel_peak(merged, int(r), int(c)))
-
     def _responses(self, target: RobustTarget, region: Region, likelihood: np.ndarray | None
                    ) -> tuple[np.ndarray, np.ndarray | None]:
         """The filter's response on the region (centred: no displacement at the middle cell)
@@ -168,23 +145,6 @@ class RobustSearch(Stage):
         w, h = target.size
         return response, cell_response(likelihood, w * region.factor, h * region.factor,
                                        target.rows, target.cols, target.cell)
-
-
-def _windowed(target: RobustTarget, peak: tuple[float, float]) -> bool:
-    """Whether the peak (row, col, in cells) lies where the region's Hann window is below half
-    its weight: more than a quarter of the region from its centre along either axis."""
-    row, col = peak
-    return (abs(row - target.rows // 2) > target.rows / 4
-            or abs(col - target.cols // 2) > target.cols / 4)
-
-
-def _frame_point(target: RobustTarget, region: Region, peak: tuple[float, float]
-                 ) -> tuple[float, float]:
-    """The frame point (x, y) of a peak (row, col, in cells) of ``region``'s response."""
-    row, col = peak
-    step = target.cell / region.factor
-    return (region.cx + (col - target.cols // 2) * step,
-            region.cy + (row - target.rows // 2) * step)
 
 
 def confidence(target: RobustTarget) -> float:
