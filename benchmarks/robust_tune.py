@@ -87,7 +87,8 @@ ABLATIONS = (
     ("-wide", "the frame-wide search (while lost, and after a frame whose colours are not "
      "the target's)", ["robust_model.filter_redetect=false"]),
     ("-colourwide", "the frame-wide search after a frame whose colours are not the target's "
-     "(only while lost)", ["robust_failure.redetect_on_colour=false"]),
+     "or whose target it found far away (only while lost)",
+     ["robust_failure.redetect_on_colour=false"]),
     ("-learnocc", "learning occluded frames whose colours agree (MOSSE: nothing learnt below "
      "PSR 7)", ["robust_failure.learn_occluded=false"]),
     ("-update", "learning after the first frame", ["robust_failure.update=false"]),

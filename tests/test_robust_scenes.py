@@ -63,15 +63,21 @@ GEOMETRIES = {
 }
 
 
+def seed_means(name: str, seeds, frames: int = FRAMES, size: tuple[int, int] | None = None,
+               overrides: tuple[str, ...] = ()) -> list[float]:
+    """robust's (with ``overrides``) mean IoU on the scene ``name`` drawn with each seed."""
+    means = []
+    for seed in seeds:
+        scene, boxes, _ = run_robust(name, seed, frames, size, overrides)
+        means.append(mean_overlap(frame_scores(boxes, scene.boxes)[0]))
+    return means
+
+
 @functools.cache
 def fast_mean(*overrides: str) -> float:
     """robust's (with ``overrides``) mean IoU on the ``fast`` scene over seeds 0-5 (a target
     moving 1.2-1.6 widths a frame; computed once per overrides)."""
-    per_seed = []
-    for seed in range(6):
-        scene, boxes, _ = run_robust("fast", seed, overrides=overrides)
-        per_seed.append(mean_overlap(frame_scores(boxes, scene.boxes)[0]))
-    return float(np.mean(per_seed))
+    return float(np.mean(seed_means("fast", range(6), overrides=overrides)))
 
 
 def test_a_target_faster_than_its_region_is_found_again_across_the_frame():
@@ -90,10 +96,7 @@ def test_a_target_faster_than_the_scenes_declared_speeds_is_followed(monkeypatch
     is followed by the same search (seeds 0-2; 0.60 at seeds 100-105 while only a frame whose
     colours disagree was)."""
     monkeypatch.setitem(hard_scenes.RANGES, "fast_speed", (1.6, 2.0))
-    means = []
-    for seed in range(3):
-        scene, boxes, _ = run_robust("fast", seed)
-        means.append(mean_overlap(frame_scores(boxes, scene.boxes)[0]))
+    means = seed_means("fast", range(3))
     assert np.mean(means) >= 0.7, [round(m, 3) for m in means]
 
 
@@ -103,11 +106,7 @@ def test_a_target_faster_than_the_scenes_declared_speeds_is_followed(monkeypatch
 def test_robust_follows_each_hard_scene(name, seeds, frames, size):
     if name == "slab" and size is None:
         seeds = SLAB_SEEDS
-    means = []
-    for seed in seeds:
-        scene, boxes, _ = run_robust(name, seed, frames, size)
-        overlaps, _ = frame_scores(boxes, scene.boxes)
-        means.append(mean_overlap(overlaps))
+    means = seed_means(name, seeds, frames, size)
     assert np.mean(means) >= 0.7, [round(m, 3) for m in means]
 
 
