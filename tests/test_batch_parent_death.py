@@ -1,6 +1,7 @@
 """Issue 21 item 3: `kill -9` of a batch leaves no worker running: each worker stops with its
 parent (its job ends `interrupted`, outputs whole, as on SIGTERM), and the resume that follows
-runs those jobs again and writes a summary that agrees with the runs' own records."""
+runs those jobs again and writes a summary that agrees with the runs' own records. A worker
+that finds the batch gone when it reports progress does not fail its run for it."""
 
 from __future__ import annotations
 
@@ -16,6 +17,10 @@ from pathlib import Path
 
 import pytest
 
+from vtrack.batch.jobs import Job, Progress
+from vtrack.batch.worker import execute
+from vtrack.config import load_config
+from vtrack.request import RunRequest
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 NAMES = ("a", "b")
@@ -105,3 +110,24 @@ def test_workers_die_with_a_killed_batch_and_the_resume_agrees(folder: Path,
         assert rows[name]["status"] in ("complete", "skipped")
         assert int(rows[name]["frames"]) == record["frames"] == 600
     assert not os.path.exists(out / NAMES[0] / "robust" / ".vtrack.lock")
+
+
+def test_a_job_whose_batch_hung_up_runs_on_and_records_itself(clip_factory,
+                                                              tmp_path: Path) -> None:
+    """A worker whose progress messages can no longer be sent (the batch's end of the pipe is
+    closed) keeps its run whole: the run is not failed by the broken pipe (the parent watch's
+    SIGTERM is what stops it), and it reports nothing more."""
+    clip = clip_factory("smooth", frames=40)
+    request = RunRequest(input=str(clip.path), out_dir=tmp_path / "job", config=load_config("s0"),
+                         gt_path=clip.gt, video=False)
+    sent: list[Progress] = []
+
+    def hung_up(progress: Progress) -> None:
+        sent.append(progress)
+        raise BrokenPipeError(32, "Broken pipe")
+
+    outcome = execute(Job("clip", "s0", request), hung_up)
+    assert outcome.status == "complete", outcome.error
+    assert len(sent) == 1
+    record = json.loads((tmp_path / "job" / "run.json").read_text())
+    assert record["status"] == "complete" and record["frames"] == 40

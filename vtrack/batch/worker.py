@@ -66,12 +66,19 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
 
 
 class _Reporter:
-    """``on_open`` / ``on_frame`` of one run, as :class:`Progress` messages to ``report``."""
+    """``on_open`` / ``on_frame`` of one run, as :class:`Progress` messages to ``report``.
+
+    A message that cannot be sent (the batch process is gone: its end of the connection is
+    closed) ends the reporting, never the run: the run is stopped by the SIGTERM of
+    :func:`_die_with_parent`, which ends it ``interrupted`` with its records whole. Raising
+    here instead would fail the run, and the SIGTERM arriving while it closes its outputs
+    could cut its ``run.json`` short."""
 
     def __init__(self, job: Job, report: Report) -> None:
         self.job, self.report = job, report
         self.total: int | None = None
         self.last = time.monotonic()
+        self.connected = True
 
     def on_open(self, info: InputInfo) -> None:
         self.total = info.frame_count
@@ -79,13 +86,21 @@ class _Reporter:
             self.total = max(self.total - self.job.request.start_frame(info.fps), 0)
             if self.job.request.max_frames is not None:
                 self.total = min(self.total, self.job.request.max_frames)
-        self.report(Progress(self.job.input, self.job.config, 0, self.total))
+        self._send(0)
 
     def on_frame(self, done: int) -> None:
         now = time.monotonic()
         if now - self.last >= PROGRESS_PERIOD:
             self.last = now
+            self._send(done)
+
+    def _send(self, done: int) -> None:
+        if not self.connected:
+            return
+        try:
             self.report(Progress(self.job.input, self.job.config, done, self.total))
+        except OSError:  # BrokenPipeError, ConnectionResetError: the batch went away
+            self.connected = False
 
 
 def _run_when_free(job: Job, report: Report | None = None) -> RunSummary:
