@@ -84,10 +84,29 @@ def test_wide_response_is_the_response_at_the_learnt_size() -> None:
     assert np.allclose(filt.respond_wide(probe), filt.respond(probe), atol=1e-5)
 
 
+def test_wide_response_through_fewer_channels_is_exact_for_a_kernel_of_that_rank() -> None:
+    """``rank``: the kernel's channels reduced to their leading singular vectors, and the
+    sample's with them. A filter learnt from a sample whose 12 channels mix 3 is a kernel of
+    rank 3: through 3 channels its response is the full one (and through 12, trivially)."""
+    rng = np.random.default_rng(5)
+    base = rng.random((21, 25, 3)).astype(np.float32)
+    mixed = base @ rng.random((3, 12)).astype(np.float32)
+    filt = CorrelationFilter(gaussian_label(21, 25, 1.5), lam=1e-3, rate=0.02)
+    filt.learn(mixed * hann2d(21, 25))
+    probe = rng.random((48, 60, 12)).astype(np.float32)
+    full = filt.respond_wide(probe)
+    assert np.allclose(filt.respond_wide(probe, rank=3), full, atol=1e-4 * np.abs(full).max())
+    assert np.allclose(filt.respond_wide(probe, rank=12), full, atol=1e-5)
+    assert not np.allclose(filt.respond_wide(probe, rank=2), full,
+                           atol=1e-2 * np.abs(full).max())
+
+
+@pytest.mark.parametrize("rank", [None, 10])
 @pytest.mark.parametrize("where", [(20, 30), (70, 130), (95, 15)])
-def test_wide_response_finds_the_target_anywhere_in_a_larger_image(where) -> None:
+def test_wide_response_finds_the_target_anywhere_in_a_larger_image(where, rank) -> None:
     """A filter learnt on fHOG of a textured target, windowed as the tracker learns it, scores
-    the whole image: its peak plus the sample's centre cell is where the target is."""
+    the whole image (through all 31 channels, or 10 as the tracker's frame-wide search): its
+    peak plus the sample's centre cell is where the target is."""
     cell, rows, cols = 4, 16, 20
     image = texture(rows * cell * 8, cols * cell * 8, seed=4)  # 128 x 160 cells
     target = texture(8 * cell, 10 * cell, seed=5)
@@ -98,7 +117,7 @@ def test_wide_response_finds_the_target_anywhere_in_a_larger_image(where) -> Non
     sample = features[cy - rows // 2: cy - rows // 2 + rows, cx - cols // 2: cx - cols // 2 + cols]
     filt = CorrelationFilter(gaussian_label(rows, cols, 1.0), lam=1e-3, rate=0.02)
     filt.learn(sample * hann2d(rows, cols))
-    response = filt.respond_wide(features)
+    response = filt.respond_wide(features, rank)
     r, c = np.unravel_index(int(np.argmax(response)), response.shape)
     found = ((r + rows // 2) % features.shape[0], (c + cols // 2) % features.shape[1])
     assert found == (cy, cx)

@@ -8,6 +8,7 @@ parameter validation. The accuracy bars are the issue's (mean IoU >= 0.7 per sce
 from __future__ import annotations
 
 import csv
+import math
 from itertools import islice
 from pathlib import Path
 
@@ -128,6 +129,33 @@ def test_learning_from_the_moved_sample_cuts_fewer_regions_and_still_follows(
         counts[within] = len(calls)
     assert counts[1.0] < 0.8 * counts[0.0], counts
     assert overlap(scene, results[1.0]) >= 0.7
+
+
+def test_the_frame_wide_search_reads_a_small_targets_frame_at_its_own_detail(
+        scene_factory, monkeypatch) -> None:
+    """A small target's working scale enlarges the frame 2 times or more: the frame-wide
+    search then reads the frame at half that scale on cells of half the pixels (the same
+    cells, a quarter of the pixels), and peaks where the search at the full working scale
+    does, to within a cell, on nearly every frame."""
+    import vtrack.stages.robust_model as robust_model
+
+    search = robust_model._filter_peak
+    scene = scene_factory("fast", 0, frames=40)  # a ~25 px target, found far away each frame
+    distances = []
+
+    def both(frame, target, cx, cy):
+        assert robust_model._wide_reduction(target.factor, target.cell) == 2
+        reduced = search(frame, target, cx, cy)
+        monkeypatch.setattr(robust_model, "WIDE_REDUCTION", 1)
+        full = search(frame, target, cx, cy)
+        monkeypatch.setattr(robust_model, "WIDE_REDUCTION", 2)
+        distances.append(math.dist(reduced, full) * target.factor / target.cell)
+        return reduced
+
+    monkeypatch.setattr(robust_model, "_filter_peak", both)
+    track(scene)
+    assert len(distances) > 20
+    assert np.mean(np.array(distances) <= 1.5) >= 0.9, np.round(distances, 1)
 
 
 def test_grey_target_is_tracked_not_refused(scene_factory) -> None:

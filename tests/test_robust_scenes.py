@@ -35,7 +35,15 @@ GRACE = 10
 def run_robust(name: str, seed: int, frames: int = FRAMES, size: tuple[int, int] | None = None,
                overrides: tuple[str, ...] = ()):
     """The scene (320x240 unless ``size``) and robust's (with ``overrides``) per-frame (box,
-    state) on it, in memory."""
+    state) on it, in memory; computed once per arguments and scene ranges (a test may widen
+    them)."""
+    return _run_robust(name, seed, frames, size, overrides,
+                       tuple(sorted(hard_scenes.RANGES.items())))
+
+
+@functools.cache
+def _run_robust(name: str, seed: int, frames: int, size: tuple[int, int] | None,
+                overrides: tuple[str, ...], _ranges: tuple):
     width, height = size or (None, None)
     scene = make_scene(name, seed=seed, frames=frames, width=width, height=height)
     config = load_config("robust").with_overrides(list(overrides))
@@ -73,20 +81,14 @@ def seed_means(name: str, seeds, frames: int = FRAMES, size: tuple[int, int] | N
     return means
 
 
-@functools.cache
-def fast_mean(*overrides: str) -> float:
-    """robust's (with ``overrides``) mean IoU on the ``fast`` scene over seeds 0-5 (a target
-    moving 1.2-1.6 widths a frame; computed once per overrides)."""
-    return float(np.mean(seed_means("fast", range(6), overrides=overrides)))
-
-
 def test_a_target_faster_than_its_region_is_found_again_across_the_frame():
     """``fast`` leaves the search region on the first frame; the filter, which learnt the
     static background around it as context, keeps a sharp peak there, but the colours at that
     peak are not the target's. With ``redetect_on_colour`` the next frame searches the whole
-    frame with the merged response and the target is found again (seeds 0-5: 0.05 -> 0.93
-    mean IoU)."""
-    shipped, off = fast_mean(), fast_mean("robust_failure.redetect_on_colour=false")
+    frame with the merged response and the target is found again (seeds 0-2: 0.04 -> 0.93
+    mean IoU; the shipped runs are the hard-scene test's)."""
+    shipped = np.mean(seed_means("fast", SEEDS))
+    off = np.mean(seed_means("fast", SEEDS, overrides=("robust_failure.redetect_on_colour=false",)))
     assert shipped >= 0.7 and shipped >= off + 0.3, (shipped, off)
 
 

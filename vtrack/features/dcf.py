@@ -99,23 +99,45 @@ class CorrelationFilter:
         product = np.einsum("...k,...k->...", self._filter, zf)
         return np.fft.irfftn(product, s=self.shape, axes=self.axes)
 
-    def respond_wide(self, z: np.ndarray) -> np.ndarray:
+    def respond_wide(self, z: np.ndarray, rank: int | None = None) -> np.ndarray:
         """The response over a sample ``z`` larger than the learnt ones (2-D filters): the
         filter's spatial kernel, zero-padded to ``z``'s size, convolved with it (circularly).
-        Index ``p`` scores a target centred at ``p`` plus the learnt samples' centre cell."""
+        Index ``p`` scores a target centred at ``p`` plus the learnt samples' centre cell.
+
+        ``rank``: the kernel's channels are first reduced to that many (ECO's projection,
+        Danelljan et al., CVPR 2017: the kernel's leading right singular vectors as cells x
+        channels), and so are ``z``'s, so that only ``rank`` channels are transformed."""
         assert self._filter is not None, "respond before learn"
         size = z.shape[:2]
-        if self._wide is None or self._wide[0] != size:
+        if self._wide is None or self._wide[0] != (size, rank):
             kernel = np.fft.irfftn(self._filter, s=self.shape, axes=(0, 1)).astype(np.float32)
-            padded = np.zeros(z.shape, np.float32)
+            projection = None
+            if rank is not None and rank < kernel.shape[2]:
+                # the leading right singular vectors: the leading eigenvectors of the channels'
+                # Gram matrix (OpenCV's: NumPy's would wake a BLAS thread pool that then spins)
+                gram = cv2.mulTransposed(kernel.reshape(-1, kernel.shape[2]), True,
+                                         dtype=cv2.CV_64F)
+                _, _, vectors = cv2.eigen(gram)  # rows, by decreasing eigenvalue
+                projection = np.ascontiguousarray(vectors[:rank].T, np.float32)
+                kernel = _project(kernel, projection)
+            padded = np.zeros(size + kernel.shape[2:], np.float32)
             # the kernel's wrapped offsets (negative ones at the end) keep their offsets
             ys, xs = (np.rint(np.fft.fftfreq(n, 1 / n)).astype(int) % m
                       for n, m in zip(self.shape, size, strict=True))
             padded[np.ix_(ys, xs)] = kernel
             # kept until the filter learns again (it learns nothing while the target is lost)
-            self._wide = (size, real_spectrum(padded, 2))
-        product = np.einsum("...k,...k->...", self._wide[1], real_spectrum(z, 2))
+            self._wide = ((size, rank), real_spectrum(padded, 2), projection)
+        _, kernel_f, projection = self._wide
+        if projection is not None:
+            z = _project(z, projection)
+        product = np.einsum("...k,...k->...", kernel_f, real_spectrum(z, 2))
         return np.fft.irfftn(product, s=size, axes=(0, 1))
+
+
+def _project(x: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """``x``'s channels (last axis) times ``projection`` (channels x rank), by OpenCV's
+    per-element transform (a matrix product would wake a BLAS thread pool that then spins)."""
+    return cv2.transform(np.ascontiguousarray(x, np.float32), projection.T)
 
 
 #: Above this many cells a 2-D sample's channels are transformed one by one with OpenCV: NumPy's

@@ -52,8 +52,16 @@ from vtrack.stages.base import Stage, TrackContext, TrackState, register
 MAX_RINGS = 4
 #: Regions searched a frame while lost besides the centre one (the cost is bounded).
 REGIONS_PER_FRAME = 8
-#: Frame-wide re-detection with the filter: at most this many working pixels (width x height)
-#: are searched (a larger frame: a window of that area around the search centre).
+#: Frame-wide re-detection reads the frame this many times smaller than the working scale where
+#: that scale enlarges the frame as much (a small target): the frame's own detail, on the same
+#: cells (of 1/this the pixels).
+WIDE_REDUCTION = 2
+#: ... and scores it with the filter's kernel reduced to this many channels (its leading
+#: singular vectors; ECO-HC compresses fHOG to 10, Danelljan et al., CVPR 2017): the
+#: transforms of 10 channels, not 32.
+WIDE_RANK = 10
+#: ... on at most this many of its pixels (width x height; a larger frame: a window of that
+#: area around the search centre).
 WIDE_WINDOW = (1024, 576)
 MAX_WIDE_PIXELS = WIDE_WINDOW[0] * WIDE_WINDOW[1]
 #: KCF/DSST/Staple's label width: sqrt(target area) / 16 (in working pixels).
@@ -152,9 +160,10 @@ class RobustTarget:
         """Filter features of a patch: fHOG (+ the cells' mean grey), under the cosine window."""
         return self.plain_features(patch) * self.cosine
 
-    def plain_features(self, patch: np.ndarray) -> np.ndarray:
-        """fHOG (+ the cells' mean grey) of a patch of any size, without the cosine window."""
-        hog = fhog(patch, self.cell)
+    def plain_features(self, patch: np.ndarray, cell: int | None = None) -> np.ndarray:
+        """fHOG (+ the cells' mean grey) of a patch of any size, without the cosine window, on
+        cells of ``cell`` pixels (default: the filter's)."""
+        hog = fhog(patch, cell or self.cell)
         if self.grey_channel:
             grey = patch if patch.ndim == 2 else cv2.cvtColor(patch, cv2.COLOR_BGR2GRAY)
             means = cv2.resize(grey, (hog.shape[1], hog.shape[0]), interpolation=cv2.INTER_AREA)
@@ -238,9 +247,10 @@ class RobustModel(Stage):
         Param("filter_redetect", bool, False, "while the target is lost (and after a frame "
               "whose colours are not the target's, robust_failure.redetect_on_colour), also "
               "search a region centred where the merged response peaks over the whole frame, "
-              "at the filter's "
-              f"working scale (a larger frame: a window of {WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} "
-              "working pixels' area around the search centre)"),
+              f"on the filter's cells through its {WIDE_RANK} leading channels (a larger "
+              "frame: a window of "
+              f"{WIDE_WINDOW[0]}x{WIDE_WINDOW[1]} working pixels' area around the search "
+              "centre)"),
         Param("shift_within", float, 0.0, "learn from the chosen region's sample moved to the "
               "found centre in the Fourier domain (ECO) when that is at most this many cells "
               "away; farther, cut and describe the region again (0: always cut again)",
@@ -341,9 +351,14 @@ class RobustModel(Stage):
 
 def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tuple[float, float]:
     """The frame point (x, y) where the merged response (the filter's and, with colour, the
-    colour response, Staple's merge) peaks over the whole frame, at the filter's working scale
-    (or over the window of at most ``MAX_WIDE_PIXELS`` working pixels around (``cx``,
-    ``cy``)): the "whole frame at a coarse scale" of a correlation tracker's re-detection."""
+    colour response, Staple's merge) peaks over the whole frame (or over the window of at most
+    ``MAX_WIDE_PIXELS`` working pixels around (``cx``, ``cy``)), on the filter's cells: the
+    "whole frame at a coarse scale" of a correlation tracker's re-detection. Where the working
+    scale enlarges the frame ``k`` = 2 times or more (a small target), the features are taken
+    from the patch at 1/``k`` of it with cells of 1/``k`` the pixels (:func:`_wide_reduction`):
+    the same cells, from the frame's own detail, at 1/``k``^2 the gradients' cost. The filter
+    scores them through ``WIDE_RANK`` channels (the region cut at the peak is then scored by
+    the whole filter, ``robust_search``)."""
     cell = target.cell
     factor = target.factor
     shrink = min(1.0, math.sqrt(MAX_WIDE_PIXELS / (frame.width * frame.height * factor**2)))
@@ -354,8 +369,10 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
     # the window inside the frame where it can be, around the search centre
     wx = min(max(cx, width / 2), max(frame.width - width / 2, width / 2))
     wy = min(max(cy, height / 2), max(frame.height - height / 2, height / 2))
-    patch = region_patch(frame, wx, wy, width, height, cols * cell, rows * cell)
-    response = target.translation.respond_wide(target.plain_features(patch))
+    k = _wide_reduction(factor, cell)
+    patch = region_patch(frame, wx, wy, width, height, cols * cell // k, rows * cell // k)
+    features = target.plain_features(patch, cell // k)
+    response = target.translation.respond_wide(features, WIDE_RANK)
     # index p scores a target at p + the learnt samples' centre cell (wrapped): rolled, index
     # p scores a target at p
     response = np.roll(response, (target.rows // 2, target.cols // 2), axis=(0, 1))
@@ -363,9 +380,17 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
         # Staple's merge (eq. 21), as robust_search scores a region: the filter alone took
         # static background, which it learnt as context, for a target that had moved away
         w, h = target.size
-        colour = cell_response(target.colour.likelihood(patch), w * factor, h * factor, rows,
-                               cols, cell)
+        colour = cell_response(target.colour.likelihood(patch), w * factor / k,
+                               h * factor / k, rows, cols, cell // k)
         response = target.merged(response, colour)
     row, col = np.unravel_index(int(np.argmax(response)), response.shape)
     step = cell / factor
     return wx + (col - cols // 2) * step, wy + (row - rows // 2) * step
+
+
+def _wide_reduction(factor: float, cell: int) -> int:
+    """How many times smaller than the working scale the frame-wide search samples the frame:
+    ``WIDE_REDUCTION`` where the working scale (``factor`` working pixels a frame pixel)
+    enlarges the frame at least that many times and a cell divides, else 1."""
+    k = WIDE_REDUCTION
+    return k if factor >= k and cell % k == 0 else 1
