@@ -52,7 +52,8 @@ def _run_robust(name: str, seed: int, frames: int, size: tuple[int, int] | None,
 
 
 #: What the correlation-filter rebuild of issue 20 does not hold yet (kept failing on purpose,
-#: strict, until it does): the return of seed 1 of the scene leaving the view. (The wider slab
+#: strict, until it does): seeds 1 and 4 of the scene leaving the view stay `occluded`, not
+#: `lost`, while out (their box follows weak peaks on the edge the target left by). (The wider slab
 #: of the larger scenes holds since a doubtful frame is learnt only when the colours agree,
 #: `fast` since a target found far away is searched for over the whole frame again.)
 OPEN_GAP = pytest.mark.xfail(strict=True, reason="robust rebuilt on a correlation filter: "
@@ -131,8 +132,11 @@ def test_robust_follows_the_slow_slab():
     assert np.mean(means) >= 0.7, [round(m, 3) for m in means]
 
 
-@pytest.mark.parametrize("seed", [0, pytest.param(1, marks=OPEN_GAP), 2])
+@pytest.mark.parametrize("seed", [pytest.param(seed, marks=OPEN_GAP) if seed in (1, 4) else seed
+                                  for seed in range(6)])
 def test_robust_is_lost_while_out_and_back_within_10_frames(seed):
+    """Out of view through an edge for 15-25 frames: `lost` from 10 frames after it left, and
+    back on the target within 10 frames of its return."""
     scene, boxes, states = run_robust("exit_return", seed)
     gone, back_in = scene.events["leave"]
     full = scene.events["back"]
