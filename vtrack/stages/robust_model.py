@@ -60,7 +60,7 @@ WIDE_REDUCTION = 2
 #: singular vectors; ECO-HC compresses fHOG to 10, Danelljan et al., CVPR 2017): the
 #: transforms of 10 channels, not 32.
 WIDE_RANK = 10
-#: ... on at most this many of its pixels (width x height; a larger frame: a window of that
+#: ... over at most this many working pixels (width x height; a larger frame: a window of that
 #: area around the search centre).
 WIDE_WINDOW = (1024, 576)
 MAX_WIDE_PIXELS = WIDE_WINDOW[0] * WIDE_WINDOW[1]
@@ -370,8 +370,9 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
     wx = min(max(cx, width / 2), max(frame.width - width / 2, width / 2))
     wy = min(max(cy, height / 2), max(frame.height - height / 2, height / 2))
     k = _wide_reduction(factor, cell)
-    patch = region_patch(frame, wx, wy, width, height, cols * cell // k, rows * cell // k)
-    features = target.plain_features(patch, cell // k)
+    read_cell = cell // k  # the filter's cells, in the pixels of the patch as read
+    patch = region_patch(frame, wx, wy, width, height, cols * read_cell, rows * read_cell)
+    features = target.plain_features(patch, read_cell)
     response = target.translation.respond_wide(features, WIDE_RANK)
     # index p scores a target at p + the learnt samples' centre cell (wrapped): rolled, index
     # p scores a target at p
@@ -381,7 +382,7 @@ def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tu
         # static background, which it learnt as context, for a target that had moved away
         w, h = target.size
         colour = cell_response(target.colour.likelihood(patch), w * factor / k,
-                               h * factor / k, rows, cols, cell // k)
+                               h * factor / k, rows, cols, read_cell)
         response = target.merged(response, colour)
     row, col = np.unravel_index(int(np.argmax(response)), response.shape)
     step = cell / factor
