@@ -24,6 +24,11 @@ filter's own response (``robust_search``), not a hand-set similarity:
   two complementary learners; the share is LMCF's beta_1 = 0.7). A target passing behind a
   plain occluder gives doubtful peaks on the occluder's edge, whose colours are not the
   target's: learnt, the edge became the target (generated `slab` and `occlusion` scenes).
+  A doubtful peak whose box lies mostly outside the frame is no sight of the target (it is
+  leaving the view) and counts as hidden, so the box mostly outside makes it lost at once:
+  followed as doubtful, a target out of view stayed occluded on weak peaks of the border it
+  left by (generated `exit_return`: out-of-view frames called lost 184 -> 229 of 269 on
+  seeds 100-111; real sequences even, benchmarks/RESULTS.md section 8, thirteenth round).
 - A hidden or lost target is taken back only on a response LMCF would call confident: sharp
   (PSR at least ``hidden_psr``), strong (its peak at least ``hidden_peak`` of its mean so far,
   LMCF's beta_2) and with an APCE of at least ``retake_apce`` of its mean so far (LMCF's
@@ -156,7 +161,12 @@ class RobustFailure(Stage):
         # ... and a target just found far away may be as far again on the next frame
         found_far = target.chosen is not None and target.chosen.far
         target.search_wide = self.redetect_on_colour and (colour_disagrees or found_far)
-        if (ctx.measurement is not None and sharp and retaken
+        # a doubtful peak whose box lies mostly outside the frame is no sight of the target:
+        # it is leaving the view (without this, weak peaks on the border it left by were
+        # followed as doubtful frames, never lost)
+        off_frame = weak and ctx.measurement is not None and _inside_share(
+            ctx.measurement, ctx.frame.width, ctx.frame.height) < 0.5
+        if (ctx.measurement is not None and sharp and retaken and not off_frame
                 and (was == TrackState.TRACKING or strong)):
             target.hidden_frames = 0
             ctx.search_growth = 1.0
