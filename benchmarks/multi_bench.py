@@ -277,13 +277,14 @@ def variants(folder: Path, overrides: list[str]) -> None:
     print("### `fixed_camera` on eight variants of MOT_TUD-Campus\n")
     runs = [("`fixed_camera`", [])] + ([(f"`fixed_camera --set {' '.join(overrides)}`",
                                          overrides)] if overrides else [])
+    configs = [load_config("fixed_camera").with_overrides(changes) for _, changes in runs]
     print("| variant | " + " | ".join(f"{label}: MOTA / IDF1" for label, _ in runs) + " |")
     print("|---|" + "---:|" * len(runs))
     pooled: list[list[dict[str, Any]]] = [[] for _ in runs]
     for label, frames, truth in clips:
         cells = []
-        for k, (_, changes) in enumerate(runs):
-            scores = scored(load_config("fixed_camera").with_overrides(changes), frames, truth)
+        for k, config in enumerate(configs):
+            scores = scored(config, frames, truth)
             pooled[k].append(scores)
             cells.append(f"{scores['mota']:.3f} / {scores['idf1']:.3f}")
         print(f"| {label} | " + " | ".join(cells) + " |")

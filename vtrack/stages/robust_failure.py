@@ -73,6 +73,7 @@ searches the whole frame) and the ``confidence`` and ``psr`` columns.
 
 from __future__ import annotations
 
+from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
@@ -164,8 +165,7 @@ class RobustFailure(Stage):
         # a doubtful peak whose box lies mostly outside the frame is no sight of the target:
         # it is leaving the view (without this, weak peaks on the border it left by were
         # followed as doubtful frames, never lost)
-        off_frame = weak and ctx.measurement is not None and _inside_share(
-            ctx.measurement, ctx.frame.width, ctx.frame.height) < 0.5
+        off_frame = weak and _mostly_outside(ctx.measurement, ctx.frame)
         if (ctx.measurement is not None and sharp and retaken and not off_frame
                 and (was == TrackState.TRACKING or strong)):
             target.hidden_frames = 0
@@ -188,8 +188,7 @@ class RobustFailure(Stage):
             ctx.measurement = None  # S0 item 7: coast on the prediction
             if ctx.prediction is not None:
                 ctx.box = ctx.prediction
-        gone = ctx.box is not None and _inside_share(ctx.box, ctx.frame.width,
-                                                     ctx.frame.height) < 0.5
+        gone = _mostly_outside(ctx.box, ctx.frame)
         lost = target.hidden_frames > self.lost_after or gone or was == TrackState.LOST
         ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
         if (may_learn and self.learn_occluded and not lost and ctx.measurement is not None
@@ -221,9 +220,11 @@ def _remember(target: RobustTarget) -> None:
     target.usual_colour += (target.colour_peak - target.usual_colour) / target.colour_frames
 
 
-def _inside_share(box: Box, width: int, height: int) -> float:
-    """Share of the box's area inside a ``width`` x ``height`` frame."""
-    window = box.window(width, height)
+def _mostly_outside(box: Box | None, frame: Frame) -> bool:
+    """Whether less than half of ``box``'s area lies inside the frame (False without a box)."""
+    if box is None:
+        return False
+    window = box.window(frame.width, frame.height)
     if window is None or box.area <= 0:
-        return 0.0
-    return window.width * window.height / box.area
+        return True
+    return window.width * window.height < 0.5 * box.area
