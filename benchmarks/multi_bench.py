@@ -1,7 +1,7 @@
 """Multi-target trackers measured: S3 (``mht``), S4 per track (``kalman_tracks``) and
 ``fixed_camera`` (``group_blobs`` + ``byte_tracks``).
 
-    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|cost|processes ...]
+    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|cost|processes ...]
         [--set STAGE.PARAM=VALUE ...]
 
 Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in this process):
@@ -21,6 +21,10 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    and from frame 11), scores per variant and pooled, and with the ``--set`` overrides beside
    it (same run). One 71-frame run moves by several hundredths of MOTA between two JPEG
    decoders alone: a change to the detector or the tracker should hold on the pooled row.
+``sizes``: ``fixed_camera`` (and with the ``--set`` overrides, same run) on ``pedestrians``
+   drawn at three frame sizes (320x240, 768x576, 1280x720) with people of three heights (the
+   generator's 0.22-0.5 of the frame height, and 0.12-0.27, 0.07-0.15), seeds 300 ..
+   300+SEEDS-1: how its sizes in frame pixels (opening, closing, least blob area) hold up.
 3. Cost per frame at 1080p (grey frames, as a decoded yuv420p video hands over the Y plane) with
    4, 16 and 64 moving targets, with and without clutter (extra bright specks each frame):
    microseconds per stage.
@@ -52,7 +56,7 @@ from vtrack.io.images import list_images, read_image
 from vtrack.io.video import decoder_threads
 from vtrack.machine import cpu_count
 from vtrack.pipeline import FrameResult, Pipeline
-from vtrack.scenes import make_scene, write_video
+from vtrack.scenes import make_scene, pedestrians, write_video
 from vtrack.stages.base import Stage, TrackContext, TrackStatus
 
 #: (label, config, --set overrides) of the trackers on pixels.
@@ -293,6 +297,46 @@ def variants(folder: Path, overrides: list[str]) -> None:
         f"{t['misses']}, ID sw. {t['id_switches']})" for t in map(summed, pooled)) + " |\n")
 
 
+#: ``sizes``: frame sizes, and people's heights (near the top, near the bottom of the walkway;
+#: shares of the frame height: the generator's own first).
+FRAME_SIZES = ((320, 240), (768, 576), (1280, 720))
+PEOPLE_HEIGHTS = ((pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT), (0.12, 0.27), (0.07, 0.15))
+SIZES_SEEDS = 300
+
+
+def sizes(seeds: int, overrides: list[str]) -> None:
+    runs = [("`fixed_camera`", [])] + ([(f"`--set {' '.join(overrides)}`", overrides)]
+                                       if overrides else [])
+    configs = [load_config("fixed_camera").with_overrides(changes) for _, changes in runs]
+    print(f"### `fixed_camera` on `pedestrians` of other sizes (seeds {SIZES_SEEDS}.."
+          f"{SIZES_SEEDS + seeds - 1}, 150 frames, pooled)\n")
+    print("| frame | people's height (share of the frame) | "
+          + " | ".join(f"{label}: MOTA / IDF1" for label, _ in runs) + " |")
+    print("|---|---|" + "---:|" * len(runs))
+    pooled: list[list[dict[str, Any]]] = [[] for _ in runs]
+    generator = (pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT)
+    try:
+        for width, height in FRAME_SIZES:
+            for far, near in PEOPLE_HEIGHTS:
+                # the generator's heights are module constants: set for this draw only
+                pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT = far, near
+                scenes = [make_scene("pedestrians", seed, width, height, 150)
+                          for seed in range(SIZES_SEEDS, SIZES_SEEDS + seeds)]
+                clips = [([BgrFrame(i, i / scene.fps, bgr) for i, bgr in enumerate(scene.frames())],
+                          dict(enumerate(scene.tracks))) for scene in scenes]
+                cells = []
+                for k, config in enumerate(configs):
+                    parts = [scored(config, frames, gt) for frames, gt in clips]
+                    pooled[k].extend(parts)
+                    total = summed(parts)
+                    cells.append(f"{total['mota']:.3f} / {total['idf1']:.3f}")
+                print(f"| {width}x{height} | {far}-{near} | " + " | ".join(cells) + " |")
+    finally:
+        pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT = generator
+    print("| **pooled** | | " + " | ".join(
+        f"**{t['mota']:.3f} / {t['idf1']:.3f}**" for t in map(summed, pooled)) + " |\n")
+
+
 def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
     """Run stages; each frame's index and its detections after the last stage that makes them
     (a tracker after them reads them and leaves them as they are)."""
@@ -418,6 +462,7 @@ SECTIONS: dict[str, Callable[[int, list[str]], None]] = {
     "generated": lambda seeds, overrides: generated(seeds),
     "tud": lambda seeds, overrides: on_tud(tud),
     "variants": lambda seeds, overrides: on_tud(lambda folder: variants(folder, overrides)),
+    "sizes": sizes,
     "cost": lambda seeds, overrides: cost(),
     "processes": lambda seeds, overrides: whole_processes(),
 }
