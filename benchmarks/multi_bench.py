@@ -21,7 +21,7 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    and from frame 11), scores per variant and pooled, and with the ``--set`` overrides beside
    it (same run). One 71-frame run moves by several hundredths of MOTA between two JPEG
    decoders alone: a change to the detector or the tracker should hold on the pooled row.
-``sizes``: ``fixed_camera`` (and with the ``--set`` overrides, same run) on ``pedestrians``
+   ``sizes``: ``fixed_camera`` (and with the ``--set`` overrides, same run) on ``pedestrians``
    drawn at three frame sizes (320x240, 768x576, 1280x720) with people of three heights (the
    generator's 0.22-0.5 of the frame height, and 0.12-0.27, 0.07-0.15), seeds 300 ..
    300+SEEDS-1: how its sizes in frame pixels (opening, closing, least blob area) hold up.
@@ -163,12 +163,29 @@ def generated(seeds: int) -> None:
 def table(first: str, chains: list[tuple[str, str, list[str]]], scenes: list) -> None:
     """One table: every chain on every scene, scores pooled."""
     print(header(first))
-    clips = [([BgrFrame(i, i / scene.fps, bgr) for i, bgr in enumerate(scene.frames())],
-              dict(enumerate(scene.tracks))) for scene in scenes]
+    clips = scene_clips(scenes)
     for label, config, overrides in chains:
         cfg = load_config(config).with_overrides(overrides)
         print(row(label, summed([scored(cfg, frames, gt) for frames, gt in clips])))
     print()
+
+
+def scene_clips(scenes: list) -> list[tuple[list[Frame], dict]]:
+    """Each generated scene as (its frames, its ground-truth tracks by frame)."""
+    return [([BgrFrame(i, i / scene.fps, bgr) for i, bgr in enumerate(scene.frames())],
+              dict(enumerate(scene.tracks))) for scene in scenes]
+
+
+def beside_shipped(overrides: list[str], label: str) -> list[tuple[str, Config]]:
+    """``fixed_camera`` as shipped and, with ``overrides``, with them (labelled ``label``):
+    the columns of a table that puts a change beside the shipped config in the same run."""
+    runs = [("`fixed_camera`", [])] + ([(label, overrides)] if overrides else [])
+    return [(name, load_config("fixed_camera").with_overrides(changes))
+            for name, changes in runs]
+
+
+def mota_idf1(scores: dict[str, Any]) -> str:
+    return f"{scores['mota']:.3f} / {scores['idf1']:.3f}"
 
 
 # --- 2. MOT_TUD-Campus --------------------------------------------------------------------------
@@ -277,24 +294,23 @@ def tud_variants(folder: Path) -> list[tuple[str, list[Frame], dict]]:
 
 
 def variants(folder: Path, overrides: list[str]) -> None:
+    """``fixed_camera`` (and with ``overrides``) on each of :func:`tud_variants`, pooled."""
     clips = tud_variants(folder)
     print("### `fixed_camera` on eight variants of MOT_TUD-Campus\n")
-    runs = [("`fixed_camera`", [])] + ([(f"`fixed_camera --set {' '.join(overrides)}`",
-                                         overrides)] if overrides else [])
-    configs = [load_config("fixed_camera").with_overrides(changes) for _, changes in runs]
+    runs = beside_shipped(overrides, f"`fixed_camera --set {' '.join(overrides)}`")
     print("| variant | " + " | ".join(f"{label}: MOTA / IDF1" for label, _ in runs) + " |")
     print("|---|" + "---:|" * len(runs))
     pooled: list[list[dict[str, Any]]] = [[] for _ in runs]
     for label, frames, truth in clips:
         cells = []
-        for k, config in enumerate(configs):
+        for k, (_, config) in enumerate(runs):
             scores = scored(config, frames, truth)
             pooled[k].append(scores)
-            cells.append(f"{scores['mota']:.3f} / {scores['idf1']:.3f}")
+            cells.append(mota_idf1(scores))
         print(f"| {label} | " + " | ".join(cells) + " |")
     print("| **pooled** | " + " | ".join(
-        f"**{t['mota']:.3f} / {t['idf1']:.3f}** (FP {t['false_positives']}, FN "
-        f"{t['misses']}, ID sw. {t['id_switches']})" for t in map(summed, pooled)) + " |\n")
+        f"**{mota_idf1(t)}** (FP {t['false_positives']}, FN {t['misses']}, ID sw. "
+        f"{t['id_switches']})" for t in map(summed, pooled)) + " |\n")
 
 
 #: ``sizes``: frame sizes, and people's heights (near the top, near the bottom of the walkway;
@@ -305,9 +321,9 @@ SIZES_SEEDS = 300
 
 
 def sizes(seeds: int, overrides: list[str]) -> None:
-    runs = [("`fixed_camera`", [])] + ([(f"`--set {' '.join(overrides)}`", overrides)]
-                                       if overrides else [])
-    configs = [load_config("fixed_camera").with_overrides(changes) for _, changes in runs]
+    """``fixed_camera`` (and with ``overrides``) on ``pedestrians`` at each of
+    ``FRAME_SIZES`` x ``PEOPLE_HEIGHTS``, pooled over the seeds."""
+    runs = beside_shipped(overrides, f"`--set {' '.join(overrides)}`")
     print(f"### `fixed_camera` on `pedestrians` of other sizes (seeds {SIZES_SEEDS}.."
           f"{SIZES_SEEDS + seeds - 1}, 150 frames, pooled)\n")
     print("| frame | people's height (share of the frame) | "
@@ -322,19 +338,17 @@ def sizes(seeds: int, overrides: list[str]) -> None:
                 pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT = far, near
                 scenes = [make_scene("pedestrians", seed, width, height, 150)
                           for seed in range(SIZES_SEEDS, SIZES_SEEDS + seeds)]
-                clips = [([BgrFrame(i, i / scene.fps, bgr) for i, bgr in enumerate(scene.frames())],
-                          dict(enumerate(scene.tracks))) for scene in scenes]
+                clips = scene_clips(scenes)
                 cells = []
-                for k, config in enumerate(configs):
+                for k, (_, config) in enumerate(runs):
                     parts = [scored(config, frames, gt) for frames, gt in clips]
                     pooled[k].extend(parts)
-                    total = summed(parts)
-                    cells.append(f"{total['mota']:.3f} / {total['idf1']:.3f}")
+                    cells.append(mota_idf1(summed(parts)))
                 print(f"| {width}x{height} | {far}-{near} | " + " | ".join(cells) + " |")
     finally:
         pedestrians.FAR_HEIGHT, pedestrians.NEAR_HEIGHT = generator
     print("| **pooled** | | " + " | ".join(
-        f"**{t['mota']:.3f} / {t['idf1']:.3f}**" for t in map(summed, pooled)) + " |\n")
+        f"**{mota_idf1(t)}**" for t in map(summed, pooled)) + " |\n")
 
 
 def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
