@@ -23,8 +23,10 @@ colours were not the target's (``robust_failure.redetect_on_colour``).
 It holds the learnt models for the other links (``ctx.robust``, :class:`RobustTarget`); it
 learns nothing after the first frame itself: ``robust_failure`` decides when the models learn.
 
-Pipeline contract of stage ``robust_model``: reads ``ctx.frame``, ``ctx.box``, ``ctx.state``,
-``ctx.prediction`` (the search centre while the target is lost), ``ctx.search_growth``;
+Pipeline contract of stage ``robust_model``: reads ``ctx.frame``, ``ctx.box`` (or, after a frame
+whose reported box was the motion model's extrapolation, ``ctx.robust``'s peak there),
+``ctx.state``, ``ctx.prediction`` (the search centre while the target is lost),
+``ctx.search_growth``;
 writes ``ctx.robust``, ``ctx.window`` (the region's part inside the frame), ``ctx.likelihood``.
 """
 
@@ -144,6 +146,11 @@ class RobustTarget:
     #: (``robust_failure.redetect_on_colour``: this frame's colours at the peak are not the
     #: target's).
     search_wide: bool = False
+    #: Neither learner sees the target on this frame (``robust_failure.coast_unseen``): the box
+    #: reported is ``robust_motion``'s extrapolation, and ``peak_box`` the response's peak,
+    #: where the next frame's search is still centred.
+    unseen: bool = False
+    peak_box: Box | None = None
     #: The colour response's weight in the merged response (``robust_search``; 0: none).
     merge: float = 0.0
 
@@ -307,6 +314,8 @@ class RobustModel(Stage):
         # motion model last had it.
         centre = ctx.box if ctx.state != TrackState.LOST and ctx.box is not None \
             else ctx.search_center
+        if target.peak_box is not None and ctx.state != TrackState.LOST:
+            centre = target.peak_box
         region = target.region(ctx.frame, centre.cx, centre.cy)
         target.regions = [region]
         predicted = ctx.prediction

@@ -14,9 +14,17 @@ target's velocity is not known), so re-detection searches around where it was la
 target taken back after being lost restarts the filter at the re-found box (its jump is not a
 velocity).
 
+On a frame where neither of ``robust``'s learners sees the target (``robust_failure``'s
+``coast_unseen``: the response says occluded and the colours at its peak are not the
+target's), the box reported is the constant-velocity extrapolation from the last frame that saw
+it (S0 item 7's coasting), while the filter still takes the frame's peak (as weakly as its
+score says) and the next search stays there: a target passing behind an occluder is reported
+where it goes, not on the occluder's edge, and a wrong velocity never moves the search.
+
 Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
-``ctx.state``, ``ctx.score``; writes ``ctx.box`` (the prediction while coasting) and
-``ctx.prediction``.
+``ctx.state``, ``ctx.score``, ``ctx.robust`` (whether this frame saw the target); writes
+``ctx.box`` (the prediction while coasting, the extrapolation on an unseen frame),
+``ctx.prediction`` and ``ctx.robust`` (an unseen frame's peak, for the next search).
 """
 
 from __future__ import annotations
@@ -50,8 +58,8 @@ class RobustMotion(Stage):
               "the filter, and the more its uncertainty (and the search window) grows while "
               "the hold lasts", min=0.01, max=1.0),
     )
-    requires = frozenset({"measurement", "box", "state", "score"})
-    provides = frozenset({"box", "prediction"})
+    requires = frozenset({"measurement", "box", "state", "score", "robust"})
+    provides = frozenset({"box", "prediction", "robust"})
 
     # Set from the parameters by Stage.__init__.
     q_rel: float
@@ -67,6 +75,7 @@ class RobustMotion(Stage):
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._was = TrackState.TRACKING
+        self._seen: tuple[tuple[float, float], tuple[float, float], int] | None = None
         self._predict(ctx)
 
     def _position(self) -> tuple[float, float]:
@@ -88,8 +97,27 @@ class RobustMotion(Stage):
                                                  R=self._model.R / confidence**4)
         elif ctx.box is not None:
             ctx.box = ctx.box.moved_to(*self._position())  # coast: this frame's prior
+        self._report_unseen(ctx)
         self._was = ctx.state
         self._predict(ctx)
+
+    def _report_unseen(self, ctx: TrackContext) -> None:
+        """On a frame where neither of ``robust``'s learners sees the target
+        (``ctx.robust.unseen``), report the box extrapolated at constant velocity from the last
+        frame that saw it (S0 item 7's coasting; the filter itself still takes this frame's
+        peak, as weakly as its score says) and keep the peak for the next search; otherwise
+        remember this frame's position and velocity."""
+        target = ctx.robust
+        assert target is not None
+        target.peak_box = None
+        if target.unseen and self._seen is not None and ctx.box is not None:
+            target.peak_box = ctx.box
+            (x, y), (vx, vy), seen_at = self._seen
+            frames = ctx.frame.index - seen_at
+            ctx.box = ctx.box.moved_to(x + vx * frames, y + vy * frames)
+        elif ctx.state != TrackState.LOST:
+            vx, vy = self._model.velocity(self._state)
+            self._seen = (self._position(), (float(vx), float(vy)), ctx.frame.index)
 
     def _predict(self, ctx: TrackContext) -> None:
         assert ctx.box is not None
