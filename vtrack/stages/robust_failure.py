@@ -46,7 +46,12 @@ filter's own response (``robust_search``), not a hand-set similarity:
   background (unseen seeds of the scenes, mean IoU: exit_return 0.48 -> 0.91, leave_return
   0.71 -> 0.89; of the check sequences' tracking frames 8.0% -> 4.4% miss the target), at a
   cost on the tune sequences (five starts each, 0.522 -> 0.512: returns after a change of
-  appearance are taken back later; benchmarks/RESULTS.md section 8).
+  appearance are taken back later; benchmarks/RESULTS.md section 8). With ``retake_colour``
+  the colour learner must agree too (the colour response at the peak passes the
+  ``doubtful_colour`` check, as for learning a doubtful frame): a pale target out of view was
+  taken back on background whose texture the filter matched, its colours 0.13 of the
+  target's (generated `exit_return` with saturation 30-170: seed 200 0.19 -> 0.93; real
+  sequences: check ten unchanged, tune -0.001 from 13 starts; seventeenth round).
 - **Redetection on colour** (``redetect_on_colour``): a frame whose colour response at the
   peak fails the ``doubtful_colour`` check says the target is not where the filter peaks (a
   target that moved more than its own size left the region, and the filter, which learnt the
@@ -111,6 +116,8 @@ class RobustFailure(Stage):
         Param("retake_apce", float, 0.0, "a hidden target is taken back only on a response "
               "whose APCE is at least this share of its mean so far (LMCF beta_1: 0.7; 0: "
               "sharp and strong suffice)", min=0.0, max=10.0),
+        Param("retake_colour", bool, False, "a hidden target is taken back only where the colour "
+              "response at the peak passes doubtful_colour's check too (both learners agree)"),
         Param("lost_after", int, 30, "hidden frames in a row before the target is lost",
               min=0, max=100000),
         Param("coast", bool, False, "while occluded, the box follows the motion model's "
@@ -144,6 +151,7 @@ class RobustFailure(Stage):
     hidden_peak: float
     doubtful_colour: float
     retake_apce: float
+    retake_colour: bool
     lost_after: int
     coast: bool
     coast_unseen: bool
@@ -169,10 +177,11 @@ class RobustFailure(Stage):
         strong = self._strong(target)
         may_learn = self.update and strong  # the models may learn this frame
         was = ctx.state
-        retaken = target.hidden_frames == 0 or (
-            not weak and target.apce >= self.retake_apce * target.usual_apce)
         # the colour learner disagrees: the colour response at the peak is low for the target
         colour_disagrees = target.colour_peak < self.doubtful_colour * target.usual_colour
+        retaken = target.hidden_frames == 0 or (
+            not weak and target.apce >= self.retake_apce * target.usual_apce
+            and not (self.retake_colour and colour_disagrees))
         _remember(target)
         # ... and a target just found far away may be as far again on the next frame
         found_far = target.chosen is not None and target.chosen.far
