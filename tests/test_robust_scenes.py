@@ -163,11 +163,9 @@ def test_a_target_hidden_behind_the_slab_is_reported_where_its_motion_carries_it
                                               overrides=("robust_failure.coast_unseen=false",))
         assert states == off_states, seed
         first, last = scene.events["occluded"]
-        hidden = range(first, last + 1)
-        shipped.append(mean_overlap(frame_scores([boxes[i] for i in hidden],
-                                                 [scene.boxes[i] for i in hidden])[0]))
-        off.append(mean_overlap(frame_scores([off_boxes[i] for i in hidden],
-                                             [scene.boxes[i] for i in hidden])[0]))
+        hidden = slice(first, last + 1)
+        for means, reported in ((shipped, boxes), (off, off_boxes)):
+            means.append(mean_overlap(frame_scores(reported[hidden], scene.boxes[hidden])[0]))
     assert np.mean(shipped) >= 0.6 and np.mean(shipped) >= np.mean(off) + 0.2, (shipped, off)
 
 

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from vtrack.filters import ConstantVelocity
+from vtrack.filters import ConstantVelocity, GaussianState
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -75,7 +75,8 @@ class RobustMotion(Stage):
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._was = TrackState.TRACKING
-        self._seen: tuple[tuple[float, float], tuple[float, float], int] | None = None
+        #: The filter's state on the last frame that saw the target, and that frame's index.
+        self._seen: tuple[GaussianState, int] | None = None
         self._predict(ctx)
 
     def _position(self) -> tuple[float, float]:
@@ -112,12 +113,11 @@ class RobustMotion(Stage):
         target.peak_box = None
         if target.unseen and self._seen is not None and ctx.box is not None:
             target.peak_box = ctx.box
-            (x, y), (vx, vy), seen_at = self._seen
-            frames = ctx.frame.index - seen_at
-            ctx.box = ctx.box.moved_to(x + vx * frames, y + vy * frames)
+            seen, seen_at = self._seen
+            extrapolated = self._model.predict(seen, ctx.frame.index - seen_at)
+            ctx.box = ctx.box.moved_to(*self._model.position(extrapolated))
         elif ctx.state != TrackState.LOST:
-            vx, vy = self._model.velocity(self._state)
-            self._seen = (self._position(), (float(vx), float(vy)), ctx.frame.index)
+            self._seen = (self._state, ctx.frame.index)
 
     def _predict(self, ctx: TrackContext) -> None:
         assert ctx.box is not None
