@@ -14,6 +14,7 @@
     python benchmarks/robust_tune.py --hard --frames 90 --size 480x360   # other geometry
     python benchmarks/robust_tune.py --hard --first-seed 100 --seeds 8    # held-out seeds
     python benchmarks/robust_tune.py --beyond --first-seed 100 --seeds 6  # parameters beyond
+    python benchmarks/robust_tune.py --looks --first-seed 200 --seeds 4   # slab, other looks
 
 Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
 precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
@@ -306,13 +307,24 @@ BEYOND: tuple[tuple[str, str, tuple[float, float]], ...] = (
 )
 
 
-def beyond(overrides: list[str], seeds: range, frames: int) -> None:
+#: ``slab`` with one of its looks drawn beyond its declared range: what hides the target and
+#: what surrounds it in colours and sizes the tests never draw.
+LOOKS: tuple[tuple[str, str, tuple[float, float]], ...] = (
+    ("slab", "background_mean", (40.0, 100.0)), ("slab", "background_mean", (200.0, 240.0)),
+    ("slab", "size", (1.0, 1.6)), ("slab", "saturation", (30.0, 170.0)),
+    ("slab", "value", (120.0, 205.0)), ("slab", "texture", (0.0, 0.6)),
+    ("slab", "texture", (1.6, 3.0)), ("slab", "slab_grey", (20.0, 70.0)),
+)
+
+
+def beyond(overrides: list[str], seeds: range, frames: int,
+           draws: tuple[tuple[str, str, tuple[float, float]], ...] = BEYOND) -> None:
     """Mean IoU of robust (with ``overrides``) on each hard scene with one parameter drawn
-    beyond its declared range (:data:`BEYOND`), per seed."""
+    beyond its declared range (``draws``: :data:`BEYOND` or :data:`LOOKS`), per seed."""
     print(f"| scene (320x240, {frames} frames) | parameter: declared -> drawn | seeds "
           f"{seeds.start}-{seeds.stop - 1} | mean | min |")
     print("|---|---|---|---:|---:|")
-    for name, parameter, drawn in BEYOND:
+    for name, parameter, drawn in draws:
         declared = hard_scenes.RANGES[parameter]
         hard_scenes.RANGES[parameter] = drawn
         try:
@@ -419,8 +431,10 @@ def main() -> None:
                         help="mean IoU on the randomised hard scenes (--seeds, --frames, --size)")
     parser.add_argument("--beyond", action="store_true",
                         help="the hard scenes with one parameter beyond its declared range")
+    parser.add_argument("--looks", action="store_true",
+                        help="slab with one of its looks beyond its declared range")
     parser.add_argument("--seeds", type=int, default=9,
-                        help="--hard, --beyond: how many seeds (default 9)")
+                        help="--hard, --beyond, --looks: how many seeds (default 9)")
     parser.add_argument("--first-seed", type=int, default=0,
                         help="--hard: the first seed (default 0; the tests use 0-5, the tables "
                              "0-8: a higher one scores parameters never looked at)")
@@ -447,9 +461,9 @@ def main() -> None:
     if args.scenes:
         scenes()
         return
-    if args.beyond:
+    if args.beyond or args.looks:
         beyond(args.overrides, range(args.first_seed, args.first_seed + args.seeds),
-               args.frames)
+               args.frames, LOOKS if args.looks else BEYOND)
         return
     if args.hard:
         size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None

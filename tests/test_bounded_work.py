@@ -16,7 +16,7 @@ from vtrack.pipeline import FrameResult
 from vtrack.run import _MultiTargetRows
 from vtrack.scenes import make_scene
 from vtrack.stages.base import Track, TrackStatus
-from vtrack.stages.detect import MAX_KERNEL, _morphology
+from vtrack.stages.detect import MAX_KERNEL, _morphology, cleaning_steps
 from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE, sampling_stride
 
 
@@ -71,12 +71,12 @@ def test_kernels_up_to_the_cap_are_cv2_morphology_exactly(size: int) -> None:
 
 
 def test_a_larger_kernel_runs_on_a_shrunk_mask() -> None:
+    steps = cleaning_steps(255.0, 255.0, 1)
+    assert all(size <= MAX_KERNEL for _, size, _ in steps)
+    assert [factor for _, _, factor in steps] == [9, 9]  # 255 / 9 = 28 <= 31
     tracker = vtrack.Tracker("s4", background__open=255, background__close=255)
     scene = make_scene("bounce", 0, 320, 240, 60, 30.0)
     result = tracker.init(scene.frame(0))
-    stage = tracker._pipeline.stages[0]
-    assert all(kernel.shape[0] <= MAX_KERNEL for _, kernel, _ in stage._kernels)
-    assert [factor for _, _, factor in stage._kernels] == [9, 9]  # 255 / 9 = 28 <= 31
     for index in range(1, 40):
         result = tracker.update(scene.frame(index))
     assert result.index == 39

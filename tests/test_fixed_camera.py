@@ -10,6 +10,7 @@ the infrared-like ``multi`` scene.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -136,6 +137,33 @@ def test_the_adaptive_models_work_on_at_most_a_quarter_of_1080p(method: str, sha
     frames = [ground(720, 1280)] * 2
     (_, second) = run_stages([Background(method=method, max_pixels=0, frames=1)], frames)
     assert second.likelihood.shape == shape
+
+
+def test_the_cleaning_follows_the_size_of_the_targets_the_tracker_measured() -> None:
+    """Two people 12 pixels wide stand 10 pixels apart: a closing of 25 frame pixels (sized
+    for people ten times as wide) joins them into one blob. Once the tracker has measured
+    people that narrow (``ctx.target_shape``), the opening and the closing follow their width
+    and the two stay apart; with few measured boxes the given sizes still weigh most."""
+    frames = [ground(120, 160)] * 6
+    frames[5] = frames[5].copy()
+    frames[5][40:70, 50:62] = 30
+    frames[5][40:70, 72:84] = 30
+    narrow = TargetShape(aspect=2.5, area=12 * 30, samples=1000)
+
+    def found(shape: TargetShape | None, **params) -> list[tuple[int, ...]]:
+        stages = [Background(method="mog2", open=5, close=25, **params), Blobs(min_area=20)]
+        ctx = TrackContext(frame=BgrFrame(0, 0.0, frames[0]))
+        for index, bgr in enumerate(frames):
+            ctx.new_frame(BgrFrame(index, index / 25, bgr))
+            ctx.target_shape = shape
+            for stage in stages:
+                (stage.start if index == 0 else stage.step)(ctx)
+        return sorted(tuple(d.box) for d in ctx.detections)
+
+    shares = {"open_share": 0.04, "close_share": 0.15}
+    assert found(None, **shares) == found(narrow) == [(50, 40, 34, 30)]
+    assert found(narrow, **shares) == [(50, 40, 12, 30), (72, 40, 12, 30)]
+    assert found(replace(narrow, samples=5), **shares) == [(50, 40, 34, 30)]
 
 
 # --- group_blobs --------------------------------------------------------------------------------

@@ -24,6 +24,7 @@ last stage.
 from __future__ import annotations
 
 import importlib
+import math
 import pkgutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -86,6 +87,11 @@ class Track:
     state: TrackStatus
 
 
+#: A value given for a scene's targets (an aspect, a size) weighs as many measured boxes as this
+#: when mixed with the one learnt from them (:meth:`TargetShape.mixed`).
+PRIOR_SAMPLES = 50
+
+
 @dataclass(frozen=True)
 class TargetShape:
     """The usual shape of a scene's confirmed targets, as a multi-target tracker measured it:
@@ -95,6 +101,18 @@ class TargetShape:
     aspect: float
     area: float
     samples: int
+
+    @property
+    def width(self) -> float:
+        """The usual width in pixels (the box of the usual area at the usual aspect)."""
+        return math.sqrt(self.area / self.aspect)
+
+    def mixed(self, given: float, learnt: float) -> float:
+        """``given`` (a value the configuration states) and ``learnt`` (the same value read
+        from this shape) averaged by their weights: the given one counts as
+        :data:`PRIOR_SAMPLES` measured boxes, so it gives way as the scene shows its targets."""
+        weight = self.samples / (self.samples + PRIOR_SAMPLES)
+        return (1 - weight) * given + weight * learnt
 
 
 @dataclass(frozen=True)

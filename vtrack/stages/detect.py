@@ -18,6 +18,7 @@ image) and ``ctx.likelihood`` (the foreground: 0 = background, anything else = f
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -104,6 +105,26 @@ MAX_KERNEL = 31
 ADAPTIVE_MAX_PIXELS = 1920 * 1080 // 4
 
 
+def cleaning_steps(opening: float, closing: float, shrink: int) -> list[tuple[int, int, int]]:
+    """The opening and the closing (sizes in frame pixels) on a mask of 1/``shrink`` of the
+    frame's side, as (OpenCV operation, kernel side, factor): the kernel runs on the mask shrunk
+    by ``factor`` so that it is at most ``MAX_KERNEL`` pixels; a size of one pixel or less is
+    no step."""
+    steps = []
+    for operation, size in ((cv2.MORPH_OPEN, opening), (cv2.MORPH_CLOSE, closing)):
+        k = max(1, round(size / shrink))  # in working pixels
+        if k > 1:
+            factor = -(-k // MAX_KERNEL)
+            steps.append((operation, k // factor, factor))
+    return steps
+
+
+@functools.lru_cache(maxsize=64)
+def _ellipse(size: int) -> np.ndarray:
+    """OpenCV's elliptic structuring element of ``size`` x ``size`` pixels (made once)."""
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+
+
 def _morphology(mask: np.ndarray, operation: int, kernel: np.ndarray,
                 factor: int) -> np.ndarray:
     """``cv2.morphologyEx`` of a 0/255 mask, on the mask shrunk by ``factor`` when it is > 1
@@ -144,7 +165,12 @@ class Background(Stage):
 
     The binary foreground can then be cleaned, S4's "simple processing" (section 1.2): an
     opening with an ``open`` x ``open`` ellipse removes specks, a closing with a ``close`` x
-    ``close`` ellipse joins the fragments of one target (both off by default).
+    ``close`` ellipse joins the fragments of one target (both off by default). Sizes in frame
+    pixels suit targets of one size only: with ``open_share`` / ``close_share``, once the
+    multi-target tracker after this stage has measured its confirmed targets
+    (``ctx.target_shape``, from the previous frame; ``byte_tracks`` gives it), each size is that
+    share of the targets' usual width, mixed with the given size as ``group_blobs`` mixes the
+    aspect (the given one weighs :data:`vtrack.stages.base.PRIOR_SAMPLES` measured boxes).
 
     ``method = "mog2"`` uses OpenCV's adaptive Gaussian-mixture background (Zivkovic 2004),
     ``method = "knn"`` its K-nearest-neighbours one (Zivkovic & van der Heijden 2006): they learn
@@ -218,6 +244,24 @@ class Background(Stage):
             "fragments of one target (S4 1.2 'after simple processing'; 1 = none; above 31 "
             "working pixels applied to a shrunk mask)",
             min=1, max=255,
+        ),
+        Param(
+            "open_share",
+            float,
+            0.0,
+            "learn the opening from the scene's targets: once a multi-target tracker has "
+            "measured its confirmed targets (ctx.target_shape, as group_blobs learns their "
+            "aspect), the opening is this share of their usual width, mixed with `open` by "
+            "the boxes measured (0: `open` always)",
+            min=0.0, max=2.0,
+        ),
+        Param(
+            "close_share",
+            float,
+            0.0,
+            "the closing likewise: this share of the targets' usual width, mixed with `close` "
+            "(0: `close` always)",
+            min=0.0, max=2.0,
         ),
         Param(
             "history",
@@ -307,12 +351,6 @@ class Background(Stage):
         while (budget and pixels > budget * self._shrink ** 2
                and min(frame.width, frame.height) >= 4 * self._shrink):
             self._shrink *= 2
-        self._kernels = [
-            (operation, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k // f, k // f)), f)
-            for size, operation in ((self.open, cv2.MORPH_OPEN), (self.close, cv2.MORPH_CLOSE))
-            if (k := max(1, round(size / self._shrink))) > 1
-            for f in [-(-k // MAX_KERNEL)]
-        ]
         if self.method == "mean":
             self.step(ctx)
             return
@@ -347,8 +385,15 @@ class Background(Stage):
         else:
             difference = cv2.absdiff(grey, self._background)
             mask = _foreground_at_least(difference, self.threshold)  # S4 eq. 2
-        for operation, kernel, factor in self._kernels:
-            mask = _morphology(mask, operation, kernel, factor)
+        opening, closing = float(self.open), float(self.close)
+        learnt = ctx.target_shape
+        if learnt is not None and learnt.samples:
+            if self.open_share:
+                opening = learnt.mixed(opening, self.open_share * learnt.width)
+            if self.close_share:
+                closing = learnt.mixed(closing, self.close_share * learnt.width)
+        for operation, size, factor in cleaning_steps(opening, closing, self._shrink):
+            mask = _morphology(mask, operation, _ellipse(size), factor)
         ctx.likelihood = mask
 
     def _images(self, ctx: TrackContext) -> tuple[np.ndarray, np.ndarray]:

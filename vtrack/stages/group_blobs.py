@@ -27,9 +27,9 @@ and uses low-score ones only to continue existing tracks (ByteTrack's second pas
 
 What is learnt comes from ``ctx.target_shape`` (the tracker's median over the boxes its
 confirmed tracks were measured with, from the previous frame); the given ``aspect`` counts as
-``PRIOR_SAMPLES`` samples, so it gives way as the scene shows its targets. Work per frame: at
-most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs (``blobs.max_blobs`` bounds
-``M``), and one column profile per blob that is split.
+``vtrack.stages.base.PRIOR_SAMPLES`` samples, so it gives way as the scene shows its targets.
+Work per frame: at most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs
+(``blobs.max_blobs`` bounds ``M``), and one column profile per blob that is split.
 """
 
 from __future__ import annotations
@@ -44,8 +44,6 @@ from vtrack.params import Param
 from vtrack.stages.base import Stage, TargetShape, TrackContext, register
 from vtrack.stages.detect import Detection, mask_window
 
-#: The given aspect weighs as many measured boxes as this when mixed with the learnt one.
-PRIOR_SAMPLES = 50
 #: A detection's fill (foreground share of its box) scores 1 from this value on ...
 FULL_FILL = 0.5
 #: ... and its size from this share of the usual area on.
@@ -61,8 +59,7 @@ def usual_shape(aspect: float, learnt: TargetShape | None) -> tuple[float, float
     weights) and the usual area (None before anything was learnt)."""
     if learnt is None or learnt.samples == 0:
         return aspect, None
-    weight = learnt.samples / (learnt.samples + PRIOR_SAMPLES)
-    mixed = math.exp((1 - weight) * math.log(aspect) + weight * math.log(learnt.aspect))
+    mixed = math.exp(learnt.mixed(math.log(aspect), math.log(learnt.aspect)))
     return mixed, learnt.area
 
 
