@@ -1,7 +1,7 @@
 """Multi-target trackers measured: S3 (``mht``), S4 per track (``kalman_tracks``) and
 ``fixed_camera`` (``group_blobs`` + ``byte_tracks``).
 
-    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|cost|processes ...]
+    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|people|cost|processes]
         [--set STAGE.PARAM=VALUE ...]
 
 Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in this process):
@@ -25,6 +25,8 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    drawn at three frame sizes (320x240, 768x576, 1280x720) with people of three heights (the
    generator's 0.22-0.5 of the frame height, and 0.12-0.27, 0.07-0.15), seeds 300 ..
    300+SEEDS-1: how its sizes in frame pixels (opening, closing, least blob area) hold up.
+   ``people``: ``fixed_camera`` (and with the overrides) on ``pedestrians`` at 640x480 and
+   768x576, seeds 205 .. 205+SEEDS-1, seed by seed and the mean per seed.
 3. Cost per frame at 1080p (grey frames, as a decoded yuv420p video hands over the Y plane) with
    4, 16 and 64 moving targets, with and without clutter (extra bright specks each frame):
    microseconds per stage.
@@ -351,6 +353,40 @@ def sizes(seeds: int, overrides: list[str]) -> None:
         f"**{mota_idf1(t)}**" for t in map(summed, pooled)) + " |\n")
 
 
+#: ``people``: the randomised pedestrians from the seeds after those of ``generated``'s table.
+PEOPLE_SEEDS = 205
+
+
+def people(seeds: int, overrides: list[str]) -> None:
+    """``fixed_camera`` (and with ``overrides``) on ``pedestrians`` at 640x480 and 768x576,
+    one row per seed, then the mean over the seeds: a change whose pooled score moves by a few
+    hundredths on five seeds is told from one seed's identity swap here."""
+    runs = beside_shipped(overrides, f"`--set {' '.join(overrides)}`")
+    last = PEOPLE_SEEDS + seeds - 1
+    print(f"### `fixed_camera` on `pedestrians`, seed by seed (seeds {PEOPLE_SEEDS}..{last}, "
+          "150 frames)\n")
+    print("| frame | seed | " + " | ".join(f"{label}: MOTA / IDF1 (ID sw.)" for label, _ in runs)
+          + " |")
+    print("|---|---|" + "---:|" * len(runs))
+    for width, height in ((640, 480), (768, 576)):
+        per_run: list[list[dict[str, Any]]] = [[] for _ in runs]
+        for seed in range(PEOPLE_SEEDS, PEOPLE_SEEDS + seeds):
+            ((frames, truth),) = scene_clips([make_scene("pedestrians", seed, width, height,
+                                                         150)])
+            cells = []
+            for k, (_, config) in enumerate(runs):
+                scores = scored(config, frames, truth)
+                per_run[k].append(scores)
+                cells.append(f"{mota_idf1(scores)} ({scores['id_switches']})")
+            print(f"| {width}x{height} | {seed} | " + " | ".join(cells) + " |")
+            sys.stdout.flush()
+        means = [" / ".join(f"{sum(s[key] for s in scores) / len(scores):.3f}"
+                            for key in ("mota", "idf1"))
+                 + f" ({sum(s['id_switches'] for s in scores)})" for scores in per_run]
+        print(f"| {width}x{height} | **mean per seed** | " + " | ".join(means) + " |")
+    print()
+
+
 def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
     """Run stages; each frame's index and its detections after the last stage that makes them
     (a tracker after them reads them and leaves them as they are)."""
@@ -477,6 +513,7 @@ SECTIONS: dict[str, Callable[[int, list[str]], None]] = {
     "tud": lambda seeds, overrides: on_tud(tud),
     "variants": lambda seeds, overrides: on_tud(lambda folder: variants(folder, overrides)),
     "sizes": sizes,
+    "people": people,
     "cost": lambda seeds, overrides: cost(),
     "processes": lambda seeds, overrides: whole_processes(),
 }
