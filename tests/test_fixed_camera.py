@@ -166,6 +166,28 @@ def test_the_cleaning_follows_the_size_of_the_targets_the_tracker_measured() -> 
     assert found(replace(narrow, samples=5), **shares) == [(50, 40, 34, 30)]
 
 
+def test_the_least_blob_follows_small_targets_down_and_never_up() -> None:
+    """With a least area of 30 pixels, a 25-pixel blob is noise beside people of 35,000
+    pixels but a person beside measured people of 60 (kept with ``min_area_share``); a
+    40-pixel fragment of a large person is kept as before (the learnt area never raises the
+    floor above ``min_area``)."""
+    mask = np.zeros((120, 160), np.uint8)
+    mask[10:15, 10:15] = 255  # 25 pixels
+    mask[50:60, 50:54] = 255  # 40 pixels
+
+    def kept(shape: TargetShape | None, **params) -> list[float]:
+        ctx = TrackContext(frame=BgrFrame(0, 0.0, ground()), target_shape=shape)
+        ctx.likelihood, ctx.feature = mask, mask
+        ctx.window = ctx.frame.full_window()
+        Blobs(min_area=30, **params).step(ctx)
+        return sorted(d.area for d in ctx.detections)
+
+    small, large = (TargetShape(2.5, area, 1000) for area in (60.0, 35000.0))
+    assert kept(small) == kept(None, min_area_share=0.05) == [40.0]
+    assert kept(large, min_area_share=0.05) == [40.0]
+    assert kept(small, min_area_share=0.05) == [25.0, 40.0]
+
+
 # --- group_blobs --------------------------------------------------------------------------------
 
 

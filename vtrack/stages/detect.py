@@ -542,7 +542,11 @@ class Blobs(Stage):
     """Connected foreground regions -> :class:`Detection` (centroid, box, area, mean grey).
 
     8-connected components of ``ctx.likelihood`` (non-zero = foreground) with ``min_area`` <=
-    area <= ``max_area`` pixels; at most ``max_blobs`` of them, the largest, so a cluttered frame
+    area <= ``max_area`` pixels (with ``min_area_share``, a smaller least area once a
+    multi-target tracker after this stage has measured targets so small that ``min_area``
+    would drop them whole: the noise floor follows the targets down, never up, since fragments
+    of large targets must reach ``group_blobs``); at most ``max_blobs`` of them, the largest, so
+    a cluttered frame
     costs a bounded amount downstream. Only the parts of the frame that hold foreground are
     labelled (see :func:`foreground_regions`). A foreground made at a reduced resolution
     (``ctx.feature_scale`` > 1) is mapped back: boxes, centroids and areas are in frame
@@ -556,6 +560,11 @@ class Blobs(Stage):
     params = (
         Param("min_area", int, 4, "smallest blob kept, in pixels (smaller: noise)",
               min=1, max=MAX_FRAME_PIXELS),
+        Param("min_area_share", float, 0.0,
+              "lower the smallest blob for small targets: once a multi-target tracker has "
+              "measured its confirmed targets (ctx.target_shape), a blob of this share of their "
+              "usual box area (mixed with `min_area` by the boxes measured) is kept even when "
+              "under `min_area` (0: `min_area` always)", min=0.0, max=1.0),
         Param("max_area", int, 0, "largest blob kept, in pixels (0: no limit)",
               min=0, max=MAX_FRAME_PIXELS),
         Param(
@@ -576,12 +585,16 @@ class Blobs(Stage):
         found = []  # (area, part's x, part's y, part's labels, label, stats row, centroid)
         scale = ctx.feature_scale
         pixel_area = scale * scale
+        least = float(self.min_area)
+        learnt = ctx.target_shape
+        if self.min_area_share and learnt is not None and learnt.samples:
+            least = min(least, learnt.mixed(least, self.min_area_share * learnt.area))
         for px, py, part in foreground_regions(ctx.likelihood):
             count, labels, stats, centres = cv2.connectedComponentsWithStats(
                 part, connectivity=8, ltype=cv2.CV_32S
             )
             areas = stats[1:count, cv2.CC_STAT_AREA] * pixel_area
-            keep = areas >= self.min_area
+            keep = areas >= least
             if self.max_area:
                 keep &= areas <= self.max_area
             for label in np.flatnonzero(keep) + 1:
