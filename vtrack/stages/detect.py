@@ -387,7 +387,7 @@ class Background(Stage):
             mask = _foreground_at_least(difference, self.threshold)  # S4 eq. 2
         opening, closing = float(self.open), float(self.close)
         learnt = ctx.target_shape
-        if learnt is not None and learnt.samples:
+        if learnt is not None:  # TargetShape.mixed gives the given size until boxes are measured
             if self.open_share:
                 opening = learnt.mixed(opening, self.open_share * learnt.width)
             if self.close_share:
@@ -546,13 +546,11 @@ class Blobs(Stage):
     multi-target tracker after this stage has measured targets so small that ``min_area``
     would drop them whole: the noise floor follows the targets down, never up, since fragments
     of large targets must reach ``group_blobs``); at most ``max_blobs`` of them, the largest, so
-    a cluttered frame
-    costs a bounded amount downstream. Only the parts of the frame that hold foreground are
-    labelled (see :func:`foreground_regions`). A foreground made at a reduced resolution
-    (``ctx.feature_scale`` > 1) is mapped back: boxes, centroids and areas are in frame
-    pixels. Publishes the candidates' mean grey for
-    ``threshold``'s next frame (S3 item 1). Detections are ordered by their box's top edge, then
-    its left edge.
+    a cluttered frame costs a bounded amount downstream. Only the parts of the frame that hold
+    foreground are labelled (see :func:`foreground_regions`). A foreground made at a reduced
+    resolution (``ctx.feature_scale`` > 1) is mapped back: boxes, centroids and areas are in
+    frame pixels. Publishes the candidates' mean grey for ``threshold``'s next frame (S3 item
+    1). Detections are ordered by their box's top edge, then its left edge.
     """
 
     name = "blobs"
@@ -587,7 +585,7 @@ class Blobs(Stage):
         pixel_area = scale * scale
         least = float(self.min_area)
         learnt = ctx.target_shape
-        if self.min_area_share and learnt is not None and learnt.samples:
+        if self.min_area_share and learnt is not None:
             least = min(least, learnt.mixed(least, self.min_area_share * learnt.area))
         for px, py, part in foreground_regions(ctx.likelihood):
             count, labels, stats, centres = cv2.connectedComponentsWithStats(

@@ -312,10 +312,12 @@ class RobustModel(Stage):
         # is searched there, and the higher peak wins (robust_search; this raised the mean AUC
         # of ten tune sequences from 0.61 to 0.67). A lost target is searched around where the
         # motion model last had it.
-        centre = ctx.box if ctx.state != TrackState.LOST and ctx.box is not None \
-            else ctx.search_center
-        if target.peak_box is not None and ctx.state != TrackState.LOST:
+        if target.peak_box is not None:  # the last box reported was extrapolated (not lost)
             centre = target.peak_box
+        elif ctx.state != TrackState.LOST and ctx.box is not None:
+            centre = ctx.box
+        else:
+            centre = ctx.search_center
         region = target.region(ctx.frame, centre.cx, centre.cy)
         target.regions = [region]
         predicted = ctx.prediction
