@@ -15,6 +15,7 @@
     python benchmarks/robust_tune.py --hard --first-seed 100 --seeds 8    # held-out seeds
     python benchmarks/robust_tune.py --beyond --first-seed 100 --seeds 6  # parameters beyond
     python benchmarks/robust_tune.py --looks --first-seed 200 --seeds 4   # slab, other looks
+    python benchmarks/robust_tune.py --variants --jobs 2   # the same footage made other footage
 
 Per sequence: AUC (OTB success, 21 IoU thresholds, strict >; a lost frame is a failure),
 precision at 20 px, mean IoU, the honest-state shares (of the frames called ``tracking``, the
@@ -37,6 +38,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
 
+import cv2
+import numpy as np
 from common import (
     CHECK_SEQUENCES,
     Clip,
@@ -352,6 +355,71 @@ def usable(variants: tuple[tuple[str, str, list[str]], ...],
     return kept
 
 
+#: ``--variants``: each real sequence made into footage it never was (from its given box):
+#: (name, what was done). Sequences tuned on come back at another size, speed, handedness or
+#: direction, so a change that fits the sequences rather than the trackers' task shows here.
+VARIANTS: tuple[tuple[str, str], ...] = (
+    ("as_is", "the sequence as it is"),
+    ("half", "every frame at half its width and height (area resample)"),
+    ("skip2", "every second frame: the target moves twice as far a frame"),
+    ("mirror", "every frame mirrored left to right"),
+    ("reverse", "played backwards, from the last frame that has a box"),
+)
+
+
+def variant_clip(clip: Clip, variant: str) -> Clip:
+    """``clip`` made into ``variant`` (a name of :data:`VARIANTS`), boxes moved to match."""
+    frames, boxes = clip.frames, clip.boxes
+    if variant == "half":
+        frames = [cv2.resize(f, (f.shape[1] // 2, f.shape[0] // 2), interpolation=cv2.INTER_AREA)
+                  for f in frames]
+        boxes = [None if b is None else Box(b.x / 2, b.y / 2, b.w / 2, b.h / 2) for b in boxes]
+    elif variant == "skip2":
+        frames, boxes = frames[::2], boxes[::2]
+    elif variant == "mirror":
+        width = frames[0].shape[1]
+        frames = [np.ascontiguousarray(f[:, ::-1]) for f in frames]
+        boxes = [None if b is None else Box(width - b.x - b.w, b.y, b.w, b.h) for b in boxes]
+    elif variant == "reverse":
+        last = max(i for i, b in enumerate(boxes) if b is not None)
+        frames, boxes = frames[last::-1], boxes[last::-1]
+    elif variant != "as_is":
+        raise ValueError(f"unknown variant {variant!r}")
+    return dataclasses.replace(clip, frames=frames, boxes=boxes)
+
+
+def variant_result(task: tuple[Sequence, str, list[str], str]) -> Result:
+    """One sequence's score as one variant, from its (moved) given box."""
+    seq, variant, overrides, config = task
+    return evaluate(variant_clip(load_clip(seq), variant), overrides, config)
+
+
+def variants(sequences: list[Sequence], overrides: list[str], config: str, jobs: int) -> None:
+    """Mean AUC (tune, check, all) and the honest-state shares of ``config`` (with
+    ``overrides``) on every variant of every sequence; then each sequence's AUC per variant."""
+    names = [seq.name for seq in sequences]
+    tasks = [(seq, variant, overrides, config) for variant, _ in VARIANTS for seq in sequences]
+    results = list(in_order(variant_result, tasks, jobs))
+    per_variant = {variant: results[k * len(sequences):(k + 1) * len(sequences)]
+                   for k, (variant, _) in enumerate(VARIANTS)}
+    print("| variant | what | mean AUC, tune | check | all | tracking & miss | miss & flagged |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for variant, what in VARIANTS:
+        scored = per_variant[variant]
+        tune, check = split_means([r.auc for r in scored], names)
+        pooled = combined(scored)
+        print(f"| {variant} | {what} | {tune} | {check} | "
+              f"{statistics.mean(r.auc for r in scored):.3f} | "
+              f"{share(pooled.false_tracking, pooled.tracking)} | "
+              f"{share(pooled.flagged, pooled.misses)} |")
+    print()
+    print("| sequence | " + " | ".join(variant for variant, _ in VARIANTS) + " |")
+    print("|---|" + "---:|" * len(VARIANTS))
+    for k, name in enumerate(names):
+        print(f"| {name} | " + " | ".join(f"{per_variant[v][k].auc:.3f}" for v, _ in VARIANTS)
+              + " |")
+
+
 def ablation_row(task: tuple[Sequence, list[tuple[str, str, list[str]]], list[str], int]
                  ) -> dict[str, Result]:
     """One sequence's score under each variant (its starts combined)."""
@@ -440,6 +508,9 @@ def main() -> None:
                              "0-8: a higher one scores parameters never looked at)")
     parser.add_argument("--frames", type=int, default=120, help="--hard: frames per scene")
     parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
+    parser.add_argument("--variants", action="store_true",
+                        help="every sequence also at half size, every second frame, mirrored "
+                             "and backwards, from the given box")
     parser.add_argument("--speed", action="store_true",
                         help="tracking work per 1080p frame, robust against s0")
     parser.add_argument("--starts", type=int, choices=(1, 5, 13), default=1,
@@ -476,6 +547,9 @@ def main() -> None:
         sequences = [s for s in sequences if (s.name in CHECK_SEQUENCES) == check]
     if not sequences:
         print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")
+        return
+    if args.variants:
+        variants(sequences, args.overrides, args.config, args.jobs)
         return
     if args.ablate:
         ablate(sequences, args.overrides, args.ablate_scenes, args.starts, args.jobs)

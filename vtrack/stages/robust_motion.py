@@ -52,11 +52,12 @@ class RobustMotion(Stage):
               min=1e-6, max=10.0),
         Param("p0_rel", float, 0.5, "initial uncertainty std, in target diagonals",
               min=0.0, max=10.0),
-        Param("min_trust", float, 0.1,
-              "floor of the score that scales a measurement's noise (R / score^4; 0.1: at "
-              "most 10^4 R): the lower, the less a held frame's low-scoring measurement moves "
-              "the filter, and the more its uncertainty (and the search window) grows while "
-              "the hold lasts", min=0.01, max=1.0),
+        Param("min_trust", float, 0.5,
+              "floor of the score that scales a measurement's noise (R / score^4; 0.5: at "
+              "most 16 R, 0.1: 10^4 R): the lower, the less a held frame's low-scoring "
+              "measurement moves the filter (a partly covered target's biased centre), and "
+              "the longer the filter lags a target that changes as it speeds up", min=0.01,
+              max=1.0),
     )
     requires = frozenset({"measurement", "box", "state", "score", "robust"})
     provides = frozenset({"box", "prediction", "robust"})
