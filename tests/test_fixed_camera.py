@@ -236,6 +236,23 @@ def test_scores_and_limits_follow_the_learnt_shape() -> None:
     assert square[0].score < 0.5
 
 
+def test_a_target_cut_by_the_frames_border_is_carried_on_beyond_it() -> None:
+    mask = np.zeros((200, 300), np.uint8)
+    mask[40:160, 0:24] = 255  # half a person (aspect 2.5: 48 wide), entering on the left
+    mask[40:160, 280:300] = 255  # ... leaving on the right, 20 of its 48 columns in view
+    mask[150:200, 190:238] = 255  # the top of one below the bottom border (120 tall)
+    mask[20:140, 100:148] = 255  # one in full view
+    found = sorted(grouped(mask), key=lambda d: d.box.x)
+    assert [tuple(d.box) for d in found] == [(-24, 40, 48, 120), (100, 20, 48, 120),
+                                             (190, 150, 48, 120), (280, 40, 48, 120)]
+    # each scores the share of it in view (its visible part is full and of the right shape):
+    # one half out of view is a low-score detection, which continues a track but starts none
+    assert [d.score for d in found] == pytest.approx([0.5, 1.0, 50 / 120, 20 / 48])
+    visible = sorted(grouped(mask, border=False), key=lambda d: d.box.x)
+    assert [tuple(d.box) for d in visible] == [(0, 40, 24, 120), (100, 20, 48, 120),
+                                               (190, 150, 48, 50), (280, 40, 20, 120)]
+
+
 # --- detection_colours --------------------------------------------------------------------------
 
 

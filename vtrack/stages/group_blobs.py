@@ -20,7 +20,12 @@ usual area:
    share of its box, full at 0.5 and above), its shape (1 at the usual aspect, 0.5 at a factor
    of two from it) and, once an area is learnt, its size (full from half the usual area). A
    detection whose shape is more than ``max_shape`` times off, or smaller than ``min_share``
-   of the usual area, is dropped.
+   of the usual area, is dropped;
+4. **border** (before scoring): a detection cut by the frame's border - a target entering or
+   leaving - is carried on beyond it to the usual aspect (:func:`completed_at_border`), as
+   benchmarks' ground truth boxes the whole target (MOTChallenge's boxes run past the image's
+   edges); its fill is that of its visible part and its score is multiplied by the share of
+   it in view, so a target less than half in view continues its track but starts none.
 
 A multi-target tracker after this stage (``byte_tracks``) matches high-score detections first
 and uses low-score ones only to continue existing tracks (ByteTrack's second pass).
@@ -142,6 +147,28 @@ def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
     return pieces
 
 
+def completed_at_border(box: Box, aspect: float, width: int, height: int,
+                        scale: float) -> Box:
+    """``box`` carried on beyond the frame's border where it touches it (within ``scale``
+    pixels, the foreground's pixel) and is shorter there than a target of the usual
+    ``aspect``: a target entering or leaving through the left or right border keeps its
+    height and is given the width ``h / aspect`` (beyond the border, its inner side kept); one
+    through the top or bottom border keeps its width and is given the height ``w aspect``."""
+    x0, y0, x1, y1 = box.x, box.y, box.x + box.w, box.y + box.h
+    full_w, full_h = box.h / aspect, box.w * aspect
+    if box.w < full_w:
+        if x0 <= scale and x1 < width - 2 * scale:
+            x0 = x1 - full_w
+        elif x1 >= width - 2 * scale and x0 > scale:
+            x1 = x0 + full_w
+    if box.h < full_h:
+        if y0 <= scale and y1 < height - 2 * scale:
+            y0 = y1 - full_h
+        elif y1 >= height - 2 * scale and y0 > scale:
+            y1 = y0 + full_h
+    return Box(x0, y0, x1 - x0, y1 - y0)
+
+
 @register
 class GroupBlobs(Stage):
     """Blobs -> one scored detection per target: fragments merged, side-by-side targets split,
@@ -169,8 +196,12 @@ class GroupBlobs(Stage):
         Param("min_share", float, 0.15,
               "once an area is learnt, detections smaller than this share of it are dropped",
               min=0.0, max=1.0),
+        Param("border", bool, True,
+              "a detection cut by the frame's border is carried on beyond it to the usual "
+              "aspect (a target entering or leaving; ground truth such as MOTChallenge's "
+              "boxes the whole target); false: only its visible part"),
     )
-    requires = frozenset({"detections", "likelihood", "feature_scale"})
+    requires = frozenset({"frame", "detections", "likelihood", "feature_scale"})
     provides = frozenset({"detections"})
     needs_init_box = False
 
@@ -188,13 +219,19 @@ class GroupBlobs(Stage):
             else:
                 grouped.append(detection)
         scored = []
+        frame = ctx.frame
         for detection in grouped:
-            b = detection.box
+            visible = b = detection.box
+            if self.border:
+                b = completed_at_border(visible, aspect, frame.width, frame.height,
+                                        ctx.feature_scale)
+                detection = replace(detection, box=b)
             shape = shape_score(b, aspect)
             size = 1.0 if area is None else min(1.0, b.area / (FULL_SIZE * area))
             small = area is not None and b.area < self.min_share * area
             if shape < 1.0 / self.max_shape or small:
                 continue
-            fill = min(1.0, detection.area / b.area / FULL_FILL)
-            scored.append(replace(detection, score=fill * shape * size))
+            fill = min(1.0, detection.area / visible.area / FULL_FILL)
+            seen = visible.area / b.area  # a target half out of view is half the evidence
+            scored.append(replace(detection, score=fill * shape * size * seen))
         ctx.detections = sorted(scored, key=lambda d: (d.box.y, d.box.x))
