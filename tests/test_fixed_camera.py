@@ -253,6 +253,22 @@ def test_a_target_cut_by_the_frames_border_is_carried_on_beyond_it() -> None:
                                                (190, 150, 48, 50), (280, 40, 20, 120)]
 
 
+def test_a_box_spans_the_bulk_of_the_foreground_not_its_farthest_pixels() -> None:
+    mask = np.zeros((200, 300), np.uint8)
+    mask[40:160, 100:140] = 255  # a body, 40 wide
+    mask[150:160, 90:100] = 255  # a foot mid-stride: 100 pixels of 4900
+    mask[60:64, 140:152] = 255  # an arm: 48 pixels
+    (full,) = grouped(mask)
+    assert tuple(full.box) == (90, 40, 62, 120)
+    (bulk,) = grouped(mask, trim=0.03)  # 3% of 4948 pixels: more than the foot, the arm
+    assert tuple(bulk.box) == (100, 40, 40, 120)
+    mask[:, :] = 0
+    mask[40:160, 0:30] = 255  # at the left border: that side stays for the completion
+    mask[40:160, 30:34] = 255
+    (cut,) = grouped(mask, trim=0.1)
+    assert cut.box.x < 0 and cut.box.x + cut.box.w < 34
+
+
 # --- detection_colours --------------------------------------------------------------------------
 
 
