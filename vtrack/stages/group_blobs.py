@@ -16,21 +16,20 @@ usual area:
    flatter blob, a shadow or a low wall, is no row of targets); it is cut at the columns
    of least foreground near its ``n``-ths where these are valleys (at most ``VALLEY`` of the
    fullest column: a solid blob is not cut), and each part gets the box of its own foreground;
-3. **score** (0..1): how target-like each detection is, the product of its fill (foreground
-   share of its box, full at 0.5 and above), its shape (1 at the usual aspect, 0.5 at a factor
-   of two from it) and, once an area is learnt, its size (full from half the usual area). A
-   detection whose shape is more than ``max_shape`` times off, or smaller than ``min_share``
-   of the usual area, is dropped;
-4. **trim** (before scoring): a detection's left and right sides are moved in to the columns
-   that leave ``trim`` of its foreground outside on either side (:func:`trimmed`): a
-   silhouette's extreme columns are thin parts - a foot mid-stride, an arm, a shadow's fringe,
-   what the closing added - that benchmarks' boxes of the person leave out (MOT_TUD-Campus's
-   boxes are 1.37 times narrower than its people's full foreground; heights agree);
-5. **border** (before scoring): a detection cut by the frame's border - a target entering or
-   leaving - is carried on beyond it to the usual aspect (:func:`completed_at_border`), as
-   benchmarks' ground truth boxes the whole target (MOTChallenge's boxes run past the image's
-   edges); its fill is that of its visible part and its score is multiplied by the share of
-   it in view, so a target less than half in view continues its track but starts none.
+3. **trim**: each detection's left and right sides are moved in to the columns that leave
+   ``trim`` of its foreground outside on either side (:func:`trimmed`): a silhouette's
+   extreme columns are thin parts - a foot mid-stride, an arm, a shadow's fringe, what the
+   closing added - that benchmarks' boxes of the person leave out (MOT_TUD-Campus's boxes are
+   1.37 times narrower than its people's full foreground; heights agree);
+4. **border**: a detection cut by the frame's border - a target entering or leaving - is
+   carried on beyond it to the usual aspect (:func:`completed_at_border`), as benchmarks'
+   ground truth boxes the whole target (MOTChallenge's boxes run past the image's edges);
+5. **score** (0..1): how target-like each detection is, the product of its fill (foreground
+   share of the box's part in view, full at 0.5 and above), its shape (1 at the usual aspect,
+   0.5 at a factor of two from it), once an area is learnt its size (full from half the usual
+   area), and the share of its box in view (a target less than half in view continues its
+   track but starts none). A detection whose shape is more than ``max_shape`` times off, or
+   smaller than ``min_share`` of the usual area, is dropped.
 
 A multi-target tracker after this stage (``byte_tracks``) matches high-score detections first
 and uses low-score ones only to continue existing tracks (ByteTrack's second pass).
@@ -152,6 +151,13 @@ def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
     return pieces
 
 
+def at_border(low: float, high: float, extent: int, scale: float) -> tuple[bool, bool]:
+    """Whether the span ``low..high`` of a frame side ``extent`` pixels long reaches its start
+    and its end, within a foreground pixel (``scale`` frame pixels; a reduced foreground
+    leaves out the frame's last pixels beyond whole blocks)."""
+    return low <= scale, high >= extent - 2 * scale
+
+
 def trimmed(detection: Detection, share: float, mask: np.ndarray, scale: float,
             width: int) -> Detection:
     """``detection`` with its box's left and right sides moved in to the columns that leave
@@ -169,9 +175,10 @@ def trimmed(detection: Detection, share: float, mask: np.ndarray, scale: float,
     c1 = int(np.searchsorted(cum, 1.0 - share)) + 1
     b = detection.box
     x0, x1 = b.x, b.x + b.w
-    if x0 > scale:  # a side on the frame's border stays there (completed_at_border)
+    at_left, at_right = at_border(x0, x1, width, scale)
+    if not at_left:  # a side on the frame's border stays there (completed_at_border)
         x0 = max(x0, (covered.x0 + c0) * scale)
-    if x1 < width - 2 * scale:
+    if not at_right:
         x1 = min(x1, (covered.x0 + c1) * scale)
     if x1 - x0 < 1:
         return detection
@@ -186,17 +193,18 @@ def completed_at_border(box: Box, aspect: float, width: int, height: int,
     height and is given the width ``h / aspect`` (beyond the border, its inner side kept); one
     through the top or bottom border keeps its width and is given the height ``w aspect``."""
     x0, y0, x1, y1 = box.x, box.y, box.x + box.w, box.y + box.h
-    full_w, full_h = box.h / aspect, box.w * aspect
-    if box.w < full_w:
-        if x0 <= scale and x1 < width - 2 * scale:
-            x0 = x1 - full_w
-        elif x1 >= width - 2 * scale and x0 > scale:
-            x1 = x0 + full_w
-    if box.h < full_h:
-        if y0 <= scale and y1 < height - 2 * scale:
-            y0 = y1 - full_h
-        elif y1 >= height - 2 * scale and y0 > scale:
-            y1 = y0 + full_h
+    at_left, at_right = at_border(x0, x1, width, scale)
+    if box.w < box.h / aspect and at_left != at_right:  # one side cut (both: it fills the view)
+        if at_left:
+            x0 = x1 - box.h / aspect
+        else:
+            x1 = x0 + box.h / aspect
+    at_top, at_bottom = at_border(y0, y1, height, scale)
+    if box.h < box.w * aspect and at_top != at_bottom:
+        if at_top:
+            y0 = y1 - box.w * aspect
+        else:
+            y1 = y0 + box.w * aspect
     return Box(x0, y0, x1 - x0, y1 - y0)
 
 
@@ -257,8 +265,9 @@ class GroupBlobs(Stage):
         frame = ctx.frame
         for detection in grouped:
             if self.trim:
+                assert ctx.likelihood is not None
                 detection = trimmed(detection, self.trim, ctx.likelihood, ctx.feature_scale,
-                                    ctx.frame.width)
+                                    frame.width)
             visible = b = detection.box
             if self.border:
                 b = completed_at_border(visible, aspect, frame.width, frame.height,
