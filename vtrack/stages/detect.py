@@ -77,6 +77,14 @@ def mask_window(box: Box, scale: float, shape: tuple[int, ...]) -> Window:
     return Window(x0, y0, x1, y1)
 
 
+def foreground_under(box: Box, mask: np.ndarray, scale: float) -> tuple[Window, np.ndarray]:
+    """The pixels of ``mask`` (a foreground, ``scale`` frame pixels per pixel) that cover
+    ``box`` (:func:`mask_window`) and which of them are foreground (a bool array, empty when
+    none cover it)."""
+    covered = mask_window(box, scale, mask.shape)
+    return covered, mask[covered.slices] > 0
+
+
 def track_state(confirmed: bool, updated: bool) -> TrackStatus:
     """``confirmed`` (confirmed and measured this frame), ``coasting`` (confirmed, predicted
     only) or ``tentative`` (not confirmed yet)."""

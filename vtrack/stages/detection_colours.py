@@ -26,7 +26,7 @@ import numpy as np
 from vtrack.geometry import Window
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
-from vtrack.stages.detect import Detection, mask_window
+from vtrack.stages.detect import Detection, foreground_under
 
 
 @register
@@ -61,10 +61,10 @@ class DetectionColours(Stage):
         """The normalised histogram of the detection's foreground pixels (None: it has none)."""
         mask, scale = ctx.likelihood, ctx.feature_scale
         assert mask is not None
-        covered = mask_window(detection.box, scale, mask.shape)
+        covered, foreground = foreground_under(detection.box, mask, scale)
         if covered.width <= 0 or covered.height <= 0:
             return None
-        inside = (mask[covered.slices] > 0).astype(np.uint8)
+        inside = foreground.astype(np.uint8)
         window = Window(round(covered.x0 * scale), round(covered.y0 * scale),
                         min(round(covered.x1 * scale), ctx.frame.width),
                         min(round(covered.y1 * scale), ctx.frame.height))

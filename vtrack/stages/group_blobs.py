@@ -51,7 +51,7 @@ import numpy as np
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TargetShape, TrackContext, register
-from vtrack.stages.detect import Detection, mask_window
+from vtrack.stages.detect import Detection, foreground_under
 
 #: A detection's fill (foreground share of its box) scores 1 from this value on ...
 FULL_FILL = 0.5
@@ -123,9 +123,8 @@ def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
     divisions, where that column holds at most ``VALLEY`` of the fullest column's foreground
     (a solid blob is not cut); each part gets the box and the pixel count of its own
     foreground."""
-    covered = mask_window(detection.box, scale, mask.shape)
+    covered, inside = foreground_under(detection.box, mask, scale)
     x0, y0 = covered.x0, covered.y0
-    inside = mask[covered.slices] > 0
     if inside.shape[1] < 2 * parts:
         return [detection]
     profile = inside.sum(axis=0)
@@ -164,8 +163,7 @@ def trimmed(detection: Detection, share: float, mask: np.ndarray, scale: float,
     ``share`` of its foreground (``mask``, ``scale`` frame pixels per pixel) outside on each
     side: the box of the body's bulk, not of its farthest pixels. A side on the frame's border
     (``width`` pixels wide) stays there, for :func:`completed_at_border`."""
-    covered = mask_window(detection.box, scale, mask.shape)
-    inside = mask[covered.slices] > 0
+    covered, inside = foreground_under(detection.box, mask, scale)
     profile = inside.sum(axis=0).astype(float)
     total = profile.sum()
     if total <= 0 or profile.size < 3:
