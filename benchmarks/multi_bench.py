@@ -1,8 +1,8 @@
 """Multi-target trackers measured: S3 (``mht``), S4 per track (``kalman_tracks``) and
 ``fixed_camera`` (``group_blobs`` + ``byte_tracks``).
 
-    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|people|cost|processes]
-        [--set STAGE.PARAM=VALUE ...]
+    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|people|outside|cost|
+        processes] [--set STAGE.PARAM=VALUE ...]
 
 Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in this process):
 
@@ -27,6 +27,10 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    300+SEEDS-1: how its sizes in frame pixels (opening, closing, least blob area) hold up.
    ``people``: ``fixed_camera`` (and with the overrides) on ``pedestrians`` at 640x480 and
    768x576, seeds 205 .. 205+SEEDS-1, seed by seed and the mean per seed.
+   ``outside``: every tracker on pixels (and ``fixed_camera`` with the overrides) on each
+   MOTChallenge sequence named in ``$VTRACK_MOT`` (folders separated as in ``PATH``, each with
+   ``gt/gt.txt`` and ``img1/`` or one video file; e.g. MOT15's TUD-Stadtmitte and
+   PETS09-S2L1): real fixed-camera footage none of the values were chosen on.
 3. Cost per frame at 1080p (grey frames, as a decoded yuv420p video hands over the Y plane) with
    4, 16 and 64 moving targets, with and without clutter (extra bright specks each frame):
    microseconds per stage.
@@ -37,6 +41,7 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -55,6 +60,7 @@ from vtrack.evaluate.mot import MATCH_IOU, evaluate_mot
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import Box, iou
 from vtrack.io.images import list_images, read_image
+from vtrack.io.inputs import open_source
 from vtrack.io.video import decoder_threads
 from vtrack.machine import cpu_count
 from vtrack.pipeline import FrameResult, Pipeline
@@ -68,6 +74,8 @@ TRACKERS = [
     ("S4 per track `s4_multi` + MOG2", "s4_multi", ["background.method=mog2"]),
     ("`fixed_camera`", "fixed_camera", []),
 ]
+#: Files ``outside`` takes for a MOTChallenge sequence's video.
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".webm", ".mov")
 #: What README tells ``fixed_camera`` for small round targets (the infrared-like ``multi``).
 SMALL = ["group_blobs.aspect=1", "blobs.min_area=4", "background.open=1", "background.close=1"]
 #: Seeds of the randomised pedestrians scene: from 200 on, none looked at while choosing
@@ -506,12 +514,61 @@ def on_tud(measure: Callable[[Path], None]) -> None:
         print("(MOT_TUD-Campus not found: skipped)\n")
 
 
+# --- 2b. MOTChallenge footage outside ../shared/data ---------------------------------------------
+
+
+def mot_sequence(folder: Path) -> tuple[list[Frame], dict[int, list[tuple[int, Box]]]]:
+    """A MOTChallenge sequence as ``vtrack run`` reads it: its frames (``img1/`` or ``img/``,
+    at ``seqinfo.ini``'s frame rate, or the folder's one video file) and its ground truth
+    (``gt/gt.txt`` or ``gt.txt``)."""
+    truths = [path for path in (folder / "gt" / "gt.txt", folder / "gt.txt") if path.is_file()]
+    if not truths:
+        raise SystemExit(f"{folder}: no gt/gt.txt or gt.txt")
+    images = [folder / name for name in ("img1", "img") if (folder / name).is_dir()]
+    videos = sorted(path for path in folder.iterdir() if path.suffix in VIDEO_SUFFIXES)
+    if images:
+        info = folder / "seqinfo.ini"
+        rate = [line.split("=")[1] for line in info.read_text().splitlines()
+                if line.startswith("frameRate=")] if info.is_file() else []
+        spec, fps = str(images[0]), float(rate[0]) if rate else None
+    elif videos:
+        spec, fps = str(videos[0]), None
+    else:
+        raise SystemExit(f"{folder}: no img1/, img/ or video file")
+    with open_source(spec, fps=fps) as source:
+        frames: list[Frame] = [BgrFrame(frame.index, frame.time_s, frame.bgr().copy())
+                               for frame in source]
+    return frames, read_mot(truths[0])
+
+
+def outside(overrides: list[str]) -> None:
+    """Every tracker on pixels (and ``fixed_camera`` with ``overrides``) on each
+    MOTChallenge sequence of ``$VTRACK_MOT`` (folders, separated as in ``PATH``): footage its
+    values were never chosen on."""
+    folders = [Path(path) for path in os.environ.get("VTRACK_MOT", "").split(os.pathsep) if path]
+    if not folders:
+        print("(VTRACK_MOT names no MOTChallenge sequence: skipped)\n")
+        return
+    chains = TRACKERS + ([(f"`fixed_camera --set {' '.join(overrides)}`", "fixed_camera",
+                           overrides)] if overrides else [])
+    for folder in folders:
+        frames, truth = mot_sequence(folder)
+        height, width = frames[0].height, frames[0].width
+        print(f"### {folder.name} ({len(frames)} frames, {width}x{height}, "
+              f"{len({i for rows in truth.values() for i, _ in rows})} people)\n")
+        print(header("tracker"))
+        for label, config, changes in chains:
+            print(row(label, scored(load_config(config).with_overrides(changes), frames, truth)))
+        print()
+
+
 #: The sections, in order, each given the seeds and the ``--set`` overrides; ``python
 #: multi_bench.py SEEDS NAME...`` prints only those named.
 SECTIONS: dict[str, Callable[[int, list[str]], None]] = {
     "generated": lambda seeds, overrides: generated(seeds),
     "tud": lambda seeds, overrides: on_tud(tud),
     "variants": lambda seeds, overrides: on_tud(lambda folder: variants(folder, overrides)),
+    "outside": lambda seeds, overrides: outside(overrides),
     "sizes": sizes,
     "people": people,
     "cost": lambda seeds, overrides: cost(),
