@@ -110,6 +110,23 @@ def test_an_occluded_frame_is_learnt_only_with_learn_occluded_and_agreeing_colou
     assert off == 0 and on > 0 and disagreeing == 0, low_psr_learnt
 
 
+def test_no_frame_called_occluded_measures_the_size(scene_factory) -> None:
+    """A frame called occluded, hidden or doubtful (a sharp but weak peak), keeps the size of
+    the frame before: fDSST's scale samples there show what hides the target too (a slow pass
+    behind a plain occluder grew the box by a quarter on the occluder's edge). On frames called
+    tracking the size is still measured: a growing target's box grows."""
+    held = 0
+    for seed in (0, 1, 2):
+        results = track(scene_factory("occlusion", seed, frames=150))
+        for before, frame in zip(results[:-1], results[1:], strict=True):
+            if frame.state == TrackState.OCCLUDED and frame.box and before.box:
+                held += 1
+                assert (frame.box.w, frame.box.h) == pytest.approx((before.box.w, before.box.h))
+    assert held > 10, held
+    widths = [r.box.w for r in track(scene_factory("scale", 0, frames=150)) if r.box]
+    assert max(widths) > 1.2 * min(widths), (min(widths), max(widths))
+
+
 @pytest.mark.parametrize("scenario", ["smooth", "scale"])
 def test_learning_from_the_moved_sample_cuts_fewer_regions_and_still_follows(
         scene_factory, monkeypatch, scenario: str) -> None:
