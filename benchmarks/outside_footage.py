@@ -1,0 +1,149 @@
+"""Lay out real footage from outside ``../shared/data`` for the accuracy benchmarks.
+
+    python benchmarks/outside_footage.py OUT --clone OWNER/NAME=PATH [--clone ...]
+
+Reads public GitHub repositories that ship tracking sequences (each cloned beforehand, bare or
+not: ``git clone https://github.com/OWNER/NAME PATH``) and writes, under ``OUT``:
+
+- ``OUT/single/NAME/img/00001.jpg ...`` + ``groundtruth.txt`` (one 1-based ``x,y,w,h`` line a
+  frame, ``nan,nan,nan,nan`` where the target is absent): the data folder's layout, for
+  ``VTRACK_DATA=OUT/single python benchmarks/robust_tune.py`` and ``robust_bench.py``;
+- ``OUT/mot/NAME/`` with ``gt/gt.txt`` and ``img1/`` (or the sequence's video) and
+  ``seqinfo.ini``: MOTChallenge's layout, for ``VTRACK_MOT=OUT/mot/A:OUT/mot/B python
+  benchmarks/multi_bench.py 1 outside``.
+
+Sequences whose repository is not given are skipped with a line naming the clone they need.
+None of ``robust``'s or ``fixed_camera``'s values were chosen on these (benchmarks/RESULTS.md,
+sections 5 and 8, say where they were used to check a change).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+from pathlib import Path
+
+CPCF, OMFL = "vision4robotics/CPCF-Tracker", "vision4robotics/OMFL-Tracker"
+MEANSHIFT, KALMAN = "lanshiyinging/MeanShift-for-Tracking", "mishless/kalman-filter-project"
+MASA, RPI = "gonzalocarreteroh/MASA-OA", "nathanrooy/rpi-urban-mobility-tracker"
+
+#: Single-target sequences: (name, repository, frames folder, ground-truth file, first frame
+#: index into the folder's sorted images, ground-truth format: "xywh" or "tlp").
+SINGLE = (
+    ("UAV123_boat1", CPCF, "CPCF-tracker1/seq/boat1", "CPCF-tracker1/seq/boat1.txt", 0, "xywh"),
+    ("UAV123_building4", CPCF, "CPCF-tracker1/seq/building4", "CPCF-tracker1/seq/building4.txt",
+     0, "xywh"),
+    ("UAV123_person12_1", CPCF, "CPCF-tracker1/seq/person12", "CPCF-tracker1/seq/person12_1.txt",
+     0, "xywh"),
+    ("UAV123_truck4_1", CPCF, "CPCF-tracker1/seq/truck4", "CPCF-tracker1/seq/truck4_1.txt", 0,
+     "xywh"),
+    ("UAV123_truck4_2", CPCF, "CPCF-tracker1/seq/truck4", "CPCF-tracker1/seq/truck4_2.txt", 193,
+     "xywh"),
+    ("UAV123_car10", OMFL, "UAV123_10fps/data_seq/car10", "UAV123_10fps/anno/car10.txt", 0,
+     "xywh"),
+    ("OTB_Bolt", MEANSHIFT, "MeanShift/Bolt/img", "MeanShift/Bolt/groundtruth_rect.txt", 0,
+     "xywh"),
+    ("OTB_Basketball", KALMAN, "data/basketball/img", "data/basketball/groundtruth_rect.txt", 0,
+     "xywh"),
+    ("OTB_Car1", KALMAN, "data/car/img", "data/car/groundtruth_rect.txt", 0, "xywh"),
+    *((f"TLP_{name}", KALMAN, f"data/TinyTLP/{name}/img",
+       f"data/TinyTLP/{name}/groundtruth_rect.txt", 0, "tlp")
+      for name in ("Bike", "CarChase2", "Drone1", "Mohiniyattam", "MotorcycleChase")),
+)
+
+#: MOTChallenge sequences: (name, repository of the frames, frames folder or video file,
+#: repository of the ground truth, its folder (gt/gt.txt, seqinfo.ini), frames kept or 0: all).
+MOT = (
+    ("TUD-Stadtmitte", MASA, "benchmarks/MOT15/TUD-Stadtmitte/TUD-Stadtmitte.mp4", MASA,
+     "benchmarks/MOT15/TUD-Stadtmitte", 0),
+    ("PETS09-S2L1-300", RPI, "data/images/PETS09-S2L1", MASA, "benchmarks/MOT15/PETS09-S2L1",
+     300),
+)
+
+
+def git(clone: Path, *args: str) -> bytes:
+    """Output of ``git -C clone ARGS`` (bare clones too)."""
+    return subprocess.run(["git", "-C", str(clone), *args], capture_output=True,
+                          check=True).stdout
+
+
+def show(clone: Path, path: str) -> bytes:
+    return git(clone, "show", f"HEAD:{path}")
+
+
+def images(clone: Path, folder: str) -> list[str]:
+    names = git(clone, "ls-tree", "--name-only", "HEAD", folder + "/").decode().split()
+    return sorted(name for name in names if name.endswith((".jpg", ".png")))
+
+
+def ground_truth(text: str, layout: str) -> list[str]:
+    """One ``x,y,w,h`` line a frame; TLP's ``frame,x,y,w,h,occluded`` lines become absent
+    targets where TLP flags full occlusion."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    if layout == "xywh":
+        return lines
+    rows = [line.split(",") for line in lines]
+    return ["nan,nan,nan,nan" if row[5] == "1" else ",".join(row[1:5]) for row in rows]
+
+
+def single(out: Path, clones: dict[str, Path]) -> None:
+    for name, repo, folder, truth, first, layout in SINGLE:
+        if repo not in clones:
+            print(f"{name}: skipped (needs --clone {repo}=PATH)")
+            continue
+        boxes = ground_truth(show(clones[repo], truth).decode(), layout)
+        frames = images(clones[repo], folder)[first:first + len(boxes)]
+        target = out / "single" / name
+        (target / "img").mkdir(parents=True, exist_ok=True)
+        for k, path in enumerate(frames, 1):
+            (target / "img" / f"{k:05d}{Path(path).suffix}").write_bytes(
+                show(clones[repo], path))
+        (target / "groundtruth.txt").write_text("\n".join(boxes[:len(frames)]) + "\n")
+        print(f"{name}: {len(frames)} frames")
+
+
+def mot(out: Path, clones: dict[str, Path]) -> None:
+    for name, frames_repo, frames_path, truth_repo, truth_folder, keep in MOT:
+        missing = [repo for repo in (frames_repo, truth_repo) if repo not in clones]
+        if missing:
+            print(f"{name}: skipped (needs " + ", ".join(f"--clone {r}=PATH" for r in missing)
+                  + ")")
+            continue
+        target = out / "mot" / name
+        (target / "gt").mkdir(parents=True, exist_ok=True)
+        rows = show(clones[truth_repo], f"{truth_folder}/gt/gt.txt").decode().splitlines()
+        if keep:
+            rows = [row for row in rows if row.strip() and int(row.split(",")[0]) <= keep]
+        (target / "gt" / "gt.txt").write_text("\n".join(rows) + "\n")
+        (target / "seqinfo.ini").write_bytes(show(clones[truth_repo],
+                                                   f"{truth_folder}/seqinfo.ini"))
+        if frames_path.endswith(".mp4"):
+            (target / Path(frames_path).name).write_bytes(show(clones[frames_repo], frames_path))
+            print(f"{name}: video")
+            continue
+        (target / "img1").mkdir(exist_ok=True)
+        frames = images(clones[frames_repo], frames_path)[:keep or None]
+        for path in frames:
+            (target / "img1" / Path(path).name).write_bytes(show(clones[frames_repo], path))
+        print(f"{name}: {len(frames)} frames")
+
+
+def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("out", type=Path, help="folder to write the sequences into")
+    parser.add_argument("--clone", action="append", default=[], metavar="OWNER/NAME=PATH",
+                        help="a local clone of a repository the sequences come from")
+    args = parser.parse_args(argv)
+    clones = {}
+    for item in args.clone:
+        repo, _, path = item.partition("=")
+        if not path or not Path(path).is_dir():
+            parser.error(f"--clone {item}: give OWNER/NAME=PATH of an existing clone")
+        clones[repo] = Path(path)
+    single(args.out, clones)
+    mot(args.out, clones)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
