@@ -41,6 +41,7 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
 
 from __future__ import annotations
 
+import configparser
 import os
 import sys
 import time
@@ -527,10 +528,9 @@ def mot_sequence(folder: Path) -> tuple[list[Frame], dict[int, list[tuple[int, B
     images = [folder / name for name in ("img1", "img") if (folder / name).is_dir()]
     videos = sorted(path for path in folder.iterdir() if path.suffix in VIDEO_SUFFIXES)
     if images:
-        info = folder / "seqinfo.ini"
-        rate = [line.split("=")[1] for line in info.read_text().splitlines()
-                if line.startswith("frameRate=")] if info.is_file() else []
-        spec, fps = str(images[0]), float(rate[0]) if rate else None
+        info = configparser.ConfigParser()
+        info.read(folder / "seqinfo.ini")  # MOTChallenge's [Sequence] frameRate; none: 30 fps
+        spec, fps = str(images[0]), info.getfloat("Sequence", "frameRate", fallback=None)
     elif videos:
         spec, fps = str(videos[0]), None
     else:

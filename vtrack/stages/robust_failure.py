@@ -235,7 +235,6 @@ class RobustFailure(Stage):
                 and target.peak >= self.update_peak * target.usual_peak)
 
 
-
 def _hold_size(target: RobustTarget, ctx: TrackContext) -> None:
     """Keep the size of the frame before on a frame called occluded (hidden or doubtful): its
     scale samples show whatever hides the target (an occluder grew the box by half in a few
