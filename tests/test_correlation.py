@@ -15,6 +15,7 @@ from vtrack.features.colour import ColourHistograms, box_mean
 from vtrack.features.dcf import (
     CorrelationFilter,
     apce,
+    constrained_filter,
     gaussian_label,
     hann2d,
     psr,
@@ -27,6 +28,7 @@ from vtrack.features.patch import ConvertedWindow, area_resized, region_patch
 from vtrack.features.scale import ScaleFilter
 from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Window
+from vtrack.stages.robust_model import support_mask
 
 
 def texture(height: int, width: int, seed: int = 0) -> np.ndarray:
@@ -307,3 +309,63 @@ def test_fhog_is_the_same_on_a_process_first_call() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "True"
+
+
+def _over_static_background(rows: int, cols: int, target_at: tuple[int, int],
+                            background_gain: float) -> np.ndarray:
+    """Features of an 8x8-cell target at ``target_at`` cells from the sample's centre over a
+    textured background that stays where it is (a camera panning with the target), under the
+    cosine window."""
+    background = np.random.default_rng(0).random((rows, cols, 8)).astype(np.float32)
+    target = np.random.default_rng(1).random((8, 8, 8)).astype(np.float32)
+    x = background * background_gain
+    cy, cx = rows // 2 + target_at[0], cols // 2 + target_at[1]
+    x[cy - 4:cy + 4, cx - 4:cx + 4] = target
+    return x * hann2d(rows, cols)
+
+
+@pytest.mark.parametrize("gain", [1.0, 2.0])
+def test_filter_constrained_to_the_box_follows_the_target_not_the_background(gain) -> None:
+    """CSR-DCF/BACF: learnt over a sample whose background carries as much texture as the
+    target, the unconstrained filter follows the background, the one constrained to the
+    target's box follows the target."""
+    rows, cols, moved = 30, 36, (3, -4)
+    found = {}
+    for constrained in (False, True):
+        filt = CorrelationFilter(gaussian_label(rows, cols, 1.0), lam=1e-3, rate=0.0)
+        filt.learn(_over_static_background(rows, cols, (0, 0), gain))
+        if constrained:
+            filt.constrain(support_mask(rows, cols, 8, 8))
+        response = filt.respond(_over_static_background(rows, cols, moved, gain))
+        r, c = np.unravel_index(int(np.argmax(response)), response.shape)
+        found[constrained] = ((int(r) + rows // 2) % rows - rows // 2,
+                              (int(c) + cols // 2) % cols - cols // 2)
+    assert found == {False: (0, 0), True: moved}
+
+
+def test_constrained_filter_is_zero_outside_its_support_and_fits_better_than_a_cut_one() -> None:
+    """The ADMM solution keeps no weight outside the support, and fits the samples (DSST's
+    objective) better than the unconstrained filter cut to the support, less well than the
+    unconstrained one."""
+    rows, cols = 24, 30
+    rng = np.random.default_rng(4)
+    xf = real_spectrum(rng.random((rows, cols, 6)).astype(np.float32) * hann2d(rows, cols), 2)
+    label_f = np.fft.rfftn(gaussian_label(rows, cols, 1.5))[..., None]
+    numerator = np.conj(label_f) * xf
+    energy = np.sum(np.abs(xf) ** 2, axis=2, keepdims=True) + 1e-3
+    support = support_mask(rows, cols, 9, 7)
+
+    def objective(spectrum: np.ndarray) -> float:
+        return float(np.sum(energy * np.abs(spectrum) ** 2
+                            - 2 * np.real(np.conj(spectrum) * numerator)))
+
+    def kernel(spectrum: np.ndarray) -> np.ndarray:
+        return np.fft.irfftn(spectrum, s=(rows, cols), axes=(0, 1))
+
+    free = numerator / energy
+    cut = real_spectrum((kernel(free) * support[..., None]).astype(np.float32), 2)
+    solved = constrained_filter(numerator, energy, support, (rows, cols))
+    weights = np.abs(kernel(solved))
+    assert weights[support == 0].max() < 1e-5 * weights[support == 1].max()
+    assert objective(free) < objective(solved) < objective(cut)
+    assert objective(solved) - objective(free) < 0.5 * (objective(cut) - objective(free))

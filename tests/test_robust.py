@@ -209,6 +209,17 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
+@pytest.mark.parametrize("scenario", ["smooth", "distractor", "occlusion"])
+def test_first_filter_constrained_to_the_box_holds_on_generated_scenes(scene_factory,
+                                                                       scenario: str) -> None:
+    """``robust_model.first_support`` (CSR-DCF/BACF's constrained filter on the first frame)
+    keeps the issue's bar on the scenes: the target is followed from a filter that uses no
+    background around it."""
+    values = [overlap(scene, track(scene, ["robust_model.first_support=1"]))
+              for scene in (scene_factory(scenario, seed, frames=150) for seed in SEEDS)]
+    assert float(np.mean(values)) >= 0.7, values
+
+
 def test_score_says_box_on_target(scene_factory) -> None:
     """The score (the response's strength against its usual value) is in 0..1, and while the
     target is hidden it is under half of what it is while the target is in full view."""
@@ -259,6 +270,7 @@ def test_run_writes_empty_box_while_lost(clip_factory, tmp_path: Path) -> None:
 @pytest.mark.parametrize("override", [
     "robust_model.working_area=2", "robust_model.bins=7", "robust_search.scale_step=3",
     "robust_failure.hidden_psr=-0.1", "robust_motion.r_rel=0", "robust_model.colour=maybe",
+    "robust_model.first_support=3.5",
 ])
 def test_parameters_are_validated(override: str) -> None:
     with pytest.raises(ConfigError, match=override.split("=")[0].split(".")[1]):

@@ -264,6 +264,10 @@ class RobustModel(Stage):
               min=0.0, max=4.0),
         Param("colour_rate", float, 0.04, "colour histograms' learning rate (Staple: 0.04)",
               min=0.0, max=1.0),
+        Param("first_support", float, 0.0, "the first frame's filter is constrained to a "
+              "support of the box scaled by this, centred on it (CSR-DCF/BACF, solved by "
+              "ADMM): background around the target, however textured, is no evidence for it "
+              "(0: DSST's unconstrained filter)", min=0.0, max=3.0),
     )
     requires = frozenset({"frame", "box", "state", "prediction", "search_growth"})
     provides = frozenset({"robust", "window", "likelihood"})
@@ -280,6 +284,7 @@ class RobustModel(Stage):
     filter_redetect: bool
     shift_within: float
     colour_rate: float
+    first_support: float
 
     def start(self, ctx: TrackContext) -> None:
         box = self.initial_box(ctx)
@@ -300,6 +305,10 @@ class RobustModel(Stage):
             translation=CorrelationFilter(gaussian_label(rows, cols, sigma), self.lam, 0.0),
             cosine=hann2d(rows, cols), colour=colour)
         target.learn(ctx.frame, box, 1.0, first=True)
+        if self.first_support > 0:
+            target.translation.constrain(support_mask(
+                rows, cols, box.w * factor / self.cell * self.first_support,
+                box.h * factor / self.cell * self.first_support))
         ctx.robust = target
 
     def step(self, ctx: TrackContext) -> None:
@@ -358,6 +367,14 @@ class RobustModel(Stage):
         start = (ctx.frame.index * REGIONS_PER_FRAME) % len(out)
         picked = (out + out)[start:start + min(REGIONS_PER_FRAME, len(out))]
         return [target.region(ctx.frame, cx, cy) for cx, cy in picked]
+
+
+def support_mask(rows: int, cols: int, width: float, height: float) -> np.ndarray:
+    """(rows, cols) 0/1: the cells of a ``width`` x ``height`` (cells) box centred on the
+    sample's centre cell (at least that cell)."""
+    r = np.abs(np.arange(rows) - rows // 2)[:, None]
+    c = np.abs(np.arange(cols) - cols // 2)[None, :]
+    return ((r <= height / 2) & (c <= width / 2)).astype(np.float32)
 
 
 def _filter_peak(frame: Frame, target: RobustTarget, cx: float, cy: float) -> tuple[float, float]:
