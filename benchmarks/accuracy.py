@@ -14,7 +14,7 @@ from __future__ import annotations
 import statistics
 import sys
 
-from common import run_sequence, single_target_sequences
+from common import no_arguments, run_sequence, single_target_sequences
 
 from vtrack.errors import VtrackError
 
@@ -31,6 +31,7 @@ CONFIGS = tuple(label for label, _, _ in VARIANTS)
 
 
 def main() -> None:
+    no_arguments(__doc__)
     sequences = single_target_sequences()
     if not sequences:
         print("no benchmark sequences found (../shared/data or $VTRACK_DATA): skipped")

@@ -34,7 +34,15 @@ import math
 import sys
 
 import numpy as np
-from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
+from common import (
+    Clip,
+    load_clip,
+    scene_clip,
+    seeds_argument,
+    single_target_sequences,
+    to_frame,
+    track_clip,
+)
 
 from vtrack.config import load_config
 from vtrack.evaluate import frame_scores, mean_center_error
@@ -208,7 +216,7 @@ def cost_table(cost: dict[str, float]) -> list[str]:
 
 
 def main() -> None:
-    seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 10
+    seeds = seeds_argument(sys.argv[1:], 10, __doc__)
     print(f"Command: `python benchmarks/claims_s1.py {seeds}`\n")
     rows = s1_claims(seeds)
     print("\n".join(claims_table(rows)))

@@ -29,6 +29,7 @@ import statistics
 import sys
 
 import numpy as np
+from common import seeds_argument
 
 from vtrack.config import load_config
 from vtrack.frame import BgrFrame
@@ -231,7 +232,7 @@ def return_sentences(rows: list[dict]) -> list[str]:
 
 
 def main() -> None:
-    seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 10
+    seeds = seeds_argument(sys.argv[1:], 10, __doc__)
     print(f"Command: `python benchmarks/claims_s1_return.py {seeds}`\n")
     rows = return_rows(seeds)
     print("\n".join(return_table(rows)))

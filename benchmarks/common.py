@@ -6,7 +6,9 @@ named by ``VTRACK_DATA``); every benchmark skips them when they are absent.
 
 from __future__ import annotations
 
+import argparse
 import os
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -140,3 +142,26 @@ def machine() -> str:
     return (f"Machine: {os.cpu_count()} cores, {v['platform']}; vtrack {v['vtrack']}, "
             f"Python {v['python']}, OpenCV {v['opencv']}, NumPy {v['numpy']}, PyAV {v['pyav']} "
             f"(libavcodec {v['ffmpeg']})")
+
+
+def seeds_argument(argv: list[str], default: int, usage: str | None) -> int:
+    """The optional first argument SEEDS of a benchmark run as ``script [SEEDS] ...``
+    (``argv`` without the script's name): ``--help`` prints ``usage`` and exits; anything but
+    a positive whole number is a one-line error."""
+    script = Path(sys.argv[0]).name
+    if {"-h", "--help"} & set(argv):
+        print(usage or f"python benchmarks/{script} [SEEDS]")
+        raise SystemExit(0)
+    if not argv:
+        return default
+    if not argv[0].isdigit() or int(argv[0]) < 1:
+        raise SystemExit(f"{script}: SEEDS must be a positive whole number, got {argv[0]!r} "
+                         "(--help for the usage)")
+    return int(argv[0])
+
+
+def no_arguments(usage: str | None) -> None:
+    """For a benchmark that takes no arguments: ``--help`` prints ``usage`` and exits, any
+    argument is a one-line usage error (argparse's)."""
+    argparse.ArgumentParser(description=usage,
+                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()

@@ -19,7 +19,15 @@ from __future__ import annotations
 import math
 import sys
 
-from common import Clip, load_clip, machine, scene_clip, single_target_sequences, track_clip
+from common import (
+    Clip,
+    load_clip,
+    machine,
+    no_arguments,
+    scene_clip,
+    single_target_sequences,
+    track_clip,
+)
 
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
@@ -72,6 +80,7 @@ def measure(clip: Clip) -> dict[str, tuple[float, float, float]]:
 
 
 def main() -> int:
+    no_arguments(__doc__)
     clips = [scene_clip(name, 0) for name in SCENES]
     clips += [load_clip(seq) for seq in single_target_sequences()]
     header = "| sequence |" + "".join(

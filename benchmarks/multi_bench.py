@@ -51,7 +51,7 @@ from typing import Any
 
 import cv2
 import numpy as np
-from common import data_dir
+from common import data_dir, seeds_argument
 from scipy.optimize import linear_sum_assignment
 from speed import DECODE_THREADS, WORK, python_baseline, vtrack_run
 
@@ -498,8 +498,12 @@ def main(argv: list[str]) -> None:
     overrides = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "--set"]
     words = [arg for i, arg in enumerate(argv) if arg != "--set"
              and (i == 0 or argv[i - 1] != "--set")]
-    seeds = int(words[0]) if words else 5
+    seeds = seeds_argument(words or [a for a in argv if a in ("-h", "--help")], 5, __doc__)
     sections = words[1:] or list(SECTIONS)
+    unknown = [name for name in sections if name not in SECTIONS]
+    if unknown:
+        raise SystemExit(f"multi_bench.py: no section {unknown[0]!r}; the sections: "
+                         f"{', '.join(SECTIONS)}")
     for name in sections:
         SECTIONS[name](seeds, overrides)
 
