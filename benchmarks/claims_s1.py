@@ -33,16 +33,9 @@ from __future__ import annotations
 import math
 import sys
 
+import common
 import numpy as np
-from common import (
-    Clip,
-    load_clip,
-    scene_clip,
-    seeds_argument,
-    single_target_sequences,
-    to_frame,
-    track_clip,
-)
+from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
 
 from vtrack.config import load_config
 from vtrack.evaluate import frame_scores, mean_center_error
@@ -216,7 +209,7 @@ def cost_table(cost: dict[str, float]) -> list[str]:
 
 
 def main() -> None:
-    seeds = seeds_argument(sys.argv[1:], 10, __doc__)
+    seeds = common.seeds_argument(sys.argv[1:], 10, __doc__)
     print(f"Command: `python benchmarks/claims_s1.py {seeds}`\n")
     rows = s1_claims(seeds)
     print("\n".join(claims_table(rows)))

@@ -33,16 +33,9 @@ import sys
 from collections import Counter
 from collections.abc import Iterator
 
+import common
 import numpy as np
-from common import (
-    Clip,
-    load_clip,
-    scene_clip,
-    seeds_argument,
-    single_target_sequences,
-    to_frame,
-    track_clip,
-)
+from common import Clip, load_clip, scene_clip, single_target_sequences, to_frame, track_clip
 
 from vtrack.config import load_config
 from vtrack.errors import VtrackError
@@ -217,7 +210,7 @@ DOCUMENT_COST = "Document (TMS320C6416, 1 GHz, table 2): 200 us - 1 ms per frame
 
 
 def main() -> None:
-    seeds = seeds_argument(sys.argv[1:], 3, __doc__)
+    seeds = common.seeds_argument(sys.argv[1:], 3, __doc__)
     print(f"Command: `python benchmarks/claims_s2.py {seeds}`\n")
     print("\n".join(success_table(s2_success(seeds))))
     print()
