@@ -55,6 +55,7 @@ from common import data_dir, seeds_argument
 from scipy.optimize import linear_sum_assignment
 from speed import DECODE_THREADS, WORK, python_baseline, vtrack_run
 
+from vtrack.batch import VIDEO_SUFFIXES
 from vtrack.config import Config, load_config, parse_config
 from vtrack.evaluate.groundtruth import read_mot, read_mot_detections
 from vtrack.evaluate.mot import MATCH_IOU, evaluate_mot
@@ -75,8 +76,6 @@ TRACKERS = [
     ("S4 per track `s4_multi` + MOG2", "s4_multi", ["background.method=mog2"]),
     ("`fixed_camera`", "fixed_camera", []),
 ]
-#: Files ``outside`` takes for a MOTChallenge sequence's video.
-VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".webm", ".mov")
 #: What README tells ``fixed_camera`` for small round targets (the infrared-like ``multi``).
 SMALL = ["group_blobs.aspect=1", "blobs.min_area=4", "background.open=1", "background.close=1"]
 #: Seeds of the randomised pedestrians scene: from 200 on, none looked at while choosing
@@ -498,7 +497,7 @@ def main(argv: list[str]) -> None:
     overrides = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "--set"]
     words = [arg for i, arg in enumerate(argv) if arg != "--set"
              and (i == 0 or argv[i - 1] != "--set")]
-    seeds = seeds_argument(words or [a for a in argv if a in ("-h", "--help")], 5, __doc__)
+    seeds = seeds_argument(words, 5, __doc__)
     sections = words[1:] or list(SECTIONS)
     unknown = [name for name in sections if name not in SECTIONS]
     if unknown:
@@ -530,7 +529,8 @@ def mot_sequence(folder: Path) -> tuple[list[Frame], dict[int, list[tuple[int, B
     if not truths:
         raise SystemExit(f"{folder}: no gt/gt.txt or gt.txt")
     images = [folder / name for name in ("img1", "img") if (folder / name).is_dir()]
-    videos = sorted(path for path in folder.iterdir() if path.suffix in VIDEO_SUFFIXES)
+    videos = sorted(path for path in folder.iterdir()
+                    if path.suffix.lower() in VIDEO_SUFFIXES)
     if images:
         info = configparser.ConfigParser()
         info.read(folder / "seqinfo.ini")  # MOTChallenge's [Sequence] frameRate; none: 30 fps

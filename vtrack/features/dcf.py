@@ -169,15 +169,15 @@ def constrained_filter(numerator: np.ndarray, energy: np.ndarray, support: np.nd
     mask = support.astype(np.float32)[..., None]
     penalty = ADMM_PENALTY * float(np.mean(energy))
 
-    def project(spectrum: np.ndarray) -> np.ndarray:
+    def cut_to_support(spectrum: np.ndarray) -> np.ndarray:
         kernel = np.fft.irfftn(spectrum, s=shape, axes=(0, 1))
         return real_spectrum((mask * kernel).astype(np.float32), 2)
 
-    constrained = project(numerator / energy)
+    constrained = cut_to_support(numerator / energy)
     multiplier = np.zeros_like(constrained)
     for _ in range(ADMM_ITERATIONS):
         free = (numerator + penalty * constrained - multiplier) / (energy + penalty)
-        constrained = project(free + multiplier / penalty)
+        constrained = cut_to_support(free + multiplier / penalty)
         multiplier += penalty * (free - constrained)
     return constrained
 
