@@ -30,7 +30,9 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    ``outside``: every tracker on pixels (and ``fixed_camera`` with the overrides) on each
    MOTChallenge sequence named in ``$VTRACK_MOT`` (folders separated as in ``PATH``, each with
    ``gt/gt.txt`` and ``img1/`` or one video file; e.g. MOT15's TUD-Stadtmitte and
-   PETS09-S2L1): real fixed-camera footage none of the values were chosen on.
+   PETS09-S2L1): real fixed-camera footage none of the values were chosen on; then where
+   ``fixed_camera``'s misses come from there (its detections' and tracks' precision and recall
+   of boxes, and the shape of the detections that overlap a person by IoU 0.2-0.5).
 3. Cost per frame at 1080p (grey frames, as a decoded yuv420p video hands over the Y plane) with
    4, 16 and 64 moving targets, with and without clutter (extra bright specks each frame):
    microseconds per stage.
@@ -395,9 +397,8 @@ def people(seeds: int, overrides: list[str]) -> None:
     print()
 
 
-def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
-    """Run stages; each frame's index and its detections after the last stage that makes them
-    (a tracker after them reads them and leaves them as they are)."""
+def _contexts(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[TrackContext]:
+    """Run stages; the shared context after each frame (the same object, updated)."""
     ctx = None
     for frame in frames:
         if ctx is None:
@@ -405,7 +406,14 @@ def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[
         ctx.new_frame(frame)
         for stage in stages:
             (stage.start if frame.index == 0 else stage.step)(ctx)
-        yield frame.index, ctx.detections
+        yield ctx
+
+
+def _detections(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[tuple[int, list]]:
+    """Run stages; each frame's index and its detections after the last stage that makes them
+    (a tracker after them reads them and leaves them as they are)."""
+    for ctx in _contexts(stages, frames):
+        yield ctx.frame.index, ctx.detections
 
 
 # --- 3. cost at 1080p ---------------------------------------------------------------------------
@@ -564,6 +572,47 @@ def outside(overrides: list[str]) -> None:
         for label, config, changes in chains:
             print(row(label, scored(load_config(config).with_overrides(changes), frames, truth)))
         print()
+        boxes_found(folder.name, [c for c in chains if c[1] == "fixed_camera"], frames, truth)
+
+
+def boxes_found(name: str, chains: list[tuple[str, str, list[str]]], frames: list[Frame],
+                truth: dict[int, list[tuple[int, Box]]]) -> None:
+    """Where ``fixed_camera``'s misses come from on one sequence: its detections (all, and
+    those scoring >= 0.5, which may start tracks) and its confirmed tracks, each as precision
+    / recall of boxes at IoU >= 0.5 (one to one per frame, no identities); then the
+    ground-truth boxes whose best detection overlaps them by IoU 0.2-0.5 (found, but boxed
+    wrong), with that detection's median width and height relative to the truth."""
+    print(f"{name}, boxes one to one per frame (IoU >= 0.5) - detections, then confirmed "
+          "tracks; near misses: ground-truth boxes whose best detection has IoU 0.2-0.5, "
+          "and its median width / height relative to them\n")
+    print("| config | detections P / R | score >= 0.5 P / R | tracks P / R "
+          "| near misses | width, height x truth |\n|---|---:|---:|---:|---:|---:|")
+    every = range(len(frames))
+    for label, config, changes in chains:
+        found: dict[int, list[tuple[Box, float]]] = {}
+        tracks: dict[int, list[Box]] = {}
+        for ctx in _contexts(load_config(config).with_overrides(changes).build(), iter(frames)):
+            index = ctx.frame.index
+            found[index] = [(d.box, d.score) for d in ctx.detections]
+            tracks[index] = [t.box for t in ctx.tracks if t.state == TrackStatus.CONFIRMED]
+        cells = []
+        for boxes in ({f: [b for b, _ in rows] for f, rows in found.items()},
+                      {f: [b for b, s in rows if s >= 0.5] for f, rows in found.items()},
+                      tracks):
+            precision, recall, _ = detection_scores(truth, boxes, every)
+            cells.append(f"{precision:.3f} / {recall:.3f}")
+        near = []
+        for index, rows in truth.items():
+            for _, box in rows:
+                overlaps = [iou(box, b) for b, _ in found.get(index, [])]
+                best = int(np.argmax(overlaps)) if overlaps else -1
+                if overlaps and 0.2 <= overlaps[best] < MATCH_IOU:
+                    b = found[index][best][0]
+                    near.append((b.w / box.w, b.h / box.h))
+        shape = ("-" if not near else
+                 ", ".join(f"{v:.2f}" for v in np.median(np.array(near), axis=0)))
+        print(f"| {label} | {' | '.join(cells)} | {len(near)} | {shape} |")
+    print()
 
 
 #: The sections, in order, each given the seeds and the ``--set`` overrides; ``python
