@@ -4,6 +4,8 @@ Dask, and the one-line errors."""
 from __future__ import annotations
 
 import csv
+import multiprocessing
+import os
 import shutil
 import subprocess
 import sys
@@ -15,9 +17,10 @@ import cv2
 import pytest
 from click.testing import CliRunner, Result
 
-from vtrack.batch import SUMMARY_COLUMNS, find_inputs
+from vtrack.batch import SUMMARY_COLUMNS, LocalExecutor, find_inputs, plan
 from vtrack.cli import main
-from vtrack.config import DEFAULT_CONFIG
+from vtrack.config import DEFAULT_CONFIG, load_config
+from vtrack.request import RunRequest
 from vtrack.scenes import make_scene, write_groundtruth
 
 if TYPE_CHECKING:
@@ -269,3 +272,59 @@ def test_batch_from_a_folder_holding_a_vtrack_folder(inputs: Path, tmp_path: Pat
     rows = summary(here / "out")
     assert set(rows) == {("smooth", DEFAULT_CONFIG), ("jump", DEFAULT_CONFIG)}
     assert all(row["status"] == "complete" for row in rows.values())
+
+
+def test_inputs_whose_results_folders_would_be_one_are_refused(tmp_path: Path,
+                                                               clip_factory: ClipFactory) -> None:
+    """`x y.mp4` and `x_y.mp4` were both written to `x_y/` (the second overwrote the first)."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    add_clip(folder, clip_factory, "smooth", "x y")
+    add_clip(folder, clip_factory, "smooth", "x_y")
+    result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "out"))
+    assert result.exit_code != 0
+    assert result.output.count("\n") == 1 and "Traceback" not in result.output
+    assert "'x y.mp4' and 'x_y.mp4' would share the results folder 'x_y.mp4'" in result.output
+    assert not (tmp_path / "out" / "summary.csv").exists()
+
+
+def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
+                                                  clip_factory: ClipFactory) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    add_clip(folder, clip_factory, "smooth", "good")
+    (folder / "gone.mp4").symlink_to(tmp_path / "nowhere.mp4")
+    shutil.copy(folder / "good.gt.txt", folder / "gone.gt.txt")
+    os.mkfifo(folder / "pipe.mp4")
+    shutil.copy(folder / "good.gt.txt", folder / "pipe.gt.txt")
+    out = tmp_path / "out"
+    result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(out))
+    assert result.exit_code == 1, result.output
+    rows = summary(out)
+    assert rows[("good", "s0")]["status"] == "complete"
+    assert rows[("gone.mp4", "s0")]["status"] == "failed"
+    assert "a broken link" in rows[("gone.mp4", "s0")]["error"]
+    assert rows[("pipe.mp4", "s0")]["status"] == "failed"
+    assert "not a regular file" in rows[("pipe.mp4", "s0")]["error"]
+
+
+def test_more_jobs_than_runs_start_a_worker_per_run(tmp_path: Path,
+                                                    clip_factory: ClipFactory) -> None:
+    """`--jobs 1000` on four runs started a worker process per job slot and hung."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    add_clip(folder, clip_factory, "smooth", "a")
+    add_clip(folder, clip_factory, "jump", "b")
+    config = load_config("s0")
+    request = RunRequest(input=str(folder), out_dir=tmp_path / "out", config=config, video=False)
+    batch_plan = plan(find_inputs(folder), {"s0": config}, tmp_path / "out", request)
+    executor = LocalExecutor(workers=64)
+    most = 0
+    outcomes = []
+    for outcome in executor.run(batch_plan.jobs):
+        most = max(most, len(multiprocessing.active_children()))
+        outcomes.append(outcome)
+    assert [o.status for o in outcomes] == ["complete", "complete"]
+    assert 1 <= most <= len(batch_plan.jobs)
+    too_many = batch(str(folder), "--jobs", "513", "--out", str(tmp_path / "o2"))
+    assert too_many.exit_code == 2 and "1<=x<=512" in too_many.output

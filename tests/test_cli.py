@@ -326,3 +326,54 @@ def test_odd_sized_image_folder_gets_an_even_cropped_video(tmp_path: Path) -> No
     assert result.returncode == 0, result.stderr.decode()
     assert len(read_csv(out / "track.csv")) == 20
     assert decoded_frames(out / "annotated.mp4") == (20, 160, 120)
+
+
+@pytest.mark.parametrize("option", [
+    ["--follow", "nan"], ["--follow", "inf"], ["--follow", "1e9"], ["--timeout", "nan"],
+    ["--stats-period", "inf"], ["--seed", "-1"], ["--seed", "4294967296"],
+])
+def test_values_outside_an_options_range_are_refused_before_anything_runs(
+        tmp_path: Path, option: list[str]) -> None:
+    """`--follow nan` waited forever (click's ranges let nan through), `--seed -1` failed after
+    tracking started with a NumPy traceback."""
+    clip = tmp_path / "c.mp4"
+    write_video(make_scene("smooth", 0, 160, 120, 10, FPS), clip, preset="ultrafast")
+    out = tmp_path / "out"
+    result = vtrack("run", str(clip), "--init", "10,10,20,20", "-o", str(out), *option)
+    error = result.stderr.decode()
+    assert result.returncode == 2, error
+    assert f"Invalid value for '{option[0]}'" in error
+    assert "Traceback" not in error and not out.exists()
+
+
+@pytest.mark.parametrize(("args", "problem"), [
+    (["x.txt"], "no video container format for this file name"),
+    (["noext"], "no video container format for this file name"),
+    (["c.mp4", "--frames", "99999999999"], "scene frames 99999999999: at most 108000"),
+])
+def test_vtrack_scene_refuses_what_it_cannot_write_in_one_line(
+        tmp_path: Path, args: list[str], problem: str) -> None:
+    result = vtrack("scene", "smooth", *args, "--size", "160x120", cwd=tmp_path)
+    error = result.stderr.decode()
+    assert result.returncode == 2, error
+    assert problem in error and error.count("\n") == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_start_frame_that_does_not_decode_is_refused(tmp_path: Path) -> None:
+    """The next frame was tracked from the start frame's ground-truth box, and the run said
+    `complete` (mean overlap 0.02)."""
+    sequence = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 30, FPS), sequence)
+    (sequence / "img" / "0011.jpg").write_text("not a picture")  # frame 10
+    gt = str(sequence / "groundtruth_rect.txt")
+    refused = vtrack("run", str(sequence), "--gt", gt, "--start", "10", "--no-video", "-o",
+                     str(tmp_path / "a"))
+    error = refused.stderr.decode()
+    assert refused.returncode == 2, error
+    assert "--start 10: frame 10 of" in error and "could not be decoded" in error
+    assert "Traceback" not in error and not (tmp_path / "a").exists()
+    after = vtrack("run", str(sequence), "--gt", gt, "--start", "11", "--no-video", "-o",
+                   str(tmp_path / "b"))
+    assert after.returncode == 0, after.stderr.decode()
+    assert read_csv(tmp_path / "b" / "track.csv")[0]["frame"] == "11"

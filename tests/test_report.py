@@ -13,6 +13,7 @@ import cv2
 import pytest
 from click.testing import CliRunner, Result
 
+from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.cli import main
 from vtrack.evaluate import auc, frame_scores, precision_at, read_boxes
 from vtrack.geometry import Box
@@ -189,3 +190,72 @@ def test_report_errors_are_one_line(tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
     assert "no run.json" in one_error_line(vtrack("report", str(tmp_path / "empty")))
     assert "missing" in one_error_line(vtrack("report", str(tmp_path / "missing")))
+
+
+def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """A run that failed part way (1 frame tracked) was averaged as if whole, and a batch row
+    the batch never ran (stopped first) appeared nowhere in the report."""
+    _, original = batch_out
+    batch = tmp_path / "batch"
+    shutil.copytree(original, batch)
+    record_path = batch / "smooth" / "s0" / "run.json"
+    record = json.loads(record_path.read_text())
+    record.update(status="failed", error="smooth.mp4: a broken frame")
+    record_path.write_text(json.dumps(record))
+    with (batch / "summary.csv").open("a", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS)
+        writer.writerow({"input": "never", "config": "s0", "status": "interrupted"})
+    report = tmp_path / "report"
+    result = vtrack("report", str(batch), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    html = (report / "index.html").read_text()
+    header, averages = html_rows(html, 0)
+    by_config = {row[0]: dict(zip(header, row, strict=True)) for row in averages}
+    _, results = html_rows(html, 1)
+    occlusion_s0 = next(row for row in results if row[:2] == ["occlusion", "s0"])
+    assert by_config["s0"]["Inputs"] == "1"  # the failed run is not averaged
+    assert by_config["s0"]["AUC"] in occlusion_s0
+    assert by_config["camshift"]["Inputs"] == "2"
+    assert "1 single-target run(s) failed part way" in html
+    markdown = (report / "summary.md").read_text()
+    assert "- **never** [s0] interrupted: never ran (the batch stopped first)" in markdown
+    with (report / "summary.csv").open(newline="") as handle:
+        rows = {(row["input"], row["config"]): row for row in csv.DictReader(handle)}
+    assert rows[("never", "s0")]["status"] == "interrupted"
+    assert rows[("smooth", "s0")]["error"] == "smooth.mp4: a broken frame"
+    assert len(rows) == 5
+
+
+def test_a_report_of_single_and_multi_target_runs_has_distinct_columns(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    _, batch = batch_out
+    write_multi_target_run(tmp_path / "runs" / "mht", {"frames": 1, "mota": 0.5, "idf1": 0.6})
+    shutil.copytree(batch / "smooth", tmp_path / "runs" / "smooth")
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        header = next(csv.reader(handle))
+        handle.seek(0)
+        rows = list(csv.DictReader(handle))
+    assert len(header) == len(set(header)) and "mota" in header
+    assert all(row["frames"] for row in rows) and len(rows) == 3
+
+
+def test_inputs_of_one_name_in_two_containers_are_two_inputs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    for name in ("a.mp4", "a.mkv"):  # FFmpeg reads the container the bytes hold
+        shutil.copy(clip.path, folder / name)
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    out = tmp_path / "out"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "--out", str(out)
+                  ).exit_code == 0
+    result = vtrack("report", str(out), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert "2 runs of 2 inputs with 1 configurations" in markdown
+    assert "| a.mkv | s0 |" in markdown and "| a.mp4 | s0 |" in markdown
+    assert "different inputs" not in markdown

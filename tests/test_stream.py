@@ -80,3 +80,46 @@ def test_each_line_arrives_while_the_input_is_still_open(tmp_path: Path) -> None
     finally:
         proc.kill()
         proc.wait()
+
+
+def test_a_stream_that_cannot_be_written_is_one_line_and_the_run_is_recorded(
+        tmp_path: Path) -> None:
+    """`--stream /dev/full` ended in a traceback from closing the stream, with no run.json."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    done = _vtrack("run", str(clip), "-c", "s1", "--init", box, "--no-video", "--out", str(out),
+                   "--stream", "/dev/full")
+    assert done.returncode == 1
+    assert done.stderr.strip() == "vtrack: error: --stream /dev/full: No space left on device"
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "failed" and record["error"].startswith("--stream /dev/full")
+    with (out / "track.csv").open() as f:
+        assert len(list(csv.DictReader(f))) == record["frames"]
+
+
+def test_no_output_of_a_run_is_written_over_what_it_reads(tmp_path: Path) -> None:
+    """`--stream` over the input, or `-y` with the input inside the output folder, replaced the
+    input by the run's own results."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    original = clip.read_bytes()
+    inside = tmp_path / "out" / "annotated.mp4"
+    inside.parent.mkdir()
+    inside.write_bytes(original)
+    cases = [
+        (["run", str(clip), "--init", box, "--out", str(tmp_path / "a"), "--stream", str(clip)],
+         f"--stream {clip}: is the input of this run"),
+        (["run", str(inside), "--init", box, "--out", str(inside.parent), "-y"],
+         f"--out {inside}: is the input of this run"),
+        (["run", str(clip), "--init", box, "--out", str(tmp_path / "b"), "--stream",
+          str(tmp_path / "b" / "track.csv")], "is one of this run's own outputs"),
+    ]
+    for args, problem in cases:
+        done = _vtrack(*args)
+        assert done.returncode == 2 and problem in done.stderr, done.stderr
+        assert done.stderr.count("\n") == 1
+    assert clip.read_bytes() == original and inside.read_bytes() == original
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

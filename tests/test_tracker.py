@@ -11,7 +11,7 @@ import pytest
 
 import vtrack
 from vtrack.config import shipped_configs
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
 from vtrack.io.csvfile import DECIMALS, format_cell
 from vtrack.io.raw import RawFormat
 from vtrack.run import run
@@ -89,3 +89,69 @@ def test_tracker_takes_av_frames_grey_and_resets(tmp_path: Path) -> None:
 def test_tracker_without_a_box_is_refused_for_a_box_config() -> None:
     with pytest.raises(ConfigError, match="initial box"):
         vtrack.Tracker("robust").update(np.zeros((48, 64, 3), np.uint8))
+
+
+def _frames(count: int = 3) -> list[np.ndarray]:
+    """A red block on black, ``count`` frames of 160x120."""
+    frames = [np.zeros((120, 160, 3), np.uint8) for _ in range(count)]
+    for frame in frames:
+        frame[40:70, 50:90] = (0, 0, 255)
+    return frames
+
+
+@pytest.mark.parametrize(("box", "problem"), [
+    ((0, 0, 1e9, 1e9), "larger than the 160x120 frame"),  # s2 once took ~24 GB on this box
+    ((0, 0, 200, 150), "larger than the 160x120 frame"),
+    ((50, 40, 1, 1), "smaller than 4x4"),
+    ((float("nan"), 40, 40, 30), "not a finite number"),
+    ((50, 40, float("inf"), 30), "not a finite number"),
+    ((500, 400, 20, 20), "outside the 160x120 frame"),
+])
+@pytest.mark.parametrize("config", ["s0", "s1", "s2"])
+def test_the_api_refuses_the_boxes_vtrack_run_refuses(config: str, box: tuple, problem: str
+                                                      ) -> None:
+    with pytest.raises(ConfigError, match=f"init_box: .*{problem}"):
+        list(vtrack.track(_frames(), config, box))
+
+
+def test_the_api_refuses_a_number_too_large_for_a_box() -> None:
+    with pytest.raises(ValueError, match=r"init_box: expected \(x, y, w, h\) numbers"):
+        vtrack.Tracker("s0").init(_frames()[0], (10**400, 0, 4, 4))
+
+
+@pytest.mark.parametrize("seed", [-1, 2**32, 1.5, "a", True])
+def test_a_seed_outside_its_range_is_a_config_error(seed: object) -> None:
+    with pytest.raises(ConfigError, match="seed .*: must be a whole number from 0 to 4294967295"):
+        vtrack.Tracker("s1", seed=seed)  # type: ignore[arg-type]
+
+
+def test_a_numpy_seed_is_a_seed() -> None:
+    results = list(vtrack.track(_frames(), "s1", (50, 40, 40, 30), seed=np.int64(7)))
+    assert results[-1].box is not None
+
+
+@pytest.mark.parametrize("fps", [0, -5, 1e200, 1e-300, float("nan"), "30"])
+def test_a_frame_rate_outside_its_range_is_a_config_error(fps: object) -> None:
+    with pytest.raises(ConfigError, match="fps .*: must be a frame rate from 0.01 to 10000"):
+        vtrack.Tracker("s2", fps=fps)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("config", ["s4", "s4_multi", "s0"])
+def test_a_frame_of_another_size_mid_sequence_is_refused(config: str) -> None:
+    frames = _frames()
+    tracker = vtrack.Tracker(config)
+    if tracker.multi_target or config == "s4":
+        tracker.update(frames[0])
+    else:
+        tracker.init(frames[0], (50, 40, 40, 30))
+    tracker.update(frames[1])
+    with pytest.raises(InputError,
+                       match="frame 2: 80x60 colour, the first frame was 160x120 colour"):
+        tracker.update(np.zeros((60, 80, 3), np.uint8))
+    with pytest.raises(InputError, match="160x120 grey, the first frame"):
+        tracker.update(np.zeros((120, 160), np.uint8))
+    tracker.reset()  # another sequence starts afresh
+    if tracker.multi_target or config == "s4":
+        assert tracker.update(np.zeros((60, 80, 3), np.uint8)).index == 0  # any size now
+    else:
+        assert tracker.init(_frames()[0], (50, 40, 40, 30)).index == 0

@@ -11,6 +11,8 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
+from vtrack.errors import ConfigError
+
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
 #: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
 MAX_FRAME_SIDE = 16384
@@ -139,3 +141,22 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
     if box.w <= 0 or box.h <= 0:
         raise error(f"{where}: width and height must be positive, got {shown!r}")
     return box
+
+
+def check_init_box(box: Box, width: int, height: int, where: str) -> None:
+    """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
+    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
+    shown = box.text()
+    if not all(math.isfinite(v) for v in box):
+        raise ConfigError(f"{where}: the box {shown} holds a value that is not a finite number")
+    if not box.is_valid():
+        raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
+    if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
+        raise ConfigError(
+            f"{where}: the box {shown} is smaller than {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} "
+            "pixels, too small to track"
+        )
+    if box.w > width or box.h > height:
+        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame")
+    if box.window(width, height) is None:
+        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")

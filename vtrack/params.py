@@ -9,9 +9,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Integral
 from typing import Any
 
 from vtrack.errors import ConfigError
+
+#: The largest seed of the stochastic stages (NumPy seeds 0 .. 2**32 - 1 as given, like
+#: ``numpy.random.seed``): ``--seed`` and ``seed=`` take 0 .. MAX_SEED.
+MAX_SEED = 2**32 - 1
+
+
+def check_seed(seed: object) -> int:
+    """``seed`` if it is a whole number from 0 to :data:`MAX_SEED`; ConfigError otherwise."""
+    if isinstance(seed, bool) or not isinstance(seed, Integral) or not 0 <= seed <= MAX_SEED:
+        raise ConfigError(f"seed {seed!r}: must be a whole number from 0 to {MAX_SEED}")
+    return int(seed)
+
 
 _TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}
 _A_TYPE = {int: "an integer", float: "a number", bool: "true or false", str: "a string"}

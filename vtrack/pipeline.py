@@ -15,6 +15,7 @@ from vtrack.errors import ConfigError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.overlays import Overlay
+from vtrack.params import check_seed
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 #: A box that lies entirely outside the frame for more than this many frames in a row is
@@ -47,6 +48,7 @@ class Pipeline:
     """An ordered chain of stages sharing one :class:`TrackContext`."""
 
     def __init__(self, stages: list[Stage], seed: int = 0) -> None:
+        check_seed(seed)
         if not stages:
             raise ConfigError("a pipeline needs at least one stage")
         self.stages = stages

@@ -23,6 +23,7 @@ input that breaks part way returns a summary with ``status = "partial"`` and the
 from __future__ import annotations
 
 import math
+import os
 import platform
 import signal
 import sys
@@ -53,7 +54,7 @@ from vtrack.errors import (
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.frame import Frame
-from vtrack.geometry import MIN_BOX_SIDE, Box
+from vtrack.geometry import Box, check_init_box
 from vtrack.io import (
     CsvWriter,
     InputInfo,
@@ -66,7 +67,7 @@ from vtrack.io import (
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
-from vtrack.io.stream import StreamWriter
+from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.latency import Latencies
 from vtrack.pipeline import FrameResult, Pipeline
@@ -156,23 +157,6 @@ def versions() -> dict[str, str]:
     }
 
 
-def _check_init_box(box: Box, width: int, height: int, where: str) -> None:
-    """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
-    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
-    shown = box.text()
-    if not box.is_valid():
-        raise ConfigError(f"{where}: the box {shown} is empty (width and height must be > 0)")
-    if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:
-        raise ConfigError(
-            f"{where}: the box {shown} is smaller than {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} "
-            "pixels, too small to track"
-        )
-    if box.w > width or box.h > height:
-        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame")
-    if box.window(width, height) is None:
-        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")
-
-
 class _Signals:
     """SIGINT and SIGTERM as Ctrl-C, never in the middle of one frame's outputs.
 
@@ -216,9 +200,23 @@ class _Signals:
             raise Interrupted(self.pending)
 
 
-def _from(frames: Iterator[Frame], start: int) -> Iterator[Frame]:
-    """The frames numbered ``start`` and on (the earlier ones are decoded and dropped)."""
-    return frames if start == 0 else (f for f in frames if f.index >= start)
+def _from(frames: Iterator[Frame], start: int, what: str) -> Iterator[Frame]:
+    """The frames numbered ``start`` and on (the earlier ones are decoded and dropped).
+    InputError when frame ``start`` itself is missing (damaged: ``what`` is the input's name)
+    and a later one comes first: the initial box is frame ``start``'s, not that one's."""
+    if start == 0:
+        yield from frames
+        return
+    first = True
+    for frame in frames:
+        if frame.index < start:
+            continue
+        if first and frame.index > start:
+            raise InputError(f"--start {start}: frame {start} of {what} could not be decoded "
+                             f"(damaged; the next is frame {frame.index}): start at a frame "
+                             "that decodes")
+        first = False
+        yield frame
 
 
 def _limited(frames: Iterator, limit: int | None) -> Iterator:
@@ -410,8 +408,9 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         try:
             info = source.info
             if resolved.init_box is not None:
-                _check_init_box(resolved.init_box, info.width, info.height,
+                check_init_box(resolved.init_box, info.width, info.height,
                                 resolved.init_from or "--init")
+            _refuse_writing_over_inputs(request, _output_names(request, resolved))
             if not overwrite:
                 refuse_replacing(request.out_dir)
             with OutputFolder(request.out_dir) as folder:
@@ -444,6 +443,24 @@ class _Writers:
     video: VideoWriter | None = None
     annotator: Annotator | None = None
     stream: StreamWriter | None = None  # --stream: a JSON line per frame
+
+
+def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
+    """ConfigError when a file this run would write (``names`` in its folder, the ``--stream``
+    file) is the input or the ground truth it reads, or the stream is one of its own outputs:
+    ``--overwrite`` replaces an earlier run's results, never what this run reads."""
+    outputs = [(request.out_dir / name, "--out") for name in names]
+    stream = None if request.stream in (None, STDOUT) else Path(request.stream)
+    reads = [(Path(request.input), "the input"), (request.gt_path, "the ground truth")]
+    for output, option in outputs + ([(stream, "--stream")] if stream else []):
+        for source, what in reads:
+            if source is not None and output.exists() and source.exists() \
+                    and os.path.samefile(output, source):
+                raise ConfigError(f"{option} {output}: is {what} of this run ({source}); "
+                                  "write the results elsewhere")
+    if stream is not None and any(stream.resolve() == output.resolve() for output, _ in outputs):
+        raise ConfigError(f"--stream {stream}: is one of this run's own outputs; name another "
+                          "file")
 
 
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
@@ -542,7 +559,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
     try:
-        frames_in = _limited(_from(iter(source), resolved.start), resolved.max_frames)
+        frames_in = _limited(_from(iter(source), resolved.start, request.input),
+                             resolved.max_frames)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)

@@ -9,14 +9,18 @@ gives the same box, state and score here as in ``track.csv``.
 from __future__ import annotations
 
 import os
+import reprlib
 from typing import Any
 
 import numpy as np
 
 from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
+from vtrack.errors import InputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame
-from vtrack.geometry import Box
+from vtrack.geometry import Box, check_init_box
+from vtrack.io.raw import checked_fps
+from vtrack.params import check_seed
 from vtrack.pipeline import FrameResult, Pipeline
 
 #: A frame as :meth:`Tracker.update` takes it.
@@ -58,8 +62,9 @@ def as_box(box: Box | Any) -> Box:
     else:
         try:
             values = tuple(float(v) for v in box)
-        except (TypeError, ValueError):
-            raise ValueError(f"init_box: expected (x, y, w, h) numbers, got {box!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f"init_box: expected (x, y, w, h) numbers, got "
+                             f"{reprlib.repr(box)}") from None
     if len(values) != 4:
         raise ValueError(f"init_box: expected 4 numbers (x, y, w, h), got {len(values)}")
     if not (values[2] > 0 and values[3] > 0):
@@ -85,14 +90,14 @@ class Tracker:
             chain = chain.with_overrides(
                 [f"{key.replace('__', '.', 1)}={_toml_value(value)}"
                  for key, value in params.items()])
-        if not fps > 0:
-            raise ValueError(f"fps: must be positive, got {fps!r}")
         self.config = chain
-        self.seed = seed
-        self.fps = fps
+        self.seed = check_seed(seed)
+        self.fps = checked_fps(fps, "fps")
         self.keep_frames = keep_frames
         self._pipeline: Pipeline | None = None
         self._index = 0
+        #: (width, height, grey) of the sequence's first frame: every later one must match
+        self._shape: tuple[int, int, bool] | None = None
 
     @property
     def multi_target(self) -> bool:
@@ -105,31 +110,48 @@ class Tracker:
     def init(self, frame: FrameLike, box: Box | Any = None) -> FrameResult:
         """Start tracking at ``frame`` with the target's box ``(x, y, w, h)`` in it (None for
         the detecting configs); returns that frame's result (its box is ``box``)."""
+        first = as_frame(frame, 0, self.fps)
+        start = None if box is None else as_box(box)
+        if start is not None:
+            check_init_box(start, first.width, first.height, "init_box")
         pipeline = self._new_pipeline()
-        pipeline.begin(None if box is None else as_box(box))
-        self._pipeline, self._index = pipeline, 0
-        return self._process(frame)
+        pipeline.begin(start)
+        self._pipeline, self._index, self._shape = pipeline, 0, None
+        return self._process(first)
 
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
         if self._pipeline is None:
             pipeline = self._new_pipeline()
             pipeline.begin(None)  # ValueError-like ConfigError if the config needs a box
-            self._pipeline, self._index = pipeline, 0
+            self._pipeline, self._index, self._shape = pipeline, 0, None
         return self._process(frame)
 
     def reset(self) -> None:
         """Forget the target: the next call must be :meth:`init` (or ``update`` for the
         detecting configs), which starts from fresh stages."""
-        self._pipeline, self._index = None, 0
+        self._pipeline, self._index, self._shape = None, 0, None
 
     def _process(self, item: FrameLike) -> FrameResult:
         assert self._pipeline is not None
-        result = self._pipeline.process(as_frame(item, self._index, self.fps))
+        frame = as_frame(item, self._index, self.fps)
+        shape = (frame.width, frame.height, isinstance(frame, GrayFrame))
+        if self._shape is None:
+            self._shape = shape
+        elif shape != self._shape:
+            raise InputError(f"frame {self._index}: {_looks(shape)}, the first frame was "
+                             f"{_looks(self._shape)} (one Tracker follows one sequence: "
+                             "reset() or a new Tracker for another)")
+        result = self._pipeline.process(frame)
         self._index += 1
         if not self.keep_frames:
             result.frame = None
         return result
+
+
+def _looks(shape: tuple[int, int, bool]) -> str:
+    width, height, grey = shape
+    return f"{width}x{height} {'grey' if grey else 'colour'}"
 
 
 def _toml_value(value: Any) -> str:

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
+from vtrack.io.files import folder_name
 
 #: File suffixes taken as video inputs (anything else beside them is ignored).
 VIDEO_SUFFIXES = frozenset({
@@ -39,6 +41,8 @@ class BatchInput:
     mot_groundtruth: Path | None = None
     init: Path | None = None
     gt_origin: int = 0
+    #: Why this input cannot be run (a broken link, a FIFO): it is reported ``failed``.
+    problem: str | None = None
 
 
 def _first(folder: Path, names: Iterable[str]) -> Path | None:
@@ -70,19 +74,35 @@ def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
 
 def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
     """A distinct name per video: its stem, or its full file name where stems (or another
-    input's name) clash. Switching a clashing name to the full one may make it clash with
-    another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated until nothing clashes (full file
-    names in one folder are distinct, so this ends)."""
+    input's name) clash, as results folders (:func:`~vtrack.io.files.folder_name`: ``a b`` and
+    ``a_b`` are one folder). Switching a clashing name to the full one may make it clash with
+    another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated until nothing clashes or every
+    clashing name is a full file name (:func:`find_inputs` then refuses the folder)."""
     names = {path: path.stem for path in videos}
     while True:
         counts: dict[str, int] = {}
         for name in [*taken, *names.values()]:
-            counts[name] = counts.get(name, 0) + 1
-        clashing = [p for p, name in names.items() if counts[name] > 1 and name != p.name]
+            counts[_folder(name)] = counts.get(_folder(name), 0) + 1
+        clashing = [p for p, name in names.items()
+                    if counts[_folder(name)] > 1 and name != p.name]
         if not clashing:
             return names
         for path in clashing:
             names[path] = path.name
+
+
+def _folder(name: str) -> str:
+    """The results folder of an input named ``name``."""
+    return folder_name(name, "input")
+
+
+def _unusable(path: Path) -> BatchInput:
+    """An entry with a video's suffix that is no file to read: failed, with the reason."""
+    if path.is_symlink() and not path.exists():
+        reason = f"a broken link (to {os.readlink(path)}, which does not exist)"
+    else:
+        reason = "not a regular file (a FIFO, socket or device is no batch input)"
+    return BatchInput(name=path.name, path=path, problem=f"{path}: {reason}")
 
 
 def is_sequence_folder(path: Path) -> bool:
@@ -105,12 +125,22 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     if is_sequence_folder(folder):
         return [_sequence(folder.resolve(), gt_origin)]
     entries = sorted(folder.resolve().iterdir())
-    videos = [p for p in entries if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES]
+    named = [p for p in entries if p.suffix.lower() in VIDEO_SUFFIXES]
+    videos = [p for p in named if p.is_file()]
     found = [_sequence(p, gt_origin) for p in entries if p.is_dir() and is_sequence_folder(p)]
+    found += [_unusable(p) for p in named if not p.is_file() and not p.is_dir()]
     found += [_video(p, name, gt_origin) for p, name in _video_names(
         videos, {item.name for item in found}).items()]
     if not found:
         raise InputError(
             f"{folder}: no inputs (video files or sequence folders with an img/ folder)"
         )
+    by_folder: dict[str, BatchInput] = {}
+    for item in found:
+        other = by_folder.setdefault(_folder(item.name), item)
+        if other is not item:
+            raise InputError(
+                f"{folder}: {other.path.name!r} and {item.path.name!r} would share the results "
+                f"folder {_folder(item.name)!r} (names differ only in characters a folder "
+                "name cannot hold): rename one")
     return sorted(found, key=lambda i: i.name)

@@ -148,8 +148,11 @@ class LocalExecutor:
         workers: list[_Worker] = []
         try:
             while pending or workers:
-                while pending and len(workers) < self.workers:
+                # a worker for each pending job no idle worker will take, up to self.workers
+                idle = sum(worker.job is None for worker in workers)
+                while len(workers) < self.workers and idle < len(pending):
                     workers.append(_Worker(context))
+                    idle += 1
                 lost = []  # workers found dead, with the job they had
                 for worker in workers:
                     if worker.job is None and pending and not worker.start(pending.popleft()):

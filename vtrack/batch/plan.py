@@ -112,6 +112,9 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             else:
                 gt_path, gt_origin = item.groundtruth, item.gt_origin
             result.order.append((item.name, label))
+            if item.problem is not None:
+                result.known.append(Outcome(item.name, label, STATUS_FAILED, error=item.problem))
+                continue
             try:
                 init = _init_box(item, label, gt_path) if pipelines[label].needs_init_box else None
             except InputError as exc:

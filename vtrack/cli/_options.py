@@ -13,6 +13,21 @@ import click
 MAX_SECONDS = 366 * 24 * 3600.0
 
 
+class Seconds(click.FloatRange):
+    """A duration in seconds from ``min`` to ``max`` (both finite): click's FloatRange lets
+    ``nan`` through every bound (it compares false), and ``inf`` through an open one."""
+
+    name = "seconds"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        seconds = super().convert(value, param, ctx)
+        if not math.isfinite(seconds):
+            self.fail(f"{value!r} is not a number of seconds from {self.min:g} to "
+                      f"{self.max:g}", param, ctx)
+        return seconds
+
+
 def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | None:
     return None if value == "auto" else int(value)
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from vtrack.cli._options import gt_origin_option
+from vtrack.cli._options import Seconds, gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
@@ -19,6 +19,9 @@ from vtrack.errors import ConfigError, Interrupted, handling_stop_signals
 if TYPE_CHECKING:
     from vtrack.config import Config
 
+#: The most local worker processes ``--jobs`` starts (each a Python process with its own
+#: decoder and chain of stages: far more than any machine has cores for).
+MAX_JOBS = 512
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
     """Add ``vtrack run``'s own options of these parameter names (same flags, help, defaults)."""
@@ -75,15 +78,16 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")
-@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
-              help="Local worker processes. Default: the number of cores.")
+@click.option("--jobs", "-j", type=click.IntRange(1, MAX_JOBS), default=None,
+              help="Local worker processes (never more than the runs to do). Default: the "
+                   "number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask distributed scheduler (tcp://host:8786) instead; workers "
                    "must see the input and output paths. Needs: pip install 'vtrack[dask]'.")
-@click.option("--scheduler-timeout", type=click.FloatRange(min=0.1), default=10.0,
+@click.option("--scheduler-timeout", type=Seconds(min=0.1, max=86400), default=10.0,
               show_default=True, metavar="SECONDS", help="Give up connecting to --scheduler "
                                                          "after this long.")
-@click.option("--worker-timeout", type=click.FloatRange(min=0, min_open=True), default=60.0,
+@click.option("--worker-timeout", type=Seconds(min=0, max=86400, min_open=True), default=60.0,
               show_default=True, metavar="SECONDS",
               help="With --scheduler and no worker connected: say so, wait this long for one, "
                    "then give up (exit 2).")

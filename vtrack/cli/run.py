@@ -8,10 +8,11 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import FrameSpan, StartPoint, gt_origin_option
+from vtrack.cli._options import FrameSpan, Seconds, StartPoint, gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
+from vtrack.params import MAX_SEED
 
 #: ``--follow`` without a number: seconds a growing file may stay the same size before its end.
 FOLLOW_S = 5.0
@@ -65,7 +66,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--input-option", "input_options", multiple=True, metavar="KEY=VALUE",
               help="An FFmpeg demuxer or protocol option (as ffmpeg -KEY VALUE before -i; "
                    "repeatable), e.g. rtsp_transport=tcp, probesize=32, fflags=nobuffer.")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.1, max=3600),
+@click.option("--timeout", "timeout_s", type=Seconds(min=0.1, max=3600),
               default=None, metavar="SECONDS",
               help="A network input that does not open, or sends nothing, this long ends the "
                    "run (recorded as partial once frames came). Default: 10.")
@@ -73,7 +74,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Keep up with the source: when a frame arrives while the tracker is busy, "
                    "track the newest and count the skipped ones. Default: on for stream URLs "
                    "(rtsp, rtp, udp, tcp) and capture devices, off for files, stdin and http.")
-@click.option("--follow", "follow_s", type=click.FloatRange(min=0, min_open=True),
+@click.option("--follow", "follow_s", type=Seconds(min=0, max=86400, min_open=True),
               is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
               help=f"Read a file that is still being written, until it has not grown for "
                    f"SECONDS (default {FOLLOW_S:g}), as tail -f (MPEG-TS, Matroska or "
@@ -87,7 +88,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
 @click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
               help="x264 quality of annotated.mp4 (lower is better and larger).")
-@click.option("--seed", type=int, default=0, show_default=True,
+@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
@@ -101,7 +102,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
                    "line then goes to stderr).")
-@click.option("--stats-period", type=click.FloatRange(min=0), default=STATS_PERIOD,
+@click.option("--stats-period", type=Seconds(min=0, max=3600), default=STATS_PERIOD,
               show_default=True, metavar="SECONDS",
               help="When stderr is not a terminal (a log): a progress line this often, instead "
                    "of the bar (as ffmpeg's -stats_period).")

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.errors import ConfigError
+from vtrack.params import MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*$")
@@ -35,7 +36,8 @@ def _scenario_list() -> str:
 @click.option("--frames", type=int, help="Number of frames [scenario default, mostly 150].")
 @click.option("--size", metavar="WxH", help="Frame size [scenario default, mostly 320x240].")
 @click.option("--fps", type=float, help="Frame rate [scenario default, mostly 30].")
-@click.option("--seed", type=int, default=0, show_default=True, help="Random seed.")
+@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
+              help="Random seed.")
 @click.option(
     "--format",
     "fmt",

@@ -20,6 +20,7 @@ import stat
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
+from numbers import Real
 from pathlib import Path
 from typing import BinaryIO
 
@@ -46,11 +47,13 @@ _RING_SLACK = 3
 MIN_FPS, MAX_FPS = 0.01, 10_000.0
 
 
-def checked_fps(fps: float) -> float:
+def checked_fps(fps: object, name: str = "--fps") -> float:
     """``fps`` if it is a frame rate from :data:`MIN_FPS` to :data:`MAX_FPS`; ConfigError
-    naming ``--fps`` otherwise."""
-    if not (math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
-        raise ConfigError(f"--fps {fps:g}: must be a frame rate from {MIN_FPS:g} to "
+    naming it (``name``) otherwise."""
+    number = isinstance(fps, Real) and not isinstance(fps, bool)
+    if not (number and math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
+        shown = f"{fps:g}" if number else repr(fps)
+        raise ConfigError(f"{name} {shown}: must be a frame rate from {MIN_FPS:g} to "
                           f"{MAX_FPS:g} frames per second")
     return float(fps)
 

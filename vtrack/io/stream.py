@@ -85,4 +85,7 @@ class StreamWriter(Closing):
             with contextlib.suppress(OSError, ValueError):  # the reader went away: write()
                 self._file.flush()                           # has said so already
             return
-        self._file.close()
+        try:
+            self._file.close()  # flushes what a failed write left in the buffer: fails again
+        except (OSError, ValueError) as exc:
+            raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None

@@ -45,6 +45,11 @@ from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
 
+#: Containers whose pictures carry no presentation time of their own: AVI stores one picture
+#: per chunk in decoding order, and with B-frames the decoder hands the pictures over (in
+#: display order) labelled with their packets' times, out of order. A frame's time there is
+#: its place over the frame rate, as FFmpeg's own frame counting does.
+FRAME_ORDER_FORMATS = frozenset({"avi"})
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 #: FFmpeg's AVCOL_RANGE_JPEG: a picture whose levels use the full 0..255 range.
@@ -281,6 +286,7 @@ class VideoSource(Source):
         # may pause): its listed frame count is its duration times its rate
         self._constant_rate = bool(stream.frames and duration and fps
                                    and abs(stream.frames - duration * fps) <= 1)
+        self._frame_order = self._container.format.name in FRAME_ORDER_FORMATS
 
         self._rotation = _quarter_turns(self._first.rotation)
         width, height = self._first.width, self._first.height
@@ -351,7 +357,7 @@ class VideoSource(Source):
         info = self.info
         fps = info.fps or 30.0
         first, self._first = self._first, None  # do not keep a decoded picture alive
-        t0 = first.time
+        t0 = None if self._frame_order else first.time
         tail = _Tail()
         index = yielded = 0
         last_t: float | None = None
@@ -365,7 +371,7 @@ class VideoSource(Source):
                         f"{index}; an input must keep one size",
                         index,
                     )
-                t = decoded.time
+                t = None if self._frame_order else decoded.time
                 if decoded.is_corrupt:
                     self._damaged = True
                 elif (self._constant_rate and t is not None and last_t is not None

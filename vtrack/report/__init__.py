@@ -35,6 +35,7 @@ from vtrack.errors import InputError, OutputError
 from vtrack.io.files import write_text_atomic
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
+from vtrack.run import STATUS_FAILED
 
 DEFAULT_TITLE = "vtrack report"
 
@@ -63,6 +64,18 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
             slug = f"{base}-{n}"
         slugs[name] = slug
     return slugs
+
+
+def _distinct_inputs(runs: list[RunResult]) -> None:
+    """Name runs of one input name but different input files (``a.mp4`` and ``a.mkv``,
+    which a batch keeps apart) by their file names: they are different inputs, not
+    different configurations."""
+    for group in _group(runs, lambda r: r.input).values():
+        names = {r.source: Path(r.source).name for r in group if r.source is not None}
+        if len(names) > 1 and len(set(names.values())) == len(names):
+            for run in group:
+                if run.source is not None:
+                    run.input = names[run.source]
 
 
 def _distinct_labels(runs: list[RunResult]) -> None:
@@ -148,13 +161,14 @@ def build_report(results: Sequence[Path], out_dir: Path,
         if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
             warnings.append(f"--gt {truth.input}={truth.path}: no run of input {truth.input} "
                             "was scored with it")
-    failed = failed_runs(results)
+    failed = failed_runs(results, runs)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
         if warnings:
             raise InputError(f"{named}: no run to report; {warnings[0]}")
         raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
                          "folders)")
+    _distinct_inputs(runs)
     _distinct_labels(runs)
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]
@@ -195,11 +209,16 @@ def build_report(results: Sequence[Path], out_dir: Path,
         sections.append(pages.Section(name, f"input-{slug}",
                                       [p.relative_to(out_dir).as_posix() for p in figures]))
 
-    by_config = _group(single, lambda r: r.config)
+    # a run that failed part way is listed with its frames' scores but averaged with no other
+    counted = [r for r in single if r.status != STATUS_FAILED]
+    if len(counted) < len(single):
+        warnings.append(f"{len(single) - len(counted)} single-target run(s) failed part way: "
+                        "listed per input, left out of the averages and the All inputs plot")
+    by_config = _group(counted, lambda r: r.config)
     overall = None
-    success, precision = _mean_curves(single)
+    success, precision = _mean_curves(counted)
     if success:
-        scored_inputs = {r.input for r in single if r.scores is not None}
+        scored_inputs = {r.input for r in counted if r.scores is not None}
         covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
         if any(inputs != scored_inputs for inputs in covered.values()):
             warnings.append("configurations were scored on different inputs: their averages "
@@ -227,7 +246,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
         out_dir=out_dir,
         index=write_text_atomic(out_dir / "index.html", pages.render_html(page)),
         markdown=write_text_atomic(out_dir / "summary.md", pages.render_markdown(page)),
-        csv=write_text_atomic(out_dir / "summary.csv", pages.render_csv(runs)),
+        csv=write_text_atomic(out_dir / "summary.csv", pages.render_csv(runs, failed)),
         plots=written,
         runs=runs,
         warnings=warnings,

@@ -165,9 +165,9 @@ def render_html(page: Page) -> str:
     if page.mot is not None:
         parts += ['<h2 id="multi-target">Multi-target runs</h2>', html_table(page.mot, 3)]
     if page.failed:
-        items = "".join(f"<li><b>{_e(f.input)}</b> [{_e(f.config)}]: {_e(f.error)}</li>"
-                        for f in page.failed)
-        parts += ['<h2 id="failed">Runs that failed (no results)</h2>', f"<ul>{items}</ul>"]
+        items = "".join(f"<li><b>{_e(f.input)}</b> [{_e(f.config)}] {_e(f.status)}: "
+                        f"{_e(f.error)}</li>" for f in page.failed)
+        parts += [f'<h2 id="failed">{NO_RESULTS}</h2>', f"<ul>{items}</ul>"]
     for section in page.sections:
         parts.append(f'<h2 id="{_e(section.anchor)}">{_e(section.name)}</h2>')
         parts += [_img(p, f"{section.name}: {Path(p).stem}") for p in section.plots]
@@ -213,8 +213,9 @@ def render_markdown(page: Page) -> str:
     if page.mot is not None:
         parts += ["## Multi-target runs", markdown_table(page.mot, 3)]
     if page.failed:
-        parts += ["## Runs that failed (no results)",
-                  "\n".join(f"- **{f.input}** [{f.config}]: {f.error}" for f in page.failed)]
+        parts += [f"## {NO_RESULTS}",
+                  "\n".join(f"- **{f.input}** [{f.config}] {f.status}: {f.error}"
+                            for f in page.failed)]
     for section in page.sections:
         if section.plots:
             parts.append(f"## {section.name}")
@@ -226,10 +227,13 @@ def render_markdown(page: Page) -> str:
 # --- CSV -------------------------------------------------------------------------------------
 
 #: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
+#: The heading of the batch rows that left no results.
+NO_RESULTS = "Runs without results (failed, or never ran)"
+#: The report's ``summary.csv`` columns (a multi-target run's metrics follow them).
 CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
                "success50", "success75", "norm_precision",
                "mean_overlap", "mean_center_error", "tracking_miss", "miss_flagged", "fps",
-               "frames_occluded", "frames_lost", "ground_truth", "run")
+               "frames_occluded", "frames_lost", "ground_truth", "run", "error")
 
 
 def _cell(value: object) -> object:
@@ -238,9 +242,11 @@ def _cell(value: object) -> object:
     return "" if value is None else value
 
 
-def render_csv(runs: Sequence[RunResult]) -> str:
-    """One row per run: OTB scores (empty without ground truth), speed, states, MOT metrics."""
-    mot_keys = sorted({k for r in runs for k in r.mot})
+def render_csv(runs: Sequence[RunResult], failed: Sequence[FailedRun] = ()) -> str:
+    """One row per run: OTB scores (empty without ground truth), speed, states, MOT metrics
+    (those not named as a column already), the error of a run that stopped on one; then one
+    row per batch row without results (input, config, status and error only)."""
+    mot_keys = sorted({k for r in runs for k in r.mot} - set(CSV_COLUMNS))
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_COLUMNS + tuple(mot_keys))
@@ -251,6 +257,10 @@ def render_csv(runs: Sequence[RunResult]) -> str:
                    s.miss_flagged] if s else [None] * 10)
         row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
                run.frames_occluded, run.frames_lost, run.ground_truth,
-               str(run.folder)] + [run.mot.get(k) for k in mot_keys]
+               str(run.folder), run.error] + [run.mot.get(k) for k in mot_keys]
         writer.writerow([_cell(v) for v in row])
+    for row_without in failed:
+        writer.writerow([row_without.input, row_without.config, row_without.status]
+                        + [""] * (len(CSV_COLUMNS) - 4) + [row_without.error]
+                        + [""] * len(mot_keys))
     return buffer.getvalue()

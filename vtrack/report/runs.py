@@ -36,6 +36,7 @@ from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
 from vtrack.geometry import Box
 from vtrack.io.identity import sizes
+from vtrack.run import STATUS_COMPLETE
 
 
 @dataclass(frozen=True)
@@ -185,11 +186,13 @@ def pick_ground_truth(truths: Sequence[GroundTruth], name: str,
 
 @dataclass(frozen=True)
 class FailedRun:
-    """A batch row with no results (``failed`` in a batch ``summary.csv``)."""
+    """A batch row with no results: a run that failed before it wrote any, or one the batch
+    never ran (``interrupted`` before it started)."""
 
     input: str
     config: str
     error: str
+    status: str = STATUS_FAILED
 
 
 def _number(text: str | None) -> float | None:
@@ -390,8 +393,10 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
     return list(found)
 
 
-def failed_runs(paths: Iterable[Path]) -> list[FailedRun]:
-    """Rows of batch ``summary.csv`` files at or below ``paths`` that left no results."""
+def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = ()) -> list[FailedRun]:
+    """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
+    left no results (no run of ``reported`` has their input and configuration)."""
+    ran = {(run.input, run.config) for run in reported}
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
@@ -400,7 +405,10 @@ def failed_runs(paths: Iterable[Path]) -> list[FailedRun]:
                 continue
             rows = _read_csv(summary)
             if rows and tuple(rows[0]) == SUMMARY_COLUMNS:
-                failed += [FailedRun(r["input"], r["config"], r["error"]) for r in rows
-                           if r["status"] == STATUS_FAILED]
+                failed += [FailedRun(r["input"], r["config"],
+                                     r["error"] or "never ran (the batch stopped first)",
+                                     r["status"]) for r in rows
+                           if r["status"] != STATUS_COMPLETE
+                           and (r["input"], r["config"]) not in ran]
     return failed
 

@@ -43,6 +43,8 @@ from vtrack.scenes.scene import Scene, SceneSpec, Truth, assemble
 MIN_WIDTH, MIN_HEIGHT = 64, 48
 #: Largest scene (8K UHD): a frame is rendered whole in float32, ~400 MB at this size.
 MAX_WIDTH, MAX_HEIGHT = 7680, 4320
+#: The longest scene (an hour at 30 fps): its ground truth is computed before any frame.
+MAX_FRAMES = 108_000
 #: Sensor noise (grey levels, std) of the ordinary scenes.
 NOISE_SIGMA = 3.0
 #: Fewest frames the target spends fully hidden (occlusion) or fully out of view (leave_return).
@@ -530,7 +532,8 @@ def make_scene(
     The same arguments always give bit-identical frames and identical ground truth. Raises
     :class:`~vtrack.errors.ConfigError` for an unknown name (listing the valid ones), a seed
     below 0, a frame smaller than 64x48 or larger than 7680x4320, too few frames for the
-    scenario or a rate outside :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``.
+    scenario or more than :data:`MAX_FRAMES`, or a rate outside
+    :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``.
     """
     scenario = SCENARIOS.get(name)
     if scenario is None:
@@ -554,6 +557,8 @@ def make_scene(
         raise ConfigError(
             f"scenario {name!r} needs at least {scenario.min_frames} frames, got {spec.frames}"
         )
+    if spec.frames > MAX_FRAMES:
+        raise ConfigError(f"scene frames {spec.frames}: at most {MAX_FRAMES} (an hour at 30 fps)")
     if not (math.isfinite(spec.fps) and MIN_FPS <= spec.fps <= MAX_FPS):
         raise ConfigError(f"scene fps {spec.fps:g}: must be from {MIN_FPS:g} to {MAX_FPS:g}")
     return scenario.build(spec)

@@ -60,6 +60,10 @@ def _writing(path: Path, folder: bool = False) -> Iterator[None]:
     except (OSError, av.FFmpegError) as exc:
         reason = getattr(exc, "strerror", None) or str(exc)
         raise OutputError(f"{path}: cannot write ({reason})") from exc
+    except ValueError as exc:  # PyAV: no container format for the file's name
+        raise OutputError(f"{path}: no video container format for this file name ({exc}); "
+                          "name it .mp4, .mkv, .avi or .mov, or use --format images / raw"
+                          ) from exc
 
 
 def _progress(scene: Scene, enabled: bool, what: str) -> Iterable[np.ndarray]:
