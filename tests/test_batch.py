@@ -274,13 +274,19 @@ def test_batch_from_a_folder_holding_a_vtrack_folder(inputs: Path, tmp_path: Pat
     assert all(row["status"] == "complete" for row in rows.values())
 
 
+def clips_folder(tmp_path: Path, clip_factory: ClipFactory, *names: str) -> Path:
+    """A folder ``tmp_path/in`` holding a smooth clip and its ground truth under each name."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in names:
+        add_clip(folder, clip_factory, "smooth", name)
+    return folder
+
+
 def test_inputs_whose_results_folders_would_be_one_are_refused(tmp_path: Path,
                                                                clip_factory: ClipFactory) -> None:
     """`x y.mp4` and `x_y.mp4` were both written to `x_y/` (the second overwrote the first)."""
-    folder = tmp_path / "in"
-    folder.mkdir()
-    add_clip(folder, clip_factory, "smooth", "x y")
-    add_clip(folder, clip_factory, "smooth", "x_y")
+    folder = clips_folder(tmp_path, clip_factory, "x y", "x_y")
     result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "out"))
     assert result.exit_code != 0
     assert result.output.count("\n") == 1 and "Traceback" not in result.output
@@ -290,9 +296,7 @@ def test_inputs_whose_results_folders_would_be_one_are_refused(tmp_path: Path,
 
 def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
                                                   clip_factory: ClipFactory) -> None:
-    folder = tmp_path / "in"
-    folder.mkdir()
-    add_clip(folder, clip_factory, "smooth", "good")
+    folder = clips_folder(tmp_path, clip_factory, "good")
     (folder / "gone.mp4").symlink_to(tmp_path / "nowhere.mp4")
     shutil.copy(folder / "good.gt.txt", folder / "gone.gt.txt")
     os.mkfifo(folder / "pipe.mp4")
@@ -311,10 +315,7 @@ def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
 def test_more_jobs_than_runs_start_a_worker_per_run(tmp_path: Path,
                                                     clip_factory: ClipFactory) -> None:
     """`--jobs 1000` on four runs started a worker process per job slot and hung."""
-    folder = tmp_path / "in"
-    folder.mkdir()
-    add_clip(folder, clip_factory, "smooth", "a")
-    add_clip(folder, clip_factory, "jump", "b")
+    folder = clips_folder(tmp_path, clip_factory, "a", "b")
     config = load_config("s0")
     request = RunRequest(input=str(folder), out_dir=tmp_path / "out", config=config, video=False)
     batch_plan = plan(find_inputs(folder), {"s0": config}, tmp_path / "out", request)
