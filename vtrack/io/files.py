@@ -7,6 +7,7 @@ file is complete, so a complete-looking file is complete.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import re
 from pathlib import Path
@@ -40,11 +41,23 @@ def check_input_path(path: str) -> None:
         raise InputError(f"{path}: cannot be read (permission denied)")
 
 
+#: The most bytes (UTF-8) of a folder name :func:`folder_name` makes: file systems allow 255,
+#: and a run's temporary files add a few dozen to a name inside the folder.
+MAX_FOLDER_BYTES = 200
+
+
 def folder_name(text: str, fallback: str = "config") -> str:
     """``text`` as one safe folder name: characters other than letters, digits and ``._+-``
     become ``_`` (so ``/``, ``..`` and absolute paths cannot lead anywhere else), leading and
-    trailing dots are dropped; ``fallback`` when nothing is left (``.``, ``..``, empty)."""
-    return re.sub(r"[^\w.+-]+", "_", text).strip(".") or fallback
+    trailing dots are dropped; ``fallback`` when nothing is left (``.``, ``..``, empty). A
+    name longer than :data:`MAX_FOLDER_BYTES` keeps its start and ends with a digest of the
+    whole text (distinct texts stay distinct folders)."""
+    name = re.sub(r"[^\w.+-]+", "_", text).strip(".") or fallback
+    if len(name.encode("utf-8", "surrogateescape")) <= MAX_FOLDER_BYTES:
+        return name
+    digest = hashlib.sha256(text.encode("utf-8", "surrogateescape")).hexdigest()[:12]
+    head = name.encode("utf-8", "surrogateescape")[:MAX_FOLDER_BYTES - 13]
+    return f"{head.decode('utf-8', 'ignore')}-{digest}"
 
 
 def temp_path(path: Path) -> Path:
