@@ -11,6 +11,7 @@ import http.server
 import json
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -324,6 +325,38 @@ def test_follow_reads_a_growing_file_to_the_end_of_its_writing(tmp_path: Path) -
     expected = (tmp_path / "whole" / "track.csv").read_bytes()
     assert expected.count(b"\n") == 61
     assert (tmp_path / "grown" / "track.csv").read_bytes() == expected
+
+
+@pytest.mark.parametrize("probing", [True, False])
+def test_sigterm_while_a_followed_file_is_waited_for_ends_the_run(tmp_path: Path,
+                                                                  probing: bool) -> None:
+    """SIGTERM (`docker stop`, `timeout`) while `--follow` waited for more data to probe the
+    file was printed as an ignored exception (it was raised inside FFmpeg's read) and the run
+    waited on. Probing (FFmpeg's default probe size: more than the file holds) it ends with
+    nothing written; tracking (a 32-byte probe) it ends `interrupted` with what it tracked."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=30, fps=30)
+    whole = write_video(scene, tmp_path / "whole.ts", preset="veryfast")
+    growing = tmp_path / "growing.ts"
+    growing.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])  # the writer paused
+    out = tmp_path / "out"
+    probe = [] if probing else ["--input-option", "probesize=32"]
+    run = subprocess.Popen([sys.executable, "-m", "vtrack", "run", str(growing), "--follow",
+                            "600", *probe, "-c", "s2", "--init",
+                            ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o",
+                            str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        time.sleep(5.0)  # started, and waiting at the file's current end
+        run.send_signal(signal.SIGTERM)
+        _, stderr = run.communicate(timeout=30)
+    finally:
+        run.kill()
+    assert run.returncode == 128 + signal.SIGTERM, stderr
+    assert b"interrupted" in stderr and b"Exception ignored" not in stderr
+    if probing:
+        assert not out.exists()
+    else:
+        record = json.loads((out / "run.json").read_text())
+        assert record["status"] == "interrupted" and 0 < record["frames"] < 30
 
 
 def test_live_pacing_passes_over_what_a_slow_tracker_cannot_keep_up_with(

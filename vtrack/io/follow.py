@@ -19,21 +19,36 @@ class GrowingFile(io.RawIOBase):
         super().__init__()
         self._file = open(path, "rb", buffering=0)  # noqa: SIM115 (closed by close())
         self.idle_s = idle_s
+        #: What a signal raised while a read waited (Ctrl-C, SIGTERM): FFmpeg calls the read,
+        #: and PyAV would print and drop an exception raised there, so the read ends the
+        #: stream instead and the decoder's owner raises this once it sees the end.
+        self.interruption: BaseException | None = None
 
     def readable(self) -> bool:
         return True
 
     def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
+        if self.interruption is not None:
+            return 0
         quiet_since: float | None = None
-        while True:
-            got = self._file.readinto(buffer)
-            if got:
-                return got
-            now = time.monotonic()
-            quiet_since = now if quiet_since is None else quiet_since
-            if now - quiet_since >= self.idle_s or self.closed:
-                return 0
-            time.sleep(POLL_S)
+        try:
+            while True:
+                got = self._file.readinto(buffer)
+                if got:
+                    return got
+                now = time.monotonic()
+                quiet_since = now if quiet_since is None else quiet_since
+                if now - quiet_since >= self.idle_s or self.closed:
+                    return 0
+                time.sleep(POLL_S)
+        except BaseException as exc:  # a signal's exception, inside FFmpeg's call: kept
+            self.interruption = exc
+            return 0
+
+    def raise_interruption(self) -> None:
+        """Raise what a signal raised while a read waited, if one did."""
+        if self.interruption is not None:
+            raise self.interruption
 
     def close(self) -> None:
         self._file.close()

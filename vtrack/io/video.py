@@ -201,7 +201,10 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
         return av.open(sys.stdin.buffer, **kwargs)
     if "://" not in path:
         if how.follow_s is not None:
-            return av.open(GrowingFile(path, how.follow_s), **kwargs)
+            growing = GrowingFile(path, how.follow_s)
+            container = av.open(growing, **kwargs)
+            growing.raise_interruption()  # a signal while FFmpeg probed it
+            return container
         return av.open(path, **kwargs)
     scheme = path.split("://", 1)[0].lower()
     if scheme == "srt":
@@ -333,6 +336,8 @@ class VideoSource(Source):
                     self._damaged = True
                     continue
                 yield from frames
+            if isinstance(self._container.file, GrowingFile):  # a signal while it waited
+                self._container.file.raise_interruption()
         except av.error.ExitError:
             for frame in self._stream.decode(None):
                 frame.time_base = self._stream.time_base  # a flushed frame comes without one
