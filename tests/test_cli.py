@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -377,3 +378,18 @@ def test_a_start_frame_that_does_not_decode_is_refused(tmp_path: Path) -> None:
                    str(tmp_path / "b"))
     assert after.returncode == 0, after.stderr.decode()
     assert read_csv(tmp_path / "b" / "track.csv")[0]["frame"] == "11"
+
+
+def test_paths_holding_bytes_that_are_not_utf8_work(tmp_path: Path) -> None:
+    """An output folder named with a byte that is no UTF-8 (a Latin-1 file system's `\\xff`)
+    failed with a UnicodeEncodeError traceback, leaving a folder with only its lock."""
+    odd = os.fsdecode(b"\xff")
+    clip = tmp_path / f"in{odd}.mp4"
+    scene = make_scene("smooth", 0, 160, 120, 10, FPS)
+    write_video(scene, clip, preset="ultrafast")
+    out = tmp_path / f"out{odd}"
+    done = vtrack("run", str(clip), "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+                  "-o", str(out))
+    assert done.returncode == 0, done.stderr.decode(errors="replace")
+    assert len(read_csv(out / "track.csv")) == 10
+    assert json.loads((out / "run.json").read_text())["status"] == "complete"

@@ -108,7 +108,7 @@ class OutputFolder:
             os.close(fd)
         self._fd = fd
         command = " ".join(sys.argv[1:]) if len(sys.argv) > 1 else self.what
-        note = f"pid {os.getpid()}: vtrack {command}\n".encode()
+        note = f"pid {os.getpid()}: vtrack {command}\n".encode("utf-8", "surrogateescape")
         try:
             os.ftruncate(fd, 0)
             os.write(fd, note)
