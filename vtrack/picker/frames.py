@@ -113,11 +113,14 @@ class FrameStore:
 
 def read_frame(input_spec: str, index: int) -> np.ndarray:
     """Frame ``index`` (0-based) of an input as a BGR image; InputError naming the input and
-    its length when it has no such frame."""
+    its length when it has no such frame, or the next frame when that one does not decode."""
     last = -1
     with open_source(input_spec) as source:
         for frame in source:
             if frame.index == index:
                 return frame.bgr().copy()
+            if frame.index > index:
+                raise InputError(f"{input_spec}: frame {index} could not be decoded (damaged; "
+                                 f"the next that decodes is frame {frame.index})")
             last = frame.index
     raise InputError(f"{input_spec}: has no frame {index} (frames 0..{last})")
