@@ -123,3 +123,19 @@ def test_no_output_of_a_run_is_written_over_what_it_reads(tmp_path: Path) -> Non
         assert done.stderr.count("\n") == 1
     assert clip.read_bytes() == original and inside.read_bytes() == original
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_a_stream_file_holding_lines_is_replaced_only_with_overwrite(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    lines = tmp_path / "lines.jsonl"
+    args = ["run", str(clip), "--init", box, "--no-video", "--stream", str(lines)]
+    assert _vtrack(*args, "--out", str(tmp_path / "a")).returncode == 0
+    first = lines.read_bytes()
+    again = _vtrack(*args, "--out", str(tmp_path / "b"))
+    assert again.returncode == 2 and again.stderr.count("\n") == 1
+    assert f"--stream {lines}: holds {len(first)} bytes already" in again.stderr
+    assert lines.read_bytes() == first and not (tmp_path / "b").exists()
+    assert _vtrack(*args, "--out", str(tmp_path / "b"), "-y").returncode == 0
+    assert lines.read_bytes().count(b"\n") == 10

@@ -26,6 +26,7 @@ import math
 import os
 import platform
 import signal
+import stat
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -413,6 +414,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             _refuse_writing_over_inputs(request, _output_names(request, resolved))
             if not overwrite:
                 refuse_replacing(request.out_dir)
+                _refuse_replacing_stream(request.stream)
             with OutputFolder(request.out_dir) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
@@ -461,6 +463,21 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
     if stream is not None and any(stream.resolve() == output.resolve() for output, _ in outputs):
         raise ConfigError(f"--stream {stream}: is one of this run's own outputs; name another "
                           "file")
+
+
+def _refuse_replacing_stream(stream: str | None) -> None:
+    """OutputError when ``--stream`` names a file that holds something (an earlier run's
+    lines, or anything else): replaced only with ``--overwrite``. A pipe, a device or an empty
+    file is written to as it is."""
+    if stream in (None, STDOUT):
+        return
+    try:
+        held = os.stat(stream)
+    except OSError:
+        return
+    if stat.S_ISREG(held.st_mode) and held.st_size > 0:
+        raise OutputError(f"--stream {stream}: holds {plural(held.st_size, 'byte')} already; "
+                          "--overwrite (-y) replaces it")
 
 
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:

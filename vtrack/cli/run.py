@@ -101,7 +101,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
-                   "line then goes to stderr).")
+                   "line then goes to stderr). A file holding anything is replaced only with "
+                   "--overwrite.")
 @click.option("--stats-period", type=Seconds(min=0, max=3600), default=STATS_PERIOD,
               show_default=True, metavar="SECONDS",
               help="When stderr is not a terminal (a log): a progress line this often, instead "
