@@ -414,7 +414,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             _refuse_writing_over_inputs(request, _output_names(request, resolved))
             if not overwrite:
                 refuse_replacing(request.out_dir)
-                _refuse_replacing_stream(request.stream)
+                _refuse_replacing_stream(_stream_file(request))
             with OutputFolder(request.out_dir) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
@@ -452,7 +452,7 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
     file) is the input or the ground truth it reads, or the stream is one of its own outputs:
     ``--overwrite`` replaces an earlier run's results, never what this run reads."""
     outputs = [(request.out_dir / name, "--out") for name in names]
-    stream = None if request.stream in (None, STDOUT) else Path(request.stream)
+    stream = _stream_file(request)
     reads = [(Path(request.input), "the input"), (request.gt_path, "the ground truth")]
     for output, option in outputs + ([(stream, "--stream")] if stream else []):
         for source, what in reads:
@@ -465,11 +465,16 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
                           "file")
 
 
-def _refuse_replacing_stream(stream: str | None) -> None:
+def _stream_file(request: RunRequest) -> Path | None:
+    """The file ``--stream`` names (None: no stream, or stdout)."""
+    return None if request.stream in (None, STDOUT) else Path(request.stream)
+
+
+def _refuse_replacing_stream(stream: Path | None) -> None:
     """OutputError when ``--stream`` names a file that holds something (an earlier run's
     lines, or anything else): replaced only with ``--overwrite``. A pipe, a device or an empty
     file is written to as it is."""
-    if stream in (None, STDOUT):
+    if stream is None:
         return
     try:
         held = os.stat(stream)

@@ -114,18 +114,20 @@ class Tracker:
         start = None if box is None else as_box(box)
         if start is not None:
             check_init_box(start, first.width, first.height, "init_box")
-        pipeline = self._new_pipeline()
-        pipeline.begin(start)
-        self._pipeline, self._index, self._shape = pipeline, 0, None
+        self._begin(start)
         return self._process(first)
 
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
         if self._pipeline is None:
-            pipeline = self._new_pipeline()
-            pipeline.begin(None)  # ValueError-like ConfigError if the config needs a box
-            self._pipeline, self._index, self._shape = pipeline, 0, None
+            self._begin(None)  # ValueError-like ConfigError if the config needs a box
         return self._process(frame)
+
+    def _begin(self, box: Box | None) -> None:
+        """Fresh stages starting from ``box``; the next frame is the sequence's first."""
+        pipeline = self._new_pipeline()
+        pipeline.begin(box)
+        self._pipeline, self._index, self._shape = pipeline, 0, None
 
     def reset(self) -> None:
         """Forget the target: the next call must be :meth:`init` (or ``update`` for the

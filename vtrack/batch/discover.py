@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -80,9 +81,7 @@ def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
     clashing name is a full file name (:func:`find_inputs` then refuses the folder)."""
     names = {path: path.stem for path in videos}
     while True:
-        counts: dict[str, int] = {}
-        for name in [*taken, *names.values()]:
-            counts[_folder(name)] = counts.get(_folder(name), 0) + 1
+        counts = Counter(_folder(name) for name in [*taken, *names.values()])
         clashing = [p for p, name in names.items()
                     if counts[_folder(name)] > 1 and name != p.name]
         if not clashing:

@@ -11,6 +11,8 @@ import click
 #: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
 #: any rate.
 MAX_SECONDS = 366 * 24 * 3600.0
+#: The longest wait an option sets (--follow, --worker-timeout, --scheduler-timeout): a day.
+MAX_WAIT_S = 24 * 3600.0
 
 
 class Seconds(click.FloatRange):

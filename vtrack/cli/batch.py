@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from vtrack.cli._options import Seconds, gt_origin_option
+from vtrack.cli._options import MAX_WAIT_S, Seconds, gt_origin_option
 from vtrack.cli._paths import OUT_PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 #: The most local worker processes ``--jobs`` starts (each a Python process with its own
 #: decoder and chain of stages: far more than any machine has cores for).
 MAX_JOBS = 512
+
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
     """Add ``vtrack run``'s own options of these parameter names (same flags, help, defaults)."""
@@ -84,10 +85,10 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask distributed scheduler (tcp://host:8786) instead; workers "
                    "must see the input and output paths. Needs: pip install 'vtrack[dask]'.")
-@click.option("--scheduler-timeout", type=Seconds(min=0.1, max=86400), default=10.0,
+@click.option("--scheduler-timeout", type=Seconds(min=0.1, max=MAX_WAIT_S), default=10.0,
               show_default=True, metavar="SECONDS", help="Give up connecting to --scheduler "
                                                          "after this long.")
-@click.option("--worker-timeout", type=Seconds(min=0, max=86400, min_open=True), default=60.0,
+@click.option("--worker-timeout", type=Seconds(min=0, max=MAX_WAIT_S, min_open=True), default=60.0,
               show_default=True, metavar="SECONDS",
               help="With --scheduler and no worker connected: say so, wait this long for one, "
                    "then give up (exit 2).")

@@ -147,6 +147,10 @@ def _img(path: str, alt: str) -> str:
     return f'<img src="{_e(path)}" alt="{_e(alt)}" loading="lazy">'
 
 
+#: The heading of the batch rows that left no results.
+NO_RESULTS = "Runs without results (failed, or never ran)"
+
+
 def render_html(page: Page) -> str:
     """The whole page: plots are ``<img>`` of PNG files beside it (relative paths)."""
     parts = [f"<h1>{_e(page.title)}</h1>", f'<p class="meta">{_e(page.meta)}</p>']
@@ -227,9 +231,6 @@ def render_markdown(page: Page) -> str:
 # --- CSV -------------------------------------------------------------------------------------
 
 #: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
-#: The heading of the batch rows that left no results.
-NO_RESULTS = "Runs without results (failed, or never ran)"
-#: The report's ``summary.csv`` columns (a multi-target run's metrics follow them).
 CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
                "success50", "success75", "norm_precision",
                "mean_overlap", "mean_center_error", "tracking_miss", "miss_flagged", "fps",

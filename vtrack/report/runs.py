@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.batch import STATUS_FAILED, SUMMARY_COLUMNS
+from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
@@ -192,7 +192,7 @@ class FailedRun:
     input: str
     config: str
     error: str
-    status: str = STATUS_FAILED
+    status: str
 
 
 def _number(text: str | None) -> float | None:
