@@ -70,6 +70,7 @@ def _open(page: Path, tmp_path: Path) -> tuple[Any, Any]:
 def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
                                                                   tmp_path: Path) -> None:
     browser, By = _open(report / "index.html", tmp_path)
+    from selenium.webdriver.support.ui import WebDriverWait
     try:
         table = browser.find_element(By.CSS_SELECTOR, "#results + .scroll table")
         headers = table.find_elements(By.TAG_NAME, "th")
@@ -88,8 +89,12 @@ def test_a_click_sorts_the_table_and_the_failure_thumbnails_load(report: Path,
         thumbnails = [i for i in browser.find_elements(By.TAG_NAME, "img")
                       if "failures_" in i.get_attribute("src")]
         assert thumbnails
-        for image in thumbnails:
+        for image in thumbnails:  # loading="lazy": each loads once scrolled into view
+            browser.execute_script("arguments[0].scrollIntoView()", image)
+            WebDriverWait(browser, 20).until(
+                lambda b, image=image: b.execute_script("return arguments[0].complete", image))
             assert browser.execute_script("return arguments[0].naturalWidth", image) > 600
+        browser.execute_script("window.scrollTo(0, 0)")
         # the page fits a 1400 px window: nothing wider than the body
         assert browser.execute_script(
             "return document.documentElement.scrollWidth <= window.innerWidth")
