@@ -315,6 +315,39 @@ def test_truncated_video_yields_good_frames_then_partial_error(tmp_path):
         assert "\n" not in message
 
 
+def test_a_later_matroska_segment_is_whole_and_its_cut_half_is_not(tmp_path):
+    """``ffmpeg -c copy -f segment`` to .mkv: a part after the first starts at t > 0, and
+    FFmpeg's Matroska muxer writes its last timestamp as the duration; the whole part was
+    reported as truncated, promised to run to start + duration."""
+    whole = tmp_path / "clip.mp4"
+    with av.open(str(whole), "w") as out:  # a key frame every 15 frames, where parts may start
+        stream = out.add_stream("libx264", rate=30, options={"preset": "ultrafast", "g": "15"})
+        stream.width, stream.height, stream.pix_fmt = W, H, "yuv420p"
+        for img in pictures(60):
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(img, format="bgr24")))
+        out.mux(stream.encode(None))
+    with av.open(str(whole)) as source, av.open(
+            str(tmp_path / "part%d.mkv"), "w", format="segment",
+            options={"segment_time": "1", "segment_format": "matroska"}) as parts:
+        stream = parts.add_stream_from_template(source.streams.video[0])
+        for packet in source.demux(video=0):
+            if packet.dts is not None:
+                packet.stream = stream
+                parts.mux(packet)
+    part = tmp_path / "part1.mkv"
+    with av.open(str(part)) as container:
+        assert container.start_time > 0  # the case: a part that does not start at 0
+    with open_source(str(part)) as source:
+        frames = list(source)
+        assert source.frames_skipped == 0 and not source.warnings
+    assert [f.time_s for f in frames] == pytest.approx([i / 30 for i in range(30)], abs=1e-3)  # ms
+    cut = tmp_path / "cut.mkv"
+    data = part.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    with open_source(str(cut)) as source, pytest.raises(PartialInputError):
+        list(source)
+
+
 def test_corrupt_packets_mid_stream_are_skipped(tmp_path):
     """Issue 11 item 7: damage in the middle is skipped as ffmpeg skips it; the frames after it
     keep their places and the source counts what was lost."""

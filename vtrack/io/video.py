@@ -50,6 +50,9 @@ from vtrack.machine import cpu_count
 #: display order) labelled with their packets' times, out of order. A frame's time there is
 #: its place over the frame rate, as FFmpeg's own frame counting does.
 FRAME_ORDER_FORMATS = frozenset({"avi"})
+#: Containers (FFmpeg's format names) whose duration FFmpeg's muxer writes as the last
+#: timestamp rather than the length: a file starting at t > 0 ends at its duration.
+END_AS_DURATION_FORMATS = frozenset({"matroska,webm"})
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 #: FFmpeg's AVCOL_RANGE_JPEG: a picture whose levels use the full 0..255 range.
@@ -355,6 +358,10 @@ class VideoSource(Source):
             return float((stream.start_time or 0) * stream.time_base + stream.duration *
                          stream.time_base)
         if container.duration and len(container.streams) == 1:
+            if container.format.name in END_AS_DURATION_FORMATS:
+                # FFmpeg's Matroska muxer records the last timestamp as the duration, which is
+                # the end when the timestamps do not start at 0 (`-f segment`'s later parts)
+                return max(container.start_time or 0, container.duration) / av.time_base
             return ((container.start_time or 0) + container.duration) / av.time_base
         return None
 
