@@ -3,6 +3,7 @@ as if it were whole: the run is left out with one warning naming the file."""
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -56,3 +57,81 @@ def test_a_cut_track_csv_is_left_out_with_a_warning(run_dir: Path, tmp_path: Pat
     assert code != 0  # the only run is left out: nothing to report
     assert "track.csv" in stderr and "cut or edited" in stderr, stderr
     assert f"{FRAMES} frames" in stderr or "bytes" in stderr, stderr
+
+
+@pytest.mark.parametrize("damage", [
+    {"config": 5}, {"input": "clip.mp4"}, {"frames": 1e999}, {"timing": []}, {"summary": "x"},
+    "[" * 100_000 + "]" * 100_000, [1, 2],
+], ids=["config", "input", "frames", "timing", "summary", "deep", "list"])
+def test_a_hand_damaged_run_json_is_left_out_and_the_other_runs_reported(
+        run_dir: Path, tmp_path: Path, damage: dict | str | list) -> None:
+    damaged = tmp_path / "damaged"
+    damaged.mkdir()
+    (damaged / "track.csv").write_bytes((run_dir / "track.csv").read_bytes())
+    record = json.loads((run_dir / "run.json").read_text())
+    (damaged / "run.json").write_text(
+        damage if isinstance(damage, str)
+        else json.dumps({**record, **damage} if isinstance(damage, dict) else damage))
+    result = vtrack("report", str(damaged), str(run_dir), "-o", str(tmp_path / "rep"), "-q")
+    stderr = result.stderr.decode()
+    assert result.returncode == 0 and "Traceback" not in stderr, stderr
+    assert stderr.strip() == (f"vtrack: warning: left out: {damaged / 'run.json'}: "
+                              "not a vtrack run record")
+    rows = (tmp_path / "rep" / "summary.csv").read_text().splitlines()
+    assert len(rows) == 2  # the whole run
+
+
+def test_a_ground_truth_changed_after_the_run_is_not_used_to_rescore(
+        run_dir: Path, tmp_path: Path) -> None:
+    """The report rescored the run's boxes against its recorded ground truth file as it is now;
+    one edited after the run gave other scores without a word."""
+    record = json.loads((run_dir / "run.json").read_text())
+    truth = Path(record["request"]["gt"])
+    copy = tmp_path / "run"
+    copy.mkdir()
+    for name in ("run.json", "track.csv"):
+        (copy / name).write_bytes((run_dir / name).read_bytes())
+    code, stderr = report(copy, tmp_path / "before")
+    before = summary_row(tmp_path / "before")
+    assert code == 0 and "changed" not in stderr, stderr
+    original = truth.read_bytes()
+    try:
+        lines = original.decode().splitlines()
+        shifted = [",".join(str(float(v) + 9 * (i == 0)) for i, v in enumerate(line.split(",")))
+                   for line in lines]
+        truth.write_text("\n".join(shifted) + "\n")
+        code, stderr = report(copy, tmp_path / "after")
+    finally:
+        truth.write_bytes(original)
+    assert code == 0
+    assert f"the ground truth {truth} changed after the run" in stderr, stderr
+    after = summary_row(tmp_path / "after")  # the recorded overlaps: 4 decimals
+    assert float(after["auc"]) == pytest.approx(float(before["auc"]), abs=0.005)
+    assert (after["precision20"], after["success50"]) == (before["precision20"],
+                                                          before["success50"])
+
+
+def summary_row(report_dir: Path) -> dict[str, str]:
+    with (report_dir / "summary.csv").open(newline="") as handle:
+        (row,) = csv.DictReader(handle)
+    return row
+
+
+def test_a_batch_resumes_past_a_hand_damaged_run_json(run_dir: Path, tmp_path: Path) -> None:
+    """A ``run.json`` whose summary is not an object stopped the resumed batch with a
+    traceback; it is a record of no complete run: the pair is not resumed, one line says why."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for name in ("clip.mp4", "clip.gt.txt"):
+        (inputs / name).write_bytes((run_dir.parent / name).read_bytes())
+    args = ("batch", str(inputs), "-c", "s0", "--no-video", "-j", "1", "-o", str(tmp_path / "out"))
+    assert vtrack(*args).returncode == 0
+    record_path = tmp_path / "out" / "clip" / "s0" / "run.json"
+    record = json.loads(record_path.read_text())
+    record_path.write_text(json.dumps({**record, "summary": None}))
+    again = vtrack(*args)
+    stderr = again.stderr.decode()
+    assert again.returncode == 1 and "Traceback" not in stderr, stderr
+    assert "clip [s0]: failed:" in stderr and "--overwrite" in stderr, stderr
+    assert vtrack(*args, "-y").returncode == 0  # replaced when asked
+    assert json.loads(record_path.read_text())["summary"]["frames"] == FRAMES

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -15,7 +14,7 @@ from vtrack.errors import InputError, OutputError
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact
-from vtrack.io.limits import RECORD_BYTES, read_bounded
+from vtrack.io.jsonfile import read_run_record
 from vtrack.io.outdir import refuse_replacing
 from vtrack.io.sidecar import read_sidecar, sidecar_path
 from vtrack.pipeline import Pipeline
@@ -30,9 +29,9 @@ def _record(request: RunRequest, since: float | None = None) -> dict[str, Any] |
     try:
         if since is not None and path.stat().st_mtime < since:
             return None
-        record = json.loads(read_bounded(path, RECORD_BYTES).decode("utf-8"))
+        record = read_run_record(path)
         return record if request.same_run(record["request"]) else None
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, InputError):
+    except (OSError, KeyError, InputError):
         return None
 
 
@@ -67,7 +66,7 @@ def completed_summary(request: RunRequest) -> RunSummary | None:
     record = _record(request)
     if record is None or record.get("status") != STATUS_COMPLETE:
         return None
-    csv_name = "tracks.csv" if record.get("summary", {}).get("multi_target") else "track.csv"
+    csv_name = "tracks.csv" if (record.get("summary") or {}).get("multi_target") else "track.csv"
     required = [csv_name] + (["annotated.mp4"] if request.video else [])
     if (record.get("identity") != request.file_identities()
             or not outputs_intact(request.out_dir, record, required)):

@@ -1,4 +1,5 @@
-"""Atomic, pretty-printed JSON (``run.json``): readers never see a half-written file."""
+"""Atomic, pretty-printed JSON (``run.json``): readers never see a half-written file; and a
+``run.json`` read back only when it has the shape vtrack writes."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from typing import Any
 
 import numpy as np
 
+from vtrack.errors import InputError
 from vtrack.io.files import write_text_atomic
+from vtrack.io.limits import RECORD_BYTES, read_bounded
 
 
 def to_jsonable(value: Any) -> Any:
@@ -38,3 +41,26 @@ def to_jsonable(value: Any) -> Any:
 def write_json(path: Path | str, data: Any) -> None:
     """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``), indented."""
     write_text_atomic(Path(path), json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n")
+
+
+#: The parts of a ``run.json`` record that are JSON objects when present.
+RECORD_OBJECTS = ("request", "summary", "config", "input", "timing", "identity", "output_bytes",
+                  "metrics")
+
+
+def read_run_record(path: Path) -> dict[str, Any]:
+    """The ``run.json`` at ``path`` as a dict whose :data:`RECORD_OBJECTS` are dicts (or
+    absent/null) and whose ``frames`` is a whole number. Raises InputError naming the file when
+    it cannot be read, is larger than :data:`RECORD_BYTES`, or is not such a record (a file
+    edited by hand: not JSON, nested too deep, a part of the wrong type)."""
+    data = read_bounded(path, RECORD_BYTES, "run record")
+    try:
+        record = json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError):
+        record = None
+    frames = record.get("frames", 0) if isinstance(record, dict) else None
+    if (not isinstance(record, dict)
+            or any(not isinstance(record.get(k), dict | None) for k in RECORD_OBJECTS)
+            or not (frames is None or (isinstance(frames, int) and frames >= 0))):
+        raise InputError(f"{path}: not a vtrack run record")
+    return record

@@ -20,7 +20,6 @@ nowhere else.
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -35,7 +34,8 @@ from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
 from vtrack.geometry import Box
-from vtrack.io.identity import sizes
+from vtrack.io.identity import file_identity, sizes
+from vtrack.io.jsonfile import read_run_record
 from vtrack.run import STATUS_COMPLETE
 
 
@@ -295,24 +295,17 @@ def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
                          "after the run); not scored")
 
 
-def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
-    """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
-    (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
+def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
+    """Whether the file the run recorded as its ``role`` (``input``, ``gt``) now has another
+    identity (size, modification time) than the one ``run.json`` recorded; False when the
+    run recorded none (an older record, or not a regular file)."""
+    recorded = (record.get("identity") or {}).get(role)
+    return recorded is not None and file_identity(path) != recorded
 
-    Raises InputError naming the file when ``run.json`` or the CSV cannot be read, or the CSV
-    is not what the run wrote (another size than recorded, or another number of rows than
-    the frames recorded: cut or edited).
-    """
-    record_path = folder / "run.json"
-    try:
-        record = json.loads(record_path.read_text(encoding="utf-8"))
-        summary = record.get("summary") or {}
-        request = record.get("request") or {}
-    except OSError as exc:
-        raise InputError(f"{record_path}: cannot read ({exc.strerror or exc})") from None
-    except (ValueError, AttributeError):
-        raise InputError(f"{record_path}: not a vtrack run record") from None
-    result = RunResult(
+
+def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -> RunResult:
+    """What ``run.json`` says of a run (its scores are read after)."""
+    return RunResult(
         folder=folder,
         input=_input_name(record, folder),
         config=str((record.get("config") or {}).get("name") or summary.get("config") or "?"),
@@ -325,6 +318,24 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
     )
+
+
+def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
+    """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
+    (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
+
+    Raises InputError naming the file when ``run.json`` or the CSV cannot be read, or the CSV
+    is not what the run wrote (another size than recorded, or another number of rows than
+    the frames recorded: cut or edited).
+    """
+    record_path = folder / "run.json"
+    record = read_run_record(record_path)
+    summary = record.get("summary") or {}
+    request = record.get("request") or {}
+    try:
+        result = _run_result(folder, record, summary)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{record_path}: not a vtrack run record") from None
     if result.multi_target:
         _check_whole(folder, record, "tracks.csv")
         result.mot = dict(record.get("metrics") or {})
@@ -344,7 +355,12 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.boxes, result.first_frame = _boxes(rows), start
         if not request.get("raw") and request.get("input") not in (None, "-"):
             result.source = str(request["input"])
-        if request.get("gt"):
+        if request.get("gt") and _changed_since_run(record, "gt", str(request["gt"])):
+            result.ground_truth = str(request["gt"])
+            result.overlaps, result.errors = _recorded_scores(rows)
+            result.note = (f"{folder}: the ground truth {request['gt']} changed after the run; "
+                           "scored with the overlaps the run recorded")
+        elif request.get("gt"):
             result.ground_truth = str(request["gt"])
             (result.overlaps, result.errors), result.truth = _rescored(rows, request, start)
             if result.truth is not None:
@@ -369,7 +385,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
                                                                       result.truth)
                 result.norm_errors = metrics.normalized_center_errors(result.boxes,
                                                                       result.truth)
-    except (KeyError, ValueError, TypeError) as exc:
+    except (KeyError, ValueError, TypeError, OverflowError) as exc:
         raise InputError(f"{folder / 'track.csv'}: not a vtrack track.csv ({exc})") from None
     return result
 
