@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +11,8 @@ import pytest
 
 import vtrack
 from vtrack.geometry import center_error
-from vtrack.scenes import make_scene, write_video
+from vtrack.run import run
+from vtrack.scenes import make_scene, write_groundtruth, write_image_sequence, write_video
 
 
 def test_track_a_path_and_frames_follow_the_target_alike(tmp_path: Path) -> None:
@@ -67,3 +70,31 @@ def test_frame_types_are_exported_and_construct_frames() -> None:
     for frame in (vtrack.BgrFrame(0, 0.0, bgr), vtrack.GrayFrame(0, 0.0, bgr[:, :, 0].copy())):
         assert isinstance(frame, vtrack.Frame) and (frame.width, frame.height) == (32, 24)
     assert {"Box", "Frame", "BgrFrame", "GrayFrame", "I420Frame", "track"} <= set(vtrack.__all__)
+
+
+def test_a_run_request_is_tracked_from_its_start_with_its_ground_truths_box(
+        tmp_path: Path) -> None:
+    """``vtrack.track(RunRequest)`` tracked frames 0.. with frame ``start``'s box, and without
+    ``init_box`` refused although the request names a ground truth (as ``vtrack run`` takes it)."""
+    scene = make_scene("smooth", seed=4, width=160, height=120, frames=40, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    gt = tmp_path / "clip.gt.txt"
+    write_groundtruth(scene, gt)
+    request = vtrack.RunRequest(str(clip), tmp_path / "unused", vtrack.load_config("s0"),
+                                gt_path=str(gt), start=20, max_frames=5)
+    results = list(vtrack.track(request))
+    assert [r.index for r in results] == list(range(20, 25))
+    assert center_error(results[0].box, scene.boxes[20]) < 1.0
+    from_cli = tmp_path / "cli"
+    run(replace(request, out_dir=from_cli, video=False))
+    with (from_cli / "track.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(row["frame"]) for row in rows] == [r.index for r in results]
+    assert [round(float(row["x"]), 2) for row in rows] == [round(r.box.x, 2) for r in results]
+
+
+def test_an_image_folder_is_timed_at_the_frame_rate_given(tmp_path: Path) -> None:
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    times = [r.time_s for r in vtrack.track(folder, "s0", scene.boxes[0], fps=10)]
+    assert times == pytest.approx([i / 10 for i in range(10)])

@@ -155,3 +155,30 @@ def test_a_frame_of_another_size_mid_sequence_is_refused(config: str) -> None:
         assert tracker.update(np.zeros((60, 80, 3), np.uint8)).index == 0  # any size now
     else:
         assert tracker.init(_frames()[0], (50, 40, 40, 30)).index == 0
+
+
+def test_keyword_parameters_take_python_and_numpy_values_as_a_config_file_does() -> None:
+    """A text value (``kalman__model="ca"``) was quoted and refused, a NumPy integer too."""
+    tracker = vtrack.Tracker("s0", kalman__model="ca", meanshift__iterations=np.int64(7),
+                             **{"occlusion.threshold": np.float32(0.25)})
+    values = dict(tracker.config.stages)
+    assert values["kalman"]["model"] == "ca" and values["meanshift"]["iterations"] == 7
+    assert values["occlusion"]["threshold"] == pytest.approx(0.25)
+    with pytest.raises(ConfigError, match="'model' must be one of 'cv', 'ca', 'gravity', got 'zz'"):
+        vtrack.Tracker("s0", kalman__model="zz")
+    with pytest.raises(ConfigError, match="'iterations' must be an integer, got '7'"):
+        vtrack.Tracker("s0", meanshift__iterations="7")
+    assert vtrack.Tracker(None).config.name == vtrack.load_config(None).name
+
+
+def test_a_tracker_whose_first_frame_failed_is_not_started() -> None:
+    """After ``init`` raised on its frame, ``update`` met half-started stages (AttributeError)."""
+    tracker = vtrack.Tracker("s0")
+    grey_black = np.zeros((120, 160, 3), np.uint8)
+    with pytest.raises(InputError, match="no pixel of the initial box"):
+        tracker.init(grey_black, (10, 10, 20, 20))
+    with pytest.raises(ConfigError, match="needs an initial box"):
+        tracker.update(grey_black)
+    coloured = grey_black.copy()
+    coloured[40:60, 50:80] = (0, 0, 230)
+    assert tracker.init(coloured, (50, 40, 30, 20)).index == 0  # starts afresh

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Iterator, Sequence
-from itertools import islice
 from typing import Any
 
 import numpy as np
@@ -26,7 +25,8 @@ FrameInput = str | os.PathLike[str] | RunRequest | Iterable[Frame] | Iterable[np
 BoxInput = Box | Sequence[float]
 
 
-def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_CONFIG,
+def track(frames: FrameInput,
+          config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG,
           init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0,
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
@@ -46,13 +46,17 @@ def track(frames: FrameInput, config: str | os.PathLike[str] | Config = DEFAULT_
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
         with open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
                          live=request.live) as source:
-            yield from _run(tracker, islice(source, request.frame_limit(source.info.fps)),
-                            request.init_box)
+            from vtrack.run import requested_frames  # the run machinery only for a request
+
+            box, requested = requested_frames(request, source)
+            yield from _run(tracker, requested, box)
         return
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)
     if isinstance(frames, str | os.PathLike):
-        with open_source(os.fspath(frames)) as source:
+        path = os.fspath(frames)
+        # an image folder is timed at fps; a video keeps its own timestamps
+        with open_source(path, fps=fps if os.path.isdir(path) else None) as source:
             yield from _run(tracker, source, box)
     else:
         yield from _run(tracker, frames, box)

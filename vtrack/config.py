@@ -19,10 +19,13 @@ Everything is checked at load time; errors name the file, the stage and the para
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
@@ -54,12 +57,27 @@ class Config:
 
     def with_overrides(self, assignments: list[str]) -> Config:
         """Apply ``stage.param=value`` strings (``--set``); the stage must be in the chain."""
-        stages = [(name, dict(values)) for name, values in self.stages]
+        changes = []
         for text in assignments:
-            where = f"--set {text}"
             key, sep, raw = text.partition("=")
+            if not sep:
+                raise ConfigError(f"--set {text}: expected stage.param=value")
+            changes.append((key, raw.strip(), f"--set {text}", True))
+        return self._changed(changes)
+
+    def with_values(self, values: Mapping[str, Any]) -> Config:
+        """Apply ``{"stage.param": value}`` Python values (the API's keyword overrides), each
+        checked as a config file's value is (a NumPy scalar counts as its Python number)."""
+        return self._changed([(key, value.item() if isinstance(value, np.generic) else value,
+                               f"{key}={value!r}", False) for key, value in values.items()])
+
+    def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
+        """This chain with each ``(stage.param, value, where, is_text)`` applied: text is
+        parsed as ``--set`` parses it, other values are validated as they are."""
+        stages = [(name, dict(values)) for name, values in self.stages]
+        for key, given, where, is_text in changes:
             stage_name, dot, param_name = key.strip().partition(".")
-            if not sep or not dot or not stage_name or not param_name:
+            if not dot or not stage_name or not param_name:
                 raise ConfigError(f"{where}: expected stage.param=value")
             matches = [values for name, values in stages if name == stage_name]
             if not matches:
@@ -72,7 +90,8 @@ class Config:
                     f"{where}: stage '{stage_name}' has no parameter {param_name!r} "
                     f"(parameters: {known})"
                 )
-            value = declared[param_name].parse(raw.strip(), f"{where}: stage '{stage_name}'")
+            param, place = declared[param_name], f"{where}: stage '{stage_name}'"
+            value = param.parse(given, place) if is_text else param.validate(given, place)
             for values in matches:
                 values[param_name] = value
         config = Config(self.name, self.source, self.description, stages)

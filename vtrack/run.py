@@ -566,6 +566,16 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
                      request.file_identities(), start, request.frame_limit(fps))
 
 
+def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, Iterator[Frame]]:
+    """What ``request`` tracks of ``source``, as ``vtrack run`` takes it: the initial box
+    (``--init``, else the input's sidecar, else the ground truth's box of the first frame
+    tracked) and the frames from ``--start`` on, at most ``--frames`` of them. ConfigError or
+    InputError as ``vtrack run`` gives them (no box for a tracker that needs one, ...)."""
+    resolved = _resolve(request, source.info.fps)
+    return resolved.init_box, _limited(_from(iter(source), resolved.start, request.input),
+                                       resolved.max_frames)
+
+
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
            signals: _Signals, on_frame: Callable[[int], None] | None,
            folder: OutputFolder) -> _Tracked:

@@ -76,20 +76,22 @@ def as_box(box: Box | Any) -> Box:
 class Tracker:
     """A per-frame tracker over any shipped or own config.
 
-    ``params`` override the config's parameters as ``--set`` does, keyed ``"stage.param"``
-    or ``stage__param`` (``Tracker("s0", meanshift__iterations=10)``). Results are
+    ``params`` override the config's parameters, keyed ``"stage.param"`` or ``stage__param``
+    (``Tracker("s0", meanshift__iterations=10, kalman__model="ca")``), Python (or NumPy)
+    values checked as a config file's are; ``config`` None is the default config. Results are
     :class:`FrameResult`: ``box`` (None while lost), ``state``, ``score``, ``extras`` and, for
     the multi-target configs (s3, s4_multi), ``tracks``. A result keeps its decoded frame only
     with ``keep_frames=True``, so memory stays flat over any number of frames.
     """
 
-    def __init__(self, config: str | os.PathLike[str] | Config = DEFAULT_CONFIG, *, seed: int = 0,
-                 fps: float = 30.0, keep_frames: bool = False, **params: Any) -> None:
-        chain = config if isinstance(config, Config) else load_config(os.fspath(config))
+    def __init__(self, config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG, *,
+                 seed: int = 0, fps: float = 30.0, keep_frames: bool = False,
+                 **params: Any) -> None:
+        chain = (config if isinstance(config, Config)
+                 else load_config(None if config is None else os.fspath(config)))
         if params:
-            chain = chain.with_overrides(
-                [f"{key.replace('__', '.', 1)}={_toml_value(value)}"
-                 for key, value in params.items()])
+            chain = chain.with_values({key.replace("__", ".", 1): value
+                                       for key, value in params.items()})
         self.config = chain
         self.seed = check_seed(seed)
         self.fps = checked_fps(fps, "fps")
@@ -114,20 +116,25 @@ class Tracker:
         start = None if box is None else as_box(box)
         if start is not None:
             check_init_box(start, first.width, first.height, "init_box")
-        self._begin(start)
-        return self._process(first)
+        return self._begin(start, first)
 
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
         if self._pipeline is None:
-            self._begin(None)  # ValueError-like ConfigError if the config needs a box
+            return self._begin(None, frame)  # ConfigError if the config needs a box
         return self._process(frame)
 
-    def _begin(self, box: Box | None) -> None:
-        """Fresh stages starting from ``box``; the next frame is the sequence's first."""
+    def _begin(self, box: Box | None, frame: FrameLike) -> FrameResult:
+        """Fresh stages starting from ``box`` on ``frame``, the sequence's first; when they
+        cannot start there (an error), the tracker is left as :meth:`reset` leaves it."""
         pipeline = self._new_pipeline()
         pipeline.begin(box)
         self._pipeline, self._index, self._shape = pipeline, 0, None
+        try:
+            return self._process(frame)
+        except BaseException:
+            self.reset()
+            raise
 
     def reset(self) -> None:
         """Forget the target: the next call must be :meth:`init` (or ``update`` for the
@@ -154,12 +161,3 @@ class Tracker:
 def _looks(shape: tuple[int, int, bool]) -> str:
     width, height, grey = shape
     return f"{width}x{height} {'grey' if grey else 'colour'}"
-
-
-def _toml_value(value: Any) -> str:
-    """A Python value as the TOML literal ``--set`` takes."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return repr(value)
