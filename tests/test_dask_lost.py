@@ -60,6 +60,28 @@ def test_a_silent_peer_times_out(folder: Path, tmp_path: Path) -> None:
     one_error(result, address, "no answer within 2 s")
 
 
+def test_a_peer_that_speaks_another_protocol_first_is_one_line(folder: Path,
+                                                               tmp_path: Path) -> None:
+    """An SSH banner read as Dask's frame sizes asked NumPy for 2.8 EiB: a traceback."""
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(8)
+
+        def greet() -> None:
+            while True:
+                try:
+                    peer = server.accept()[0]
+                except OSError:
+                    return
+                peer.sendall(b"SSH-2.0-OpenSSH_9.2p1\r\n")
+
+        threading.Thread(target=greet, daemon=True).start()
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        result = vtrack("batch", str(folder), "--scheduler", address, "--scheduler-timeout", "3",
+                        "-o", str(tmp_path / "out"))
+    one_error(result, address, "not a Dask scheduler")
+
+
 def test_a_malformed_address_is_one_line(folder: Path, tmp_path: Path) -> None:
     one_error(vtrack("batch", str(folder), "--scheduler", "tcp://[::zz]:x",
                      "--scheduler-timeout", "2", "-o", str(tmp_path / "out")), "[::zz]")

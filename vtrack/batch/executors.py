@@ -289,19 +289,28 @@ class DaskExecutor:
 def _probe(address: str, timeout_s: float) -> None:
     """Ask the scheduler at ``address`` who it is, within ``timeout_s`` in all (connecting,
     the handshake, the answer): a peer that accepts and stays silent, or a port that is not a
-    scheduler's (the dashboard's HTTP), raises TimeoutError or OSError here, before a Client
-    (whose own timeout does not cover them) exists."""
+    scheduler's (the dashboard's HTTP, a server that speaks another protocol first) raises
+    TimeoutError or OSError here, before a Client (whose own timeout does not cover them)
+    exists."""
     import asyncio
 
     from distributed.comm import connect
 
-    async def identity() -> None:
-        comm = await connect(address, timeout=timeout_s)
+    async def ask() -> object:
+        comm = await connect(address, timeout=timeout_s)  # (the handshake is read here)
         try:
             await comm.write({"op": "identity", "reply": True})
-            reply = await comm.read()
+            return await comm.read()
         finally:
             comm.abort()
+
+    async def identity() -> None:
+        try:
+            reply = await ask()
+        except (OSError, TimeoutError, asyncio.CancelledError):
+            raise
+        except Exception:  # another protocol's bytes read as Dask's frames (sizes, msgpack)
+            raise OSError("not a Dask scheduler") from None
         if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
             raise OSError("not a Dask scheduler")
 
