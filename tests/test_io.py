@@ -30,7 +30,12 @@ from vtrack.io import (
 )
 from vtrack.io.files import temp_path
 from vtrack.io.threads import Prefetcher
-from vtrack.io.video import DECODER_PICTURE_BUDGET, MIN_DECODER_THREADS, decoder_threads
+from vtrack.io.video import (
+    DECODER_PICTURE_BUDGET,
+    MIN_DECODER_THREADS,
+    FFmpegInput,
+    decoder_threads,
+)
 from vtrack.machine import cpu_count
 from vtrack.pipeline import FrameResult
 from vtrack.stages.base import TrackState
@@ -346,6 +351,14 @@ def test_a_later_matroska_segment_is_whole_and_its_cut_half_is_not(tmp_path):
     cut.write_bytes(data[: len(data) // 2])
     with open_source(str(cut)) as source, pytest.raises(PartialInputError):
         list(source)
+
+
+@pytest.mark.parametrize("fmt", ["image2", "image2pipe"])
+def test_a_video_read_as_an_image_format_is_one_input_error(tmp_path, fmt):
+    """``-f image2`` on an MP4: FFmpeg finds a stream it has no decoder for (AttributeError)."""
+    clip = write_video(tmp_path / "clip.mp4", pictures(4))
+    with pytest.raises(InputError, match=f"clip.mp4: no decoder .*format {fmt}; a wrong --format"):
+        read_all(str(clip), ffmpeg=FFmpegInput(format=fmt))
 
 
 def test_corrupt_packets_mid_stream_are_skipped(tmp_path):

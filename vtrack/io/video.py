@@ -257,6 +257,9 @@ class VideoSource(Source):
             raise InputError(f"{path}: no video stream (streams: {kinds})")
         self._container = container
         self._stream = stream = container.streams.video[0]
+        if stream.codec_context is None:  # e.g. a video file read with --format image2
+            raise InputError(f"{path}: no decoder for its video stream as FFmpeg reads it "
+                             f"(format {container.format.name}; a wrong --format?)")
         self._dropped = 0  # packets the decoder refused (damage in the middle of the file)
         self._corrupt = 0  # pictures the decoder marked as decoded with errors
         self._damaged = False  # damage seen: frame indices come from timestamps from now on
