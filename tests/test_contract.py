@@ -104,3 +104,16 @@ def test_a_chain_missing_a_shared_value_is_refused_before_anything_runs(
     assert len(lines) == 1
     assert lines[0].startswith("vtrack: error: ") and f"stage '{stage}' needs {missing}" in lines[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("top", "problem"), [
+    ({"name": ""}, "name is empty"), ({"name": "  "}, "name is empty"),
+    ({"name": 5}, "name must be text, got 5"), ({"name": {"a": 1}}, "name must be text"),
+    ({"description": 3}, "description must be text, got 3"),
+])
+def test_a_config_name_that_cannot_name_a_results_folder_is_refused(top: dict,
+                                                                    problem: str) -> None:
+    """An empty name wrote the run's results into the input's own folder (vtrack-out/clip/);
+    a number or a table was taken as its text."""
+    with pytest.raises(ConfigError, match=f"^mine.toml: {problem}"):
+        parse_config({**top, "stage": [{"name": "particle"}]}, "mine.toml")

@@ -166,10 +166,16 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
         values = {k: v for k, v in table.items() if k != "name"}
         build_stage(table["name"], values, where)  # validates names, parameters, types
         stages.append((table["name"], values))
+    for key in ("name", "description"):
+        if key in data and not isinstance(data[key], str):
+            raise ConfigError(f"{where}: {key} must be text, got {data[key]!r}")
+    name = data.get("name", default_name)
+    if not name.strip():
+        raise ConfigError(f"{where}: name is empty: a config's name names its results folder")
     config = Config(
-        name=str(data.get("name", default_name)),
+        name=name,
         source=where,
-        description=str(data.get("description", "")),
+        description=data.get("description", ""),
         stages=stages,
     )
     check_chain(config)
