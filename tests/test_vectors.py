@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from vtrack.golden.s0 import hue8
+from vtrack.scenes import write_image_sequence
 
 FRAMES = 4
 
@@ -126,3 +127,38 @@ def test_vectors_bad_input_is_one_line(vectors, tmp_path) -> None:
     empty.mkdir()
     nothing = vtrack("vectors", "check", str(out), str(empty))
     assert nothing.returncode == 2 and "none of the vector files" in nothing.stderr
+
+
+@pytest.mark.parametrize(("box", "problem"), [
+    ("500,500,40,30", "lies outside the"), ("0,0,2,2", "smaller than 4x4"),
+    ("0,0,5000,5000", "larger than the"),
+])
+def test_vectors_refuse_the_initial_boxes_run_refuses(vectors, tmp_path, box: str,
+                                                      problem: str) -> None:
+    """A box with no pixel in the frame gave vectors of nothing (exit 0)."""
+    _, clip = vectors
+    result = vtrack("vectors", str(clip.path), "--init", box, "--frames", "2", "--out",
+                    str(tmp_path / "v"))
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    assert result.stderr.strip().startswith(f"vtrack: error: --init: the box {box}")
+    assert problem in result.stderr and not (tmp_path / "v").exists()
+
+
+def test_an_undecodable_frame_is_named_and_the_folders_keep_frame_numbers(
+        vectors, tmp_path) -> None:
+    """A frame skipped as undecodable went unmentioned, and the folders were renumbered past it
+    (frame_0006 held frame 7's picture while trace.csv said 7)."""
+    _, clip = vectors
+    folder = write_image_sequence(clip.scene, tmp_path / "seq")
+    (folder / "img" / "0007.jpg").write_bytes(b"junk")  # frame 6 (0-based)
+    box = clip.scene.boxes[0]
+    out = tmp_path / "v"
+    result = vtrack("vectors", str(folder), "--config", "s0-fixed", "--init",
+                    f"{box.x},{box.y},{box.w},{box.h}", "--frames", "8", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "0007.jpg" in result.stderr and "frame 6 skipped" in result.stderr
+    with (out / "trace.csv").open(newline="") as handle:
+        frames = [int(row["frame"]) for row in csv.DictReader(handle)]
+    assert frames == [0, 1, 2, 3, 4, 5, 7, 8]
+    assert sorted(p.name for p in out.glob("frame_*")) == [f"frame_{i:04d}" for i in frames]
+

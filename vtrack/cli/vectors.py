@@ -60,6 +60,7 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     from vtrack.config import load_config
     from vtrack.errors import ConfigError, plural
     from vtrack.evaluate.groundtruth import parse_box
+    from vtrack.geometry import check_init_box
     from vtrack.golden.vectors import MAX_FRAMES, fixed_stage
     from vtrack.golden.vectors import generate as write_vectors
     from vtrack.io import open_source
@@ -74,8 +75,11 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     extra = {"input": Path(input_spec).name, "config": config.name, "init": list(init_box),
              "vtrack": __version__}
     with open_source(input_spec) as source:
+        check_init_box(init_box, source.info.width, source.info.height, "--init")
         frames = itertools.islice(iter(source), count)
         written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
+        for warning in source.warnings:  # frames skipped as undecodable, as vtrack run says
+            click.echo(f"vtrack: warning: {warning}", err=True)
     click.echo(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
 
 

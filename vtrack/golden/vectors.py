@@ -173,7 +173,8 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
             assert record is not None and result.frame is not None
             frame = result.frame
             size = (frame.width, frame.height)
-            write_frame(out_dir / f"frame_{count:04d}", frame.bgr(), record, count)
+            # named by the input's frame number, as trace.csv's rows (a skipped frame: a gap)
+            write_frame(out_dir / f"frame_{result.index:04d}", frame.bgr(), record, count)
             trace.write(record.trace)
             if record.model == "s2":
                 if iterations is None:
