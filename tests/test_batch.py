@@ -294,6 +294,24 @@ def test_inputs_whose_results_folders_would_be_one_are_refused(tmp_path: Path,
     assert not (tmp_path / "out" / "summary.csv").exists()
 
 
+def test_an_input_named_like_the_batch_summary_gets_its_own_folder(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """``summary.csv.mp4``'s results folder was ``summary.csv``, the batch's own file: the
+    input could never run."""
+    folder = clips_folder(tmp_path, clip_factory, "summary.csv")
+    (folder / "summary.csv").mkdir()  # a sequence folder of that name cannot be renamed
+    (folder / "summary.csv" / "img").mkdir()
+    refused = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "no"))
+    assert refused.exit_code != 0 and "'summary.csv' would have the results folder" in \
+        refused.output
+    shutil.rmtree(folder / "summary.csv")
+    out = tmp_path / "out"
+    result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    assert summary(out)[("summary.csv.mp4", "s0")]["status"] == "complete"
+    assert (out / "summary.csv.mp4" / "s0" / "track.csv").is_file()
+
+
 def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
                                                   clip_factory: ClipFactory) -> None:
     folder = clips_folder(tmp_path, clip_factory, "good")

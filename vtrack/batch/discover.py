@@ -12,6 +12,8 @@ from vtrack.errors import InputError
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
 from vtrack.io.files import folder_name
 
+#: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
+SUMMARY_FILE = "summary.csv"
 #: File suffixes taken as video inputs (anything else beside them is ignored).
 VIDEO_SUFFIXES = frozenset({
     ".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".ts", ".mts", ".m2ts", ".mpg", ".mpeg",
@@ -114,8 +116,9 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     sorted by name, with the ground truth found beside or inside each (module docstring).
 
     Inputs are named after their file stem (folder name for sequences); videos whose stem is
-    taken twice (``a.mp4`` and ``a.avi``, a folder ``a/``, or ``a.mp4`` and ``a.mp4.mkv``) keep
-    their full file names, so every input has a results folder of its own.
+    taken twice (``a.mp4`` and ``a.avi``, a folder ``a/``, ``a.mp4`` and ``a.mp4.mkv``, or
+    ``summary.csv.mp4`` and the batch's ``summary.csv``) keep their full file names, so every
+    input has a results folder of its own.
     Raises InputError when ``folder`` is not a folder or holds no input.
     """
     folder = Path(folder)
@@ -129,13 +132,16 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     found = [_sequence(p, gt_origin) for p in entries if p.is_dir() and is_sequence_folder(p)]
     found += [_unusable(p) for p in named if not p.is_file() and not p.is_dir()]
     found += [_video(p, name, gt_origin) for p, name in _video_names(
-        videos, {item.name for item in found}).items()]
+        videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
     if not found:
         raise InputError(
             f"{folder}: no inputs (video files or sequence folders with an img/ folder)"
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:
+        if _folder(item.name) == SUMMARY_FILE:
+            raise InputError(f"{folder}: {item.path.name!r} would have the results folder "
+                             f"{SUMMARY_FILE!r}, the batch's own summary: rename it")
         other = by_folder.setdefault(_folder(item.name), item)
         if other is not item:
             raise InputError(

@@ -130,6 +130,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         plan,
         run_batch,
     )
+    from vtrack.batch.discover import SUMMARY_FILE
     from vtrack.cli._progress import BatchProgress
     from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
@@ -140,7 +141,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     inputs = find_inputs(folder, gt_origin)
     workers = jobs or cpu_count()
     out_dir = out_dir or default_out_dir(str(folder))
-    summary_path = out_dir / "summary.csv"
+    summary_path = out_dir / SUMMARY_FILE
     outcomes = []
     progress = BatchProgress(quiet, stats_period)
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
