@@ -312,6 +312,29 @@ def test_an_input_named_like_the_batch_summary_gets_its_own_folder(
     assert (out / "summary.csv.mp4" / "s0" / "track.csv").is_file()
 
 
+def test_names_with_control_characters_keep_one_line_in_messages_and_the_report(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """An input named with a newline split its summary line, its Markdown table row and its
+    heading in two; one with a tab made matplotlib warn of a missing glyph."""
+    folder = clips_folder(tmp_path, clip_factory, "new\nline", "tab\tx")
+    out, report = tmp_path / "out", tmp_path / "report"
+    done = subprocess.run([sys.executable, "-W", "error::UserWarning", "-m", "vtrack", "batch",
+                           str(folder), "-c", "s0", "--no-video", "-o", str(out)],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines() + done.stdout.splitlines()
+    assert any(line.startswith("new\\nline [s0]: ") for line in lines), lines
+    assert any(line.startswith("tab\\tx [s0]: ") for line in lines), lines
+    shown = subprocess.run([sys.executable, "-W", "error::UserWarning", "-m", "vtrack",
+                            "report", str(out), "-q", "-o", str(report)],
+                           capture_output=True, text=True, timeout=300, check=False)
+    assert shown.returncode == 0 and shown.stderr == "", shown.stderr
+    markdown = (report / "summary.md").read_text().splitlines()
+    assert "## new\\nline" in markdown and "## tab\\tx" in markdown
+    assert sum(line.startswith(("| new\\nline | s0 |", "| tab\\tx | s0 |"))
+               for line in markdown) == 2
+
+
 def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
                                                   clip_factory: ClipFactory) -> None:
     folder = clips_folder(tmp_path, clip_factory, "good")

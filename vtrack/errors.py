@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import signal
 import threading
+import unicodedata
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -13,6 +14,13 @@ def plural(count: int, noun: str, nouns: str | None = None) -> str:
     """``1 frame``, ``2 frames``: a count and its noun for a user message (``nouns``: the plural
     when it is not ``noun + "s"``)."""
     return f"{count} {noun}" if count == 1 else f"{count} {nouns or noun + 's'}"
+
+
+def printable(text: str) -> str:
+    """``text`` with each control character (newline, tab, escape, ...) written as its Python
+    escape (``\\n``): a name taken from the file system stays one line of a message, a table
+    row or a plot title."""
+    return "".join(repr(c)[1:-1] if unicodedata.category(c) == "Cc" else c for c in text)
 
 
 class VtrackError(Exception):

@@ -51,6 +51,7 @@ from vtrack.errors import (
     VtrackError,
     handling_stop_signals,
     plural,
+    printable,
 )
 from vtrack.evaluate.groundtruth import read_boxes, read_mot
 from vtrack.evaluate.metrics import score_frame, summarize
@@ -141,7 +142,7 @@ class RunSummary:
             parts.append(f"skipped {self.frames_passed} while busy (live)")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
         head = f"{label or self.input}{status}: "
-        return head + ", ".join(parts) + f" -> {self.out_dir}"
+        return printable(head + ", ".join(parts) + f" -> {self.out_dir}")  # one line
 
 
 def versions() -> dict[str, str]:

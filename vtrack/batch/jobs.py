@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from vtrack.errors import printable
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
@@ -55,10 +56,11 @@ class Outcome:
 
     def line(self) -> str:
         """One line for the terminal: the run's summary line, or what went wrong."""
+        label = f"{printable(self.input)} [{printable(self.config)}]"
         if self.status == STATUS_FAILED or self.summary is None:
-            line = f"{self.input} [{self.config}]: {self.status}: {self.error}"
+            line = f"{label}: {self.status}: {self.error}"
         else:
-            line = self.summary.line(f"{self.input} [{self.config}]")
+            line = self.summary.line(label)
         if self.resumed:
             line += " (already complete: not run again)"
         if self.attempt > 1:

@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from vtrack.errors import VtrackError
+from vtrack.errors import VtrackError, printable
 from vtrack.geometry import Box
 from vtrack.report.plots import DPI, runs_of
 from vtrack.report.runs import RunResult
@@ -95,7 +95,7 @@ def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
             axis.set_axis_off()
             at = frame - run.first_frame
             if not 0 <= at < len(run.boxes):
-                axis.set_title(f"{run.config}, frame {frame}: not tracked", fontsize=8)
+                axis.set_title(f"{printable(run.config)}, frame {frame}: not tracked", fontsize=8)
                 continue
             assert run.truth is not None and run.overlaps is not None
             truth = run.truth[at] if at < len(run.truth) else None
@@ -106,9 +106,9 @@ def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
             said = run.states[at] or "skipped"
             score = "no box" if run.boxes[at] is None else (
                 "—" if overlap is None else f"IoU {overlap:.2f}")
-            axis.set_title(f"{run.config}, frame {frame}: {score} ({said})", fontsize=8,
+            axis.set_title(f"{printable(run.config)}, frame {frame}: {score} ({said})", fontsize=8,
                            color=palette[run.config])
-    figure.suptitle(f"{name}: where the trackers lost the target (white: ground truth; "
+    figure.suptitle(f"{printable(name)}: where the trackers lost the target (white: ground truth; "
                     "dashed: the tracker said occluded or lost)", fontsize=10)
     figure.savefig(path)
     return path

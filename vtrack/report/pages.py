@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from vtrack.errors import printable
 from vtrack.report.runs import FailedRun, RunResult
 from vtrack.report.tables import NOTES, Table
 
@@ -188,8 +189,9 @@ def render_html(page: Page) -> str:
 
 # --- Markdown --------------------------------------------------------------------------------
 
-def _md(text: str) -> str:
-    return text.replace("|", "\\|")
+def _md(text: object) -> str:
+    """Text for one Markdown line or cell: control characters escaped, ``|`` too."""
+    return printable(str(text)).replace("|", "\\|")
 
 
 def markdown_table(table: Table, labels: int) -> str:
@@ -218,11 +220,11 @@ def render_markdown(page: Page) -> str:
         parts += ["## Multi-target runs", markdown_table(page.mot, 3)]
     if page.failed:
         parts += [f"## {NO_RESULTS}",
-                  "\n".join(f"- **{f.input}** [{f.config}] {f.status}: {f.error}"
+                  "\n".join(f"- **{_md(f.input)}** [{_md(f.config)}] {f.status}: {_md(f.error)}"
                             for f in page.failed)]
     for section in page.sections:
         if section.plots:
-            parts.append(f"## {section.name}")
+            parts.append(f"## {_md(section.name)}")
             parts += [f"![{Path(p).stem}]({p})" for p in section.plots]
     parts.append("---\n" + _footer(page))
     return "\n\n".join(parts) + "\n"

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from vtrack.errors import printable
 from vtrack.evaluate.metrics import ERROR_THRESHOLDS, OVERLAP_THRESHOLDS, PRECISION_THRESHOLD_PX
 from vtrack.report.runs import RunResult
 from vtrack.stages.base import TrackState
@@ -75,7 +76,7 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
         axis.set_ylim(*SCORE_YLIM)
         axis.set_xlim(-0.5, max(len(series), 1) - 0.5)
         axis.set_ylabel(ylabel)
-        axis.set_title(run.config, loc="left", fontsize=10, color=palette[run.config])
+        axis.set_title(printable(run.config), loc="left", fontsize=10, color=palette[run.config])
         axis.grid(alpha=0.3)
         for handle, label in zip(*axis.get_legend_handles_labels(), strict=True):
             legend.setdefault(label, handle)
@@ -83,7 +84,7 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
         figure.legend(list(legend.values()), list(legend), loc="outside upper right",
                       fontsize=8, ncols=len(legend), frameon=False)
     axes[-1].set_xlabel("frame")
-    figure.suptitle(title, fontsize=11)
+    figure.suptitle(printable(title), fontsize=11)
     return figure
 
 
@@ -125,10 +126,10 @@ def curves_figure(title: str, success: Mapping[str, np.ndarray],
     at20 = int(np.searchsorted(ERROR_THRESHOLDS, PRECISION_THRESHOLD_PX))
     for config in sorted(success, key=lambda c: -success[c].mean()):
         left.plot(OVERLAP_THRESHOLDS, success[config], color=palette[config], lw=1.8,
-                  label=f"{config} [{success[config].mean():.3f}]")
+                  label=f"{printable(config)} [{success[config].mean():.3f}]")
     for config in sorted(precision, key=lambda c: -precision[c][at20]):
         right.plot(ERROR_THRESHOLDS, precision[config], color=palette[config], lw=1.8,
-                   label=f"{config} [{precision[config][at20]:.3f}]")
+                   label=f"{printable(config)} [{precision[config][at20]:.3f}]")
     right.axvline(PRECISION_THRESHOLD_PX, color="0.5", lw=0.8, ls="--")
     for axis, xlabel, name, xmax in (
         (left, "overlap threshold", "Success plot (AUC)", 1.0),
@@ -141,7 +142,7 @@ def curves_figure(title: str, success: Mapping[str, np.ndarray],
         axis.set_title(name, fontsize=10)
         axis.grid(alpha=0.3)
         axis.legend(loc="lower left" if axis is left else "lower right", fontsize=8)
-    figure.suptitle(title, fontsize=11)
+    figure.suptitle(printable(title), fontsize=11)
     return figure
 
 
