@@ -342,6 +342,7 @@ def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
     shutil.copy(folder / "good.gt.txt", folder / "gone.gt.txt")
     os.mkfifo(folder / "pipe.mp4")
     shutil.copy(folder / "good.gt.txt", folder / "pipe.gt.txt")
+    (folder / "loop.mp4").symlink_to("loop.mp4")  # said "to loop.mp4, which does not exist"
     out = tmp_path / "out"
     result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(out))
     assert result.exit_code == 1, result.output
@@ -349,6 +350,8 @@ def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
     assert rows[("good", "s0")]["status"] == "complete"
     assert rows[("gone.mp4", "s0")]["status"] == "failed"
     assert "a broken link" in rows[("gone.mp4", "s0")]["error"]
+    assert rows[("loop.mp4", "s0")]["status"] == "failed"
+    assert "a link in a loop (to loop.mp4" in rows[("loop.mp4", "s0")]["error"]
     assert rows[("pipe.mp4", "s0")]["status"] == "failed"
     assert "not a regular file" in rows[("pipe.mp4", "s0")]["error"]
 

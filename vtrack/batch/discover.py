@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 from collections import Counter
 from collections.abc import Iterable
@@ -100,7 +101,13 @@ def _folder(name: str) -> str:
 def _unusable(path: Path) -> BatchInput:
     """An entry with a video's suffix that is no file to read: failed, with the reason."""
     if path.is_symlink() and not path.exists():
-        reason = f"a broken link (to {os.readlink(path)}, which does not exist)"
+        try:
+            os.stat(path)
+            reason = "a link that cannot be followed"
+        except OSError as exc:
+            reason = (f"a link in a loop (to {os.readlink(path)}, a link back to itself)"
+                      if exc.errno == errno.ELOOP
+                      else f"a broken link (to {os.readlink(path)}, which does not exist)")
     else:
         reason = "not a regular file (a FIFO, socket or device is no batch input)"
     return BatchInput(name=path.name, path=path, problem=f"{path}: {reason}")
