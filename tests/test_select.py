@@ -66,6 +66,13 @@ def test_a_malformed_sidecar_is_an_error_naming_the_file(tmp_path: Path, text: s
         read_sidecar(tmp_path / "a.mp4")
 
 
+def test_a_sidecar_with_two_boxes_is_refused(tmp_path: Path) -> None:
+    """Its second line was ignored without a word (a ground truth file saved as the sidecar)."""
+    (tmp_path / "a.init.txt").write_text("10,10,40,30\n# comment\n20,20,40,30\n")
+    with pytest.raises(InputError, match=r"a\.init\.txt: holds 2 lines of values; expected one"):
+        read_sidecar(tmp_path / "a.mp4")
+
+
 def test_format_box_is_what_init_takes() -> None:
     assert format_box(Box(10.0, 20.0, 30.0, 40.0)) == "10,20,30,40"
     assert format_box(Box(0.5, 1.25, 3.0, 4.126)) == "0.5,1.25,3,4.13"

@@ -45,13 +45,16 @@ def format_box(box: Box) -> str:
 
 
 def parse_sidecar(text: str, where: str) -> Box:
-    """The box of a sidecar file's text: the first line that is not blank or a ``#`` comment,
+    """The box of a sidecar file's text: its one line that is not blank or a ``#`` comment,
     4 numbers separated by commas, spaces or tabs, width and height > 0.
 
-    Raises InputError naming ``where`` otherwise.
+    Raises InputError naming ``where`` otherwise (a second box line too: which box is meant?).
     """
-    lines = [line.split("#", 1)[0].strip() for line in text.splitlines()]
-    line = next((x for x in lines if x), "")
+    lines = [x for x in (line.split("#", 1)[0].strip() for line in text.splitlines()) if x]
+    if len(lines) > 1:
+        raise InputError(f"{where}: holds {len(lines)} lines of values; expected one line "
+                         "x,y,w,h (the first frame's box)")
+    line = lines[0] if lines else ""
     return box_from_parts(line.replace(",", " ").split(), where, "one line x,y,w,h", line,
                           InputError)
 
