@@ -5,8 +5,10 @@ from __future__ import annotations
 import csv
 import json
 import select
+import socket
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 from vtrack.io.csvfile import format_cell
@@ -139,3 +141,52 @@ def test_a_stream_file_holding_lines_is_replaced_only_with_overwrite(tmp_path: P
     assert lines.read_bytes() == first and not (tmp_path / "b").exists()
     assert _vtrack(*args, "--out", str(tmp_path / "b"), "-y").returncode == 0
     assert lines.read_bytes().count(b"\n") == 10
+
+
+def _stalled_run(tmp_path: Path, frames: int, output: list[str], stdout: int | None) -> tuple[
+        subprocess.Popen, dict]:
+    """``vtrack run`` of a ``frames``-frame clip with ``output`` options whose receiver takes
+    nothing (``--timeout 1``), ended by itself; its process (stdout never read) and run.json."""
+    scene = make_scene("smooth", seed=1, width=320, height=240, frames=frames, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0", "--init", box, "-q",
+         "--out", str(out), "--timeout", "1", *output],
+        stdout=stdout, stderr=subprocess.PIPE, text=True)
+    try:
+        process.wait(timeout=60)  # it hung until SIGKILL, SIGTERM held off while it waited
+    finally:
+        process.kill()
+    return process, json.loads((out / "run.json").read_text())
+
+
+def test_a_stream_reader_that_takes_nothing_ends_the_run_after_the_timeout(
+        tmp_path: Path) -> None:
+    process, record = _stalled_run(tmp_path, 1500, ["--no-video", "--stream", "-"],
+                                   subprocess.PIPE)
+    assert process.returncode == 1
+    error = "--stream -: its reader took nothing for 1 s"
+    assert process.stderr.read().strip() == f"vtrack: error: {error}"
+    assert record["status"] == "failed" and record["error"] == error
+    with (tmp_path / "out" / "track.csv").open() as f:  # what was tracked is whole
+        assert 0 < len(list(csv.DictReader(f))) == record["frames"] < 1500
+
+
+def test_a_live_video_receiver_that_takes_nothing_ends_the_run_after_the_timeout(
+        tmp_path: Path) -> None:
+    with socket.socket() as server:  # accepts, never reads
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        peers: list[socket.socket] = []
+        threading.Thread(target=lambda: peers.append(server.accept()[0]), daemon=True).start()
+        url = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        process, record = _stalled_run(tmp_path, 1500, ["--video-out", url, "--crf", "0"],
+                                       subprocess.DEVNULL)
+        for peer in peers:
+            peer.close()
+    error = f"--video-out {url}: the receiver took nothing for 1 s"
+    assert process.returncode == 1
+    assert process.stderr.read().strip() == f"vtrack: error: {error}"
+    assert record["status"] == "failed" and record["error"] == error

@@ -503,7 +503,8 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
         try:
             writers.video = VideoWriter(request.out_dir / "annotated.mp4", info.width,
                                         info.height, info.fps or 30.0, preset=request.preset,
-                                        crf=request.crf, url=request.video_out)
+                                        crf=request.crf, url=request.video_out,
+                                        stall_s=request.ffmpeg.timeout_s)
         except BaseException:
             writers.csv.abort()
             raise
@@ -512,7 +513,8 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
                                       gt_tracks=resolved.mot_gt)
     if request.stream is not None:
         try:
-            writers.stream = StreamWriter(request.stream, pipeline.multi_target)
+            writers.stream = StreamWriter(request.stream, pipeline.multi_target,
+                                          stall_s=request.ffmpeg.timeout_s)
         except BaseException:
             writers.csv.abort()
             if writers.video is not None:

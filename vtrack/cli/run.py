@@ -69,7 +69,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--timeout", "timeout_s", type=Seconds(min=0.1, max=3600),
               default=None, metavar="SECONDS",
               help="A network input that does not open, or sends nothing, this long ends the "
-                   "run (recorded as partial once frames came). Default: 10.")
+                   "run (recorded as partial once frames came); so does a live output "
+                   "(--video-out, --stream) whose receiver takes nothing this long. Default: 10.")
 @click.option("--live/--no-live", "live", default=None,
               help="Keep up with the source: when a frame arrives while the tracker is busy, "
                    "track the newest and count the skipped ones. Default: on for stream URLs "

@@ -13,6 +13,8 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import os
+import select
 import sys
 from typing import IO, Any
 
@@ -58,27 +60,48 @@ def frame_record(result: FrameResult, multi_target: bool) -> dict[str, Any]:
 
 class StreamWriter(Closing):
     """Writes :func:`frame_record` lines to ``target`` (a path, or ``-`` for standard output),
-    each flushed before :meth:`write` returns. OutputError names the target when a line cannot
-    be written (a full disk, a reader that went away)."""
+    each written out before :meth:`write` returns. OutputError names the target when a line
+    cannot be written (a full disk, a reader that went away) or when the reader of a pipe takes
+    nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
+    reading, nor hold off SIGTERM while it waits)."""
 
-    def __init__(self, target: str, multi_target: bool) -> None:
+    def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0) -> None:
         self.target = target
         self.multi_target = multi_target
+        self.stall_s = stall_s
         self.lines = 0
         try:
-            self._file: IO[str] = sys.stdout if target == STDOUT else open(  # noqa: SIM115
-                target, "w", encoding="utf-8")
+            self._file: IO[bytes] = (_stdout_bytes() if target == STDOUT
+                                     else open(target, "wb"))  # noqa: SIM115
         except OSError as exc:
             raise OutputError(f"--stream {target}: {os_reason(exc)}") from None
+        try:
+            self._fd: int | None = self._file.fileno()
+        except (OSError, ValueError):  # standard output replaced by an object (a test runner)
+            self._fd = None
 
     def write(self, result: FrameResult) -> None:
         line = json.dumps(frame_record(result, self.multi_target), separators=(",", ":"))
+        data = (line + "\n").encode("utf-8")
         try:
-            self._file.write(line + "\n")
-            self._file.flush()
+            if self._fd is None:
+                self._file.write(data)
+                self._file.flush()
+            else:
+                self._send(memoryview(data))
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
         self.lines += 1
+
+    def _send(self, data: memoryview) -> None:
+        """Write ``data`` to the descriptor, at most ``PIPE_BUF`` bytes at a time and each
+        only once it can take them (a pipe with room: such a write does not block), waiting
+        at most ``stall_s`` for that room."""
+        while data:
+            if not select.select([], [self._fd], [], self.stall_s)[1]:
+                raise OutputError(f"--stream {self.target}: its reader took nothing for "
+                                  f"{self.stall_s:g} s")
+            data = data[os.write(self._fd, data[:select.PIPE_BUF]):]
 
     def close(self) -> None:
         if self.target == STDOUT:
@@ -86,6 +109,12 @@ class StreamWriter(Closing):
                 self._file.flush()                           # has said so already
             return
         try:
-            self._file.close()  # flushes what a failed write left in the buffer: fails again
+            self._file.close()
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
+
+
+def _stdout_bytes() -> IO[bytes]:
+    """Standard output for bytes, after what was printed to it as text."""
+    sys.stdout.flush()
+    return sys.stdout.buffer if hasattr(sys.stdout, "buffer") else sys.stdout  # type: ignore[return-value]

@@ -64,7 +64,9 @@ class VideoWriter(Closing):
 
     With ``url`` the pictures go to that live output instead (``--video-out``: MPEG-TS over
     ``udp://``/``tcp://``, RTSP to ``rtsp://``, FLV to ``rtmp://``), encoded for low latency
-    (x264 ``zerolatency``, slice threads); nothing is written to ``path``.
+    (x264 ``zerolatency``, slice threads); nothing is written to ``path``. A receiver that
+    takes nothing for ``stall_s`` seconds (FFmpeg's write to it blocks) is an OutputError,
+    from :meth:`write` or :meth:`close`: the run never waits on it for ever.
     """
 
     #: Output pictures in flight between the caller and the encoder thread.
@@ -80,9 +82,13 @@ class VideoWriter(Closing):
         crf: int = 23,
         codec: str = "libx264",
         url: str | None = None,
+        stall_s: float = 10.0,
     ) -> None:
         self.path = Path(path)
         self.url = url
+        #: How long a live output's receiver may take nothing (None for a file: no bound).
+        self._stall_s = stall_s if url is not None else None
+        self._stalled = False
         self.width, self.height = width & ~1, height & ~1
         if self.width <= 0 or self.height <= 0:
             raise OutputError(f"{self.path}: cannot encode a {width}x{height} video")
@@ -164,6 +170,8 @@ class VideoWriter(Closing):
         """Raise the encoder thread's failure as an OutputError, once."""
         if self._error is not None and not self._error_reported:
             self._error_reported = True
+            if isinstance(self._error, OutputError):  # already says what and where
+                raise self._error
             raise OutputError(f"{self.url or self.path}: cannot write video "
                               f"({os_reason(self._error)})")
 
@@ -196,7 +204,12 @@ class VideoWriter(Closing):
         self._raise_error()
         if time_s is None and isinstance(image, Frame):
             time_s = image.time_s
-        slot = self._free.get()
+        try:
+            slot = self._free.get(timeout=self._stall_s)
+        except queue.Empty:
+            self._stalled, self._error_reported = True, True  # said here, not again on close
+            self._error = OutputError(self._stall_message())
+            raise self._error from None
         try:
             self._fill(slot.buffer, image)
             if draw is not None:
@@ -211,10 +224,17 @@ class VideoWriter(Closing):
         self._frames += 1
         self._todo.put(slot)
 
+    def _stall_message(self) -> str:
+        return f"--video-out {self.url}: the receiver took nothing for {self._stall_s:g} s"
+
     def _finish(self, flush: bool) -> None:
         self._closed = True
         self._todo.put(flush)
-        self._thread.join()
+        self._thread.join(0 if self._stalled else self._stall_s)
+        if self._thread.is_alive():  # blocked in a write to the receiver: left to exit with us
+            self._stalled = True
+            self._error = self._error or OutputError(self._stall_message())
+            return
         try:
             self._container.close()
         except (av.FFmpegError, OSError) as exc:
