@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from vtrack.cli import main
-from vtrack.config import parse_config
+from vtrack.config import load_config, parse_config
 from vtrack.errors import ConfigError, VtrackError
 from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene
@@ -117,3 +117,25 @@ def test_a_config_name_that_cannot_name_a_results_folder_is_refused(top: dict,
     a number or a table was taken as its text."""
     with pytest.raises(ConfigError, match=f"^mine.toml: {problem}"):
         parse_config({**top, "stage": [{"name": "particle"}]}, "mine.toml")
+
+
+def test_repeated_configs_and_integers_too_long_to_read_are_named_for_what_they_are(
+        tmp_path: Path) -> None:
+    """``vtrack run -c s0 -c s1`` ran s1 without a word; a 5000-digit integer was called
+    "not an integer"."""
+    import subprocess
+    import sys
+
+    def vtrack(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                              text=True, timeout=60, check=False)
+
+    twice = vtrack("run", "clip.mp4", "-c", "s0", "-c", "s1", "--init", "1,1,8,8")
+    assert twice.returncode == 2 and "Traceback" not in twice.stderr
+    assert "--config given 2 times (s0, s1): a run tracks with one config" in twice.stderr
+    config = load_config("s0")
+    with pytest.raises(ConfigError, match="'iterations' must be in the range .*, got a "
+                                          "5000-digit integer"):
+        config.with_overrides(["meanshift.iterations=" + "9" * 5000])
+    with pytest.raises(ConfigError, match="'bins' must be one of .*, got a 4001-digit integer"):
+        load_config("robust").with_overrides(["robust_model.bins=" + "1" * 4001])

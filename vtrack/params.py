@@ -101,6 +101,12 @@ class Param:
                     raise ValueError(text)
                 value = lowered in ("true", "1", "yes", "on")
             elif self.type is int:
+                digits = text.strip().lstrip("+-")
+                if len(digits) > 4000 and digits.isdigit():  # more than Python reads as an int
+                    allowed = (f"in the range {self.range_text()}" if self.range_text() else
+                               "one of " + ", ".join(repr(c) for c in self.choices or ()))
+                    raise ConfigError(f"{where}: parameter '{self.name}' must be {allowed}, "
+                                      f"got a {len(digits)}-digit integer")
                 value = int(text)
             elif self.type is float:
                 value = float(text)

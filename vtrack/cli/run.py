@@ -34,9 +34,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 
 @click.command("run")
 @click.argument("input_spec", metavar="INPUT")
-@click.option("--config", "-c", "config_spec", default=None, metavar="FILE|NAME",
+@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
               help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
-                   f"Default: {DEFAULT_CONFIG}.")
+                   f"Default: {DEFAULT_CONFIG}. One per run (vtrack batch runs several).")
 @click.option("--init", "init_text", metavar="x,y,w,h",
               help="Initial box (top-left x, y, width, height). Default: the input's sidecar box "
                    "(NAME.init.txt, written by vtrack select), else the first --gt box.")
@@ -109,7 +109,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="When stderr is not a terminal (a log): a progress line this often, instead "
                    "of the bar (as ffmpeg's -stats_period).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
-def command(input_spec: str, config_spec: str | None, init_text: str | None,
+def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | None,
             gt_path: Path | None, gt_origin: int | None, out_dir: Path | None, overwrite: bool,
             overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
@@ -138,6 +138,11 @@ def command(input_spec: str, config_spec: str | None, init_text: str | None,
             "the annotated video cannot go out with --no-video" if no_video else
             "expected a URL (udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is "
             "annotated.mp4 in --out"))
+    if len(config_specs) > 1:  # click keeps the last of a repeated option without a word
+        raise click.UsageError(f"--config given {len(config_specs)} times "
+                               f"({', '.join(config_specs)}): a run tracks with one config; "
+                               "vtrack batch runs several")
+    config_spec = config_specs[0] if config_specs else None
     config = load_config(config_spec).with_overrides(list(overrides))
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
     raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
