@@ -52,6 +52,23 @@ def test_a_container_on_stdin_gives_the_same_csv_as_its_file(tmp_path: Path) -> 
     assert b"-: 30 frames" in from_pipe.stdout
 
 
+def test_a_transport_stream_cut_inside_a_packet_is_partial_from_a_pipe_too(
+        tmp_path: Path) -> None:
+    """Redirected, the cut MPEG-TS was `partial` (FFmpeg knows the file's size); piped, FFmpeg
+    cannot ask a pipe for its size, and the same bytes were `complete`."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=60, fps=30)
+    whole = write_video(scene, tmp_path / "whole.ts", preset="veryfast")
+    cut = whole.read_bytes()[: whole.stat().st_size // 2 // 188 * 188 + 100]
+    common = ["-", "-c", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+              "--no-video"]
+    piped = _run([*common, "--out", str(tmp_path / "cut")], input=cut)
+    assert piped.returncode == 1, piped.stderr
+    assert b"ends inside a 188-byte transport packet" in piped.stderr
+    assert json.loads((tmp_path / "cut" / "run.json").read_text())["status"] == "partial"
+    done = _run([*common, "--out", str(tmp_path / "whole")], input=whole.read_bytes())
+    assert done.returncode == 0, done.stderr
+
+
 def test_stdin_that_is_no_container_is_one_line_and_a_non_zero_exit(tmp_path: Path) -> None:
     done = _run(["-", "--init", "1,1,8,8", "--no-video", "--out", str(tmp_path / "o")],
                 input=b"not a video at all\n" * 50)

@@ -23,6 +23,8 @@ class GrowingFile(io.RawIOBase):
         #: and PyAV would print and drop an exception raised there, so the read ends the
         #: stream instead and the decoder's owner raises this once it sees the end.
         self.interruption: BaseException | None = None
+        #: Bytes handed to FFmpeg so far (a stream's size: FFmpeg cannot ask for it).
+        self.bytes_read = 0
 
     def readable(self) -> bool:
         return True
@@ -35,6 +37,7 @@ class GrowingFile(io.RawIOBase):
             while True:
                 got = self._file.readinto(buffer)
                 if got:
+                    self.bytes_read += got
                     return got
                 now = time.monotonic()
                 quiet_since = now if quiet_since is None else quiet_since

@@ -25,11 +25,12 @@ stale picture out of order is dropped. Only a stream that really ends early is p
 
 from __future__ import annotations
 
+import io
 import itertools
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import IO, Any
 
 import av
 import cv2
@@ -192,6 +193,31 @@ class FFmpegInput:
     follow_s: float | None = None
 
 
+def _python_file(container: av.container.InputContainer) -> object:
+    """The Python object ``container`` reads from (None for a path or URL FFmpeg opened):
+    PyAV 14+ wraps it in a ``PyIOFile`` whose ``file`` it is."""
+    given = container.file
+    return getattr(given, "file", given)
+
+
+class CountedStream(io.RawIOBase):
+    """A stream that cannot seek (a pipe on stdin), read through as it is, counting its bytes
+    (``bytes_read``): FFmpeg cannot ask a pipe for its size."""
+
+    def __init__(self, raw: IO[bytes]) -> None:
+        super().__init__()
+        self._raw = raw
+        self.bytes_read = 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
+        got = self._raw.readinto(buffer)  # type: ignore[attr-defined]
+        self.bytes_read += got or 0
+        return got or 0
+
+
 def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     """``path`` opened by FFmpeg as ``how`` says: ``-`` is stdin, ``scheme://`` a network
     input (with ``how.timeout_s``; ``srt://`` refused: the wheel's FFmpeg has no SRT), a file
@@ -201,7 +227,8 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
                          "-formats lists them; capture devices /dev/videoN need no --format)")
     kwargs: dict[str, Any] = {"format": how.format, "options": dict(how.options)}
     if path == "-":
-        return av.open(sys.stdin.buffer, **kwargs)
+        stdin = sys.stdin.buffer
+        return av.open(stdin if stdin.seekable() else CountedStream(stdin), **kwargs)
     if "://" not in path:
         if how.follow_s is not None:
             growing = GrowingFile(path, how.follow_s)
@@ -342,8 +369,9 @@ class VideoSource(Source):
                     self._damaged = True
                     continue
                 yield from frames
-            if isinstance(self._container.file, GrowingFile):  # a signal while it waited
-                self._container.file.raise_interruption()
+            read = _python_file(self._container)
+            if isinstance(read, GrowingFile):  # a signal while it waited
+                read.raise_interruption()
         except av.error.ExitError:
             for frame in self._stream.decode(None):
                 frame.time_base = self._stream.time_base  # a flushed frame comes without one
@@ -451,6 +479,8 @@ class VideoSource(Source):
         if self._container.format.name != "mpegts":
             return None
         size = self._container.size
+        if size <= 0:  # a pipe or a followed file: what was read of it
+            size = getattr(_python_file(self._container), "bytes_read", 0)
         if size > 0 and all(size % n for n in TS_PACKET_SIZES):
             return f"the file ends inside a {TS_PACKET_SIZES[0]}-byte transport packet"
         return None
