@@ -224,6 +224,39 @@ def test_udp_stream_whose_sender_is_killed_ends_partial_with_whole_outputs(
     assert [json.loads(line)["frame"] for line in lines.read_text().splitlines()] == numbers
 
 
+def test_a_udp_stream_joined_far_from_its_next_key_frame_is_not_called_no_video(
+        tmp_path: Path) -> None:
+    """Joined after its only key frame, the stream sent data but nothing decodable within
+    --timeout: it was "not a video FFmpeg can decode"."""
+    scene = make_scene("smooth", seed=8, width=160, height=120, frames=300, fps=30)
+    clip = write_video(scene, tmp_path / "live.mp4", preset="veryfast", keyint=300)
+    port = _free_port(socket.SOCK_DGRAM)
+    sender = subprocess.Popen([*SENDER, str(clip), f"udp://127.0.0.1:{port}"])
+    try:
+        time.sleep(1.0)  # past the key frame
+        done = _run([f"udp://127.0.0.1:{port}", "--init", "1,1,8,8", "--timeout", "1",
+                     "--no-video", "-o", str(tmp_path / "out")], timeout=60)
+    finally:
+        sender.kill()
+        sender.wait()
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.decode().strip().startswith(
+        f"vtrack: error: udp://127.0.0.1:{port}: nothing FFmpeg could decode came within 1 s")
+    assert b"a live stream starts at a key frame" in done.stderr
+
+
+def test_following_a_plain_mp4_says_it_cannot_be_followed(tmp_path: Path) -> None:
+    """A finished plain MP4 given --follow was "not a video FFmpeg can decode" (one larger
+    than FFmpeg's probe: a smaller one is read whole before its index is needed)."""
+    scene = make_scene("smooth", seed=8, width=320, height=240, frames=150, fps=30)
+    clip = write_video(scene, tmp_path / "plain.mp4")
+    done = _run([str(clip), "--follow", "1", "--init", "1,1,8,8", "--no-video", "-o",
+                 str(tmp_path / "out")])
+    assert done.returncode == 2, done.stderr
+    assert b"plain.mp4: cannot be read as it grows" in done.stderr
+    assert b"follow fragmented MP4, MPEG-TS or Matroska" in done.stderr
+
+
 def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) -> None:
     """Sent in real time to a receiver already listening (``--no-live``: every frame tracked),
     a UDP stream gives every frame, the ones the decoder still held when the stream went quiet

@@ -247,6 +247,28 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
 
 
+#: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
+#: records it at the end, once finished).
+INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
+
+
+def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
+    """The one line for an input FFmpeg could not open or decode a first frame from, saying
+    what the way it was read (a URL, ``--follow``) makes likely."""
+    reason = os_reason(exc)
+    if "://" in path and isinstance(exc, av.error.InvalidDataError):
+        return (f"{path}: nothing FFmpeg could decode came within {how.timeout_s:g} s "
+                f"({reason}): a live stream starts at a key frame (--timeout SECONDS waits "
+                "longer)")
+    if "://" in path:
+        return f"{path}: cannot be opened ({reason})"
+    if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
+        return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
+                "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
+                "MP4 without --follow")
+    return f"{path}: not a video FFmpeg can decode ({reason})"
+
+
 class VideoSource(Source):
     """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
     threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
@@ -265,8 +287,7 @@ class VideoSource(Source):
             raise InputError(f"{path}: cannot be opened (nothing came within "
                              f"{how.timeout_s:g} s; --timeout SECONDS waits longer)") from None
         except av.FFmpegError as exc:
-            what = "cannot be opened" if "://" in path else "not a video FFmpeg can decode"
-            raise InputError(f"{path}: {what} ({os_reason(exc)})") from None
+            raise InputError(_undecodable(path, how, exc)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         try:
@@ -304,9 +325,7 @@ class VideoSource(Source):
         except StopIteration:
             raise InputError(f"{path}: no frame could be decoded") from None
         except av.FFmpegError as exc:
-            raise InputError(
-                f"{path}: not a video FFmpeg can decode ({os_reason(exc)})"
-            ) from None
+            raise InputError(_undecodable(path, self._how, exc)) from None
 
         rate = stream.guessed_rate or stream.average_rate
         fps = float(rate) if rate else None
