@@ -63,6 +63,22 @@ def test_overlap_plot_legend_is_outside_the_data_and_uses_the_success_scale(
         assert max(values) <= 1.0 + 1e-9 and values == [o for o in run.overlaps if o is not None]
 
 
+def test_overlap_panels_show_each_run_whole_at_its_own_frame_numbers(
+        tmp_path: Path) -> None:
+    """The panels share one frame axis, and each set its own limit: the last one's (a 20-frame
+    run) cut the 60-frame run above it; a run from --start 10 was drawn from 0."""
+    clip, gt = clip_with_gt(tmp_path, "occlusion", 60)
+    for name, args in (("whole", []), ("short", ["--frames", "20"]), ("late", ["--start", "10"])):
+        done = vtrack_run(clip, tmp_path / name, "--gt", str(gt), "-c", "s0", *args)
+        assert done.returncode == 0, done.stderr
+    runs = [load_run(tmp_path / name) for name in ("whole", "late", "short")]
+    figure = plots.overlap_figure("occlusion", runs, plots.colours([runs[0].config]))
+    for axis, run, first in zip(figure.axes, runs, (0, 10, 0), strict=True):
+        assert axis.get_xlim() == (-0.5, 59.5)
+        (line,) = axis.get_lines()
+        assert list(line.get_xdata()) == list(range(first, first + len(run.overlaps)))
+
+
 def table_rows(markdown: str, heading: str) -> list[list[str]]:
     """Body rows of the first table after ``heading`` in summary.md (bold marks removed)."""
     lines = markdown.split(heading, 1)[1].splitlines()

@@ -45,11 +45,13 @@ def runs_of(values: Sequence[object]) -> list[tuple[int, int, object]]:
     return stretches
 
 
-def _shade(axis, values: Sequence[object], value: object, colour: str, label: str) -> None:
-    """Shade the frames where ``values`` equals ``value`` (one legend entry)."""
+def _shade(axis, values: Sequence[object], value: object, colour: str, label: str,
+           first: int = 0) -> None:
+    """Shade the frames where ``values`` (frame ``first`` on) equals ``value`` (one legend
+    entry)."""
     spans = [(start, end) for start, end, v in runs_of(values) if v == value]
     for n, (start, end) in enumerate(spans):
-        axis.axvspan(start - 0.5, end - 0.5, color=colour, alpha=0.22, lw=0,
+        axis.axvspan(first + start - 0.5, first + end - 0.5, color=colour, alpha=0.22, lw=0,
                      label=label if n == 0 else None)
 
 
@@ -66,15 +68,20 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
     figure = Figure(figsize=(10, 0.9 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
     axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
     legend: dict[str, object] = {}
+    # one frame axis for all panels, in the input's frame numbers (a run from --start N
+    # begins at N): from the first frame any run tracked to the last
+    start = min(run.first_frame for run in runs)
+    end = max(run.first_frame + max(len(values(run)), 1) for run in runs)
     for axis, run in zip(axes, runs, strict=True):
         series = np.array([np.nan if v is None else v for v in values(run)], float)
         for state, (colour, label) in SHADES.items():
-            _shade(axis, run.states, state, colour, label)
+            _shade(axis, run.states, state, colour, label, run.first_frame)
         if absent is not None:
-            _shade(axis, absent(run), True, NO_GT_SHADE, "no ground truth")
-        axis.plot(np.arange(len(series)), series, color=palette[run.config], lw=1.2)
+            _shade(axis, absent(run), True, NO_GT_SHADE, "no ground truth", run.first_frame)
+        axis.plot(run.first_frame + np.arange(len(series)), series, color=palette[run.config],
+                  lw=1.2)
         axis.set_ylim(*SCORE_YLIM)
-        axis.set_xlim(-0.5, max(len(series), 1) - 0.5)
+        axis.set_xlim(start - 0.5, end - 0.5)
         axis.set_ylabel(ylabel)
         axis.set_title(printable(run.config), loc="left", fontsize=10, color=palette[run.config])
         axis.grid(alpha=0.3)
