@@ -369,3 +369,12 @@ def test_success_rates_and_normalised_precision_by_hand() -> None:
     assert errors[2] is None and errors[3] == math.inf
     # thresholds 0, 0.01, ..., 0.5: 0.1 passes 41 of 51, 0.3 passes 21, inf none
     assert normalized_precision(errors) == pytest.approx((41 + 21) / 51 / 3)
+
+
+def test_the_overlap_of_a_box_with_itself_is_exactly_one() -> None:
+    """Rounding gave 1.0000000000000007: a mean overlap above 1, an AUC counting the bin above
+    1.0."""
+    box = Box(57.82, 68.03, 40.8, 31.2)
+    assert iou(box, box) == 1.0
+    overlaps, _ = frame_scores([box], [box])
+    assert auc(overlaps) == pytest.approx(20 / 21)

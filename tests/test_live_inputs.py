@@ -69,6 +69,21 @@ def test_a_transport_stream_cut_inside_a_packet_is_partial_from_a_pipe_too(
     assert done.returncode == 0, done.stderr
 
 
+def test_a_plain_mp4_piped_on_stdin_opens_as_ffmpeg_opens_it(tmp_path: Path) -> None:
+    """Its index comes last: FFmpeg must read on and come back, within its probe buffer as
+    ``ffmpeg -i pipe:`` does (PyAV's default buffer was too small: "not a video")."""
+    scene = make_scene("smooth", seed=6, width=320, height=240, frames=150, fps=30)
+    clip = write_video(scene, tmp_path / "plain.mp4")
+    assert 40_000 < clip.stat().st_size < 5_000_000
+    common = ["--config", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+              "--no-video"]
+    piped = _run(["-", *common, "--out", str(tmp_path / "pipe")], input=clip.read_bytes())
+    assert piped.returncode == 0, piped.stderr
+    assert _run([str(clip), *common, "--out", str(tmp_path / "path")]).returncode == 0
+    assert (tmp_path / "pipe" / "track.csv").read_bytes() == \
+        (tmp_path / "path" / "track.csv").read_bytes()
+
+
 def test_stdin_that_is_no_container_is_one_line_and_a_non_zero_exit(tmp_path: Path) -> None:
     done = _run(["-", "--init", "1,1,8,8", "--no-video", "--out", str(tmp_path / "o")],
                 input=b"not a video at all\n" * 50)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -61,8 +62,9 @@ def test_a_cut_track_csv_is_left_out_with_a_warning(run_dir: Path, tmp_path: Pat
 
 @pytest.mark.parametrize("damage", [
     {"config": 5}, {"input": "clip.mp4"}, {"frames": 1e999}, {"timing": []}, {"summary": "x"},
-    "[" * 100_000 + "]" * 100_000, [1, 2],
-], ids=["config", "input", "frames", "timing", "summary", "deep", "list"])
+    "[" * 100_000 + "]" * 100_000, [1, 2], {"timing": {"fps": "fast"}},
+    {"request": {"gt_origin": 7}},
+], ids=["config", "input", "frames", "timing", "summary", "deep", "list", "fps", "origin"])
 def test_a_hand_damaged_run_json_is_left_out_and_the_other_runs_reported(
         run_dir: Path, tmp_path: Path, damage: dict | str | list) -> None:
     damaged = tmp_path / "damaged"
@@ -71,7 +73,9 @@ def test_a_hand_damaged_run_json_is_left_out_and_the_other_runs_reported(
     record = json.loads((run_dir / "run.json").read_text())
     (damaged / "run.json").write_text(
         damage if isinstance(damage, str)
-        else json.dumps({**record, **damage} if isinstance(damage, dict) else damage))
+        else json.dumps({**record, **{k: ({**record[k], **v} if isinstance(v, dict) else v)
+                                      for k, v in damage.items()}}
+                        if isinstance(damage, dict) else damage))
     result = vtrack("report", str(damaged), str(run_dir), "-o", str(tmp_path / "rep"), "-q")
     stderr = result.stderr.decode()
     assert result.returncode == 0 and "Traceback" not in stderr, stderr
@@ -135,3 +139,32 @@ def test_a_batch_resumes_past_a_hand_damaged_run_json(run_dir: Path, tmp_path: P
     assert "clip [s0]: failed:" in stderr and "--overwrite" in stderr, stderr
     assert vtrack(*args, "-y").returncode == 0  # replaced when asked
     assert json.loads(record_path.read_text())["summary"]["frames"] == FRAMES
+
+
+def test_a_fifo_given_as_ground_truth_is_refused_not_waited_on(run_dir: Path,
+                                                               tmp_path: Path) -> None:
+    """Opening a FIFO waits for a writer: ``report --gt FIFO`` and ``run --gt FIFO`` hung."""
+    fifo = tmp_path / "gt.fifo"
+    os.mkfifo(fifo)
+    for args in (("report", str(run_dir), "--gt", str(fifo), "-o", str(tmp_path / "rep")),
+                 ("run", str(run_dir.parent / "clip.mp4"), "--gt", str(fifo), "-c", "s0",
+                  "--no-video", "-o", str(tmp_path / "run"))):
+        result = vtrack(*args)
+        stderr = result.stderr.decode()
+        assert result.returncode == 2 and "Traceback" not in stderr, stderr
+        assert f"{fifo}: a FIFO, not a file" in stderr, stderr
+
+
+def test_a_relative_ground_truth_not_found_from_here_is_not_called_changed(
+        run_dir: Path, tmp_path: Path) -> None:
+    """Reported from another folder, a run's relative ground-truth path was "changed after
+    the run"; it is only not found there: the run's recorded overlaps score it."""
+    copy = tmp_path / "run"
+    copy.mkdir()
+    record = json.loads((run_dir / "run.json").read_text())
+    record["request"]["gt"] = "elsewhere/clip.gt.txt"
+    (copy / "run.json").write_text(json.dumps(record))
+    (copy / "track.csv").write_bytes((run_dir / "track.csv").read_bytes())
+    code, stderr = report(copy, tmp_path / "rep")
+    assert code == 0 and "changed" not in stderr, stderr
+    assert float(summary_row(tmp_path / "rep")["auc"]) > 0

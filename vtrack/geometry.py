@@ -117,7 +117,8 @@ def iou(a: Box, b: Box) -> float:
         return 0.0
     inter = ix * iy
     union = a.area + b.area - inter
-    return inter / union if union > 0 else 0.0
+    # rounding can put the intersection a hair above the union of two equal boxes
+    return min(inter / union, 1.0) if union > 0 else 0.0
 
 
 def center_error(a: Box, b: Box) -> float:

@@ -29,8 +29,9 @@ FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported 
 
 def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
     """``item`` as a :class:`Frame` numbered ``index``: a Frame as it is; a uint8 ``HxWx3`` BGR
-    or ``HxW`` grey array timed ``index / fps``; an ``av.VideoFrame`` converted to BGR and timed
-    by its own timestamp (``index / fps`` if it has none). TypeError for anything else."""
+    or ``HxW`` grey array timed ``index / fps``; an ``av.VideoFrame`` as ``vtrack run``'s reader
+    takes it (I420 planes, converted as there) and timed by its own timestamp (``index / fps``
+    if it has none). TypeError for anything else."""
     if isinstance(item, Frame):
         return item
     time_s = index / fps
@@ -39,9 +40,11 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
         if to_ndarray is None or type(item).__module__.split(".")[0] != "av":
             raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
                             f"av.VideoFrame, got {type(item).__name__}")
+        from vtrack.io.video import decoded_frame  # PyAV only for a PyAV frame
+
         if item.time is not None:
             time_s = float(item.time)
-        return BgrFrame(index, time_s, to_ndarray(format="bgr24"))
+        return decoded_frame(item, index, time_s)  # as vtrack run reads it
     if item.dtype != np.uint8:
         raise TypeError(f"frame {index}: expected uint8 pixels, got {item.dtype}")
     if item.ndim == 3 and item.shape[2] == 3:

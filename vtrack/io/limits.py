@@ -9,6 +9,7 @@ that kind.
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 from vtrack.errors import InputError
@@ -40,6 +41,8 @@ def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -
     pieces: list[bytes] = []
     size = 0
     try:
+        if stat.S_ISFIFO(os.stat(path).st_mode):  # opening one waits for a writer, maybe for ever
+            raise InputError(f"{path}: a FIFO, not a file: give the {what} as a file")
         with open(path, "rb") as handle:
             while size <= limit:
                 piece = handle.read(min(_PIECE, limit + 1 - size))

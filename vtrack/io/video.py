@@ -200,6 +200,10 @@ def _python_file(container: av.container.InputContainer) -> object:
     return getattr(given, "file", given)
 
 
+#: FFmpeg's read buffer for a container on a pipe: its default probe size (``probesize``).
+PIPE_BUFFER_BYTES = 5_000_000
+
+
 class CountedStream(io.RawIOBase):
     """A stream that cannot seek (a pipe on stdin), read through as it is, counting its bytes
     (``bytes_read``): FFmpeg cannot ask a pipe for its size."""
@@ -213,7 +217,7 @@ class CountedStream(io.RawIOBase):
         return True
 
     def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
-        got = self._raw.readinto(buffer)  # type: ignore[attr-defined]
+        got = self._raw.readinto1(buffer)  # type: ignore[attr-defined]  # what has arrived
         self.bytes_read += got or 0
         return got or 0
 
@@ -228,7 +232,11 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     kwargs: dict[str, Any] = {"format": how.format, "options": dict(how.options)}
     if path == "-":
         stdin = sys.stdin.buffer
-        return av.open(stdin if stdin.seekable() else CountedStream(stdin), **kwargs)
+        if stdin.seekable():
+            return av.open(stdin, **kwargs)
+        # a pipe: FFmpeg's reads are buffered up to its probe size, as ``ffmpeg -i pipe:`` is,
+        # so a container whose index comes last (a plain MP4) that fits opens as it does there
+        return av.open(CountedStream(stdin), buffer_size=PIPE_BUFFER_BYTES, **kwargs)
     if "://" not in path:
         if how.follow_s is not None:
             growing = GrowingFile(path, how.follow_s)
@@ -250,6 +258,26 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
 #: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
 #: records it at the end, once finished).
 INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
+
+
+def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
+                  rotation: int = 0) -> Frame:
+    """A decoded picture as the :class:`Frame` every reader hands over: I420 planes as they
+    are (4:2:0 of even size; converted by OpenCV only where a stage asks), else BGR from
+    FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix)."""
+    even = decoded.width % 2 == 0 and decoded.height % 2 == 0
+    if even and decoded.format.name in I420_FORMATS and rotation:
+        planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height, rotation)
+        return I420Frame(index, time_s, planes, full_range(decoded), bt709(decoded))
+    if even and decoded.format.name in I420_FORMATS:
+        # Views of the decoder's own planes: no 3 MB copy per 1080p frame. Reading them is
+        # safe; the buffers live as long as the views (PyAV refcounts them).
+        return I420Frame.from_planes(index, time_s, *plane_views(decoded),
+                                     full_range=full_range(decoded), bt709=bt709(decoded))
+    bgr = decoded.to_ndarray(format="bgr24")
+    if rotation:
+        bgr = cv2.rotate(bgr, ROTATE_CODES[rotation])
+    return BgrFrame(index, time_s, bgr)
 
 
 def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
@@ -423,7 +451,6 @@ class VideoSource(Source):
         tail = _Tail()
         index = yielded = 0
         last_t: float | None = None
-        even = info.width % 2 == 0 and info.height % 2 == 0
         try:
             for decoded in itertools.chain((first,), self._decoded):
                 if (decoded.width, decoded.height) != self._coded_size:
@@ -449,21 +476,7 @@ class VideoSource(Source):
                 if self._damaged and t is not None and t0 is not None:
                     # Frames lost to damage keep their places (see the module docstring).
                     index = max(index, round(time_s * fps))
-                if even and decoded.format.name in I420_FORMATS and self._rotation:
-                    planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height,
-                                         self._rotation)
-                    yield I420Frame(index, time_s, planes, full_range(decoded), bt709(decoded))
-                elif even and decoded.format.name in I420_FORMATS:
-                    # Views of the decoder's own planes: no 3 MB copy per 1080p frame. Reading
-                    # them is safe; the buffers live as long as the views (PyAV refcounts them).
-                    yield I420Frame.from_planes(index, time_s, *plane_views(decoded),
-                                                full_range=full_range(decoded),
-                                                bt709=bt709(decoded))
-                else:
-                    bgr = decoded.to_ndarray(format="bgr24")
-                    if self._rotation:
-                        bgr = cv2.rotate(bgr, ROTATE_CODES[self._rotation])
-                    yield BgrFrame(index, time_s, bgr)
+                yield decoded_frame(decoded, index, time_s, self._rotation)
                 index += 1
                 yielded += 1
         except av.error.ExitError:  # the timeout's interrupt: a network input went quiet

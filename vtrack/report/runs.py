@@ -298,20 +298,27 @@ def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
 def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
     """Whether the file the run recorded as its ``role`` (``input``, ``gt``) now has another
     identity (size, modification time) than the one ``run.json`` recorded; False when the
-    run recorded none (an older record, or not a regular file)."""
-    recorded = (record.get("identity") or {}).get(role)
-    return recorded is not None and file_identity(path) != recorded
+    run recorded none (an older record, or not a regular file) or the file is not found here
+    (a relative path from another folder: the recorded scores are used, see ``_rescored``)."""
+    recorded, now = (record.get("identity") or {}).get(role), file_identity(path)
+    return recorded is not None and now is not None and now != recorded
 
 
 def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -> RunResult:
-    """What ``run.json`` says of a run (its scores are read after)."""
+    """What ``run.json`` says of a run (its scores are read after). ValueError or TypeError
+    for values of the wrong kind (a record edited by hand)."""
+    fps = (record.get("timing") or {}).get("fps", summary.get("fps"))
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, int | float)):
+        raise ValueError(f"fps {fps!r}")
+    if (record.get("request") or {}).get("gt_origin", 0) not in (0, 1):
+        raise ValueError("gt_origin")
     return RunResult(
         folder=folder,
         input=_input_name(record, folder),
         config=str((record.get("config") or {}).get("name") or summary.get("config") or "?"),
         status=str(record.get("status", "?")),
         frames=int(record.get("frames") or 0),
-        fps=(record.get("timing") or {}).get("fps", summary.get("fps")),
+        fps=fps,
         frames_occluded=int(summary.get("frames_occluded") or 0),
         frames_lost=int(summary.get("frames_lost") or 0),
         multi_target=(folder / "tracks.csv").is_file(),
