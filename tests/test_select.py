@@ -7,7 +7,9 @@ The browser test needs Debian's ``chromium`` and ``chromium-driver`` packages an
 
 from __future__ import annotations
 
+import http.client
 import json
+import os
 import queue
 import shutil
 import subprocess
@@ -15,12 +17,14 @@ import sys
 import threading
 import urllib.error
 import urllib.request
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
+import vtrack as vtrack_package
 from vtrack.errors import InputError
 from vtrack.geometry import Box
 from vtrack.io.sidecar import format_box, read_sidecar, sidecar_path, write_sidecar
@@ -180,6 +184,62 @@ def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> No
     assert out.strip() == "--init 10,20,30,40"
     assert read_sidecar(clip) == Box(10, 20, 30, 40)
     assert "clip.init.txt" in err
+
+
+def test_select_refuses_what_run_refuses_and_takes_one_confirm(tmp_path: Path,
+                                                               clip: Path) -> None:
+    """A 1x1 box and frame 123456 were saved (vtrack run then refused the sidecar); of 12
+    confirms sent at once two were taken, the printed box not the saved one; a malformed
+    sidecar stopped select from starting at all."""
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(clip.read_bytes())
+    sidecar_path(video).write_text("garbage\n")
+    select = Select(str(video))
+    try:
+        status, answer = post(select.url + "select", {"box": [10.5, 20.25, 1, 1], "frame": 0})
+        assert status == 400 and "smaller than 4x4" in answer["error"]
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 123456})
+        assert status == 400 and "frame 123456: the input's frames are 0..11" in answer["error"]
+        assert sidecar_path(video).read_text() == "garbage\n"
+        def confirm(i: int) -> tuple[int | None, dict]:
+            try:
+                return post(select.url + "select", {"box": [i, 10, 20, 20], "frame": 0})
+            except (OSError, http.client.HTTPException):  # closed once one was taken
+                return None, {}
+
+        with ThreadPoolExecutor(12) as pool:
+            answers = list(pool.map(confirm, range(12)))
+        taken = [i for i, (status, _) in enumerate(answers) if status == 200]
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert len(taken) == 1 and code == 0, (answers, err)
+    assert "garbage" in err and "the box you confirm replaces it" in err
+    assert out.strip() == f"--init {taken[0]},10,20,20"
+    assert read_sidecar(video) == Box(taken[0], 10, 20, 20)
+
+
+def test_select_on_stdin_writes_no_sidecar(tmp_path: Path, clip: Path) -> None:
+    """``select -`` wrote ``./-.init.txt``, which ``run -`` never reads, and said run used it."""
+    with clip.open("rb") as stdin:
+        process = subprocess.Popen([sys.executable, "-m", "vtrack", "select", "-"], stdin=stdin,
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(
+                                       Path(vtrack_package.__file__).parents[1])})  # this one
+    select = Select.__new__(Select)
+    select.process, select.lines = process, queue.Queue()
+    select.reader = threading.Thread(target=select._read, daemon=True)
+    select.reader.start()
+    line = select.lines.get(timeout=30)
+    select.url = line[line.index("http://"):].split()[0]
+    try:
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 0})
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert status == 200 and answer["sidecar"] is None and code == 0, err
+    assert out.strip() == "--init 10,20,30,40" and "give the box to vtrack run as --init" in err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_select_a_frame_past_the_end_is_an_error(clip: Path) -> None:

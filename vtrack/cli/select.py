@@ -33,11 +33,18 @@ def command(input_spec: str, frame: int, port: int) -> None:
         click.echo(f"vtrack select: drag a box around the target at {server.url}  "
                    f"(Ctrl-C to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "
                    "HOST)", err=True)
+        if server.unreadable:
+            click.echo(f"vtrack: warning: {server.unreadable}; the box you confirm replaces it",
+                       err=True)
         selection = server.wait()
     if selection.frame != 0:
         click.echo(f"vtrack: warning: the box was drawn on frame {selection.frame}; the saved "
                    "box is used from frame 0: to track from this frame, run with --start "
                    f"{selection.frame} --init {format_box(selection.box)}", err=True)
     click.echo(f"--init {format_box(selection.box)}")
-    click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch use it "
-               "when no --init is given)", err=True)
+    if selection.sidecar is None:
+        click.echo(f"vtrack select: {input_spec} has no sidecar file (stdin, a URL or a "
+                   "device): give the box to vtrack run as --init", err=True)
+    else:
+        click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch "
+                   "use it when no --init is given)", err=True)

@@ -96,8 +96,9 @@ $("confirm").onclick = () => {
                     body: JSON.stringify({ box: box, frame: index }) })
     .then((r) => r.json()).then((res) => {
       if (res.error) { $("status").textContent = res.error; return; }
-      $("status").textContent = "Done: --init " + res.init + " (saved in " + res.sidecar +
-                                "). You can close this page.";
+      const saved = res.sidecar ? " (saved in " + res.sidecar + ")" :
+                                  " (this input has no sidecar file: give it as --init)";
+      $("status").textContent = "Done: --init " + res.init + saved + ". You can close this page.";
       document.body.dataset.done = res.init;
       ["prev", "next", "confirm"].forEach((id) => { $(id).disabled = true; });
     });

@@ -30,9 +30,9 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from vtrack.errors import ConfigError, VtrackError
-from vtrack.geometry import Box
-from vtrack.io.sidecar import format_box, read_sidecar, write_sidecar
+from vtrack.errors import ConfigError, InputError, VtrackError
+from vtrack.geometry import MIN_BOX_SIDE, Box
+from vtrack.io.sidecar import format_box, has_sidecar, read_sidecar, write_sidecar
 from vtrack.picker.frames import FrameStore
 from vtrack.picker.page import PAGE
 
@@ -119,11 +119,12 @@ def _box_values(values: Any) -> list[float]:
 
 @dataclass(frozen=True)
 class Selection:
-    """What the user confirmed: the box, the frame it was drawn on, the sidecar written."""
+    """What the user confirmed: the box, the frame it was drawn on, the sidecar written (None
+    for an input that has none: stdin, a URL, a device)."""
 
     box: Box
     frame: int
-    sidecar: Path
+    sidecar: Path | None
 
 
 class SelectionServer:
@@ -135,7 +136,13 @@ class SelectionServer:
         self.frame = frame
         self.selection: Selection | None = None
         self._done = threading.Event()
-        self._saved = read_sidecar(input_spec)
+        self._confirming = threading.Lock()  # one confirmed box, however many arrive at once
+        #: Why an existing sidecar could not be read (it is replaced on confirm), if it could not.
+        self.unreadable: str | None = None
+        try:
+            self._saved = read_sidecar(input_spec)
+        except InputError as exc:
+            self._saved, self.unreadable = None, str(exc)
         self.token = secrets.token_urlsafe(16)
         try:
             self._httpd = _BoundedServer((HOST, port), self._handler())
@@ -159,12 +166,19 @@ class SelectionServer:
         width, height = self.store.info.width, self.store.info.height
         if box.w < 1 or box.h < 1:
             raise ConfigError("the box is empty: drag a box around the target")
+        if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:  # what vtrack run refuses
+            raise ConfigError(f"the box {format_box(box)} is smaller than "
+                              f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} pixels, too small to track")
         if box.x < 0 or box.y < 0 or box.x + box.w > width or box.y + box.h > height:
             raise ConfigError(f"the box {format_box(box)} is not inside the {width}x{height} "
                               "frame")
-        frame = body.get("frame")
-        valid = isinstance(frame, int) and not isinstance(frame, bool) and 0 <= frame <= MAX_FRAME
-        return Selection(box, frame if valid else self.frame, write_sidecar(self.input_spec, box))
+        frame = body.get("frame", self.frame)
+        last = MAX_FRAME if self.store.count is None else self.store.count - 1
+        if isinstance(frame, bool) or not isinstance(frame, int) or not 0 <= frame <= last:
+            raise ConfigError(f"frame {frame!r}: the input's frames are 0..{last}")
+        sidecar = (write_sidecar(self.input_spec, box) if has_sidecar(self.input_spec)
+                   else None)
+        return Selection(box, frame, sidecar)
 
     def wait(self) -> Selection:
         """Serve until a box is confirmed; return it. Ctrl-C raises KeyboardInterrupt."""
@@ -260,11 +274,15 @@ class SelectionServer:
                 if (self.headers.get("Content-Type") or "").split(";")[0] != "application/json":
                     raise _Refused(415, "expected Content-Type: application/json")
                 body = self._body()
-                selection = server.select(body if isinstance(body, dict) else {})
-                server.selection = selection
+                with server._confirming:
+                    if server._done.is_set():  # another confirm came first
+                        raise _Refused(404, "not found")
+                    selection = server.select(body if isinstance(body, dict) else {})
+                    server.selection = selection
+                    server._done.set()
                 self._json({"init": format_box(selection.box),
-                            "sidecar": selection.sidecar.name})
-                server._done.set()
+                            "sidecar": None if selection.sidecar is None
+                            else selection.sidecar.name})
 
             def _body(self) -> Any:
                 """The request's JSON body, read only when small (_Refused otherwise)."""
