@@ -115,6 +115,28 @@ def test_frame_of_a_sequence_folder_default_name(tmp_path: Path) -> None:
     assert cv2.imread(str(tmp_path / "Seq-frame2.png")).shape == (120, 160, 3)
 
 
+def test_frame_never_writes_into_its_input(clip: Path, tmp_path: Path) -> None:
+    """``-o seq/img/0001.jpg`` burnt the grid into the input's own frame; ``frame -`` wrote
+    ``--frame0.png``."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    first = (folder / "img" / "0001.jpg").read_bytes()
+    for out in (folder / "img" / "0001.jpg", folder / "img" / "0011.png", folder / "x.png"):
+        done = vtrack("frame", str(folder), "-o", str(out))
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.strip() == (f"vtrack: error: --out {out}: is, or is inside, the "
+                                       f"input {folder} (it would replace or add one of its "
+                                       "frames); write the image elsewhere")
+    assert (folder / "img" / "0001.jpg").read_bytes() == first
+    assert sorted(p.name for p in folder.rglob("*.png")) == []
+    with clip.open("rb") as stdin:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "frame", "-"], stdin=stdin,
+                              capture_output=True, text=True, timeout=60, check=False,
+                              cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(
+                                  Path(vtrack_package.__file__).parents[1])})
+    assert done.returncode == 0 and (tmp_path / "stdin-frame0.png").is_file(), done.stderr
+
+
 class Select:
     """``vtrack select`` running in a subprocess; ``url`` is the page it printed."""
 

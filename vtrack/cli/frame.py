@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import click
@@ -23,13 +24,20 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
     """Write frame N of INPUT as an image with a light pixel grid and its scale (x along the
     top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError, OutputError
+    from vtrack.io.specs import input_name
     from vtrack.picker.frames import encode_image, read_frame
     from vtrack.picker.grid import draw_grid
 
-    out = out or Path(f"{Path(input_spec.rstrip('/')).stem or 'input'}-frame{index}.png")
+    out = out or Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
     ext = out.suffix.lower().replace(".jpeg", ".jpg")
     if ext not in (".png", ".jpg"):
         raise ConfigError(f"--out {out}: write a .png or .jpg image")
+    source = Path(input_spec)
+    if input_spec != "-" and source.exists() and (
+            (out.exists() and os.path.samefile(out, source))
+            or (source.is_dir() and source.resolve() in out.resolve().parents)):
+        raise ConfigError(f"--out {out}: is, or is inside, the input {input_spec} (it would "
+                          "replace or add one of its frames); write the image elsewhere")
     bgr = read_frame(input_spec, index)
     image = bgr if no_grid else draw_grid(bgr, step)
     try:
