@@ -9,6 +9,7 @@ import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import av
 import cv2
 import pytest
 from click.testing import CliRunner, Result
@@ -225,6 +226,60 @@ def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
     assert rows[("never", "s0")]["status"] == "interrupted"
     assert rows[("smooth", "s0")]["error"] == "smooth.mp4: a broken frame"
     assert len(rows) == 5
+
+
+def test_a_run_that_did_not_complete_is_never_marked_best_and_says_how_far_it_got(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """A failed run scored on the frames it reached was bolded as the input's best AUC, its
+    status only "failed"."""
+    _, original = batch_out
+    batch = tmp_path / "batch"
+    shutil.copytree(original, batch)
+    scores = {}
+    for config in ("s0", "camshift"):
+        scores[config] = json.loads((batch / "occlusion" / config / "run.json").read_text())[
+            "metrics"]["auc"]
+    better, worse = sorted(scores, key=scores.get, reverse=True)
+    record_path = batch / "occlusion" / better / "run.json"
+    record = json.loads(record_path.read_text())
+    record.update(status="failed", error="occlusion.mp4: a broken frame")
+    record_path.write_text(json.dumps(record))
+    report = tmp_path / "report"
+    assert vtrack("report", str(batch), "--out", str(report)).exit_code == 0
+    html = (report / "index.html").read_text()
+    body = re.findall(r"<table[^>]*>(.*?)</table>", html, re.S)[1]
+    rows = {tuple(re.findall(r"<td[^>]*>(.*?)</td>", row)[:2]): row
+            for row in re.findall(r"<tr[^>]*>(.*?)</tr>", body)[1:]}
+    assert "best" not in rows[("occlusion", better)]  # (one complete run left: none is best)
+    assert "best" not in rows[("occlusion", worse)]
+    frames = record["input"]["frame_count"]
+    assert f"failed: {record['frames']} of {frames} frames" in rows[("occlusion", better)]
+
+
+def test_a_partial_run_whose_name_was_told_apart_is_not_listed_without_results(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`a.mp4` and a cut `a.ts`: the partial a.ts had results, yet was also listed under
+    "Runs without results" (its batch row was matched by name, told apart since)."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    shutil.copy(clip.path, folder / "a.mp4")
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    with av.open(str(clip.path)) as source, av.open(str(tmp_path / "a.ts"), "w") as ts:
+        stream = ts.add_stream_from_template(source.streams.video[0])
+        for packet in source.demux(video=0):
+            if packet.dts is not None:
+                packet.stream = stream
+                ts.mux(packet)
+    data = (tmp_path / "a.ts").read_bytes()
+    (folder / "a.ts").write_bytes(data[: len(data) * 2 // 3])
+    out = tmp_path / "out"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "--out", str(out)
+                  ).exit_code == 1  # the cut one is partial
+    report = tmp_path / "report"
+    assert vtrack("report", str(out), "--out", str(report)).exit_code == 0
+    markdown = (report / "summary.md").read_text()
+    assert "partial" in markdown and "Runs without results" not in markdown
 
 
 def test_a_report_of_single_and_multi_target_runs_has_distinct_columns(

@@ -34,6 +34,7 @@ from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
 from vtrack.geometry import Box
+from vtrack.io.files import folder_name
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
 from vtrack.run import STATUS_COMPLETE
@@ -418,8 +419,9 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
 
 def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = ()) -> list[FailedRun]:
     """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
-    left no results (no run of ``reported`` has their input and configuration)."""
-    ran = {(run.input, run.config) for run in reported}
+    left no results (no run of ``reported`` is in their results folder, the batch's
+    ``<input>/<config>/``: names alone may have been told apart since)."""
+    ran = {run.folder.resolve() for run in reported}
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
@@ -432,6 +434,7 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = ()) -> li
                                      r["error"] or "never ran (the batch stopped first)",
                                      r["status"]) for r in rows
                            if r["status"] != STATUS_COMPLETE
-                           and (r["input"], r["config"]) not in ran]
+                           and (summary.parent / folder_name(r["input"], "input")
+                                / folder_name(r["config"])).resolve() not in ran]
     return failed
 

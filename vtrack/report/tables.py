@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from vtrack.errors import plural
 from vtrack.report.runs import RunResult
-from vtrack.run import STATUS_INTERRUPTED, STATUS_PARTIAL
+from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, STATUS_PARTIAL
 
 #: Multi-target metrics the page shows, in this order, when a run records them: key ->
 #: (title as MOTChallenge abbreviates it, which way is better (None: not ranked), tooltip).
@@ -118,20 +118,22 @@ def _text(value: float | None, digits: int) -> str:
 
 
 def _add_group(table: Table, labels: list[list[str]], values: list[Values],
-               columns: Sequence[Column]) -> None:
-    """Append rows (label cells, then the formatted values) marking each column's best."""
+               columns: Sequence[Column], ranked: Sequence[bool] | None = None) -> None:
+    """Append rows (label cells, then the formatted values) marking each column's best among
+    the ``ranked`` rows (default all: a run that did not complete scores frames it chose)."""
     table.groups.append(len(table.rows))
     rows = [[Cell(t) for t in label] + [Cell(_text(v, c.digits))
                                         for v, c in zip(row, columns, strict=True)]
             for label, row in zip(labels, values, strict=True)]
     offset = len(labels[0]) if labels else 0
+    ranked = [True] * len(values) if ranked is None else ranked
     for c, column in enumerate(columns):
-        present = [row[c] for row in values if _finite(row[c])]
+        present = [row[c] for row, r in zip(values, ranked, strict=True) if r and _finite(row[c])]
         if column.higher_is_better is None or len(set(present)) < 2:
             continue
         best = max(present) if column.higher_is_better else min(present)
-        for cells, row in zip(rows, values, strict=True):
-            cells[offset + c].best = row[c] == best
+        for cells, row, r in zip(rows, values, ranked, strict=True):
+            cells[offset + c].best = r and row[c] == best
     table.rows += rows
 
 
@@ -170,9 +172,9 @@ INCOMPLETE = (STATUS_PARTIAL, STATUS_INTERRUPTED)
 
 
 def status_text(run: RunResult) -> str:
-    """The run's status; one that stopped early says how far it got
-    (``partial: 40 of 60 frames``)."""
-    if run.status in INCOMPLETE and run.input_frames:
+    """The run's status; one that stopped early (partial, interrupted, failed) says how far
+    it got (``partial: 40 of 60 frames``)."""
+    if run.status != STATUS_COMPLETE and run.input_frames:
         return f"{run.status}: {run.frames} of {plural(run.input_frames, 'frame')}"
     return run.status
 
@@ -187,7 +189,7 @@ def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
     for runs in by_input:
         _add_group(table, [_run_label(r) for r in runs],
                    [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
-                   RESULT_COLUMNS)
+                   RESULT_COLUMNS, [r.status == STATUS_COMPLETE for r in runs])
     return table
 
 
