@@ -314,3 +314,62 @@ def test_inputs_of_one_name_in_two_containers_are_two_inputs(
     assert "2 runs of 2 inputs with 1 configurations" in markdown
     assert "| a.mkv | s0 |" in markdown and "| a.mp4 | s0 |" in markdown
     assert "different inputs" not in markdown
+
+
+def _table_labels(markdown: str) -> set[tuple[str, str]]:
+    """(input, config) of every row of the results table in summary.md."""
+    rows = markdown.split("## Results per input and configuration", 1)[1].split("\n## ", 1)[0]
+    return {tuple(c.strip() for c in line.strip("|").split("|")[:2])
+            for line in rows.splitlines()[4:] if line.startswith("|")}
+
+
+def test_one_file_name_in_two_folders_is_two_inputs(clip_factory: ClipFactory,
+                                                    tmp_path: Path) -> None:
+    """Two different clip.mp4 were one input (their runs two configs, "s0 (bx)" and "s0 (by)"),
+    and one's boxes were drawn on the other's frames."""
+    for name, scenario in (("x", "smooth"), ("y", "jump")):
+        folder = tmp_path / f"d{name}"
+        folder.mkdir()
+        clip = clip_factory(scenario, width=W, height=H, frames=40)
+        shutil.copy(clip.path, folder / "clip.mp4")
+        shutil.copy(clip.gt, folder / "clip.gt.txt")
+        assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "--out",
+                      str(tmp_path / f"b{name}")).exit_code == 0
+    result = vtrack("report", str(tmp_path / "bx"), str(tmp_path / "by"), "--out",
+                    str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert _table_labels(markdown) == {("clip (bx)", "s0"), ("clip (by)", "s0")}
+
+
+def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Two TOML files both named "mine": run on different inputs they were averaged as one
+    config; run on overlapping inputs one batch's config got two labels."""
+    shipped = (Path(__file__).parents[1] / "vtrack" / "configs" / "s0.toml").read_text()
+    configs = {}
+    for name, iterations in (("A", 1), ("B", 10)):
+        (tmp_path / name).mkdir()
+        configs[name] = tmp_path / name / "mine.toml"
+        configs[name].write_text(shipped.replace('name = "s0"', 'name = "mine"', 1).replace(
+            "\niterations = 1\n", f"\niterations = {iterations}\n", 1))
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for scenario in ("smooth", "jump"):
+        clip = clip_factory(scenario, width=W, height=H, frames=40)
+        shutil.copy(clip.path, inputs / f"{scenario}.mp4")
+        shutil.copy(clip.gt, inputs / f"{scenario}.gt.txt")
+    assert vtrack("batch", str(inputs), "-c", str(configs["A"]), "--no-video", "--out",
+                  str(tmp_path / "bA")).exit_code == 0
+    only_smooth = tmp_path / "in-smooth"
+    only_smooth.mkdir()
+    for name in ("smooth.mp4", "smooth.gt.txt"):
+        shutil.copy(inputs / name, only_smooth / name)
+    assert vtrack("batch", str(only_smooth), "-c", str(configs["B"]), "--no-video", "--out",
+                  str(tmp_path / "bB")).exit_code == 0
+    result = vtrack("report", str(tmp_path / "bA"), str(tmp_path / "bB"), "--out",
+                    str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert _table_labels(markdown) == {("jump", "mine (bA)"), ("smooth", "mine (bA)"),
+                                       ("smooth", "mine (bB)")}

@@ -67,30 +67,49 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
 
 
 def _distinct_inputs(runs: list[RunResult]) -> None:
-    """Name runs of one input name but different input files (``a.mp4`` and ``a.mkv``,
-    which a batch keeps apart) by their file names: they are different inputs, not
-    different configurations."""
-    for group in _group(runs, lambda r: r.input).values():
-        names = {r.source: Path(r.source).name for r in group if r.source is not None}
-        if len(names) > 1 and len(set(names.values())) == len(names):
-            for run in group:
-                if run.source is not None:
-                    run.input = names[run.source]
+    """Name runs of one input name but different input files apart: by their file names where
+    those differ (``a.mp4`` and ``a.mkv``, which a batch keeps apart), else by where their
+    results are (two ``clip.mp4`` of two folders: ``clip (batch-x)``). They are different
+    inputs, not different configurations."""
+    for name, group in _group(runs, lambda r: r.input).items():
+        files = _group(group, lambda r: r.input_key)
+        if len(files) < 2:
+            continue
+        names = {key: Path(g[0].source).name for key, g in files.items() if g[0].source}
+        if len(names) == len(files) and len(set(names.values())) == len(names):
+            labels = names
+        else:
+            places = _places([g[0].folder for g in files.values()])
+            labels = {key: f"{name} ({place})" for key, place in zip(files, places, strict=True)}
+        for key, same in files.items():
+            for run in same:
+                run.input = labels[key]
 
 
 def _distinct_labels(runs: list[RunResult]) -> None:
-    """Give runs of the same input and config name (e.g. from two batch folders) distinct
-    config labels, suffixed with where they differ: ``s0 (batch-a)``."""
-    groups: dict[tuple[str, str], list[RunResult]] = {}
-    for run in runs:
-        groups.setdefault((run.input, run.config), []).append(run)
-    for group in (g for g in groups.values() if len(g) > 1):
-        common = os.path.commonpath([r.folder for r in group])
-        paths = [os.path.relpath(r.folder, common) for r in group]
-        heads = [p.split(os.sep)[0] for p in paths]
-        where = heads if len(set(heads)) == len(heads) else paths
-        for run, place in zip(group, where, strict=True):
-            run.config = f"{run.config} ({place})"
+    """Give runs of one config name distinct config labels, suffixed with where they differ
+    (``s0 (batch-a)``): configs of that name whose chains differ (two TOML files), each one
+    label over every input; then runs of the same input and config label (two batch folders)."""
+    for name, group in _group(runs, lambda r: r.config).items():
+        chains = _group(group, lambda r: r.config_key)
+        if len(chains) > 1:
+            places = _places([g[0].folder for g in chains.values()])
+            for same, place in zip(chains.values(), places, strict=True):
+                for run in same:
+                    run.config = f"{name} ({place})"
+    for group in _group(runs, lambda r: f"{r.input}\0{r.config}").values():
+        if len(group) > 1:
+            for run, place in zip(group, _places([r.folder for r in group]), strict=True):
+                run.config = f"{run.config} ({place})"
+
+
+def _places(folders: Sequence[Path]) -> list[str]:
+    """Where each of ``folders`` differs from the others: its first folder below their common
+    one, or its whole path from there when those are not distinct."""
+    common = os.path.commonpath(folders)
+    paths = [os.path.relpath(folder, common) for folder in folders]
+    heads = [path.split(os.sep)[0] for path in paths]
+    return heads if len(set(heads)) == len(heads) else paths
 
 
 def _group(runs: Sequence[RunResult], key: Callable[[RunResult], str]

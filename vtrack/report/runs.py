@@ -20,6 +20,7 @@ nowhere else.
 from __future__ import annotations
 
 import csv
+import json
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -121,6 +122,10 @@ class RunResult:
     #: The tracker's box per frame (None: lost) and the ground truth's, when it was rescored.
     boxes: list[Box | None] = field(default_factory=list)
     truth: list[Box | None] | None = None
+    #: What tells inputs of one name apart (:func:`_input_key`).
+    input_key: str = ""
+    #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
+    config_key: str = ""
 
     @cached_property
     def scores(self) -> Scores | None:
@@ -296,6 +301,18 @@ def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
                          "after the run); not scored")
 
 
+def _input_key(record: dict[str, Any]) -> str:
+    """What tells a run's input from another of the same name: its file name and the file's
+    size (and a folder's file count) as the run recorded them, not the modification time (a
+    copy of the same clip is the same input) nor the folder (a relative path's depends on where
+    the run was started)."""
+    identity = (record.get("identity") or {}).get("input")
+    given = str((record.get("request") or {}).get("input") or "")
+    return json.dumps({"name": Path(given.rstrip("/")).name,
+                       **({k: identity.get(k) for k in ("size", "files")}
+                          if isinstance(identity, dict) else {})}, sort_keys=True)
+
+
 def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
     """Whether the file the run recorded as its ``role`` (``input``, ``gt``) now has another
     identity (size, modification time) than the one ``run.json`` recorded; False when the
@@ -325,6 +342,9 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         multi_target=(folder / "tracks.csv").is_file(),
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
+        input_key=_input_key(record),
+        config_key=json.dumps((record.get("config") or {}).get("stages") or "",
+                              sort_keys=True),
     )
 
 
