@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import av
 import cv2
@@ -13,7 +14,8 @@ from click.testing import CliRunner
 from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box, center_error
-from vtrack.scenes import SCENARIOS, make_scene, write_groundtruth, write_raw
+from vtrack.io import open_source
+from vtrack.scenes import SCENARIOS, make_scene, write_clip, write_groundtruth, write_raw
 
 
 def target_mask(bgr: np.ndarray) -> np.ndarray:
@@ -506,3 +508,20 @@ def test_grey_target_on_grey_texture_has_no_colour_but_contrast(seed):
                                                                           scene.height)
     assert abs(inside - bgr[ring.slices].mean()) > 15  # the target stands out in grey level
     assert cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY).std() > 5  # textured background
+
+
+@pytest.mark.parametrize("fmt", ["images", "mp4"])
+def test_a_scene_written_over_another_leaves_nothing_of_it(tmp_path: Path, fmt: str) -> None:
+    """An 80-frame multi-target clip overwritten by a 20-frame one kept 60 of its images and
+    its MOTChallenge file: `vtrack run` then tracked 80 frames against the new ground truth."""
+    out = tmp_path / ("seq" if fmt == "images" else "clip.mp4")
+    first = write_clip(make_scene("multi", seed=0, width=64, height=48, frames=80, fps=30), out,
+                       fmt=fmt)
+    assert first.mot is not None and first.mot.is_file()
+    second = write_clip(make_scene("smooth", seed=0, width=64, height=48, frames=20, fps=30),
+                        out, fmt=fmt)
+    assert second.mot is None and not first.mot.exists()
+    if fmt == "images":
+        assert len(list((out / "img").iterdir())) == 20
+    with open_source(str(out)) as source:
+        assert len(list(source)) == 20

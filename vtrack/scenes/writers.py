@@ -16,6 +16,7 @@ Every writer creates missing parent folders and turns an OS failure into
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -230,6 +231,10 @@ class ClipFiles:
     mot: Path | None
 
 
+#: The images :func:`write_image_sequence` names (``0001.jpg``).
+IMAGE_NAME = re.compile(r"\d{4,}\.(jpg|png)")
+
+
 def write_clip(
     scene: Scene,
     out: str | Path,
@@ -247,8 +252,18 @@ def write_clip(
 
     Scenes with more than one tracked object (``multi``) also get MOTChallenge ground truth:
     ``<stem>.mot.txt`` beside a file, ``out/groundtruth_mot.txt`` in an image folder.
+    Written over an earlier clip, nothing of that one is left: its numbered images in
+    ``out/img`` and a MOTChallenge file the new scene does not have are removed.
     """
     out = Path(out)
+    multi = any(len(tracks) > 1 for tracks in scene.tracks)
+    mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
+    stale = [mot] if not multi else []
+    if fmt == "images" and (out / "img").is_dir():
+        stale += [f for f in (out / "img").iterdir() if IMAGE_NAME.fullmatch(f.name)]
+    with _writing(out):
+        for path in stale:
+            path.unlink(missing_ok=True)
     if fmt == "mp4":
         pix = pix_fmt or "yuv420p"
         write_video(scene, out, crf=crf, preset=preset, pix_fmt=pix, progress=progress)
@@ -258,9 +273,6 @@ def write_clip(
         write_image_sequence(scene, out, progress=progress)
     else:
         raise ConfigError(f"clip format {fmt!r}: choose one of {', '.join(CLIP_FORMATS)}")
-    if fmt == "images":
-        gt, mot = out / "groundtruth_rect.txt", out / "groundtruth_mot.txt"
-    else:
-        gt, mot = write_groundtruth(scene, sidecar(out, "gt")), sidecar(out, "mot")
-    multi = any(len(tracks) > 1 for tracks in scene.tracks)
+    gt = (out / "groundtruth_rect.txt" if fmt == "images"
+          else write_groundtruth(scene, sidecar(out, "gt")))
     return ClipFiles(out, gt, write_mot_groundtruth(scene, mot) if multi else None)
