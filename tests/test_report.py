@@ -126,6 +126,26 @@ def test_report_scores_a_run_without_ground_truth_with_gt(clip_factory: ClipFact
     assert row["ground_truth"] == str(clip.gt)
 
 
+def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: ClipFactory,
+                                                                 tmp_path: Path) -> None:
+    """A plain --gt FILE scored every input of its length, another clip's included (AUC 0.02
+    for the wrong one), without a word."""
+    runs = tmp_path / "runs"
+    for scenario in ("smooth", "jump"):
+        clip = clip_factory(scenario, width=W, height=H, frames=40)
+        first = clip.gt.read_text().splitlines()[0]
+        assert vtrack("run", str(clip.path), "--init", first, "--no-video", "--quiet",
+                      "--out", str(runs / scenario)).exit_code == 0
+    truth = clip_factory("smooth", width=W, height=H, frames=40).gt
+    result = vtrack("report", str(runs), "--gt", str(truth), "--out", str(tmp_path / "rep"))
+    assert result.exit_code == 0, result.output
+    assert f"--gt {truth} scored 2 inputs (jump_" in result.stderr
+    assert "each of its length: give --gt INPUT=FILE for each input" in result.stderr
+    alone = vtrack("report", str(runs / "smooth"), "--gt", str(truth), "--out",
+                   str(tmp_path / "alone"))
+    assert alone.exit_code == 0 and "scored" not in alone.stderr
+
+
 def write_multi_target_run(folder: Path, metrics: dict[str, float]) -> None:
     """A multi-target run folder as `vtrack run` leaves it (tracks.csv + run.json)."""
     folder.mkdir(parents=True)

@@ -180,6 +180,11 @@ def build_report(results: Sequence[Path], out_dir: Path,
         if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
             warnings.append(f"--gt {truth.input}={truth.path}: no run of input {truth.input} "
                             "was scored with it")
+        scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
+        if truth.input is None and len(scored) > 1:  # one file is one input's ground truth
+            warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
+                            f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
+                            "for each input")
     failed = failed_runs(results, runs)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
