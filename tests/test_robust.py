@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 import pytest
 
+from vtrack import Tracker
 from vtrack.config import load_config
 from vtrack.errors import ConfigError
 from vtrack.evaluate.metrics import frame_scores, mean_overlap
@@ -288,3 +289,13 @@ def test_initial_box_outside_frame_is_a_user_error() -> None:
     frames = [BgrFrame(0, 0.0, np.zeros((48, 64, 3), np.uint8))]
     with pytest.raises(InputError, match="robust_model"):
         list(Pipeline(load_config("robust").build()).track(frames, Box(100, 100, 10, 10)))
+
+
+def test_a_featureless_frame_changes_no_size() -> None:
+    """On black frames every scale matches alike; the first scale (the smallest) was taken each
+    frame and the box shrank from 40x30 to the least size within 8 frames."""
+    tracker = Tracker("robust")
+    black = np.zeros((240, 320, 3), np.uint8)
+    results = [tracker.init(black, (100, 100, 40, 30))]
+    results += [tracker.update(black) for _ in range(20)]
+    assert all(r.box is not None and (r.box.w, r.box.h) == (40, 30) for r in results)

@@ -94,13 +94,17 @@ class ScaleFilter:
         self.denominator = (1 - self.rate) * self.denominator + self.rate * energy
 
     def ratio(self, samples: np.ndarray) -> float:
-        """The size ratio whose (interpolated) scale the filter matches best (1: unchanged)."""
+        """The size ratio whose (interpolated) scale the filter matches best (1: unchanged, also
+        when no scale matches better than another)."""
         assert self.template is not None and self.denominator is not None, "ratio before learn"
         # DSST eq. 6: sum over features of conj(F(template)) F(sample), times the label
         response_f = self.label_f * np.fft.fft(_correlation(self.template, samples)) / (
             self.denominator + SCALE_LAMBDA)
         response = np.fft.fftshift(np.fft.ifft(_resized_spectrum(
             response_f, self.interp_scales)).real)
+        peak = float(np.abs(response).max())
+        if peak == 0.0 or float(np.ptp(response)) <= 1e-6 * peak:
+            return 1.0  # a flat response (a featureless patch) is no evidence of a new size
         return float(self.interp_factors[int(np.argmax(response))])
 
 
