@@ -146,6 +146,21 @@ def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: Cli
     assert alone.exit_code == 0 and "scored" not in alone.stderr
 
 
+def test_a_config_without_ground_truth_is_not_said_to_be_scored_on_other_inputs(
+        batch_out: tuple[Path, Path], clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A config scored nowhere (no ground truth) made every report say "configurations were
+    scored on different inputs"."""
+    _, batch = batch_out
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    first = clip.gt.read_text().splitlines()[0]
+    unscored = tmp_path / "unscored"
+    assert vtrack("run", str(clip.path), "--init", first, "-c", "s2", "--no-video", "--quiet",
+                  "--out", str(unscored)).exit_code == 0
+    result = vtrack("report", str(batch), str(unscored), "--out", str(tmp_path / "rep"))
+    assert result.exit_code == 0 and "no ground truth" in result.stderr
+    assert "different inputs" not in result.stderr
+
+
 def write_multi_target_run(folder: Path, metrics: dict[str, float]) -> None:
     """A multi-target run folder as `vtrack run` leaves it (tracks.csv + run.json)."""
     folder.mkdir(parents=True)
