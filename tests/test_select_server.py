@@ -8,6 +8,8 @@ from __future__ import annotations
 import contextlib
 import json
 import socket
+import subprocess
+import sys
 import time
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -197,3 +199,26 @@ def test_the_frame_cache_stays_within_its_budget(clip: Path) -> None:
             assert store.get(i) == first[i]
             assert store.cached_bytes <= 3 * one
         assert store.get(40) is None and store.count == 40
+
+
+def test_a_stream_whose_early_frames_left_the_cache_says_it_cannot_be_read_again(
+        clip: Path) -> None:
+    """``select -``: once frame 0 left the cache, asking for it read stdin again from where it
+    was and answered "not a video FFmpeg can decode"."""
+    script = """if True:
+        from vtrack.errors import InputError
+        from vtrack.picker.frames import FrameStore
+        with FrameStore("-", cache_bytes=1) as store:
+            assert store.get(30) is not None
+            try:
+                store.get(0)
+            except InputError as exc:
+                print(exc)
+    """
+    with clip.open("rb") as stdin:
+        done = subprocess.run([sys.executable, "-c", script], stdin=stdin, capture_output=True,
+                              text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == ("-: its earlier frames are no longer held and it cannot be "
+                                   "read again (a stream); pick a later frame, or give the "
+                                   "input as a file")

@@ -19,6 +19,7 @@ import numpy as np
 from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.io import open_source
+from vtrack.io.sidecar import has_sidecar
 from vtrack.io.source import InputInfo, Source
 
 
@@ -96,6 +97,10 @@ class FrameStore:
             self.cached_bytes -= len(dropped)
 
     def _rewind(self) -> None:
+        if not has_sidecar(self._spec):  # not a file or folder (stdin, URL, device): read once
+            raise InputError(f"{self._spec}: its earlier frames are no longer held and it "
+                             "cannot be read again (a stream); pick a later frame, or give "
+                             "the input as a file")
         self._source.close()
         self._source = open_source(self._spec)
         self._frames = iter(self._source)
