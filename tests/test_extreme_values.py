@@ -3,11 +3,15 @@ are one line and a non-zero exit, never a traceback."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 from test_cli import assert_one_line_error, vtrack
 
+import vtrack as vtrack_package
 from vtrack.scenes import make_scene, write_clip, write_groundtruth, write_video
 
 W, H, FRAMES = 64, 48, 20
@@ -54,6 +58,18 @@ def test_scene_extremes_are_one_line(tmp_path: Path, args, needle) -> None:
     result = vtrack("scene", "smooth", str(tmp_path / "s.mp4"), *args)
     assert_one_line_error(result, needle)
     assert not (tmp_path / "s.mp4").exists()
+
+
+@pytest.mark.parametrize("fmt", ["mp4", "raw", "images"])
+def test_scene_to_a_dash_is_refused_not_a_file_named_dash(tmp_path: Path, fmt: str) -> None:
+    """``vtrack scene smooth - --format raw`` wrote files named ``-`` and ``-.gt.txt``, while
+    ``vtrack run -`` reads standard input."""
+    result = subprocess.run([sys.executable, "-m", "vtrack", "scene", "smooth", "-", "--format",
+                             fmt], capture_output=True, timeout=60, check=False, cwd=tmp_path,
+                            env={**os.environ, "PYTHONPATH": str(
+                                Path(vtrack_package.__file__).parents[1])})  # this vtrack
+    assert_one_line_error(result, "OUT -: vtrack scene writes files")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_vectors_into_a_file_and_a_damaged_dump(clip, tmp_path: Path) -> None:

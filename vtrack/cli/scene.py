@@ -72,6 +72,9 @@ def command(
     frame) and, for the multi-target scenario, OUT.mot.txt (MOTChallenge). An image folder holds
     its groundtruth_rect.txt (and groundtruth_mot.txt). Same arguments, same pixels.
     """
+    if str(out) == "-":  # elsewhere "-" is standard input or output; here it would be a file
+        raise ConfigError("OUT -: vtrack scene writes files (the clip and its ground truth "
+                          "beside it): name one, e.g. clip.mp4 or clip.raw --format raw")
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
