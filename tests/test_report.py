@@ -408,3 +408,17 @@ def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
     markdown = (tmp_path / "report" / "summary.md").read_text()
     assert _table_labels(markdown) == {("jump", "mine (bA)"), ("smooth", "mine (bA)"),
                                        ("smooth", "mine (bB)")}
+
+
+def test_a_motchallenge_gt_given_to_report_says_what_report_scores(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """It said to use a multi-target config (--config s3): report has no --config."""
+    _, batch = batch_out
+    mot = tmp_path / "gt.txt"
+    mot.write_text("1,1,10,10,20,40,1,-1,-1,-1\n2,1,12,10,20,40,1,-1,-1,-1\n")
+    result = vtrack("report", str(batch), "--gt", str(mot), "--out", str(tmp_path / "rep"))
+    assert result.exit_code == 2
+    assert result.output.strip() == (
+        f"vtrack: error: --gt {mot}: MOTChallenge ground truth (many targets); the report's "
+        "--gt scores single-target runs: a multi-target run is scored with the ground truth "
+        "given to vtrack run --gt")

@@ -67,6 +67,10 @@ def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
 MAX_COORDINATE = 1e6
 
 
+class MultiTargetTruthError(InputError):
+    """Many targets' ground truth (MOTChallenge) where one target's boxes were expected."""
+
+
 def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent.
 
@@ -90,7 +94,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             values = []
         if len(values) in (9, 10) and values[0] == int(values[0]) and values[1] == int(values[1]):
             # MOTChallenge: frame,id,x,y,w,h,conf,x,y,z (Milan et al. 2016, MOT16 sec. 3.3)
-            raise InputError(
+            raise MultiTargetTruthError(
                 f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
                 "for many targets; a single-target config reads x,y,w,h per frame: use a "
                 "multi-target config (--config s3 or --config s4_multi)")

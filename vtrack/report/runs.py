@@ -33,7 +33,7 @@ import numpy as np
 from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.errors import InputError, plural
 from vtrack.evaluate import metrics
-from vtrack.evaluate.groundtruth import gt_origin_of, read_boxes
+from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import file_identity, sizes
@@ -153,7 +153,12 @@ class GroundTruth:
     def read(cls, path: Path, origin: int | None = 0, input: str | None = None) -> GroundTruth:
         """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError);
         ``origin`` None: :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
-        return cls(str(path), read_boxes(path, origin=gt_origin_of(path, origin)), input)
+        try:
+            return cls(str(path), read_boxes(path, origin=gt_origin_of(path, origin)), input)
+        except MultiTargetTruthError:
+            raise InputError(f"--gt {path}: MOTChallenge ground truth (many targets); the "
+                             "report's --gt scores single-target runs: a multi-target run is "
+                             "scored with the ground truth given to vtrack run --gt") from None
 
     @classmethod
     def parse(cls, text: str, origin: int | None = 0) -> GroundTruth:
