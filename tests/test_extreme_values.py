@@ -51,11 +51,12 @@ def test_the_fps_limits_themselves_run(clip, tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("args", "needle"), [
     (("--size", "99999x99999"), "7680x4320"),
+    (("--size", "64x48"), "under the 4x4 a tracker starts from"),  # vtrack run refused it
     (("--fps", "1e308"), "fps"),
     (("--fps", "0"), "fps"),
 ])
 def test_scene_extremes_are_one_line(tmp_path: Path, args, needle) -> None:
-    result = vtrack("scene", "smooth", str(tmp_path / "s.mp4"), *args)
+    result = vtrack("scene", "grow", str(tmp_path / "s.mp4"), *args)
     assert_one_line_error(result, needle)
     assert not (tmp_path / "s.mp4").exists()
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.errors import ConfigError
+from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 
@@ -79,6 +80,12 @@ def command(
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
     scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps)
+    first = scene.boxes[0] if scene.boxes else None
+    if first is not None and 0 < min(first.w, first.h) < MIN_BOX_SIDE:  # what run would refuse
+        raise ConfigError(f"scene {name} at {scene.width}x{scene.height}: its target starts "
+                          f"{first.w:.1f}x{first.h:.1f} pixels, under the "
+                          f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} a tracker starts from: give a "
+                          "larger --size")
     files = write_clip(
         scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset, progress=sys.stderr.isatty()
     )
