@@ -575,8 +575,13 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
     tracked) and the frames from ``--start`` on, at most ``--frames`` of them. ConfigError or
     InputError as ``vtrack run`` gives them (no box for a tracker that needs one, ...)."""
     resolved = _resolve(request, source.info.fps)
-    return resolved.init_box, _limited(_from(iter(source), resolved.start, request.input),
-                                       resolved.max_frames)
+    return resolved.init_box, _frames_to_track(request, resolved, source)
+
+
+def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
+                     ) -> Iterator[Frame]:
+    """``source``'s frames from the resolved first one on, at most the resolved number."""
+    return _limited(_from(iter(source), resolved.start, request.input), resolved.max_frames)
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -594,8 +599,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
     try:
-        frames_in = _limited(_from(iter(source), resolved.start, request.input),
-                             resolved.max_frames)
+        frames_in = _frames_to_track(request, resolved, source)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)

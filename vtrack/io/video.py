@@ -284,12 +284,12 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
     """The one line for an input FFmpeg could not open or decode a first frame from, saying
     what the way it was read (a URL, ``--follow``) makes likely."""
     reason = os_reason(exc)
-    if "://" in path and isinstance(exc, av.error.InvalidDataError):
+    if "://" in path:  # a network input, as _open_container opens it
+        if not isinstance(exc, av.error.InvalidDataError):
+            return f"{path}: cannot be opened ({reason})"
         return (f"{path}: nothing FFmpeg could decode came within {how.timeout_s:g} s "
                 f"({reason}): a live stream starts at a key frame (--timeout SECONDS waits "
                 "longer)")
-    if "://" in path:
-        return f"{path}: cannot be opened ({reason})"
     if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "

@@ -31,7 +31,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from vtrack.errors import ConfigError, InputError, VtrackError
-from vtrack.geometry import MIN_BOX_SIDE, Box
+from vtrack.geometry import Box, check_init_box
 from vtrack.io.sidecar import format_box, has_sidecar, read_sidecar, write_sidecar
 from vtrack.picker.frames import FrameStore
 from vtrack.picker.page import PAGE
@@ -166,12 +166,10 @@ class SelectionServer:
         width, height = self.store.info.width, self.store.info.height
         if box.w < 1 or box.h < 1:
             raise ConfigError("the box is empty: drag a box around the target")
-        if box.w < MIN_BOX_SIDE or box.h < MIN_BOX_SIDE:  # what vtrack run refuses
-            raise ConfigError(f"the box {format_box(box)} is smaller than "
-                              f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} pixels, too small to track")
         if box.x < 0 or box.y < 0 or box.x + box.w > width or box.y + box.h > height:
             raise ConfigError(f"the box {format_box(box)} is not inside the {width}x{height} "
                               "frame")
+        check_init_box(box, width, height, "select")  # what vtrack run refuses (under 4x4)
         frame = body.get("frame", self.frame)
         last = MAX_FRAME if self.store.count is None else self.store.count - 1
         if isinstance(frame, bool) or not isinstance(frame, int) or not 0 <= frame <= last:

@@ -68,12 +68,9 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
     figure = Figure(figsize=(10, 0.9 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
     axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
     legend: dict[str, object] = {}
-    # one frame axis for all panels, in the input's frame numbers (a run from --start N
-    # begins at N): from the first frame any run tracked to the last
-    start = min(run.first_frame for run in runs)
-    end = max(run.first_frame + max(len(values(run)), 1) for run in runs)
-    for axis, run in zip(axes, runs, strict=True):
-        series = np.array([np.nan if v is None else v for v in values(run)], float)
+    series_of = [np.array([np.nan if v is None else v for v in values(run)], float)
+                 for run in runs]
+    for axis, run, series in zip(axes, runs, series_of, strict=True):
         for state, (colour, label) in SHADES.items():
             _shade(axis, run.states, state, colour, label, run.first_frame)
         if absent is not None:
@@ -81,7 +78,6 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
         axis.plot(run.first_frame + np.arange(len(series)), series, color=palette[run.config],
                   lw=1.2)
         axis.set_ylim(*SCORE_YLIM)
-        axis.set_xlim(start - 0.5, end - 0.5)
         axis.set_ylabel(ylabel)
         axis.set_title(printable(run.config), loc="left", fontsize=10, color=palette[run.config])
         axis.grid(alpha=0.3)
@@ -90,6 +86,11 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
     if legend:  # one legend for all panels, outside them (constrained layout makes room)
         figure.legend(list(legend.values()), list(legend), loc="outside upper right",
                       fontsize=8, ncols=len(legend), frameon=False)
+    # one frame axis for all panels (shared), in the input's frame numbers (a run from
+    # --start N begins at N): from the first frame any run tracked to the last
+    axes[-1].set_xlim(min(run.first_frame for run in runs) - 0.5,
+                      max(run.first_frame + max(len(series), 1)
+                          for run, series in zip(runs, series_of, strict=True)) - 0.5)
     axes[-1].set_xlabel("frame")
     figure.suptitle(printable(title), fontsize=11)
     return figure
