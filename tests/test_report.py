@@ -422,3 +422,32 @@ def test_a_motchallenge_gt_given_to_report_says_what_report_scores(
         f"vtrack: error: --gt {mot}: MOTChallenge ground truth (many targets); the report's "
         "--gt scores single-target runs: a multi-target run is scored with the ground truth "
         "given to vtrack run --gt")
+
+
+def test_a_report_made_from_another_folder_reads_the_runs_relative_input_and_ground_truth(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    clip = clip_factory("occlusion", width=W, height=H, frames=60)
+    started = tmp_path / "project"
+    started.mkdir()
+    shutil.copy(clip.path, started / "clip.mp4")
+    shutil.copy(clip.gt, started / "clip.gt.txt")
+    monkeypatch.chdir(started)
+    assert vtrack("run", "clip.mp4", "--gt", "clip.gt.txt", "-c", "s0", "--no-video",
+                  "--quiet", "--out", "runs").exit_code == 0
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+
+    # the failure thumbnails need the input's frames and the ground truth's boxes
+    found = vtrack("report", str(started / "runs"), "--out", "found")
+    assert found.exit_code == 0 and "left out" not in found.stderr, found.output
+    assert (elsewhere / "found" / "plots" / "failures_clip.png").is_file()
+
+    # a ground truth no longer there: scored as the run recorded, the thumbnails left out
+    # with a word (not silently)
+    (started / "clip.gt.txt").rename(started / "other.txt")
+    gone = vtrack("report", str(started / "runs"), "--out", "gone")
+    assert gone.exit_code == 0
+    assert "failure frames of clip left out: the ground truth clip.gt.txt" in gone.stderr
+    assert not (elsewhere / "gone" / "plots" / "failures_clip.png").exists()
+    assert (elsewhere / "gone" / "plots" / "overlap_clip.png").is_file()

@@ -790,6 +790,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "identity": resolved.identity,
         "versions": versions(),
         "command": sys.argv,
+        # what the request's relative paths (input, ground truth) are relative to: a report
+        # made from another folder reads them from here
+        "working_dir": os.getcwd(),
     }
     try:
         write_json(request.out_dir / "run.json", record)

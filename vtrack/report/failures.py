@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from vtrack.errors import VtrackError, printable
+from vtrack.errors import InputError, VtrackError, printable
 from vtrack.geometry import Box
 from vtrack.report.plots import DPI, runs_of
 from vtrack.report.runs import RunResult
@@ -71,6 +71,10 @@ def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
     """The grid of failure frames of ``runs`` (one input) saved as ``path``; None when no run
     misses the target. Raises InputError (a VtrackError) when the input cannot be read again."""
     scored = [r for r in runs if r.truth is not None and r.overlaps]
+    unread = [r for r in runs if r.truth is None and r.ground_truth and failure_frames(r)]
+    if unread and not scored:  # scored with the overlaps the run recorded
+        raise InputError(f"the ground truth {unread[0].ground_truth} is not found from here or "
+                         "changed since the run (the failure frames draw its boxes)")
     rows = sorted({f for run in scored for f in failure_frames(run)})[:MAX_ROWS]
     sources = [r.source for r in scored if r.source]
     if not rows or not sources:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -38,6 +39,7 @@ from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
+from vtrack.io.specs import is_url
 from vtrack.run import STATUS_COMPLETE
 
 
@@ -234,17 +236,18 @@ def _recorded_scores(rows: list[dict[str, str]]) -> FrameScores:
     return overlaps, errors
 
 
-def _rescored(rows: list[dict[str, str]], request: dict[str, Any], start: int
+def _rescored(rows: list[dict[str, str]], request: dict[str, Any], gt: str, start: int
               ) -> tuple[FrameScores, list[Box | None] | None]:
-    """The run's boxes against the ground truth it recorded (see the module docstring), and
-    those ground-truth boxes (None: the file could not be read, the recorded scores are used)."""
+    """The run's boxes against the ground truth it recorded (found at ``gt``, see the module
+    docstring), and those ground-truth boxes (None: the file could not be read, the recorded
+    scores are used)."""
     recorded = _recorded_scores(rows)
     boxes = _boxes(rows)
     origins = [request["gt_origin"]] if "gt_origin" in request else [0, 1]
     candidates = []
     for origin in origins:
         try:
-            truth = read_boxes(request["gt"], origin=origin)[start:]
+            truth = read_boxes(gt, origin=origin)[start:]
             scores = metrics.frame_scores(boxes, truth)
         except InputError:
             return recorded, None
@@ -318,6 +321,22 @@ def _input_key(record: dict[str, Any]) -> str:
                           if isinstance(identity, dict) else {})}, sort_keys=True)
 
 
+def _found_path(record: dict[str, Any], role: str) -> str | None:
+    """Where the file the run recorded as its ``role`` (``input``, ``gt``) is found from here:
+    a relative path is read from the folder the run was started in (``working_dir``) when
+    that holds it, else as given (a record without one, or a tree moved with its runs); None
+    when the run recorded none."""
+    given = (record.get("request") or {}).get(role)
+    if given is None:
+        return None
+    path = str(given)
+    started_in = record.get("working_dir")
+    if (isinstance(started_in, str) and path != "-" and not is_url(path)
+            and not os.path.isabs(path) and os.path.exists(os.path.join(started_in, path))):
+        return os.path.join(started_in, path)
+    return path
+
+
 def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
     """Whether the file the run recorded as its ``role`` (``input``, ``gt``) now has another
     identity (size, modification time) than the one ``run.json`` recorded; False when the
@@ -386,16 +405,18 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.states = [row["state"] for row in rows]
         result.confidence = [_number(row.get("score")) for row in rows]
         result.boxes, result.first_frame = _boxes(rows), start
-        if not request.get("raw") and request.get("input") not in (None, "-"):
-            result.source = str(request["input"])
-        if request.get("gt") and _changed_since_run(record, "gt", str(request["gt"])):
+        found_input, found_gt = _found_path(record, "input"), _found_path(record, "gt")
+        if not request.get("raw") and found_input not in (None, "-"):
+            result.source = found_input
+        if found_gt and _changed_since_run(record, "gt", found_gt):
             result.ground_truth = str(request["gt"])
             result.overlaps, result.errors = _recorded_scores(rows)
             result.note = (f"{folder}: the ground truth {request['gt']} changed after the run; "
                            "scored with the overlaps the run recorded")
-        elif request.get("gt"):
+        elif found_gt:
             result.ground_truth = str(request["gt"])
-            (result.overlaps, result.errors), result.truth = _rescored(rows, request, start)
+            (result.overlaps, result.errors), result.truth = _rescored(rows, request, found_gt,
+                                                                      start)
             if result.truth is not None:
                 result.norm_errors = metrics.normalized_center_errors(result.boxes,
                                                                       result.truth)
