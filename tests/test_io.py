@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import csv
 import fcntl
+import itertools
 import json
 import os
 import sys
 import threading
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
 
@@ -63,25 +65,35 @@ def write_video(
     fmt: str | None = None,
     options: dict[str, str] | None = None,
     rotation: int = 0,
+    x264_params: str | None = None,
 ) -> Path:
     """Encode BGR pictures with PyAV (x264, ms time base when ``times`` are given)."""
     with av.open(str(path), "w", format=fmt, options=options or {}) as out:
         stream = out.add_stream("libx264", rate=30)
         stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], \
             "yuv420p"
-        stream.options = {"preset": "ultrafast", "crf": "18"}
+        stream.options = {"preset": "ultrafast", "crf": "18",
+                          **({"x264-params": x264_params} if x264_params else {})}
         if times is not None:
             stream.codec_context.time_base = stream.time_base = Fraction(1, 1000)
         if rotation:
             stream.set_display_rotation(rotation)
-        for i, img in enumerate(frames):
-            frame = av.VideoFrame.from_ndarray(img, format="bgr24")
-            frame.pts = i if times is None else round(times[i] * 1000)
-            for packet in stream.encode(frame):
-                out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
+        encode(out, stream, frames,
+               None if times is None else [round(t * 1000) for t in times])
     return path
+
+
+def encode(out: av.container.OutputContainer, stream: av.VideoStream,
+           pictures: list[np.ndarray], pts: list[int] | None = None) -> None:
+    """Encode BGR ``pictures`` into ``stream`` of ``out`` (timestamps 0, 1, ... or ``pts``)
+    and flush the encoder."""
+    for i, img in enumerate(pictures):
+        frame = av.VideoFrame.from_ndarray(img, format="bgr24")
+        frame.pts = i if pts is None else pts[i]
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
 
 
 def decode_all(path: Path) -> list[np.ndarray]:
@@ -413,6 +425,84 @@ def test_scattered_damage_is_counted_and_frames_keep_their_places(tmp_path):
                               ("decoded with errors", source.frames_corrupt)):
             assert any(phrase in w for w in source.warnings) == (count > 0)
     assert complete >= 3
+
+
+def _remuxed(clip: Path, out: Path, damage: Callable[[int, av.Packet], av.Packet | None],
+             fmt: str | None = None) -> Path:
+    """``clip``'s packets copied into ``out``, each through ``damage(index, packet)`` (None:
+    the packet is left out)."""
+    with av.open(str(clip)) as source, av.open(str(out), "w", format=fmt) as target:
+        given = source.streams.video[0]
+        stream = target.add_stream_from_template(given)
+        for i, packet in enumerate(source.demux(given)):
+            if packet.size == 0:
+                continue
+            changed = damage(i, packet)
+            if changed is not None:
+                changed.stream = stream
+                target.mux(changed)
+    return out
+
+
+def test_pictures_cut_out_of_a_transport_stream_leave_their_places_empty(tmp_path):
+    """A transport stream (no listed frame count) that lost five whole pictures, each its own
+    key frame, without a decoding error: the later frames were renumbered 20, 21, ... and
+    scored against the wrong ground truth, with no warning."""
+    clip = write_video(tmp_path / "intra.ts", pictures(40), fmt="mpegts", x264_params="keyint=1")
+    cut = _remuxed(clip, tmp_path / "cut.ts", lambda i, p: None if 20 <= i < 25 else p,
+                   fmt="mpegts")
+    with open_source(str(cut)) as source:
+        frames = [(frame.index, frame.time_s) for frame in source]
+    assert [index for index, _ in frames] == list(range(20)) + list(range(25, 40))
+    assert all(abs(time_s * 30 - index) < 1e-6 for index, time_s in frames)
+    assert source.frames_skipped == 5
+    assert source.warnings == [f"{cut}: 5 damaged frames could not be decoded and were skipped"]
+
+
+def test_a_refused_packet_of_a_variable_rate_video_leaves_one_place_empty(tmp_path):
+    """A variable-rate Matroska file whose 31st packet is garbage: the frame index was rebuilt
+    from the timestamps at the guessed rate, so one lost frame made over 10,000 "skipped"."""
+    rng = np.random.default_rng(3)
+    times = np.cumsum(np.r_[0, rng.uniform(0.005, 0.4, 59)])
+    clip = write_video(tmp_path / "vfr.mkv", pictures(60), times=list(times))
+
+    def garbled(i: int, packet: av.Packet) -> av.Packet:
+        if i != 30:
+            return packet
+        bad = av.Packet(bytes(b ^ 0x5A for b in bytes(packet)))
+        bad.pts, bad.dts, bad.time_base = packet.pts, packet.dts, packet.time_base
+        return bad
+
+    broken = _remuxed(clip, tmp_path / "broken.mkv", garbled)
+    with open_source(str(broken)) as source:
+        frames = [(frame.index, frame.time_s) for frame in source]
+    assert source.frames_skipped == 1
+    assert [index for index, _ in frames] == [i for i in range(60) if i != 30]
+    assert [round(t, 3) for _, t in frames] == [round(t, 3) for i, t in enumerate(times)
+                                                if i != 30]
+    # a reader that stops early (--frames) still hears of the damage it went past
+    with open_source(str(broken)) as source:
+        assert len(list(itertools.islice(source, 45))) == 45
+    assert source.warnings == [f"{broken}: 1 damaged frames could not be decoded and were "
+                               "skipped"]
+
+
+def test_the_video_stream_is_the_one_ffmpeg_takes(tmp_path):
+    """A file whose first video stream is a 64x64 picture and whose second, marked default,
+    is the video: the picture's one frame was tracked."""
+    clip = tmp_path / "two.mkv"
+    with av.open(str(clip), "w") as out:
+        cover = out.add_stream("mpeg4", rate=1)
+        cover.width = cover.height = 64
+        cover.pix_fmt, cover.disposition = "yuv420p", 0
+        video = out.add_stream("libx264", rate=30)
+        video.width, video.height, video.pix_fmt = W, H, "yuv420p"
+        video.disposition = av.stream.Disposition.default
+        encode(out, cover, [np.zeros((64, 64, 3), np.uint8)])
+        encode(out, video, pictures(20))
+    with open_source(str(clip)) as source:
+        assert (source.info.width, source.info.height) == (W, H)
+        assert len(list(source)) == 20
 
 
 def test_truncated_mp4_with_index_at_the_end_cannot_be_opened(tmp_path):

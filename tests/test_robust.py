@@ -15,6 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from test_io import write_video
 
 from vtrack import Tracker
 from vtrack.config import load_config
@@ -305,22 +306,10 @@ def test_a_box_mostly_outside_the_frame_is_never_called_tracking(tmp_path: Path)
     """A box given as the whole frame over black frames, then a red square appears: the
     filter's strong peak on the replicated border put the box wholly past the frame's edge
     (176,101 in a 160x120 frame), called `tracking`."""
-    import av
-
     black = np.zeros((120, 160, 3), np.uint8)
     square = black.copy()
     square[40:70, 60:90] = (0, 0, 255)
-    clip = tmp_path / "appear.mkv"
-    with av.open(str(clip), "w") as out:
-        stream = out.add_stream("ffv1", rate=30)
-        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
-        for i, picture in enumerate([black] * 5 + [square] * 35):
-            frame = av.VideoFrame.from_ndarray(picture, format="bgr24")
-            frame.pts = i
-            for packet in stream.encode(frame):
-                out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
+    clip = write_video(tmp_path / "appear.mp4", [black] * 5 + [square] * 35)
     out_dir = tmp_path / "out"
     run(RunRequest(input=str(clip), out_dir=out_dir, config=load_config("robust"),
                    init_box=Box(0, 0, 160, 120), video=False))

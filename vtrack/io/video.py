@@ -15,12 +15,17 @@ good frames.
 Damage in the middle of a file is skipped as the ``ffmpeg`` command skips it: a packet the
 decoder refuses (``InvalidDataError``) is dropped and decoding goes on with the next one. Damage
 also shows without an error: pictures the decoder marks as decoded with errors, and, in a
-constant-rate stream (its listed frame count is its duration times its rate), pictures that
-vanish, leaving a gap in the timestamps. The frames lost are counted (``frames_skipped``), those
-decoded with errors too (``frames_corrupt``), each kind with a warning, and later frames keep
-their place in the stream: once damage was seen, a frame's index comes from its timestamp
-(``round(time_s * fps)``, never less than the next index), so ground truth stays aligned, and a
-stale picture out of order is dropped. Only a stream that really ends early is partial.
+constant-rate stream, pictures that vanish, leaving a gap in the timestamps. A stream is
+constant-rate when its listed frame count is its duration times its rate, or, in a container
+that lists no count but carries constant-rate video (MPEG-TS), when its pictures came one frame
+apart until the gap. The frames lost are counted (``frames_skipped``), those decoded with
+errors too (``frames_corrupt``), each kind with a warning (also when reading stops before the
+end), and later frames keep their place in the stream, so ground truth stays aligned: in a
+constant-rate stream, once damage was seen, a frame's index comes from its timestamp
+(``round(time_s * fps)``, never less than the next index), and a stale picture out of order is
+dropped; in a variable-rate one, whose timestamps cannot tell, each refused packet leaves one
+place. Only a stream that really ends early is partial. Of several video streams, the one
+``ffmpeg`` would take is read (not a cover picture; the default; the largest).
 """
 
 from __future__ import annotations
@@ -54,6 +59,14 @@ FRAME_ORDER_FORMATS = frozenset({"avi"})
 #: Containers (FFmpeg's format names) whose duration FFmpeg's muxer writes as the last
 #: timestamp rather than the length: a file starting at t > 0 ends at its duration.
 END_AS_DURATION_FORMATS = frozenset({"matroska,webm"})
+#: Containers that list no frame count but carry constant-rate video (broadcast and streaming
+#: transport): a stream whose pictures came at its frame rate until a gap in their timestamps
+#: lost pictures there (with a listed count, the count tells; see the module docstring).
+STEADY_RATE_FORMATS = frozenset({"mpegts"})
+#: ... after at least this many intervals of one frame each (within :data:`STEADY_TOLERANCE`
+#: of a frame).
+STEADY_INTERVALS = 4
+STEADY_TOLERANCE = 0.1
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 #: FFmpeg's AVCOL_RANGE_JPEG: a picture whose levels use the full 0..255 range.
@@ -114,6 +127,18 @@ def decoder_threads(width: int, height: int, cores: int) -> int:
 def _quarter_turns(degrees: float) -> int:
     """A display-matrix angle as 0, 90, 180 or 270 degrees counter-clockwise."""
     return int(round(degrees / 90.0)) % 4 * 90
+
+
+def _main_video_stream(container: av.container.InputContainer) -> av.VideoStream:
+    """The video stream ``ffmpeg -i`` would take: not a cover picture (attached picture) when
+    there is another, then the one marked default, then the largest; the first on a tie."""
+    def rank(stream: av.VideoStream) -> tuple[bool, bool, int]:
+        flags, context = stream.disposition, stream.codec_context
+        return (not flags & av.stream.Disposition.attached_pic,
+                bool(flags & av.stream.Disposition.default),
+                0 if context is None else (context.width or 0) * (context.height or 0))
+
+    return max(container.streams.video, key=rank)
 
 
 class _Tail:
@@ -332,13 +357,14 @@ class VideoSource(Source):
             kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
         self._container = container
-        self._stream = stream = container.streams.video[0]
+        self._stream = stream = _main_video_stream(container)
         if stream.codec_context is None:  # e.g. a video file read with --format image2
             raise InputError(f"{path}: no decoder for its video stream as FFmpeg reads it "
                              f"(format {container.format.name}; a wrong --format?)")
         self._dropped = 0  # packets the decoder refused (damage in the middle of the file)
         self._corrupt = 0  # pictures the decoder marked as decoded with errors
-        self._damaged = False  # damage seen: frame indices come from timestamps from now on
+        self._damaged = False  # damage seen: later frames keep their places in the stream
+        self._damage_warned = False
         # Bounded before the decoder allocates a picture (the size is in the stream header).
         too_big = frame_size_problem(stream.codec_context.width, stream.codec_context.height)
         if too_big and stream.codec_context.width and stream.codec_context.height:
@@ -449,8 +475,11 @@ class VideoSource(Source):
         first, self._first = self._first, None  # do not keep a decoded picture alive
         t0 = None if self._frame_order else first.time
         tail = _Tail()
-        index = yielded = 0
+        index = yielded = refused = 0
         last_t: float | None = None
+        # a gap in the timestamps of a stream that kept its frame rate so far is pictures lost
+        steady = self._constant_rate
+        intervals = 0 if self._container.format.name in STEADY_RATE_FORMATS else None
         try:
             for decoded in itertools.chain((first,), self._decoded):
                 if (decoded.width, decoded.height) != self._coded_size:
@@ -461,11 +490,15 @@ class VideoSource(Source):
                         index,
                     )
                 t = None if self._frame_order else decoded.time
+                step = None if t is None or last_t is None else (t - last_t) * fps
                 if decoded.is_corrupt:
                     self._damaged = True
-                elif (self._constant_rate and t is not None and last_t is not None
-                      and t - last_t > 1.5 / fps):
+                elif steady and step is not None and step > 1.5:
                     self._damaged = True  # pictures vanished without an error
+                elif intervals is not None and step is not None and not self._damaged:
+                    regular = abs(step - 1) <= STEADY_TOLERANCE
+                    intervals = intervals + 1 if regular else None
+                    steady = steady or (intervals or 0) >= STEADY_INTERVALS
                 if self._damaged and t is not None and last_t is not None and t <= last_t:
                     continue  # a stale picture of the damaged stretch, out of order: its place
                     # has passed, it counts as skipped
@@ -473,9 +506,14 @@ class VideoSource(Source):
                 tail.add(t, decoded.is_corrupt)
                 self._corrupt += decoded.is_corrupt
                 time_s = index / fps if t is None or t0 is None else t - t0
-                if self._damaged and t is not None and t0 is not None:
-                    # Frames lost to damage keep their places (see the module docstring).
+                # Frames lost to damage keep their places (see the module docstring): in a
+                # constant-rate stream its timestamps tell them; in another (a variable rate),
+                # one place a packet the decoder refused
+                if self._damaged and steady and t is not None and t0 is not None:
                     index = max(index, round(time_s * fps))
+                elif self._dropped > refused:
+                    index += self._dropped - refused
+                refused = self._dropped
                 yield decoded_frame(decoded, index, time_s, self._rotation)
                 index += 1
                 yielded += 1
@@ -491,12 +529,7 @@ class VideoSource(Source):
         finally:
             if self._damaged:  # every place left empty, also by pictures the decoder dropped
                 self._dropped = max(self._dropped, index - yielded)
-        if self.frames_skipped:
-            self.warnings.append(f"{info.path}: {self.frames_skipped} damaged frames could not be "
-                                 "decoded and were skipped")
-        if self.frames_corrupt:
-            self.warnings.append(f"{info.path}: {plural(self.frames_corrupt, 'frame')} decoded "
-                                 "with errors (damaged file: their pictures may be wrong)")
+        self._warn_of_damage()
         tail.frames += self.frames_skipped  # skipped frames were in the file: not a shortfall
         shortfall = tail.shortfall(self._stream.frames, self._end_s, fps) or self._torn_packet()
         if shortfall:
@@ -517,6 +550,21 @@ class VideoSource(Source):
             return f"the file ends inside a {TS_PACKET_SIZES[0]}-byte transport packet"
         return None
 
+    def _warn_of_damage(self) -> None:
+        """The warnings of frames skipped and decoded with errors, once: when the stream has
+        ended, or when it is closed before its end (``--frames``)."""
+        if self._damage_warned:
+            return
+        self._damage_warned = True
+        if self.frames_skipped:
+            self.warnings.append(f"{self.info.path}: {self.frames_skipped} damaged frames could "
+                                 "not be decoded and were skipped")
+        if self.frames_corrupt:
+            self.warnings.append(f"{self.info.path}: {plural(self.frames_corrupt, 'frame')} "
+                                 "decoded with errors (damaged file: their pictures may be "
+                                 "wrong)")
+
     def _release(self) -> None:
+        self._warn_of_damage()
         self._decoded.close()  # finish the demuxer before its container goes
         self._container.close()
