@@ -599,6 +599,22 @@ def test_image_folder_natural_order_and_gray_images(tmp_path):
     assert [f.time_s for f in frames] == pytest.approx([0, 1 / 30, 2 / 30])
 
 
+def test_an_image_missing_from_a_numbered_sequence_leaves_its_frame_empty(tmp_path):
+    """OTB's seq/img/0001.jpg... with 0005 deleted: the later images were renumbered (0006.jpg
+    became frame 4) and scored against the wrong ground truth, without a word."""
+    img_dir = tmp_path / "seq" / "img"
+    img_dir.mkdir(parents=True)
+    for i, img in enumerate(pictures(8)):
+        if i != 4:
+            cv2.imwrite(str(img_dir / f"{i + 1:04d}.png"), img)
+    with open_source(str(tmp_path / "seq")) as source:
+        indices = [frame.index for frame in source]
+    assert indices == [0, 1, 2, 3, 5, 6, 7]
+    assert source.info.frame_count == 8 and source.frames_skipped == 1
+    assert source.warnings == [f"{tmp_path / 'seq'}: 1 image missing from the numbering (the "
+                               "first after 0004.png); their frames are skipped"]
+
+
 def test_otb_layout_colour_images(tmp_path):
     img_dir = tmp_path / "Car9" / "img"
     img_dir.mkdir(parents=True)

@@ -5,6 +5,10 @@ decoded with PyAV in the reader thread. A sequence whose first image is grey bec
 :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
 converted to match). There are no timestamps: ``time_s = index / fps``. An image that cannot be
 decoded (after the first) is skipped with a warning; the frames after it keep their indices.
+Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
+one count of digits) take their frame index from their number (the first image's is index 0),
+so an image missing from the numbering leaves its frame's place empty, counted as skipped with
+a warning, and ground truth stays aligned.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import av
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError, PartialInputError
+from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import os_reason
@@ -48,6 +52,19 @@ def list_images(folder: Path) -> list[Path]:
         if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
     ]
     return sorted(files, key=lambda p: natural_key(p.name))
+
+
+def frame_places(files: list[Path]) -> list[int]:
+    """Each image's frame index: its number less the first image's when every name is one name
+    but for its last number, written with one count of digits (``img0001.jpg``,
+    ``img0002.jpg``: a sequence's numbering), else its place in the list."""
+    numbered = [re.fullmatch(r"(.*?)(\d+)(\D*)", p.name) for p in files]
+    if all(numbered):
+        parts = [(m[1], len(m[2]), m[3].lower()) for m in numbered if m]
+        numbers = [int(m[2]) for m in numbered if m]
+        if len(set(parts)) == 1 and all(b > a for a, b in zip(numbers, numbers[1:], strict=False)):
+            return [n - numbers[0] for n in numbers]
+    return list(range(len(files)))
 
 
 def read_image(path: Path) -> np.ndarray:
@@ -86,6 +103,7 @@ class ImageFolderSource(Source):
         if not self._files:
             suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
             raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/")
+        self._places = frame_places(self._files)
         self._skipped = 0
         self._first = read_image(self._files[0])
         height, width = self._first.shape[:2]
@@ -101,8 +119,8 @@ class ImageFolderSource(Source):
                 width=width,
                 height=height,
                 fps=fps,
-                frame_count=len(self._files),
-                duration_s=len(self._files) / fps,
+                frame_count=self._places[-1] + 1,
+                duration_s=(self._places[-1] + 1) / fps,
                 codec=self._files[0].suffix.lower().lstrip("."),
                 pix_fmt="gray" if self._first.ndim == 2 else "bgr24",
             )
@@ -116,12 +134,21 @@ class ImageFolderSource(Source):
         fps = self.info.fps or DEFAULT_FPS
         size = self._first.shape[:2]
         first, self._first = self._first, None
-        for index, path in enumerate(self._files):
+        unreadable = 0
+        missing = self._places[-1] + 1 - len(self._files)
+        if missing:
+            self._skipped += missing
+            gap = next(i for i, place in enumerate(self._places) if place != i)
+            self.warnings.append(
+                f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
+                f"(the first after {self._files[gap - 1].name}); their frames are skipped")
+        for index, path in zip(self._places, self._files, strict=True):
             try:
                 pixels = first if index == 0 else read_image(path)
             except InputError as exc:
                 self._skipped += 1
-                if self._skipped <= _NAMED_SKIPS:
+                unreadable += 1
+                if unreadable <= _NAMED_SKIPS:
                     self.warnings.append(f"{exc}; frame {index} skipped")
                 continue
             if pixels.shape[:2] != size:
@@ -139,8 +166,8 @@ class ImageFolderSource(Source):
                 if pixels.ndim == 2:
                     pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
                 yield BgrFrame(index, time_s, pixels)
-        if self._skipped > _NAMED_SKIPS:
-            self.warnings.append(f"{self.info.path}: {self._skipped} unreadable images skipped "
+        if unreadable > _NAMED_SKIPS:
+            self.warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
                                  f"in all (the first {_NAMED_SKIPS} are named above)")
 
     def _release(self) -> None:
