@@ -87,7 +87,7 @@ def test_tracker_takes_av_frames_grey_and_resets(tmp_path: Path) -> None:
 
 
 def test_tracker_without_a_box_is_refused_for_a_box_config() -> None:
-    with pytest.raises(ConfigError, match="initial box"):
+    with pytest.raises(ConfigError, match="needs the target.s box first"):
         vtrack.Tracker("robust").update(np.zeros((48, 64, 3), np.uint8))
 
 
@@ -177,8 +177,21 @@ def test_a_tracker_whose_first_frame_failed_is_not_started() -> None:
     grey_black = np.zeros((120, 160, 3), np.uint8)
     with pytest.raises(InputError, match="no pixel of the initial box"):
         tracker.init(grey_black, (10, 10, 20, 20))
-    with pytest.raises(ConfigError, match="needs an initial box"):
+    with pytest.raises(ConfigError, match=r"s0: this tracker needs the target's box first: "
+                       r"call init\(frame, \(x, y, w, h\)\)"):  # not a command-line flag
         tracker.update(grey_black)
     coloured = grey_black.copy()
     coloured[40:60, 50:80] = (0, 0, 230)
     assert tracker.init(coloured, (50, 40, 30, 20)).index == 0  # starts afresh
+
+
+@pytest.mark.parametrize("config", ["s3", "s4", "s4_multi", "fixed_camera", "robust"])
+@pytest.mark.parametrize("shape", [(0, 0), (10, 0), (0, 10, 3)])
+def test_an_empty_image_is_refused_by_every_config(config: str, shape: tuple[int, ...]) -> None:
+    """The detecting configs raised OpenCV's own error (``!_src0.empty()`` in medianBlur)."""
+    tracker = vtrack.Tracker(config)
+    with pytest.raises(ValueError, match=r"frame 0: the frame size \d+x\d+ is empty"):
+        if tracker.multi_target:
+            tracker.update(np.zeros(shape, np.uint8))
+        else:
+            tracker.init(np.zeros(shape, np.uint8), (0, 0, 4, 4))

@@ -83,7 +83,7 @@ class Pipeline:
         """Start a new track: the next frame given to :meth:`process` is the first, and
         ``init_box`` is the target's box in it (required unless the chain detects targets)."""
         if init_box is None and self.needs_init_box:
-            raise ConfigError("this tracker needs an initial box (--init x,y,w,h or --gt FILE)")
+            raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
         self._init_box = init_box
         self._ctx: TrackContext | None = None
         self._off_frame = 0  # frames in a row the box has been entirely outside the frame

@@ -16,9 +16,9 @@ import numpy as np
 
 from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import InputError
+from vtrack.errors import ConfigError, InputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame
-from vtrack.geometry import Box, check_init_box
+from vtrack.geometry import Box, check_init_box, frame_size_problem
 from vtrack.io.raw import checked_fps
 from vtrack.params import check_seed
 from vtrack.pipeline import FrameResult, Pipeline
@@ -47,6 +47,9 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
         return decoded_frame(item, index, time_s)  # as vtrack run reads it
     if item.dtype != np.uint8:
         raise TypeError(f"frame {index}: expected uint8 pixels, got {item.dtype}")
+    problem = item.ndim in (2, 3) and frame_size_problem(item.shape[1], item.shape[0])
+    if problem:
+        raise ValueError(f"frame {index}: {problem}")
     if item.ndim == 3 and item.shape[2] == 3:
         return BgrFrame(index, time_s, np.ascontiguousarray(item))
     if item.ndim == 2:
@@ -124,7 +127,10 @@ class Tracker:
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
         if self._pipeline is None:
-            return self._begin(None, frame)  # ConfigError if the config needs a box
+            if self._new_pipeline().needs_init_box:
+                raise ConfigError(f"{self.config.name}: this tracker needs the target's box "
+                                  "first: call init(frame, (x, y, w, h))")
+            return self._begin(None, frame)
         return self._process(frame)
 
     def _begin(self, box: Box | None, frame: FrameLike) -> FrameResult:
