@@ -10,11 +10,13 @@ import pytest
 
 from vtrack.annotate import (
     GROUND_TRUTH,
+    GROUND_TRUTH_BGR,
     LEGEND_MAX_SHARE,
     LEGEND_ROWS,
     PARTICLES,
     PREDICTION,
     TRACK_PALETTE,
+    TRACK_PALETTE_BGR,
     TRACKED,
     WINDOW,
     Annotator,
@@ -298,3 +300,16 @@ def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
     without_truth = Annotator(W, H, multi_target=True)
     without_truth.draw(blank(), result(box=None, tracks=tracks))
     assert without_truth.legend.rows == ("track id",)
+
+
+def test_no_track_colour_passes_for_the_ground_truths_green() -> None:
+    """Tracks 3 and 5 were drawn in (0, 255, 128) and (128, 255, 0): on a multi-target run
+    with ground truth they could not be told from its green boxes."""
+    def hsv(bgr: tuple[int, int, int]) -> tuple[int, int, int]:
+        return tuple(int(v) for v in cv2.cvtColor(np.uint8([[bgr]]), cv2.COLOR_BGR2HSV)[0, 0])
+
+    truth_hue = hsv(GROUND_TRUTH_BGR)[0]
+    for colour in TRACK_PALETTE_BGR:
+        hue, saturation, _ = hsv(colour)
+        distance = min(abs(hue - truth_hue), 180 - abs(hue - truth_hue))  # OpenCV: 0..180
+        assert saturation < 64 or distance >= 30, colour

@@ -5,6 +5,7 @@ single-target config, shipped config names not shadowed by files, no ground-trut
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -125,6 +126,8 @@ def test_multi_target_summaries_show_only_multi_target_numbers(clip_factory: Cli
     scored = vtrack("run", str(clip.path), "-c", "s3", "--gt", str(clip.mot), "--no-video",
                     "-o", str(tmp_path / "b"))
     assert "mota" in scored.stdout and "occluded" not in scored.stdout
+    # as the README says: mostly tracked / mostly lost too
+    assert re.search(r"mostly_tracked \d+, mostly_lost \d+", scored.stdout), scored.stdout
     # a metric without a value (MOTP when nothing matched) is left out, not printed as None
     summary = RunSummary("clip.mp4", "out", "s3", "complete", 60, 1.0, 60.0,
                          mot={"mota": -1.0, "motp": None, "idf1": 0.0, "id_switches": 0},

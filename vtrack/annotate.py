@@ -70,9 +70,10 @@ WINDOW = Yuv.from_bgr(*WINDOW_BGR)
 PARTICLES = Yuv.from_bgr(*PARTICLES_BGR)
 PREDICTION = Yuv.from_bgr(*PREDICTION_BGR)
 CAPTION_BACKGROUND = Yuv.from_bgr(0, 0, 0)
+#: Track colours, none of them a green that could pass for the ground truth's.
 TRACK_PALETTE_BGR = (
-    (255, 128, 0), (0, 200, 255), (180, 0, 255), (0, 255, 128), (255, 0, 128),
-    (128, 255, 0), (0, 128, 255), (255, 255, 255), (160, 160, 255), (255, 160, 160),
+    (255, 128, 0), (0, 200, 255), (180, 0, 255), (64, 64, 192), (255, 0, 128),
+    (192, 64, 192), (0, 128, 255), (255, 255, 255), (160, 160, 255), (255, 160, 160),
 )
 TRACK_PALETTE = tuple(Yuv.from_bgr(*bgr) for bgr in TRACK_PALETTE_BGR)
 FONT = cv2.FONT_HERSHEY_SIMPLEX

@@ -132,7 +132,8 @@ class RunSummary:
         if self.mot:  # a metric with no value (motp without a match) is left out
             parts += [f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
                       for k, v in self.mot.items()
-                      if k in ("mota", "motp", "idf1", "id_switches") and v is not None]
+                      if k in ("mota", "motp", "idf1", "id_switches", "mostly_tracked",
+                               "mostly_lost") and v is not None]
         if not self.multi_target:  # one target's states; tracks have their own in tracks.csv
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
