@@ -341,3 +341,18 @@ def test_every_parameter_rejects_a_wrong_type(param: Param) -> None:
         build_stage("kernel_meanshift", {param.name: WRONG[param.type]}, "s2.toml")
     message = str(error.value)
     assert "s2.toml" in message and "'kernel_meanshift'" in message and param.name in message
+
+
+@pytest.mark.parametrize(("config", "box"), [("s2-fixed", (319, 239, 4, 4)),
+                                           ("s2-fixed", (-3.9, -3.9, 4, 4)),
+                                           ("s2", (-3.9, -3.9, 4, 4))])
+def test_a_box_s2s_kernel_sees_nothing_of_is_refused_saying_why(config, box) -> None:
+    """The box overlaps the frame, so 'is outside the frame' (no stage named) was untrue: S2's
+    kernel, centred on the box, weighs no pixel of the frame."""
+    from vtrack.errors import InputError
+    from vtrack.pipeline import Pipeline
+
+    frames = [BgrFrame(0, 0.0, np.full((240, 320, 3), 90, np.uint8))]
+    with pytest.raises(InputError, match=r"kernel_meanshift\w*: the initial box .* puts no frame "
+                       r"pixel under S2's kernel \(move it further into the frame\)"):
+        list(Pipeline(load_config(config).build()).track(frames, Box(*box)))

@@ -92,7 +92,8 @@ class KernelMeanShiftInt(Stage):
         self._frame_bins = None
         model = self._sample(ctx.frame, *self._pos, 10000)
         if model is None:
-            raise InputError(f"initial box {box.text()} is outside the frame")
+            raise InputError(f"{self.name}: the initial box {box.text()} puts no frame pixel "
+                             "under S2's kernel (move it further into the frame)")
         self._q, self._c = model.hist, model.total
         self.record.hist, self.record.hist_max = model.hist, int(model.hist.max())
         self.record.iterations = []
