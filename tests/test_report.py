@@ -228,6 +228,19 @@ def test_report_errors_are_one_line(tmp_path: Path) -> None:
     assert "missing" in one_error_line(vtrack("report", str(tmp_path / "missing")))
 
 
+def test_when_every_run_is_left_out_the_error_names_every_reason(tmp_path: Path) -> None:
+    """Four damaged run folders: the one error line named only the first."""
+    for name in ("a", "b", "c"):
+        (tmp_path / "runs" / name).mkdir(parents=True)
+        (tmp_path / "runs" / name / "run.json").write_text("{not json" + name)
+    write_multi_target_run(tmp_path / "runs" / "d", {})
+    (tmp_path / "runs" / "d" / "tracks.csv").unlink()
+    line = one_error_line(vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "r")))
+    assert "no run to report, 4 left out: " in line
+    for name in "abcd":
+        assert str(tmp_path / "runs" / name) in line, line
+
+
 def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
         batch_out: tuple[Path, Path], tmp_path: Path) -> None:
     """A run that failed part way (1 frame tracked) was averaged as if whole, and a batch row

@@ -38,6 +38,8 @@ from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, ru
 from vtrack.run import STATUS_FAILED
 
 DEFAULT_TITLE = "vtrack report"
+#: When no run can be reported, the error line names the reasons of at most this many.
+NAMED_REASONS = 4
 
 
 @dataclass
@@ -188,8 +190,14 @@ def build_report(results: Sequence[Path], out_dir: Path,
     failed = failed_runs(results, runs)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
-        if warnings:
+        if len(warnings) == 1:
             raise InputError(f"{named}: no run to report; {warnings[0]}")
+        if warnings:  # every reason, up to a few (one line)
+            more = len(warnings) - NAMED_REASONS
+            raise InputError(f"{named}: no run to report, {len(warnings)} left out: "
+                             + "; ".join(w.removeprefix("left out: ")
+                                         for w in warnings[:NAMED_REASONS])
+                             + (f"; and {more} more" if more > 0 else ""))
         raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
                          "folders)")
     _distinct_inputs(runs)
