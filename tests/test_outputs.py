@@ -39,9 +39,9 @@ def vtrack(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
                           text=True, cwd=cwd, timeout=120, check=False)
 
 
-def start(*args: str) -> subprocess.Popen:
+def start(*args: str, new_session: bool = False) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "vtrack", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=new_session)
 
 
 def error_line(stderr: str) -> str:
@@ -311,6 +311,38 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
         statuses.append(row["status"])
     assert "interrupted" in statuses  # the batch did stop early
     assert "complete" in statuses  # the job running at the signal finished in the grace
+
+
+def test_a_signal_to_the_batchs_process_group_leaves_a_summary_that_agrees_with_the_runs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Ctrl-C, `timeout` or a scheduler signal the whole process group: the forkserver died
+    too, so the batch took its worker for gone at once and wrote the running job's row
+    (no frames, no error) before the worker wrote its run.json (frames and error)."""
+    long = clip_factory("smooth", width=320, height=240, frames=900)
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for name in ("a", "b"):
+        shutil.copy(long.path, inputs / f"{name}.mp4")
+        shutil.copy(long.gt, inputs / f"{name}.gt.txt")
+    out = tmp_path / "out"
+    process = start("batch", str(inputs), "--jobs", "1", "--out", str(out), "--quiet",
+                    new_session=True)
+    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 600
+                         for p in out.glob("*/*/.track.tmp*")), process, "a job running")
+    os.killpg(process.pid, signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 128 + signal.SIGTERM, stderr
+    with (out / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    recorded = 0
+    for row in rows:
+        folder = out / row["input"] / row["config"]
+        if (folder / "run.json").exists():
+            record = assert_records_agree(folder)
+            assert (row["status"], row["frames"], row["error"]) == (
+                record["status"], str(record["frames"]), record["error"] or ""), row
+            recorded += 1
+    assert recorded >= 1
 
 
 # --- the default folder, replacing an earlier run ---------------------------------------------

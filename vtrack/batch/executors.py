@@ -115,13 +115,25 @@ class _Worker:
 
     def stop(self, grace_s: float = 5) -> None:
         """Ask the worker to finish; a job still running (interrupted, it is writing its
-        ``run.json``) gets ``grace_s``, then the process is terminated."""
+        ``run.json``) gets ``grace_s``, then the process is killed.
+
+        Its exit is read from its end of the pipe closing, not from ``Process.join``: the
+        worker is the forkserver's child, and a signal to the whole process group (Ctrl-C,
+        ``timeout``, a scheduler's SIGTERM) may have ended the forkserver, whose lost status
+        pipe makes ``join`` return at once with exit code 255 while the worker still writes
+        its records (``summary.csv`` was then written without them)."""
         with suppress(OSError):
             self.connection.send(None)
-        self.process.join(grace_s)
-        if self.process.is_alive():
-            self.process.terminate()
-            self.process.join()
+        deadline = time.monotonic() + grace_s
+        try:
+            while (left := deadline - time.monotonic()) > 0 and self.connection.poll(left):
+                self.connection.recv()  # an outcome or progress nobody waits for now
+        except (EOFError, OSError):
+            pass  # its end closed: the worker is gone
+        else:
+            with suppress(ProcessLookupError):
+                os.kill(self.process.pid, signal.SIGKILL)
+        self.process.join(1)
         self.connection.close()
 
 
