@@ -505,6 +505,15 @@ def test_the_video_stream_is_the_one_ffmpeg_takes(tmp_path):
         assert len(list(source)) == 20
 
 
+def test_a_text_file_is_not_tracked_as_a_video(tmp_path):
+    """FFmpeg's tty reader draws a .txt file's characters as 640x400 pictures: a ground truth
+    given as the input was tracked over 7 frames of text."""
+    notes = tmp_path / "clip.gt.txt"
+    notes.write_text("10,10,40,30\n" * 200)
+    with pytest.raises(InputError, match=r"clip\.gt\.txt: a text file, not a video"):
+        open_source(str(notes))
+
+
 def test_truncated_mp4_with_index_at_the_end_cannot_be_opened(tmp_path):
     whole = write_video(tmp_path / "clip.mp4", pictures(20))
     cut = tmp_path / "cut.mp4"

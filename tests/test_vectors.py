@@ -162,3 +162,32 @@ def test_an_undecodable_frame_is_named_and_the_folders_keep_frame_numbers(
     assert frames == [0, 1, 2, 3, 4, 5, 7, 8]
     assert sorted(p.name for p in out.glob("frame_*")) == [f"frame_{i:04d}" for i in frames]
 
+
+
+def test_vectors_written_again_leave_nothing_of_the_earlier_ones(vectors, tmp_path) -> None:
+    """Six frames of s0-fixed, then two of s2-fixed into the same folder: frame_0002..0005
+    and s0's hue/bp files stayed, and `vectors check` compared a dump with those stale frames."""
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+    out = tmp_path / "vec"
+    (out / "frame_0000").mkdir(parents=True)
+    (out / "notes.txt").write_text("mine")  # not vtrack's: kept
+    for config, frames in (("s0-fixed", "6"), ("s2-fixed", "2")):
+        result = vtrack("vectors", str(clip.path), "--config", config, "--init",
+                        f"{box.x},{box.y},{box.w},{box.h}", "--frames", frames, "--out",
+                        str(out))
+        assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in out.iterdir()) == [
+        "frame_0000", "frame_0001", "iterations.csv", "manifest.json", "notes.txt", "trace.csv"]
+    assert sorted(p.name for p in (out / "frame_0000").iterdir()) == ["gray.hex", "rgb.hex"]
+
+
+def test_a_clip_shorter_than_the_frames_asked_for_is_said(vectors, tmp_path) -> None:
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+    result = vtrack("vectors", str(clip.path), "--config", "s0-fixed", "--init",
+                    f"{box.x},{box.y},{box.w},{box.h}", "--frames", "40", "--out",
+                    str(tmp_path / "v"))
+    assert result.returncode == 0, result.stderr
+    assert (f"vtrack: warning: {clip.path}: 30 frames to write of the 40 asked for (--frames)"
+            in result.stderr)

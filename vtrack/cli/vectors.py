@@ -80,6 +80,9 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
         written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
         for warning in source.warnings:  # frames skipped as undecodable, as vtrack run says
             click.echo(f"vtrack: warning: {warning}", err=True)
+    if written < count:
+        click.echo(f"vtrack: warning: {input_spec}: {plural(written, 'frame')} to write of the "
+                   f"{count} asked for (--frames)", err=True)
     click.echo(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
 
 

@@ -17,6 +17,7 @@ two-character codes, never a Python loop per pixel.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import math
@@ -164,6 +165,7 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
     frames written."""
     owner = fixed_stage(stages, str(extra.get("config")))
     prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
+    _remove_earlier_vectors(out_dir)
     trace = TraceWriter(out_dir / "trace.csv")
     iterations: TraceWriter | None = None
     count, size, record = 0, (0, 0), None
@@ -191,6 +193,19 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
     data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
     (out_dir / "manifest.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     return count
+
+
+def _remove_earlier_vectors(out_dir: Path) -> None:
+    """Remove the vector files an earlier ``generate`` left in ``out_dir`` (its frame folders,
+    traces and manifest; nothing else), so that no frame of another run is checked against."""
+    for name in ("manifest.json", "trace.csv", "iterations.csv"):
+        (out_dir / name).unlink(missing_ok=True)
+    for folder in out_dir.glob("frame_[0-9][0-9][0-9][0-9]*"):
+        if folder.is_dir() and folder.name[6:].isdigit():
+            for vector in folder.glob("*.hex"):
+                vector.unlink()
+            with contextlib.suppress(OSError):  # a folder holding files of the user's own
+                folder.rmdir()
 
 
 # --- check ---------------------------------------------------------------------------------------

@@ -67,6 +67,8 @@ STEADY_RATE_FORMATS = frozenset({"mpegts"})
 #: of a frame).
 STEADY_INTERVALS = 4
 STEADY_TOLERANCE = 0.1
+#: FFmpeg's readers that render text as pictures (ANSI art): such an input is a text file.
+TEXT_FORMATS = frozenset({"tty"})
 #: Decoded layouts handed over as I420 planes without conversion.
 I420_FORMATS = frozenset({"yuv420p", "yuvj420p"})
 #: FFmpeg's AVCOL_RANGE_JPEG: a picture whose levels use the full 0..255 range.
@@ -356,6 +358,9 @@ class VideoSource(Source):
         if not container.streams.video:
             kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
+        if container.format.name in TEXT_FORMATS:
+            raise InputError(f"{path}: a text file, not a video (FFmpeg's {container.format.name} "
+                             "reader would draw its characters as pictures)")
         self._container = container
         self._stream = stream = _main_video_stream(container)
         if stream.codec_context is None:  # e.g. a video file read with --format image2
