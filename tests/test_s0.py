@@ -500,3 +500,12 @@ def test_lost_after_a_long_absence_and_found_again(scene_factory) -> None:
     assert TrackState.LOST in states[start:end]
     assert all(r.box is None for r in results if r.state == TrackState.LOST)
     assert states[-1] == TrackState.TRACKING and iou(results[-1].box, scene.boxes[-1]) > 0.5
+
+
+@pytest.mark.parametrize("config", ["s0", "camshift"])
+@pytest.mark.parametrize("scene", [("cover", 2, 160, 120), ("occlusion", 0, 320, 240)])
+def test_the_score_is_never_negative(scene_factory, config: str, scene: tuple) -> None:
+    """Behind the cover the box showed less of the target's colour than the surroundings did:
+    scores of -0.008 were written (bp_mass keeps its sign)."""
+    results = track(scene_factory(*scene, 60, 30.0), config, i420=True)
+    assert all(r.score >= 0 for r in results)
