@@ -216,6 +216,16 @@ def test_a_full_disk_is_one_line_exit_1_and_records_agree(
         assert "annotated.mp4" not in assert_records_agree(out)["outputs"]
 
 
+def test_a_disk_full_before_the_header_leaves_nothing(clip: Clip, small_disk: Path) -> None:
+    """No room even for track.csv's header: the run's new folder stayed behind with an empty
+    temporary CSV in it (the README: such a run creates no folder)."""
+    fill(small_disk, leave=0)
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--out",
+                    str(small_disk / "out"))
+    assert result.returncode != 0 and "No space left on device" in error_line(result.stderr)
+    assert sorted(p.name for p in small_disk.iterdir()) == ["filler"]
+
+
 # --- a bad --out ------------------------------------------------------------------------------
 
 

@@ -65,7 +65,11 @@ class CsvWriter(Closing):
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
         self._text = io.StringIO()
         self._writer = csv.writer(self._text, lineterminator="\n")
-        self._append([self.columns])
+        try:
+            self._append([self.columns])
+        except OutputError:  # no room even for the header (a full disk): leave nothing
+            self.abort()
+            raise
         self.rows = 0
 
     def _append(self, rows: Sequence[Sequence[str]]) -> None:
