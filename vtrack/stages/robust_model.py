@@ -63,8 +63,10 @@ WIDE_REDUCTION = 2
 #: transforms of 10 channels, not 32.
 WIDE_RANK = 10
 #: ... over at most this many working pixels (width x height; a larger frame: a window of that
-#: area around the search centre).
-WIDE_WINDOW = (1024, 576)
+#: area around the search centre). 1024x576 cost a lost 640x480 frame ~10 tracked ones and
+#: scored no better on the real sequences; 512x288 lost targets faster than the generated
+#: `fast` scene's (benchmarks/RESULTS.md section 8, twenty-third round).
+WIDE_WINDOW = (768, 432)
 MAX_WIDE_PIXELS = WIDE_WINDOW[0] * WIDE_WINDOW[1]
 #: KCF/DSST/Staple's label width: sqrt(target area) / 16 (in working pixels).
 LABEL_SIGMA_FACTOR = 1 / 16
