@@ -195,3 +195,18 @@ def test_an_empty_image_is_refused_by_every_config(config: str, shape: tuple[int
             tracker.update(np.zeros(shape, np.uint8))
         else:
             tracker.init(np.zeros(shape, np.uint8), (0, 0, 4, 4))
+
+
+def test_a_pyav_frame_of_phone_footage_is_turned_as_vtrack_run_turns_it(tmp_path) -> None:
+    """A 320x240 clip marked rotated by 90 degrees: vtrack run tracks a 240x320 picture, the
+    API took the stored 320x240 one and refused the box that run accepts."""
+    from test_io import pictures, write_video
+
+    clip = write_video(tmp_path / "phone.mp4", pictures(3, 320, 240), rotation=90)
+    with av.open(str(clip)) as container:
+        first = next(container.decode(video=0))
+    tracker = vtrack.Tracker("robust")
+    result = tracker.init(first, (100, 270, 40, 30))  # inside 240x320 only
+    assert result.box == (100, 270, 40, 30) and result.state.value == "tracking"
+    with pytest.raises(ConfigError, match="outside the 240x320 frame"):
+        tracker.init(first, (250, 10, 40, 30))  # inside the stored 320x240 only

@@ -288,10 +288,13 @@ INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
 
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
-                  rotation: int = 0) -> Frame:
+                  rotation: int | None = None) -> Frame:
     """A decoded picture as the :class:`Frame` every reader hands over: I420 planes as they
     are (4:2:0 of even size; converted by OpenCV only where a stage asks), else BGR from
-    FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix)."""
+    FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix; None:
+    the picture's own, as ``vtrack run`` turns a phone's footage)."""
+    if rotation is None:
+        rotation = _quarter_turns(decoded.rotation)
     even = decoded.width % 2 == 0 and decoded.height % 2 == 0
     if even and decoded.format.name in I420_FORMATS and rotation:
         planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height, rotation)
