@@ -397,3 +397,17 @@ def test_paths_holding_bytes_that_are_not_utf8_work(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr.decode(errors="replace")
     assert len(read_csv(out / "track.csv")) == 10
     assert json.loads((out / "run.json").read_text())["status"] == "complete"
+
+
+@pytest.mark.parametrize(("options", "flag"), [
+    (("--pix-fmt", "gray"), "--pix-fmt is the pixel format of raw input"),
+    (("--raw", f"{W}x{H}", "-f", "mpegts"), "--format is for inputs FFmpeg reads"),
+    (("--raw", f"{W}x{H}", "--input-option", "probesize=32"), "--input-option is for inputs"),
+])
+def test_an_option_the_input_would_ignore_is_refused(occlusion_clip, tmp_path: Path,
+                                                     options: tuple[str, ...],
+                                                     flag: str) -> None:
+    """`--pix-fmt gray` on an MP4, `-f mpegts` with --raw: accepted and ignored (exit 0)."""
+    clip, _, _ = occlusion_clip
+    assert_one_line_error(vtrack("run", str(clip), *options, "--init", "10,10,20,20",
+                                 "--no-video", "--out", str(tmp_path / "o")), flag)
