@@ -34,6 +34,8 @@ class FrameResult:
     time_s: float
     box: Box | None
     state: TrackState
+    #: The tracker's confidence in its box, never negative (``ctx.score`` floored at 0; NaN
+    #: where a chain gives none).
     score: float
     prediction: Box | None
     extras: dict[str, Any] = field(default_factory=dict)
@@ -122,7 +124,7 @@ class Pipeline:
             frame=frame,
             box=None if state == TrackState.LOST else ctx.box,  # lost: no box is claimed
             state=state,
-            score=ctx.score,
+            score=max(ctx.score, 0.0),  # a signal below its reference is no evidence: 0
             prediction=ctx.prediction,
             extras=ctx.extras,
             tracks=ctx.tracks,

@@ -127,16 +127,16 @@ class Tracker:
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
         if self._pipeline is None:
-            if self._new_pipeline().needs_init_box:
-                raise ConfigError(f"{self.config.name}: this tracker needs the target's box "
-                                  "first: call init(frame, (x, y, w, h))")
-            return self._begin(None, frame)
+            return self._begin(None, frame)  # ConfigError if the config needs a box
         return self._process(frame)
 
     def _begin(self, box: Box | None, frame: FrameLike) -> FrameResult:
         """Fresh stages starting from ``box`` on ``frame``, the sequence's first; when they
         cannot start there (an error), the tracker is left as :meth:`reset` leaves it."""
         pipeline = self._new_pipeline()
+        if box is None and pipeline.needs_init_box:
+            raise ConfigError(f"{self.config.name}: this tracker needs the target's box first: "
+                              "call init(frame, (x, y, w, h))")
         pipeline.begin(box)
         self._pipeline, self._index, self._shape = pipeline, 0, None
         try:

@@ -200,8 +200,8 @@ def _remove_earlier_vectors(out_dir: Path) -> None:
     traces and manifest; nothing else), so that no frame of another run is checked against."""
     for name in ("manifest.json", "trace.csv", "iterations.csv"):
         (out_dir / name).unlink(missing_ok=True)
-    for folder in out_dir.glob("frame_[0-9][0-9][0-9][0-9]*"):
-        if folder.is_dir() and folder.name[6:].isdigit():
+    for folder in out_dir.glob("frame_*"):
+        if folder.is_dir() and folder.name.removeprefix("frame_").isdigit():
             for vector in folder.glob("*.hex"):
                 vector.unlink()
             with contextlib.suppress(OSError):  # a folder holding files of the user's own

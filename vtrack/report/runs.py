@@ -331,10 +331,10 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
         return None
     path = str(given)
     started_in = record.get("working_dir")
-    if (isinstance(started_in, str) and path != "-" and not is_url(path)
-            and not os.path.isabs(path) and os.path.exists(os.path.join(started_in, path))):
-        return os.path.join(started_in, path)
-    return path
+    if not isinstance(started_in, str) or path == "-" or is_url(path) or os.path.isabs(path):
+        return path
+    there = os.path.join(started_in, path)
+    return there if os.path.exists(there) else path
 
 
 def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:

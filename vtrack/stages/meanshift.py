@@ -32,8 +32,7 @@ Pipeline contract of stage ``meanshift``:
 - reads ``ctx.window``, ``ctx.likelihood``, ``ctx.search_box`` (where the search starts, from
   the hue stage) and ``ctx.target_model`` (the references of ``bp_mass``);
 - writes ``ctx.measurement`` and ``ctx.box`` (the new box: the mean-shift result is the position
-  unless a later stage - occlusion, kalman - decides otherwise), ``ctx.score`` (``bp_mass``,
-  0 below 0)
+  unless a later stage - occlusion, kalman - decides otherwise), ``ctx.score`` (= ``bp_mass``)
   and the extras ``iterations`` (mean-shift steps taken; empty for camshift, which does not
   report them) and ``bp_mass`` (back-projection mass of the new box relative to the initial
   box's, see :func:`vtrack.stages.backproject.bp_mass`).
@@ -166,7 +165,7 @@ class MeanShift(Stage):
             ctx.extras["iterations"] = steps
         mass = bp_mass(ctx, box)
         ctx.measurement = ctx.box = box
-        ctx.score = max(mass, 0.0)  # bp_mass keeps the signed value
+        ctx.score = mass
         ctx.extras["bp_mass"] = mass
 
     def _camshift(self, likelihood: np.ndarray, window: Window, start: Box) -> Box:

@@ -35,9 +35,8 @@ update or coast):
   ``bp_mass`` references; the model histogram for ``similarity``, with ``ctx.feature``,
   ``ctx.feature_mask``, ``ctx.feature_levels``) and ``ctx.search_box`` (where the search
   started: the prediction, or the held box);
-- writes ``ctx.state``, ``ctx.score`` (the signal, 0 below 0), ``ctx.search_growth`` and
-  ``ctx.measurement`` / ``ctx.box``: None / the search box while hidden, the re-found box on
-  recovery.
+- writes ``ctx.state``, ``ctx.score`` (the signal), ``ctx.search_growth`` and ``ctx.measurement``
+  / ``ctx.box``: None / the search box while hidden, the re-found box on recovery.
 """
 
 from __future__ import annotations
@@ -145,7 +144,7 @@ class Occlusion(Stage):
             candidate = best_box(ctx.likelihood, ctx.window, search_box)
             level = max(self.recover, self.threshold)
         value = 0.0 if candidate is None else self._signal(ctx, candidate)
-        ctx.score = max(value, 0.0)  # below the surroundings' level is no evidence: 0
+        ctx.score = value
         if value >= level:
             ctx.state = TrackState.TRACKING
             ctx.search_growth = 1.0
