@@ -267,20 +267,22 @@ class SelectionServer:
                     raise _Refused(404, "not found")
 
             def _post(self, route: str) -> None:
-                if route != "select" or server._done.is_set():
+                if route != "select" or server.selection is not None:
                     raise _Refused(404, "not found")
                 if (self.headers.get("Content-Type") or "").split(";")[0] != "application/json":
                     raise _Refused(415, "expected Content-Type: application/json")
                 body = self._body()
                 with server._confirming:
-                    if server._done.is_set():  # another confirm came first
+                    if server.selection is not None:  # another confirm came first
                         raise _Refused(404, "not found")
                     selection = server.select(body if isinstance(body, dict) else {})
                     server.selection = selection
+                try:
+                    self._json({"init": format_box(selection.box),
+                                "sidecar": None if selection.sidecar is None
+                                else selection.sidecar.name})
+                finally:  # answered before wait() stops the server and the process exits
                     server._done.set()
-                self._json({"init": format_box(selection.box),
-                            "sidecar": None if selection.sidecar is None
-                            else selection.sidecar.name})
 
             def _body(self) -> Any:
                 """The request's JSON body, read only when small (_Refused otherwise)."""
