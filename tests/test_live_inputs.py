@@ -278,8 +278,9 @@ def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) ->
     included; the run then ends partial, saying the stream stopped."""
     clip, box = _live_clip(tmp_path, frames=45)
     port = _free_port(socket.SOCK_DGRAM)
+    # --timeout 3: on a loaded machine a real-time sender may pause for over a second
     receiver = _receiver([f"udp://127.0.0.1:{port}", "--no-live", "-c", "s2", "--init", box,
-                          "--timeout", "1", "--no-video", "-o", str(tmp_path / "out")])
+                          "--timeout", "3", "--no-video", "-o", str(tmp_path / "out")])
     try:
         _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)
         subprocess.run([*SENDER, str(clip), f"udp://127.0.0.1:{port}"], check=True, timeout=60)

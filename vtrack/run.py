@@ -67,7 +67,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.identity import sizes
-from vtrack.io.outdir import OutputFolder, refuse_replacing
+from vtrack.io.outdir import LOCK_NAME, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
@@ -172,6 +172,9 @@ class _Signals:
 
     def __init__(self) -> None:
         self.pending: int | None = None
+        #: The first signal received, even one whose exception FFmpeg's C code swallowed (a
+        #: read or an open it interrupted then fails with EINTR or "invalid data").
+        self.received: int | None = None
         self.inside = False
         self._handlers = ExitStack()
 
@@ -183,6 +186,7 @@ class _Signals:
         self._handlers.close()
 
     def _handle(self, signum: int, frame: object) -> None:
+        self.received = self.received or signum
         if self.inside:
             self.pending = self.pending or signum
         else:
@@ -399,11 +403,11 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         # a time (--start 2.5s, --frames 10s) needs the input's frame rate: that input opens
         # first
         timed = request.start_s is not None or request.max_s is not None
-        source: Source | None = _open(request) if timed else None
+        source: Source | None = _open(request, signals) if timed else None
         try:
             resolved = _resolve(request, None if source is None else source.info.fps)
             if source is None:
-                source = _open(request)
+                source = _open(request, signals)
         except BaseException:
             if source is not None:
                 source.close()
@@ -433,9 +437,16 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     return summary
 
 
-def _open(request: RunRequest) -> Source:
-    return open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                       live=request.live)
+def _open(request: RunRequest, signals: _Signals) -> Source:
+    """The request's input opened; Interrupted when a signal came while it opened, whatever
+    error the interrupted open then gave (FFmpeg turns it into EINTR or "invalid data")."""
+    try:
+        return open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
+                           live=request.live)
+    except Exception:
+        if signals.received is not None:
+            raise Interrupted(signals.received) from None
+        raise
 
 
 @dataclass
@@ -462,7 +473,8 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
                     and os.path.samefile(output, source):
                 raise ConfigError(f"{option} {output}: is {what} of this run ({source}); "
                                   "write the results elsewhere")
-    if stream is not None and any(stream.resolve() == output.resolve() for output, _ in outputs):
+    own = [output for output, _ in outputs] + [request.out_dir / LOCK_NAME]
+    if stream is not None and any(stream.resolve() == output.resolve() for output in own):
         raise ConfigError(f"--stream {stream}: is one of this run's own outputs; name another "
                           "file")
 

@@ -1,4 +1,4 @@
-"""Path options shared by the commands that write files."""
+"""Path options and arguments shared by the commands."""
 
 from __future__ import annotations
 
@@ -8,9 +8,10 @@ from typing import Any
 import click
 
 
-class OutPath(click.Path):
+class NonEmptyPath(click.Path):
     """A ``click.Path`` that refuses an empty value: ``--out ""`` would otherwise mean the
-    current folder and replace the outputs an earlier run left there."""
+    current folder and replace the outputs an earlier run left there (and ``vtrack batch ""``
+    track every input in it)."""
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> Any:
@@ -20,5 +21,5 @@ class OutPath(click.Path):
         return super().convert(value, param, ctx)
 
 
-#: The type of every ``--out`` option.
-OUT_PATH = OutPath(path_type=Path)
+#: The type of every ``--out`` option and path argument.
+PATH = NonEmptyPath(path_type=Path)

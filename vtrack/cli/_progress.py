@@ -61,8 +61,11 @@ class ProgressLines:
         if now - self.last >= self.period:
             self.last = now
             total = max(self.total, done) if self.total else None
-            print(progress_line(self.name, done, total, now - self.started) + note,
-                  file=sys.stderr, flush=True)
+            try:
+                print(progress_line(self.name, done, total, now - self.started) + note,
+                      file=sys.stderr, flush=True)
+            except (OSError, ValueError):  # the log's reader went away: the run goes on
+                self.period = float("inf")
 
 
 class BatchProgress:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import click
 
 from vtrack.cli._options import MAX_WAIT_S, Seconds, gt_origin_option
-from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._paths import PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
@@ -72,11 +72,11 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
 @_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames",
               "stats_period", "quiet")
 @click.command("batch")
-@click.argument("folder", type=click.Path(path_type=Path))
+@click.argument("folder", type=PATH)
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
               help="Tracker config, a TOML file or a shipped name; repeat to run every input "
                    f"with each. Default: {DEFAULT_CONFIG}.")
-@click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
+@click.option("--out", "-o", "out_dir", type=PATH, metavar="DIR",
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")
 @click.option("--jobs", "-j", type=click.IntRange(1, MAX_JOBS), default=None,

@@ -7,14 +7,14 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._paths import PATH
 
 
 @click.command("frame")
 @click.argument("input_spec", metavar="INPUT")
 @click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True,
               help="Frame number (0-based).")
-@click.option("--out", "-o", "out", type=OUT_PATH, metavar="FILE",
+@click.option("--out", "-o", "out", type=PATH, metavar="FILE",
               help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
 @click.option("--step", type=click.IntRange(min=2), default=None, metavar="PX",
               help="Grid spacing in pixels. Default: a round step giving ~16 lines.")

@@ -7,14 +7,14 @@ from pathlib import Path
 import click
 
 from vtrack.cli._options import gt_origin_option
-from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._paths import PATH
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
 
 @click.command("report")
-@click.argument("results", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--out", "-o", "out_dir", type=OUT_PATH,
+@click.argument("results", nargs=-1, required=True, type=PATH)
+@click.option("--out", "-o", "out_dir", type=PATH,
               default=Path("vtrack-report"), show_default=True, metavar="DIR",
               help="Report folder: index.html, plots/*.png, summary.md, summary.csv.")
 @click.option("--gt", "gt_specs", multiple=True, metavar="[INPUT=]FILE",

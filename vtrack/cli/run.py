@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.cli._options import MAX_WAIT_S, FrameSpan, Seconds, StartPoint, gt_origin_option
-from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._paths import PATH
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.params import MAX_SEED
@@ -40,11 +40,11 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--init", "init_text", metavar="x,y,w,h",
               help="Initial box (top-left x, y, width, height). Default: the input's sidecar box "
                    "(NAME.init.txt, written by vtrack select), else the first --gt box.")
-@click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="FILE",
+@click.option("--gt", "gt_path", type=PATH, metavar="FILE",
               help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
                    "multi-target configs): fills overlap and center_error.")
 @gt_origin_option()
-@click.option("--out", "-o", "out_dir", type=OUT_PATH, metavar="DIR",
+@click.option("--out", "-o", "out_dir", type=PATH, metavar="DIR",
               help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. A folder "
                    "holding an earlier run's results is refused unless --overwrite.")
 @click.option("--overwrite", "-y", is_flag=True,

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._paths import OUT_PATH
+from vtrack.cli._paths import PATH
 
 
 class _DefaultGroup(click.Group):
@@ -47,7 +47,7 @@ def command() -> None:
               help="Initial box (top-left x, y, width, height).")
 @click.option("--frames", "count", type=int, default=10, show_default=True,
               help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
-@click.option("--out", "-o", "out_dir", type=OUT_PATH, required=True,
+@click.option("--out", "-o", "out_dir", type=PATH, required=True,
               metavar="DIR", help="Output folder (created; existing vector files are replaced).")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
               help="Override a stage parameter (repeatable).")
@@ -87,8 +87,8 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
 
 
 @command.command("check")
-@click.argument("vectors_dir", metavar="DIR", type=click.Path(path_type=Path))
-@click.argument("dump_dir", metavar="DUMP", type=click.Path(path_type=Path))
+@click.argument("vectors_dir", metavar="DIR", type=PATH)
+@click.argument("dump_dir", metavar="DUMP", type=PATH)
 def check(vectors_dir: Path, dump_dir: Path) -> None:
     """Compare a simulator's DUMP (same layout, any subset of the files) with the vectors DIR."""
     from vtrack.errors import InputError

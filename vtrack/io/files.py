@@ -10,8 +10,9 @@ import contextlib
 import hashlib
 import os
 import re
+import sys
 from pathlib import Path
-from typing import Self
+from typing import BinaryIO, Self
 
 from vtrack.errors import InputError, OutputError
 
@@ -44,6 +45,16 @@ def check_input_path(path: str) -> None:
 #: The most bytes (UTF-8) of a folder name :func:`folder_name` makes: file systems allow 255,
 #: and a run's temporary files add a few dozen to a name inside the folder.
 MAX_FOLDER_BYTES = 200
+
+
+def piped_stdin(what: str) -> BinaryIO:
+    """Standard input's bytes, for ``-``: InputError when it is closed (``<&-``) or a terminal
+    (``what`` says what to pipe in)."""
+    if sys.stdin is None or sys.stdin.closed:
+        raise InputError(f"stdin is closed; pipe {what} into vtrack")
+    if sys.stdin.isatty():
+        raise InputError(f"stdin is a terminal; pipe {what} into vtrack")
+    return getattr(sys.stdin, "buffer", sys.stdin)  # a binary stream given as stdin as it is
 
 
 def folder_name(text: str, fallback: str = "config") -> str:

@@ -17,7 +17,6 @@ import math
 import os
 import re
 import stat
-import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from numbers import Real
@@ -30,7 +29,7 @@ import numpy as np
 from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.files import check_input_path, os_reason
+from vtrack.io.files import check_input_path, os_reason, piped_stdin
 from vtrack.io.source import InputInfo, Source
 
 PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
@@ -169,9 +168,8 @@ class RawSource(Source):
 
     def _open(self, spec: str) -> BinaryIO:
         if spec == "-":
-            if sys.stdin.isatty():
-                raise InputError("stdin: is a terminal; pipe raw frames into vtrack")
-            return open(sys.stdin.fileno(), "rb", buffering=0, closefd=False)
+            stdin = piped_stdin("raw frames")
+            return open(stdin.fileno(), "rb", buffering=0, closefd=False)
         check_input_path(spec)
         if os.path.isdir(spec):
             raise InputError(f"{spec}: is a folder, not a file of raw frames")

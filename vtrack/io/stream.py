@@ -11,11 +11,14 @@ number), ``time_s`` (the frame's timestamp), ``x``, ``y``, ``w``, ``h`` (null wh
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import os
 import select
+import stat
 import sys
+import time
 from typing import IO, Any
 
 from vtrack.errors import OutputError
@@ -72,7 +75,7 @@ class StreamWriter(Closing):
         self.lines = 0
         try:
             self._file: IO[bytes] = (_stdout_bytes() if target == STDOUT
-                                     else open(target, "wb"))  # noqa: SIM115
+                                     else _open_for_lines(target, stall_s))
         except OSError as exc:
             raise OutputError(f"--stream {target}: {os_reason(exc)}") from None
         try:
@@ -112,6 +115,35 @@ class StreamWriter(Closing):
             self._file.close()
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
+
+
+#: How often the opening of a FIFO looks for its reader (seconds).
+READER_POLL_S = 0.05
+
+
+def _open_for_lines(target: str, wait_s: float) -> IO[bytes]:
+    """``target`` opened to write. A FIFO is opened once a reader has opened it, waiting at
+    most ``wait_s`` (a plain open would wait for ever: OutputError)."""
+    try:
+        fifo = stat.S_ISFIFO(os.stat(target).st_mode)
+    except OSError:
+        fifo = False
+    if not fifo:
+        return open(target, "wb")  # noqa: SIM115 (closed by StreamWriter.close)
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            fd = os.open(target, os.O_WRONLY | os.O_NONBLOCK)  # ENXIO: no reader yet
+            break
+        except OSError as exc:
+            if exc.errno != errno.ENXIO:
+                raise
+            if time.monotonic() >= deadline:
+                raise OutputError(f"--stream {target}: a FIFO that no reader opened within "
+                                  f"{wait_s:g} s (--timeout)") from None
+            time.sleep(READER_POLL_S)
+    os.set_blocking(fd, True)
+    return open(fd, "wb")  # noqa: SIM115
 
 
 def _stdout_bytes() -> IO[bytes]:

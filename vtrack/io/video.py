@@ -30,12 +30,10 @@ place. Only a stream that really ends early is partial. Of several video streams
 
 from __future__ import annotations
 
-import io
 import itertools
-import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import IO, Any
+from typing import Any
 
 import av
 import cv2
@@ -44,9 +42,10 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.files import os_reason
+from vtrack.io.files import os_reason, piped_stdin
 from vtrack.io.follow import GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
+from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
@@ -231,24 +230,6 @@ def _python_file(container: av.container.InputContainer) -> object:
 PIPE_BUFFER_BYTES = 5_000_000
 
 
-class CountedStream(io.RawIOBase):
-    """A stream that cannot seek (a pipe on stdin), read through as it is, counting its bytes
-    (``bytes_read``): FFmpeg cannot ask a pipe for its size."""
-
-    def __init__(self, raw: IO[bytes]) -> None:
-        super().__init__()
-        self._raw = raw
-        self.bytes_read = 0
-
-    def readable(self) -> bool:
-        return True
-
-    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
-        got = self._raw.readinto1(buffer)  # type: ignore[attr-defined]  # what has arrived
-        self.bytes_read += got or 0
-        return got or 0
-
-
 def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     """``path`` opened by FFmpeg as ``how`` says: ``-`` is stdin, ``scheme://`` a network
     input (with ``how.timeout_s``; ``srt://`` refused: the wheel's FFmpeg has no SRT), a file
@@ -258,18 +239,15 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
                          "-formats lists them; capture devices /dev/videoN need no --format)")
     kwargs: dict[str, Any] = {"format": how.format, "options": dict(how.options)}
     if path == "-":
-        stdin = sys.stdin.buffer
+        stdin = piped_stdin("a video")
         if stdin.seekable():
             return av.open(stdin, **kwargs)
         # a pipe: FFmpeg's reads are buffered up to its probe size, as ``ffmpeg -i pipe:`` is,
         # so a container whose index comes last (a plain MP4) that fits opens as it does there
-        return av.open(CountedStream(stdin), buffer_size=PIPE_BUFFER_BYTES, **kwargs)
+        return _open_stream(CountedStream(stdin), buffer_size=PIPE_BUFFER_BYTES, **kwargs)
     if "://" not in path:
         if how.follow_s is not None:
-            growing = GrowingFile(path, how.follow_s)
-            container = av.open(growing, **kwargs)
-            growing.raise_interruption()  # a signal while FFmpeg probed it
-            return container
+            return _open_stream(GrowingFile(path, how.follow_s), **kwargs)
         return av.open(path, **kwargs)
     scheme = path.split("://", 1)[0].lower()
     if scheme == "srt":
@@ -280,6 +258,20 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
             and "listen_timeout" not in options:  # FFmpeg's own default fails (ERANGE)
         options["listen_timeout"] = str(max(1, round(how.timeout_s)))
     return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
+
+
+def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputContainer:
+    """``stream`` opened by FFmpeg. A signal while FFmpeg probed it ends the probe; what it
+    raised is raised here rather than FFmpeg's error about the cut-short data."""
+    try:
+        container = av.open(stream, **kwargs)
+    except av.FFmpegError:
+        stream.raise_interruption()
+        raise
+    if stream.interruption is not None:
+        container.close()
+        stream.raise_interruption()
+    return container
 
 
 #: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
@@ -451,7 +443,7 @@ class VideoSource(Source):
                     continue
                 yield from frames
             read = _python_file(self._container)
-            if isinstance(read, GrowingFile):  # a signal while it waited
+            if isinstance(read, CapturingStream):  # a signal while a read waited
                 read.raise_interruption()
         except av.error.ExitError:
             for frame in self._stream.decode(None):
@@ -564,6 +556,9 @@ class VideoSource(Source):
         if self._damage_warned:
             return
         self._damage_warned = True
+        read = _python_file(self._container)
+        if isinstance(read, CapturingStream) and read.interruption is not None:
+            return  # the stream was cut short by a signal, not damaged
         if self.frames_skipped:
             self.warnings.append(f"{self.info.path}: {self.frames_skipped} damaged frames could "
                                  "not be decoded and were skipped")

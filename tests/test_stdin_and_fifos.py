@@ -1,0 +1,219 @@
+"""Standard input, FIFOs and growing files at their edges: a signal while FFmpeg reads or opens
+them, stdin closed or a terminal, a --stream FIFO nobody reads, --follow where it cannot apply
+(found by a hostile probe)."""
+
+from __future__ import annotations
+
+import json
+import os
+import pty
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from vtrack.io import follow
+from vtrack.io.follow import GrowingFile
+from vtrack.scenes import make_scene, write_clip, write_video
+
+FEEDER = """if True:
+    import sys, time
+    data = open(sys.argv[1], 'rb').read()
+    try:
+        for at in range(0, len(data), 200):
+            sys.stdout.buffer.write(data[at:at + 200]); sys.stdout.buffer.flush(); time.sleep(0.1)
+    except BrokenPipeError:
+        pass"""
+
+
+def _vtrack(args: list[str], **kwargs: object) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "vtrack", "run", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            **kwargs)  # type: ignore[call-overload]
+
+
+def _signalled(run: subprocess.Popen, signum: int, after_s: float) -> bytes:
+    try:
+        time.sleep(after_s)  # reading (or opening) its input, whatever the exact moment
+        run.send_signal(signum)
+        _, stderr = run.communicate(timeout=60)
+    finally:
+        run.kill()
+    return stderr
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_a_slow_pipe_is_read_interrupts_the_run(tmp_path: Path,
+                                                               signum: int) -> None:
+    """A container trickling in on stdin: Ctrl-C or SIGTERM was printed as an ignored
+    exception inside FFmpeg's read and lost; the run went on to the end of the feed and said
+    `complete` (exit 0), with a "damaged frame" the cut read had made."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=60, fps=30)
+    clip = write_video(scene, tmp_path / "clip.ts", preset="veryfast")
+    feeder = subprocess.Popen([sys.executable, "-c", FEEDER, str(clip)], stdout=subprocess.PIPE)
+    try:
+        run = _vtrack(["-", "-c", "s0", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+                       "--no-video", "-o", str(tmp_path / "out")], stdin=feeder.stdout)
+        stderr = _signalled(run, signum, 3.0)
+    finally:
+        feeder.kill()
+        feeder.wait()
+    assert run.returncode == 128 + signum, stderr
+    assert b"interrupted" in stderr
+    assert b"Exception ignored" not in stderr and b"Traceback" not in stderr
+    assert b"damaged" not in stderr
+    record = tmp_path / "out" / "run.json"
+    if record.exists():  # the signal came after the first frame
+        assert json.loads(record.read_text())["status"] == "interrupted"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_a_fifo_waits_for_its_writer_interrupts_the_run(tmp_path: Path,
+                                                                       signum: int) -> None:
+    """FFmpeg's open of a FIFO no one writes to, cut by the signal, failed with EINTR: the run
+    said "not a video FFmpeg can decode (Interrupted system call)" and exited 2."""
+    fifo = tmp_path / "feed"
+    os.mkfifo(fifo)
+    run = _vtrack([str(fifo), "-c", "s0", "--init", "1,1,8,8", "--no-video", "-o",
+                   str(tmp_path / "out")])
+    stderr = _signalled(run, signum, 2.0)
+    assert run.returncode == 128 + signum, stderr
+    assert stderr.decode().strip() == "vtrack: interrupted"
+    assert not (tmp_path / "out").exists()
+
+
+def test_stream_into_a_fifo_no_reader_opens_ends_after_timeout(tmp_path: Path) -> None:
+    """`--stream FIFO` waited for ever for a reader to open it (--timeout did not apply)."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                           "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                           "--stream", str(fifo), "--timeout", "1", "-o", str(tmp_path / "out")],
+                          capture_output=True, timeout=60, check=False)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.decode().strip() == (f"vtrack: error: --stream {fifo}: a FIFO that no "
+                                            "reader opened within 1 s (--timeout)")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_growing_file_ends_once_idle_for_its_time_in_all(tmp_path: Path,
+                                                            monkeypatch: pytest.MonkeyPatch
+                                                            ) -> None:
+    """FFmpeg asks for more several times at the end of a followed file; each request waited
+    the whole --follow time anew (--follow 2 ended ~9 s after the file stopped growing). Once
+    the file has been idle that long since data last came, a read ends at once."""
+    path = tmp_path / "grown.ts"
+    path.write_bytes(b"x" * 1000)
+    growing = GrowingFile(str(path), idle_s=0.2)
+    buffer = bytearray(4096)
+    assert growing.readinto(buffer) == 1000
+    time.sleep(0.3)  # idle past --follow since the data came
+
+    def no_waiting(seconds: float) -> None:
+        raise AssertionError(f"waited {seconds} s more at an end already reached")
+
+    monkeypatch.setattr(follow.time, "sleep", no_waiting)
+    assert growing.readinto(buffer) == 0
+    assert growing.readinto(buffer) == 0
+    assert growing.interruption is None  # (a read keeps what is raised inside it)
+    growing.close()
+
+
+def test_follow_is_refused_where_it_cannot_apply(tmp_path: Path) -> None:
+    """--follow was accepted and ignored for raw input, an image folder and stdin (run.json
+    even recorded it)."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=10, fps=30)
+    raw = write_clip(scene, tmp_path / "clip.raw", fmt="raw").clip
+    folder = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    cases = [([str(raw), "--raw", "160x120"], "raw frames are read to the end"),
+             ([str(folder)], "is an image folder"),
+             (["-"], "stdin is read until its writer closes it"),
+             (["udp://127.0.0.1:9"], "is a stream, read until it ends")]
+    for args, reason in cases:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", *args, "--follow", "1",
+                               "-c", "s0", "--init", "1,1,8,8", "-o", str(tmp_path / "out")],
+                              capture_output=True, timeout=60, check=False,
+                              stdin=subprocess.DEVNULL)
+        assert done.returncode == 2, (args, done.stderr)
+        line = done.stderr.decode().strip()
+        assert line.startswith("vtrack: error: --follow reads a video file that is still "
+                               "being written;") and reason in line, line
+        assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("raw", [False, True])
+def test_stdin_closed_or_a_terminal_is_one_line(tmp_path: Path, raw: bool) -> None:
+    """A closed stdin (`<&-`) was an AttributeError traceback; a terminal on stdin made a
+    container read wait for ever (raw input was already refused)."""
+    what = "raw frames" if raw else "a video"
+    args = [sys.executable, "-m", "vtrack", "run", "-", *(["--raw", "160x120"] if raw else []),
+            "-c", "s0", "--init", "1,1,8,8", "--no-video", "-o", str(tmp_path / "out")]
+    closed = subprocess.run(args, capture_output=True, timeout=60, check=False,
+                            preexec_fn=lambda: os.close(0))
+    assert closed.returncode == 2
+    assert closed.stderr.decode().strip() == (f"vtrack: error: stdin is closed; pipe {what} "
+                                              "into vtrack")
+    leader, follower = pty.openpty()
+    try:
+        on_terminal = subprocess.run(args, capture_output=True, timeout=60, check=False,
+                                     stdin=follower)
+    finally:
+        os.close(leader)
+        os.close(follower)
+    assert on_terminal.returncode == 2
+    assert on_terminal.stderr.decode().strip() == (f"vtrack: error: stdin is a terminal; pipe "
+                                                   f"{what} into vtrack")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_log_reader_that_goes_away_does_not_fail_the_run(tmp_path: Path) -> None:
+    """Progress lines into a pipe whose reader left (`2>&1 | head -1`): the run failed with
+    "[Errno 32] Broken pipe", naming nothing. The tracking is the product: it completes."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=150, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    run = subprocess.Popen([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s1",
+                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+                            "--stats-period", "0.001", "-o", str(tmp_path / "out")],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        assert run.stderr is not None
+        first = run.stderr.readline()
+        run.stderr.close()  # the reader leaves after one line
+        run.wait(timeout=120)
+    finally:
+        run.kill()
+    assert b"frames" in first
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert record["status"] == "complete" and record["frames"] == 150
+
+
+def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:
+    """`--stream OUT/.vtrack.lock` was accepted, and the lines were deleted with the lock at the
+    end of the run."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                           "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                           "--stream", str(out / ".vtrack.lock"), "-o", str(out)],
+                          capture_output=True, timeout=60, check=False)
+    assert done.returncode == 2
+    assert "is one of this run's own outputs" in done.stderr.decode()
+
+
+@pytest.mark.parametrize("command", [["batch", "", "-c", "s0", "--out", "OUT"],
+                                     ["report", ""], ["scene", "smooth", ""]])
+def test_an_empty_path_argument_is_refused(tmp_path: Path, command: list[str]) -> None:
+    """`vtrack batch ""` tracked every input of the current folder; `vtrack report ""` read
+    it (an empty --out was already refused)."""
+    args = [str(tmp_path / "o") if a == "OUT" else a for a in command]
+    done = subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          timeout=60, check=False, cwd=tmp_path)
+    assert done.returncode == 2
+    assert "empty; give a folder or file name" in done.stderr.decode()
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -1,0 +1,56 @@
+"""Python streams FFmpeg reads through PyAV (a pipe on stdin, a file that is still growing)."""
+
+from __future__ import annotations
+
+import io
+from typing import IO
+
+
+class CapturingStream(io.RawIOBase):
+    """A readable, unseekable stream that counts the bytes it hands over (``bytes_read``:
+    FFmpeg cannot ask a stream for its size) and keeps what a signal raised inside a read.
+
+    FFmpeg calls :meth:`readinto` from C, and PyAV prints and drops an exception raised there
+    (a Ctrl-C or SIGTERM while a read waited): the run would go on as if nothing had happened.
+    Here the read ends the stream instead, and the reader's owner raises the kept exception
+    (:meth:`raise_interruption`) once it sees the end."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        #: What a signal raised while a read waited, once one did.
+        self.interruption: BaseException | None = None
+        self.bytes_read = 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
+        if self.interruption is not None:
+            return 0
+        try:
+            got = self._read_into(buffer)
+        except BaseException as exc:  # a signal's exception, inside FFmpeg's call: kept
+            self.interruption = exc
+            return 0
+        self.bytes_read += got
+        return got
+
+    def _read_into(self, buffer: bytearray | memoryview) -> int:
+        """Fill ``buffer`` with what there is; 0 at the stream's end."""
+        raise NotImplementedError
+
+    def raise_interruption(self) -> None:
+        """Raise what a signal raised while a read waited, if one did."""
+        if self.interruption is not None:
+            raise self.interruption
+
+
+class CountedStream(CapturingStream):
+    """A stream that cannot seek (a pipe on stdin), read through as it arrives."""
+
+    def __init__(self, raw: IO[bytes]) -> None:
+        super().__init__()
+        self._raw = raw
+
+    def _read_into(self, buffer: bytearray | memoryview) -> int:
+        return self._raw.readinto1(buffer) or 0  # type: ignore[attr-defined]  # what has arrived
