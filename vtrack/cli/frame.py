@@ -23,7 +23,8 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
             no_grid: bool) -> None:
     """Write frame N of INPUT as an image with a light pixel grid and its scale (x along the
     top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
-    from vtrack.errors import ConfigError, OutputError
+    from vtrack.errors import ConfigError
+    from vtrack.io.files import write_bytes_atomic
     from vtrack.io.specs import input_name
     from vtrack.picker.frames import encode_image, read_frame
     from vtrack.picker.grid import draw_grid
@@ -40,8 +41,5 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
                           "replace or add one of its frames); write the image elsewhere")
     bgr = read_frame(input_spec, index)
     image = bgr if no_grid else draw_grid(bgr, step)
-    try:
-        out.write_bytes(encode_image(image, ext))
-    except OSError as exc:
-        raise OutputError(f"{out}: cannot be written ({exc.strerror or exc})") from None
+    write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old image
     click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")

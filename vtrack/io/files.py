@@ -10,7 +10,9 @@ import contextlib
 import hashlib
 import os
 import re
+import shutil
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO, Self
 
@@ -87,7 +89,11 @@ def is_temp_of(name: str, final: str) -> bool:
 
 
 def remove_quietly(path: Path) -> None:
-    """Delete a temporary file if it is there (a failure to delete is not worth reporting)."""
+    """Delete a temporary file, or folder with what it holds, if it is there (a failure to
+    delete is not worth reporting)."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+        return
     with contextlib.suppress(OSError):
         path.unlink(missing_ok=True)
 
@@ -109,14 +115,56 @@ def prepare_output_dir(folder: Path) -> Path:
     return folder
 
 
+@contextlib.contextmanager
+def replacing(*paths: Path) -> Iterator[tuple[Path, ...]]:
+    """A :func:`temp_path` for each of ``paths``, for the block to write (a file, or a folder
+    it creates). When the block completes, each is renamed over its path in turn (a folder
+    replaces the folder there, whatever that held); when it raises, every temporary name is
+    removed and ``paths`` are left as they were, so a failed write never leaves a file that
+    looks complete nor spoils the one that was there. OutputError naming a path whose rename
+    fails."""
+    temps = tuple(temp_path(path) for path in paths)
+    try:
+        yield temps
+        for temp, path in zip(temps, paths, strict=True):
+            try:
+                _rename_over(temp, path)
+            except OSError as exc:
+                raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+    finally:
+        for temp in temps:
+            remove_quietly(temp)
+
+
+def _rename_over(temp: Path, path: Path) -> None:
+    """``os.replace(temp, path)``; a folder ``temp`` first moves an existing folder ``path``
+    aside (rename cannot replace a folder that holds something) and removes it after."""
+    if not (temp.is_dir() and path.is_dir() and not path.is_symlink()):
+        os.replace(temp, path)
+        return
+    aside = temp_path(path)
+    os.replace(path, aside)
+    try:
+        os.replace(temp, path)
+    except OSError:
+        os.replace(aside, path)
+        raise
+    remove_quietly(aside)
+
+
+def write_bytes_atomic(path: Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file renamed when complete (readers never
+    see a half-written file, and a failed write leaves the earlier ``path`` as it was) and
+    return ``path``; OutputError naming it if it cannot be."""
+    with replacing(path) as (temp,):
+        try:
+            temp.write_bytes(data)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+    return path
+
+
 def write_text_atomic(path: Path, text: str) -> Path:
     """Write ``text`` to ``path`` through a temporary file renamed when complete (readers never
     see a half-written file) and return ``path``; OutputError naming it if it cannot be."""
-    temp = temp_path(path)
-    try:
-        temp.write_text(text, encoding="utf-8")
-        os.replace(temp, path)
-    except OSError as exc:
-        remove_quietly(temp)
-        raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
-    return path
+    return write_bytes_atomic(path, text.encode("utf-8"))

@@ -10,13 +10,13 @@ Ground-truth conventions:
 - MOTChallenge (``write_mot_groundtruth``): ``frame,id,x,y,w,h,1,1,1`` with 1-based frames, one
   line per object at least partly inside the frame.
 
-Every writer creates missing parent folders and turns an OS failure into
+Every writer creates missing parent folders, writes temporary names renamed when complete (a
+failed write leaves no partial file and the earlier one as it was) and turns an OS failure into
 :class:`~vtrack.errors.OutputError` naming the path.
 """
 
 from __future__ import annotations
 
-import re
 import sys
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -30,6 +30,8 @@ import numpy as np
 from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError
+from vtrack.io.files import replacing
+from vtrack.picker.frames import encode_image
 from vtrack.scenes.scene import Scene
 
 #: Layouts ``write_raw`` can produce (bytes per frame: 3wh, 3wh, 1.5wh, wh).
@@ -52,11 +54,11 @@ CLIP_FORMATS = ("mp4", "images", "raw")
 
 
 @contextmanager
-def _writing(path: Path, folder: bool = False) -> Iterator[None]:
-    """Create ``path``'s parent folder (or ``path`` itself when it is a ``folder``); report
-    OS / FFmpeg failures as OutputError naming ``path``."""
+def _writing(path: Path) -> Iterator[None]:
+    """Create ``path``'s parent folder; report OS / FFmpeg failures as OutputError naming
+    ``path``."""
     try:
-        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield
     except (OSError, av.FFmpegError) as exc:
         reason = getattr(exc, "strerror", None) or str(exc)
@@ -105,9 +107,17 @@ def write_video(
     a key frame at least every that many frames (a stream a receiver may join part way; None:
     the encoder's choice). The scene's
     frames are deterministic, the encoded bytes need not be (x264's mb-tree can vary slightly
-    from run to run).
+    from run to run). ``path`` appears only once the video is complete.
     """
     path = Path(path)
+    _check_video(scene, path, preset, codec, pix_fmt)
+    with replacing(path) as (temp,):
+        _encode_video(scene, path, temp, crf, preset, codec, pix_fmt, progress, keyint)
+    return path
+
+
+def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str) -> None:
+    """ConfigError naming ``path`` when the encoder, preset or pixel format cannot be used."""
     try:
         av.codec.Codec(codec, "w")
     except ValueError as exc:
@@ -120,8 +130,13 @@ def write_video(
         raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
     if pix_fmt == "yuv420p":
         _need_even(scene, f"{path}: pixel format yuv420p")
+
+
+def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, codec: str,
+                  pix_fmt: str, progress: bool, keyint: int | None) -> None:
+    """What :func:`write_video` promises, written to ``temp`` (errors name ``path``)."""
     rate = Fraction(scene.fps).limit_denominator(1001)
-    with _writing(path), av.open(str(path), "w") as container:
+    with _writing(path), av.open(str(temp), "w") as container:
         options = {"crf": str(crf), "preset": preset}
         if keyint is not None:
             options["g"] = str(keyint)
@@ -138,7 +153,6 @@ def write_video(
             frame.pts = index
             container.mux(stream.encode(frame))
         container.mux(stream.encode(None))
-    return path
 
 
 def _box_line(values: Iterable[float]) -> str:
@@ -151,27 +165,39 @@ def write_groundtruth(scene: Scene, path: str | Path, origin: int = 0) -> Path:
     ``origin=1`` writes MATLAB-style 1-based boxes, as OTB's ``groundtruth_rect.txt`` files are.
     """
     path = Path(path)
+    with replacing(path) as (temp,):
+        _groundtruth_to(scene, path, temp, origin)
+    return path
+
+
+def _groundtruth_to(scene: Scene, path: Path, temp: Path, origin: int) -> None:
+    """What :func:`write_groundtruth` promises, written to ``temp`` (errors name ``path``)."""
     lines = [
         _box_line(box._replace(x=box.x + origin, y=box.y + origin)) if box is not None
         else "0,0,0,0"
         for box in scene.boxes
     ]
     with _writing(path):
-        path.write_text("\n".join(lines) + "\n")
-    return path
+        temp.write_text("\n".join(lines) + "\n")
 
 
 def write_mot_groundtruth(scene: Scene, path: str | Path) -> Path:
     """MOTChallenge ground truth: ``frame,id,x,y,w,h,1,1,1`` per visible object, 1-based frames."""
     path = Path(path)
+    with replacing(path) as (temp,):
+        _mot_groundtruth_to(scene, path, temp)
+    return path
+
+
+def _mot_groundtruth_to(scene: Scene, path: Path, temp: Path) -> None:
+    """What :func:`write_mot_groundtruth` promises, written to ``temp`` (errors name ``path``)."""
     lines = [
         f"{index + 1},{track_id},{_box_line(box)},1,1,1"
         for index, tracks in enumerate(scene.tracks)
         for track_id, box in tracks
     ]
     with _writing(path):
-        path.write_text("".join(line + "\n" for line in lines))
-    return path
+        temp.write_text("".join(line + "\n" for line in lines))
 
 
 def write_image_sequence(
@@ -179,42 +205,67 @@ def write_image_sequence(
 ) -> Path:
     """OTB layout: ``folder/img/0001.<ext>`` ... (1-based, >= 4 digits) and
     ``folder/groundtruth_rect.txt`` with 1-based boxes, as OTB writes them (read it with
-    ``--gt-origin 1``). JPEG quality 95; ``ext`` is ``jpg`` or ``png``."""
+    ``--gt-origin 1``). JPEG quality 95; ``ext`` is ``jpg`` or ``png``. Both appear once
+    every image is written: ``folder/img`` replaces the folder there as a whole."""
+    folder = Path(folder)
+    _check_image_ext(ext)
+    images, groundtruth = folder / "img", folder / "groundtruth_rect.txt"
+    with replacing(images, groundtruth) as (images_temp, groundtruth_temp):
+        _images_to(scene, images, images_temp, ext, progress)
+        _groundtruth_to(scene, groundtruth, groundtruth_temp, origin=1)
+    return folder
+
+
+def _check_image_ext(ext: str) -> None:
     if ext not in ("jpg", "png"):
         raise ConfigError(f"image format {ext!r}: choose jpg or png")
-    folder = Path(folder)
-    images = folder / "img"
+
+
+def _images_to(scene: Scene, images: Path, temp: Path, ext: str, progress: bool) -> None:
+    """The numbered images of :func:`write_image_sequence`, in the new folder ``temp``
+    (errors name ``images``)."""
     digits = max(4, len(str(len(scene))))
-    params = [cv2.IMWRITE_JPEG_QUALITY, 95] if ext == "jpg" else []
-    with _writing(images, folder=True):
-        for index, bgr in enumerate(_progress(scene, progress, folder.name)):
-            name = images / f"{index + 1:0{digits}d}.{ext}"
-            if not cv2.imwrite(str(name), bgr, params):
-                raise OSError(f"OpenCV could not write {name}")
-    write_groundtruth(scene, folder / "groundtruth_rect.txt", origin=1)
-    return folder
+    with _writing(images):
+        temp.mkdir()
+        for index, bgr in enumerate(_progress(scene, progress, images.parent.name)):
+            name = temp / f"{index + 1:0{digits}d}.{ext}"
+            name.write_bytes(encode_image(bgr, f".{ext}", quality=95))
+
+
+#: The conversion from BGR of each layout ``write_raw`` writes (None: as it is).
+_RAW_CONVERSIONS = {
+    "bgr24": None,
+    "rgb24": cv2.COLOR_BGR2RGB,
+    "yuv420p": cv2.COLOR_BGR2YUV_I420,
+    "gray": cv2.COLOR_BGR2GRAY,
+}
 
 
 def write_raw(
     scene: Scene, path: str | Path, pix_fmt: str = "bgr24", progress: bool = False
 ) -> Path:
-    """Frames back to back, no header, in ``pix_fmt`` (one of :data:`RAW_PIX_FMTS`)."""
-    conversions = {
-        "bgr24": None,
-        "rgb24": cv2.COLOR_BGR2RGB,
-        "yuv420p": cv2.COLOR_BGR2YUV_I420,
-        "gray": cv2.COLOR_BGR2GRAY,
-    }
-    if pix_fmt not in conversions:
-        raise ConfigError(f"raw pixel format {pix_fmt!r}: choose one of {', '.join(RAW_PIX_FMTS)}")
+    """Frames back to back, no header, in ``pix_fmt`` (one of :data:`RAW_PIX_FMTS`);
+    ``path`` appears only once every frame is written."""
     path = Path(path)
+    _check_raw(scene, path, pix_fmt)
+    with replacing(path) as (temp,):
+        _raw_to(scene, path, temp, pix_fmt, progress)
+    return path
+
+
+def _check_raw(scene: Scene, path: Path, pix_fmt: str) -> None:
+    if pix_fmt not in _RAW_CONVERSIONS:
+        raise ConfigError(f"raw pixel format {pix_fmt!r}: choose one of {', '.join(RAW_PIX_FMTS)}")
     if pix_fmt == "yuv420p":
         _need_even(scene, f"{path}: pixel format yuv420p")
-    code = conversions[pix_fmt]
-    with _writing(path), path.open("wb") as out:
+
+
+def _raw_to(scene: Scene, path: Path, temp: Path, pix_fmt: str, progress: bool) -> None:
+    """What :func:`write_raw` promises, written to ``temp`` (errors name ``path``)."""
+    code = _RAW_CONVERSIONS[pix_fmt]
+    with _writing(path), temp.open("wb") as out:
         for bgr in _progress(scene, progress, path.name):
             out.write((bgr if code is None else cv2.cvtColor(bgr, code)).tobytes())
-    return path
 
 
 def sidecar(path: str | Path, kind: str) -> Path:
@@ -229,10 +280,6 @@ class ClipFiles:
     clip: Path
     groundtruth: Path
     mot: Path | None
-
-
-#: The images :func:`write_image_sequence` names (``0001.jpg``).
-IMAGE_NAME = re.compile(r"\d{4,}\.(jpg|png)")
 
 
 def write_clip(
@@ -252,27 +299,35 @@ def write_clip(
 
     Scenes with more than one tracked object (``multi``) also get MOTChallenge ground truth:
     ``<stem>.mot.txt`` beside a file, ``out/groundtruth_mot.txt`` in an image folder.
-    Written over an earlier clip, nothing of that one is left: its numbered images in
-    ``out/img`` and a MOTChallenge file the new scene does not have are removed.
+    Every file (and ``out/img``) is written under a temporary name and they are renamed
+    together once all are complete: when a write fails none of them appears, and an earlier
+    clip there is left as it was. Written over an earlier clip, nothing of that one is left:
+    ``out/img`` is replaced as a whole, and a MOTChallenge file the new scene does not have is
+    removed.
     """
     out = Path(out)
-    multi = any(len(tracks) > 1 for tracks in scene.tracks)
-    mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
-    stale = [mot] if not multi else []
-    if fmt == "images" and (out / "img").is_dir():
-        stale += [f for f in (out / "img").iterdir() if IMAGE_NAME.fullmatch(f.name)]
-    with _writing(out):
-        for path in stale:
-            path.unlink(missing_ok=True)
-    if fmt == "mp4":
-        pix = pix_fmt or "yuv420p"
-        write_video(scene, out, crf=crf, preset=preset, pix_fmt=pix, progress=progress)
-    elif fmt == "raw":
-        write_raw(scene, out, pix_fmt=pix_fmt or "bgr24", progress=progress)
-    elif fmt == "images":
-        write_image_sequence(scene, out, progress=progress)
-    else:
+    if fmt not in CLIP_FORMATS:
         raise ConfigError(f"clip format {fmt!r}: choose one of {', '.join(CLIP_FORMATS)}")
-    gt = (out / "groundtruth_rect.txt" if fmt == "images"
-          else write_groundtruth(scene, sidecar(out, "gt")))
-    return ClipFiles(out, gt, write_mot_groundtruth(scene, mot) if multi else None)
+    pix = pix_fmt or ("yuv420p" if fmt == "mp4" else "bgr24")
+    if fmt == "mp4":
+        _check_video(scene, out, preset, "libx264", pix)
+    elif fmt == "raw":
+        _check_raw(scene, out, pix)
+    multi = any(len(tracks) > 1 for tracks in scene.tracks)
+    clip = out / "img" if fmt == "images" else out
+    gt = out / "groundtruth_rect.txt" if fmt == "images" else sidecar(out, "gt")
+    mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
+    with replacing(clip, gt, *([mot] if multi else [])) as temps:
+        if fmt == "mp4":
+            _encode_video(scene, out, temps[0], crf, preset, "libx264", pix, progress, None)
+        elif fmt == "raw":
+            _raw_to(scene, out, temps[0], pix, progress)
+        else:
+            _images_to(scene, clip, temps[0], "jpg", progress)
+        _groundtruth_to(scene, gt, temps[1], origin=1 if fmt == "images" else 0)
+        if multi:
+            _mot_groundtruth_to(scene, mot, temps[2])
+    if not multi:
+        with _writing(mot):
+            mot.unlink(missing_ok=True)
+    return ClipFiles(out, gt, mot if multi else None)
