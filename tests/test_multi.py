@@ -520,6 +520,48 @@ def test_vtrack_run_s3_with_mot_ground_truth_and_no_init(tmp_path, clip_factory)
     assert metrics["mota"] > 0.85 and metrics["idf1"] > 0.9
 
 
+def _rewritten_mot(clip, tmp_path, columns: str):
+    """The clip's MOTChallenge ground truth with columns 7.. replaced by ``columns``."""
+    rows = clip.mot.read_text().splitlines()
+    path = tmp_path / "gt.txt"
+    path.write_text("".join(",".join(row.split(",")[:6]) + columns + "\n" for row in rows))
+    return path, len(rows)
+
+
+@pytest.mark.parametrize(("columns", "reason"), [
+    (",0", "the consider flag 0 in column 7"),
+    (",1,7,1", "class 7 in column 8, not pedestrian 1"),
+])
+def test_ground_truth_whose_every_row_is_ignored_is_a_warning(tmp_path, clip_factory, columns,
+                                                               reason) -> None:
+    """Probe 48 item 2: every row dropped (not to be considered, or static persons) was scored
+    silently as gt_boxes 0, mota null. As in TrackEval the run goes on, and it says so."""
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    gt, rows = _rewritten_mot(clip, tmp_path, columns)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    note = f"{gt}: all {rows} ground-truth rows are ignored ({rows} with {reason})"
+    assert f"vtrack: warning: {note}" in result.stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["metrics"]["gt_boxes"] == 0 and any(note in w for w in record["warnings"])
+
+
+def test_a_class_column_that_holds_no_motchallenge_class_is_refused(tmp_path,
+                                                                    clip_factory) -> None:
+    """Probe 48 item 2: MOT15 rows cut to 9 columns (world coordinates -1 read as the class) were
+    all dropped silently; TrackEval refuses a class outside 1-13, and so does vtrack run."""
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    gt, _ = _rewritten_mot(clip, tmp_path, ",1,-1,-1")
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(tmp_path / "out"), "--quiet"])
+    assert result.exit_code == 2, result.output
+    assert result.stderr.startswith(f"vtrack: error: {gt} line 1: column 8 is -1, not a "
+                                    "MOTChallenge class")
+    assert len(result.stderr.splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("start", [0, 40])
 def test_a_run_scores_as_it_goes_what_its_tracks_csv_scores(tmp_path, clip_factory,
                                                            start) -> None:

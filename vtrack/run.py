@@ -53,7 +53,7 @@ from vtrack.errors import (
     plural,
     printable,
 )
-from vtrack.evaluate.groundtruth import read_boxes, read_mot
+from vtrack.evaluate.groundtruth import all_dropped_note, read_boxes, read_mot_counting
 from vtrack.evaluate.metrics import score_frame, summarize
 from vtrack.frame import Frame
 from vtrack.geometry import Box, check_init_box
@@ -354,6 +354,8 @@ class _Resolved:
     start: int = 0
     #: How many frames to track at most (``--frames``, a duration counted at the frame rate).
     max_frames: int | None = None
+    #: What the run warns of before it tracks (ground truth whose every row is ignored).
+    warnings: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -542,13 +544,16 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
     folder is touched)."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
+    warnings: list[str] = []
     if request.gt_path is not None and pipeline.multi_target:
         try:
-            mot_gt = read_mot(request.gt_path)
+            mot_gt, dropped = read_mot_counting(request.gt_path)
         except InputError as exc:
             raise InputError(
                 f"{exc}; {request.config.name} tracks several targets and scores them against "
                 "MOTChallenge ground truth (gt.txt lines frame,id,x,y,w,h,...)") from None
+        if not mot_gt and dropped:
+            warnings.append(all_dropped_note(request.gt_path, dropped))
     elif request.gt_path is not None:
         gt = read_boxes(request.gt_path, origin=request.gt_origin)
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
@@ -579,7 +584,7 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
-                     request.file_identities(), start, request.frame_limit(fps))
+                     request.file_identities(), start, request.frame_limit(fps), warnings)
 
 
 def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, Iterator[Frame]]:
@@ -740,7 +745,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         frames_passed=source.frames_passed,
         multi_target=resolved.pipeline.multi_target,
         error=error,
-        warnings=list(source.warnings),
+        warnings=[*resolved.warnings, *source.warnings],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
     )
     if frames == 0 and status == STATUS_COMPLETE:

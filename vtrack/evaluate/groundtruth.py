@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections import Counter
 from collections.abc import Iterator
 from os import PathLike
 from pathlib import Path
@@ -22,6 +23,9 @@ _SEPARATORS = re.compile(r"[,\s]+")
 
 #: MOT16/17/20 ``gt.txt`` class id of a walking/standing pedestrian (column 8).
 MOT_PEDESTRIAN = 1
+#: The classes MOTChallenge's ground truth uses (MOT16/17: 1 pedestrian ... 12 reflection; MOT20
+#: adds 13 crowd); TrackEval, the official evaluation kit, refuses a file with any other.
+MOT_CLASSES = range(1, 14)
 
 _QUOTE_MAX = 60
 
@@ -162,32 +166,62 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
     - column 7 (the "consider" flag) equal to 0 drops the row (MOTChallenge: ignore this box);
     - only in the 8- and 9-column MOT16/17/20 layout, column 8 is the class: only pedestrians
       (class 1) are kept; persons on vehicles, static persons, distractors, reflections etc. are
-      dropped. The 10-column layout has no class column and is not filtered;
+      dropped. A class that is not one of MOTChallenge's (:data:`MOT_CLASSES`, e.g. the ``-1``
+      of a MOT15 row cut to 9 columns) is an error, as in TrackEval. The 10-column layout has
+      no class column and is not filtered;
     - a row whose box has ``w <= 0`` or ``h <= 0`` is dropped.
 
     Frames without kept rows are not keys; keys are ascending, rows keep file order. Frame 1 of
     the file is key 0; boxes are taken as written (MOTChallenge's top-left corner). Blank lines
     are skipped. Two kept rows for one (frame, id) are an error: a target is in one place at a
-    time. For ``det.txt`` files use :func:`read_mot_detections`.
+    time. For ``det.txt`` files use :func:`read_mot_detections`; :func:`read_mot_counting`
+    also says which rows were dropped.
     """
+    return read_mot_counting(path)[0]
+
+
+def read_mot_counting(
+    path: str | PathLike[str],
+) -> tuple[dict[int, list[tuple[int, Box]]], Counter[str]]:
+    """:func:`read_mot`, and how many rows it dropped for each reason (``"the consider flag 0
+    in column 7"``, ``"class 7 in column 8, not pedestrian 1"``, ``"w or h <= 0"``)."""
     frames: dict[int, list[tuple[int, Box]]] = {}
     seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
+    dropped: Counter[str] = Counter()
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
+        if len(values) in (8, 9) and values[7] not in MOT_CLASSES:
+            raise InputError(
+                f"{path} line {number}: column 8 is {values[7]:g}, not a MOTChallenge class "
+                f"(1-13, 1 pedestrian): {len(values)} columns are "
+                "frame,id,x,y,w,h,consider,class[,visibility]; MOT15's rows with world "
+                "coordinates have 10 (frame,id,x,y,w,h,conf,x,y,z)")
         if len(values) >= 7 and values[6] == 0:
+            dropped["the consider flag 0 in column 7"] += 1
             continue
         if len(values) in (8, 9) and values[7] != MOT_PEDESTRIAN:
+            dropped[f"class {values[7]:g} in column 8, not pedestrian {MOT_PEDESTRIAN}"] += 1
             continue
         box = Box(*values[2:6])
-        if box.w > 0 and box.h > 0:
-            target = int(values[1])
-            first = seen.setdefault((frame, target), number)
-            if first != number:
-                raise InputError(f"{path} line {number}: frame {frame + 1} has a second box for "
-                                 f"id {target} (the first is on line {first})")
-            frames.setdefault(frame, []).append((target, box))
-    return dict(sorted(frames.items()))
+        if not (box.w > 0 and box.h > 0):
+            dropped["w or h <= 0"] += 1
+            continue
+        target = int(values[1])
+        first = seen.setdefault((frame, target), number)
+        if first != number:
+            raise InputError(f"{path} line {number}: frame {frame + 1} has a second box for "
+                             f"id {target} (the first is on line {first})")
+        frames.setdefault(frame, []).append((target, box))
+    return dict(sorted(frames.items())), dropped
+
+
+def all_dropped_note(path: str | PathLike[str], dropped: Counter[str]) -> str:
+    """The warning for MOTChallenge ground truth whose every row :func:`read_mot_counting`
+    dropped: how many, and why (``dropped`` as it returns it)."""
+    why = "; ".join(f"{count} with {reason}" for reason, count in dropped.most_common())
+    return (f"{path}: all {sum(dropped.values())} ground-truth rows are ignored ({why}): "
+            "nothing to score against (gt_boxes 0, mota null)")
 
 
 def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, float]]]:
