@@ -147,3 +147,40 @@ def test_batch_tracks_a_folder_of_footage_without_ground_truth(
         rows = {row["input"]: row for row in csv.DictReader(handle)}
     assert rows["clip"]["status"] == "complete" and rows["seq"]["status"] == "complete"
     assert first_row(out / "clip" / DEFAULT_CONFIG) == moved, again.output
+
+
+def test_init_is_refused_by_a_config_that_finds_its_targets_but_a_sidecar_is_not(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Probe 48 item 3: ``--init`` with s3 / fixed_camera was accepted, had no effect and was
+    recorded in run.json as used. Now an explicit --init is refused in one line; a sidecar box
+    beside the input (there for single-target configs) leaves a multi-target run alone, in
+    ``vtrack run`` and ``vtrack batch``; s4, which starts from a given box, still takes one."""
+    clip = clip_factory("multi", frames=60)
+    path = tmp_path / "footage" / "clip.mp4"
+    path.parent.mkdir()
+    shutil.copy(clip.path, path)
+    box = first_box(clip.scene.tracks[0][0][1])
+    path.with_name("clip.init.txt").write_text(text(box) + "\n")
+    for config in ("s3", "fixed_camera", "s4_multi"):
+        out = tmp_path / f"refused-{config}"
+        result = vtrack("run", str(path), "-c", config, "--init", text(box), "--no-video",
+                        "-o", str(out))
+        assert result.exit_code == 2, result.output
+        assert result.stderr.splitlines() == [
+            f"vtrack: error: --init: {config} finds its targets itself (it tracks several, each "
+            "from where it is detected) and takes no first box; leave --init out"]
+        assert not out.exists()
+    out = tmp_path / "s3"
+    assert vtrack("run", str(path), "-c", "s3", "--no-video", "-o", str(out)).exit_code == 0
+    assert (record(out)["init"], record(out)["init_from"]) == (None, None)
+    result = vtrack("run", str(path), "-c", "s4", "--init", text(box), "--no-video", "-o",
+                    str(tmp_path / "s4"))
+    assert result.exit_code == 0, result.output
+    assert record(tmp_path / "s4")["init_from"] == "--init" and first_row(tmp_path / "s4") == box
+    batch = tmp_path / "batch"
+    result = vtrack("batch", str(path.parent), "-c", "s3", "-c", "fixed_camera", "--jobs", "1",
+                    "--no-video", "--out", str(batch))
+    assert result.exit_code == 0, result.output
+    for config in ("s3", "fixed_camera"):
+        assert record(batch / "clip" / config)["status"] == "complete"
+        assert record(batch / "clip" / config)["init"] is None
