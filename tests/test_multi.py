@@ -613,3 +613,32 @@ def test_vtrack_run_s4_needs_no_init(tmp_path, clip_factory) -> None:
     assert {row["state"] for row in rows[:30]} == {"lost"}  # learning the background
     assert {row["state"] for row in rows[30:]} == {"tracking"}
 
+
+
+def test_a_score_is_given_exactly_by_the_chains_that_declare_one(scene_factory) -> None:
+    """Probe 48 item 4: the stages reference says which shipped configs give no score (S4:
+    its document defines no confidence, so track.csv's score is empty); that declaration
+    (``Stage.gives_score``) is what each single-target config does on a clip."""
+    from vtrack import track
+    from vtrack.config import shipped_configs
+
+    scene = scene_factory("bounce", 0, 160, 120, 40)
+    first = scene.boxes[0]
+    assert first is not None
+    frames = list(scene.frames())
+    unscored = []
+    for name in sorted(shipped_configs()):
+        pipeline = Pipeline(load_config(name).build())
+        if pipeline.multi_target:
+            continue
+        init = None if not pipeline.needs_init_box else first
+        scores = [r.score for r in track(frames, name, init_box=init)]
+        assert any(math.isfinite(s) for s in scores) == pipeline.gives_score, name
+        if not pipeline.gives_score:
+            unscored.append(name)
+    assert unscored == ["s4"]
+    from vtrack.cli.stages import stages_text
+
+    reference = stages_text(markdown=True)
+    assert [line for line in reference.splitlines() if "no score" in line] == [
+        next(line for line in reference.splitlines() if line.startswith("- `s4`:"))]

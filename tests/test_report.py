@@ -464,3 +464,24 @@ def test_a_report_made_from_another_folder_reads_the_runs_relative_input_and_gro
     assert "failure frames of clip left out: the ground truth clip.gt.txt" in gone.stderr
     assert not (elsewhere / "gone" / "plots" / "failures_clip.png").exists()
     assert (elsewhere / "gone" / "plots" / "overlap_clip.png").is_file()
+
+
+def test_a_tracker_that_gives_no_score_is_said_so_not_plotted_blank(clip_factory: ClipFactory,
+                                                                     tmp_path: Path) -> None:
+    """Probe 48 item 4: s4 (its document defines no confidence) leaves ``score`` empty on every
+    row, and the report drew a blank score plot. The page now says it has none, and the panel
+    does too; s0's score is plotted as before."""
+    clip = clip_factory("bounce", width=W, height=H, frames=60)
+    box = clip.gt.read_text().splitlines()[0]
+    for config, init in (("s4", []), ("s0", ["--init", box])):
+        result = vtrack("run", str(clip.path), "-c", config, *init, "--no-video", "-q", "-o",
+                        str(tmp_path / config))
+        assert result.exit_code == 0, result.output
+    with (tmp_path / "s4" / "track.csv").open(newline="") as handle:
+        assert {row["score"] for row in csv.DictReader(handle)} == {""}
+    assert vtrack("report", str(tmp_path / "s4"), str(tmp_path / "s0"), "-q", "-o",
+                  str(tmp_path / "report")).exit_code == 0
+    page = (tmp_path / "report" / "index.html").read_text()
+    notes = re.findall(r"Warning: ([^<]*no score[^<]*)</p>", page)
+    assert len(notes) == 1 and "[s4]: no score: this tracker gives none" in notes[0], notes
+    assert len(list((tmp_path / "report" / "plots").glob("state_*.png"))) == 1

@@ -67,6 +67,11 @@ class Pipeline:
         return any(s.needs_init_box for s in self.stages)
 
     @property
+    def gives_score(self) -> bool:
+        """Whether a stage of the chain sets the score (else every result's is NaN)."""
+        return any(s.gives_score for s in self.stages)
+
+    @property
     def columns(self) -> tuple[str, ...]:
         """Extra CSV columns declared by the stages, in chain order, without repeats."""
         seen: dict[str, None] = {}

@@ -226,6 +226,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
         if unscored_here:
             figures.append(plots.state_plot(name, unscored_here, palette,
                                             plot_dir / f"state_{slug}.png"))
+            warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_here
+                         if all(c is None for c in r.confidence)]
         if scored:
             figures.append(plots.overlap_plot(name, scored, palette,
                                               plot_dir / f"overlap_{slug}.png"))

@@ -55,16 +55,21 @@ def _shade(axis, values: Sequence[object], value: object, colour: str, label: st
                      label=label if n == 0 else None)
 
 
+#: What the score panel of a run whose tracker gives no score says (S4: its document has none).
+NO_SCORE = "no score: this tracker gives none (track.csv's score is empty); its state is shaded"
+
 #: The y range of every 0..1 score axis (overlap over time, success and precision plots).
 SCORE_YLIM = (0.0, 1.02)
 
 
 def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], ylabel: str,
             values: Callable[[RunResult], Sequence[float | None]],
-            absent: Callable[[RunResult], Sequence[bool]] | None = None) -> Figure:
+            absent: Callable[[RunResult], Sequence[bool]] | None = None,
+            empty: str | None = None) -> Figure:
     """A panel per run (configuration): ``values`` per frame (0..1) over the frames it reported
-    occluded or lost (shaded), and frames where ``absent`` is true in grey (no ground truth).
-    The shading legend sits above the panels, never over the data."""
+    occluded or lost (shaded), and frames where ``absent`` is true in grey (no ground truth);
+    a run with frames but no value at all gets the text ``empty`` across its panel instead of
+    a blank line. The shading legend sits above the panels, never over the data."""
     figure = Figure(figsize=(10, 0.9 + 1.7 * len(runs)), dpi=DPI, layout="constrained")
     axes = figure.subplots(len(runs), 1, sharex=True, squeeze=False)[:, 0]
     legend: dict[str, object] = {}
@@ -77,6 +82,9 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
             _shade(axis, absent(run), True, NO_GT_SHADE, "no ground truth", run.first_frame)
         axis.plot(run.first_frame + np.arange(len(series)), series, color=palette[run.config],
                   lw=1.2)
+        if empty is not None and len(series) and not np.isfinite(series).any():
+            axis.text(0.5, 0.5, empty, transform=axis.transAxes, ha="center", va="center",
+                      fontsize=9, color="0.35")
         axis.set_ylim(*SCORE_YLIM)
         axis.set_ylabel(ylabel)
         axis.set_title(printable(run.config), loc="left", fontsize=10, color=palette[run.config])
@@ -108,9 +116,10 @@ def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
 def state_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
                path: Path) -> Path:
     """Without ground truth: each run's own score (0..1) per frame, its occluded and lost
-    frames shaded; saved as ``path``."""
+    frames shaded (a run whose tracker gives no score: :data:`NO_SCORE` in its panel); saved
+    as ``path``."""
     _panels(f"{name}: tracker's score and state over time (no ground truth)", runs, palette,
-            "score", lambda run: run.confidence).savefig(path)
+            "score", lambda run: run.confidence, empty=NO_SCORE).savefig(path)
     return path
 
 

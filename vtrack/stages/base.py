@@ -243,6 +243,10 @@ class Stage:
     #: False when the stage can start without an initial box (detecting trackers, and stages
     #: that read ``ctx.box`` only if it is set). A chain needs one when any of its stages does.
     needs_init_box: ClassVar[bool] = True
+    #: True for stages that set ``ctx.score`` (their confidence in the box). A chain with none
+    #: (S4, whose document defines no confidence) leaves the score NaN: track.csv's ``score``
+    #: empty on every row.
+    gives_score: ClassVar[bool] = False
 
     def __init__(self, **values: Any) -> None:
         """``values`` are validated (see :func:`build_stage`); missing ones take defaults."""
