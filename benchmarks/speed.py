@@ -42,9 +42,11 @@ from pathlib import Path
 
 from common import machine, process_env
 
+from vtrack.config import load_config
 from vtrack.evaluate.groundtruth import read_boxes
 from vtrack.io.video import decoder_threads
 from vtrack.machine import cpu_count
+from vtrack.pipeline import Pipeline
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 WORK = Path(__file__).resolve().parent / "_work"
@@ -208,6 +210,9 @@ def main() -> None:
         if round_ > 0:  # round 0 warms the file cache and the imports: dropped
             seconds.setdefault(key, []).append(value)
 
+    # the first box, for the configs that track a given target (the others find theirs)
+    box = {c: ["--init", init] if Pipeline(load_config(c).build()).needs_init_box else []
+           for c in configs}
     with tempfile.TemporaryDirectory() as scratch:
         for round_ in range(args.rounds + 1):
             # Alternate every measurement within a round so drift hits them alike.
@@ -219,7 +224,7 @@ def main() -> None:
             for config in configs:
                 key = f"novideo:{config}"
                 t, record = vtrack_run([str(clip), "--no-video", "--config", config,
-                                        "--init", init], n, f"vtrack run --no-video ({config})")
+                                        *box[config]], n, f"vtrack run --no-video ({config})")
                 keep(key, t, round_)
                 if round_ > 0:
                     ratios.setdefault(key, []).append(decode / t)  # fps ratio, same round
@@ -235,7 +240,7 @@ def main() -> None:
                 keep(f"transcode:{preset}", transcode, round_)
                 for config in configs:
                     key = f"video:{config}:{preset}"
-                    t, record = vtrack_run([str(clip), "--config", config, "--init", init,
+                    t, record = vtrack_run([str(clip), "--config", config, *box[config],
                                             "--preset", preset], n,
                                            f"vtrack run with video ({config}, {preset})")
                     keep(key, t, round_)
@@ -245,7 +250,7 @@ def main() -> None:
             if not args.no_raw:
                 for config in configs:
                     key = f"raw:{config}"
-                    t, record = raw_pipe(n, ["--no-video", "--config", config, "--init", init],
+                    t, record = raw_pipe(n, ["--no-video", "--config", config, *box[config]],
                                          f"vtrack run - --raw ({config})")
                     keep(key, t, round_)
                     if round_ > 0:
