@@ -184,3 +184,26 @@ def test_init_is_refused_by_a_config_that_finds_its_targets_but_a_sidecar_is_not
     for config in ("s3", "fixed_camera"):
         assert record(batch / "clip" / config)["status"] == "complete"
         assert record(batch / "clip" / config)["init"] is None
+
+
+def test_batch_from_a_later_frame_does_not_take_the_sidecar_box(
+        video: tuple[Path, Box], clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """The sidecar holds frame 0's box: `vtrack batch --start 10` put it on frame 10 and
+    tracked background, `complete` (vtrack run refused). Without ground truth the pair fails
+    now, saying why; with it, the ground truth's box of frame 10 starts the run."""
+    path, _ = video
+    out = tmp_path / "out"
+    result = vtrack("batch", str(path.parent), "-c", "s2", "--start", "10", "--no-video", "-o",
+                    str(out))
+    assert result.exit_code != 0
+    assert ("--start 10: config 's2' needs the target's box in that frame, and there is no "
+            "ground truth (clip.gt.txt, clip.txt; a sidecar box is frame 0's)") in result.stderr
+    assert not (out / "clip" / "s2" / "run.json").exists()
+    scene = clip_factory("smooth", width=W, height=H, frames=FRAMES).scene  # the video's
+    scene_boxes = [first_box(b) for b in scene.boxes]
+    path.with_name("clip.gt.txt").write_text("".join(f"{text(b)}\n" for b in scene_boxes))
+    again = vtrack("batch", str(path.parent), "-c", "s2", "--start", "10", "--no-video", "-o",
+                   str(out))
+    assert again.exit_code == 0, again.output
+    assert record(out / "clip" / "s2")["init"] == list(scene_boxes[10])
+    assert first_row(out / "clip" / "s2") == scene_boxes[10]

@@ -190,6 +190,25 @@ def test_a_log_reader_that_goes_away_does_not_fail_the_run(tmp_path: Path) -> No
     assert b"frames" in first
     record = json.loads((tmp_path / "out" / "run.json").read_text())
     assert record["status"] == "complete" and record["frames"] == 150
+    assert run.returncode == 0  # the summary line it could not print is no failure
+
+
+def test_a_summary_reader_that_goes_away_leaves_the_exit_status_to_the_run(
+        tmp_path: Path) -> None:
+    """`vtrack run ... | head -0`: the summary line met a closed stdout and the complete run
+    exited 1, saying nothing."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    run = subprocess.Popen([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                            "-o", str(tmp_path / "out")],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert run.stdout is not None and run.stderr is not None
+    run.stdout.close()  # `| head -0`
+    stderr = run.stderr.read()
+    assert run.wait(timeout=120) == 0, stderr
+    assert stderr == b""
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "complete"
 
 
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:

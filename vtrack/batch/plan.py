@@ -115,7 +115,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=item.problem))
                 continue
             try:
-                init = _init_box(item, label, gt_path) if pipelines[label].needs_init_box else None
+                init = (_init_box(item, label, gt_path, settings)
+                        if pipelines[label].needs_init_box else None)
             except InputError as exc:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=str(exc)))
                 continue
@@ -139,17 +140,25 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     return result
 
 
-def _init_box(item: BatchInput, config: str, gt_path: Path | None) -> Box | None:
+def _init_box(item: BatchInput, config: str, gt_path: Path | None,
+              settings: RunRequest) -> Box | None:
     """The first box of an input from its sidecar file (``NAME.init.txt``, ``init.txt`` in a
     sequence folder: 0-based pixels whatever ``--gt-origin`` says, as ``vtrack run`` reads it);
-    None when it has none but has ground truth (the run takes its first box). Raises
-    InputError when there is neither, or the sidecar is malformed."""
-    box = read_sidecar(item.path)
+    None when it has none but has ground truth (the run takes its first box). The sidecar
+    holds frame 0's box: a batch that starts later (``--start``) takes the ground truth's box
+    of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither, or
+    the sidecar is malformed."""
+    starts_later = bool(settings.start or settings.start_s)
+    box = None if starts_later else read_sidecar(item.path)
     if box is None and gt_path is None:
         if item.path.is_dir():
             names = (*SEQUENCE_GT, SEQUENCE_INIT)
         else:
             names = tuple(p.format(item.path.stem) for p in (*VIDEO_GT, VIDEO_INIT))
+        if starts_later:
+            raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
+                             "needs the target's box in that frame, and there is no ground "
+                             f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
         raise InputError(f"{item.path}: config '{config}' tracks a given target, but there is "
                          f"no ground truth or initial box ({', '.join(names)})")
     return box

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
 from pathlib import Path
@@ -95,8 +96,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
               "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame at "
-              "or after it, at the input's frame rate). --init (default: the --gt box of that "
-              "frame) is the target's box in it. Earlier frames are decoded and skipped.")
+              "or after it, at the input's frame rate). The target's box in it: --init's "
+              "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
+              "0's). Earlier frames are decoded and skipped.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
               help="Stop after N frames, or after T seconds of the input at its frame rate "
                    "(10s, like ffmpeg -t: the first ceil(T x fps) frames from --start).")
@@ -179,17 +181,23 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     finally:
         progress.close()
     for warning in summary.warnings:
-        click.echo(f"vtrack: warning: {warning}", err=True)
+        _say(f"vtrack: warning: {warning}", err=True)
     if not quiet:
-        click.echo(summary.line(), err=stream == "-")
+        _say(summary.line(), err=stream == "-")
     if summary.status == STATUS_INTERRUPTED:
-        click.echo(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
-                   err=True)
+        _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}", err=True)
         sys.exit(128 + signal.Signals[summary.interrupted_by or "SIGINT"].value)
     if summary.status != STATUS_COMPLETE:
-        click.echo(f"vtrack: error: {summary.error}; results up to there are in "
-                   f"{summary.out_dir}", err=True)
+        _say(f"vtrack: error: {summary.error}; results up to there are in {summary.out_dir}",
+             err=True)
         sys.exit(1)
+
+
+def _say(line: str, err: bool) -> None:
+    """``line`` on stderr (or stdout); nothing when its reader went away (``2>&1 | head``):
+    the run's exit status says how the run ended, its files and run.json what it did."""
+    with contextlib.suppress(OSError, ValueError):
+        click.echo(line, err=err)
 
 
 def _refuse_options_the_input_ignores(raw: bool, input_format: str | None,
