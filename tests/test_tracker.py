@@ -92,6 +92,21 @@ def test_tracker_without_a_box_is_refused_for_a_box_config() -> None:
         vtrack.Tracker("robust").update(np.zeros((48, 64, 3), np.uint8))
 
 
+@pytest.mark.parametrize("config", ["s3", "s4_multi", "fixed_camera"])
+def test_a_first_box_is_refused_by_a_config_that_finds_its_targets(config: str) -> None:
+    """``Tracker(config).init(frame, box)`` took the box and ignored it (vtrack run refuses
+    --init for these configs); without a box the same call starts the tracker."""
+    frame = np.zeros((48, 64, 3), np.uint8)
+    tracker = vtrack.Tracker(config)
+    with pytest.raises(ConfigError, match=f"^{config} finds its targets itself .* call "
+                       r"init\(frame\) without a box"):
+        tracker.init(frame, (1, 1, 8, 8))
+    assert tracker.init(frame).tracks == []
+    assert list(vtrack.track([frame, frame], config=config))[1].tracks == []
+    with pytest.raises(ConfigError, match="finds its targets itself"):
+        list(vtrack.track([frame], config=config, init_box=(1, 1, 8, 8)))
+
+
 def _frames(count: int = 3) -> list[np.ndarray]:
     """A red block on black, ``count`` frames of 160x120."""
     frames = [np.zeros((120, 160, 3), np.uint8) for _ in range(count)]

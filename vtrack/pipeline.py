@@ -66,6 +66,13 @@ class Pipeline:
     def needs_init_box(self) -> bool:
         return any(s.needs_init_box for s in self.stages)
 
+    def refuse_a_first_box(self, name: str, instead: str) -> None:
+        """ConfigError for a first box given to a multi-target chain (``name``: the config's),
+        which would ignore it; ``instead`` says what to do."""
+        if self.multi_target:
+            raise ConfigError(f"{name} finds its targets itself (it tracks several, each from "
+                              f"where it is detected) and takes no first box; {instead}")
+
     @property
     def gives_score(self) -> bool:
         """Whether a stage of the chain sets the score (else every result's is NaN)."""

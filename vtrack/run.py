@@ -560,10 +560,8 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
     # says, vtrack.io.sidecar), else the first ground-truth box
     # (the sidecar holds frame 0's box: not for a run that starts later)
     init_box, init_from = request.init_box, request.init_from or "--init"
-    if init_box is not None and request.init_from is None and pipeline.multi_target:
-        raise ConfigError(f"--init: {request.config.name} finds its targets itself (it tracks "
-                          "several, each from where it is detected) and takes no first box; "
-                          "leave --init out")
+    if init_box is not None and request.init_from is None:
+        pipeline.refuse_a_first_box(f"--init: {request.config.name}", "leave --init out")
     start = request.start_frame(fps)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))

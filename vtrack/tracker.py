@@ -134,6 +134,9 @@ class Tracker:
         """Fresh stages starting from ``box`` on ``frame``, the sequence's first; when they
         cannot start there (an error), the tracker is left as :meth:`reset` leaves it."""
         pipeline = self._new_pipeline()
+        if box is not None:
+            pipeline.refuse_a_first_box(self.config.name, "call init(frame) without a box, or "
+                                        "update(frame)")
         if box is None and pipeline.needs_init_box:
             raise ConfigError(f"{self.config.name}: this tracker needs the target's box first: "
                               "call init(frame, (x, y, w, h))")
