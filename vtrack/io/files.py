@@ -12,7 +12,7 @@ import os
 import re
 import shutil
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import BinaryIO, Self
 
@@ -115,6 +115,64 @@ def prepare_output_dir(folder: Path) -> Path:
     return folder
 
 
+class StagedFiles:
+    """Files (or folders) written under :func:`temp_path` names and put in place together by
+    :meth:`commit`, in the order staged: when one of them cannot be written, none is put in
+    place (an earlier set of these files stays whole) and :meth:`discard` removes every
+    temporary name. As a ``with`` block: committed when the block completes, discarded however
+    it ends. :func:`replacing` and the report's pages and plots both write through it."""
+
+    def __init__(self) -> None:
+        self._pending: list[tuple[Path, Path]] = []
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, *exc_info: object) -> None:
+        try:
+            if exc_type is None:
+                self.commit()
+        finally:
+            self.discard()
+
+    def temp(self, path: Path) -> Path:
+        """A :func:`temp_path` of ``path`` for the caller to write (a file, or a folder it
+        creates), renamed over ``path`` by :meth:`commit`."""
+        temp = temp_path(path)
+        self._pending.append((temp, path))
+        return temp
+
+    def write(self, path: Path, write: Callable[[Path], object]) -> Path:
+        """Call ``write`` with a temporary path beside ``path`` (put in place by
+        :meth:`commit`) and return ``path``. Raises OutputError naming ``path`` when it cannot
+        be written (a folder of that name, a full disk, a file size limit, no permission)."""
+        if path.is_dir():
+            raise OutputError(f"{path}: cannot write (a folder of that name is in the way)")
+        try:
+            write(self.temp(path))
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+        return path
+
+    def commit(self) -> None:
+        """Rename every temporary name over its path, in the order staged (a folder replaces
+        the folder there, whatever that held). Raises OutputError naming the path that could
+        not be (the temporary names not yet renamed are left to :meth:`discard`)."""
+        while self._pending:
+            temp, path = self._pending[0]
+            try:
+                _rename_over(temp, path)
+            except OSError as exc:
+                raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+            self._pending.pop(0)
+
+    def discard(self) -> None:
+        """Remove the temporary names not put in place (nothing happens after a commit)."""
+        for temp, _ in self._pending:
+            remove_quietly(temp)
+        self._pending.clear()
+
+
 @contextlib.contextmanager
 def replacing(*paths: Path) -> Iterator[tuple[Path, ...]]:
     """A :func:`temp_path` for each of ``paths``, for the block to write (a file, or a folder
@@ -122,18 +180,9 @@ def replacing(*paths: Path) -> Iterator[tuple[Path, ...]]:
     replaces the folder there, whatever that held); when it raises, every temporary name is
     removed and ``paths`` are left as they were, so a failed write never leaves a file that
     looks complete nor spoils the one that was there. OutputError naming a path whose rename
-    fails."""
-    temps = tuple(temp_path(path) for path in paths)
-    try:
-        yield temps
-        for temp, path in zip(temps, paths, strict=True):
-            try:
-                _rename_over(temp, path)
-            except OSError as exc:
-                raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
-    finally:
-        for temp in temps:
-            remove_quietly(temp)
+    fails (:class:`StagedFiles` for files not all known at the start)."""
+    with StagedFiles() as staged:
+        yield tuple(staged.temp(path) for path in paths)
 
 
 def _rename_over(temp: Path, path: Path) -> None:
@@ -156,11 +205,8 @@ def write_bytes_atomic(path: Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file renamed when complete (readers never
     see a half-written file, and a failed write leaves the earlier ``path`` as it was) and
     return ``path``; OutputError naming it if it cannot be."""
-    with replacing(path) as (temp,):
-        try:
-            temp.write_bytes(data)
-        except OSError as exc:
-            raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from None
+    with StagedFiles() as staged:
+        staged.write(path, lambda temp: temp.write_bytes(data))
     return path
 
 

@@ -28,11 +28,12 @@ from datetime import datetime
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from vtrack import __version__
 from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError
-from vtrack.io.files import write_text_atomic
+from vtrack.io.files import StagedFiles, prepare_output_dir
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
 from vtrack.run import STATUS_FAILED
@@ -210,13 +211,55 @@ def build_report(results: Sequence[Path], out_dir: Path,
         warnings.append(f"{len(unscored)} single-target run(s) have no ground truth; give "
                         "--gt FILE (or --gt INPUT=FILE per input) to score them")
 
-    plot_dir = out_dir / "plots"
-    try:
-        plot_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"{out_dir}: cannot write ({exc.strerror or exc})") from None
-    palette = plots.colours(sorted({r.config for r in runs}))
+    plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
     by_input = _group(single, lambda r: r.input)
+    # a run that failed part way is listed with its frames' scores but averaged with no other
+    counted = [r for r in single if r.status != STATUS_FAILED]
+    if len(counted) < len(single):
+        warnings.append(f"{len(single) - len(counted)} single-target run(s) failed part way: "
+                        "listed per input, left out of the averages and the All inputs plot")
+    by_config = _group(counted, lambda r: r.config)
+    palette = plots.colours(sorted({r.config for r in runs}))
+    with StagedFiles() as staged:  # put in place together when all are written
+        written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings)
+        overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
+        inputs = {r.input for r in runs}
+        page = pages.Page(
+            title=title,
+            meta=(f"{len(runs)} runs of {len(inputs)} inputs with "
+                  f"{len({r.config for r in runs})} configurations; generated "
+                  f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
+            warnings=warnings,
+            overall_plot=overall and overall.relative_to(out_dir).as_posix(),
+            averages=tables.average_table(by_config) if by_config else None,
+            results=tables.results_table(list(by_input.values())) if single else None,
+            mot=tables.mot_table(list(_group(multi, lambda r: r.input).values()))
+            if multi else None,
+            failed=failed,
+            sections=sections,
+        )
+        # the pages last: a report whose plots could not all be written has no index.html
+        csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
+        markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
+        index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
+    return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv,
+                  plots=written + ([overall] if overall else []), runs=runs, warnings=warnings)
+
+
+def _stage_text(staged: StagedFiles, path: Path, text: str) -> Path:
+    return staged.write(path, lambda temp: temp.write_text(text, encoding="utf-8"))
+
+
+def _save(staged: StagedFiles, figure: Figure, path: Path) -> Path:
+    return staged.write(path, lambda temp: plots.save(figure, temp))
+
+
+def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[RunResult]],
+                 palette: dict[str, str], warnings: list[str]
+                 ) -> tuple[list[Path], list[pages.Section]]:
+    """Stage the plots of each input in ``plot_dir`` (a thumbnail problem is appended to
+    ``warnings``): the plots written and a section per input (its plots relative to the report
+    folder). OutputError naming the plot that cannot be written."""
     written: list[Path] = []
     sections = []
     for name, slug in _slugs(list(by_input)).items():
@@ -224,66 +267,41 @@ def build_report(results: Sequence[Path], out_dir: Path,
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
         figures = []
         if unscored_here:
-            figures.append(plots.state_plot(name, unscored_here, palette,
-                                            plot_dir / f"state_{slug}.png"))
+            figures.append(_save(staged, plots.state_figure(name, unscored_here, palette),
+                                 plot_dir / f"state_{slug}.png"))
             warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_here
                          if all(c is None for c in r.confidence)]
         if scored:
-            figures.append(plots.overlap_plot(name, scored, palette,
-                                              plot_dir / f"overlap_{slug}.png"))
+            figures.append(_save(staged, plots.overlap_figure(name, scored, palette),
+                                 plot_dir / f"overlap_{slug}.png"))
             success, precision = _mean_curves(scored)
             if success:
-                figures.append(plots.curves_plot(name, success, precision, palette,
-                                                 plot_dir / f"curves_{slug}.png"))
-            thumbnails, problem = failures.try_failure_plot(
-                name, scored, palette, plot_dir / f"failures_{slug}.png")
-            figures += [thumbnails] if thumbnails else []
+                figures.append(_save(staged, plots.curves_figure(name, success, precision,
+                                                                 palette),
+                                     plot_dir / f"curves_{slug}.png"))
+            thumbnails, problem = failures.try_failure_figure(name, scored, palette)
+            if thumbnails is not None:
+                figures.append(_save(staged, thumbnails, plot_dir / f"failures_{slug}.png"))
             warnings += [problem] if problem else []
         written += figures
-        sections.append(pages.Section(name, f"input-{slug}",
-                                      [p.relative_to(out_dir).as_posix() for p in figures]))
+        sections.append(pages.Section(name, f"input-{slug}", [
+            p.relative_to(plot_dir.parent).as_posix() for p in figures]))
+    return written, sections
 
-    # a run that failed part way is listed with its frames' scores but averaged with no other
-    counted = [r for r in single if r.status != STATUS_FAILED]
-    if len(counted) < len(single):
-        warnings.append(f"{len(single) - len(counted)} single-target run(s) failed part way: "
-                        "listed per input, left out of the averages and the All inputs plot")
-    by_config = _group(counted, lambda r: r.config)
-    overall = None
-    success, precision = _mean_curves(counted)
-    if success:
-        scored_inputs = {r.input for r in counted if r.scores is not None}
-        covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
-        # (a config scored nowhere is in no average: the no-ground-truth warning names it)
-        if any(inputs and inputs != scored_inputs for inputs in covered.values()):
-            warnings.append("configurations were scored on different inputs: their averages "
-                            "are not directly comparable")
-        path = plots.curves_plot(f"All inputs (mean over {len(scored_inputs)} inputs)",
-                                 success, precision, palette, plot_dir / "curves_all.png")
-        written.append(path)
-        overall = path.relative_to(out_dir).as_posix()
 
-    inputs = {r.input for r in runs}
-    page = pages.Page(
-        title=title,
-        meta=(f"{len(runs)} runs of {len(inputs)} inputs with "
-              f"{len({r.config for r in runs})} configurations; generated "
-              f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
-        warnings=warnings,
-        overall_plot=overall,
-        averages=tables.average_table(by_config) if by_config else None,
-        results=tables.results_table(list(by_input.values())) if single else None,
-        mot=tables.mot_table(list(_group(multi, lambda r: r.input).values())) if multi else None,
-        failed=failed,
-        sections=sections,
-    )
-    return Report(
-        out_dir=out_dir,
-        index=write_text_atomic(out_dir / "index.html", pages.render_html(page)),
-        markdown=write_text_atomic(out_dir / "summary.md", pages.render_markdown(page)),
-        csv=write_text_atomic(out_dir / "summary.csv", pages.render_csv(runs, failed)),
-        plots=written,
-        runs=runs,
-        warnings=warnings,
-    )
-
+def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list[RunResult]],
+                  palette: dict[str, str], warnings: list[str]) -> Path | None:
+    """Stage the success and precision plots averaged over inputs (None: no config is scored);
+    warn when the configs were scored on different inputs."""
+    success, precision = _mean_curves([r for runs in by_config.values() for r in runs])
+    if not success:
+        return None
+    scored_inputs = {r.input for runs in by_config.values() for r in runs if r.scores is not None}
+    covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
+    # (a config scored nowhere is in no average: the no-ground-truth warning names it)
+    if any(inputs and inputs != scored_inputs for inputs in covered.values()):
+        warnings.append("configurations were scored on different inputs: their averages "
+                        "are not directly comparable")
+    return _save(staged, plots.curves_figure(
+        f"All inputs (mean over {len(scored_inputs)} inputs)", success, precision, palette),
+        plot_dir / "curves_all.png")

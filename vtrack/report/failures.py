@@ -10,7 +10,6 @@ configuration, so the same moment is compared across trackers.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -66,10 +65,10 @@ def _draw_truth(axis, box: Box | None, scale: float) -> None:
     _draw_box(axis, box, scale, "white", width=1.2)
 
 
-def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
-                 path: Path) -> Path | None:
-    """The grid of failure frames of ``runs`` (one input) saved as ``path``; None when no run
-    misses the target. Raises InputError (a VtrackError) when the input cannot be read again."""
+def failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]
+                   ) -> Figure | None:
+    """The grid of failure frames of ``runs`` (one input); None when no run misses the target.
+    Raises InputError (a VtrackError) when the input cannot be read again."""
     scored = [r for r in runs if r.truth is not None and r.overlaps]
     unread = [r for r in runs if r.truth is None and r.ground_truth and failure_frames(r)]
     if unread and not scored:  # scored with the overlaps the run recorded
@@ -114,14 +113,13 @@ def failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
                            color=palette[run.config])
     figure.suptitle(f"{printable(name)}: where the trackers lost the target (white: ground truth; "
                     "dashed: the tracker said occluded or lost)", fontsize=10)
-    figure.savefig(path)
-    return path
+    return figure
 
 
-def try_failure_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
-                     path: Path) -> tuple[Path | None, str | None]:
-    """:func:`failure_plot`, or (None, a warning) when the input cannot be read again."""
+def try_failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]
+                       ) -> tuple[Figure | None, str | None]:
+    """:func:`failure_figure`, or (None, a warning) when the input cannot be read again."""
     try:
-        return failure_plot(name, runs, palette, path), None
+        return failure_figure(name, runs, palette), None
     except VtrackError as exc:
         return None, f"failure frames of {name} left out: {exc}"

@@ -1,13 +1,13 @@
 """The report's figures, drawn with matplotlib's Agg canvas (no display, no pyplot state).
 
-- :func:`overlap_plot`: overlap (%) over time, one panel per configuration, occluded and lost
+- :func:`overlap_figure`: overlap (%) over time, one panel per configuration, occluded and lost
   frames shaded (the layout of S0's Fig. 20);
-- :func:`state_plot`: without ground truth, the tracker's own score over time with its
+- :func:`state_figure`: without ground truth, the tracker's own score over time with its
   occluded and lost frames shaded, one panel per configuration;
-- :func:`curves_plot`: OTB success plot (AUC in the legend) beside the precision plot (value at
+- :func:`curves_figure`: OTB success plot (AUC in the legend) beside the precision plot (value at
   20 px in the legend).
 
-Every function writes one PNG and returns its path.
+Every function returns a matplotlib Figure; :func:`save` writes one as PNG.
 """
 
 from __future__ import annotations
@@ -113,21 +113,12 @@ def overlap_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
                    lambda run: [o is None for o in run.overlaps or []])
 
 
-def state_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
-               path: Path) -> Path:
+def state_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]) -> Figure:
     """Without ground truth: each run's own score (0..1) per frame, its occluded and lost
-    frames shaded (a run whose tracker gives no score: :data:`NO_SCORE` in its panel); saved
-    as ``path``."""
-    _panels(f"{name}: tracker's score and state over time (no ground truth)", runs, palette,
-            "score", lambda run: run.confidence, empty=NO_SCORE).savefig(path)
-    return path
-
-
-def overlap_plot(name: str, runs: Sequence[RunResult], palette: Mapping[str, str],
-                 path: Path) -> Path:
-    """:func:`overlap_figure` saved as ``path``."""
-    overlap_figure(name, runs, palette).savefig(path)
-    return path
+    frames shaded (a run whose tracker gives no score: :data:`NO_SCORE` in its panel); a panel
+    per run (configuration)."""
+    return _panels(f"{name}: tracker's score and state over time (no ground truth)", runs,
+                   palette, "score", lambda run: run.confidence, empty=NO_SCORE)
 
 
 def curves_figure(title: str, success: Mapping[str, np.ndarray],
@@ -163,8 +154,8 @@ def curves_figure(title: str, success: Mapping[str, np.ndarray],
     return figure
 
 
-def curves_plot(title: str, success: Mapping[str, np.ndarray], precision: Mapping[str, np.ndarray],
-                palette: Mapping[str, str], path: Path) -> Path:
-    """:func:`curves_figure` saved as ``path``."""
-    curves_figure(title, success, precision, palette).savefig(path)
+def save(figure: Figure, path: Path) -> Path:
+    """Write ``figure`` as a PNG file at ``path`` (whatever its name) and return ``path``; the
+    OSError of a file that cannot be written is the caller's."""
+    figure.savefig(path, format="png")
     return path

@@ -1,0 +1,92 @@
+"""`vtrack report` against what a hostile tester did to it (probe 48): plots that cannot be
+written, hand-edited records and batch summaries, many runs of one input, a report written over
+an earlier one, an input replaced after its run. Every input is made here: generated clips run
+by `vtrack run`."""
+
+from __future__ import annotations
+
+import resource
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H = 160, 120
+
+
+def vtrack(*args: str, fsize: int | None = None, cwd: Path | None = None
+           ) -> subprocess.CompletedProcess:
+    """``python -m vtrack ARGS`` as a user runs it (a whole process: tracebacks, exit codes);
+    ``fsize`` limits the size of every file it writes (``prlimit --fsize``)."""
+
+    def limit() -> None:
+        if fsize is not None:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (fsize, fsize))
+
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=300, check=False, preexec_fn=limit, cwd=cwd)
+
+
+def error_line(done: subprocess.CompletedProcess) -> str:
+    """The one ``vtrack: error:`` line of a failed command (and nothing else on stderr)."""
+    assert done.returncode != 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.strip()
+             and not line.startswith("vtrack: warning: ")]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), done.stderr
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A 60-frame occlusion clip and its ground truth."""
+    folder = tmp_path_factory.mktemp("probe-clip")
+    scene = make_scene("occlusion", seed=0, width=W, height=H, frames=60, fps=30)
+    return (write_video(scene, folder / "occlusion.mp4"),
+            write_groundtruth(scene, folder / "occlusion.gt.txt"))
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory: pytest.TempPathFactory, clip: tuple[Path, Path]) -> Path:
+    """Two runs of the clip with its ground truth (s0 and camshift): results/<config>/."""
+    video, gt = clip
+    out = tmp_path_factory.mktemp("probe-results")
+    for config in ("s0", "camshift"):
+        done = vtrack("run", str(video), "-c", config, "--gt", str(gt), "--no-video", "-q",
+                      "-o", str(out / config))
+        assert done.returncode == 0, done.stderr
+    return out
+
+
+def test_a_plot_that_cannot_be_written_is_one_error_line_and_no_page(results: Path,
+                                                                     tmp_path: Path) -> None:
+    """A file size limit made savefig raise: a traceback, exit 1, and a report folder holding
+    some plots. Now one line naming the plot and the reason, and nothing that looks like a
+    report; an earlier report in that folder stays whole."""
+    report = tmp_path / "report"
+    line = error_line(vtrack("report", str(results), "-o", str(report), fsize=20_000))
+    assert str(report / "plots") in line and ".png: cannot write (File too large)" in line
+    assert not [p for p in report.rglob("*") if p.is_file()]  # no page, no plot, no temp file
+
+    assert vtrack("report", str(results), "-o", str(report)).returncode == 0
+    earlier = {p: p.read_bytes() for p in report.rglob("*") if p.is_file()}
+    error_line(vtrack("report", str(results), "-o", str(report), "--title", "again",
+                      fsize=20_000))
+    assert {p: p.read_bytes() for p in report.rglob("*") if p.is_file()} == earlier
+
+
+def test_a_folder_in_the_place_of_a_plot_or_of_plots_is_named(results: Path,
+                                                             tmp_path: Path) -> None:
+    (tmp_path / "a" / "plots" / "curves_all.png").mkdir(parents=True)
+    line = error_line(vtrack("report", str(results), "-o", str(tmp_path / "a")))
+    assert f"{tmp_path / 'a' / 'plots' / 'curves_all.png'}: cannot write" in line
+    assert not (tmp_path / "a" / "index.html").exists()
+    assert [p.name for p in (tmp_path / "a" / "plots").iterdir()] == ["curves_all.png"]
+
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "plots").touch()  # the folder was named, as if it were the file
+    line = error_line(vtrack("report", str(results), "-o", str(tmp_path / "b")))
+    assert line.startswith(f"vtrack: error: {tmp_path / 'b' / 'plots'}: "), line
