@@ -5,6 +5,7 @@ by `vtrack run`."""
 
 from __future__ import annotations
 
+import json
 import resource
 import shutil
 import subprocess
@@ -90,3 +91,39 @@ def test_a_folder_in_the_place_of_a_plot_or_of_plots_is_named(results: Path,
     (tmp_path / "b" / "plots").touch()  # the folder was named, as if it were the file
     line = error_line(vtrack("report", str(results), "-o", str(tmp_path / "b")))
     assert line.startswith(f"vtrack: error: {tmp_path / 'b' / 'plots'}: "), line
+
+
+@pytest.fixture(scope="module")
+def multi_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A multi-target run (s3) of the generated multi scene with its MOTChallenge ground
+    truth: its run.json records MOTA, IDF1, false positives ..."""
+    folder = tmp_path_factory.mktemp("probe-multi")
+    done = vtrack("scene", "multi", str(folder / "multi.mp4"), "--frames", "60",
+                  "--size", f"{W}x{H}")
+    assert done.returncode == 0, done.stderr
+    done = vtrack("run", str(folder / "multi.mp4"), "-c", "s3", "--gt",
+                  str(folder / "multi.mot.txt"), "--no-video", "-q", "-o", str(folder / "s3"))
+    assert done.returncode == 0, done.stderr
+    return folder / "s3"
+
+
+@pytest.mark.parametrize("edit", [{"mota": "0.9"}, {"false_positives": "many"}, {"idf1": [1]},
+                                  {"mota": 10**400}, {"mota": True}, {"motp": {"a": 1}}])
+def test_a_multi_target_record_with_metrics_of_the_wrong_kind_is_left_out(
+        multi_run: Path, tmp_path: Path, edit: dict[str, object]) -> None:
+    """A hand-edited multi-target run.json gave a traceback (TypeError in tables._finite,
+    OverflowError for 10**400); now it is left out like a single-target record of the wrong
+    kind, and the other runs are reported."""
+    shutil.copytree(multi_run, tmp_path / "runs" / "good")
+    shutil.copytree(multi_run, tmp_path / "runs" / "edited")
+    record_path = tmp_path / "runs" / "edited" / "run.json"
+    record = json.loads(record_path.read_text())
+    record["metrics"].update(edit)
+    record_path.write_text(json.dumps(record))
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert (f"vtrack: warning: left out: {record_path}: not a vtrack run record"
+            in done.stderr.splitlines())
+    assert "Traceback" not in done.stderr
+    html = (tmp_path / "report" / "index.html").read_text()
+    assert html.count("<td class=\"label\">s3") == 1  # the good run only

@@ -372,6 +372,32 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
     )
 
 
+def _mot_metrics(record: dict[str, Any]) -> dict[str, int | float | None]:
+    """A multi-target run's ``metrics`` as ``run.json`` records them: a finite number (or
+    null) per name. ValueError naming the first that is not (a string, a list, a true/false,
+    a number past a float's range: a record edited by hand)."""
+    metrics = dict(record.get("metrics") or {})
+    for key, value in metrics.items():
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"metrics.{key} {value!r}")
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int past a float's range
+            finite = False
+        if not finite:
+            raise ValueError(f"metrics.{key} is not a finite number")
+    return metrics
+
+
+def _text_or_none(value: object) -> str | None:
+    """``value`` when it is a string or None; ValueError for anything else."""
+    if value is not None and not isinstance(value, str):
+        raise ValueError(f"{value!r} is not text")
+    return value
+
+
 def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
     """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
     (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
@@ -386,12 +412,13 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     request = record.get("request") or {}
     try:
         result = _run_result(folder, record, summary)
+        if result.multi_target:
+            result.mot = _mot_metrics(record)
+            result.ground_truth = _text_or_none(request.get("gt"))
     except (TypeError, ValueError, OverflowError):
         raise InputError(f"{record_path}: not a vtrack run record") from None
     if result.multi_target:
         _check_whole(folder, record, "tracks.csv")
-        result.mot = dict(record.get("metrics") or {})
-        result.ground_truth = request.get("gt")
         return result
     _check_whole(folder, record, "track.csv")
     try:
