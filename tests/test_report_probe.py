@@ -6,6 +6,7 @@ by `vtrack run`."""
 from __future__ import annotations
 
 import json
+import re
 import resource
 import shutil
 import subprocess
@@ -127,3 +128,47 @@ def test_a_multi_target_record_with_metrics_of_the_wrong_kind_is_left_out(
     assert "Traceback" not in done.stderr
     html = (tmp_path / "report" / "index.html").read_text()
     assert html.count("<td class=\"label\">s3") == 1  # the good run only
+
+
+def test_many_runs_of_one_input_draw_a_bounded_figure_and_say_what_is_left_out(
+        results: Path, tmp_path: Path) -> None:
+    """100 runs of one input drew 100 overlap panels (a 1000 x 17090 px image, 34 s) and as
+    many failure-frame columns; the success plot's legend ran off the figure. Now at most
+    MAX_RUNS_DRAWN panels and columns, the page names the runs not drawn, and the legend names
+    the best MAX_LEGEND configurations and counts the others."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from vtrack.report import plots
+
+    copies, drawn = 14, 6  # plots.MAX_RUNS_DRAWN
+    for n in range(copies):
+        shutil.copytree(results / "s0", tmp_path / "runs" / f"r{n:02d}" / "s0")
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    overlap = (tmp_path / "report" / "plots" / "overlap_occlusion.png").read_bytes()
+    width, height = (int.from_bytes(overlap[16 + 4 * i:20 + 4 * i], "big") for i in (0, 1))
+    assert width == 1000 and height <= (0.9 + 1.7 * drawn) * 100 + 1  # 6 panels at 100 dpi
+    html = (tmp_path / "report" / "index.html").read_text()
+    left_out = copies - drawn
+    (note,) = re.findall(r'<p class="note">([^<]*)</p>', html)
+    assert note.startswith(f"{left_out} of the {copies} runs of this input are not drawn")
+    assert f": s0 (r{drawn:02d}), " in note and f" and {left_out - 5} more" in note
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert f"{left_out} of the {copies} runs" in markdown
+    assert html.count('<td class="label">s0 (r') == 2 * copies  # every run in both tables
+    assert drawn == plots.MAX_RUNS_DRAWN
+
+    curves = {f"c{n:03d}": plots.OVERLAP_THRESHOLDS * 0 + n / 100 for n in range(40)}
+    precision = {c: plots.ERROR_THRESHOLDS * 0 + v[0] for c, v in curves.items()}
+    figure = plots.curves_figure("many", curves, precision, plots.colours(list(curves)))
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.draw(renderer)
+    whole = figure.bbox
+    for axis in figure.axes:
+        legend = axis.get_legend()
+        texts = [t.get_text() for t in legend.get_texts()]
+        assert texts[0].startswith("c039 [0.390]") and len(texts) == plots.MAX_LEGEND + 1
+        assert texts[-1].startswith(f"{40 - plots.MAX_LEGEND} more")
+        box = legend.get_window_extent(renderer)
+        assert whole.x0 <= box.x0 <= box.x1 <= whole.x1
+        assert whole.y0 <= box.y0 <= box.y1 <= whole.y1

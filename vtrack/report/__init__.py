@@ -41,6 +41,8 @@ from vtrack.run import STATUS_FAILED
 DEFAULT_TITLE = "vtrack report"
 #: When no run can be reported, the error line names the reasons of at most this many.
 NAMED_REASONS = 4
+#: A section's note of the runs its plots do not draw names at most this many.
+NAMED_LEFT_OUT = 5
 
 
 @dataclass
@@ -265,6 +267,11 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
     for name, slug in _slugs(list(by_input)).items():
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
+        # a panel (or thumbnail column) per run costs time and height: at most a few drawn
+        left_out = [r.config for r in (scored[plots.MAX_RUNS_DRAWN:]
+                                       + unscored_here[plots.MAX_RUNS_DRAWN:])]
+        scored_drawn, unscored_here = (scored[:plots.MAX_RUNS_DRAWN],
+                                       unscored_here[:plots.MAX_RUNS_DRAWN])
         figures = []
         if unscored_here:
             figures.append(_save(staged, plots.state_figure(name, unscored_here, palette),
@@ -272,20 +279,28 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
             warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_here
                          if all(c is None for c in r.confidence)]
         if scored:
-            figures.append(_save(staged, plots.overlap_figure(name, scored, palette),
+            figures.append(_save(staged, plots.overlap_figure(name, scored_drawn, palette),
                                  plot_dir / f"overlap_{slug}.png"))
             success, precision = _mean_curves(scored)
             if success:
                 figures.append(_save(staged, plots.curves_figure(name, success, precision,
                                                                  palette),
                                      plot_dir / f"curves_{slug}.png"))
-            thumbnails, problem = failures.try_failure_figure(name, scored, palette)
+            thumbnails, problem = failures.try_failure_figure(name, scored_drawn, palette)
             if thumbnails is not None:
                 figures.append(_save(staged, thumbnails, plot_dir / f"failures_{slug}.png"))
             warnings += [problem] if problem else []
         written += figures
+        notes = [] if not left_out else [
+            f"{len(left_out)} of the {len(by_input[name])} runs of this input are not drawn "
+            "over time or in the failure frames (each plot draws at most "
+            f"{plots.MAX_RUNS_DRAWN}, the first by configuration name): "
+            + ", ".join(left_out[:NAMED_LEFT_OUT])
+            + (f" and {len(left_out) - NAMED_LEFT_OUT} more" if len(left_out) > NAMED_LEFT_OUT
+               else "")
+            + ". The success and precision plots draw every run; the tables list them all."]
         sections.append(pages.Section(name, f"input-{slug}", [
-            p.relative_to(plot_dir.parent).as_posix() for p in figures]))
+            p.relative_to(plot_dir.parent).as_posix() for p in figures], notes))
     return written, sections
 
 

@@ -59,12 +59,13 @@ nav a { margin-right: 10px; } footer { margin-top: 40px; color: #555; font-size:
 
 @dataclass
 class Section:
-    """One input's part of the report: its name, anchor and plots (paths relative to the
-    report folder)."""
+    """One input's part of the report: its name, anchor, plots (paths relative to the
+    report folder) and notes shown under its heading (what its plots leave out)."""
 
     name: str
     anchor: str
     plots: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -175,6 +176,7 @@ def render_html(page: Page) -> str:
         parts += [f'<h2 id="failed">{NO_RESULTS}</h2>', f"<ul>{items}</ul>"]
     for section in page.sections:
         parts.append(f'<h2 id="{_e(section.anchor)}">{_e(section.name)}</h2>')
+        parts += [f'<p class="note">{_e(note)}</p>' for note in section.notes]
         parts += [_img(p, f"{section.name}: {Path(p).stem}") for p in section.plots]
         if not section.plots:
             parts.append("<p>No frame tracked: nothing to plot.</p>")
@@ -225,6 +227,7 @@ def render_markdown(page: Page) -> str:
     for section in page.sections:
         if section.plots:
             parts.append(f"## {_md(section.name)}")
+            parts += [_md(note) for note in section.notes]
             parts += [f"![{Path(p).stem}]({p})" for p in section.plots]
     parts.append("---\n" + _footer(page))
     return "\n\n".join(parts) + "\n"

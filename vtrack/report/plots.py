@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
 from vtrack.errors import printable
@@ -57,6 +58,11 @@ def _shade(axis, values: Sequence[object], value: object, colour: str, label: st
 
 #: What the score panel of a run whose tracker gives no score says (S4: its document has none).
 NO_SCORE = "no score: this tracker gives none (track.csv's score is empty); its state is shaded"
+
+#: Configurations a success or precision plot names in its legend (the best); the others are
+#: drawn in grey under one entry. Runs drawn as panels of an overlap or state plot (and as
+#: columns of the failure frames): past these, a plot draws the first and the page says so.
+MAX_LEGEND, MAX_RUNS_DRAWN = 10, 6
 
 #: The y range of every 0..1 score axis (overlap over time, success and precision plots).
 SCORE_YLIM = (0.0, 1.02)
@@ -121,9 +127,26 @@ def state_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
                    palette, "score", lambda run: run.confidence, empty=NO_SCORE)
 
 
+def _ranked_curves(axis, thresholds: np.ndarray, curves: Mapping[str, np.ndarray],
+                   palette: Mapping[str, str], score: Callable[[np.ndarray], float]) -> None:
+    """Draw ``curves`` best ``score`` first, each labelled with its score; past the best
+    :data:`MAX_LEGEND` the others are thin grey lines under one legend entry that counts them
+    (the legend stays within the figure however many configurations there are)."""
+    ranked = sorted(curves, key=lambda c: -score(curves[c]))
+    for config in ranked[:MAX_LEGEND]:
+        axis.plot(thresholds, curves[config], color=palette[config], lw=1.8, zorder=3,
+                  label=f"{printable(config)} [{score(curves[config]):.3f}]")
+    others = ranked[MAX_LEGEND:]
+    if others:  # one collection: drawn as fast as a line, however many
+        axis.add_collection(LineCollection(
+            [np.column_stack([thresholds, curves[c]]) for c in others], colors="0.6", lw=0.7,
+            alpha=0.6, zorder=2, label=f"{len(others)} more (grey; in the tables)"))
+
+
 def curves_figure(title: str, success: Mapping[str, np.ndarray],
                   precision: Mapping[str, np.ndarray], palette: Mapping[str, str]) -> Figure:
-    """Success plot and precision plot side by side, configurations ordered best first.
+    """Success plot and precision plot side by side, configurations ordered best first; the
+    legends name the best :data:`MAX_LEGEND` and count the others (drawn in grey).
 
     ``success[config]`` holds the 21 success rates at :data:`OVERLAP_THRESHOLDS`, its legend the
     AUC (their mean); ``precision[config]`` the 51 rates at :data:`ERROR_THRESHOLDS`, its legend
@@ -132,12 +155,8 @@ def curves_figure(title: str, success: Mapping[str, np.ndarray],
     figure = Figure(figsize=(10, 3.8), dpi=DPI, layout="constrained")
     left, right = figure.subplots(1, 2)
     at20 = int(np.searchsorted(ERROR_THRESHOLDS, PRECISION_THRESHOLD_PX))
-    for config in sorted(success, key=lambda c: -success[c].mean()):
-        left.plot(OVERLAP_THRESHOLDS, success[config], color=palette[config], lw=1.8,
-                  label=f"{printable(config)} [{success[config].mean():.3f}]")
-    for config in sorted(precision, key=lambda c: -precision[c][at20]):
-        right.plot(ERROR_THRESHOLDS, precision[config], color=palette[config], lw=1.8,
-                   label=f"{printable(config)} [{precision[config][at20]:.3f}]")
+    _ranked_curves(left, OVERLAP_THRESHOLDS, success, palette, lambda curve: curve.mean())
+    _ranked_curves(right, ERROR_THRESHOLDS, precision, palette, lambda curve: curve[at20])
     right.axvline(PRECISION_THRESHOLD_PX, color="0.5", lw=0.8, ls="--")
     for axis, xlabel, name, xmax in (
         (left, "overlap threshold", "Success plot (AUC)", 1.0),
