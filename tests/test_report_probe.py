@@ -172,3 +172,52 @@ def test_many_runs_of_one_input_draw_a_bounded_figure_and_say_what_is_left_out(
         box = legend.get_window_extent(renderer)
         assert whole.x0 <= box.x0 <= box.x1 <= whole.x1
         assert whole.y0 <= box.y0 <= box.y1 <= whole.y1
+
+
+def batch_with_summary(results: Path, folder: Path, text: str) -> Path:
+    """A batch folder: the s0 run as <input>/<config>/ and ``text`` as its summary.csv."""
+    shutil.copytree(results / "s0", folder / "occlusion" / "s0")
+    (folder / "summary.csv").write_text(text)
+    return folder
+
+
+HEADER = ("input,config,frames,fps,mean_overlap,auc,precision20,frames_lost,frames_skipped,"
+          "status,error\n")
+COMPLETE = "occlusion,s0,60,500.0,0.8,0.8,1.0,0,0,complete,\n"
+FAILED = "broken.mp4,s0,,,,,,,,failed,broken.mp4: a broken link\n"
+
+
+def test_a_batch_summary_with_empty_and_repeated_rows_lists_each_failure_once(
+        results: Path, tmp_path: Path) -> None:
+    """An all-empty row was listed as a run with empty input, config and status, and a row
+    repeated was listed twice."""
+    batch = batch_with_summary(results, tmp_path / "batch",
+                               HEADER + ",,,,,,,,,,\n" + FAILED + COMPLETE + FAILED + "\n")
+    done = vtrack("report", str(batch), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert "summary.csv" not in done.stderr  # nothing wrong with it
+    html = (tmp_path / "report" / "index.html").read_text()
+    assert re.findall(r"<li>(.*?)</li>", html) == [
+        "<b>broken.mp4</b> [s0] failed: broken.mp4: a broken link"]
+    rows = (tmp_path / "report" / "summary.csv").read_text().splitlines()
+    assert [row.split(",")[:3] for row in rows[1:]] == [["occlusion", "s0", "complete"],
+                                                       ["broken.mp4", "s0", "failed"]]
+
+
+@pytest.mark.parametrize(("text", "problem"), [
+    (HEADER.replace("input,", "name,") + FAILED, "not a vtrack batch summary"),
+    (HEADER + FAILED.replace(",failed,", ",failed,X,") + COMPLETE, "line 2 not read"),
+    (HEADER + COMPLETE + FAILED.replace("failed", "exploded"), "line 3 not read"),
+    (HEADER + FAILED.replace(",broken.mp4:", ',"broken.mp4:') + FAILED.replace("s0", "s1"),
+     "lines 2-3 not read"),
+], ids=["header", "extra-column", "unknown-status", "broken-quote"])
+def test_batch_rows_that_cannot_be_read_are_a_warning_naming_the_summary(
+        results: Path, tmp_path: Path, text: str, problem: str) -> None:
+    """A summary.csv of another layout (a changed header, an extra column, a broken quote)
+    lost its failed rows from the report without a word."""
+    batch = batch_with_summary(results, tmp_path / "batch", text)
+    done = vtrack("report", str(batch), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    warning = f"vtrack: warning: {batch / 'summary.csv'}: {problem}"
+    assert [line for line in done.stderr.splitlines() if line.startswith(warning)], done.stderr
+    assert "<li>" not in (tmp_path / "report" / "index.html").read_text()

@@ -190,7 +190,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
             warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
                             f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
                             "for each input")
-    failed = failed_runs(results, runs)
+    failed = failed_runs(results, runs, warnings, not_batch=pages.CSV_COLUMNS)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
         if len(warnings) == 1:

@@ -32,15 +32,15 @@ from typing import Any
 import numpy as np
 
 from vtrack.batch import SUMMARY_COLUMNS
-from vtrack.errors import InputError, plural
+from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
 from vtrack.geometry import Box
-from vtrack.io.files import folder_name
+from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
 from vtrack.io.specs import is_url
-from vtrack.run import STATUS_COMPLETE
+from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
 
 @dataclass(frozen=True)
@@ -490,24 +490,85 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
     return list(found)
 
 
-def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = ()) -> list[FailedRun]:
+#: The statuses a batch's ``summary.csv`` row may have.
+BATCH_STATUSES = frozenset({STATUS_COMPLETE, STATUS_PARTIAL, STATUS_INTERRUPTED, STATUS_FAILED})
+
+
+def _batch_rows(summary: Path, problems: list[str], not_batch: Sequence[str] = ()
+                ) -> list[dict[str, str]]:
+    """The rows of a batch's ``summary.csv``, one per (input, config) (a repeated pair: its
+    last row, the newest), empty rows skipped. A file that cannot be read, a header other than
+    the batch's, rows that are not a batch's (another number of columns, a broken quote, an
+    unknown status, no input or config) are each one line appended to ``problems`` naming the
+    file; a file whose header starts with ``not_batch`` (the report's own) is skipped."""
+    rows: dict[tuple[str, str], dict[str, str]] = {}
+    unread: list[str] = []
+    try:
+        with summary.open(newline="", encoding="utf-8") as handle:
+            reader = csv.reader(handle, strict=True)
+            header = next(reader, [])
+            if not header or not_batch and tuple(header[:len(not_batch)]) == tuple(not_batch):
+                return []
+            if tuple(header) != SUMMARY_COLUMNS:
+                problems.append(f"{summary}: not a vtrack batch summary (its header is "
+                                f"{printable(','.join(header))[:80]!r}); the runs without "
+                                "results it may list are not shown")
+                return []
+            while True:
+                first = reader.line_num + 1
+                try:
+                    fields = next(reader)
+                except StopIteration:
+                    break
+                except csv.Error:  # a broken quote: the rows it swallowed
+                    unread.append(_lines(first, reader.line_num))
+                    continue
+                row = dict(zip(header, fields, strict=False))
+                if not any(field.strip() for field in fields):
+                    continue
+                if (len(fields) != len(header) or row["status"] not in BATCH_STATUSES
+                        or not row["input"] or not row["config"]):
+                    unread.append(_lines(first, reader.line_num))
+                    continue
+                rows[(row["input"], row["config"])] = row
+    except OSError as exc:
+        problems.append(f"{summary}: cannot read ({os_reason(exc)}); the runs without results "
+                        "it lists are not shown")
+    except UnicodeDecodeError:
+        problems.append(f"{summary}: not a text file; the runs without results it lists are "
+                        "not shown")
+    if unread:
+        problems.append(f"{summary}: line{'s' if len(unread) > 1 or '-' in unread[0] else ''} "
+                        f"{', '.join(unread[:5])}{' ...' if len(unread) > 5 else ''} not read "
+                        f"(not a batch row: {len(SUMMARY_COLUMNS)} columns with a known "
+                        "status, or a broken quote); a run without results there is not shown")
+    return list(rows.values())
+
+
+def _lines(first: int, last: int) -> str:
+    return str(first) if first >= last else f"{first}-{last}"
+
+
+def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = (),
+                problems: list[str] | None = None, not_batch: Sequence[str] = ()
+                ) -> list[FailedRun]:
     """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
     left no results (no run of ``reported`` is in their results folder, the batch's
-    ``<input>/<config>/``: names alone may have been told apart since)."""
+    ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
+    once. What could not be read of those files is appended to ``problems`` (see
+    :func:`_batch_rows`; ``not_batch``: the leading header of other files of that name)."""
     ran = {run.folder.resolve() for run in reported}
+    problems = [] if problems is None else problems
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
         for summary in summaries:
             if summary.name != "summary.csv":
                 continue
-            rows = _read_csv(summary)
-            if rows and tuple(rows[0]) == SUMMARY_COLUMNS:
-                failed += [FailedRun(r["input"], r["config"],
-                                     r["error"] or "never ran (the batch stopped first)",
-                                     r["status"]) for r in rows
-                           if r["status"] != STATUS_COMPLETE
-                           and (summary.parent / folder_name(r["input"], "input")
-                                / folder_name(r["config"])).resolve() not in ran]
+            failed += [FailedRun(r["input"], r["config"],
+                                 r["error"] or "never ran (the batch stopped first)",
+                                 r["status"]) for r in _batch_rows(summary, problems, not_batch)
+                       if r["status"] != STATUS_COMPLETE
+                       and (summary.parent / folder_name(r["input"], "input")
+                            / folder_name(r["config"])).resolve() not in ran]
     return failed
-
