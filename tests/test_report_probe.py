@@ -221,3 +221,16 @@ def test_batch_rows_that_cannot_be_read_are_a_warning_naming_the_summary(
     warning = f"vtrack: warning: {batch / 'summary.csv'}: {problem}"
     assert [line for line in done.stderr.splitlines() if line.startswith(warning)], done.stderr
     assert "<li>" not in (tmp_path / "report" / "index.html").read_text()
+
+
+def test_a_multi_target_run_without_its_tracks_csv_is_named_by_that_file(
+        multi_run: Path, tmp_path: Path) -> None:
+    """The warning named .../track.csv, a file a multi-target run never writes."""
+    shutil.copytree(multi_run, tmp_path / "runs" / "good")
+    shutil.copytree(multi_run, tmp_path / "runs" / "cut")
+    (tmp_path / "runs" / "cut" / "tracks.csv").unlink()
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert (f"vtrack: warning: left out: {tmp_path / 'runs' / 'cut' / 'tracks.csv'}: is missing"
+            in done.stderr), done.stderr
+    assert "track.csv" not in done.stderr

@@ -346,6 +346,13 @@ def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
     return recorded is not None and now is not None and now != recorded
 
 
+def _multi_target(folder: Path, record: dict[str, Any]) -> bool:
+    """Whether the run tracked many targets: its ``run.json`` lists ``tracks.csv`` among its
+    outputs (so a missing one is named as missing), or the folder holds one (older records)."""
+    recorded = [*(record.get("outputs") or []), *(record.get("output_bytes") or {})]
+    return "tracks.csv" in recorded or (folder / "tracks.csv").is_file()
+
+
 def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -> RunResult:
     """What ``run.json`` says of a run (its scores are read after). ValueError or TypeError
     for values of the wrong kind (a record edited by hand)."""
@@ -363,7 +370,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         fps=fps,
         frames_occluded=int(summary.get("frames_occluded") or 0),
         frames_lost=int(summary.get("frames_lost") or 0),
-        multi_target=(folder / "tracks.csv").is_file(),
+        multi_target=_multi_target(folder, record),
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
         input_key=_input_key(record),
