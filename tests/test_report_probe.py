@@ -234,3 +234,23 @@ def test_a_multi_target_run_without_its_tracks_csv_is_named_by_that_file(
     assert (f"vtrack: warning: left out: {tmp_path / 'runs' / 'cut' / 'tracks.csv'}: is missing"
             in done.stderr), done.stderr
     assert "track.csv" not in done.stderr
+
+
+def test_a_report_over_an_earlier_one_removes_that_reports_plots_only(
+        results: Path, tmp_path: Path) -> None:
+    """A report written into an earlier report's folder kept the earlier plots (240 stale of
+    244). Now the plots named as a report names them and not written this time go; the
+    user's other files stay."""
+    report = tmp_path / "report"
+    assert vtrack("report", str(results), "-o", str(report)).returncode == 0
+    plots_dir = report / "plots"
+    ours = sorted(p.name for p in plots_dir.iterdir())
+    png = (plots_dir / "curves_all.png").read_bytes()
+    for name in ("overlap_gone.png", "curves_gone.png", "failures_gone.png", "state_gone.png"):
+        (plots_dir / name).write_bytes(png)  # as an earlier report of input "gone" left them
+    (plots_dir / "mine.png").write_bytes(png)
+    (plots_dir / "overlap_notes.txt").write_text("the user's")
+    (plots_dir / "state_folder.png").mkdir()
+    assert vtrack("report", str(results), "-o", str(report)).returncode == 0
+    assert sorted(p.name for p in plots_dir.iterdir()) == sorted(
+        [*ours, "mine.png", "overlap_notes.txt", "state_folder.png"])

@@ -33,7 +33,7 @@ from matplotlib.figure import Figure
 from vtrack import __version__
 from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError
-from vtrack.io.files import StagedFiles, prepare_output_dir
+from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
 from vtrack.run import STATUS_FAILED
@@ -244,8 +244,23 @@ def build_report(results: Sequence[Path], out_dir: Path,
         csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
         markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
         index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
+    _remove_stale_plots(plot_dir, written + ([overall] if overall else []))
     return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv,
                   plots=written + ([overall] if overall else []), runs=runs, warnings=warnings)
+
+
+#: The kinds of plot a report writes, as ``plots/<kind>_<input>.png`` (``curves_all.png``).
+PLOT_KINDS = ("state", "overlap", "curves", "failures")
+
+
+def _remove_stale_plots(plot_dir: Path, written: Sequence[Path]) -> None:
+    """Delete the plots an earlier report left in ``plot_dir`` (files named as this report
+    names its plots, :data:`PLOT_KINDS`, that it did not write now); other files are the
+    user's and stay."""
+    for kind in PLOT_KINDS:
+        for path in plot_dir.glob(f"{kind}_*.png"):
+            if path not in written and not path.is_dir():
+                remove_quietly(path)
 
 
 def _stage_text(staged: StagedFiles, path: Path, text: str) -> Path:
