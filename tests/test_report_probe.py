@@ -254,3 +254,26 @@ def test_a_report_over_an_earlier_one_removes_that_reports_plots_only(
     assert vtrack("report", str(results), "-o", str(report)).returncode == 0
     assert sorted(p.name for p in plots_dir.iterdir()) == sorted(
         [*ours, "mine.png", "overlap_notes.txt", "state_folder.png"])
+
+
+def test_failure_frames_are_not_drawn_from_an_input_replaced_after_the_run(
+        clip: tuple[Path, Path], tmp_path: Path) -> None:
+    """The thumbnails were drawn from whatever video now had the input's name; run.json
+    records the input's size and modification time, so the replaced one is told apart and the
+    thumbnails are left out with a warning, as they are when the input is missing."""
+    video, gt = clip
+    shutil.copy(video, tmp_path / "clip.mp4")
+    done = vtrack("run", str(tmp_path / "clip.mp4"), "-c", "s0", "--gt", str(gt),
+                  "--no-video", "-q", "-o", str(tmp_path / "run"))
+    assert done.returncode == 0, done.stderr
+    assert vtrack("report", str(tmp_path / "run"), "-o", str(tmp_path / "before")).returncode == 0
+    assert (tmp_path / "before" / "plots" / "failures_clip.png").is_file()
+
+    other = make_scene("smooth", seed=3, width=W, height=H, frames=60, fps=30)
+    write_video(other, tmp_path / "clip.mp4")  # another video under the run's input name
+    done = vtrack("report", str(tmp_path / "run"), "-o", str(tmp_path / "after"))
+    assert done.returncode == 0, done.stderr
+    assert (f"vtrack: warning: failure frames of clip left out: the input "
+            f"{tmp_path / 'clip.mp4'} changed since the run" in done.stderr), done.stderr
+    assert not (tmp_path / "after" / "plots" / "failures_clip.png").exists()
+    assert (tmp_path / "after" / "plots" / "overlap_clip.png").is_file()  # the rest is there

@@ -68,7 +68,8 @@ def _draw_truth(axis, box: Box | None, scale: float) -> None:
 def failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]
                    ) -> Figure | None:
     """The grid of failure frames of ``runs`` (one input); None when no run misses the target.
-    Raises InputError (a VtrackError) when the input cannot be read again."""
+    Raises InputError (a VtrackError) when the input cannot be read again or is not the file
+    the runs read (it changed since)."""
     scored = [r for r in runs if r.truth is not None and r.overlaps]
     unread = [r for r in runs if r.truth is None and r.ground_truth and failure_frames(r)]
     if unread and not scored:  # scored with the overlaps the run recorded
@@ -76,6 +77,9 @@ def failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
                          "changed since the run (the failure frames draw its boxes)")
     rows = sorted({f for run in scored for f in failure_frames(run)})[:MAX_ROWS]
     sources = [r.source for r in scored if r.source]
+    changed = [r.source_changed for r in scored if r.source_changed]
+    if rows and changed and not sources:  # another video than the one tracked
+        raise InputError(changed[0])
     if not rows or not sources:
         return None
     pictures = _frames(sources[0], set(rows))

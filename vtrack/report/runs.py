@@ -121,6 +121,8 @@ class RunResult:
     #: which cannot be read again), and the input's frame number of the run's first frame.
     source: str | None = None
     first_frame: int = 0
+    #: Why ``source`` is None for an input that is there: it is not the file the run read.
+    source_changed: str | None = None
     #: The tracker's box per frame (None: lost) and the ground truth's, when it was rescored.
     boxes: list[Box | None] = field(default_factory=list)
     truth: list[Box | None] | None = None
@@ -441,7 +443,12 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.boxes, result.first_frame = _boxes(rows), start
         found_input, found_gt = _found_path(record, "input"), _found_path(record, "gt")
         if not request.get("raw") and found_input not in (None, "-"):
-            result.source = found_input
+            if _changed_since_run(record, "input", found_input):
+                result.source_changed = (f"the input {found_input} changed since the run (its "
+                                         "size or modification time); its frames may not be "
+                                         "the ones tracked")
+            else:
+                result.source = found_input
         if found_gt and _changed_since_run(record, "gt", found_gt):
             result.ground_truth = str(request["gt"])
             result.overlaps, result.errors = _recorded_scores(rows)
