@@ -277,3 +277,23 @@ def test_failure_frames_are_not_drawn_from_an_input_replaced_after_the_run(
             f"{tmp_path / 'clip.mp4'} changed since the run" in done.stderr), done.stderr
     assert not (tmp_path / "after" / "plots" / "failures_clip.png").exists()
     assert (tmp_path / "after" / "plots" / "overlap_clip.png").is_file()  # the rest is there
+
+
+@pytest.mark.parametrize("configs", [["s0"], ["s0", "camshift"]])
+def test_the_failure_frames_title_fits_its_figure(results: Path, configs: list[str]) -> None:
+    """The title was one line wider than the figure: at 672 px it read '... said occluded or
+    lo', with one config only its middle showed. Now it is wrapped to the figure's width."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from vtrack.report import failures, plots
+    from vtrack.report.runs import load_run
+
+    runs = [load_run(results / config) for config in configs]
+    assert all(failures.failure_frames(run) for run in runs), "the clip should make them miss"
+    figure = failures.failure_figure("occlusion", runs, plots.colours(configs))
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.draw(renderer)
+    title = figure.get_suptitle()
+    assert title.replace("\n", " ").endswith("dashed: the tracker said occluded or lost)")
+    box, whole = figure._suptitle.get_window_extent(renderer), figure.bbox
+    assert whole.x0 <= box.x0 <= box.x1 <= whole.x1 and box.y1 <= whole.y1, (box, whole)

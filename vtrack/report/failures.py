@@ -9,6 +9,7 @@ configuration, so the same moment is compared across trackers.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 
 import cv2
@@ -26,6 +27,9 @@ PER_RUN, MAX_ROWS = 3, 6
 #: Width of a thumbnail in pixels (frames are scaled to it, small ones at most twice up), and
 #: the narrowest cell (room for its title).
 THUMB_WIDTH, MIN_CELL = 320, 270
+#: Pixels a character of the title takes at most (10 pt at :data:`DPI`), and the fewest
+#: characters a title line is wrapped to.
+TITLE_CHAR_PX, MIN_TITLE_CHARS = 8, 20
 
 
 def failure_frames(run: RunResult, limit: int = PER_RUN) -> list[int]:
@@ -115,8 +119,11 @@ def failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
                 "—" if overlap is None else f"IoU {overlap:.2f}")
             axis.set_title(f"{printable(run.config)}, frame {frame}: {score} ({said})", fontsize=8,
                            color=palette[run.config])
-    figure.suptitle(f"{printable(name)}: where the trackers lost the target (white: ground truth; "
-                    "dashed: the tracker said occluded or lost)", fontsize=10)
+    # wrapped to the figure's width: one column is narrower than the title's one line
+    chars = max(MIN_TITLE_CHARS, int(figure.get_figwidth() * DPI / TITLE_CHAR_PX))
+    figure.suptitle(textwrap.fill(f"{printable(name)}: where the trackers lost the target "
+                                  "(white: ground truth; dashed: the tracker said occluded or "
+                                  "lost)", chars), fontsize=10)
     return figure
 
 
