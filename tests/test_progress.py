@@ -114,3 +114,32 @@ def test_a_tracker_that_cannot_start_prints_no_bar(clip: Path, tmp_path: Path) -
     assert code != 0, "the grey background corner should have no colour for S0"
     assert "%|" not in screen and "frame/s" not in screen, screen
     assert screen.strip().startswith("vtrack: error:")
+
+
+def test_report_shows_its_progress_through_the_inputs(clip: Path, tmp_path: Path) -> None:
+    """`vtrack report` of a large batch drew its plots for minutes without a word (~1.4 s an
+    input); now a bar counts the inputs in a terminal, lines do in a log, --quiet is silent."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("a", "b", "c"):
+        (folder / f"{name}.mp4").write_bytes(clip.read_bytes())
+        (folder / f"{name}.gt.txt").write_bytes(clip.with_suffix(".gt.txt").read_bytes())
+    batch = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s0",
+                            "--no-video", "--jobs", "2", "-q", "--out", "res"], cwd=tmp_path,
+                           capture_output=True, timeout=300, check=False)
+    assert batch.returncode == 0, batch.stderr
+    code, screen = in_terminal("report", "res", "--out", "rep", cwd=tmp_path)
+    assert code == 0, screen
+    assert "3/3" in screen and "100%" in screen and re.search(r"report: +\d+%\|", screen)
+    logged = subprocess.run([sys.executable, "-m", "vtrack", "report", "res", "--out", "rep2",
+                             "--stats-period", "0"], cwd=tmp_path, capture_output=True,
+                            timeout=300, check=False, text=True)
+    assert logged.returncode == 0, logged.stderr
+    lines = [line for line in logged.stderr.splitlines() if line.startswith("report: ")]
+    assert [line.split(" inputs")[0] for line in lines] == [
+        "report: 1/3", "report: 2/3", "report: 3/3"]
+    assert all(re.search(r"[\d.]+ inputs/s", line) for line in lines), lines
+    quiet = subprocess.run([sys.executable, "-m", "vtrack", "report", "res", "--out", "rep3",
+                            "--stats-period", "0", "-q"], cwd=tmp_path, capture_output=True,
+                           timeout=300, check=False, text=True)
+    assert quiet.returncode == 0 and quiet.stderr == "" and quiet.stdout == ""

@@ -8,6 +8,8 @@ from typing import Any
 
 import click
 
+from vtrack.cli._progress import STATS_PERIOD
+
 #: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
 #: any rate.
 MAX_SECONDS = 366 * 24 * 3600.0
@@ -32,6 +34,16 @@ class Seconds(click.FloatRange):
 
 def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | None:
     return None if value == "auto" else int(value)
+
+
+def stats_period_option() -> Callable[[Any], Any]:
+    """``--stats-period SECONDS`` of ``run``, ``batch`` and ``report``: how often a progress
+    line is written when stderr is a log."""
+    return click.option(
+        "--stats-period", type=Seconds(min=0, max=3600), default=STATS_PERIOD,
+        show_default=True, metavar="SECONDS",
+        help="When stderr is not a terminal (a log): a progress line this often, instead of "
+             "the bar (as ffmpeg's -stats_period).")
 
 
 def gt_origin_option() -> Callable[[Any], Any]:

@@ -40,20 +40,23 @@ def terminal(quiet: bool) -> bool:
 def progress_line(name: str, done: int, total: int | None, seconds: float,
                   unit: str = "frames") -> str:
     """``name: 120/600 frames (20%), 240.0 fps, 0:00:02 left`` (without a total: done and
-    rate only): one line of progress for a log."""
+    rate only; a rate per second for other units: ``inputs/s``): one line of progress for a
+    log."""
     rate = done / seconds if seconds > 0 else 0.0
+    per = "fps" if unit == "frames" else f"{unit}/s"
     if not total:
-        return f"{name}: {done} {unit}, {rate:.1f} fps"
+        return f"{name}: {done} {unit}, {rate:.1f} {per}"
     left = timedelta(seconds=round((total - done) / rate)) if rate > 0 else "?"
-    return (f"{name}: {done}/{total} {unit} ({100 * done / total:.0f}%), {rate:.1f} fps, "
+    return (f"{name}: {done}/{total} {unit} ({100 * done / total:.0f}%), {rate:.1f} {per}, "
             f"{left} left")
 
 
 class ProgressLines:
     """A line of progress at most every ``period`` seconds (the first after ``period``)."""
 
-    def __init__(self, name: str, total: int | None, period: float) -> None:
-        self.name, self.total, self.period = name, total, period
+    def __init__(self, name: str, total: int | None, period: float,
+                 unit: str = "frames") -> None:
+        self.name, self.total, self.period, self.unit = name, total, period, unit
         self.started = self.last = time.monotonic()
 
     def update(self, done: int, note: str = "") -> None:
@@ -62,13 +65,25 @@ class ProgressLines:
             self.last = now
             total = max(self.total, done) if self.total else None
             try:
-                print(progress_line(self.name, done, total, now - self.started) + note,
-                      file=sys.stderr, flush=True)
+                print(progress_line(self.name, done, total, now - self.started, self.unit)
+                      + note, file=sys.stderr, flush=True)
             except (OSError, ValueError):  # the log's reader went away: the run goes on
                 self.period = float("inf")
 
 
-class BatchProgress:
+class _Shown:
+    """What shows progress: a tqdm bar, :class:`ProgressLines`, or nothing yet (``bar``)."""
+
+    bar: tqdm | ProgressLines | None = None
+
+    def close(self) -> None:
+        """End the bar (a log's lines need no ending)."""
+        if self.bar is not None and not isinstance(self.bar, ProgressLines):
+            self.bar.close()
+        self.bar = None
+
+
+class BatchProgress(_Shown):
     """Frames tracked over a batch's runs (``vtrack batch``): a bar in a terminal, lines every
     ``period`` seconds in a log, each with the runs finished. The total is the frame counts
     the running and finished runs reported, plus their mean for each run not started yet.
@@ -81,7 +96,7 @@ class BatchProgress:
         self.runs = 0  # runs to do (set once the batch is planned)
         self.done_runs = 0
         self.frames: dict[tuple[str, str], tuple[int, int | None]] = {}
-        self.bar: tqdm | ProgressLines | None = None
+        self.bar = None
 
     def on_progress(self, progress: Progress) -> None:
         self.frames[(progress.input, progress.config)] = (progress.frames, progress.total)
@@ -128,13 +143,8 @@ class BatchProgress:
         self.bar.set_postfix_str(note.lstrip(", "), refresh=False)
         self.bar.refresh()
 
-    def close(self) -> None:
-        if self.bar is not None and not isinstance(self.bar, ProgressLines):
-            self.bar.close()
-        self.bar = None
 
-
-class FrameProgress:
+class FrameProgress(_Shown):
     """``on_open`` / ``on_frame`` callbacks of :func:`vtrack.run.run`: a frame bar in a
     terminal, progress lines every ``period`` seconds otherwise, nothing when ``quiet``."""
 
@@ -146,7 +156,7 @@ class FrameProgress:
         #: frames skipped before tracking (--start), given the input's frame rate
         self.start = start
         self.period = period
-        self.bar: tqdm | ProgressLines | None = None
+        self.bar = None
         self.info: InputInfo | None = None
 
     def on_open(self, info: InputInfo) -> None:
@@ -179,7 +189,30 @@ class FrameProgress:
             self.bar.total = done
         self.bar.update(done - self.bar.n)
 
-    def close(self) -> None:
-        if self.bar is not None and not isinstance(self.bar, ProgressLines):
-            self.bar.close()
+
+class StepProgress(_Shown):
+    """Progress through a known number of steps (``vtrack report``'s inputs), called with
+    (done, total) after each: a bar in a terminal, lines every ``period`` seconds otherwise,
+    nothing when ``quiet``."""
+
+    def __init__(self, quiet: bool, name: str, unit: str, period: float = STATS_PERIOD) -> None:
+        self.quiet, self.name, self.unit, self.period = quiet, name, unit, period
         self.bar = None
+        self._started = time.monotonic()  # the first step's time counts in the rate
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.quiet:
+            return
+        if self.bar is None:
+            if terminal(self.quiet):
+                from tqdm import tqdm
+
+                self.bar = tqdm(total=total, unit=self.unit.rstrip("s"), desc=self.name,
+                                dynamic_ncols=True, file=sys.stderr)
+            else:
+                self.bar = ProgressLines(self.name, total, self.period, self.unit)
+                self.bar.started = self.bar.last = self._started
+        if isinstance(self.bar, ProgressLines):
+            self.bar.update(done)
+        else:
+            self.bar.update(done - self.bar.n)

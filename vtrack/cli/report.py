@@ -6,8 +6,9 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import gt_origin_option
+from vtrack.cli._options import gt_origin_option, stats_period_option
 from vtrack.cli._paths import PATH
+from vtrack.cli._progress import StepProgress
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
@@ -25,16 +26,21 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
                    "names it).")
 @gt_origin_option()
 @click.option("--title", default=DEFAULT_TITLE, show_default=True, help="Page title.")
-@click.option("--quiet", "-q", is_flag=True, help="No summary line.")
+@stats_period_option()
+@click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
-            gt_origin: int | None, title: str, quiet: bool) -> None:
+            gt_origin: int | None, title: str, stats_period: float, quiet: bool) -> None:
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""
     from vtrack.report import build_report  # plotting loads only for this command
 
-    report = build_report(list(results), out_dir, gt=list(gt_specs), gt_origin=gt_origin,
-                          title=title)
+    progress = StepProgress(quiet, "report", "inputs", stats_period)
+    try:
+        report = build_report(list(results), out_dir, gt=list(gt_specs), gt_origin=gt_origin,
+                              title=title, on_input=progress)
+    finally:
+        progress.close()
     for warning in report.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:

@@ -9,9 +9,15 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import MAX_WAIT_S, FrameSpan, Seconds, StartPoint, gt_origin_option
+from vtrack.cli._options import (
+    MAX_WAIT_S,
+    FrameSpan,
+    Seconds,
+    StartPoint,
+    gt_origin_option,
+    stats_period_option,
+)
 from vtrack.cli._paths import PATH
-from vtrack.cli._progress import STATS_PERIOD
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.params import MAX_SEED
 
@@ -107,10 +113,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
                    "line then goes to stderr). A file holding anything is replaced only with "
                    "--overwrite.")
-@click.option("--stats-period", type=Seconds(min=0, max=3600), default=STATS_PERIOD,
-              show_default=True, metavar="SECONDS",
-              help="When stderr is not a terminal (a log): a progress line this often, instead "
-                   "of the bar (as ffmpeg's -stats_period).")
+@stats_period_option()
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | None,
             gt_path: Path | None, gt_origin: int | None, out_dir: Path | None, overwrite: bool,

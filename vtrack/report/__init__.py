@@ -157,7 +157,8 @@ def _refuse_batch_folder(out_dir: Path) -> None:
 
 def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
-                 gt_origin: int | None = 0, title: str = DEFAULT_TITLE) -> Report:
+                 gt_origin: int | None = 0, title: str = DEFAULT_TITLE,
+                 on_input: Callable[[int, int], None] | None = None) -> Report:
     """Read every run below ``results`` and write the report into ``out_dir``.
 
     ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
@@ -166,7 +167,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     file of its own length (else a warning names the run and the file). A run folder that
     cannot be read is left out with a warning. Raises InputError when nothing below
     ``results`` is a run (or a failed batch row) and OutputError when ``out_dir`` cannot be
-    written, holds a batch's ``summary.csv`` or is a run's folder.
+    written, holds a batch's ``summary.csv`` or is a run's folder. ``on_input(done, inputs)``
+    is called as each input's plots are drawn (the long part: progress).
     """
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
@@ -223,7 +225,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     by_config = _group(counted, lambda r: r.config)
     palette = plots.colours(sorted({r.config for r in runs}))
     with StagedFiles() as staged:  # put in place together when all are written
-        written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings)
+        written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
+                                         on_input)
         overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
         inputs = {r.input for r in runs}
         page = pages.Page(
@@ -272,14 +275,16 @@ def _save(staged: StagedFiles, figure: Figure, path: Path) -> Path:
 
 
 def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[RunResult]],
-                 palette: dict[str, str], warnings: list[str]
+                 palette: dict[str, str], warnings: list[str],
+                 on_input: Callable[[int, int], None] | None = None
                  ) -> tuple[list[Path], list[pages.Section]]:
     """Stage the plots of each input in ``plot_dir`` (a thumbnail problem is appended to
-    ``warnings``): the plots written and a section per input (its plots relative to the report
-    folder). OutputError naming the plot that cannot be written."""
+    ``warnings``; ``on_input(done, inputs)`` after each input's): the plots written and a
+    section per input (its plots relative to the report folder). OutputError naming the plot
+    that cannot be written."""
     written: list[Path] = []
     sections = []
-    for name, slug in _slugs(list(by_input)).items():
+    for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
         # a panel (or thumbnail column) per run costs time and height: at most a few drawn
@@ -316,6 +321,8 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
             + ". The success and precision plots draw every run; the tables list them all."]
         sections.append(pages.Section(name, f"input-{slug}", [
             p.relative_to(plot_dir.parent).as_posix() for p in figures], notes))
+        if on_input is not None:
+            on_input(done, len(by_input))
     return written, sections
 
 
