@@ -184,7 +184,9 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
 
 def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
-    value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`)."""
+    value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`), and a chain
+    that cannot track (:func:`_check_tracks`)."""
+    _check_tracks(config)
     available = set(PIPELINE_PROVIDES)
     before: list[str] = []
     for name, values in config.stages:
@@ -202,3 +204,40 @@ def check_chain(config: Config) -> None:
         for provided in cls.provides:  # what an older value was computed from is stale now
             available -= DERIVED.get(provided, frozenset()) - cls.provides
         available |= cls.provides
+
+
+#: What a single-target stage sets: a chain that tracks several targets writes none of it.
+SINGLE_TARGET_OUTPUTS = frozenset({"box", "measurement"})
+
+
+def _check_tracks(config: Config) -> None:
+    """ConfigError for a chain whose result would not be what it computes: a stage named twice
+    (one stage runs once a frame); a single-target chain in which no stage sets the box (it
+    would report the first box on every frame), or a multi-target one with no stage, or two,
+    setting the tracks; a multi-target chain with a stage of a single target (its box would be
+    thrown away, or it would need a first box the chain refuses)."""
+    classes = [stage_class(name, config.source) for name, _ in config.stages]
+    names = [cls.name for cls in classes]
+    for name in names:
+        if names.count(name) > 1:
+            raise ConfigError(f"{config.source}: stage '{name}' appears {names.count(name)} "
+                              "times; a chain runs each stage once")
+    trackers = [cls.name for cls in classes if "tracks" in cls.provides]
+    if not any(cls.multi_target for cls in classes):
+        if not any("box" in cls.provides for cls in classes):
+            raise ConfigError(f"{config.source}: no stage of the chain ({' -> '.join(names)}) "
+                              "tracks: none sets the target's box (e.g. meanshift, particle, "
+                              "kernel_meanshift, robust_search, kalman) nor the tracks of "
+                              "several (mht, kalman_tracks, byte_tracks)")
+        return
+    if len(trackers) > 1:
+        raise ConfigError(f"{config.source}: stages {' and '.join(trackers)} both set the "
+                          "tracks; a chain has one multi-target tracker")
+    for cls in classes:
+        single = sorted(cls.provides & SINGLE_TARGET_OUTPUTS)
+        if cls.needs_init_box or single:
+            why = "needs the target's first box" if cls.needs_init_box else \
+                f"sets the {' and '.join(single)} of one target"
+            raise ConfigError(f"{config.source}: stage '{cls.name}' {why}, but the chain "
+                              f"tracks several targets ({trackers[0]}), whose result is the "
+                              "tracks: use one kind of chain")
