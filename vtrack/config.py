@@ -29,6 +29,7 @@ import numpy as np
 
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
+from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, read_text_bounded
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
@@ -126,9 +127,13 @@ def load_config(spec: str | Path | None = None) -> Config:
     spec = DEFAULT_CONFIG if spec is None else spec
     path = Path(spec)
     shipped = shipped_configs()
+    try:
+        found = str(spec) in shipped or path.is_file()
+    except OSError as exc:  # a name too long for the file system, ...
+        raise ConfigError(f"{spec}: cannot be read as a config file ({os_reason(exc)})") from None
     if str(spec) in shipped:
         path = shipped[str(spec)]
-    elif not path.is_file():
+    elif not found:
         if path.is_dir():
             raise ConfigError(f"{spec}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):

@@ -78,6 +78,11 @@ class Param:
                 f"{where}: parameter '{self.name}' must be a finite number in the range "
                 f"{self.range_text()}, got {value!r}"
             )
+        if self.type is float:
+            value += 0.0  # -0.0 is 0.0 (NumPy's uniform(-x, x) refuses x = -0.0)
+        if self.type is str and "\x00" in value:
+            raise ConfigError(f"{where}: parameter '{self.name}' must not contain a NUL "
+                              "character")
         if self.choices is not None and value not in self.choices:
             options = ", ".join(repr(c) for c in self.choices)
             raise ConfigError(

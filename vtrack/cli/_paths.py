@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
 import click
+
+#: The longest file or folder name the common file systems take (bytes).
+NAME_MAX = 255
 
 
 class NonEmptyPath(click.Path):
@@ -18,6 +22,10 @@ class NonEmptyPath(click.Path):
         if isinstance(value, str) and not value.strip():
             self.fail("empty; give a folder or file name ('.' for the current folder)",
                       param, ctx)
+        if isinstance(value, str) and any(len(os.fsencode(part)) > NAME_MAX
+                                           for part in Path(value).parts):
+            self.fail(f"a name in it is longer than {NAME_MAX} bytes, more than a file system "
+                      "takes", param, ctx)
         return super().convert(value, param, ctx)
 
 

@@ -26,6 +26,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
+from warnings import catch_warnings, simplefilter
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -224,7 +225,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
                         "listed per input, left out of the averages and the All inputs plot")
     by_config = _group(counted, lambda r: r.config)
     palette = plots.colours(sorted({r.config for r in runs}))
-    with StagedFiles() as staged:  # put in place together when all are written
+    with StagedFiles() as staged, catch_warnings():  # put in place together when all written
+        # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
+        # drawing, not the runs: the terminal shows vtrack's warnings only
+        simplefilter("ignore", UserWarning)
         written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
                                          on_input)
         overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)

@@ -53,7 +53,9 @@ class MotDetections(Stage):
     def start(self, ctx: TrackContext) -> None:
         """Read the file (InputError if it cannot be read or parsed), then this frame's boxes."""
         if not self.path:
-            raise ConfigError(f"stage '{self.name}': parameter 'path' must name a det.txt file")
+            raise ConfigError(f"stage '{self.name}': parameter 'path' must name a det.txt file "
+                              f"(path = \"det.txt\" in the config's [[stage]] table, or --set "
+                              f"{self.name}.path=FILE)")
         self._frames = read_mot_detections(Path(self.path))
         self.step(ctx)
 

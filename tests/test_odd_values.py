@@ -1,0 +1,84 @@
+"""Values a user can type that the file system or NumPy take badly (found by a hostile probe):
+names too long for a file system, a NUL in a path, a negative zero; and matplotlib's own notes
+kept off the report's terminal."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vtrack.config import load_config
+from vtrack.errors import ConfigError
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+LONG = "a" * 300
+
+
+def _vtrack(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=300, check=False, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("odd")
+    scene = make_scene("smooth", seed=2, width=160, height=120, frames=12, fps=30)
+    write_groundtruth(scene, folder / "clip.gt.txt")
+    return write_video(scene, folder / "clip.mp4")
+
+
+@pytest.mark.parametrize("where", ["config", "out"])
+def test_a_name_too_long_for_the_file_system_is_one_line(clip: Path, tmp_path: Path,
+                                                         where: str) -> None:
+    """A 300-character config file name or --out folder was an OSError traceback (ENAMETOOLONG,
+    exit 1)."""
+    args = ["run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")), "--no-video"]
+    args += ["-c", f"{LONG}.toml", "-o", "out"] if where == "config" else ["-o", LONG]
+    done = _vtrack(*args, cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), lines
+    assert ("File name too long" in lines[0] if where == "config"
+            else "longer than 255 bytes" in lines[0])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_nul_in_a_path_parameter_is_refused_when_the_config_loads(tmp_path: Path) -> None:
+    """`path = "det\\u0000.txt"` ran, failed at the first frame with a ValueError traceback and
+    left a failed run.json and a tracks.csv."""
+    config = tmp_path / "nul.toml"
+    config.write_text('[[stage]]\nname = "mot_detections"\npath = "det\\u0000.txt"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    with pytest.raises(ConfigError, match=r"nul.toml: stage 'mot_detections': parameter 'path' "
+                       "must not contain a NUL character"):
+        load_config(config)
+
+
+def test_a_negative_zero_is_zero(clip: Path, tmp_path: Path) -> None:
+    """`--set particle.spread=-0` passed the range check (-0.0 >= 0), then NumPy's uniform
+    refused it at frame 1 with a traceback."""
+    assert load_config("s1").with_overrides(["particle.spread=-0"]).stages[0][1]["spread"] == 0
+    done = _vtrack("run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")), "-c", "s1",
+                   "--set", "particle.spread=-0", "--no-video", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["frames"] == 12
+
+
+def test_the_report_keeps_matplotlibs_notes_off_the_terminal(clip: Path, tmp_path: Path) -> None:
+    """A config named with an emoji and a long name: matplotlib printed UserWarnings (a missing
+    glyph, a layout it could not apply) among vtrack's own lines."""
+    config = tmp_path / "odd.toml"
+    config.write_text('name = "' + "\U0001F3AF" + "long" * 30 + '"\n'
+                      + "".join(f'[[stage]]\nname = "{s}"\n'
+                                for s in ("hue", "backproject", "meanshift", "kalman")))
+    run = _vtrack("run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")), "-c",
+                  str(config), "--no-video", "-o", "res", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    report = _vtrack("report", "res", "-o", "rep", cwd=tmp_path)
+    assert report.returncode == 0, report.stderr
+    assert "Warning" not in report.stderr and "warn(" not in report.stderr, report.stderr
+    assert (tmp_path / "rep" / "index.html").is_file()
