@@ -129,6 +129,82 @@ def test_vectors_bad_input_is_one_line(vectors, tmp_path) -> None:
     assert nothing.returncode == 2 and "none of the vector files" in nothing.stderr
 
 
+def _dump_trace(out: Path, dump: Path, header: list[str], value: str | None = None,
+                bom: bool = False) -> None:
+    """``dump/trace.csv``: the vectors' rows under ``header`` (every cell ``value`` if given)."""
+    with (out / "trace.csv").open(newline="") as handle:
+        rows = list(csv.reader(handle))[1:]
+    dump.mkdir()
+    with (dump / "trace.csv").open("w", newline="", encoding="utf-8-sig" if bom else "utf-8"
+                                   ) as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows([[value] * len(r) for r in rows] if value is not None else rows)
+
+
+def test_a_dump_trace_missing_columns_of_the_vectors_differs(vectors, tmp_path) -> None:
+    """A dump whose trace.csv header was the real one in upper case, every value 999, was
+    `1 file(s) equal`, exit 0: its columns matched none of the vectors', so none was compared."""
+    out, _ = vectors
+    with (out / "trace.csv").open(newline="") as handle:
+        header = next(csv.reader(handle))
+    _dump_trace(out, tmp_path / "upper", [c.upper() for c in header], "999")
+    upper = vtrack("vectors", "check", str(out), str(tmp_path / "upper"))
+    assert upper.returncode == 1, upper.stdout + upper.stderr
+    assert upper.stdout.startswith(f"trace.csv: missing {len(header)} column(s) of the vectors: "
+                                   "frame, win_x"), upper.stdout
+    assert "case-sensitive" in upper.stdout and "equal" not in upper.stdout
+    # one column dropped: named, though every other value is right
+    _dump_trace(out, tmp_path / "less", [*header[:-1], "extra"])
+    less = vtrack("vectors", "check", str(out), str(tmp_path / "less"))
+    assert less.returncode == 1, less.stdout + less.stderr
+    assert less.stdout == f"trace.csv: missing 1 column(s) of the vectors: {header[-1]}\n"
+
+
+def test_a_dump_trace_with_a_byte_order_mark_is_compared_whole(vectors, tmp_path) -> None:
+    """A header saved with a UTF-8 BOM (Excel) named its first column '\\ufeffframe', skipped."""
+    out, _ = vectors
+    with (out / "trace.csv").open(newline="") as handle:
+        header = next(csv.reader(handle))
+    _dump_trace(out, tmp_path / "same", header, bom=True)
+    same = vtrack("vectors", "check", str(out), str(tmp_path / "same"))
+    assert same.returncode == 0 and same.stdout == "1 file(s) equal\n", same.stdout + same.stderr
+    (tmp_path / "frame").mkdir()
+    (tmp_path / "frame" / "trace.csv").write_bytes(
+        b"\xef\xbb\xbf" + "\n".join(["frame", *(str(10 + k) for k in range(FRAMES))]).encode())
+    frame = vtrack("vectors", "check", str(out), str(tmp_path / "frame"))
+    assert frame.returncode == 1
+    assert "frame 0 column frame: expected 0, got 10" in frame.stdout, frame.stdout
+
+
+@pytest.mark.parametrize(("name", "content", "problem"), [
+    ("manifest.json", b'{"model": "s0"}\n', "manifest.json: not a vectors manifest"),
+    ("manifest.json", b"[1, 2]\n", "manifest.json: not a vectors manifest"),
+    ("manifest.json", b'{"files": {"rgb.hex": {"width": "abc"}}}\n',
+     "manifest.json: not a vectors manifest"),
+    ("manifest.json", b'{"files": {"rgb.hex": {"width": 0}}}\n',
+     "manifest.json: not a vectors manifest"),
+    ("manifest.json", b"\xff\xfe{}", "not a vectors folder (manifest.json: "),
+    ("trace.csv", None, "trace.csv: not a vectors CSV file ("),
+])
+def test_a_foreign_vectors_folder_is_one_error_line(vectors, tmp_path, name: str,
+                                                    content: bytes | None, problem: str) -> None:
+    """A tampered or foreign manifest.json raised KeyError/TypeError/ValueError and a non-UTF-8
+    trace.csv UnicodeDecodeError, all exit 1: the code of a dump that differs."""
+    out, _ = vectors
+    tampered = tmp_path / "vec"
+    shutil.copytree(out, tampered)
+    path = tampered / name
+    path.write_bytes(content if content is not None else path.read_bytes() + b"\xff\xfe\n")
+    dump = tmp_path / "dump"
+    dump.mkdir()
+    shutil.copy(out / "trace.csv", dump / "trace.csv")
+    done = vtrack("vectors", "check", str(tampered), str(dump))
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
+    assert done.stderr.startswith(f"vtrack: error: {tampered}") and problem in done.stderr
+
+
 @pytest.mark.parametrize(("box", "problem"), [
     ("500,500,40,30", "lies outside the"), ("0,0,2,2", "smaller than 4x4"),
     ("0,0,5000,5000", "larger than the"),

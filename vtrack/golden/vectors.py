@@ -31,7 +31,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
-from vtrack.io.files import prepare_output_dir
+from vtrack.io.files import os_reason, prepare_output_dir
 
 #: Largest --frames: a 1080p frame writes ~25 MB of hex text (rgb + hue + bp).
 MAX_FRAMES = 300
@@ -254,14 +254,48 @@ def _same_cell(a: str, b: str) -> bool:
         return a.lower() == b.lower()
 
 
-def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
-    with expected.open(newline="", encoding="utf-8") as f:
-        want = list(csv.DictReader(f))
+#: How many missing column names a difference line lists.
+_COLUMNS_SHOWN = 8
+
+
+def _read_expected_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    """The header and rows of a vectors CSV; InputError naming it when it cannot be read."""
     try:
-        with got.open(newline="", encoding="utf-8") as f:
-            have = list(csv.DictReader(f))
+        with path.open(newline="", encoding="utf-8-sig") as f:
+            reader = csv.DictReader(f)
+            return list(reader.fieldnames or []), list(reader)
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: not a vectors CSV file ({os_reason(exc)})") from None
+
+
+def _missing_columns(name: str, want: list[str], have: list[str]) -> str | None:
+    """The line naming the columns of the vectors the dump's header lacks (names compare
+    exactly, case included), or None when it has them all."""
+    missing = [c for c in want if c not in have]
+    if not missing:
+        return None
+    shown = ", ".join(missing[:_COLUMNS_SHOWN]) + (", ..." if len(missing) > _COLUMNS_SHOWN
+                                                    else "")
+    line = f"{name}: missing {len(missing)} column(s) of the vectors: {shown}"
+    folded = {c.casefold() for c in have}
+    if any(c.casefold() in folded for c in missing):
+        line += " (column names are case-sensitive)"
+    return line
+
+
+def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
+    columns, want = _read_expected_csv(expected)
+    try:
+        # utf-8-sig: a header saved with a byte-order mark (Excel) names its first column
+        with got.open(newline="", encoding="utf-8-sig") as f:
+            reader = csv.DictReader(f)
+            have = list(reader)
+            header = list(reader.fieldnames or [])
     except (UnicodeDecodeError, csv.Error) as exc:
         return f"{name}: unreadable CSV ({exc})"
+    except OSError as exc:
+        raise InputError(f"{got}: cannot be read ({os_reason(exc)})") from None
+    missing = _missing_columns(name, columns, header)
     found: list[str] = []
     total = 0
     for i, (row_w, row_h) in enumerate(zip(want, have, strict=False)):
@@ -278,8 +312,34 @@ def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
         found.append(f"{len(have)} rows, expected {len(want)}")
         total += 1
     if not total:
-        return None
-    return f"{name}: {total} differing value(s); " + "; ".join(found)
+        return missing
+    line = f"{name}: {total} differing value(s); " + "; ".join(found)
+    return line if missing is None else f"{missing}; {line.removeprefix(name + ': ')}"
+
+
+def _frame_width(vectors: Path) -> int:
+    """The frame width ``manifest.json`` of ``vectors`` gives (rgb.hex's ``width``); InputError
+    naming the manifest when it is missing, not JSON or not a vectors manifest."""
+    path = vectors / "manifest.json"
+    try:
+        info = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
+        raise InputError(f"{vectors}: not a vectors folder (manifest.json: {os_reason(exc)})"
+                         ) from None
+    files = info.get("files") if isinstance(info, dict) else None
+    rgb = files.get("rgb.hex") if isinstance(files, dict) else None
+    width = rgb.get("width") if isinstance(rgb, dict) else None
+    if isinstance(width, bool) or not isinstance(width, int) or width <= 0:
+        raise InputError(f"{path}: not a vectors manifest (no whole positive "
+                         "files.rgb.hex.width, the frame width; written by vtrack vectors)")
+    return width
+
+
+def _read_bytes(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
 
 
 def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
@@ -289,11 +349,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
     column, and both values for the first :data:`SHOWN` differences) and the number of files
     compared. Files of ``dump`` the vectors do not have are reported too.
     """
-    try:
-        info = json.loads((vectors / "manifest.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{vectors}: not a vectors folder (manifest.json: {exc})") from None
-    width = int(info["files"]["rgb.hex"]["width"])
+    width = _frame_width(vectors)
     if not dump.is_dir():
         raise InputError(f"{dump}: no such folder")
     lines: list[str] = []
@@ -309,7 +365,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
             continue
         compared += 1
         if path.suffix == ".hex":
-            diff = _hex_differences(name, expected.read_bytes(), path.read_bytes(), width)
+            diff = _hex_differences(name, _read_bytes(expected), _read_bytes(path), width)
         else:
             diff = _csv_differences(name, expected, path)
         if diff is not None:
