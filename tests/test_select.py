@@ -208,6 +208,37 @@ def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> No
     assert "clip.init.txt" in err
 
 
+def test_select_of_a_sequence_img_folder_saves_the_box_run_and_batch_read(
+        tmp_path: Path) -> None:
+    """``select SEQ/img`` saved SEQ/img/init.txt and said run and batch would use it; ``run
+    SEQ`` and ``batch`` read SEQ/init.txt and failed: "needs an initial box"."""
+    scene = make_scene("smooth", seed=2, width=160, height=120, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "footage" / "seqA")
+    (folder / "groundtruth_rect.txt").unlink()  # the box can only come from the sidecar
+    assert sidecar_path(folder / "img") == sidecar_path(folder) == folder / "init.txt"
+    assert sidecar_path(str(folder / "img") + "/") == folder / "init.txt"
+    select = Select(str(folder / "img"))
+    try:
+        status, answer = post(select.url + "select", {"box": [60, 50, 30, 24], "frame": 0})
+        assert status == 200, answer
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert (folder / "init.txt").read_text() == "60,50,30,24\n"
+    assert not (folder / "img" / "init.txt").exists()
+    assert str(folder / "init.txt") in err
+    for given in (folder, folder / "img"):
+        out_dir = tmp_path / f"run-{given.name}"
+        done = vtrack("run", str(given), "--no-video", "--frames", "3", "-o", str(out_dir))
+        assert done.returncode == 0, done.stderr
+        assert json.loads((out_dir / "run.json").read_text())["init_from"] == str(
+            folder / "init.txt")
+    batch = vtrack("batch", str(folder.parent), "--jobs", "1", "--no-video", "--frames", "3",
+                   "--out", str(tmp_path / "batch"))
+    assert batch.returncode == 0, batch.stdout + batch.stderr
+
+
 def test_select_refuses_what_run_refuses_and_takes_one_confirm(tmp_path: Path,
                                                                clip: Path) -> None:
     """A 1x1 box and frame 123456 were saved (vtrack run then refused the sidecar); of 12

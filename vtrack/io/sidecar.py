@@ -1,6 +1,7 @@
 """The initial-box sidecar file: where a user leaves the target's first box for an input.
 
-``NAME.init.txt`` beside a video ``NAME.EXT``, ``init.txt`` inside an image-sequence folder; one
+``NAME.init.txt`` beside a video ``NAME.EXT``, ``init.txt`` inside an image-sequence folder
+(``SEQ/init.txt`` for an OTB sequence given as ``SEQ/img`` as well as ``SEQ``); one
 line ``x,y,w,h`` (top-left corner, width, height) in 0-based pixel coordinates of the first
 frame, the same numbers ``--init`` takes. ``vtrack select`` writes it; ``vtrack run`` and
 ``vtrack batch`` read it when no ``--init`` (and no ground truth) is given.
@@ -19,13 +20,19 @@ from vtrack.io.specs import is_url
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
+SEQUENCE_IMAGES = "img"  # an OTB sequence folder's images: SEQ/img and SEQ share SEQ/init.txt
 
 
 def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
-    """Where the initial box of ``input_spec`` lives: ``FOLDER/init.txt`` for a folder,
-    ``DIR/NAME.init.txt`` for a file ``DIR/NAME.EXT``. The file need not exist."""
+    """Where the initial box of ``input_spec`` lives: ``FOLDER/init.txt`` for a folder (for an
+    OTB sequence's ``SEQ/img`` too: one box for the sequence given either way, as ``vtrack
+    batch`` finds it by ``SEQ``), ``DIR/NAME.init.txt`` for a file ``DIR/NAME.EXT``. The file
+    need not exist."""
     path = Path(input_spec)
     if path.is_dir():
+        named = path if path.name not in ("", "..") else path.resolve()  # ``.``, ``..``
+        if named.name == SEQUENCE_IMAGES:  # SEQ/img: the sequence's box, which run SEQ reads
+            return named.parent / SEQUENCE_SIDECAR
         return path / SEQUENCE_SIDECAR
     return path.with_name(VIDEO_SIDECAR.format(path.stem))
 
