@@ -115,6 +115,27 @@ def test_frame_of_a_sequence_folder_default_name(tmp_path: Path) -> None:
     assert cv2.imread(str(tmp_path / "Seq-frame2.png")).shape == (120, 160, 3)
 
 
+def test_select_and_frame_on_a_silent_stream_name_no_option_they_lack(tmp_path: Path) -> None:
+    """On a silent udp:// input select and frame said "--timeout SECONDS waits longer", an
+    option only vtrack run has."""
+    import socket
+
+    urls = []  # a port each: both listen at once
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as one, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as two:
+        for probe in (one, two):
+            probe.bind(("127.0.0.1", 0))
+            urls.append(f"udp://127.0.0.1:{probe.getsockname()[1]}")
+    with ThreadPoolExecutor(2) as pool:  # each waits the 10 s default
+        done = list(pool.map(lambda args: vtrack(*args, cwd=tmp_path),
+                             [("select", urls[0]), ("frame", urls[1])]))
+    for result, quiet in zip(done, urls, strict=True):
+        assert result.returncode == 2 and result.stdout == "", result.stderr
+        assert result.stderr == (f"vtrack: error: {quiet}: cannot be opened (nothing came "
+                                 "within 10 s)\n")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_frame_never_writes_into_its_input(clip: Path, tmp_path: Path) -> None:
     """``-o seq/img/0001.jpg`` burnt the grid into the input's own frame; ``frame -`` wrote
     ``--frame0.png``."""

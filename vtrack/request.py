@@ -92,7 +92,8 @@ class RunRequest:
             "max_s": self.max_s,
             "init_from": self.init_from,
             "stream": self.stream,
-            "ffmpeg": {**asdict(self.ffmpeg), "options": dict(self.ffmpeg.options)},
+            "ffmpeg": {**{k: v for k, v in asdict(self.ffmpeg).items() if k != "timeout_option"},
+                       "options": dict(self.ffmpeg.options)},
             "live": self.live,
             "video_out": self.video_out,
         }

@@ -172,7 +172,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         start_s=start[1],
         stream=stream,
         ffmpeg=FFmpegInput(format=input_format, options=parse_options(input_options),
-                           follow_s=follow_s,
+                           follow_s=follow_s, timeout_option="--timeout",
                            **({} if timeout_s is None else {"timeout_s": timeout_s})),
         live=live,
         video_out=video_out,

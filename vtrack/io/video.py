@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import av
@@ -217,6 +217,14 @@ class FFmpegInput:
     options: tuple[tuple[str, str], ...] = ()
     timeout_s: float = NETWORK_TIMEOUT_S
     follow_s: float | None = None
+    #: The command's option that sets ``timeout_s``, which a timeout's message names (None: the
+    #: command has none, as ``vtrack select`` and ``frame``). Not part of a run's settings.
+    timeout_option: str | None = field(default=None, compare=False)
+
+    def waits_longer(self) -> str:
+        """``; --timeout SECONDS waits longer`` when the command has the option, else ``""``."""
+        return "" if self.timeout_option is None else \
+            f"; {self.timeout_option} SECONDS waits longer"
 
 
 def _python_file(container: av.container.InputContainer) -> object:
@@ -310,8 +318,7 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
         if not isinstance(exc, av.error.InvalidDataError):
             return f"{path}: cannot be opened ({reason})"
         return (f"{path}: nothing FFmpeg could decode came within {how.timeout_s:g} s "
-                f"({reason}): a live stream starts at a key frame (--timeout SECONDS waits "
-                "longer)")
+                f"({reason}): a live stream starts at a key frame{how.waits_longer()}")
     if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
@@ -335,7 +342,7 @@ class VideoSource(Source):
             raise InputError(f"{path}: no such file") from None
         except av.error.ExitError:  # the timeout's interrupt
             raise InputError(f"{path}: cannot be opened (nothing came within "
-                             f"{how.timeout_s:g} s; --timeout SECONDS waits longer)") from None
+                             f"{how.timeout_s:g} s{how.waits_longer()})") from None
         except av.FFmpegError as exc:
             raise InputError(_undecodable(path, how, exc)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
