@@ -230,6 +230,34 @@ def test_an_unreachable_scheduler_is_one_line(inputs: Path, tmp_path: Path) -> N
     assert "tcp://127.0.0.1:9" in line and "cannot reach" in line
 
 
+@pytest.mark.parametrize(("address", "problem"), [
+    ("", "no address"),  # ran the batch locally
+    ("tcp://127.0.0.1", "no port"),
+    ("tcp://127.0.0.1:99999", "not a number from 1 to 65535"),
+    ("ucx://", "does not connect with ucx://"),
+    ("tls://", "does not connect with tls://"),
+    ("inproc://", "does not connect with inproc://"),
+])
+def test_a_scheduler_address_that_cannot_be_one_says_what_is_wrong(
+        inputs: Path, tmp_path: Path, address: str, problem: str) -> None:
+    """These said "not a Dask scheduler" (an empty one ran the batch locally, exit 0)."""
+    out = tmp_path / "out"
+    line = one_error_line(batch(str(inputs), "--scheduler", address, "--no-video",
+                                "--out", str(out)))
+    assert problem in line and "not a Dask scheduler" not in line
+    assert not (out / "summary.csv").exists()
+
+
+@pytest.mark.parametrize("option", ["--scheduler-timeout", "--worker-timeout"])
+def test_dask_options_without_a_scheduler_are_refused(inputs: Path, tmp_path: Path,
+                                                      option: str) -> None:
+    """They were accepted and ignored: the batch ran locally."""
+    out = tmp_path / "out"
+    line = one_error_line(batch(str(inputs), option, "5", "--no-video", "--out", str(out)))
+    assert option in line and "--scheduler" in line.replace(option, "")
+    assert not (out / "summary.csv").exists()
+
+
 def test_scheduler_without_dask_says_how_to_install(inputs: Path, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError

@@ -6,6 +6,7 @@ import gc
 import multiprocessing
 import os
 import signal
+import socket
 import sys
 import time
 import uuid
@@ -16,6 +17,7 @@ from dataclasses import replace
 from multiprocessing import forkserver
 from multiprocessing.connection import wait
 from typing import Any, Protocol
+from urllib.parse import urlsplit
 
 from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.batch.worker import _serve, execute
@@ -26,6 +28,10 @@ from vtrack.run import STATUS_FAILED
 RETRIES = 1
 #: How often a Dask batch checks that the scheduler still has a worker (seconds).
 WORKER_POLL_S = 1.0
+#: The Dask protocols ``--scheduler`` connects with: the others need what vtrack does not
+#: give a Client (``tls``/``wss``: certificates; ``ucx``: UCX-Py and its network) or cannot
+#: reach another process at all (``inproc``).
+SCHEDULER_PROTOCOLS = ("tcp", "ws")
 
 
 class Executor(Protocol):
@@ -216,6 +222,9 @@ class DaskExecutor:
         except ImportError:
             raise VtrackError(
                 "--scheduler needs Dask distributed: pip install 'vtrack[dask]'") from None
+        problem = scheduler_address_problem(address)
+        if problem:
+            raise VtrackError(f"--scheduler {address}: {problem}")
         self.address = address
         self.worker_timeout_s: float | None = None
         try:
@@ -298,6 +307,39 @@ class DaskExecutor:
                            error=f"Dask: {type(exc).__name__}: {exc}")
 
 
+def _host_port(address: str) -> tuple[str, str, int | None]:
+    """``(protocol, host, port)`` of a scheduler address (``tcp`` without ``PROTOCOL://``;
+    port None when there is none); ValueError for a port that is not one."""
+    protocol, sep, location = address.partition("://")
+    if not sep:
+        protocol, location = "tcp", address
+    parts = urlsplit(f"//{location}")
+    return protocol, parts.hostname or "", parts.port
+
+
+def scheduler_address_problem(address: str) -> str | None:
+    """What is wrong with ``address`` as ``--scheduler``'s (``tcp://HOST:PORT``), before
+    anything connects to it; None if nothing is."""
+    if not address.strip():
+        return "no address: give the scheduler's, tcp://HOST:PORT"
+    protocol = address.partition("://")[0] if "://" in address else "tcp"
+    if protocol not in SCHEDULER_PROTOCOLS:
+        known = " and ".join(f"{name}://" for name in SCHEDULER_PROTOCOLS)
+        return (f"vtrack does not connect with {protocol}:// (it connects with {known}; "
+                "a scheduler's address is tcp://HOST:PORT)")
+    try:
+        _, host, port = _host_port(address)
+    except ValueError:  # not a number, or past 65535
+        return "the port is not a number from 1 to 65535 (tcp://HOST:PORT)"
+    if not host:
+        return "no host: give tcp://HOST:PORT"
+    if port is None:
+        return "no port: give tcp://HOST:PORT (a scheduler listens on 8786 unless told otherwise)"
+    if port == 0:
+        return "port 0 is no port a scheduler listens on (tcp://HOST:PORT)"
+    return None
+
+
 def _probe(address: str, timeout_s: float) -> None:
     """Ask the scheduler at ``address`` who it is, within ``timeout_s`` in all (connecting,
     the handshake, the answer): a peer that accepts and stays silent, or a port that is not a
@@ -316,7 +358,20 @@ def _probe(address: str, timeout_s: float) -> None:
         finally:
             comm.abort()
 
+    async def reachable() -> None:
+        """Refused at once, not after Dask's retries for the whole timeout. (A scheduler logs
+        this bare connection at INFO: "closed before handshake completed".)"""
+        _, host, port = _host_port(address)
+        try:
+            _, writer = await asyncio.open_connection(host, port)
+        except ConnectionRefusedError:
+            raise OSError("connection refused") from None
+        except socket.gaierror:
+            raise OSError(f"no host named {host!r} is known") from None
+        writer.close()
+
     async def identity() -> None:
+        await reachable()
         try:
             reply = await ask()
         except (OSError, TimeoutError, asyncio.CancelledError):

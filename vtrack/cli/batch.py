@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
+from click.core import ParameterSource
 
 from vtrack.cli._options import MAX_WAIT_S, Seconds, gt_origin_option
 from vtrack.cli._paths import PATH
@@ -67,6 +68,27 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
             )
         configs[config.name] = folders[folder_name(config.name)] = config
     return configs
+
+
+def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
+    """Refuse a --scheduler address that is wrong before anything connects (an empty one ran
+    the batch locally), and the options of a Dask batch given without --scheduler (they were
+    ignored), as ``vtrack run`` refuses options its input would ignore."""
+    from vtrack.batch.executors import scheduler_address_problem
+
+    if scheduler is None:
+        source = click.get_current_context().get_parameter_source
+        for name, flag in (("scheduler_timeout", "--scheduler-timeout"),
+                           ("worker_timeout", "--worker-timeout")):
+            if source(name) is not ParameterSource.DEFAULT:
+                raise click.UsageError(f"{flag} is for a batch on a Dask scheduler: give "
+                                       "--scheduler ADDRESS with it, or leave it out")
+        return
+    if jobs is not None:
+        raise click.UsageError("--jobs and --scheduler exclude each other")
+    problem = scheduler_address_problem(scheduler)
+    if problem:
+        raise click.UsageError(f"--scheduler {scheduler or repr(scheduler)}: {problem}")
 
 
 @_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames",
@@ -135,8 +157,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
 
-    if scheduler and jobs is not None:
-        raise click.UsageError("--jobs and --scheduler exclude each other")
+    _check_scheduler_options(scheduler, jobs)
     configs = _configs(config_specs, overrides)
     inputs = find_inputs(folder, gt_origin)
     workers = jobs or cpu_count()
@@ -148,7 +169,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     # is taken (created, checked, locked) before any job is planned
     with handling_stop_signals(_StopOnce()), OutputFolder(out_dir, "batch"):
         executor: Executor
-        if scheduler:
+        if scheduler is not None:
             dask = DaskExecutor(scheduler, scheduler_timeout)
             dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
             executor = dask
