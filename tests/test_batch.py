@@ -258,6 +258,15 @@ def test_dask_options_without_a_scheduler_are_refused(inputs: Path, tmp_path: Pa
     assert not (out / "summary.csv").exists()
 
 
+def test_a_set_for_a_stage_one_config_lacks_names_that_config(inputs: Path,
+                                                               tmp_path: Path) -> None:
+    """The message showed s0's chain but not which --config it was."""
+    line = one_error_line(batch(str(inputs), "-c", "s0", "-c", "s1", "--set",
+                                "particle.particles=16", "--out", str(tmp_path / "out")))
+    assert "--config s0:" in line and "'particle' is not in the chain" in line
+    assert "every --config" in line
+
+
 def test_scheduler_without_dask_says_how_to_install(inputs: Path, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError

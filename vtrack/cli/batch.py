@@ -59,7 +59,12 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
     configs: dict[str, Config] = {}
     folders: dict[str, Config] = {}
     for spec in specs or (DEFAULT_CONFIG,):
-        config = load_config(spec).with_overrides(list(overrides))
+        config = load_config(spec)
+        try:
+            config = config.with_overrides(list(overrides))
+        except ConfigError as exc:  # name the config: the chain alone did not say which
+            raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
+                              "--config") from None
         other = configs.get(config.name) or folders.get(folder_name(config.name))
         if other is not None:
             raise ConfigError(
