@@ -410,3 +410,70 @@ def test_more_jobs_than_runs_start_a_worker_per_run(tmp_path: Path,
     assert 1 <= most <= len(batch_plan.jobs)
     too_many = batch(str(folder), "--jobs", "513", "--out", str(tmp_path / "o2"))
     assert too_many.exit_code == 2 and "1<=x<=512" in too_many.output
+
+
+MOT_CONFIG = """
+[[stage]]
+name = "mot_detections"
+path = "det.txt"
+[[stage]]
+name = "byte_tracks"
+"""
+
+
+def detections_setup(tmp_path: Path, clip_factory: ClipFactory) -> tuple[Path, Path]:
+    """An input folder with a multi-target clip, and a working folder holding ``mot.toml``
+    (``path = "det.txt"``, relative) and ``det.txt`` (the clip's ground truth as detections)."""
+    clip = clip_factory("multi", width=W, height=H, frames=60)
+    assert clip.mot is not None
+    folder, work = tmp_path / "in", tmp_path / "work"
+    folder.mkdir()
+    work.mkdir()
+    shutil.copy(clip.path, folder / "multi.mp4")
+    shutil.copy(clip.mot, folder / "multi.mot.txt")
+    rows = [line.split(",")[:6] for line in clip.mot.read_text().splitlines() if line.strip()]
+    (work / "det.txt").write_text("".join(",".join(row) + ",1,-1,-1,-1\n" for row in rows))
+    (work / "mot.toml").write_text(MOT_CONFIG)
+    return folder, work
+
+
+def test_a_relative_detections_path_is_the_batch_folders_on_dask(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``path = "det.txt"`` was read in the Dask worker's working folder (here one without a
+    det.txt: every run failed; with another det.txt there it scored against that one)."""
+    distributed = pytest.importorskip("distributed")
+    folder, work = detections_setup(tmp_path, clip_factory)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the worker processes start here
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        monkeypatch.chdir(work)  # the batch runs from here, where det.txt is
+        result = batch(str(folder), "-c", "mot.toml", "--scheduler", cluster.scheduler_address,
+                       "--no-video", "--out", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert summary(tmp_path / "out")[("multi", "mot")]["status"] == "complete"
+    tracks = (tmp_path / "out" / "multi" / "mot" / "tracks.csv").read_text().splitlines()
+    assert len(tracks) > 60  # the clip's people were tracked from the detections
+
+
+def test_a_replaced_detections_file_runs_again(tmp_path: Path, clip_factory: ClipFactory,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    """After det.txt was replaced, the batch said "complete before, not run again" and kept
+    the results of the old detections."""
+    folder, work = detections_setup(tmp_path, clip_factory)
+    monkeypatch.chdir(work)
+    out = tmp_path / "out"
+    first = batch(str(folder), "-c", "mot.toml", "--jobs", "1", "--no-video", "--out", str(out))
+    assert first.exit_code == 0, first.output
+    tracks = out / "multi" / "mot" / "tracks.csv"
+    before = tracks.read_text()
+    again = batch(str(folder), "-c", "mot.toml", "--jobs", "1", "--no-video", "--out", str(out))
+    assert "not run again" in again.output  # unchanged: reused
+    det = work / "det.txt"
+    det.write_text("".join(det.read_text().splitlines(keepends=True)[:3]))  # another detector
+    replaced = batch(str(folder), "-c", "mot.toml", "--jobs", "1", "--no-video",
+                     "--out", str(out))
+    assert replaced.exit_code == 0, replaced.output
+    assert "not run again" not in replaced.output
+    assert tracks.read_text() != before

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,7 @@ from vtrack.geometry import Box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
 from vtrack.io.video import FFmpegInput
+from vtrack.stages.base import stage_class
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,11 @@ class RunRequest:
     live: bool | None = None
     #: ``--video-out URL``: the annotated video goes to this live output instead of a file.
     video_out: str | None = None
+
+    def __post_init__(self) -> None:
+        # files a stage reads (mot_detections' det.txt) relative to the folder the request was
+        # made in, not the one a worker runs in (a Dask worker's: another file, or none)
+        object.__setattr__(self, "config", _absolute_files(self.config))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``run.json``'s ``"request"``): the config as its resolved chain
@@ -157,13 +164,40 @@ class RunRequest:
         return fps
 
     def file_identities(self) -> dict[str, Any]:
-        """The identity (:func:`~vtrack.io.identity.file_identity`) of the input and the ground
-        truth as they are now: ``run.json`` records it, batch's resume compares it."""
-        return {"input": file_identity(self.input), "gt": file_identity(self.gt_path)}
+        """The identity (:func:`~vtrack.io.identity.file_identity`) of the input, the ground
+        truth and the files the config's stages read (``"files"``, by path, when there are
+        any: a ``det.txt``) as they are now: ``run.json`` records it, batch's resume compares
+        it."""
+        identities = {"input": file_identity(self.input), "gt": file_identity(self.gt_path)}
+        files = {path: file_identity(path) for path in _stage_files(self.config)}
+        return {**identities, "files": files} if files else identities
 
     def same_run(self, recorded: Any) -> bool:
         """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request."""
         return json.loads(json.dumps(self.to_dict())) == recorded
+
+
+def _stage_files(config: Config) -> list[str]:
+    """The files the stages of ``config`` read: the values of their ``file_params``."""
+    return [values[name] for stage, values in config.stages
+            for name in getattr(stage_class(stage, config.source), "file_params", ())
+            if isinstance(values.get(name), str) and values[name]]
+
+
+def _absolute_files(config: Config) -> Config:
+    """``config`` with each relative file a stage reads (its ``file_params``) made absolute
+    against the current folder."""
+    stages = []
+    for stage, values in config.stages:
+        values = dict(values)
+        for name in getattr(stage_class(stage, config.source), "file_params", ()):
+            path = values.get(name)
+            if isinstance(path, str) and path and not os.path.isabs(path):
+                values[name] = os.path.abspath(path)
+        stages.append((stage, values))
+    if stages == config.stages:
+        return config
+    return Config(config.name, config.source, config.description, stages)
 
 
 def _ffmpeg_input(data: dict[str, Any] | None) -> FFmpegInput:

@@ -36,7 +36,8 @@ class MotDetections(Stage):
             "path",
             str,
             "",
-            "the det.txt file (frame,id,x,y,w,h,conf,...), relative to the working directory",
+            "the det.txt file (frame,id,x,y,w,h,conf,...), relative to the folder vtrack "
+            "was started in (a batch's, also on Dask workers)",
         ),
         Param(
             "min_score",
@@ -48,6 +49,10 @@ class MotDetections(Stage):
         ),
     )
     provides = frozenset({"detections"})
+    #: Parameters naming a file the stage reads: a run's request makes them absolute, and a
+    #: batch reuses a result only while the file is the one the run read
+    #: (:class:`~vtrack.request.RunRequest`).
+    file_params = ("path",)
     needs_init_box = False
 
     def start(self, ctx: TrackContext) -> None:
