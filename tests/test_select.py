@@ -202,6 +202,23 @@ def post(url: str, data: dict) -> tuple[int, dict]:
         return exc.code, json.loads(exc.read())
 
 
+def test_a_box_drawn_on_a_later_frame_is_printed_with_its_frame_not_saved(clip: Path) -> None:
+    """A box drawn on frame 7 was saved as the sidecar, which run and batch take as frame 0's
+    box (only a warning said so)."""
+    sidecar_path(clip).write_text("1,2,30,40\n")
+    select = Select(str(clip), "--frame", "7")
+    try:
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 7})
+        assert status == 200 and answer == {"init": "10,20,30,40", "sidecar": None}
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == "--start 7 --init 10,20,30,40"
+    assert "not saved (the sidecar holds frame 0's box)" in err
+    assert read_sidecar(clip) == Box(1, 2, 30, 40)  # frame 0's box, as it was
+
+
 def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> None:
     """The page's server without a browser: info, frames, a rejected box, a confirmed one."""
     sidecar_path(clip).unlink(missing_ok=True)

@@ -37,10 +37,12 @@ def command(input_spec: str, frame: int, port: int) -> None:
             click.echo(f"vtrack: warning: {server.unreadable}; the box you confirm replaces it",
                        err=True)
         selection = server.wait()
-    if selection.frame != 0:
-        click.echo(f"vtrack: warning: the box was drawn on frame {selection.frame}; the saved "
-                   "box is used from frame 0: to track from this frame, run with --start "
-                   f"{selection.frame} --init {format_box(selection.box)}", err=True)
+    if selection.frame != 0:  # not saved: a sidecar box is frame 0's
+        click.echo(f"--start {selection.frame} --init {format_box(selection.box)}")
+        click.echo(f"vtrack select: not saved (the sidecar holds frame 0's box): the box was "
+                   f"drawn on frame {selection.frame}; give both options to vtrack run",
+                   err=True)
+        return
     click.echo(f"--init {format_box(selection.box)}")
     if selection.sidecar is None:
         click.echo(f"vtrack select: {input_spec} has no sidecar file (stdin, a URL or a "

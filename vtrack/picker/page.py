@@ -97,7 +97,8 @@ $("confirm").onclick = () => {
     .then((r) => r.json()).then((res) => {
       if (res.error) { $("status").textContent = res.error; return; }
       const saved = res.sidecar ? " (saved in " + res.sidecar + ")" :
-                                  " (this input has no sidecar file: give it as --init)";
+        index !== 0 ? " --start " + index + " (not saved: the sidecar holds frame 0's box)" :
+        " (this input has no sidecar file: give it as --init)";
       $("status").textContent = "Done: --init " + res.init + saved + ". You can close this page.";
       document.body.dataset.done = res.init;
       ["prev", "next", "confirm"].forEach((id) => { $(id).disabled = true; });

@@ -120,7 +120,8 @@ def _box_values(values: Any) -> list[float]:
 @dataclass(frozen=True)
 class Selection:
     """What the user confirmed: the box, the frame it was drawn on, the sidecar written (None
-    for an input that has none: stdin, a URL, a device)."""
+    for an input that has none: stdin, a URL, a device; and for a box drawn on a frame other
+    than 0, since the sidecar holds frame 0's box)."""
 
     box: Box
     frame: int
@@ -174,8 +175,9 @@ class SelectionServer:
         last = MAX_FRAME if self.store.count is None else self.store.count - 1
         if isinstance(frame, bool) or not isinstance(frame, int) or not 0 <= frame <= last:
             raise ConfigError(f"frame {frame!r}: the input's frames are 0..{last}")
-        sidecar = (write_sidecar(self.input_spec, box) if has_sidecar(self.input_spec)
-                   else None)
+        # the sidecar holds frame 0's box: one drawn on a later frame is printed, not saved
+        sidecar = (write_sidecar(self.input_spec, box)
+                   if has_sidecar(self.input_spec) and frame == 0 else None)
         return Selection(box, frame, sidecar)
 
     def wait(self) -> Selection:
