@@ -618,7 +618,8 @@ def test_vtrack_run_s4_needs_no_init(tmp_path, clip_factory) -> None:
 def test_a_score_is_given_exactly_by_the_chains_that_declare_one(scene_factory) -> None:
     """Probe 48 item 4: the stages reference says which shipped configs give no score (S4:
     its document defines no confidence, so track.csv's score is empty); that declaration
-    (``Stage.gives_score``) is what each single-target config does on a clip."""
+    (``Pipeline.gives_score``: a stage provides ``score``) is what each single-target config
+    does on a clip."""
     from vtrack import track
     from vtrack.config import shipped_configs
 

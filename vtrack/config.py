@@ -19,6 +19,7 @@ Everything is checked at load time; errors name the file, the stage and the para
 from __future__ import annotations
 
 import tomllib
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
@@ -127,13 +128,9 @@ def load_config(spec: str | Path | None = None) -> Config:
     spec = DEFAULT_CONFIG if spec is None else spec
     path = Path(spec)
     shipped = shipped_configs()
-    try:
-        found = str(spec) in shipped or path.is_file()
-    except OSError as exc:  # a name too long for the file system, ...
-        raise ConfigError(f"{spec}: cannot be read as a config file ({os_reason(exc)})") from None
     if str(spec) in shipped:
         path = shipped[str(spec)]
-    elif not found:
+    elif not _is_file(path, str(spec)):
         if path.is_dir():
             raise ConfigError(f"{spec}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
@@ -187,15 +184,24 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
     return config
 
 
+def _is_file(path: Path, spec: str) -> bool:
+    """Whether ``path`` is a file; ConfigError naming ``spec`` when the file system cannot
+    say (a name too long for it, ...)."""
+    try:
+        return path.is_file()
+    except OSError as exc:
+        raise ConfigError(f"{spec}: cannot be read as a config file ({os_reason(exc)})") from None
+
+
 def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
     value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`), and a chain
     that cannot track (:func:`_check_tracks`)."""
-    _check_tracks(config)
+    classes = [stage_class(name, config.source) for name, _ in config.stages]
+    _check_tracks(config.source, classes)
     available = set(PIPELINE_PROVIDES)
     before: list[str] = []
-    for name, values in config.stages:
-        cls = stage_class(name, config.source)
+    for (name, values), cls in zip(config.stages, classes, strict=True):
         missing = cls.requires - available
         if missing:
             raise ConfigError(
@@ -215,34 +221,33 @@ def check_chain(config: Config) -> None:
 SINGLE_TARGET_OUTPUTS = frozenset({"box", "measurement"})
 
 
-def _check_tracks(config: Config) -> None:
+def _check_tracks(source: str, classes: list[type[Stage]]) -> None:
     """ConfigError for a chain whose result would not be what it computes: a stage named twice
     (one stage runs once a frame); a single-target chain in which no stage sets the box (it
     would report the first box on every frame), or a multi-target one with no stage, or two,
     setting the tracks; a multi-target chain with a stage of a single target (its box would be
     thrown away, or it would need a first box the chain refuses)."""
-    classes = [stage_class(name, config.source) for name, _ in config.stages]
     names = [cls.name for cls in classes]
-    for name in names:
-        if names.count(name) > 1:
-            raise ConfigError(f"{config.source}: stage '{name}' appears {names.count(name)} "
-                              "times; a chain runs each stage once")
-    trackers = [cls.name for cls in classes if "tracks" in cls.provides]
+    for name, count in Counter(names).items():
+        if count > 1:
+            raise ConfigError(f"{source}: stage '{name}' appears {count} times; a chain runs "
+                              "each stage once")
     if not any(cls.multi_target for cls in classes):
         if not any("box" in cls.provides for cls in classes):
-            raise ConfigError(f"{config.source}: no stage of the chain ({' -> '.join(names)}) "
+            raise ConfigError(f"{source}: no stage of the chain ({' -> '.join(names)}) "
                               "tracks: none sets the target's box (e.g. meanshift, particle, "
                               "kernel_meanshift, robust_search, kalman) nor the tracks of "
                               "several (mht, kalman_tracks, byte_tracks)")
         return
+    trackers = [cls.name for cls in classes if "tracks" in cls.provides]
     if len(trackers) > 1:
-        raise ConfigError(f"{config.source}: stages {' and '.join(trackers)} both set the "
+        raise ConfigError(f"{source}: stages {' and '.join(trackers)} both set the "
                           "tracks; a chain has one multi-target tracker")
     for cls in classes:
         single = sorted(cls.provides & SINGLE_TARGET_OUTPUTS)
         if cls.needs_init_box or single:
             why = "needs the target's first box" if cls.needs_init_box else \
                 f"sets the {' and '.join(single)} of one target"
-            raise ConfigError(f"{config.source}: stage '{cls.name}' {why}, but the chain "
+            raise ConfigError(f"{source}: stage '{cls.name}' {why}, but the chain "
                               f"tracks several targets ({trackers[0]}), whose result is the "
                               "tracks: use one kind of chain")

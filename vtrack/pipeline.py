@@ -75,8 +75,9 @@ class Pipeline:
 
     @property
     def gives_score(self) -> bool:
-        """Whether a stage of the chain sets the score (else every result's is NaN)."""
-        return any(s.gives_score for s in self.stages)
+        """Whether a stage of the chain sets the score (provides it; else every result's is
+        NaN: S4, whose document defines no confidence)."""
+        return any("score" in s.provides for s in self.stages)
 
     @property
     def columns(self) -> tuple[str, ...]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -138,6 +139,12 @@ class RunRequest:
         """``--start`` as the user gave it (``75`` or ``2.5s``), for messages."""
         return str(self.start) if self.start_s is None else f"{self.start_s:g}s"
 
+    @property
+    def starts_later(self) -> bool:
+        """Whether ``--start`` names a point after the input's beginning (a sidecar box, frame
+        0's, is then not the target's first box)."""
+        return bool(self.start or self.start_s)
+
     def start_frame(self, fps: float | None) -> int:
         """The first frame to track: ``start``, or for ``start_s`` the first frame at or after
         that time at ``fps`` frames a second (InputError when the input has no frame rate)."""
@@ -177,26 +184,30 @@ class RunRequest:
         return json.loads(json.dumps(self.to_dict())) == recorded
 
 
+def _file_values(config: Config) -> Iterator[tuple[int, str, str]]:
+    """(stage index, parameter, path) of each file a stage of ``config`` reads (the non-empty
+    values of its ``file_params``)."""
+    for index, (stage, values) in enumerate(config.stages):
+        for name in stage_class(stage, config.source).file_params:
+            if isinstance(values.get(name), str) and values[name]:
+                yield index, name, values[name]
+
+
 def _stage_files(config: Config) -> list[str]:
-    """The files the stages of ``config`` read: the values of their ``file_params``."""
-    return [values[name] for stage, values in config.stages
-            for name in getattr(stage_class(stage, config.source), "file_params", ())
-            if isinstance(values.get(name), str) and values[name]]
+    """The files the stages of ``config`` read."""
+    return [path for _, _, path in _file_values(config)]
 
 
 def _absolute_files(config: Config) -> Config:
-    """``config`` with each relative file a stage reads (its ``file_params``) made absolute
-    against the current folder."""
-    stages = []
-    for stage, values in config.stages:
-        values = dict(values)
-        for name in getattr(stage_class(stage, config.source), "file_params", ()):
-            path = values.get(name)
-            if isinstance(path, str) and path and not os.path.isabs(path):
-                values[name] = os.path.abspath(path)
-        stages.append((stage, values))
-    if stages == config.stages:
+    """``config`` with each relative file a stage reads made absolute against the current
+    folder."""
+    relative = [(i, name, path) for i, name, path in _file_values(config)
+                if not os.path.isabs(path)]
+    if not relative:
         return config
+    stages = [(stage, dict(values)) for stage, values in config.stages]
+    for index, name, path in relative:
+        stages[index][1][name] = os.path.abspath(path)
     return Config(config.name, config.source, config.description, stages)
 
 

@@ -217,8 +217,6 @@ class DaskExecutor:
     def __init__(self, address: str, timeout_s: float = 10) -> None:
         try:
             from distributed import Client
-            from distributed.comm import parse_address
-            from distributed.comm.registry import get_backend
         except ImportError:
             raise VtrackError(
                 "--scheduler needs Dask distributed: pip install 'vtrack[dask]'") from None
@@ -228,7 +226,6 @@ class DaskExecutor:
         self.address = address
         self.worker_timeout_s: float | None = None
         try:
-            get_backend(parse_address(address)[0])  # a bad scheme fails here, before a Client
             _probe(address, timeout_s)
             with _quiet_client_teardown():
                 self.client = Client(address, timeout=timeout_s, set_as_default=False)

@@ -148,14 +148,13 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     holds frame 0's box: a batch that starts later (``--start``) takes the ground truth's box
     of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither, or
     the sidecar is malformed."""
-    starts_later = bool(settings.start or settings.start_s)
-    box = None if starts_later else read_sidecar(item.path)
+    box = None if settings.starts_later else read_sidecar(item.path)
     if box is None and gt_path is None:
         if item.path.is_dir():
             names = (*SEQUENCE_GT, SEQUENCE_INIT)
         else:
             names = tuple(p.format(item.path.stem) for p in (*VIDEO_GT, VIDEO_INIT))
-        if starts_later:
+        if settings.starts_later:
             raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
                              "needs the target's box in that frame, and there is no ground "
                              f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")

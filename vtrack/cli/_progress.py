@@ -55,9 +55,9 @@ class ProgressLines:
     """A line of progress at most every ``period`` seconds (the first after ``period``)."""
 
     def __init__(self, name: str, total: int | None, period: float,
-                 unit: str = "frames") -> None:
+                 unit: str = "frames", started: float | None = None) -> None:
         self.name, self.total, self.period, self.unit = name, total, period, unit
-        self.started = self.last = time.monotonic()
+        self.started = self.last = time.monotonic() if started is None else started
 
     def update(self, done: int, note: str = "") -> None:
         now = time.monotonic()
@@ -75,6 +75,19 @@ class _Shown:
     """What shows progress: a tqdm bar, :class:`ProgressLines`, or nothing yet (``bar``)."""
 
     bar: tqdm | ProgressLines | None = None
+    quiet: bool
+    period: float
+
+    def _open(self, name: str, total: int | None, unit: str = "frames",
+              started: float | None = None) -> tqdm | ProgressLines:
+        """The bar of ``total`` ``unit`` in a terminal, else progress lines every ``period``
+        (their rate counted from ``started``, default now)."""
+        if terminal(self.quiet):
+            from tqdm import tqdm
+
+            return tqdm(total=total, unit=unit.rstrip("s"), desc=name, dynamic_ncols=True,
+                        file=sys.stderr)
+        return ProgressLines(name, total, self.period, unit, started)
 
     def close(self) -> None:
         """End the bar (a log's lines need no ending)."""
@@ -96,7 +109,6 @@ class BatchProgress(_Shown):
         self.runs = 0  # runs to do (set once the batch is planned)
         self.done_runs = 0
         self.frames: dict[tuple[str, str], tuple[int, int | None]] = {}
-        self.bar = None
 
     def on_progress(self, progress: Progress) -> None:
         self.frames[(progress.input, progress.config)] = (progress.frames, progress.total)
@@ -127,13 +139,7 @@ class BatchProgress(_Shown):
         total, done = self._total(), sum(done for done, _ in self.frames.values())
         note = f", {self.done_runs}/{self.runs} runs"
         if self.bar is None:
-            if terminal(self.quiet):
-                from tqdm import tqdm
-
-                self.bar = tqdm(total=total, unit="frame", desc="batch", dynamic_ncols=True,
-                                file=sys.stderr)
-            else:
-                self.bar = ProgressLines("batch", total, self.period)
+            self.bar = self._open("batch", total)
         if isinstance(self.bar, ProgressLines):
             self.bar.total = total
             self.bar.update(done, note)
@@ -156,7 +162,6 @@ class FrameProgress(_Shown):
         #: frames skipped before tracking (--start), given the input's frame rate
         self.start = start
         self.period = period
-        self.bar = None
         self.info: InputInfo | None = None
 
     def on_open(self, info: InputInfo) -> None:
@@ -174,14 +179,7 @@ class FrameProgress(_Shown):
         if self.bar is None:
             if self.quiet or self.info is None:
                 return
-            total = self._total(self.info)
-            if not terminal(self.quiet):
-                self.bar = ProgressLines(self.info.name, total, self.period)
-            else:
-                from tqdm import tqdm
-
-                self.bar = tqdm(total=total, unit="frame", desc=self.info.name,
-                                dynamic_ncols=True, file=sys.stderr)
+            self.bar = self._open(self.info.name, self._total(self.info))
         if isinstance(self.bar, ProgressLines):
             self.bar.update(done)
             return
@@ -197,21 +195,13 @@ class StepProgress(_Shown):
 
     def __init__(self, quiet: bool, name: str, unit: str, period: float = STATS_PERIOD) -> None:
         self.quiet, self.name, self.unit, self.period = quiet, name, unit, period
-        self.bar = None
         self._started = time.monotonic()  # the first step's time counts in the rate
 
     def __call__(self, done: int, total: int) -> None:
         if self.quiet:
             return
         if self.bar is None:
-            if terminal(self.quiet):
-                from tqdm import tqdm
-
-                self.bar = tqdm(total=total, unit=self.unit.rstrip("s"), desc=self.name,
-                                dynamic_ncols=True, file=sys.stderr)
-            else:
-                self.bar = ProgressLines(self.name, total, self.period, self.unit)
-                self.bar.started = self.bar.last = self._started
+            self.bar = self._open(self.name, total, self.unit, self._started)
         if isinstance(self.bar, ProgressLines):
             self.bar.update(done)
         else:

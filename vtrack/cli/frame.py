@@ -25,8 +25,9 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
     top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError
     from vtrack.io.files import write_bytes_atomic
+    from vtrack.io.images import encode_image
     from vtrack.io.specs import input_name
-    from vtrack.picker.frames import encode_image, read_frame
+    from vtrack.picker.frames import read_frame
     from vtrack.picker.grid import draw_grid
 
     out = out or Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")

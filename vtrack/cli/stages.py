@@ -127,7 +127,7 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
         config = load_config(name)
         chain = " -> ".join(stage for stage, _ in config.stages)
         classes = [stages[stage] for stage, _ in config.stages]
-        unscored = not any(cls.gives_score or cls.multi_target for cls in classes)
+        unscored = not any("score" in cls.provides or cls.multi_target for cls in classes)
         description = config.description + ("; no score: no stage of its chain gives one, "
                                             "track.csv's score is empty" if unscored else "")
         lines.append(f"- `{name}`: {description} ({chain})" if markdown

@@ -191,17 +191,18 @@ def read_mot_counting(
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
-        if len(values) in (8, 9) and values[7] not in MOT_CLASSES:
+        kind = values[7] if len(values) in (8, 9) else None  # the class column's, if any
+        if kind is not None and kind not in MOT_CLASSES:
             raise InputError(
-                f"{path} line {number}: column 8 is {values[7]:g}, not a MOTChallenge class "
+                f"{path} line {number}: column 8 is {kind:g}, not a MOTChallenge class "
                 f"(1-13, 1 pedestrian): {len(values)} columns are "
                 "frame,id,x,y,w,h,consider,class[,visibility]; MOT15's rows with world "
                 "coordinates have 10 (frame,id,x,y,w,h,conf,x,y,z)")
         if len(values) >= 7 and values[6] == 0:
             dropped["the consider flag 0 in column 7"] += 1
             continue
-        if len(values) in (8, 9) and values[7] != MOT_PEDESTRIAN:
-            dropped[f"class {values[7]:g} in column 8, not pedestrian {MOT_PEDESTRIAN}"] += 1
+        if kind is not None and kind != MOT_PEDESTRIAN:
+            dropped[f"class {kind:g} in column 8, not pedestrian {MOT_PEDESTRIAN}"] += 1
             continue
         box = Box(*values[2:6])
         if not (box.w > 0 and box.h > 0):

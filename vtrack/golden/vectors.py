@@ -315,8 +315,8 @@ def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
         total += 1
     if not total:
         return missing
-    line = f"{name}: {total} differing value(s); " + "; ".join(found)
-    return line if missing is None else f"{missing}; {line.removeprefix(name + ': ')}"
+    body = f"{total} differing value(s); " + "; ".join(found)
+    return f"{name}: {body}" if missing is None else f"{missing}; {body}"
 
 
 def _frame_width(vectors: Path) -> int:

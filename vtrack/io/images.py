@@ -34,6 +34,15 @@ DEFAULT_FPS = 30.0
 _NAMED_SKIPS = 3
 
 
+def encode_image(bgr: np.ndarray, ext: str = ".jpg", quality: int = 92) -> bytes:
+    """``bgr`` encoded as JPEG (``.jpg``) or PNG (``.png``) bytes by OpenCV."""
+    params = [cv2.IMWRITE_JPEG_QUALITY, quality] if ext == ".jpg" else []
+    ok, data = cv2.imencode(ext, bgr, params)
+    if not ok:
+        raise InputError(f"cannot encode a {bgr.shape[1]}x{bgr.shape[0]} frame as {ext}")
+    return data.tobytes()
+
+
 def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
     """Sort key comparing digit runs as numbers: ``img2`` < ``img10``."""
     return tuple(

@@ -42,12 +42,11 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     live = is_live(spec) if live is None else live
     if fps is not None:
         checked_fps(fps)
-    follows = ffmpeg.follow_s is not None
+    unfollowable = _not_followed(spec, raw) if ffmpeg.follow_s is not None else None
+    if unfollowable:
+        raise ConfigError(f"--follow reads a video file that is still being written; "
+                          f"{unfollowable}")
     if raw is not None:
-        if follows:
-            raise ConfigError("--follow reads a video file that is still being written; raw "
-                              "frames are read to the end of what is there (pipe a growing "
-                              "raw file in with tail -c +1 -f FILE | vtrack run - --raw WxH)")
         if live:
             raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
                               "sender back); give a container (e.g. -f mpegts) to skip frames")
@@ -56,14 +55,7 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     if not (spec == "-" or is_url(spec)):
         check_input_path(spec)
         if os.path.isdir(spec):
-            if follows:
-                raise ConfigError(f"--follow reads a video file that is still being written; "
-                                  f"{spec} is an image folder, read as it is when it opens")
             return ImageFolderSource(spec, fps=fps)
-    elif follows:
-        what = "stdin is read until its writer closes it" if spec == "-" else \
-            f"{spec} is a stream, read until it ends (--timeout)"
-        raise ConfigError(f"--follow reads a video file that is still being written; {what}")
     if fps is not None:
         what = ("a container on stdin carries its own timestamps" if spec == "-" else
                 f"{spec} is a video file, whose frames carry their own timestamps"
@@ -79,3 +71,17 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
         source = VideoSource(spec, ffmpeg, live)
     source.live = live
     return source
+
+
+def _not_followed(spec: str, raw: RawFormat | None) -> str | None:
+    """Why ``--follow`` (a video file still being written) cannot apply to ``spec``, if so."""
+    if raw is not None:
+        return ("raw frames are read to the end of what is there (pipe a growing raw file in "
+                "with tail -c +1 -f FILE | vtrack run - --raw WxH)")
+    if spec == "-":
+        return "stdin is read until its writer closes it"
+    if is_url(spec):
+        return f"{spec} is a stream, read until it ends (--timeout)"
+    if os.path.isdir(spec):
+        return f"{spec} is an image folder, read as it is when it opens"
+    return None

@@ -13,24 +13,14 @@ import threading
 from collections import OrderedDict
 from collections.abc import Iterator
 
-import cv2
 import numpy as np
 
 from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.io import open_source
+from vtrack.io.images import encode_image
 from vtrack.io.sidecar import has_sidecar
 from vtrack.io.source import InputInfo, Source
-
-
-def encode_image(bgr: np.ndarray, ext: str = ".jpg", quality: int = 92) -> bytes:
-    """``bgr`` encoded as JPEG (``.jpg``) or PNG (``.png``) bytes by OpenCV."""
-    params = [cv2.IMWRITE_JPEG_QUALITY, quality] if ext == ".jpg" else []
-    ok, data = cv2.imencode(ext, bgr, params)
-    if not ok:
-        raise InputError(f"cannot encode a {bgr.shape[1]}x{bgr.shape[0]} frame as {ext}")
-    return data.tobytes()
-
 
 #: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
 CACHE_BYTES = 64 << 20

@@ -251,9 +251,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
         csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
         markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
         index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
-    _remove_stale_plots(plot_dir, written + ([overall] if overall else []))
-    return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv,
-                  plots=written + ([overall] if overall else []), runs=runs, warnings=warnings)
+    written += [overall] if overall else []
+    _remove_stale_plots(plot_dir, written)
+    return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv, plots=written,
+                  runs=runs, warnings=warnings)
 
 
 #: The kinds of plot a report writes, as ``plots/<kind>_<input>.png`` (``curves_all.png``).
@@ -334,10 +335,11 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
                   palette: dict[str, str], warnings: list[str]) -> Path | None:
     """Stage the success and precision plots averaged over inputs (None: no config is scored);
     warn when the configs were scored on different inputs."""
-    success, precision = _mean_curves([r for runs in by_config.values() for r in runs])
+    counted = [r for runs in by_config.values() for r in runs]
+    success, precision = _mean_curves(counted)
     if not success:
         return None
-    scored_inputs = {r.input for runs in by_config.values() for r in runs if r.scores is not None}
+    scored_inputs = {r.input for r in counted if r.scores is not None}
     covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
     # (a config scored nowhere is in no average: the no-ground-truth warning names it)
     if any(inputs and inputs != scored_inputs for inputs in covered.values()):

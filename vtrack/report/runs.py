@@ -563,16 +563,14 @@ def _lines(first: int, last: int) -> str:
     return str(first) if first >= last else f"{first}-{last}"
 
 
-def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult] = (),
-                problems: list[str] | None = None, not_batch: Sequence[str] = ()
-                ) -> list[FailedRun]:
+def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: list[str],
+                not_batch: Sequence[str]) -> list[FailedRun]:
     """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
     left no results (no run of ``reported`` is in their results folder, the batch's
     ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
     once. What could not be read of those files is appended to ``problems`` (see
     :func:`_batch_rows`; ``not_batch``: the leading header of other files of that name)."""
     ran = {run.folder.resolve() for run in reported}
-    problems = [] if problems is None else problems
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))

@@ -30,8 +30,8 @@ import numpy as np
 from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError
-from vtrack.io.files import replacing
-from vtrack.picker.frames import encode_image
+from vtrack.io.files import os_reason, replacing
+from vtrack.io.images import encode_image
 from vtrack.scenes.scene import Scene
 
 #: Layouts ``write_raw`` can produce (bytes per frame: 3wh, 3wh, 1.5wh, wh).
@@ -51,6 +51,10 @@ X264_PRESETS = (
 )
 #: What ``write_clip`` can write.
 CLIP_FORMATS = ("mp4", "images", "raw")
+#: The encoder of ``write_video`` and of ``write_clip``'s mp4 clips.
+CODEC = "libx264"
+#: The image format of ``write_image_sequence`` and of ``write_clip``'s image folders.
+IMAGE_EXT = "jpg"
 
 
 @contextmanager
@@ -61,8 +65,7 @@ def _writing(path: Path) -> Iterator[None]:
         path.parent.mkdir(parents=True, exist_ok=True)
         yield
     except (OSError, av.FFmpegError) as exc:
-        reason = getattr(exc, "strerror", None) or str(exc)
-        raise OutputError(f"{path}: cannot write ({reason})") from exc
+        raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from exc
     except ValueError as exc:  # PyAV: no container format for the file's name
         raise OutputError(f"{path}: no video container format for this file name ({exc}); "
                           "name it .mp4, .mkv, .avi or .mov, or use --format images / raw"
@@ -94,7 +97,7 @@ def write_video(
     path: str | Path,
     crf: int = 23,
     preset: str = "medium",
-    codec: str = "libx264",
+    codec: str = CODEC,
     pix_fmt: str = "yuv420p",
     progress: bool = False,
     keyint: int | None = None,
@@ -201,7 +204,7 @@ def _mot_groundtruth_to(scene: Scene, path: Path, temp: Path) -> None:
 
 
 def write_image_sequence(
-    scene: Scene, folder: str | Path, ext: str = "jpg", progress: bool = False
+    scene: Scene, folder: str | Path, ext: str = IMAGE_EXT, progress: bool = False
 ) -> Path:
     """OTB layout: ``folder/img/0001.<ext>`` ... (1-based, >= 4 digits) and
     ``folder/groundtruth_rect.txt`` with 1-based boxes, as OTB writes them (read it with
@@ -310,7 +313,7 @@ def write_clip(
         raise ConfigError(f"clip format {fmt!r}: choose one of {', '.join(CLIP_FORMATS)}")
     pix = pix_fmt or ("yuv420p" if fmt == "mp4" else "bgr24")
     if fmt == "mp4":
-        _check_video(scene, out, preset, "libx264", pix)
+        _check_video(scene, out, preset, CODEC, pix)
     elif fmt == "raw":
         _check_raw(scene, out, pix)
     multi = any(len(tracks) > 1 for tracks in scene.tracks)
@@ -319,11 +322,11 @@ def write_clip(
     mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
     with replacing(clip, gt, *([mot] if multi else [])) as temps:
         if fmt == "mp4":
-            _encode_video(scene, out, temps[0], crf, preset, "libx264", pix, progress, None)
+            _encode_video(scene, out, temps[0], crf, preset, CODEC, pix, progress, keyint=None)
         elif fmt == "raw":
             _raw_to(scene, out, temps[0], pix, progress)
         else:
-            _images_to(scene, clip, temps[0], "jpg", progress)
+            _images_to(scene, clip, temps[0], IMAGE_EXT, progress)
         _groundtruth_to(scene, gt, temps[1], origin=1 if fmt == "images" else 0)
         if multi:
             _mot_groundtruth_to(scene, mot, temps[2])

@@ -243,10 +243,9 @@ class Stage:
     #: False when the stage can start without an initial box (detecting trackers, and stages
     #: that read ``ctx.box`` only if it is set). A chain needs one when any of its stages does.
     needs_init_box: ClassVar[bool] = True
-    #: True for stages that set ``ctx.score`` (their confidence in the box). A chain with none
-    #: (S4, whose document defines no confidence) leaves the score NaN: track.csv's ``score``
-    #: empty on every row.
-    gives_score: ClassVar[bool] = False
+    #: Parameters naming a file the stage reads (``mot_detections``' det.txt): a relative path
+    #: is the folder's the run was requested in, and the file counts among a run's inputs.
+    file_params: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, **values: Any) -> None:
         """``values`` are validated (see :func:`build_stage`); missing ones take defaults."""

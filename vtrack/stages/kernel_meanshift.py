@@ -133,7 +133,6 @@ class KernelMeanShift(Stage):
     """S2: kernel mean shift on a quantised-grey (or hue) histogram, three bandwidths a frame."""
 
     name = "kernel_meanshift"
-    gives_score = True
     summary = (
         "Kernel mean shift (pyramid kernel, q/p weights, histogram intersection), 3 scales, "
         "Kalman-prediction failure logic (S2)"

@@ -99,7 +99,6 @@ class MeanShift(Stage):
     """One (or a few) mean-shift steps per frame on the back-projection (S0 4-5), or CamShift."""
 
     name = "meanshift"
-    gives_score = True
     summary = "mean shift on the back-projection, one step per frame (S0 4-5), or cv2.CamShift"
     params = (
         Param(

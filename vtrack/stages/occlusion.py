@@ -80,7 +80,6 @@ class Occlusion(Stage):
     """Tracking / occluded / lost from a target-presence signal; coasting while hidden (S0 7)."""
 
     name = "occlusion"
-    gives_score = True
     summary = "occluded/lost detection: withhold the measurement so the Kalman filter coasts (S0 7)"
     params = (
         Param(

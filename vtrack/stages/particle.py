@@ -89,7 +89,6 @@ class ParticleFilter(Stage):
     with the patent's tracked/lost decision on the best weight's 10-frame ratio."""
 
     name = "particle"
-    gives_score = True
     summary = "S1 particle filter: hue histograms, centroid correction, tracked/lost state"
     params = (
         Param("particles", int, 8, "number of particles per frame (S1 embodiment: 8)",

@@ -43,7 +43,6 @@ class RobustSearch(Stage):
     """Correlation peak merged with the colour response (Staple); fDSST scale."""
 
     name = "robust_search"
-    gives_score = True
     summary = ("robust: peak of the fHOG correlation filter's response merged with the colour "
                "response (Staple), then the size from fDSST's scale filter")
     params = (

@@ -149,7 +149,6 @@ class MeanShiftFixed(Stage):
     """S0 items 4-5, 7 in integers: eq. 6-7 sums about win + w//2, one rounded step per frame."""
 
     name = "meanshift_fixed"
-    gives_score = True
     summary = "S0 4-5 bit-exact: integer sums of eq. 6-7, one rounded step; integer occlusion test"
     params = (
         Param("normalization", str, "weighted",

@@ -40,7 +40,6 @@ class KernelMeanShiftInt(Stage):
     """S2 sec. 3 in integers: pyramid kernel, q/p weights, intersection, scales 9/10/11."""
 
     name = "kernel_meanshift_int"
-    gives_score = True
     summary = "S2 bit-exact: the integer DSP loop (scales 9/10/11 of s from 1000), failure logic"
     params = (
         Param("bins", int, 16, "grey levels m, b = grey * m >> 8 (S2 sec. 6.1: 16)",
