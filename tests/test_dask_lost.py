@@ -5,6 +5,7 @@ up, with its summary, when every worker is gone for --worker-timeout. Loopback o
 from __future__ import annotations
 
 import csv
+import json
 import signal
 import socket
 import subprocess
@@ -136,3 +137,49 @@ def test_the_dashboard_port_and_a_batch_whose_workers_all_die(folder: Path,
         rows = list(csv.DictReader(handle))
     assert [row["status"] for row in rows] == ["failed"]
     assert "no worker connected" in rows[0]["error"]
+
+
+def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path) -> None:
+    """Ctrl-C cancelled the job's future, but a Dask task already running is not stopped by
+    that: the batch reported it ``interrupted`` while the worker went on and finished it (its
+    run.json then said ``complete``, the summary ``interrupted``)."""
+    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                       "--no-dashboard"])
+    worker = batch = None
+    try:
+        assert scheduler.stderr is not None
+        for line in scheduler.stderr:
+            if "Scheduler at" in line:
+                address = line.split("Scheduler at:")[1].strip()
+                break
+        worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
+                        "--no-nanny", "--no-dashboard"])
+        out = tmp_path / "out"
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--preset", "slow", "-o", str(out)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 90
+        while not list((out / "a").glob("*/.track.tmp-*.csv")):
+            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
+            time.sleep(0.05)
+        time.sleep(0.5)  # a few frames tracked
+        batch.send_signal(signal.SIGINT)
+        _, stderr = batch.communicate(timeout=60)
+        records = list(out.glob("a/*/run.json"))
+        assert len(records) == 1, stderr  # the job recorded itself before the batch ended
+        first = json.loads(records[0].read_text())
+        time.sleep(3)  # the worker does not carry on with the job
+        last = json.loads(records[0].read_text())
+    finally:
+        for process in (batch, worker, scheduler):
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
+    assert batch.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert first["status"] == last["status"] == "interrupted", (first, last)
+    assert 0 < first["frames"] < 600 and last == first
+    with (out / "summary.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["status"] for row in rows] == ["interrupted"]

@@ -20,7 +20,7 @@ from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from vtrack.batch.jobs import Job, Outcome, Progress
-from vtrack.batch.worker import _serve, execute
+from vtrack.batch.worker import _serve, execute_on_dask
 from vtrack.errors import VtrackError
 from vtrack.run import STATUS_FAILED
 
@@ -28,6 +28,8 @@ from vtrack.run import STATUS_FAILED
 RETRIES = 1
 #: How often a Dask batch checks that the scheduler still has a worker (seconds).
 WORKER_POLL_S = 1.0
+#: How long a stopped batch waits for its running jobs to end ``interrupted`` (seconds).
+STOP_GRACE_S = 5.0
 #: The Dask protocols ``--scheduler`` connects with: the others need what vtrack does not
 #: give a Client (``tls``/``wss``: certificates; ``ucx``: UCX-Py and its network) or cannot
 #: reach another process at all (``inproc``).
@@ -119,7 +121,7 @@ class _Worker:
         except (EOFError, OSError):
             return None
 
-    def stop(self, grace_s: float = 5) -> None:
+    def stop(self, grace_s: float = STOP_GRACE_S) -> None:
         """Ask the worker to finish; a job still running (interrupted, it is writing its
         ``run.json``) gets ``grace_s``, then the process is killed.
 
@@ -261,15 +263,20 @@ class DaskExecutor:
     def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
         """Submit every job and yield outcomes as they finish. When no worker has been
         connected for the worker timeout (:meth:`wait_for_workers`; every worker died), the
-        jobs still pending are cancelled and reported ``failed``, naming the scheduler."""
-        from distributed import as_completed
+        jobs still pending are cancelled and reported ``failed``, naming the scheduler. Stopped
+        part way (Ctrl-C, SIGTERM: the consumer closes this generator), running jobs are stopped
+        too (:meth:`_stop_running`)."""
+        from distributed import Event, as_completed
 
         batch = uuid.uuid4().hex[:8]
-        futures = {self.client.submit(execute, replace(job, threads=1), pure=False,
+        stop = Event(f"vtrack-{batch}-stop", client=self.client)
+        futures = {self.client.submit(execute_on_dask, replace(job, threads=1), stop.name,
+                                      pure=False,
                                       key=f"vtrack-{batch}-{n}-{job.input}-{job.config}"): job
                    for n, job in enumerate(jobs)}
         finished = as_completed(futures, loop=self.client.loop)
         seen = checked = time.monotonic()
+        stopped = True  # (until the batch ends by itself)
         try:
             while not finished.is_empty():
                 if finished.has_ready():
@@ -289,11 +296,30 @@ class DaskExecutor:
                             yield Outcome(job.input, job.config, STATUS_FAILED, error=(
                                 f"Dask: no worker connected to {self.address} for "
                                 f"{_seconds(self.worker_timeout_s)} (--worker-timeout)"))
+                    stopped = False  # no worker is left to stop
                     return
+            stopped = False
         finally:
+            if stopped:
+                self._stop_running(stop, [f for f in futures if not f.done()])
             with suppress(Exception):
                 self.client.cancel(list(futures))
             self.close()
+
+    @staticmethod
+    def _stop_running(stop: Any, unfinished: list[Any], grace_s: float = STOP_GRACE_S) -> None:
+        """Stop a batch's tasks (Ctrl-C, SIGTERM, no worker left): ``stop`` is set, so a running
+        job ends ``interrupted`` at its next progress check, with its records whole (as a local
+        worker's job on Ctrl-C), and a job not yet started returns without touching its folder;
+        they get ``grace_s`` to do so. (Cancelling a Dask future does not stop a task that is
+        already running: the worker went on and finished the job after the batch had reported it
+        interrupted.)"""
+        from distributed import wait as wait_for
+
+        with suppress(Exception):
+            stop.set()
+            if unfinished:
+                wait_for(unfinished, timeout=grace_s)
 
     @staticmethod
     def _outcome(future: Any, job: Job) -> Outcome:

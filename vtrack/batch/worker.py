@@ -17,7 +17,7 @@ import cv2
 
 from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.batch.plan import recorded_summary
-from vtrack.errors import FolderInUseError, OutputError, VtrackError
+from vtrack.errors import FolderInUseError, Interrupted, OutputError, VtrackError
 from vtrack.io import InputInfo
 from vtrack.io.outdir import OutputFolder
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
@@ -63,6 +63,26 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
                        error=f"internal error: {type(exc).__name__}: {exc}{where}",
                        attempt=job.attempt)
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
+
+
+def execute_on_dask(job: Job, stop_event: str) -> Outcome:
+    """:func:`execute` as a Dask task: the batch sets the Dask ``Event`` named ``stop_event``
+    when it is stopped (Ctrl-C, SIGTERM). A job that has not started by then returns
+    ``interrupted`` without touching its folder; a running one checks the event with each
+    progress report (every :data:`PROGRESS_PERIOD` seconds) and ends ``interrupted``, its
+    records whole, as a local worker's job does on Ctrl-C."""
+    from distributed import Event
+
+    stop = Event(stop_event)
+    if stop.is_set():
+        return Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted",
+                       attempt=job.attempt)
+
+    def check(progress: Progress) -> None:
+        if progress.frames and stop.is_set():
+            raise Interrupted(signal.SIGINT)
+
+    return execute(job, check)
 
 
 class _Reporter:
