@@ -346,6 +346,47 @@ def test_format_and_input_options_reach_ffmpeg(tmp_path: Path) -> None:
             done.stderr, done.stderr
 
 
+def test_an_input_option_ffmpeg_does_not_use_is_refused(tmp_path: Path) -> None:
+    """``--input-option framerat=30`` (a typo) or an option of another demuxer was ignored
+    without a word; now one line names the option FFmpeg did not use, exit 2, nothing written.
+    Options of every input (probesize), of the file protocol (blocksize) and of the demuxer
+    (rawvideo's framerate) are taken, from a path or from stdin."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    common = ["-c", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video"]
+    for key in ("framerat", "rtsp_transprt", "framerate", "rtsp_transport"):
+        out = tmp_path / key
+        for spec, stdin in ((str(clip), None), ("-", clip.read_bytes())):
+            done = _run([spec, "--input-option", f"{key}=30", *common, "-o", str(out)],
+                        input=stdin)
+            lines = done.stderr.decode().strip().splitlines()
+            assert done.returncode == 2 and len(lines) == 1, done.stderr
+            assert lines[0].startswith(f"vtrack: error: --input-option {key}: FFmpeg did not "
+                                       f"use it opening {spec} "), lines
+            assert not out.exists()
+    taken = ["--input-option", "probesize=5000000", "--input-option", "blocksize=65536"]
+    done = _run([str(clip), *taken, *common, "-o", str(tmp_path / "ok")])
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "ok" / "track.csv").read_bytes().count(b"\n") == 11
+
+
+def test_protocol_and_demuxer_options_of_a_url_are_known_to_be_used() -> None:
+    """What FFmpeg's own option tables say is taken opening a URL: the rtsp demuxer's
+    rtsp_transport, the http protocol's headers, udp's fifo_size, tcp's and tls's options below
+    a network protocol; a typo of any is not."""
+    from vtrack.io.ffoptions import input_protocols, unused_options
+
+    keys = ["rtsp_transport", "rtsp_flags", "probesize", "rtsp_transprt"]
+    assert unused_options(keys, "rtsp", input_protocols("rtsp://cam/1", False)) == \
+        ["rtsp_transprt"]
+    keys = ["headers", "tcp_nodelay", "tls_verify", "fifo_size", "header"]
+    assert unused_options(keys, "hls", input_protocols("https://host/a.m3u8", False)) == \
+        ["header"]
+    assert unused_options(["fifo_size", "blocksize"], "mpegts",
+                          input_protocols("udp://127.0.0.1:5000", False)) == ["blocksize"]
+    assert unused_options(["blocksize"], "mpegts", input_protocols("-", True)) == ["blocksize"]
+
+
 def test_a_stream_or_stdin_without_init_asks_for_init_not_a_sidecar(tmp_path: Path) -> None:
     for spec in ("udp://127.0.0.1:9", "-"):
         done = _run([spec, "-c", "s2", "-o", str(tmp_path / "o")], input=b"")

@@ -322,8 +322,8 @@ def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) ->
         assert "--start" in line and "2.5s" in line, line
     line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
                                  "2s", "-o", str(tmp_path / "bad")))
-    assert line.endswith("--start 2s: " + f"{clip.path} has no frame 60 (frames are numbered "
-                         "from 0)")
+    assert line.endswith("--start 2s: " + f"{clip.path} has no frame at or after 2 s (it ends "
+                         "before)")
     assert not (tmp_path / "bad").exists()
 
     folder = tmp_path / "in"
@@ -340,6 +340,50 @@ def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) ->
     assert report.returncode == 0, report.stderr
     summary = (tmp_path / "report" / "summary.csv").read_text().splitlines()
     assert summary[1].split(",")[4] == "25"  # frames_evaluated: frames 15..39
+
+
+def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
+        tmp_path: Path) -> None:
+    """``--start Ts`` on a variable-frame-rate video counted frames at the stream's nominal
+    rate (100 fps here: frame 100 of 40, refused); it starts at the first frame whose
+    timestamp is at or after T, with that frame's ground-truth box."""
+    import csv
+    import json
+    from fractions import Fraction
+
+    import av
+
+    from vtrack.scenes import make_scene, write_groundtruth
+
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=40, fps=30)
+    # 20 frames 10 ms apart (0 .. 0.19 s), a pause, then 20 frames 100 ms apart (0.3 .. 2.2 s)
+    times_ms = [10 * i for i in range(20)] + [300 + 100 * i for i in range(20)]
+    clip = tmp_path / "vfr.mp4"
+    with av.open(str(clip), "w") as out:
+        stream = out.add_stream("libx264", rate=30, options={"preset": "ultrafast"})
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
+        stream.codec_context.time_base = stream.time_base = Fraction(1, 1000)
+        for ms, picture in zip(times_ms, scene.frames(), strict=True):
+            frame = av.VideoFrame.from_ndarray(picture, format="bgr24")
+            frame.pts = ms
+            out.mux(stream.encode(frame))
+        out.mux(stream.encode())
+    gt = tmp_path / "vfr.gt.txt"
+    write_groundtruth(scene, gt)
+    for start, frame, time_s in (("1s", 27, 1.0), ("0.25s", 20, 0.3), ("0.05s", 5, 0.05)):
+        done = vtrack("run", str(clip), "--gt", str(gt), "-c", "s2", "--start", start, "-q",
+                      "--no-video", "-o", str(tmp_path / start))
+        assert done.returncode == 0, done.stderr
+        with (tmp_path / start / "track.csv").open(newline="") as handle:
+            rows = list(csv.DictReader(handle))
+        assert [int(r["frame"]) for r in rows] == list(range(frame, 40))
+        assert float(rows[0]["time_s"]) == pytest.approx(time_s, abs=1e-6)
+        assert json.loads((tmp_path / start / "run.json").read_text())["start_frame"] == frame
+    line = one_error_line(vtrack("run", str(clip), "--gt", str(gt), "--start", "2.25s",
+                                 "-o", str(tmp_path / "past")))
+    assert line.endswith(f"--start 2.25s: {clip} has no frame at or after 2.25 s (it ends "
+                         "before)"), line
+    assert not (tmp_path / "past").exists()
 
 
 @pytest.fixture(scope="module")

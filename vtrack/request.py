@@ -36,8 +36,9 @@ class RunRequest:
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
     seeds the stochastic stages; ``start`` is the first frame tracked (the input's 0-based
     frame number; the frames before it are decoded and skipped, as ``ffmpeg -ss`` skips time);
-    ``start_s``, when set, gives it as a time instead (``--start 2.5s``): the first frame at or
-    after that many seconds at the input's frame rate (:meth:`start_frame`);
+    ``start_s``, when set, gives it as a time instead (``--start 2.5s``): the first frame whose
+    timestamp is at or after that many seconds (found as the run reads the input; a variable
+    frame rate is followed);
     ``max_frames`` stops after that many tracked frames; ``max_s``, when set, gives that as a
     duration instead (``--frames 10s``): the first ``ceil(max_s * fps)`` frames
     (:meth:`frame_limit`).
@@ -145,13 +146,16 @@ class RunRequest:
         0's, is then not the target's first box)."""
         return bool(self.start or self.start_s)
 
-    def start_frame(self, fps: float | None) -> int:
-        """The first frame to track: ``start``, or for ``start_s`` the first frame at or after
-        that time at ``fps`` frames a second (InputError when the input has no frame rate)."""
+    def start_estimate(self, fps: float | None) -> int:
+        """The first frame tracked as a progress bar can tell before the frames are read:
+        ``start``, or for ``start_s`` the first frame at or after that time at ``fps`` frames a
+        second (0 without a frame rate). Exact for a constant rate; the run itself takes the
+        first frame whose timestamp is at or after ``start_s``."""
         if self.start_s is None:
             return self.start
-        return max(0, math.ceil(self.start_s * self._rate(fps, f"--start {self.start_text}",
-                                                          "--start N") - 1e-6))
+        if fps is None or not math.isfinite(fps) or fps <= 0:
+            return 0
+        return max(0, math.ceil(self.start_s * fps - 1e-6))
 
     def frame_limit(self, fps: float | None) -> int | None:
         """How many frames to track at most (None: all): ``max_frames``, or for ``max_s`` the

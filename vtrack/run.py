@@ -350,7 +350,7 @@ class _Resolved:
     init_from: str | None = None
     #: The input's and ground truth's identity when the run started (run.json ``identity``).
     identity: dict[str, Any] = field(default_factory=dict)
-    #: The first frame tracked (``--start``, a time found at the input's frame rate).
+    #: The first frame tracked (``--start``; a time found in the frames' timestamps).
     start: int = 0
     #: How many frames to track at most (``--frames``, a duration counted at the frame rate).
     max_frames: int | None = None
@@ -402,12 +402,12 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
-        # a time (--start 2.5s, --frames 10s) needs the input's frame rate: that input opens
-        # first
+        # a time (--start 2.5s: the frames' timestamps; --frames 10s: the frame rate) needs
+        # the input: that input opens first
         timed = request.start_s is not None or request.max_s is not None
         source: Source | None = _open(request, signals) if timed else None
         try:
-            resolved = _resolve(request, None if source is None else source.info.fps)
+            resolved = _resolve(request, source)
             if source is None:
                 source = _open(request, signals)
         except BaseException:
@@ -538,10 +538,12 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
     return writers
 
 
-def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
-    """Build the chain, read the ground truth, settle the first frame (``fps``: the input's
-    frame rate, for a start time) and the initial box (user errors raise before the output
-    folder is touched)."""
+def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
+    """Build the chain, read the ground truth, settle the first frame and the initial box
+    (user errors raise before the output folder is touched). A time (``--start 2.5s``,
+    ``--frames 10s``) needs the opened ``source``: a start time is found in its frames' own
+    timestamps (:meth:`Source.skip_to`, which decodes up to it), a duration at its frame
+    rate."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     warnings: list[str] = []
@@ -562,7 +564,7 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
     init_box, init_from = request.init_box, request.init_from or "--init"
     if init_box is not None and request.init_from is None:
         pipeline.refuse_a_first_box(f"--init: {request.config.name}", "leave --init out")
-    start = request.start_frame(fps)
+    start = _first_frame(request, source)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
@@ -588,7 +590,22 @@ def _resolve(request: RunRequest, fps: float | None = None) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
-                     request.file_identities(), start, request.frame_limit(fps), warnings)
+                     request.file_identities(), start,
+                     request.frame_limit(None if source is None else source.info.fps), warnings)
+
+
+def _first_frame(request: RunRequest, source: Source | None) -> int:
+    """The first frame to track: ``--start N``, or for ``--start Ts`` the first frame of
+    ``source`` whose timestamp is at or after T (decoded up to it: a variable frame rate is
+    followed, where T x fps would miss). InputError when the input ends before T."""
+    if request.start_s is None:
+        return request.start
+    assert source is not None, "a start time needs the opened input"
+    found = source.skip_to(request.start_s)
+    if found is None:
+        raise InputError(f"--start {request.start_text}: {request.input} has no frame at or "
+                         f"after {request.start_s:g} s (it ends before)")
+    return found
 
 
 def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, Iterator[Frame]]:
@@ -596,7 +613,7 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
     (``--init``, else the input's sidecar, else the ground truth's box of the first frame
     tracked) and the frames from ``--start`` on, at most ``--frames`` of them. ConfigError or
     InputError as ``vtrack run`` gives them (no box for a tracker that needs one, ...)."""
-    resolved = _resolve(request, source.info.fps)
+    resolved = _resolve(request, source)
     return resolved.init_box, _frames_to_track(request, resolved, source)
 
 

@@ -103,7 +103,7 @@ class _Reporter:
     def on_open(self, info: InputInfo) -> None:
         self.total = info.frame_count
         if self.total is not None:
-            self.total = max(self.total - self.job.request.start_frame(info.fps), 0)
+            self.total = max(self.total - self.job.request.start_estimate(info.fps), 0)
             if self.job.request.max_frames is not None:
                 self.total = min(self.total, self.job.request.max_frames)
         self._send(0)

@@ -159,7 +159,7 @@ class FrameProgress(_Shown):
                  period: float = STATS_PERIOD) -> None:
         self.quiet = quiet
         self.max_frames = max_frames
-        #: frames skipped before tracking (--start), given the input's frame rate
+        #: frames skipped before tracking (--start), estimated from the input's frame rate
         self.start = start
         self.period = period
         self.info: InputInfo | None = None

@@ -73,7 +73,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "mpegts, h264, mjpeg, rtsp ...).")
 @click.option("--input-option", "input_options", multiple=True, metavar="KEY=VALUE",
               help="An FFmpeg demuxer or protocol option (as ffmpeg -KEY VALUE before -i; "
-                   "repeatable), e.g. rtsp_transport=tcp, probesize=32, fflags=nobuffer.")
+                   "repeatable), e.g. rtsp_transport=tcp, probesize=32, fflags=nobuffer. "
+                   "One FFmpeg did not use opening the input is refused.")
 @click.option("--timeout", "timeout_s", type=Seconds(min=0.1, max=3600),
               default=None, metavar="SECONDS",
               help="A network input that does not open, or sends nothing, this long ends the "
@@ -101,8 +102,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
-              "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame at "
-              "or after it, at the input's frame rate). The target's box in it: --init's "
+              "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame "
+              "whose timestamp is at or after it). The target's box in it: --init's "
               "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
               "0's). Earlier frames are decoded and skipped.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
@@ -177,7 +178,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         live=live,
         video_out=video_out,
     )
-    progress = FrameProgress(quiet, request.max_frames, request.start_frame, stats_period)
+    progress = FrameProgress(quiet, request.max_frames, request.start_estimate, stats_period)
     try:
         summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
                       overwrite=overwrite)

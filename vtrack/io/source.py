@@ -8,6 +8,7 @@ leaving its ``with`` block) stops that thread and releases the file, also mid-st
 
 from __future__ import annotations
 
+import itertools
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
@@ -18,6 +19,10 @@ from vtrack.io.files import Closing
 from vtrack.io.threads import KeepingUp, Prefetcher
 
 InputKind = Literal["video", "images", "raw"]
+
+#: Seconds a frame's ``time_s`` may fall short of a time and still count as at it (rounding:
+#: frame 15 of a 30 fps stream is at 0.5 s, whatever its float says).
+TIME_SLACK_S = 1e-6
 
 
 @dataclass
@@ -72,6 +77,8 @@ class Source(Closing, ABC):
         self.warnings: list[str] = []
         self._prefetch: Prefetcher[Frame] | KeepingUp[Frame] | None = None
         self._closed = False
+        #: After :meth:`skip_to`: the frame it stopped at and the frames after it.
+        self._resumed: Iterator[Frame] | None = None
 
     @property
     def frames_skipped(self) -> int:
@@ -91,6 +98,9 @@ class Source(Closing, ABC):
     def __iter__(self) -> Iterator[Frame]:
         if self._closed:
             raise RuntimeError(f"{self.info.path}: the source is closed")
+        if self._resumed is not None:  # the pass skip_to began
+            resumed, self._resumed = self._resumed, None
+            return resumed
         if self._prefetch is not None:
             raise RuntimeError(f"{self.info.path}: a source can be iterated only once")
         name = f"vtrack-read:{self.info.name}"
@@ -98,6 +108,19 @@ class Source(Closing, ABC):
                           if self.live
                           else Prefetcher(self._frames(), self.depth, name))
         return iter(self._prefetch)
+
+    def skip_to(self, seconds: float) -> int | None:
+        """Decode and drop the frames before ``seconds`` (their ``time_s``, the input's own
+        timestamps, so a variable frame rate is followed; :data:`TIME_SLACK_S` of rounding
+        allowed): the index of the first frame at or after it, which iterating the source then
+        hands over first; None when the input ends before. Called instead of a first
+        ``iter()``; a broken input raises as iterating does."""
+        frames = iter(self)
+        for frame in frames:
+            if frame.time_s >= seconds - TIME_SLACK_S:
+                self._resumed = itertools.chain((frame,), frames)
+                return frame.index
+        return None
 
     @property
     def frames_passed(self) -> int:

@@ -42,6 +42,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
+from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import os_reason, piped_stdin
 from vtrack.io.follow import GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
@@ -326,6 +327,20 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
     return f"{path}: not a video FFmpeg can decode ({reason})"
 
 
+def _refuse_unused_options(path: str, how: FFmpegInput,
+                           container: av.container.InputContainer) -> None:
+    """InputError naming the first ``--input-option`` FFmpeg had no use for opening ``path``
+    (it ignores those without a word; :mod:`vtrack.io.ffoptions`)."""
+    demuxer = container.format.name
+    protocols = input_protocols(path, _python_file(container) is not None)
+    unused = unused_options([key for key, _ in how.options], demuxer, protocols)
+    if unused:
+        read = f"its {demuxer} demuxer" + "".join(f", the {p} protocol" for p in protocols)
+        raise InputError(f"--input-option {unused[0]}: FFmpeg did not use it opening {path} "
+                         f"(not an option of {read} or of every input; ffmpeg -h "
+                         f"demuxer={demuxer.split(',')[0]} lists the demuxer's)")
+
+
 class VideoSource(Source):
     """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
     threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
@@ -357,6 +372,7 @@ class VideoSource(Source):
     def _open(self, path: str, container: av.container.InputContainer, live: bool
               ) -> InputInfo:
         """Pick the video stream, decode the first frame, describe the input."""
+        _refuse_unused_options(path, self._how, container)
         if not container.streams.video:
             kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
