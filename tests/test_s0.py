@@ -27,12 +27,12 @@ from vtrack.filters import (
     Point,
     motion_model,
 )
-from vtrack.frame import BgrFrame, I420Frame
+from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Box, Window, iou
 from vtrack.io import open_source
 from vtrack.overlays import SearchWindow
 from vtrack.pipeline import FrameResult, Pipeline
-from vtrack.scenes import Scene
+from vtrack.scenes import Scene, make_scene
 from vtrack.stages.backproject import BackProject, box_mean, bp_mass
 from vtrack.stages.base import Stage, TargetModel, TrackContext, TrackState
 from vtrack.stages.colour import Hue
@@ -509,3 +509,26 @@ def test_the_score_is_never_negative(scene_factory, config: str, scene: tuple) -
     scores of -0.008 were written (bp_mass keeps its sign)."""
     results = track(scene_factory(*scene, 60, 30.0), config, i420=True)
     assert all(r.score >= 0 for r in results)
+
+
+@pytest.mark.parametrize("config", ["s0-fixed", "s1"])
+@pytest.mark.parametrize("grey_frame", [False, True])
+def test_hue_trackers_without_a_mask_refuse_grey_footage(config: str, grey_frame: bool) -> None:
+    """S0-fixed (the paper has no saturation mask) and S1 took every grey pixel's hue as 0:
+    on grey footage both reported 'tracking' on every frame with full confidence while the box
+    walked into a corner (AUC 0.02). Now they refuse it at the first frame, as s0 does."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=10)
+    colour = list(scene.frames())[:2]
+    grey = [cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) for image in colour]
+    frames = (GrayFrame(i, i / 30, g) if grey_frame
+              else BgrFrame(i, i / 30, cv2.cvtColor(g, cv2.COLOR_GRAY2BGR))
+              for i, g in enumerate(grey))
+    pipeline = Pipeline(load_config(config).build())
+    first = scene.boxes[0]
+    assert first is not None
+    with pytest.raises(InputError, match="has a colour .grey footage"):
+        list(pipeline.track(frames, first))
+    # the same frames in colour are taken
+    coloured = (BgrFrame(i, i / 30, image) for i, image in enumerate(colour))
+    results = list(Pipeline(load_config(config).build()).track(coloured, first))
+    assert len(results) == 2 and results[0].state == TrackState.TRACKING

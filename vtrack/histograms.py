@@ -5,6 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from vtrack.errors import InputError
+
 
 def hue_histogram(
     feature: np.ndarray, mask: np.ndarray | None, bins: int, levels: int
@@ -31,3 +33,16 @@ def bhattacharyya_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     totals = np.sqrt(p.sum(axis=1) * q.sum())
     overlap = np.sqrt(p * q).sum(axis=1)
     return np.divide(overlap, totals, out=np.zeros_like(overlap), where=totals > 0)
+
+
+def refuse_colourless(bgr: np.ndarray, stage: str, box_text: str) -> None:
+    """InputError when no pixel of ``bgr`` (the initial box's pixels, BGR or grey) has a hue:
+    every pixel's three channels are equal (grey footage), so a hue histogram holds one bin
+    whatever the target is, and a hue tracker follows nothing while it reports tracking."""
+    if bgr.ndim == 3 and bgr.shape[2] == 3:
+        blue, green, red = cv2.split(bgr)
+        if cv2.countNonZero(cv2.absdiff(blue, green)) or cv2.countNonZero(cv2.absdiff(green, red)):
+            return
+    raise InputError(
+        f"{stage}: no pixel of the initial box {box_text} has a colour (grey footage?): a hue "
+        "tracker has nothing to follow; try --config robust or s2")

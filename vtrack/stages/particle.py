@@ -35,7 +35,7 @@ import numpy as np
 from vtrack.errors import InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
-from vtrack.histograms import bhattacharyya_rows, hue_histogram
+from vtrack.histograms import bhattacharyya_rows, hue_histogram, refuse_colourless
 from vtrack.overlays import Particles
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
@@ -182,6 +182,7 @@ class ParticleFilter(Stage):
                 f"stage '{self.name}': initial box {tuple(box)} is outside the "
                 f"{frame.width}x{frame.height} frame"
             )
+        refuse_colourless(frame.bgr(window), self.name, box.text())
         # S1 item 1: target feature = hue histogram of the first frame's box.
         first = hue_windows(frame, [window])[0]
         self._target = hue_histogram(first, None, self.bins, HUE_LEVELS).astype(np.float64)

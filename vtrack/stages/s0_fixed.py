@@ -31,6 +31,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import Box, Window
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
+from vtrack.histograms import refuse_colourless
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
@@ -93,6 +94,8 @@ class HueBpFixed(Stage):
         x, y, w, h, cx, cy = integer_window(box)
         record.size = (w, h)
         hue, mask = self._window(ctx, record, x, y, w, h, cx, cy)
+        assert ctx.window is not None
+        refuse_colourless(ctx.frame.bgr(ctx.window), self.name, box.text())
         record.hist = s0.histogram(hue, mask, self.hist_bits)
         record.hist_max = int(record.hist.max())
         if record.hist_max == 0:
