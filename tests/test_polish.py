@@ -342,13 +342,10 @@ def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) ->
     assert summary[1].split(",")[4] == "25"  # frames_evaluated: frames 15..39
 
 
-def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
-        tmp_path: Path) -> None:
-    """``--start Ts`` on a variable-frame-rate video counted frames at the stream's nominal
-    rate (100 fps here: frame 100 of 40, refused); it starts at the first frame whose
-    timestamp is at or after T, with that frame's ground-truth box."""
-    import csv
-    import json
+def _variable_rate_clip(tmp_path: Path) -> tuple[Path, Path]:
+    """A 40-frame H.264 clip at a variable rate, and its ground truth: 20 frames 10 ms apart
+    (0 .. 0.19 s), a pause, then 20 frames 100 ms apart (0.3 .. 2.2 s); the stream's nominal
+    rate comes out as 100 fps."""
     from fractions import Fraction
 
     import av
@@ -356,7 +353,6 @@ def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
     from vtrack.scenes import make_scene, write_groundtruth
 
     scene = make_scene("smooth", seed=3, width=160, height=120, frames=40, fps=30)
-    # 20 frames 10 ms apart (0 .. 0.19 s), a pause, then 20 frames 100 ms apart (0.3 .. 2.2 s)
     times_ms = [10 * i for i in range(20)] + [300 + 100 * i for i in range(20)]
     clip = tmp_path / "vfr.mp4"
     with av.open(str(clip), "w") as out:
@@ -370,6 +366,18 @@ def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
         out.mux(stream.encode())
     gt = tmp_path / "vfr.gt.txt"
     write_groundtruth(scene, gt)
+    return clip, gt
+
+
+def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
+        tmp_path: Path) -> None:
+    """``--start Ts`` on a variable-frame-rate video counted frames at the stream's nominal
+    rate (100 fps here: frame 100 of 40, refused); it starts at the first frame whose
+    timestamp is at or after T, with that frame's ground-truth box."""
+    import csv
+    import json
+
+    clip, gt = _variable_rate_clip(tmp_path)
     for start, frame, time_s in (("1s", 27, 1.0), ("0.25s", 20, 0.3), ("0.05s", 5, 0.05)):
         done = vtrack("run", str(clip), "--gt", str(gt), "-c", "s2", "--start", start, "-q",
                       "--no-video", "-o", str(tmp_path / start))
@@ -384,6 +392,31 @@ def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
     assert line.endswith(f"--start 2.25s: {clip} has no frame at or after 2.25 s (it ends "
                          "before)"), line
     assert not (tmp_path / "past").exists()
+
+
+def test_a_duration_in_a_variable_rate_video_ends_by_the_timestamps(tmp_path: Path) -> None:
+    """``--frames Ts`` on a variable-frame-rate video took ceil(T x nominal fps) frames (50 of
+    a 100 fps guess: 0.5 s ran to the end of a 2.2 s clip); it tracks the frames whose
+    timestamp is less than T past the first tracked one's, at least that one, and the ground
+    truth beyond is not warned of."""
+    import csv
+    import json
+
+    clip, gt = _variable_rate_clip(tmp_path)
+    cases = ((None, "0.5s", range(0, 22)),  # 0 .. 0.19 s, 0.3 and 0.4 s
+             ("1s", "0.5s", range(27, 32)),  # 1.0 .. 1.4 s
+             ("5", "0.25s", range(5, 20)),  # 0.05 .. 0.19 s: 0.3 s is the end, not in
+             ("0.2s", "0.05s", range(20, 21)),  # 0.3 s, none other within 0.05 s
+             (None, "3s", range(0, 40)))
+    for start, span, frames in cases:
+        out = tmp_path / f"{start}-{span}"
+        done = vtrack("run", str(clip), "--gt", str(gt), "-c", "s2", "--frames", span, "-q",
+                      "--no-video", "-o", str(out), *(("--start", start) if start else ()))
+        assert done.returncode == 0, done.stderr
+        with (out / "track.csv").open(newline="") as handle:
+            assert [int(r["frame"]) for r in csv.DictReader(handle)] == list(frames), out
+        record = json.loads((out / "run.json").read_text())
+        assert (record["status"], record["warnings"]) == ("complete", []), out
 
 
 @pytest.fixture(scope="module")

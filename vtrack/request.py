@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
-from vtrack.errors import InputError
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
@@ -40,8 +39,8 @@ class RunRequest:
     timestamp is at or after that many seconds (found as the run reads the input; a variable
     frame rate is followed);
     ``max_frames`` stops after that many tracked frames; ``max_s``, when set, gives that as a
-    duration instead (``--frames 10s``): the first ``ceil(max_s * fps)`` frames
-    (:meth:`frame_limit`).
+    duration instead (``--frames 10s``): the frames whose timestamp is less than ``max_s``
+    past the first tracked one's (a variable frame rate is followed; at least one frame).
     """
 
     input: str
@@ -156,23 +155,6 @@ class RunRequest:
         if fps is None or not math.isfinite(fps) or fps <= 0:
             return 0
         return max(0, math.ceil(self.start_s * fps - 1e-6))
-
-    def frame_limit(self, fps: float | None) -> int | None:
-        """How many frames to track at most (None: all): ``max_frames``, or for ``max_s`` the
-        frames of that many seconds at ``fps`` frames a second, at least one (InputError when
-        the input has no frame rate)."""
-        if self.max_s is None:
-            return self.max_frames
-        return max(1, math.ceil(self.max_s * self._rate(fps, f"--frames {self.max_s:g}s",
-                                                        "--frames N") - 1e-6))
-
-    def _rate(self, fps: float | None, option: str, instead: str) -> float:
-        """``fps``, or InputError naming ``option`` when the input has no frame rate to turn
-        its time into frames (``instead``: the option's form in frames)."""
-        if fps is None or not math.isfinite(fps) or fps <= 0:
-            raise InputError(f"{option}: {self.input} has no frame rate to turn that time into "
-                             f"frames by; give frames ({instead})")
-        return fps
 
     def file_identities(self) -> dict[str, Any]:
         """The identity (:func:`~vtrack.io.identity.file_identity`) of the input, the ground

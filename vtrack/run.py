@@ -69,6 +69,7 @@ from vtrack.io import (
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
+from vtrack.io.source import TIME_SLACK_S
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.latency import Latencies
@@ -226,11 +227,37 @@ def _from(frames: Iterator[Frame], start: int, what: str) -> Iterator[Frame]:
         yield frame
 
 
-def _limited(frames: Iterator, limit: int | None) -> Iterator:
-    for n, frame in enumerate(frames):
-        if limit is not None and n >= limit:
-            return
-        yield frame
+@dataclass
+class _Span:
+    """``--frames``: how much a run tracks from its first frame on: at most ``count`` frames,
+    or (``seconds``, as ``ffmpeg -t``) the frames whose timestamp is less than ``seconds``
+    past the first one's, so a variable frame rate is followed (the first frame is always
+    taken; :data:`TIME_SLACK_S` of rounding: a constant rate gives ``ceil(seconds x fps)``
+    frames); neither: every frame."""
+
+    count: int | None = None
+    seconds: float | None = None
+    #: A frame at or past ``seconds`` came: the duration, not the input, ended the run.
+    ended_by_time: bool = False
+
+    @property
+    def given(self) -> bool:
+        """Whether ``--frames`` was given."""
+        return self.count is not None or self.seconds is not None
+
+    def take(self, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """``frames`` up to the end of the span."""
+        end: float | None = None
+        for n, frame in enumerate(frames):
+            if self.count is not None and n >= self.count:
+                return
+            if self.seconds is not None:
+                if end is None:
+                    end = frame.time_s + self.seconds - TIME_SLACK_S
+                elif frame.time_s >= end:
+                    self.ended_by_time = True
+                    return
+            yield frame
 
 
 def _fmt(value: float | None) -> float | None:
@@ -352,8 +379,9 @@ class _Resolved:
     identity: dict[str, Any] = field(default_factory=dict)
     #: The first frame tracked (``--start``; a time found in the frames' timestamps).
     start: int = 0
-    #: How many frames to track at most (``--frames``, a duration counted at the frame rate).
-    max_frames: int | None = None
+    #: How much to track from ``start`` on (``--frames``: a count, or a duration measured in
+    #: the frames' timestamps).
+    span: _Span = field(default_factory=_Span)
     #: What the run warns of before it tracks (ground truth whose every row is ignored).
     warnings: list[str] = field(default_factory=list)
 
@@ -402,9 +430,8 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
-        # a time (--start 2.5s: the frames' timestamps; --frames 10s: the frame rate) needs
-        # the input: that input opens first
-        timed = request.start_s is not None or request.max_s is not None
+        # a start time (--start 2.5s) is found in the frames' timestamps: that input opens first
+        timed = request.start_s is not None
         source: Source | None = _open(request, signals) if timed else None
         try:
             resolved = _resolve(request, source)
@@ -540,10 +567,9 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
 
 def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     """Build the chain, read the ground truth, settle the first frame and the initial box
-    (user errors raise before the output folder is touched). A time (``--start 2.5s``,
-    ``--frames 10s``) needs the opened ``source``: a start time is found in its frames' own
-    timestamps (:meth:`Source.skip_to`, which decodes up to it), a duration at its frame
-    rate."""
+    (user errors raise before the output folder is touched). A start time (``--start 2.5s``)
+    needs the opened ``source``: it is found in its frames' own timestamps
+    (:meth:`Source.skip_to`, which decodes up to it)."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     warnings: list[str] = []
@@ -590,8 +616,8 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
-                     request.file_identities(), start,
-                     request.frame_limit(None if source is None else source.info.fps), warnings)
+                     request.file_identities(), start, _Span(request.max_frames, request.max_s),
+                     warnings)
 
 
 def _first_frame(request: RunRequest, source: Source | None) -> int:
@@ -620,7 +646,7 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
 def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
                      ) -> Iterator[Frame]:
     """``source``'s frames from the resolved first one on, at most the resolved number."""
-    return _limited(_from(iter(source), resolved.start, request.input), resolved.max_frames)
+    return resolved.span.take(_from(iter(source), resolved.start, request.input))
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -781,7 +807,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
-        stopped = resolved.max_frames is not None and span >= resolved.max_frames  # --frames
+        limit = resolved.span.count
+        stopped = (limit is not None and span >= limit) or resolved.span.ended_by_time  # --frames
         if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (
@@ -796,7 +823,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
         past = [f for f in resolved.mot_gt if f >= start + frames]
-        if past and status == STATUS_COMPLETE and resolved.max_frames is None:
+        if past and status == STATUS_COMPLETE and not resolved.span.given:
             summary.warnings.append(
                 f"{request.gt_path}: ground truth has boxes in "
                 f"{plural(len(past), 'frame')} past the input's {plural(frames, 'frame')} "

@@ -107,8 +107,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
               "0's). Earlier frames are decoded and skipped.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
-              help="Stop after N frames, or after T seconds of the input at its frame rate "
-                   "(10s, like ffmpeg -t: the first ceil(T x fps) frames from --start).")
+              help="Stop after N frames, or after T seconds of the input (10s, like ffmpeg "
+                   "-t: the frames whose timestamp is less than T past the first tracked "
+                   "one's, so a variable frame rate is followed).")
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
