@@ -370,6 +370,40 @@ def test_an_input_option_ffmpeg_does_not_use_is_refused(tmp_path: Path) -> None:
     assert (tmp_path / "ok" / "track.csv").read_bytes().count(b"\n") == 11
 
 
+def test_ffmpeg_input_options_are_refused_for_inputs_ffmpeg_does_not_open(
+        tmp_path: Path) -> None:
+    """``-f mjpeg`` or ``--input-option probesize=32`` with an image folder (read image by
+    image) or a capture device (read through OpenCV) was ignored without a word; now one line
+    names the option and the kind of input, exit 2, nothing written."""
+    from vtrack.errors import ConfigError
+    from vtrack.io import open_source
+    from vtrack.io.video import FFmpegInput
+    from vtrack.scenes import write_image_sequence
+
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=10, fps=30)
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    for given, flag in ((["-f", "mjpeg"], "--format"),
+                        (["--input-option", "probesize=32"], "--input-option")):
+        out = tmp_path / flag
+        done = _run([str(folder), *given, "-c", "s2", "--init", box, "--no-video", "-o",
+                     str(out)])
+        lines = done.stderr.decode().strip().splitlines()
+        assert done.returncode == 2 and lines == [
+            f"vtrack: error: {flag} is for inputs FFmpeg reads; {folder} is an image folder, "
+            "whose images are read one by one"], done.stderr
+        assert not out.exists()
+    for how, flag in ((FFmpegInput(format="v4l2"), "--format"),
+                      (FFmpegInput(options=(("framerate", "30"),)), "--input-option")):
+        with pytest.raises(ConfigError) as refused:
+            open_source("/dev/video9", ffmpeg=how)
+        assert str(refused.value) == (f"{flag} is for inputs FFmpeg reads; /dev/video9 is a "
+                                      "capture device, read through OpenCV's V4L2 backend")
+    done = _run([str(folder), "-c", "s2", "--init", box, "--no-video", "-o",
+                 str(tmp_path / "ok")])
+    assert done.returncode == 0, done.stderr
+
+
 def test_protocol_and_demuxer_options_of_a_url_are_known_to_be_used() -> None:
     """What FFmpeg's own option tables say is taken opening a URL: the rtsp demuxer's
     rtsp_transport, the http protocol's headers, udp's fifo_size, tcp's and tls's options below

@@ -150,7 +150,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         raise click.UsageError(f"--config given {len(config_specs)} times "
                                f"({', '.join(config_specs)}): a run tracks with one config; "
                                "vtrack batch runs several")
-    _refuse_options_the_input_ignores(raw_size is not None, input_format, input_options)
+    _refuse_pix_fmt_without_raw(raw_size is not None)
     config_spec = config_specs[0] if config_specs else None
     config = load_config(config_spec).with_overrides(list(overrides))
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
@@ -205,18 +205,13 @@ def _say(line: str, err: bool) -> None:
         click.echo(line, err=err)
 
 
-def _refuse_options_the_input_ignores(raw: bool, input_format: str | None,
-                                      input_options: tuple[str, ...]) -> None:
-    """--pix-fmt describes --raw input only; --format and --input-option are FFmpeg's, which
-    raw input does not go through: given where they would be ignored, they are refused."""
+def _refuse_pix_fmt_without_raw(raw: bool) -> None:
+    """--pix-fmt describes --raw input only: given without it, it is refused (--format and
+    --input-option, FFmpeg's, are refused for inputs FFmpeg does not read by open_source)."""
     given = click.get_current_context().get_parameter_source("pix_fmt")
     if not raw and given == click.core.ParameterSource.COMMANDLINE:
         raise click.UsageError("--pix-fmt is the pixel format of raw input: give --raw WxH "
                                "too (a video file or image folder says its own)")
-    if raw and (input_format is not None or input_options):
-        flag = "--format" if input_format is not None else "--input-option"
-        raise click.UsageError(f"{flag} is for inputs FFmpeg reads; --raw input is read as "
-                               "bare frames without it")
 
 
 def parse_options(pairs: tuple[str, ...]) -> tuple[tuple[str, str], ...]:

@@ -32,7 +32,9 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     - ``-`` without ``raw``: a container on stdin (``vtrack run - < clip.mp4``, or piped);
     - anything else: a file, FIFO or URL FFmpeg can open (``ffmpeg`` says how); its frames
       carry their own timestamps, so ``fps`` is refused for it (ConfigError). A given ``fps``
-      must be a frame rate (> 0).
+      must be a frame rate (> 0). ``ffmpeg``'s ``format`` and ``options`` are refused
+      (ConfigError) for the inputs FFmpeg does not open: raw frames, an image folder, a
+      capture device.
 
     ``live`` (None: :func:`is_live`) makes the source hand over the frames its consumer keeps
     up with and pass over the others, counted (:attr:`Source.frames_passed`,
@@ -46,6 +48,11 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     if unfollowable:
         raise ConfigError(f"--follow reads a video file that is still being written; "
                           f"{unfollowable}")
+    given = "--format" if ffmpeg.format is not None else "--input-option" if ffmpeg.options \
+        else None
+    elsewhere = _not_through_ffmpeg(spec, raw) if given else None
+    if elsewhere:
+        raise ConfigError(f"{given} is for inputs FFmpeg reads; {elsewhere}")
     if raw is not None:
         if live:
             raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
@@ -84,4 +91,16 @@ def _not_followed(spec: str, raw: RawFormat | None) -> str | None:
         return f"{spec} is a stream, read until it ends (--timeout)"
     if os.path.isdir(spec):
         return f"{spec} is an image folder, read as it is when it opens"
+    return None
+
+
+def _not_through_ffmpeg(spec: str, raw: RawFormat | None) -> str | None:
+    """Why FFmpeg's input options (``--format``, ``--input-option``) cannot apply to ``spec``,
+    if so: it is not an input FFmpeg opens."""
+    if raw is not None:
+        return "--raw input is read as bare frames without it"
+    if device_number(spec) is not None:
+        return f"{spec} is a capture device, read through OpenCV's V4L2 backend"
+    if spec != "-" and not is_url(spec) and os.path.isdir(spec):
+        return f"{spec} is an image folder, whose images are read one by one"
     return None
