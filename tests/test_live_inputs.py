@@ -404,6 +404,32 @@ def test_ffmpeg_input_options_are_refused_for_inputs_ffmpeg_does_not_open(
     assert done.returncode == 0, done.stderr
 
 
+def test_nobuffer_is_refused_for_an_input_that_is_not_live(tmp_path: Path) -> None:
+    """``--input-option fflags=nobuffer`` (the --help's example) on an mp4 failed with "no frame
+    could be decoded": FFmpeg drops the packets it read while probing, here the clip's only
+    key frame; with a key frame every 5 frames, as here, the first 5 were lost without a word.
+    It is refused in one line for a file or stdin, nothing written; --live takes it."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4", preset="ultrafast", keyint=5)
+    common = ["-c", "s2", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video"]
+    for value in ("nobuffer", "+genpts+nobuffer"):
+        for spec, stdin in ((str(clip), None), ("-", clip.read_bytes())):
+            out = tmp_path / "refused"
+            done = _run([spec, "--input-option", f"fflags={value}", *common, "-o", str(out)],
+                        input=stdin)
+            lines = done.stderr.decode().strip().splitlines()
+            assert done.returncode == 2 and lines == [
+                f"vtrack: error: --input-option fflags={value}: FFmpeg drops the packets it "
+                f"reads probing {spec}, so its first frames would be lost; nobuffer is for "
+                "live streams (rtsp://, udp:// ..., or --live)"], done.stderr
+            assert not out.exists()
+    for given in (["--input-option", "fflags=-nobuffer"],
+                  ["--input-option", "fflags=nobuffer", "--live"]):
+        done = _run([str(clip), *given, *common, "-y", "-o", str(tmp_path / "taken")])
+        assert done.returncode == 0, done.stderr
+        assert (tmp_path / "taken" / "track.csv").read_bytes().count(b"\n") > 1
+
+
 def test_protocol_and_demuxer_options_of_a_url_are_known_to_be_used() -> None:
     """What FFmpeg's own option tables say is taken opening a URL: the rtsp demuxer's
     rtsp_transport, the http protocol's headers, udp's fifo_size, tcp's and tls's options below

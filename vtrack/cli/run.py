@@ -73,8 +73,10 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "mpegts, h264, mjpeg, rtsp ...).")
 @click.option("--input-option", "input_options", multiple=True, metavar="KEY=VALUE",
               help="An FFmpeg demuxer or protocol option (as ffmpeg -KEY VALUE before -i; "
-                   "repeatable), e.g. rtsp_transport=tcp, probesize=32, fflags=nobuffer. "
-                   "One FFmpeg did not use opening the input is refused.")
+                   "repeatable), e.g. rtsp_transport=tcp (rtsp://), probesize=32, "
+                   "fflags=nobuffer (a live stream: less delay; it drops what probing read, "
+                   "so it is refused for an input that is not live). One FFmpeg did not use "
+                   "opening the input is refused.")
 @click.option("--timeout", "timeout_s", type=Seconds(min=0.1, max=3600),
               default=None, metavar="SECONDS",
               help="A network input that does not open, or sends nothing, this long ends the "

@@ -31,6 +31,7 @@ place. Only a stream that really ends early is partial. Of several video streams
 from __future__ import annotations
 
 import itertools
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -341,12 +342,27 @@ def _refuse_unused_options(path: str, how: FFmpegInput,
                          f"demuxer={demuxer.split(',')[0]} lists the demuxer's)")
 
 
+def _refuse_nobuffer(path: str, how: FFmpegInput) -> None:
+    """InputError for ``fflags=nobuffer`` opening ``path``, an input that is not live: FFmpeg
+    then drops the packets it reads to probe it (less delay on a live stream), so a file's
+    first frames, up to a key frame after them, would be lost without a word (all of them in
+    a clip with one key frame), and ground truth would no longer line up."""
+    for key, value in how.options:
+        flags = re.findall(r"([+-]?)(\w+)", value)
+        if key == "fflags" and any(sign != "-" and name == "nobuffer" for sign, name in flags):
+            raise InputError(f"--input-option fflags={value}: FFmpeg drops the packets it reads "
+                             f"probing {path}, so its first frames would be lost; nobuffer is "
+                             "for live streams (rtsp://, udp:// ..., or --live)")
+
+
 class VideoSource(Source):
     """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
     threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
 
     def __init__(self, path: str, how: FFmpegInput | None = None, live: bool = False) -> None:
         self._how = how = how or FFmpegInput()
+        if not live:
+            _refuse_nobuffer(path, how)
         try:
             # ``-``: the container on stdin, through Python's file object so that FFmpeg may
             # seek in a redirected file (``< clip.mp4``) and reads a pipe as a stream
