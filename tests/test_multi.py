@@ -303,8 +303,9 @@ def test_quadratic_predictor_is_s3_eq_6_with_constant_velocity_fallbacks() -> No
 
 
 def points_frame(index: int, points: list[tuple[float, float]]) -> TrackContext:
-    """A context whose detections are 6x6 boxes centred on ``points``."""
-    ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((4, 4), np.uint8)),
+    """A context whose detections are 6x6 boxes centred on ``points``, in a 320x240 frame
+    (the generated scenes' size: a tracker drops what lies wholly outside the frame)."""
+    ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((240, 320), np.uint8)),
                        seed=0)
     ctx.detections = [Detection(Box.from_center(x, y, 6, 6), x, y, 36.0) for x, y in points]
     return ctx

@@ -31,7 +31,7 @@ import numpy as np
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
-from vtrack.io.limits import CONFIG_BYTES, read_text_bounded
+from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
 
@@ -131,6 +131,9 @@ def load_config(spec: str | Path | None = None) -> Config:
     if str(spec) in shipped:
         path = shipped[str(spec)]
     elif not _is_file(path, str(spec)):
+        kind = special_kind(path)
+        if kind is not None:
+            raise ConfigError(not_a_file(spec, kind, "config"))
         if path.is_dir():
             raise ConfigError(f"{spec}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):

@@ -16,6 +16,16 @@ def plural(count: int, noun: str, nouns: str | None = None) -> str:
     return f"{count} {noun}" if count == 1 else f"{count} {nouns or noun + 's'}"
 
 
+def number_text(value: float) -> str:
+    """A number for a user message: ``5``, ``0.25``, ``1e+06`` (six significant digits), or
+    Python's shortest exact form (``10.000000000000002``, ``320.0001``, ``1e-300``) when six
+    digits would show another number: a value a hair past a limit never reads as the limit."""
+    if isinstance(value, int):  # exact already (and may be too large for a float)
+        return str(value)
+    short = f"{value:g}"
+    return short if float(short) == value else repr(float(value))
+
+
 def printable(text: str) -> str:
     """``text`` with each control character (newline, tab, escape, ...) written as its Python
     escape (``\\n``): a name taken from the file system stays one line of a message, a table

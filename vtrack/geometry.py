@@ -11,7 +11,7 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, number_text
 
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
 #: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
@@ -146,8 +146,9 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
 
 def check_init_box(box: Box, width: int, height: int, where: str) -> None:
     """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
-    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it."""
-    shown = box.text()
+    ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it. The message shows
+    the box's numbers as given (rounding could put one onto the limit it breaks)."""
+    shown = ",".join(number_text(v) for v in box)
     if not all(math.isfinite(v) for v in box):
         raise ConfigError(f"{where}: the box {shown} holds a value that is not a finite number")
     if not box.is_valid():

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
 
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, number_text
 
 #: The largest seed of the stochastic stages (NumPy seeds 0 .. 2**32 - 1 as given, like
 #: ``numpy.random.seed``): ``--seed`` and ``seed=`` take 0 .. MAX_SEED.
@@ -138,8 +138,9 @@ class Param:
 
 
 def _number(value: float) -> str:
-    """A bound or value for messages and docs: ``5``, ``0.25``, ``1e+06``, ``1e-09``."""
+    """A bound or value for messages and docs: ``5``, ``0.25``, ``1e+06``, ``1e-09``; every
+    digit a value needs to differ from a bound it breaks (``10.000000000000002``)."""
     if isinstance(value, int) and not isinstance(value, bool):
         text = str(value)
         return text if len(text) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
-    return f"{value:g}"
+    return number_text(value)

@@ -792,7 +792,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         frames_passed=source.frames_passed,
         multi_target=resolved.pipeline.multi_target,
         error=error,
-        warnings=[*resolved.warnings, *source.warnings],
+        warnings=[*resolved.warnings, *source.warnings,
+                  *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
     )
     if frames == 0 and status == STATUS_COMPLETE:

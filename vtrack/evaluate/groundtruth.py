@@ -71,6 +71,17 @@ def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
 MAX_COORDINATE = 1e6
 
 
+def _check_coordinates(path: str | PathLike[str], number: int, line: str,
+                       values: list[float]) -> None:
+    """InputError naming ``path`` and line ``number`` when a finite coordinate of ``values``
+    lies beyond +-:data:`MAX_COORDINATE` (one rule for every box file vtrack reads)."""
+    if any(abs(v) > MAX_COORDINATE for v in values):
+        raise InputError(
+            f"{path} line {number}: coordinate beyond +-{MAX_COORDINATE:g} pixels in "
+            f"{_quote(line)}"
+        )
+
+
 class MultiTargetTruthError(InputError):
     """Many targets' ground truth (MOTChallenge) where one target's boxes were expected."""
 
@@ -109,11 +120,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             continue
         if not all(math.isfinite(v) for v in values):
             raise InputError(f"{path} line {number}: infinite coordinate in {_quote(line)}")
-        if any(abs(v) > MAX_COORDINATE for v in values):
-            raise InputError(
-                f"{path} line {number}: coordinate beyond +-{MAX_COORDINATE:g} pixels in "
-                f"{_quote(line)}"
-            )
+        _check_coordinates(path, number, line, values)
         if len(values) == 8:
             xs, ys = values[0::2], values[1::2]
             box = Box(min(xs), min(ys), max(xs) - min(xs), max(ys) - min(ys))
@@ -130,7 +137,8 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
     """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file.
 
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
-    finite numbers and the frame an integer >= 1. Further columns are passed through unchecked.
+    finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer >= 1.
+    Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
     for number, line in enumerate(_read_lines(path, "MOT"), start=1):
@@ -147,6 +155,7 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
             )
         if not all(math.isfinite(v) for v in values[:min_columns]):
             raise InputError(f"{path} line {number}: non-finite number in {_quote(line)}")
+        _check_coordinates(path, number, line, values[2:6])
         frame = values[0]
         if not frame.is_integer() or frame < 1:
             raise InputError(

@@ -33,6 +33,32 @@ def _mb(limit: int) -> str:
     return f"{limit / (1 << 20):g} MB" if limit >= 1 << 20 else f"{limit >> 10} KB"
 
 
+#: What :func:`special_kind` calls each kind of file that is neither a file nor a folder.
+_SPECIAL_KINDS = (
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def special_kind(path: str | os.PathLike[str]) -> str | None:
+    """What ``path`` is when it exists but is neither a regular file nor a folder: ``"a
+    FIFO"`` (a named pipe, a shell's ``<(...)``), ``"a character device"`` (``/dev/null``),
+    ``"a block device"`` or ``"a socket"``; None otherwise (also when it cannot be looked at)."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    return next((kind for test, kind in _SPECIAL_KINDS if test(mode)), None)
+
+
+def not_a_file(path: str | os.PathLike[str], kind: str, what: str) -> str:
+    """The message refusing ``path``, of ``kind`` (:func:`special_kind`), given as the ``what``
+    file: ``x: a FIFO, not a file: give the config as a file``."""
+    return f"{path}: {kind}, not a file: give the {what} as a file"
+
+
 def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> bytes:
     """The bytes of ``path`` if it holds at most ``limit`` of them. Raises InputError naming
     the file when it cannot be read or is larger (a device or pipe that never ends included:
@@ -42,7 +68,7 @@ def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -
     size = 0
     try:
         if stat.S_ISFIFO(os.stat(path).st_mode):  # opening one waits for a writer, maybe for ever
-            raise InputError(f"{path}: a FIFO, not a file: give the {what} as a file")
+            raise InputError(not_a_file(path, "a FIFO", what))
         with open(path, "rb") as handle:
             while size <= limit:
                 piece = handle.read(min(_PIECE, limit + 1 - size))

@@ -26,7 +26,7 @@ from typing import BinaryIO
 import cv2
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError, PartialInputError
+from vtrack.errors import ConfigError, InputError, PartialInputError, number_text
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
@@ -51,7 +51,7 @@ def checked_fps(fps: object, name: str = "--fps") -> float:
     naming it (``name``) otherwise."""
     number = isinstance(fps, Real) and not isinstance(fps, bool)
     if not (number and math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
-        shown = f"{fps:g}" if number else repr(fps)
+        shown = number_text(fps) if number else repr(fps)
         raise ConfigError(f"{name} {shown}: must be a frame rate from {MIN_FPS:g} to "
                           f"{MAX_FPS:g} frames per second")
     return float(fps)

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, plural
+from vtrack.errors import ConfigError, number_text, plural
 from vtrack.geometry import Window
 from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.scenes.render import (
@@ -560,5 +560,6 @@ def make_scene(
     if spec.frames > MAX_FRAMES:
         raise ConfigError(f"scene frames {spec.frames}: at most {MAX_FRAMES} (an hour at 30 fps)")
     if not (math.isfinite(spec.fps) and MIN_FPS <= spec.fps <= MAX_FPS):
-        raise ConfigError(f"scene fps {spec.fps:g}: must be from {MIN_FPS:g} to {MAX_FPS:g}")
+        raise ConfigError(f"scene fps {number_text(spec.fps)}: must be from {MIN_FPS:g} to "
+                          f"{MAX_FPS:g}")
     return scenario.build(spec)

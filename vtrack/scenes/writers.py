@@ -92,6 +92,23 @@ def _need_even(scene: Scene, what: str) -> None:
         )
 
 
+def _need_even_for(scene: Scene, layout: av.VideoFormat, what: str) -> None:
+    """ConfigError when ``layout`` (a pixel format of a 2x2 frame) halves the chroma planes'
+    width or height and the scene's is odd: yuv420p and nv12 need both even, yuv422p an even
+    width, yuv444p and gray neither."""
+    chroma = [c for c in layout.components if c.is_chroma]
+    half_width = any(c.width < 2 for c in chroma)
+    half_height = any(c.height < 2 for c in chroma)
+    if half_width and half_height:
+        _need_even(scene, what)
+    elif half_width and scene.width % 2:
+        raise ConfigError(f"{what} needs an even width, the scene is "
+                          f"{scene.width}x{scene.height}")
+    elif half_height and scene.height % 2:
+        raise ConfigError(f"{what} needs an even height, the scene is "
+                          f"{scene.width}x{scene.height}")
+
+
 def write_video(
     scene: Scene,
     path: str | Path,
@@ -128,11 +145,14 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
     if codec in ("libx264", "libx265") and preset not in X264_PRESETS:
         raise ConfigError(f"{path}: preset {preset!r}: choose one of {', '.join(X264_PRESETS)}")
     try:
-        av.VideoFormat(pix_fmt)
+        layout = av.VideoFormat(pix_fmt, 2, 2)
     except ValueError as exc:
         raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
-    if pix_fmt == "yuv420p":
-        _need_even(scene, f"{path}: pixel format yuv420p")
+    taken = [f.name for f in av.codec.Codec(codec, "w").video_formats or ()]
+    if taken and pix_fmt not in taken:
+        raise ConfigError(f"{path}: {codec} does not take pixel format {pix_fmt}; it takes "
+                          f"{', '.join(taken)}")
+    _need_even_for(scene, layout, f"{path}: pixel format {pix_fmt}")
 
 
 def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, codec: str,

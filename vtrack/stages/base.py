@@ -277,6 +277,11 @@ class Stage:
     def step(self, ctx: TrackContext) -> None:
         raise NotImplementedError
 
+    def notes(self) -> list[str]:
+        """What the stage warns of about the frames it has processed since ``start`` (one line
+        each; a run prints them and records them in ``run.json``). Default: nothing."""
+        return []
+
 
 
 _REGISTRY: dict[str, type[Stage]] = {}

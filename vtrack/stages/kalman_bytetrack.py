@@ -17,7 +17,8 @@ models (:data:`vtrack.filters.MOTION_MODELS`, on the box centre; the size is smo
    half hidden, a blob cut by the background model) against the confirmed tracks left, with
    IoU >= ``low_iou``: they continue tracks, never start one;
 4. tentative tracks against the high-score detections left, as in 2;
-5. every high-score detection still left starts a tentative track.
+5. every high-score detection still left starts a tentative track, unless it lies wholly
+   outside the frame.
 
 With ``colour_gate`` < 1, passes 2 and 4 also gate on colours, as DeepSORT (Wojke et al.,
 ICIP 2017, eq. 6) admits a pair only inside both its motion gate and its appearance gate, with
@@ -33,7 +34,7 @@ Life of a track: tentative -> confirmed after ``confirm`` measured frames (a ten
 missing a frame is deleted) -> coasting while unmeasured (it keeps its identity through short
 occlusions and is matched again as in 2, its gate widening with its uncertainty) -> deleted
 after more than ``max_coast`` frames in a row without a measurement, or once its box has left
-the frame.
+the frame: a track wholly outside the frame is never reported.
 
 The measurement noise of a detection grows with its size (``noise`` x the square root of its
 box area, in pixels, as DeepSORT scales it by height): a person's centre from background
@@ -233,7 +234,8 @@ class ByteTracks(Stage):
         used = set(matched.values())
         updated = {id(t) for t in kept if id(t) in matched}
         for index in high:
-            if index not in used:
+            if index not in used and not detections[index].box.outside(ctx.frame.width,
+                                                                       ctx.frame.height):
                 track = self._start(detections[index])
                 kept.append(track)
                 updated.add(id(track))

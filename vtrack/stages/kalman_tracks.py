@@ -19,7 +19,9 @@ which is what S4's method becomes with several targets:
    starts a tentative track (its filter starts at the measurement, at rest: S4's start at
    ``(w/2, 0)`` suits one ball falling from the top, not targets anywhere);
 4. a track is confirmed after ``confirm`` updates; a tentative track is deleted on its first
-   miss, a confirmed one after more than ``max_coast`` misses in a row.
+   miss, a confirmed one after more than ``max_coast`` misses in a row; any track once its
+   box has left the frame, and a detection wholly outside the frame starts none (as
+   ``byte_tracks``: a track wholly outside the frame is never reported).
 
 Output (``ctx.tracks``): one :class:`~vtrack.stages.base.Track` per track, the filtered centre
 with the last measured size, confidence = the share of its frames with a measurement, state
@@ -142,13 +144,15 @@ class KalmanTracks(Stage):
         for track in self._tracks:
             if id(track) not in updated:
                 track.misses += 1
+        width, height = ctx.frame.width, ctx.frame.height
         self._tracks = [
             t for t in self._tracks
-            if id(t) in updated or (t.confirmed and t.misses <= self.max_coast)
+            if (id(t) in updated or (t.confirmed and t.misses <= self.max_coast))
+            and not self._box(t).outside(width, height)
         ]
         taken = {column for _, column in matches}
         for column, detection in enumerate(detections):
-            if column not in taken:
+            if column not in taken and not detection.box.outside(width, height):
                 self._tracks.append(self._start(detection))
                 updated.add(id(self._tracks[-1]))
         if len(self._tracks) > self.max_tracks:  # the longest coasting go first (stable)
@@ -157,12 +161,15 @@ class KalmanTracks(Stage):
         ctx.tracks = [
             Track(
                 t.id,
-                Box.from_center(*model.position(t.state), *t.size),
+                self._box(t),
                 t.hits / t.age,
                 track_state(t.confirmed, id(t) in updated),
             )
             for t in self._tracks
         ]
+
+    def _box(self, track: _KalmanTrack) -> Box:
+        return Box.from_center(*self._model.position(track.state), *track.size)
 
     def _start(self, detection: Detection) -> _KalmanTrack:
         point = (detection.cx, detection.cy)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, plural
 from vtrack.evaluate.groundtruth import read_mot_detections
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
@@ -62,9 +62,25 @@ class MotDetections(Stage):
                               f"(path = \"det.txt\" in the config's [[stage]] table, or --set "
                               f"{self.name}.path=FILE)")
         self._frames = read_mot_detections(Path(self.path))
+        self._outside = 0
+        self._frame_size = (ctx.frame.width, ctx.frame.height)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
+        """This frame's boxes scoring ``min_score`` or more; those wholly outside the frame are
+        dropped (no tracker could follow them there) and counted for :meth:`notes`."""
+        width, height = ctx.frame.width, ctx.frame.height
         for box, score in self._frames.get(ctx.frame.index, ()):
-            if score >= self.min_score:
+            if box.outside(width, height):
+                self._outside += 1
+            elif score >= self.min_score:
                 ctx.detections.append(Detection(box, box.cx, box.cy, box.area, score=score))
+
+    def notes(self) -> list[str]:
+        """How many of the file's detections lay wholly outside the frame, if any."""
+        if not getattr(self, "_outside", 0):
+            return []
+        width, height = self._frame_size
+        return [f"{self.path}: {plural(self._outside, 'detection')} lay wholly outside the "
+                f"{width}x{height} frame and were ignored (are its boxes in this input's "
+                "pixels?)"]

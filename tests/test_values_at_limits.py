@@ -1,0 +1,186 @@
+"""Values at and beyond a limit, as a hostile probe gave them: a det.txt with absurd or
+off-frame boxes, a number a hair past a bound (the message must not round it onto the bound),
+a pixel format libx264 does not take, a config given as a pipe or a device."""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pytest
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+from vtrack.frame import GrayFrame
+from vtrack.geometry import Box
+from vtrack.stages.base import Stage, TrackContext, TrackStatus
+from vtrack.stages.detect import Detection
+from vtrack.stages.kalman_bytetrack import ByteTracks
+from vtrack.stages.kalman_tracks import KalmanTracks
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, list(args))
+
+
+def one_error(result: Result) -> str:
+    """The single ``vtrack: error:`` line of a refused command (exit 2)."""
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
+    return lines[0]
+
+
+def _detections(clip, tmp_path: Path, name: str, shift: float = 0.0,
+                at: float | None = None) -> Path:
+    """The clip's MOTChallenge ground truth as a det.txt (columns 1-6, then ``1,-1,-1,-1``),
+    every box moved by ``shift`` pixels or put at ``(at, at)``."""
+    path = tmp_path / name
+    lines = []
+    for row in clip.mot.read_text().splitlines():
+        frame, ident, x, y, w, h = row.split(",")[:6]
+        x, y = (str(at), str(at)) if at is not None else (str(float(x) + shift),
+                                                         str(float(y) + shift))
+        lines.append(",".join([frame, ident, x, y, w, h, "1", "-1", "-1", "-1"]))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _config(tmp_path: Path, det: Path, tracker: str) -> Path:
+    path = tmp_path / f"{det.stem}_{tracker}.toml"
+    path.write_text(f'name = "h"\n[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                    f'[[stage]]\nname = "{tracker}"\n')
+    return path
+
+
+@pytest.mark.parametrize("tracker", ["byte_tracks", "kalman_tracks"])
+def test_a_det_txt_with_a_coordinate_beyond_the_limit_is_refused(
+        tmp_path: Path, clip_factory: ClipFactory, tracker: str) -> None:
+    clip = clip_factory("multi", frames=60)
+    det = _detections(clip, tmp_path, "det_huge.txt", at=1e300)
+    out = tmp_path / "out"
+    line = one_error(vtrack("run", str(clip.path), "-c", str(_config(tmp_path, det, tracker)),
+                            "--no-video", "-o", str(out), "-y"))
+    assert f"{det} line 1: coordinate beyond +-1e+06 pixels" in line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("tracker", ["byte_tracks", "kalman_tracks"])
+def test_detections_wholly_outside_the_frame_are_dropped_with_a_warning(
+        tmp_path: Path, clip_factory: ClipFactory, tracker: str) -> None:
+    clip = clip_factory("multi", frames=60)
+    det = _detections(clip, tmp_path, "det_off.txt", shift=5000)
+    rows = len(clip.mot.read_text().splitlines())
+    out = tmp_path / "out"
+    result = vtrack("run", str(clip.path), "-c", str(_config(tmp_path, det, tracker)),
+                    "--no-video", "-o", str(out), "-y")
+    assert result.exit_code == 0, result.output
+    assert (f"vtrack: warning: {det}: {rows} detections lay wholly outside the 320x240 frame "
+            "and were ignored") in result.stderr
+    with open(out / "tracks.csv", newline="") as handle:
+        tracks = list(csv.DictReader(handle))
+    assert not [row for row in tracks
+                if Box(*(float(row[k]) for k in "xywh")).outside(320, 240)]
+
+
+@pytest.mark.parametrize("stage", [KalmanTracks(confirm=1), ByteTracks(confirm=1)],
+                         ids=["kalman_tracks", "byte_tracks"])
+def test_no_track_is_reported_wholly_outside_the_frame(stage: Stage) -> None:
+    # detections given straight to the stage (not through mot_detections, which drops them)
+    for index in range(5):
+        ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((240, 320), np.uint8)), seed=0)
+        ctx.detections = [
+            Detection(Box(5000.0 + 3 * index, 40.0, 10, 10), 5005.0, 45.0, 100.0, score=1.0),
+            Detection(Box(100.0 + 3 * index, 40.0, 10, 10), 105.0, 45.0, 100.0, score=1.0)]
+        (stage.start if index == 0 else stage.step)(ctx)
+        assert not [t for t in ctx.tracks if t.box.outside(320, 240)]
+    assert [t.state for t in ctx.tracks] == [TrackStatus.CONFIRMED]
+
+
+# --- a value a hair past a limit is not shown as the limit --------------------------------------
+
+
+@pytest.mark.parametrize(("option", "value", "shown"), [
+    ("--set", "particle.spread=10.000000000000001",
+     "must be in the range 0 to 10, got 10.000000000000002"),
+    ("--init", "0,0,320.0001,240", "the box 0,0,320.0001,240 is larger than the 320x240 frame"),
+    ("--init", "10,10,3.9999,40", "the box 10,10,3.9999,40 is smaller than 4x4 pixels"),
+    ("--init", "10,10,1e-300,40", "the box 10,10,1e-300,40 is smaller than 4x4 pixels"),
+    # ordinary values read as before
+    ("--set", "particle.spread=11", "must be in the range 0 to 10, got 11"),
+    ("--init", "10,10,3,40", "the box 10,10,3,40 is smaller than 4x4 pixels"),
+])
+def test_a_refused_value_is_shown_as_given_not_rounded_onto_the_limit(
+        tmp_path: Path, clip_factory: ClipFactory, option: str, value: str, shown: str) -> None:
+    clip = clip_factory("smooth", frames=10)
+    line = one_error(vtrack("run", str(clip.path), "-c", "s1", option, value, "--no-video",
+                            "-o", str(tmp_path / "out"), "-y"))
+    assert shown in line
+
+
+def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> None:
+    line = one_error(vtrack("scene", "smooth", str(tmp_path / "a.mp4"), "--frames", "10",
+                            "--fps", "10000.00001"))
+    assert "scene fps 10000.00001: must be from 0.01 to 10000" in line
+
+
+# --- a pixel format libx264 cannot encode is refused before anything is written -----------------
+
+
+@pytest.mark.parametrize(("size", "pix_fmt", "problem"), [
+    ("320x240", "rgb24", "libx264 does not take pixel format rgb24; it takes yuv420p"),
+    ("320x240", "bgr24", "libx264 does not take pixel format bgr24"),
+    ("320x240", "gbrp", "libx264 does not take pixel format gbrp"),
+    ("641x479", "yuv422p", "pixel format yuv422p needs an even width, the scene is 641x479"),
+    ("641x479", "nv12", "pixel format nv12 needs an even width and height, the scene is 641x479"),
+    ("320x239", "nv12", "pixel format nv12 needs an even width and height"),
+])
+def test_a_pixel_format_the_encoder_cannot_write_is_one_line(
+        tmp_path: Path, size: str, pix_fmt: str, problem: str) -> None:
+    out = tmp_path / "a.mp4"
+    line = one_error(vtrack("scene", "smooth", str(out), "--frames", "10", "--size", size,
+                            "--pix-fmt", pix_fmt))
+    assert f"{out}: {problem}" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("size", "pix_fmt"), [("640x479", "yuv422p"), ("641x479", "yuv444p"),
+                                               ("641x479", "gray")])
+def test_a_pixel_format_whose_chroma_is_not_halved_that_way_takes_an_odd_size(
+        tmp_path: Path, size: str, pix_fmt: str) -> None:
+    out = tmp_path / "a.mp4"
+    result = vtrack("scene", "smooth", str(out), "--frames", "10", "--size", size,
+                    "--pix-fmt", pix_fmt)
+    assert result.exit_code == 0, result.output
+    assert out.stat().st_size > 0
+
+
+# --- a config given as a pipe or a device -------------------------------------------------------
+
+
+def test_a_config_given_as_a_pipe_says_so(tmp_path: Path, clip_factory: ClipFactory) -> None:
+    clip = clip_factory("smooth", frames=10)
+    read, write = os.pipe()
+    try:
+        line = one_error(vtrack("run", str(clip.path), "--config", f"/dev/fd/{read}",
+                                "--no-video", "-o", str(tmp_path / "out"), "-y"))
+    finally:
+        os.close(read)
+        os.close(write)
+    assert line == (f"vtrack: error: /dev/fd/{read}: a FIFO, not a file: give the config as "
+                    "a file")
+
+
+def test_a_config_given_as_dev_null_says_what_it_is(tmp_path: Path,
+                                                    clip_factory: ClipFactory) -> None:
+    clip = clip_factory("smooth", frames=10)
+    line = one_error(vtrack("run", str(clip.path), "--config", "/dev/null", "--no-video",
+                            "-o", str(tmp_path / "out"), "-y"))
+    assert line == ("vtrack: error: /dev/null: a character device, not a file: give the "
+                    "config as a file")
