@@ -13,6 +13,9 @@ Treat the files as read-only: other tests share them.
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -84,3 +87,19 @@ def clip_factory(
         return cache[key]
 
     return make
+
+
+def wait_for_stop_handlers(process: subprocess.Popen, timeout_s: float = 60) -> None:
+    """Return once ``process`` (a ``python -m vtrack ...``) catches SIGTERM: vtrack's stop
+    handlers are in place (Python itself catches only SIGINT), so its start-up is over and a
+    signal sent now is vtrack's to handle, however loaded the machine (a fixed sleep was not
+    always long enough). Linux: reads ``/proc/PID/status``."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        with open(f"/proc/{process.pid}/status", encoding="ascii") as status:
+            caught = next(line for line in status if line.startswith("SigCgt:"))
+        if int(caught.split()[1], 16) >> (signal.SIGTERM - 1) & 1:
+            return
+        assert process.poll() is None, "vtrack ended before it handled signals"
+        assert time.monotonic() < deadline, "vtrack did not start within the time"
+        time.sleep(0.05)

@@ -21,6 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from conftest import wait_for_stop_handlers
 
 from vtrack.scenes import make_scene, write_clip, write_video
 
@@ -512,7 +513,8 @@ def test_sigterm_while_a_followed_file_is_waited_for_ends_the_run(tmp_path: Path
                             ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o",
                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        time.sleep(5.0)  # started, and waiting at the file's current end
+        wait_for_stop_handlers(run)
+        time.sleep(2.0)  # waiting at the file's current end
         run.send_signal(signal.SIGTERM)
         _, stderr = run.communicate(timeout=30)
     finally:

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import wait_for_stop_handlers
 
 from vtrack.io import follow
 from vtrack.io.follow import GrowingFile
@@ -37,6 +38,7 @@ def _vtrack(args: list[str], **kwargs: object) -> subprocess.Popen:
 
 def _signalled(run: subprocess.Popen, signum: int, after_s: float) -> bytes:
     try:
+        wait_for_stop_handlers(run)
         time.sleep(after_s)  # reading (or opening) its input, whatever the exact moment
         run.send_signal(signum)
         _, stderr = run.communicate(timeout=60)
@@ -57,7 +59,7 @@ def test_a_signal_while_a_slow_pipe_is_read_interrupts_the_run(tmp_path: Path,
     try:
         run = _vtrack(["-", "-c", "s0", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
                        "--no-video", "-o", str(tmp_path / "out")], stdin=feeder.stdout)
-        stderr = _signalled(run, signum, 3.0)
+        stderr = _signalled(run, signum, 1.0)
     finally:
         feeder.kill()
         feeder.wait()
@@ -79,7 +81,7 @@ def test_a_signal_while_a_fifo_waits_for_its_writer_interrupts_the_run(tmp_path:
     os.mkfifo(fifo)
     run = _vtrack([str(fifo), "-c", "s0", "--init", "1,1,8,8", "--no-video", "-o",
                    str(tmp_path / "out")])
-    stderr = _signalled(run, signum, 2.0)
+    stderr = _signalled(run, signum, 1.0)
     assert run.returncode == 128 + signum, stderr
     assert stderr.decode().strip() == "vtrack: interrupted"
     assert not (tmp_path / "out").exists()
