@@ -10,9 +10,16 @@ import numpy as np
 import pytest
 
 import vtrack
+from vtrack.errors import ConfigError
 from vtrack.geometry import center_error
 from vtrack.run import run
-from vtrack.scenes import make_scene, write_groundtruth, write_image_sequence, write_video
+from vtrack.scenes import (
+    make_scene,
+    write_groundtruth,
+    write_image_sequence,
+    write_raw,
+    write_video,
+)
 
 
 def test_track_a_path_and_frames_follow_the_target_alike(tmp_path: Path) -> None:
@@ -55,9 +62,10 @@ def test_track_takes_plain_values_path_tuple_and_numpy_frames(tmp_path: Path) ->
 
 def test_track_rejects_values_it_cannot_use_with_a_clear_message() -> None:
     frames = [np.zeros((48, 64, 3), np.uint8)] * 2
-    with pytest.raises(ValueError, match="4 numbers"):
+    with pytest.raises(ConfigError, match="4 numbers"):
         list(vtrack.track(frames, "s0", (1, 2, 3)))
-    with pytest.raises(ValueError, match="positive"):
+    with pytest.raises(ConfigError, match=r"the box 1,2,0,5 is empty \(width and height must "
+                       r"be > 0\)"):
         list(vtrack.track(frames, "s0", (1, 2, 0, 5)))
     with pytest.raises(TypeError, match="frame 0.*float32"):
         list(vtrack.track([np.zeros((48, 64, 3), np.float32)], "s0", (1, 2, 8, 8)))
@@ -113,3 +121,133 @@ def test_decoded_av_frames_give_the_boxes_vtrack_run_gives(tmp_path: Path, confi
         decoded = [r.box for r in vtrack.track(container.decode(video=0), config,
                                                 scene.boxes[0])]
     assert decoded == by_path
+
+
+def _red_block(count: int = 3) -> list[np.ndarray]:
+    """A red block on black, ``count`` BGR frames of 160x120."""
+    frames = [np.zeros((120, 160, 3), np.uint8) for _ in range(count)]
+    for frame in frames:
+        frame[40:70, 50:90] = (0, 0, 255)
+    return frames
+
+
+def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: Path) -> None:
+    """``open_source(pathlib.Path)`` raised TypeError (``'PosixPath' is not iterable``) and
+    ``raw="320x240"`` AttributeError (``'str' object has no attribute 'frame_bytes'``)."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    with vtrack.open_source(clip) as source:
+        assert (source.info.width, source.info.height) == (96, 72)
+        assert sum(1 for _ in source) == 10
+    raw = write_raw(scene, tmp_path / "clip.bgr")
+    with vtrack.open_source(raw, raw="96x72", fps=10) as source:  # (frames reuse a ring)
+        read = [(f.time_s, np.array_equal(f.bgr(), image))
+                for f, image in zip(source, scene.frames(), strict=True)]
+    assert read == [(pytest.approx(i / 10), True) for i in range(10)]
+    with vtrack.open_source(raw, raw="96x72", pix_fmt="gray") as source:
+        assert (source.info.pix_fmt, source.info.frame_count) == ("gray", 30)  # 1/3 the bytes
+    with pytest.raises(ConfigError, match=r"--raw '96x7x': expected WIDTHxHEIGHT"):
+        vtrack.open_source(raw, raw="96x7x")
+    with pytest.raises(ConfigError, match="raw: expected a vtrack.io.RawFormat or "
+                       "'WIDTHxHEIGHT', got int"):
+        vtrack.open_source(raw, raw=96)
+
+
+@pytest.mark.parametrize(("box", "problem"), [
+    ((100, 100, 0, 40), r"the box 100,100,0,40 is empty \(width and height must be > 0\)"),
+    ((100, 100, -40, 40), r"the box 100,100,-40,40 is empty"),
+    ((100, 100, 2, 2), "the box 100,100,2,2 is smaller than 4x4"),
+    ((1, 2, 3), r"expected 4 numbers \(x, y, w, h\), got 3"),
+    ("1234", r"expected \(x, y, w, h\) numbers, got '1234'"),
+    ("abc", r"expected \(x, y, w, h\) numbers, got 'abc'"),
+])
+def test_every_bad_first_box_is_a_config_error_as_with_vtrack_run_init(box: object,
+                                                                       problem: str) -> None:
+    """An empty box or one of 3 numbers raised builtins.ValueError, a 2x2 one ConfigError (what
+    ``vtrack run --init`` raises for each); "1234" was taken as the box 1,2,3,4."""
+    with pytest.raises(ConfigError, match=f"^init_box: {problem}"):
+        vtrack.Tracker("s0").init(np.zeros((240, 320, 3), np.uint8), box)
+
+
+def test_a_pyav_object_that_is_no_picture_vtrack_reads_is_a_type_error() -> None:
+    """An av.AudioFrame raised AttributeError ('rotation') and an rgb4 picture, which FFmpeg
+    cannot convert, a bare OSError [Errno 95]; a pal8 one is converted and tracked."""
+    import av
+
+    with pytest.raises(TypeError, match="frame 0: expected a vtrack.Frame, a NumPy image or "
+                       "an av.VideoFrame, got AudioFrame"):
+        vtrack.Tracker("s0").init(av.AudioFrame(format="s16", layout="mono", samples=10),
+                                  (1, 1, 4, 4))
+    with pytest.raises(TypeError, match=r"frame 0: FFmpeg cannot convert an av.VideoFrame of "
+                       r"pixel format rgb4 to BGR \(.+\)"):
+        vtrack.Tracker("robust").init(av.VideoFrame(64, 48, "rgb4"), (1, 1, 8, 8))
+    palette = np.zeros((256, 4), np.uint8)
+    palette[1] = (0, 0, 255, 255)
+    indices = np.zeros((120, 160), np.uint8)
+    indices[40:70, 50:90] = 1
+    pal8 = av.VideoFrame.from_ndarray((indices, palette), format="pal8")
+    result = vtrack.Tracker("robust", keep_frames=True).init(pal8, (50, 40, 40, 30))
+    assert np.array_equal(result.frame.bgr(), pal8.to_ndarray(format="bgr24"))
+    assert result.frame.bgr()[50, 60].any() and not result.frame.bgr()[0, 0].any()
+
+
+def test_one_image_given_as_the_frames_is_refused_not_read_row_by_row() -> None:
+    """One 240x320x3 image was tracked as 240 grey 3x320 frames: "the box ... is larger than
+    the 3x320 frame"."""
+    image = _red_block(1)[0]
+    with pytest.raises(TypeError, match=r"frames: expected an iterable of frames, got one "
+                       r"image of 120x160x3 \(give \[image\] for a single frame\)"):
+        list(vtrack.track(image, "robust", (50, 40, 40, 30)))
+    with pytest.raises(TypeError, match="got one image of 120x160 "):
+        list(vtrack.track(image[:, :, 2].copy(), "s2", (50, 40, 40, 30)))
+    with pytest.raises(TypeError, match="got one BgrFrame"):
+        list(vtrack.track(vtrack.BgrFrame(0, 0.0, image), "robust", (50, 40, 40, 30)))
+    assert [r.index for r in vtrack.track([image], "robust", (50, 40, 40, 30))] == [0]
+    stack = np.stack(_red_block(3))  # N x H x W x 3: a sequence of 3 frames
+    assert [r.index for r in vtrack.track(stack, "robust", (50, 40, 40, 30))] == [0, 1, 2]
+
+
+@pytest.mark.parametrize("config", ["s0", "robust"])
+def test_pipeline_checks_its_frames_and_first_box_as_the_tracker_does(config: str) -> None:
+    """Pipeline.track raised AttributeError for a NumPy frame ('width') and a tuple box ('cx'),
+    a bare AssertionError or InputError for Box(100, 100, -40, -40), and returned a 1e9 box."""
+    frames = [vtrack.BgrFrame(i, i / 30, image) for i, image in enumerate(_red_block())]
+
+    def track(frames: list, box: object) -> list:
+        return list(vtrack.Pipeline(vtrack.load_config(config).build()).track(frames, box))
+
+    by_tuple = track(frames, (50, 40, 40, 30))
+    by_box = track(frames, vtrack.Box(50, 40, 40, 30))
+    assert [r.box for r in by_tuple] == [r.box for r in by_box] and len(by_box) == 3
+    with pytest.raises(TypeError, match="Pipeline takes vtrack.Frame objects .*got ndarray"):
+        track(_red_block(), vtrack.Box(50, 40, 40, 30))
+    with pytest.raises(ConfigError, match=r"init_box: the box 100,100,-40,-40 is empty"):
+        track(frames, vtrack.Box(100, 100, -40, -40))
+    with pytest.raises(ConfigError, match="init_box: the box 0,0,1e.09,1e.09 is larger than "
+                       "the 160x120 frame"):
+        track(frames, vtrack.Box(0, 0, 1e9, 1e9))
+
+
+def test_frame_constructors_refuse_what_the_tracker_refuses_with_its_message() -> None:
+    """BgrFrame took float32 pixels (and failed later: "no pixel of the initial box passes
+    the hue stage's mask"), GrayFrame an HxWx3 array, and either a time of NaN."""
+    image = _red_block(1)[0]
+    with pytest.raises(TypeError, match="^frame 4: expected uint8 pixels, got float32$"):
+        vtrack.BgrFrame(4, 0.0, image.astype(np.float32))
+    with pytest.raises(TypeError, match="^frame 0: expected uint8 pixels, got float32$"):
+        vtrack.Tracker("s0").init(image.astype(np.float32), (50, 40, 40, 30))  # as_frame's
+    with pytest.raises(TypeError, match=r"^frame 0: expected an HxW grey image, got shape "
+                       r"\(120, 160, 3\)$"):
+        vtrack.GrayFrame(0, 0.0, image)
+    with pytest.raises(TypeError, match=r"^frame 0: expected an HxWx3 BGR image, got shape "
+                       r"\(120, 160\)$"):
+        vtrack.BgrFrame(0, 0.0, image[:, :, 0])
+    for time_s in (float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=f"^frame 2: time_s {time_s} is not a finite "):
+            vtrack.BgrFrame(2, time_s, image)
+    with pytest.raises(ValueError, match=r"^frame 0: the frame size 160x0 is empty$"):
+        vtrack.GrayFrame(0, 0.0, np.zeros((0, 160), np.uint8))
+    with pytest.raises(TypeError, match=r"^frame 0: expected an \(h \* 3 // 2\)xW I420 image "
+                       r"of even width and height, got shape \(100, 160\)$"):
+        vtrack.I420Frame(0, 0.0, np.zeros((100, 160), np.uint8))
+    assert vtrack.I420Frame(0, 0.0, np.zeros((180, 160), np.uint8)).height == 120

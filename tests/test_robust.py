@@ -285,10 +285,12 @@ def test_parameters_are_validated(override: str) -> None:
 
 
 def test_initial_box_outside_frame_is_a_user_error() -> None:
-    from vtrack.errors import InputError
+    """Refused by the pipeline before any stage starts, as ``vtrack run --init`` refuses it."""
+    from vtrack.errors import ConfigError
 
     frames = [BgrFrame(0, 0.0, np.zeros((48, 64, 3), np.uint8))]
-    with pytest.raises(InputError, match="robust_model"):
+    with pytest.raises(ConfigError, match="^init_box: the box 100,100,10,10 lies outside the "
+                       "64x48 frame$"):
         list(Pipeline(load_config("robust").build()).track(frames, Box(100, 100, 10, 10)))
 
 

@@ -27,7 +27,7 @@ _EXPORTS = {
     "BgrFrame": "vtrack.frame",
     "GrayFrame": "vtrack.frame",
     "I420Frame": "vtrack.frame",
-    "open_source": "vtrack.io",
+    "open_source": "vtrack.api",
     "FrameResult": "vtrack.pipeline",
     "Pipeline": "vtrack.pipeline",
     "RunRequest": "vtrack.request",
@@ -35,11 +35,10 @@ _EXPORTS = {
 }
 
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads these
-    from vtrack.api import track
+    from vtrack.api import open_source, track
     from vtrack.config import Config, load_config
     from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
     from vtrack.geometry import Box
-    from vtrack.io import open_source
     from vtrack.pipeline import FrameResult, Pipeline
     from vtrack.request import RunRequest
     from vtrack.tracker import Tracker

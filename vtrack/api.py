@@ -1,4 +1,5 @@
-"""``vtrack.track``: the library in one call, taking plain Python values.
+"""``vtrack.track`` and ``vtrack.open_source``: the library in one call, taking plain Python
+values.
 
 Kept out of ``vtrack/__init__.py`` so that ``import vtrack`` (and every ``vtrack`` command) pays
 only for what it uses: this module pulls in the config, the stages and the readers.
@@ -14,12 +15,15 @@ import numpy as np
 
 from vtrack.config import Config
 from vtrack.configs import DEFAULT_CONFIG
+from vtrack.errors import ConfigError
 from vtrack.frame import Frame
-from vtrack.geometry import Box
-from vtrack.io import open_source
+from vtrack.geometry import Box, as_box
+from vtrack.io import inputs
+from vtrack.io.raw import RawFormat
+from vtrack.io.source import Source
 from vtrack.pipeline import FrameResult
 from vtrack.request import RunRequest
-from vtrack.tracker import Tracker, as_box
+from vtrack.tracker import Tracker
 
 FrameInput = str | os.PathLike[str] | RunRequest | Iterable[Frame] | Iterable[np.ndarray]
 BoxInput = Box | Sequence[float]
@@ -32,15 +36,16 @@ def track(frames: FrameInput,
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
     ``frames`` is an input (``str`` or ``pathlib.Path``: a video file, an image folder, a URL
-    or a capture device, opened with :func:`vtrack.io.open_source`; a live one hands over the
+    or a capture device, opened with :func:`open_source`; a live one hands over the
     frames the tracker keeps up with), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
     of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images (timed at
     ``fps``) or of ``av.VideoFrame``; ``config`` a shipped config name, a TOML path or a
     :class:`Config`; ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)``
     (not needed by the detecting trackers s3/s4). Results hold their decoded frame only with
-    ``keep_frames=True``.
+    ``keep_frames=True``. One image or frame on its own (not in a sequence) is a TypeError.
     """
+    _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
         request = frames
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
@@ -60,6 +65,38 @@ def track(frames: FrameInput,
             yield from _run(tracker, source, box)
     else:
         yield from _run(tracker, frames, box)
+
+
+def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None, *,
+                pix_fmt: str | None = None, fps: float | None = None,
+                **options: Any) -> Source:
+    """:func:`vtrack.io.open_source` taking what a user writes: ``spec`` a ``str`` or
+    ``pathlib.Path``; ``raw`` a :class:`RawFormat` or, as ``vtrack run --raw`` takes it,
+    ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
+    ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
+    for a raw format vtrack cannot read."""
+    if isinstance(raw, str):
+        raw = RawFormat.parse(raw, pix_fmt or "bgr24", 30.0 if fps is None else fps)
+    elif raw is not None and not isinstance(raw, RawFormat):
+        raise ConfigError(f"raw: expected a vtrack.io.RawFormat or 'WIDTHxHEIGHT', got "
+                          f"{type(raw).__name__}")
+    elif pix_fmt is not None:
+        raise ConfigError("pix_fmt is the pixel format of raw input: give raw='WIDTHxHEIGHT' "
+                          "with it")
+    return inputs.open_source(os.fsdecode(spec), raw, fps=fps, **options)
+
+
+def _refuse_one_frame(frames: object) -> None:
+    """TypeError for one picture given where a sequence of frames is expected: a NumPy image
+    would be iterated row by row (a 240x320x3 image as 240 grey 3x320 frames)."""
+    if isinstance(frames, np.ndarray) and (frames.ndim == 2 or frames.ndim == 3
+                                           and frames.shape[2] == 3):
+        shape = "x".join(str(n) for n in frames.shape)
+        raise TypeError(f"frames: expected an iterable of frames, got one image of {shape} "
+                        "(give [image] for a single frame)")
+    if isinstance(frames, Frame) or type(frames).__module__.split(".")[0] == "av":
+        raise TypeError(f"frames: expected an iterable of frames, got one "
+                        f"{type(frames).__name__} (give [frame] for a single frame)")
 
 
 def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:

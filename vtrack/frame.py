@@ -8,12 +8,13 @@ the tracking path. Writers ask for ``frame.i420()`` (planar Y, U, V stacked as o
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 
 import cv2
 import numpy as np
 
-from vtrack.geometry import Window
+from vtrack.geometry import Window, frame_size_problem
 
 
 def i420_planes(buffer: np.ndarray, width: int, height: int) -> tuple[np.ndarray, ...]:
@@ -37,12 +38,35 @@ def halved(image: np.ndarray, k: int) -> np.ndarray:
     return image
 
 
+def check_pixels(index: int, pixels: object, ndim: int, layout: str) -> None:
+    """TypeError naming frame ``index`` unless ``pixels`` is a uint8 NumPy array of ``ndim``
+    dimensions (3: the last one of 3 channels), the ``layout`` a message names ("HxWx3 BGR").
+    A few attribute checks, no pixel is read: the frames' constructors call it per frame."""
+    if not isinstance(pixels, np.ndarray):
+        raise TypeError(f"frame {index}: expected a NumPy {layout} image, got "
+                        f"{type(pixels).__name__}")
+    if pixels.dtype != np.uint8:
+        raise TypeError(f"frame {index}: expected uint8 pixels, got {pixels.dtype}")
+    if pixels.ndim != ndim or (ndim == 3 and pixels.shape[2] != 3):
+        raise TypeError(f"frame {index}: expected an {layout} image, got shape {pixels.shape}")
+
+
 class Frame(ABC):
-    """One picture of the input. ``index`` is 0-based; ``time_s`` comes from its timestamp."""
+    """One picture of the input. ``index`` is 0-based; ``time_s`` comes from its timestamp.
+
+    The constructors refuse what cannot be a frame: pixels that are not uint8 or not in the
+    class's layout (TypeError), a size :func:`frame_size_problem` refuses or a ``time_s`` that
+    is not a finite number (ValueError), each naming the frame (``frame 3: ...``).
+    """
 
     __slots__ = ("index", "time_s", "width", "height")
 
     def __init__(self, index: int, time_s: float, width: int, height: int) -> None:
+        problem = frame_size_problem(width, height)
+        if problem:
+            raise ValueError(f"frame {index}: {problem}")
+        if not math.isfinite(time_s):
+            raise ValueError(f"frame {index}: time_s {time_s!r} is not a finite number")
         self.index = index
         self.time_s = time_s
         self.width = width
@@ -94,6 +118,7 @@ class BgrFrame(Frame):
     __slots__ = ("_bgr",)
 
     def __init__(self, index: int, time_s: float, bgr: np.ndarray) -> None:
+        check_pixels(index, bgr, 3, "HxWx3 BGR")
         super().__init__(index, time_s, bgr.shape[1], bgr.shape[0])
         self._bgr = bgr
 
@@ -113,6 +138,7 @@ class GrayFrame(Frame):
     __slots__ = ("_gray",)
 
     def __init__(self, index: int, time_s: float, gray: np.ndarray) -> None:
+        check_pixels(index, gray, 2, "HxW grey")
         super().__init__(index, time_s, gray.shape[1], gray.shape[0])
         self._gray = gray
 
@@ -201,7 +227,11 @@ class I420Frame(Frame):
 
     def __init__(self, index: int, time_s: float, planes: np.ndarray,
                  full_range: bool = False, bt709: bool = False) -> None:
+        check_pixels(index, planes, 2, "(h * 3 // 2)xW I420")
         width, height = planes.shape[1], planes.shape[0] * 2 // 3
+        if planes.shape[0] != height * 3 // 2 or width % 2 or height % 2:
+            raise TypeError(f"frame {index}: expected an (h * 3 // 2)xW I420 image of even "
+                            f"width and height, got shape {planes.shape}")
         super().__init__(index, time_s, width, height)
         self.y, self.u, self.v = i420_planes(planes, width, height)
         self.full_range, self.bt709 = full_range, bt709
@@ -210,6 +240,12 @@ class I420Frame(Frame):
     def from_planes(cls, index: int, time_s: float, y: np.ndarray, u: np.ndarray,
                     v: np.ndarray, full_range: bool = False, bt709: bool = False) -> I420Frame:
         """A frame over existing planes (``y`` is (h, w), ``u`` and ``v`` (h/2, w/2)); no copy."""
+        for plane in (y, u, v):
+            check_pixels(index, plane, 2, "HxW plane")
+        half = (y.shape[0] // 2, y.shape[1] // 2)
+        if u.shape != half or v.shape != half or y.shape[0] % 2 or y.shape[1] % 2:
+            raise TypeError(f"frame {index}: expected an even-sized Y plane and U, V planes of "
+                            f"half its size, got {y.shape}, {u.shape}, {v.shape}")
         frame = cls.__new__(cls)
         Frame.__init__(frame, index, time_s, y.shape[1], y.shape[0])
         frame.y, frame.u, frame.v = y, u, v

@@ -8,8 +8,9 @@ already clipped to the frame, used to cut the part of a frame a stage works on.
 from __future__ import annotations
 
 import math
+import reprlib
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from vtrack.errors import ConfigError, number_text
 
@@ -142,6 +143,24 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
     if box.w <= 0 or box.h <= 0:
         raise error(f"{where}: width and height must be positive, got {shown!r}")
     return box
+
+
+def as_box(box: Box | Any, where: str = "init_box") -> Box:
+    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)``; ConfigError naming
+    ``where`` otherwise (what ``--init`` raises). Whether it can be tracked in a frame is
+    :func:`check_init_box`'s to say."""
+    if isinstance(box, Box):
+        return box
+    try:
+        if isinstance(box, str | bytes):  # "1234" would be 4 digits
+            raise TypeError
+        values = tuple(float(v) for v in box)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigError(f"{where}: expected (x, y, w, h) numbers, got "
+                          f"{reprlib.repr(box)}") from None
+    if len(values) != 4:
+        raise ConfigError(f"{where}: expected 4 numbers (x, y, w, h), got {len(values)}")
+    return Box(*values)
 
 
 def check_init_box(box: Box, width: int, height: int, where: str) -> None:

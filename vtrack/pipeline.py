@@ -1,19 +1,21 @@
 """Run a chain of stages over frames: a generator of per-frame results.
 
 ``Pipeline(stages).track(frames, init_box)`` yields one :class:`FrameResult` per frame, in order.
-Stage timings are accumulated in ``pipeline.stage_seconds`` for ``run.json``.
+Stage timings are accumulated in ``pipeline.stage_seconds`` for ``run.json``. It is the layer
+under :class:`vtrack.Tracker`: its frames are :class:`Frame` objects (the Tracker also takes
+NumPy images and ``av.VideoFrame``); its first box is checked as the Tracker's is.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from vtrack.errors import ConfigError
 from vtrack.frame import Frame
-from vtrack.geometry import Box
+from vtrack.geometry import Box, as_box, check_init_box
 from vtrack.overlays import Overlay
 from vtrack.params import check_seed
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
@@ -88,27 +90,38 @@ class Pipeline:
                 seen.setdefault(column)
         return tuple(seen)
 
-    def track(self, frames: Iterable[Frame], init_box: Box | None = None) -> Iterator[FrameResult]:
-        """Yield one result per frame. ``init_box`` is required unless the chain detects targets."""
+    def track(self, frames: Iterable[Frame], init_box: Box | Sequence[float] | None = None
+              ) -> Iterator[FrameResult]:
+        """Yield one result per frame (:class:`Frame` objects). ``init_box`` (a :class:`Box` or
+        ``(x, y, w, h)``) is required unless the chain detects targets; ConfigError for one the
+        first frame cannot start from, as :func:`check_init_box` says."""
         self.begin(init_box)
         for frame in frames:
             yield self.process(frame)
 
-    def begin(self, init_box: Box | None = None) -> None:
+    def begin(self, init_box: Box | Sequence[float] | None = None) -> None:
         """Start a new track: the next frame given to :meth:`process` is the first, and
-        ``init_box`` is the target's box in it (required unless the chain detects targets)."""
+        ``init_box`` is the target's box in it (required unless the chain detects targets;
+        checked against that frame by :meth:`process`)."""
         if init_box is None and self.needs_init_box:
             raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
-        self._init_box = init_box
+        self._init_box = None if init_box is None else as_box(init_box)
         self._ctx: TrackContext | None = None
         self._off_frame = 0  # frames in a row the box has been entirely outside the frame
 
     def process(self, frame: Frame) -> FrameResult:
-        """Track ``frame`` (the next frame after :meth:`begin`) and return what is said about it."""
+        """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
+        else) and return what is said about it."""
+        if not isinstance(frame, Frame):
+            raise TypeError(f"Pipeline takes vtrack.Frame objects (BgrFrame, GrayFrame, "
+                            f"I420Frame), got {type(frame).__name__}; vtrack.Tracker and "
+                            "vtrack.track also take NumPy images and av.VideoFrame")
         clock = time.perf_counter
         ctx = self._ctx
         if ctx is None:
             init_box = self._init_box
+            if init_box is not None:
+                check_init_box(init_box, frame.width, frame.height, "init_box")
             ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
             ctx.new_frame(frame)
             for stage in self.stages:

@@ -9,7 +9,6 @@ gives the same box, state and score here as in ``track.csv``.
 from __future__ import annotations
 
 import os
-import reprlib
 from typing import Any
 
 import numpy as np
@@ -18,7 +17,7 @@ from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.frame import BgrFrame, Frame, GrayFrame
-from vtrack.geometry import Box, check_init_box, frame_size_problem
+from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
 from vtrack.params import check_seed
 from vtrack.pipeline import FrameResult, Pipeline
@@ -31,52 +30,41 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
     """``item`` as a :class:`Frame` numbered ``index``: a Frame as it is; a uint8 ``HxWx3`` BGR
     or ``HxW`` grey array timed ``index / fps``; an ``av.VideoFrame`` as ``vtrack run``'s reader
     takes it (I420 planes, converted as there) and timed by its own timestamp (``index / fps``
-    if it has none). TypeError for anything else."""
+    if it has none). TypeError for anything else, for pixels that are not uint8 and for a
+    picture FFmpeg cannot convert to BGR (rgb4); ValueError for a size vtrack refuses."""
     if isinstance(item, Frame):
         return item
-    time_s = index / fps
-    if not isinstance(item, np.ndarray):
-        to_ndarray = getattr(item, "to_ndarray", None)
-        if to_ndarray is None or type(item).__module__.split(".")[0] != "av":
-            raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
-                            f"av.VideoFrame, got {type(item).__name__}")
-        from vtrack.io.video import decoded_frame  # PyAV only for a PyAV frame
+    if isinstance(item, np.ndarray):
+        if item.ndim == 2:
+            return GrayFrame(index, index / fps, np.ascontiguousarray(item))
+        if item.ndim != 3 or item.shape[2] != 3:
+            raise TypeError(f"frame {index}: expected an HxWx3 BGR or HxW grey image, got "
+                            f"shape {item.shape}")
+        return BgrFrame(index, index / fps, np.ascontiguousarray(item))
+    if type(item).__module__.split(".")[0] == "av":  # PyAV only for a PyAV object
+        import av
 
-        if item.time is not None:
-            time_s = float(item.time)
-        return decoded_frame(item, index, time_s)  # as vtrack run reads it
-    if item.dtype != np.uint8:
-        raise TypeError(f"frame {index}: expected uint8 pixels, got {item.dtype}")
-    problem = item.ndim in (2, 3) and frame_size_problem(item.shape[1], item.shape[0])
+        if isinstance(item, av.VideoFrame):
+            return _decoded(item, index, fps)
+    raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
+                    f"av.VideoFrame, got {type(item).__name__}")
+
+
+def _decoded(item: Any, index: int, fps: float) -> Frame:
+    """An ``av.VideoFrame`` as ``vtrack run``'s reader takes it (see :func:`as_frame`)."""
+    import av
+
+    from vtrack.io.video import decoded_frame
+
+    problem = frame_size_problem(item.width, item.height)
     if problem:
         raise ValueError(f"frame {index}: {problem}")
-    if item.ndim == 3 and item.shape[2] == 3:
-        return BgrFrame(index, time_s, np.ascontiguousarray(item))
-    if item.ndim == 2:
-        return GrayFrame(index, time_s, np.ascontiguousarray(item))
-    raise TypeError(f"frame {index}: expected an HxWx3 BGR or HxW grey image, got shape "
-                    f"{item.shape}")
-
-
-def as_box(box: Box | Any) -> Box:
-    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)``; ValueError otherwise.
-
-    Width and height must be positive: a box with no area cannot be tracked.
-    """
-    if isinstance(box, Box):
-        values = tuple(box)
-    else:
-        try:
-            values = tuple(float(v) for v in box)
-        except (TypeError, ValueError, OverflowError):
-            raise ValueError(f"init_box: expected (x, y, w, h) numbers, got "
-                             f"{reprlib.repr(box)}") from None
-    if len(values) != 4:
-        raise ValueError(f"init_box: expected 4 numbers (x, y, w, h), got {len(values)}")
-    if not (values[2] > 0 and values[3] > 0):
-        raise ValueError(f"init_box: width and height must be positive, got {values[2]:g}x"
-                         f"{values[3]:g}")
-    return Box(*values)
+    time_s = index / fps if item.time is None else float(item.time)
+    try:
+        return decoded_frame(item, index, time_s)  # as vtrack run reads it
+    except av.FFmpegError as exc:
+        raise TypeError(f"frame {index}: FFmpeg cannot convert an av.VideoFrame of pixel "
+                        f"format {item.format.name} to BGR ({exc.strerror})") from None
 
 
 class Tracker:
@@ -118,11 +106,7 @@ class Tracker:
     def init(self, frame: FrameLike, box: Box | Any = None) -> FrameResult:
         """Start tracking at ``frame`` with the target's box ``(x, y, w, h)`` in it (None for
         the detecting configs); returns that frame's result (its box is ``box``)."""
-        first = as_frame(frame, 0, self.fps)
-        start = None if box is None else as_box(box)
-        if start is not None:
-            check_init_box(start, first.width, first.height, "init_box")
-        return self._begin(start, first)
+        return self._begin(box, as_frame(frame, 0, self.fps))
 
     def update(self, frame: FrameLike) -> FrameResult:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
@@ -130,9 +114,10 @@ class Tracker:
             return self._begin(None, frame)  # ConfigError if the config needs a box
         return self._process(frame)
 
-    def _begin(self, box: Box | None, frame: FrameLike) -> FrameResult:
+    def _begin(self, box: Box | Any, frame: FrameLike) -> FrameResult:
         """Fresh stages starting from ``box`` on ``frame``, the sequence's first; when they
         cannot start there (an error), the tracker is left as :meth:`reset` leaves it."""
+        self.reset()
         pipeline = self._new_pipeline()
         if box is not None:
             pipeline.refuse_a_first_box(self.config.name, "call init(frame) without a box, or "
@@ -141,7 +126,7 @@ class Tracker:
             raise ConfigError(f"{self.config.name}: this tracker needs the target's box first: "
                               "call init(frame, (x, y, w, h))")
         pipeline.begin(box)
-        self._pipeline, self._index, self._shape = pipeline, 0, None
+        self._pipeline = pipeline
         try:
             return self._process(frame)
         except BaseException:
