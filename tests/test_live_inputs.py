@@ -448,6 +448,33 @@ def test_protocol_and_demuxer_options_of_a_url_are_known_to_be_used() -> None:
     assert unused_options(["blocksize"], "mpegts", input_protocols("-", True)) == ["blocksize"]
 
 
+def test_options_of_every_url_are_used_and_pyav_s_own_ffmpeg_is_asked() -> None:
+    """rw_timeout (and the protocol white/black lists) belong to every URL FFmpeg opens through
+    a protocol, whose class libavformat does not export: they were refused as unused. And the
+    libraries asked were the first libavformat in the process's memory map, which could be
+    OpenCV's copy of FFmpeg rather than PyAV's."""
+    import ctypes
+
+    import cv2  # noqa: F401 - OpenCV's FFmpeg in the process too
+
+    from vtrack.io.ffoptions import _libraries, input_protocols, unused_options
+
+    for path in ("clip.mp4", "udp://127.0.0.1:5000"):
+        assert unused_options(["rw_timeout", "protocol_whitelist", "rw_timeot"], "mpegts",
+                              input_protocols(path, False)) == ["rw_timeot"]
+    assert unused_options(["rw_timeout"], "mpegts", input_protocols("-", True)) == ["rw_timeout"]
+    ffmpeg = _libraries()
+    assert ffmpeg is not None
+    class DlInfo(ctypes.Structure):
+        _fields_ = [("fname", ctypes.c_char_p), ("fbase", ctypes.c_void_p),
+                    ("sname", ctypes.c_char_p), ("saddr", ctypes.c_void_p)]
+    libc = ctypes.CDLL(None)
+    info = DlInfo()
+    address = ctypes.cast(ffmpeg.av_opt_find, ctypes.c_void_p)
+    assert libc.dladdr(address, ctypes.byref(info))
+    assert b"opencv" not in info.fname.lower(), info.fname  # PyAV's own (av.libs/ in a wheel)
+
+
 def test_a_stream_or_stdin_without_init_asks_for_init_not_a_sidecar(tmp_path: Path) -> None:
     for spec in ("udp://127.0.0.1:9", "-"):
         done = _run([spec, "-c", "s2", "-o", str(tmp_path / "o")], input=b"")

@@ -6,83 +6,69 @@ found``). PyAV 18 frees that dictionary without a word, so a mistyped key would 
 FFmpeg uses a key when it is an option of one of the objects that opened the input: every
 input's (``AVFormatContext``: probesize, fflags, ...), its demuxer's (``framerate`` for image2,
 ``rtsp_transport`` for rtsp), and the protocol's that read its bytes (``file`` for a path; for a
-URL its scheme's and the transports under it, tcp, udp, tls). :func:`unused_options` asks the
-FFmpeg libraries PyAV loaded about each (``av_opt_find``, through ctypes).
+URL its scheme's and the transports under it, tcp, udp, tls). :func:`unused_options` asks
+PyAV's own FFmpeg about each (``av_opt_find``, through ctypes).
 """
 
 from __future__ import annotations
 
 import ctypes
 import functools
-import glob
-import os
 from collections.abc import Iterable
 
-import av
+import av.format
 
 #: av_opt_find's AV_OPT_SEARCH_FAKE_OBJ: the object is a pointer to an AVClass.
 _SEARCH_FAKE_OBJ = 2
 #: Protocols a network protocol may open below itself, handing them the options it left.
 TRANSPORTS = ("tcp", "udp", "tls")
+#: Options of every URL FFmpeg opens through a protocol (its URLContext's class, which
+#: libavformat does not export): taken for any input read through a protocol.
+URL_OPTIONS = ("rw_timeout", "protocol_whitelist", "protocol_blacklist")
+#: libavformat major versions whose AVInputFormat starts with :class:`_InputFormat`'s fields
+#: (FFmpeg 4 to 8); with another, the demuxer's own options are not looked up.
+KNOWN_LAYOUTS = range(58, 63)
 
 
 class _InputFormat(ctypes.Structure):
-    """The leading public fields of FFmpeg's AVInputFormat (the same since FFmpeg 4)."""
+    """The leading public fields of FFmpeg's AVInputFormat (the same in FFmpeg 4 to 8)."""
 
     _fields_ = [("name", ctypes.c_char_p), ("long_name", ctypes.c_char_p),
                 ("flags", ctypes.c_int), ("extensions", ctypes.c_char_p),
                 ("codec_tag", ctypes.c_void_p), ("priv_class", ctypes.c_void_p)]
 
 
-def _library_path(stem: str) -> str | None:
-    """The file of FFmpeg's library ``stem`` (``libavformat``) that PyAV loaded: from the
-    process's memory map (Linux), else next to PyAV's package (its wheel's copies)."""
-    try:
-        with open("/proc/self/maps", encoding="utf-8", errors="replace") as maps:
-            for line in maps:
-                path = line.rstrip("\n").split(" ")[-1]
-                if os.path.basename(path).startswith((stem + ".", stem + "-")):
-                    return path
-    except OSError:
-        pass
-    package = os.path.dirname(av.__file__)
-    for folder in (package + ".libs", os.path.join(package, ".dylibs")):
-        found = sorted(glob.glob(os.path.join(folder, stem + "*")))
-        if found:
-            return found[0]
-    return None
-
-
 @functools.cache
-def _libraries() -> tuple[ctypes.CDLL, ctypes.CDLL] | None:
-    """PyAV's libavformat and libavutil with the functions used here typed (None: not found,
-    so nothing can be asked)."""
-    paths = _library_path("libavformat"), _library_path("libavutil")
-    if paths[0] is None or paths[1] is None:
-        return None
+def _libraries() -> ctypes.CDLL | None:
+    """PyAV's own FFmpeg, with the functions used here typed; None where it cannot be asked
+    (nothing is refused then). The symbols are looked up through PyAV's extension module, so
+    the loader finds the libavformat and libavutil PyAV links with, not another copy in the
+    process (OpenCV's wheel carries its own FFmpeg). On Windows a module exports only its own
+    symbols: None."""
     try:
-        avformat, avutil = ctypes.CDLL(paths[0]), ctypes.CDLL(paths[1])
-    except OSError:
+        ffmpeg = ctypes.CDLL(av.format.__file__)
+        ffmpeg.avformat_version.restype = ctypes.c_uint
+        ffmpeg.avformat_get_class.restype = ctypes.c_void_p
+        ffmpeg.avio_protocol_get_class.restype = ctypes.c_void_p
+        ffmpeg.avio_protocol_get_class.argtypes = [ctypes.c_char_p]
+        ffmpeg.av_find_input_format.restype = ctypes.c_void_p
+        ffmpeg.av_find_input_format.argtypes = [ctypes.c_char_p]
+        ffmpeg.av_opt_find.restype = ctypes.c_void_p
+        ffmpeg.av_opt_find.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_char_p,
+                                       ctypes.c_int, ctypes.c_int]
+    except (OSError, AttributeError):  # not loadable, or a symbol missing
         return None
-    avformat.avformat_get_class.restype = ctypes.c_void_p
-    avformat.avio_protocol_get_class.restype = ctypes.c_void_p
-    avformat.avio_protocol_get_class.argtypes = [ctypes.c_char_p]
-    avformat.av_find_input_format.restype = ctypes.c_void_p
-    avformat.av_find_input_format.argtypes = [ctypes.c_char_p]
-    avutil.av_opt_find.restype = ctypes.c_void_p
-    avutil.av_opt_find.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_char_p,
-                                   ctypes.c_int, ctypes.c_int]
-    return avformat, avutil
+    return ffmpeg
 
 
-def _classes(avformat: ctypes.CDLL, demuxer: str, protocols: Iterable[str]) -> list[int]:
+def _classes(ffmpeg: ctypes.CDLL, demuxer: str, protocols: Iterable[str]) -> list[int]:
     """The AVClasses whose options FFmpeg took when it opened an input with ``demuxer`` read
     through ``protocols``."""
-    classes = [avformat.avformat_get_class()]
-    found = avformat.av_find_input_format(demuxer.encode())
-    if found:
+    classes = [ffmpeg.avformat_get_class()]
+    found = ffmpeg.av_find_input_format(demuxer.encode())
+    if found and ffmpeg.avformat_version() >> 16 in KNOWN_LAYOUTS:
         classes.append(_InputFormat.from_address(found).priv_class)
-    classes += [avformat.avio_protocol_get_class(name.encode()) for name in protocols]
+    classes += [ffmpeg.avio_protocol_get_class(name.encode()) for name in protocols]
     return [c for c in classes if c]
 
 
@@ -100,18 +86,20 @@ def input_protocols(path: str, python_io: bool) -> tuple[str, ...]:
 def unused_options(keys: Iterable[str], demuxer: str, protocols: Iterable[str]) -> list[str]:
     """The ``keys`` FFmpeg left unused when it opened an input with ``demuxer`` (its name, as
     ``container.format.name``) read through ``protocols``: those no option of every input,
-    of the demuxer or of a protocol is named. Empty when PyAV's FFmpeg libraries cannot be
-    found to ask (nothing is refused then)."""
-    libraries = _libraries()
-    if libraries is None:
+    of the demuxer or of a protocol (nor, through a protocol, of every URL) is named. Empty
+    when there is no key, or PyAV's FFmpeg cannot be asked (nothing is refused then)."""
+    keys, protocols = list(keys), list(protocols)
+    ffmpeg = _libraries() if keys else None
+    if ffmpeg is None:
         return []
-    avformat, avutil = libraries
-    classes = _classes(avformat, demuxer, protocols)
+    classes = _classes(ffmpeg, demuxer, protocols)
 
     def known(key: str) -> bool:
+        if protocols and key in URL_OPTIONS:
+            return True
         for cls in classes:
             fake_object = ctypes.c_void_p(cls)
-            if avutil.av_opt_find(ctypes.byref(fake_object), key.encode(), None, 0,
+            if ffmpeg.av_opt_find(ctypes.byref(fake_object), key.encode(), None, 0,
                                   _SEARCH_FAKE_OBJ):
                 return True
         return False
