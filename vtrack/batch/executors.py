@@ -276,7 +276,7 @@ class DaskExecutor:
                    for n, job in enumerate(jobs)}
         finished = as_completed(futures, loop=self.client.loop)
         seen = checked = time.monotonic()
-        stopped = True  # (until the batch ends by itself)
+        ended_early = True  # (until the batch ends by itself)
         try:
             while not finished.is_empty():
                 if finished.has_ready():
@@ -296,30 +296,38 @@ class DaskExecutor:
                             yield Outcome(job.input, job.config, STATUS_FAILED, error=(
                                 f"Dask: no worker connected to {self.address} for "
                                 f"{_seconds(self.worker_timeout_s)} (--worker-timeout)"))
-                    stopped = False  # no worker is left to stop
+                    ended_early = False  # no worker is left to stop
                     return
-            stopped = False
+            ended_early = False
         finally:
-            if stopped:
+            if ended_early:
                 self._stop_running(stop, [f for f in futures if not f.done()])
             with suppress(Exception):
                 self.client.cancel(list(futures))
             self.close()
 
-    @staticmethod
-    def _stop_running(stop: Any, unfinished: list[Any], grace_s: float = STOP_GRACE_S) -> None:
-        """Stop a batch's tasks (Ctrl-C, SIGTERM, no worker left): ``stop`` is set, so a running
-        job ends ``interrupted`` at its next progress check, with its records whole (as a local
-        worker's job on Ctrl-C), and a job not yet started returns without touching its folder;
-        they get ``grace_s`` to do so. (Cancelling a Dask future does not stop a task that is
-        already running: the worker went on and finished the job after the batch had reported it
-        interrupted.)"""
-        from distributed import wait as wait_for
-
-        with suppress(Exception):
+    def _stop_running(self, stop: Any, unfinished: list[Any],
+                      grace_s: float = STOP_GRACE_S) -> None:
+        """Stop a batch's tasks when it is stopped part way (Ctrl-C, SIGTERM): ``stop`` is set,
+        so a running job ends ``interrupted`` at its next progress check, with its records whole
+        (as a local worker's job on Ctrl-C), and one that starts now returns without touching
+        its folder; the tasks the scheduler has not handed to a worker are cancelled, those it
+        has get ``grace_s`` to end. (Cancelling a Dask future does not stop a task already
+        running: the worker went on and finished the job after the batch had reported it
+        interrupted.) Nothing is asked of a scheduler that is gone (each call would wait for
+        it), and the event is cleared after, so the scheduler does not keep it."""
+        if self.client.status != "running":
+            return
+        with _quiet_client_teardown(), suppress(Exception):
             stop.set()
-            if unfinished:
-                wait_for(unfinished, timeout=grace_s)
+            handed = {key for keys in self.client.processing().values() for key in keys}
+            self.client.cancel([f for f in unfinished if f.key not in handed])
+            started = [f for f in unfinished if f.key in handed]
+            deadline = time.monotonic() + grace_s
+            while any(not f.done() for f in started) and time.monotonic() < deadline:
+                time.sleep(0.05)
+        with _quiet_client_teardown(), suppress(Exception):
+            stop.clear()
 
     @staticmethod
     def _outcome(future: Any, job: Job) -> Outcome:

@@ -28,6 +28,8 @@ LOCK_WAIT_S = 15.0
 
 #: Seconds between two progress messages of a running job.
 PROGRESS_PERIOD = 0.25
+#: Seconds between two questions a Dask job asks the scheduler: is the batch stopped?
+STOP_CHECK_S = 1.0
 Report = Callable[[Progress], None]
 
 
@@ -68,19 +70,33 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
 def execute_on_dask(job: Job, stop_event: str) -> Outcome:
     """:func:`execute` as a Dask task: the batch sets the Dask ``Event`` named ``stop_event``
     when it is stopped (Ctrl-C, SIGTERM). A job that has not started by then returns
-    ``interrupted`` without touching its folder; a running one checks the event with each
-    progress report (every :data:`PROGRESS_PERIOD` seconds) and ends ``interrupted``, its
-    records whole, as a local worker's job does on Ctrl-C."""
+    ``interrupted`` without touching its folder; a running one asks the scheduler about the
+    event at most every :data:`STOP_CHECK_S` seconds of tracking (with its progress reports)
+    and ends ``interrupted``, its records whole, as a local worker's job does on Ctrl-C. An
+    event the scheduler cannot answer for (a lost connection) counts as not set: the job
+    carries on."""
     from distributed import Event
 
     stop = Event(stop_event)
-    if stop.is_set():
+
+    def stopped() -> bool:
+        try:
+            return stop.is_set()
+        except (OSError, TimeoutError):
+            return False
+
+    if stopped():
         return Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted",
                        attempt=job.attempt)
+    checked = time.monotonic()
 
     def check(progress: Progress) -> None:
-        if progress.frames and stop.is_set():
-            raise Interrupted(signal.SIGINT)
+        nonlocal checked
+        now = time.monotonic()
+        if progress.frames and now - checked >= STOP_CHECK_S:
+            checked = now
+            if stopped():
+                raise Interrupted(signal.SIGINT)
 
     return execute(job, check)
 
