@@ -65,7 +65,11 @@ class Frame(ABC):
         problem = frame_size_problem(width, height)
         if problem:
             raise ValueError(f"frame {index}: {problem}")
-        if not math.isfinite(time_s):
+        try:
+            finite = math.isfinite(time_s)
+        except TypeError:  # None, a string
+            finite = False
+        if not finite:
             raise ValueError(f"frame {index}: time_s {time_s!r} is not a finite number")
         self.index = index
         self.time_s = time_s

@@ -16,7 +16,7 @@ import numpy as np
 from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
-from vtrack.frame import BgrFrame, Frame, GrayFrame
+from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
 from vtrack.params import check_seed
@@ -35,12 +35,17 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
     if isinstance(item, Frame):
         return item
     if isinstance(item, np.ndarray):
+        # checked before a copy is made (a huge or float array is refused, not copied)
         if item.ndim == 2:
-            return GrayFrame(index, index / fps, np.ascontiguousarray(item))
-        if item.ndim != 3 or item.shape[2] != 3:
-            raise TypeError(f"frame {index}: expected an HxWx3 BGR or HxW grey image, got "
-                            f"shape {item.shape}")
-        return BgrFrame(index, index / fps, np.ascontiguousarray(item))
+            check_pixels(index, item, 2, "HxW grey")
+            frame_type: type[BgrFrame | GrayFrame] = GrayFrame
+        else:
+            check_pixels(index, item, 3, "HxWx3 BGR or HxW grey")
+            frame_type = BgrFrame
+        problem = frame_size_problem(item.shape[1], item.shape[0])
+        if problem:
+            raise ValueError(f"frame {index}: {problem}")
+        return frame_type(index, index / fps, np.ascontiguousarray(item))
     if type(item).__module__.split(".")[0] == "av":  # PyAV only for a PyAV object
         import av
 
