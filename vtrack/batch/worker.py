@@ -112,17 +112,24 @@ class _Reporter:
 
     def __init__(self, job: Job, report: Report) -> None:
         self.job, self.report = job, report
-        self.total: int | None = None
+        self.info: InputInfo | None = None
         self.last = time.monotonic()
         self.connected = True
 
     def on_open(self, info: InputInfo) -> None:
-        self.total = info.frame_count
-        if self.total is not None:
-            self.total = max(self.total - self.job.request.start_estimate(info.fps), 0)
-            if self.job.request.max_frames is not None:
-                self.total = min(self.total, self.job.request.max_frames)
+        self.info = info
         self._send(0)
+
+    @property
+    def total(self) -> int | None:
+        """The frames the run will track, as far as the input's count tells (read again each
+        time: the reader replaces an estimated count as it reads)."""
+        total = None if self.info is None else self.info.frame_count
+        if total is not None and self.info is not None:
+            total = max(total - self.job.request.start_estimate(self.info.fps), 0)
+            if self.job.request.max_frames is not None:
+                total = min(total, self.job.request.max_frames)
+        return total
 
     def on_frame(self, done: int) -> None:
         now = time.monotonic()

@@ -5,9 +5,10 @@ counts its input's (:class:`FrameProgress`).
 
 A bar appears only once there is progress to show: for ``vtrack run`` after the first frame is
 tracked (so an error opening the input or starting the tracker is never preceded by an empty
-bar), sized by the input's frame count (exact, or the container's duration x frame rate) less
-``--start``, and capped by ``--frames``. It shows done / total, percent, rate and ETA; without
-any count (a pipe) it shows frames done and the rate.
+bar), sized by the input's frame count (exact, or the container's duration x frame rate until
+the frames' timestamps depart from it: then none) less ``--start``, and capped by
+``--frames``. It shows done / total, percent, rate and ETA; without any count (a pipe) it
+shows frames done and the rate.
 
 When stderr is not a terminal (a log file, a pipe, a job scheduler) there is no bar: a plain
 line (:func:`progress_line`) is written every ``--stats-period`` seconds instead, as ``ffmpeg``
@@ -176,15 +177,20 @@ class FrameProgress(_Shown):
         return total
 
     def on_frame(self, done: int) -> None:
+        if self.quiet or self.info is None:
+            return
+        # the input's count is read again each time: the reader replaces an estimate as it
+        # reads (None once the timestamps depart from it, the exact count at the end)
+        total = self._total(self.info)
         if self.bar is None:
-            if self.quiet or self.info is None:
-                return
-            self.bar = self._open(self.info.name, self._total(self.info))
+            self.bar = self._open(self.info.name, total)
         if isinstance(self.bar, ProgressLines):
+            self.bar.total = total
             self.bar.update(done)
             return
-        if self.bar.total is not None and done > self.bar.total:  # the estimate was short
-            self.bar.total = done
+        if total is not None and done > total:  # the estimate was short
+            total = done
+        self.bar.total = total
         self.bar.update(done - self.bar.n)
 
 

@@ -39,7 +39,8 @@ class InputInfo:
     height: int
     #: Nominal frame rate (None when the container does not say).
     fps: float | None
-    #: Number of frames, exact or the container's estimate (None when unknown, e.g. a pipe).
+    #: Number of frames (None when unknown, e.g. a pipe): exact, or an estimate when
+    #: ``frame_count_estimated`` says so.
     frame_count: int | None
     duration_s: float | None
     codec: str | None
@@ -47,6 +48,12 @@ class InputInfo:
     #: Degrees (0, 90, 180, 270) the stored pictures were turned counter-clockwise to display
     #: them upright, from the stream's display matrix. Frames come out already turned.
     rotation: int = 0
+    #: ``frame_count`` is no count the container lists but its duration times the nominal
+    #: frame rate (Matroska, WebM, MPEG-TS). A gap in the timestamps or a variable frame rate
+    #: makes that wrong, so the reader replaces it as it reads: with None once the frames'
+    #: timestamps depart from it, with the exact count (and False here) once it read the
+    #: input to its end.
+    frame_count_estimated: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

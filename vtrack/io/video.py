@@ -68,6 +68,11 @@ STEADY_RATE_FORMATS = frozenset({"mpegts"})
 #: of a frame).
 STEADY_INTERVALS = 4
 STEADY_TOLERANCE = 0.1
+#: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the
+#: first), plus this share of its number, before a frame count estimated from the duration at
+#: that rate is given up (a gap in the timestamps, a variable frame rate).
+ESTIMATE_SLACK_FRAMES = 2
+ESTIMATE_SLACK_SHARE = 0.1
 #: FFmpeg's readers that render text as pictures (ANSI art): such an input is a text file.
 TEXT_FORMATS = frozenset({"tty"})
 #: Decoded layouts handed over as I420 planes without conversion.
@@ -355,6 +360,15 @@ def _refuse_nobuffer(path: str, how: FFmpegInput) -> None:
                              "for live streams (rtsp://, udp:// ..., or --live)")
 
 
+def _check_estimate(info: InputInfo, index: int, time_s: float, fps: float) -> None:
+    """Give up ``info``'s estimated frame count (None) when frame ``index``, ``time_s``
+    seconds after the first, is off the timeline of ``fps`` frames a second the estimate
+    counted with by more than :data:`ESTIMATE_SLACK_FRAMES` and
+    :data:`ESTIMATE_SLACK_SHARE` of ``index``: the timestamps jump or the rate varies."""
+    if abs(time_s * fps - index) > ESTIMATE_SLACK_FRAMES + ESTIMATE_SLACK_SHARE * index:
+        info.frame_count, info.frame_count_estimated = None, False
+
+
 class VideoSource(Source):
     """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
     threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
@@ -428,7 +442,8 @@ class VideoSource(Source):
         if self._end_s is not None and start_s is not None:
             duration = self._end_s - start_s
         frame_count = stream.frames or None
-        if frame_count is None and duration is not None and fps:
+        estimated = frame_count is None and duration is not None and bool(fps)
+        if estimated:
             frame_count = round(duration * fps)
         # a gap in a constant-rate stream's timestamps is pictures lost (a variable-rate one
         # may pause): its listed frame count is its duration times its rate
@@ -453,6 +468,7 @@ class VideoSource(Source):
             codec=stream.codec_context.name,
             pix_fmt=self._first.format.name,
             rotation=self._rotation,
+            frame_count_estimated=estimated,
         )
 
     @property
@@ -553,6 +569,8 @@ class VideoSource(Source):
                 elif self._dropped > refused:
                     index += self._dropped - refused
                 refused = self._dropped
+                if info.frame_count_estimated and t is not None and t0 is not None:
+                    _check_estimate(info, index, time_s, fps)
                 yield decoded_frame(decoded, index, time_s, self._rotation)
                 index += 1
                 yielded += 1
@@ -576,6 +594,8 @@ class VideoSource(Source):
                 f"{info.path}: decoding stopped at frame {index} ({shortfall}; truncated file?)",
                 index,
             )
+        if not self._stream.frames:  # read to its end: the count is known now
+            info.frame_count, info.frame_count_estimated = index, False
 
     def _torn_packet(self) -> str | None:
         """MPEG-TS is a run of fixed-size packets (188 bytes; 192 or 204 in variants): a file
