@@ -381,7 +381,7 @@ def test_a_start_frame_that_does_not_decode_is_refused(tmp_path: Path) -> None:
     picture = vtrack("frame", str(sequence), "--at", "10", "-o", str(tmp_path / "f.png"))
     error = picture.stderr.decode()  # was: "has no frame 10 (frames 0..29)"
     assert picture.returncode != 0 and "Traceback" not in error
-    assert "frame 10 could not be decoded (damaged; the next that decodes is frame 11)" in error
+    assert "frame 10 could not be decoded (damaged); the next frame it has is frame 11" in error
 
 
 def test_paths_holding_bytes_that_are_not_utf8_work(tmp_path: Path) -> None:

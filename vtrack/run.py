@@ -109,8 +109,11 @@ class RunSummary:
     precision20: float | None = None
     frames_occluded: int = 0
     frames_lost: int = 0
-    #: Frames of the input that could not be decoded and were skipped (damaged file).
+    #: Frames of the input that could not be decoded and were skipped (damaged file), and
+    #: those with no picture at all (``frames_missing``).
     frames_skipped: int = 0
+    #: Of ``frames_skipped``, images missing from a folder's numbering.
+    frames_missing: int = 0
     #: A live source's frames passed over because a newer one arrived while the tracker was
     #: busy (``--live``); track.csv keeps the source's frame numbers, with these left out.
     frames_passed: int = 0
@@ -138,8 +141,10 @@ class RunSummary:
         if not self.multi_target:  # one target's states; tracks have their own in tracks.csv
             parts.append(f"occluded {self.frames_occluded}")
             parts.append(f"lost {self.frames_lost}")
-        if self.frames_skipped:
-            parts.append(f"skipped {self.frames_skipped} undecodable")
+        if self.frames_skipped > self.frames_missing:
+            parts.append(f"skipped {self.frames_skipped - self.frames_missing} undecodable")
+        if self.frames_missing:
+            parts.append(f"skipped {self.frames_missing} missing from the numbering")
         if self.frames_passed:
             parts.append(f"skipped {self.frames_passed} while busy (live)")
         status = "" if self.status == STATUS_COMPLETE else f" ({self.status})"
@@ -208,21 +213,21 @@ class _Signals:
             raise Interrupted(self.pending)
 
 
-def _from(frames: Iterator[Frame], start: int, what: str) -> Iterator[Frame]:
-    """The frames numbered ``start`` and on (the earlier ones are decoded and dropped).
-    InputError when frame ``start`` itself is missing (damaged: ``what`` is the input's name)
-    and a later one comes first: the initial box is frame ``start``'s, not that one's."""
+def _from(source: Source, start: int, what: str) -> Iterator[Frame]:
+    """``source``'s frames numbered ``start`` and on (the earlier ones are decoded and
+    dropped). InputError when frame ``start`` itself is missing (damaged, or no image numbered
+    for it: ``what`` is the input's name) and a later one comes first: the initial box is frame
+    ``start``'s, not that one's."""
     if start == 0:
-        yield from frames
+        yield from source
         return
     first = True
-    for frame in frames:
+    for frame in source:
         if frame.index < start:
             continue
         if first and frame.index > start:
-            raise InputError(f"--start {start}: frame {start} of {what} could not be decoded "
-                             f"(damaged; the next is frame {frame.index}): start at a frame "
-                             "that decodes")
+            raise InputError(f"--start {start}: frame {start} of {what} {source.absent(start)}"
+                             f"; the next is frame {frame.index}: start at a frame it has")
         first = False
         yield frame
 
@@ -646,7 +651,7 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
 def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
                      ) -> Iterator[Frame]:
     """``source``'s frames from the resolved first one on, at most the resolved number."""
-    return resolved.span.take(_from(iter(source), resolved.start, request.input))
+    return resolved.span.take(_from(source, resolved.start, request.input))
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -789,6 +794,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         frames_occluded=tracked.states[TrackState.OCCLUDED],
         frames_lost=tracked.states[TrackState.LOST],
         frames_skipped=source.frames_skipped,
+        frames_missing=source.frames_missing,
         frames_passed=source.frames_passed,
         multi_target=resolved.pipeline.multi_target,
         error=error,

@@ -13,6 +13,7 @@ a warning, and ground truth stays aligned.
 
 from __future__ import annotations
 
+import bisect
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -114,6 +115,7 @@ class ImageFolderSource(Source):
             raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/")
         self._places = frame_places(self._files)
         self._skipped = 0
+        self._missing = 0  # of those, places no image is numbered for
         self._first = read_image(self._files[0])
         height, width = self._first.shape[:2]
         fps = fps or DEFAULT_FPS
@@ -139,6 +141,19 @@ class ImageFolderSource(Source):
     def frames_skipped(self) -> int:
         return self._skipped
 
+    @property
+    def frames_missing(self) -> int:
+        return self._missing
+
+    def absent(self, index: int) -> str:
+        """``is missing from the numbering (no image between 0003.jpg and 0007.jpg)`` for a
+        place no image is numbered for, else an image that could not be decoded."""
+        after = bisect.bisect_left(self._places, index)
+        if 0 < after < len(self._places) and self._places[after] != index:
+            return (f"is missing from the numbering (no image between "
+                    f"{self._files[after - 1].name} and {self._files[after].name})")
+        return super().absent(index)
+
     def _frames(self) -> Iterator[Frame]:
         fps = self.info.fps or DEFAULT_FPS
         size = self._first.shape[:2]
@@ -147,6 +162,7 @@ class ImageFolderSource(Source):
         missing = self._places[-1] + 1 - len(self._files)
         if missing:
             self._skipped += missing
+            self._missing = missing
             gap = next(i for i, place in enumerate(self._places) if place != i)
             self.warnings.append(
                 f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "

@@ -94,6 +94,17 @@ class Source(Closing, ABC):
         has ended."""
         return 0
 
+    @property
+    def frames_missing(self) -> int:
+        """Of :attr:`frames_skipped`, the frames that have no picture in the input at all
+        (images missing from a folder's numbering); the others could not be decoded."""
+        return 0
+
+    def absent(self, index: int) -> str:
+        """Why frame ``index``, passed over by the frames yielded, has no picture: a phrase
+        that follows ``frame N`` in a message (``could not be decoded (damaged)``)."""
+        return "could not be decoded (damaged)"
+
     @abstractmethod
     def _frames(self) -> Iterator[Frame]:
         """Produce the frames (runs in the reader thread)."""

@@ -115,7 +115,7 @@ def read_frame(input_spec: str, index: int) -> np.ndarray:
             if frame.index == index:
                 return frame.bgr().copy()
             if frame.index > index:
-                raise InputError(f"{input_spec}: frame {index} could not be decoded (damaged; "
-                                 f"the next that decodes is frame {frame.index})")
+                raise InputError(f"{input_spec}: frame {index} {source.absent(index)}; the "
+                                 f"next frame it has is frame {frame.index}")
             last = frame.index
     raise InputError(f"{input_spec}: has no frame {index} (frames 0..{last})")

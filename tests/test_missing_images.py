@@ -1,0 +1,57 @@
+"""Images missing from a folder's numbering are called missing, as the warning says, not
+undecodable or damaged (in the summary line, ``vtrack frame`` and ``--start``)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import make_scene, write_image_sequence
+
+
+def vtrack(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=120, check=False)
+
+
+def truth(images: Path) -> tuple[str, ...]:
+    """The options that read the sequence's (1-based) ground truth."""
+    return "--gt", str(images.parent / "groundtruth_rect.txt"), "--gt-origin", "1"
+
+
+@pytest.fixture(scope="module")
+def numbered(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A sequence of 12 images with 0004..0006.jpg (frames 3..5) removed."""
+    folder = tmp_path_factory.mktemp("missing") / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 12, 30), folder)
+    for number in (4, 5, 6):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    return folder / "img"
+
+
+def test_the_summary_counts_missing_images_as_missing(numbered: Path, tmp_path: Path) -> None:
+    """The summary said ``skipped 3 undecodable`` under a warning of 3 missing images."""
+    done = vtrack("run", str(numbered), *truth(numbered), "-c", "s0", "--no-video",
+                  "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    assert "skipped 3 missing from the numbering" in done.stdout
+    assert "undecodable" not in done.stdout
+    summary = json.loads((tmp_path / "out" / "run.json").read_text())["summary"]
+    assert (summary["frames_skipped"], summary["frames_missing"]) == (3, 3)
+
+
+def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:
+    """``vtrack frame --at 4`` said ``frame 4 could not be decoded (damaged; ...)``."""
+    picture = vtrack("frame", str(numbered), "--at", "4", "-o", str(tmp_path / "f.png"))
+    assert picture.returncode != 0 and picture.stderr.count("\n") == 1, picture.stderr
+    assert (f"{numbered}: frame 4 is missing from the numbering (no image between 0003.jpg "
+            "and 0007.jpg); the next frame it has is frame 6") in picture.stderr
+    started = vtrack("run", str(numbered), *truth(numbered), "-c", "s0", "--start", "3",
+                     "--no-video", "-o", str(tmp_path / "out"))
+    assert started.returncode == 2, started.stderr
+    assert "frame 3 of" in started.stderr and "is missing from the numbering" in started.stderr
+    assert "damaged" not in started.stderr
