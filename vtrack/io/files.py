@@ -34,6 +34,18 @@ def os_reason(exc: BaseException) -> str:
     return getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
 
 
+#: The start of a name FFmpeg reads as ``protocol:rest``: its scheme characters, a colon.
+_PROTOCOL_LIKE = re.compile(r"[A-Za-z0-9+.-]+:")
+
+
+def ffmpeg_file(path: str | Path) -> str:
+    """The name that makes FFmpeg open the local file ``path`` as that file: ``file:`` before
+    a name whose start it would read as a protocol (``x:y.mp4``: "Protocol not found";
+    ``file:z.mp4``: the file ``z.mp4``), else ``path`` unchanged."""
+    text = str(path)
+    return f"file:{text}" if _PROTOCOL_LIKE.match(text) else text
+
+
 def check_input_path(path: str) -> None:
     """Raise InputError when ``path`` does not exist or cannot be read."""
     if not os.path.lexists(path):

@@ -25,7 +25,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.files import os_reason
+from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.source import InputInfo, Source
 
 IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
@@ -83,7 +83,7 @@ def read_image(path: Path) -> np.ndarray:
     Raises InputError naming the file when FFmpeg cannot decode it.
     """
     try:
-        with av.open(str(path)) as container:
+        with av.open(ffmpeg_file(path)) as container:
             if not container.streams.video:
                 raise StopIteration
             codec = container.streams.video[0].codec_context

@@ -44,7 +44,7 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.ffoptions import input_protocols, unused_options
-from vtrack.io.files import os_reason, piped_stdin
+from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.pyfile import CapturingStream, CountedStream
@@ -263,7 +263,7 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     if "://" not in path:
         if how.follow_s is not None:
             return _open_stream(GrowingFile(path, how.follow_s), **kwargs)
-        return av.open(path, **kwargs)
+        return av.open(ffmpeg_file(path), **kwargs)
     scheme = path.split("://", 1)[0].lower()
     if scheme == "srt":
         raise InputError(f"{path}: srt:// is not in the FFmpeg that PyAV's wheel ships; relay "

@@ -27,7 +27,7 @@ import numpy as np
 from vtrack.errors import ConfigError, OutputError
 from vtrack.frame import Frame, I420Frame, to_video_range
 from vtrack.geometry import Window
-from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
+from vtrack.io.files import Closing, ffmpeg_file, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
 
 #: Clock of the output timestamps: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
@@ -115,7 +115,8 @@ class VideoWriter(Closing):
         live = self.url is not None
         where = self.url if self.url is not None else str(self._temp)
         try:  # a file: nothing touches the disk yet
-            container = av.open(where, "w", format=live_format(where) if live else None)
+            container = av.open(where if live else ffmpeg_file(where), "w",
+                                format=live_format(where) if live else None)
         except (av.FFmpegError, OSError) as exc:  # a live output that cannot be reached
             raise OutputError(f"--video-out {where}: cannot be opened ({os_reason(exc)})"
                               ) from None
@@ -288,7 +289,7 @@ def verify_video(path: Path | str, frames: int) -> str | None:
     a frame count falls back to counting the packets.
     """
     try:
-        with av.open(str(path)) as container:
+        with av.open(ffmpeg_file(path)) as container:
             stream = container.streams.video[0]
             found = stream.frames or sum(1 for p in container.demux(stream) if p.size)
     except (av.FFmpegError, OSError, IndexError) as exc:

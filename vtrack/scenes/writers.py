@@ -30,7 +30,7 @@ import numpy as np
 from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError
-from vtrack.io.files import os_reason, replacing
+from vtrack.io.files import ffmpeg_file, os_reason, replacing
 from vtrack.io.images import encode_image
 from vtrack.scenes.scene import Scene
 
@@ -159,7 +159,7 @@ def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, c
                   pix_fmt: str, progress: bool, keyint: int | None) -> None:
     """What :func:`write_video` promises, written to ``temp`` (errors name ``path``)."""
     rate = Fraction(scene.fps).limit_denominator(1001)
-    with _writing(path), av.open(str(temp), "w") as container:
+    with _writing(path), av.open(ffmpeg_file(temp), "w") as container:
         options = {"crf": str(crf), "preset": preset}
         if keyint is not None:
             options["g"] = str(keyint)
