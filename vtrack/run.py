@@ -244,11 +244,19 @@ class _Span:
     seconds: float | None = None
     #: A frame at or past ``seconds`` came: the duration, not the input, ended the run.
     ended_by_time: bool = False
+    #: Frames handed on so far.
+    taken: int = 0
 
     @property
     def given(self) -> bool:
         """Whether ``--frames`` was given."""
         return self.count is not None or self.seconds is not None
+
+    @property
+    def stopped(self) -> bool:
+        """Whether ``--frames`` ended the run (its count of frames taken, or a frame at or
+        past its duration came) rather than the input's end."""
+        return self.ended_by_time or (self.count is not None and self.taken >= self.count)
 
     def take(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """``frames`` up to the end of the span."""
@@ -262,6 +270,7 @@ class _Span:
                 elif frame.time_s >= end:
                     self.ended_by_time = True
                     return
+            self.taken += 1
             yield frame
 
 
@@ -807,6 +816,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.error = error = f"{request.input}: no frame could be decoded"
     metrics: Mapping[str, Any] = {}
     start = resolved.start
+    stopped = resolved.span.stopped  # by --frames
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
         gt = gt[start:]  # the frames tracked (--start)
         metrics = summarize(formatter.boxes, gt, formatter.states)
@@ -814,8 +824,6 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
-        limit = resolved.span.count
-        stopped = (limit is not None and span >= limit) or resolved.span.ended_by_time  # --frames
         if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (
@@ -844,6 +852,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "input": source.info.to_dict(),
         "request": request.to_dict(),
         "start_frame": resolved.start,
+        # --frames ended the run, not the input: ground truth past it belongs to frames not read
+        "stopped_by_frames": stopped,
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
         "init_from": resolved.init_from,
         "config": request.config.resolved(),

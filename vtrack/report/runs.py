@@ -407,6 +407,18 @@ def _text_or_none(value: object) -> str | None:
     return value
 
 
+def _stopped_by_frames(record: dict[str, Any], frames: int) -> bool:
+    """Whether ``--frames`` ended the run of ``record`` (spanning ``frames`` frames) before
+    its input ended, as ``run.json`` records it (``stopped_by_frames``); a record from before
+    that: ``--frames N`` reached, or any ``--frames Ts`` (a duration may have ended it)."""
+    recorded = record.get("stopped_by_frames")
+    if recorded is not None:
+        return bool(recorded)
+    request = record.get("request") or {}
+    limit = request.get("max_frames")
+    return bool(limit and frames >= limit) or request.get("max_s") is not None
+
+
 def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None) -> RunResult:
     """Read one run folder. ``gt`` scores a single-target run that recorded no ground truth
     (the file for its input, see :func:`pick_ground_truth`, if its length fits the run).
@@ -464,11 +476,10 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         elif gt is not None:
             truths = [gt] if isinstance(gt, GroundTruth) else list(gt)
             truth = pick_ground_truth(truths, result.input, request)
-            # Frames the run spans (skipped frames included); one stopped by --frames N is
-            # scored on its N frames like one that stopped on an error
+            # Frames the run spans (skipped frames included); one stopped by --frames (N or
+            # a duration) is scored on its frames like one that stopped on an error
             frames = len(rows)
-            limit = request.get("max_frames")
-            whole = result.status == "complete" and not (limit and frames >= limit)
+            whole = result.status == "complete" and not _stopped_by_frames(record, frames)
             misfit = truth.misfit(frames, whole, start) if truth else None
             if misfit:
                 result.note = (f"{folder}: input {result.input} not scored: {misfit}; give "
