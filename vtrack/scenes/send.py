@@ -9,16 +9,19 @@ on the wall clock, so the receiver sees a stream arriving in real time.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
 import av
 
+from vtrack.io.files import ffmpeg_file, os_reason
+
 
 def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> int:
     """Copy the video stream of ``path`` into ``url`` as ``fmt``, each packet sent when its
     timestamp is due (``realtime``), and return the number of packets sent."""
-    with av.open(path) as source, av.open(url, "w", format=fmt) as sink:
+    with av.open(ffmpeg_file(path)) as source, av.open(url, "w", format=fmt) as sink:
         video = source.streams.video[0]
         out = sink.add_stream_from_template(video)
         started = time.perf_counter()
@@ -39,5 +42,26 @@ def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> 
     return sent
 
 
+def main(argv: list[str] | None = None) -> int:
+    """``python -m vtrack.scenes.send FILE URL [FORMAT]``: a usage line and exit code 2 for
+    missing or extra arguments, one line and exit code 1 when the file or the URL fails."""
+    parser = argparse.ArgumentParser(
+        prog="python -m vtrack.scenes.send",
+        description="Send the video stream of FILE to URL in real time (as ffmpeg -re -i FILE "
+                    "-c copy -f FORMAT URL).")
+    parser.add_argument("file", metavar="FILE", help="a video file")
+    parser.add_argument("url", metavar="URL", help="where to send it, e.g. udp://127.0.0.1:5000")
+    parser.add_argument("format", metavar="FORMAT", nargs="?", default="mpegts",
+                        help="the container sent (default: mpegts)")
+    args = parser.parse_args(argv)
+    try:
+        send(args.file, args.url, args.format)
+    except (av.FFmpegError, OSError, ValueError, IndexError) as exc:
+        print(f"{parser.prog}: error: {args.file} -> {args.url}: {os_reason(exc)}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
 if __name__ == "__main__":
-    send(sys.argv[1], sys.argv[2], *sys.argv[3:4])
+    sys.exit(main())

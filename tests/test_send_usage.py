@@ -1,0 +1,34 @@
+"""``python -m vtrack.scenes.send``: wrong arguments get a usage line and exit code 2, a file
+it cannot send one line and exit code 1, never a traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SENDER = [sys.executable, "-m", "vtrack.scenes.send"]
+
+
+@pytest.mark.parametrize("args", [[], ["clip.mp4"], ["a", "b", "c", "d"]])
+def test_wrong_arguments_print_the_usage(args: list[str], tmp_path: Path) -> None:
+    """Too few arguments ended in an IndexError traceback."""
+    done = subprocess.run([*SENDER, *args], capture_output=True, text=True, cwd=tmp_path,
+                          timeout=60, check=False)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("usage: python -m vtrack.scenes.send [-h] FILE URL [FORMAT]")
+    assert "Traceback" not in done.stderr
+
+
+def test_help_and_a_missing_file(tmp_path: Path) -> None:
+    """``--help`` was an IndexError traceback; a missing file a FileNotFoundError one."""
+    helped = subprocess.run([*SENDER, "--help"], capture_output=True, text=True, timeout=60,
+                            check=False)
+    assert helped.returncode == 0 and "FILE URL [FORMAT]" in helped.stdout, helped.stderr
+    missing = subprocess.run([*SENDER, str(tmp_path / "none.mp4"), "udp://127.0.0.1:9"],
+                             capture_output=True, text=True, timeout=60, check=False)
+    assert missing.returncode == 1, missing.stderr
+    assert missing.stderr.count("\n") == 1 and "none.mp4" in missing.stderr, missing.stderr
+    assert "No such file" in missing.stderr
