@@ -12,6 +12,7 @@ import threading
 from pathlib import Path
 
 from vtrack.io.csvfile import format_cell
+from vtrack.io.outdir import RUN_OUTPUTS
 from vtrack.scenes import make_scene, write_raw, write_video
 
 W, H = 160, 120
@@ -125,6 +126,28 @@ def test_no_output_of_a_run_is_written_over_what_it_reads(tmp_path: Path) -> Non
         assert done.stderr.count("\n") == 1
     assert clip.read_bytes() == original and inside.read_bytes() == original
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
+        tmp_path: Path) -> None:
+    """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was
+    filled during the run and then removed by the folder's clearing at its end, exit 0: only
+    the files the run itself writes were refused, not all of RUN_OUTPUTS."""
+    smooth = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(smooth, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in smooth.boxes[0])
+    multi = write_video(make_scene("multi", seed=2, width=W, height=H, frames=60, fps=30),
+                        tmp_path / "multi.mp4")
+    cases = [(["-c", "s0", str(clip), "--init", box], name) for name in RUN_OUTPUTS]
+    cases += [(["-c", "s3", str(multi)], name) for name in ("track.csv", "error.log")]
+    for index, (args, name) in enumerate(cases):
+        out = tmp_path / f"o{index}"
+        done = _vtrack("run", *args, "--no-video", "-q", "--out", str(out),
+                       "--stream", str(out / name))
+        assert done.returncode == 2, (name, done.stderr)
+        assert done.stderr == (f"vtrack: error: --stream {out / name}: is one of this run's "
+                               "own outputs; name another file\n")
+        assert not out.exists()
 
 
 def test_a_stream_file_holding_lines_is_replaced_only_with_overwrite(tmp_path: Path) -> None:

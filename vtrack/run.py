@@ -67,7 +67,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.identity import sizes
-from vtrack.io.outdir import LOCK_NAME, OutputFolder, refuse_replacing
+from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.source import TIME_SLACK_S
 from vtrack.io.stream import STDOUT, StreamWriter
@@ -505,7 +505,8 @@ class _Writers:
 
 def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
     """ConfigError when a file this run would write (``names`` in its folder, the ``--stream``
-    file) is the input or the ground truth it reads, or the stream is one of its own outputs:
+    file) is the input or the ground truth it reads, or the stream is one of its own outputs
+    (any file of ``RUN_OUTPUTS``: the folder's clearing would remove it):
     ``--overwrite`` replaces an earlier run's results, never what this run reads."""
     outputs = [(request.out_dir / name, "--out") for name in names]
     stream = _stream_file(request)
@@ -516,7 +517,7 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
                     and os.path.samefile(output, source):
                 raise ConfigError(f"{option} {output}: is {what} of this run ({source}); "
                                   "write the results elsewhere")
-    own = [output for output, _ in outputs] + [request.out_dir / LOCK_NAME]
+    own = [request.out_dir / name for name in (*RUN_OUTPUTS, LOCK_NAME)]  # all it clears
     if stream is not None and any(stream.resolve() == output.resolve() for output in own):
         raise ConfigError(f"--stream {stream}: is one of this run's own outputs; name another "
                           "file")
