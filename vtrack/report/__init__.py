@@ -33,7 +33,7 @@ from matplotlib.figure import Figure
 
 from vtrack import __version__
 from vtrack.batch.jobs import SUMMARY_COLUMNS
-from vtrack.errors import InputError, OutputError
+from vtrack.errors import InputError, OutputError, plural
 from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
@@ -289,6 +289,7 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
     that cannot be written."""
     written: list[Path] = []
     sections = []
+    once: list[str] = []  # inputs whose failure frames are not drawn: read once, live
     for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
@@ -315,6 +316,7 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
             if thumbnails is not None:
                 figures.append(_save(staged, thumbnails, plot_dir / f"failures_{slug}.png"))
             warnings += [problem] if problem else []
+            once += [name] if failures.read_once_misses(scored_drawn) else []
         written += figures
         notes = [] if not left_out else [
             f"{len(left_out)} of the {len(by_input[name])} runs of this input are not drawn "
@@ -328,6 +330,14 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
             p.relative_to(plot_dir.parent).as_posix() for p in figures], notes))
         if on_input is not None:
             on_input(done, len(by_input))
+    if once:  # one note for them all: nothing was waited for
+        warnings.append(f"failure frames of {plural(len(once), 'input')} left out: "
+                        f"{', '.join(once[:NAMED_LEFT_OUT])}"
+                        + (f" and {len(once) - NAMED_LEFT_OUT} more" if len(once) >
+                           NAMED_LEFT_OUT else "")
+                        + ": a stream, URL, stdin or device, read by the runs as it came and "
+                        "not read again (it would show what it sends now, not the frames "
+                        "tracked)")
     return written, sections
 
 

@@ -127,6 +127,14 @@ def failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, s
     return figure
 
 
+def read_once_misses(runs: Sequence[RunResult]) -> bool:
+    """Whether ``runs`` (one input) miss the target somewhere but their input was read once as
+    it came (:attr:`RunResult.live_input`: a stream, a URL, stdin): their failure frames are
+    not drawn, what the input sends now is not what was tracked."""
+    return not any(r.source for r in runs) and any(
+        r.live_input and r.truth is not None and failure_frames(r) for r in runs)
+
+
 def try_failure_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str]
                        ) -> tuple[Figure | None, str | None]:
     """:func:`failure_figure`, or (None, a warning) when the input cannot be read again."""

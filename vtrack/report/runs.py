@@ -39,7 +39,8 @@ from vtrack.geometry import Box
 from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
-from vtrack.io.specs import is_url
+from vtrack.io.limits import special_kind
+from vtrack.io.specs import is_live, is_url
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
 
@@ -123,6 +124,9 @@ class RunResult:
     first_frame: int = 0
     #: Why ``source`` is None for an input that is there: it is not the file the run read.
     source_changed: str | None = None
+    #: The run read its input once as it came (a stream, a URL, stdin, a device or a FIFO,
+    #: :func:`read_once`): ``source`` is None, what is there now is not what was tracked.
+    live_input: bool = False
     #: The tracker's box per frame (None: lost) and the ground truth's, when it was rescored.
     boxes: list[Box | None] = field(default_factory=list)
     truth: list[Box | None] | None = None
@@ -339,6 +343,14 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
     return there if os.path.exists(there) else path
 
 
+def read_once(spec: str) -> bool:
+    """Whether the input a run recorded (``run.json``'s request) gave its frames once, as they
+    came: stdin (``-``), a URL (a live stream, or a server that may send another video now), a
+    capture device, a FIFO or another special file. Reading it again would wait for a sender
+    or show what is there now, not the frames the run tracked."""
+    return spec == "-" or is_url(spec) or is_live(spec) or special_kind(spec) is not None
+
+
 def _changed_since_run(record: dict[str, Any], role: str, path: str) -> bool:
     """Whether the file the run recorded as its ``role`` (``input``, ``gt``) now has another
     identity (size, modification time) than the one ``run.json`` recorded; False when the
@@ -454,7 +466,9 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.confidence = [_number(row.get("score")) for row in rows]
         result.boxes, result.first_frame = _boxes(rows), start
         found_input, found_gt = _found_path(record, "input"), _found_path(record, "gt")
-        if not request.get("raw") and found_input not in (None, "-"):
+        if found_input is not None and read_once(found_input):
+            result.live_input = True
+        elif not request.get("raw") and found_input is not None:
             if _changed_since_run(record, "input", found_input):
                 result.source_changed = (f"the input {found_input} changed since the run (its "
                                          "size or modification time); its frames may not be "

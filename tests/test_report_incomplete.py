@@ -1,0 +1,71 @@
+"""`vtrack report` on results it cannot show whole (probe 49): runs of a live input whose frames
+are gone, a batch still writing its folder, batch rows whose results folder was removed. Every
+input is made here: generated clips run by `vtrack run` and `vtrack batch`."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vtrack.io.specs import input_name
+from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+W, H = 160, 120
+
+
+def vtrack(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    """``python -m vtrack ARGS`` as a user runs it (a whole process: exit code, stderr)."""
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=300, check=False, cwd=cwd)
+
+
+def warnings_of(done: subprocess.CompletedProcess) -> list[str]:
+    """The ``vtrack: warning:`` lines of a command that succeeded."""
+    assert done.returncode == 0, done.stderr
+    return [line.removeprefix("vtrack: warning: ") for line in done.stderr.splitlines()
+            if line.startswith("vtrack: warning: ")]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A run of a 60-frame occlusion clip with s0 and its ground truth (the target is missed:
+    the report draws failure frames of it)."""
+    folder = tmp_path_factory.mktemp("incomplete")
+    scene = make_scene("occlusion", seed=0, width=W, height=H, frames=60, fps=30)
+    video = write_video(scene, folder / "occlusion.mp4")
+    gt = write_groundtruth(scene, folder / "occlusion.gt.txt")
+    done = vtrack("run", str(video), "-c", "s0", "--gt", str(gt), "--no-video", "-q",
+                  "-o", str(folder / "run"))
+    assert done.returncode == 0, done.stderr
+    return folder / "run"
+
+
+def test_a_live_input_is_not_read_again_for_the_failure_frames(run: Path,
+                                                                 tmp_path: Path) -> None:
+    """The report reopened a run's udp:// / tcp:// / rtsp:// / http:// input to draw the failure
+    frames: it drew what the sender sent now (another video), or waited 10 s per run for a
+    sender that was gone. Now the input the run recorded is not read again: one note names
+    the inputs whose failure frames are left out."""
+    live = ["udp://127.0.0.1:9", "tcp://127.0.0.1:9", "rtsp://127.0.0.1:9/cam",
+            "http://127.0.0.1:9/clip.mp4", "-"]
+    for index, spec in enumerate(live):
+        folder = tmp_path / "runs" / f"r{index}"
+        shutil.copytree(run, folder)
+        record = json.loads((folder / "run.json").read_text())
+        record["request"]["input"] = record["input"]["path"] = spec
+        record["input"]["name"] = input_name(spec)
+        (folder / "run.json").write_text(json.dumps(record))
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    names = ", ".join(sorted(input_name(spec) for spec in live))
+    assert warnings_of(done) == [
+        f"failure frames of 5 inputs left out: {names}: a stream, URL, stdin or device, read "
+        "by the runs as it came and not read again (it would show what it sends now, not the "
+        "frames tracked)"]
+    plots = {p.name for p in (tmp_path / "report" / "plots").iterdir()}
+    assert not [p for p in plots if p.startswith("failures_")]
+    assert {f"overlap_{input_name(spec)}.png" for spec in live} <= plots  # the rest is there
