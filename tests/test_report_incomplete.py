@@ -5,13 +5,17 @@ input is made here: generated clips run by `vtrack run` and `vtrack batch`."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
+from vtrack.io.outdir import OutputFolder
 from vtrack.io.specs import input_name
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
@@ -69,3 +73,57 @@ def test_a_live_input_is_not_read_again_for_the_failure_frames(run: Path,
     plots = {p.name for p in (tmp_path / "report" / "plots").iterdir()}
     assert not [p for p in plots if p.startswith("failures_")]
     assert {f"overlap_{input_name(spec)}.png" for spec in live} <= plots  # the rest is there
+
+
+def _holds(folder: Path, pid: int) -> bool:
+    """Whether process ``pid`` has taken ``folder`` (its lock file names it)."""
+    try:
+        return (folder / ".vtrack.lock").read_text().startswith(f"pid {pid}: ")
+    except OSError:
+        return False
+
+
+def test_a_report_of_a_folder_a_batch_still_writes_says_so(run: Path, tmp_path: Path) -> None:
+    """A report made while a batch still ran into the folder was silently incomplete. Now one
+    warning names the folder and that a batch is still writing it; a stale lock (left by a
+    killed batch, held by no process) is no warning."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    shutil.copy(run.parent / "occlusion.mp4", clips)
+    shutil.copy(run.parent / "occlusion.gt.txt", clips)
+    res = tmp_path / "res"
+    assert vtrack("batch", str(clips), "-c", "s0", "--no-video", "-q", "-j", "1",
+                  "-o", str(res)).returncode == 0
+    stale = res / ".vtrack.lock"
+    stale.write_text("pid 1: vtrack batch clips -c s0\n")  # running pid, but nobody holds it
+    assert warnings_of(vtrack("report", str(res), "-o", str(tmp_path / "r1"))) == []
+    stale.unlink()
+
+    # the batch's next run waits for its folder, held here: the batch holds its own
+    with OutputFolder(res / "occlusion" / "camshift"):
+        batch = subprocess.Popen([sys.executable, "-m", "vtrack", "batch", str(clips), "-c",
+                                  "s0", "-c", "camshift", "--no-video", "-q", "-j", "1",
+                                  "-o", str(res)], stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.DEVNULL)
+        try:
+            deadline = time.monotonic() + 120  # a bound on the wait, not a measure
+            while not _holds(res, batch.pid):
+                assert batch.poll() is None and time.monotonic() < deadline
+                time.sleep(0.05)
+            os.kill(batch.pid, signal.SIGSTOP)  # it stays in the middle of its work
+            try:
+                assert _holds(res, batch.pid)
+                done = vtrack("report", str(res), "-o", str(tmp_path / "r2"))
+                report_of_one_run = vtrack("report", str(res / "occlusion" / "s0"), "-o",
+                                           str(tmp_path / "r3"))
+            finally:
+                os.kill(batch.pid, signal.SIGCONT)
+        except BaseException:
+            batch.kill()
+            raise
+    batch.wait(timeout=300)
+    expected = (f"{res.resolve()}: a batch is still writing it (pid {batch.pid}: vtrack batch "
+                f"{clips} -c s0 -c camshift --no-video -q -j 1 -o {res}); this report shows "
+                "only what it had finished")
+    assert warnings_of(done) == [expected]
+    assert warnings_of(report_of_one_run) == [expected]  # a folder inside it

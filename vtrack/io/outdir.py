@@ -38,6 +38,43 @@ def _holder(path: Path) -> str:
     return text.splitlines()[0] if text else "another process"
 
 
+def live_holder(folder: Path | str) -> str | None:
+    """Who holds ``folder``'s lock now (``pid N: vtrack ...``, as written into it), or None
+    when no process does: no lock file, or a stale one a killed process left behind (the
+    kernel released its lock). Told from ``/proc/locks`` without taking the lock (which could
+    turn away a run or batch taking it at that moment); where that cannot be read, from
+    whether the pid written into the file is running."""
+    path = Path(folder) / LOCK_NAME
+    try:
+        held = os.stat(path)
+    except OSError:
+        return None
+    try:
+        with open("/proc/locks", encoding="ascii", errors="replace") as table:
+            locks = table.read()
+    except OSError:
+        return _holder(path) if _pid_running(_holder(path)) else None
+    # a line per lock: "1: FLOCK  ADVISORY  WRITE 4242 fe:00:123456 0 EOF" (MAJ:MIN:INODE)
+    key = f"{os.major(held.st_dev):02x}:{os.minor(held.st_dev):02x}:{held.st_ino}"
+    locked = any("FLOCK" in fields and key in fields
+                 for fields in (line.split() for line in locks.splitlines()))
+    return _holder(path) if locked else None
+
+
+def _pid_running(holder: str) -> bool:
+    """Whether the ``pid N`` a lock file names is a running process (not this one)."""
+    pid = holder.removeprefix("pid ").split(":", 1)[0]
+    if not pid.isdigit() or int(pid) == os.getpid():
+        return False
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # another user's process
+    return True
+
+
 def earlier_results(folder: Path | str) -> list[str]:
     """The files of :data:`RUN_OUTPUTS` an earlier run left in ``folder`` (none if it is not
     a folder)."""

@@ -36,7 +36,14 @@ from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError, plural
 from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
 from vtrack.report import failures, pages, plots, tables
-from vtrack.report.runs import GroundTruth, RunResult, failed_runs, load_run, run_folders
+from vtrack.report.runs import (
+    GroundTruth,
+    RunResult,
+    failed_runs,
+    load_run,
+    run_folders,
+    still_written,
+)
 from vtrack.run import STATUS_FAILED
 
 DEFAULT_TITLE = "vtrack report"
@@ -174,7 +181,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
     truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
-    warnings: list[str] = []
+    warnings: list[str] = still_written(results)
     runs: list[RunResult] = []
     for folder in run_folders(results):
         try:

@@ -40,6 +40,7 @@ from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
 from vtrack.io.limits import special_kind
+from vtrack.io.outdir import LOCK_NAME, live_holder
 from vtrack.io.specs import is_live, is_url
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
@@ -527,6 +528,32 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
             for record in sorted(path.rglob("run.json")):
                 found.setdefault(record.parent.resolve())
     return list(found)
+
+
+def still_written(paths: Iterable[Path]) -> list[str]:
+    """A warning per folder at, above or below ``paths`` that a running ``vtrack batch`` (or
+    ``vtrack run``) still writes (its lock is held by a live process,
+    :func:`~vtrack.io.outdir.live_holder`; a stale lock is no warning): a report of it shows
+    only what was finished. A folder inside one already named is not named again."""
+    folders: set[Path] = set()
+    for path in paths:
+        if not path.exists():
+            continue  # (named as missing by run_folders)
+        path = path.resolve()
+        start = path if path.is_dir() else path.parent
+        folders.update([start, *start.parents])
+        folders.update(lock.parent for lock in start.rglob(LOCK_NAME))
+    named: list[Path] = []
+    warnings = []
+    for folder in sorted(folders, key=lambda f: len(f.parts)):
+        holder = live_holder(folder)
+        if holder is None or any(folder.is_relative_to(n) for n in named):
+            continue
+        named.append(folder)
+        what = "a batch" if holder.split(": ", 1)[-1].startswith("vtrack batch") else "vtrack"
+        warnings.append(f"{folder}: {what} is still writing it ({holder}); this report shows "
+                        "only what it had finished")
+    return warnings
 
 
 #: The statuses a batch's ``summary.csv`` row may have.
