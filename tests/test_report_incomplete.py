@@ -127,3 +127,25 @@ def test_a_report_of_a_folder_a_batch_still_writes_says_so(run: Path, tmp_path: 
                 "only what it had finished")
     assert warnings_of(done) == [expected]
     assert warnings_of(report_of_one_run) == [expected]  # a folder inside it
+
+
+def test_complete_batch_rows_whose_results_are_gone_are_named(run: Path, tmp_path: Path
+                                                              ) -> None:
+    """`cp -r res1 resR; rm -rf resR/occlusion; vtrack report resR`: the complete rows of the
+    removed folder were dropped silently. Now one warning per summary.csv names them."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    for name in ("occlusion.mp4", "occlusion.gt.txt"):
+        shutil.copy(run.parent / name, clips)
+        shutil.copy(run.parent / name, clips / name.replace("occlusion", "other"))
+    res = tmp_path / "res"
+    assert vtrack("batch", str(clips), "-c", "s0", "-c", "camshift", "--no-video", "-q",
+                  "-j", "1", "-o", str(res)).returncode == 0
+    assert warnings_of(vtrack("report", str(res), "-o", str(tmp_path / "whole"))) == []
+    shutil.rmtree(res / "occlusion")
+    done = vtrack("report", str(res), "-o", str(tmp_path / "part"))
+    assert warnings_of(done) == [
+        f"{res / 'summary.csv'}: 2 complete runs listed without results here (no run.json in "
+        "<input>/<config>/: moved or removed): occlusion [camshift], occlusion [s0]; not in "
+        "this report"]
+    assert "2 runs" in done.stdout  # the other input's

@@ -621,7 +621,8 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
     left no results (no run of ``reported`` is in their results folder, the batch's
     ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
     once. What could not be read of those files is appended to ``problems`` (see
-    :func:`_batch_rows`; ``not_batch``: the leading header of other files of that name)."""
+    :func:`_batch_rows`; ``not_batch``: the leading header of other files of that name), and
+    one line per file naming its complete rows whose results folder holds no ``run.json``."""
     ran = {run.folder.resolve() for run in reported}
     failed = []
     for path in paths:
@@ -629,10 +630,21 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
         for summary in summaries:
             if summary.name != "summary.csv":
                 continue
-            failed += [FailedRun(r["input"], r["config"],
-                                 r["error"] or "never ran (the batch stopped first)",
-                                 r["status"]) for r in _batch_rows(summary, problems, not_batch)
-                       if r["status"] != STATUS_COMPLETE
-                       and (summary.parent / folder_name(r["input"], "input")
-                            / folder_name(r["config"])).resolve() not in ran]
+            gone = []
+            for r in _batch_rows(summary, problems, not_batch):
+                folder = summary.parent / folder_name(r["input"], "input") / folder_name(
+                    r["config"])
+                if folder.resolve() in ran:
+                    continue
+                if r["status"] != STATUS_COMPLETE:
+                    failed.append(FailedRun(r["input"], r["config"], r["error"] or
+                                            "never ran (the batch stopped first)", r["status"]))
+                elif not (folder / "run.json").exists():  # (one that is: warned as left out)
+                    gone.append(f"{r['input']} [{r['config']}]")
+            if gone:
+                named = ", ".join(sorted(gone)[:5]) + (" ..." if len(gone) > 5 else "")
+                problems.append(
+                    f"{summary}: {plural(len(gone), 'complete run')} listed without results "
+                    f"here (no run.json in <input>/<config>/: moved or removed): {named}; not "
+                    "in this report")
     return failed
