@@ -141,7 +141,7 @@ def machine() -> str:
     v = versions()
     return (f"Machine: {os.cpu_count()} cores, {v['platform']}; vtrack {v['vtrack']}, "
             f"Python {v['python']}, OpenCV {v['opencv']}, NumPy {v['numpy']}, PyAV {v['pyav']} "
-            f"(libavcodec {v['ffmpeg']})")
+            f"(FFmpeg {v['ffmpeg']}, libavcodec {v['libavcodec']})")
 
 
 def seeds_argument(argv: list[str], default: int, usage: str | None) -> int:

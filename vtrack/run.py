@@ -160,7 +160,9 @@ def versions() -> dict[str, str]:
         "numpy": np.__version__,
         "opencv": cv2.__version__,
         "pyav": av.__version__,
-        "ffmpeg": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
+        # FFmpeg's release (what a paper cites), then the decoder library's own version
+        "ffmpeg": str(av.ffmpeg_version_info),
+        "libavcodec": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
         # not platform.platform(): it runs `uname -p` in a subprocess (~4 ms of every run)
         "platform": f"{platform.system()}-{platform.release()}-{platform.machine()}",
     }
@@ -409,9 +411,13 @@ class _Tracked:
     failure: Exception | None = None
     signum: int | None = None
     frames: int = 0
+    #: Wall time from the loop's start to the last frame handled (its outputs written): what
+    #: came after it (a live stream's ``--timeout`` wait that only found the end, the closing)
+    #: is not tracking; the whole loop when no frame was handled.
     seconds: float = 0.0
     #: CPU time of the frame loop's own thread (tracking, CSV rows, hand-over to the writers;
-    #: not the decoder's and encoder's threads, nor the time others had the core).
+    #: not the decoder's and encoder's threads, nor the time others had the core), over the
+    #: same span as ``seconds``.
     cpu_seconds: float = 0.0
     states: dict[TrackState, int] = field(
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
@@ -678,6 +684,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     # with --start the video's clock starts at its first frame (as ffmpeg -ss makes it)
     first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
+    handled: tuple[float, float] | None = None  # (wall, cpu) when the last frame was done
     try:
         frames_in = _frames_to_track(request, resolved, source)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
@@ -704,6 +711,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                 out.latency.add(time.perf_counter() - received)
             if on_frame is not None:
                 on_frame(out.frames)
+            handled = time.perf_counter(), time.thread_time()
         if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
             raise InputError(f"--start {request.start_text}: {request.input} has no frame "
                              f"{resolved.start} (frames are numbered from 0)")
@@ -722,8 +730,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.status, out.error, out.failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
         signals.hold()  # a signal now must not cut the closing and the records short
-        out.seconds = time.perf_counter() - started
-        out.cpu_seconds = time.thread_time() - cpu_started
+        wall, cpu = handled or (time.perf_counter(), time.thread_time())
+        out.seconds, out.cpu_seconds = wall - started, cpu - cpu_started
         source.close()
         if out.untouched:
             for dropped in (csv, video):

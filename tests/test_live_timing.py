@@ -1,0 +1,71 @@
+"""What a run's ``timing`` counts: the frames, not the waits around them; its ``versions``."""
+
+from __future__ import annotations
+
+import json
+import select
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import av
+
+from vtrack.scenes import make_scene, write_raw
+
+W, H = 160, 120
+
+
+def test_seconds_end_when_the_last_frame_is_handled_not_when_the_input_closes(
+        tmp_path: Path) -> None:
+    """Stdin stays open ``hold`` seconds after the last frame's line came out: that wait only
+    finds the end of the input, so ``timing.seconds`` (and fps) leave it out. The bound is
+    causal, not a speed: the tracked span ended before the test read the last line (``hold/2``
+    spare for the scheduler); with the wait counted, ``seconds`` exceeds it by ``hold/2``
+    minus vtrack's start-up."""
+    hold = 4.0
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    raw = write_raw(scene, tmp_path / "clip.bgr").read_bytes()
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    spawned = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "vtrack", "run", "-", "--raw", f"{W}x{H}",
+                             "--config", "s0", "--init", box, "--no-video", "--out", str(out),
+                             "--stream", "-", "-q"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    assert proc.stdin is not None and proc.stdout is not None
+    try:
+        proc.stdin.write(raw)
+        proc.stdin.flush()
+        for index in range(10):
+            ready, _, _ = select.select([proc.stdout], [], [], 120)  # a bound, not a measure
+            assert ready, f"no line for frame {index}"
+            assert json.loads(proc.stdout.readline())["frame"] == index
+        last_line = time.perf_counter()
+        time.sleep(hold)  # the input stays open, with nothing more in it
+        proc.stdin.close()
+        assert proc.wait(timeout=120) == 0
+    finally:
+        proc.kill()
+        proc.wait()
+    record = json.loads((out / "run.json").read_text())
+    seconds = record["timing"]["seconds"]
+    assert 0 < seconds < last_line - spawned + hold / 2
+    assert record["timing"]["fps"] == record["frames"] / seconds
+
+
+def test_versions_name_ffmpeg_s_release_and_libavcodec_s_own(tmp_path: Path) -> None:
+    """``versions.ffmpeg`` is FFmpeg's release (what a paper cites), not libavcodec's number,
+    which is kept as ``versions.libavcodec``."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    raw = write_raw(scene, tmp_path / "clip.bgr")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    subprocess.run([sys.executable, "-m", "vtrack", "run", str(raw), "--raw", f"{W}x{H}",
+                    "-c", "s0", "--init", box, "--no-video", "-o", str(out), "-q"],
+                   check=True, timeout=120, capture_output=True)
+    versions = json.loads((out / "run.json").read_text())["versions"]
+    assert versions["ffmpeg"] == str(av.ffmpeg_version_info)
+    assert versions["libavcodec"] == ".".join(map(str, av.library_versions["libavcodec"]))
+    assert versions["ffmpeg"] != versions["libavcodec"]
