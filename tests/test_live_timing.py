@@ -11,7 +11,7 @@ from pathlib import Path
 
 import av
 
-from vtrack.scenes import make_scene, write_raw
+from vtrack.scenes import make_scene, write_raw, write_video
 
 W, H = 160, 120
 
@@ -69,3 +69,26 @@ def test_versions_name_ffmpeg_s_release_and_libavcodec_s_own(tmp_path: Path) -> 
     assert versions["ffmpeg"] == str(av.ffmpeg_version_info)
     assert versions["libavcodec"] == ".".join(map(str, av.library_versions["libavcodec"]))
     assert versions["ffmpeg"] != versions["libavcodec"]
+
+
+def test_timestamps_that_go_back_are_one_warning_with_their_count(tmp_path: Path) -> None:
+    """A source whose timestamps start again (a sender restarted; here one MPEG-TS recording
+    three times over) while frame numbers carry on: one warning in run.json and on stderr,
+    counting the jumps, naming the first, and the ground truth's caveat."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.ts")
+    joined = tmp_path / "joined.ts"
+    joined.write_bytes(clip.read_bytes() * 3)
+    gt = tmp_path / "joined.gt.txt"
+    gt.write_text("".join(",".join(f"{v:g}" for v in b) + "\n" for b in scene.boxes) * 3)
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(joined), "-c", "s0",
+                           "--gt", str(gt), "--no-video", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    record = json.loads((out / "run.json").read_text())
+    jumps = [w for w in record["warnings"] if "timestamps jumped back" in w]
+    assert len(jumps) == 1
+    assert "2 times" in jumps[0] and "first at frame 10" in jumps[0] and str(gt) in jumps[0]
+    assert done.stderr.count("timestamps jumped back") == 1
+    assert record["frames"] == 30

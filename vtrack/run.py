@@ -276,6 +276,38 @@ class _Span:
             yield frame
 
 
+@dataclass
+class _Timeline:
+    """The input's own timestamps (``time_s``) as the frames come: how often they went back
+    (a live sender restarted, a stream spliced) while frame numbers carried on."""
+
+    #: Times a frame's timestamp was earlier than the one before it.
+    jumps: int = 0
+    #: The first such jump: (frame, the timestamp before, the frame's).
+    first: tuple[int, float, float] | None = None
+    _last: float | None = None
+
+    def add(self, index: int, time_s: float) -> None:
+        """Note frame ``index``'s timestamp."""
+        if self._last is not None and time_s < self._last:
+            self.jumps += 1
+            self.first = self.first or (index, self._last, time_s)
+        self._last = time_s
+
+    def warning(self, what: str, gt_path: Path | None) -> str | None:
+        """One line for ``run.json`` and stderr when the timestamps went back, else None."""
+        if self.first is None:
+            return None
+        index, before, after = self.first
+        note = (f"{what}: its timestamps jumped back {plural(self.jumps, 'time')} (first at "
+                f"frame {index}: {before:.4f} s -> {after:.4f} s; the source restarted?): "
+                "track.csv's time_s starts again there while frame numbers carry on")
+        if gt_path is not None:
+            note += (f"; {gt_path} is matched by frame number counted from the first frame "
+                     "received, so its boxes after a restart may belong to other frames")
+        return note
+
+
 def _fmt(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else value
 
@@ -423,6 +455,7 @@ class _Tracked:
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
     #: Live sources: each frame's time from decoded to its result written.
     latency: Latencies = field(default_factory=Latencies)
+    timeline: _Timeline = field(default_factory=_Timeline)
 
     @property
     def untouched(self) -> bool:
@@ -698,6 +731,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                 if result.state in out.states:
                     out.states[result.state] += 1
                 out.frames += 1  # its row is on disk; a video error below loses only the video
+                out.timeline.add(result.index, result.time_s)
                 if writers.stream is not None:
                     writers.stream.write(result)
                 if video is not None and annotator is not None:
@@ -820,6 +854,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                   *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
     )
+    jumped = tracked.timeline.warning(request.input, request.gt_path)
+    if jumped is not None:
+        summary.warnings.append(jumped)
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
