@@ -54,7 +54,7 @@ from vtrack.errors import (
     printable,
 )
 from vtrack.evaluate.groundtruth import all_dropped_note, read_boxes, read_mot_counting
-from vtrack.evaluate.metrics import score_frame, summarize
+from vtrack.evaluate.metrics import score_frame, summarize_scores
 from vtrack.frame import Frame
 from vtrack.geometry import Box, check_init_box
 from vtrack.io import (
@@ -66,6 +66,7 @@ from vtrack.io import (
     open_source,
     write_json,
 )
+from vtrack.io.csvfile import as_written
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
@@ -313,40 +314,55 @@ def _fmt(value: float | None) -> float | None:
 
 
 class _SingleTargetRows:
-    """Formats single-target results as ``track.csv`` rows and, with ground truth, keeps the
-    boxes and states for the metrics (without it nothing grows with the run's length)."""
+    """Formats single-target results as ``track.csv`` rows and, with ground truth, keeps each
+    frame's overlap, centre error and state for the metrics (without it nothing grows with the
+    run's length). The scores are those of the box as written, rounded as written: run.json's
+    metrics are what anyone recomputes from ``track.csv``."""
 
     def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None,
                  start: int = 0) -> None:
         self.columns = TRACK_COLUMNS + extras
         self.extras = extras
         self.gt = gt
-        #: ``boxes`` and ``states`` hold the frames from ``start`` on (``--start``).
+        #: ``overlaps``, ``errors`` and ``states`` hold the frames from ``start`` on
+        #: (``--start``), those the input skipped included (no box).
         self.start = start
-        self.boxes: list[Box | None] = []
+        self.overlaps: list[float | None] = []
+        self.errors: list[float | None] = []
         self.states: list[str] = []
+
+    def _score(self, index: int, box: Box | None) -> tuple[float | None, float | None]:
+        """Frame ``index``'s (overlap, centre error) as ``track.csv`` holds them (an error of
+        ``inf``, no box claimed, is an empty cell)."""
+        if self.gt is None or index >= len(self.gt):
+            return None, None
+        if box is not None:  # scored as written, so a reader's rescoring gives the same
+            box = Box(*(as_written(v, "x") for v in box))
+        overlap, error = score_frame(box, self.gt[index])
+        return as_written(overlap, "overlap"), as_written(error, "center_error")
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box
+        overlap, error = self._score(result.index, box)
         if self.gt is not None:  # kept for the metrics only: without ground truth, nothing
             at = result.index - self.start
-            self.boxes += [None] * (at - len(self.boxes))  # frames the input skipped
-            self.boxes.append(box)
+            for skipped in range(self.start + len(self.overlaps), result.index):
+                gone = self._score(skipped, None)  # frames the input skipped: no box
+                self.overlaps.append(gone[0])
+                self.errors.append(gone[1])
+            self.overlaps.append(overlap)
+            self.errors.append(error)
             self.states += [""] * (at - len(self.states))  # skipped: no state
             self.states.append(result.state)
-        overlap = error = None
-        if self.gt is not None and result.index < len(self.gt):
-            overlap, error = score_frame(box, self.gt[result.index])
-            error = _fmt(error)
         geometry = [None] * 6 if box is None else [box.x, box.y, box.w, box.h, box.cx, box.cy]
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
-               overlap, error]
+               overlap, _fmt(error)]
         return [row + [result.extras.get(column) for column in self.extras]]
 
     def undo(self, result: FrameResult) -> None:
         """Forget ``result`` (its rows could not be written)."""
-        del self.boxes[result.index - self.start:]
-        del self.states[result.index - self.start:]
+        for kept in (self.overlaps, self.errors, self.states):
+            del kept[result.index - self.start:]
 
 
 class _MultiTargetRows:
@@ -865,11 +881,11 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     stopped = resolved.span.stopped  # by --frames
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
         gt = gt[start:]  # the frames tracked (--start)
-        metrics = summarize(formatter.boxes, gt, formatter.states)
+        metrics = summarize_scores(formatter.overlaps, formatter.errors, formatter.states)
         summary.mean_overlap = metrics.get("mean_overlap")
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
-        span = len(formatter.boxes)  # frames tracked, and those the input skipped among them
+        span = len(formatter.overlaps)  # frames tracked, and those the input skipped among them
         if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             side = "fewer" if len(gt) < span else "more"
             note = (

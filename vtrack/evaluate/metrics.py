@@ -222,6 +222,15 @@ def summarize(
     the dict is valid JSON as it is.
     """
     overlaps, errors = frame_scores(pred, gt)
+    return summarize_scores(overlaps, errors, states)
+
+
+def summarize_scores(
+    overlaps: Sequence[float | None], errors: Sequence[float | None],
+    states: Sequence[str] | None = None,
+) -> Summary:
+    """:func:`summarize` of per-frame ``overlaps`` and centre ``errors`` already computed (as
+    :func:`frame_scores` gives them: None where unscored, ``inf`` where no box was claimed)."""
     summary = Summary(
         frames_evaluated=sum(o is not None for o in overlaps),
         mean_overlap=_or_none(mean_overlap(overlaps)),

@@ -21,8 +21,10 @@ import numpy as np
 from vtrack.errors import OutputError
 from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
 
-#: Decimals of float columns: pixels to a thousandth, times/scores/overlaps to 4 places.
-DECIMALS: Mapping[str, int] = {"time_s": 4, "score": 4, "overlap": 4, "conf": 4}
+#: Decimals of float columns: pixels to a thousandth, times/scores to 4 places, overlaps to 6
+#: (so a success plot's thresholds, multiples of 0.05, meet a rounded tie only when the overlap
+#: is within 5e-7 of one; run.json's metrics are computed from the overlaps as written).
+DECIMALS: Mapping[str, int] = {"time_s": 4, "score": 4, "overlap": 6, "conf": 4}
 DEFAULT_DECIMALS = 3
 
 
@@ -37,6 +39,14 @@ def format_cell(value: Any, decimals: int = DEFAULT_DECIMALS) -> str:
         text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
         return "0" if text in ("-0", "") else text
     return str(value)
+
+
+def as_written(value: float | None, column: str) -> float | None:
+    """``value`` as a reader of ``column``'s cell gets it back (rounded to its decimals);
+    None and non-finite values are returned as they are (their cell is empty)."""
+    if value is None or not math.isfinite(value):
+        return value
+    return float(format_cell(float(value), DECIMALS.get(column, DEFAULT_DECIMALS)))
 
 
 class CsvWriter(Closing):
