@@ -6,7 +6,7 @@ Per-frame scores of a single-target run are its ``track.csv`` boxes scored by
 - the ground truth the run recorded in ``run.json``, read with the recorded ``gt_origin``; a
   record without one gets the origin (0 or 1) whose scores reproduce the run's own ``overlap``
   column. If that file can no longer be read, the run's ``overlap`` and ``center_error`` columns
-  are used as they are (rounded to 4 and 3 decimals; an empty ``center_error`` next to an
+  are used as they are (rounded to 6 and 3 decimals; an empty ``center_error`` next to an
   overlap is a frame where the tracker claimed no box: infinite error);
 - otherwise the report's ``--gt`` file for the run's input (``--gt INPUT=FILE``), else its
   plain ``--gt FILE``; a file whose box count differs from the run's frames is not used (the run
@@ -36,6 +36,7 @@ from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
 from vtrack.geometry import Box
+from vtrack.io.csvfile import as_written
 from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
@@ -255,7 +256,7 @@ def _rescored(rows: list[dict[str, str]], request: dict[str, Any], gt: str, star
     for origin in origins:
         try:
             truth = read_boxes(gt, origin=origin)[start:]
-            scores = metrics.frame_scores(boxes, truth)
+            scores = _scored_as_written(boxes, truth)
         except InputError:
             return recorded, None
         distance = sum(abs(a - b) for a, b in zip(scores[0], recorded[0], strict=True)
@@ -263,6 +264,16 @@ def _rescored(rows: list[dict[str, str]], request: dict[str, Any], gt: str, star
         candidates.append((distance, scores, truth))
     _, scores, truth = min(candidates, key=lambda c: c[0])
     return scores, truth
+
+
+def _scored_as_written(boxes: Sequence[Box | None], truth: Sequence[Box | None]
+                       ) -> FrameScores:
+    """:func:`vtrack.evaluate.metrics.frame_scores`, each score rounded as ``track.csv`` writes
+    it: as ``vtrack run`` scores its ``run.json`` (a threshold such as OTB's 0.95 then falls on
+    the same side of every score in both)."""
+    overlaps, errors = metrics.frame_scores(boxes, truth)
+    return ([as_written(v, "overlap") for v in overlaps],
+            [as_written(e, "center_error") for e in errors])
 
 
 def _start(record: dict[str, Any]) -> int:
@@ -502,8 +513,8 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             elif truth is not None:
                 result.ground_truth = truth.path
                 result.truth = truth.boxes[start:]
-                result.overlaps, result.errors = metrics.frame_scores(result.boxes,
-                                                                      result.truth)
+                result.overlaps, result.errors = _scored_as_written(result.boxes,
+                                                                    result.truth)
                 result.norm_errors = metrics.normalized_center_errors(result.boxes,
                                                                       result.truth)
     except (KeyError, ValueError, TypeError, OverflowError) as exc:
