@@ -758,14 +758,14 @@ def test_raw_format_parse_and_sizes():
 def test_csv_rows_are_on_disk_as_written_and_renamed_on_close(tmp_path):
     path = tmp_path / "track.csv"
     writer = CsvWriter(path, ["frame", "x", "state", "overlap", "score"])
-    writer.write([0, 12.345678, "tracking", 0.123456, float("nan")])
+    writer.write([0, 12.345678, "tracking", 0.12345678, float("nan")])
     writer.write([1, 3.0, "lost", None, np.float32(0.5)])
     (partial,) = tmp_path.glob(".track.tmp-*.csv")  # unique to this process and writer
     assert f"-{os.getpid()}-" in partial.name and temp_path(path) != temp_path(path)
     assert not path.exists()
     rows = list(csv.reader(partial.open()))
     assert rows == [["frame", "x", "state", "overlap", "score"],
-                    ["0", "12.346", "tracking", "0.1235", ""],
+                    ["0", "12.346", "tracking", "0.123457", ""],  # overlap: 6 decimals
                     ["1", "3", "lost", "", "0.5"]]
     writer.close()
     writer.close()
