@@ -715,7 +715,8 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
 
 def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
                      ) -> Iterator[Frame]:
-    """``source``'s frames from the resolved first one on, at most the resolved number."""
+    """``source``'s frames from the resolved first one on, within the resolved span (a frame
+    count or a duration, ``--frames``)."""
     return resolved.span.take(_from(source, resolved.start, request.input))
 
 
