@@ -162,7 +162,7 @@ def versions() -> dict[str, str]:
         "opencv": cv2.__version__,
         "pyav": av.__version__,
         # FFmpeg's release (what a paper cites), then the decoder library's own version
-        "ffmpeg": str(av.ffmpeg_version_info),
+        "ffmpeg": str(getattr(av, "ffmpeg_version_info", "")),  # PyAV >= 13.1
         "libavcodec": ".".join(str(v) for v in av.library_versions.get("libavcodec", ())),
         # not platform.platform(): it runs `uname -p` in a subprocess (~4 ms of every run)
         "platform": f"{platform.system()}-{platform.release()}-{platform.machine()}",

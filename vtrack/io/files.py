@@ -34,16 +34,12 @@ def os_reason(exc: BaseException) -> str:
     return getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
 
 
-#: The start of a name FFmpeg reads as ``protocol:rest``: its scheme characters, a colon.
-_PROTOCOL_LIKE = re.compile(r"[A-Za-z0-9+.-]+:")
-
-
 def ffmpeg_file(path: str | Path) -> str:
-    """The name that makes FFmpeg open the local file ``path`` as that file: ``file:`` before
-    a name whose start it would read as a protocol (``x:y.mp4``: "Protocol not found";
-    ``file:z.mp4``: the file ``z.mp4``), else ``path`` unchanged."""
-    text = str(path)
-    return f"file:{text}" if _PROTOCOL_LIKE.match(text) else text
+    """The name that makes FFmpeg open the local file ``path`` as that file, whatever it is
+    called: ``file:`` before it. FFmpeg reads a name's start as a protocol (``x:y.mp4``:
+    "Protocol not found"; ``file:z.mp4``: the file ``z.mp4``; ``:x.png``, ``subfile,...``),
+    and its file protocol takes exactly one ``file:`` off."""
+    return f"file:{path}"
 
 
 def check_input_path(path: str) -> None:
