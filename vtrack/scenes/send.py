@@ -21,24 +21,45 @@ from vtrack.io.files import ffmpeg_file, os_reason
 def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> int:
     """Copy the video stream of ``path`` into ``url`` as ``fmt``, each packet sent when its
     timestamp is due (``realtime``), and return the number of packets sent."""
-    with av.open(ffmpeg_file(path)) as source, av.open(url, "w", format=fmt) as sink:
+    try:
+        source = av.open(ffmpeg_file(path))
+    except (av.FFmpegError, OSError) as exc:
+        raise SendError(f"{path}: {os_reason(exc)}") from None
+    with source:
+        if not source.streams.video:
+            raise SendError(f"{path}: has no video stream")
         video = source.streams.video[0]
-        out = sink.add_stream_from_template(video)
-        started = time.perf_counter()
-        first: float | None = None
-        sent = 0
-        for packet in source.demux(video):
-            if packet.dts is None:
-                continue  # the demuxer's flush packet
-            if realtime and packet.pts is not None and packet.time_base is not None:
-                due = float(packet.pts * packet.time_base)
-                first = due if first is None else first
-                wait = started + (due - first) - time.perf_counter()
-                if wait > 0:
-                    time.sleep(wait)
-            packet.stream = out
-            sink.mux(packet)
-            sent += 1
+        try:
+            sink = av.open(url, "w", format=fmt)
+        except (av.FFmpegError, OSError, ValueError) as exc:
+            raise SendError(f"{url}: {os_reason(exc)}") from None
+        with sink:
+            return _copy(source, video, sink, realtime)
+
+
+class SendError(Exception):
+    """The file or the URL of :func:`send` failed: the message names which."""
+
+
+def _copy(source: av.container.InputContainer, video: av.VideoStream,
+          sink: av.container.OutputContainer, realtime: bool) -> int:
+    """The packets of ``video`` muxed into ``sink``, each when due (``realtime``); how many."""
+    out = sink.add_stream_from_template(video)
+    started = time.perf_counter()
+    first: float | None = None
+    sent = 0
+    for packet in source.demux(video):
+        if packet.dts is None:
+            continue  # the demuxer's flush packet
+        if realtime and packet.pts is not None and packet.time_base is not None:
+            due = float(packet.pts * packet.time_base)
+            first = due if first is None else first
+            wait = started + (due - first) - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+        packet.stream = out
+        sink.mux(packet)
+        sent += 1
     return sent
 
 
@@ -56,10 +77,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         send(args.file, args.url, args.format)
-    except (av.FFmpegError, OSError, ValueError, IndexError) as exc:
+    except SendError as exc:
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return 1
+    except (av.FFmpegError, OSError, ValueError) as exc:  # while sending (the receiver left)
         print(f"{parser.prog}: error: {args.file} -> {args.url}: {os_reason(exc)}",
               file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        return 130
     return 0
 
 
