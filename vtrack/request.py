@@ -156,6 +156,18 @@ class RunRequest:
             return 0
         return max(0, math.ceil(self.start_s * fps - 1e-6))
 
+    def frames_expected(self, frame_count: int | None, fps: float | None) -> int | None:
+        """The frames the run will track, as far as the input's ``frame_count`` (None:
+        unknown) and frame rate tell a progress bar: the count less the frames before
+        ``--start`` (:meth:`start_estimate`), at most ``--frames`` given as a count (that alone
+        when the count is unknown); None when nothing tells."""
+        total = None
+        if frame_count is not None:
+            total = max(frame_count - self.start_estimate(fps), 0) or None
+        if self.max_frames is not None:
+            total = min(total, self.max_frames) if total else self.max_frames
+        return total
+
     def file_identities(self) -> dict[str, Any]:
         """The identity (:func:`~vtrack.io.identity.file_identity`) of the input, the ground
         truth and the files the config's stages read (``"files"``, by path, when there are

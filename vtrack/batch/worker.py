@@ -124,12 +124,9 @@ class _Reporter:
     def total(self) -> int | None:
         """The frames the run will track, as far as the input's count tells (read again each
         time: the reader replaces an estimated count as it reads)."""
-        total = None if self.info is None else self.info.frame_count
-        if total is not None and self.info is not None:
-            total = max(total - self.job.request.start_estimate(self.info.fps), 0)
-            if self.job.request.max_frames is not None:
-                total = min(total, self.job.request.max_frames)
-        return total
+        if self.info is None:
+            return None
+        return self.job.request.frames_expected(self.info.frame_count, self.info.fps)
 
     def on_frame(self, done: int) -> None:
         now = time.monotonic()

@@ -155,33 +155,26 @@ class FrameProgress(_Shown):
     """``on_open`` / ``on_frame`` callbacks of :func:`vtrack.run.run`: a frame bar in a
     terminal, progress lines every ``period`` seconds otherwise, nothing when ``quiet``."""
 
-    def __init__(self, quiet: bool, max_frames: int | None,
-                 start: Callable[[float | None], int] = lambda fps: 0,
+    def __init__(self, quiet: bool,
+                 expected: Callable[[int | None, float | None], int | None] = (
+                     lambda count, fps: count),
                  period: float = STATS_PERIOD) -> None:
         self.quiet = quiet
-        self.max_frames = max_frames
-        #: frames skipped before tracking (--start), estimated from the input's frame rate
-        self.start = start
+        #: the frames to track from the input's count and frame rate
+        #: (:meth:`vtrack.request.RunRequest.frames_expected`)
+        self.expected = expected
         self.period = period
         self.info: InputInfo | None = None
 
     def on_open(self, info: InputInfo) -> None:
         self.info = info
 
-    def _total(self, info: InputInfo) -> int | None:
-        total = info.frame_count
-        if total is not None:
-            total = max(total - self.start(info.fps), 0) or None
-        if self.max_frames is not None:
-            total = min(total, self.max_frames) if total else self.max_frames
-        return total
-
     def on_frame(self, done: int) -> None:
         if self.quiet or self.info is None:
             return
         # the input's count is read again each time: the reader replaces an estimate as it
         # reads (None once the timestamps depart from it, the exact count at the end)
-        total = self._total(self.info)
+        total = self.expected(self.info.frame_count, self.info.fps)
         if self.bar is None:
             self.bar = self._open(self.info.name, total)
         if isinstance(self.bar, ProgressLines):

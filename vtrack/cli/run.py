@@ -181,7 +181,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         live=live,
         video_out=video_out,
     )
-    progress = FrameProgress(quiet, request.max_frames, request.start_estimate, stats_period)
+    progress = FrameProgress(quiet, request.frames_expected, stats_period)
     try:
         summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
                       overwrite=overwrite)
