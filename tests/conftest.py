@@ -19,10 +19,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from vtrack.scenes import Scene, make_scene, write_clip
+
+if TYPE_CHECKING:
+    from click.testing import Result
 
 
 @dataclass(frozen=True)
@@ -103,3 +107,11 @@ def wait_for_stop_handlers(process: subprocess.Popen, timeout_s: float = 60) -> 
         assert process.poll() is None, "vtrack ended before it handled signals"
         assert time.monotonic() < deadline, "vtrack did not start within the time"
         time.sleep(0.05)
+
+
+def one_error_line(result: Result) -> str:
+    """The single ``vtrack: error:`` line of a command the CLI refused (exit 2)."""
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
+    return lines[0]

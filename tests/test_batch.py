@@ -16,6 +16,7 @@ import av
 import cv2
 import pytest
 from click.testing import CliRunner, Result
+from conftest import one_error_line
 
 from vtrack.batch import SUMMARY_COLUMNS, LocalExecutor, find_inputs, plan
 from vtrack.cli import main
@@ -209,13 +210,6 @@ def test_dask_gives_the_same_tracks_as_the_local_pool(inputs: Path, tmp_path: Pa
         tracks = [(tmp_path / side / name / DEFAULT_CONFIG / "track.csv").read_text()
                   for side in ("local", "dask")]
         assert tracks[0] == tracks[1]
-
-
-def one_error_line(result: Result) -> str:
-    assert result.exit_code == 2, result.output
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
-    return lines[0]
 
 
 def test_a_folder_without_inputs_is_one_line(tmp_path: Path) -> None:

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 from click.testing import CliRunner, Result
+from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.config import load_config, shipped_configs
@@ -32,18 +33,11 @@ def vtrack(*args: str) -> Result:
     return CliRunner().invoke(main, list(args))
 
 
-def one_error(result: Result) -> str:
-    assert result.exit_code == 2, result.output
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
-    return lines[0]
-
-
 def test_motchallenge_ground_truth_for_one_target_names_the_multi_target_configs(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     clip = clip_factory("multi", width=W, height=H, frames=60)
     assert clip.mot is not None
-    line = one_error(vtrack("run", str(clip.path), "--gt", str(clip.mot), "--no-video",
+    line = one_error_line(vtrack("run", str(clip.path), "--gt", str(clip.mot), "--no-video",
                             "-o", str(tmp_path / "out")))
     assert str(clip.mot) in line and "MOTChallenge" in line
     assert "s3" in line and "s4_multi" in line

@@ -13,6 +13,7 @@ import av
 import cv2
 import pytest
 from click.testing import CliRunner, Result
+from conftest import one_error_line
 
 from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.cli import main
@@ -213,13 +214,6 @@ def test_the_multi_target_table_ranks_each_metric_its_own_way(tmp_path: Path) ->
     assert best["bad"] == set()  # more track ids is not better; equal FPS marks nothing
     summary = (tmp_path / "report" / "summary.csv").read_text().splitlines()[0]
     assert {"gt_boxes", "track_boxes", "matches"} <= set(summary.split(","))  # kept there
-
-
-def one_error_line(result: Result) -> str:
-    assert result.exit_code == 2, result.output
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
-    return lines[0]
 
 
 def test_report_errors_are_one_line(tmp_path: Path) -> None:

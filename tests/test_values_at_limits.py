@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 from click.testing import CliRunner, Result
+from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.frame import GrayFrame
@@ -27,14 +28,6 @@ if TYPE_CHECKING:
 
 def vtrack(*args: str) -> Result:
     return CliRunner().invoke(main, list(args))
-
-
-def one_error(result: Result) -> str:
-    """The single ``vtrack: error:`` line of a refused command (exit 2)."""
-    assert result.exit_code == 2, result.output
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
-    return lines[0]
 
 
 def _detections(clip, tmp_path: Path, name: str, shift: float = 0.0,
@@ -65,7 +58,7 @@ def test_a_det_txt_with_a_coordinate_beyond_the_limit_is_refused(
     clip = clip_factory("multi", frames=60)
     det = _detections(clip, tmp_path, "det_huge.txt", at=1e300)
     out = tmp_path / "out"
-    line = one_error(vtrack("run", str(clip.path), "-c", str(_config(tmp_path, det, tracker)),
+    line = one_error_line(vtrack("run", str(clip.path), "-c", str(_config(tmp_path, det, tracker)),
                             "--no-video", "-o", str(out), "-y"))
     assert f"{det} line 1: coordinate beyond +-1e+06 pixels" in line
     assert not out.exists()
@@ -119,13 +112,13 @@ def test_no_track_is_reported_wholly_outside_the_frame(stage: Stage) -> None:
 def test_a_refused_value_is_shown_as_given_not_rounded_onto_the_limit(
         tmp_path: Path, clip_factory: ClipFactory, option: str, value: str, shown: str) -> None:
     clip = clip_factory("smooth", frames=10)
-    line = one_error(vtrack("run", str(clip.path), "-c", "s1", option, value, "--no-video",
+    line = one_error_line(vtrack("run", str(clip.path), "-c", "s1", option, value, "--no-video",
                             "-o", str(tmp_path / "out"), "-y"))
     assert shown in line
 
 
 def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> None:
-    line = one_error(vtrack("scene", "smooth", str(tmp_path / "a.mp4"), "--frames", "10",
+    line = one_error_line(vtrack("scene", "smooth", str(tmp_path / "a.mp4"), "--frames", "10",
                             "--fps", "10000.00001"))
     assert "scene fps 10000.00001: must be from 0.01 to 10000" in line
 
@@ -144,7 +137,7 @@ def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> 
 def test_a_pixel_format_the_encoder_cannot_write_is_one_line(
         tmp_path: Path, size: str, pix_fmt: str, problem: str) -> None:
     out = tmp_path / "a.mp4"
-    line = one_error(vtrack("scene", "smooth", str(out), "--frames", "10", "--size", size,
+    line = one_error_line(vtrack("scene", "smooth", str(out), "--frames", "10", "--size", size,
                             "--pix-fmt", pix_fmt))
     assert f"{out}: {problem}" in line
     assert list(tmp_path.iterdir()) == []
@@ -168,7 +161,7 @@ def test_a_config_given_as_a_pipe_says_so(tmp_path: Path, clip_factory: ClipFact
     clip = clip_factory("smooth", frames=10)
     read, write = os.pipe()
     try:
-        line = one_error(vtrack("run", str(clip.path), "--config", f"/dev/fd/{read}",
+        line = one_error_line(vtrack("run", str(clip.path), "--config", f"/dev/fd/{read}",
                                 "--no-video", "-o", str(tmp_path / "out"), "-y"))
     finally:
         os.close(read)
@@ -180,7 +173,7 @@ def test_a_config_given_as_a_pipe_says_so(tmp_path: Path, clip_factory: ClipFact
 def test_a_config_given_as_dev_null_says_what_it_is(tmp_path: Path,
                                                     clip_factory: ClipFactory) -> None:
     clip = clip_factory("smooth", frames=10)
-    line = one_error(vtrack("run", str(clip.path), "--config", "/dev/null", "--no-video",
+    line = one_error_line(vtrack("run", str(clip.path), "--config", "/dev/null", "--no-video",
                             "-o", str(tmp_path / "out"), "-y"))
     assert line == ("vtrack: error: /dev/null: a character device, not a file: give the "
                     "config as a file")

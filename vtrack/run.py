@@ -66,7 +66,7 @@ from vtrack.io import (
     open_source,
     write_json,
 )
-from vtrack.io.csvfile import as_written
+from vtrack.io.csvfile import as_written, scores_as_written
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
@@ -338,8 +338,7 @@ class _SingleTargetRows:
             return None, None
         if box is not None:  # scored as written, so a reader's rescoring gives the same
             box = Box(*(as_written(v, "x") for v in box))
-        overlap, error = score_frame(box, self.gt[index])
-        return as_written(overlap, "overlap"), as_written(error, "center_error")
+        return scores_as_written(*score_frame(box, self.gt[index]))
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         box = result.box

@@ -49,6 +49,13 @@ def as_written(value: float | None, column: str) -> float | None:
     return float(format_cell(float(value), DECIMALS.get(column, DEFAULT_DECIMALS)))
 
 
+def scores_as_written(overlap: float | None, error: float | None
+                      ) -> tuple[float | None, float | None]:
+    """A frame's (overlap, centre error) as ``track.csv``'s cells give them back: what
+    ``run.json`` and the report score, so a reader's rescoring gives the same."""
+    return as_written(overlap, "overlap"), as_written(error, "center_error")
+
+
 class CsvWriter(Closing):
     """Write a header and rows to ``path``; each row (or each frame's rows, :meth:`write_rows`)
     reaches the file as it is written.

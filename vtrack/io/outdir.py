@@ -53,7 +53,8 @@ def live_holder(folder: Path | str) -> str | None:
         with open("/proc/locks", encoding="ascii", errors="replace") as table:
             locks = table.read()
     except OSError:
-        return _holder(path) if _pid_running(_holder(path)) else None
+        holder = _holder(path)
+        return holder if _pid_running(holder) else None
     # a line per lock: "1: FLOCK  ADVISORY  WRITE 4242 fe:00:123456 0 EOF" (MAJ:MIN:INODE)
     key = f"{os.major(held.st_dev):02x}:{os.minor(held.st_dev):02x}:{held.st_ino}"
     locked = any("FLOCK" in fields and key in fields

@@ -1,7 +1,8 @@
 """Finding and reading result folders for a report: ``run.json`` + ``track.csv``/``tracks.csv``.
 
 Per-frame scores of a single-target run are its ``track.csv`` boxes scored by
-:func:`vtrack.evaluate.metrics.frame_scores` against:
+:func:`vtrack.evaluate.metrics.frame_scores`, rounded as ``track.csv`` writes scores (as
+``run.json``'s are), against:
 
 - the ground truth the run recorded in ``run.json``, read with the recorded ``gt_origin``; a
   record without one gets the origin (0 or 1) whose scores reproduce the run's own ``overlap``
@@ -36,7 +37,7 @@ from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
 from vtrack.geometry import Box
-from vtrack.io.csvfile import as_written
+from vtrack.io.csvfile import scores_as_written
 from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
@@ -271,9 +272,9 @@ def _scored_as_written(boxes: Sequence[Box | None], truth: Sequence[Box | None]
     """:func:`vtrack.evaluate.metrics.frame_scores`, each score rounded as ``track.csv`` writes
     it: as ``vtrack run`` scores its ``run.json`` (a threshold such as OTB's 0.95 then falls on
     the same side of every score in both)."""
-    overlaps, errors = metrics.frame_scores(boxes, truth)
-    return ([as_written(v, "overlap") for v in overlaps],
-            [as_written(e, "center_error") for e in errors])
+    written = [scores_as_written(*pair) for pair in zip(*metrics.frame_scores(boxes, truth),
+                                                         strict=True)]
+    return [overlap for overlap, _ in written], [error for _, error in written]
 
 
 def _start(record: dict[str, Any]) -> int:
