@@ -128,3 +128,14 @@ def test_multi_target_summaries_show_only_multi_target_numbers(clip_factory: Cli
                          multi_target=True)
     assert "None" not in summary.line() and "motp" not in summary.line()
     assert "mota -1.000" in summary.line()
+
+
+@pytest.mark.parametrize("args, usage", [((), "Usage: vtrack [OPTIONS] COMMAND"),
+                                         (("vectors",), "Usage: vtrack vectors [OPTIONS]")])
+def test_a_group_given_no_command_prints_its_help_not_an_error_line(
+        args: tuple[str, ...], usage: str) -> None:
+    result = CliRunner().invoke(main, list(args), prog_name="vtrack")
+    assert result.exit_code == 2, result.output
+    assert result.stderr.startswith(usage), result.stderr
+    assert "vtrack: error" not in result.stderr and "Commands:" in result.stderr
+    assert "(see '" not in result.stderr

@@ -6,7 +6,9 @@ function: ``vtrack run --help`` never loads the report's plotting, Dask or the s
 
 User errors (:class:`~vtrack.errors.VtrackError`) and click's usage errors (an unknown option, a
 value out of range) become one line on stderr, ``vtrack: error: ...``, and exit code 2 (1 for an
-output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it) 143.
+output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it) 143. A group
+given no command (``vtrack``, ``vtrack vectors``) prints its help on stderr, as click does, and
+exits 2.
 """
 
 from __future__ import annotations
@@ -42,6 +44,9 @@ class _Group(click.Group):
             return super().main(*args, standalone_mode=False, **kwargs)
         try:
             code = super().main(*args, standalone_mode=False, **kwargs)
+        except click.exceptions.NoArgsIsHelpError as exc:  # `vtrack` alone: the help, as click
+            click.echo(exc.format_message(), err=True)     # prints it (not an error line)
+            sys.exit(exc.exit_code)
         except click.UsageError as exc:
             where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
             click.echo(f"vtrack: error: {exc.format_message()}{where}", err=True)
