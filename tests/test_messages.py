@@ -139,3 +139,17 @@ def test_a_group_given_no_command_prints_its_help_not_an_error_line(
     assert result.stderr.startswith(usage), result.stderr
     assert "vtrack: error" not in result.stderr and "Commands:" in result.stderr
     assert "(see '" not in result.stderr
+
+
+def test_an_unreadable_input_without_a_first_box_is_named_as_unreadable(tmp_path: Path) -> None:
+    videos = tmp_path / "videos"  # a folder of videos is not an image sequence
+    videos.mkdir()
+    (videos / "a.mp4").write_bytes(b"\0" * 64)
+    notes = tmp_path / "notes.mp4"
+    notes.write_text("not a video\n" * 20)
+    for spec, problem in ((videos, "no images"), (notes, "not a video")):
+        for extra in ((), ("--start", "3")):
+            line = one_error_line(vtrack("run", str(spec), *extra, "-o", str(tmp_path / "out")))
+            assert line.startswith(f"vtrack: error: {spec}: {problem}"), line
+            assert "box" not in line and "init" not in line, line
+    assert not (tmp_path / "out").exists()

@@ -671,6 +671,8 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
             raise InputError(f"{request.gt_path}: the {where} is {why}; give --init x,y,w,h")
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
+        if source is None:
+            _refuse_unreadable(request)
         if start:
             raise ConfigError(f"--start {request.start_text}: this tracker needs the target's "
                               f"box in frame "
@@ -687,6 +689,15 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
                      request.file_identities(), start, _Span(request.max_frames, request.max_s),
                      warnings)
+
+
+def _refuse_unreadable(request: RunRequest) -> None:
+    """InputError naming a local file or folder input that vtrack cannot read (a folder without
+    images, a file that is not a video), found by opening it once: a run told that it lacks a
+    first box hears of its input first. Stdin, FIFOs, devices and URLs are read once only, by
+    the run itself."""
+    if os.path.isfile(request.input) or os.path.isdir(request.input):
+        open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg).close()
 
 
 def _first_frame(request: RunRequest, source: Source | None) -> int:
