@@ -153,3 +153,23 @@ def test_an_unreadable_input_without_a_first_box_is_named_as_unreadable(tmp_path
             assert line.startswith(f"vtrack: error: {spec}: {problem}"), line
             assert "box" not in line and "init" not in line, line
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("args, named", [
+    (("run", ""), "'INPUT'"),
+    (("run", "clip.mp4", "-c", ""), "'--config'"),
+    (("run", "clip.mp4", "--init", "1,1,5,5", "--stream", ""), "'--stream'"),
+    (("batch", ".", "-c", ""), "'--config'"),
+    (("frame", ""), "'INPUT'"),
+    (("select", ""), "'INPUT'"),
+    (("vectors", "", "--init", "1,1,5,5", "-o", "vec"), "'INPUT'"),
+    (("vectors", "clip.mp4", "-c", "", "--init", "1,1,5,5", "-o", "vec"), "'--config'"),
+    (("report", ".", "--gt", ""), "'--gt'"),
+])
+def test_an_empty_name_is_refused_naming_its_option(
+        args: tuple[str, ...], named: str, tmp_path: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)  # an empty name must not become this folder
+    line = one_error_line(vtrack(*args))
+    assert named in line and ": empty; give " in line, line
+    assert list(tmp_path.iterdir()) == []

@@ -1,4 +1,4 @@
-"""Path options and arguments shared by the commands."""
+"""Path and name options and arguments shared by the commands."""
 
 from __future__ import annotations
 
@@ -31,3 +31,26 @@ class NonEmptyPath(click.Path):
 
 #: The type of every ``--out`` option and path argument.
 PATH = NonEmptyPath(path_type=Path)
+
+
+class NonEmptyText(click.ParamType):
+    """A name that refuses an empty value, saying what to give (``hint``): an empty input,
+    config or ``--stream`` name would otherwise be read as the current folder or reach a
+    message that names nothing (``vtrack: error: : is a folder, not a config file``)."""
+
+    name = "text"
+
+    def __init__(self, hint: str) -> None:
+        self.hint = hint
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and not value.strip():
+            self.fail(f"empty; give {self.hint}", param, ctx)
+        return value
+
+
+#: An input argument (``vtrack run``, ``frame``, ``select``, ``vectors``).
+INPUT = NonEmptyText("a video file, an image folder, a URL or - (stdin)")
+#: A ``--config`` value.
+CONFIG = NonEmptyText("a shipped config's name (vtrack stages lists them) or a TOML file")

@@ -11,7 +11,7 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._options import MAX_WAIT_S, Seconds, gt_origin_option
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import CONFIG, PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
@@ -100,7 +100,7 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
               "stats_period", "quiet")
 @click.command("batch")
 @click.argument("folder", type=PATH)
-@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
+@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME", type=CONFIG,
               help="Tracker config, a TOML file or a shipped name; repeat to run every input "
                    f"with each. Default: {DEFAULT_CONFIG}.")
 @click.option("--out", "-o", "out_dir", type=PATH, metavar="DIR",

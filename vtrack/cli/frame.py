@@ -7,11 +7,11 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import INPUT, PATH
 
 
 @click.command("frame")
-@click.argument("input_spec", metavar="INPUT")
+@click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True,
               help="Frame number (0-based).")
 @click.option("--out", "-o", "out", type=PATH, metavar="FILE",

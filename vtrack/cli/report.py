@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from vtrack.cli._options import gt_origin_option, stats_period_option
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import PATH, NonEmptyText
 from vtrack.cli._progress import StepProgress
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
@@ -19,6 +19,7 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
               default=Path("vtrack-report"), show_default=True, metavar="DIR",
               help="Report folder: index.html, plots/*.png, summary.md, summary.csv.")
 @click.option("--gt", "gt_specs", multiple=True, metavar="[INPUT=]FILE",
+              type=NonEmptyText("a ground-truth file or INPUT=FILE"),
               help="Ground truth for single-target runs made without it (their track.csv "
                    "boxes are scored against it). INPUT=FILE gives the file of one input "
                    "(its name as the report shows it, or its path); repeat for several. A run "

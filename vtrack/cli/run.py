@@ -17,7 +17,7 @@ from vtrack.cli._options import (
     gt_origin_option,
     stats_period_option,
 )
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import CONFIG, INPUT, PATH, NonEmptyText
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.params import MAX_SEED
 
@@ -40,8 +40,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 
 
 @click.command("run")
-@click.argument("input_spec", metavar="INPUT")
-@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME",
+@click.argument("input_spec", metavar="INPUT", type=INPUT)
+@click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME", type=CONFIG,
               help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
                    f"Default: {DEFAULT_CONFIG}. One per run (vtrack batch runs several).")
 @click.option("--init", "init_text", metavar="x,y,w,h",
@@ -113,6 +113,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "-t: the frames whose timestamp is less than T past the first tracked "
                    "one's, so a variable frame rate is followed).")
 @click.option("--stream", "stream", metavar="FILE|-", default=None,
+              type=NonEmptyText("a file or - (stdout)"),
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
                    "line then goes to stderr). A file holding anything is replaced only with "

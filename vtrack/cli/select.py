@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import click
 
+from vtrack.cli._paths import INPUT
+
 
 @click.command("select")
-@click.argument("input_spec", metavar="INPUT")
+@click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--frame", "frame", type=click.IntRange(min=0), default=0, show_default=True,
               help="Frame shown first (0-based); the page steps back and forth from it.")
 @click.option("--port", type=click.IntRange(0, 65535), default=0,

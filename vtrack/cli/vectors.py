@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import CONFIG, INPUT, PATH
 
 
 class _DefaultGroup(click.Group):
@@ -40,8 +40,8 @@ def command() -> None:
 
 
 @command.command("generate", hidden=True)
-@click.argument("input_spec", metavar="INPUT")
-@click.option("--config", "-c", "config_spec", default="s0-fixed", show_default=True,
+@click.argument("input_spec", metavar="INPUT", type=INPUT)
+@click.option("--config", "-c", "config_spec", default="s0-fixed", show_default=True, type=CONFIG,
               metavar="NAME|FILE", help="A fixed-point config: s0-fixed or s2-fixed.")
 @click.option("--init", "init_text", required=True, metavar="x,y,w,h",
               help="Initial box (top-left x, y, width, height).")
