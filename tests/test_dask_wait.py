@@ -87,7 +87,7 @@ def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         out, err = batch.communicate(timeout=120)
         assert batch.returncode == 0, first + err
-        assert "1 runs (1 complete)" in out
+        assert "1 run (1 complete)" in out
     finally:
         for process in (worker, scheduler):
             if process is not None:

@@ -173,3 +173,23 @@ def test_an_empty_name_is_refused_naming_its_option(
     line = one_error_line(vtrack(*args))
     assert named in line and ": empty; give " in line, line
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_batch_and_report_of_one_run_count_it_singular(clip_factory: ClipFactory,
+                                                          tmp_path: Path) -> None:
+    clip = clip_factory("smooth", width=W, height=H, frames=12)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "clip.mp4")
+    (folder / "clip.init.txt").write_text(clip.gt.read_text().splitlines()[0] + "\n")
+    batch = vtrack("batch", str(folder), "-c", "s0", "--jobs", "1", "--no-video",
+                   "--out", str(tmp_path / "out"))
+    assert batch.exit_code == 0, batch.output
+    assert "\n1 run (1 complete) -> " in batch.stdout, batch.stdout
+    report = vtrack("report", str(tmp_path / "out"), "-o", str(tmp_path / "report"))
+    assert report.exit_code == 0, report.output
+    assert "1 single-target run has no ground truth" in report.stderr, report.stderr
+    assert report.stdout.startswith("1 run, 1 plot -> "), report.stdout
+    page = (tmp_path / "report" / "summary.md").read_text()
+    assert "1 run of 1 input with 1 configuration;" in page
+    assert "(s)" not in report.output + page

@@ -260,7 +260,7 @@ def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
     assert by_config["s0"]["Inputs"] == "1"  # the failed run is not averaged
     assert by_config["s0"]["AUC"] in occlusion_s0
     assert by_config["camshift"]["Inputs"] == "2"
-    assert "1 single-target run(s) failed part way" in html
+    assert "1 single-target run failed part way" in html
     markdown = (report / "summary.md").read_text()
     assert "- **never** [s0] interrupted: never ran (the batch stopped first)" in markdown
     with (report / "summary.csv").open(newline="") as handle:
@@ -353,7 +353,7 @@ def test_inputs_of_one_name_in_two_containers_are_two_inputs(
     result = vtrack("report", str(out), "--out", str(tmp_path / "report"))
     assert result.exit_code == 0, result.output
     markdown = (tmp_path / "report" / "summary.md").read_text()
-    assert "2 runs of 2 inputs with 1 configurations" in markdown
+    assert "2 runs of 2 inputs with 1 configuration;" in markdown
     assert "| a.mkv | s0 |" in markdown and "| a.mp4 | s0 |" in markdown
     assert "different inputs" not in markdown
 

@@ -15,7 +15,7 @@ from vtrack.cli._paths import CONFIG, PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError, Interrupted, handling_stop_signals
+from vtrack.errors import ConfigError, Interrupted, handling_stop_signals, plural
 
 if TYPE_CHECKING:
     from vtrack.config import Config
@@ -210,7 +210,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         resumed = sum(outcome.resumed for outcome in outcomes)
         if resumed:
             tally += f"; {resumed} of them complete before, not run again"
-        click.echo(f"{len(outcomes)} runs ({tally}) -> {summary_path}")
+        click.echo(f"{plural(len(outcomes), 'run')} ({tally}) -> {summary_path}")
     failed = [o for o in outcomes if not o.ok]
     for outcome in failed:
         click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.status}: "

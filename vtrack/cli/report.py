@@ -9,6 +9,7 @@ import click
 from vtrack.cli._options import gt_origin_option, stats_period_option
 from vtrack.cli._paths import PATH, NonEmptyText
 from vtrack.cli._progress import StepProgress
+from vtrack.errors import plural
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
@@ -45,4 +46,5 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     for warning in report.warnings:
         click.echo(f"vtrack: warning: {warning}", err=True)
     if not quiet:
-        click.echo(f"{len(report.runs)} runs, {len(report.plots)} plots -> {report.index}")
+        click.echo(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
+                   f"-> {report.index}")

@@ -220,7 +220,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     multi = [r for r in runs if r.multi_target]
     unscored = [r for r in single if r.overlaps is None]  # (not: failed before frame 1)
     if unscored:
-        warnings.append(f"{len(unscored)} single-target run(s) have no ground truth; give "
+        warnings.append(f"{plural(len(unscored), 'single-target run')} "
+                        f"{'has' if len(unscored) == 1 else 'have'} no ground truth; give "
                         "--gt FILE (or --gt INPUT=FILE per input) to score them")
 
     plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
@@ -228,7 +229,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     # a run that failed part way is listed with its frames' scores but averaged with no other
     counted = [r for r in single if r.status != STATUS_FAILED]
     if len(counted) < len(single):
-        warnings.append(f"{len(single) - len(counted)} single-target run(s) failed part way: "
+        warnings.append(f"{plural(len(single) - len(counted), 'single-target run')} failed "
+                        "part way: "
                         "listed per input, left out of the averages and the All inputs plot")
     by_config = _group(counted, lambda r: r.config)
     palette = plots.colours(sorted({r.config for r in runs}))
@@ -242,8 +244,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
         inputs = {r.input for r in runs}
         page = pages.Page(
             title=title,
-            meta=(f"{len(runs)} runs of {len(inputs)} inputs with "
-                  f"{len({r.config for r in runs})} configurations; generated "
+            meta=(f"{plural(len(runs), 'run')} of {plural(len(inputs), 'input')} with "
+                  f"{plural(len({r.config for r in runs}), 'configuration')}; generated "
                   f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
             warnings=warnings,
             overall_plot=overall and overall.relative_to(out_dir).as_posix(),
