@@ -272,3 +272,13 @@ def test_a_clip_shorter_than_the_frames_asked_for_is_said(vectors, tmp_path) -> 
     assert result.returncode == 0, result.stderr
     assert (f"vtrack: warning: {clip.path}: 30 frames to write of the 40 asked for (--frames)"
             in result.stderr)
+
+
+def test_vectors_help_lists_the_options_of_vtrack_vectors_input() -> None:
+    result = vtrack("vectors", "--help")
+    assert result.returncode == 0, result.stderr
+    text = result.stdout
+    options = text.split("Options of vtrack vectors INPUT:")[1]
+    for option in ("--config", "--init", "--frames", "--out", "--set"):
+        assert option in options, text
+    assert "[default: 10]" in options and "Commands:" in text and "check" in text

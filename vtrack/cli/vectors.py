@@ -24,6 +24,15 @@ class _DefaultGroup(click.Group):
             args = ["generate", *args]
         return super().parse_args(ctx, args)
 
+    def format_options(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The group's options and commands, then those of ``vtrack vectors INPUT`` (the hidden
+        ``generate``), so ``vtrack vectors --help`` shows what the first form takes."""
+        super().format_options(ctx, formatter)
+        rows = [record for param in self.commands["generate"].params
+                if (record := param.get_help_record(ctx)) is not None]
+        with formatter.section("Options of vtrack vectors INPUT"):
+            formatter.write_dl(rows)
+
 
 @click.group("vectors", cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
 def command() -> None:
