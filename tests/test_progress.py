@@ -15,12 +15,17 @@ import struct
 import subprocess
 import sys
 import termios
+import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
 
 FRAMES = 24
 
@@ -143,3 +148,24 @@ def test_report_shows_its_progress_through_the_inputs(clip: Path, tmp_path: Path
                             "--stats-period", "0", "-q"], cwd=tmp_path, capture_output=True,
                            timeout=300, check=False, text=True)
     assert quiet.returncode == 0 and quiet.stderr == "" and quiet.stdout == ""
+
+
+def test_a_progress_line_counts_the_first_frames_time_in_its_rate(
+        clip_factory: ClipFactory, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--stats-period 0` printed '1/N frames, 306184.7 fps' after the first frame: the rate's
+    clock started once that frame was done. It starts when the input opens."""
+    from vtrack.cli._progress import FrameProgress
+    from vtrack.io import open_source
+
+    clip = clip_factory("smooth", width=160, height=120, frames=10)
+    progress = FrameProgress(quiet=False, period=0)
+    with open_source(str(clip.path)) as source:
+        progress.on_open(source.info)
+        opened = time.monotonic()
+        next(iter(source))  # the first frame's work, however long it takes here
+        done = time.monotonic()
+        progress.on_frame(1)
+    line = capsys.readouterr().err.strip()
+    rate = float(re.search(r", ([\d.]+) fps", line).group(1))
+    assert line.startswith(f"{clip.path.stem}: 1/10 frames"), line
+    assert rate <= 1 / (done - opened) + 0.05, line  # at least the first frame's time counted

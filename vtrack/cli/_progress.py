@@ -165,9 +165,12 @@ class FrameProgress(_Shown):
         self.expected = expected
         self.period = period
         self.info: InputInfo | None = None
+        self._started: float | None = None
 
     def on_open(self, info: InputInfo) -> None:
+        """The input opened: the rate's clock starts, so the first frame's time counts."""
         self.info = info
+        self._started = time.monotonic()
 
     def on_frame(self, done: int) -> None:
         if self.quiet or self.info is None:
@@ -176,7 +179,7 @@ class FrameProgress(_Shown):
         # reads (None once the timestamps depart from it, the exact count at the end)
         total = self.expected(self.info.frame_count, self.info.fps)
         if self.bar is None:
-            self.bar = self._open(self.info.name, total)
+            self.bar = self._open(self.info.name, total, started=self._started)
         if isinstance(self.bar, ProgressLines):
             self.bar.total = total
             self.bar.update(done)
