@@ -193,3 +193,18 @@ def test_a_batch_and_report_of_one_run_count_it_singular(clip_factory: ClipFacto
     page = (tmp_path / "report" / "summary.md").read_text()
     assert "1 run of 1 input with 1 configuration;" in page
     assert "(s)" not in report.output + page
+
+
+def test_help_names_the_ground_truth_files_batch_finds_and_scene_writes() -> None:
+    """vtrack scene writes an image folder's MOTChallenge truth as groundtruth_mot.txt, which
+    vtrack batch reads; its --help named only gt.txt. Scene's named one multi-target scenario."""
+    from vtrack.batch.discover import SEQUENCE_MOT_GT, VIDEO_GT, VIDEO_MOT_GT
+    from vtrack.evaluate.groundtruth import SEQUENCE_GT
+
+    batch = vtrack("batch", "--help").output.split("Options:")[0]
+    batch = " ".join(batch.split())  # lines wrapped anywhere
+    for name in (*SEQUENCE_GT, *SEQUENCE_MOT_GT, *(n.format("name") for n in VIDEO_GT),
+                 *(n.format("name") for n in VIDEO_MOT_GT)):
+        assert name in batch, (name, batch)
+    scene = " ".join(vtrack("scene", "--help").output.split("Options:")[0].split())
+    assert "(multi, pedestrians), OUT.mot.txt" in scene, scene
