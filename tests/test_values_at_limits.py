@@ -21,6 +21,7 @@ from vtrack.stages.base import Stage, TrackContext, TrackStatus
 from vtrack.stages.detect import Detection
 from vtrack.stages.kalman_bytetrack import ByteTracks
 from vtrack.stages.kalman_tracks import KalmanTracks
+from vtrack.stages.mht import MultipleHypothesis
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -94,6 +95,22 @@ def test_no_track_is_reported_wholly_outside_the_frame(stage: Stage) -> None:
         (stage.start if index == 0 else stage.step)(ctx)
         assert not [t for t in ctx.tracks if t.box.outside(320, 240)]
     assert [t.state for t in ctx.tracks] == [TrackStatus.CONFIRMED]
+
+
+def test_an_mht_track_coasting_out_of_the_frame_is_not_reported() -> None:
+    # S3's defaults: a blob moving right is measured until it reaches the frame's edge, then
+    # its confirmed track coasts on the predictor past the edge (up to max_coast frames)
+    stage = MultipleHypothesis()
+    coasting = 0
+    for index in range(30):
+        ctx = TrackContext(frame=GrayFrame(index, 0.0, np.zeros((120, 160), np.uint8)), seed=0)
+        x = 100.0 + 6 * index
+        ctx.detections = [Detection(Box(x, 40.0, 10, 10), x + 5, 45.0, 100.0)] if x + 10 <= 160 \
+            else []
+        (stage.start if index == 0 else stage.step)(ctx)
+        assert not [t for t in ctx.tracks if t.box.outside(160, 120)], index
+        coasting += sum(t.state is TrackStatus.COASTING for t in ctx.tracks)
+    assert coasting  # it was reported while its box still overlapped the frame
 
 
 # --- a value a hair past a limit is not shown as the limit --------------------------------------

@@ -38,7 +38,9 @@ The output (``ctx.tracks``) is the best hypothesis: one :class:`~vtrack.stages.b
 track with its ``P_R`` as confidence and state ``confirmed`` (confirmed and updated this frame:
 written to ``tracks.csv``), ``coasting`` (confirmed, no measurement this frame) or
 ``tentative``. Track ids start at 1, are given when a track survives its first frame, and are
-never reused.
+never reused. A branch coasting on its prediction wholly outside the frame lives on (it may
+meet its target again) but is not reported (as ``kalman_tracks`` and ``byte_tracks``: a track
+wholly outside the frame is never reported).
 
 Bounded work per frame: at most ``max_branches`` + 1 children per branch, ``max_hypotheses``
 hypotheses, and the search for the best extensions of one hypothesis stops after
@@ -268,9 +270,10 @@ class MultipleHypothesis(Stage):
                 newcomers[m].family = next(self._ids)
         self._hypotheses = hypotheses or [()]
         best = self._hypotheses[0]
-        ctx.tracks = [
+        width, height = ctx.frame.width, ctx.frame.height
+        ctx.tracks = [  # a branch coasting wholly outside the frame is kept, not reported
             Track(b.family, b.box, b.confidence, track_state(b.confirmed, b.detection is not None))
-            for b in sorted(best, key=lambda b: b.family)
+            for b in sorted(best, key=lambda b: b.family) if not b.box.outside(width, height)
         ]
 
     # --- branches ------------------------------------------------------------------------
