@@ -1,8 +1,8 @@
 """Issue 21 items 11 and 12: work and memory per frame stay bounded at every declared value.
 Multi-target runs keep no boxes for metrics without ground truth; `kalman_tracks` keeps at most
-`max_tracks` tracks; large morphology kernels, many particles over a large box and many kernel
-mean-shift steps over a large box are capped per frame, while the shipped configs' own values
-give exactly what they gave before."""
+`max_tracks` tracks, `mht` as many per hypothesis; large morphology kernels, many particles over
+a large box and many kernel mean-shift steps over a large box are capped per frame, while the
+shipped configs' own values give exactly what they gave before."""
 
 from __future__ import annotations
 
@@ -37,6 +37,18 @@ def test_tracks_are_capped_whatever_max_coast_lets_live() -> None:
     tracker = vtrack.Tracker("s4_multi", background__frames=1, blobs__min_area=1,
                              kalman_tracks__max_coast=100000, kalman_tracks__confirm=1,
                              kalman_tracks__max_tracks=40)
+    frames = specks(30)
+    tracker.init(frames[0])
+    counts = [len(tracker.update(frame).tracks) for frame in frames[1:]]
+    assert max(counts) == 40  # the specks make far more; the cap holds every frame
+
+
+def test_mht_tracks_are_capped_whatever_miss_delete_and_max_coast_let_live() -> None:
+    # P_R never falls (miss 0) and no branch is deleted for 100000 frames: without the cap each
+    # frame's specks start tracks that all live on, and a frame's work grows with the run
+    tracker = vtrack.Tracker("s3", threshold__median=1, blobs__min_area=1, mht__miss=0.0,
+                             mht__delete=-1e6, mht__max_coast=100000, mht__confirm=1.0,
+                             mht__max_tracks=40)
     frames = specks(30)
     tracker.init(frames[0])
     counts = [len(tracker.update(frame).tracks) for frame in frames[1:]]

@@ -39,7 +39,8 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
   are clipped to the frame (`hue.search_scale` <= 16, widened by `occlusion.max_growth` <= 16);
 - multi-target work: at most `blobs.max_blobs` (<= 1000) detections a frame; `mht` keeps at
   most `max_hypotheses` (<= 64) hypotheses and extends each branch with at most `max_branches`
-  (<= 16) measurements, searching a bounded number of combinations per hypothesis;
+  (<= 16) measurements, searching a bounded number of combinations per hypothesis, each of
+  at most `max_tracks` (<= 1000) tracks whatever `miss`, `delete` and `max_coast` allow;
   `kalman_tracks` keeps at most `max_tracks` (<= 1000) tracks whatever `max_coast` allows;
   multi-target runs keep no track boxes of past frames (with ground truth each frame is
   scored as it goes);

@@ -43,10 +43,12 @@ meet its target again) but is not reported (as ``kalman_tracks`` and ``byte_trac
 wholly outside the frame is never reported).
 
 Bounded work per frame: at most ``max_branches`` + 1 children per branch, ``max_hypotheses``
-hypotheses, and the search for the best extensions of one hypothesis stops after
-``4 * max_hypotheses * (tracks with a choice + 1)`` steps (it always finds the greedy best
-extension first; the search is exact unless the budget runs out). With ``B`` branches and
-``M`` measurements a frame costs ``O(B M)`` for gating (NumPy) plus the bounded search.
+hypotheses of at most ``max_tracks`` tracks each (however long ``miss``, ``delete`` and
+``max_coast`` let a coasting track live), and the search for the best extensions of one
+hypothesis stops after ``4 * max_hypotheses * (tracks with a choice + 1)`` steps (it always
+finds the greedy best extension first; the search is exact unless the budget runs out). With
+``B`` branches and ``M`` measurements a frame costs ``O(B M)`` for gating (NumPy) plus the
+bounded search.
 """
 
 from __future__ import annotations
@@ -237,6 +239,15 @@ class MultipleHypothesis(Stage):
             "not given: 0.5)",
             min=0.0, max=1e6,
         ),
+        Param(
+            "max_tracks",
+            int,
+            1000,
+            "at most this many tracks per hypothesis, those coasting longest dropped first "
+            "(bounds each frame's work and memory whatever miss, delete and max_coast let live; "
+            "not in S3)",
+            min=1, max=1000,
+        ),
     )
     requires = frozenset({"detections"})
     provides = frozenset({"tracks"})
@@ -264,7 +275,7 @@ class MultipleHypothesis(Stage):
                                       if m not in used)
             extended[frozenset(map(id, full))] = full
         hypotheses = self._prune(list(extended.values()))
-        hypotheses = self._delete_by_global_confidence(hypotheses)
+        hypotheses = self._capped(self._delete_by_global_confidence(hypotheses))
         for m in sorted(newcomers):  # ids in measurement order, only for tracks that survive
             if any(newcomers[m] in h for h in hypotheses):
                 newcomers[m].family = next(self._ids)
@@ -406,6 +417,17 @@ class MultipleHypothesis(Stage):
             return ranked
         floor = _score(ranked[0])[0] - self.prune_margin
         return [h for h in ranked if _score(h)[0] >= floor]
+
+    def _capped(self, hypotheses: list[_Hypothesis]) -> list[_Hypothesis]:
+        """Each hypothesis with at most ``max_tracks`` branches, those coasting longest dropped
+        first (stable), duplicates merged; best first."""
+        kept: dict[frozenset[int], _Hypothesis] = {}
+        for hypothesis in hypotheses:
+            if len(hypothesis) > self.max_tracks:
+                keep = sorted(range(len(hypothesis)), key=lambda i: hypothesis[i].coasting)
+                hypothesis = tuple(hypothesis[i] for i in sorted(keep[: self.max_tracks]))
+            kept.setdefault(frozenset(map(id, hypothesis)), hypothesis)
+        return sorted(kept.values(), key=_score, reverse=True)
 
     def _delete_by_global_confidence(self, hypotheses: list[_Hypothesis]) -> list[_Hypothesis]:
         """Delete branches whose P_G (S3 eq. 7) is below ``global_delete``; best first."""
