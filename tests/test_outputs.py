@@ -27,9 +27,10 @@ import pytest
 from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.config import DEFAULT_CONFIG
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
+from vtrack.io.raw import PIPE_BYTES
 
 if TYPE_CHECKING:
-    from conftest import Clip, ClipFactory
+    from conftest import Clip, ClipFactory, SceneFactory
 
 W, H, FRAMES = 160, 120, 48
 
@@ -291,6 +292,35 @@ def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path)
     record = assert_records_agree(out)
     assert record["status"] == "interrupted" and "SIGTERM" in record["error"]
     assert record["frames"] == 30 and sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
+
+
+def test_a_signal_before_the_first_tracked_frame_is_an_interrupted_run(
+        scene_factory: SceneFactory, tmp_path: Path) -> None:
+    """Interrupted while ``--start`` passes over the frames before it: no frame was tracked,
+    so there is no video to write (an MP4 of no picture does not open: the run used to call
+    that a broken output, exit 1, 'tuple index out of range')."""
+    scene = scene_factory("smooth", width=640, height=480, frames=12)
+    frames = list(scene.frames())
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vtrack", "run", "-", "--raw", "640x480", "--fps", "30",
+         "--start", "10", "--init", ",".join(map(str, scene.boxes[10])), "--out", str(out)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdin is not None
+    # 9 frames are more than the pipe holds (vtrack enlarges it to PIPE_BYTES) and one frame:
+    # once written, frames past the first (which opening the input reads) have been read, so
+    # the run is in its frame loop, passing over the frames before frame 10, which never comes
+    assert 8 * frames[0].nbytes > PIPE_BYTES
+    for frame in frames[:9]:
+        process.stdin.write(frame.tobytes())
+    process.stdin.flush()
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal.SIGTERM, stderr.decode()
+    assert error_line(stderr.decode()).endswith(f"interrupted by SIGTERM; partial results in {out}")
+    record = assert_records_agree(out)
+    assert (record["status"], record["frames"], record["outputs"]) == (
+        "interrupted", 0, ["track.csv"])
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])

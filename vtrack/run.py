@@ -800,6 +800,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     dropped.abort()
         else:
             folder.clear()
+            if video is not None and video.url is None and video.frames_written == 0:
+                video.abort()  # no picture, no video (a file of none does not open)
         for writer in (csv, video, writers.stream):
             if writer is None:
                 continue
