@@ -16,6 +16,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,9 +26,12 @@ import av
 import pytest
 
 from vtrack.batch import SUMMARY_COLUMNS
-from vtrack.config import DEFAULT_CONFIG
+from vtrack.batch.executors import _context, _Worker
+from vtrack.batch.jobs import Job
+from vtrack.config import DEFAULT_CONFIG, load_config
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
-from vtrack.io.raw import PIPE_BYTES
+from vtrack.io.raw import PIPE_BYTES, RawFormat
+from vtrack.request import RunRequest
 
 if TYPE_CHECKING:
     from conftest import Clip, ClipFactory, SceneFactory
@@ -351,6 +355,43 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
         statuses.append(row["status"])
     assert "interrupted" in statuses  # the batch did stop early
     assert "complete" in statuses  # the job running at the signal finished in the grace
+
+
+def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
+        scene_factory: SceneFactory, tmp_path: Path) -> None:
+    """A batch stopped alone (SIGTERM to its pid: ``kill``, ``docker stop``) gives its running
+    jobs a grace period; a job still running after it (here: its input sends no more frames)
+    gets SIGTERM and ends ``interrupted`` with its outputs whole and its ``run.json`` written.
+    It used to be killed outright: temporary files only, its tracked frames unrecorded."""
+    scene = scene_factory("smooth", width=W, height=H, frames=12)
+    fifo = tmp_path / "feed"
+    os.mkfifo(fifo)
+    writer = os.open(fifo, os.O_RDWR)  # holds the feed open: the job waits for frame 10
+    out = tmp_path / "out"
+    request = RunRequest(input=str(fifo), out_dir=out, config=load_config("s0"),
+                         init_box=scene.boxes[0], raw=RawFormat.parse(f"{W}x{H}", "bgr24", 30))
+    worker = _Worker(_context())
+    try:
+        assert worker.start(Job("feed", "s0", request))
+        data = b"".join(frame.tobytes() for frame in list(scene.frames())[:10])
+        threading.Thread(target=os.write, args=(writer, data), daemon=True).start()
+        wait_for_worker(lambda: any(p.read_bytes().count(b"\n") > 10
+                                    for p in out.glob(".track.tmp*")), worker, "rows")
+        worker.stop(grace_s=0)
+    finally:
+        os.close(writer)
+    assert not worker.process.is_alive()
+    record = assert_records_agree(out)
+    assert (record["status"], record["error"], record["frames"]) == (
+        "interrupted", "interrupted by SIGTERM", 10)
+
+
+def wait_for_worker(condition, worker: _Worker, what: str) -> None:
+    deadline = time.monotonic() + 60
+    while not condition():
+        assert worker.process.is_alive(), f"the worker ended before {what}"
+        assert time.monotonic() < deadline, f"no {what}"
+        time.sleep(0.01)
 
 
 def test_a_signal_to_the_batchs_process_group_leaves_a_summary_that_agrees_with_the_runs(

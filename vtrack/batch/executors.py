@@ -28,8 +28,11 @@ from vtrack.run import STATUS_FAILED
 RETRIES = 1
 #: How often a Dask batch checks that the scheduler still has a worker (seconds).
 WORKER_POLL_S = 1.0
-#: How long a stopped batch waits for its running jobs to end ``interrupted`` (seconds).
+#: How long a stopped batch waits for its running jobs to finish (seconds).
 STOP_GRACE_S = 5.0
+#: How long a job still running then has, after SIGTERM, to end ``interrupted`` and write its
+#: records, before its worker is killed (seconds).
+RECORD_GRACE_S = 10.0
 #: The Dask protocols ``--scheduler`` connects with: the others need what vtrack does not
 #: give a Client (``tls``/``wss``: certificates; ``ucx``: UCX-Py and its network) or cannot
 #: reach another process at all (``inproc``).
@@ -122,8 +125,10 @@ class _Worker:
             return None
 
     def stop(self, grace_s: float = STOP_GRACE_S) -> None:
-        """Ask the worker to finish; a job still running (interrupted, it is writing its
-        ``run.json``) gets ``grace_s``, then the process is killed.
+        """Ask the worker to finish; a job still running gets ``grace_s`` to end, then the
+        worker gets SIGTERM, so the job ends ``interrupted`` with its outputs whole and its
+        ``run.json`` written (as on Ctrl-C), and :data:`RECORD_GRACE_S` to do so; only then
+        is the process killed.
 
         Its exit is read from its end of the pipe closing, not from ``Process.join``: the
         worker is the forkserver's child, and a signal to the whole process group (Ctrl-C,
@@ -132,17 +137,24 @@ class _Worker:
         its records (``summary.csv`` was then written without them)."""
         with suppress(OSError):
             self.connection.send(None)
-        deadline = time.monotonic() + grace_s
-        try:
-            while (left := deadline - time.monotonic()) > 0 and self.connection.poll(left):
-                self.connection.recv()  # an outcome or progress nobody waits for now
-        except (EOFError, OSError):
-            pass  # its end closed: the worker is gone
-        else:
+        for wait_s, then in ((grace_s, signal.SIGTERM), (RECORD_GRACE_S, signal.SIGKILL)):
+            if self._ended_within(wait_s):
+                break
             with suppress(ProcessLookupError):
-                os.kill(self.process.pid, signal.SIGKILL)
+                os.kill(self.process.pid, then)
         self.process.join(1)
         self.connection.close()
+
+    def _ended_within(self, wait_s: float) -> bool:
+        """Whether the worker's end of the pipe closes (it is gone) within ``wait_s``; what it
+        sends meanwhile (an outcome or progress nobody waits for now) is dropped."""
+        deadline = time.monotonic() + wait_s
+        try:
+            while (left := deadline - time.monotonic()) > 0 and self.connection.poll(left):
+                self.connection.recv()
+        except (EOFError, OSError):
+            return True
+        return False
 
 
 class LocalExecutor:
