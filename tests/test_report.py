@@ -358,6 +358,30 @@ def test_inputs_of_one_name_in_two_containers_are_two_inputs(
     assert "different inputs" not in markdown
 
 
+def test_an_input_named_all_keeps_its_own_plots(clip_factory: ClipFactory,
+                                                tmp_path: Path) -> None:
+    """The plots over all inputs are ``curves_all.png``: an input named ``all`` showed those
+    under its own heading, its own curves written over by them."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name, scenario in (("all", "smooth"), ("b", "jump")):
+        clip = clip_factory(scenario, width=W, height=H, frames=20)
+        shutil.copy(clip.path, folder / f"{name}.mp4")
+        shutil.copy(clip.gt, folder / f"{name}.gt.txt")
+    out = tmp_path / "out"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "--out", str(out)
+                  ).exit_code == 0
+    report = tmp_path / "report"
+    assert vtrack("report", str(out), "--out", str(report)).exit_code == 0
+    markdown = (report / "summary.md").read_text()
+    under_all = markdown.split("\n## all\n", 1)[1].split("\n## ", 1)[0]
+    assert re.findall(r"plots/(curves_[^)]+)\)", under_all) == ["curves_all-2.png"]
+    everything = markdown.split("## All inputs", 1)[1].split("\n## ", 1)[0]
+    assert re.findall(r"plots/(curves_[^)]+)\)", everything) == ["curves_all.png"]
+    assert (report / "plots" / "curves_all-2.png").read_bytes() != (
+        report / "plots" / "curves_all.png").read_bytes()
+
+
 def _table_labels(markdown: str) -> set[tuple[str, str]]:
     """(input, config) of every row of the results table in summary.md."""
     rows = markdown.split("## Results per input and configuration", 1)[1].split("\n## ", 1)[0]

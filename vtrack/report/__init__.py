@@ -66,13 +66,18 @@ class Report:
     warnings: list[str]
 
 
+#: The slug of the plots over all inputs (``curves_all.png``): no input's plots take it.
+ALL_INPUTS = "all"
+
+
 def _slugs(names: Sequence[str]) -> dict[str, str]:
-    """A distinct file-name-safe slug per name."""
+    """A distinct file-name-safe slug per name, never :data:`ALL_INPUTS` (an input named
+    ``all`` gets ``all-2``: its plots are not replaced by those over all inputs)."""
     slugs: dict[str, str] = {}
     for name in names:
         base = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "input"
         slug, n = base, 1
-        while slug in slugs.values():
+        while slug in slugs.values() or slug == ALL_INPUTS:
             n += 1
             slug = f"{base}-{n}"
         slugs[name] = slug
@@ -366,4 +371,4 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
                         "are not directly comparable")
     return _save(staged, plots.curves_figure(
         f"All inputs (mean over {len(scored_inputs)} inputs)", success, precision, palette),
-        plot_dir / "curves_all.png")
+        plot_dir / f"curves_{ALL_INPUTS}.png")
