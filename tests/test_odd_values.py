@@ -47,6 +47,24 @@ def test_a_name_too_long_for_the_file_system_is_one_line(clip: Path, tmp_path: P
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("option", ["--out", "--stream"])
+def test_a_path_too_long_for_the_system_is_one_line(clip: Path, tmp_path: Path,
+                                                    option: str) -> None:
+    """A path of names each short enough but longer than the system takes (4096 bytes) was an
+    OSError traceback (ENAMETOOLONG, exit 1); a 300-byte --stream name too."""
+    deep = "/".join(["d" * 250] * 17)
+    for path in (deep, LONG) if option == "--stream" else (deep,):
+        done = _vtrack("run", str(clip), "--gt", str(clip.with_suffix(".gt.txt")), "--no-video",
+                       *(["-o", path] if option == "--out" else ["-o", "out", option, path]),
+                       cwd=tmp_path)
+        assert done.returncode == 2, done.stderr
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(
+            f"vtrack: error: Invalid value for '{option}"), lines
+        assert "longer than" in lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_nul_in_a_path_parameter_is_refused_when_the_config_loads(tmp_path: Path) -> None:
     """`path = "det\\u0000.txt"` ran, failed at the first frame with a ValueError traceback and
     left a failed run.json and a tracks.csv."""

@@ -10,6 +10,9 @@ import click
 
 #: The longest file or folder name the common file systems take (bytes).
 NAME_MAX = 255
+#: The longest path a command takes (bytes): Linux takes 4096 (PATH_MAX), and vtrack adds
+#: names below an ``--out`` (a batch's ``<input>/<config>/`` and a temporary file name).
+PATH_BYTES = 3584
 
 
 class NonEmptyPath(click.Path):
@@ -22,11 +25,21 @@ class NonEmptyPath(click.Path):
         if isinstance(value, str) and not value.strip():
             self.fail("empty; give a folder or file name ('.' for the current folder)",
                       param, ctx)
-        if isinstance(value, str) and any(len(os.fsencode(part)) > NAME_MAX
-                                           for part in Path(value).parts):
-            self.fail(f"a name in it is longer than {NAME_MAX} bytes, more than a file system "
-                      "takes", param, ctx)
+        problem = length_problem(value) if isinstance(value, str) else None
+        if problem:
+            self.fail(problem, param, ctx)
         return super().convert(value, param, ctx)
+
+
+def length_problem(path: str) -> str | None:
+    """Why ``path`` is too long for a file system to take (None: it is not): a name in it
+    longer than :data:`NAME_MAX` bytes, or the whole longer than :data:`PATH_BYTES`."""
+    if any(len(os.fsencode(part)) > NAME_MAX for part in Path(path).parts):
+        return f"a name in it is longer than {NAME_MAX} bytes, more than a file system takes"
+    if len(os.fsencode(path)) > PATH_BYTES:
+        return (f"longer than {PATH_BYTES} bytes (a path takes at most 4096, and vtrack adds "
+                "names below it)")
+    return None
 
 
 #: The type of every ``--out`` option and path argument.
@@ -47,6 +60,23 @@ class NonEmptyText(click.ParamType):
                 ctx: click.Context | None) -> Any:
         if isinstance(value, str) and not value.strip():
             self.fail(f"empty; give {self.hint}", param, ctx)
+        return value
+
+
+class FileOrDash(NonEmptyText):
+    """A file name or ``-`` (stdout), neither empty nor longer than a file system takes."""
+
+    name = "FILE|-"
+
+    def __init__(self) -> None:
+        super().__init__("a file or - (stdout)")
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        value = super().convert(value, param, ctx)
+        problem = length_problem(value) if isinstance(value, str) else None
+        if problem:
+            self.fail(problem, param, ctx)
         return value
 
 

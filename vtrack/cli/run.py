@@ -17,7 +17,7 @@ from vtrack.cli._options import (
     gt_origin_option,
     stats_period_option,
 )
-from vtrack.cli._paths import CONFIG, INPUT, PATH, NonEmptyText
+from vtrack.cli._paths import CONFIG, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.params import MAX_SEED
 
@@ -112,8 +112,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Stop after N frames, or after T seconds of the input (10s, like ffmpeg "
                    "-t: the frames whose timestamp is less than T past the first tracked "
                    "one's, so a variable frame rate is followed).")
-@click.option("--stream", "stream", metavar="FILE|-", default=None,
-              type=NonEmptyText("a file or - (stdout)"),
+@click.option("--stream", "stream", metavar="FILE|-", type=FileOrDash(), default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
                    "score, extras), flushed as each frame is done; '-' is stdout (the summary "
                    "line then goes to stderr). A file holding anything is replaced only with "
