@@ -63,8 +63,10 @@ def test_a_cut_track_csv_is_left_out_with_a_warning(run_dir: Path, tmp_path: Pat
 @pytest.mark.parametrize("damage", [
     {"config": 5}, {"input": "clip.mp4"}, {"frames": 1e999}, {"timing": []}, {"summary": "x"},
     "[" * 100_000 + "]" * 100_000, [1, 2], {"timing": {"fps": "fast"}},
-    {"request": {"gt_origin": 7}},
-], ids=["config", "input", "frames", "timing", "summary", "deep", "list", "fps", "origin"])
+    {"request": {"gt_origin": 7}}, {"status": "done"}, {"start_frame": -5},
+    {"start_frame": "x"}, {"output_bytes": {"track.csv": "123"}},
+], ids=["config", "input", "frames", "timing", "summary", "deep", "list", "fps", "origin",
+        "status", "start", "start-text", "bytes-text"])
 def test_a_hand_damaged_run_json_is_left_out_and_the_other_runs_reported(
         run_dir: Path, tmp_path: Path, damage: dict | str | list) -> None:
     damaged = tmp_path / "damaged"

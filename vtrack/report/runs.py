@@ -279,10 +279,13 @@ def _scored_as_written(boxes: Sequence[Box | None], truth: Sequence[Box | None]
 
 def _start(record: dict[str, Any]) -> int:
     """The first frame the run tracked (``--start``, a time already found as a frame; 0 for
-    records made before it existed)."""
-    if record.get("start_frame") is not None:
-        return int(record["start_frame"])
-    return int((record.get("request") or {}).get("start") or 0)
+    records made before it existed). ValueError when it is not a frame number."""
+    start = record.get("start_frame")
+    if start is None:
+        start = (record.get("request") or {}).get("start") or 0
+    if isinstance(start, bool) or not isinstance(start, int) or start < 0:
+        raise ValueError(f"start_frame {start!r}")
+    return start
 
 
 def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dict[str, str]]:
@@ -321,6 +324,8 @@ def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
     recorded = (record.get("output_bytes") or {}).get(name)
     if recorded is None:
         return
+    if isinstance(recorded, bool) or not isinstance(recorded, int):
+        raise InputError(f"{folder / 'run.json'}: not a vtrack run record")
     found = sizes(folder, [name]).get(name)
     if found != recorded:
         held = "is missing" if found is None else f"holds {found} bytes"
@@ -388,6 +393,9 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         raise ValueError(f"fps {fps!r}")
     if (record.get("request") or {}).get("gt_origin", 0) not in (0, 1):
         raise ValueError("gt_origin")
+    if record.get("status", "?") not in (*BATCH_STATUSES, "?"):
+        raise ValueError("status")
+    _start(record)  # a frame number (read again with the rows)
     return RunResult(
         folder=folder,
         input=_input_name(record, folder),
