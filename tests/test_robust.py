@@ -217,13 +217,12 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
-@pytest.mark.parametrize("scenario", ["smooth", "distractor", "occlusion"])
-def test_first_filter_constrained_to_the_box_holds_on_generated_scenes(scene_factory,
-                                                                       scenario: str) -> None:
+def test_first_filter_constrained_to_the_box_holds_on_generated_scenes(scene_factory) -> None:
     """``robust_model.first_support`` (CSR-DCF/BACF's constrained filter on the first frame)
-    keeps the issue's bar on the scenes: the target is followed from a filter that uses no
-    background around it."""
-    values = overlaps_over_seeds(scene_factory, scenario, ["robust_model.first_support=1"])
+    keeps the issue's bar where a filter learnt without its background is most tried: a target
+    hidden and seen again (the option is off by default; ``smooth`` and ``distractor``, which
+    it also held, were dropped to keep the suite within its time)."""
+    values = overlaps_over_seeds(scene_factory, "occlusion", ["robust_model.first_support=1"])
     assert float(np.mean(values)) >= 0.7, values
 
 
