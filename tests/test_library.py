@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import vtrack
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import center_error
 from vtrack.run import run
 from vtrack.scenes import (
@@ -251,3 +251,29 @@ def test_frame_constructors_refuse_what_the_tracker_refuses_with_its_message() -
                        r"of even width and height, got shape \(100, 160\)$"):
         vtrack.I420Frame(0, 0.0, np.zeros((100, 160), np.uint8))
     assert vtrack.I420Frame(0, 0.0, np.zeros((180, 160), np.uint8)).height == 120
+
+
+@pytest.mark.parametrize("config", ["s0", "s0-fixed", "robust"])
+def test_pipeline_refuses_a_frame_of_another_size_or_kind_than_the_first(config: str) -> None:
+    """Pipeline.track took a 40x30 frame after a 160x120 one and said 'tracking' with the box
+    120,80,20,20 wholly outside it (s0-fixed: a box at -4.5,-4.5); vtrack.Tracker refused it."""
+    first = _red_block(1)[0]
+    pipeline = vtrack.Pipeline(vtrack.load_config(config).build())
+    results = pipeline.track([vtrack.BgrFrame(0, 0.0, first),
+                              vtrack.BgrFrame(1, 0.1, np.zeros((30, 40, 3), np.uint8))],
+                             (50, 40, 40, 30))
+    assert next(results).index == 0
+    with pytest.raises(InputError, match=r"^frame 1: 40x30 colour, the first frame was 160x120 "
+                       r"colour \(one track follows one sequence: Tracker.reset\(\) or "
+                       r"Pipeline.begin\(\) starts another\)$"):
+        next(results)
+    grey = pipeline.track([vtrack.BgrFrame(0, 0.0, first),
+                           vtrack.GrayFrame(1, 0.1, first[:, :, 2].copy())], (50, 40, 40, 30))
+    assert next(grey).index == 0
+    with pytest.raises(InputError, match="^frame 1: 160x120 grey, the first frame was 160x120 "
+                       "colour"):
+        next(grey)
+    small = np.zeros((30, 40, 3), np.uint8)
+    small[5:25, 5:25] = (0, 0, 255)
+    again = pipeline.track([vtrack.BgrFrame(0, 0.0, small)], (5, 5, 20, 20))  # any size
+    assert [r.index for r in again] == [0]

@@ -13,8 +13,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from vtrack.errors import ConfigError
-from vtrack.frame import Frame
+from vtrack.errors import ConfigError, InputError
+from vtrack.frame import Frame, GrayFrame
 from vtrack.geometry import Box, as_box, check_init_box
 from vtrack.overlays import Overlay
 from vtrack.params import check_seed
@@ -107,15 +107,20 @@ class Pipeline:
             raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
         self._init_box = None if init_box is None else as_box(init_box)
         self._ctx: TrackContext | None = None
+        #: (width, height, grey) of the track's first frame: every later one must match
+        self._shape: tuple[int, int, bool] | None = None
         self._off_frame = 0  # frames in a row the box has been entirely outside the frame
 
     def process(self, frame: Frame) -> FrameResult:
         """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
-        else) and return what is said about it."""
+        else) and return what is said about it. InputError for a frame of another size than
+        the track's first, or grey after colour (or colour after grey): its stages' windows,
+        models and boxes are those of the first frame's pictures."""
         if not isinstance(frame, Frame):
             raise TypeError(f"Pipeline takes vtrack.Frame objects (BgrFrame, GrayFrame, "
                             f"I420Frame), got {type(frame).__name__}; vtrack.Tracker and "
                             "vtrack.track also take NumPy images and av.VideoFrame")
+        self._check_shape(frame)
         clock = time.perf_counter
         ctx = self._ctx
         if ctx is None:
@@ -157,6 +162,22 @@ class Pipeline:
             overlays=ctx.overlays,
         )
 
+    def _check_shape(self, frame: Frame) -> None:
+        """InputError naming ``frame`` when its size or kind (grey, colour) is not the track's
+        first frame's; the first frame of a track sets them."""
+        shape = (frame.width, frame.height, isinstance(frame, GrayFrame))
+        if self._shape is None:
+            self._shape = shape
+        elif shape != self._shape:
+            raise InputError(f"frame {frame.index}: {_looks(shape)}, the first frame was "
+                             f"{_looks(self._shape)} (one track follows one sequence: "
+                             "Tracker.reset() or Pipeline.begin() starts another)")
+
     def stage_microseconds_per_frame(self) -> dict[str, float]:
         n = max(self.frames_done, 1)
         return {name: seconds * 1e6 / n for name, seconds in self.stage_seconds.items()}
+
+
+def _looks(shape: tuple[int, int, bool]) -> str:
+    width, height, grey = shape
+    return f"{width}x{height} {'grey' if grey else 'colour'}"

@@ -15,7 +15,7 @@ import numpy as np
 
 from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
@@ -97,8 +97,6 @@ class Tracker:
         self.keep_frames = keep_frames
         self._pipeline: Pipeline | None = None
         self._index = 0
-        #: (width, height, grey) of the sequence's first frame: every later one must match
-        self._shape: tuple[int, int, bool] | None = None
 
     @property
     def multi_target(self) -> bool:
@@ -141,25 +139,14 @@ class Tracker:
     def reset(self) -> None:
         """Forget the target: the next call must be :meth:`init` (or ``update`` for the
         detecting configs), which starts from fresh stages."""
-        self._pipeline, self._index, self._shape = None, 0, None
+        self._pipeline, self._index = None, 0
 
     def _process(self, item: FrameLike) -> FrameResult:
         assert self._pipeline is not None
-        frame = as_frame(item, self._index, self.fps)
-        shape = (frame.width, frame.height, isinstance(frame, GrayFrame))
-        if self._shape is None:
-            self._shape = shape
-        elif shape != self._shape:
-            raise InputError(f"frame {self._index}: {_looks(shape)}, the first frame was "
-                             f"{_looks(self._shape)} (one Tracker follows one sequence: "
-                             "reset() or a new Tracker for another)")
-        result = self._pipeline.process(frame)
+        # a frame of another size or kind than the first: InputError from the pipeline
+        result = self._pipeline.process(as_frame(item, self._index, self.fps))
         self._index += 1
         if not self.keep_frames:
             result.frame = None
         return result
 
-
-def _looks(shape: tuple[int, int, bool]) -> str:
-    width, height, grey = shape
-    return f"{width}x{height} {'grey' if grey else 'colour'}"
