@@ -277,3 +277,20 @@ def test_pipeline_refuses_a_frame_of_another_size_or_kind_than_the_first(config:
     small[5:25, 5:25] = (0, 0, 255)
     again = pipeline.track([vtrack.BgrFrame(0, 0.0, small)], (5, 5, 20, 20))  # any size
     assert [r.index for r in again] == [0]
+
+
+def test_a_frame_index_that_is_not_a_frame_number_is_one_line_naming_it() -> None:
+    """BgrFrame(image, 0, 0.0) (arguments swapped) raised 'frame [[[0 0 0] ...' with the whole
+    image printed over dozens of lines; an index of 'a', -1 or 1.5 made a frame."""
+    image = _red_block(1)[0]
+    with pytest.raises(TypeError, match=r"^frame index: expected a whole number >= 0 \(the "
+                       r"frame's 0-based number, the first argument\), got ndarray$"):
+        vtrack.BgrFrame(image, 0, 0.0)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="^frame index: .*got ndarray$"):
+        vtrack.GrayFrame(image[:, :, 0], 0, 0.0)  # type: ignore[arg-type]
+    for index, shown in (("a", "str"), (1.5, "float"), (True, "bool")):
+        with pytest.raises(TypeError, match=f"^frame index: .*got {shown}$"):
+            vtrack.BgrFrame(index, 0.0, image)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="^frame index: expected a whole number >= 0, got -1$"):
+        vtrack.I420Frame(-1, 0.0, np.zeros((180, 160), np.uint8))
+    assert vtrack.BgrFrame(np.int64(3), 0.1, image).index == 3
