@@ -55,6 +55,8 @@ def test_track_takes_plain_values_path_tuple_and_numpy_frames(tmp_path: Path) ->
     from_frames = list(vtrack.track(scene.as_frames(), "s0", vtrack.Box(*start)))
     assert [r.box for r in from_arrays] == [r.box for r in from_frames]
     assert [r.time_s for r in from_arrays] == [r.time_s for r in from_frames]
+    as_bytes = [r.box for r in vtrack.track(bytes(clip), "s0", start)]  # a path, not frames
+    assert as_bytes == typed
     # a grey image is a frame too (for a grey tracker)
     grey = [np.ascontiguousarray(f[:, :, 1]) for f in scene.frames()]
     assert len(list(vtrack.track(grey, "s2", start))) == 20
@@ -294,3 +296,24 @@ def test_a_frame_index_that_is_not_a_frame_number_is_one_line_naming_it() -> Non
     with pytest.raises(TypeError, match="^frame index: expected a whole number >= 0, got -1$"):
         vtrack.I420Frame(-1, 0.0, np.zeros((180, 160), np.uint8))
     assert vtrack.BgrFrame(np.int64(3), 0.1, image).index == 3
+
+
+@pytest.mark.parametrize("frames", [5, None])
+def test_what_is_neither_a_path_nor_frames_is_one_line_naming_the_argument(frames: object
+                                                                          ) -> None:
+    """track(5) raised "'int' object is not iterable", track([image], 5) and Tracker(5)
+    "expected str, bytes or os.PathLike object, not int" and open_source(None) the same
+    ("not NoneType"): none named the argument."""
+    image = _red_block(1)[0]
+    kind = type(frames).__name__
+    with pytest.raises(TypeError, match=r"^frames: expected a path \(str or pathlib.Path\), a "
+                       f"RunRequest or an iterable of frames, got {kind}$"):
+        list(vtrack.track(frames, "s0", (50, 40, 40, 30)))  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"^spec: expected a path \(str or pathlib.Path\), a "
+                       f"URL or a device, got {kind}$"):
+        vtrack.open_source(frames)  # type: ignore[arg-type]
+    config = r"^config: expected a shipped config name, a TOML file path or a vtrack.Config"
+    with pytest.raises(TypeError, match=f"{config}, got int$"):
+        list(vtrack.track([image], 5, (50, 40, 40, 30)))  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=f"{config}, got list$"):
+        vtrack.Tracker(["s0"])  # type: ignore[arg-type]

@@ -58,8 +58,8 @@ def track(frames: FrameInput,
         return
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)
-    if isinstance(frames, str | os.PathLike):
-        path = os.fspath(frames)
+    if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
+        path = os.fsdecode(frames)
         # an image folder is timed at fps; a video keeps its own timestamps
         with open_source(path, fps=fps if os.path.isdir(path) else None) as source:
             yield from _run(tracker, source, box)
@@ -83,12 +83,16 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     elif pix_fmt is not None:
         raise ConfigError("pix_fmt is the pixel format of raw input: give raw='WIDTHxHEIGHT' "
                           "with it")
+    if not isinstance(spec, str | bytes | os.PathLike):
+        raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
+                        f"{type(spec).__name__}")
     return inputs.open_source(os.fsdecode(spec), raw, fps=fps, **options)
 
 
 def _refuse_one_frame(frames: object) -> None:
     """TypeError for one picture given where a sequence of frames is expected: a NumPy image
-    would be iterated row by row (a 240x320x3 image as 240 grey 3x320 frames)."""
+    would be iterated row by row (a 240x320x3 image as 240 grey 3x320 frames); and for what is
+    neither a path nor iterable (None, a number), named as ``frames``."""
     if isinstance(frames, np.ndarray) and (frames.ndim == 2 or frames.ndim == 3
                                            and frames.shape[2] == 3):
         shape = "x".join(str(n) for n in frames.shape)
@@ -97,6 +101,9 @@ def _refuse_one_frame(frames: object) -> None:
     if isinstance(frames, Frame) or type(frames).__module__.split(".")[0] == "av":
         raise TypeError(f"frames: expected an iterable of frames, got one "
                         f"{type(frames).__name__} (give [frame] for a single frame)")
+    if not isinstance(frames, str | bytes | os.PathLike | RunRequest | Iterable):
+        raise TypeError(f"frames: expected a path (str or pathlib.Path), a RunRequest or an "
+                        f"iterable of frames, got {type(frames).__name__}")
 
 
 def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:

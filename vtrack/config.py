@@ -18,6 +18,7 @@ Everything is checked at load time; errors name the file, the stage and the para
 
 from __future__ import annotations
 
+import os
 import tomllib
 from collections import Counter
 from collections.abc import Mapping
@@ -126,6 +127,9 @@ def load_config(spec: str | Path | None = None) -> Config:
     the current folder: give such a file as a path (``./s2``) or with ``.toml``.
     """
     spec = DEFAULT_CONFIG if spec is None else spec
+    if not isinstance(spec, str | os.PathLike):
+        raise TypeError(f"config: expected a shipped config name, a TOML file path or a "
+                        f"vtrack.Config, got {type(spec).__name__}")
     path = Path(spec)
     shipped = shipped_configs()
     if str(spec) in shipped:

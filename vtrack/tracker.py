@@ -86,8 +86,7 @@ class Tracker:
     def __init__(self, config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG, *,
                  seed: int = 0, fps: float = 30.0, keep_frames: bool = False,
                  **params: Any) -> None:
-        chain = (config if isinstance(config, Config)
-                 else load_config(None if config is None else os.fspath(config)))
+        chain = config if isinstance(config, Config) else load_config(config)
         if params:
             chain = chain.with_values({key.replace("__", ".", 1): value
                                        for key, value in params.items()})
