@@ -162,11 +162,15 @@ def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: 
     ((1, 2, 3), r"expected 4 numbers \(x, y, w, h\), got 3"),
     ("1234", r"expected \(x, y, w, h\) numbers, got '1234'"),
     ("abc", r"expected \(x, y, w, h\) numbers, got 'abc'"),
+    ((True, 100, 40, 40), r"expected \(x, y, w, h\) numbers, got \(True, 100, 40, 40\)"),
+    (("100", 100, 40, 40), r"expected \(x, y, w, h\) numbers, got \('100', 100, 40, 40\)"),
+    (vtrack.Box("100", 100, 40, 40), r"expected \(x, y, w, h\) numbers, got Box\(x='100'"),
 ])
 def test_every_bad_first_box_is_a_config_error_as_with_vtrack_run_init(box: object,
                                                                        problem: str) -> None:
     """An empty box or one of 3 numbers raised builtins.ValueError, a 2x2 one ConfigError (what
-    ``vtrack run --init`` raises for each); "1234" was taken as the box 1,2,3,4."""
+    ``vtrack run --init`` raises for each); "1234" was taken as the box 1,2,3,4, (True, ...)
+    as x = 1 and ("100", ...) as x = 100; Box("100", ...) raised "Unknown format code 'g'"."""
     with pytest.raises(ConfigError, match=f"^init_box: {problem}"):
         vtrack.Tracker("s0").init(np.zeros((240, 320, 3), np.uint8), box)
 

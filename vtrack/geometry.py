@@ -8,6 +8,7 @@ already clipped to the frame, used to cut the part of a frame a stage works on.
 from __future__ import annotations
 
 import math
+import numbers
 import reprlib
 from collections.abc import Sequence
 from typing import Any, NamedTuple
@@ -146,15 +147,16 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
 
 
 def as_box(box: Box | Any, where: str = "init_box") -> Box:
-    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)``; ConfigError naming
-    ``where`` otherwise (what ``--init`` raises). Whether it can be tracked in a frame is
-    :func:`check_init_box`'s to say."""
-    if isinstance(box, Box):
-        return box
-    try:
+    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)`` (real numbers, NumPy's
+    too; not booleans nor strings); ConfigError naming ``where`` otherwise (what ``--init``
+    raises). Whether it can be tracked in a frame is :func:`check_init_box`'s to say."""
+    try:  # a Box too: Box("10", 1, 2, 3) is built without a check
         if isinstance(box, str | bytes):  # "1234" would be 4 digits
             raise TypeError
-        values = tuple(float(v) for v in box)
+        items = tuple(box)
+        if any(isinstance(v, bool) or not isinstance(v, numbers.Real) for v in items):
+            raise TypeError  # True is not the number 1, nor '10' the number 10
+        values = tuple(float(v) for v in items)
     except (TypeError, ValueError, OverflowError):
         raise ConfigError(f"{where}: expected (x, y, w, h) numbers, got "
                           f"{reprlib.repr(box)}") from None
