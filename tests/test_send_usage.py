@@ -32,3 +32,24 @@ def test_help_and_a_missing_file(tmp_path: Path) -> None:
     assert missing.returncode == 1, missing.stderr
     assert missing.stderr.count("\n") == 1 and "none.mp4" in missing.stderr, missing.stderr
     assert "No such file" in missing.stderr
+
+
+def test_a_text_file_and_a_port_out_of_range_are_one_line_naming_them(tmp_path: Path) -> None:
+    """A ground-truth file was sent as FFmpeg's tty reader draws it and failed with
+    '... -> udp://127.0.0.1:9: ansi'; udp://127.0.0.1:99999 sent the clip to port 34463 (99999
+    mod 65536) and exited 0."""
+    from vtrack.scenes import make_scene, write_groundtruth, write_video
+
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=30, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4", preset="ultrafast")
+    text = write_groundtruth(scene, tmp_path / "clip.gt.txt")
+    for args, problem in (
+            ([str(text), "udp://127.0.0.1:9"], f"{text}: a text file, not a video"),
+            ([str(clip), "udp://127.0.0.1:99999"],
+             "udp://127.0.0.1:99999: the port must be a number from 1 to 65535")):
+        done = subprocess.run([*SENDER, *args], capture_output=True, text=True, timeout=60,
+                              check=False)
+        assert done.returncode == 1, done.stderr
+        assert done.stderr == f"python -m vtrack.scenes.send: error: {problem}" + (
+            " (FFmpeg's tty reader would draw its characters as pictures)\n"
+            if "text" in problem else "\n")

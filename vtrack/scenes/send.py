@@ -12,10 +12,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from urllib.parse import urlsplit
 
 import av
 
 from vtrack.io.files import ffmpeg_file, os_reason
+from vtrack.io.video import TEXT_FORMATS
 
 
 def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> int:
@@ -28,13 +30,28 @@ def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> 
     with source:
         if not source.streams.video:
             raise SendError(f"{path}: has no video stream")
+        if source.format.name in TEXT_FORMATS:
+            raise SendError(f"{path}: a text file, not a video (FFmpeg's {source.format.name} "
+                            "reader would draw its characters as pictures)")
         video = source.streams.video[0]
+        _check_port(url)
         try:
             sink = av.open(url, "w", format=fmt)
         except (av.FFmpegError, OSError, ValueError) as exc:
             raise SendError(f"{url}: {os_reason(exc)}") from None
         with sink:
             return _copy(source, video, sink, realtime)
+
+
+def _check_port(url: str) -> None:
+    """SendError naming ``url`` when it gives a port outside 1..65535 (FFmpeg takes
+    ``udp://127.0.0.1:99999`` and sends to port 99999 mod 65536, where no one listens)."""
+    try:
+        port = urlsplit(url).port
+    except ValueError:
+        port = -1
+    if port is not None and not 1 <= port <= 65535:
+        raise SendError(f"{url}: the port must be a number from 1 to 65535")
 
 
 class SendError(Exception):
