@@ -321,3 +321,12 @@ def test_what_is_neither_a_path_nor_frames_is_one_line_naming_the_argument(frame
         list(vtrack.track([image], 5, (50, 40, 40, 30)))  # type: ignore[arg-type]
     with pytest.raises(TypeError, match=f"{config}, got list$"):
         vtrack.Tracker(["s0"])  # type: ignore[arg-type]
+
+
+def test_track_without_the_first_box_a_config_needs_names_init_box() -> None:
+    """vtrack.track(frames, "s0") said 'call init(frame, (x, y, w, h))', a method the caller of
+    track never sees, and only after opening the input and decoding its first frame."""
+    with pytest.raises(ConfigError, match=r"^init_box: s0 starts from the target's first box: "
+                       r"give init_box=\(x, y, w, h\)$"):
+        next(vtrack.track("no-such-clip.mp4", "s0"))  # not opened: the box is asked for first
+    assert [r.index for r in vtrack.track(_red_block(2), "s4_multi")] == [0, 1]

@@ -58,6 +58,9 @@ def track(frames: FrameInput,
         return
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)
+    if box is None and tracker.needs_init_box:  # said before the input is opened
+        raise ConfigError(f"init_box: {tracker.config.name} starts from the target's first "
+                          "box: give init_box=(x, y, w, h)")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
         path = os.fsdecode(frames)
         # an image folder is timed at fps; a video keeps its own timestamps

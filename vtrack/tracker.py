@@ -102,6 +102,11 @@ class Tracker:
         """True for the configs that detect and return several tracks (no initial box)."""
         return self._new_pipeline().multi_target
 
+    @property
+    def needs_init_box(self) -> bool:
+        """True for the configs that start from the target's first box (all but s3, s4, ...)."""
+        return self._new_pipeline().needs_init_box
+
     def _new_pipeline(self) -> Pipeline:
         return Pipeline(self.config.build(), seed=self.seed)
 
