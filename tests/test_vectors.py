@@ -282,3 +282,27 @@ def test_vectors_help_lists_the_options_of_vtrack_vectors_input() -> None:
     for option in ("--config", "--init", "--frames", "--out", "--set"):
         assert option in options, text
     assert "[default: 10]" in options and "Commands:" in text and "check" in text
+
+
+def test_s2_vectors_manifest_says_what_every_trace_and_iteration_column_is(vectors,
+                                                                           tmp_path) -> None:
+    """S0's manifest.json described its trace.csv (the s0 section) but S2's said nothing of
+    trace.csv nor iterations.csv (r, r_prime, s, rho, c, s_t, c_prime ...: units, blanks) and
+    left out the model histogram q_u a bench starts from."""
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+    out = tmp_path / "s2"
+    result = vtrack("vectors", str(clip.path), "--config", "s2-fixed", "--init",
+                    f"{box.x},{box.y},{box.w},{box.h}", "--frames", "3", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    section = json.loads((out / "manifest.json").read_text())["s2"]
+    described = " ".join(section[key] for key in ("trace", "iterations"))
+    words = {w.strip(",=:;()") for w in described.split()}
+    for name in ("trace.csv", "iterations.csv"):
+        with (out / name).open() as f:
+            header = next(csv.reader(f))
+        assert [c for c in header if c not in words and c != "frame"] == [], name
+    with (out / "trace.csv").open() as f:
+        first = next(csv.DictReader(f))
+    assert sum(section["histogram_counts"]) == int(first["c"])  # C = sum q_u
+    assert max(section["histogram_counts"]) == section["histogram_max"] > 0

@@ -156,7 +156,38 @@ def manifest(record: FixedRecord, width: int, height: int, stages: list[Any],
             "box": "box_x, box_y, box_w, box_h: vtrack's box (pixel i covers [i, i+1)), "
                    "centre = measured pixel + 0.5",
         }
+    if record.model == "s2":
+        assert record.hist is not None
+        data["s2"] = _S2_COLUMNS | {
+            "histogram_counts": [int(v) for v in record.hist],
+            "histogram_max": record.hist_max,
+        }
     return data
+
+
+#: What ``manifest.json`` says of S2's ``trace.csv`` and ``iterations.csv`` (as the ``s0``
+#: section does of S0's): each column, its unit and when it is empty.
+_S2_COLUMNS: dict[str, str] = {
+    "grey": "gray.hex: (77 R + 150 G + 29 B + 128) >> 8; bin b = grey * m >> 8 (m: bins)",
+    "histogram": "q_u = sum K [b = u] over the first frame's window about the initial box's "
+                 "centre pixel, K = h_x - |dx| + h_y - |dy|, h = round(size) // 2; "
+                 "histogram_counts: q_u, C = their sum (trace column c)",
+    "trace": "one row per frame: pred_x, pred_y = floor of the Kalman prediction's centre "
+             "(empty on frame 0); found_x, found_y = the search's converged pixel; r, r_prime "
+             "= |found - pred| summed over both axes (eq. 17) before and after the search "
+             "from the prediction (empty when not computed or no bin was seen); decision: "
+             "accept, fast_motion or occlusion (sec. 5); x, y = the centre pixel kept; s = "
+             "scale x 1000 (s_0 = 1000); rho = sum_u min(q_u, C p_u // C') at found; c = C; "
+             "iterations = steps over every scale; box_x, box_y, box_w, box_h: vtrack's box "
+             "(centre = x + 0.5, size = initial size * s / 1000)",
+    "iterations": "iterations.csv, one row per mean-shift step: search = 0 from the last "
+                  "position, 1 from the prediction; s_t = 9, 10 or 11 times s; iteration "
+                  "counts from 1 per scale; x, y = the window's centre pixel; c_prime = C' = "
+                  "sum K of its in-frame pixels; sum_w, sum_w_dx, sum_w_dy = the step-5 sums "
+                  "of w_u = (q_u << F) // p_u (F: weight_frac_bits); new_x, new_y = x, y + the "
+                  "step rounded as kernel_meanshift_int.rounding; rho at the scale's last step "
+                  "only (empty before)",
+}
 
 
 def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: Any,
