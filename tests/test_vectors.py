@@ -306,3 +306,23 @@ def test_s2_vectors_manifest_says_what_every_trace_and_iteration_column_is(vecto
         first = next(csv.DictReader(f))
     assert sum(section["histogram_counts"]) == int(first["c"])  # C = sum q_u
     assert max(section["histogram_counts"]) == section["histogram_max"] > 0
+
+
+def test_check_reads_a_dump_as_readmemh_does(vectors, tmp_path) -> None:
+    """A dump written by a simulator's $writememh (a '//' header, '@addr' words, no leading
+    zeros) loads into the same memory as the vectors but was '12256 differing value(s); line 1
+    (x=0, y=0): expected .., got //'; a real difference in it is still named."""
+    out, _ = vectors
+    words = (out / "frame_0001" / "hue.hex").read_text().split()
+    dump = tmp_path / "dump" / "frame_0001"
+    dump.mkdir(parents=True)
+    body = "".join(f"@{i:x} {int(w, 16):x}\n" for i, w in enumerate(words))
+    (dump / "hue.hex").write_text("// memory data file\n/* format=hex */\n" + body)
+    same = vtrack("vectors", "check", str(out), str(dump.parent))
+    assert (same.returncode, same.stdout) == (0, "1 file(s) equal\n"), same.stdout
+    changed = (int(words[5], 16) + 1) % 256
+    (dump / "hue.hex").write_text(body + f"@5 {changed:x}\n")  # a later word at address 5
+    differ = vtrack("vectors", "check", str(out), str(dump.parent))
+    assert differ.returncode == 1
+    assert differ.stdout == (f"frame_0001/hue.hex: 1 differing value(s); line 6 (x=5, y=0): "
+                             f"expected {words[5]}, got {changed:02x}\n")

@@ -21,6 +21,7 @@ import contextlib
 import csv
 import json
 import math
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -253,23 +254,66 @@ def _shown(token: bytes | str) -> str:
     return text + "..." if len(token) > _VALUE_SHOWN else text
 
 
+#: ``$readmemh`` comments: ``// ...`` to the end of the line and ``/* ... */``.
+_MEMH_COMMENT = re.compile(rb"//[^\n]*|/\*.*?\*/", re.S)
+
+
+def _memh_value(token: bytes) -> int | bytes:
+    """A ``$readmemh`` word as its number; a word that is none (``xx``, ``zz``) as it is."""
+    try:
+        return int(token, 16)
+    except ValueError:
+        return token
+
+
+def memh_values(text: bytes, limit: int) -> tuple[list[int | bytes], int]:
+    """What ``$readmemh`` loads from ``text``: the first ``limit`` words in address order
+    (comments skipped, ``@addr`` moving the address, a word without leading zeros the same
+    number; an address left unwritten ``b"(none)"``) and the number of addresses loaded (the
+    highest + 1). Only ``limit`` words are kept, whatever addresses the text names."""
+    if b"/" in text:
+        text = _MEMH_COMMENT.sub(b" ", text)
+    tokens = text.split()
+    if b"@" not in text:
+        return [_memh_value(t) for t in tokens[:limit]], len(tokens)
+    values: list[int | bytes] = [b"(none)"] * limit
+    address = count = 0
+    for token in tokens:
+        if token.startswith(b"@"):
+            moved = _memh_value(token[1:])
+            if isinstance(moved, int):
+                address = moved
+                continue
+        if address < limit:
+            values[address] = _memh_value(token)
+        address += 1
+        count = max(count, address)
+    return values[:count], count
+
+
+def _shown_word(value: int | bytes, digits: int) -> str:
+    return f"{value:0{digits}x}" if isinstance(value, int) else _shown(value)
+
+
 def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str | None:
     got = got.lower()
     if expected == got:
         return None
-    want, have = expected.split(), got.split()
+    want = expected.split()
+    digits = len(want[0]) if want else 2
+    have, count = memh_values(got, len(want))
     lines = []
     n = min(len(want), len(have))
-    a = np.array(want[:n], dtype=object)
+    a = np.array([int(w, 16) for w in want[:n]], dtype=object)
     b = np.array(have[:n], dtype=object)
     bad = np.flatnonzero(a != b)
     for i in bad[:SHOWN]:
         x, y = (int(i) % width, int(i) // width) if width else (0, 0)
         lines.append(f"line {i + 1} (x={x}, y={y}): expected {_shown(want[i])}, "
-                     f"got {_shown(have[i])}")
+                     f"got {_shown_word(have[i], digits)}")
     total = len(bad)
-    if len(want) != len(have):
-        lines.append(f"{len(have)} lines, expected {len(want)}")
+    if len(want) != count:
+        lines.append(f"{count} lines, expected {len(want)}")
         total += 1
     if not total:
         return None
