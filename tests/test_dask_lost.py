@@ -139,10 +139,15 @@ def test_the_dashboard_port_and_a_batch_whose_workers_all_die(folder: Path,
     assert "no worker connected" in rows[0]["error"]
 
 
-def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("signum", "error"), [(signal.SIGINT, "interrupted by the user"),
+                                                (signal.SIGTERM, "interrupted by SIGTERM")],
+                         ids=["SIGINT", "SIGTERM"])
+def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path, signum: int,
+                                               error: str) -> None:
     """Ctrl-C cancelled the job's future, but a Dask task already running is not stopped by
     that: the batch reported it ``interrupted`` while the worker went on and finished it (its
-    run.json then said ``complete``, the summary ``interrupted``)."""
+    run.json then said ``complete``, the summary ``interrupted``). The job's records name the
+    signal the batch got: a SIGTERM was recorded as "interrupted by the user"."""
     scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
                        "--no-dashboard"])
     worker = batch = None
@@ -164,7 +169,7 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path) -> 
             assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
             time.sleep(0.05)
         time.sleep(0.5)  # a few frames tracked
-        batch.send_signal(signal.SIGINT)
+        batch.send_signal(signum)
         _, stderr = batch.communicate(timeout=60)
         records = list(out.glob("a/*/run.json"))
         assert len(records) == 1, stderr  # the job recorded itself before the batch ended
@@ -176,10 +181,11 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path) -> 
             if process is not None and process.poll() is None:
                 process.kill()
                 process.wait()
-    assert batch.returncode == 130, stderr
+    assert batch.returncode == 128 + signum, stderr
     assert "Traceback" not in stderr
     assert first["status"] == last["status"] == "interrupted", (first, last)
+    assert first["error"] == error, first
     assert 0 < first["frames"] < 600 and last == first
     with (out / "summary.csv").open() as handle:
         rows = list(csv.DictReader(handle))
-    assert [row["status"] for row in rows] == ["interrupted"]
+    assert [(row["status"], row["error"]) for row in rows] == [("interrupted", error)]

@@ -357,12 +357,17 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
     assert "complete" in statuses  # the job running at the signal finished in the grace
 
 
+@pytest.mark.parametrize(("signum", "error"), [(signal.SIGINT, "interrupted by the user"),
+                                                (signal.SIGTERM, "interrupted by SIGTERM")],
+                         ids=["SIGINT", "SIGTERM"])
 def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
-        scene_factory: SceneFactory, tmp_path: Path) -> None:
+        scene_factory: SceneFactory, tmp_path: Path, signum: signal.Signals, error: str) -> None:
     """A batch stopped alone (SIGTERM to its pid: ``kill``, ``docker stop``) gives its running
     jobs a grace period; a job still running after it (here: its input sends no more frames)
     gets SIGTERM and ends ``interrupted`` with its outputs whole and its ``run.json`` written.
-    It used to be killed outright: temporary files only, its tracked frames unrecorded."""
+    It used to be killed outright: temporary files only, its tracked frames unrecorded. The
+    job gets the signal the batch got: a batch stopped by SIGINT alone gave it SIGTERM, and
+    its record said "interrupted by SIGTERM"."""
     scene = scene_factory("smooth", width=W, height=H, frames=12)
     fifo = tmp_path / "feed"
     os.mkfifo(fifo)
@@ -377,13 +382,13 @@ def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
         threading.Thread(target=os.write, args=(writer, data), daemon=True).start()
         wait_for_worker(lambda: any(p.read_bytes().count(b"\n") > 10
                                     for p in out.glob(".track.tmp*")), worker, "rows")
-        worker.stop(grace_s=0)
+        worker.stop(grace_s=0, signum=signum)
     finally:
         os.close(writer)
     assert not worker.process.is_alive()
     record = assert_records_agree(out)
     assert (record["status"], record["error"], record["frames"]) == (
-        "interrupted", "interrupted by SIGTERM", 10)
+        "interrupted", error, 10)
 
 
 def wait_for_worker(condition, worker: _Worker, what: str) -> None:

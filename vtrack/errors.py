@@ -5,7 +5,7 @@ from __future__ import annotations
 import signal
 import threading
 import unicodedata
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -82,6 +82,26 @@ class Interrupted(KeyboardInterrupt):
     @property
     def exit_code(self) -> int:
         return 128 + self.signum
+
+    @property
+    def reason(self) -> str:
+        """What stopped the work, as a run's record says it: ``interrupted by the user``
+        (SIGINT, Ctrl-C) or ``interrupted by SIGTERM``."""
+        if self.signum == signal.SIGINT:
+            return "interrupted by the user"
+        return f"interrupted by {signal.Signals(self.signum).name}"
+
+
+@contextmanager
+def passing_stop_to(generator: Generator[Any, Any, Any]) -> Iterator[None]:
+    """Inside the block (which consumes ``generator``), an :class:`Interrupted` raised outside
+    the generator (while its consumer works on what it yielded) is thrown into it at its
+    ``yield``, so its clean-up learns the signal; it is raised on either way."""
+    try:
+        yield
+    except Interrupted as exc:
+        generator.throw(exc)
+        raise
 
 
 #: The signals a run or batch stops on as it does on Ctrl-C.

@@ -780,8 +780,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.status, out.error = STATUS_PARTIAL, str(exc)
     except Interrupted as exc:
         out.status, out.signum = STATUS_INTERRUPTED, exc.signum
-        out.error = ("interrupted by the user" if exc.signum == signal.SIGINT
-                     else f"interrupted by {signal.Signals(exc.signum).name}")
+        out.error = exc.reason
     except KeyboardInterrupt:
         out.status, out.error = STATUS_INTERRUPTED, "interrupted by the user"
     except OutputError as exc:  # a full disk part way: what is on disk is whole

@@ -11,7 +11,7 @@ import sys
 import time
 import uuid
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Generator, Iterator, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import replace
 from multiprocessing import forkserver
@@ -20,8 +20,8 @@ from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from vtrack.batch.jobs import Job, Outcome, Progress
-from vtrack.batch.worker import _serve, execute_on_dask
-from vtrack.errors import VtrackError
+from vtrack.batch.worker import _serve, execute_on_dask, stop_signal_name
+from vtrack.errors import Interrupted, VtrackError
 from vtrack.run import STATUS_FAILED
 
 #: How often a job whose worker process died is started again before it is reported failed.
@@ -42,7 +42,7 @@ SCHEDULER_PROTOCOLS = ("tcp", "ws")
 class Executor(Protocol):
     """Runs jobs somewhere and yields one outcome per job, in completion order."""
 
-    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]: ...
+    def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]: ...
 
 
 def _died(job: Job, how: str) -> Outcome:
@@ -124,11 +124,12 @@ class _Worker:
         except (EOFError, OSError):
             return None
 
-    def stop(self, grace_s: float = STOP_GRACE_S) -> None:
+    def stop(self, grace_s: float = STOP_GRACE_S,
+             signum: signal.Signals = signal.SIGTERM) -> None:
         """Ask the worker to finish; a job still running gets ``grace_s`` to end, then the
-        worker gets SIGTERM, so the job ends ``interrupted`` with its outputs whole and its
-        ``run.json`` written (as on Ctrl-C), and :data:`RECORD_GRACE_S` to do so; only then
-        is the process killed.
+        worker gets ``signum`` (the signal the batch was stopped by: SIGINT, SIGTERM), so the
+        job ends ``interrupted`` with its outputs whole and its ``run.json`` written, naming
+        that signal, and :data:`RECORD_GRACE_S` to do so; only then is the process killed.
 
         Its exit is read from its end of the pipe closing, not from ``Process.join``: the
         worker is the forkserver's child, and a signal to the whole process group (Ctrl-C,
@@ -137,7 +138,7 @@ class _Worker:
         its records (``summary.csv`` was then written without them)."""
         with suppress(OSError):
             self.connection.send(None)
-        for wait_s, then in ((grace_s, signal.SIGTERM), (RECORD_GRACE_S, signal.SIGKILL)):
+        for wait_s, then in ((grace_s, signum), (RECORD_GRACE_S, signal.SIGKILL)):
             if self._ended_within(wait_s):
                 break
             with suppress(ProcessLookupError):
@@ -174,10 +175,11 @@ class LocalExecutor:
         #: Called with each running job's :class:`Progress` as its worker reports it.
         self.on_progress = on_progress
 
-    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
+    def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]:
         context = _context()
         pending = deque(jobs)
         workers: list[_Worker] = []
+        stop_signal = signal.SIGTERM  # (a worker lost, or the consumer gone: not a signal)
         try:
             while pending or workers:
                 # a worker for each pending job no idle worker will take, up to self.workers
@@ -212,9 +214,12 @@ class LocalExecutor:
                         yield _died(job, _exit_reason(worker.process.exitcode))
                 if not pending and all(w.job is None for w in workers):
                     return
+        except Interrupted as exc:  # a running job ends naming the signal the batch got
+            stop_signal = signal.Signals(exc.signum)
+            raise
         finally:
             for worker in workers:
-                worker.stop()
+                worker.stop(signum=stop_signal)
 
 
 class DaskExecutor:
@@ -272,12 +277,12 @@ class DaskExecutor:
         with _quiet_client_teardown(), suppress(Exception):
             self.client.close()
 
-    def run(self, jobs: Sequence[Job]) -> Iterator[Outcome]:
+    def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]:
         """Submit every job and yield outcomes as they finish. When no worker has been
         connected for the worker timeout (:meth:`wait_for_workers`; every worker died), the
         jobs still pending are cancelled and reported ``failed``, naming the scheduler. Stopped
         part way (Ctrl-C, SIGTERM: the consumer closes this generator), running jobs are stopped
-        too (:meth:`_stop_running`)."""
+        too (:meth:`_stop_running`), their records naming the signal the batch got."""
         from distributed import Event, as_completed
 
         batch = uuid.uuid4().hex[:8]
@@ -289,6 +294,7 @@ class DaskExecutor:
         finished = as_completed(futures, loop=self.client.loop)
         seen = checked = time.monotonic()
         ended_early = True  # (until the batch ends by itself)
+        stop_signal = signal.SIGINT  # (the consumer gone without a signal: as on Ctrl-C)
         try:
             while not finished.is_empty():
                 if finished.has_ready():
@@ -311,26 +317,36 @@ class DaskExecutor:
                     ended_early = False  # no worker is left to stop
                     return
             ended_early = False
+        except Interrupted as exc:
+            stop_signal = signal.Signals(exc.signum)
+            raise
         finally:
             if ended_early:
-                self._stop_running(stop, [f for f in futures if not f.done()])
+                self._stop_running(stop, [f for f in futures if not f.done()], stop_signal)
             with suppress(Exception):
                 self.client.cancel(list(futures))
             self.close()
 
-    def _stop_running(self, stop: Any, unfinished: list[Any],
+    def _stop_running(self, stop: Any, unfinished: list[Any], signum: signal.Signals,
                       grace_s: float = STOP_GRACE_S) -> None:
-        """Stop a batch's tasks when it is stopped part way (Ctrl-C, SIGTERM): ``stop`` is set,
-        so a running job ends ``interrupted`` at its next progress check, with its records whole
-        (as a local worker's job on Ctrl-C), and one that starts now returns without touching
+        """Stop a batch's tasks when it is stopped part way by ``signum`` (Ctrl-C, SIGTERM):
+        ``signum`` is put in the Dask ``Variable`` beside ``stop``
+        (:func:`~vtrack.batch.worker.stop_signal_name`), then ``stop`` is set, so a running
+        job ends ``interrupted`` at its next progress check, with its records whole and its
+        error naming that signal, and one that starts now returns without touching
         its folder; the tasks the scheduler has not handed to a worker are cancelled, those it
         has get ``grace_s`` to end. (Cancelling a Dask future does not stop a task already
         running: the worker went on and finished the job after the batch had reported it
         interrupted.) Nothing is asked of a scheduler that is gone (each call would wait for
-        it), and the event is cleared after, so the scheduler does not keep it."""
+        it), and the event is cleared and the variable deleted after, so the scheduler does not
+        keep them."""
+        from distributed import Variable
+
         if self.client.status != "running":
             return
+        stop_signal = Variable(stop_signal_name(stop.name), client=self.client)
         with _quiet_client_teardown(), suppress(Exception):
+            stop_signal.set(int(signum))
             stop.set()
             handed = {key for keys in self.client.processing().values() for key in keys}
             self.client.cancel([f for f in unfinished if f.key not in handed])
@@ -340,6 +356,7 @@ class DaskExecutor:
                 time.sleep(0.05)
         with _quiet_client_teardown(), suppress(Exception):
             stop.clear()
+            stop_signal.delete()
 
     @staticmethod
     def _outcome(future: Any, job: Job) -> Outcome:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Generator, Iterable
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -13,15 +13,18 @@ from typing import Any
 from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
 from vtrack.batch.plan import Plan, recorded_summary
+from vtrack.errors import passing_stop_to
 from vtrack.io.files import write_text_atomic
 from vtrack.run import STATUS_INTERRUPTED
 
 
-def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[Outcome]:
+def run_batch(batch: Plan, executor: Executor,
+              summary_path: Path) -> Generator[Outcome, None, None]:
     """Yield every outcome, known ones first, keeping ``summary_path`` current.
 
     The summary has one row per input x config of the plan. If the batch stops early (Ctrl-C,
-    SIGTERM), the executor first lets running jobs finish or record themselves; a job whose
+    SIGTERM), the executor first lets running jobs finish or record themselves (those it must
+    stop are stopped by the signal the batch got, which their records name); a job whose
     outcome did not arrive then gets the row of its own ``run.json`` when this batch wrote one
     (a run that finished in the grace period is ``complete``), else the status
     ``interrupted``: the summary agrees with the runs' records.
@@ -33,7 +36,7 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path) -> Iterator[O
         for outcome in batch.known:
             summary.add(outcome)
             yield outcome
-        with closing(executor.run(batch.jobs)) as outcomes:
+        with closing(executor.run(batch.jobs)) as outcomes, passing_stop_to(outcomes):
             for outcome in outcomes:
                 summary.add(outcome)
                 yield outcome

@@ -67,26 +67,41 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
     return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
 
 
+def stop_signal_name(stop_event: str) -> str:
+    """The name of the Dask ``Variable`` that holds the signal (its number) a Dask batch was
+    stopped by, beside its stop ``Event`` named ``stop_event``."""
+    return f"{stop_event}-signal"
+
+
 def execute_on_dask(job: Job, stop_event: str) -> Outcome:
     """:func:`execute` as a Dask task: the batch sets the Dask ``Event`` named ``stop_event``
-    when it is stopped (Ctrl-C, SIGTERM). A job that has not started by then returns
+    when it is stopped (Ctrl-C, SIGTERM), after putting the signal it got in the ``Variable``
+    :func:`stop_signal_name` names. A job that has not started by then returns
     ``interrupted`` without touching its folder; a running one asks the scheduler about the
     event at most every :data:`STOP_CHECK_S` seconds of tracking (with its progress reports)
-    and ends ``interrupted``, its records whole, as a local worker's job does on Ctrl-C. An
-    event the scheduler cannot answer for (a lost connection) counts as not set: the job
-    carries on."""
-    from distributed import Event
+    and ends ``interrupted``, its records whole, as a local worker's job does: its error
+    names that signal (``interrupted by the user`` for SIGINT, ``interrupted by SIGTERM``;
+    SIGINT if the scheduler cannot say). An event the scheduler cannot answer for (a lost
+    connection) counts as not set: the job carries on."""
+    from distributed import Event, Variable
 
     stop = Event(stop_event)
+    stop_signal = Variable(stop_signal_name(stop_event))
 
-    def stopped() -> bool:
+    def stopped() -> Interrupted | None:
         try:
-            return stop.is_set()
+            if not stop.is_set():
+                return None
         except (OSError, TimeoutError):
-            return False
+            return None
+        try:
+            return Interrupted(signal.Signals(int(stop_signal.get(timeout=STOP_CHECK_S))))
+        except Exception:  # not set, not a signal, the scheduler gone: as on Ctrl-C
+            return Interrupted(signal.SIGINT)
 
-    if stopped():
-        return Outcome(job.input, job.config, STATUS_INTERRUPTED, error="interrupted",
+    interrupted = stopped()
+    if interrupted is not None:
+        return Outcome(job.input, job.config, STATUS_INTERRUPTED, error=interrupted.reason,
                        attempt=job.attempt)
     checked = time.monotonic()
 
@@ -95,8 +110,9 @@ def execute_on_dask(job: Job, stop_event: str) -> Outcome:
         now = time.monotonic()
         if progress.frames and now - checked >= STOP_CHECK_S:
             checked = now
-            if stopped():
-                raise Interrupted(signal.SIGINT)
+            interrupted = stopped()
+            if interrupted is not None:
+                raise interrupted
 
     return execute(job, check)
 

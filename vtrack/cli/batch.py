@@ -15,7 +15,13 @@ from vtrack.cli._paths import CONFIG, PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError, Interrupted, handling_stop_signals, plural
+from vtrack.errors import (
+    ConfigError,
+    Interrupted,
+    handling_stop_signals,
+    passing_stop_to,
+    plural,
+)
 
 if TYPE_CHECKING:
     from vtrack.config import Config
@@ -193,14 +199,16 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
+        running = run_batch(batch, executor, summary_path)
         try:
-            for outcome in run_batch(batch, executor, summary_path):
-                outcomes.append(outcome)
-                if not quiet:
-                    progress.write(outcome.line())
-                if (outcome.input, outcome.config) in to_run:
-                    progress.finished(outcome.input, outcome.config,
-                                      outcome.summary.frames if outcome.summary else 0)
+            with passing_stop_to(running):
+                for outcome in running:
+                    outcomes.append(outcome)
+                    if not quiet:
+                        progress.write(outcome.line())
+                    if (outcome.input, outcome.config) in to_run:
+                        progress.finished(outcome.input, outcome.config,
+                                          outcome.summary.frames if outcome.summary else 0)
         finally:
             progress.close()
     counts: dict[str, int] = {}
