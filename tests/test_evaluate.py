@@ -28,6 +28,7 @@ from vtrack.evaluate import (
     tracking_miss_rate,
 )
 from vtrack.geometry import Box, center_error, iou
+from vtrack.io.sidecar import parse_sidecar
 
 G = Box(0, 0, 10, 10)
 
@@ -339,9 +340,17 @@ def test_parse_box():
     assert parse_box(" 1.5, 2, 3 ,4") == Box(1.5, 2, 3, 4)
 
 
-@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3 4"])
+@pytest.mark.parametrize("text", ["64 177 40 31", "64\t177\t40\t31", "64, 177, 40, 31"])
+def test_init_takes_the_forms_a_sidecar_file_takes(text: str) -> None:
+    """``--init "64 177 40 31"`` was refused while a sidecar file holding that line was taken."""
+    assert parse_box(text) == parse_sidecar(text, "init.txt") == Box(64, 177, 40, 31)
+
+
+@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3"])
 def test_parse_box_rejects_malformed(text):
-    with pytest.raises(ConfigError, match=r"^--init: expected x,y,w,h, got '"):
+    """The message lists the forms --init takes."""
+    with pytest.raises(ConfigError, match=r"^--init: expected x,y,w,h or x y w h \(4 numbers "
+                                          r"separated by commas, spaces or tabs\), got '"):
         parse_box(text)
 
 

@@ -207,3 +207,19 @@ def test_batch_from_a_later_frame_does_not_take_the_sidecar_box(
     assert again.exit_code == 0, again.output
     assert record(out / "clip" / "s2")["init"] == list(scene_boxes[10])
     assert first_row(out / "clip" / "s2") == scene_boxes[10]
+
+
+def test_init_takes_the_line_a_sidecar_file_holds(video: tuple[Path, Box],
+                                                  tmp_path: Path) -> None:
+    """``--init "X Y W H"`` (the line a sidecar file may hold) was refused as not x,y,w,h; a
+    bad --init now lists the forms it takes."""
+    path, box = video
+    out = tmp_path / "out"
+    spaced = " ".join(f"{v:g}" for v in box)
+    result = vtrack("run", str(path), "--init", spaced, "--no-video", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert first_row(out) == box and record(out)["init_from"] == "--init"
+    bad = vtrack("run", str(path), "--init", "1 2 3", "--no-video", "-o", str(tmp_path / "b"))
+    assert bad.exit_code == 2
+    assert bad.stderr.strip() == ("vtrack: error: --init: expected x,y,w,h or x y w h "
+                                  "(4 numbers separated by commas, spaces or tabs), got '1 2 3'")

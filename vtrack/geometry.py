@@ -146,6 +146,20 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
     return box
 
 
+#: The forms a box is written in, by ``--init`` and in a sidecar file (:func:`parse_box_text`),
+#: as a message about a bad one lists them.
+BOX_FORMS = "x,y,w,h or x y w h (4 numbers separated by commas, spaces or tabs)"
+
+
+def parse_box_text(text: str, where: str, error: type[Exception],
+                   expected: str = BOX_FORMS) -> Box:
+    """The box of ``text``: 4 finite numbers separated by commas, spaces or tabs (``x,y,w,h``,
+    ``x, y, w, h``, ``x y w h``), ``w, h > 0``; otherwise ``error`` naming ``where`` and
+    saying what was ``expected`` (:func:`box_from_parts`). One parser for ``--init`` and the
+    sidecar file, so both take the same forms."""
+    return box_from_parts(text.replace(",", " ").split(), where, expected, text, error)
+
+
 def as_box(box: Box | Any, where: str = "init_box") -> Box:
     """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)`` (real numbers, NumPy's
     too; not booleans nor strings); ConfigError naming ``where`` otherwise (what ``--init``

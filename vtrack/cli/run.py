@@ -45,7 +45,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
                    f"Default: {DEFAULT_CONFIG}. One per run (vtrack batch runs several).")
 @click.option("--init", "init_text", metavar="x,y,w,h",
-              help="Initial box (top-left x, y, width, height). Default: the input's sidecar box "
+              help="Initial box (top-left x, y, width, height), as x,y,w,h or \"x y w h\". "
+                   "Default: the input's sidecar box "
                    "(NAME.init.txt, written by vtrack select), else the first --gt box. "
                    "Refused by multi-target configs (s3, s4_multi, fixed_camera).")
 @click.option("--gt", "gt_path", type=PATH, metavar="FILE",

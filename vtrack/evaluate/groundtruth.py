@@ -15,7 +15,7 @@ from os import PathLike
 from pathlib import Path
 
 from vtrack.errors import ConfigError, InputError
-from vtrack.geometry import Box, box_from_parts
+from vtrack.geometry import Box, parse_box_text
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
@@ -251,8 +251,8 @@ def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, 
 
 
 def parse_box(text: str) -> Box:
-    """Parse the CLI's ``--init x,y,w,h``: 4 comma-separated finite numbers, ``w, h > 0``.
-
-    Spaces around the numbers are allowed. Raises ConfigError naming ``--init`` otherwise.
+    """Parse the CLI's ``--init x,y,w,h``: 4 finite numbers separated by commas, spaces or
+    tabs (the forms a sidecar file takes, :func:`~vtrack.geometry.parse_box_text`), ``w, h >
+    0``. Raises ConfigError naming ``--init`` and listing those forms otherwise.
     """
-    return box_from_parts(text.split(","), "--init", "x,y,w,h", text, ConfigError)
+    return parse_box_text(text, "--init", ConfigError)

@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 
 from vtrack.errors import InputError
-from vtrack.geometry import Box, box_from_parts
+from vtrack.geometry import BOX_FORMS, Box, parse_box_text
 from vtrack.io.files import write_text_atomic
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.specs import is_url
@@ -53,7 +53,8 @@ def format_box(box: Box) -> str:
 
 def parse_sidecar(text: str, where: str) -> Box:
     """The box of a sidecar file's text: its one line that is not blank or a ``#`` comment,
-    4 numbers separated by commas, spaces or tabs, width and height > 0.
+    4 numbers separated by commas, spaces or tabs (:func:`~vtrack.geometry.parse_box_text`, as
+    ``--init``), width and height > 0.
 
     Raises InputError naming ``where`` otherwise (a second box line too: which box is meant?).
     """
@@ -62,8 +63,7 @@ def parse_sidecar(text: str, where: str) -> Box:
         raise InputError(f"{where}: holds {len(lines)} lines of values; expected one line "
                          "x,y,w,h (the first frame's box)")
     line = lines[0] if lines else ""
-    return box_from_parts(line.replace(",", " ").split(), where, "one line x,y,w,h", line,
-                          InputError)
+    return parse_box_text(line, where, InputError, f"one line {BOX_FORMS}")
 
 
 def read_sidecar(input_spec: str | os.PathLike[str]) -> Box | None:
