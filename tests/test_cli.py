@@ -348,9 +348,25 @@ def test_values_outside_an_options_range_are_refused_before_anything_runs(
 
 
 @pytest.mark.parametrize(("args", "problem"), [
+    (["--frames", "5"], "--frames 5: must be from 10 (what scenario 'smooth' needs) to 108000"),
+    (["--size", "10x10"], "--size 10x10: must be from 64x48 to 7680x4320"),
+    (["--fps", "0"], "--fps 0: must be from 0.01 to 10000"),
+])
+def test_vtrack_scene_names_the_option_given_and_its_range(
+        tmp_path: Path, args: list[str], problem: str) -> None:
+    """The errors said "scene fps 0", "scene size 10x10", "scenario 'smooth' needs at least 10
+    frames": not the option the user gave."""
+    result = vtrack("scene", "smooth", "c.mp4", *args, cwd=tmp_path)
+    error = result.stderr.decode()
+    assert result.returncode == 2, error
+    assert error == f"vtrack: error: {problem}\n"
+    assert not (tmp_path / "c.mp4").exists()
+
+
+@pytest.mark.parametrize(("args", "problem"), [
     (["x.txt"], "no video container format for this file name"),
     (["noext"], "no video container format for this file name"),
-    (["c.mp4", "--frames", "99999999999"], "scene frames 99999999999: at most 108000"),
+    (["c.mp4", "--frames", "99999999999"], "--frames 99999999999: at most 108000"),
 ])
 def test_vtrack_scene_refuses_what_it_cannot_write_in_one_line(
         tmp_path: Path, args: list[str], problem: str) -> None:

@@ -137,7 +137,7 @@ def test_a_refused_value_is_shown_as_given_not_rounded_onto_the_limit(
 def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> None:
     line = one_error_line(vtrack("scene", "smooth", str(tmp_path / "a.mp4"), "--frames", "10",
                             "--fps", "10000.00001"))
-    assert "scene fps 10000.00001: must be from 0.01 to 10000" in line
+    assert "--fps 10000.00001: must be from 0.01 to 10000" in line
 
 
 # --- a pixel format libx264 cannot encode is refused before anything is written -----------------

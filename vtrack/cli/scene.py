@@ -14,6 +14,8 @@ from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 
+#: The options a scene's settings come from, for make_scene's errors to name.
+_OPTION_NAMES = {"seed": "--seed", "size": "--size", "frames": "--frames", "fps": "--fps"}
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*$")
 
 
@@ -81,7 +83,8 @@ def command(
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
-    scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps)
+    scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps,
+                       names=_OPTION_NAMES)
     first = scene.boxes[0] if scene.boxes else None
     if first is not None and 0 < min(first.w, first.h) < MIN_BOX_SIDE:  # what run would refuse
         raise ConfigError(f"scene {name} at {scene.width}x{scene.height}: its target starts "

@@ -10,7 +10,7 @@ textures and noise; the structure of each scenario (and its guarantees) never ch
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -519,6 +519,12 @@ SCENARIOS: dict[str, Scenario] = {
 }
 
 
+#: What an error of :func:`make_scene` calls each setting (``seed``, ``size``: width and
+#: height, ``frames``, ``fps``) by default; ``vtrack scene`` passes its options' names.
+SETTING_NAMES = {"seed": "scene seed", "size": "scene size", "frames": "scene frames",
+                 "fps": "scene fps"}
+
+
 def make_scene(
     name: str,
     seed: int = 0,
@@ -526,6 +532,8 @@ def make_scene(
     height: int | None = None,
     frames: int | None = None,
     fps: float | None = None,
+    *,
+    names: Mapping[str, str] = SETTING_NAMES,
 ) -> Scene:
     """Build scenario ``name``; ``None`` takes the scenario's default size, length or rate.
 
@@ -533,7 +541,8 @@ def make_scene(
     :class:`~vtrack.errors.ConfigError` for an unknown name (listing the valid ones), a seed
     below 0, a frame smaller than 64x48 or larger than 7680x4320, too few frames for the
     scenario or more than :data:`MAX_FRAMES`, or a rate outside
-    :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``.
+    :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``: its message names the setting as ``names``
+    calls it (:data:`SETTING_NAMES`'s keys) and gives the valid range.
     """
     scenario = SCENARIOS.get(name)
     if scenario is None:
@@ -547,19 +556,21 @@ def make_scene(
         fps=scenario.fps if fps is None else fps,
     )
     if spec.seed < 0:
-        raise ConfigError(f"scene seed {spec.seed}: must be 0 or more")
+        raise ConfigError(f"{names['seed']} {spec.seed}: must be 0 or more")
     if not (MIN_WIDTH <= spec.width <= MAX_WIDTH and MIN_HEIGHT <= spec.height <= MAX_HEIGHT):
         raise ConfigError(
-            f"scene size {spec.width}x{spec.height}: must be from {MIN_WIDTH}x{MIN_HEIGHT} to "
+            f"{names['size']} {spec.width}x{spec.height}: must be from {MIN_WIDTH}x{MIN_HEIGHT} to "
             f"{MAX_WIDTH}x{MAX_HEIGHT}"
         )
     if spec.frames < scenario.min_frames:
         raise ConfigError(
-            f"scenario {name!r} needs at least {scenario.min_frames} frames, got {spec.frames}"
+            f"{names['frames']} {spec.frames}: must be from {scenario.min_frames} (what "
+            f"scenario {name!r} needs) to {MAX_FRAMES}"
         )
     if spec.frames > MAX_FRAMES:
-        raise ConfigError(f"scene frames {spec.frames}: at most {MAX_FRAMES} (an hour at 30 fps)")
+        raise ConfigError(f"{names['frames']} {spec.frames}: at most {MAX_FRAMES} (an hour at "
+                          "30 fps)")
     if not (math.isfinite(spec.fps) and MIN_FPS <= spec.fps <= MAX_FPS):
-        raise ConfigError(f"scene fps {number_text(spec.fps)}: must be from {MIN_FPS:g} to "
+        raise ConfigError(f"{names['fps']} {number_text(spec.fps)}: must be from {MIN_FPS:g} to "
                           f"{MAX_FPS:g}")
     return scenario.build(spec)
