@@ -196,7 +196,7 @@ def test_start_tracks_from_a_later_frame(clip_factory, tmp_path: Path) -> None:
             "40 past the input's end?)") in line
     line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
                                  "40", "-o", str(tmp_path / "late")))
-    assert line.endswith("has no frame 40 (frames are numbered from 0)")
+    assert line.endswith("has no frame 40 (frames 0..39)")  # was: "frames are numbered from 0"
     line = one_error_line(vtrack("run", str(clip.path), "--start", "5", "-o",
                                  str(tmp_path / "late")))
     assert "needs the target's box in frame 5" in line

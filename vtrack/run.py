@@ -216,6 +216,16 @@ class _Signals:
             raise Interrupted(self.pending)
 
 
+def _numbering(info: InputInfo) -> str:
+    """How an input's frames are numbered, for a message about one it does not have: ``frames
+    0..149`` when its frame count is known (exact: read to its end, or listed by its
+    container), else ``frames are numbered from 0``."""
+    count = info.frame_count
+    if count and not info.frame_count_estimated:
+        return f"frames 0..{count - 1}"
+    return "frames are numbered from 0"
+
+
 def _from(source: Source, start: int, what: str) -> Iterator[Frame]:
     """``source``'s frames numbered ``start`` and on (the earlier ones are decoded and
     dropped). InputError when frame ``start`` itself is missing (damaged, or no image numbered
@@ -775,7 +785,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             handled = time.perf_counter(), time.thread_time()
         if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
             raise InputError(f"--start {request.start_text}: {request.input} has no frame "
-                             f"{resolved.start} (frames are numbered from 0)")
+                             f"{resolved.start} ({_numbering(source.info)})")
     except PartialInputError as exc:
         out.status, out.error = STATUS_PARTIAL, str(exc)
     except Interrupted as exc:
