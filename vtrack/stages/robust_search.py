@@ -59,8 +59,10 @@ class RobustSearch(Stage):
               min=0.0, max=1.0),
         Param("scale_area", int, 512, "pixels of a scale sample at most (DSST: 512)",
               min=64, max=2048),
-        Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side",
-              min=1.0, max=1000.0),
+        Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side, "
+              "unless the frame is too small for that: the box never grows so large that its "
+              "search region (the box and its padding) outgrows the frame (or its first size), "
+              "and that limit wins", min=1.0, max=1000.0),
     )
     requires = frozenset({"robust", "likelihood"})
     provides = frozenset({"measurement", "box", "score", "robust"})
