@@ -431,6 +431,26 @@ def test_nobuffer_is_refused_for_an_input_that_is_not_live(tmp_path: Path) -> No
         assert (tmp_path / "taken" / "track.csv").read_bytes().count(b"\n") > 1
 
 
+def test_nobuffer_that_leaves_no_frame_says_it_may_be_why(tmp_path: Path) -> None:
+    """``fflags=nobuffer --live`` on a clip with one key frame ended "no frame could be
+    decoded" without saying why (and without --init, its first opening refused nobuffer as
+    if --live had not been given): it now says that nobuffer may have dropped that key
+    frame."""
+    scene = make_scene("smooth", seed=6, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4", preset="ultrafast")
+    init = ["--init", ",".join(f"{v:g}" for v in scene.boxes[0])]
+    for given in (init, []):
+        out = tmp_path / "out"
+        done = _run([str(clip), "--input-option", "fflags=nobuffer", "--live", *given,
+                     "--no-video", "-o", str(out)])
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.decode().strip().splitlines() == [
+            f"vtrack: error: {clip}: no frame could be decoded; --input-option fflags=nobuffer "
+            "may have dropped the stream's only key frame (FFmpeg drops the packets it reads "
+            "probing the input): try without it"]
+        assert not out.exists()
+
+
 def test_protocol_and_demuxer_options_of_a_url_are_known_to_be_used() -> None:
     """What FFmpeg's own option tables say is taken opening a URL: the rtsp demuxer's
     rtsp_transport, the http protocol's headers, udp's fifo_size, tcp's and tls's options below

@@ -707,7 +707,8 @@ def _refuse_unreadable(request: RunRequest) -> None:
     first box hears of its input first. Stdin, FIFOs, devices and URLs are read once only, by
     the run itself."""
     if os.path.isfile(request.input) or os.path.isdir(request.input):
-        open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg).close()
+        open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
+                    live=request.live).close()
 
 
 def _first_frame(request: RunRequest, source: Source | None) -> int:

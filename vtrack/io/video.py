@@ -352,12 +352,33 @@ def _refuse_nobuffer(path: str, how: FFmpegInput) -> None:
     then drops the packets it reads to probe it (less delay on a live stream), so a file's
     first frames, up to a key frame after them, would be lost without a word (all of them in
     a clip with one key frame), and ground truth would no longer line up."""
+    value = _nobuffer(how)
+    if value is not None:
+        raise InputError(f"--input-option fflags={value}: FFmpeg drops the packets it reads "
+                         f"probing {path}, so its first frames would be lost; nobuffer is "
+                         "for live streams (rtsp://, udp:// ..., or --live)")
+
+
+def _nobuffer(how: FFmpegInput) -> str | None:
+    """The value of the ``fflags`` option of ``how`` that sets ``nobuffer`` (``nobuffer``,
+    ``+nobuffer+genpts`` ...), or None when none does."""
     for key, value in how.options:
         flags = re.findall(r"([+-]?)(\w+)", value)
         if key == "fflags" and any(sign != "-" and name == "nobuffer" for sign, name in flags):
-            raise InputError(f"--input-option fflags={value}: FFmpeg drops the packets it reads "
-                             f"probing {path}, so its first frames would be lost; nobuffer is "
-                             "for live streams (rtsp://, udp:// ..., or --live)")
+            return value
+    return None
+
+
+def _no_frame(path: str, how: FFmpegInput) -> str:
+    """The message for an input of which no frame could be decoded; with ``fflags=nobuffer``
+    it says that the flag may be why: FFmpeg drops the packets it read probing the input,
+    which may have held its only key frame (every frame after needs it)."""
+    value = _nobuffer(how)
+    if value is None:
+        return f"{path}: no frame could be decoded"
+    return (f"{path}: no frame could be decoded; --input-option fflags={value} may have "
+            "dropped the stream's only key frame (FFmpeg drops the packets it reads probing "
+            "the input): try without it")
 
 
 def _check_estimate(info: InputInfo, index: int, time_s: float, fps: float) -> None:
@@ -430,7 +451,7 @@ class VideoSource(Source):
         try:
             self._first = next(self._decoded)
         except StopIteration:
-            raise InputError(f"{path}: no frame could be decoded") from None
+            raise InputError(_no_frame(path, self._how)) from None
         except av.FFmpegError as exc:
             raise InputError(_undecodable(path, self._how, exc)) from None
 
