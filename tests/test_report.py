@@ -127,6 +127,24 @@ def test_report_scores_a_run_without_ground_truth_with_gt(clip_factory: ClipFact
     assert row["ground_truth"] == str(clip.gt)
 
 
+def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """``--gt INPUT=FILE`` for runs that recorded their own ground truth warned only "no run
+    of input ... was scored with it"; it now says they were scored with their own."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    run = tmp_path / "run"
+    assert vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--quiet",
+                  "--out", str(run)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    name = clip.path.stem
+    result = vtrack("report", str(run), "--gt", f"{name}={other}", "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert (f"vtrack: warning: --gt {name}={other}: no run of input {name} was scored with "
+            f"it: 1 run of it was already scored with its own ground truth ({clip.gt}), which "
+            "--gt does not replace") in result.stderr.splitlines()
+
+
 def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: ClipFactory,
                                                                  tmp_path: Path) -> None:
     """A plain --gt FILE scored every input of its length, another clip's included (AUC 0.02

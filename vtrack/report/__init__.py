@@ -168,6 +168,20 @@ def _refuse_batch_folder(out_dir: Path) -> None:
                           "for the report")
 
 
+def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
+    """The warning for ``--gt INPUT=FILE`` that scored no run: saying, when it is so, that
+    runs of that input were already scored with the ground truth they recorded (which
+    ``--gt`` does not replace)."""
+    warning = f"--gt {truth.input}={truth.path}: no run of input {truth.input} was scored with it"
+    own = [r for r in runs if truth.belongs_to(r.input, {}) and r.ground_truth]
+    if not own:
+        return warning
+    files = ", ".join(sorted({str(r.ground_truth) for r in own}))
+    return (f"{warning}: {plural(len(own), 'run')} of it {'was' if len(own) == 1 else 'were'} "
+            f"already scored with {'its' if len(own) == 1 else 'their'} own ground truth "
+            f"({files}), which --gt does not replace")
+
+
 def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
                  gt_origin: int | None = 0, title: str = DEFAULT_TITLE,
@@ -198,8 +212,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                 warnings.append(runs[-1].note)
     for truth in truths:
         if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
-            warnings.append(f"--gt {truth.input}={truth.path}: no run of input {truth.input} "
-                            "was scored with it")
+            warnings.append(_unused_gt_warning(truth, runs))
         scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
         if truth.input is None and len(scored) > 1:  # one file is one input's ground truth
             warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
