@@ -29,9 +29,11 @@ from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.batch.executors import _context, _Worker
 from vtrack.batch.jobs import Job
 from vtrack.config import DEFAULT_CONFIG, load_config
+from vtrack.errors import Interrupted
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
 from vtrack.io.raw import PIPE_BYTES, RawFormat
 from vtrack.request import RunRequest
+from vtrack.run import run
 
 if TYPE_CHECKING:
     from conftest import Clip, ClipFactory, SceneFactory
@@ -322,6 +324,42 @@ def test_a_signal_before_the_first_tracked_frame_is_an_interrupted_run(
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 128 + signal.SIGTERM, stderr.decode()
     assert error_line(stderr.decode()).endswith(f"interrupted by SIGTERM; partial results in {out}")
+    record = assert_records_agree(out)
+    assert (record["status"], record["frames"], record["outputs"]) == (
+        "interrupted", 0, ["track.csv"])
+
+
+def test_a_signal_while_the_outputs_open_is_an_interrupted_run(clip: Clip, tmp_path: Path
+                                                               ) -> None:
+    """A signal that came while the run opened its outputs (here: as it reports them open)
+    cut the opening short: `.track.tmp-*` and `.annotated.tmp-*` were left in the folder,
+    with no run.json. Now the run ends interrupted before its first frame, its records whole."""
+    out = tmp_path / "out"
+    request = RunRequest(str(clip.path), out, load_config("s0"), init_box=clip.scene.boxes[0])
+    try:
+        summary = run(request, on_open=lambda info: os.kill(os.getpid(), signal.SIGTERM))
+    except Interrupted:  # (a KeyboardInterrupt: it would end the whole test session)
+        pytest.fail(f"run() raised Interrupted, leaving {sorted(p.name for p in out.iterdir())}")
+    assert (summary.status, summary.interrupted_by, summary.frames) == (
+        "interrupted", "SIGTERM", 0)
+    record = assert_records_agree(out)
+    assert (record["status"], record["outputs"]) == ("interrupted", ["track.csv"])
+
+
+def test_a_signal_while_a_stream_fifo_waits_for_its_reader_is_an_interrupted_run(
+        clip: Clip, tmp_path: Path) -> None:
+    """SIGTERM while `--stream FIFO` waited for a reader (the CSV's temporary file already
+    open): the run removed its outputs and left no run.json. Now it is recorded interrupted."""
+    fifo, out = tmp_path / "lines", tmp_path / "out"
+    os.mkfifo(fifo)
+    process = start("run", str(clip.path), "-c", "s0", "--init",
+                    ",".join(map(str, clip.scene.boxes[0])), "--no-video", "--stream",
+                    str(fifo), "--timeout", "600", "--out", str(out))
+    wait_for(lambda: any(out.glob(".track.tmp*")), process, "CSV opened")
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal.SIGTERM, stderr
+    assert error_line(stderr).endswith(f"interrupted by SIGTERM; partial results in {out}")
     record = assert_records_agree(out)
     assert (record["status"], record["frames"], record["outputs"]) == (
         "interrupted", 0, ["track.csv"])

@@ -205,6 +205,23 @@ class _Signals:
         """From now on signals are only noted (``pending``), never raised."""
         self.inside = True
 
+    def release(self) -> None:
+        """Signals raise again: one noted while held at once (Interrupted)."""
+        self.inside = False
+        if self.pending:
+            raise Interrupted(self.pending)
+
+    @contextmanager
+    def live(self) -> Iterator[None]:
+        """Inside the block signals raise at once (one noted before: on entry), whatever
+        held them: for a wait a signal must cut short. The hold is back after it."""
+        held = self.inside
+        try:
+            self.release()
+            yield
+        finally:
+            self.inside = held
+
     @contextmanager
     def writing(self) -> Iterator[None]:
         self.inside = True
@@ -528,10 +545,14 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             if not overwrite:
                 refuse_replacing(request.out_dir)
                 _refuse_replacing_stream(_stream_file(request))
+            # from taking the folder until the frame loop, a signal is only noted (the loop
+            # then ends at once, interrupted): none cuts the opening of the outputs short and
+            # leaves their temporary files (or the folder's lock) behind without a record
+            signals.hold()
             with OutputFolder(request.out_dir) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
-                writers = _open_writers(request, resolved, info)
+                writers = _open_writers(request, resolved, info, signals)
                 if on_open is not None:
                     on_open(info)
                 tracked = _track(request, resolved, source, writers, signals, on_frame, folder)
@@ -614,7 +635,11 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
                                      request.video_out is None else [])
 
 
-def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> _Writers:
+def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
+                  signals: _Signals) -> _Writers:
+    """The run's writers, opened while ``signals`` are held; on an error none is left open.
+    The wait for a ``--stream`` FIFO's reader is cut short by a signal: the run then goes on
+    without the stream, its signal noted (the frame loop ends at once, interrupted)."""
     pipeline = resolved.pipeline
     formatter = _MultiTargetRows(resolved.mot_gt, resolved.start) if pipeline.multi_target \
         else _SingleTargetRows(pipeline.columns, resolved.gt, resolved.start)
@@ -634,8 +659,11 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo) -> 
                                       gt_tracks=resolved.mot_gt)
     if request.stream is not None:
         try:
-            writers.stream = StreamWriter(request.stream, pipeline.multi_target,
-                                          stall_s=request.ffmpeg.timeout_s)
+            with signals.live():
+                writers.stream = StreamWriter(request.stream, pipeline.multi_target,
+                                              stall_s=request.ffmpeg.timeout_s)
+        except Interrupted as exc:
+            signals.pending = signals.pending or exc.signum
         except BaseException:
             writers.csv.abort()
             if writers.video is not None:
@@ -757,6 +785,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     started, cpu_started = time.perf_counter(), time.thread_time()
     handled: tuple[float, float] | None = None  # (wall, cpu) when the last frame was done
     try:
+        signals.release()  # held while the outputs opened: one that came then ends it here
         frames_in = _frames_to_track(request, resolved, source)
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
