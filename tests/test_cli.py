@@ -367,6 +367,8 @@ def test_vtrack_scene_names_the_option_given_and_its_range(
     (["x.txt"], "no video container format for this file name"),
     (["noext"], "no video container format for this file name"),
     (["c.mp4", "--frames", "99999999999"], "--frames 99999999999: at most 108000"),
+    # the name first, as for the default pixel format (was: "libx264 does not take ... rgb24")
+    (["t.out", "--pix-fmt", "rgb24"], "t.out: no video container format for this file name"),
 ])
 def test_vtrack_scene_refuses_what_it_cannot_write_in_one_line(
         tmp_path: Path, args: list[str], problem: str) -> None:
@@ -375,6 +377,21 @@ def test_vtrack_scene_refuses_what_it_cannot_write_in_one_line(
     assert result.returncode == 2, error
     assert problem in error and error.count("\n") == 1
     assert not list(tmp_path.iterdir())
+
+
+def test_vtrack_scene_images_over_a_file_says_it_is_a_file(tmp_path: Path) -> None:
+    """`--format images` with OUT an existing file said "OUT/img: cannot write (File
+    exists)"."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "0001.jpg").write_bytes(b"a picture")
+    result = vtrack("scene", "smooth", "a/0001.jpg", "--format", "images", "--size", "160x120",
+                    cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.decode() == ("vtrack: error: a/0001.jpg: is a file; --format images "
+                                      "writes a folder there (img/0001.jpg ... and its ground "
+                                      "truth): name a folder\n")
+    assert [p.name for p in tmp_path.rglob("*")] == ["a", "0001.jpg"]
+    assert (tmp_path / "a" / "0001.jpg").read_bytes() == b"a picture"
 
 
 def test_a_start_frame_that_does_not_decode_is_refused(tmp_path: Path) -> None:

@@ -67,9 +67,29 @@ def _writing(path: Path) -> Iterator[None]:
     except (OSError, av.FFmpegError) as exc:
         raise OutputError(f"{path}: cannot write ({os_reason(exc)})") from exc
     except ValueError as exc:  # PyAV: no container format for the file's name
-        raise OutputError(f"{path}: no video container format for this file name ({exc}); "
-                          "name it .mp4, .mkv, .avi or .mov, or use --format images / raw"
-                          ) from exc
+        raise _no_container(path, exc) from exc
+
+
+def _no_container(path: Path, reason: Exception) -> OutputError:
+    """The error for a video name FFmpeg has no container format for."""
+    return OutputError(f"{path}: no video container format for this file name ({reason}); "
+                       "name it .mp4, .mkv, .avi or .mov, or use --format images / raw")
+
+
+def _check_container(path: Path) -> None:
+    """OutputError when FFmpeg has no container format for ``path``'s name (found without
+    touching the disk: an output container creates its file only when encoding starts)."""
+    try:
+        av.open(ffmpeg_file(path), "w").close()
+    except ValueError as exc:
+        raise _no_container(path, exc) from None
+
+
+def _check_folder(folder: Path) -> None:
+    """OutputError when ``folder``, where an image folder goes, is an existing file."""
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{folder}: is a file; --format images writes a folder there "
+                          "(img/0001.jpg ... and its ground truth): name a folder")
 
 
 def _progress(scene: Scene, enabled: bool, what: str) -> Iterable[np.ndarray]:
@@ -137,7 +157,9 @@ def write_video(
 
 
 def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str) -> None:
-    """ConfigError naming ``path`` when the encoder, preset or pixel format cannot be used."""
+    """OutputError naming ``path`` when FFmpeg has no container for its name; then
+    ConfigError when the encoder, preset or pixel format cannot be used."""
+    _check_container(path)
     try:
         av.codec.Codec(codec, "w")
     except ValueError as exc:
@@ -232,6 +254,7 @@ def write_image_sequence(
     every image is written: ``folder/img`` replaces the folder there as a whole."""
     folder = Path(folder)
     _check_image_ext(ext)
+    _check_folder(folder)
     images, groundtruth = folder / "img", folder / "groundtruth_rect.txt"
     with replacing(images, groundtruth) as (images_temp, groundtruth_temp):
         _images_to(scene, images, images_temp, ext, progress)
@@ -336,6 +359,8 @@ def write_clip(
         _check_video(scene, out, preset, CODEC, pix)
     elif fmt == "raw":
         _check_raw(scene, out, pix)
+    else:
+        _check_folder(out)
     multi = any(len(tracks) > 1 for tracks in scene.tracks)
     clip = out / "img" if fmt == "images" else out
     gt = out / "groundtruth_rect.txt" if fmt == "images" else sidecar(out, "gt")
