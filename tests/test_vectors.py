@@ -326,3 +326,36 @@ def test_check_reads_a_dump_as_readmemh_does(vectors, tmp_path) -> None:
     assert differ.returncode == 1
     assert differ.stdout == (f"frame_0001/hue.hex: 1 differing value(s); line 6 (x=5, y=0): "
                              f"expected {words[5]}, got {changed:02x}\n")
+
+
+def test_check_says_what_kind_of_difference_a_dump_has(vectors, tmp_path) -> None:
+    """A vector set of another config was compared file by file ('missing 17 column(s)...');
+    an empty value read 'got ' and a truncated dump '0 differing value(s); 100 lines,
+    expected 76800'."""
+    out, clip = vectors
+    box = clip.scene.boxes[0]
+    s2 = tmp_path / "s2"
+    made = vtrack("vectors", str(clip.path), "--config", "s2-fixed", "--init",
+                  f"{box.x},{box.y},{box.w},{box.h}", "--frames", "2", "--out", str(s2))
+    assert made.returncode == 0, made.stderr
+    other = vtrack("vectors", "check", str(out), str(s2))
+    assert (other.returncode, other.stdout) == (2, ""), other.stdout
+    assert other.stderr == (f"vtrack: error: {s2}: vectors of s2-fixed, {out} holds vectors of "
+                            "s0-fixed (their manifest.json): compare vectors of one config\n")
+    # one value left empty, one file cut short
+    with (out / "trace.csv").open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    column = rows[0].index("sum_bp")
+    expected, rows[2][column] = rows[2][column], ""  # frame 1
+    dump = tmp_path / "dump"
+    (dump / "frame_0001").mkdir(parents=True)
+    with (dump / "trace.csv").open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    words = (out / "frame_0001" / "hue.hex").read_text().splitlines()
+    (dump / "frame_0001" / "hue.hex").write_text("".join(w + "\n" for w in words[:100]))
+    differ = vtrack("vectors", "check", str(out), str(dump))
+    assert differ.returncode == 1, differ.stderr
+    assert differ.stdout.splitlines() == [
+        f"frame_0001/hue.hex: truncated (100 of {len(words)} lines)",
+        f"trace.csv: 1 differing value(s); frame 1 column sum_bp: expected {expected}, "
+        "got nothing"]

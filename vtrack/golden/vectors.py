@@ -311,13 +311,29 @@ def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str 
         x, y = (int(i) % width, int(i) // width) if width else (0, 0)
         lines.append(f"line {i + 1} (x={x}, y={y}): expected {_shown(want[i])}, "
                      f"got {_shown_word(have[i], digits)}")
-    total = len(bad)
-    if len(want) != count:
-        lines.append(f"{count} lines, expected {len(want)}")
-        total += 1
-    if not total:
-        return None
-    return f"{name}: {len(bad)} differing value(s); " + "; ".join(lines)
+    body = _differences(len(bad), lines, _length(count, len(want), "lines"))
+    return None if body is None else f"{name}: {body}"
+
+
+def _length(count: int, expected: int, unit: str) -> str | None:
+    """How a dump's length (``count`` lines or rows) differs from the vectors' (None: it
+    does not): a shorter one is truncated."""
+    if count < expected:
+        return f"truncated ({count} of {expected} {unit})"
+    return f"{count} {unit}, expected {expected}" if count > expected else None
+
+
+def _differences(differing: int, shown: list[str], length: str | None) -> str | None:
+    """A file's difference line after its name: the number of differing values and the first
+    of them (none said when none differs), then how its length differs; None when equal."""
+    parts = ([f"{differing} differing value(s)", *shown] if differing else []) + (
+        [length] if length is not None else [])
+    return "; ".join(parts) if parts else None
+
+
+def _shown_cell(text: str | None) -> str:
+    """A CSV value for a message: an empty or missing one is ``nothing``."""
+    return _shown(text) if text else "nothing"
 
 
 def _same_cell(a: str, b: str) -> bool:
@@ -383,14 +399,11 @@ def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
                 total += 1
                 if len(found) < SHOWN:
                     frame = row_w.get("frame", str(i))
-                    found.append(f"frame {frame} column {column}: expected {row_w[column]}, "
-                                 f"got {_shown(value or '')}")
-    if len(want) != len(have):
-        found.append(f"{len(have)} rows, expected {len(want)}")
-        total += 1
-    if not total:
+                    found.append(f"frame {frame} column {column}: expected "
+                                 f"{_shown_cell(row_w[column])}, got {_shown_cell(value)}")
+    body = _differences(total, found, _length(len(have), len(want), "rows"))
+    if body is None:
         return missing
-    body = f"{total} differing value(s); " + "; ".join(found)
     return f"{name}: {body}" if missing is None else f"{missing}; {body}"
 
 
@@ -412,6 +425,25 @@ def _frame_width(vectors: Path) -> int:
     return width
 
 
+def _config_of(folder: Path) -> str | None:
+    """The config ``folder``'s ``manifest.json`` names (None: it has none, or names none)."""
+    try:
+        info = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    config = info.get("config") if isinstance(info, dict) else None
+    return config if isinstance(config, str) else None
+
+
+def _refuse_another_config(vectors: Path, dump: Path) -> None:
+    """InputError when ``dump`` is a vector set (it has a manifest) of another config than
+    ``vectors``: its files differ throughout, and for that one reason."""
+    ours, theirs = _config_of(vectors), _config_of(dump)
+    if ours is not None and theirs is not None and ours != theirs:
+        raise InputError(f"{dump}: vectors of {theirs}, {vectors} holds vectors of {ours} "
+                         "(their manifest.json): compare vectors of one config")
+
+
 def _read_bytes(path: Path) -> bytes:
     try:
         return path.read_bytes()
@@ -429,6 +461,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
     width = _frame_width(vectors)
     if not dump.is_dir():
         raise InputError(f"{dump}: no such folder")
+    _refuse_another_config(vectors, dump)
     lines: list[str] = []
     compared = 0
     for path in sorted(dump.rglob("*")):
