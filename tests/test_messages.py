@@ -208,3 +208,14 @@ def test_help_names_the_ground_truth_files_batch_finds_and_scene_writes() -> Non
         assert name in batch, (name, batch)
     scene = " ".join(vtrack("scene", "--help").output.split("Options:")[0].split())
     assert "(multi, pedestrians), OUT.mot.txt" in scene, scene
+
+
+@pytest.mark.parametrize("command", ["frame", "select", "run"])
+def test_a_raw_file_where_a_video_is_read_says_only_run_reads_raw_frames(
+        clip_factory: ClipFactory, command: str) -> None:
+    """`vtrack frame r.raw` and `vtrack select r.raw` (which take no --raw) said only
+    'not a video FFmpeg can decode (Invalid argument)'."""
+    raw = clip_factory("smooth", width=160, height=120, frames=10, fmt="raw").path
+    line = one_error_line(vtrack(command, str(raw)))
+    assert line == (f"vtrack: error: {raw}: not a video FFmpeg can decode (Invalid argument); "
+                    "raw frames are read only by vtrack run --raw WxH (with --pix-fmt, --fps)")

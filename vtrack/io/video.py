@@ -292,6 +292,8 @@ def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputCo
 #: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
 #: records it at the end, once finished).
 INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
+#: Names of files of raw frames (no header: nothing FFmpeg opens without their size).
+RAW_SUFFIXES = (".raw", ".yuv", ".rgb", ".bgr", ".gray")
 
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
@@ -319,7 +321,7 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
 
 def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
     """The one line for an input FFmpeg could not open or decode a first frame from, saying
-    what the way it was read (a URL, ``--follow``) makes likely."""
+    what the way it was read (a URL, ``--follow``) or its name (raw frames) makes likely."""
     reason = os_reason(exc)
     if "://" in path:  # a network input, as _open_container opens it
         if not isinstance(exc, av.error.InvalidDataError):
@@ -330,6 +332,9 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
                 "MP4 without --follow")
+    if path.lower().endswith(RAW_SUFFIXES):
+        return (f"{path}: not a video FFmpeg can decode ({reason}); raw frames are read only "
+                "by vtrack run --raw WxH (with --pix-fmt, --fps)")
     return f"{path}: not a video FFmpeg can decode ({reason})"
 
 
