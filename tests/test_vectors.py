@@ -284,17 +284,22 @@ def test_vectors_help_lists_the_options_of_vtrack_vectors_input() -> None:
     assert "[default: 10]" in options and "Commands:" in text and "check" in text
 
 
+def _s2_vectors(clip, out: Path, frames: int) -> Path:
+    """``vtrack vectors`` of ``frames`` frames of ``clip`` with s2-fixed into ``out``."""
+    box = clip.scene.boxes[0]
+    made = vtrack("vectors", str(clip.path), "--config", "s2-fixed", "--init",
+                  f"{box.x},{box.y},{box.w},{box.h}", "--frames", str(frames), "--out", str(out))
+    assert made.returncode == 0, made.stderr
+    return out
+
+
 def test_s2_vectors_manifest_says_what_every_trace_and_iteration_column_is(vectors,
                                                                            tmp_path) -> None:
     """S0's manifest.json described its trace.csv (the s0 section) but S2's said nothing of
     trace.csv nor iterations.csv (r, r_prime, s, rho, c, s_t, c_prime ...: units, blanks) and
     left out the model histogram q_u a bench starts from."""
     _, clip = vectors
-    box = clip.scene.boxes[0]
-    out = tmp_path / "s2"
-    result = vtrack("vectors", str(clip.path), "--config", "s2-fixed", "--init",
-                    f"{box.x},{box.y},{box.w},{box.h}", "--frames", "3", "--out", str(out))
-    assert result.returncode == 0, result.stderr
+    out = _s2_vectors(clip, tmp_path / "s2", frames=3)
     section = json.loads((out / "manifest.json").read_text())["s2"]
     described = " ".join(section[key] for key in ("trace", "iterations"))
     words = {w.strip(",=:;()") for w in described.split()}
@@ -333,11 +338,7 @@ def test_check_says_what_kind_of_difference_a_dump_has(vectors, tmp_path) -> Non
     an empty value read 'got ' and a truncated dump '0 differing value(s); 100 lines,
     expected 76800'."""
     out, clip = vectors
-    box = clip.scene.boxes[0]
-    s2 = tmp_path / "s2"
-    made = vtrack("vectors", str(clip.path), "--config", "s2-fixed", "--init",
-                  f"{box.x},{box.y},{box.w},{box.h}", "--frames", "2", "--out", str(s2))
-    assert made.returncode == 0, made.stderr
+    s2 = _s2_vectors(clip, tmp_path / "s2", frames=2)
     other = vtrack("vectors", "check", str(out), str(s2))
     assert (other.returncode, other.stdout) == (2, ""), other.stdout
     assert other.stderr == (f"vtrack: error: {s2}: vectors of s2-fixed, {out} holds vectors of "
