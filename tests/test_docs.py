@@ -31,3 +31,79 @@ def test_readme_configs_exist_and_set_up_commands_come_first() -> None:
     assert blocks[1].strip() in ci
     sample = re.search(r"vtrack run (samples/\S+)", blocks[0])
     assert sample and (ROOT / sample.group(1)).is_file()
+
+
+RESULTS = ROOT / "benchmarks" / "RESULTS.md"
+
+
+def _results_section(number: int) -> str:
+    """The text of RESULTS.md's section ``## number.`` (up to the next ``## ``)."""
+    text = RESULTS.read_text()
+    start = re.search(rf"^## {number}\. .*$", text, re.M)
+    assert start, f"RESULTS.md has no section {number}"
+    rest = text[start.end():]
+    end = re.search(r"^## \d+\. ", rest, re.M)
+    return rest[: end.start()] if end else rest
+
+
+def _last_table(section: str) -> list[list[str]]:
+    """The rows (cells stripped, header and rule dropped) of the section's last Markdown table."""
+    tables = re.findall(r"((?:^\|.*\|\n)+)", section, re.M)
+    assert tables
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in tables[-1].splitlines()]
+    return rows[2:]
+
+
+def _readme_text() -> str:
+    """The README with its line breaks as spaces (a quoted number may wrap)."""
+    return " ".join((ROOT / "README.md").read_text().split())
+
+
+def test_readme_results_sections_exist() -> None:
+    readme = _readme_text()
+    named = {int(n) for n in re.findall(r"RESULTS\.md\]?[^.;]{0,40}?,? section (\d+)", readme)}
+    assert {1, 5, 6, 8, 12} <= named
+    for number in named:
+        _results_section(number)
+
+
+def test_readme_scene_list_is_the_generators() -> None:
+    from vtrack.scenes.scenarios import SCENARIOS
+
+    row = next(line for line in (ROOT / "README.md").read_text().splitlines()
+               if line.startswith("| `vtrack scene NAME"))
+    listed = re.findall(r"`(\w+)`", row.split("exact ground truth", 1)[1])
+    assert sorted(listed) == sorted(SCENARIOS)
+
+
+def test_readme_start_up_bound_is_the_latest_measured() -> None:
+    """The README's start-up figure is the largest ratio of section 6's latest table."""
+    rows = _last_table(_results_section(6))
+    ratios = [float(row[2].rstrip("x")) for row in rows]
+    readme = _readme_text()
+    assert f"{max(ratios):.2f}x" in readme
+    bound = re.search(r"Start-up of every command is at most ([\d.]+)x", readme)
+    assert bound and float(bound.group(1)) >= max(ratios)
+
+
+def test_readme_live_figures_are_the_latest_measured() -> None:
+    """The frames `robust` and `s0` tracked live, as the latest table of section 12 has them."""
+    rows = {row[0]: row for row in _last_table(_results_section(12))}
+    readme = _readme_text()
+    robust, video, s0 = (rows["robust, --no-video"][1], rows["robust, annotated.mp4"][1],
+                         rows["s0, annotated.mp4"][1])
+    assert f"`s0` tracked {s0} of 600" in readme
+    assert f"`robust` {robust} without it" in readme and f"{video} with it" in readme
+
+
+def test_readme_speed_ratios_are_the_latest_measured() -> None:
+    """Section 1 puts its newest run first: `robust`'s ratios there are the README's."""
+    section = _results_section(1)
+    table = re.search(r"((?:^\|.*\|\n)+)", section, re.M).group(1)
+    ratio = {row.split("|")[1].strip(): row.split("|")[4].strip() for row in table.splitlines()}
+    no_video = float(ratio["`vtrack run CLIP --no-video --config robust`"].split()[0])
+    video = float(ratio["`vtrack run CLIP --config robust --preset ultrafast` (annotated video)"]
+                  .split()[0])
+    readme = _readme_text()
+    assert f"{no_video:.2f}x a decode-only PyAV process" in readme.replace("**", "")
+    assert f"{video:.2f}x (robust)" in readme
