@@ -292,7 +292,9 @@ def memh_values(text: bytes, limit: int) -> tuple[list[int | bytes], int]:
 
 
 def _shown_word(value: int | bytes, digits: int) -> str:
-    return f"{value:0{digits}x}" if isinstance(value, int) else _shown(value)
+    """A word ``$readmemh`` loaded, for a message: a number in ``digits`` hex digits (at
+    least), else as it is; cut short either way (a damaged dump's word may be 10 MB long)."""
+    return _shown(f"{value:0{digits}x}" if isinstance(value, int) else value)
 
 
 def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str | None:
