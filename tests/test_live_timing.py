@@ -57,6 +57,28 @@ def test_seconds_end_when_the_last_frame_is_handled_not_when_the_input_closes(
     assert record["timing"]["fps"] == record["frames"] / seconds
 
 
+def test_seconds_leave_out_the_wait_that_found_the_end_of_a_followed_file(
+        tmp_path: Path) -> None:
+    """``--follow F`` on a finished file waits F seconds after its last growth before the end
+    is found, and the decoder's frame threads hand over the last frames only then: that wait
+    counted in ``timing.seconds`` (3.1 s for 30 frames with ``--follow 3``). The bound is
+    causal, not a speed: the wait (at least F) and the tracked span both lie inside the
+    process's life, so the span without the wait is at most that life less F."""
+    follow_s = 3
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=30, fps=30)
+    clip = write_video(scene, tmp_path / "clip.ts")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    spawned = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "--follow", str(follow_s),
+                    "-c", "s0", "--init", box, "--no-video", "-o", str(out), "-q"],
+                   check=True, timeout=120, capture_output=True)
+    lived = time.perf_counter() - spawned
+    record = json.loads((out / "run.json").read_text())
+    assert record["frames"] == 30
+    assert 0 < record["timing"]["seconds"] <= lived - follow_s
+
+
 def test_versions_name_ffmpeg_s_release_and_libavcodec_s_own(tmp_path: Path) -> None:
     """``versions.ffmpeg`` is FFmpeg's release (what a paper cites), not libavcodec's number,
     which is kept as ``versions.libavcodec``."""

@@ -487,7 +487,8 @@ class _Tracked:
     frames: int = 0
     #: Wall time from the loop's start to the last frame handled (its outputs written): what
     #: came after it (a live stream's ``--timeout`` wait that only found the end, the closing)
-    #: is not tracking; the whole loop when no frame was handled.
+    #: is not tracking, nor is ``--follow``'s wait that found the end (:func:`_waited`); the
+    #: whole loop when no frame was handled.
     seconds: float = 0.0
     #: CPU time of the frame loop's own thread (tracking, CSV rows, hand-over to the writers;
     #: not the decoder's and encoder's threads, nor the time others had the core), over the
@@ -769,6 +770,16 @@ def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
     return resolved.span.take(_from(source, resolved.start, request.input))
 
 
+def _waited(source: Source, start: float, end: float) -> float:
+    """The part of the span ``start``..``end`` (``perf_counter``) the input spent waiting at
+    its end for data that never came (``--follow``'s idle time): the decoder's frame threads
+    hand over the last frames only after the end is found, so the span may hold it."""
+    wait = source.end_wait
+    if wait is None:
+        return 0.0
+    return max(0.0, min(wait[1], end) - max(wait[0], start))
+
+
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
            signals: _Signals, on_frame: Callable[[int], None] | None,
            folder: OutputFolder) -> _Tracked:
@@ -831,7 +842,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     finally:
         signals.hold()  # a signal now must not cut the closing and the records short
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
-        out.seconds, out.cpu_seconds = wall - started, cpu - cpu_started
+        out.seconds, out.cpu_seconds = wall - started - _waited(source, started, wall), \
+            cpu - cpu_started
         source.close()
         if out.untouched:
             for dropped in (csv, video):

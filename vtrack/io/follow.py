@@ -20,17 +20,24 @@ class GrowingFile(CapturingStream):
         super().__init__()
         self._file = open(path, "rb", buffering=0)  # noqa: SIM115 (closed by close())
         self.idle_s = idle_s
-        #: When a read last found new data: the idle time counts from there, across reads
-        #: (FFmpeg asks again several times at the end; each must not wait ``idle_s`` anew).
-        self._grew_at = time.monotonic()
+        #: When a read last found new data (``perf_counter``): the idle time counts from
+        #: there, across reads (FFmpeg asks again several times at the end; each must not wait
+        #: ``idle_s`` anew).
+        self._grew_at = time.perf_counter()
+        #: The wait that found the end: from the last growth to the end reported
+        #: (``perf_counter`` times; None before the end). It is no reading.
+        self.end_wait: tuple[float, float] | None = None
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
         while True:
             got = self._file.readinto(buffer)
             if got:
-                self._grew_at = time.monotonic()
+                self._grew_at = time.perf_counter()
                 return got
-            if time.monotonic() - self._grew_at >= self.idle_s or self.closed:
+            now = time.perf_counter()
+            if now - self._grew_at >= self.idle_s or self.closed:
+                if self.end_wait is None:
+                    self.end_wait = (self._grew_at, now)
                 return 0
             time.sleep(POLL_S)
 

@@ -152,6 +152,12 @@ class Source(Closing, ABC):
         its latency; None otherwise."""
         return self._prefetch.received if isinstance(self._prefetch, KeepingUp) else None
 
+    @property
+    def end_wait(self) -> tuple[float, float] | None:
+        """When the input waited at its end for data that never came (``--follow``'s idle
+        time: ``perf_counter`` start and end), which is no reading; None if it did not."""
+        return None
+
     def close(self) -> None:
         """Stop decoding and release the input. Safe to call twice and mid-stream."""
         if self._closed:

@@ -509,6 +509,11 @@ class VideoSource(Source):
         may show damage)."""
         return self._corrupt
 
+    @property
+    def end_wait(self) -> tuple[float, float] | None:
+        read = _python_file(self._container)
+        return read.end_wait if isinstance(read, GrowingFile) else None
+
     def _decode(self) -> Iterator[av.VideoFrame]:
         """Decoded frames in order, dropping packets the decoder refuses (damage in the middle
         of the file: ffmpeg skips them the same way). A demuxer error still ends the stream;
