@@ -165,10 +165,11 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path, sig
              "--preset", "slow", "-o", str(out)],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         deadline = time.monotonic() + 90
-        while not list((out / "a").glob("*/.track.tmp-*.csv")):
+        # a few frames tracked: their rows are on disk as they are written (header + 3 rows)
+        while not any(p.read_bytes().count(b"\n") > 3
+                      for p in (out / "a").glob("*/.track.tmp-*.csv")):
             assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
             time.sleep(0.05)
-        time.sleep(0.5)  # a few frames tracked
         batch.send_signal(signum)
         _, stderr = batch.communicate(timeout=60)
         records = list(out.glob("a/*/run.json"))

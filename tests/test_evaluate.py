@@ -346,7 +346,8 @@ def test_init_takes_the_forms_a_sidecar_file_takes(text: str) -> None:
     assert parse_box(text) == parse_sidecar(text, "init.txt") == Box(64, 177, 40, 31)
 
 
-@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3"])
+@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3",
+                                  "10,,20,30,40", "1,2,3,4,", ",1,2,3,4"])
 def test_parse_box_rejects_malformed(text):
     """The message lists the forms --init takes."""
     with pytest.raises(ConfigError, match=r"^--init: expected x,y,w,h or x y w h \(4 numbers "

@@ -268,10 +268,15 @@ def test_batch_into_a_read_only_folder_is_one_line(inputs: Path,
 # --- signals ----------------------------------------------------------------------------------
 
 
-def wait_for(condition, process: subprocess.Popen, what: str) -> None:
+def wait_for(condition, process: subprocess.Popen | _Worker, what: str) -> None:
+    """Wait (at most 60 s) until ``condition()``, failing if ``process`` (a subprocess or a
+    batch's worker) ends first."""
     deadline = time.monotonic() + 60
     while not condition():
-        assert process.poll() is None, f"finished before {what}: {process.communicate()}"
+        if isinstance(process, _Worker):
+            assert process.process.is_alive(), f"the worker ended before {what}"
+        else:
+            assert process.poll() is None, f"finished before {what}: {process.communicate()}"
         assert time.monotonic() < deadline, f"no {what}"
         time.sleep(0.01)
 
@@ -418,7 +423,7 @@ def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
         assert worker.start(Job("feed", "s0", request))
         data = b"".join(frame.tobytes() for frame in list(scene.frames())[:10])
         threading.Thread(target=os.write, args=(writer, data), daemon=True).start()
-        wait_for_worker(lambda: any(p.read_bytes().count(b"\n") > 10
+        wait_for(lambda: any(p.read_bytes().count(b"\n") > 10
                                     for p in out.glob(".track.tmp*")), worker, "rows")
         worker.stop(grace_s=0, signum=signum)
     finally:
@@ -427,14 +432,6 @@ def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
     record = assert_records_agree(out)
     assert (record["status"], record["error"], record["frames"]) == (
         "interrupted", error, 10)
-
-
-def wait_for_worker(condition, worker: _Worker, what: str) -> None:
-    deadline = time.monotonic() + 60
-    while not condition():
-        assert worker.process.is_alive(), f"the worker ended before {what}"
-        assert time.monotonic() < deadline, f"no {what}"
-        time.sleep(0.01)
 
 
 def test_a_signal_to_the_batchs_process_group_leaves_a_summary_that_agrees_with_the_runs(

@@ -521,3 +521,13 @@ def test_a_tracker_that_gives_no_score_is_said_so_not_plotted_blank(clip_factory
     notes = re.findall(r"Warning: ([^<]*no score[^<]*)</p>", page)
     assert len(notes) == 1 and "[s4]: no score: this tracker gives none" in notes[0], notes
     assert len(list((tmp_path / "report" / "plots").glob("state_*.png"))) == 1
+
+
+def test_no_input_s_plots_take_the_name_of_the_plots_over_all_inputs_in_any_case() -> None:
+    """``curves_All.png`` is ``curves_all.png`` on a file system blind to case (macOS,
+    Windows): an input named All, ALL or all gets another slug."""
+    from vtrack.report import ALL_INPUTS, _slugs
+
+    slugs = _slugs(["All", "ALL", "all", "alley"])
+    assert all(slug.lower() != ALL_INPUTS for slug in slugs.values()), slugs
+    assert slugs["alley"] == "alley"

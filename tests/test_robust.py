@@ -217,7 +217,7 @@ def test_every_part_can_be_switched_off(scene_factory) -> None:
         assert overlap(scene, track(scene, [switch])) >= 0.6, switch
 
 
-def test_first_filter_constrained_to_the_box_holds_on_generated_scenes(scene_factory) -> None:
+def test_first_filter_constrained_to_the_box_holds_on_the_occlusion_scene(scene_factory) -> None:
     """``robust_model.first_support`` (CSR-DCF/BACF's constrained filter on the first frame)
     keeps the issue's bar where a filter learnt without its background is most tried: a target
     hidden and seen again (the option is off by default; ``smooth`` and ``distractor``, which

@@ -360,3 +360,13 @@ def test_check_says_what_kind_of_difference_a_dump_has(vectors, tmp_path) -> Non
         f"frame_0001/hue.hex: truncated (100 of {len(words)} lines)",
         f"trace.csv: 1 differing value(s); frame 1 column sum_bp: expected {expected}, "
         "got nothing"]
+
+
+def test_a_vector_word_that_is_no_number_is_compared_not_a_traceback() -> None:
+    """A vectors file holding a word ``$readmemh`` loads as no number (``xx``) was read with
+    ``int(w, 16)``: a ValueError traceback instead of a difference line."""
+    from vtrack.golden.vectors import _hex_differences
+
+    assert _hex_differences("rgb.hex", b"xx\n01\n", b"xx\n01\n", 2) is None
+    found = _hex_differences("rgb.hex", b"xx\n01\n", b"00\n01\n", 2)
+    assert found is not None and "expected xx, got 00" in found, found

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 import reprlib
 from collections.abc import Sequence
 from typing import Any, NamedTuple
@@ -157,7 +158,9 @@ def parse_box_text(text: str, where: str, error: type[Exception],
     ``x, y, w, h``, ``x y w h``), ``w, h > 0``; otherwise ``error`` naming ``where`` and
     saying what was ``expected`` (:func:`box_from_parts`). One parser for ``--init`` and the
     sidecar file, so both take the same forms."""
-    return box_from_parts(text.replace(",", " ").split(), where, expected, text, error)
+    # an empty field ("1,,2,3,4", "1,2,3,4,") stays a part: no number, refused
+    parts = re.split(r"\s*,\s*|\s+", text.strip())
+    return box_from_parts(parts, where, expected, text, error)
 
 
 def as_box(box: Box | Any, where: str = "init_box") -> Box:

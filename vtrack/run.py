@@ -29,7 +29,8 @@ import signal
 import stat
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -487,7 +488,7 @@ class _Tracked:
     frames: int = 0
     #: Wall time from the loop's start to the last frame handled (its outputs written): what
     #: came after it (a live stream's ``--timeout`` wait that only found the end, the closing)
-    #: is not tracking, nor is ``--follow``'s wait that found the end (:func:`_waited`); the
+    #: is not tracking, nor is the loop's wait while ``--follow`` waited for the end; the
     #: whole loop when no frame was handled.
     seconds: float = 0.0
     #: CPU time of the frame loop's own thread (tracking, CSV rows, hand-over to the writers;
@@ -770,14 +771,33 @@ def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
     return resolved.span.take(_from(source, resolved.start, request.input))
 
 
-def _waited(source: Source, start: float, end: float) -> float:
-    """The part of the span ``start``..``end`` (``perf_counter``) the input spent waiting at
-    its end for data that never came (``--follow``'s idle time): the decoder's frame threads
-    hand over the last frames only after the end is found, so the span may hold it."""
-    wait = source.end_wait
-    if wait is None:
-        return 0.0
-    return max(0.0, min(wait[1], end) - max(wait[0], start))
+class _Waits:
+    """The frames of ``frames``, noting when the loop waited for each of the last
+    :data:`WAITS_KEPT` (``perf_counter`` start and end; a bounded record)."""
+
+    def __init__(self, frames: Iterable[Frame]) -> None:
+        self._frames = iter(frames)
+        self.last: deque[tuple[float, float]] = deque(maxlen=WAITS_KEPT)
+
+    def __iter__(self) -> Iterator[Frame]:
+        return self
+
+    def __next__(self) -> Frame:
+        asked = time.perf_counter()
+        try:
+            return next(self._frames)
+        finally:
+            self.last.append((asked, time.perf_counter()))
+
+    def during(self, span: tuple[float, float]) -> float:
+        """How long the loop waited for frames during ``span`` (of the last waits noted)."""
+        return sum(max(0.0, min(end, span[1]) - max(start, span[0]))
+                   for start, end in self.last)
+
+
+#: The waits for frames :class:`_Waits` keeps: more than the frames a decoder holds back
+#: until the end of its input is found (one per frame thread).
+WAITS_KEPT = 64
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -794,10 +814,11 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     # with --start the video's clock starts at its first frame (as ffmpeg -ss makes it)
     first_time: float | None = None if resolved.start else 0.0
     started, cpu_started = time.perf_counter(), time.thread_time()
+    frames_in: _Waits | None = None
     handled: tuple[float, float] | None = None  # (wall, cpu) when the last frame was done
     try:
         signals.release()  # held while the outputs opened: one that came then ends it here
-        frames_in = _frames_to_track(request, resolved, source)
+        frames_in = _Waits(_frames_to_track(request, resolved, source))
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)
@@ -842,8 +863,12 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     finally:
         signals.hold()  # a signal now must not cut the closing and the records short
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
-        out.seconds, out.cpu_seconds = wall - started - _waited(source, started, wall), \
-            cpu - cpu_started
+        # the loop's wait for frames while the input waited at its end (--follow) is not
+        # tracking: the decoder's frame threads hand over its last frames only after it
+        end_wait = source.end_wait
+        waited = 0.0 if frames_in is None or end_wait is None else frames_in.during(
+            (max(end_wait[0], started), min(end_wait[1], wall)))
+        out.seconds, out.cpu_seconds = wall - started - waited, cpu - cpu_started
         source.close()
         if out.untouched:
             for dropped in (csv, video):

@@ -126,36 +126,48 @@ class _Worker:
 
     def stop(self, grace_s: float = STOP_GRACE_S,
              signum: signal.Signals = signal.SIGTERM) -> None:
-        """Ask the worker to finish; a job still running gets ``grace_s`` to end, then the
-        worker gets ``signum`` (the signal the batch was stopped by: SIGINT, SIGTERM), so the
-        job ends ``interrupted`` with its outputs whole and its ``run.json`` written, naming
-        that signal, and :data:`RECORD_GRACE_S` to do so; only then is the process killed.
+        """:func:`stop_workers` of this worker alone."""
+        stop_workers([self], grace_s, signum)
 
-        Its exit is read from its end of the pipe closing, not from ``Process.join``: the
-        worker is the forkserver's child, and a signal to the whole process group (Ctrl-C,
-        ``timeout``, a scheduler's SIGTERM) may have ended the forkserver, whose lost status
-        pipe makes ``join`` return at once with exit code 255 while the worker still writes
-        its records (``summary.csv`` was then written without them)."""
-        with suppress(OSError):
-            self.connection.send(None)
-        for wait_s, then in ((grace_s, signum), (RECORD_GRACE_S, signal.SIGKILL)):
-            if self._ended_within(wait_s):
-                break
-            with suppress(ProcessLookupError):
-                os.kill(self.process.pid, then)
-        self.process.join(1)
-        self.connection.close()
-
-    def _ended_within(self, wait_s: float) -> bool:
-        """Whether the worker's end of the pipe closes (it is gone) within ``wait_s``; what it
-        sends meanwhile (an outcome or progress nobody waits for now) is dropped."""
-        deadline = time.monotonic() + wait_s
+    def ended_by(self, deadline: float) -> bool:
+        """Whether the worker's end of the pipe closes (it is gone) by ``deadline``
+        (``time.monotonic``); what it sends meanwhile (an outcome or progress nobody waits for
+        now) is dropped."""
         try:
             while (left := deadline - time.monotonic()) > 0 and self.connection.poll(left):
                 self.connection.recv()
         except (EOFError, OSError):
             return True
         return False
+
+
+def stop_workers(workers: Sequence[_Worker], grace_s: float = STOP_GRACE_S,
+                 signum: signal.Signals = signal.SIGTERM) -> None:
+    """Ask every worker to finish, together: the jobs still running share ``grace_s`` to end,
+    then their workers get ``signum`` (the signal the batch was stopped by: SIGINT, SIGTERM),
+    so each job ends ``interrupted`` with its outputs whole and its ``run.json`` written,
+    naming that signal, and they share :data:`RECORD_GRACE_S` to do so; only then are the
+    processes still there killed. (One after the other, each busy worker would add its whole
+    wait: a stop's time would grow with the workers, past what ``docker stop`` allows.)
+
+    A worker's exit is read from its end of the pipe closing, not from ``Process.join``: the
+    worker is the forkserver's child, and a signal to the whole process group (Ctrl-C,
+    ``timeout``, a scheduler's SIGTERM) may have ended the forkserver, whose lost status pipe
+    makes ``join`` return at once with exit code 255 while the worker still writes its
+    records (``summary.csv`` was then written without them)."""
+    for worker in workers:
+        with suppress(OSError):
+            worker.connection.send(None)
+    running = list(workers)
+    for wait_s, then in ((grace_s, signum), (RECORD_GRACE_S, signal.SIGKILL)):
+        deadline = time.monotonic() + wait_s
+        running = [worker for worker in running if not worker.ended_by(deadline)]
+        for worker in running:
+            with suppress(ProcessLookupError):
+                os.kill(worker.process.pid, then)
+    for worker in workers:
+        worker.process.join(1)
+        worker.connection.close()
 
 
 class LocalExecutor:
@@ -218,8 +230,7 @@ class LocalExecutor:
             stop_signal = signal.Signals(exc.signum)
             raise
         finally:
-            for worker in workers:
-                worker.stop(signum=stop_signal)
+            stop_workers(workers, signum=stop_signal)
 
 
 class DaskExecutor:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from contextlib import closing
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -201,7 +202,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         to_run = {(job.input, job.config) for job in batch.jobs}
         running = run_batch(batch, executor, summary_path)
         try:
-            with passing_stop_to(running):
+            with closing(running), passing_stop_to(running):
                 for outcome in running:
                     outcomes.append(outcome)
                     if not quiet:

@@ -53,7 +53,7 @@ def command() -> None:
 @click.option("--config", "-c", "config_spec", default="s0-fixed", show_default=True, type=CONFIG,
               metavar="NAME|FILE", help="A fixed-point config: s0-fixed or s2-fixed.")
 @click.option("--init", "init_text", required=True, metavar="x,y,w,h",
-              help="Initial box (top-left x, y, width, height).")
+              help="Initial box (top-left x, y, width, height): x,y,w,h or x y w h.")
 @click.option("--frames", "count", type=int, default=10, show_default=True,
               help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
 @click.option("--out", "-o", "out_dir", type=PATH, required=True,

@@ -306,7 +306,7 @@ def _hex_differences(name: str, expected: bytes, got: bytes, width: int) -> str 
     have, count = memh_values(got, len(want))
     lines = []
     n = min(len(want), len(have))
-    a = np.array([int(w, 16) for w in want[:n]], dtype=object)
+    a = np.array([_memh_value(w) for w in want[:n]], dtype=object)  # (a vector may be xx)
     b = np.array(have[:n], dtype=object)
     bad = np.flatnonzero(a != b)
     for i in bad[:SHOWN]:

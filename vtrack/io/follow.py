@@ -24,20 +24,25 @@ class GrowingFile(CapturingStream):
         #: there, across reads (FFmpeg asks again several times at the end; each must not wait
         #: ``idle_s`` anew).
         self._grew_at = time.perf_counter()
-        #: The wait that found the end: from the last growth to the end reported
-        #: (``perf_counter`` times; None before the end). It is no reading.
+        #: When a read first found no more data since the last growth (None: the last read
+        #: found some): the reader's wait at the end starts there.
+        self._empty_since: float | None = None
+        #: The wait that found the end: from the first read that found nothing more to the end
+        #: reported (``perf_counter`` times; None before the end). It is no reading.
         self.end_wait: tuple[float, float] | None = None
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
         while True:
             got = self._file.readinto(buffer)
-            if got:
-                self._grew_at = time.perf_counter()
-                return got
             now = time.perf_counter()
+            if got:
+                self._grew_at, self._empty_since = now, None
+                return got
+            if self._empty_since is None:
+                self._empty_since = now
             if now - self._grew_at >= self.idle_s or self.closed:
                 if self.end_wait is None:
-                    self.end_wait = (self._grew_at, now)
+                    self.end_wait = (self._empty_since, now)
                 return 0
             time.sleep(POLL_S)
 

@@ -77,7 +77,7 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
     for name in names:
         base = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "input"
         slug, n = base, 1
-        while slug in slugs.values() or slug == ALL_INPUTS:
+        while slug in slugs.values() or slug.lower() == ALL_INPUTS:  # (case-blind file systems)
             n += 1
             slug = f"{base}-{n}"
         slugs[name] = slug
