@@ -76,7 +76,7 @@ class Frame(ABC):
     __slots__ = ("index", "time_s", "width", "height")
 
     def __init__(self, index: int, time_s: float, width: int, height: int) -> None:
-        check_index(index)
+        # (the index was checked with the pixels, check_pixels, before any size was read)
         problem = frame_size_problem(width, height)
         if problem:
             raise ValueError(f"frame {index}: {problem}")

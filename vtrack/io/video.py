@@ -241,6 +241,15 @@ def _python_file(container: av.container.InputContainer) -> object:
     return getattr(given, "file", given)
 
 
+def text_file_problem(path: str, container: av.container.InputContainer) -> str | None:
+    """Why ``container`` (``path`` opened) is no video when FFmpeg read it as a text file
+    (:data:`TEXT_FORMATS`); None otherwise."""
+    if container.format.name not in TEXT_FORMATS:
+        return None
+    return (f"{path}: a text file, not a video (FFmpeg's {container.format.name} reader "
+            "would draw its characters as pictures)")
+
+
 #: FFmpeg's read buffer for a container on a pipe: its default probe size (``probesize``).
 PIPE_BUFFER_BYTES = 5_000_000
 
@@ -432,9 +441,9 @@ class VideoSource(Source):
         if not container.streams.video:
             kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
-        if container.format.name in TEXT_FORMATS:
-            raise InputError(f"{path}: a text file, not a video (FFmpeg's {container.format.name} "
-                             "reader would draw its characters as pictures)")
+        text = text_file_problem(path, container)
+        if text:
+            raise InputError(text)
         self._container = container
         self._stream = stream = _main_video_stream(container)
         if stream.codec_context is None:  # e.g. a video file read with --format image2

@@ -17,7 +17,7 @@ from urllib.parse import urlsplit
 import av
 
 from vtrack.io.files import ffmpeg_file, os_reason
-from vtrack.io.video import TEXT_FORMATS
+from vtrack.io.video import text_file_problem
 
 
 def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> int:
@@ -30,9 +30,9 @@ def send(path: str, url: str, fmt: str = "mpegts", *, realtime: bool = True) -> 
     with source:
         if not source.streams.video:
             raise SendError(f"{path}: has no video stream")
-        if source.format.name in TEXT_FORMATS:
-            raise SendError(f"{path}: a text file, not a video (FFmpeg's {source.format.name} "
-                            "reader would draw its characters as pictures)")
+        text = text_file_problem(path, source)
+        if text:
+            raise SendError(text)
         video = source.streams.video[0]
         _check_port(url)
         try:

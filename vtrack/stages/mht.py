@@ -275,7 +275,7 @@ class MultipleHypothesis(Stage):
                                       if m not in used)
             extended[frozenset(map(id, full))] = full
         hypotheses = self._prune(list(extended.values()))
-        hypotheses = self._capped(self._delete_by_global_confidence(hypotheses))
+        hypotheses = self._delete_by_global_confidence(hypotheses)
         for m in sorted(newcomers):  # ids in measurement order, only for tracks that survive
             if any(newcomers[m] in h for h in hypotheses):
                 newcomers[m].family = next(self._ids)
@@ -418,19 +418,17 @@ class MultipleHypothesis(Stage):
         floor = _score(ranked[0])[0] - self.prune_margin
         return [h for h in ranked if _score(h)[0] >= floor]
 
-    def _capped(self, hypotheses: list[_Hypothesis]) -> list[_Hypothesis]:
-        """Each hypothesis with at most ``max_tracks`` branches, those coasting longest dropped
-        first (stable), duplicates merged; best first."""
-        kept: dict[frozenset[int], _Hypothesis] = {}
-        for hypothesis in hypotheses:
-            if len(hypothesis) > self.max_tracks:
-                keep = sorted(range(len(hypothesis)), key=lambda i: hypothesis[i].coasting)
-                hypothesis = tuple(hypothesis[i] for i in sorted(keep[: self.max_tracks]))
-            kept.setdefault(frozenset(map(id, hypothesis)), hypothesis)
-        return sorted(kept.values(), key=_score, reverse=True)
+    def _capped(self, hypothesis: _Hypothesis) -> _Hypothesis:
+        """``hypothesis`` with at most ``max_tracks`` branches, those coasting longest dropped
+        first (the others in their order)."""
+        if len(hypothesis) <= self.max_tracks:
+            return hypothesis
+        keep = sorted(range(len(hypothesis)), key=lambda i: hypothesis[i].coasting)
+        return tuple(hypothesis[i] for i in sorted(keep[: self.max_tracks]))
 
     def _delete_by_global_confidence(self, hypotheses: list[_Hypothesis]) -> list[_Hypothesis]:
-        """Delete branches whose P_G (S3 eq. 7) is below ``global_delete``; best first."""
+        """Delete branches whose P_G (S3 eq. 7) is below ``global_delete``, then cap each
+        hypothesis at ``max_tracks`` (:meth:`_capped`); distinct hypotheses, best first."""
         weights = [_score(h)[0] for h in hypotheses]
         total = sum(weights)
         support: dict[int, float] = {}
@@ -445,7 +443,7 @@ class MultipleHypothesis(Stage):
                     doomed.add(id(branch))
         kept: dict[frozenset[int], _Hypothesis] = {}
         for hypothesis in hypotheses:
-            survivors = tuple(b for b in hypothesis if id(b) not in doomed)
+            survivors = self._capped(tuple(b for b in hypothesis if id(b) not in doomed))
             kept.setdefault(frozenset(map(id, survivors)), survivors)
         return sorted(kept.values(), key=_score, reverse=True)
 
