@@ -118,6 +118,29 @@ def test_mot_summary_reads_the_ground_truth_file(tmp_path) -> None:
         mot_summary({}, tmp_path / "missing.txt", 2)
 
 
+def test_track_boxes_on_distractors_are_taken_out_as_trackeval_does(tmp_path) -> None:
+    """Probe 51c: a track on a static person (class 7), a distractor (8), a reflection (12) or a
+    person on a vehicle (2) counted as a false positive on every frame; TrackEval, whose reading
+    the README promises, takes such track boxes out before scoring. A track on a car (class 3,
+    no distractor) stays a false positive, and the assignment gives a box covering both a
+    pedestrian and a distractor to the one it overlaps more."""
+    car, walker, static = Box(200, 0, 10, 10), A, B
+    near_static = Box(101, 100, 10, 10)  # IoU 0.82 with the static person, 0 with the walker
+    path = tmp_path / "gt.txt"
+    path.write_text("1,1,0,0,10,10,1,1,1\n1,2,100,100,10,10,1,7,1\n1,3,200,0,10,10,1,3,1\n"
+                    "2,1,0,0,10,10,1,1,1\n2,2,100,100,10,10,0,8,1\n"
+                    "3,1,0,0,10,10,1,1,1\n3,2,100,100,10,10,1,12,0.2\n3,5,1,0,10,10,1,2,1\n")
+    tracks = {0: [(1, walker), (2, static), (3, car)], 1: [(1, walker), (2, near_static)],
+              2: [(1, walker), (2, static)]}
+    scores = mot_summary(tracks, path, 3)
+    # by hand: the walker matched on all 3 frames; the static person's track taken out on all
+    # 3 (class 7, then 8 with consider 0, then 12); the car's a false positive; frame 3's person
+    # on a vehicle (IoU 0.82 with the walker's box) takes no box, the walker's row wins it
+    assert (scores["matches"], scores["false_positives"], scores["misses"]) == (3, 1, 0)
+    assert scores["track_boxes"] == 4 and scores["track_ids"] == 2
+    assert scores["mota"] == pytest.approx(1 - 1 / 3) and scores["idf1"] == pytest.approx(6 / 7)
+
+
 def test_the_metrics_agree_with_py_motmetrics() -> None:
     mm = pytest.importorskip("motmetrics")
     rng = np.random.default_rng(3)
@@ -561,6 +584,36 @@ def test_a_class_column_that_holds_no_motchallenge_class_is_refused(tmp_path,
     assert result.stderr.startswith(f"vtrack: error: {gt} line 1: column 8 is -1, not a "
                                     "MOTChallenge class")
     assert len(result.stderr.splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
+def test_a_run_takes_its_track_boxes_on_distractors_out_of_the_score(tmp_path,
+                                                                      clip_factory) -> None:
+    """Probe 51c: with one of the scene's four targets marked a static person (class 7) in
+    gt.txt, vtrack run counted every box of the track following it as a false positive. Its
+    run.json now scores its tracks.csv as TrackEval does, those boxes taken out."""
+    from vtrack.evaluate.groundtruth import read_mot_counting
+
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{row.rsplit(',', 2)[0]},{7 if row.split(',')[1] == '2' else 1},1\n"
+                          for row in clip.mot.read_text().splitlines()))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    tracks: dict[int, list[tuple[int, Box]]] = {}
+    with open(out / "tracks.csv", newline="") as handle:
+        for row in csv.DictReader(handle):
+            box = Box(*(float(row[k]) for k in ("x", "y", "w", "h")))
+            tracks.setdefault(int(row["frame"]) - 1, []).append((int(row["id"]), box))
+    truth = read_mot_counting(gt)
+    metrics = json.loads((out / "run.json").read_text())["metrics"]
+    expected = evaluate_mot(truth.boxes, tracks, MULTI_FRAMES, truth.distractors)
+    for key, value in expected.items():
+        assert metrics[key] == pytest.approx(value, rel=1e-9), key
+    counted = evaluate_mot(truth.boxes, tracks, MULTI_FRAMES)  # the static person's track kept
+    assert metrics["false_positives"] + 30 < counted["false_positives"]
+    assert metrics["track_boxes"] + 30 < sum(len(boxes) for boxes in tracks.values())
 
 
 @pytest.mark.parametrize("start", [0, 40])

@@ -394,15 +394,18 @@ class _SingleTargetRows:
 
 class _MultiTargetRows:
     """Formats multi-target results as MOTChallenge rows (1-based frames) plus ``state``; with
-    ground truth (``gt``, MOTChallenge boxes by 0-based frame) it scores the confirmed boxes as
-    the run goes (:class:`~vtrack.evaluate.mot.MotScore`): no boxes of past frames are kept.
+    ground truth (``gt``, MOTChallenge boxes by 0-based frame; ``distractors``, the rows that
+    take track boxes on distractors out) it scores the confirmed boxes as the run goes
+    (:class:`~vtrack.evaluate.mot.MotScore`): no boxes of past frames are kept.
     A frame is scored once the next frame's rows are written (until then :meth:`undo` may
     withdraw it); :meth:`mot` scores the rest."""
 
     columns = MOT_COLUMNS
 
-    def __init__(self, gt: Mapping[int, Sequence[tuple[int, Box]]] | None, start: int) -> None:
+    def __init__(self, gt: Mapping[int, Sequence[tuple[int, Box]]] | None, start: int,
+                 distractors: Mapping[int, Sequence[tuple[Box, bool]]] | None = None) -> None:
         self.gt = gt
+        self.distractors = distractors or {}
         self.score: MotScore | None = None
         if gt is not None:
             from vtrack.evaluate.mot import MotScore  # SciPy: only for MOT ground truth
@@ -443,7 +446,7 @@ class _MultiTargetRows:
             index, boxes = self._pending
             self._score_until(index)
             assert self.score is not None and self.gt is not None
-            self.score.add(self.gt.get(index, ()), boxes)
+            self.score.add(self.gt.get(index, ()), boxes, self.distractors.get(index, ()))
             self._next = index + 1
             self._pending = None
 
@@ -475,6 +478,9 @@ class _Resolved:
     span: _Span = field(default_factory=_Span)
     #: What the run warns of before it tracks (ground truth whose every row is ignored).
     warnings: list[str] = field(default_factory=list)
+    #: The MOTChallenge rows that take track boxes on distractors out of the score
+    #: (:attr:`~vtrack.evaluate.groundtruth.MotTruth.distractors`).
+    mot_distractors: dict[int, list[tuple[Box, bool]]] = field(default_factory=dict)
 
 
 @dataclass
@@ -643,7 +649,8 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
     The wait for a ``--stream`` FIFO's reader is cut short by a signal: the run then goes on
     without the stream, its signal noted (the frame loop ends at once, interrupted)."""
     pipeline = resolved.pipeline
-    formatter = _MultiTargetRows(resolved.mot_gt, resolved.start) if pipeline.multi_target \
+    formatter = _MultiTargetRows(resolved.mot_gt, resolved.start, resolved.mot_distractors) \
+        if pipeline.multi_target \
         else _SingleTargetRows(pipeline.columns, resolved.gt, resolved.start)
     csv_name = "tracks.csv" if pipeline.multi_target else "track.csv"
     writers = _Writers(formatter, CsvWriter(request.out_dir / csv_name, formatter.columns))
@@ -681,10 +688,11 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     (:meth:`Source.skip_to`, which decodes up to it)."""
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
+    distractors: dict[int, list[tuple[Box, bool]]] = {}
     warnings: list[str] = []
     if request.gt_path is not None and pipeline.multi_target:
         try:
-            mot_gt, dropped = read_mot_counting(request.gt_path)
+            mot_gt, dropped, distractors = read_mot_counting(request.gt_path)
         except InputError as exc:
             raise InputError(
                 f"{exc}; {request.config.name} tracks several targets and scores them against "
@@ -728,7 +736,7 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
                      request.file_identities(), start, _Span(request.max_frames, request.max_s),
-                     warnings)
+                     warnings, distractors)
 
 
 def _refuse_unreadable(request: RunRequest) -> None:

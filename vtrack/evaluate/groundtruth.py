@@ -13,6 +13,7 @@ from collections import Counter
 from collections.abc import Iterator
 from os import PathLike
 from pathlib import Path
+from typing import NamedTuple
 
 from vtrack.errors import ConfigError, InputError
 from vtrack.geometry import Box, parse_box_text
@@ -26,6 +27,12 @@ MOT_PEDESTRIAN = 1
 #: The classes MOTChallenge's ground truth uses (MOT16/17: 1 pedestrian ... 12 reflection; MOT20
 #: adds 13 crowd); TrackEval, the official evaluation kit, refuses a file with any other.
 MOT_CLASSES = range(1, 14)
+#: The classes whose boxes TrackEval's MOT16/17 preprocessing calls distractors (2 person on
+#: vehicle, 7 static person, 8 distractor, 12 reflection): a track box matched to one is taken
+#: out before scoring, neither a match nor a false positive. (MOT20 adds 6, non-MOT vehicle; its
+#: files do not say they are MOT20's, so 6 is scored as MOT17 scores it: dropped, not a
+#: distractor.)
+MOT_DISTRACTORS = frozenset({2, 7, 8, 12})
 
 _QUOTE_MAX = 60
 
@@ -175,7 +182,9 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
     - column 7 (the "consider" flag) equal to 0 drops the row (MOTChallenge: ignore this box);
     - only in the 8- and 9-column MOT16/17/20 layout, column 8 is the class: only pedestrians
       (class 1) are kept; persons on vehicles, static persons, distractors, reflections etc. are
-      dropped. A class that is not one of MOTChallenge's (:data:`MOT_CLASSES`, e.g. the ``-1``
+      dropped (track boxes on the distractor classes are taken out of the score by
+      :class:`~vtrack.evaluate.mot.MotScore`, given :attr:`MotTruth.distractors`). A class
+      that is not one of MOTChallenge's (:data:`MOT_CLASSES`, e.g. the ``-1``
       of a MOT15 row cut to 9 columns) is an error, as in TrackEval. The 10-column layout has
       no class column and is not filtered;
     - a row whose box has ``w <= 0`` or ``h <= 0`` is dropped.
@@ -186,17 +195,30 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
     time. For ``det.txt`` files use :func:`read_mot_detections`; :func:`read_mot_counting`
     also says which rows were dropped.
     """
-    return read_mot_counting(path)[0]
+    return read_mot_counting(path).boxes
 
 
-def read_mot_counting(
-    path: str | PathLike[str],
-) -> tuple[dict[int, list[tuple[int, Box]]], Counter[str]]:
-    """:func:`read_mot`, and how many rows it dropped for each reason (``"the consider flag 0
-    in column 7"``, ``"class 7 in column 8, not pedestrian 1"``, ``"w or h <= 0"``)."""
+class MotTruth(NamedTuple):
+    """MOTChallenge ground truth as :func:`read_mot_counting` reads it."""
+
+    #: The scored boxes, as :func:`read_mot` returns them.
+    boxes: dict[int, list[tuple[int, Box]]]
+    #: How many rows were not scored, for each reason (``"the consider flag 0 in column 7"``,
+    #: ``"class 7 in column 8, not pedestrian 1"``, ``"w or h <= 0"``).
+    dropped: Counter[str]
+    #: Only for the frames holding a row of a :data:`MOT_DISTRACTORS` class: every row of that
+    #: frame with a box, ``(box, is a distractor)``, whatever its consider flag or class (what
+    #: TrackEval matches track boxes against before it takes out those on distractors).
+    distractors: dict[int, list[tuple[Box, bool]]]
+
+
+def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
+    """:func:`read_mot`, with how many rows it dropped for each reason and the rows that take
+    track boxes on distractors out of the score (:class:`MotTruth`)."""
     frames: dict[int, list[tuple[int, Box]]] = {}
     seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
     dropped: Counter[str] = Counter()
+    rows: dict[int, list[tuple[Box, bool]]] = {}  # every row with a box, for the distractors
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
@@ -207,13 +229,15 @@ def read_mot_counting(
                 f"(1-13, 1 pedestrian): {len(values)} columns are "
                 "frame,id,x,y,w,h,consider,class[,visibility]; MOT15's rows with world "
                 "coordinates have 10 (frame,id,x,y,w,h,conf,x,y,z)")
+        box = Box(*values[2:6])
+        if kind is not None and box.w > 0 and box.h > 0:
+            rows.setdefault(frame, []).append((box, kind in MOT_DISTRACTORS))
         if len(values) >= 7 and values[6] == 0:
             dropped["the consider flag 0 in column 7"] += 1
             continue
         if kind is not None and kind != MOT_PEDESTRIAN:
             dropped[f"class {kind:g} in column 8, not pedestrian {MOT_PEDESTRIAN}"] += 1
             continue
-        box = Box(*values[2:6])
         if not (box.w > 0 and box.h > 0):
             dropped["w or h <= 0"] += 1
             continue
@@ -223,7 +247,8 @@ def read_mot_counting(
             raise InputError(f"{path} line {number}: frame {frame + 1} has a second box for "
                              f"id {target} (the first is on line {first})")
         frames.setdefault(frame, []).append((target, box))
-    return dict(sorted(frames.items())), dropped
+    distractors = {f: r for f, r in sorted(rows.items()) if any(d for _, d in r)}
+    return MotTruth(dict(sorted(frames.items())), dropped, distractors)
 
 
 def all_dropped_note(path: str | PathLike[str], dropped: Counter[str]) -> str:

@@ -19,6 +19,12 @@
   ``IDF1 = 2 IDTP / (ground-truth boxes + track boxes)``, ``IDP = IDTP / track boxes``,
   ``IDR = IDTP / ground-truth boxes``.
 
+Before a frame is scored, track boxes on a **distractor** (a ground-truth row of class 2, 7, 8 or
+12: a person on a vehicle, a static person, a distractor, a reflection) are taken out, as
+TrackEval's MOT16/17 preprocessing does: the frame's track boxes are assigned to all its
+ground-truth rows (any class or consider flag; maximum total IoU, pairs of IoU >= 0.5) and those
+assigned to a distractor are neither matches nor false positives.
+
 These are the definitions py-motmetrics implements; the assignments are SciPy's
 ``linear_sum_assignment`` (the solver py-motmetrics uses), so py-motmetrics itself (which calls
 ``np.asfarray``, gone in NumPy 2) is not needed.
@@ -34,7 +40,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from vtrack.evaluate.groundtruth import read_mot
+from vtrack.evaluate.groundtruth import read_mot_counting
 from vtrack.geometry import Box, iou
 
 #: A ground-truth box and a track box may be matched when their IoU is at least this.
@@ -46,6 +52,9 @@ MOSTLY_LOST = 0.2
 
 #: Boxes per frame: ``{0-based frame: [(id, box), ...]}`` (ground truth or tracker output).
 FrameBoxes = Mapping[int, Sequence[tuple[int, Box]]]
+#: A frame's ground-truth rows of every class, ``[(box, is a distractor), ...]``
+#: (:attr:`~vtrack.evaluate.groundtruth.MotTruth.distractors` holds them by frame).
+TruthRows = Sequence[tuple[Box, bool]]
 
 
 def _iou_matrix(a: Sequence[Box], b: Sequence[Box]) -> np.ndarray:
@@ -66,18 +75,34 @@ def _ratio(numerator: float, denominator: float) -> float | None:
     return numerator / denominator if denominator > 0 else None
 
 
-def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int) -> dict[str, Any]:
+def _off_distractors(hyps: Sequence[tuple[int, Box]],
+                     rows: TruthRows) -> Sequence[tuple[int, Box]]:
+    """``hyps`` without the boxes TrackEval takes out: those a maximum-IoU assignment to the
+    frame's ground-truth ``rows`` (pairs of IoU >= 0.5) gives to a distractor."""
+    if not hyps or not any(d for _, d in rows):
+        return hyps
+    overlap = _iou_matrix([b for b, _ in rows], [b for _, b in hyps])
+    overlap[overlap < MATCH_IOU] = 0.0
+    out = {int(c) for r, c in zip(*linear_sum_assignment(-overlap), strict=True)
+           if overlap[r, c] > 0 and rows[r][1]}
+    return [h for j, h in enumerate(hyps) if j not in out]
+
+
+def evaluate_mot(gt: FrameBoxes, tracks: FrameBoxes, frames: int,
+                 distractors: Mapping[int, TruthRows] | None = None) -> dict[str, Any]:
     """CLEAR MOT and identity measures of ``tracks`` against ``gt`` over frames ``0..frames-1``.
 
-    Boxes of other frames are ignored. Returns ``mota``, ``motp`` (mean IoU of matches),
-    ``idf1``, ``idp``, ``idr`` (floats; None when undefined: no ground-truth box, no match, no
-    box at all), ``id_switches``, ``false_positives``, ``misses``, ``matches``,
+    Boxes of other frames are ignored. ``distractors`` (by frame, as
+    :attr:`~vtrack.evaluate.groundtruth.MotTruth.distractors`) takes the track boxes on
+    distractors out of the score (see the module docstring). Returns ``mota``, ``motp`` (mean
+    IoU of matches), ``idf1``, ``idp``, ``idr`` (floats; None when undefined: no ground-truth
+    box, no match, no box at all), ``id_switches``, ``false_positives``, ``misses``, ``matches``,
     ``mostly_tracked``, ``partially_tracked``, ``mostly_lost``, ``gt_ids``, ``gt_boxes``,
     ``track_ids``, ``track_boxes`` and ``frames`` (ints). See the module docstring.
     """
     score = MotScore()
     for frame in range(frames):
-        score.add(gt.get(frame, ()), tracks.get(frame, ()))
+        score.add(gt.get(frame, ()), tracks.get(frame, ()), (distractors or {}).get(frame, ()))
     return score.result(frames)
 
 
@@ -95,8 +120,12 @@ class MotScore:
         self.track_boxes: Counter[int] = Counter()
         self.pair_frames: Counter[tuple[int, int]] = Counter()  # frames a pair overlaps (IDF1)
 
-    def add(self, objects: Sequence[tuple[int, Box]], hyps: Sequence[tuple[int, Box]]) -> None:
-        """Score the next frame: its ground truth ``objects`` and tracks ``hyps``, (id, box)."""
+    def add(self, objects: Sequence[tuple[int, Box]], hyps: Sequence[tuple[int, Box]],
+            rows: TruthRows = ()) -> None:
+        """Score the next frame: its ground truth ``objects`` and tracks ``hyps``, (id, box);
+        ``rows``, the frame's ground-truth rows of every class when one is a distractor, takes
+        the track boxes on distractors out first."""
+        hyps = _off_distractors(hyps, rows)
         oids = [o for o, _ in objects]
         hids = [h for h, _ in hyps]
         self.present.update(oids)
@@ -195,7 +224,9 @@ def mot_summary(
 
     ``tracks`` is ``{0-based frame: [(track id, box), ...]}``, ``frames`` the number of frames
     the run processed: ground truth beyond them is not scored. The ground truth is read with
-    :func:`~vtrack.evaluate.groundtruth.read_mot` (ignored rows and non-pedestrian classes
-    dropped); an unreadable file raises :class:`~vtrack.errors.InputError`.
+    :func:`~vtrack.evaluate.groundtruth.read_mot_counting` (ignored rows and non-pedestrian
+    classes dropped, track boxes on distractors taken out); an unreadable file raises
+    :class:`~vtrack.errors.InputError`.
     """
-    return evaluate_mot(read_mot(gt_path), tracks, frames)
+    truth = read_mot_counting(gt_path)
+    return evaluate_mot(truth.boxes, tracks, frames, truth.distractors)
