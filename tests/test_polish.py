@@ -91,6 +91,26 @@ def test_stages_of_a_config_show_the_values_it_sets() -> None:
     assert "sets" not in vtrack("stages", "robust_model").stdout
 
 
+def test_stages_of_several_configs_show_what_each_sets_in_a_stage_they_share() -> None:
+    """Probe 51c: ``vtrack stages s4 fixed_camera`` (or ``background fixed_camera``) listed a
+    shared stage once, with the first name's values only: fixed_camera's MOG2 background, its
+    shadows and its 200-pixel blobs were nowhere, though --help promises a config's values."""
+    def line(out: str, stage: str, param: str) -> str:
+        block = out.split(f"\n{stage}: ", 1)[1] if not out.startswith(f"{stage}: ") else out
+        return next(x for x in block.splitlines() if x.strip().startswith(f"{param} ("))
+
+    both = vtrack("stages", "s4", "fixed_camera").stdout
+    assert line(both, "background", "method").endswith("; fixed_camera sets 'mog2'")
+    assert line(both, "blobs", "min_area").endswith("; fixed_camera sets 200")
+    assert line(both, "kalman", "model").endswith("; s4 sets 'gravity'")
+    assert [x for x in both.splitlines() if not x.startswith(" ")].count(
+        "blobs: connected components of the foreground -> detections (centroid, box, area, grey)"
+    ) == 1
+    named = vtrack("stages", "background", "fixed_camera", "fixed_camera").stdout
+    assert line(named, "background", "shadows").endswith("; fixed_camera sets true")
+    assert named.count("; fixed_camera sets 'mog2'") == 1
+
+
 def test_a_missing_input_is_named_before_what_else_is_missing(tmp_path: Path) -> None:
     line = one_error_line(vtrack("run", "nothere.mp4", cwd=tmp_path))
     assert line == "vtrack: error: nothere.mp4: no such file"

@@ -54,43 +54,45 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 """
 
 
-def _plain(name: str, cls: type, config: str = "", settings: dict | None = None) -> list[str]:
-    """One stage's plain-text entry: its summary, a line per parameter, its CSV columns; with a
-    config's ``settings``, each parameter the config sets to other than its default says so."""
+def _plain(name: str, cls: type, sets: list[tuple[str, dict]] | None = None) -> list[str]:
+    """One stage's plain-text entry: its summary, a line per parameter, its CSV columns; with
+    configs' ``sets`` (config name, its settings of this stage), each parameter a config sets
+    to other than its default says so, for every config that does."""
     lines = [f"{name}: {cls.summary}"]
     for param in cls.params:
         line = f"    {param.describe()}"
-        value = (settings or {}).get(param.name, param.default)
-        if value != param.default:
-            line += f"; {config} sets {param.value_text(value)}"
+        for config, settings in sets or ():
+            value = settings.get(param.name, param.default)
+            if value != param.default:
+                line += f"; {config} sets {param.value_text(value)}"
         lines.append(line)
     if cls.columns:
         lines.append(f"    csv columns: {', '.join(cls.columns)}")
     return lines
 
 
-def _selected(names: tuple[str, ...]) -> list[tuple[str, str, dict | None]]:
-    """The stages ``names`` ask for, as (stage, config, its settings there): a stage by its
-    name (no config), a shipped config as its chain. ConfigError for a name that is
-    neither."""
+def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
+    """The stages ``names`` ask for, in the order first named (a stage by its name, a shipped
+    config as its chain), each with the settings of every named config holding it (config
+    name, settings). ConfigError for a name that is neither."""
     from vtrack.config import load_config, shipped_configs
     from vtrack.errors import ConfigError
     from vtrack.stages.base import all_stages
 
     known, configs = all_stages(), shipped_configs()
-    chosen: list[tuple[str, str, dict | None]] = []
+    chosen: dict[str, list[tuple[str, dict]]] = {}
     for name in names:
         if name in known:
-            chosen.append((name, "", None))
+            chosen.setdefault(name, [])
         elif name in configs:
-            chosen += [(stage, name, settings) for stage, settings in load_config(name).stages]
+            if any(name == config for sets in chosen.values() for config, _ in sets):
+                continue  # named twice: listed once
+            for stage, settings in load_config(name).stages:
+                chosen.setdefault(stage, []).append((name, settings))
         else:
             raise ConfigError(f"{name}: not a stage or a shipped config (stages: "
                               f"{', '.join(known)}; configs: {', '.join(sorted(configs))})")
-    first: dict[str, tuple[str, str, dict | None]] = {}
-    for entry in chosen:  # a stage named twice is listed once, as first named
-        first.setdefault(entry[0], entry)
-    return list(first.values())
+    return chosen
 
 
 def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
@@ -103,8 +105,8 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
     stages = all_stages()
     if names:
         lines = []
-        for name, config, settings in _selected(names):
-            lines += _plain(name, stages[name], config, settings)
+        for name, sets in _selected(names).items():
+            lines += _plain(name, stages[name], sets)
         return "\n".join(lines)
     lines: list[str] = []
     if markdown:
