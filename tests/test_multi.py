@@ -616,6 +616,34 @@ def test_a_run_takes_its_track_boxes_on_distractors_out_of_the_score(tmp_path,
     assert metrics["track_boxes"] + 30 < sum(len(boxes) for boxes in tracks.values())
 
 
+def test_ground_truth_that_ends_before_the_run_says_what_it_costs(tmp_path,
+                                                                   clip_factory) -> None:
+    """Probe 51c: MOT ground truth of a clip's first 60 frames given to a run of all 150 made
+    every track box after frame 60 a false positive (MOTA below 0) without a word, where
+    single-target ground truth that is too short is a warning. Now it is one too, counting
+    them; full ground truth gives none."""
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{row}\n" for row in clip.mot.read_text().splitlines()
+                          if int(row.split(",")[0]) <= 60))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    with open(out / "tracks.csv", newline="") as handle:
+        after = sum(int(row["frame"]) > 60 for row in csv.DictReader(handle))
+    note = (f"{gt}: ground truth ends at frame 60 (MOTChallenge's 1-based numbering, as "
+            f"tracks.csv's), before the run's last frame 150; the {after} track boxes after it "
+            "count as false positives")
+    assert after > 100 and result.stderr == f"vtrack: warning: {note}\n"
+    record = json.loads((out / "run.json").read_text())
+    assert record["warnings"] == [note] and record["metrics"]["false_positives"] >= after
+    full = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt",
+                                     str(clip.mot), "--no-video", "--out", str(tmp_path / "b"),
+                                     "--quiet"])
+    assert full.exit_code == 0 and full.stderr == ""
+
+
 @pytest.mark.parametrize("start", [0, 40])
 def test_a_run_scores_as_it_goes_what_its_tracks_csv_scores(tmp_path, clip_factory,
                                                            start) -> None:

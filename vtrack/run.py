@@ -413,6 +413,10 @@ class _MultiTargetRows:
             self.score = MotScore()
         self._start = self._next = start  # the first frame, the next frame to score
         self._pending: tuple[int, list[tuple[int, Box]]] | None = None
+        #: The last frame holding a ground-truth row (-1: none), and how many track boxes
+        #: scored after it (each a false positive: the warning of :meth:`after_truth_note`).
+        self.truth_end = max((*(gt or {}), *self.distractors), default=-1)
+        self.boxes_after_truth = 0
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         rows, boxes = [], []
@@ -447,8 +451,21 @@ class _MultiTargetRows:
             self._score_until(index)
             assert self.score is not None and self.gt is not None
             self.score.add(self.gt.get(index, ()), boxes, self.distractors.get(index, ()))
+            if index > self.truth_end:
+                self.boxes_after_truth += len(boxes)
             self._next = index + 1
             self._pending = None
+
+    def after_truth_note(self, gt_path: object, frames: int) -> str | None:
+        """The warning for ground truth that ends before the run's last frame (of ``frames``
+        from the start) while track boxes were scored after it, as false positives; None
+        otherwise, or when no row was kept (that has its own warning)."""
+        if not self.boxes_after_truth or not self.gt:
+            return None
+        boxes = plural(self.boxes_after_truth, "track box", "track boxes")
+        return (f"{gt_path}: ground truth ends at frame {self.truth_end + 1} (MOTChallenge's "
+                f"1-based numbering, as tracks.csv's), before the run's last frame "
+                f"{self._start + frames}; the {boxes} after it count as false positives")
 
     def _score_until(self, end: int) -> None:
         """Score the frames from the next one to ``end`` (excluded) as frames without tracks."""
@@ -996,6 +1013,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
         summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
+        note = formatter.after_truth_note(request.gt_path, frames)
+        if note is not None and status == STATUS_COMPLETE:
+            summary.warnings.append(note)
         past = [f for f in resolved.mot_gt if f >= start + frames]
         if past and status == STATUS_COMPLETE and not resolved.span.given:
             summary.warnings.append(
