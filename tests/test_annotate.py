@@ -302,6 +302,23 @@ def test_a_multi_target_frame_counts_its_tracks_and_explains_the_id_colours():
     assert without_truth.legend.rows == ("track id",)
 
 
+def test_a_multi_target_frame_is_numbered_as_its_tracks_csv_rows() -> None:
+    """Probe 51c: a multi-target video wrote 'frame 30' on the frame whose boxes tracks.csv
+    (1-based, MOTChallenge) lists as frame 31, while its frame 30 rows held the boxes of the
+    frame before. The label is now tracks.csv's number: frame index 30 reads 'frame 31', as a
+    single-target frame index 31 does (track.csv is 0-based)."""
+    def label(annotator: Annotator, index: int) -> np.ndarray:
+        buf = blank()
+        annotator.draw(buf, result(index, box=None))
+        legend = annotator.legend
+        assert legend is not None
+        return planes(buf)[0][legend.y0:legend.y0 + legend.row, :legend.y.shape[1]].copy()
+
+    multi = label(Annotator(W, H, multi_target=True), 30)
+    assert np.array_equal(multi, label(Annotator(W, H), 31))
+    assert not np.array_equal(multi, label(Annotator(W, H), 30))
+
+
 def test_no_track_colour_passes_for_the_ground_truths_green() -> None:
     """Tracks 3 and 5 were drawn in (0, 255, 128) and (128, 255, 0): on a multi-target run
     with ground truth they could not be told from its green boxes."""

@@ -9,7 +9,8 @@ What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack
 is a ``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
 confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), the
 state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box), and
-bottom-left the frame number (0-based, ``track.csv``'s ``frame``) above a legend of the colours.
+bottom-left the frame number (``track.csv``'s ``frame``, 0-based; for multi-target results
+``tracks.csv``'s, 1-based as MOTChallenge numbers frames) above a legend of the colours.
 The prediction (where the next search starts, single target) is a thin box. The legend lists
 only what this run has drawn so far (a tracker without a search window has no such row; the
 ``lost`` row appears with the first lost frame), so it differs between trackers.
@@ -288,7 +289,8 @@ class Annotator:
             if not drawn <= self._drawn:
                 self._drawn |= drawn
                 self.legend = Legend(*self._size, self.font_scale, self._drawn)
-            self.legend.draw(canvas, result.index)
+            # the number of the frame's rows in the run's CSV: tracks.csv's are 1-based (MOT)
+            self.legend.draw(canvas, result.index + 1 if self.multi_target else result.index)
 
     def _draw_single(self, canvas: Canvas, result: FrameResult) -> set[str]:
         """A single-target frame; returns the legend rows of what it drew."""
