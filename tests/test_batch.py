@@ -4,6 +4,7 @@ Dask, and the one-line errors."""
 from __future__ import annotations
 
 import csv
+import json
 import multiprocessing
 import os
 import shutil
@@ -471,3 +472,29 @@ def test_a_replaced_detections_file_runs_again(tmp_path: Path, clip_factory: Cli
     assert replaced.exit_code == 0, replaced.output
     assert "not run again" not in replaced.output
     assert tracks.read_text() != before
+
+
+def test_a_motchallenge_sequence_folder_is_an_input(tmp_path: Path,
+                                                    clip_factory: ClipFactory) -> None:
+    """Probe 51c: a MOTChallenge sequence (SEQ/img1/000001.jpg, SEQ/gt/gt.txt) was no input:
+    `vtrack batch` of a folder of them said 'no inputs (... sequence folders with an img/
+    folder)' though its --help names gt/gt.txt, and `vtrack run SEQ` 'no images in the folder
+    or its img/'. img1/ is now a sequence's image folder as img/ is, and SEQ/img1 is SEQ."""
+    clip = clip_factory("multi", frames=60, fmt="images")
+    seq = tmp_path / "MOT" / "SEQ-01"
+    shutil.copytree(clip.path / "img", seq / "img1")
+    (seq / "gt").mkdir()
+    shutil.copy(clip.mot, seq / "gt" / "gt.txt")
+    out = tmp_path / "out"
+    result = batch(str(seq.parent), "-c", "s3", "--no-video", "-j", "1", "-o", str(out), "-q")
+    assert result.exit_code == 0, result.output
+    assert summary(out)[("SEQ-01", "s3")]["status"] == "complete"
+    record = json.loads((out / "SEQ-01" / "s3" / "run.json").read_text())
+    assert record["request"]["gt"] == str(seq / "gt" / "gt.txt")
+    assert record["metrics"]["gt_boxes"] > 100 and record["metrics"]["mota"] > 0.5
+    for given in (seq, seq / "img1"):
+        ran = CliRunner().invoke(main, ["run", str(given), "-c", "s3", "--no-video", "-q",
+                                        "-o", str(tmp_path / given.name)])
+        assert ran.exit_code == 0, ran.output
+        record = json.loads((tmp_path / given.name / "run.json").read_text())
+        assert record["input"]["name"] == "SEQ-01" and record["frames"] == 60

@@ -12,6 +12,7 @@ from pathlib import Path
 from vtrack.errors import InputError
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
 from vtrack.io.files import folder_name
+from vtrack.io.sidecar import sequence_images
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
 SUMMARY_FILE = "summary.csv"
@@ -114,8 +115,9 @@ def _unusable(path: Path) -> BatchInput:
 
 
 def is_sequence_folder(path: Path) -> bool:
-    """An OTB-style image-sequence folder: it holds an ``img/`` folder."""
-    return (path / "img").is_dir()
+    """An image-sequence folder: it holds an ``img/`` folder (OTB) or ``img1/``
+    (MOTChallenge), :func:`~vtrack.io.sidecar.sequence_images`."""
+    return sequence_images(path) is not None
 
 
 def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
@@ -142,7 +144,7 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
     if not found:
         raise InputError(
-            f"{folder}: no inputs (video files or sequence folders with an img/ folder)"
+            f"{folder}: no inputs (video files or sequence folders with an img/ or img1/ folder)"
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:

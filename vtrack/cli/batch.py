@@ -146,9 +146,9 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     of `vtrack run`) and DIR/summary.csv.
 
     Inputs are video files (ground truth beside them: name.gt.txt or name.txt, MOTChallenge
-    name.mot.txt) and sequence folders holding img/ (ground truth inside: groundtruth_rect.txt
-    or groundtruth.txt, MOTChallenge groundtruth_mot.txt as vtrack scene writes it, gt.txt or
-    gt/gt.txt). Without ground truth, single-target configs
+    name.mot.txt) and sequence folders holding img/ or MOTChallenge's img1/ (ground truth
+    inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge groundtruth_mot.txt as vtrack
+    scene writes it, gt.txt or gt/gt.txt). Without ground truth, single-target configs
     start from the box in name.init.txt (init.txt in a sequence folder). Results already
     complete are not run again (resume) unless --force; results of runs with other settings are
     replaced only with --overwrite. A failing input does not stop the others;

@@ -26,6 +26,7 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
+from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_images
 from vtrack.io.source import InputInfo, Source
 
 IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
@@ -54,9 +55,10 @@ def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
 
 
 def list_images(folder: Path) -> list[Path]:
-    """The images of a sequence folder in frame order (``folder/img/`` if it exists; hidden
-    files such as macOS ``._0001.jpg`` are not images)."""
-    where = folder / "img" if (folder / "img").is_dir() else folder
+    """The images of a sequence folder in frame order (those of its ``img/`` or ``img1/`` if
+    it has one, :func:`sequence_images`; hidden files such as macOS ``._0001.jpg`` are not
+    images)."""
+    where = sequence_images(folder) or folder
     files = [
         p for p in where.iterdir()
         if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
@@ -112,7 +114,8 @@ class ImageFolderSource(Source):
             raise InputError(f"{folder}: cannot list the folder ({os_reason(exc)})") from None
         if not self._files:
             suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
-            raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/")
+            raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ "
+                             "(img1/)")
         self._places = frame_places(self._files)
         self._skipped = 0
         self._missing = 0  # of those, places no image is numbered for
@@ -120,7 +123,7 @@ class ImageFolderSource(Source):
         height, width = self._first.shape[:2]
         fps = fps or DEFAULT_FPS
         name = root.resolve().name
-        if name == "img":  # given the img/ folder itself: name it after the sequence
+        if name in SEQUENCE_IMAGES:  # given the img/ folder itself: name it after the sequence
             name = root.resolve().parent.name
         super().__init__(
             InputInfo(

@@ -20,7 +20,16 @@ from vtrack.io.specs import is_url
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
-SEQUENCE_IMAGES = "img"  # an OTB sequence folder's images: SEQ/img and SEQ share SEQ/init.txt
+#: The folder of a sequence's images, first found wins: OTB's SEQ/img, MOTChallenge's SEQ/img1.
+#: SEQ/img (or img1) and SEQ are one input: they share SEQ/init.txt and SEQ's name.
+SEQUENCE_IMAGES = ("img", "img1")
+
+
+def sequence_images(folder: Path) -> Path | None:
+    """The folder of ``folder``'s images when it is a sequence folder (it holds one of
+    :data:`SEQUENCE_IMAGES`: OTB's ``img/``, MOTChallenge's ``img1/``),
+    else None."""
+    return next((folder / n for n in SEQUENCE_IMAGES if (folder / n).is_dir()), None)
 
 
 def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
@@ -31,7 +40,7 @@ def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
     path = Path(input_spec)
     if path.is_dir():
         named = path if path.name not in ("", "..") else path.resolve()  # ``.``, ``..``
-        if named.name == SEQUENCE_IMAGES:  # SEQ/img: the sequence's box, which run SEQ reads
+        if named.name in SEQUENCE_IMAGES:  # SEQ/img: the sequence's box, which run SEQ reads
             return named.parent / SEQUENCE_SIDECAR
         return path / SEQUENCE_SIDECAR
     return path.with_name(VIDEO_SIDECAR.format(path.stem))
