@@ -43,6 +43,24 @@ def test_motchallenge_ground_truth_for_one_target_names_the_multi_target_configs
     assert "s3" in line and "s4_multi" in line
 
 
+@pytest.mark.parametrize("columns", [6, 7, 8])
+def test_motchallenge_rows_of_fewer_columns_for_one_target_are_named_as_such(
+        clip_factory: ClipFactory, tmp_path: Path, columns: int) -> None:
+    """Probe 51c: MOTChallenge ground truth of 8 columns (frame,id,x,y,w,h,consider,class, which
+    multi-target configs read) was taken by a single-target config as VOT polygons (AUC 0,
+    'more boxes than frames' only); of 6 or 7 it was 'expected 4 or 8 numbers'. Each is now
+    named MOTChallenge ground truth, with every multi-target config (fixed_camera too)."""
+    clip = clip_factory("multi", width=W, height=H, frames=60)
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(",".join(row.split(",")[:columns]) + "\n"
+                          for row in clip.mot.read_text().splitlines()))
+    out = tmp_path / "out"
+    line = one_error_line(vtrack("run", str(clip.path), "-c", "s4", "--gt", str(gt),
+                                 "--no-video", "-o", str(out)))
+    assert line.startswith(f"vtrack: error: {gt} line 1: this is MOTChallenge ground truth")
+    assert line.endswith("(--config fixed_camera, s3 or s4_multi)") and not out.exists()
+
+
 def test_a_file_named_like_a_shipped_config_does_not_shadow_it(
         clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     clip = clip_factory("smooth", width=W, height=H, frames=10)

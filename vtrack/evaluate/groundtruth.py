@@ -93,6 +93,18 @@ class MultiTargetTruthError(InputError):
     """Many targets' ground truth (MOTChallenge) where one target's boxes were expected."""
 
 
+def _is_mot_row(values: list[float]) -> bool:
+    """Whether a line's numbers are a MOTChallenge row (Milan et al. 2016, MOT16 sec. 3.3):
+    6 to 10 numbers, the first two (frame, id) whole. 8 numbers are a VOT polygon unless its
+    last two are a consider flag (0 or 1) and a MOTChallenge class (frame,id,x,y,w,h,consider,
+    class) and the frame is >= 1."""
+    if not 6 <= len(values) <= 10 or not all(v.is_integer() for v in values[:2]):
+        return False
+    if len(values) != 8:
+        return True
+    return values[0] >= 1 and values[6] in (0, 1) and values[7] in MOT_CLASSES
+
+
 def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent.
 
@@ -114,12 +126,11 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             values = [float(t) for t in tokens]
         except ValueError:
             values = []
-        if len(values) in (9, 10) and values[0] == int(values[0]) and values[1] == int(values[1]):
-            # MOTChallenge: frame,id,x,y,w,h,conf,x,y,z (Milan et al. 2016, MOT16 sec. 3.3)
+        if _is_mot_row(values):
             raise MultiTargetTruthError(
                 f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
                 "for many targets; a single-target config reads x,y,w,h per frame: use a "
-                "multi-target config (--config s3 or --config s4_multi)")
+                "multi-target config (--config fixed_camera, s3 or s4_multi)")
         if len(values) not in (4, 8):
             raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got {_quote(line)}")
         if any(math.isnan(v) for v in values):
