@@ -498,3 +498,36 @@ def test_a_motchallenge_sequence_folder_is_an_input(tmp_path: Path,
         assert ran.exit_code == 0, ran.output
         record = json.loads((tmp_path / given.name / "run.json").read_text())
         assert record["input"]["name"] == "SEQ-01" and record["frames"] == 60
+
+
+def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(tmp_path: Path,
+                                                                 clip_factory: ClipFactory) -> None:
+    """Probe 51c: a MOTChallenge sequence's frame rate is in its seqinfo.ini (frameRate=25);
+    its frames were timed at 30 fps whatever it said (time_s, the annotated video's rate, a
+    --frames 2s span). It is read now, --fps still wins, and a frameRate that is no rate is
+    one line naming the file."""
+    clip = clip_factory("multi", frames=60, fmt="images")
+    seq = tmp_path / "SEQ-02"
+    shutil.copytree(clip.path / "img", seq / "img1")
+    info = seq / "seqinfo.ini"
+    info.write_text("[Sequence]\nname=SEQ-02\nimDir=img1\nframeRate=25\nseqLength=60\n")
+
+    def run(*args: str) -> Result:
+        return CliRunner().invoke(main, ["run", *args, "-c", "s3", "--no-video", "-q", "-y",
+                                         "-o", str(tmp_path / "out")])
+
+    for given, extra, fps in ((seq, (), 25.0), (seq / "img1", (), 25.0),
+                              (seq, ("--fps", "10"), 10.0)):
+        result = run(str(given), *extra)
+        assert result.exit_code == 0, result.output
+        record = json.loads((tmp_path / "out" / "run.json").read_text())
+        assert record["input"]["fps"] == fps and record["input"]["duration_s"] == 60 / fps
+    result = batch(str(tmp_path), "-c", "s3", "--no-video", "-j", "1", "-o", str(tmp_path / "b"),
+                   "-q")
+    assert result.exit_code == 0, result.output
+    assert json.loads((tmp_path / "b" / "SEQ-02" / "s3" / "run.json").read_text()
+                      )["input"]["fps"] == 25.0
+    info.write_text("[Sequence]\nframeRate=fast\n")
+    assert one_error_line(run(str(seq))) == (
+        f"vtrack: error: {info}: frameRate must be a number > 0, got 'fast' (--fps N gives the "
+        "sequence's frame rate instead)")

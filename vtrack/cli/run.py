@@ -66,9 +66,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
               default="bgr24", show_default=True, help="Pixel format of --raw input.")
 @click.option("--fps", type=float, default=None,
-              help="Frame rate of --raw input or an image folder (default 30): time_s = frame "
-                   "index / fps. Refused for a video file, whose frames carry their own "
-                   "timestamps.")
+              help="Frame rate of --raw input or an image folder (default 30; a MOTChallenge "
+                   "sequence's seqinfo.ini frameRate): time_s = frame index / fps. Refused "
+                   "for a video file, whose frames carry their own timestamps.")
 @click.option("--format", "-f", "input_format", metavar="NAME", default=None,
               help="FFmpeg input format, for what probing cannot decide (as ffmpeg -f: "
                    "mpegts, h264, mjpeg, rtsp ...).")

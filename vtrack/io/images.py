@@ -14,6 +14,8 @@ a warning, and ground truth stays aligned.
 from __future__ import annotations
 
 import bisect
+import configparser
+import math
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,6 +28,7 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
+from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_images
 from vtrack.io.source import InputInfo, Source
 
@@ -103,6 +106,37 @@ def read_image(path: Path) -> np.ndarray:
         raise InputError(f"{path}: not an image FFmpeg can decode ({reason})") from None
 
 
+#: A MOTChallenge sequence's description, beside its img1/: ``[Sequence]`` ``frameRate=25`` ...
+SEQUENCE_INFO = "seqinfo.ini"
+
+
+def sequence_fps(folder: Path) -> float | None:
+    """The frame rate a MOTChallenge sequence's :data:`SEQUENCE_INFO` gives (its
+    ``frameRate``), for the sequence folder or its ``img1/`` (``folder``); None when there is no
+    such file or it gives none. InputError naming the file when it cannot be read or its
+    ``frameRate`` is not a number > 0."""
+    path = (folder.parent if folder.resolve().name in SEQUENCE_IMAGES else folder) / SEQUENCE_INFO
+    if not path.is_file():
+        return None
+    parser = configparser.ConfigParser(interpolation=None)
+    try:
+        parser.read_string(read_text_bounded(path, SIDECAR_BYTES, "sequence description"))
+    except configparser.Error as exc:
+        first = str(exc).splitlines()[0]
+        raise InputError(f"{path}: not a MOTChallenge seqinfo.ini ({first})") from None
+    text = parser.get("Sequence", "frameRate", fallback=None)
+    if text is None:
+        return None
+    try:
+        fps = float(text)
+    except ValueError:
+        fps = math.nan
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"{path}: frameRate must be a number > 0, got {text!r} (--fps N "
+                         "gives the sequence's frame rate instead)")
+    return fps
+
+
 class ImageFolderSource(Source):
     """The images of a folder as frames, in natural name order."""
 
@@ -121,7 +155,7 @@ class ImageFolderSource(Source):
         self._missing = 0  # of those, places no image is numbered for
         self._first = read_image(self._files[0])
         height, width = self._first.shape[:2]
-        fps = fps or DEFAULT_FPS
+        fps = fps or sequence_fps(root) or DEFAULT_FPS
         name = root.resolve().name
         if name in SEQUENCE_IMAGES:  # given the img/ folder itself: name it after the sequence
             name = root.resolve().parent.name
