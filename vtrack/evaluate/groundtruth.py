@@ -76,6 +76,10 @@ def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
 #: Largest coordinate a ground-truth box may have: frames are at most 16384 pixels a side, so
 #: anything near this is a damaged file (and 1e308 would overflow the metrics and the drawing).
 MAX_COORDINATE = 1e6
+#: Largest frame number a MOTChallenge file may give (over a year of 30 fps video): beyond it the
+#: file is damaged, and a 300-digit number would be printed whole in the warning of frames past
+#: the input.
+MAX_MOT_FRAME = 10**9
 
 
 def _check_coordinates(path: str | PathLike[str], number: int, line: str,
@@ -155,7 +159,8 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
     """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file.
 
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
-    finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer >= 1.
+    finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer from 1
+    to :data:`MAX_MOT_FRAME`.
     Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
@@ -180,6 +185,9 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
                 f"{path} line {number}: frame must be an integer >= 1 (MOTChallenge frames are"
                 f" 1-based), got {_quote(line)}"
             )
+        if frame > MAX_MOT_FRAME:
+            raise InputError(f"{path} line {number}: frame beyond {MAX_MOT_FRAME:,} in "
+                             f"{_quote(line)}")
         yield number, int(frame) - 1, values
 
 
