@@ -13,13 +13,15 @@ Treat the files as read-only: other tests share them.
 
 from __future__ import annotations
 
+import queue
 import signal
 import subprocess
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import IO, TYPE_CHECKING
 
 import pytest
 
@@ -115,3 +117,27 @@ def one_error_line(result: Result) -> str:
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), result.stderr
     return lines[0]
+
+
+class LinesAsTheyCome:
+    """The lines of ``stream`` (a subprocess's stdout), each taken by a daemon thread as it
+    arrives. Wait for one with :meth:`next`, never with ``select()`` on the stream: a
+    ``readline()`` may take several lines into the stream's buffer, where ``select()`` does not
+    see them, and then waits for a line the process writes only once it is sent more."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        self._lines: queue.Queue[bytes] = queue.Queue()
+        threading.Thread(target=self._read, args=(stream,), daemon=True).start()
+
+    def _read(self, stream: IO[bytes]) -> None:
+        for line in stream:
+            self._lines.put(line)
+        self._lines.put(b"")
+
+    def next(self, timeout_s: float) -> bytes | None:
+        """The next line (``b""`` once the stream has ended); None when none came within
+        ``timeout_s`` seconds."""
+        try:
+            return self._lines.get(timeout=timeout_s)
+        except queue.Empty:
+            return None

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-import select
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import av
+from conftest import LinesAsTheyCome
 
 from vtrack.scenes import make_scene, write_raw, write_video
 
@@ -35,12 +35,13 @@ def test_seconds_end_when_the_last_frame_is_handled_not_when_the_input_closes(
                             stderr=subprocess.PIPE)
     assert proc.stdin is not None and proc.stdout is not None
     try:
+        lines = LinesAsTheyCome(proc.stdout)
         proc.stdin.write(raw)
         proc.stdin.flush()
         for index in range(10):
-            ready, _, _ = select.select([proc.stdout], [], [], 120)  # a bound, not a measure
-            assert ready, f"no line for frame {index}"
-            assert json.loads(proc.stdout.readline())["frame"] == index
+            line = lines.next(120)  # a bound, not a measure
+            assert line, f"no line for frame {index}"
+            assert json.loads(line)["frame"] == index
         last_line = time.perf_counter()
         # the input stays open, with nothing more in it, longer than all that came before
         time.sleep(last_line - spawned + 2)

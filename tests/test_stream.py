@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import csv
 import json
-import select
 import socket
 import subprocess
 import sys
 import threading
 from pathlib import Path
+
+from conftest import LinesAsTheyCome
 
 from vtrack.io.csvfile import format_cell
 from vtrack.io.outdir import RUN_OUTPUTS
@@ -70,16 +71,17 @@ def test_each_line_arrives_while_the_input_is_still_open(tmp_path: Path) -> None
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
     assert proc.stdin is not None and proc.stdout is not None
+    lines = LinesAsTheyCome(proc.stdout)
     try:
         for index in range(10):
             proc.stdin.write(raw[index * size:(index + 1) * size])
             proc.stdin.flush()
-            ready, _, _ = select.select([proc.stdout], [], [], 60)  # a bound, not a measure
-            assert ready, f"no line for frame {index} while the input stays open"
-            assert json.loads(proc.stdout.readline())["frame"] == index
+            line = lines.next(60)  # a bound, not a measure
+            assert line, f"no line for frame {index} while the input stays open"
+            assert json.loads(line)["frame"] == index
         proc.stdin.close()
         assert proc.wait(timeout=60) == 0
-        assert proc.stdout.read() == b""
+        assert lines.next(60) == b""
     finally:
         proc.kill()
         proc.wait()
