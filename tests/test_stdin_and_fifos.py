@@ -238,3 +238,26 @@ def test_an_empty_path_argument_is_refused(tmp_path: Path, command: list[str]) -
     assert done.returncode == 2
     assert "empty; give a folder or file name" in done.stderr.decode()
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_frames_n_ends_with_its_last_frame_while_the_pipe_stays_open(tmp_path: Path) -> None:
+    """`--frames 5` on a pipe that has sent 5 frames and stays open (a sender that waits for
+    the results) waited for a sixth frame before ending, for ever: it ends with the fifth."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=10, fps=30)
+    raw = write_clip(scene, tmp_path / "clip.bgr", fmt="raw").clip.read_bytes()
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    run = _vtrack(["-", "--raw", "160x120", "-c", "s0", "--init", box, "--frames", "5",
+                   "--no-video", "-o", str(out), "-q"], stdin=subprocess.PIPE)
+    assert run.stdin is not None
+    try:
+        run.stdin.write(raw[:len(raw) // 2])
+        run.stdin.flush()
+        assert run.wait(timeout=120) == 0  # a bound, not a measure: stdin is still open
+    finally:
+        run.kill()
+        run.wait()
+        run.stdin.close()
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "complete" and record["frames"] == 5
+    assert record["stopped_by_frames"] is True

@@ -290,11 +290,13 @@ class _Span:
         return self.ended_by_time or (self.count is not None and self.taken >= self.count)
 
     def take(self, frames: Iterator[Frame]) -> Iterator[Frame]:
-        """``frames`` up to the end of the span."""
+        """``frames`` up to the end of the span. A count ends it as its last frame is handed
+        on, without asking ``frames`` for one more (a pipe or stream may hold it back for
+        ever); a duration needs the next frame's timestamp to end."""
         end: float | None = None
-        for n, frame in enumerate(frames):
-            if self.count is not None and n >= self.count:
-                return
+        if self.count is not None and self.count <= 0:
+            return
+        for frame in frames:
             if self.seconds is not None:
                 if end is None:
                     end = frame.time_s + self.seconds - TIME_SLACK_S
@@ -303,6 +305,8 @@ class _Span:
                     return
             self.taken += 1
             yield frame
+            if self.count is not None and self.taken >= self.count:
+                return
 
 
 @dataclass
