@@ -4,12 +4,14 @@ them, stdin closed or a terminal, a --stream FIFO nobody reads, --follow where i
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import pty
 import signal
 import subprocess
 import sys
+import termios
 import time
 from pathlib import Path
 
@@ -261,3 +263,37 @@ def test_frames_n_ends_with_its_last_frame_while_the_pipe_stays_open(tmp_path: P
     record = json.loads((out / "run.json").read_text())
     assert record["status"] == "complete" and record["frames"] == 5
     assert record["stopped_by_frames"] is True
+
+
+def test_a_signal_while_a_stream_reader_stalls_is_an_interrupted_run(tmp_path: Path) -> None:
+    """SIGTERM while `--stream FIFO` waited for its reader to make room was held until
+    `--timeout` ran out (10 s by default, docker stop's whole grace), and the run then ended
+    `failed` ('its reader took nothing'): it ends interrupted at once, its outputs whole."""
+    scene = make_scene("smooth", seed=3, width=64, height=48, frames=600, fps=30)
+    raw = write_clip(scene, tmp_path / "clip.bgr", fmt="raw").clip
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # opened, never read
+    out = tmp_path / "out"
+    run = _vtrack([str(raw), "--raw", "64x48", "-c", "s0", "--init",
+                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
+                   "--stream", str(fifo), "--timeout", "3600", "-q"])
+    try:
+        # vtrack waits in select() for the reader (Linux: its main thread's wait channel)
+        # once the pipe is full: only then does the signal come
+        wchan = Path(f"/proc/{run.pid}/task/{run.pid}/wchan")
+        deadline = time.monotonic() + 120  # a bound, not a measure
+        while not (fcntl.ioctl(reader, termios.FIONREAD, b"\0" * 4) != b"\0" * 4
+                   and "poll" in wchan.read_text()):
+            assert run.poll() is None and time.monotonic() < deadline, "the pipe never filled"
+            time.sleep(0.05)
+        run.send_signal(signal.SIGTERM)
+        assert run.wait(timeout=120) == 143  # not --timeout's hour
+    finally:
+        run.kill()
+        run.wait()
+        os.close(reader)
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "interrupted" and record["error"] == "interrupted by SIGTERM"
+    rows = (out / "track.csv").read_text().splitlines()
+    assert len(rows) - 1 == record["frames"] < 600

@@ -202,6 +202,10 @@ class _Signals:
         else:
             raise Interrupted(signum)
 
+    def stopping(self) -> bool:
+        """Whether a signal held (``pending``) will end the run once the frame is out."""
+        return self.pending is not None
+
     def hold(self) -> None:
         """From now on signals are only noted (``pending``), never raised."""
         self.inside = True
@@ -860,14 +864,14 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     out.states[result.state] += 1
                 out.frames += 1  # its row is on disk; a video error below loses only the video
                 out.timeline.add(result.index, result.time_s)
-                if writers.stream is not None:
-                    writers.stream.write(result)
                 if video is not None and annotator is not None:
                     assert result.frame is not None
                     if first_time is None:
                         first_time = result.time_s
                     video.write(result.frame, lambda planes, r=result: annotator.draw(
                         planes, r), time_s=result.time_s - first_time)
+                if writers.stream is not None:  # last: a signal may cut short its wait
+                    writers.stream.write(result, stop=signals.stopping)
             received = source.received
             if received is not None:
                 out.latency.add(time.perf_counter() - received)

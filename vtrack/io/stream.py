@@ -19,6 +19,7 @@ import select
 import stat
 import sys
 import time
+from collections.abc import Callable
 from typing import IO, Any
 
 from vtrack.errors import OutputError
@@ -28,6 +29,8 @@ from vtrack.stages.base import TrackStatus
 
 #: ``--stream -``: the lines go to standard output.
 STDOUT = "-"
+#: How often a line waiting for a stalled reader looks whether the run is to stop (seconds).
+STOP_POLL_S = 0.1
 
 
 def _number(value: Any) -> Any:
@@ -66,7 +69,8 @@ class StreamWriter(Closing):
     each written out before :meth:`write` returns. OutputError names the target when a line
     cannot be written (a full disk, a reader that went away) or when the reader of a pipe takes
     nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
-    reading, nor hold off SIGTERM while it waits)."""
+    reading). A line none of which is out yet gives way to a stop (see :meth:`write`), so
+    Ctrl-C or SIGTERM does not wait for ``stall_s``."""
 
     def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0) -> None:
         self.target = target
@@ -83,28 +87,41 @@ class StreamWriter(Closing):
         except (OSError, ValueError):  # standard output replaced by an object (a test runner)
             self._fd = None
 
-    def write(self, result: FrameResult) -> None:
+    def write(self, result: FrameResult, stop: Callable[[], bool] | None = None) -> bool:
+        """Write ``result``'s line; True once it is out. False, with nothing of the line
+        written, when ``stop()`` turned true while the line waited for a reader to make room
+        (a line already begun is finished). OutputError as the class says."""
         line = json.dumps(frame_record(result, self.multi_target), separators=(",", ":"))
         data = (line + "\n").encode("utf-8")
         try:
             if self._fd is None:
                 self._file.write(data)
                 self._file.flush()
-            else:
-                self._send(memoryview(data))
+            elif not self._send(memoryview(data), stop):
+                return False
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
         self.lines += 1
+        return True
 
-    def _send(self, data: memoryview) -> None:
+    def _send(self, data: memoryview, stop: Callable[[], bool] | None) -> bool:
         """Write ``data`` to the descriptor, at most ``PIPE_BUF`` bytes at a time and each
         only once it can take them (a pipe with room: such a write does not block), waiting
-        at most ``stall_s`` for that room."""
+        at most ``stall_s`` for that room; False (nothing written) if ``stop()`` turned true
+        while the first bytes waited."""
+        first = True
         while data:
-            if not select.select([], [self._fd], [], self.stall_s)[1]:
-                raise OutputError(f"--stream {self.target}: its reader took nothing for "
-                                  f"{self.stall_s:g} s")
+            deadline = time.monotonic() + self.stall_s
+            while not select.select([], [self._fd], [],
+                                    max(0.0, min(STOP_POLL_S, deadline - time.monotonic())))[1]:
+                if first and stop is not None and stop():
+                    return False
+                if time.monotonic() >= deadline:
+                    raise OutputError(f"--stream {self.target}: its reader took nothing for "
+                                      f"{self.stall_s:g} s")
             data = data[os.write(self._fd, data[:select.PIPE_BUF]):]
+            first = False
+        return True
 
     def close(self) -> None:
         if self.target == STDOUT:
