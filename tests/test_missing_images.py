@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from vtrack.io.images import ImageFolderSource
 from vtrack.scenes import make_scene, write_image_sequence
 
 
@@ -55,3 +56,19 @@ def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: 
     assert started.returncode == 2, started.stderr
     assert "frame 3 of" in started.stderr and "is missing from the numbering" in started.stderr
     assert "damaged" not in started.stderr
+
+
+def test_an_image_removed_while_the_folder_is_read_is_called_unreadable(tmp_path: Path) -> None:
+    """A folder is listed when it opens; an image removed after that (a folder being cleaned
+    while it is tracked) was 'not an image FFmpeg can decode (No such file or directory)'.
+    Now it 'cannot be read', and its frame is skipped as before."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 10, 30), folder)
+    source = ImageFolderSource(str(folder))
+    gone = folder / "img" / "0004.jpg"
+    gone.unlink()
+    with source:
+        indices = [frame.index for frame in source]
+    assert indices == [0, 1, 2, 4, 5, 6, 7, 8, 9]
+    assert source.warnings == [f"{gone}: cannot be read (No such file or directory); "
+                               "frame 3 skipped"]

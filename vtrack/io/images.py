@@ -85,7 +85,8 @@ def frame_places(files: list[Path]) -> list[int]:
 def read_image(path: Path) -> np.ndarray:
     """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR.
 
-    Raises InputError naming the file when FFmpeg cannot decode it.
+    Raises InputError naming the file when it cannot be read (gone, or not readable) or
+    FFmpeg cannot decode it.
     """
     try:
         with av.open(ffmpeg_file(path)) as container:
@@ -102,6 +103,8 @@ def read_image(path: Path) -> np.ndarray:
                 return picture.to_ndarray(format="gray")
             return picture.to_ndarray(format="bgr24")
     except (av.FFmpegError, OSError, StopIteration) as exc:
+        if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
+            raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         reason = "no picture" if isinstance(exc, StopIteration) else os_reason(exc)
         raise InputError(f"{path}: not an image FFmpeg can decode ({reason})") from None
 
