@@ -20,9 +20,11 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import wait_for_stop_handlers
 
+from vtrack.io.videowriter import VideoWriter
 from vtrack.scenes import make_scene, write_clip, write_video
 
 
@@ -677,3 +679,37 @@ def test_latency_percentiles_are_within_their_bins() -> None:
     assert got["frames"] == 100 and got["max_ms"] == 100
     assert got["p50_ms"] == pytest.approx(50, rel=0.01)
     assert got["p99_ms"] == pytest.approx(99, rel=0.01)
+
+
+def test_a_live_video_output_whose_receiver_stalls_gives_way_to_a_stop(tmp_path: Path) -> None:
+    """Ctrl-C or SIGTERM while `--video-out tcp://...` waited for a receiver that took
+    nothing was held until `--timeout` ran out (then the run ended `failed`, exit 1): a
+    picture waiting for room now gives way to a stop (the run's pending signal), and closing
+    does not wait for the receiver again. Here the receiver never accepts the connection."""
+    width, height = 320, 240
+    noise = np.random.default_rng(0).integers(0, 256, (height * 3 // 2, width), np.uint8)
+    with socket.socket() as server:
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        writer = VideoWriter(tmp_path / "unused.mp4", width, height, 30.0, crf=0,
+                             url=f"tcp://127.0.0.1:{server.getsockname()[1]}", stall_s=3600)
+        for sent in range(10_000):
+            if not writer.write(np.roll(noise, sent, axis=1), stop=lambda: True):
+                break
+        else:
+            pytest.fail("the receiver never held the writer back")
+        errors: list[BaseException] = []
+
+        def close() -> None:
+            try:
+                writer.close()
+            except BaseException as exc:  # noqa: BLE001 (checked below, in the test's thread)
+                errors.append(exc)
+
+        closing = threading.Thread(target=close, daemon=True)
+        closing.start()
+        closing.join(120)  # a bound, not a measure: the stall bound is an hour
+        assert not closing.is_alive(), "closing waited for the receiver after the stop"
+        assert errors == []
+    assert not (tmp_path / "unused.mp4").exists()

@@ -869,7 +869,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     if first_time is None:
                         first_time = result.time_s
                     video.write(result.frame, lambda planes, r=result: annotator.draw(
-                        planes, r), time_s=result.time_s - first_time)
+                        planes, r), time_s=result.time_s - first_time, stop=signals.stopping)
                 if writers.stream is not None:  # last: a signal may cut short its wait
                     writers.stream.write(result, stop=signals.stopping)
             received = source.received

@@ -24,13 +24,12 @@ from typing import IO, Any
 
 from vtrack.errors import OutputError
 from vtrack.io.files import Closing, os_reason
+from vtrack.io.threads import STOP_POLL_S
 from vtrack.pipeline import FrameResult
 from vtrack.stages.base import TrackStatus
 
 #: ``--stream -``: the lines go to standard output.
 STDOUT = "-"
-#: How often a line waiting for a stalled reader looks whether the run is to stop (seconds).
-STOP_POLL_S = 0.1
 
 
 def _number(value: Any) -> Any:

@@ -16,8 +16,9 @@ from typing import Generic, TypeVar
 T = TypeVar("T")
 
 _END = object()
-#: How often a producer blocked on a full queue checks whether it was asked to stop (seconds).
-_POLL_S = 0.1
+#: How often a thread waiting on another (a producer blocked on a full queue, a writer waiting
+#: for a stalled receiver) checks whether it was asked to stop (seconds).
+STOP_POLL_S = 0.1
 #: A live consumer may fall this far behind the newest item before older items are passed
 #: over: a decoder hands frames over in bursts, and a consumer faster than the source on
 #: average works through a short burst in time (issue 23's latency aim: p99 under 50 ms).
@@ -50,7 +51,7 @@ class Prefetcher(Generic[T]):
         """Queue ``item``; False when asked to stop before there was room."""
         while not self._stop.is_set():
             try:
-                self._queue.put(item, timeout=_POLL_S)
+                self._queue.put(item, timeout=STOP_POLL_S)
                 return True
             except queue.Full:
                 continue
@@ -156,7 +157,7 @@ class KeepingUp(Generic[T]):
         """The next item to hand over (None: the producer has ended), passing over the ones
         the consumer could not work through in time. Called holding ``_ready``."""
         while not self._waiting and self._end is None:
-            self._ready.wait(_POLL_S)
+            self._ready.wait(STOP_POLL_S)
         if not self._waiting:
             return None
         budget = max(self._period_s, LATENCY_BUDGET_S)

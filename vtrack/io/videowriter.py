@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import queue
 import threading
+import time
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
@@ -29,6 +30,7 @@ from vtrack.frame import Frame, I420Frame, to_video_range
 from vtrack.geometry import Window
 from vtrack.io.files import Closing, ffmpeg_file, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
+from vtrack.io.threads import STOP_POLL_S
 
 #: Clock of the output timestamps: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
 TIME_BASE = Fraction(1, 90000)
@@ -66,7 +68,8 @@ class VideoWriter(Closing):
     ``udp://``/``tcp://``, RTSP to ``rtsp://``, FLV to ``rtmp://``), encoded for low latency
     (x264 ``zerolatency``, slice threads); nothing is written to ``path``. A receiver that
     takes nothing for ``stall_s`` seconds (FFmpeg's write to it blocks) is an OutputError,
-    from :meth:`write` or :meth:`close`: the run never waits on it for ever.
+    from :meth:`write` or :meth:`close`: the run never waits on it for ever; a stop gives way
+    sooner (see :meth:`write`).
     """
 
     #: Output pictures in flight between the caller and the encoder thread.
@@ -89,6 +92,8 @@ class VideoWriter(Closing):
         #: How long a live output's receiver may take nothing (None for a file: no bound).
         self._stall_s = stall_s if url is not None else None
         self._stalled = False
+        #: A picture gave way to a stop while a live output's receiver took nothing.
+        self._gave_way = False
         self.width, self.height = width & ~1, height & ~1
         if self.width <= 0 or self.height <= 0:
             raise OutputError(f"{self.path}: cannot encode a {width}x{height} video")
@@ -190,27 +195,28 @@ class VideoWriter(Closing):
             cv2.cvtColor(image.bgr(window), cv2.COLOR_BGR2YUV_I420, dst=buffer)
 
     def write(
-        self, image: Frame | np.ndarray, draw: Draw | None = None, time_s: float | None = None
-    ) -> None:
+        self, image: Frame | np.ndarray, draw: Draw | None = None, time_s: float | None = None,
+        stop: Callable[[], bool] | None = None,
+    ) -> bool:
         """Queue one picture: ``image`` is an I420 buffer of the encoded size or a Frame.
 
         The pixels are copied into a reused output buffer first, ``draw(buffer)`` may then
         annotate that copy in place (an I420 buffer, see :mod:`vtrack.io.planes`); ``image``
         itself is never modified and may be reused as soon as this returns. ``time_s`` is the
         picture's time (a Frame's own by default; else ``frame number / fps``).
-        Blocks while the encoder is ``depth`` pictures behind.
+        Blocks while the encoder is ``depth`` pictures behind; True once the picture is
+        queued. For a live output, False (the picture not written, and :meth:`close` then
+        waits no more for the receiver) when ``stop()`` turned true while it waited.
         """
         if self._closed:
             raise RuntimeError(f"{self.path}: the video writer is closed")
         self._raise_error()
         if time_s is None and isinstance(image, Frame):
             time_s = image.time_s
-        try:
-            slot = self._free.get(timeout=self._stall_s)
-        except queue.Empty:
-            self._stalled, self._error_reported = True, True  # said here, not again on close
-            self._error = OutputError(self._stall_message())
-            raise self._error from None
+        slot = self._free_slot(stop if self.url is not None else None)
+        if slot is None:
+            self._gave_way = True
+            return False
         try:
             self._fill(slot.buffer, image)
             if draw is not None:
@@ -224,6 +230,25 @@ class VideoWriter(Closing):
         slot.pts = self._last_pts = pts
         self._frames += 1
         self._todo.put(slot)
+        return True
+
+    def _free_slot(self, stop: Callable[[], bool] | None) -> _Slot | None:
+        """An output buffer the encoder is done with, waiting for one at most ``stall_s``
+        (OutputError, a live output) and, with ``stop``, None once ``stop()`` is true."""
+        deadline = None if self._stall_s is None else time.monotonic() + self._stall_s
+        while True:
+            waits = [STOP_POLL_S] if stop is not None else []
+            if deadline is not None:
+                waits.append(max(0.0, deadline - time.monotonic()))
+            try:
+                return self._free.get(timeout=min(waits) if waits else None)
+            except queue.Empty:
+                if stop is not None and stop():
+                    return None
+                if deadline is not None and time.monotonic() >= deadline:
+                    self._stalled, self._error_reported = True, True  # said here, not on close
+                    self._error = OutputError(self._stall_message())
+                    raise self._error from None
 
     def _stall_message(self) -> str:
         return f"--video-out {self.url}: the receiver took nothing for {self._stall_s:g} s"
@@ -231,10 +256,11 @@ class VideoWriter(Closing):
     def _finish(self, flush: bool) -> None:
         self._closed = True
         self._todo.put(flush)
-        self._thread.join(0 if self._stalled else self._stall_s)
+        self._thread.join(0 if self._stalled or self._gave_way else self._stall_s)
         if self._thread.is_alive():  # blocked in a write to the receiver: left to exit with us
-            self._stalled = True
-            self._error = self._error or OutputError(self._stall_message())
+            if not self._gave_way:  # after a stop the last pictures are not awaited
+                self._stalled = True
+                self._error = self._error or OutputError(self._stall_message())
             return
         try:
             self._container.close()
