@@ -297,3 +297,34 @@ def test_a_signal_while_a_stream_reader_stalls_is_an_interrupted_run(tmp_path: P
     assert record["status"] == "interrupted" and record["error"] == "interrupted by SIGTERM"
     rows = (out / "track.csv").read_text().splitlines()
     assert len(rows) - 1 == record["frames"] < 600
+
+
+def test_a_followed_file_cut_shorter_ends_the_run_partial_naming_the_cut(tmp_path: Path) -> None:
+    """A file cut shorter while `--follow` read it (a recorder restarted over the same name,
+    `ffmpeg -y rec.ts`) was read on from the old end: the run waited, then tracked the middle
+    of the new recording as if it went on, and ended `complete`. Now it ends `partial` at
+    once, saying the file was cut."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
+    recording = tmp_path / "rec.ts"
+    recording.write_bytes(write_video(scene, tmp_path / "clip.ts").read_bytes())
+    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
+    run = _vtrack([str(recording), "--follow", "60", "-c", "s0", "--init",
+                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
+                   "--stream", str(lines), "-q"])
+    try:
+        deadline = time.monotonic() + 120  # a bound, not a measure
+        while not (lines.exists() and lines.stat().st_size):  # the file is being read
+            assert run.poll() is None and time.monotonic() < deadline, "nothing was tracked"
+            time.sleep(0.05)
+        with recording.open("r+b") as handle:
+            handle.truncate(0)
+        _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 60 s
+    finally:
+        run.kill()
+        run.wait()
+    assert run.returncode == 1, stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "partial"
+    assert f"{recording}: reading stopped at frame {record['frames']}: the file was cut to 0 " \
+           "bytes after " in record["error"]
+    assert stderr.decode().count("vtrack: error:") == 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 from vtrack.io.pyfile import CapturingStream
@@ -10,11 +11,18 @@ from vtrack.io.pyfile import CapturingStream
 POLL_S = 0.05
 
 
+class FollowedFileCut(OSError):
+    """The followed file became shorter than what was read of it: rewritten from its start
+    (a recorder restarted over the same name) or cut. Reading on where the old data ended
+    would hand over the middle of other data."""
+
+
 class GrowingFile(CapturingStream):
     """``path`` read from its start; at its current end a read waits for more data and reports
     the end only once the file has not grown for ``idle_s`` seconds. Not seekable, so FFmpeg
     reads it as a stream (a container that needs its end first, like a plain MP4, cannot be
-    followed: record fragmented MP4, MPEG-TS or Matroska)."""
+    followed: record fragmented MP4, MPEG-TS or Matroska). A file cut shorter than what was
+    read of it ends the stream, and :attr:`interruption` holds :class:`FollowedFileCut`."""
 
     def __init__(self, path: str, idle_s: float) -> None:
         super().__init__()
@@ -38,6 +46,10 @@ class GrowingFile(CapturingStream):
             if got:
                 self._grew_at, self._empty_since = now, None
                 return got
+            size, read = os.fstat(self._file.fileno()).st_size, self._file.tell()
+            if size < read:
+                raise FollowedFileCut(f"the file was cut to {size} bytes after {read} were read "
+                                      "(rewritten from its start?)")
             if self._empty_since is None:
                 self._empty_since = now
             if now - self._grew_at >= self.idle_s or self.closed:

@@ -45,7 +45,7 @@ from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
-from vtrack.io.follow import GrowingFile
+from vtrack.io.follow import FollowedFileCut, GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.source import InputInfo, Source
@@ -623,6 +623,9 @@ class VideoSource(Source):
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
             ) from None
+        except FollowedFileCut as exc:
+            raise PartialInputError(f"{info.path}: reading stopped at frame {index}: {exc}",
+                                    index) from None
         finally:
             if self._damaged:  # every place left empty, also by pictures the decoder dropped
                 self._dropped = max(self._dropped, index - yielded)
