@@ -190,3 +190,54 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path, sig
     with (out / "summary.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert [(row["status"], row["error"]) for row in rows] == [("interrupted", error)]
+
+
+def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
+        folder: Path, tmp_path: Path) -> None:
+    """The scheduler stopped (SIGTERM) while a job ran: the batch printed Dask's reconnect
+    traceback and a two-line error per job ('... cancelled for reason:
+    scheduler-connection-lost.' then 'Client lost the connection ...'), also two lines in
+    summary.csv; on the worker, which its scheduler closed, the job's check of the stop event
+    raised AttributeError: the run ended ``failed`` (internal error, error.log) part way."""
+    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                       "--no-dashboard"])
+    worker = batch = None
+    try:
+        assert scheduler.stderr is not None
+        for line in scheduler.stderr:
+            if "Scheduler at" in line:
+                address = line.split("Scheduler at:")[1].strip()
+                break
+        worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
+                        "--no-nanny", "--no-dashboard"])
+        out = tmp_path / "out"
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--preset", "slow", "-o", str(out)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 90
+        while not any(p.read_bytes().count(b"\n") > 3
+                      for p in (out / "a").glob("*/.track.tmp-*.csv")):
+            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
+            time.sleep(0.05)
+        scheduler.send_signal(signal.SIGTERM)
+        _, stderr = batch.communicate(timeout=60)
+        worker.wait(timeout=120)  # closed by its scheduler, once its running job has ended
+    finally:
+        for process in (batch, worker, scheduler):
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
+    assert batch.returncode == 1, stderr
+    assert "Traceback" not in stderr, stderr
+    errors = [line for line in stderr.splitlines() if line.strip()]
+    assert len(errors) == 1 and errors[0].startswith("vtrack: error: a [robust]: failed: "), stderr
+    assert f"lost the connection to the scheduler {address}" in errors[0]
+    with (out / "summary.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["status"] for row in rows] == ["failed"]
+    assert "\n" not in rows[0]["error"] and address in rows[0]["error"]
+    run = out / "a" / "robust"
+    assert not (run / "error.log").exists(), (run / "error.log").read_text()
+    record = json.loads((run / "run.json").read_text())
+    assert (record["status"], record["frames"]) == ("complete", 600), record

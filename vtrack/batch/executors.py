@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import logging
 import multiprocessing
 import os
 import signal
@@ -284,9 +285,16 @@ class DaskExecutor:
                               f"{_seconds(timeout_s or 0)} (--worker-timeout)") from None
 
     def close(self) -> None:
-        """Disconnect; nothing is printed if the scheduler is already gone."""
-        with _quiet_client_teardown(), suppress(Exception):
-            self.client.close()
+        """Disconnect; nothing is printed if the scheduler is already gone (the Client's
+        attempt to reconnect to a lost scheduler, cancelled here, logs a traceback at ERROR
+        otherwise: the jobs' lines already say the scheduler was lost)."""
+        client_log = logging.getLogger("distributed.client")
+        disabled, client_log.disabled = client_log.disabled, True
+        try:
+            with _quiet_client_teardown(), suppress(Exception):
+                self.client.close()
+        finally:
+            client_log.disabled = disabled
 
     def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]:
         """Submit every job and yield outcomes as they finish. When no worker has been
@@ -369,13 +377,19 @@ class DaskExecutor:
             stop.clear()
             stop_signal.delete()
 
-    @staticmethod
-    def _outcome(future: Any, job: Job) -> Outcome:
+    def _outcome(self, future: Any, job: Job) -> Outcome:
+        """The job's outcome from its future; a task Dask could not finish (``KilledWorker``,
+        the scheduler lost) is ``failed`` with one line saying why."""
         try:
             return future.result()
         except Exception as exc:  # KilledWorker, lost connection: report, carry on
-            return Outcome(job.input, job.config, STATUS_FAILED,
-                           error=f"Dask: {type(exc).__name__}: {exc}")
+            if getattr(exc, "reason", None) == "scheduler-connection-lost":
+                error = (f"Dask: lost the connection to the scheduler {self.address} while "
+                         "the job was pending or running; its outcome is unknown")
+            else:
+                first = str(exc).splitlines()[0] if str(exc).strip() else ""
+                error = f"Dask: {type(exc).__name__}: {first}".rstrip(": ")
+            return Outcome(job.input, job.config, STATUS_FAILED, error=error)
 
 
 def _host_port(address: str) -> tuple[str, str, int | None]:

@@ -82,7 +82,7 @@ def execute_on_dask(job: Job, stop_event: str) -> Outcome:
     and ends ``interrupted``, its records whole, as a local worker's job does: its error
     names that signal (``interrupted by the user`` for SIGINT, ``interrupted by SIGTERM``;
     SIGINT if the scheduler cannot say). An event the scheduler cannot answer for (a lost
-    connection) counts as not set: the job carries on."""
+    connection, a worker whose scheduler closed it) counts as not set: the job carries on."""
     from distributed import Event, Variable
 
     stop = Event(stop_event)
@@ -92,7 +92,7 @@ def execute_on_dask(job: Job, stop_event: str) -> Outcome:
         try:
             if not stop.is_set():
                 return None
-        except (OSError, TimeoutError):
+        except Exception:  # lost (OSError), or the worker closing: its client is gone
             return None
         try:
             return Interrupted(signal.Signals(int(stop_signal.get(timeout=STOP_CHECK_S))))
