@@ -253,6 +253,45 @@ def test_when_every_run_is_left_out_the_error_names_every_reason(tmp_path: Path)
         assert str(tmp_path / "runs" / name) in line, line
 
 
+def test_rows_without_results_of_two_batches_name_their_batch(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """`vtrack report batch-a batch-b`, batch-b stopped before it ran smooth [s0]: the list
+    of runs without results said 'smooth [s0] interrupted: never ran' beside batch-a's
+    complete smooth [s0], as if that run had not run; and each batch's row of an input that
+    never ran anywhere was listed twice alike. Each such row now names its batch."""
+    _, original = batch_out
+    batches = {name: tmp_path / name for name in ("batch-a", "batch-b")}
+    for batch in batches.values():
+        shutil.copytree(original, batch)
+        with (batch / "summary.csv").open("a", newline="") as handle:
+            csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS).writerow(
+                {"input": "never", "config": "s0", "status": "interrupted"})
+    stopped = batches["batch-b"]
+    shutil.rmtree(stopped / "smooth" / "s0")
+    with (stopped / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    for row in rows:
+        if (row["input"], row["config"]) == ("smooth", "s0"):
+            row.update({column: "" for column in SUMMARY_COLUMNS[2:]}, status="interrupted")
+    with (stopped / "summary.csv").open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    report = tmp_path / "report"
+    result = vtrack("report", *map(str, batches.values()), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    markdown = (report / "summary.md").read_text()
+    listed = sorted(line for line in markdown.splitlines() if line.startswith("- **"))
+    assert listed == [
+        f"- **{name}** [s0] interrupted: never ran (the batch stopped first)"
+        for name in ("never (batch-a)", "never (batch-b)", "smooth (batch-b)")]
+    with (report / "summary.csv").open(newline="") as handle:
+        statuses = {(row["input"], row["config"]): row["status"]
+                    for row in csv.DictReader(handle)}
+    assert statuses[("smooth", "s0")] == "complete"  # batch-a's run, the only one
+    assert statuses[("smooth (batch-b)", "s0")] == "interrupted"
+
+
 def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
         batch_out: tuple[Path, Path], tmp_path: Path) -> None:
     """A run that failed part way (1 frame tracked) was averaged as if whole, and a batch row

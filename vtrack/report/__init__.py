@@ -23,7 +23,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import datetime
 from pathlib import Path
 from warnings import catch_warnings, simplefilter
@@ -37,6 +37,7 @@ from vtrack.errors import InputError, OutputError, plural
 from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import (
+    FailedRun,
     GroundTruth,
     RunResult,
     failed_runs,
@@ -119,6 +120,26 @@ def _distinct_labels(runs: list[RunResult]) -> None:
         if len(group) > 1:
             for run, place in zip(group, _places([r.folder for r in group]), strict=True):
                 run.config = f"{run.config} ({place})"
+
+
+def _distinct_failed(failed: list[FailedRun], runs: Sequence[RunResult]) -> list[FailedRun]:
+    """``failed`` with the input of a row named after the batch folder it comes from
+    (``v3 (batch-b)``) where that input's name is also that of a run or failed row of another
+    folder: two batches' ``v3`` need not be one input, and ``v3 [robust] never ran`` beside a
+    complete ``v3 [robust]`` of another batch read as that run's."""
+    def batch_of(run: RunResult) -> Path:
+        return run.folder.resolve().parent.parent  # (<batch>/<input>/<config>/)
+
+    elsewhere: dict[str, set[Path]] = {}
+    for row in failed:
+        elsewhere.setdefault(row.input, set()).add(row.batch or Path())
+    for run in runs:
+        if run.input in elsewhere:
+            elsewhere[run.input].add(batch_of(run))
+    named = {name: dict(zip(sorted(folders), _places(sorted(folders)), strict=True))
+             for name, folders in elsewhere.items() if len(folders) > 1}
+    return [replace(row, input=f"{row.input} ({named[row.input][row.batch or Path()]})")
+            if row.input in named else row for row in failed]
 
 
 def _places(folders: Sequence[Path]) -> list[str]:
@@ -231,6 +252,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                              + (f"; and {more} more" if more > 0 else ""))
         raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
                          "folders)")
+    failed = _distinct_failed(failed, runs)  # (by the runs' input names, not yet told apart)
     _distinct_inputs(runs)
     _distinct_labels(runs)
     runs.sort(key=lambda r: (r.input, r.config))

@@ -215,6 +215,8 @@ class FailedRun:
     config: str
     error: str
     status: str
+    #: The batch folder whose ``summary.csv`` holds the row.
+    batch: Path | None = None
 
 
 def _number(text: str | None) -> float | None:
@@ -658,7 +660,8 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
                     continue
                 if r["status"] != STATUS_COMPLETE:
                     failed.append(FailedRun(r["input"], r["config"], r["error"] or
-                                            "never ran (the batch stopped first)", r["status"]))
+                                            "never ran (the batch stopped first)", r["status"],
+                                            summary.parent.resolve()))
                 elif not (folder / "run.json").exists():  # (one that is: warned as left out)
                     gone.append(f"{r['input']} [{r['config']}]")
             if gone:
