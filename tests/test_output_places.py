@@ -105,3 +105,31 @@ def test_report_does_not_replace_a_batch_summary(clip, tmp_path: Path) -> None:
     result = vtrack("report", str(out), "--out", str(out / "occ" / "s0"))
     assert_one_line_error(result, "run's results folder")
     assert vtrack("report", str(out), "--out", str(tmp_path / "rep")).returncode == 0
+
+
+def test_a_run_and_a_batch_do_not_write_into_each_others_results(clip, tmp_path: Path
+                                                                  ) -> None:
+    """`vtrack run ... -o BATCH` wrote its run.json and track.csv beside the batch's
+    summary.csv, and `vtrack batch ... -o RUN` its summary.csv and input folders into a run's
+    folder (exit 0 both): a report of either then mixed the two. Each is now one line, exit 2,
+    nothing written; a folder holding some other summary.csv is still a run's to take."""
+    folder = one_input(tmp_path / "in", clip)
+    batch = tmp_path / "batch"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(batch)
+                  ).returncode == 0
+    before = sorted(p.relative_to(batch) for p in batch.rglob("*"))
+    result = vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video",
+                    "-y", "-o", str(batch))
+    assert_one_line_error(result, str(batch), "batch's results folder", "another --out")
+    assert result.returncode == 2
+    run = batch / "occ" / "s0"
+    result = vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(run))
+    assert_one_line_error(result, str(run), "run's results folder", "another --out")
+    assert result.returncode == 2
+    assert sorted(p.relative_to(batch) for p in batch.rglob("*")) == before
+    other = tmp_path / "mine"
+    other.mkdir()
+    (other / "summary.csv").write_text("name,value\na,1\n")
+    assert vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video",
+                  "-o", str(other)).returncode == 0
+    assert (other / "run.json").is_file()

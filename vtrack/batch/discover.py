@@ -12,10 +12,11 @@ from pathlib import Path
 from vtrack.errors import InputError
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
 from vtrack.io.files import folder_name
+from vtrack.io.outdir import BATCH_SUMMARY
 from vtrack.io.sidecar import sequence_images
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
-SUMMARY_FILE = "summary.csv"
+SUMMARY_FILE = BATCH_SUMMARY
 #: File suffixes taken as video inputs (anything else beside them is ignored).
 VIDEO_SUFFIXES = frozenset({
     ".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".ts", ".mts", ".m2ts", ".mpg", ".mpeg",

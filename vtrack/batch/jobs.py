@@ -6,12 +6,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from vtrack.errors import printable
+from vtrack.io.outdir import BATCH_COLUMNS
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
 #: ``summary.csv`` columns, in order.
-SUMMARY_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
-                   "frames_lost", "frames_skipped", "status", "error")
+SUMMARY_COLUMNS = BATCH_COLUMNS
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,37 @@ LOCK_NAME = ".vtrack.lock"
 RUN_OUTPUTS = ("run.json", "track.csv", "tracks.csv", "annotated.mp4", "error.log")
 
 
+#: A batch's own file in its results folder, beside its inputs' folders, and its columns.
+BATCH_SUMMARY = "summary.csv"
+BATCH_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
+                 "frames_lost", "frames_skipped", "status", "error")
+
+
+def is_batch_folder(folder: Path | str) -> bool:
+    """Whether ``folder`` is a batch's results folder: it holds a ``summary.csv`` whose header
+    is a batch's (:data:`BATCH_COLUMNS`), not any file of that name."""
+    try:
+        with (Path(folder) / BATCH_SUMMARY).open(encoding="utf-8", errors="replace") as handle:
+            return handle.readline(4096).strip() == ",".join(BATCH_COLUMNS)
+    except OSError:
+        return False
+
+
+def refuse_other_results(folder: Path | str, what: str) -> None:
+    """Raise OutputError when ``folder`` holds the other kind's results: a run's
+    (``run.json``) for a batch (``what`` ``batch``), whose folder per input would sit among
+    them, or a batch's (:func:`is_batch_folder`) for a run (any other ``what``), whose files
+    would sit among the batch's: either way a report of it would mix the two."""
+    folder = Path(folder)
+    if what == "batch" and (folder / "run.json").is_file():
+        raise OutputError(f"{folder}: is a run's results folder (run.json); a batch there "
+                          "would mix its inputs' folders with that run: choose another --out")
+    if what != "batch" and is_batch_folder(folder):
+        raise OutputError(f"{folder}: is a batch's results folder ({BATCH_SUMMARY}); a run "
+                          "there would mix its files with the batch's: choose another --out "
+                          "(the batch's own runs are in its <input>/<config>/ folders)")
+
+
 def _holder(path: Path) -> str:
     """Who holds the lock at ``path``, as written into it (``pid N: command``)."""
     try:
@@ -97,7 +128,8 @@ class OutputFolder:
     """Take ``folder`` for one run or batch: ``with OutputFolder(path) as folder: ...``.
 
     Entering creates the folder, checks a file can be written in it and takes its lock (or
-    raises OutputError: not writable, a file, or in use by another vtrack, naming the holder:
+    raises OutputError: the other kind's results folder, :func:`refuse_other_results`; not
+    writable, a file, or in use by another vtrack, naming the holder:
     :class:`~vtrack.errors.FolderInUseError`).
     Leaving releases the lock and removes the folder (and the parents it created) when nothing
     but the lock was left in it.
@@ -110,6 +142,7 @@ class OutputFolder:
         self._created: list[Path] = []
 
     def __enter__(self) -> Self:
+        refuse_other_results(self.folder, self.what)
         missing = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
         prepare_output_dir(self.folder)
         self._created = missing  # deepest first: the order to remove them in

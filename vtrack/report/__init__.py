@@ -32,9 +32,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vtrack import __version__
-from vtrack.batch.jobs import SUMMARY_COLUMNS
 from vtrack.errors import InputError, OutputError, plural
 from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
+from vtrack.io.outdir import is_batch_folder
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import (
     FailedRun,
@@ -175,13 +175,7 @@ def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict
 def _refuse_batch_folder(out_dir: Path) -> None:
     """Raise OutputError when ``out_dir`` holds a batch's ``summary.csv`` (the report's own
     ``summary.csv`` would replace it) or a run's ``run.json``."""
-    summary = out_dir / "summary.csv"
-    try:
-        with summary.open(encoding="utf-8", errors="replace") as handle:
-            header = handle.readline(4096).strip()
-    except OSError:
-        header = ""
-    if header == ",".join(SUMMARY_COLUMNS):
+    if is_batch_folder(out_dir):
         raise OutputError(f"--out {out_dir}: holds a batch's summary.csv, which the report "
                           "would replace; choose another folder for the report")
     if (out_dir / "run.json").exists():
