@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import json
+import multiprocessing
 import os
 import shutil
 import signal
@@ -25,9 +26,9 @@ from typing import TYPE_CHECKING
 import av
 import pytest
 
-from vtrack.batch import SUMMARY_COLUMNS
-from vtrack.batch.executors import _context, _Worker
-from vtrack.batch.jobs import Job
+from vtrack.batch import SUMMARY_COLUMNS, executors
+from vtrack.batch.executors import LocalExecutor, _context, _Worker, stop_workers
+from vtrack.batch.jobs import Job, Progress
 from vtrack.config import DEFAULT_CONFIG, load_config
 from vtrack.errors import Interrupted
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
@@ -37,6 +38,8 @@ from vtrack.run import run
 
 if TYPE_CHECKING:
     from conftest import Clip, ClipFactory, SceneFactory
+
+    from vtrack.scenes import Scene
 
 W, H, FRAMES = 160, 120, 48
 
@@ -432,6 +435,118 @@ def test_a_job_still_running_when_the_batch_stops_records_itself_interrupted(
     record = assert_records_agree(out)
     assert (record["status"], record["error"], record["frames"]) == (
         "interrupted", error, 10)
+
+
+def _stalled_job(scene: Scene, folder: Path, name: str) -> tuple[Job, int]:
+    """A job reading raw frames from a FIFO that gets only 10 frames and stays open (the job
+    waits for frame 10 until it is stopped), results in ``folder / name``; and the FIFO's
+    held end, for the caller to close."""
+    fifo = folder / f"{name}.feed"
+    os.mkfifo(fifo)
+    writer = os.open(fifo, os.O_RDWR)
+    data = b"".join(frame.tobytes() for frame in list(scene.frames())[:10])
+    threading.Thread(target=os.write, args=(writer, data), daemon=True).start()
+    request = RunRequest(input=str(fifo), out_dir=folder / name, config=load_config("s0"),
+                         init_box=scene.boxes[0], raw=RawFormat.parse(f"{W}x{H}", "bgr24", 30))
+    return Job(name, "s0", request), writer
+
+
+def _ten_rows(out: Path) -> bool:
+    return any(p.read_bytes().count(b"\n") > 10 for p in out.glob(".track.tmp*"))
+
+
+def test_stopped_workers_share_each_wait_and_one_that_cannot_record_is_killed(
+        scene_factory: SceneFactory, tmp_path: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """stop_workers' phases are shared, not one worker after the other: with the first worker
+    unable to act (SIGSTOP), the second still gets the signal after the (shared) grace and
+    records itself while the first is held in the record grace; the first, still there when
+    that grace ends, is killed (no run.json: it never recorded). One after the other, the
+    second would get its signal only once the first had been killed."""
+    scene = scene_factory("smooth", width=W, height=H, frames=12)
+    jobs, writers, workers = [], [], []
+    try:
+        for name in ("held", "free"):
+            job, writer = _stalled_job(scene, tmp_path, name)
+            jobs.append(job)
+            writers.append(writer)
+            workers.append(_Worker(_context()))
+            assert workers[-1].start(job)
+        for job, worker in zip(jobs, workers, strict=True):
+            wait_for(lambda out=job.request.out_dir: _ten_rows(out), worker, "rows")
+        held = workers[0]
+        os.kill(held.process.pid, signal.SIGSTOP)
+        released = threading.Event()
+        monkeypatch.setattr(executors, "RECORD_GRACE_S", 3600.0)  # ends when `held` does
+        stopping = threading.Thread(target=lambda: (stop_workers(workers, grace_s=0),
+                                                    released.set()), daemon=True)
+        stopping.start()
+        free_out = jobs[1].request.out_dir
+        deadline = time.monotonic() + 60  # (it records, then ends: no wait_for on it)
+        while not (free_out / "run.json").exists():
+            assert time.monotonic() < deadline, "the free worker did not record itself"
+            time.sleep(0.01)
+        assert not released.is_set() and held.process.is_alive()  # the record grace goes on
+        os.kill(held.process.pid, signal.SIGKILL)  # (as the grace's end would)
+        stopping.join(60)
+        assert released.is_set()
+    finally:
+        for worker in workers:  # (a failed test leaves no process held stopped)
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(worker.process.pid, signal.SIGKILL)
+        for writer in writers:
+            os.close(writer)
+    record = assert_records_agree(free_out)
+    assert (record["status"], record["error"], record["frames"]) == (
+        "interrupted", "interrupted by SIGTERM", 10)
+    assert not (jobs[0].request.out_dir / "run.json").exists()
+    assert not any(worker.process.is_alive() for worker in workers)
+    # the end of the record grace kills what is still there: here, a worker held stopped
+    job, writer = _stalled_job(scene, tmp_path, "again")
+    worker = _Worker(_context())
+    try:
+        assert worker.start(job)
+        wait_for(lambda: _ten_rows(job.request.out_dir), worker, "rows")
+        os.kill(worker.process.pid, signal.SIGSTOP)
+        monkeypatch.setattr(executors, "RECORD_GRACE_S", 0.0)
+        stop_workers([worker], grace_s=0)
+        worker.process.join(60)
+    finally:
+        os.close(writer)
+    assert worker.process.exitcode == -signal.SIGKILL
+    assert not (job.request.out_dir / "run.json").exists()
+
+
+def test_a_batch_closed_while_a_job_runs_stops_it_with_its_records_whole(
+        scene_factory: SceneFactory, tmp_path: Path) -> None:
+    """The consumer of LocalExecutor.run gone while a job runs (the batch command ends on an
+    error, closing the generator): the job still running after the grace gets SIGTERM and
+    ends interrupted, its outputs whole and run.json written; no worker is left."""
+    scene = scene_factory("smooth", width=W, height=H, frames=12)
+    job, writer = _stalled_job(scene, tmp_path, "feed")
+
+    class Gone(Exception):
+        pass
+
+    def on_progress(progress: Progress) -> None:
+        """(The job's first message: it has opened its input.)"""
+        deadline = time.monotonic() + 60
+        while not _ten_rows(job.request.out_dir):
+            assert time.monotonic() < deadline, "no rows"
+            time.sleep(0.01)
+        raise Gone  # the batch's own error, while the job waits for frame 10
+
+    started = len(multiprocessing.active_children())
+    try:
+        with pytest.raises(Gone):
+            for _ in LocalExecutor(1, on_progress=on_progress).run([job]):
+                pass
+    finally:
+        os.close(writer)
+    record = assert_records_agree(job.request.out_dir)
+    assert (record["status"], record["error"], record["frames"]) == (
+        "interrupted", "interrupted by SIGTERM", 10)
+    assert len(multiprocessing.active_children()) <= started
 
 
 def test_a_signal_to_the_batchs_process_group_leaves_a_summary_that_agrees_with_the_runs(
