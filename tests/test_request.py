@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 #: Another value for every field of RunRequest.
 OTHER: dict[str, Any] = {
     "input": "other.mp4",
-    "out_dir": None,  # a copy of the results folder, see below
+    "out_dir": Path("moved"),  # a copy of the results folder, see below
     "config": load_config("camshift"),
     "init_box": Box(1, 2, 30, 40),
     "gt_path": Path("other.gt.txt"),
@@ -60,12 +60,16 @@ def test_changing_any_field_of_the_request_makes_resume_run_again(
     assert completed_summary(request) is not None  # the same request: reused
     assert {f.name for f in fields(RunRequest)} == set(OTHER)  # a new field needs a value here
     for name, value in OTHER.items():
-        if name == "out_dir":  # the same results, moved: recorded for another folder
+        if name == "out_dir":
             value = tmp_path / "b"
-            shutil.copytree(request.out_dir, value)
         changed = replace(request, **{name: value})
         assert changed != request, name
+        if name == "out_dir":  # the same results, moved whole: still this request's
+            shutil.copytree(request.out_dir, value)
+            assert completed_summary(changed) is not None
+            continue
         assert completed_summary(changed) is None, name
+        assert request.differences(changed.to_dict()), name  # (named in a refusal)
 
 
 def test_the_request_round_trips_through_its_dict() -> None:

@@ -76,3 +76,22 @@ def test_a_result_that_no_longer_stands_is_run_again(folder: Path, tmp_path: Pat
     assert record["status"] == "complete"
     assert record["identity"]["gt"]["size"] == (folder / "occ.gt.txt").stat().st_size
     assert "already complete: not run again" in resume(folder, out)
+
+
+def test_a_moved_batch_folder_resumes_and_a_refusal_names_what_changed(folder: Path,
+                                                                      tmp_path: Path) -> None:
+    """`mv r r2; vtrack batch in -o r2`: every pair failed 'made with other settings' (the
+    record's out_dir was the old folder: nothing the user set), and with -y all ran again. Now
+    it resumes, its line naming where the results are now. A pair that other settings did
+    make is refused naming them ('made with other settings: --no-video, --frames')."""
+    out = tmp_path / "r"
+    resume(folder, out)
+    moved = tmp_path / "r2"
+    shutil.move(out, moved)
+    line = resume(folder, moved)
+    assert "already complete: not run again" in line, line
+    assert f"-> {moved.resolve() / 'occ' / 's0'} " in line, line
+    result = vtrack("batch", str(folder), "-c", "s0", "-o", str(moved), "-j", "1",
+                    "--no-video", "--frames", "5")
+    assert result.returncode == 1
+    assert "(made with other settings: --no-video, --frames)" in result.stderr.decode()

@@ -4,7 +4,8 @@
 :class:`RunRequest` is built by the CLI (``vtrack run``; ``vtrack batch`` builds one per input x
 config from a template), recorded in ``run.json`` as ``"request"`` through :meth:`to_dict`, read
 back with :meth:`from_dict`, and compared whole by batch's resume test (:meth:`same_run`): a
-result is reused only if every field of the request that made it is the same.
+result is reused only if every field of the request that made it is the same (but for the
+results folder's own place: a batch folder moved whole resumes).
 """
 
 from __future__ import annotations
@@ -178,8 +179,37 @@ class RunRequest:
         return {**identities, "files": files} if files else identities
 
     def same_run(self, recorded: Any) -> bool:
-        """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request."""
-        return json.loads(json.dumps(self.to_dict())) == recorded
+        """Whether ``recorded`` (a ``run.json`` ``"request"``) describes exactly this request,
+        wherever its results folder was then (``out_dir``: a results folder moved or copied
+        whole holds the same runs)."""
+        return not self.differences(recorded)
+
+    def differences(self, recorded: Any) -> list[str]:
+        """What a user changed between ``recorded`` (a ``run.json`` ``"request"``) and this
+        request, each field by the option that sets it (``--no-video``, ``--set or the
+        config``, ...; ``out_dir`` is not compared, see :meth:`same_run`); empty when they are
+        the same run."""
+        if not isinstance(recorded, dict):
+            return ["the whole request (run.json records none)"]
+        mine = json.loads(json.dumps(self.to_dict()))
+        keys = [k for k in dict.fromkeys([*mine, *recorded])
+                if k != "out_dir" and mine.get(k, _ABSENT) != recorded.get(k, _ABSENT)]
+        return list(dict.fromkeys(_SETTING_NAMES.get(key, key) for key in keys))
+
+
+#: (A field missing from one of two requests compared.)
+_ABSENT = object()
+#: How a user sets each field of :meth:`RunRequest.to_dict` (named when it differs).
+_SETTING_NAMES = {
+    "input": "the input's path", "config": "the config (its file or a --set)",
+    "init": "the first box (--init or NAME.init.txt)", "gt": "the ground truth (--gt)",
+    "gt_origin": "--gt-origin", "raw": "--raw/--pix-fmt", "fps": "--fps",
+    "video": "--no-video", "preset": "--preset", "crf": "--crf", "seed": "--seed",
+    "max_frames": "--frames", "max_s": "--frames", "start": "--start", "start_s": "--start",
+    "init_from": "the first box (--init or NAME.init.txt)", "stream": "--stream",
+    "ffmpeg": "the input options (--input-option ...)", "live": "--live",
+    "video_out": "the video's place (--video)",
+}
 
 
 def _file_values(config: Config) -> Iterator[tuple[int, str, str]]:

@@ -35,11 +35,14 @@ def _record(request: RunRequest, since: float | None = None) -> dict[str, Any] |
         return None
 
 
-def _summary(record: dict[str, Any]) -> RunSummary | None:
+def _summary(record: dict[str, Any], out_dir: Path) -> RunSummary | None:
+    """The record's summary, its results where they are now: ``out_dir`` (a batch folder may
+    have been moved since)."""
     try:
         names = {f.name for f in fields(RunSummary)}
         summary = RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
         summary.status = record["status"]
+        summary.out_dir = str(out_dir)
     except (KeyError, TypeError, AttributeError):
         return None
     return summary
@@ -50,7 +53,7 @@ def recorded_summary(request: RunRequest, since: float | None = None) -> RunSumm
     ``request`` (every field, :meth:`RunRequest.same_run`), whatever its status; None if there
     is none, it is another request's, or it was written before the time ``since``."""
     record = _record(request, since)
-    return None if record is None else _summary(record)
+    return None if record is None else _summary(record, request.out_dir)
 
 
 def completed_summary(request: RunRequest) -> RunSummary | None:
@@ -71,7 +74,7 @@ def completed_summary(request: RunRequest) -> RunSummary | None:
     if (record.get("identity") != request.file_identities()
             or not outputs_intact(request.out_dir, record, required)):
         return None
-    return _summary(record)
+    return _summary(record, request.out_dir)
 
 
 @dataclass
@@ -130,7 +133,7 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                     refuse_replacing(request.out_dir)
                 except OutputError as exc:
                     result.known.append(Outcome(item.name, label, STATUS_FAILED,
-                                                error=f"{exc} (made with other settings)"))
+                                                error=f"{exc} ({_other_settings(request)})"))
                     continue
             if done is not None:
                 result.known.append(Outcome(item.name, label, STATUS_COMPLETE, done,
@@ -138,6 +141,16 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             else:
                 result.jobs.append(Job(item.name, label, request, threads=threads))
     return result
+
+
+def _other_settings(request: RunRequest) -> str:
+    """``made with other settings``, naming those that differ from ``request``'s in the
+    ``run.json`` of its folder (as far as it can be read)."""
+    try:
+        changed = request.differences(read_run_record(request.out_dir / "run.json")["request"])
+    except (OSError, KeyError, TypeError, InputError):
+        changed = []
+    return "made with other settings" + (f": {', '.join(changed)}" if changed else "")
 
 
 def _init_box(item: BatchInput, config: str, gt_path: Path | None,
