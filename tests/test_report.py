@@ -145,6 +145,35 @@ def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
             "--gt does not replace") in result.stderr.splitlines()
 
 
+def test_runs_of_one_input_scored_against_different_ground_truth_are_warned_of(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Two configs of one clip, one run with its ground truth and one with a file whose boxes
+    are shifted 15 px, were ranked side by side (the best in bold) without a word; now a
+    warning names the input and each file. A byte-identical copy of the ground truth is the
+    same truth: no warning."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    shifted = tmp_path / "shifted.gt.txt"
+    shifted.write_text("".join(f"{box.x + 15},{box.y},{box.w},{box.h}\n"
+                               for box in read_boxes(clip.gt)))
+    copy = tmp_path / "copy.gt.txt"
+    copy.write_bytes(clip.gt.read_bytes())
+    for config, gt in (("robust", clip.gt), ("s0", shifted), ("camshift", copy)):
+        assert vtrack("run", str(clip.path), "-c", config, "--gt", str(gt), "--no-video",
+                      "--quiet", "--out", str(tmp_path / "runs" / config)).exit_code == 0
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    name = clip.path.stem
+    assert [line for line in result.stderr.splitlines() if "different ground truth" in line] == [
+        f"vtrack: warning: {name}: its runs were scored against different ground truth "
+        f"({' = '.join(sorted([str(copy), str(clip.gt)]))} for camshift, robust; {shifted} "
+        "for s0): their scores are not "
+        "directly comparable"]
+    shutil.rmtree(tmp_path / "runs" / "s0")
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "r2"))
+    assert result.exit_code == 0, result.output
+    assert "different ground truth" not in result.stderr
+
+
 def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: ClipFactory,
                                                                  tmp_path: Path) -> None:
     """A plain --gt FILE scored every input of its length, another clip's included (AUC 0.02

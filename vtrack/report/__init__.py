@@ -20,6 +20,7 @@ Scores follow the OTB definitions of :mod:`vtrack.evaluate.metrics` (see :mod:`.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 from collections.abc import Callable, Sequence
@@ -172,6 +173,27 @@ def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict
             {c: np.mean(v, axis=0) for c, v in precision.items()})
 
 
+def _mixed_truth_warning(name: str, runs: Sequence[RunResult]) -> str | None:
+    """A warning when the scored runs of input ``name`` were scored against different ground
+    truth (files whose bytes differ, or that cannot be read and have different paths): the
+    table ranks them side by side as if against one truth."""
+    def content(path: str) -> str:
+        try:
+            return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError:
+            return path
+
+    truths = _group([r for r in runs if r.scores is not None and r.ground_truth],
+                    lambda r: content(str(r.ground_truth)))
+    if len(truths) < 2:
+        return None
+    named = "; ".join(sorted(
+        f"{' = '.join(sorted({str(r.ground_truth) for r in group}))} for "
+        f"{', '.join(sorted({r.config for r in group}))}" for group in truths.values()))
+    return (f"{name}: its runs were scored against different ground truth ({named}): their "
+            "scores are not directly comparable")
+
+
 def _refuse_batch_folder(out_dir: Path) -> None:
     """Raise OutputError when ``out_dir`` holds a batch's ``summary.csv`` (the report's own
     ``summary.csv`` would replace it) or a run's ``run.json``."""
@@ -260,6 +282,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
 
     plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
     by_input = _group(single, lambda r: r.input)
+    warnings += [line for name, group in by_input.items()
+                 if (line := _mixed_truth_warning(name, group))]
     # a run that failed part way is listed with its frames' scores but averaged with no other
     counted = [r for r in single if r.status != STATUS_FAILED]
     if len(counted) < len(single):
