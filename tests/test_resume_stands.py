@@ -95,3 +95,19 @@ def test_a_moved_batch_folder_resumes_and_a_refusal_names_what_changed(folder: P
                     "--no-video", "--frames", "5")
     assert result.returncode == 1
     assert "(made with other settings: --no-video, --frames)" in result.stderr.decode()
+
+
+def test_force_replaces_results_of_other_settings_as_its_help_says(folder: Path,
+                                                                   tmp_path: Path) -> None:
+    """--force replaced the results of a run with other settings without -y, while the help
+    (and README) said those are replaced only with --overwrite; the help now says it."""
+    out = tmp_path / "r"
+    resume(folder, out)
+    result = vtrack("batch", str(folder), "-c", "s0", "-o", str(out), "-j", "1", "--force",
+                    "--no-video")
+    assert result.returncode == 0, result.stderr.decode()
+    assert json.loads((out / "occ" / "s0" / "run.json").read_text())["request"]["video"] is False
+    help_text = " ".join(vtrack("batch", "--help").stdout.decode().split())
+    force = help_text.split("--force ", 1)[1].split(" -y, --overwrite", 1)[0]
+    assert "other settings" in force and "--overwrite" in force, force
+    assert "without it (or --force) those pairs fail" in help_text

@@ -128,11 +128,12 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
                    "then give up (exit 2).")
 @gt_origin_option()
 @click.option("--force", is_flag=True,
-              help="Run again input x config pairs whose results are already complete.")
+              help="Run again input x config pairs whose results are already complete; "
+                   "replaces the results of runs with other settings too (as --overwrite).")
 @click.option("--overwrite", "-y", is_flag=True,
               help="Replace results that runs with other settings (another --set, --start, "
-                   "ground truth ...) left in DIR/<input>/<config>/; without it those pairs "
-                   "fail, naming the folder.")
+                   "ground truth ...) left in DIR/<input>/<config>/; without it (or --force) "
+                   "those pairs fail, naming the folder.")
 def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             jobs: int | None, scheduler: str | None, scheduler_timeout: float,
             worker_timeout: float, gt_origin: int | None,
@@ -151,7 +152,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     scene writes it, gt.txt or gt/gt.txt). Without ground truth, single-target configs
     start from the box in name.init.txt (init.txt in a sequence folder). Results already
     complete are not run again (resume) unless --force; results of runs with other settings are
-    replaced only with --overwrite. A failing input does not stop the others;
+    replaced only with --overwrite (or --force). A failing input does not stop the others;
     the exit code is 1 if any failed.
     """
     # imported here, not at the top: other commands start without them (Dask loads only
