@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from vtrack.batch.jobs import Job, Progress
+from vtrack.batch.summary import UNFINISHED
 from vtrack.batch.worker import execute
 from vtrack.config import load_config
 from vtrack.request import RunRequest
@@ -99,6 +100,11 @@ def test_workers_die_with_a_killed_batch_and_the_resume_agrees(folder: Path,
         record = json.loads((out / name / "robust" / "run.json").read_text())
         assert record["status"] == "interrupted", record["status"]
         assert 0 < record["frames"] < 600
+    # the summary has a row for every pair, none finished (it had none: no summary.csv, or
+    # after some runs a summary of those alone, that looked whole)
+    with (out / "summary.csv").open() as handle:
+        killed = {row["input"]: (row["status"], row["error"]) for row in csv.DictReader(handle)}
+    assert killed == dict.fromkeys(NAMES, ("interrupted", UNFINISHED))
 
     resume = subprocess.run(command, capture_output=True, timeout=300, check=False)
     assert resume.returncode == 0, resume.stderr.decode()

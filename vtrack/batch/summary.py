@@ -17,6 +17,9 @@ from vtrack.errors import passing_stop_to
 from vtrack.io.files import write_text_atomic
 from vtrack.run import STATUS_INTERRUPTED
 
+#: The error of a pair the batch had not finished when it last wrote ``summary.csv``.
+UNFINISHED = "not finished when the batch last wrote this file (it was still running, or killed)"
+
 
 def run_batch(batch: Plan, executor: Executor,
               summary_path: Path) -> Generator[Outcome, None, None]:
@@ -32,6 +35,7 @@ def run_batch(batch: Plan, executor: Executor,
     summary = SummaryWriter(summary_path, batch.order)
     started = time.time()
     finished = False
+    summary.write()
     try:
         for outcome in batch.known:
             summary.add(outcome)
@@ -50,7 +54,7 @@ def run_batch(batch: Plan, executor: Executor,
                         summary.rows[(job.input, job.config)] = Outcome(
                             job.input, job.config, recorded.status, recorded, recorded.error,
                             job.attempt).row()
-            summary.write(unfinished=STATUS_INTERRUPTED)
+            summary.write(stopped=True)
 
 
 def earlier_rows(path: Path) -> dict[tuple[str, str], dict[str, Any]]:
@@ -85,15 +89,18 @@ class SummaryWriter:
         self.rows[(outcome.input, outcome.config)] = outcome.row()
         self.write()
 
-    def write(self, unfinished: str | None = None) -> None:
-        """Write the file; jobs without an outcome get the status ``unfinished`` (or no row)."""
+    def write(self, stopped: bool = False) -> None:
+        """Write the file. Pairs without an outcome yet are ``interrupted``: while the batch
+        runs, with the error :data:`UNFINISHED` (so a batch killed outright, ``kill -9``,
+        leaves a row for each pair it did not finish, not a summary of fewer pairs that looks
+        whole); once it has ``stopped`` early (Ctrl-C, SIGTERM), with none (never ran)."""
         buffer = io.StringIO()
         writer = csv.DictWriter(buffer, SUMMARY_COLUMNS, lineterminator="\n")
         writer.writeheader()
         for (name, config), row in self.rows.items():
-            if row is not None:
-                writer.writerow(row)
-            elif unfinished is not None:
-                writer.writerow({"input": name, "config": config, "status": unfinished})
+            if row is None:
+                row = {"input": name, "config": config, "status": STATUS_INTERRUPTED,
+                       "error": None if stopped else UNFINISHED}
+            writer.writerow(row)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path, buffer.getvalue())
