@@ -4,6 +4,7 @@ up, with its summary, when every worker is gone for --worker-timeout. Loopback o
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import signal
@@ -12,6 +13,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -93,6 +95,41 @@ def start(command: list[str]) -> subprocess.Popen[str]:
                             stderr=subprocess.PIPE, text=True)
 
 
+@contextlib.contextmanager
+def batch_on_a_cluster(folder: Path, out: Path) -> Iterator[
+        tuple[str, subprocess.Popen[str], subprocess.Popen[str], subprocess.Popen[str]]]:
+    """A local scheduler, one worker and a ``slow`` batch of ``folder`` on them, yielded once
+    its job has tracked a few frames (their rows are on disk as they are written: header + 3
+    rows): ``(address, scheduler, worker, batch)``. Whatever is still running is killed at
+    the end."""
+    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                       "--no-dashboard"])
+    worker = batch = None
+    try:
+        assert scheduler.stderr is not None
+        for line in scheduler.stderr:
+            if "Scheduler at" in line:
+                address = line.split("Scheduler at:")[1].strip()
+                break
+        worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
+                        "--no-nanny", "--no-dashboard"])
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--preset", "slow", "-o", str(out)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 90
+        while not any(p.read_bytes().count(b"\n") > 3
+                      for p in (out / "a").glob("*/.track.tmp-*.csv")):
+            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
+            time.sleep(0.05)
+        yield address, scheduler, worker, batch
+    finally:
+        for process in (batch, worker, scheduler):
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
+
+
 def test_the_dashboard_port_and_a_batch_whose_workers_all_die(folder: Path,
                                                               tmp_path: Path) -> None:
     with socket.socket() as a, socket.socket() as b:
@@ -148,28 +185,8 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path, sig
     that: the batch reported it ``interrupted`` while the worker went on and finished it (its
     run.json then said ``complete``, the summary ``interrupted``). The job's records name the
     signal the batch got: a SIGTERM was recorded as "interrupted by the user"."""
-    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-                       "--no-dashboard"])
-    worker = batch = None
-    try:
-        assert scheduler.stderr is not None
-        for line in scheduler.stderr:
-            if "Scheduler at" in line:
-                address = line.split("Scheduler at:")[1].strip()
-                break
-        worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
-                        "--no-nanny", "--no-dashboard"])
-        out = tmp_path / "out"
-        batch = subprocess.Popen(
-            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
-             "--preset", "slow", "-o", str(out)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 90
-        # a few frames tracked: their rows are on disk as they are written (header + 3 rows)
-        while not any(p.read_bytes().count(b"\n") > 3
-                      for p in (out / "a").glob("*/.track.tmp-*.csv")):
-            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
-            time.sleep(0.05)
+    out = tmp_path / "out"
+    with batch_on_a_cluster(folder, out) as (_, _, _, batch):
         batch.send_signal(signum)
         _, stderr = batch.communicate(timeout=60)
         records = list(out.glob("a/*/run.json"))
@@ -177,11 +194,6 @@ def test_a_stopped_batch_stops_its_running_job(folder: Path, tmp_path: Path, sig
         first = json.loads(records[0].read_text())
         time.sleep(3)  # the worker does not carry on with the job
         last = json.loads(records[0].read_text())
-    finally:
-        for process in (batch, worker, scheduler):
-            if process is not None and process.poll() is None:
-                process.kill()
-                process.wait()
     assert batch.returncode == 128 + signum, stderr
     assert "Traceback" not in stderr
     assert first["status"] == last["status"] == "interrupted", (first, last)
@@ -199,35 +211,11 @@ def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
     scheduler-connection-lost.' then 'Client lost the connection ...'), also two lines in
     summary.csv; on the worker, which its scheduler closed, the job's check of the stop event
     raised AttributeError: the run ended ``failed`` (internal error, error.log) part way."""
-    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-                       "--no-dashboard"])
-    worker = batch = None
-    try:
-        assert scheduler.stderr is not None
-        for line in scheduler.stderr:
-            if "Scheduler at" in line:
-                address = line.split("Scheduler at:")[1].strip()
-                break
-        worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
-                        "--no-nanny", "--no-dashboard"])
-        out = tmp_path / "out"
-        batch = subprocess.Popen(
-            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
-             "--preset", "slow", "-o", str(out)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 90
-        while not any(p.read_bytes().count(b"\n") > 3
-                      for p in (out / "a").glob("*/.track.tmp-*.csv")):
-            assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
-            time.sleep(0.05)
+    out = tmp_path / "out"
+    with batch_on_a_cluster(folder, out) as (address, scheduler, worker, batch):
         scheduler.send_signal(signal.SIGTERM)
         _, stderr = batch.communicate(timeout=60)
         worker.wait(timeout=120)  # closed by its scheduler, once its running job has ended
-    finally:
-        for process in (batch, worker, scheduler):
-            if process is not None and process.poll() is None:
-                process.kill()
-                process.wait()
     assert batch.returncode == 1, stderr
     assert "Traceback" not in stderr, stderr
     errors = [line for line in stderr.splitlines() if line.strip()]
