@@ -668,6 +668,32 @@ def test_keeping_up_works_through_a_decoders_bursts_when_quick_on_average() -> N
     assert taken == list(range(30)) and source.passed == 0
 
 
+def test_keeping_up_works_through_a_burst_longer_than_its_queue() -> None:
+    """io.threads.KeepingUp: a burst longer than the queue (the backlog FFmpeg buffers while
+    a stream opens arrives at once when the tracker starts) was cut to the newest 8 by the
+    reader (`vtrack run udp://...` passed over frames 2-5 and 8-10 of a 160x120 clip at p99
+    5 ms); now the reader waits for room while the consumer keeps up, and every item is
+    handed over. Here the consumer holds the first item until the producer has been asked
+    for the item after the queue's worth (the old reader had dropped one by then)."""
+    from vtrack.io.threads import KeepingUp
+
+    depth, asked = 8, threading.Event()
+
+    def burst():
+        for i in range(3 * depth):
+            if i == depth + 2:
+                asked.set()
+            yield i
+
+    source = KeepingUp(burst(), "burst", period_s=10.0, depth=depth)
+    taken = []
+    for item in source:
+        if item == 0:
+            asked.wait(1.0)  # the new reader waits for room instead, and this gives up
+        taken.append(item)
+    assert taken == list(range(3 * depth)) and source.passed == 0
+
+
 def test_latency_percentiles_are_within_their_bins() -> None:
     from vtrack.latency import Latencies
 

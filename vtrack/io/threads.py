@@ -105,12 +105,16 @@ class KeepingUp(Generic[T]):
     handing over what the consumer can still keep up with and passing over the rest.
 
     Items wait in a queue of at most ``depth``. When the consumer asks for the next one, it
-    gets the oldest waiting item if it can work through everything waiting within
-    ``LATENCY_BUDGET_S`` (or the next item's period, if longer; at its measured time per item);
-    otherwise the older items are passed over until it can (the newest always stays). So a
-    burst of items that arrived together (several frames from a frame-threaded decoder, or
-    from one network packet) is worked through, while a consumer slower than the source
-    always gets the newest and never falls further behind than the budget.
+    gets the oldest waiting item if it can work through everything waiting within the budget
+    (``LATENCY_BUDGET_S``, or the next item's period if longer; at its measured time per item);
+    otherwise the older items are passed over until it can (the newest always stays). When the
+    queue is full, the producer waits for room until the oldest waiting item has waited the
+    budget, and only then passes it over: the rest of a burst stays in the source (the
+    decoder, the socket) meanwhile. So a burst of items that arrived together (several frames
+    from a frame-threaded decoder, from one network packet, or the backlog FFmpeg buffered
+    while a stream was opened), however long, is worked through by a consumer that keeps up
+    with it within the budget, while a consumer slower than the source always gets the newest
+    and never falls further behind than the budget.
 
     ``passed`` counts the items passed over; ``received`` is when the item last handed over
     was produced (``time.perf_counter()``). Memory stays flat whatever the consumer's pace. If
@@ -138,20 +142,35 @@ class KeepingUp(Generic[T]):
                 if self._stop.is_set():
                     return
                 with self._ready:
-                    if len(self._waiting) == self._depth:
-                        self._waiting.popleft()
-                        self.passed += 1
+                    self._make_room()
+                    if self._stop.is_set():
+                        return
                     self._waiting.append((item, time.perf_counter()))
-                    self._ready.notify()
+                    self._ready.notify_all()
         except BaseException as exc:  # handed to the consumer, who decides what it means
             end = _Failure(exc)
         finally:
             with self._ready:
                 self._end = end
-                self._ready.notify()
+                self._ready.notify_all()
             close = getattr(self._items, "close", None)
             if close is not None:
                 close()
+
+    def _budget_s(self) -> float:
+        return max(self._period_s, LATENCY_BUDGET_S)
+
+    def _make_room(self) -> None:
+        """Wait until the queue has room, or passing over its oldest item is due: that item
+        has waited the budget (the consumer is not keeping up), or a stop was asked for.
+        Called by the producer holding ``_ready``."""
+        while len(self._waiting) >= self._depth and not self._stop.is_set():
+            waited = time.perf_counter() - self._waiting[0][1]
+            if waited >= self._budget_s():
+                self._waiting.popleft()
+                self.passed += 1
+                return
+            self._ready.wait(min(STOP_POLL_S, self._budget_s() - waited))
 
     def _take(self) -> tuple[object, float] | None:
         """The next item to hand over (None: the producer has ended), passing over the ones
@@ -160,11 +179,11 @@ class KeepingUp(Generic[T]):
             self._ready.wait(STOP_POLL_S)
         if not self._waiting:
             return None
-        budget = max(self._period_s, LATENCY_BUDGET_S)
-        keep = max(1, int(budget / self._busy_s)) if self._busy_s > 0 else self._depth
+        keep = max(1, int(self._budget_s() / self._busy_s)) if self._busy_s > 0 else self._depth
         while len(self._waiting) > keep:
             self._waiting.popleft()
             self.passed += 1
+        self._ready.notify_all()  # a producer waiting for room has it now
         return self._waiting.popleft()
 
     def __iter__(self) -> Iterator[T]:
@@ -194,6 +213,7 @@ class KeepingUp(Generic[T]):
         self._stop.set()
         with self._ready:
             self._waiting.clear()
+            self._ready.notify_all()
         if not self._started:
             return True
         self._thread.join(timeout)
