@@ -308,6 +308,43 @@ def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path)
     assert record["frames"] == 30 and sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
 
 
+def test_a_signal_after_a_complete_run_is_recorded_leaves_its_exit_status_0(
+        scene_factory: SceneFactory, tmp_path: Path) -> None:
+    """SIGTERM once run.json said `complete` (while the summary line was printed, or while
+    the interpreter tore down after it) ended the process 143, the record and the exit
+    disagreeing: the signal handlers were gone once the run had returned. Now the exit is 0,
+    as the record says. Here the summary line waits for room in a full stdout pipe, never
+    drained, while SIGTERM comes again and again once run.json is there."""
+    scene = scene_factory("smooth", width=W, height=H, frames=FRAMES)
+    raw = tmp_path / "in.raw"
+    raw.write_bytes(b"".join(frame.tobytes() for frame in scene.frames()))
+    out = tmp_path / "out"
+    read, write = os.pipe()
+    os.set_blocking(write, False)
+    for chunk in (b"x" * 4096, b"x"):  # full to the last byte
+        with contextlib.suppress(BlockingIOError):
+            while True:
+                os.write(write, chunk)
+    os.set_blocking(write, True)
+    try:
+        with raw.open("rb") as stdin, (tmp_path / "stderr.txt").open("wb") as stderr:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "vtrack", "run", "-", "--raw", f"{W}x{H}", "--fps", "30",
+                 "--init", ",".join(map(str, scene.boxes[0])), "--no-video", "--out", str(out)],
+                stdin=stdin, stdout=write, stderr=stderr)
+        wait_for(lambda: (out / "run.json").exists(), process, "run.json")
+        deadline = time.monotonic() + 60
+        while process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+            assert time.monotonic() < deadline, "vtrack did not end"
+            time.sleep(0.01)
+    finally:
+        os.close(write)
+        os.close(read)
+    assert assert_records_agree(out)["status"] == "complete"
+    assert process.returncode == 0, (tmp_path / "stderr.txt").read_text()
+
+
 def test_a_signal_before_the_first_tracked_frame_is_an_interrupted_run(
         scene_factory: SceneFactory, tmp_path: Path) -> None:
     """Interrupted while ``--start`` passes over the frames before it: no frame was tracked,

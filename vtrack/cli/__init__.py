@@ -37,6 +37,15 @@ class _Group(click.Group):
         command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
         return command if isinstance(command, click.Command) else None
 
+    #: Set when the group runs as the process's own program (the ``vtrack`` command, ``python
+    #: -m vtrack``), not called by click's test runner: a command may then leave signal
+    #: handlers for the interpreter's teardown after it (``vtrack run``'s final exit status).
+    owns_process = False
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        self.owns_process = True
+        return self.main(*args, **kwargs)
+
     def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
         """As click's ``main``, but a usage error is one ``vtrack: error:`` line naming the
         command's ``--help``, like every other error of vtrack."""

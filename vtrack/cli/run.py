@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
+import threading
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -19,7 +22,12 @@ from vtrack.cli._options import (
 )
 from vtrack.cli._paths import CONFIG, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
+from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError
 from vtrack.params import MAX_SEED
+
+if TYPE_CHECKING:
+    from vtrack.io import InputInfo
+    from vtrack.run import RunSummary
 
 #: ``--follow`` without a number: seconds a growing file may stay the same size before its end.
 FOLLOW_S = 5.0
@@ -183,22 +191,83 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         video_out=video_out,
     )
     progress = FrameProgress(quiet, request.frames_expected, stats_period)
-    try:
-        summary = run(request, on_frame=progress.on_frame, on_open=progress.on_open,
-                      overwrite=overwrite)
-    finally:
-        progress.close()
-    for warning in summary.warnings:
-        _say(f"vtrack: warning: {warning}", err=True)
-    if not quiet:
-        _say(summary.line(), err=stream == "-")
+    root = click.get_current_context().find_root().command
+    with _Ending(whole_process=getattr(root, "owns_process", False)) as ending:
+
+        def opened(info: InputInfo) -> None:
+            ending.recording = True
+            progress.on_open(info)
+
+        try:
+            summary = run(request, on_frame=progress.on_frame, on_open=opened,
+                          overwrite=overwrite)
+        except VtrackError as exc:  # recorded (if the outputs had opened): exits as it says
+            ending.code = exc.exit_code
+            raise
+        finally:
+            progress.close()
+        ending.code = _exit_code(summary)
+        for warning in summary.warnings:
+            _say(f"vtrack: warning: {warning}", err=True)
+        if not quiet:
+            _say(summary.line(), err=stream == "-")
+        if summary.status == STATUS_INTERRUPTED:
+            _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
+                 err=True)
+        elif summary.status != STATUS_COMPLETE:
+            _say(f"vtrack: error: {summary.error}; results up to there are in "
+                 f"{summary.out_dir}", err=True)
+    if ending.code:
+        sys.exit(ending.code)
+
+
+def _exit_code(summary: RunSummary) -> int:
+    """The exit status ``summary``'s run ends with: 0 complete, 128 + the signal's number
+    interrupted (130, 143), else 1."""
+    from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED
+
+    if summary.status == STATUS_COMPLETE:
+        return 0
     if summary.status == STATUS_INTERRUPTED:
-        _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}", err=True)
-        sys.exit(128 + signal.Signals[summary.interrupted_by or "SIGINT"].value)
-    if summary.status != STATUS_COMPLETE:
-        _say(f"vtrack: error: {summary.error}; results up to there are in {summary.out_dir}",
-             err=True)
-        sys.exit(1)
+        return 128 + signal.Signals[summary.interrupted_by or "SIGINT"].value
+    return 1
+
+
+class _Ending:
+    """SIGINT and SIGTERM around :func:`vtrack.run.run`, which handles them itself while it
+    works. Before it has opened the outputs a signal interrupts as usual (Interrupted). Once it
+    has (``recording``) it writes a record, and when it returns that record is final: a signal
+    then cannot make the exit disagree with it (run.json ``complete`` and exit 143). It is
+    ignored until the exit status is known (``code``), then it ends the process at once with
+    that status. In a process of its own (``whole_process``: vtrack started from the command
+    line) the signals are then ignored for the interpreter's teardown after the command (its
+    first step puts the default handlers back, which would end the process 130 or 143); else
+    (click's test runner) the previous handlers come back after the block."""
+
+    def __init__(self, whole_process: bool) -> None:
+        self.whole_process = whole_process
+        self.recording = False
+        self.code: int | None = None
+        self._previous: dict[int, Any] = {}
+
+    def __call__(self, signum: int, frame: object) -> None:
+        if not self.recording:
+            raise Interrupted(signum)
+        if self.code is not None:
+            os._exit(self.code)
+
+    def __enter__(self) -> _Ending:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = {s: signal.signal(s, self) for s in STOP_SIGNALS}
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self.whole_process and self.recording and self._previous:
+            for signum in STOP_SIGNALS:
+                signal.signal(signum, signal.SIG_IGN)
+            return
+        for signum, old in self._previous.items():
+            signal.signal(signum, old)
 
 
 def _say(line: str, err: bool) -> None:
