@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame
-from vtrack.geometry import Box, center_error
+from vtrack.geometry import Box, center_error, iou
 from vtrack.io import open_source
 from vtrack.scenes import SCENARIOS, make_scene, write_clip, write_groundtruth, write_raw
 
@@ -127,6 +127,36 @@ def test_blob_centroids_match_multi_target_truth(scene_factory):
                 continue  # partly out of the frame
             cx, cy, _ = measured(bgr, box, bright)
             assert math.hypot(cx - box.cx, cy - box.cy) < 0.5
+
+
+def test_mot_groundtruth_gives_every_walker_its_own_visibility(scene_factory, tmp_path):
+    """pedestrians' .mot.txt had visibility 1 (column 9) for every walker, also half out of
+    the frame or hidden behind another: now each row's is its walker's visible fraction. A
+    walker clear of the others is 1 inside the frame and less across its edge; of walkers 1
+    and 2 where they cross, the one behind is less than 1."""
+    from vtrack.scenes import write_mot_groundtruth
+
+    scene = scene_factory("pedestrians", width=320, height=240, frames=60, fps=25.0)
+    rows: dict[tuple[int, int], tuple[Box, float]] = {}
+    for line in write_mot_groundtruth(scene, tmp_path / "p.mot.txt").read_text().splitlines():
+        values = line.split(",")
+        box = Box(*map(float, values[2:6]))
+        rows[int(values[0]) - 1, int(values[1])] = (box, float(values[8]))
+    assert all(0.0 <= seen <= 1.0 for _, seen in rows.values())
+    edge = inside = 0
+    for (index, track_id), (box, seen) in rows.items():
+        others = [b for (i, t), (b, _) in rows.items() if i == index and t != track_id]
+        if any(iou(box, other) > 0 for other in others):
+            continue
+        if box.x >= 0 and box.y >= 0 and box.x + box.w <= 320 and box.y + box.h <= 240:
+            assert seen == 1.0, (index, track_id)
+            inside += 1
+        elif box.x < -1 or box.x + box.w > 321:
+            assert seen < 1.0, (index, track_id, box)
+            edge += 1
+    assert inside and edge
+    cross = scene.events["cross"]
+    assert min(rows[cross, 1][1], rows[cross, 2][1]) < 1.0
 
 
 # ---------------------------------------------------------------------------------- events

@@ -27,6 +27,9 @@ class Scene:
       1 fully visible, 0 fully occluded or out of the frame.
     - ``tracks[i]``: ``[(track_id, box), ...]`` for every tracked object at least partly inside
       the frame (also while occluded), sorted by id; single-target scenes have only id 1.
+    - ``track_visibility[i]``: ``{track_id: fraction}`` for the objects of ``tracks[i]``, as
+      ``visibility`` is for the target: the fraction of its area inside the frame and not
+      covered by an object in front of it (MOTChallenge's visibility ratio).
     - ``events``: the scenario's key frames (see :data:`vtrack.scenes.SCENARIOS`).
 
     Frames are rendered when asked for (``frame(i)``, ``frames()``) and are bit-identical for the
@@ -41,6 +44,7 @@ class Scene:
     boxes: list[Box | None]
     visibility: list[float]
     tracks: list[list[tuple[int, Box]]]
+    track_visibility: list[dict[int, float]]
     events: dict[str, Any]
     compositor: Compositor = field(repr=False)
 
@@ -97,10 +101,8 @@ def assemble(
     """
     truth = compositor.measure(spec.width, spec.height, spec.frames)
     target = truth[1]
-    tracks: list[list[tuple[int, Box]]] = [
-        [(tid, rows[i][0]) for tid, rows in sorted(truth.items()) if rows[i][1] > 0.0]
-        for i in range(spec.frames)
-    ]
+    in_view = [[tid for tid, rows in sorted(truth.items()) if rows[i][1] > 0.0]
+               for i in range(spec.frames)]
     return Scene(
         name=spec.name,
         width=spec.width,
@@ -109,7 +111,8 @@ def assemble(
         seed=spec.seed,
         boxes=[box if in_frame > 0.0 else None for box, in_frame, _ in target],
         visibility=[visible for _, _, visible in target],
-        tracks=tracks,
+        tracks=[[(tid, truth[tid][i][0]) for tid in ids] for i, ids in enumerate(in_view)],
+        track_visibility=[{tid: truth[tid][i][2] for tid in ids} for i, ids in enumerate(in_view)],
         events=events_of(truth) if events_of else {},
         compositor=compositor,
     )

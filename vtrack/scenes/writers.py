@@ -7,8 +7,8 @@ Ground-truth conventions:
   edge). A frame where the target is entirely outside the frame is ``0,0,0,0`` (the UAV123 /
   LaSOT convention for an absent target). A fully *occluded* target keeps its true box (see
   :class:`~vtrack.scenes.scene.Scene`).
-- MOTChallenge (``write_mot_groundtruth``): ``frame,id,x,y,w,h,1,1,1`` with 1-based frames, one
-  line per object at least partly inside the frame.
+- MOTChallenge (``write_mot_groundtruth``): ``frame,id,x,y,w,h,1,1,visibility`` with 1-based
+  frames, one line per object at least partly inside the frame.
 
 Every writer creates missing parent folders, writes temporary names renamed when complete (a
 failed write leaves no partial file and the earlier one as it was) and turns an OS failure into
@@ -204,6 +204,11 @@ def _box_line(values: Iterable[float]) -> str:
     return ",".join(f"{v:.2f}" for v in values)
 
 
+def _fraction(value: float) -> str:
+    """A fraction 0..1 with 4 decimals at most: ``1``, ``0``, ``0.4375``."""
+    return f"{value:.4f}".rstrip("0").rstrip(".")
+
+
 def write_groundtruth(scene: Scene, path: str | Path, origin: int = 0) -> Path:
     """OTB ground truth: one ``x,y,w,h`` line per frame; ``0,0,0,0`` where the target is absent.
 
@@ -227,7 +232,9 @@ def _groundtruth_to(scene: Scene, path: Path, temp: Path, origin: int) -> None:
 
 
 def write_mot_groundtruth(scene: Scene, path: str | Path) -> Path:
-    """MOTChallenge ground truth: ``frame,id,x,y,w,h,1,1,1`` per visible object, 1-based frames."""
+    """MOTChallenge ground truth: ``frame,id,x,y,w,h,1,1,visibility`` per object at least
+    partly inside the frame, 1-based frames; visibility is the fraction of the object that can
+    be seen (inside the frame and not hidden behind another), 0 to 1."""
     path = Path(path)
     with replacing(path) as (temp,):
         _mot_groundtruth_to(scene, path, temp)
@@ -237,8 +244,9 @@ def write_mot_groundtruth(scene: Scene, path: str | Path) -> Path:
 def _mot_groundtruth_to(scene: Scene, path: Path, temp: Path) -> None:
     """What :func:`write_mot_groundtruth` promises, written to ``temp`` (errors name ``path``)."""
     lines = [
-        f"{index + 1},{track_id},{_box_line(box)},1,1,1"
-        for index, tracks in enumerate(scene.tracks)
+        f"{index + 1},{track_id},{_box_line(box)},1,1,{_fraction(seen[track_id])}"
+        for index, (tracks, seen) in enumerate(
+            zip(scene.tracks, scene.track_visibility, strict=True))
         for track_id, box in tracks
     ]
     with _writing(path):
