@@ -4,7 +4,10 @@ An input can be read only forward; :class:`FrameStore` decodes as far as the fra
 keeps the most recently used frames encoded (JPEG by default, ~20x smaller than the pixels) up
 to a byte budget, so stepping back and forth near a frame costs nothing, while memory stays
 bounded whatever the input's length and size: a frame that was dropped from the cache is
-decoded again, reopening the input.
+decoded again, reopening the input. Frames are numbered as the input numbers them (as ``vtrack
+run --start`` and ``vtrack frame --at`` count): an image missing from a folder's numbering, or a
+frame that does not decode, leaves its number out (:class:`AbsentFrame`), it does not shift the
+frames after it.
 """
 
 from __future__ import annotations
@@ -26,8 +29,20 @@ from vtrack.io.source import InputInfo, Source
 CACHE_BYTES = 64 << 20
 
 
+class AbsentFrame(InputError):
+    """A frame number within the input that has no picture: missing from an image folder's
+    numbering, or not decodable. ``previous`` and ``following`` are the nearest frames before
+    and after it that have one (``previous`` None when there is none before)."""
+
+    def __init__(self, message: str, previous: int | None, following: int) -> None:
+        super().__init__(message)
+        self.previous = previous
+        self.following = following
+
+
 class FrameStore:
-    """Encoded frames of one input, decoded on demand up to the highest index asked for.
+    """Encoded frames of one input, decoded on demand up to the highest index asked for, by the
+    input's own frame numbers (:class:`AbsentFrame` for one it passes over).
 
     At most ``cache_bytes`` of encoded frames are kept (least recently used dropped first;
     the frame asked for is always returned). Safe to use from several threads (a page's
@@ -40,7 +55,9 @@ class FrameStore:
         self._source: Source = open_source(input_spec)
         self.info: InputInfo = self._source.info
         self._frames: Iterator[Frame] = iter(self._source)
-        self._next = 0  # index of the next frame the input yields
+        self._next = 0  # index after the last frame the input yielded
+        #: Runs of frame numbers the input passed over (first, last), in order.
+        self._gaps: list[tuple[int, int]] = []
         self._end: int | None = None  # the frame count, once the end was reached
         self._cache: OrderedDict[int, bytes] = OrderedDict()
         self._budget = cache_bytes
@@ -59,13 +76,15 @@ class FrameStore:
         return self._end if self._end is not None else self.info.frame_count
 
     def get(self, index: int) -> bytes | None:
-        """Frame ``index`` (0-based) encoded, or None when the input has no such frame."""
+        """Frame ``index`` (0-based, the input's numbering) encoded, or None when the input has
+        no such frame (past its end). AbsentFrame when the input passes over that number."""
         if index < 0 or (self._end is not None and index >= self._end):
             return None
         with self._lock:
             if index in self._cache:
                 self._cache.move_to_end(index)
                 return self._cache[index]
+            self._check_present(index)
             if index < self._next:  # dropped from the cache: read the input again
                 self._rewind()
             data = None
@@ -74,10 +93,25 @@ class FrameStore:
                 if frame is None:
                     self._end = self._next
                     return None
+                if frame.index > self._next and (not self._gaps
+                                                 or self._gaps[-1][1] < self._next):
+                    self._gaps.append((self._next, frame.index - 1))
+                self._next = frame.index + 1
+                if frame.index < index:
+                    self._keep(frame.index, encode_image(frame.bgr(), self._ext))
+                    continue
                 data = encode_image(frame.bgr(), self._ext)
-                self._keep(self._next, data)
-                self._next += 1
+                self._keep(frame.index, data)
+            self._check_present(index)
             return data
+
+    def _check_present(self, index: int) -> None:
+        """AbsentFrame when ``index`` lies in a run of numbers the input passed over."""
+        for first, last in self._gaps:
+            if first <= index <= last:
+                raise AbsentFrame(f"{self._spec}: frame {index} {self._source.absent(index)}; "
+                                  f"the next frame it has is frame {last + 1}",
+                                  first - 1 if first else None, last + 1)
 
     def _keep(self, index: int, data: bytes) -> None:
         self._cache[index] = data

@@ -49,43 +49,60 @@ function show() {
   boxDiv.style.width = box[2] / s + "px"; boxDiv.style.height = box[3] / s + "px";
   boxDiv.style.display = "block"; $("confirm").disabled = false;
 }
-function setBox(b, fromField) {
-  box = b.map(Math.round);
-  if (!fromField) field.value = box.join(",");
+function hint() {
+  $("status").textContent = box ? "Confirm with 'Use this box'." :
+                            "Drag a box around the target.";
+}
+// the box as shown and sent: from a drag, its corners rounded to whole pixels (so it stays
+// within the frame); typed or saved, as given
+function setBox(b, typed) {
+  box = b && b[2] >= 1 && b[3] >= 1 ? b : null;
+  if (!typed) field.value = b ? b.join(",") : "";
   show();
 }
-function load(i) {
+function dragged(p, q) {
+  const x0 = Math.round(Math.min(p[0], q[0])), y0 = Math.round(Math.min(p[1], q[1]));
+  return [x0, y0, Math.round(Math.max(p[0], q[0])) - x0, Math.round(Math.max(p[1], q[1])) - y0];
+}
+// step: +1 or -1 when stepping, to pass over numbers the input has no picture for
+function load(i, step) {
   fetch("frame/" + i).then((r) => {
-    if (!r.ok) { $("status").textContent = "no frame " + i; return null; }
-    return r.blob();
+    if (r.ok) return r.blob();
+    return r.json().catch(() => ({})).then((e) => {
+      const over = step > 0 ? e.next : step < 0 ? e.previous : null;
+      if (Number.isInteger(over)) load(over, step);
+      else $("status").textContent = e.error || "no frame " + i;
+      return null;
+    });
   }).then((blob) => {
     if (!blob) return;
-    index = i; img.src = URL.createObjectURL(blob);
+    index = i; img.src = URL.createObjectURL(blob); hint();
     const n = info.frames == null ? "?" : info.frames;
     $("where").textContent = "frame " + i + " of 0.." + (n === "?" ? "?" : n - 1);
   });
 }
 stage.addEventListener("pointerdown", (ev) => {
   ev.preventDefault(); stage.setPointerCapture(ev.pointerId); start = toImage(ev);
-  setBox([start[0], start[1], 0, 0]);
+  setBox(null);
 });
 stage.addEventListener("pointermove", (ev) => {
-  if (!start) return;
-  const p = toImage(ev);
-  setBox([Math.min(p[0], start[0]), Math.min(p[1], start[1]),
-          Math.abs(p[0] - start[0]), Math.abs(p[1] - start[1])]);
+  if (start) setBox(dragged(start, toImage(ev)));
 });
-stage.addEventListener("pointerup", () => { start = null;
-  $("status").textContent = box && box[2] >= 1 ? "Confirm with 'Use this box'." :
-                            "Drag a box around the target."; });
+stage.addEventListener("pointerup", () => { start = null; hint(); });
+// what --init and the sidecar take: x,y,w,h or x y w h; anything else leaves no box to confirm
+const NUMBER = /^[+-]?(\\d+\\.?\\d*|\\.\\d+)(e[+-]?\\d+)?$/i;
 field.addEventListener("input", () => {
-  const v = field.value.split(",").map(Number);
-  if (v.length === 4 && v.every(Number.isFinite)) setBox(v, true);
+  const text = field.value.trim(), parts = text.split(/\\s*,\\s*|\\s+/);
+  const ok = parts.length === 4 && parts.every((p) => NUMBER.test(p));
+  setBox(ok ? parts.map(Number) : null, true);
+  if (box || text === "") hint();
+  else $("status").textContent = ok ? "The box's width and height must be at least 1." :
+    "Type the box as x,y,w,h or x y w h (four numbers), or drag it on the image.";
 });
 img.addEventListener("load", show);
 window.addEventListener("resize", show);
-$("prev").onclick = () => { if (index > 0) load(index - 1); };
-$("next").onclick = () => load(index + 1);
+$("prev").onclick = () => { if (index > 0) load(index - 1, -1); };
+$("next").onclick = () => load(index + 1, 1);
 document.addEventListener("keydown", (ev) => {
   if (ev.target === field) return;
   if (ev.key === "ArrowLeft") $("prev").onclick();

@@ -2,8 +2,9 @@
 
 Routes, under a per-session secret path ``/TOKEN/`` (the URL the command prints): ``GET`` the
 page (:mod:`.page`), ``GET info`` the input's name, size, frame count, start frame and any box
-already saved, ``GET frame/N`` frame N as JPEG, ``POST select`` ``{"box": [x, y, w, h],
-"frame": N}`` which validates the box, writes the sidecar file and ends the selection. The
+already saved, ``GET frame/N`` frame N as JPEG (for a number the input passes over, 404 with
+the nearest frames it has, ``previous`` and ``next``), ``POST select`` ``{"box": [x, y, w,
+h], "frame": N}`` which validates the box, writes the sidecar file and ends the selection. The
 server listens on 127.0.0.1 only (reach it from elsewhere with an SSH port forward), on a free
 port unless one is asked for.
 
@@ -33,7 +34,7 @@ from urllib.parse import urlsplit
 from vtrack.errors import ConfigError, InputError, VtrackError
 from vtrack.geometry import Box, check_init_box
 from vtrack.io.sidecar import format_box, has_sidecar, read_sidecar, write_sidecar
-from vtrack.picker.frames import FrameStore
+from vtrack.picker.frames import AbsentFrame, FrameStore
 from vtrack.picker.page import PAGE
 
 HOST = "127.0.0.1"
@@ -260,7 +261,12 @@ class SelectionServer:
                 elif route == "info":
                     self._json(server.info())
                 elif frame is not None:
-                    data = server.store.get(int(frame.group(1)))
+                    try:
+                        data = server.store.get(int(frame.group(1)))
+                    except AbsentFrame as exc:  # the page steps over it to a frame it has
+                        self._json({"error": str(exc), "previous": exc.previous,
+                                    "next": exc.following}, 404)
+                        return
                     if data is None:
                         self._json({"error": f"no frame {int(frame.group(1))}"}, 404)
                     else:

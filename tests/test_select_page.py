@@ -1,0 +1,164 @@
+"""What ``vtrack select``'s page shows is what it writes: its frames are numbered as the input
+numbers them (as ``vtrack frame --at`` and ``vtrack run --start`` count), and a box typed into
+its field is the box confirmed. The browser test drives a real headless Chromium; it is skipped,
+saying what is missing, without Debian's chromium and chromium-driver and selenium.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from test_select import Select, _browser
+
+from vtrack.errors import InputError
+from vtrack.picker.frames import FrameStore, read_frame
+from vtrack.scenes import make_scene, write_image_sequence
+
+W, H = 160, 120
+
+
+@pytest.fixture(scope="module")
+def gapped(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A 12-image sequence whose 0004..0006.jpg (frames 3..5) are missing."""
+    folder = tmp_path_factory.mktemp("gapped") / "seq"
+    write_image_sequence(make_scene("smooth", seed=4, width=W, height=H, frames=12, fps=30),
+                         folder)
+    for number in (4, 5, 6):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    (folder / "groundtruth_rect.txt").unlink()
+    return folder / "img"
+
+
+def _image(data: bytes) -> np.ndarray:
+    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR).astype(int)
+
+
+def test_the_picker_numbers_frames_as_the_input_does(gapped: Path) -> None:
+    """After 3 missing images the page's frame 3 was image 0007.jpg (vtrack frame's and run's
+    frame 6), so a box drawn on it was printed --start 3; frames 9..11 did not exist."""
+    with FrameStore(str(gapped)) as store:
+        for index in (0, 2, 6, 8, 11):
+            shown = _image(store.get(index))
+            assert np.abs(shown - read_frame(str(gapped), index)).mean() < 3, index
+        for index in (3, 5, 4):  # before and after the store passed them
+            with pytest.raises(InputError) as absent:  # AbsentFrame
+                store.get(index)
+            assert (getattr(absent.value, "previous", None),
+                    getattr(absent.value, "following", None)) == (2, 6)
+            assert str(absent.value) == (f"{gapped}: frame {index} is missing from the "
+                                         "numbering (no image between 0003.jpg and 0007.jpg); "
+                                         "the next frame it has is frame 6")
+        assert store.get(12) is None and store.decoded == 12
+
+
+def test_select_names_a_missing_start_frame_and_the_page_server_steps_over_it(
+        gapped: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "vtrack", "select", str(gapped), "--frame", "4"],
+                          capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr == (f"vtrack: error: {gapped}: frame 4 is missing from the numbering "
+                           "(no image between 0003.jpg and 0007.jpg); the next frame it has is "
+                           "frame 6\n")
+    select = Select(str(gapped))
+    try:
+        with pytest.raises(urllib.error.HTTPError) as missing:
+            urllib.request.urlopen(select.url + "frame/4", timeout=10)
+        answer = json.loads(missing.value.read())
+        assert missing.value.code == 404 and (answer["previous"], answer["next"]) == (2, 6)
+        with urllib.request.urlopen(select.url + "frame/9", timeout=10) as response:
+            assert np.abs(_image(response.read()) - read_frame(str(gapped), 9)).mean() < 3
+    finally:
+        select.stop()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory: pytest.TempPathFactory):
+    """Headless Chromium in a 900x700 window."""
+    binary, driver_path = _browser()
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = binary
+    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                 "--disable-background-networking", "--window-size=900,700",
+                 f"--user-data-dir={tmp_path_factory.mktemp('profile')}"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(driver_path), options=options)
+    yield driver
+    driver.quit()
+
+
+def _confirmed(browser, select: Select) -> tuple[int, str, str]:
+    """Click 'Use this box', wait for the page to say it is done; the command's exit code and
+    output."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    browser.find_element(By.ID, "confirm").click()
+    WebDriverWait(browser, 20).until(
+        lambda b: b.find_element(By.TAG_NAME, "body").get_attribute("data-done"))
+    return select.finish()
+
+
+def test_the_page_steps_over_missing_frames(gapped: Path, browser) -> None:
+    """'next' from frame 2 showed image 0007.jpg as frame 3; a box drawn on it was printed
+    --start 3."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    select = Select(str(gapped), "--frame", "2")
+    try:
+        wait = WebDriverWait(browser, 20)
+        browser.get(select.url)
+        where = browser.find_element(By.ID, "where")
+        wait.until(lambda b: where.text.startswith("frame 2 "))
+        for button, shown in (("next", 6), ("prev", 2), ("next", 6)):
+            browser.find_element(By.ID, button).click()
+            wait.until(lambda b, shown=shown: where.text.startswith(f"frame {shown} "))
+        browser.find_element(By.ID, "init").send_keys("10,20,30,40")
+        code, out, err = _confirmed(browser, select)
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == "--start 6 --init 10,20,30,40"
+
+
+def test_the_box_confirmed_is_the_box_typed(gapped: Path, browser) -> None:
+    """Typed '10.5 20.25 30 40' (the form --init takes) was ignored and the dragged box
+    confirmed; '10.5,20.25,30,40' was shown but 11,20,30,40 confirmed; a half-typed box left
+    the last one to confirm."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    select = Select(str(gapped))
+    try:
+        browser.get(select.url)
+        image, field = browser.find_element(By.ID, "frame"), browser.find_element(By.ID, "init")
+        confirm = browser.find_element(By.ID, "confirm")
+        WebDriverWait(browser, 20).until(
+            lambda b: b.execute_script("return arguments[0].naturalWidth", image) == W)
+        (ActionChains(browser).move_to_element_with_offset(image, -40, -30).click_and_hold()
+         .move_by_offset(30, 20).release().perform())
+        assert confirm.is_enabled() and field.get_attribute("value")
+        field.clear()
+        field.send_keys("10,20,30")  # not a box: nothing to confirm, and the page says so
+        assert not confirm.is_enabled()
+        assert "four numbers" in browser.find_element(By.ID, "status").text
+        field.clear()
+        field.send_keys("10.5 20.25 30 40")
+        code, out, err = _confirmed(browser, select)
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == "--init 10.5,20.25,30,40"
+    assert (gapped.parent / "init.txt").read_text() == "10.5,20.25,30,40\n"
