@@ -301,6 +301,8 @@ def test_select_refuses_what_run_refuses_and_takes_one_confirm(tmp_path: Path,
         with ThreadPoolExecutor(12) as pool:
             answers = list(pool.map(confirm, range(12)))
         taken = [i for i, (status, _) in enumerate(answers) if status == 200]
+        assert all(answer["error"].startswith("a box was already confirmed")  # not 'not found'
+                   for status, answer in answers if status not in (200, None))
         code, out, err = select.finish()
     finally:
         select.stop()

@@ -7,6 +7,7 @@ saying what is missing, without Debian's chromium and chromium-driver and seleni
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import sys
 import urllib.error
@@ -162,3 +163,29 @@ def test_the_box_confirmed_is_the_box_typed(gapped: Path, browser) -> None:
     assert code == 0, err
     assert out.strip() == "--init 10.5,20.25,30,40"
     assert (gapped.parent / "init.txt").read_text() == "10.5,20.25,30,40\n"
+
+
+def test_a_page_whose_select_stopped_says_so(gapped: Path, browser) -> None:
+    """After Ctrl-C in the terminal (or a box confirmed on another page) 'Use this box' and
+    'next' did nothing and the page still said "Confirm with 'Use this box'"."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    select = Select(str(gapped))
+    try:
+        browser.get(select.url)
+        wait = WebDriverWait(browser, 20)
+        wait.until(lambda b: b.find_element(By.ID, "where").text.startswith("frame 0 "))
+        select.process.send_signal(signal.SIGINT)
+        code, out, err = select.finish()
+        assert code == 130 and out == "" and err.endswith("vtrack: interrupted\n")
+        field = browser.find_element(By.ID, "init")
+        field.clear()
+        field.send_keys("10,20,30,40")
+        browser.find_element(By.ID, "confirm").click()
+        status = browser.find_element(By.ID, "status")
+        wait.until(lambda b: "not running any more" in status.text)
+        assert not browser.find_element(By.ID, "confirm").is_enabled()
+        assert not browser.find_element(By.ID, "next").is_enabled()
+    finally:
+        select.stop()

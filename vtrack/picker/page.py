@@ -49,6 +49,16 @@ function show() {
   boxDiv.style.width = box[2] / s + "px"; boxDiv.style.height = box[3] / s + "px";
   boxDiv.style.display = "block"; $("confirm").disabled = false;
 }
+// a request vtrack select did not answer: it stopped (Ctrl-C, or a box confirmed on another
+// page); the page says so instead of doing nothing, and waits no further
+function ask(url, options) {
+  return fetch(url, options).catch(() => {
+    $("status").textContent = "vtrack select is not running any more (cancelled, or a box " +
+      "was confirmed on another page): nothing is taken from this page; run it again";
+    ["prev", "next", "confirm"].forEach((id) => { $(id).disabled = true; });
+    return new Promise(() => {});
+  });
+}
 function hint() {
   $("status").textContent = box ? "Confirm with 'Use this box'." :
                             "Drag a box around the target.";
@@ -66,7 +76,7 @@ function dragged(p, q) {
 }
 // step: +1 or -1 when stepping, to pass over numbers the input has no picture for
 function load(i, step) {
-  fetch("frame/" + i).then((r) => {
+  ask("frame/" + i).then((r) => {
     if (r.ok) return r.blob();
     return r.json().catch(() => ({})).then((e) => {
       const over = step > 0 ? e.next : step < 0 ? e.previous : null;
@@ -109,7 +119,7 @@ document.addEventListener("keydown", (ev) => {
   if (ev.key === "ArrowRight") $("next").onclick();
 });
 $("confirm").onclick = () => {
-  fetch("select", { method: "POST", headers: { "Content-Type": "application/json" },
+  ask("select", { method: "POST", headers: { "Content-Type": "application/json" },
                     body: JSON.stringify({ box: box, frame: index }) })
     .then((r) => r.json()).then((res) => {
       if (res.error) { $("status").textContent = res.error; return; }
@@ -121,7 +131,7 @@ $("confirm").onclick = () => {
       ["prev", "next", "confirm"].forEach((id) => { $(id).disabled = true; });
     });
 };
-fetch("info").then((r) => r.json()).then((i) => {
+ask("info").then((r) => r.json()).then((i) => {
   info = i; document.title = "vtrack select: " + i.name;
   if (i.box) setBox(i.box);
   load(i.frame);

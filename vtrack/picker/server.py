@@ -48,6 +48,9 @@ MAX_FRAME = 999_999_999
 MAX_COORDINATE = 1e6
 
 
+#: The answer to a confirm after the box was taken (from another page, or a second click).
+ALREADY_CONFIRMED = "a box was already confirmed (on another page?): this one is not taken"
+
 #: Connections served at once (a page makes a few); more are closed unanswered.
 MAX_CONNECTIONS = 16
 #: Seconds a connection may stay idle (mid-request or between requests) before it is closed.
@@ -275,14 +278,16 @@ class SelectionServer:
                     raise _Refused(404, "not found")
 
             def _post(self, route: str) -> None:
-                if route != "select" or server.selection is not None:
+                if route != "select":
                     raise _Refused(404, "not found")
+                if server.selection is not None:
+                    raise _Refused(409, ALREADY_CONFIRMED)
                 if (self.headers.get("Content-Type") or "").split(";")[0] != "application/json":
                     raise _Refused(415, "expected Content-Type: application/json")
                 body = self._body()
                 with server._confirming:
                     if server.selection is not None:  # another confirm came first
-                        raise _Refused(404, "not found")
+                        raise _Refused(409, ALREADY_CONFIRMED)
                     selection = server.select(body if isinstance(body, dict) else {})
                     server.selection = selection
                 try:
