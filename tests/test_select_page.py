@@ -21,7 +21,7 @@ from test_select import Select, _browser
 
 from vtrack.errors import InputError
 from vtrack.picker.frames import FrameStore, read_frame
-from vtrack.scenes import make_scene, write_image_sequence
+from vtrack.scenes import make_scene, write_image_sequence, write_video
 
 W, H = 160, 120
 
@@ -189,3 +189,32 @@ def test_a_page_whose_select_stopped_says_so(gapped: Path, browser) -> None:
         assert not browser.find_element(By.ID, "next").is_enabled()
     finally:
         select.stop()
+
+
+def test_a_box_dragged_to_the_edge_of_a_scaled_frame_stays_inside_it(tmp_path: Path,
+                                                                     browser) -> None:
+    """A 240-wide frame shown 160 CSS pixels wide (a window smaller than the frame): a drag
+    from image x 10.5 to past the right edge gave 11,..,230,.. (x, y, w and h each rounded),
+    which ends at 241, and the page's own confirm was refused 'not inside the 240x180 frame'."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    video = write_video(make_scene("smooth", seed=4, width=240, height=180, frames=10, fps=30),
+                        tmp_path / "wide.mp4")
+    select = Select(str(video))
+    try:
+        browser.get(select.url)
+        image = browser.find_element(By.ID, "frame")
+        WebDriverWait(browser, 20).until(
+            lambda b: b.execute_script("return arguments[0].naturalWidth", image) == 240)
+        browser.execute_script("arguments[0].style.width = '160px'", image)  # 1.5 px a pixel
+        assert image.rect["width"] == 160
+        (ActionChains(browser).move_to_element_with_offset(image, 7 - 80, 10 - 60)
+         .click_and_hold().move_by_offset(300, 30).release().perform())
+        assert browser.find_element(By.ID, "init").get_attribute("value") == "11,15,229,45"
+        code, out, err = _confirmed(browser, select)
+    finally:
+        select.stop()
+    assert code == 0, err
+    assert out.strip() == "--init 11,15,229,45"
