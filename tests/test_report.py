@@ -237,6 +237,19 @@ def test_multi_target_runs_get_a_metrics_table(tmp_path: Path) -> None:
     assert "CLEAR MOT" in html.split("<footer>")[1]
 
 
+def test_only_the_html_page_says_its_headers_sort_and_hover(tmp_path: Path) -> None:
+    """summary.md said "Click a column's header to sort by it; hover it for what it means" and
+    "hover a header": a Markdown table does neither."""
+    write_multi_target_run(tmp_path / "runs" / "mht", {"mota": 0.5, "id_switches": 2})
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    footer = (tmp_path / "report" / "index.html").read_text().split("<footer>")[1]
+    assert "Click a column&#x27;s header to sort by it" in footer and "hover a header" in footer
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert "CLEAR MOT" in markdown and "mark none. Tracking miss:" in markdown
+    assert "click" not in markdown.lower() and "hover" not in markdown.lower()
+
+
 def test_the_multi_target_table_ranks_each_metric_its_own_way(tmp_path: Path) -> None:
     """Issue 22: every MOT metric was marked best when highest (mostly lost, track ids) and
     the table repeated the frame count and derivable box counts, too wide for the page."""

@@ -16,6 +16,7 @@ from vtrack.report.runs import FailedRun, RunResult
 from vtrack.report.tables import NOTES, Table
 
 #: The footer of every report: what the numbers mean (OTB conventions, vtrack.evaluate.metrics).
+#: ``{sorting}`` is :data:`SORTING` in index.html, nothing in summary.md.
 DEFINITIONS = (
     "Overlap is the intersection over union (IoU) of the tracker's box and the ground-truth box. "
     "Success plot: share of evaluated frames whose overlap is > t, for t = 0, 0.05, ..., 1; "
@@ -25,17 +26,18 @@ DEFINITIONS = (
     "where the tracker claims no box (lost) counts as a failure (overlap 0, infinite centre "
     "error). Averages over inputs are means of the per-input curves and scores. Best value per "
     "column (among the configurations of an input, or among configurations) in bold; columns "
-    "that describe rather than rank (frames, miss flagged, lost frames) mark none. Click a "
-    "column's header to sort by it; hover it for what it means. "
+    "that describe rather than rank (frames, miss flagged, lost frames) mark none.{sorting} "
     + " ".join(f"{title}: {note}." for title, note in NOTES.items()
                if title in ("Tracking miss", "Miss flagged", "Lost frames"))
 )
-#: Added to the footer when multi-target runs are shown.
+#: How index.html's tables answer the mouse (a Markdown table neither sorts nor hovers).
+SORTING = " Click a column's header to sort by it; hover it for what it means."
+#: Added to the footer when multi-target runs are shown; ``{hover}`` as ``{sorting}`` above.
 MOT_DEFINITIONS = (
     "Multi-target runs show the CLEAR MOT and identity metrics (MOTA, MOTP, IDF1, ID switches "
     "...) that vtrack run recorded in run.json against MOTChallenge ground truth, abbreviated "
     "as MOTChallenge does (IDs: ID switches, FP: false positives, FN: misses, MT/PT/ML: mostly "
-    "tracked/partially tracked/mostly lost objects; hover a header); a dash means the run had "
+    "tracked/partially tracked/mostly lost objects{hover}); a dash means the run had "
     "no ground truth. summary.csv holds every recorded metric."
 )
 
@@ -83,8 +85,13 @@ class Page:
     sections: list[Section]
 
 
-def _footer(page: Page) -> str:
-    return DEFINITIONS + (" " + MOT_DEFINITIONS if page.mot is not None else "")
+def _footer(page: Page, html_page: bool) -> str:
+    """What the numbers mean; how the tables sort and explain themselves in ``html_page`` only
+    (index.html, not summary.md)."""
+    text = DEFINITIONS.format(sorting=SORTING if html_page else "")
+    if page.mot is not None:
+        text += " " + MOT_DEFINITIONS.format(hover="; hover a header" if html_page else "")
+    return text
 
 
 # --- HTML ------------------------------------------------------------------------------------
@@ -180,7 +187,7 @@ def render_html(page: Page) -> str:
         parts += [_img(p, f"{section.name}: {Path(p).stem}") for p in section.plots]
         if not section.plots:
             parts.append("<p>No frame tracked: nothing to plot.</p>")
-    parts.append(f"<footer>{_e(_footer(page))}</footer>")
+    parts.append(f"<footer>{_e(_footer(page, html_page=True))}</footer>")
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
@@ -229,7 +236,7 @@ def render_markdown(page: Page) -> str:
             parts.append(f"## {_md(section.name)}")
             parts += [_md(note) for note in section.notes]
             parts += [f"![{Path(p).stem}]({p})" for p in section.plots]
-    parts.append("---\n" + _footer(page))
+    parts.append("---\n" + _footer(page, html_page=False))
     return "\n\n".join(parts) + "\n"
 
 
