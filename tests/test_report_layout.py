@@ -120,3 +120,30 @@ def test_partial_runs_are_marked_and_averages_count_only_listed_inputs(
     s0 = averages["s0"]
     assert int(s0[-1]) == json.loads((occluded_run / "run.json").read_text())[
         "summary"]["frames_lost"]
+
+
+def test_a_one_frame_run_is_drawn_at_a_whole_frame(tmp_path: Path) -> None:
+    """The overlap plot of a one-frame run (--frames 1, or a one-frame clip) was an empty
+    panel, a line of one point not being drawn, over frames -0.4 .. 0.4."""
+    import numpy as np
+    from matplotlib.colors import to_rgb
+
+    clip, gt = clip_with_gt(tmp_path, "smooth", 10)
+    done = vtrack_run(clip, tmp_path / "one", "--gt", str(gt), "-c", "s2", "--frames", "1")
+    assert done.returncode == 0, done.stderr
+    run = load_run(tmp_path / "one")
+    assert len(run.overlaps) == 1 and run.overlaps[0] > 0.9
+    palette = plots.colours([run.config])
+    figure = plots.overlap_figure("smooth", [run], palette)
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    pixels = np.asarray(canvas.buffer_rgba())[:, :, :3].astype(int)
+    colour = np.array(to_rgb(palette[run.config])) * 255
+    (axis,) = figure.axes
+    box = axis.get_window_extent()
+    height = pixels.shape[0]
+    panel = pixels[int(height - box.y1) + 1:int(height - box.y0) - 1,
+                   int(box.x0) + 1:int(box.x1) - 1]
+    assert (np.abs(panel - colour).max(axis=2) < 40).sum() >= 4, "the run's frame is not drawn"
+    low, high = axis.get_xlim()
+    assert [t for t in axis.get_xticks() if low <= t <= high] == [0]  # not -0.4, -0.2 ...

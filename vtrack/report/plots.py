@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from vtrack.errors import printable
 from vtrack.evaluate.metrics import ERROR_THRESHOLDS, OVERLAP_THRESHOLDS, PRECISION_THRESHOLD_PX
@@ -68,6 +69,17 @@ MAX_LEGEND, MAX_RUNS_DRAWN = 10, 6
 SCORE_YLIM = (0.0, 1.02)
 
 
+def _line(axis, frames: np.ndarray, series: np.ndarray, colour: str) -> None:
+    """``series`` over ``frames`` as a line, NaN left as gaps; a value with no value on either
+    side (a run of one frame, a frame between frames without ground truth) as a dot, which a
+    line would leave undrawn."""
+    axis.plot(frames, series, color=colour, lw=1.2)
+    known = np.isfinite(series)
+    alone = known & ~np.r_[False, known[:-1]] & ~np.r_[known[1:], False]
+    if alone.any():
+        axis.plot(frames[alone], series[alone], "o", color=colour, ms=3)
+
+
 def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], ylabel: str,
             values: Callable[[RunResult], Sequence[float | None]],
             absent: Callable[[RunResult], Sequence[bool]] | None = None,
@@ -86,8 +98,7 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
             _shade(axis, run.states, state, colour, label, run.first_frame)
         if absent is not None:
             _shade(axis, absent(run), True, NO_GT_SHADE, "no ground truth", run.first_frame)
-        axis.plot(run.first_frame + np.arange(len(series)), series, color=palette[run.config],
-                  lw=1.2)
+        _line(axis, run.first_frame + np.arange(len(series)), series, palette[run.config])
         if empty is not None and len(series) and not np.isfinite(series).any():
             axis.text(0.5, 0.5, empty, transform=axis.transAxes, ha="center", va="center",
                       fontsize=9, color="0.35")
@@ -105,6 +116,7 @@ def _panels(title: str, runs: Sequence[RunResult], palette: Mapping[str, str], y
     axes[-1].set_xlim(min(run.first_frame for run in runs) - 0.5,
                       max(run.first_frame + max(len(series), 1)
                           for run, series in zip(runs, series_of, strict=True)) - 0.5)
+    axes[-1].xaxis.set_major_locator(MaxNLocator(integer=True, min_n_ticks=1))  # whole frames
     axes[-1].set_xlabel("frame")
     figure.suptitle(printable(title), fontsize=11)
     return figure
