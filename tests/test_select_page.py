@@ -218,3 +218,17 @@ def test_a_box_dragged_to_the_edge_of_a_scaled_frame_stays_inside_it(tmp_path: P
         select.stop()
     assert code == 0, err
     assert out.strip() == "--init 11,15,229,45"
+
+
+def test_select_help_says_a_box_on_a_later_frame_is_not_saved() -> None:
+    """--help said every confirmed box is written to the sidecar; one drawn on frame N > 0 is
+    printed as --start N --init and not saved (the README said so, --help did not)."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    done = CliRunner().invoke(main, ["select", "--help"], terminal_width=200)
+    assert done.exit_code == 0
+    text = " ".join(done.output.split())
+    assert "printed as --start N --init x,y,w,h and not saved" in text
+    assert "typed as x,y,w,h" in text

@@ -17,10 +17,12 @@ def command(input_spec: str, frame: int, port: int) -> None:
     """Pick the target's first box by dragging it on a frame of INPUT in a browser.
 
     Serves a page on 127.0.0.1 at a URL with a per-session secret path, printed when it
-    starts (over SSH: ssh -L PORT:127.0.0.1:PORT HOST, then open that URL locally). On
-    confirm, prints the --init value and writes it to the
-    sidecar file that vtrack run and vtrack batch read when no --init is given: NAME.init.txt
-    beside a video NAME.EXT, init.txt inside an image-sequence folder.
+    starts (over SSH: ssh -L PORT:127.0.0.1:PORT HOST, then open that URL locally). The box
+    is dragged on the frame or typed as x,y,w,h. On confirm, prints the --init value and writes
+    it to the sidecar file that vtrack run and vtrack batch read when no --init is given:
+    NAME.init.txt beside a video NAME.EXT, init.txt inside an image-sequence folder (stdin, a
+    URL or a device has none). A box confirmed on a frame N other than 0 is printed as --start
+    N --init x,y,w,h and not saved: the sidecar holds frame 0's box.
     """
     from vtrack.errors import InputError
     from vtrack.io.sidecar import format_box
