@@ -93,8 +93,13 @@ def test_frame_writes_the_frame_with_a_light_grid(clip: Path, tmp_path: Path) ->
     assert done.returncode == 0, done.stderr
     assert "frame 4" in done.stdout and f"{W}x{H}" in done.stdout
     plain = tmp_path / "plain.png"
-    assert vtrack("frame", str(clip), "--at", "4", "-o", str(plain), "--no-grid",
-                  "--step", "20").returncode == 0
+    assert vtrack("frame", str(clip), "--at", "4", "-o", str(plain), "--no-grid").returncode == 0
+    # --step with --no-grid was taken and ignored
+    done = vtrack("frame", str(clip), "-o", str(tmp_path / "n.png"), "--no-grid", "--step", "20")
+    assert (done.returncode, done.stderr) == (2, "vtrack: error: --step 20: spaces the grid's "
+                                              "lines, and --no-grid draws none; give one of "
+                                              "them\n")
+    assert not (tmp_path / "n.png").exists()
     grid, frame = cv2.imread(str(out)).astype(int), cv2.imread(str(plain)).astype(int)
     assert grid.shape == frame.shape == (H, W, 3)
     # lines every 20 px are lighter than the frame, between them the frame is untouched

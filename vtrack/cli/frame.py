@@ -30,6 +30,9 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
     from vtrack.picker.frames import read_frame
     from vtrack.picker.grid import draw_grid
 
+    if no_grid and step is not None:
+        raise ConfigError(f"--step {step}: spaces the grid's lines, and --no-grid draws none; "
+                          "give one of them")
     out = out or Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
     ext = out.suffix.lower().replace(".jpeg", ".jpg")
     if ext not in (".png", ".jpg"):
