@@ -232,3 +232,24 @@ def test_select_help_says_a_box_on_a_later_frame_is_not_saved() -> None:
     text = " ".join(done.output.split())
     assert "printed as --start N --init x,y,w,h and not saved" in text
     assert "typed as x,y,w,h" in text
+
+
+def test_the_saved_box_is_offered_on_frame_0_only(tmp_path: Path, browser) -> None:
+    """select --frame 7 on an input with a sidecar showed the sidecar's box (frame 0's) on
+    frame 7, ready to confirm: one click printed --start 7 --init with frame 0's box."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    video = write_video(make_scene("smooth", seed=4, width=W, height=H, frames=10, fps=30),
+                        tmp_path / "saved.mp4")
+    (tmp_path / "saved.init.txt").write_text("12,14,30,20\n")
+    for frame, shown in ((7, ""), (0, "12,14,30,20")):
+        select = Select(str(video), "--frame", str(frame))
+        try:
+            browser.get(select.url)
+            WebDriverWait(browser, 20).until(lambda b, frame=frame: b.find_element(
+                By.ID, "where").text.startswith(f"frame {frame} "))
+            assert browser.find_element(By.ID, "init").get_attribute("value") == shown
+            assert browser.find_element(By.ID, "confirm").is_enabled() == bool(shown)
+        finally:
+            select.stop()

@@ -133,7 +133,8 @@ $("confirm").onclick = () => {
 };
 ask("info").then((r) => r.json()).then((i) => {
   info = i; document.title = "vtrack select: " + i.name;
-  if (i.box) setBox(i.box);
+  // the sidecar's box is frame 0's: offered there only, not as a later frame's box
+  if (i.box && i.frame === 0) setBox(i.box);
   load(i.frame);
 });
 </script>
