@@ -253,3 +253,26 @@ def test_the_saved_box_is_offered_on_frame_0_only(tmp_path: Path, browser) -> No
             assert browser.find_element(By.ID, "confirm").is_enabled() == bool(shown)
         finally:
             select.stop()
+
+
+def test_the_page_learns_the_last_frame_when_it_steps_past_it(tmp_path: Path, browser) -> None:
+    """A folder whose last image does not decode: the page said 'frame 10 of 0..11' (the
+    images counted), and 'next' answered only 'no frame 11' while still saying 0..11."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    folder = write_image_sequence(
+        make_scene("smooth", seed=4, width=W, height=H, frames=12, fps=30), tmp_path / "cut")
+    (folder / "img" / "0012.jpg").write_bytes(b"not a picture")
+    select = Select(str(folder), "--frame", "10")
+    try:
+        browser.get(select.url)
+        wait = WebDriverWait(browser, 20)
+        where = browser.find_element(By.ID, "where")
+        wait.until(lambda b: where.text == "frame 10 of 0..11")  # the images counted
+        browser.find_element(By.ID, "next").click()
+        status = browser.find_element(By.ID, "status")
+        wait.until(lambda b: status.text == "no frame 11 (frames 0..10)")
+        assert where.text == "frame 10 of 0..10"
+    finally:
+        select.stop()

@@ -79,6 +79,7 @@ function load(i, step) {
   ask("frame/" + i).then((r) => {
     if (r.ok) return r.blob();
     return r.json().catch(() => ({})).then((e) => {
+      if (Number.isInteger(e.frames)) { info.frames = e.frames; where(); }
       const over = step > 0 ? e.next : step < 0 ? e.previous : null;
       if (Number.isInteger(over)) load(over, step);
       else $("status").textContent = e.error || "no frame " + i;
@@ -86,10 +87,12 @@ function load(i, step) {
     });
   }).then((blob) => {
     if (!blob) return;
-    index = i; img.src = URL.createObjectURL(blob); hint();
-    const n = info.frames == null ? "?" : info.frames;
-    $("where").textContent = "frame " + i + " of 0.." + (n === "?" ? "?" : n - 1);
+    index = i; img.src = URL.createObjectURL(blob); hint(); where();
   });
+}
+function where() {
+  const last = info.frames == null ? "?" : info.frames - 1;
+  $("where").textContent = "frame " + index + " of 0.." + last;
 }
 stage.addEventListener("pointerdown", (ev) => {
   ev.preventDefault(); stage.setPointerCapture(ev.pointerId); start = toImage(ev);

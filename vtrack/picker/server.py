@@ -270,8 +270,11 @@ class SelectionServer:
                         self._json({"error": str(exc), "previous": exc.previous,
                                     "next": exc.following}, 404)
                         return
-                    if data is None:
-                        self._json({"error": f"no frame {int(frame.group(1))}"}, 404)
+                    if data is None:  # past the end: the count is then known
+                        count = server.store.count
+                        known = "" if count is None else f" (frames 0..{count - 1})"
+                        self._json({"error": f"no frame {int(frame.group(1))}{known}",
+                                    "frames": count}, 404)
                     else:
                         self._send(200, data, "image/jpeg")
                 else:
