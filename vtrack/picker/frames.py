@@ -97,9 +97,6 @@ class FrameStore:
                                                  or self._gaps[-1][1] < self._next):
                     self._gaps.append((self._next, frame.index - 1))
                 self._next = frame.index + 1
-                if frame.index < index:
-                    self._keep(frame.index, encode_image(frame.bgr(), self._ext))
-                    continue
                 data = encode_image(frame.bgr(), self._ext)
                 self._keep(frame.index, data)
             self._check_present(index)
@@ -109,8 +106,7 @@ class FrameStore:
         """AbsentFrame when ``index`` lies in a run of numbers the input passed over."""
         for first, last in self._gaps:
             if first <= index <= last:
-                raise AbsentFrame(f"{self._spec}: frame {index} {self._source.absent(index)}; "
-                                  f"the next frame it has is frame {last + 1}",
+                raise AbsentFrame(absent_text(self._spec, index, self._source, last + 1),
                                   first - 1 if first else None, last + 1)
 
     def _keep(self, index: int, data: bytes) -> None:
@@ -149,7 +145,13 @@ def read_frame(input_spec: str, index: int) -> np.ndarray:
             if frame.index == index:
                 return frame.bgr().copy()
             if frame.index > index:
-                raise InputError(f"{input_spec}: frame {index} {source.absent(index)}; the "
-                                 f"next frame it has is frame {frame.index}")
+                raise InputError(absent_text(input_spec, index, source, frame.index))
             last = frame.index
     raise InputError(f"{input_spec}: has no frame {index} (frames 0..{last})")
+
+
+def absent_text(input_spec: str, index: int, source: Source, following: int) -> str:
+    """What is said of frame ``index``, which ``source`` passed over (``following`` is the next
+    frame it has): why it has no picture, and where the frames go on."""
+    return (f"{input_spec}: frame {index} {source.absent(index)}; the next frame it has is "
+            f"frame {following}")
