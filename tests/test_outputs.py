@@ -413,6 +413,10 @@ def test_a_signal_while_a_stream_fifo_waits_for_its_reader_is_an_interrupted_run
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
         inputs: Path, tmp_path: Path, signum: int) -> None:
+    """... and the stopped batch says what it did, as a finished one does: a line per run it
+    has a record of (also one that finished in the grace period), the tally with where
+    summary.csv is, then that it was interrupted. It used to print only "vtrack: interrupted"
+    after the lines of the runs done before the signal."""
     out = tmp_path / "out"
     process = start("batch", str(inputs), "-c", "s0", "-c", "camshift", "--jobs", "1",
                     "--out", str(out))
@@ -420,7 +424,7 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
     # grace period, the batch stops before the rest
     wait_for(lambda: any(out.glob("*/*/.track.tmp*")), process, "a job running")
     process.send_signal(signum)
-    _, stderr = process.communicate(timeout=120)
+    stdout, stderr = process.communicate(timeout=120)
     assert process.returncode == 128 + signum, stderr
     assert "Traceback" not in stderr
     with (out / "summary.csv").open(newline="") as handle:
@@ -438,6 +442,15 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
         statuses.append(row["status"])
     assert "interrupted" in statuses  # the batch did stop early
     assert "complete" in statuses  # the job running at the signal finished in the grace
+    stdout_lines = stdout.splitlines()
+    for row in rows:
+        if (out / row["input"] / row["config"] / "run.json").exists():
+            label = f"{row['input']} [{row['config']}]: "
+            assert sum(line.startswith(label) for line in stdout_lines) == 1, (label, stdout)
+    tally = stdout_lines[-1]
+    assert tally.startswith("8 runs (") and tally.endswith(f"-> {out / 'summary.csv'}"), stdout
+    assert "not started: the batch was stopped" in tally
+    assert stderr.splitlines()[-1] == "vtrack: interrupted", stderr
 
 
 @pytest.mark.parametrize(("signum", "error"), [(signal.SIGINT, "interrupted by the user"),

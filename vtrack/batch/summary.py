@@ -21,8 +21,8 @@ from vtrack.run import STATUS_INTERRUPTED
 UNFINISHED = "not finished when the batch last wrote this file (it was still running, or killed)"
 
 
-def run_batch(batch: Plan, executor: Executor,
-              summary_path: Path) -> Generator[Outcome, None, None]:
+def run_batch(batch: Plan, executor: Executor, summary_path: Path,
+              late: list[Outcome] | None = None) -> Generator[Outcome, None, None]:
     """Yield every outcome, known ones first, keeping ``summary_path`` current.
 
     The summary has one row per input x config of the plan. If the batch stops early (Ctrl-C,
@@ -30,7 +30,9 @@ def run_batch(batch: Plan, executor: Executor,
     stop are stopped by the signal the batch got, which their records name); a job whose
     outcome did not arrive then gets the row of its own ``run.json`` when this batch wrote one
     (a run that finished in the grace period is ``complete``), else the status
-    ``interrupted``: the summary agrees with the runs' records.
+    ``interrupted``: the summary agrees with the runs' records. The outcomes of those recorded
+    jobs (which the stopped generator can no longer yield) are appended to ``late``, for the
+    caller to report.
     """
     summary = SummaryWriter(summary_path, batch.order)
     started = time.time()
@@ -51,9 +53,11 @@ def run_batch(batch: Plan, executor: Executor,
                 if summary.rows.get((job.input, job.config)) is None:
                     recorded = recorded_summary(job.request, since=started)
                     if recorded is not None:
-                        summary.rows[(job.input, job.config)] = Outcome(
-                            job.input, job.config, recorded.status, recorded, recorded.error,
-                            job.attempt).row()
+                        outcome = Outcome(job.input, job.config, recorded.status, recorded,
+                                          recorded.error, job.attempt)
+                        summary.rows[(job.input, job.config)] = outcome.row()
+                        if late is not None:
+                            late.append(outcome)
             summary.write(stopped=True)
 
 

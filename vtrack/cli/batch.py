@@ -25,6 +25,7 @@ from vtrack.errors import (
 )
 
 if TYPE_CHECKING:
+    from vtrack.batch import Outcome
     from vtrack.config import Config
 
 #: The most local worker processes ``--jobs`` starts (each a Python process with its own
@@ -177,7 +178,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     workers = jobs or cpu_count()
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / SUMMARY_FILE
-    outcomes = []
+    outcomes: list[Outcome] = []
     progress = BatchProgress(quiet, stats_period)
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
     # is taken (created, checked, locked) before any job is planned
@@ -201,7 +202,9 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
-        running = run_batch(batch, executor, summary_path)
+        late: list[Outcome] = []  # jobs that ended in a stop's grace period
+        stopped: Interrupted | None = None
+        running = run_batch(batch, executor, summary_path, late)
         try:
             with closing(running), passing_stop_to(running):
                 for outcome in running:
@@ -211,21 +214,44 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                     if (outcome.input, outcome.config) in to_run:
                         progress.finished(outcome.input, outcome.config,
                                           outcome.summary.frames if outcome.summary else 0)
+        except Interrupted as exc:  # report what was done, then end as interrupted
+            stopped = exc
         finally:
             progress.close()
+        if stopped is not None:
+            for outcome in late:
+                outcomes.append(outcome)
+                if not quiet:
+                    click.echo(outcome.line())
+        _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None)
+    if stopped is not None:
+        raise stopped
+    if any(not o.ok for o in outcomes):
+        sys.exit(1)
+
+
+def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
+            stopped: bool) -> None:
+    """The end of a batch: the tally of its ``pairs`` (input x config) by status and where
+    ``summary.csv`` is (unless ``quiet``), then one ``vtrack: error:`` line per run that did not
+    complete. A ``stopped`` batch counts the pairs it never started, and names no error for
+    the runs its stop interrupted (its own ``vtrack: interrupted`` line follows)."""
+    from vtrack.run import STATUS_INTERRUPTED
+
     counts: dict[str, int] = {}
     for outcome in outcomes:
         counts[outcome.status] = counts.get(outcome.status, 0) + 1
     if not quiet:
         tally = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
+        unstarted = pairs - len(outcomes) if stopped else 0
+        if unstarted:
+            tally += (", " if tally else "") + f"{unstarted} not started: the batch was stopped"
         resumed = sum(outcome.resumed for outcome in outcomes)
         if resumed:
             tally += f"; {resumed} of them complete before, not run again"
-        click.echo(f"{plural(len(outcomes), 'run')} ({tally}) -> {summary_path}")
-    failed = [o for o in outcomes if not o.ok]
-    for outcome in failed:
-        click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.status}: "
-                   f"{outcome.error}", err=True)
-    if failed:
-        sys.exit(1)
-
+        total = pairs if stopped else len(outcomes)
+        click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
+    for outcome in outcomes:
+        if not outcome.ok and not (stopped and outcome.status == STATUS_INTERRUPTED):
+            click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.status}: "
+                       f"{outcome.error}", err=True)
