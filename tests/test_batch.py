@@ -531,3 +531,27 @@ def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(tmp_path: Path,
     assert one_error_line(run(str(seq))) == (
         f"vtrack: error: {info}: frameRate must be a number > 0, got 'fast' (--fps N gives the "
         "sequence's frame rate instead)")
+
+
+def test_videos_in_sub_folders_are_counted_in_one_warning(tmp_path: Path,
+                                                          clip_factory: ClipFactory) -> None:
+    """`in/nested/c.mp4` is no input, and the batch said nothing of it. Now one warning line
+    counts the video files in sub-folders (at any depth) and names the first; a sequence
+    folder's images and a results folder's annotated.mp4 are not counted."""
+    folder = clips_folder(tmp_path, clip_factory, "a")
+    add_clip(folder, clip_factory, "smooth", "seq", fmt="images")
+    for name in ("nested/c.mp4", "nested/deeper/d.mkv", "old/a/s0/annotated.mp4"):
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(folder / "a.mp4", folder / name)
+    (folder / "old" / "a" / "s0" / "run.json").write_text("{}\n")
+    shutil.copy(folder / "a.gt.txt", folder / "nested" / "c.gt.txt")
+    result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert set(summary(tmp_path / "out")) == {("a", "s0"), ("seq", "s0")}
+    warnings = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(warnings) == 1 and warnings[0].startswith(f"vtrack: warning: {folder}: "), warnings
+    assert "2 video files in sub-folders are not inputs" in warnings[0]
+    assert f"({folder / 'nested' / 'c.mp4'} and 1 more)" in warnings[0]
+    alone = batch(str(folder / "nested"), "-c", "s0", "--no-video", "--out",
+                  str(tmp_path / "out2"))
+    assert alone.exit_code == 0 and "1 video file in sub-folders is not an input" in alone.stderr

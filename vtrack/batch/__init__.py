@@ -7,7 +7,8 @@ outcomes are in ``jobs``. Each job is one :func:`vtrack.run.run` writing the fil
 ``vtrack run`` into ``OUT/<input>/<config>/``; ``OUT/summary.csv`` has one row per input x
 config and is rewritten (atomically) as each job finishes.
 
-Inputs (:func:`find_inputs`), looked for directly inside the folder:
+Inputs (:func:`find_inputs`), looked for directly inside the folder (video files in its other
+sub-folders are not inputs: :func:`nested_videos` finds them, for the batch to warn):
 
 - video files (by suffix, :data:`VIDEO_SUFFIXES`), with ground truth beside them:
   ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
@@ -50,6 +51,7 @@ from vtrack.batch.discover import (
     BatchInput,
     find_inputs,
     is_sequence_folder,
+    nested_videos,
 )
 from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Job, Outcome
@@ -63,6 +65,6 @@ __all__ = [
     "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT", "SEQUENCE_MOT_GT", "STATUS_FAILED",
     "SUMMARY_COLUMNS", "VIDEO_GT", "VIDEO_INIT", "VIDEO_MOT_GT", "VIDEO_SUFFIXES", "BatchInput",
     "DaskExecutor", "Executor", "Job", "LocalExecutor", "Outcome", "Plan", "SummaryWriter",
-    "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder", "plan",
-    "run_batch",
+    "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder",
+    "nested_videos", "plan", "run_batch",
 ]

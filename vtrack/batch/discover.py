@@ -12,7 +12,7 @@ from pathlib import Path
 from vtrack.errors import InputError
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
 from vtrack.io.files import folder_name
-from vtrack.io.outdir import BATCH_SUMMARY
+from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import sequence_images
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
@@ -159,3 +159,26 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
                 f"folder {_folder(item.name)!r} (names differ only in characters a folder "
                 "name cannot hold): rename one")
     return sorted(found, key=lambda i: i.name)
+
+
+def nested_videos(folder: Path) -> list[Path]:
+    """The video files (by suffix) in sub-folders of ``folder`` that :func:`find_inputs` does
+    not take, sorted: those below a sub-folder that is not a sequence folder, at any depth.
+    Sequence folders and results folders (a run's ``run.json``, a batch's ``summary.csv``:
+    their ``annotated.mp4`` are no inputs) are not looked into; links to folders are not
+    followed. Nothing when ``folder`` is itself a sequence folder."""
+    folder = Path(folder)
+    if not folder.is_dir() or is_sequence_folder(folder):
+        return []
+    found: list[Path] = []
+    for top in sorted(folder.iterdir()):
+        if not top.is_dir() or top.is_symlink() or is_sequence_folder(top):
+            continue
+        for root, dirs, files in os.walk(top):
+            here = Path(root)
+            if (here / "run.json").is_file() or is_batch_folder(here):
+                dirs.clear()
+                continue
+            dirs[:] = [d for d in dirs if not is_sequence_folder(here / d)]
+            found += [here / f for f in files if Path(f).suffix.lower() in VIDEO_SUFFIXES]
+    return sorted(found)

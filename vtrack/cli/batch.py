@@ -147,14 +147,15 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
     of `vtrack run`) and DIR/summary.csv.
 
-    Inputs are video files (ground truth beside them: name.gt.txt or name.txt, MOTChallenge
-    name.mot.txt) and sequence folders holding img/ or MOTChallenge's img1/ (ground truth
-    inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge groundtruth_mot.txt as vtrack
-    scene writes it, gt.txt or gt/gt.txt). Without ground truth, single-target configs
-    start from the box in name.init.txt (init.txt in a sequence folder). Results already
-    complete are not run again (resume) unless --force; results of runs with other settings are
-    replaced only with --overwrite (or --force). A failing input does not stop the others;
-    the exit code is 1 if any failed.
+    Inputs are the video files directly in FOLDER (ground truth beside them: name.gt.txt or
+    name.txt, MOTChallenge name.mot.txt) and its sequence folders holding img/ or MOTChallenge's
+    img1/ (ground truth inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge
+    groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt); videos in other
+    sub-folders are not inputs (a warning counts them: give such a folder as FOLDER). Without
+    ground truth, single-target configs start from the box in name.init.txt (init.txt in a
+    sequence folder). Results already complete are not run again (resume) unless --force;
+    results of runs with other settings are replaced only with --overwrite (or --force). A
+    failing input does not stop the others; the exit code is 1 if any failed.
     """
     # imported here, not at the top: other commands start without them (Dask loads only
     # inside DaskExecutor, with --scheduler)
@@ -164,6 +165,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         LocalExecutor,
         cpu_count,
         find_inputs,
+        nested_videos,
         plan,
         run_batch,
     )
@@ -175,6 +177,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     _check_scheduler_options(scheduler, jobs)
     configs = _configs(config_specs, overrides)
     inputs = find_inputs(folder, gt_origin)
+    _warn_left_out(folder, nested_videos(folder))
     workers = jobs or cpu_count()
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / SUMMARY_FILE
@@ -228,6 +231,19 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         raise stopped
     if any(not o.ok for o in outcomes):
         sys.exit(1)
+
+
+def _warn_left_out(folder: Path, videos: list[Path]) -> None:
+    """One warning line counting the video files in sub-folders of ``folder`` that are no
+    input (:func:`~vtrack.batch.nested_videos`), naming the first, and how to track them."""
+    if not videos:
+        return
+    more = f" and {len(videos) - 1} more" if len(videos) > 1 else ""
+    verb = "is not an input" if len(videos) == 1 else "are not inputs"
+    click.echo(f"vtrack: warning: {folder}: {plural(len(videos), 'video file')} in sub-folders "
+               f"{verb} ({videos[0]}{more}): a batch takes the videos directly in the folder "
+               "and its sequence folders (img/, img1/); run vtrack batch on a sub-folder to "
+               "track its videos", err=True)
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
