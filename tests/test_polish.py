@@ -549,9 +549,13 @@ def test_batch_replaces_results_of_other_settings_only_with_overwrite(clip_facto
     assert vtrack(*common).returncode == 0
     record = tmp_path / "res" / "walk" / "s0" / "run.json"
     before = record.read_bytes()
+    summary = (tmp_path / "res" / "summary.csv").read_text()
     refused = vtrack(*common, "--set", "meanshift.iterations=5")
     assert refused.returncode == 1 and "made with other settings" in refused.stderr
     assert record.read_bytes() == before
+    # the refused pair's row went on describing its folder's run (it said `failed`, while
+    # `vtrack report` found that run complete)
+    assert (tmp_path / "res" / "summary.csv").read_text() == summary
     replaced = vtrack(*common, "--set", "meanshift.iterations=5", "-y")
     assert replaced.returncode == 0, replaced.stderr
     with (tmp_path / "res" / "summary.csv").open(newline="") as handle:

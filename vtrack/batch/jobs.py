@@ -49,6 +49,10 @@ class Outcome:
     #: Which attempt this is: 2 after a worker process died running the job.
     attempt: int = 1
     resumed: bool = False
+    #: A job refused because its folder holds a run made with other settings: that run's
+    #: summary (from its ``run.json``), which the ``summary.csv`` row keeps describing (the
+    #: folder still holds it).
+    kept: RunSummary | None = None
 
     @property
     def ok(self) -> bool:
@@ -68,8 +72,9 @@ class Outcome:
         return line
 
     def row(self) -> dict[str, Any]:
-        """This job's ``summary.csv`` row (:data:`SUMMARY_COLUMNS`)."""
-        s = self.summary
+        """This job's ``summary.csv`` row (:data:`SUMMARY_COLUMNS`): what its folder holds,
+        the run it ``kept`` when it was refused."""
+        s = self.kept or self.summary
         return {
             "input": self.input,
             "config": self.config,
@@ -80,8 +85,8 @@ class Outcome:
             "precision20": _round(s.precision20, 4) if s else None,
             "frames_lost": s.frames_lost if s else None,
             "frames_skipped": s.frames_skipped if s else None,
-            "status": self.status,
-            "error": self.error,
+            "status": self.kept.status if self.kept else self.status,
+            "error": self.kept.error if self.kept else self.error,
         }
 
 

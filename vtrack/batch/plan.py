@@ -133,7 +133,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                     refuse_replacing(request.out_dir)
                 except OutputError as exc:
                     result.known.append(Outcome(item.name, label, STATUS_FAILED,
-                                                error=f"{exc} ({_other_settings(request)})"))
+                                                error=f"{exc} ({_other_settings(request)})",
+                                                kept=_on_disk(request.out_dir)))
                     continue
             if done is not None:
                 result.known.append(Outcome(item.name, label, STATUS_COMPLETE, done,
@@ -141,6 +142,15 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             else:
                 result.jobs.append(Job(item.name, label, request, threads=threads))
     return result
+
+
+def _on_disk(out_dir: Path) -> RunSummary | None:
+    """The summary of the run ``out_dir/run.json`` records, whatever request it was made
+    with; None when there is none that can be read."""
+    try:
+        return _summary(read_run_record(out_dir / "run.json"), out_dir)
+    except (OSError, InputError):
+        return None
 
 
 def _other_settings(request: RunRequest) -> str:
