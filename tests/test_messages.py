@@ -237,3 +237,23 @@ def test_a_raw_file_where_a_video_is_read_says_only_run_reads_raw_frames(
     line = one_error_line(vtrack(command, str(raw)))
     assert line == (f"vtrack: error: {raw}: not a video FFmpeg can decode (Invalid argument); "
                     "raw frames are read only by vtrack run --raw WxH (with --pix-fmt, --fps)")
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("batch", "in", "-j", "abc"), "'--jobs' / '-j': 'abc' is not a whole number in the range "
+                                   "1<=x<=512"),
+    (("batch", "in", "-j", "1.5"), "'--jobs' / '-j': '1.5' is not a whole number in the range "
+                                   "1<=x<=512"),
+    (("run", "in.mp4", "--crf", "high"), "'--crf': 'high' is not a whole number in the range "
+                                         "0<=x<=51"),
+    (("batch", "in", "--scheduler-timeout", "soon"), "'--scheduler-timeout': 'soon' is not a "
+                                                     "number of seconds from 0.1 to 86400"),
+], ids=["jobs-word", "jobs-fraction", "crf", "seconds"])
+def test_a_value_that_is_no_number_is_refused_naming_the_options_range(
+        args: tuple[str, ...], said: str) -> None:
+    """`vtrack batch -j abc` said "'abc' is not a valid integer range." (and a word for a time,
+    "'soon' is not a valid seconds."): now what the option takes, as a number out of its
+    range is told."""
+    line = one_error_line(vtrack(*args))
+    assert said in line, line
+    assert "is not a valid" not in line

@@ -25,11 +25,28 @@ class Seconds(click.FloatRange):
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> Any:
-        seconds = super().convert(value, param, ctx)
+        try:  # (click's own words for a word: "'x' is not a valid seconds.")
+            seconds = float(value)
+        except (TypeError, ValueError):
+            seconds = math.nan
         if not math.isfinite(seconds):
             self.fail(f"{value!r} is not a number of seconds from {self.min:g} to "
                       f"{self.max:g}", param, ctx)
-        return seconds
+        return super().convert(value, param, ctx)
+
+
+class WholeNumber(click.IntRange):
+    """A whole number in click's ``IntRange`` bounds; a value that is none is refused naming
+    the range, as one out of it is (click said "'abc' is not a valid integer range.")."""
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        try:
+            int(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a whole number in the range "
+                      f"{self._describe_range()}", param, ctx)
+        return super().convert(value, param, ctx)
 
 
 def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | None:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import click
 from click.core import ParameterSource
 
-from vtrack.cli._options import MAX_WAIT_S, Seconds, gt_origin_option
+from vtrack.cli._options import MAX_WAIT_S, Seconds, WholeNumber, gt_origin_option
 from vtrack.cli._paths import CONFIG, PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
@@ -114,7 +114,7 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
 @click.option("--out", "-o", "out_dir", type=PATH, metavar="DIR",
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")
-@click.option("--jobs", "-j", type=click.IntRange(1, MAX_JOBS), default=None,
+@click.option("--jobs", "-j", type=WholeNumber(1, MAX_JOBS), default=None,
               help="Local worker processes (never more than the runs to do). Default: the "
                    "number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",

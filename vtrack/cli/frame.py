@@ -7,16 +7,17 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT, PATH
 
 
 @click.command("frame")
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
-@click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True,
+@click.option("--at", "index", type=WholeNumber(min=0), default=0, show_default=True,
               help="Frame number (0-based).")
 @click.option("--out", "-o", "out", type=PATH, metavar="FILE",
               help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
-@click.option("--step", type=click.IntRange(min=2), default=None, metavar="PX",
+@click.option("--step", type=WholeNumber(min=2), default=None, metavar="PX",
               help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
 def command(input_spec: str, index: int, out: Path | None, step: int | None,

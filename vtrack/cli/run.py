@@ -17,6 +17,7 @@ from vtrack.cli._options import (
     FrameSpan,
     Seconds,
     StartPoint,
+    WholeNumber,
     gt_origin_option,
     stats_period_option,
 )
@@ -107,9 +108,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "FLV (watch it with ffplay, mpv or VLC).")
 @click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
-@click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
+@click.option("--crf", type=WholeNumber(0, 51), default=23, show_default=True,
               help="x264 quality of annotated.mp4 (lower is better and larger).")
-@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
+@click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import PATH
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
@@ -40,7 +41,7 @@ def _scenario_list() -> str:
 @click.option("--frames", type=int, help="Number of frames [scenario default, mostly 150].")
 @click.option("--size", metavar="WxH", help="Frame size [scenario default, mostly 320x240].")
 @click.option("--fps", type=float, help="Frame rate [scenario default, mostly 30].")
-@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
+@click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Random seed.")
 @click.option(
     "--format",
@@ -54,7 +55,7 @@ def _scenario_list() -> str:
     "--pix-fmt",
     help="mp4: encoder pixel format [yuv420p]; raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
-@click.option("--crf", type=click.IntRange(0, 51), default=23, show_default=True,
+@click.option("--crf", type=WholeNumber(0, 51), default=23, show_default=True,
               help="x264 quality of mp4 output (lower is better and larger).")
 @click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
               help="x264 preset of mp4 output.")

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import click
 
+from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
 
 
 @click.command("select")
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
-@click.option("--frame", "frame", type=click.IntRange(min=0), default=0, show_default=True,
+@click.option("--frame", "frame", type=WholeNumber(min=0), default=0, show_default=True,
               help="Frame shown first (0-based); the page steps back and forth from it.")
-@click.option("--port", type=click.IntRange(0, 65535), default=0,
+@click.option("--port", type=WholeNumber(0, 65535), default=0,
               help="Port on 127.0.0.1 to serve the page on. Default: a free one (printed).")
 def command(input_spec: str, frame: int, port: int) -> None:
     """Pick the target's first box by dragging it on a frame of INPUT in a browser.
