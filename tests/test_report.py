@@ -612,3 +612,22 @@ def test_no_input_s_plots_take_the_name_of_the_plots_over_all_inputs_in_any_case
     slugs = _slugs(["All", "ALL", "all", "alley"])
     assert all(slug.lower() != ALL_INPUTS for slug in slugs.values()), slugs
     assert slugs["alley"] == "alley"
+
+
+def test_a_report_of_a_batch_whose_every_run_failed_counts_those_runs(tmp_path: Path) -> None:
+    """Every run of the batch failed (an input that is no video): the report's heading read
+    "0 runs of 0 inputs with 0 configurations" above its list of those runs. Now it counts
+    them, their inputs and configurations."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "notvideo.mp4").write_text("this is not a video\n")
+    (folder / "notvideo.gt.txt").write_text("1,1,10,10\n")
+    out, report = tmp_path / "out", tmp_path / "report"
+    ran = vtrack("batch", str(folder), "-c", "s0", "-c", "camshift", "--no-video", "-j", "1",
+                 "--out", str(out))
+    assert ran.exit_code == 1, ran.output
+    result = vtrack("report", str(out), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    markdown = (report / "summary.md").read_text()
+    assert "2 runs without results of 1 input with 2 configurations;" in markdown, markdown
+    assert "0 runs" not in markdown

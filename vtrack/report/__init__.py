@@ -123,6 +123,22 @@ def _distinct_labels(runs: list[RunResult]) -> None:
                 run.config = f"{run.config} ({place})"
 
 
+def _counts(runs: Sequence[RunResult], failed: Sequence[FailedRun]) -> str:
+    """What a report shows: ``3 runs of 2 inputs with 2 configurations``, its runs and its batch
+    rows without results (``2 runs and 1 without results of ...``; ``3 runs without results of
+    ...`` when it has only those), the inputs and configurations of both."""
+    inputs = {r.input for r in runs} | {f.input for f in failed}
+    configs = {r.config for r in runs} | {f.config for f in failed}
+    if not failed:
+        shown = plural(len(runs), "run")
+    elif not runs:
+        shown = f"{plural(len(failed), 'run')} without results"
+    else:
+        shown = f"{plural(len(runs), 'run')} and {len(failed)} without results"
+    return (f"{shown} of {plural(len(inputs), 'input')} with "
+            f"{plural(len(configs), 'configuration')}")
+
+
 def _distinct_failed(failed: list[FailedRun], runs: Sequence[RunResult]) -> list[FailedRun]:
     """``failed`` with the input of a row named after the batch folder it comes from
     (``v3 (batch-b)``) where that input's name is also that of a run or failed row of another
@@ -299,11 +315,9 @@ def build_report(results: Sequence[Path], out_dir: Path,
         written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
                                          on_input)
         overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
-        inputs = {r.input for r in runs}
         page = pages.Page(
             title=title,
-            meta=(f"{plural(len(runs), 'run')} of {plural(len(inputs), 'input')} with "
-                  f"{plural(len({r.config for r in runs}), 'configuration')}; generated "
+            meta=(f"{_counts(runs, failed)}; generated "
                   f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
             warnings=warnings,
             overall_plot=overall and overall.relative_to(out_dir).as_posix(),
