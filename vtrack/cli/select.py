@@ -31,9 +31,9 @@ def command(input_spec: str, frame: int, port: int) -> None:
     from vtrack.picker.server import SelectionServer
 
     with FrameStore(input_spec) as store:
-        if store.get(frame) is None:
+        if store.get(frame) is None:  # (at once when the input's frame count says so)
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
-                             f"(frames 0..{store.decoded - 1})")
+                             f"(frames 0..{store.count - 1})")
         server = SelectionServer(input_spec, store, frame, port)
         click.echo(f"vtrack select: drag a box around the target at {server.url}  "
                    f"(Ctrl-C to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "

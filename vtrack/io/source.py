@@ -140,6 +140,14 @@ class Source(Closing, ABC):
                 return frame.index
         return None
 
+    def start_near(self, index: int) -> int:
+        """Called instead of a first ``iter()``, to reach frame ``index`` without decoding all
+        the frames before it: where the input can jump (a seekable video whose timestamps
+        number its frames, :meth:`VideoSource.start_near`), iterating then begins at a frame
+        at or before ``index``, the frames keeping their numbers; elsewhere it begins at the
+        first frame, as without this call. Returns the index iteration begins at."""
+        return 0
+
     @property
     def frames_passed(self) -> int:
         """Live sources: frames decoded but passed over because the consumer could not have

@@ -31,6 +31,7 @@ place. Only a stream that really ends early is partial. Of several video streams
 from __future__ import annotations
 
 import itertools
+import os
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -427,6 +428,10 @@ class VideoSource(Source):
             raise InputError(_undecodable(path, how, exc)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
+        # a regular file can jump to a key frame (start_near): not stdin, a FIFO, a URL or a
+        # growing file
+        self._seekable = not live and how.follow_s is None and "://" not in path \
+            and path != "-" and os.path.isfile(path)
         try:
             info = self._open(path, container, live)
         except BaseException:
@@ -485,6 +490,8 @@ class VideoSource(Source):
         self._constant_rate = bool(stream.frames and duration and fps
                                    and abs(stream.frames - duration * fps) <= 1)
         self._frame_order = self._container.format.name in FRAME_ORDER_FORMATS
+        self._t0 = self._first.time  # frame 0's timestamp: the others' places count from it
+        self._start = 0  # the index of the frame iteration begins at (start_near)
 
         self._rotation = _quarter_turns(self._first.rotation)
         width, height = self._first.width, self._first.height
@@ -546,6 +553,42 @@ class VideoSource(Source):
                 yield frame
             raise
 
+    def start_near(self, index: int) -> int:
+        """Jump to the key frame at or before frame ``index`` when the frames' places follow
+        from their timestamps, ``round((t - t0) * fps)`` (a local file of constant frame rate:
+        its listed count is its duration times its rate; not AVI, whose pictures carry no
+        times of their own). The frame found there is checked: a clean picture on that
+        timeline, at or before ``index``; else (or when FFmpeg cannot seek) the reader goes
+        back to the first frame, and iteration begins there as it would have. Returns the
+        index iteration begins at."""
+        fps = self.info.fps
+        if (index <= 0 or self._prefetch is not None or not self._seekable or not fps
+                or not self._constant_rate or self._frame_order or self._t0 is None):
+            return 0
+        dropped = self._dropped
+        try:
+            first = self._seek(round((self._t0 + index / fps) / self._stream.time_base))
+            place = (first.time - self._t0) * fps
+            if abs(place - round(place)) <= 0.25 and 0 <= round(place) <= index:
+                self._first, self._start, self._dropped = first, round(place), 0
+                return self._start
+        except (av.FFmpegError, StopIteration, TypeError):  # TypeError: a frame without time
+            pass
+        try:
+            self._first = self._seek(self._stream.start_time or 0)
+        except (av.FFmpegError, StopIteration):
+            raise InputError(f"{self.info.path}: cannot be read again from its first frame "
+                             "after a seek") from None
+        self._start, self._dropped = 0, dropped
+        return 0
+
+    def _seek(self, pts: int) -> av.VideoFrame:
+        """The first clean picture decoded from the key frame at or before ``pts`` (stream
+        time base); the decoder then goes on from it."""
+        self._container.seek(pts, stream=self._stream, backward=True, any_frame=False)
+        self._decoded = self._decode()
+        return next(frame for frame in self._decoded if not frame.is_corrupt)
+
     def _promised_end_s(self) -> float | None:
         """Where the container says the video stream ends (seconds, stream clock), if it says.
 
@@ -568,9 +611,10 @@ class VideoSource(Source):
         info = self.info
         fps = info.fps or 30.0
         first, self._first = self._first, None  # do not keep a decoded picture alive
-        t0 = None if self._frame_order else first.time
+        t0 = None if self._frame_order else self._t0
         tail = _Tail()
-        index = yielded = refused = 0
+        index = yielded = self._start  # (start_near: the frames before it were not read)
+        refused = 0
         last_t: float | None = None
         # a gap in the timestamps of a stream that kept its frame rate so far is pictures lost
         steady = self._constant_rate
@@ -630,7 +674,8 @@ class VideoSource(Source):
             if self._damaged:  # every place left empty, also by pictures the decoder dropped
                 self._dropped = max(self._dropped, index - yielded)
         self._warn_of_damage()
-        tail.frames += self.frames_skipped  # skipped frames were in the file: not a shortfall
+        # skipped frames were in the file, and so were those before a jump: not a shortfall
+        tail.frames += self.frames_skipped + self._start
         shortfall = tail.shortfall(self._stream.frames, self._end_s, fps) or self._torn_packet()
         if shortfall:
             raise PartialInputError(

@@ -27,6 +27,9 @@ from vtrack.io.source import InputInfo, Source
 
 #: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
 CACHE_BYTES = 64 << 20
+#: Frames ahead of the last one read from which :class:`FrameStore` reopens the input at a key
+#: frame before the one asked for (where it can jump) rather than decoding its way there.
+JUMP_FRAMES = 100
 
 
 class AbsentFrame(InputError):
@@ -67,7 +70,8 @@ class FrameStore:
 
     @property
     def decoded(self) -> int:
-        """Frames decoded so far (from the start of the input)."""
+        """The index after the last frame read (the frames decoded from the start of the input,
+        unless the store jumped ahead, :data:`JUMP_FRAMES`)."""
         return self._next if self._end is None else self._end
 
     @property
@@ -77,8 +81,10 @@ class FrameStore:
 
     def get(self, index: int) -> bytes | None:
         """Frame ``index`` (0-based, the input's numbering) encoded, or None when the input has
-        no such frame (past its end). AbsentFrame when the input passes over that number."""
-        if index < 0 or (self._end is not None and index >= self._end):
+        no such frame (past its end: at once when its frame count says so, :func:`past_end`).
+        AbsentFrame when the input passes over that number."""
+        if index < 0 or (self._end is not None and index >= self._end) \
+                or past_end(self.info, index):
             return None
         with self._lock:
             if index in self._cache:
@@ -86,7 +92,9 @@ class FrameStore:
                 return self._cache[index]
             self._check_present(index)
             if index < self._next:  # dropped from the cache: read the input again
-                self._rewind()
+                self._rewind(index)
+            elif index >= self._next + JUMP_FRAMES and has_sidecar(self._spec):
+                self._jump(index)  # (not a stream: it can be opened again)
             data = None
             while self._next <= index:
                 frame = next(self._frames, None)
@@ -116,15 +124,31 @@ class FrameStore:
             _, dropped = self._cache.popitem(last=False)
             self.cached_bytes -= len(dropped)
 
-    def _rewind(self) -> None:
+    def _rewind(self, index: int) -> None:
+        """Read the input again, from its first frame or a key frame at or before ``index``."""
         if not has_sidecar(self._spec):  # not a file or folder (stdin, URL, device): read once
             raise InputError(f"{self._spec}: its earlier frames are no longer held and it "
                              "cannot be read again (a stream); pick a later frame, or give "
                              "the input as a file")
+        source = open_source(self._spec)
+        self._use(source, start_toward(source, index) or 0)
+
+    def _jump(self, index: int) -> None:
+        """Go on from a key frame at or before ``index`` when the input can jump there past
+        the frames already read; else go on reading from where the store is."""
+        source = open_source(self._spec)
+        begin = start_toward(source, index) or 0
+        if begin <= self._next:
+            source.close()
+            return
+        self._use(source, begin)
+
+    def _use(self, source: Source, begin: int) -> None:
+        """Read on from ``source``, whose iteration begins at frame ``begin``."""
         self._source.close()
-        self._source = open_source(self._spec)
-        self._frames = iter(self._source)
-        self._next = 0
+        self._source = source
+        self._frames = iter(source)
+        self._next = begin  # (the frames before it were passed by a jump, not missing)
 
     def close(self) -> None:
         self._source.close()
@@ -136,11 +160,47 @@ class FrameStore:
         self.close()
 
 
+def past_end(info: InputInfo, index: int) -> bool:
+    """Whether the input's frame count says it has no frame ``index``: the count its container
+    lists (or an image folder's numbering, a raw file's size), or, estimated from its duration
+    and frame rate, that count with the slack the video reader allows such an estimate. False
+    when the count is unknown (a pipe, a URL)."""
+    from vtrack.io.video import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE
+
+    count = info.frame_count
+    if count is None:
+        return False
+    if info.frame_count_estimated:
+        return index >= count + ESTIMATE_SLACK_FRAMES + ESTIMATE_SLACK_SHARE * count
+    return index >= count
+
+
+def past_end_text(input_spec: str, index: int, info: InputInfo) -> str:
+    """What is said of frame ``index`` when :func:`past_end` holds: the frames there are."""
+    count = info.frame_count
+    about = " by its duration and frame rate, about" if info.frame_count_estimated else ""
+    return f"{input_spec}: has no frame {index} (frames{about} 0..{count - 1})"
+
+
+def start_toward(source: Source, index: int) -> int | None:
+    """Make ``source`` (opened, not yet iterated) reach frame ``index`` without reading all
+    the frames before it: None, reading nothing, when its frame count says it has no such
+    frame (:func:`past_end`); else the index its iteration begins at, at or before ``index``
+    (a key frame near it where the input can jump there, :meth:`Source.start_near`; else 0)."""
+    if past_end(source.info, index):
+        return None
+    return source.start_near(index)
+
+
 def read_frame(input_spec: str, index: int) -> np.ndarray:
     """Frame ``index`` (0-based) of an input as a BGR image; InputError naming the input and
-    its length when it has no such frame, or the next frame when that one does not decode."""
+    its length when it has no such frame (at once when its frame count says so), or the next
+    frame when that one does not decode. A far frame of a seekable video is reached from the
+    key frame before it (:func:`start_toward`), the frame checked by its index."""
     last = -1
     with open_source(input_spec) as source:
+        if start_toward(source, index) is None:
+            raise InputError(past_end_text(input_spec, index, source.info))
         for frame in source:
             if frame.index == index:
                 return frame.bgr().copy()

@@ -1,0 +1,76 @@
+"""``vtrack frame --at N`` and ``vtrack select --frame N`` on a long input: a frame past the
+count the input states is refused before a frame is decoded, and a far frame of a seekable
+video is read from the key frame before it, the very frame a full decode gives."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vtrack.io import open_source
+from vtrack.picker.frames import FrameStore, read_frame
+from vtrack.scenes import make_scene, write_video
+
+FRAMES, KEYINT = 300, 30
+FAR = 10**12 - 1
+
+
+@pytest.fixture(scope="module")
+def long_clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=FRAMES, fps=30)
+    return write_video(scene, tmp_path_factory.mktemp("seek") / "long.mp4", keyint=KEYINT)
+
+
+def vtrack(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                          text=True, timeout=60, check=False)
+
+
+def test_a_frame_past_the_stated_count_is_refused_before_any_is_decoded(
+        long_clip: Path, tmp_path: Path) -> None:
+    """Both commands decoded the whole input before saying it had no such frame."""
+    with FrameStore(str(long_clip)) as store:
+        assert store.get(FAR) is None and store.get(FRAMES) is None
+        assert store.decoded == 0  # was 300: read to its end first
+    done = vtrack("frame", str(long_clip), "--at", str(FAR), "-o", str(tmp_path / "f.png"))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: {long_clip}: has no frame {FAR} "
+                           f"(frames 0..{FRAMES - 1})\n")
+    done = vtrack("select", str(long_clip), "--frame", str(FAR))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: {long_clip}: --frame {FAR}: there is no such "
+                           f"frame (frames 0..{FRAMES - 1})\n")
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_a_far_frame_is_read_from_the_key_frame_before_it(long_clip: Path) -> None:
+    with open_source(str(long_clip)) as source:
+        every = {frame.index: frame.bgr().copy() for frame in source}
+    assert sorted(every) == list(range(FRAMES))
+    with open_source(str(long_clip)) as source:
+        assert source.start_near(5 * KEYINT + 7) == 5 * KEYINT  # the key frame before it
+        rest = [frame.index for frame in source]  # to the end, not taken as a cut-off file
+        assert rest == list(range(5 * KEYINT, FRAMES)) and source.frames_skipped == 0
+    for index in (0, 7, 4 * KEYINT - 1, 4 * KEYINT, 4 * KEYINT + 1, FRAMES - 1):
+        assert np.array_equal(read_frame(str(long_clip), index), every[index]), index
+    with FrameStore(str(long_clip)) as store:  # the page's store jumps there too, and back
+        for index in (FRAMES - 2, 3, 2 * KEYINT + 3):
+            shown = cv2.imdecode(np.frombuffer(store.get(index), np.uint8), cv2.IMREAD_COLOR)
+            assert np.abs(shown.astype(int) - every[index]).mean() < 3, index
+
+
+def test_a_frame_past_an_estimated_count_names_the_estimate(tmp_path: Path) -> None:
+    """Matroska lists no frame count: its duration times its rate estimates it."""
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=40, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mkv")
+    with FrameStore(str(clip)) as store:
+        assert store.get(FAR) is None and store.decoded == 0
+    done = vtrack("frame", str(clip), "--at", str(FAR), "-o", str(tmp_path / "f.png"))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: {clip}: has no frame {FAR} (frames by its "
+                           "duration and frame rate, about 0..39)\n")
