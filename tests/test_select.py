@@ -407,3 +407,15 @@ def test_select_in_a_real_browser_drag_a_box_and_confirm(tmp_path: Path) -> None
     assert out.strip() == f"--init {typed}"
     assert (folder / "init.txt").read_text().strip() == typed
     assert read_sidecar(folder) == Box(x, y, w, h)
+
+
+def test_select_stopped_by_sigterm_says_so_as_run_does(clip: Path) -> None:
+    """``vtrack select clip.mp4 & kill $!`` exited 143 without a word."""
+    select = Select(str(clip))
+    try:
+        select.process.terminate()
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert (code, out) == (143, "")
+    assert err.splitlines()[-1] == "vtrack: interrupted" and "Traceback" not in err

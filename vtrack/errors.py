@@ -104,6 +104,13 @@ def passing_stop_to(generator: Generator[Any, Any, Any]) -> Iterator[None]:
         raise
 
 
+def interrupt(signum: int, frame: object) -> None:
+    """A stop-signal handler (:func:`handling_stop_signals`) that stops the work at once: it
+    raises :class:`Interrupted`, which the CLI turns into ``vtrack: interrupted`` and exit
+    ``128 + signum``."""
+    raise Interrupted(signum)
+
+
 #: The signals a run or batch stops on as it does on Ctrl-C.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 

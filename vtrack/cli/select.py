@@ -25,12 +25,13 @@ def command(input_spec: str, frame: int, port: int) -> None:
     URL or a device has none). A box confirmed on a frame N other than 0 is printed as --start
     N --init x,y,w,h and not saved: the sidecar holds frame 0's box.
     """
-    from vtrack.errors import InputError
+    from vtrack.errors import InputError, handling_stop_signals, interrupt
     from vtrack.io.sidecar import format_box
     from vtrack.picker.frames import FrameStore
     from vtrack.picker.server import SelectionServer
 
-    with FrameStore(input_spec) as store:
+    # SIGTERM (kill, timeout) as Ctrl-C: 'vtrack: interrupted', exit 143, as vtrack run
+    with handling_stop_signals(interrupt), FrameStore(input_spec) as store:
         if store.get(frame) is None:  # (at once when the input's frame count says so)
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
                              f"(frames 0..{store.count - 1})")
