@@ -419,3 +419,26 @@ def test_select_stopped_by_sigterm_says_so_as_run_does(clip: Path) -> None:
         select.stop()
     assert (code, out) == (143, "")
     assert err.splitlines()[-1] == "vtrack: interrupted" and "Traceback" not in err
+
+
+def test_select_with_stdout_gone_says_where_the_box_went(clip: Path) -> None:
+    """``vtrack select clip.mp4 | true``, then confirm: the box was saved and the command
+    exited 1 without a word."""
+    sidecar_path(clip).unlink(missing_ok=True)
+    select = Select(str(clip))
+    try:
+        assert select.process.stdout is not None
+        select.process.stdout.close()  # its only reader: the next write breaks the pipe
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 0})
+        assert status == 200 and answer["init"] == "10,20,30,40"
+        code = select.process.wait(timeout=30)
+        select.reader.join(timeout=10)
+    finally:
+        select.stop()
+    err = []
+    while not select.lines.empty():
+        err.append(select.lines.get())
+    assert code == 1
+    assert err == [f"vtrack: error: standard output: Broken pipe: --init 10,20,30,40 was "
+                   f"not printed there; it is saved in {sidecar_path(clip)}\n"]
+    assert read_sidecar(clip) == Box(10, 20, 30, 40)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import click
 
 from vtrack.cli._options import WholeNumber
@@ -44,15 +46,38 @@ def command(input_spec: str, frame: int, port: int) -> None:
                        err=True)
         selection = server.wait()
     if selection.frame != 0:  # not saved: a sidecar box is frame 0's
-        click.echo(f"--start {selection.frame} --init {format_box(selection.box)}")
+        _print(f"--start {selection.frame} --init {format_box(selection.box)}", "it was not "
+               "saved (the sidecar holds frame 0's box)")
         click.echo(f"vtrack select: not saved (the sidecar holds frame 0's box): the box was "
                    f"drawn on frame {selection.frame}; give both options to vtrack run",
                    err=True)
         return
-    click.echo(f"--init {format_box(selection.box)}")
     if selection.sidecar is None:
+        _print(f"--init {format_box(selection.box)}", f"it was not saved ({input_spec} has "
+               "no sidecar file)")
         click.echo(f"vtrack select: {input_spec} has no sidecar file (stdin, a URL or a "
                    "device): give the box to vtrack run as --init", err=True)
     else:
+        _print(f"--init {format_box(selection.box)}", f"it is saved in {selection.sidecar}")
         click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch "
                    "use it when no --init is given)", err=True)
+
+
+def _print(line: str, kept: str) -> None:
+    """``line``, the options for vtrack run, on stdout. When stdout's reader went away
+    (``vtrack select clip.mp4 | true``) OutputBrokenError (one line, exit 1) gives ``line`` and
+    ``kept`` (whether and where the box was saved) on stderr instead; stdout is then pointed
+    at /dev/null, so the interpreter's last flush adds nothing."""
+    import os
+    import sys
+
+    from vtrack.errors import OutputBrokenError
+    from vtrack.io.files import os_reason
+
+    try:
+        click.echo(line)
+    except (OSError, ValueError) as exc:
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise OutputBrokenError(f"standard output: {os_reason(exc)}: {line} was not printed "
+                                f"there; {kept}") from None
