@@ -442,3 +442,13 @@ def test_select_with_stdout_gone_says_where_the_box_went(clip: Path) -> None:
     assert err == [f"vtrack: error: standard output: Broken pipe: --init 10,20,30,40 was "
                    f"not printed there; it is saved in {sidecar_path(clip)}\n"]
     assert read_sidecar(clip) == Box(10, 20, 30, 40)
+
+
+def test_frame_with_an_empty_out_names_what_out_takes(clip: Path, tmp_path: Path) -> None:
+    """``-o ''`` suggested "'.' for the current folder", which -o then refused ("write a .png
+    or .jpg image")."""
+    done = vtrack("frame", str(clip), "-o", "", cwd=tmp_path)
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr.startswith("vtrack: error: Invalid value for '--out' / '-o': empty; "
+                                  "give an image file name ending in .png or .jpg (see ")
+    assert list(tmp_path.iterdir()) == []

@@ -18,13 +18,18 @@ PATH_BYTES = 3584
 class NonEmptyPath(click.Path):
     """A ``click.Path`` that refuses an empty value: ``--out ""`` would otherwise mean the
     current folder and replace the outputs an earlier run left there (and ``vtrack batch ""``
-    track every input in it)."""
+    track every input in it). ``hint`` says what to give instead."""
+
+    def __init__(self, *args: Any,
+                 hint: str = "a folder or file name ('.' for the current folder)",
+                 **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.hint = hint
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> Any:
         if isinstance(value, str) and not value.strip():
-            self.fail("empty; give a folder or file name ('.' for the current folder)",
-                      param, ctx)
+            self.fail(f"empty; give {self.hint}", param, ctx)
         problem = length_problem(value) if isinstance(value, str) else None
         if problem:
             self.fail(problem, param, ctx)
@@ -44,6 +49,8 @@ def length_problem(path: str) -> str | None:
 
 #: The type of every ``--out`` option and path argument.
 PATH = NonEmptyPath(path_type=Path)
+#: The type of ``vtrack frame --out``: an image file, no folder.
+IMAGE_PATH = NonEmptyPath(path_type=Path, hint="an image file name ending in .png or .jpg")
 
 
 class NonEmptyText(click.ParamType):

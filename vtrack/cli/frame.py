@@ -8,14 +8,14 @@ from pathlib import Path
 import click
 
 from vtrack.cli._options import WholeNumber
-from vtrack.cli._paths import INPUT, PATH
+from vtrack.cli._paths import IMAGE_PATH, INPUT
 
 
 @click.command("frame")
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--at", "index", type=WholeNumber(min=0), default=0, show_default=True,
               help="Frame number (0-based).")
-@click.option("--out", "-o", "out", type=PATH, metavar="FILE",
+@click.option("--out", "-o", "out", type=IMAGE_PATH, metavar="FILE",
               help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
 @click.option("--step", type=WholeNumber(min=2), default=None, metavar="PX",
               help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
