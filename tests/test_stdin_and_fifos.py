@@ -328,3 +328,47 @@ def test_a_followed_file_cut_shorter_ends_the_run_partial_naming_the_cut(tmp_pat
     assert f"{recording}: reading stopped at frame {record['frames']}: the file was cut to 0 " \
            "bytes after " in record["error"]
     assert stderr.decode().count("vtrack: error:") == 1
+
+
+def _read_to_its_end(process: subprocess.Popen, path: Path) -> bool:
+    """Whether ``process`` has read ``path`` (open in it) as far as the file goes now."""
+    for fd in Path(f"/proc/{process.pid}/fd").iterdir():
+        try:
+            if not fd.samefile(path):
+                continue
+            info = (Path(f"/proc/{process.pid}/fdinfo") / fd.name).read_text()
+        except OSError:  # closed meanwhile
+            continue
+        position = int(info.split("pos:")[1].split()[0])
+        return position >= path.stat().st_size
+    return False
+
+
+def test_a_signal_while_following_tracks_the_frames_already_in_the_file(tmp_path: Path) -> None:
+    """SIGTERM while `--follow` waited for a finished file to grow ended the run at once: the
+    frames the decoder's frame threads still held (in the file, read whole) were never tracked
+    (49 of 60). Now the input ends where the file ends, they are tracked, and the run ends
+    `interrupted` with every frame of the file."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
+    recording = write_video(scene, tmp_path / "rec.ts")
+    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
+    run = _vtrack([str(recording), "--follow", "600", "-c", "s0", "--init",
+                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
+                   "--stream", str(lines), "-q"])
+    try:
+        deadline = time.monotonic() + 120  # a bound, not a measure
+        # tracking has begun and the whole file has been read: the run waits for more
+        while not (lines.exists() and lines.stat().st_size and _read_to_its_end(run, recording)):
+            assert run.poll() is None and time.monotonic() < deadline, "never read to its end"
+            time.sleep(0.05)
+        run.send_signal(signal.SIGTERM)
+        _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 600 s
+    finally:
+        run.kill()
+        run.wait()
+    assert run.returncode == 128 + signal.SIGTERM, stderr
+    record = json.loads((out / "run.json").read_text())
+    assert (record["status"], record["error"]) == ("interrupted", "interrupted by SIGTERM")
+    assert record["frames"] == 30
+    assert len((out / "track.csv").read_text().splitlines()) - 1 == 30
+    assert len(lines.read_text().splitlines()) == 30

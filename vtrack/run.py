@@ -178,6 +178,12 @@ class _Signals:
     picture are both out. After :meth:`hold` (the outputs are being closed and recorded) signals
     are only noted: the run finishes its records. Only installed in the main thread (signal
     handlers can only be set there).
+
+    While ``drain`` is set (the frame loop of a ``--follow`` run: ``Source.stop_at_end``), a
+    first signal that comes once the followed file has been read to its end is only noted
+    (``draining``): the input ends there, the frames the decoder still holds (already in the
+    file; milliseconds of work) are tracked, then the run ends interrupted. A second signal
+    stops it as usual.
     """
 
     def __init__(self) -> None:
@@ -186,6 +192,11 @@ class _Signals:
         #: read or an open it interrupted then fails with EINTR or "invalid data").
         self.received: int | None = None
         self.inside = False
+        #: Ends a followed input where it is now, True if it did (see the class docstring).
+        self.drain: Callable[[], bool] | None = None
+        #: The signal that ended the input (``drain``): the run ends interrupted by it once
+        #: the frames already read are tracked.
+        self.draining: int | None = None
         self._handlers = ExitStack()
 
     def __enter__(self) -> _Signals:
@@ -197,7 +208,10 @@ class _Signals:
 
     def _handle(self, signum: int, frame: object) -> None:
         self.received = self.received or signum
-        if self.inside:
+        if self.draining is None and self.pending is None and self.drain is not None \
+                and self.drain():
+            self.draining = signum
+        elif self.inside:
             self.pending = self.pending or signum
         else:
             raise Interrupted(signum)
@@ -532,6 +546,10 @@ class _Tracked:
     latency: Latencies = field(default_factory=Latencies)
     timeline: _Timeline = field(default_factory=_Timeline)
 
+    def interrupted(self, by: Interrupted) -> None:
+        """Record that the loop ended by the signal ``by`` (Ctrl-C, SIGTERM)."""
+        self.status, self.signum, self.error = STATUS_INTERRUPTED, by.signum, by.reason
+
     @property
     def untouched(self) -> bool:
         """The run stopped on a user error before its first frame was out (the tracker refused
@@ -851,6 +869,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     handled: tuple[float, float] | None = None  # (wall, cpu) when the last frame was done
     try:
         signals.release()  # held while the outputs opened: one that came then ends it here
+        signals.drain = source.stop_at_end
         frames_in = _Waits(_frames_to_track(request, resolved, source))
         for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
@@ -878,14 +897,18 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             if on_frame is not None:
                 on_frame(out.frames)
             handled = time.perf_counter(), time.thread_time()
+        if signals.draining is not None:  # the frames the followed file held are tracked
+            raise Interrupted(signals.draining)
         if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
             raise InputError(f"--start {request.start_text}: {request.input} has no frame "
                              f"{resolved.start} ({_numbering(source.info)})")
     except PartialInputError as exc:
-        out.status, out.error = STATUS_PARTIAL, str(exc)
+        if signals.draining is None:
+            out.status, out.error = STATUS_PARTIAL, str(exc)
+        else:  # a followed file ended by a signal where a recorder was writing: no damage
+            out.interrupted(Interrupted(signals.draining))
     except Interrupted as exc:
-        out.status, out.signum = STATUS_INTERRUPTED, exc.signum
-        out.error = exc.reason
+        out.interrupted(exc)
     except KeyboardInterrupt:
         out.status, out.error = STATUS_INTERRUPTED, "interrupted by the user"
     except OutputError as exc:  # a full disk part way: what is on disk is whole
@@ -895,6 +918,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.status, out.error, out.failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
         signals.hold()  # a signal now must not cut the closing and the records short
+        signals.drain = None
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
         # the loop's wait for frames while the input waited at its end (--follow) is not
         # tracking: the decoder's frame threads hand over its last frames only after it

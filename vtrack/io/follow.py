@@ -22,7 +22,9 @@ class GrowingFile(CapturingStream):
     the end only once the file has not grown for ``idle_s`` seconds. Not seekable, so FFmpeg
     reads it as a stream (a container that needs its end first, like a plain MP4, cannot be
     followed: record fragmented MP4, MPEG-TS or Matroska). A file cut shorter than what was
-    read of it ends the stream, and :attr:`interruption` holds :class:`FollowedFileCut`."""
+    read of it ends the stream, and :attr:`interruption` holds :class:`FollowedFileCut`.
+    :meth:`stop_at_end` ends the stream where the file ends now (a signal: the frames already
+    in the file still come out of the decoder)."""
 
     def __init__(self, path: str, idle_s: float) -> None:
         super().__init__()
@@ -38,6 +40,8 @@ class GrowingFile(CapturingStream):
         #: The wait that found the end: from the first read that found nothing more to the end
         #: reported (``perf_counter`` times; None before the end). It is no reading.
         self.end_wait: tuple[float, float] | None = None
+        #: Set by :meth:`stop_at_end`: the next read that finds no more data ends the stream.
+        self._stop_at_end = False
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
         while True:
@@ -52,11 +56,23 @@ class GrowingFile(CapturingStream):
                                       "(rewritten from its start?)")
             if self._empty_since is None:
                 self._empty_since = now
-            if now - self._grew_at >= self.idle_s or self.closed:
+            if now - self._grew_at >= self.idle_s or self.closed or self._stop_at_end:
                 if self.end_wait is None:
                     self.end_wait = (self._empty_since, now)
                 return 0
             time.sleep(POLL_S)
+
+    def stop_at_end(self) -> bool:
+        """If everything the file holds now has been read (what is not out yet is in the
+        reader's buffers and the decoder's frame threads), end the stream there instead of
+        waiting for more, and return True; else (more is left to read, or the file is closed)
+        False and nothing changes. Safe to call from another thread (a signal handler)."""
+        try:
+            done = self._file.tell() >= os.fstat(self._file.fileno()).st_size
+        except (OSError, ValueError):  # closed meanwhile
+            return False
+        self._stop_at_end = self._stop_at_end or done
+        return done
 
     def close(self) -> None:
         self._file.close()

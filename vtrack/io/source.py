@@ -166,6 +166,13 @@ class Source(Closing, ABC):
         time: ``perf_counter`` start and end), which is no reading; None if it did not."""
         return None
 
+    def stop_at_end(self) -> bool:
+        """A followed file (``--follow``) read to its current end: stop waiting for more, so
+        that the frames the decoder still holds (in the file already) come out and iteration
+        ends; True. False for any other input, or one with more left to read (nothing
+        changes). Safe to call from a signal handler."""
+        return False
+
     def close(self) -> None:
         """Stop decoding and release the input. Safe to call twice and mid-stream."""
         if self._closed:

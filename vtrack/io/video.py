@@ -530,6 +530,10 @@ class VideoSource(Source):
         read = _python_file(self._container)
         return read.end_wait if isinstance(read, GrowingFile) else None
 
+    def stop_at_end(self) -> bool:
+        read = _python_file(self._container)
+        return isinstance(read, GrowingFile) and read.stop_at_end()
+
     def _decode(self) -> Iterator[av.VideoFrame]:
         """Decoded frames in order, dropping packets the decoder refuses (damage in the middle
         of the file: ffmpeg skips them the same way). A demuxer error still ends the stream;
