@@ -372,3 +372,36 @@ def test_a_signal_while_following_tracks_the_frames_already_in_the_file(tmp_path
     assert record["frames"] == 30
     assert len((out / "track.csv").read_text().splitlines()) - 1 == 30
     assert len(lines.read_text().splitlines()) == 30
+
+
+def test_a_followed_file_replaced_by_rename_ends_the_run_partial_naming_it(
+        tmp_path: Path) -> None:
+    """A new recording renamed over the followed name (`mv new.ts rec.ts`) went unnoticed:
+    `--follow` read on the old file (its name gone) until it went idle and said `complete`.
+    Now, once the file opened is read to its end (all its frames tracked), the run ends
+    `partial`, saying another file now has the name and that --follow does not go on to it."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
+    recording = write_video(scene, tmp_path / "rec.ts")
+    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
+    run = _vtrack([str(recording), "--follow", "600", "-c", "s0", "--init",
+                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
+                   "--stream", str(lines), "-q"])
+    try:
+        deadline = time.monotonic() + 120  # a bound, not a measure
+        while not (lines.exists() and lines.stat().st_size):  # the file is being read
+            assert run.poll() is None and time.monotonic() < deadline, "nothing was tracked"
+            time.sleep(0.05)
+        newer = tmp_path / "new.ts"
+        newer.write_bytes(recording.read_bytes())
+        newer.replace(recording)
+        _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 600 s
+    finally:
+        run.kill()
+        run.wait()
+    assert run.returncode == 1, stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "partial" and record["frames"] == 30
+    assert f"{recording}: reading stopped at frame 30: another file now has its name " \
+           "(renamed over it, or the recording rotated)" in record["error"]
+    assert "(tail -f, not tail -F)" in record["error"]
+    assert stderr.decode().count("vtrack: error:") == 1

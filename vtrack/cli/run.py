@@ -99,8 +99,9 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--follow", "follow_s", type=Seconds(min=0, max=MAX_WAIT_S, min_open=True),
               is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
               help=f"Read a file that is still being written, until it has not grown for "
-                   f"SECONDS (default {FOLLOW_S:g}), as tail -f (MPEG-TS, Matroska or "
-                   "fragmented MP4; a plain MP4 is readable only once finished).")
+                   f"SECONDS (default {FOLLOW_S:g}), as tail -f: the file opened, not one later "
+                   "renamed over its name (that ends the run partial). MPEG-TS, Matroska or "
+                   "fragmented MP4; a plain MP4 is readable only once finished.")
 @click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
 @click.option("--video-out", "video_out", metavar="URL", default=None,
               help="Send the annotated video to this live output instead of annotated.mp4: "

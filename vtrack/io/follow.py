@@ -11,10 +11,20 @@ from vtrack.io.pyfile import CapturingStream
 POLL_S = 0.05
 
 
-class FollowedFileCut(OSError):
+class FollowedFileChanged(OSError):
+    """The followed file is no longer the recording that was being read: the stream ends."""
+
+
+class FollowedFileCut(FollowedFileChanged):
     """The followed file became shorter than what was read of it: rewritten from its start
     (a recorder restarted over the same name) or cut. Reading on where the old data ended
     would hand over the middle of other data."""
+
+
+class FollowedFileReplaced(FollowedFileChanged):
+    """The followed path names another file than the one opened (a new recording renamed
+    over it, or the old one rotated away and a new one made). The file opened is read to its
+    end first (``tail -f``, not ``tail -F``); what the path names now is another recording."""
 
 
 class GrowingFile(CapturingStream):
@@ -22,13 +32,18 @@ class GrowingFile(CapturingStream):
     the end only once the file has not grown for ``idle_s`` seconds. Not seekable, so FFmpeg
     reads it as a stream (a container that needs its end first, like a plain MP4, cannot be
     followed: record fragmented MP4, MPEG-TS or Matroska). A file cut shorter than what was
-    read of it ends the stream, and :attr:`interruption` holds :class:`FollowedFileCut`.
+    read of it ends the stream, and :attr:`interruption` holds :class:`FollowedFileCut`; the
+    file opened read to its end while ``path`` names another file ends it with
+    :class:`FollowedFileReplaced`.
     :meth:`stop_at_end` ends the stream where the file ends now (a signal: the frames already
     in the file still come out of the decoder)."""
 
     def __init__(self, path: str, idle_s: float) -> None:
         super().__init__()
         self._file = open(path, "rb", buffering=0)  # noqa: SIM115 (closed by close())
+        self._path = path
+        opened = os.fstat(self._file.fileno())
+        self._identity = (opened.st_dev, opened.st_ino)
         self.idle_s = idle_s
         #: When a read last found new data (``perf_counter``): the idle time counts from
         #: there, across reads (FFmpeg asks again several times at the end; each must not wait
@@ -54,6 +69,11 @@ class GrowingFile(CapturingStream):
             if size < read:
                 raise FollowedFileCut(f"the file was cut to {size} bytes after {read} were read "
                                       "(rewritten from its start?)")
+            if self._replaced():
+                raise FollowedFileReplaced(
+                    f"another file now has its name (renamed over it, or the recording "
+                    f"rotated) and the {read} bytes of the one opened were read; --follow "
+                    "does not go on to it (tail -f, not tail -F)")
             if self._empty_since is None:
                 self._empty_since = now
             if now - self._grew_at >= self.idle_s or self.closed or self._stop_at_end:
@@ -61,6 +81,15 @@ class GrowingFile(CapturingStream):
                     self.end_wait = (self._empty_since, now)
                 return 0
             time.sleep(POLL_S)
+
+    def _replaced(self) -> bool:
+        """Whether the path names another file than the one opened now (a missing name is
+        not: the writer may still write the file opened)."""
+        try:
+            now = os.stat(self._path)
+        except OSError:
+            return False
+        return (now.st_dev, now.st_ino) != self._identity
 
     def stop_at_end(self) -> bool:
         """If everything the file holds now has been read (what is not out yet is in the

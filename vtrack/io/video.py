@@ -46,7 +46,7 @@ from vtrack.frame import BgrFrame, Frame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
-from vtrack.io.follow import FollowedFileCut, GrowingFile
+from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import ROTATE_CODES, rotate_i420
 from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.source import InputInfo, Source
@@ -671,7 +671,7 @@ class VideoSource(Source):
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({os_reason(exc)})", index
             ) from None
-        except FollowedFileCut as exc:
+        except FollowedFileChanged as exc:
             raise PartialInputError(f"{info.path}: reading stopped at frame {index}: {exc}",
                                     index) from None
         finally:
