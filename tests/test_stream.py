@@ -215,3 +215,35 @@ def test_a_live_video_receiver_that_takes_nothing_ends_the_run_after_the_timeout
     assert process.returncode == 1
     assert process.stderr.read().strip() == f"vtrack: error: {error}"
     assert record["status"] == "failed" and record["error"] == error
+
+
+def test_a_stream_reader_that_goes_away_stops_the_run_quietly_as_sigpipe(tmp_path: Path) -> None:
+    """`vtrack run ... --stream - | head -2` ended `failed`, "vtrack: error: --stream -: Broken
+    pipe", exit 1. Now the run stops there as a writer to a closed pipe does: exit 141 (128 +
+    SIGPIPE), no error line, run.json `interrupted` saying the reader went away, track.csv
+    whole."""
+    # more lines than a pipe holds (64 KiB): the run cannot have written them all already
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=600, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    out = tmp_path / "out"
+    run = subprocess.Popen([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                            "-q", "-o", str(out), "--stream", "-"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        assert run.stdout is not None and run.stderr is not None
+        taken = [run.stdout.readline(), run.stdout.readline()]  # `| head -2`
+        run.stdout.close()
+        stderr = run.stderr.read()
+        run.wait(timeout=120)
+    finally:
+        run.kill()
+    assert all(json.loads(line)["frame"] == i for i, line in enumerate(taken))
+    assert run.returncode == 141, stderr
+    assert stderr == b""
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "interrupted"
+    assert record["error"].startswith("--stream -: its reader went away (closed the pipe) after ")
+    assert record["error"].endswith(" lines: the run stopped there (SIGPIPE)")
+    with (out / "track.csv").open() as f:
+        assert len(list(csv.DictReader(f))) == record["frames"] < 600

@@ -51,6 +51,12 @@ class OutputError(VtrackError):
     """An output location that cannot be written."""
 
 
+class StreamReaderGone(OutputError):
+    """The reader of ``--stream`` went away (closed its end of the pipe: ``| head -2``). The
+    run stops there as a writer to a closed pipe does (SIGPIPE): it ends ``interrupted`` by
+    SIGPIPE (exit 141), its outputs whole, not failed."""
+
+
 class FolderInUseError(OutputError):
     """An output folder another vtrack process holds (its lock): nothing was written."""
 

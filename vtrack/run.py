@@ -49,6 +49,7 @@ from vtrack.errors import (
     OutputBrokenError,
     OutputError,
     PartialInputError,
+    StreamReaderGone,
     VtrackError,
     handling_stop_signals,
     plural,
@@ -911,6 +912,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.interrupted(exc)
     except KeyboardInterrupt:
         out.status, out.error = STATUS_INTERRUPTED, "interrupted by the user"
+    except StreamReaderGone as exc:  # `--stream - | head -2`: stopped as by SIGPIPE
+        out.status, out.signum, out.error = STATUS_INTERRUPTED, signal.SIGPIPE, str(exc)
     except OutputError as exc:  # a full disk part way: what is on disk is whole
         out.status, out.error = STATUS_FAILED, str(exc)
         out.failure = OutputBrokenError(str(exc))

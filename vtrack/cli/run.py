@@ -213,7 +213,9 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             _say(f"vtrack: warning: {warning}", err=True)
         if not quiet:
             _say(summary.line(), err=stream == "-")
-        if summary.status == STATUS_INTERRUPTED:
+        if summary.interrupted_by == "SIGPIPE":
+            pass  # the --stream reader went away (| head): quiet, as a pipe's writer; run.json
+        elif summary.status == STATUS_INTERRUPTED:  # says why
             _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
                  err=True)
         elif summary.status != STATUS_COMPLETE:
@@ -225,7 +227,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
 
 def _exit_code(summary: RunSummary) -> int:
     """The exit status ``summary``'s run ends with: 0 complete, 128 + the signal's number
-    interrupted (130, 143), else 1."""
+    interrupted (130, 143; 141 when the ``--stream`` reader went away), else 1."""
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED
 
     if summary.status == STATUS_COMPLETE:

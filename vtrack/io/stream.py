@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 from typing import IO, Any
 
-from vtrack.errors import OutputError
+from vtrack.errors import OutputError, StreamReaderGone
 from vtrack.io.files import Closing, os_reason
 from vtrack.io.threads import STOP_POLL_S
 from vtrack.pipeline import FrameResult
@@ -66,7 +66,8 @@ def frame_record(result: FrameResult, multi_target: bool) -> dict[str, Any]:
 class StreamWriter(Closing):
     """Writes :func:`frame_record` lines to ``target`` (a path, or ``-`` for standard output),
     each written out before :meth:`write` returns. OutputError names the target when a line
-    cannot be written (a full disk, a reader that went away) or when the reader of a pipe takes
+    cannot be written (a full disk; :class:`~vtrack.errors.StreamReaderGone` for a reader that
+    went away) or when the reader of a pipe takes
     nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
     reading). A line none of which is out yet gives way to a stop (see :meth:`write`), so
     Ctrl-C or SIGTERM does not wait for ``stall_s``."""
@@ -98,6 +99,10 @@ class StreamWriter(Closing):
                 self._file.flush()
             elif not self._send(memoryview(data), stop):
                 return False
+        except BrokenPipeError:
+            raise StreamReaderGone(f"--stream {self.target}: its reader went away (closed the "
+                                   f"pipe) after {self.lines} lines: the run stopped there "
+                                   "(SIGPIPE)") from None
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
         self.lines += 1
