@@ -154,7 +154,8 @@ def test_init_is_refused_by_a_config_that_finds_its_targets_but_a_sidecar_is_not
     """Probe 48 item 3: ``--init`` with s3 / fixed_camera was accepted, had no effect and was
     recorded in run.json as used. Now an explicit --init is refused in one line; a sidecar box
     beside the input (there for single-target configs) leaves a multi-target run alone, in
-    ``vtrack run`` and ``vtrack batch``; s4, which starts from a given box, still takes one."""
+    ``vtrack run`` and ``vtrack batch``; s4 still takes one (and says it does not use it:
+    test_s4_takes_init_but_reports_no_box_it_does_not_track)."""
     clip = clip_factory("multi", frames=60)
     path = tmp_path / "footage" / "clip.mp4"
     path.parent.mkdir()
@@ -176,7 +177,7 @@ def test_init_is_refused_by_a_config_that_finds_its_targets_but_a_sidecar_is_not
     result = vtrack("run", str(path), "-c", "s4", "--init", text(box), "--no-video", "-o",
                     str(tmp_path / "s4"))
     assert result.exit_code == 0, result.output
-    assert record(tmp_path / "s4")["init_from"] == "--init" and first_row(tmp_path / "s4") == box
+    assert record(tmp_path / "s4")["init_from"] == "--init"
     batch = tmp_path / "batch"
     result = vtrack("batch", str(path.parent), "-c", "s3", "-c", "fixed_camera", "--jobs", "1",
                     "--no-video", "--out", str(batch))
@@ -223,3 +224,27 @@ def test_init_takes_the_line_a_sidecar_file_holds(video: tuple[Path, Box],
     assert bad.exit_code == 2
     assert bad.stderr.strip() == ("vtrack: error: --init: expected x,y,w,h or x y w h "
                                   "(4 numbers separated by commas, spaces or tabs), got '1 2 3'")
+
+
+def test_s4_takes_init_but_reports_no_box_it_does_not_track(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`vtrack run m.mp4 -c s4 --init 10,20,30,40` drew that box, untracked, as `occluded` for
+    the 30 frames s4 learns the background (frames_occluded 30), though s4 finds its target
+    itself and tracked the same without it. Now --init is still taken (run.json says so) but
+    the rows are those of a run without it, and one warning says the box is not used."""
+    clip = clip_factory("bounce", width=W, height=H, frames=40)
+    given, without = tmp_path / "given", tmp_path / "without"
+    result = vtrack("run", str(clip.path), "-c", "s4", "--init", "10,20,30,40", "--no-video",
+                    "-q", "-o", str(given))
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        "vtrack: warning: --init: s4 finds its target itself (from its first detection, after "
+        "learning the background) and does not use a first box: no box is reported until it "
+        "detects the target"]
+    assert vtrack("run", str(clip.path), "-c", "s4", "--no-video", "-q", "-o",
+                  str(without)).exit_code == 0
+    assert (given / "track.csv").read_text() == (without / "track.csv").read_text()
+    assert record(given)["summary"]["frames_occluded"] == \
+        record(without)["summary"]["frames_occluded"] == 0
+    assert record(given)["init_from"] == "--init"
+    assert record(given)["warnings"] == [result.stderr.splitlines()[0][len("vtrack: warning: "):]]

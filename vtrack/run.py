@@ -751,6 +751,10 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     init_box, init_from = request.init_box, request.init_from or "--init"
     if init_box is not None and request.init_from is None:
         pipeline.refuse_a_first_box(f"--init: {request.config.name}", "leave --init out")
+        if not pipeline.needs_init_box:  # s4: taken, as before, but never drawn (_track)
+            warnings.append(f"--init: {request.config.name} finds its target itself (from its "
+                            "first detection, after learning the background) and does not use "
+                            "a first box: no box is reported until it detects the target")
     start = _first_frame(request, source)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
@@ -872,7 +876,10 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         signals.release()  # held while the outputs opened: one that came then ends it here
         signals.drain = source.stop_at_end
         frames_in = _Waits(_frames_to_track(request, resolved, source))
-        for result in resolved.pipeline.track(frames_in, resolved.init_box):
+        # a chain that finds its target itself (s4) tracks the same with a box given: it would
+        # only be drawn, untracked, until the first detection (warned of in _resolve)
+        given = resolved.init_box if resolved.pipeline.needs_init_box else None
+        for result in resolved.pipeline.track(frames_in, given):
             with signals.writing():
                 rows = formatter.rows(result)
                 try:
