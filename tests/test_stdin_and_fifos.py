@@ -13,6 +13,7 @@ import subprocess
 import sys
 import termios
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -299,23 +300,34 @@ def test_a_signal_while_a_stream_reader_stalls_is_an_interrupted_run(tmp_path: P
     assert len(rows) - 1 == record["frames"] < 600
 
 
+def _following(tmp_path: Path, follow_s: int) -> tuple[Path, Path, Path, subprocess.Popen]:
+    """``rec.ts`` (a finished 30-frame ``smooth`` clip) tracked by s0 with ``--follow
+    follow_s`` and a ``--stream`` file: ``(recording, out folder, stream file, process)``."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
+    recording = write_video(scene, tmp_path / "rec.ts")
+    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
+    run = _vtrack([str(recording), "--follow", str(follow_s), "-c", "s0", "--init",
+                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
+                   "--stream", str(lines), "-q"])
+    return recording, out, lines, run
+
+
+def _wait_until(run: subprocess.Popen, done: Callable[[], bool], what: str) -> None:
+    deadline = time.monotonic() + 120  # a bound, not a measure
+    while not done():
+        assert run.poll() is None and time.monotonic() < deadline, what
+        time.sleep(0.05)
+
+
 def test_a_followed_file_cut_shorter_ends_the_run_partial_naming_the_cut(tmp_path: Path) -> None:
     """A file cut shorter while `--follow` read it (a recorder restarted over the same name,
     `ffmpeg -y rec.ts`) was read on from the old end: the run waited, then tracked the middle
     of the new recording as if it went on, and ended `complete`. Now it ends `partial` at
     once, saying the file was cut."""
-    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
-    recording = tmp_path / "rec.ts"
-    recording.write_bytes(write_video(scene, tmp_path / "clip.ts").read_bytes())
-    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
-    run = _vtrack([str(recording), "--follow", "60", "-c", "s0", "--init",
-                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
-                   "--stream", str(lines), "-q"])
+    recording, out, lines, run = _following(tmp_path, 60)
     try:
-        deadline = time.monotonic() + 120  # a bound, not a measure
-        while not (lines.exists() and lines.stat().st_size):  # the file is being read
-            assert run.poll() is None and time.monotonic() < deadline, "nothing was tracked"
-            time.sleep(0.05)
+        _wait_until(run, lambda: lines.exists() and lines.stat().st_size > 0,
+                    "nothing was tracked")  # the file is being read
         with recording.open("r+b") as handle:
             handle.truncate(0)
         _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 60 s
@@ -349,18 +361,12 @@ def test_a_signal_while_following_tracks_the_frames_already_in_the_file(tmp_path
     frames the decoder's frame threads still held (in the file, read whole) were never tracked
     (49 of 60). Now the input ends where the file ends, they are tracked, and the run ends
     `interrupted` with every frame of the file."""
-    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
-    recording = write_video(scene, tmp_path / "rec.ts")
-    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
-    run = _vtrack([str(recording), "--follow", "600", "-c", "s0", "--init",
-                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
-                   "--stream", str(lines), "-q"])
+    recording, out, lines, run = _following(tmp_path, 600)
     try:
-        deadline = time.monotonic() + 120  # a bound, not a measure
         # tracking has begun and the whole file has been read: the run waits for more
-        while not (lines.exists() and lines.stat().st_size and _read_to_its_end(run, recording)):
-            assert run.poll() is None and time.monotonic() < deadline, "never read to its end"
-            time.sleep(0.05)
+        _wait_until(run, lambda: bool(lines.exists() and lines.stat().st_size
+                                      and _read_to_its_end(run, recording)),
+                    "never read to its end")
         run.send_signal(signal.SIGTERM)
         _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 600 s
     finally:
@@ -380,17 +386,10 @@ def test_a_followed_file_replaced_by_rename_ends_the_run_partial_naming_it(
     `--follow` read on the old file (its name gone) until it went idle and said `complete`.
     Now, once the file opened is read to its end (all its frames tracked), the run ends
     `partial`, saying another file now has the name and that --follow does not go on to it."""
-    scene = make_scene("smooth", seed=3, width=160, height=120, frames=30, fps=30)
-    recording = write_video(scene, tmp_path / "rec.ts")
-    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
-    run = _vtrack([str(recording), "--follow", "600", "-c", "s0", "--init",
-                   ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o", str(out),
-                   "--stream", str(lines), "-q"])
+    recording, out, lines, run = _following(tmp_path, 600)
     try:
-        deadline = time.monotonic() + 120  # a bound, not a measure
-        while not (lines.exists() and lines.stat().st_size):  # the file is being read
-            assert run.poll() is None and time.monotonic() < deadline, "nothing was tracked"
-            time.sleep(0.05)
+        _wait_until(run, lambda: lines.exists() and lines.stat().st_size > 0,
+                    "nothing was tracked")  # the file is being read
         newer = tmp_path / "new.ts"
         newer.write_bytes(recording.read_bytes())
         newer.replace(recording)
