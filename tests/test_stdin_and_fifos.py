@@ -380,20 +380,45 @@ def test_a_signal_while_following_tracks_the_frames_already_in_the_file(tmp_path
     assert len(lines.read_text().splitlines()) == 30
 
 
+def test_what_is_written_after_a_stop_at_the_end_is_not_read(tmp_path: Path) -> None:
+    """A stop while a followed file was read to its end (a signal: ``stop_at_end``) ended the
+    stream only at a read that found nothing: a recorder writing on kept the run going (600
+    frames tracked, 4 s after the signal, of a file that held 60 when it came). Now nothing
+    written after the stop is read."""
+    import threading
+
+    path = tmp_path / "rec.ts"
+    path.write_bytes(b"x" * 1000)
+    growing = GrowingFile(str(path), idle_s=600)
+    buffer = bytearray(4096)
+    assert growing.readinto(buffer) == 1000
+    got: list[int] = []
+    reader = threading.Thread(target=lambda: got.append(growing.readinto(buffer)), daemon=True)
+    reader.start()  # waits at the end of the file for more (600 s)
+    assert growing.stop_at_end()  # everything the file holds has been read
+    with path.open("ab") as handle:
+        handle.write(b"y" * 500)  # the recorder writes on
+    reader.join(timeout=60)  # a bound: it ends at its next poll
+    assert got == [0]
+    assert growing.readinto(buffer) == 0
+    growing.close()
+
+
 def test_a_followed_file_replaced_by_rename_ends_the_run_partial_naming_it(
         tmp_path: Path) -> None:
     """A new recording renamed over the followed name (`mv new.ts rec.ts`) went unnoticed:
     `--follow` read on the old file (its name gone) until it went idle and said `complete`.
-    Now, once the file opened is read to its end (all its frames tracked), the run ends
-    `partial`, saying another file now has the name and that --follow does not go on to it."""
-    recording, out, lines, run = _following(tmp_path, 600)
+    Now the file opened is followed on as `tail -f` follows it; when it has not grown for
+    --follow's seconds the run ends `partial`, saying another file now has the name and that
+    --follow does not go on to it."""
+    recording, out, lines, run = _following(tmp_path, 5)
     try:
         _wait_until(run, lambda: lines.exists() and lines.stat().st_size > 0,
                     "nothing was tracked")  # the file is being read
         newer = tmp_path / "new.ts"
         newer.write_bytes(recording.read_bytes())
         newer.replace(recording)
-        _, stderr = run.communicate(timeout=120)  # a bound: --follow alone would wait 600 s
+        _, stderr = run.communicate(timeout=120)  # a bound
     finally:
         run.kill()
         run.wait()
@@ -402,5 +427,5 @@ def test_a_followed_file_replaced_by_rename_ends_the_run_partial_naming_it(
     assert record["status"] == "partial" and record["frames"] == 30
     assert f"{recording}: reading stopped at frame 30: another file now has its name " \
            "(renamed over it, or the recording rotated)" in record["error"]
-    assert "(tail -f, not tail -F)" in record["error"]
+    assert "(as tail -f, not tail -F)" in record["error"]
     assert stderr.decode().count("vtrack: error:") == 1

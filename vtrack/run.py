@@ -927,8 +927,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
     except Exception as exc:  # recorded in run.json, then raised again by run()
         out.status, out.error, out.failure = STATUS_FAILED, str(exc) or type(exc).__name__, exc
     finally:
+        signals.drain = None  # first: a signal from here on is held, not taken for a drain
         signals.hold()  # a signal now must not cut the closing and the records short
-        signals.drain = None
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
         # the loop's wait for frames while the input waited at its end (--follow) is not
         # tracking: the decoder's frame threads hand over its last frames only after it

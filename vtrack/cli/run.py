@@ -100,7 +100,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
               help=f"Read a file that is still being written, until it has not grown for "
                    f"SECONDS (default {FOLLOW_S:g}), as tail -f: the file opened, not one later "
-                   "renamed over its name (that ends the run partial). MPEG-TS, Matroska or "
+                   "renamed over its name (the run then ends partial). MPEG-TS, Matroska or "
                    "fragmented MP4; a plain MP4 is readable only once finished.")
 @click.option("--no-video", is_flag=True, help="Do not write annotated.mp4 (fastest).")
 @click.option("--video-out", "video_out", metavar="URL", default=None,

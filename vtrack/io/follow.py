@@ -55,13 +55,23 @@ class GrowingFile(CapturingStream):
         #: The wait that found the end: from the first read that found nothing more to the end
         #: reported (``perf_counter`` times; None before the end). It is no reading.
         self.end_wait: tuple[float, float] | None = None
-        #: Set by :meth:`stop_at_end`: the next read that finds no more data ends the stream.
-        self._stop_at_end = False
+        #: Set by :meth:`stop_at_end`: where the stream ends (the file's size then); what is
+        #: written after the stop is not read, also by a read already under way.
+        self._end_at: int | None = None
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
         while True:
+            end_at = self._end_at
+            if end_at is not None and self._file.tell() >= end_at:
+                now = time.perf_counter()
+                if self.end_wait is None:
+                    self.end_wait = (self._empty_since or now, now)
+                return 0
             got = self._file.readinto(buffer)
             now = time.perf_counter()
+            end_at = self._end_at  # (a stop may have come while the read was under way)
+            if end_at is not None:
+                got = max(0, min(got, end_at - (self._file.tell() - got)))
             if got:
                 self._grew_at, self._empty_since = now, None
                 return got
@@ -69,14 +79,15 @@ class GrowingFile(CapturingStream):
             if size < read:
                 raise FollowedFileCut(f"the file was cut to {size} bytes after {read} were read "
                                       "(rewritten from its start?)")
-            if self._replaced():
-                raise FollowedFileReplaced(
-                    f"another file now has its name (renamed over it, or the recording "
-                    f"rotated) and the {read} bytes of the one opened were read; --follow "
-                    "does not go on to it (tail -f, not tail -F)")
             if self._empty_since is None:
                 self._empty_since = now
-            if now - self._grew_at >= self.idle_s or self.closed or self._stop_at_end:
+            if now - self._grew_at >= self.idle_s or self.closed:
+                if not self.closed and self._replaced():
+                    raise FollowedFileReplaced(
+                        f"another file now has its name (renamed over it, or the recording "
+                        f"rotated); the {read} bytes of the one opened were read and it stayed "
+                        f"{self.idle_s:g} s without growing; --follow does not go on to the "
+                        "new one (as tail -f, not tail -F)")
                 if self.end_wait is None:
                     self.end_wait = (self._empty_since, now)
                 return 0
@@ -97,10 +108,12 @@ class GrowingFile(CapturingStream):
         waiting for more, and return True; else (more is left to read, or the file is closed)
         False and nothing changes. Safe to call from another thread (a signal handler)."""
         try:
-            done = self._file.tell() >= os.fstat(self._file.fileno()).st_size
+            read = self._file.tell()
+            done = read >= os.fstat(self._file.fileno()).st_size
         except (OSError, ValueError):  # closed meanwhile
             return False
-        self._stop_at_end = self._stop_at_end or done
+        if done and self._end_at is None:
+            self._end_at = read
         return done
 
     def close(self) -> None:

@@ -141,11 +141,12 @@ class KeepingUp(Generic[T]):
             for item in self._items:
                 if self._stop.is_set():
                     return
+                produced = time.perf_counter()  # before any wait for room: latency counts it
                 with self._ready:
                     self._make_room()
                     if self._stop.is_set():
                         return
-                    self._waiting.append((item, time.perf_counter()))
+                    self._waiting.append((item, produced))
                     self._ready.notify_all()
         except BaseException as exc:  # handed to the consumer, who decides what it means
             end = _Failure(exc)

@@ -101,9 +101,10 @@ class FrameStore:
                 if frame is None:
                     self._end = self._next
                     return None
-                if frame.index > self._next and (not self._gaps
-                                                 or self._gaps[-1][1] < self._next):
-                    self._gaps.append((self._next, frame.index - 1))
+                gap = (self._next, frame.index - 1)
+                if frame.index > self._next and gap not in self._gaps:
+                    # wherever it lies: after a jump or a rewind, gaps are met out of order
+                    self._gaps.append(gap)
                 self._next = frame.index + 1
                 data = encode_image(frame.bgr(), self._ext)
                 self._keep(frame.index, data)
