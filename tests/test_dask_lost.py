@@ -218,7 +218,8 @@ def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
         worker.wait(timeout=120)  # closed by its scheduler, once its running job has ended
     assert batch.returncode == 1, stderr
     assert "Traceback" not in stderr, stderr
-    errors = [line for line in stderr.splitlines() if line.strip()]
+    # (the batch's progress lines come too on a slow machine: stderr is no terminal here)
+    errors = [line for line in stderr.splitlines() if line.startswith("vtrack:")]
     assert len(errors) == 1 and errors[0].startswith("vtrack: error: a [robust]: failed: "), stderr
     assert f"lost the connection to the scheduler {address}" in errors[0]
     with (out / "summary.csv").open() as handle:
