@@ -247,10 +247,10 @@ class _Signals:
         self.inside = True
         try:
             yield
-        finally:
+        except BaseException:
             self.inside = False
-        if self.pending:
-            raise Interrupted(self.pending)
+            raise
+        self.release()
 
 
 def _numbering(info: InputInfo) -> str:

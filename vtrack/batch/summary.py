@@ -37,10 +37,11 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
     summary = SummaryWriter(summary_path, batch.order)
     started = time.time()
     finished = False
+    for outcome in batch.known:  # resumed pairs: one write for all of them
+        summary.add(outcome, write=False)
     summary.write()
     try:
         for outcome in batch.known:
-            summary.add(outcome)
             yield outcome
         with closing(executor.run(batch.jobs)) as outcomes, passing_stop_to(outcomes):
             for outcome in outcomes:
@@ -89,9 +90,10 @@ class SummaryWriter:
         self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
             key: None if key in planned else earlier[key] for key in keys}
 
-    def add(self, outcome: Outcome) -> None:
+    def add(self, outcome: Outcome, write: bool = True) -> None:
         self.rows[(outcome.input, outcome.config)] = outcome.row()
-        self.write()
+        if write:
+            self.write()
 
     def write(self, stopped: bool = False) -> None:
         """Write the file. Pairs without an outcome yet are ``interrupted``: while the batch

@@ -265,7 +265,7 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
         resumed = sum(outcome.resumed for outcome in outcomes)
         if resumed:
             tally += f"; {resumed} of them complete before, not run again"
-        total = pairs if stopped else len(outcomes)
+        total = len(outcomes) + unstarted
         click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
     for outcome in outcomes:
         if not outcome.ok and not (stopped and outcome.status == STATUS_INTERRUPTED):

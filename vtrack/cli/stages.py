@@ -81,12 +81,10 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
 
     known, configs = all_stages(), shipped_configs()
     chosen: dict[str, list[tuple[str, dict]]] = {}
-    for name in names:
+    for name in dict.fromkeys(names):  # a name given twice: listed once
         if name in known:
             chosen.setdefault(name, [])
         elif name in configs:
-            if any(name == config for sets in chosen.values() for config, _ in sets):
-                continue  # named twice: listed once
             for stage, settings in load_config(name).stages:
                 chosen.setdefault(stage, []).append((name, settings))
         else:

@@ -63,10 +63,7 @@ class GrowingFile(CapturingStream):
         while True:
             end_at = self._end_at
             if end_at is not None and self._file.tell() >= end_at:
-                now = time.perf_counter()
-                if self.end_wait is None:
-                    self.end_wait = (self._empty_since or now, now)
-                return 0
+                return self._ended(time.perf_counter())
             got = self._file.readinto(buffer)
             now = time.perf_counter()
             end_at = self._end_at  # (a stop may have come while the read was under way)
@@ -88,10 +85,15 @@ class GrowingFile(CapturingStream):
                         f"rotated); the {read} bytes of the one opened were read and it stayed "
                         f"{self.idle_s:g} s without growing; --follow does not go on to the "
                         "new one (as tail -f, not tail -F)")
-                if self.end_wait is None:
-                    self.end_wait = (self._empty_since, now)
-                return 0
+                return self._ended(now)
             time.sleep(POLL_S)
+
+    def _ended(self, now: float) -> int:
+        """The stream's end (0), its wait at the end recorded once: from the first read that
+        found nothing more (or ``now``) to ``now``."""
+        if self.end_wait is None:
+            self.end_wait = (self._empty_since or now, now)
+        return 0
 
     def _replaced(self) -> bool:
         """Whether the path names another file than the one opened now (a missing name is

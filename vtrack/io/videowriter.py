@@ -235,6 +235,8 @@ class VideoWriter(Closing):
     def _free_slot(self, stop: Callable[[], bool] | None) -> _Slot | None:
         """An output buffer the encoder is done with, waiting for one at most ``stall_s``
         (OutputError, a live output) and, with ``stop``, None once ``stop()`` is true."""
+        if stop is None and self._stall_s is None:  # a file: the encoder frees one in time
+            return self._free.get()
         deadline = None if self._stall_s is None else time.monotonic() + self._stall_s
         while True:
             waits = [STOP_POLL_S] if stop is not None else []

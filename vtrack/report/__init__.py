@@ -199,8 +199,9 @@ def _mixed_truth_warning(name: str, runs: Sequence[RunResult]) -> str | None:
         except OSError:
             return path
 
-    truths = _group([r for r in runs if r.scores is not None and r.ground_truth],
-                    lambda r: content(str(r.ground_truth)))
+    scored = [r for r in runs if r.scores is not None and r.ground_truth]
+    digests = {path: content(path) for path in {str(r.ground_truth) for r in scored}}
+    truths = _group(scored, lambda r: digests[str(r.ground_truth)])
     if len(truths) < 2:
         return None
     named = "; ".join(sorted(
