@@ -550,12 +550,17 @@ def test_batch_replaces_results_of_other_settings_only_with_overwrite(clip_facto
     record = tmp_path / "res" / "walk" / "s0" / "run.json"
     before = record.read_bytes()
     summary = (tmp_path / "res" / "summary.csv").read_text()
-    refused = vtrack(*common, "--set", "meanshift.iterations=5")
+    refused = vtrack(*[a for a in common if a != "-q"], "--set", "meanshift.iterations=5")
     assert refused.returncode == 1 and "made with other settings" in refused.stderr
     assert record.read_bytes() == before
     # the refused pair's row went on describing its folder's run (it said `failed`, while
-    # `vtrack report` found that run complete)
+    # `vtrack report` found that run complete); the tally counts it as its row does (it
+    # said `1 failed` beside a row that said complete)
     assert (tmp_path / "res" / "summary.csv").read_text() == summary
+    assert refused.stdout.startswith("walk [s0]: failed: ")
+    assert refused.stdout.splitlines()[-1].startswith(
+        "1 run (1 complete; 1 of them made with other settings, not run again "
+        "(--overwrite replaces them)) -> ")
     replaced = vtrack(*common, "--set", "meanshift.iterations=5", "-y")
     assert replaced.returncode == 0, replaced.stderr
     with (tmp_path / "res" / "summary.csv").open(newline="") as handle:

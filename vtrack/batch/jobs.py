@@ -58,6 +58,12 @@ class Outcome:
     def ok(self) -> bool:
         return self.status == STATUS_COMPLETE
 
+    @property
+    def held(self) -> str:
+        """The status of what the pair's folder holds, as its ``summary.csv`` row says: the
+        ``kept`` run's when this job was refused, else the job's own."""
+        return self.kept.status if self.kept else self.status
+
     def line(self) -> str:
         """One line for the terminal: the run's summary line, or what went wrong."""
         label = f"{printable(self.input)} [{printable(self.config)}]"
@@ -85,7 +91,7 @@ class Outcome:
             "precision20": _round(s.precision20, 4) if s else None,
             "frames_lost": s.frames_lost if s else None,
             "frames_skipped": s.frames_skipped if s else None,
-            "status": self.kept.status if self.kept else self.status,
+            "status": self.held,
             "error": self.kept.error if self.kept else self.error,
         }
 

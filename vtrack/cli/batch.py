@@ -248,15 +248,16 @@ def _warn_left_out(folder: Path, videos: list[Path]) -> None:
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
             stopped: bool) -> None:
-    """The end of a batch: the tally of its ``pairs`` (input x config) by status and where
-    ``summary.csv`` is (unless ``quiet``), then one ``vtrack: error:`` line per run that did not
-    complete. A ``stopped`` batch counts the pairs it never started, and names no error for
-    the runs its stop interrupted (its own ``vtrack: interrupted`` line follows)."""
+    """The end of a batch: the tally of its ``pairs`` (input x config) by status, as the rows
+    of ``summary.csv`` give it (a run refused for other settings counts as the run its folder
+    keeps), and where that file is (unless ``quiet``), then one ``vtrack: error:`` line per run
+    that did not complete. A ``stopped`` batch counts the pairs it never started, and names no
+    error for the runs its stop interrupted (its own ``vtrack: interrupted`` line follows)."""
     from vtrack.run import STATUS_INTERRUPTED
 
     counts: dict[str, int] = {}
-    for outcome in outcomes:
-        counts[outcome.status] = counts.get(outcome.status, 0) + 1
+    for outcome in outcomes:  # by what each pair's folder holds, as summary.csv's rows
+        counts[outcome.held] = counts.get(outcome.held, 0) + 1
     if not quiet:
         tally = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
         unstarted = pairs - len(outcomes) if stopped else 0
@@ -265,6 +266,10 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
         resumed = sum(outcome.resumed for outcome in outcomes)
         if resumed:
             tally += f"; {resumed} of them complete before, not run again"
+        refused = sum(outcome.kept is not None for outcome in outcomes)
+        if refused:
+            tally += (f"; {refused} of them made with other settings, not run again "
+                      "(--overwrite replaces them)")
         total = len(outcomes) + unstarted
         click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
     for outcome in outcomes:
