@@ -166,9 +166,13 @@ def test_frame_never_writes_into_its_input(clip: Path, tmp_path: Path) -> None:
 class Select:
     """``vtrack select`` running in a subprocess; ``url`` is the page it printed."""
 
-    def __init__(self, *args: str) -> None:
-        self.process = subprocess.Popen([sys.executable, "-m", "vtrack", "select", *args],
-                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    def __init__(self, *args: str, stdout_closed: bool = False) -> None:
+        """``stdout_closed``: start it as ``vtrack select ARGS >&-`` (no stdout at all)."""
+        command = [sys.executable, "-m", "vtrack", "select", *args]
+        if stdout_closed:
+            command = ["sh", "-c", 'exec "$0" "$@" >&-', *command]
+        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        text=True)
         self.lines: queue.Queue[str] = queue.Queue()
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -421,11 +425,13 @@ def test_select_stopped_by_sigterm_says_so_as_run_does(clip: Path) -> None:
     assert err.splitlines()[-1] == "vtrack: interrupted" and "Traceback" not in err
 
 
-def test_select_with_stdout_gone_says_where_the_box_went(clip: Path) -> None:
+@pytest.mark.parametrize("gone", ["Broken pipe", "closed before vtrack started"])
+def test_select_with_stdout_gone_says_where_the_box_went(clip: Path, gone: str) -> None:
     """``vtrack select clip.mp4 | true``, then confirm: the box was saved and the command
-    exited 1 without a word."""
+    exited 1 without a word. ``vtrack select clip.mp4 >&-`` (stdout closed from the start)
+    exited 0 without a word about the box it did not print."""
     sidecar_path(clip).unlink(missing_ok=True)
-    select = Select(str(clip))
+    select = Select(str(clip), stdout_closed=gone != "Broken pipe")
     try:
         assert select.process.stdout is not None
         select.process.stdout.close()  # its only reader: the next write breaks the pipe
@@ -439,7 +445,7 @@ def test_select_with_stdout_gone_says_where_the_box_went(clip: Path) -> None:
     while not select.lines.empty():
         err.append(select.lines.get())
     assert code == 1
-    assert err == [f"vtrack: error: standard output: Broken pipe: --init 10,20,30,40 was "
+    assert err == [f"vtrack: error: standard output: {gone}: --init 10,20,30,40 was "
                    f"not printed there; it is saved in {sidecar_path(clip)}\n"]
     assert read_sidecar(clip) == Box(10, 20, 30, 40)
 

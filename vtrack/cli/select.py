@@ -67,13 +67,18 @@ def _print(line: str, kept: str) -> None:
     """``line``, the options for vtrack run, on stdout. When stdout's reader went away
     (``vtrack select clip.mp4 | true``) OutputBrokenError (one line, exit 1) gives ``line`` and
     ``kept`` (whether and where the box was saved) on stderr instead; stdout is then pointed
-    at /dev/null, so the interpreter's last flush adds nothing."""
+    at /dev/null, so the interpreter's last flush adds nothing. So too when stdout was closed
+    before vtrack started (``vtrack select clip.mp4 >&-``: Python has no ``sys.stdout`` then,
+    and click would print nothing without a word)."""
     import os
     import sys
 
     from vtrack.errors import OutputBrokenError
     from vtrack.io.files import os_reason
 
+    if sys.stdout is None:  # its descriptor may be another file's now: leave it alone
+        raise OutputBrokenError(f"standard output: closed before vtrack started: {line} was "
+                                f"not printed there; {kept}")
     try:
         click.echo(line)
     except (OSError, ValueError) as exc:
