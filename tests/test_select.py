@@ -450,11 +450,18 @@ def test_select_with_stdout_gone_says_where_the_box_went(clip: Path, gone: str) 
     assert read_sidecar(clip) == Box(10, 20, 30, 40)
 
 
-def test_frame_with_an_empty_out_names_what_out_takes(clip: Path, tmp_path: Path) -> None:
-    """``-o ''`` suggested "'.' for the current folder", which -o then refused ("write a .png
-    or .jpg image")."""
-    done = vtrack("frame", str(clip), "-o", "", cwd=tmp_path)
+@pytest.mark.parametrize(("command", "option", "takes"), [
+    ("frame", "'--out' / '-o'", "an image file name ending in .png or .jpg"),
+    ("run", "'--gt'", "a ground-truth file name (OTB, VOT or MOTChallenge boxes)"),
+])
+def test_an_empty_file_option_names_what_it_takes(clip: Path, tmp_path: Path, command: str,
+                                                  option: str, takes: str) -> None:
+    """``vtrack frame -o ''`` and ``vtrack run --gt ''`` suggested "'.' for the current
+    folder", which neither takes (-o then said "write a .png or .jpg image")."""
+    flag = "-o" if command == "frame" else "--gt"
+    done = vtrack(command, str(clip), flag, "", cwd=tmp_path)
     assert (done.returncode, done.stdout) == (2, "")
-    assert done.stderr.startswith("vtrack: error: Invalid value for '--out' / '-o': empty; "
-                                  "give an image file name ending in .png or .jpg (see ")
+    assert done.stderr.startswith(f"vtrack: error: Invalid value for {option}: empty; give "
+                                  f"{takes} (see ")
+    assert len(done.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []

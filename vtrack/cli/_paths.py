@@ -51,6 +51,9 @@ def length_problem(path: str) -> str | None:
 PATH = NonEmptyPath(path_type=Path)
 #: The type of ``vtrack frame --out``: an image file, no folder.
 IMAGE_PATH = NonEmptyPath(path_type=Path, hint="an image file name ending in .png or .jpg")
+#: The type of ``vtrack run --gt``: a ground-truth file, no folder.
+GT_PATH = NonEmptyPath(path_type=Path, hint="a ground-truth file name (OTB, VOT or "
+                       "MOTChallenge boxes)")
 
 
 class NonEmptyText(click.ParamType):

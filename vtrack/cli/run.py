@@ -21,7 +21,7 @@ from vtrack.cli._options import (
     gt_origin_option,
     stats_period_option,
 )
-from vtrack.cli._paths import CONFIG, INPUT, PATH, FileOrDash
+from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError
 from vtrack.params import MAX_SEED
@@ -58,7 +58,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "Default: the input's sidecar box "
                    "(NAME.init.txt, written by vtrack select), else the first --gt box. "
                    "Refused by multi-target configs (s3, s4_multi, fixed_camera).")
-@click.option("--gt", "gt_path", type=PATH, metavar="FILE",
+@click.option("--gt", "gt_path", type=GT_PATH, metavar="FILE",
               help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
                    "multi-target configs): fills overlap and center_error.")
 @gt_origin_option()
