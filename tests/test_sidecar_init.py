@@ -177,7 +177,7 @@ def test_init_is_refused_by_a_config_that_finds_its_targets_but_a_sidecar_is_not
     result = vtrack("run", str(path), "-c", "s4", "--init", text(box), "--no-video", "-o",
                     str(tmp_path / "s4"))
     assert result.exit_code == 0, result.output
-    assert record(tmp_path / "s4")["init_from"] == "--init"
+    assert record(tmp_path / "s4")["init_ignored"] == list(box)
     batch = tmp_path / "batch"
     result = vtrack("batch", str(path.parent), "-c", "s3", "-c", "fixed_camera", "--jobs", "1",
                     "--no-video", "--out", str(batch))
@@ -230,8 +230,9 @@ def test_s4_takes_init_but_reports_no_box_it_does_not_track(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """`vtrack run m.mp4 -c s4 --init 10,20,30,40` drew that box, untracked, as `occluded` for
     the 30 frames s4 learns the background (frames_occluded 30), though s4 finds its target
-    itself and tracked the same without it. Now --init is still taken (run.json says so) but
-    the rows are those of a run without it, and one warning says the box is not used."""
+    itself and tracked the same without it. Now --init is still taken but the rows are those
+    of a run without it, and one warning says the box is not used; run.json records it as
+    given and ignored (it recorded it as the run's first box: `init`, `init_from --init`)."""
     clip = clip_factory("bounce", width=W, height=H, frames=40)
     given, without = tmp_path / "given", tmp_path / "without"
     result = vtrack("run", str(clip.path), "-c", "s4", "--init", "10,20,30,40", "--no-video",
@@ -246,5 +247,8 @@ def test_s4_takes_init_but_reports_no_box_it_does_not_track(
     assert (given / "track.csv").read_text() == (without / "track.csv").read_text()
     assert record(given)["summary"]["frames_occluded"] == \
         record(without)["summary"]["frames_occluded"] == 0
-    assert record(given)["init_from"] == "--init"
+    assert (record(given)["init"], record(given)["init_from"]) == (None, None)
+    assert record(given)["init_ignored"] == [10, 20, 30, 40]
+    assert record(given)["request"]["init"] == [10, 20, 30, 40]
+    assert record(without)["init_ignored"] is None
     assert record(given)["warnings"] == [result.stderr.splitlines()[0][len("vtrack: warning: "):]]

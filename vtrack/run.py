@@ -509,6 +509,9 @@ class _Resolved:
     #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
     #: a ground-truth file (None: no box).
     init_from: str | None = None
+    #: An ``--init`` box the chain does not use (s4 finds its target itself): checked like one
+    #: it uses, recorded in run.json as ``init_ignored``, never handed to the tracker.
+    init_ignored: Box | None = None
     #: The input's and ground truth's identity when the run started (run.json ``identity``).
     identity: dict[str, Any] = field(default_factory=dict)
     #: The first frame tracked (``--start``; a time found in the frames' timestamps).
@@ -590,9 +593,9 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             raise
         try:
             info = source.info
-            if resolved.init_box is not None:
-                check_init_box(resolved.init_box, info.width, info.height,
-                                resolved.init_from or "--init")
+            for box in (resolved.init_box, resolved.init_ignored):
+                if box is not None:
+                    check_init_box(box, info.width, info.height, resolved.init_from or "--init")
             _refuse_writing_over_inputs(request, _output_names(request, resolved))
             if not overwrite:
                 refuse_replacing(request.out_dir)
@@ -749,12 +752,14 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     # says, vtrack.io.sidecar), else the first ground-truth box
     # (the sidecar holds frame 0's box: not for a run that starts later)
     init_box, init_from = request.init_box, request.init_from or "--init"
+    ignored = None
     if init_box is not None and request.init_from is None:
         pipeline.refuse_a_first_box(f"--init: {request.config.name}", "leave --init out")
-        if not pipeline.needs_init_box:  # s4: taken, as before, but never drawn (_track)
+        if not pipeline.needs_init_box:  # s4: taken, but it would only be drawn, untracked
             warnings.append(f"--init: {request.config.name} finds its target itself (from its "
                             "first detection, after learning the background) and does not use "
                             "a first box: no box is reported until it detects the target")
+            ignored, init_box = init_box, None
     start = _first_frame(request, source)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
@@ -782,7 +787,7 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
             f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
             "(vtrack select INPUT picks it)"
         )
-    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None,
+    return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, _Span(request.max_frames, request.max_s),
                      warnings, distractors)
 
@@ -876,10 +881,7 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         signals.release()  # held while the outputs opened: one that came then ends it here
         signals.drain = source.stop_at_end
         frames_in = _Waits(_frames_to_track(request, resolved, source))
-        # a chain that finds its target itself (s4) tracks the same with a box given: it would
-        # only be drawn, untracked, until the first detection (warned of in _resolve)
-        given = resolved.init_box if resolved.pipeline.needs_init_box else None
-        for result in resolved.pipeline.track(frames_in, given):
+        for result in resolved.pipeline.track(frames_in, resolved.init_box):
             with signals.writing():
                 rows = formatter.rows(result)
                 try:
@@ -1077,6 +1079,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "stopped_by_frames": stopped,
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
         "init_from": resolved.init_from,
+        # an --init box the config does not use (s4): given, not tracked from (a warning)
+        "init_ignored": None if resolved.init_ignored is None else list(resolved.init_ignored),
         "config": request.config.resolved(),
         "metrics": metrics,
         "summary": {k: v for k, v in summary.__dict__.items() if k not in ("warnings", "mot")},
