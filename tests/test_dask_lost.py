@@ -210,7 +210,9 @@ def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
     traceback and a two-line error per job ('... cancelled for reason:
     scheduler-connection-lost.' then 'Client lost the connection ...'), also two lines in
     summary.csv; on the worker, which its scheduler closed, the job's check of the stop event
-    raised AttributeError: the run ended ``failed`` (internal error, error.log) part way."""
+    raised AttributeError: the run ended ``failed`` (internal error, error.log) part way.
+    The job's error said only "its outcome is unknown", while the job went on to write a
+    complete run.json: it now says so, and the same batch run again takes that run up."""
     out = tmp_path / "out"
     with batch_on_a_cluster(folder, out) as (address, scheduler, worker, batch):
         scheduler.send_signal(signal.SIGTERM)
@@ -230,3 +232,11 @@ def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
     assert not (run / "error.log").exists(), (run / "error.log").read_text()
     record = json.loads((run / "run.json").read_text())
     assert (record["status"], record["frames"]) == ("complete", 600), record
+    assert errors[0].endswith("its outcome is unknown here: a running job may still end on its "
+                              "worker and write its run.json (the same vtrack batch again takes "
+                              "up a complete one, vtrack report shows it)")
+    again = vtrack("batch", str(folder), "--preset", "slow", "-o", str(out))
+    assert again.returncode == 0, again.stderr
+    assert "1 of them complete before, not run again" in again.stdout
+    with (out / "summary.csv").open() as handle:
+        assert [row["status"] for row in csv.DictReader(handle)] == ["complete"]

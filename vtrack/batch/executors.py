@@ -385,7 +385,10 @@ class DaskExecutor:
         except Exception as exc:  # KilledWorker, lost connection: report, carry on
             if getattr(exc, "reason", None) == "scheduler-connection-lost":
                 error = (f"Dask: lost the connection to the scheduler {self.address} while "
-                         "the job was pending or running; its outcome is unknown")
+                         "the job was pending or running; its outcome is unknown here: a "
+                         "running job may still end on its worker and write its run.json (the "
+                         "same vtrack batch again takes up a complete one, vtrack report "
+                         "shows it)")
             else:
                 first = str(exc).splitlines()[0] if str(exc).strip() else ""
                 error = f"Dask: {type(exc).__name__}: {first}".rstrip(": ")
