@@ -22,17 +22,21 @@ from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
 
-def _record(request: RunRequest, since: float | None = None) -> dict[str, Any] | None:
-    """The ``run.json`` in ``request.out_dir`` if it records a run of exactly ``request``
-    (:meth:`RunRequest.same_run`) and was written at or after the time ``since``; else None."""
-    path = request.out_dir / "run.json"
+def _read(out_dir: Path) -> dict[str, Any] | None:
+    """The ``run.json`` in ``out_dir``, whatever run it records; None when there is none that
+    can be read."""
     try:
-        if since is not None and path.stat().st_mtime < since:
-            return None
-        record = read_run_record(path)
-        return record if request.same_run(record["request"]) else None
-    except (OSError, KeyError, InputError):
+        return read_run_record(out_dir / "run.json")
+    except (OSError, InputError):
         return None
+
+
+def _of(request: RunRequest, record: dict[str, Any] | None) -> dict[str, Any] | None:
+    """``record`` if it records a run of exactly ``request`` (:meth:`RunRequest.same_run`),
+    else None."""
+    if record is None or "request" not in record:
+        return None
+    return record if request.same_run(record["request"]) else None
 
 
 def _summary(record: dict[str, Any], out_dir: Path) -> RunSummary | None:
@@ -52,7 +56,12 @@ def recorded_summary(request: RunRequest, since: float | None = None) -> RunSumm
     """The summary ``run.json`` in ``request.out_dir`` records for a run of exactly
     ``request`` (every field, :meth:`RunRequest.same_run`), whatever its status; None if there
     is none, it is another request's, or it was written before the time ``since``."""
-    record = _record(request, since)
+    try:
+        if since is not None and (request.out_dir / "run.json").stat().st_mtime < since:
+            return None
+    except OSError:
+        return None
+    record = _of(request, _read(request.out_dir))
     return None if record is None else _summary(record, request.out_dir)
 
 
@@ -66,7 +75,12 @@ def completed_summary(request: RunRequest) -> RunSummary | None:
     modification time, :mod:`vtrack.io.identity`) and every output it lists is there with the
     size it recorded.
     """
-    record = _record(request)
+    return _completed(request, _of(request, _read(request.out_dir)))
+
+
+def _completed(request: RunRequest, record: dict[str, Any] | None) -> RunSummary | None:
+    """:func:`completed_summary` of ``record``, the ``run.json`` of exactly ``request`` (None:
+    there is none)."""
     if record is None or record.get("status") != STATUS_COMPLETE:
         return None
     csv_name = "tracks.csv" if (record.get("summary") or {}).get("multi_target") else "track.csv"
@@ -127,14 +141,18 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             request = replace(settings, input=str(item.path), out_dir=folder,
                               config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin,
                               init_from=None if init is None else str(sidecar_path(item.path)))
-            done = None if force else completed_summary(request)
-            if not overwrite and recorded_summary(request) is None:
+            # the folder's run.json, read once: whether it stands, is this run's, or another's
+            on_disk = _read(folder) if not (force and overwrite) else None
+            same = _of(request, on_disk)
+            done = None if force else _completed(request, same)
+            if not overwrite and (same is None or _summary(same, folder) is None):
                 try:
                     refuse_replacing(request.out_dir)
                 except OutputError as exc:
-                    result.known.append(Outcome(item.name, label, STATUS_FAILED,
-                                                error=f"{exc} ({_other_settings(request)})",
-                                                kept=_on_disk(request.out_dir)))
+                    result.known.append(Outcome(
+                        item.name, label, STATUS_FAILED,
+                        error=f"{exc} ({_other_settings(request, on_disk)})",
+                        kept=None if on_disk is None else _summary(on_disk, folder)))
                     continue
             if done is not None:
                 result.known.append(Outcome(item.name, label, STATUS_COMPLETE, done,
@@ -144,22 +162,11 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     return result
 
 
-def _on_disk(out_dir: Path) -> RunSummary | None:
-    """The summary of the run ``out_dir/run.json`` records, whatever request it was made
-    with; None when there is none that can be read."""
-    try:
-        return _summary(read_run_record(out_dir / "run.json"), out_dir)
-    except (OSError, InputError):
-        return None
-
-
-def _other_settings(request: RunRequest) -> str:
-    """``made with other settings``, naming those that differ from ``request``'s in the
-    ``run.json`` of its folder (as far as it can be read)."""
-    try:
-        changed = request.differences(read_run_record(request.out_dir / "run.json")["request"])
-    except (OSError, KeyError, TypeError, InputError):
-        changed = []
+def _other_settings(request: RunRequest, record: dict[str, Any] | None) -> str:
+    """``made with other settings``, naming those that differ from ``request``'s in
+    ``record``, the ``run.json`` of its folder (None: none could be read)."""
+    changed = ([] if record is None or "request" not in record
+               else request.differences(record["request"]))
     return "made with other settings" + (f": {', '.join(changed)}" if changed else "")
 
 
