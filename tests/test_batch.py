@@ -500,12 +500,13 @@ def test_a_motchallenge_sequence_folder_is_an_input(tmp_path: Path,
         assert record["input"]["name"] == "SEQ-01" and record["frames"] == 60
 
 
-def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(tmp_path: Path,
-                                                                 clip_factory: ClipFactory) -> None:
+def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
     """Probe 51c: a MOTChallenge sequence's frame rate is in its seqinfo.ini (frameRate=25);
     its frames were timed at 30 fps whatever it said (time_s, the annotated video's rate, a
     --frames 2s span). It is read now, --fps still wins, and a frameRate that is no rate is
-    one line naming the file."""
+    one line naming the file. ``vtrack run .`` inside img1/ looked for ./seqinfo.ini (30 fps)
+    though it named the run after the sequence."""
     clip = clip_factory("multi", frames=60, fmt="images")
     seq = tmp_path / "SEQ-02"
     shutil.copytree(clip.path / "img", seq / "img1")
@@ -522,6 +523,10 @@ def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(tmp_path: Path,
         assert result.exit_code == 0, result.output
         record = json.loads((tmp_path / "out" / "run.json").read_text())
         assert record["input"]["fps"] == fps and record["input"]["duration_s"] == 60 / fps
+    monkeypatch.chdir(seq / "img1")
+    assert run(".").exit_code == 0
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["input"]["fps"], record["input"]["name"]) == (25.0, "SEQ-02")
     result = batch(str(tmp_path), "-c", "s3", "--no-video", "-j", "1", "-o", str(tmp_path / "b"),
                    "-q")
     assert result.exit_code == 0, result.output

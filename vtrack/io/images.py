@@ -29,7 +29,7 @@ from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
-from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_images
+from vtrack.io.sidecar import sequence_images, sequence_of
 from vtrack.io.source import InputInfo, Source
 
 IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
@@ -118,7 +118,7 @@ def sequence_fps(folder: Path) -> float | None:
     ``frameRate``), for the sequence folder or its ``img1/`` (``folder``); None when there is no
     such file or it gives none. InputError naming the file when it cannot be read or its
     ``frameRate`` is not a number > 0."""
-    path = (folder.parent if folder.resolve().name in SEQUENCE_IMAGES else folder) / SEQUENCE_INFO
+    path = (sequence_of(folder) or folder) / SEQUENCE_INFO
     if not path.is_file():
         return None
     parser = configparser.ConfigParser(interpolation=None)
@@ -159,9 +159,9 @@ class ImageFolderSource(Source):
         self._first = read_image(self._files[0])
         height, width = self._first.shape[:2]
         fps = fps or sequence_fps(root) or DEFAULT_FPS
-        name = root.resolve().name
-        if name in SEQUENCE_IMAGES:  # given the img/ folder itself: name it after the sequence
-            name = root.resolve().parent.name
+        # given the img/ folder itself: named after the sequence
+        resolved = root.resolve()
+        name = (sequence_of(resolved) or resolved).name
         super().__init__(
             InputInfo(
                 path=folder,

@@ -32,17 +32,22 @@ def sequence_images(folder: Path) -> Path | None:
     return next((folder / n for n in SEQUENCE_IMAGES if (folder / n).is_dir()), None)
 
 
+def sequence_of(folder: Path) -> Path | None:
+    """The sequence folder ``SEQ`` when ``folder`` is its images' folder (``SEQ/img``,
+    ``SEQ/img1``: :data:`SEQUENCE_IMAGES`; ``.`` and ``..`` are resolved first, other paths
+    kept as given), else None."""
+    named = folder if folder.name not in ("", "..") else folder.resolve()
+    return named.parent if named.name in SEQUENCE_IMAGES else None
+
+
 def sidecar_path(input_spec: str | os.PathLike[str]) -> Path:
     """Where the initial box of ``input_spec`` lives: ``FOLDER/init.txt`` for a folder (for an
     OTB sequence's ``SEQ/img`` too: one box for the sequence given either way, as ``vtrack
     batch`` finds it by ``SEQ``), ``DIR/NAME.init.txt`` for a file ``DIR/NAME.EXT``. The file
     need not exist."""
     path = Path(input_spec)
-    if path.is_dir():
-        named = path if path.name not in ("", "..") else path.resolve()  # ``.``, ``..``
-        if named.name in SEQUENCE_IMAGES:  # SEQ/img: the sequence's box, which run SEQ reads
-            return named.parent / SEQUENCE_SIDECAR
-        return path / SEQUENCE_SIDECAR
+    if path.is_dir():  # SEQ/img: the sequence's box, which run SEQ reads
+        return (sequence_of(path) or path) / SEQUENCE_SIDECAR
     return path.with_name(VIDEO_SIDECAR.format(path.stem))
 
 
