@@ -36,7 +36,7 @@ def test_a_frame_past_the_stated_count_is_refused_before_any_is_decoded(
     """Both commands decoded the whole input before saying it had no such frame."""
     with FrameStore(str(long_clip)) as store:
         assert store.get(FAR) is None and store.get(FRAMES) is None
-        assert store.decoded == 0  # was 300: read to its end first
+        assert store.cached_bytes == 0  # no frame decoded (it read all 300 first)
     done = vtrack("frame", str(long_clip), "--at", str(FAR), "-o", str(tmp_path / "f.png"))
     assert (done.returncode, done.stdout) == (2, "")
     assert done.stderr == (f"vtrack: error: {long_clip}: has no frame {FAR} "
@@ -69,7 +69,7 @@ def test_a_frame_past_an_estimated_count_names_the_estimate(tmp_path: Path) -> N
     scene = make_scene("smooth", seed=1, width=64, height=48, frames=40, fps=30)
     clip = write_video(scene, tmp_path / "clip.mkv")
     with FrameStore(str(clip)) as store:
-        assert store.get(FAR) is None and store.decoded == 0
+        assert store.get(FAR) is None and store.cached_bytes == 0  # no frame decoded
     done = vtrack("frame", str(clip), "--at", str(FAR), "-o", str(tmp_path / "f.png"))
     assert (done.returncode, done.stdout) == (2, "")
     assert done.stderr == (f"vtrack: error: {clip}: has no frame {FAR} (frames by its "

@@ -69,12 +69,6 @@ class FrameStore:
         self._lock = threading.Lock()
 
     @property
-    def decoded(self) -> int:
-        """The index after the last frame read (the frames decoded from the start of the input,
-        unless the store jumped ahead, :data:`JUMP_FRAMES`)."""
-        return self._next if self._end is None else self._end
-
-    @property
     def count(self) -> int | None:
         """The number of frames: exact once the end was reached, else the input's estimate."""
         return self._end if self._end is not None else self.info.frame_count
