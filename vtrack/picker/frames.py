@@ -125,18 +125,26 @@ class FrameStore:
             raise InputError(f"{self._spec}: its earlier frames are no longer held and it "
                              "cannot be read again (a stream); pick a later frame, or give "
                              "the input as a file")
-        source = open_source(self._spec)
-        self._use(source, start_toward(source, index) or 0)
+        self._use(*self._reopen(index))
 
     def _jump(self, index: int) -> None:
         """Go on from a key frame at or before ``index`` when the input can jump there past
         the frames already read; else go on reading from where the store is."""
-        source = open_source(self._spec)
-        begin = start_toward(source, index) or 0
+        source, begin = self._reopen(index)
         if begin <= self._next:
             source.close()
             return
         self._use(source, begin)
+
+    def _reopen(self, index: int) -> tuple[Source, int]:
+        """The input opened again and made to begin at a key frame at or before ``index``
+        (:func:`start_toward`; else its first frame): the source and that frame's index."""
+        source = open_source(self._spec)
+        try:
+            return source, start_toward(source, index) or 0
+        except BaseException:
+            source.close()
+            raise
 
     def _use(self, source: Source, begin: int) -> None:
         """Read on from ``source``, whose iteration begins at frame ``begin``."""
