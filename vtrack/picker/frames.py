@@ -119,6 +119,12 @@ class FrameStore:
             _, dropped = self._cache.popitem(last=False)
             self.cached_bytes -= len(dropped)
 
+    def no_frame_text(self, index: int) -> str:
+        """What is said of frame ``index`` when :meth:`get` found none there: ``no frame N
+        (frames 0..M)`` by :attr:`count` (exact once the end was reached)."""
+        estimated = self._end is None and self.info.frame_count_estimated
+        return no_frame_text(index, self.count, estimated)
+
     def _rewind(self, index: int) -> None:
         """Read the input again, from its first frame or a key frame at or before ``index``."""
         if not has_sidecar(self._spec):  # not a file or folder (stdin, URL, device): read once
@@ -178,11 +184,20 @@ def past_end(info: InputInfo, index: int) -> bool:
     return index >= count
 
 
+def no_frame_text(index: int, count: int | None, estimated: bool = False) -> str:
+    """``no frame N (frames 0..M)``: what is said of a frame past the input's end, with the
+    input's frame ``count`` (``estimated``: from its duration and frame rate; no range when
+    it is unknown)."""
+    if count is None:
+        return f"no frame {index}"
+    about = " by its duration and frame rate, about" if estimated else ""
+    return f"no frame {index} (frames{about} 0..{count - 1})"
+
+
 def past_end_text(input_spec: str, index: int, info: InputInfo) -> str:
     """What is said of frame ``index`` when :func:`past_end` holds: the frames there are."""
-    count = info.frame_count
-    about = " by its duration and frame rate, about" if info.frame_count_estimated else ""
-    return f"{input_spec}: has no frame {index} (frames{about} 0..{count - 1})"
+    return (f"{input_spec}: has "
+            f"{no_frame_text(index, info.frame_count, info.frame_count_estimated)}")
 
 
 def start_toward(source: Source, index: int) -> int | None:
@@ -210,7 +225,7 @@ def read_frame(input_spec: str, index: int) -> np.ndarray:
             if frame.index > index:
                 raise InputError(absent_text(input_spec, index, source, frame.index))
             last = frame.index
-    raise InputError(f"{input_spec}: has no frame {index} (frames 0..{last})")
+    raise InputError(f"{input_spec}: has {no_frame_text(index, last + 1)}")
 
 
 def absent_text(input_spec: str, index: int, source: Source, following: int) -> str:

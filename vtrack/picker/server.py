@@ -271,10 +271,8 @@ class SelectionServer:
                                     "next": exc.following}, 404)
                         return
                     if data is None:  # past the end: the count is then known
-                        count = server.store.count
-                        known = "" if count is None else f" (frames 0..{count - 1})"
-                        self._json({"error": f"no frame {int(frame.group(1))}{known}",
-                                    "frames": count}, 404)
+                        self._json({"error": server.store.no_frame_text(int(frame.group(1))),
+                                    "frames": server.store.count}, 404)
                     else:
                         self._send(200, data, "image/jpeg")
                 else:
