@@ -40,6 +40,23 @@ RECORD_GRACE_S = 10.0
 SCHEDULER_PROTOCOLS = ("tcp", "ws")
 
 
+class _StopSignal:
+    """The signal an executor stops its running jobs with: ``signum`` until an
+    :class:`Interrupted` passes out of :meth:`watch`, then the signal the batch got (their
+    records name it)."""
+
+    def __init__(self, signum: signal.Signals) -> None:
+        self.signum = signum
+
+    @contextmanager
+    def watch(self) -> Iterator[None]:
+        try:
+            yield
+        except Interrupted as exc:
+            self.signum = signal.Signals(exc.signum)
+            raise
+
+
 class Executor(Protocol):
     """Runs jobs somewhere and yields one outcome per job, in completion order."""
 
@@ -192,46 +209,45 @@ class LocalExecutor:
         context = _context()
         pending = deque(jobs)
         workers: list[_Worker] = []
-        stop_signal = signal.SIGTERM  # (a worker lost, or the consumer gone: not a signal)
+        stop = _StopSignal(signal.SIGTERM)  # (a worker lost, or the consumer gone: not a signal)
         try:
-            while pending or workers:
-                # a worker for each pending job no idle worker will take, up to self.workers
-                idle = sum(worker.job is None for worker in workers)
-                while len(workers) < self.workers and idle < len(pending):
-                    workers.append(_Worker(context))
-                    idle += 1
-                lost = []  # workers found dead, with the job they had
-                for worker in workers:
-                    if worker.job is None and pending and not worker.start(pending.popleft()):
-                        lost.append(worker)
-                busy = {w.connection: w for w in workers if w.job is not None and w not in lost}
-                for connection in wait(list(busy)) if busy else ():
-                    worker = busy[connection]
-                    outcome = worker.result()
-                    if isinstance(outcome, Progress):
-                        if self.on_progress is not None:
-                            self.on_progress(outcome)
-                        continue
-                    if outcome is None:
-                        lost.append(worker)
-                    else:
-                        worker.job = None
-                        yield outcome
-                for worker in lost:
-                    workers.remove(worker)
-                    worker.stop()
-                    job = worker.job
-                    if job.attempt <= RETRIES:
-                        pending.appendleft(replace(job, attempt=job.attempt + 1))
-                    else:
-                        yield _died(job, _exit_reason(worker.process.exitcode))
-                if not pending and all(w.job is None for w in workers):
-                    return
-        except Interrupted as exc:  # a running job ends naming the signal the batch got
-            stop_signal = signal.Signals(exc.signum)
-            raise
+            with stop.watch():
+                while pending or workers:
+                    # a worker for each pending job no idle worker will take, up to self.workers
+                    idle = sum(worker.job is None for worker in workers)
+                    while len(workers) < self.workers and idle < len(pending):
+                        workers.append(_Worker(context))
+                        idle += 1
+                    lost = []  # workers found dead, with the job they had
+                    for worker in workers:
+                        if worker.job is None and pending and not worker.start(pending.popleft()):
+                            lost.append(worker)
+                    busy = {w.connection: w for w in workers if w.job is not None and w not in lost}
+                    for connection in wait(list(busy)) if busy else ():
+                        worker = busy[connection]
+                        outcome = worker.result()
+                        if isinstance(outcome, Progress):
+                            if self.on_progress is not None:
+                                self.on_progress(outcome)
+                            continue
+                        if outcome is None:
+                            lost.append(worker)
+                        else:
+                            worker.job = None
+                            yield outcome
+                    for worker in lost:
+                        workers.remove(worker)
+                        worker.stop()
+                        job = worker.job
+                        if job.attempt <= RETRIES:
+                            pending.appendleft(replace(job, attempt=job.attempt + 1))
+                        else:
+                            yield _died(job, _exit_reason(worker.process.exitcode))
+                    if not pending and all(w.job is None for w in workers):
+                        return
         finally:
-            stop_workers(workers, signum=stop_signal)
+            # a running job ends naming the signal the batch got
+            stop_workers(workers, signum=stop.signum)
 
 
 class DaskExecutor:
@@ -313,35 +329,34 @@ class DaskExecutor:
         finished = as_completed(futures, loop=self.client.loop)
         seen = checked = time.monotonic()
         ended_early = True  # (until the batch ends by itself)
-        stop_signal = signal.SIGINT  # (the consumer gone without a signal: as on Ctrl-C)
+        stop_with = _StopSignal(signal.SIGINT)  # (the consumer gone without a signal: as on Ctrl-C)
         try:
-            while not finished.is_empty():
-                if finished.has_ready():
-                    for future in finished.next_batch(block=False):
-                        yield self._outcome(future, futures[future])
-                    continue
-                time.sleep(0.05)
-                now = time.monotonic()
-                if now - checked < WORKER_POLL_S:
-                    continue
-                checked = now
-                if self.client.scheduler_info().get("workers"):
-                    seen = now
-                elif self.worker_timeout_s is not None and now - seen > self.worker_timeout_s:
-                    for future, job in futures.items():
-                        if not future.done():
-                            yield Outcome(job.input, job.config, STATUS_FAILED, error=(
-                                f"Dask: no worker connected to {self.address} for "
-                                f"{_seconds(self.worker_timeout_s)} (--worker-timeout)"))
-                    ended_early = False  # no worker is left to stop
-                    return
-            ended_early = False
-        except Interrupted as exc:
-            stop_signal = signal.Signals(exc.signum)
-            raise
+            with stop_with.watch():
+                while not finished.is_empty():
+                    if finished.has_ready():
+                        for future in finished.next_batch(block=False):
+                            yield self._outcome(future, futures[future])
+                        continue
+                    time.sleep(0.05)
+                    now = time.monotonic()
+                    if now - checked < WORKER_POLL_S:
+                        continue
+                    checked = now
+                    if self.client.scheduler_info().get("workers"):
+                        seen = now
+                    elif self.worker_timeout_s is not None and now - seen > self.worker_timeout_s:
+                        for future, job in futures.items():
+                            if not future.done():
+                                yield Outcome(job.input, job.config, STATUS_FAILED, error=(
+                                    f"Dask: no worker connected to {self.address} for "
+                                    f"{_seconds(self.worker_timeout_s)} (--worker-timeout)"))
+                        ended_early = False  # no worker is left to stop
+                        return
+                ended_early = False
         finally:
             if ended_early:
-                self._stop_running(stop, [f for f in futures if not f.done()], stop_signal)
+                self._stop_running(stop, [f for f in futures if not f.done()],
+                                   stop_with.signum)
             with suppress(Exception):
                 self.client.cancel(list(futures))
             self.close()
