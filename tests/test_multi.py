@@ -14,6 +14,7 @@ import dataclasses
 import itertools
 import json
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -642,6 +643,38 @@ def test_ground_truth_that_ends_before_the_run_says_what_it_costs(tmp_path,
                                      str(clip.mot), "--no-video", "--out", str(tmp_path / "b"),
                                      "--quiet"])
     assert full.exit_code == 0 and full.stderr == ""
+
+
+def test_ground_truth_past_the_end_counts_the_inputs_frames_not_those_tracked(
+        tmp_path, clip_factory) -> None:
+    """Probe 52b: a multi-target run of a sequence with an image missing from its numbering
+    (or from --start 10) warned that ground truth of its own last frame lay 'past the input's
+    49 frames ... not evaluated', though that frame was tracked and scored: the frames were
+    counted as those tracked, not the input's up to the run's end. Now only rows after the
+    run's last frame are named, against the input's 60 frames."""
+    clip = clip_factory("multi", seed=0, frames=60, fmt="images")
+    folder = tmp_path / "seq"
+    shutil.copytree(clip.path, folder)
+    (folder / "img" / "0021.jpg").unlink()  # frame 20: skipped, its number kept
+    rows = clip.mot.read_text().splitlines()
+    longer = tmp_path / "longer.txt"
+    longer.write_text("\n".join([*rows, "62,1,40,40,10,10,1,1,1"]) + "\n")
+    warnings = []
+    for gt in (clip.mot, longer):
+        out = tmp_path / gt.stem
+        result = CliRunner().invoke(main, ["run", str(folder), "--config", "s3", "--gt",
+                                           str(gt), "--start", "10", "--no-video", "--out",
+                                           str(out), "--quiet"])
+        assert result.exit_code == 0, result.output
+        record = json.loads((out / "run.json").read_text())
+        assert record["frames"] == 49 and record["summary"]["frames_skipped"] == 1
+        with open(out / "tracks.csv", newline="") as handle:
+            assert max(int(row["frame"]) for row in csv.DictReader(handle)) == 60
+        warnings.append(record["warnings"])
+    assert not any("ground truth" in w for w in warnings[0]), warnings[0]
+    assert [w for w in warnings[1] if "ground truth" in w] == [
+        f"{longer}: ground truth has boxes in 1 frame past the input's 60 frames (up to frame "
+        "62); they are not evaluated"]
 
 
 @pytest.mark.parametrize("start", [0, 40])

@@ -435,6 +435,9 @@ class _MultiTargetRows:
 
             self.score = MotScore()
         self._start = self._next = start  # the first frame, the next frame to score
+        #: One past the last frame whose rows were written: the input's frames up to the
+        #: run's end (frames the input skipped, ``--start``'s frames before it, included).
+        self.end = start
         self._pending: tuple[int, list[tuple[int, Box]]] | None = None
         #: The last frame holding a ground-truth row (-1: none), and how many track boxes
         #: scored after it (each a false positive: the warning of :meth:`after_truth_note`).
@@ -453,12 +456,15 @@ class _MultiTargetRows:
         if self.score is not None:
             self._score_pending()
             self._pending = (result.index, boxes)
+        self.end = result.index + 1
         return rows
 
     def undo(self, result: FrameResult) -> None:
         """Forget ``result`` (its rows could not be written)."""
         if self._pending is not None and self._pending[0] == result.index:
             self._pending = None
+        if self.end == result.index + 1:
+            self.end = result.index
 
     def mot(self, frames: int) -> dict[str, Any]:
         """The MOT measures of the ``frames`` frames from the start (ground truth only where no
@@ -479,16 +485,27 @@ class _MultiTargetRows:
             self._next = index + 1
             self._pending = None
 
-    def after_truth_note(self, gt_path: object, frames: int) -> str | None:
-        """The warning for ground truth that ends before the run's last frame (of ``frames``
-        from the start) while track boxes were scored after it, as false positives; None
-        otherwise, or when no row was kept (that has its own warning)."""
+    def after_truth_note(self, gt_path: object) -> str | None:
+        """The warning for ground truth that ends before the run's last frame (:attr:`end`)
+        while track boxes were scored after it, as false positives; None otherwise, or when no
+        row was kept (that has its own warning)."""
         if not self.boxes_after_truth or not self.gt:
             return None
         boxes = plural(self.boxes_after_truth, "track box", "track boxes")
         return (f"{gt_path}: ground truth ends at frame {self.truth_end + 1} (MOTChallenge's "
                 f"1-based numbering, as tracks.csv's), before the run's last frame "
-                f"{self._start + frames}; the {boxes} after it count as false positives")
+                f"{self.end}; the {boxes} after it count as false positives")
+
+    def past_truth_note(self, gt_path: object) -> str | None:
+        """The warning for ground-truth rows in frames after the run's last one
+        (:attr:`end`: the input's frames up to there, not only those tracked), which are not
+        evaluated; None when there are none."""
+        past = [f for f in self.gt or {} if f >= self.end]
+        if not past:
+            return None
+        return (f"{gt_path}: ground truth has boxes in {plural(len(past), 'frame')} past the "
+                f"input's {plural(self.end, 'frame')} (up to frame {max(past) + 1}); they are "
+                "not evaluated")
 
     def _score_until(self, end: int) -> None:
         """Score the frames from the next one to ``end`` (excluded) as frames without tracks."""
@@ -1057,15 +1074,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
         summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
-        note = formatter.after_truth_note(request.gt_path, frames)
+        note = formatter.after_truth_note(request.gt_path)
         if note is not None and status == STATUS_COMPLETE:
             summary.warnings.append(note)
-        past = [f for f in resolved.mot_gt if f >= start + frames]
-        if past and status == STATUS_COMPLETE and not resolved.span.given:
-            summary.warnings.append(
-                f"{request.gt_path}: ground truth has boxes in "
-                f"{plural(len(past), 'frame')} past the input's {plural(frames, 'frame')} "
-                f"(up to frame {max(past) + 1}); they are not evaluated")
+        past = formatter.past_truth_note(request.gt_path)
+        if past is not None and status == STATUS_COMPLETE and not resolved.span.given:
+            summary.warnings.append(past)
 
     record = {
         "status": status,
