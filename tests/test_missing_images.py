@@ -3,6 +3,7 @@ undecodable or damaged (in the summary line, ``vtrack frame`` and ``--start``)."
 
 from __future__ import annotations
 
+import csv
 import json
 import subprocess
 import sys
@@ -72,3 +73,32 @@ def test_an_image_removed_while_the_folder_is_read_is_called_unreadable(tmp_path
     assert indices == [0, 1, 2, 4, 5, 6, 7, 8, 9]
     assert source.warnings == [f"{gone}: cannot be read (No such file or directory); "
                                "frame 3 skipped"]
+
+
+def test_frames_the_input_skipped_are_no_unflagged_misses(tmp_path: Path) -> None:
+    """Probe 52b: run.json's (and the report's) miss_flagged, the share of missed frames the
+    tracker itself calls occluded or lost, counted each image missing from the numbering as a
+    miss the tracker did not flag, though it never saw that frame (leave_return, s1: 0.933
+    where every missed frame of track.csv is called lost, 1.0). Such frames still count as
+    misses in the overlap, but are left out of the honest-state measures."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("leave_return", 0, 160, 120, 60, 30), folder)
+    for number in (6, 7):  # frames 5 and 6: the target is in view
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    out = tmp_path / "out"
+    done = vtrack("run", str(folder), *truth(folder / "img"), "-c", "s1", "--no-video",
+                  "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    with (out / "track.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    missed = [row["state"] for row in rows if row["overlap"] != "" and float(row["overlap"]) == 0]
+    assert missed and 5 not in {int(row["frame"]) for row in rows}
+    record = json.loads((out / "run.json").read_text())
+    expected = sum(state in ("occluded", "lost") for state in missed) / len(missed)
+    assert record["metrics"]["frames_evaluated"] == 2 + sum(row["overlap"] != "" for row in rows)
+    assert record["metrics"]["miss_flagged"] == pytest.approx(expected)
+    report = vtrack("report", str(out), "-o", str(tmp_path / "report"))
+    assert report.returncode == 0, report.stderr
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        (row,) = csv.DictReader(handle)
+    assert float(row["miss_flagged"]) == pytest.approx(expected, abs=1e-6)

@@ -56,7 +56,7 @@ from vtrack.errors import (
     printable,
 )
 from vtrack.evaluate.groundtruth import all_dropped_note, read_boxes, read_mot_counting
-from vtrack.evaluate.metrics import score_frame, summarize_scores
+from vtrack.evaluate.metrics import SKIPPED, score_frame, summarize_scores
 from vtrack.frame import Frame
 from vtrack.geometry import Box, check_init_box
 from vtrack.io import (
@@ -402,7 +402,7 @@ class _SingleTargetRows:
                 self.errors.append(gone[1])
             self.overlaps.append(overlap)
             self.errors.append(error)
-            self.states += [""] * (at - len(self.states))  # skipped: no state
+            self.states += [SKIPPED] * (at - len(self.states))  # no state of the tracker's
             self.states.append(result.state)
         geometry = [None] * 6 if box is None else [box.x, box.y, box.w, box.h, box.cx, box.cy]
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),

@@ -19,6 +19,9 @@ Honesty of the state (issue 14): a frame *misses* when the target is present and
 box does not touch it (IoU 0, or no box). :func:`tracking_miss_rate` is the share of the frames
 the tracker calls ``tracking`` that miss; :func:`flagged_miss_rate` the share of missed frames
 it calls ``occluded`` or ``lost``. An honest tracker has the first low and the second high.
+A frame the input skipped (damaged, or missing from an image sequence's numbering; its state
+:data:`SKIPPED`) is scored as a miss but is left out of both: the tracker never saw it, so it
+says nothing about the tracker's states.
 
 Functions over a sequence take the per-frame lists of :func:`frame_scores`,
 ``None`` entries included, and return NaN when no frame is evaluated.
@@ -65,6 +68,8 @@ class Summary(TypedDict):
 
 #: States that say "my box may not be on the target" (the pipeline's ``occluded`` / ``lost``).
 FLAGGED_STATES = frozenset({"occluded", "lost"})
+#: The state of a frame the input skipped (no row in ``track.csv``): no state of the tracker's.
+SKIPPED = "skipped"
 
 
 def score_frame(pred: Box | None, gt: Box | None) -> tuple[float | None, float | None]:
@@ -178,13 +183,14 @@ def mean_center_error(errors: Sequence[float | None]) -> float:
 
 
 def _misses(states: Sequence[str], overlaps: Sequence[float | None]) -> tuple[np.ndarray, ...]:
-    """(evaluated, missed, tracking, flagged) boolean arrays over the frames of ``overlaps``."""
+    """(evaluated, missed, tracking, flagged) boolean arrays over the frames of ``overlaps``;
+    ``missed`` holds only frames the tracker saw (not :data:`SKIPPED`)."""
     if len(states) != len(overlaps):
         raise ValueError(f"{len(states)} states for {len(overlaps)} scored frames")
     values = np.asarray(overlaps, dtype=float)  # None -> NaN
     evaluated = ~np.isnan(values)
-    missed = evaluated & (np.nan_to_num(values, nan=1.0) <= 0.0)
     state = np.asarray([str(s) for s in states])  # str: TrackState values are strings
+    missed = evaluated & (np.nan_to_num(values, nan=1.0) <= 0.0) & (state != SKIPPED)
     tracking = state == "tracking"
     flagged = np.isin(state, list(FLAGGED_STATES))
     return evaluated, missed, tracking, flagged
@@ -200,7 +206,8 @@ def tracking_miss_rate(states: Sequence[str], overlaps: Sequence[float | None]) 
 
 def flagged_miss_rate(states: Sequence[str], overlaps: Sequence[float | None]) -> float:
     """Share of missed frames (target present, IoU 0 or no box) called ``occluded`` or
-    ``lost``; NaN when no frame misses."""
+    ``lost``; NaN when no frame misses. Frames the input skipped (:data:`SKIPPED`) are left
+    out."""
     _, missed, _, flagged = _misses(states, overlaps)
     return float((missed & flagged).sum() / missed.sum()) if missed.any() else math.nan
 

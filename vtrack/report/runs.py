@@ -299,7 +299,7 @@ def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dic
     filled: list[dict[str, str]] = []
     for row in rows:
         frame = int(row["frame"])
-        filled += [{"frame": str(i), "state": "skipped", "x": "", "overlap": "",
+        filled += [{"frame": str(i), "state": metrics.SKIPPED, "x": "", "overlap": "",
                     "center_error": ""} for i in range(start + len(filled), frame)]
         filled.append(row)
     return filled

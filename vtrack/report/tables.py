@@ -88,7 +88,8 @@ NOTES = {
                      "the target (IoU 0): lower is better, a tracker should not claim a target "
                      "it has lost",
     "Miss flagged": "of the frames whose box misses the target (or that have no box while it "
-                    "is in view), the share the tracker itself calls 'occluded' or 'lost': how "
+                    "is in view; not the frames the input skipped, which the tracker never "
+                    "saw), the share the tracker itself calls 'occluded' or 'lost': how "
                     "honest its state is, not how well it tracks (not ranked)",
     "Lost frames": "frames the tracker called 'lost' (no box); 0 for trackers that never say "
                    "lost (not ranked)",
