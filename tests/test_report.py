@@ -174,6 +174,29 @@ def test_runs_of_one_input_scored_against_different_ground_truth_are_warned_of(
     assert "different ground truth" not in result.stderr
 
 
+def test_runs_of_one_input_over_different_frames_are_warned_of(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Probe 52b: two configs of one clip, one run over all 40 frames and one with --start 10
+    --frames 20, were ranked side by side (the best in bold) without a word, though they were
+    scored on different frames. Now a warning names the input and each run's frames; runs over
+    the same frames get none."""
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    for config, span in (("robust", ()), ("s0", ("--start", "10", "--frames", "20")),
+                         ("camshift", ())):
+        assert vtrack("run", str(clip.path), "-c", config, "--gt", str(clip.gt), *span,
+                      "--no-video", "--quiet", "--out",
+                      str(tmp_path / "runs" / config)).exit_code == 0
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert [line for line in result.stderr.splitlines() if "different frames" in line] == [
+        f"vtrack: warning: {clip.path.stem}: its runs cover different frames (frames 0..39 for "
+        "camshift, robust; frames 10..29 for s0): their scores are not directly comparable"]
+    shutil.rmtree(tmp_path / "runs" / "s0")
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "r2"))
+    assert result.exit_code == 0, result.output
+    assert "different frames" not in result.stderr
+
+
 def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: ClipFactory,
                                                                  tmp_path: Path) -> None:
     """A plain --gt FILE scored every input of its length, another clip's included (AUC 0.02

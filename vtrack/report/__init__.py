@@ -46,7 +46,7 @@ from vtrack.report.runs import (
     run_folders,
     still_written,
 )
-from vtrack.run import STATUS_FAILED
+from vtrack.run import STATUS_COMPLETE, STATUS_FAILED
 
 DEFAULT_TITLE = "vtrack report"
 #: When no run can be reported, the error line names the reasons of at most this many.
@@ -211,6 +211,24 @@ def _mixed_truth_warning(name: str, runs: Sequence[RunResult]) -> str | None:
             "scores are not directly comparable")
 
 
+def _mixed_span_warning(name: str, runs: Sequence[RunResult]) -> str | None:
+    """A warning when the complete, scored runs of input ``name`` cover different frames
+    (``--start`` / ``--frames``): the table ranks them side by side as if over one clip."""
+    scored = [r for r in runs if r.scores is not None and r.overlaps
+              and r.status == STATUS_COMPLETE]
+    def span(run: RunResult) -> str:
+        return f"{run.first_frame}..{run.first_frame + len(run.overlaps or ()) - 1}"
+
+    spans = _group(scored, span)
+    if len(spans) < 2:
+        return None
+    named = "; ".join(
+        f"frames {span} for {', '.join(sorted({r.config for r in group}))}"
+        for span, group in sorted(spans.items(), key=lambda item: item[1][0].first_frame))
+    return (f"{name}: its runs cover different frames ({named}): their scores are not "
+            "directly comparable")
+
+
 def _refuse_batch_folder(out_dir: Path) -> None:
     """Raise OutputError when ``out_dir`` holds a batch's ``summary.csv`` (the report's own
     ``summary.csv`` would replace it) or a run's ``run.json``."""
@@ -300,7 +318,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
     by_input = _group(single, lambda r: r.input)
     warnings += [line for name, group in by_input.items()
-                 if (line := _mixed_truth_warning(name, group))]
+                 for warn in (_mixed_truth_warning, _mixed_span_warning)
+                 if (line := warn(name, group))]
     # a run that failed part way is listed with its frames' scores but averaged with no other
     counted = [r for r in single if r.status != STATUS_FAILED]
     if len(counted) < len(single):
