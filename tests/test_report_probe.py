@@ -130,6 +130,30 @@ def test_a_multi_target_record_with_metrics_of_the_wrong_kind_is_left_out(
     assert html.count("<td class=\"label\">s3") == 1  # the good run only
 
 
+def test_a_dash_for_a_measure_of_a_run_with_ground_truth_is_explained(
+        multi_run: Path, tmp_path: Path) -> None:
+    """Probe 52b: a multi-target run whose track boxes matched no ground-truth box showed MOTP
+    as a dash, and the page said 'a dash means the run had no ground truth', though it had
+    (its MOTA, FN ... beside it). Now the page says why such a measure has none."""
+    video = multi_run.parent / "multi.mp4"
+    far = tmp_path / "far.txt"  # a 1x1 box in a corner: no track box overlaps it by half
+    far.write_text("".join(f"{frame},1,0,0,1,1,1,1,1\n" for frame in range(1, 61)))
+    done = vtrack("run", str(video), "-c", "s3", "--gt", str(far), "--no-video", "-q", "-o",
+                  str(tmp_path / "runs" / "far"))
+    assert done.returncode == 0, done.stderr
+    metrics = json.loads((tmp_path / "runs" / "far" / "run.json").read_text())["metrics"]
+    assert metrics["motp"] is None and metrics["misses"] == 60
+    shutil.copytree(multi_run, tmp_path / "runs" / "given")  # one with a MOTP: the column
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    header, *rows = [line.split(" | ") for line in markdown.splitlines()
+                     if line.startswith(("| Input |", "| multi |"))]
+    motp = {row[1]: row[header.index("MOTP")] for row in rows}
+    assert motp["s3 (far)"] == "—" and motp["s3 (given)"] != "—", motp
+    assert "MOTP: no track box matched" in markdown.split("---")[-1]
+
+
 def test_many_runs_of_one_input_draw_a_bounded_figure_and_say_what_is_left_out(
         results: Path, tmp_path: Path) -> None:
     """100 runs of one input drew 100 overlap panels (a 1000 x 17090 px image, 34 s) and as

@@ -38,7 +38,9 @@ MOT_DEFINITIONS = (
     "...) that vtrack run recorded in run.json against MOTChallenge ground truth, abbreviated "
     "as MOTChallenge does (IDs: ID switches, FP: false positives, FN: misses, MT/PT/ML: mostly "
     "tracked/partially tracked/mostly lost objects{hover}); a dash means the run had "
-    "no ground truth. summary.csv holds every recorded metric."
+    "no ground truth, or that a measure had nothing to be taken over (MOTP: no track box "
+    "matched; IDP: no track box; MOTA, IDR: no ground-truth box). summary.csv holds every "
+    "recorded metric."
 )
 
 CSS = """
