@@ -248,6 +248,35 @@ def test_ground_truth_shorter_and_longer(occlusion_clip, tmp_path: Path) -> None
     assert result.returncode == 0 and "long.txt" in result.stderr.decode()
 
 
+def test_ground_truth_that_marks_the_target_absent_throughout_is_a_warning(
+        occlusion_clip, tmp_path: Path) -> None:
+    """Probe 52b: --gt with every box 0,0,0,0 (the target out of view throughout: a file for
+    another clip, or a mistaken export) scored nothing without a word: the summary line just
+    had no overlap, AUC or precision, where MOT ground truth whose rows are all ignored is a
+    warning. Now it is one too, also in run.json; a file with some boxes is none."""
+    clip, gt, _ = occlusion_clip
+    lines = gt.read_text().splitlines()
+    for name, text in (("absent", "0,0,0,0\n" * len(lines)),
+                       ("half", "NaN,NaN,NaN,NaN\n" * 60 + "\n".join(lines[60:]) + "\n")):
+        path = tmp_path / f"{name}.txt"
+        path.write_text(text)
+        out = tmp_path / name
+        result = vtrack("run", str(clip), "--gt", str(path), "--init", lines[0], "-c", "s0",
+                        "--no-video", "--out", str(out))
+        assert result.returncode == 0, result.stderr
+        record = json.loads((out / "run.json").read_text())
+        stderr = result.stderr.decode()
+        if name == "half":
+            assert record["metrics"]["frames_evaluated"] == len(lines) - 60
+            assert record["warnings"] == [] and "warning" not in stderr, stderr
+            continue
+        note = (f"{path}: the ground truth marks the target absent (NaN, or w or h <= 0) in all "
+                f"{len(lines)} frames of the run it has boxes for: no frame is scored "
+                "(frames_evaluated 0; mean_overlap, auc, precision20 null)")
+        assert record["metrics"]["frames_evaluated"] == 0 and record["warnings"] == [note]
+        assert stderr == f"vtrack: warning: {note}\n"
+
+
 def test_bad_ground_truth_file(occlusion_clip, tmp_path: Path) -> None:
     clip, _, _ = occlusion_clip
     bad = tmp_path / "bad.txt"

@@ -1071,6 +1071,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                                  else "extra boxes ignored")
             )
             summary.warnings.append(note)
+        absent = min(len(gt), span)  # the run's frames the file has a box for
+        if absent and not metrics["frames_evaluated"] and status == STATUS_COMPLETE:
+            summary.warnings.append(
+                f"{request.gt_path}: the ground truth marks the target absent (NaN, or w or "
+                f"h <= 0) in all {plural(absent, 'frame')} of the run it has boxes for: no "
+                "frame is scored (frames_evaluated 0; mean_overlap, auc, precision20 null)")
     elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
         summary.mot = formatter.mot(frames)
         metrics = dict(summary.mot)
