@@ -27,6 +27,7 @@ from vtrack.evaluate import (
     summarize,
     tracking_miss_rate,
 )
+from vtrack.evaluate.groundtruth import MultiTargetTruthError
 from vtrack.geometry import Box, center_error, iou
 from vtrack.io.sidecar import parse_sidecar
 
@@ -216,6 +217,18 @@ def test_read_boxes_vot_polygon_and_rectangle(tmp_path):
         "3,4,5,6\n",  # VOT rectangle
     )
     assert read_boxes(path) == [Box(1, 2, 10, 20), Box(0, 0, 10, 10), Box(3, 4, 5, 6)]
+
+
+def test_a_polygon_that_reads_as_a_motchallenge_row_is_a_polygon_after_the_first_line(
+        tmp_path):
+    """Probe 52b: a VOT polygon file was refused as MOTChallenge ground truth at its line 6,
+    5,2,25,2,25,12,1,12 (an axis-aligned box by the frame's top-left corner: frame 5, id 2,
+    consider 1, class 12 to a MOTChallenge reader), though its first 5 lines were polygons.
+    The first line tells the file's kind; a MOTChallenge file is still named as such."""
+    path = write(tmp_path, "10,20,30,20,30,40,10,40\n5,2,25,2,25,12,1,12\n")
+    assert read_boxes(path) == [Box(10, 20, 20, 20), Box(1, 2, 24, 10)]
+    with pytest.raises(MultiTargetTruthError, match="line 1: this is MOTChallenge"):
+        read_boxes(write(tmp_path, "5,2,25,2,25,12,1,12\n10,20,30,20,30,40,10,40\n"))
 
 
 def test_read_boxes_absent_frames(tmp_path):

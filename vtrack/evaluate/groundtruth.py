@@ -119,7 +119,10 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
     from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
     4 or 8 numbers, an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
-    missing, unreadable or empty file.
+    missing, unreadable or empty file. A file whose first line is a MOTChallenge row
+    (:func:`_is_mot_row`) raises :class:`MultiTargetTruthError`; in a file of boxes, a later
+    line of 8 numbers is a polygon, also one that could be read as such a row (a polygon
+    touching the frame's top-left corner, ``5,2,25,2,25,12,1,12``).
     """
     if origin not in (0, 1):
         raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
@@ -130,7 +133,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             values = [float(t) for t in tokens]
         except ValueError:
             values = []
-        if _is_mot_row(values):
+        if number == 1 and _is_mot_row(values):  # the first line tells the file's kind
             raise MultiTargetTruthError(
                 f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
                 "for many targets; a single-target config reads x,y,w,h per frame: use a "
