@@ -102,3 +102,21 @@ def test_frames_the_input_skipped_are_no_unflagged_misses(tmp_path: Path) -> Non
     with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
         (row,) = csv.DictReader(handle)
     assert float(row["miss_flagged"]) == pytest.approx(expected, abs=1e-6)
+
+
+def test_the_report_says_why_evaluated_frames_may_exceed_the_frames(numbered: Path,
+                                                                    tmp_path: Path) -> None:
+    """Probe 52b: the report of a run whose input skipped 3 frames listed Frames 9 and
+    Evaluated 12 with the note 'frames with ground truth present', as if it had scored frames
+    it did not track; the note now says skipped frames count among them, as misses."""
+    out = tmp_path / "out"
+    done = vtrack("run", str(numbered), *truth(numbered), "-c", "s0", "--no-video",
+                  "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    report = vtrack("report", str(out), "-o", str(tmp_path / "report"))
+    assert report.returncode == 0, report.stderr
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        (row,) = csv.DictReader(handle)
+    assert (int(row["frames"]), int(row["frames_evaluated"])) == (9, 12)
+    html = (tmp_path / "report" / "index.html").read_text()
+    assert "skipped among them included (misses: no box), so it may exceed Frames" in html

@@ -77,7 +77,8 @@ class Column:
 
 #: What the less common columns mean (the tooltips, and the report's footer).
 NOTES = {
-    "Evaluated": "frames with ground truth present (the others are not scored)",
+    "Evaluated": "frames with ground truth present (the others are not scored), frames the "
+                 "input skipped among them included (misses: no box), so it may exceed Frames",
     "SR0.5": "success rate at IoU 0.5: share of evaluated frames whose overlap is > 0.5 "
              "(GOT-10k's SR0.50)",
     "SR0.75": "success rate at IoU 0.75: share of evaluated frames whose overlap is > 0.75",
