@@ -217,6 +217,25 @@ def test_one_plain_gt_file_scoring_several_inputs_is_warned_of(clip_factory: Cli
     assert alone.exit_code == 0 and "scored" not in alone.stderr
 
 
+def test_a_run_the_given_gt_does_not_fit_is_not_said_to_lack_ground_truth(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Probe 52b: vtrack report RUN --gt SHORT.txt (30 boxes for a 40-frame run) said why the
+    run was not scored, then 'give --gt FILE ... to score them' of that same run, as if no
+    --gt had been given. Now the one warning that names the file's misfit is said."""
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    lines = clip.gt.read_text().splitlines()
+    run = tmp_path / "run"
+    assert vtrack("run", str(clip.path), "--init", lines[0], "-c", "s0", "--no-video",
+                  "--quiet", "--out", str(run)).exit_code == 0
+    short = tmp_path / "short.txt"
+    short.write_text("\n".join(lines[:30]) + "\n")
+    result = vtrack("report", str(run), "--gt", str(short), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert result.stderr == (f"vtrack: warning: {run}: input {clip.path.stem} not scored: "
+                             f"{short} has 30 boxes for its 40 frames; give --gt "
+                             f"{clip.path.stem}=FILE with its own ground truth\n")
+
+
 def test_a_config_without_ground_truth_is_not_said_to_be_scored_on_other_inputs(
         batch_out: tuple[Path, Path], clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A config scored nowhere (no ground truth) made every report say "configurations were

@@ -309,7 +309,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]
     multi = [r for r in runs if r.multi_target]
-    unscored = [r for r in single if r.overlaps is None]  # (not: failed before frame 1)
+    # (not: failed before frame 1; nor a run --gt's file did not fit: its own warning says so)
+    unscored = [r for r in single if r.overlaps is None and r.note is None]
     if unscored:
         warnings.append(f"{plural(len(unscored), 'single-target run')} "
                         f"{'has' if len(unscored) == 1 else 'have'} no ground truth; give "
