@@ -1,7 +1,8 @@
 """Image-sequence folders (OTB layout ``seq/img/0001.jpg`` or images directly in the folder).
 
 Images are sorted by name with numbers compared as numbers (``2.png`` before ``10.png``) and
-decoded with PyAV in the reader thread. A sequence whose first image is grey becomes
+decoded with PyAV in the reader thread, each turned upright by its own orientation (a phone
+photo's EXIF tag). A sequence whose first image is grey becomes
 :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
 converted to match). There are no timestamps: ``time_s = index / fps``. An image that cannot be
 decoded (after the first) is skipped with a warning; the frames after it keep their indices.
@@ -29,6 +30,7 @@ from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
+from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import sequence_images, sequence_of
 from vtrack.io.source import InputInfo, Source
 
@@ -83,7 +85,9 @@ def frame_places(files: list[Path]) -> list[int]:
 
 
 def read_image(path: Path) -> np.ndarray:
-    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR.
+    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR, turned
+    upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
+    turns the image given alone and a phone's video.
 
     Raises InputError naming the file when it cannot be read (gone, or not readable) or
     FFmpeg cannot decode it.
@@ -99,9 +103,9 @@ def read_image(path: Path) -> np.ndarray:
             if too_big:
                 raise InputError(f"{path}: {too_big}")
             picture = next(container.decode(video=0))
-            if picture.format.name.startswith(("gray", "ya")):
-                return picture.to_ndarray(format="gray")
-            return picture.to_ndarray(format="bgr24")
+            grey = picture.format.name.startswith(("gray", "ya"))
+            return turned(picture.to_ndarray(format="gray" if grey else "bgr24"),
+                          quarter_turns(picture.rotation))
     except (av.FFmpegError, OSError, StopIteration) as exc:
         if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None

@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import av
-import cv2
 import numpy as np
 
 from vtrack.errors import InputError, PartialInputError, plural
@@ -47,7 +46,7 @@ from vtrack.geometry import frame_size_problem
 from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
-from vtrack.io.planes import ROTATE_CODES, rotate_i420
+from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
@@ -131,11 +130,6 @@ def decoder_threads(width: int, height: int, cores: int) -> int:
     auto = min(cores + 1, _FFMPEG_AUTO_MAX)
     affordable = DECODER_PICTURE_BUDGET // max(width * height * 3 // 2, 1)
     return max(auto, min(MIN_DECODER_THREADS, affordable))
-
-
-def _quarter_turns(degrees: float) -> int:
-    """A display-matrix angle as 0, 90, 180 or 270 degrees counter-clockwise."""
-    return int(round(degrees / 90.0)) % 4 * 90
 
 
 def _main_video_stream(container: av.container.InputContainer) -> av.VideoStream:
@@ -313,7 +307,7 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
     FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix; None:
     the picture's own, as ``vtrack run`` turns a phone's footage)."""
     if rotation is None:
-        rotation = _quarter_turns(decoded.rotation)
+        rotation = quarter_turns(decoded.rotation)
     even = decoded.width % 2 == 0 and decoded.height % 2 == 0
     if even and decoded.format.name in I420_FORMATS and rotation:
         planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height, rotation)
@@ -323,10 +317,7 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
         # safe; the buffers live as long as the views (PyAV refcounts them).
         return I420Frame.from_planes(index, time_s, *plane_views(decoded),
                                      full_range=full_range(decoded), bt709=bt709(decoded))
-    bgr = decoded.to_ndarray(format="bgr24")
-    if rotation:
-        bgr = cv2.rotate(bgr, ROTATE_CODES[rotation])
-    return BgrFrame(index, time_s, bgr)
+    return BgrFrame(index, time_s, turned(decoded.to_ndarray(format="bgr24"), rotation))
 
 
 def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
@@ -493,7 +484,7 @@ class VideoSource(Source):
         self._t0 = self._first.time  # frame 0's timestamp: the others' places count from it
         self._start = 0  # the index of the frame iteration begins at (start_near)
 
-        self._rotation = _quarter_turns(self._first.rotation)
+        self._rotation = quarter_turns(self._first.rotation)
         width, height = self._first.width, self._first.height
         self._coded_size = (width, height)
         if self._rotation in (90, 270):
