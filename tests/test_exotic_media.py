@@ -5,9 +5,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import av
 import numpy as np
+from click.testing import CliRunner
+from conftest import one_error_line
 from PIL import Image
 
+from vtrack.cli import main
 from vtrack.io import open_source
 
 #: EXIF Orientation 6: the stored picture is shown turned 90 degrees clockwise (a phone held
@@ -43,3 +47,36 @@ def test_an_image_folder_is_turned_by_each_photos_orientation_as_one_image_is(tm
         assert np.abs(frame.astype(int) - expected).mean() < 2
     # Turned clockwise: the stored top-left marker is at the top-right of the upright frame.
     assert frames[0][:10, -10:].mean() > 200 and frames[0][:10, :10].mean() < 100
+
+
+def _song_with_cover(path: Path) -> Path:
+    """An MP3 of silence whose only picture is its album art (a 32x32 attached picture)."""
+    with av.open(str(path), "w") as out:
+        audio = out.add_stream("libmp3lame", rate=8000)
+        audio.layout = "mono"
+        cover = out.add_stream("png")
+        cover.width = cover.height = 32
+        cover.pix_fmt, cover.disposition = "rgb24", av.stream.Disposition.attached_pic
+        picture = av.VideoFrame.from_ndarray(np.zeros((32, 32, 3), np.uint8), format="rgb24")
+        for packet in [*cover.encode(picture), *cover.encode()]:
+            out.mux(packet)
+        for i in range(4):
+            sound = av.AudioFrame.from_ndarray(np.zeros((1, 1152), np.int16), format="s16",
+                                               layout="mono")
+            sound.sample_rate, sound.pts = 8000, i * 1152
+            for packet in audio.encode(sound):
+                out.mux(packet)
+        for packet in audio.encode():
+            out.mux(packet)
+    return path
+
+
+def test_an_audio_file_with_cover_art_is_no_video(tmp_path):
+    """vtrack run song.mp3 tracked its album art as a one-frame video at 90000 fps and ended
+    complete, exit 0; now it is refused as an audio file is, naming the cover picture."""
+    song = _song_with_cover(tmp_path / "song.mp3")
+    result = CliRunner().invoke(main, ["run", str(song), "--init", "1,1,8,8",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (f"vtrack: error: {song}: no video stream "
+                                      "(streams: audio, cover picture)")
+    assert not (tmp_path / "out").exists()

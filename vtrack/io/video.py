@@ -25,7 +25,8 @@ constant-rate stream, once damage was seen, a frame's index comes from its times
 (``round(time_s * fps)``, never less than the next index), and a stale picture out of order is
 dropped; in a variable-rate one, whose timestamps cannot tell, each refused packet leaves one
 place. Only a stream that really ends early is partial. Of several video streams, the one
-``ffmpeg`` would take is read (not a cover picture; the default; the largest).
+``ffmpeg`` would take is read (not a cover picture; the default; the largest); a file whose
+only picture is a cover picture (an audio file's album art) has no video to read.
 """
 
 from __future__ import annotations
@@ -132,12 +133,18 @@ def decoder_threads(width: int, height: int, cores: int) -> int:
     return max(auto, min(MIN_DECODER_THREADS, affordable))
 
 
+def _is_cover(stream: av.stream.Stream) -> bool:
+    """Whether ``stream`` is a cover picture (an attached picture: an MP3's or M4A's album
+    art), one still image, not a video."""
+    return bool(stream.disposition & av.stream.Disposition.attached_pic)
+
+
 def _main_video_stream(container: av.container.InputContainer) -> av.VideoStream:
-    """The video stream ``ffmpeg -i`` would take: not a cover picture (attached picture) when
-    there is another, then the one marked default, then the largest; the first on a tie."""
+    """The video stream ``ffmpeg -i`` would take: not a cover picture (attached picture), then
+    the one marked default, then the largest; the first on a tie."""
     def rank(stream: av.VideoStream) -> tuple[bool, bool, int]:
         flags, context = stream.disposition, stream.codec_context
-        return (not flags & av.stream.Disposition.attached_pic,
+        return (not _is_cover(stream),
                 bool(flags & av.stream.Disposition.default),
                 0 if context is None else (context.width or 0) * (context.height or 0))
 
@@ -434,8 +441,9 @@ class VideoSource(Source):
               ) -> InputInfo:
         """Pick the video stream, decode the first frame, describe the input."""
         _refuse_unused_options(path, self._how, container)
-        if not container.streams.video:
-            kinds = ", ".join(sorted({s.type for s in container.streams})) or "none"
+        if not any(not _is_cover(s) for s in container.streams.video):
+            kinds = ", ".join(sorted({"cover picture" if _is_cover(s) else s.type
+                                      for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
         text = text_file_problem(path, container)
         if text:
