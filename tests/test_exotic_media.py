@@ -7,6 +7,7 @@ from pathlib import Path
 
 import av
 import numpy as np
+import pytest
 from click.testing import CliRunner
 from conftest import one_error_line
 from PIL import Image
@@ -79,4 +80,49 @@ def test_an_audio_file_with_cover_art_is_no_video(tmp_path):
                                        "-o", str(tmp_path / "out")])
     assert one_error_line(result) == (f"vtrack: error: {song}: no video stream "
                                       "(streams: audio, cover picture)")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("keep", "problem"), [
+    (lambda data: data[: len(data) // 2], "no index (moov box)"),
+    (lambda data: data[: data.rfind(b"moov") + 60], "its index (moov box) cut short"),
+])
+def test_an_mp4_cut_before_its_index_was_written_says_so(clip_factory, tmp_path, keep,
+                                                         problem):
+    """A phone's or camera's MP4 cut off before it was finished (a plain MP4 writes its index
+    last; here cut in the middle, or inside the index) was 'not a video FFmpeg can decode
+    (Invalid data found ...)' or 'no video stream (streams: none)', as if it were no video at
+    all; now the line says what is missing and why."""
+    whole = clip_factory("smooth", width=160, height=120, frames=10).path.read_bytes()
+    assert whole.rfind(b"moov") > len(whole) // 2  # a plain MP4: its index written last
+    cut = tmp_path / "rec.mp4"
+    cut.write_bytes(keep(whole))
+    result = CliRunner().invoke(main, ["run", str(cut), "--init", "10,10,20,20",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (
+        f"vtrack: error: {cut}: an MP4 with {problem}: the recording was cut off before it "
+        "was finished (a camera or phone stopped, a copy not complete), and its frames cannot "
+        "be found without it")
+
+
+def test_an_empty_file_is_called_empty(tmp_path):
+    """A 0-byte clip.mp4 (a copy that failed, a recording never begun) was 'not a video FFmpeg
+    can decode (Invalid data found when processing input)'."""
+    empty = tmp_path / "clip.mp4"
+    empty.write_bytes(b"")
+    result = CliRunner().invoke(main, ["run", str(empty), "--init", "10,10,20,20",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == f"vtrack: error: {empty}: an empty file (0 bytes), not a video"
+
+
+def test_a_container_given_as_raw_frames_is_refused_naming_what_it_is(clip_factory, tmp_path):
+    """vtrack run clip.mp4 --raw 160x120 (or an MP4 piped into vtrack run - --raw) tracked the
+    container's bytes as pixels: noise frames, then 'raw stream ended with N stray bytes' (exit
+    1), or exit 0 when the sizes happened to divide; now one line says what the input is."""
+    clip = clip_factory("smooth", width=160, height=120, frames=10).path
+    result = CliRunner().invoke(main, ["run", str(clip), "--raw", "160x120", "--pix-fmt", "gray",
+                                       "--init", "10,10,20,20", "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (
+        f"vtrack: error: {clip}: an MP4/QuickTime file, not raw frames: read it without --raw "
+        "(its frames carry their own size and pixel format)")
     assert not (tmp_path / "out").exists()

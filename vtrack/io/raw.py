@@ -3,7 +3,8 @@
 Each frame is read with ``readinto`` into one of a small ring of preallocated buffers (no 6 MB
 allocation per frame at 1080p). A pipe is enlarged to 1 MiB first, which lifts 1080p bgr24 from
 ~145 to ~490 fps (PERFORMANCE.md point 5). A stream whose length is not a whole number of frames
-yields its whole frames, then raises :class:`~vtrack.errors.PartialInputError`.
+yields its whole frames, then raises :class:`~vtrack.errors.PartialInputError`. An input that
+begins as a container or an image does (an MP4 given with ``--raw``) is refused before a frame.
 
 Plain reads are what PyAV's rawvideo demuxer does underneath; measured at 1080p bgr24 through an
 enlarged pipe, the demuxer (a new packet per frame) was slower, so plain reads are used.
@@ -30,6 +31,7 @@ from vtrack.errors import ConfigError, InputError, PartialInputError, number_tex
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
+from vtrack.io.signatures import container_kind
 from vtrack.io.source import InputInfo, Source
 
 PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
@@ -122,6 +124,15 @@ def _read_full(stream: BinaryIO, view: memoryview) -> int:
     return got
 
 
+def _refuse_a_container(label: str, head: bytes) -> None:
+    """InputError when ``head``, the input's first bytes, begins a container or an image
+    (:func:`~vtrack.io.signatures.container_kind`): its bytes would be tracked as pixels."""
+    kind = container_kind(head)
+    if kind:
+        raise InputError(f"{label}: {kind}, not raw frames: read it without --raw (its frames "
+                         "carry their own size and pixel format)")
+
+
 class RawSource(Source):
     """Raw frames of a known :class:`RawFormat` from ``-`` (stdin), a FIFO or a regular file."""
 
@@ -192,6 +203,8 @@ class RawSource(Source):
                 ) from None
             if got == 0:
                 return
+            if index == 0:
+                _refuse_a_container(label, memoryview(target).cast("B")[:16].tobytes())
             if got < fmt.frame_bytes:
                 raise PartialInputError(
                     f"{label}: raw stream ended with {got} stray bytes after {index} whole "

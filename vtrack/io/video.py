@@ -49,6 +49,7 @@ from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
+from vtrack.io.signatures import mp4_index_problem
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
@@ -327,9 +328,26 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
     return BgrFrame(index, time_s, turned(decoded.to_ndarray(format="bgr24"), rotation))
 
 
+def _cut_file(path: str) -> str | None:
+    """The line for ``path``, a local file, when it is empty or an MP4 whose index is missing
+    or cut short (:func:`~vtrack.io.signatures.mp4_index_problem`: FFmpeg then finds no
+    frames, or no streams at all); None otherwise."""
+    if path == "-" or not os.path.isfile(path):
+        return None
+    if os.path.getsize(path) == 0:
+        return f"{path}: an empty file (0 bytes), not a video"
+    problem = mp4_index_problem(path)
+    if problem is None:
+        return None
+    return (f"{path}: an MP4 with {problem}: the recording was cut off before it was finished "
+            "(a camera or phone stopped, a copy not complete), and its frames cannot be found "
+            "without it")
+
+
 def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
     """The one line for an input FFmpeg could not open or decode a first frame from, saying
-    what the way it was read (a URL, ``--follow``) or its name (raw frames) makes likely."""
+    what the way it was read (a URL, ``--follow``), its bytes (none; an MP4 without its whole index)
+    or its name (raw frames) makes likely."""
     reason = os_reason(exc)
     if "://" in path:  # a network input, as _open_container opens it
         if not isinstance(exc, av.error.InvalidDataError):
@@ -340,6 +358,9 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
                 "MP4 without --follow")
+    cut = _cut_file(path)
+    if cut:
+        return cut
     if path.lower().endswith(RAW_SUFFIXES):
         return (f"{path}: not a video FFmpeg can decode ({reason}); raw frames are read only "
                 "by vtrack run --raw WxH (with --pix-fmt, --fps)")
@@ -442,6 +463,9 @@ class VideoSource(Source):
         """Pick the video stream, decode the first frame, describe the input."""
         _refuse_unused_options(path, self._how, container)
         if not any(not _is_cover(s) for s in container.streams.video):
+            cut = _cut_file(path)
+            if cut:
+                raise InputError(cut)
             kinds = ", ".join(sorted({"cover picture" if _is_cover(s) else s.type
                                       for s in container.streams})) or "none"
             raise InputError(f"{path}: no video stream (streams: {kinds})")
