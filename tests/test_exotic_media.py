@@ -3,6 +3,8 @@ with cover art, recordings cut before they were finished, containers given as ra
 
 from __future__ import annotations
 
+import csv
+import re
 from pathlib import Path
 
 import av
@@ -12,6 +14,7 @@ from click.testing import CliRunner
 from conftest import one_error_line
 from PIL import Image
 
+from vtrack.batch import VIDEO_SUFFIXES
 from vtrack.cli import main
 from vtrack.io import open_source
 
@@ -126,3 +129,33 @@ def test_a_container_given_as_raw_frames_is_refused_naming_what_it_is(clip_facto
         f"vtrack: error: {clip}: an MP4/QuickTime file, not raw frames: read it without --raw "
         "(its frames carry their own size and pixel format)")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):
+    """vtrack batch of a folder of a camera's .MXF clips said 'no inputs (video files or
+    sequence folders ...)' though vtrack run tracks them and --help said inputs are the video
+    files in FOLDER; the README lists every name a batch takes, and only those."""
+    folder = tmp_path / "shoot"
+    folder.mkdir()
+    with av.open(str(folder / "A001.MXF"), "w", format="mxf") as out:
+        stream = out.add_stream("mpeg2video", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        for i in range(3):
+            pixels = np.full((48, 64, 3), 90, np.uint8)
+            pixels[10:30, 10 + i:30 + i] = (40, 60, 210)  # a red target moving right
+            picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
+            picture.pts = i
+            for packet in stream.encode(picture):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    (folder / "A001.init.txt").write_text("10,10,20,20\n")
+    result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
+                                       "-o", str(tmp_path / "out")], catch_exceptions=False)
+    with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(row["input"], row["status"], row["frames"]) for row in rows] == [
+        ("A001", "complete", "3")], result.output
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    listed = re.search(r"Video files are known by their names.*?: (`\.[^(]*)\(", readme, re.S)
+    assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)

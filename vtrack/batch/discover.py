@@ -17,10 +17,14 @@ from vtrack.io.sidecar import sequence_images
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
 SUMMARY_FILE = BATCH_SUMMARY
-#: File suffixes taken as video inputs (anything else beside them is ignored).
+#: File suffixes taken as video inputs (anything else beside them is ignored): what phones,
+#: cameras (MXF, DV, HDV .m2t, camcorders' .mod/.tod, GoPro's .lrv), DVDs, IP cameras (ASF,
+#: Dahua's .dav) and tools write.
 VIDEO_SUFFIXES = frozenset({
-    ".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".ts", ".mts", ".m2ts", ".mpg", ".mpeg",
-    ".flv", ".wmv", ".ogv", ".3gp", ".y4m", ".h264", ".264", ".h265", ".hevc", ".mjpeg",
+    ".mp4", ".m4v", ".mov", ".qt", ".mkv", ".webm", ".avi", ".divx", ".ts", ".mts", ".m2ts",
+    ".m2t", ".mpg", ".mpeg", ".m2v", ".vob", ".mod", ".tod", ".mxf", ".dv", ".flv", ".f4v",
+    ".wmv", ".asf", ".ogv", ".3gp", ".3g2", ".lrv", ".dav", ".nut", ".ivf", ".y4m", ".h264",
+    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg",
 })
 #: MOTChallenge ground truth inside a sequence folder, first found wins.
 SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")

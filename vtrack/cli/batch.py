@@ -147,7 +147,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     """Track every input in FOLDER with every --config; write DIR/<input>/<config>/ (the files
     of `vtrack run`) and DIR/summary.csv.
 
-    Inputs are the video files directly in FOLDER (ground truth beside them: name.gt.txt or
+    Inputs are the video files directly in FOLDER, known by their names (.mp4, .mov, .mkv,
+    .mxf, .ts, .avi ...: the README lists them; ground truth beside them: name.gt.txt or
     name.txt, MOTChallenge name.mot.txt) and its sequence folders holding img/ or MOTChallenge's
     img1/ (ground truth inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge
     groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt); videos in other
