@@ -4,6 +4,7 @@ with cover art, recordings cut before they were finished, containers given as ra
 from __future__ import annotations
 
 import csv
+import json
 import re
 from pathlib import Path
 
@@ -159,3 +160,45 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
     listed = re.search(r"Video files are known by their names.*?: (`\.[^(]*)\(", readme, re.S)
     assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)
+
+
+def _fragmented_recording(path: Path) -> Path:
+    """A fragmented MP4 (as OBS or a phone records it: an empty index first, then a fragment
+    from each key frame, here every 5 of 30 frames) of a red target moving right."""
+    with av.open(str(path), "w", options={"movflags": "frag_keyframe+empty_moov"}) as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.options = {"preset": "ultrafast", "x264-params": "keyint=5:min-keyint=5"}
+        for i in range(30):
+            pixels = np.full((48, 64, 3), 90, np.uint8)
+            pixels[10:30, 5 + i:25 + i] = (40, 60, 210)
+            picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
+            picture.pts = i
+            for packet in stream.encode(picture):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    return path
+
+
+def test_a_fragmented_recording_cut_inside_a_fragment_is_partial(tmp_path):
+    """A fragmented MP4 cut part way (the recorder crashed, a copy stopped) lists no frame
+    count, and FFmpeg reads its whole fragments without a word: vtrack run ended complete,
+    exit 0, with 2/3 of the frames. Now it ends partial (exit 1) naming the cut; the whole
+    file is still complete."""
+    whole = _fragmented_recording(tmp_path / "rec.mp4")
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    runs = {}
+    for clip in (whole, cut):
+        out = tmp_path / f"out-{clip.stem}"
+        result = CliRunner().invoke(main, ["run", str(clip), "--init", "5,10,20,20",
+                                           "--no-video", "-o", str(out)])
+        record = json.loads((out / "run.json").read_text())
+        runs[clip.stem] = (result.exit_code, record["status"], record["frames"],
+                           record["error"])
+    assert runs["rec"] == (0, "complete", 30, None)
+    code, status, frames, error = runs["cut"]
+    assert (code, status) == (1, "partial") and 0 < frames < 30
+    assert error == (f"{cut}: decoding stopped at frame {frames} (the file ends inside its last "
+                     "mdat box; truncated file?)")

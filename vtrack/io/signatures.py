@@ -1,5 +1,6 @@
-"""What a file's first bytes say it is, where FFmpeg's own message says too little: a container
-or an image given as raw frames (``--raw``), an MP4 cut off before its index was written.
+"""What a file's bytes say it is, where FFmpeg's own message says too little: a container or an
+image given as raw frames (``--raw``), an MP4 cut off before its index was written or inside
+its last fragment.
 
 Only signatures of four bytes or more are taken, so raw pixels are not mistaken for one
 (MPEG-TS's one sync byte and JPEG's three are not).
@@ -9,10 +10,9 @@ from __future__ import annotations
 
 import os
 
-#: Boxes an MP4/QuickTime file is read through to find its index; beyond them it is not
-#: looked for (the top level of a real file holds a handful).
-_MAX_BOXES = 10_000
-_NO_INDEX = "no index (moov box)"
+#: Top-level boxes an MP4/QuickTime file is read through, at most: a plain file holds a
+#: handful, a fragmented recording two a fragment (a day at a fragment a second: 172,800).
+_MAX_BOXES = 1_000_000
 
 
 def container_kind(head: bytes) -> str | None:
@@ -34,23 +34,27 @@ def container_kind(head: bytes) -> str | None:
     return None
 
 
-def mp4_index_problem(path: str | os.PathLike[str]) -> str | None:
-    """What is wrong with the index (``moov`` box) of ``path``, an MP4/QuickTime file (its
-    first box ``ftyp``): ``"no index (moov box)"`` when none of its top-level boxes is one,
-    ``"its index (moov box) cut short"`` when the file ends inside it: a recording cut off
-    before it was finished (a plain MP4 writes its index last). None when its index is whole,
-    when it is no such file or cannot be read."""
+def _top_boxes(path: str | os.PathLike[str]) -> tuple[int, list[tuple[bytes, int, int]]] | None:
+    """The size of ``path``, an MP4/QuickTime file (its first box ``ftyp``), and its top-level
+    boxes in file order as (type, offset, size), the last one's size as its header says (past
+    the file's end when the file was cut inside it; a header cut short is type ``b""``). None
+    when it is no such file, cannot be read, is not laid out in boxes, or holds more than
+    :data:`_MAX_BOXES`."""
+    boxes: list[tuple[bytes, int, int]] = []
     try:
         with open(path, "rb") as handle:
             end = os.fstat(handle.fileno()).st_size
             offset = 0
-            for _ in range(_MAX_BOXES):
+            while offset < end:
+                if len(boxes) == _MAX_BOXES:
+                    return None
                 handle.seek(offset)
                 header = handle.read(16)
-                if len(header) < 8:  # the file ends after whole boxes, none an index
-                    return _NO_INDEX if offset > 0 else None
+                if len(header) < 8:
+                    boxes.append((b"", offset, 8))
+                    break
                 size, kind = int.from_bytes(header[:4], "big"), header[4:8]
-                if offset == 0 and kind != b"ftyp":
+                if not boxes and kind != b"ftyp":
                     return None
                 if size == 1 and len(header) == 16:  # a 64-bit size follows the type
                     size = int.from_bytes(header[8:], "big")
@@ -58,12 +62,40 @@ def mp4_index_problem(path: str | os.PathLike[str]) -> str | None:
                     size = end - offset
                 if size < 8:
                     return None  # not boxes as MP4 lays them out
-                if kind == b"moov":
-                    return "its index (moov box) cut short" if offset + size > end else None
+                boxes.append((kind, offset, size))
                 offset += size
-                if offset >= end:
-                    return _NO_INDEX
     except OSError:
         return None
-    return None
+    return (end, boxes) if boxes else None
 
+
+def mp4_index_problem(path: str | os.PathLike[str]) -> str | None:
+    """What is wrong with the index (``moov`` box) of ``path``, an MP4/QuickTime file (its
+    first box ``ftyp``): ``"no index (moov box)"`` when none of its top-level boxes is one,
+    ``"its index (moov box) cut short"`` when the file ends inside it: a recording cut off
+    before it was finished (a plain MP4 writes its index last). None when its index is whole,
+    when it is no such file or cannot be read."""
+    found = _top_boxes(path)
+    if found is None:
+        return None
+    end, boxes = found
+    index = next(((offset, size) for kind, offset, size in boxes if kind == b"moov"), None)
+    if index is None:
+        return "no index (moov box)"
+    return "its index (moov box) cut short" if sum(index) > end else None
+
+
+def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
+    """``"the file ends inside its last mdat box"`` (or ``moof`` ...) when ``path``, an
+    MP4/QuickTime file, was cut inside its last top-level box: a fragmented recording (a
+    phone's, OBS's) stopped part way, whose whole fragments FFmpeg reads without a word. None
+    when its last box is whole, or it is no such file."""
+    found = _top_boxes(path)
+    if found is None:
+        return None
+    end, boxes = found
+    kind, offset, size = boxes[-1]
+    if offset + size <= end:
+        return None
+    name = kind.decode("latin-1") if kind.isalnum() else ""
+    return f"the file ends inside its last {name + ' ' if name else ''}box"
