@@ -162,10 +162,12 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)
 
 
-def _fragmented_recording(path: Path) -> Path:
-    """A fragmented MP4 (as OBS or a phone records it: an empty index first, then a fragment
-    from each key frame, here every 5 of 30 frames) of a red target moving right."""
-    with av.open(str(path), "w", options={"movflags": "frag_keyframe+empty_moov"}) as out:
+def _recording(path: Path, fmt: str, options: dict[str, str]) -> Path:
+    """A recording as it is written while it goes (OBS, a phone): ``fmt`` with muxer
+    ``options`` (fragmented MP4: an empty index first, a fragment from each key frame; live
+    Matroska: no duration, clusters of unknown size), a key frame every 5 of 30 frames of a red
+    target moving right."""
+    with av.open(str(path), "w", format=fmt, options=options) as out:
         stream = out.add_stream("libx264", rate=30)
         stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
         stream.options = {"preset": "ultrafast", "x264-params": "keyint=5:min-keyint=5"}
@@ -181,24 +183,27 @@ def _fragmented_recording(path: Path) -> Path:
     return path
 
 
-def test_a_fragmented_recording_cut_inside_a_fragment_is_partial(tmp_path):
-    """A fragmented MP4 cut part way (the recorder crashed, a copy stopped) lists no frame
-    count, and FFmpeg reads its whole fragments without a word: vtrack run ended complete,
-    exit 0, with 2/3 of the frames. Now it ends partial (exit 1) naming the cut; the whole
-    file is still complete."""
-    whole = _fragmented_recording(tmp_path / "rec.mp4")
-    cut = tmp_path / "cut.mp4"
+@pytest.mark.parametrize(("name", "fmt", "options", "cut_inside"), [
+    ("rec.mp4", "mp4", {"movflags": "frag_keyframe+empty_moov"}, "its last mdat box"),
+    ("rec.mkv", "matroska", {"live": "1"}, "a block of its last cluster"),
+])
+def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, options, cut_inside):
+    """A fragmented MP4 or a live-written Matroska file cut part way (the recorder crashed, a
+    copy stopped) has no frame count or duration to fall short of, and FFmpeg reads its whole
+    fragments or blocks without a word: vtrack run ended complete, exit 0, with 2/3 of the
+    frames. Now it ends partial (exit 1) naming the cut; the whole file is still complete."""
+    whole = _recording(tmp_path / name, fmt, options)
+    cut = tmp_path / f"cut-{name}"
     cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
     runs = {}
     for clip in (whole, cut):
-        out = tmp_path / f"out-{clip.stem}"
+        out = tmp_path / f"out-{clip.name}"
         result = CliRunner().invoke(main, ["run", str(clip), "--init", "5,10,20,20",
                                            "--no-video", "-o", str(out)])
         record = json.loads((out / "run.json").read_text())
-        runs[clip.stem] = (result.exit_code, record["status"], record["frames"],
-                           record["error"])
-    assert runs["rec"] == (0, "complete", 30, None)
-    code, status, frames, error = runs["cut"]
+        runs[clip] = (result.exit_code, record["status"], record["frames"], record["error"])
+    assert runs[whole] == (0, "complete", 30, None)
+    code, status, frames, error = runs[cut]
     assert (code, status) == (1, "partial") and 0 < frames < 30
-    assert error == (f"{cut}: decoding stopped at frame {frames} (the file ends inside its last "
-                     "mdat box; truncated file?)")
+    assert error == (f"{cut}: decoding stopped at frame {frames} (the file ends inside "
+                     f"{cut_inside}; truncated file?)")

@@ -1,6 +1,6 @@
 """What a file's bytes say it is, where FFmpeg's own message says too little: a container or an
 image given as raw frames (``--raw``), an MP4 cut off before its index was written or inside
-its last fragment.
+its last fragment, a Matroska/WebM recording cut inside a block.
 
 Only signatures of four bytes or more are taken, so raw pixels are not mistaken for one
 (MPEG-TS's one sync byte and JPEG's three are not).
@@ -99,3 +99,59 @@ def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
         return None
     name = kind.decode("latin-1") if kind.isalnum() else ""
     return f"the file ends inside its last {name + ' ' if name else ''}box"
+
+
+#: Matroska elements whose children are read one by one (the Segment and its Clusters, whose
+#: size a live recording leaves unknown); every other element is passed over by its size.
+_MATROSKA_CONTAINERS = frozenset({0x18538067, 0x1F43B675})
+
+
+
+def _vint(data: bytes, at: int, keep_marker: bool) -> tuple[int, int] | None:
+    """The EBML variable-length integer at ``data[at:]`` and its length (an element ID keeps
+    its length marker, a size does not; an all-ones size, unknown, is -1); None when ``data``
+    ends inside it or it is not one."""
+    if at >= len(data) or data[at] == 0:
+        return None
+    length = 9 - data[at].bit_length()
+    if at + length > len(data):
+        return None
+    value = int.from_bytes(data[at:at + length], "big")
+    if keep_marker:
+        return value, length
+    value &= (1 << (7 * length)) - 1
+    return (-1 if value == (1 << (7 * length)) - 1 else value), length
+
+
+def matroska_torn_element(path: str | os.PathLike[str]) -> str | None:
+    """``"the file ends inside a block of its last cluster"`` when ``path``, a Matroska/WebM
+    file, was cut inside an element (a recording written live, as OBS does, stopped by a crash
+    has no duration to fall short of, and FFmpeg reads the whole blocks before the cut without
+    a word). None when its last element is whole, it is not such a file or cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            end = os.fstat(handle.fileno()).st_size
+            offset, elements = 0, 0
+            while offset < end and elements < _MAX_BOXES:
+                handle.seek(offset)
+                head = handle.read(12)
+                element = _vint(head, 0, keep_marker=True)
+                size = element and _vint(head, element[1], keep_marker=False)
+                if element is None or size is None:
+                    return "the file ends inside an element's header" if elements else None
+                if elements == 0 and element[0] != 0x1A45DFA3:  # the EBML header
+                    return None
+                elements += 1
+                offset += element[1] + size[1]
+                if element[0] in _MATROSKA_CONTAINERS:
+                    continue  # read its children
+                if size[0] < 0:
+                    return None  # an element of unknown size that is no container: give up
+                offset += size[0]
+                if offset > end:
+                    where = "a block of its last cluster" if element[0] in (0xA3, 0xA0) else \
+                        "its last element"
+                    return f"the file ends inside {where}"
+    except OSError:
+        return None
+    return None

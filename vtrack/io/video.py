@@ -49,7 +49,7 @@ from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
-from vtrack.io.signatures import mp4_index_problem, mp4_torn_box
+from vtrack.io.signatures import matroska_torn_element, mp4_index_problem, mp4_torn_box
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
@@ -704,7 +704,7 @@ class VideoSource(Source):
         # skipped frames were in the file, and so were those before a jump: not a shortfall
         tail.frames += self.frames_skipped + self._start
         shortfall = (tail.shortfall(self._stream.frames, self._end_s, fps)
-                     or self._torn_packet() or self._torn_box())
+                     or self._torn_packet() or self._torn_container())
         if shortfall:
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({shortfall}; truncated file?)",
@@ -725,13 +725,20 @@ class VideoSource(Source):
             return f"the file ends inside a {TS_PACKET_SIZES[0]}-byte transport packet"
         return None
 
-    def _torn_box(self) -> str | None:
-        """An MP4/QuickTime file ends with a whole top-level box: one cut inside its last box
-        (a fragmented recording stopped part way) was cut, though FFmpeg reads the whole
-        fragments before it without a word (a regular file read to its end only)."""
-        if not self._seekable or "mp4" not in self._container.format.name:
+    def _torn_container(self) -> str | None:
+        """An MP4/QuickTime file ends with a whole top-level box, a Matroska/WebM file with a
+        whole element: one cut inside (a fragmented MP4 or a live-written Matroska recording
+        stopped part way: no frame count or duration to fall short of) was cut, though FFmpeg
+        reads the whole fragments or blocks before it without a word (a regular file read to
+        its end only)."""
+        if not self._seekable:
             return None
-        return mp4_torn_box(self.info.path)
+        demuxer = self._container.format.name
+        if "mp4" in demuxer:
+            return mp4_torn_box(self.info.path)
+        if "matroska" in demuxer:
+            return matroska_torn_element(self.info.path)
+        return None
 
     def _warn_of_damage(self) -> None:
         """The warnings of frames skipped and decoded with errors, once: when the stream has
