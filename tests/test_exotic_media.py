@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import av
+import cv2
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -207,3 +208,24 @@ def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, optio
     assert (code, status) == (1, "partial") and 0 < frames < 30
     assert error == (f"{cut}: decoding stopped at frame {frames} (the file ends inside "
                      f"{cut_inside}; truncated file?)")
+
+
+def test_a_jpeg_cut_short_in_a_folder_is_skipped_with_a_warning(tmp_path):
+    """A sequence image cut short (a card copy or a camera's write that stopped) decodes in
+    FFmpeg without an error, its missing part grey: it was tracked as a whole frame without a
+    word. Now it is skipped as an unreadable image is, with a warning naming it; a phone's
+    motion photo (a video appended after the picture's end marker) is a whole image."""
+    folder = tmp_path / "seq" / "img"
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(0)
+    for i in range(3):
+        cv2.imwrite(str(folder / f"{i + 1:04d}.jpg"),
+                    rng.integers(0, 256, (48, 64, 3), np.uint8))
+    second, third = folder / "0002.jpg", folder / "0003.jpg"
+    second.write_bytes(second.read_bytes()[: second.stat().st_size // 2])
+    third.write_bytes(third.read_bytes() + b"\x00\x00\x00\x18ftypmp42" + bytes(100))
+    with open_source(str(folder.parent)) as source:
+        indices = [frame.index for frame in source]
+    assert indices == [0, 2] and source.frames_skipped == 1
+    assert source.warnings == [f"{second}: a JPEG cut short (no end-of-image marker after its "
+                               "image data): part of the picture is missing; frame 1 skipped"]

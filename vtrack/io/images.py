@@ -32,8 +32,10 @@ from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import sequence_images, sequence_of
+from vtrack.io.signatures import jpeg_cut_short
 from vtrack.io.source import InputInfo, Source
 
+JPEG_SUFFIXES = frozenset({".jpg", ".jpeg"})
 IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".pgm", ".ppm"})
 #: Frame rate of an image sequence unless told otherwise.
 DEFAULT_FPS = 30.0
@@ -89,8 +91,9 @@ def read_image(path: Path) -> np.ndarray:
     upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
     turns the image given alone and a phone's video.
 
-    Raises InputError naming the file when it cannot be read (gone, or not readable) or
-    FFmpeg cannot decode it.
+    Raises InputError naming the file when it cannot be read (gone, or not readable), FFmpeg
+    cannot decode it, or it is a JPEG cut short (which FFmpeg decodes with its missing part
+    grey, without an error).
     """
     try:
         with av.open(ffmpeg_file(path)) as container:
@@ -103,6 +106,9 @@ def read_image(path: Path) -> np.ndarray:
             if too_big:
                 raise InputError(f"{path}: {too_big}")
             picture = next(container.decode(video=0))
+            if path.suffix.lower() in JPEG_SUFFIXES and jpeg_cut_short(path):
+                raise InputError(f"{path}: a JPEG cut short (no end-of-image marker after its "
+                                 "image data): part of the picture is missing")
             grey = picture.format.name.startswith(("gray", "ya"))
             return turned(picture.to_ndarray(format="gray" if grey else "bgr24"),
                           quarter_turns(picture.rotation))

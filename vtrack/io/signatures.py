@@ -155,3 +155,39 @@ def matroska_torn_element(path: str | os.PathLike[str]) -> str | None:
     except OSError:
         return None
     return None
+
+
+#: Bytes at a JPEG's end looked at first for its end-of-image marker (after any padding).
+_JPEG_TAIL = 1024
+
+
+def jpeg_cut_short(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path``, a JPEG, ends before its end-of-image marker (FF D9) after its image
+    data: a copy or a camera's write cut short, which FFmpeg decodes without an error (the
+    missing part grey). Data appended after the marker (a phone's motion photo) is no cut.
+    False when it is no JPEG or cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            end = os.fstat(handle.fileno()).st_size
+            handle.seek(max(0, end - _JPEG_TAIL))
+            if handle.read().rstrip(b"\x00").endswith(b"\xff\xd9"):
+                return False  # the usual end: no need to read the file
+            handle.seek(0)
+            data = handle.read()
+    except OSError:
+        return False
+    if not data.startswith(b"\xff\xd8"):
+        return False
+    at = 2
+    while at + 4 <= len(data):  # marker segments up to the scan (EXIF's thumbnail inside one)
+        if data[at] != 0xFF:
+            return False
+        marker = data[at + 1]
+        if marker == 0xFF:  # fill byte
+            at += 1
+            continue
+        length = int.from_bytes(data[at + 2:at + 4], "big")
+        if marker == 0xDA:  # start of scan: entropy-coded data, where FF D9 cannot occur
+            return data.find(b"\xff\xd9", at + 2 + length) < 0
+        at += 2 + length
+    return True  # ends before its first scan
