@@ -6,6 +6,8 @@ from __future__ import annotations
 import csv
 import json
 import re
+import struct
+import zlib
 from pathlib import Path
 
 import av
@@ -229,3 +231,34 @@ def test_a_jpeg_cut_short_in_a_folder_is_skipped_with_a_warning(tmp_path):
     assert indices == [0, 2] and source.frames_skipped == 1
     assert source.warnings == [f"{second}: a JPEG cut short (no end-of-image marker after its "
                                "image data): part of the picture is missing; frame 1 skipped"]
+
+
+def _png_declaring(path: Path, width: int, height: int) -> Path:
+    """A small PNG file whose header declares a ``width`` x ``height`` grey picture (its data
+    holds one row)."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(
+            ">I", zlib.crc32(kind + data))
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                     + chunk(b"IDAT", zlib.compress(bytes(width + 1))) + chunk(b"IEND", b""))
+    return path
+
+
+def test_a_picture_size_declared_too_large_is_named(tmp_path):
+    """Headers declaring pictures over FFmpeg's limit (2^28 pixels) were 'not a video FFmpeg
+    can decode (Device or resource busy)' (a YUV4MPEG2 stream), 'no frame could be decoded' (a
+    PNG) or 'not an image FFmpeg can decode (Invalid data ...)' (a PNG in a folder): now each
+    names the size and vtrack's limit, as a video stream's size is."""
+    y4m = tmp_path / "huge.y4m"
+    y4m.write_bytes(b"YUV4MPEG2 W50000 H50000 F30:1 Ip A1:1 C420jpeg\nFRAME\n" + bytes(1000))
+    png = _png_declaring(tmp_path / "pano.png", 40000, 40000)
+    folder = tmp_path / "seq" / "img"
+    folder.mkdir(parents=True)
+    _png_declaring(folder / "0001.png", 40000, 40000)
+    for given, named, size in ((y4m, y4m, "50000x50000"), (png, png, "40000x40000"),
+                               (folder.parent, folder / "0001.png", "40000x40000")):
+        result = CliRunner().invoke(main, ["run", str(given), "--init", "1,1,8,8",
+                                           "-o", str(tmp_path / "out")])
+        assert one_error_line(result) == (f"vtrack: error: {named}: the frames are {size}; "
+                                          "vtrack accepts at most 16384x16384")

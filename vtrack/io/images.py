@@ -32,7 +32,7 @@ from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import sequence_images, sequence_of
-from vtrack.io.signatures import jpeg_cut_short
+from vtrack.io.signatures import declared_size_problem, jpeg_cut_short
 from vtrack.io.source import InputInfo, Source
 
 JPEG_SUFFIXES = frozenset({".jpg", ".jpeg"})
@@ -115,6 +115,9 @@ def read_image(path: Path) -> np.ndarray:
     except (av.FFmpegError, OSError, StopIteration) as exc:
         if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
+        too_big = declared_size_problem(path)  # FFmpeg's message names no size
+        if too_big:
+            raise InputError(f"{path}: {too_big}") from None
         reason = "no picture" if isinstance(exc, StopIteration) else os_reason(exc)
         raise InputError(f"{path}: not an image FFmpeg can decode ({reason})") from None
 

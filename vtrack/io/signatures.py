@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 
+from vtrack.geometry import frame_size_problem
+
 #: Top-level boxes an MP4/QuickTime file is read through, at most: a plain file holds a
 #: handful, a fragmented recording two a fragment (a day at a fragment a second: 172,800).
 _MAX_BOXES = 1_000_000
@@ -191,3 +193,30 @@ def jpeg_cut_short(path: str | os.PathLike[str]) -> bool:
             return data.find(b"\xff\xd9", at + 2 + length) < 0
         at += 2 + length
     return True  # ends before its first scan
+
+
+def declared_size(head: bytes) -> tuple[int, int] | None:
+    """The picture size a PNG's header (IHDR) or a YUV4MPEG2 stream's header line declares
+    at the start of ``head`` (a file's first 64 bytes or more), as (width, height); None for
+    other files. Read before FFmpeg, which refuses a picture over 2^28 pixels with a message
+    naming no size ('Device or resource busy', or no frame at all)."""
+    if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
+        return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    if head.startswith(b"YUV4MPEG2 "):
+        fields = head.split(b"\n", 1)[0].split()
+        sizes = {field[:1]: field[1:] for field in fields[1:] if field[:1] in (b"W", b"H")}
+        if sizes.get(b"W", b"").isdigit() and sizes.get(b"H", b"").isdigit():
+            return int(sizes[b"W"]), int(sizes[b"H"])
+    return None
+
+
+def declared_size_problem(path: str | os.PathLike[str]) -> str | None:
+    """Why the pictures the header of ``path`` declares (:func:`declared_size`) cannot be
+    tracked, ``the frames are 50000x50000; vtrack accepts at most ...``; None when they can,
+    it declares none, or it cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            size = declared_size(handle.read(64))
+    except OSError:
+        return None
+    return frame_size_problem(*size) if size else None

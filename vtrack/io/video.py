@@ -49,7 +49,12 @@ from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
-from vtrack.io.signatures import matroska_torn_element, mp4_index_problem, mp4_torn_box
+from vtrack.io.signatures import (
+    declared_size_problem,
+    matroska_torn_element,
+    mp4_index_problem,
+    mp4_torn_box,
+)
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
@@ -329,13 +334,17 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
 
 
 def _cut_file(path: str) -> str | None:
-    """The line for ``path``, a local file, when it is empty or an MP4 whose index is missing
-    or cut short (:func:`~vtrack.io.signatures.mp4_index_problem`: FFmpeg then finds no
-    frames, or no streams at all); None otherwise."""
+    """The line for ``path``, a local file, when it is empty, declares pictures larger than
+    vtrack takes, or is an MP4 whose index is missing or cut short
+    (:func:`~vtrack.io.signatures.mp4_index_problem`: FFmpeg then finds no frames, or no
+    streams at all); None otherwise."""
     if path == "-" or not os.path.isfile(path):
         return None
     if os.path.getsize(path) == 0:
         return f"{path}: an empty file (0 bytes), not a video"
+    too_big = declared_size_problem(path)
+    if too_big:
+        return f"{path}: {too_big}"
     problem = mp4_index_problem(path)
     if problem is None:
         return None
@@ -409,7 +418,7 @@ def _no_frame(path: str, how: FFmpegInput) -> str:
     which may have held its only key frame (every frame after needs it)."""
     value = _nobuffer(how)
     if value is None:
-        return f"{path}: no frame could be decoded"
+        return _cut_file(path) or f"{path}: no frame could be decoded"
     return (f"{path}: no frame could be decoded; --input-option fflags={value} may have "
             "dropped the stream's only key frame (FFmpeg drops the packets it reads probing "
             "the input): try without it")
