@@ -262,3 +262,26 @@ def test_a_picture_size_declared_too_large_is_named(tmp_path):
                                            "-o", str(tmp_path / "out")])
         assert one_error_line(result) == (f"vtrack: error: {named}: the frames are {size}; "
                                           "vtrack accepts at most 16384x16384")
+
+
+def test_a_display_matrix_that_is_no_quarter_turn_is_warned_of(tmp_path):
+    """A clip whose display matrix turns it 45 degrees (an editor's tilt) was read as stored
+    and recorded rotation 0 without a word (ffmpeg shows it tilted); now a warning says how it
+    is read. Quarter turns are applied without one."""
+    clips = {}
+    for degrees in (45, 90):
+        clips[degrees] = clip = tmp_path / f"tilt{degrees}.mp4"
+        with av.open(str(clip), "w") as out:
+            stream = out.add_stream("libx264", rate=30)
+            stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+            stream.set_display_rotation(degrees)
+            picture = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 90, np.uint8),
+                                                 format="bgr24")
+            for packet in [*stream.encode(picture), *stream.encode()]:
+                out.mux(packet)
+    with open_source(str(clips[45])) as tilted, open_source(str(clips[90])) as turned:
+        assert (tilted.info.rotation, turned.info.rotation) == (0, 90)
+        assert tilted.warnings == [f"{clips[45]}: its display matrix turns the picture 45 "
+                                   "degrees, not a quarter turn; it is read turned 0 degrees "
+                                   "(the nearest quarter turn)"]
+        assert turned.warnings == []

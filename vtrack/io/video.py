@@ -466,6 +466,8 @@ class VideoSource(Source):
             container.close()
             raise
         super().__init__(info)
+        if self._odd_turn:
+            self.warnings.append(self._odd_turn)
 
     def _open(self, path: str, container: av.container.InputContainer, live: bool
               ) -> InputInfo:
@@ -526,6 +528,10 @@ class VideoSource(Source):
         self._start = 0  # the index of the frame iteration begins at (start_near)
 
         self._rotation = quarter_turns(self._first.rotation)
+        off = (self._first.rotation - self._rotation + 180) % 360 - 180
+        self._odd_turn = (f"{path}: its display matrix turns the picture {self._first.rotation:g}"
+                          f" degrees, not a quarter turn; it is read turned {self._rotation} "
+                          "degrees (the nearest quarter turn)") if abs(off) > 1 else None
         width, height = self._first.width, self._first.height
         self._coded_size = (width, height)
         if self._rotation in (90, 270):
