@@ -285,3 +285,34 @@ def test_a_display_matrix_that_is_no_quarter_turn_is_warned_of(tmp_path):
                                    "degrees, not a quarter turn; it is read turned 0 degrees "
                                    "(the nearest quarter turn)"]
         assert turned.warnings == []
+
+
+def test_time_s_counts_from_the_first_frame_as_the_readme_says(tmp_path):
+    """A recording whose timestamps start at 5 s (an MPEG-TS starts at 1.4 s, a later part of
+    a recording hours in) has time_s 0 at frame 0: the README said only 'time_s comes from each
+    frame's timestamp', and a user comparing with ffprobe's pts_time found it 5 s off."""
+    clip = tmp_path / "part2.mp4"
+    with av.open(str(clip), "w") as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        for i in range(3):
+            pixels = np.full((48, 64, 3), 90, np.uint8)
+            pixels[10:30, 5 + i:25 + i] = (40, 60, 210)
+            picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
+            picture.pts = 150 + i
+            for packet in stream.encode(picture):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    with av.open(str(clip)) as container:
+        assert next(container.decode(video=0)).time == pytest.approx(5.0)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip), "--init", "5,10,20,20", "--no-video",
+                                       "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    with (out / "track.csv").open(newline="") as handle:
+        times = [float(row["time_s"]) for row in csv.DictReader(handle)]
+    assert times == pytest.approx([0, 1 / 30, 2 / 30], abs=1e-4)
+    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
+    assert "`time_s` comes from each frame's timestamp, counted from the first frame's (frame " \
+           "0 is at 0 s, whatever time the container starts at" in readme
