@@ -257,3 +257,18 @@ def test_a_value_that_is_no_number_is_refused_naming_the_options_range(
     line = one_error_line(vtrack(*args))
     assert said in line, line
     assert "is not a valid" not in line
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "in.ts", "--follow", "later"), "'--follow': 'later' is not a number of seconds "
+                                            "above 0 and at most 86400"),
+    (("batch", "in", "--worker-timeout", "soon"), "'--worker-timeout': 'soon' is not a number "
+                                                  "of seconds above 0 and at most 86400"),
+], ids=["follow", "worker-timeout"])
+def test_a_word_for_a_wait_that_excludes_0_says_above_0(args: tuple[str, ...],
+                                                        said: str) -> None:
+    """`vtrack run rec.ts --follow later` said "is not a number of seconds from 0 to 86400",
+    though --follow 0 is refused ('not in the range 0<x<=86400'): an open bound is said as one."""
+    line = one_error_line(vtrack(*args))
+    assert said in line, line
+    assert "from 0 to" not in line

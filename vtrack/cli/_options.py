@@ -30,9 +30,17 @@ class Seconds(click.FloatRange):
         except (TypeError, ValueError):
             seconds = math.nan
         if not math.isfinite(seconds):
-            self.fail(f"{value!r} is not a number of seconds from {self.min:g} to "
-                      f"{self.max:g}", param, ctx)
+            self.fail(f"{value!r} is not a number of seconds {self.range_words()}", param, ctx)
         return super().convert(value, param, ctx)
+
+    def range_words(self) -> str:
+        """The range as words, its open bounds said so: ``from 0.1 to 3600``, ``above 0 and
+        at most 86400`` (``--follow 0`` is refused: 0 is no number of seconds it takes)."""
+        low = f"above {self.min:g}" if self.min_open else f"from {self.min:g}"
+        high = f"below {self.max:g}" if self.max_open else f"at most {self.max:g}"
+        if not self.min_open and not self.max_open:
+            return f"{low} to {self.max:g}"
+        return f"{low} and {high}"
 
 
 class WholeNumber(click.IntRange):
