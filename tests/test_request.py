@@ -4,6 +4,7 @@ exactly the same request."""
 from __future__ import annotations
 
 import csv
+import json
 import shutil
 from dataclasses import fields, replace
 from pathlib import Path
@@ -33,7 +34,7 @@ OTHER: dict[str, Any] = {
     "gt_origin": 1,
     "raw": RawFormat(160, 120, "bgr24", 30.0),
     "fps": 12.5,
-    "video": True,
+    "video": False,
     "preset": "fast",
     "crf": 30,
     "seed": 7,
@@ -55,7 +56,7 @@ def test_changing_any_field_of_the_request_makes_resume_run_again(
 ) -> None:
     clip = clip_factory("smooth", width=160, height=120, frames=20)
     request = RunRequest(input=str(clip.path), out_dir=tmp_path / "a", config=load_config("s0"),
-                         gt_path=clip.gt, video=False, max_frames=12)
+                         gt_path=clip.gt, max_frames=12)  # (a video: --preset, --crf count)
     assert run(request).status == STATUS_COMPLETE
     assert completed_summary(request) is not None  # the same request: reused
     assert {f.name for f in fields(RunRequest)} == set(OTHER)  # a new field needs a value here
@@ -101,3 +102,31 @@ def test_batch_runs_again_when_only_the_ground_truth_origin_changed(
             statuses.append(next(csv.DictReader(handle))["status"])
         statuses.append("not run again" in result.output)
     assert statuses == ["complete", False, "complete", False, "complete", True]
+
+
+def test_settings_that_change_nothing_do_not_make_resume_run_again(
+    clip_factory: ClipFactory, tmp_path: Path
+) -> None:
+    """`vtrack batch in --no-video`, then `vtrack batch in --no-video --crf 30 --preset slow`
+    refused every pair, 'made with other settings: --preset, --crf' (exit 1), though neither
+    writes a video for them to change; --gt-origin without ground truth likewise. Now such a
+    pair is reused ('already complete: not run again'); with a video they still count, and a
+    --video-out run is named by its option (was 'the video's place (--video)')."""
+    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "smooth.mp4")
+    (folder / "smooth.init.txt").write_text(clip.gt.read_text().splitlines()[0])  # no --gt
+    out = tmp_path / "out"
+    outputs = []
+    for extra in ([], ["--crf", "30", "--preset", "slow", "--gt-origin", "1"]):
+        result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--jobs", "1",
+                                           "--no-video", "--out", str(out), *extra])
+        assert result.exit_code == 0, result.output
+        outputs.append(result.output)
+    assert "not run again" not in outputs[0] and "already complete: not run again" in outputs[1]
+    record = (out / "smooth" / "s0" / "run.json").read_text()
+    video = replace(RunRequest.from_dict(json.loads(record)["request"]), video=True)
+    assert video.differences(replace(video, crf=30).to_dict()) == ["--crf"]
+    assert video.differences(replace(video, video_out="udp://127.0.0.1:5000").to_dict()) == [
+        "--video-out"]

@@ -192,9 +192,24 @@ class RunRequest:
         if not isinstance(recorded, dict):
             return ["the whole request (run.json records none)"]
         mine = json.loads(json.dumps(self.to_dict()))
+        moot = _moot(mine) & _moot(recorded)
         keys = [k for k in dict.fromkeys([*mine, *recorded])
-                if k != "out_dir" and mine.get(k, _ABSENT) != recorded.get(k, _ABSENT)]
+                if k != "out_dir" and k not in moot
+                and mine.get(k, _ABSENT) != recorded.get(k, _ABSENT)]
         return list(dict.fromkeys(_SETTING_NAMES.get(key, key) for key in keys))
+
+
+def _moot(request: dict[str, Any]) -> set[str]:
+    """The fields of ``request`` (a ``run.json`` ``"request"``) that change nothing in its run:
+    the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``), and
+    ``--gt-origin`` without ground truth. Two requests that both leave one moot are the same
+    run whatever it says."""
+    moot = set()
+    if request.get("video") is False:
+        moot |= {"preset", "crf"}
+    if request.get("gt") is None:
+        moot.add("gt_origin")
+    return moot
 
 
 #: (A field missing from one of two requests compared.)
@@ -208,7 +223,7 @@ _SETTING_NAMES = {
     "max_frames": "--frames", "max_s": "--frames", "start": "--start", "start_s": "--start",
     "init_from": "the first box (--init or NAME.init.txt)", "stream": "--stream",
     "ffmpeg": "the input options (--input-option ...)", "live": "--live",
-    "video_out": "the video's place (--video)",
+    "video_out": "--video-out",
 }
 
 
