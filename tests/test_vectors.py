@@ -370,3 +370,16 @@ def test_a_vector_word_that_is_no_number_is_compared_not_a_traceback() -> None:
     assert _hex_differences("rgb.hex", b"xx\n01\n", b"xx\n01\n", 2) is None
     found = _hex_differences("rgb.hex", b"xx\n01\n", b"00\n01\n", 2)
     assert found is not None and "expected xx, got 00" in found, found
+
+
+def test_an_error_of_vtrack_vectors_input_names_the_command_typed() -> None:
+    """`vtrack vectors clip.mp4 -o out` (no --init) said "(see 'vtrack vectors generate
+    --help')", a command no help lists; the usage of `vtrack vectors clip.mp4 --help` said
+    'vtrack vectors generate [OPTIONS] INPUT'. Both now name what was typed, vtrack vectors."""
+    result = vtrack("vectors", "clip.mp4", "-o", "out")
+    assert result.returncode == 2
+    line = result.stderr.strip()  # (run as python -m vtrack)
+    assert line.startswith("vtrack: error: Missing option '--init'.") and "\n" not in line, line
+    assert line.endswith(" vtrack vectors --help')"), line
+    usage = vtrack("vectors", "clip.mp4", "--help").stdout
+    assert "vtrack vectors [OPTIONS] INPUT" in usage and "generate" not in usage, usage

@@ -34,6 +34,20 @@ class _DefaultGroup(click.Group):
             formatter.write_dl(rows)
 
 
+class _NamedAsTheGroup(click.Context):
+    """The hidden ``generate``'s context, named as the group: a user types ``vtrack vectors
+    INPUT``, so its usage line and an error's ``(see '... --help')`` say ``vtrack vectors``
+    (they said ``vtrack vectors generate``, a command no help lists)."""
+
+    @property
+    def command_path(self) -> str:
+        return self.parent.command_path if self.parent is not None else super().command_path
+
+
+class _Generate(click.Command):
+    context_class = _NamedAsTheGroup
+
+
 @click.group("vectors", cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
 def command() -> None:
     """Test vectors of the fixed-point golden models for an HDL simulation bench.
@@ -48,7 +62,7 @@ def command() -> None:
     """
 
 
-@command.command("generate", hidden=True)
+@command.command("generate", cls=_Generate, hidden=True)
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--config", "-c", "config_spec", default="s0-fixed", show_default=True, type=CONFIG,
               metavar="NAME|FILE", help="A fixed-point config: s0-fixed or s2-fixed.")
