@@ -193,6 +193,17 @@ def test_an_empty_name_is_refused_naming_its_option(
     assert list(tmp_path.iterdir()) == []
 
 
+def test_scene_with_an_empty_out_names_what_out_takes(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack scene smooth ''` suggested "'.' for the current folder", which OUT then refused
+    ('.: no video container format for this file name'); it now says what OUT takes."""
+    monkeypatch.chdir(tmp_path)
+    line = one_error_line(vtrack("scene", "smooth", ""))
+    assert "'OUT': empty; give the clip's name: clip.mp4" in line, line
+    assert "'.'" not in line
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_batch_and_report_of_one_run_count_it_singular(clip_factory: ClipFactory,
                                                           tmp_path: Path) -> None:
     clip = clip_factory("smooth", width=W, height=H, frames=12)

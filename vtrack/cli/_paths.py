@@ -54,6 +54,9 @@ IMAGE_PATH = NonEmptyPath(path_type=Path, hint="an image file name ending in .pn
 #: The type of ``vtrack run --gt``: a ground-truth file, no folder.
 GT_PATH = NonEmptyPath(path_type=Path, hint="a ground-truth file name (OTB, VOT or "
                        "MOTChallenge boxes)")
+#: The type of ``vtrack scene``'s OUT: a clip's name (``.`` is no video file name).
+CLIP_PATH = NonEmptyPath(path_type=Path, hint="the clip's name: clip.mp4 (or .mkv, .avi, .mov), "
+                         "a folder for --format images, a file for --format raw")
 
 
 class NonEmptyText(click.ParamType):

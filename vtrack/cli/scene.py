@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.cli._options import WholeNumber
-from vtrack.cli._paths import PATH
+from vtrack.cli._paths import CLIP_PATH
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_SEED
@@ -37,7 +37,7 @@ def _scenario_list() -> str:
 
 @click.command("scene", epilog=_scenario_list())
 @click.argument("name")
-@click.argument("out", type=PATH)
+@click.argument("out", type=CLIP_PATH)
 @click.option("--frames", type=int, help="Number of frames [scenario default, mostly 150].")
 @click.option("--size", metavar="WxH", help="Frame size [scenario default, mostly 320x240].")
 @click.option("--fps", type=float, help="Frame rate [scenario default, mostly 30].")
