@@ -193,6 +193,25 @@ def test_an_empty_name_is_refused_naming_its_option(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "in", "--fps", "abc"), "'--fps': 'abc' is not a frame rate (a number from 0.01 "
+                                    "to 10000 frames per second)"),
+    (("scene", "smooth", "x.mp4", "--fps", "fast"), "'--fps': 'fast' is not a frame rate"),
+    (("scene", "smooth", "x.mp4", "--frames", "1.5"), "'--frames': '1.5' is not a whole "
+                                                      "number of frames"),
+    (("vectors", "in.mp4", "--init", "1,1,9,9", "-o", "v", "--frames", "all"),
+     "'--frames': 'all' is not a whole number of frames, 1 to 300"),
+], ids=["run-fps", "scene-fps", "scene-frames", "vectors-frames"])
+def test_a_frame_rate_or_count_that_is_no_number_says_what_the_option_takes(
+        args: tuple[str, ...], said: str) -> None:
+    """`vtrack run in --fps abc` said "'abc' is not a valid float." (vtrack scene --frames 1.5
+    and vtrack vectors --frames all: "is not a valid integer."), as -j abc did before it was
+    told what it takes."""
+    line = one_error_line(vtrack(*args))
+    assert said in line, line
+    assert "is not a valid" not in line
+
+
 def test_scene_with_an_empty_out_names_what_out_takes(tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """`vtrack scene smooth ''` suggested "'.' for the current folder", which OUT then refused

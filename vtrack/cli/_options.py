@@ -57,6 +57,30 @@ class WholeNumber(click.IntRange):
         return super().convert(value, param, ctx)
 
 
+class NumberWord(click.ParamType):
+    """A number (``kind``: int or float) whose range the command checks itself, in its own
+    words; a value that is no number is refused here saying what the option takes (click said
+    "'abc' is not a valid float.")."""
+
+    def __init__(self, kind: type[int] | type[float], takes: str) -> None:
+        self.kind, self.takes = kind, takes
+        self.name = "integer" if kind is int else "float"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, self.kind) and not isinstance(value, bool):
+            return value
+        try:
+            return self.kind(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not {self.takes}", param, ctx)
+
+
+#: ``--fps`` of ``run`` and ``scene`` (the range: :func:`vtrack.io.raw.checked_fps`'s, which
+#: checks it; that module loads OpenCV, too slow to import for a command's options).
+FRAME_RATE = NumberWord(float, "a frame rate (a number from 0.01 to 10000 frames per second)")
+
+
 def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | None:
     return None if value == "auto" else int(value)
 

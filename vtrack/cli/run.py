@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from vtrack.cli._options import (
+    FRAME_RATE,
     MAX_WAIT_S,
     FrameSpan,
     Seconds,
@@ -74,7 +75,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Input is raw frames of this size (from -, a FIFO or a file).")
 @click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
               default="bgr24", show_default=True, help="Pixel format of --raw input.")
-@click.option("--fps", type=float, default=None,
+@click.option("--fps", type=FRAME_RATE, default=None,
               help="Frame rate of --raw input or an image folder (default 30; a MOTChallenge "
                    "sequence's seqinfo.ini frameRate): time_s = frame index / fps. Refused "
                    "for a video file, whose frames carry their own timestamps.")

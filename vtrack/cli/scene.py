@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import WholeNumber
+from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
@@ -38,9 +38,10 @@ def _scenario_list() -> str:
 @click.command("scene", epilog=_scenario_list())
 @click.argument("name")
 @click.argument("out", type=CLIP_PATH)
-@click.option("--frames", type=int, help="Number of frames [scenario default, mostly 150].")
+@click.option("--frames", type=NumberWord(int, "a whole number of frames"),
+              help="Number of frames [scenario default, mostly 150].")
 @click.option("--size", metavar="WxH", help="Frame size [scenario default, mostly 320x240].")
-@click.option("--fps", type=float, help="Frame rate [scenario default, mostly 30].")
+@click.option("--fps", type=FRAME_RATE, help="Frame rate [scenario default, mostly 30].")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Random seed.")
 @click.option(

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._options import NumberWord
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 
 
@@ -68,7 +69,8 @@ def command() -> None:
               metavar="NAME|FILE", help="A fixed-point config: s0-fixed or s2-fixed.")
 @click.option("--init", "init_text", required=True, metavar="x,y,w,h",
               help="Initial box (top-left x, y, width, height): x,y,w,h or x y w h.")
-@click.option("--frames", "count", type=int, default=10, show_default=True,
+@click.option("--frames", "count", type=NumberWord(int, "a whole number of frames, 1 to 300"),
+              default=10, show_default=True,
               help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
 @click.option("--out", "-o", "out_dir", type=PATH, required=True,
               metavar="DIR", help="Output folder (created; existing vector files are replaced).")
