@@ -62,7 +62,8 @@ def test_stages_takes_stage_and_config_names() -> None:
     chain = vtrack("stages", "s0").stdout
     assert [line.split(":")[0] for line in chain.splitlines() if not line.startswith(" ")] == [
         "hue", "backproject", "meanshift", "occlusion", "kalman"]
-    assert "not a stage or a shipped config" in one_error_line(vtrack("stages", "nope"))
+    assert "not a stage, a shipped config or a config file" in one_error_line(
+        vtrack("stages", "nope"))
 
 
 def test_stages_of_a_config_show_the_values_it_sets() -> None:
@@ -109,6 +110,27 @@ def test_stages_of_several_configs_show_what_each_sets_in_a_stage_they_share() -
     named = vtrack("stages", "background", "fixed_camera", "fixed_camera").stdout
     assert line(named, "background", "shadows").endswith("; fixed_camera sets true")
     assert named.count("; fixed_camera sets 'mog2'") == 1
+
+
+def test_stages_of_a_config_file_show_the_values_it_sets(tmp_path: Path) -> None:
+    """`vtrack stages mine.toml` (the file `vtrack run -c mine.toml` takes) said 'mine.toml:
+    not a stage or a shipped config', though --help offers CONFIG names. A config file is
+    now listed as a shipped config is, with the values it sets; one with a mistake is told
+    as `vtrack run -c` tells it."""
+    chain = "".join(f'[[stage]]\nname = "{name}"\n' for name in ("hue", "backproject"))
+    (tmp_path / "mine.toml").write_text(chain + '[[stage]]\nname = "meanshift"\n'
+                                        'iterations = 7\n')
+    out = vtrack("stages", "mine.toml", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert [x.split(":")[0] for x in out.stdout.splitlines() if not x.startswith(" ")] == [
+        "hue", "backproject", "meanshift"]
+    assert any(x.strip().startswith("iterations (") and x.endswith("; mine.toml sets 7")
+               for x in out.stdout.splitlines()), out.stdout
+    (tmp_path / "bad.toml").write_text(chain + '[[stage]]\nname = "meanshift"\n'
+                                       'iterations = "many"\n')
+    assert one_error_line(vtrack("stages", "bad.toml", cwd=tmp_path)) == (
+        "vtrack: error: bad.toml: stage 'meanshift': parameter 'iterations' must be an "
+        "integer, got 'many'")
 
 
 def test_a_missing_input_is_named_before_what_else_is_missing(tmp_path: Path) -> None:

@@ -73,8 +73,11 @@ def _plain(name: str, cls: type, sets: list[tuple[str, dict]] | None = None) -> 
 
 def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
     """The stages ``names`` ask for, in the order first named (a stage by its name, a shipped
-    config as its chain), each with the settings of every named config holding it (config
-    name, settings). ConfigError for a name that is neither."""
+    config or a config file, as ``--config`` takes them, as its chain), each with the settings
+    of every named config holding it (config name or file, settings). ConfigError for a name
+    that is none of them, or a config file with a mistake (as ``vtrack run`` says it)."""
+    from pathlib import Path
+
     from vtrack.config import load_config, shipped_configs
     from vtrack.errors import ConfigError
     from vtrack.stages.base import all_stages
@@ -84,19 +87,21 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
     for name in dict.fromkeys(names):  # a name given twice: listed once
         if name in known:
             chosen.setdefault(name, [])
-        elif name in configs:
+        elif name in configs or Path(name).suffix == ".toml" or "/" in name \
+                or Path(name).is_file():
             for stage, settings in load_config(name).stages:
                 chosen.setdefault(stage, []).append((name, settings))
         else:
-            raise ConfigError(f"{name}: not a stage or a shipped config (stages: "
-                              f"{', '.join(known)}; configs: {', '.join(sorted(configs))})")
+            raise ConfigError(f"{name}: not a stage, a shipped config or a config file "
+                              f"(stages: {', '.join(known)}; configs: "
+                              f"{', '.join(sorted(configs))})")
     return chosen
 
 
 def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
     """The stage reference (plain text for the terminal, or Markdown for docs/stages.md);
-    with ``names`` (stages or shipped configs), only those stages' parameters, and for a
-    config the values it sets."""
+    with ``names`` (stages, shipped configs or config files), only those stages' parameters,
+    and for a config the values it sets."""
     from vtrack.config import load_config, shipped_configs
     from vtrack.stages.base import all_stages
 
@@ -141,8 +146,9 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
 @click.option("--markdown", is_flag=True, help="Print Markdown (the source of docs/stages.md).")
 def command(names: tuple[str, ...], markdown: bool) -> None:
     """List the stages, their parameters (type, default, help) and the shipped configs; with
-    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0), only those stages,
-    and for a CONFIG the values it sets."""
+    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0, vtrack stages
+    mine.toml), only those stages, and for a CONFIG (a shipped name or a file, as --config
+    takes) the values it sets."""
     if names and markdown:
         raise click.UsageError("--markdown prints the whole reference; give no names with it")
     click.echo(stages_text(markdown, names))
