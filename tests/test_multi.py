@@ -758,3 +758,24 @@ def test_a_score_is_given_exactly_by_the_chains_that_declare_one(scene_factory) 
     reference = stages_text(markdown=True)
     assert [line for line in reference.splitlines() if "no score" in line] == [
         next(line for line in reference.splitlines() if line.startswith("- `s4`:"))]
+
+
+def test_motchallenge_ground_truth_is_read_as_written_whatever_gt_origin_says(
+        clip_factory, tmp_path) -> None:
+    """`vtrack run m.mp4 -c s3 --gt m.mot.txt --gt-origin 1` scored exactly as --gt-origin 0,
+    while --help said the option sets the origin of ground-truth boxes: MOTChallenge ground
+    truth is read as written (as TrackEval reads it). --help now says the option is for
+    single-target ground truth."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    scores = []
+    for origin in ("0", "1"):
+        out = tmp_path / origin
+        result = CliRunner().invoke(main, ["run", str(clip.path), "-c", "s3", "--gt",
+                                           str(clip.mot), "--gt-origin", origin, "--no-video",
+                                           "-q", "-o", str(out)])
+        assert result.exit_code == 0, result.output
+        scores.append(json.loads((out / "run.json").read_text())["metrics"])
+    assert scores[0] == scores[1] and scores[0]["motp"] is not None
+    text = " ".join(CliRunner().invoke(main, ["run", "--help"]).output.split())
+    assert "Origin of single-target ground-truth boxes" in text
+    assert "MOTChallenge ground truth is read as written" in text

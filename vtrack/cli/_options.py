@@ -102,9 +102,10 @@ def gt_origin_option() -> Callable[[Any], Any]:
     return click.option(
         "--gt-origin", type=click.Choice(["auto", "0", "1"]), default="auto",
         show_default=True, callback=_origin,
-        help="Origin of ground-truth boxes: 1 for MATLAB-style 1-based boxes (OTB), 0 for "
-             "0-based. auto: 1 for groundtruth_rect.txt or groundtruth.txt inside a sequence "
-             "folder (one holding img/), else 0 (name.gt.txt beside a video).")
+        help="Origin of single-target ground-truth boxes: 1 for MATLAB-style 1-based boxes "
+             "(OTB), 0 for 0-based. auto: 1 for groundtruth_rect.txt or groundtruth.txt inside "
+             "a sequence folder (one holding img/), else 0 (name.gt.txt beside a video). "
+             "MOTChallenge ground truth is read as written, as TrackEval reads it.")
 
 
 def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | None:
