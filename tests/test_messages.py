@@ -212,6 +212,22 @@ def test_a_frame_rate_or_count_that_is_no_number_says_what_the_option_takes(
     assert "is not a valid" not in line
 
 
+@pytest.mark.parametrize(("text", "said"), [
+    ('[[stage]]\nname = 5\n', "mine.toml: stage #1: name must be text (a stage's name, e.g. "
+                                'name = "hue"), got 5'),
+    ('stage = ["hue"]\n', "mine.toml: stage #1 is not a [[stage]] table, got 'hue'"),
+    ('[[stage]]\niterations = 5\n', "mine.toml: stage #1 has no name"),
+], ids=["number", "not-a-table", "none"])
+def test_a_stage_whose_name_is_wrong_is_told_what_is_wrong(
+        text: str, said: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A config whose [[stage]] said `name = 5` (or `stage = ["hue"]`, a list of names) was
+    refused 'mine.toml: stage #1 has no name': it has one, of the wrong kind."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").write_text(text)
+    line = one_error_line(vtrack("run", "in.mp4", "-c", "mine.toml", "--init", "1,1,9,9"))
+    assert line == f"vtrack: error: {said}", line
+
+
 def test_scene_with_an_empty_out_names_what_out_takes(tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """`vtrack scene smooth ''` suggested "'.' for the current folder", which OUT then refused

@@ -170,8 +170,14 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
         raise ConfigError(f"{where}: no [[stage]] tables: a config is a chain of stages")
     stages: list[tuple[str, dict[str, Any]]] = []
     for position, table in enumerate(raw_stages, start=1):
-        if not isinstance(table, dict) or not isinstance(table.get("name"), str):
+        if not isinstance(table, dict):
+            raise ConfigError(f"{where}: stage #{position} is not a [[stage]] table, got "
+                              f"{table!r}")
+        if "name" not in table:
             raise ConfigError(f"{where}: stage #{position} has no name")
+        if not isinstance(table["name"], str):
+            raise ConfigError(f"{where}: stage #{position}: name must be text (a stage's "
+                              f"name, e.g. name = \"hue\"), got {table['name']!r}")
         values = {k: v for k, v in table.items() if k != "name"}
         build_stage(table["name"], values, where)  # validates names, parameters, types
         stages.append((table["name"], values))
