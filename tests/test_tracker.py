@@ -107,6 +107,18 @@ def test_a_first_box_is_refused_by_a_config_that_finds_its_targets(config: str) 
         list(vtrack.track([frame], config=config, init_box=(1, 1, 8, 8)))
 
 
+@pytest.mark.parametrize("frames", [[np.zeros((48, 64, 3), np.uint8)], "no-such-clip.mp4"])
+def test_vtrack_track_refuses_a_first_box_naming_its_own_argument(frames: object) -> None:
+    """`vtrack.track("m.mp4", "s3", init_box=box)` said "... takes no first box; call
+    init(frame) without a box, or update(frame)": Tracker's advice, for a function with no
+    init(). It now names its own argument, before any input is opened."""
+    with pytest.raises(ConfigError) as refused:
+        list(vtrack.track(frames, config="s3", init_box=(1, 1, 8, 8)))
+    assert str(refused.value) == (
+        "init_box: s3 finds its targets itself (it tracks several, each from where it is "
+        "detected) and takes no first box; leave init_box out")
+
+
 def _frames(count: int = 3) -> list[np.ndarray]:
     """A red block on black, ``count`` frames of 160x120."""
     frames = [np.zeros((120, 160, 3), np.uint8) for _ in range(count)]

@@ -21,7 +21,7 @@ from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
 from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
-from vtrack.pipeline import FrameResult
+from vtrack.pipeline import FrameResult, first_box_refused
 from vtrack.request import RunRequest
 from vtrack.tracker import Tracker
 
@@ -61,6 +61,8 @@ def track(frames: FrameInput,
     if box is None and tracker.needs_init_box:  # said before the input is opened
         raise ConfigError(f"init_box: {tracker.config.name} starts from the target's first "
                           "box: give init_box=(x, y, w, h)")
+    if box is not None and tracker.multi_target:  # (Tracker.init's words name init())
+        raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
         path = os.fsdecode(frames)
         # an image folder is timed at fps; a video keeps its own timestamps

@@ -48,6 +48,13 @@ class FrameResult:
     frame: Frame | None = None
 
 
+
+def first_box_refused(name: str, instead: str) -> ConfigError:
+    """The error for a first box given to a multi-target chain (``name``: the config's, with
+    where the box came from), which would ignore it; ``instead`` says what to do."""
+    return ConfigError(f"{name} finds its targets itself (it tracks several, each from where it "
+                       f"is detected) and takes no first box; {instead}")
+
 class Pipeline:
     """An ordered chain of stages sharing one :class:`TrackContext`."""
 
@@ -72,8 +79,7 @@ class Pipeline:
         """ConfigError for a first box given to a multi-target chain (``name``: the config's),
         which would ignore it; ``instead`` says what to do."""
         if self.multi_target:
-            raise ConfigError(f"{name} finds its targets itself (it tracks several, each from "
-                              f"where it is detected) and takes no first box; {instead}")
+            raise first_box_refused(name, instead)
 
     @property
     def gives_score(self) -> bool:
