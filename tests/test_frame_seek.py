@@ -74,3 +74,18 @@ def test_a_frame_past_an_estimated_count_names_the_estimate(tmp_path: Path) -> N
     assert (done.returncode, done.stdout) == (2, "")
     assert done.stderr == (f"vtrack: error: {clip}: has no frame {FAR} (frames by its "
                            "duration and frame rate, about 0..39)\n")
+
+
+def test_run_refuses_a_start_past_the_stated_count_before_asking_for_a_box(
+        long_clip: Path, tmp_path: Path) -> None:
+    """`vtrack run long.mp4 --start N` past its frames decoded the whole input before saying
+    '--start N: long.mp4 has no frame N', and without --init first asked for the box of that
+    frame, which does not exist. Now it is refused at once from the count the input states,
+    as vtrack frame --at N is, before anything else is asked."""
+    for extra in ((), ("--init", "10,10,20,20")):
+        done = vtrack("run", str(long_clip), "--start", str(FRAMES), *extra, "-o",
+                      str(tmp_path / "out"))
+        assert (done.returncode, done.stdout) == (2, "")
+        assert done.stderr == (f"vtrack: error: --start {FRAMES}: {long_clip}: has no frame "
+                               f"{FRAMES} (frames 0..{FRAMES - 1})\n")
+    assert not (tmp_path / "out").exists()

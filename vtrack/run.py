@@ -76,6 +76,7 @@ from vtrack.io.source import TIME_SLACK_S
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.latency import Latencies
+from vtrack.picker.frames import past_end, past_end_text
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
@@ -597,9 +598,10 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     """
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
-        # a start time (--start 2.5s) is found in the frames' timestamps: that input opens first
-        timed = request.start_s is not None
-        source: Source | None = _open(request, signals) if timed else None
+        # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
+        # past the frames the input states is refused at once: that input opens first
+        later = request.start_s is not None or request.start > 0
+        source: Source | None = _open(request, signals) if later else None
         try:
             resolved = _resolve(request, source)
             if source is None:
@@ -822,8 +824,12 @@ def _refuse_unreadable(request: RunRequest) -> None:
 def _first_frame(request: RunRequest, source: Source | None) -> int:
     """The first frame to track: ``--start N``, or for ``--start Ts`` the first frame of
     ``source`` whose timestamp is at or after T (decoded up to it: a variable frame rate is
-    followed, where T x fps would miss). InputError when the input ends before T."""
+    followed, where T x fps would miss). InputError when the input ends before T, or
+    (``source`` opened) its frame count says it has no frame N, before any is decoded."""
     if request.start_s is None:
+        if request.start and source is not None and past_end(source.info, request.start):
+            raise InputError(f"--start {request.start_text}: "
+                             + past_end_text(request.input, request.start, source.info))
         return request.start
     assert source is not None, "a start time needs the opened input"
     found = source.skip_to(request.start_s)
