@@ -127,6 +127,28 @@ def test_report_scores_a_run_without_ground_truth_with_gt(clip_factory: ClipFact
     assert row["ground_truth"] == str(clip.gt)
 
 
+def test_gt_for_an_input_given_by_another_path_to_it_scores_its_runs(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack report results --gt footage/a.mp4=a.gt.txt` (--help: INPUT is 'its name as the
+    report shows it, or its path') scored nothing, 'no run of input footage/a.mp4 was scored
+    with it': a batch records its inputs' absolute paths, and only that text matched. A path
+    to the same file now names that input's runs."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    footage = tmp_path / "footage"
+    footage.mkdir()
+    shutil.copy(clip.path, footage / "a.mp4")
+    (footage / "a.init.txt").write_text(clip.gt.read_text().splitlines()[0] + "\n")
+    monkeypatch.chdir(tmp_path)
+    assert vtrack("batch", "footage", "-c", "s0", "--jobs", "1", "--no-video", "--quiet",
+                  "--out", "results").exit_code == 0
+    result = vtrack("report", "results", "--gt", f"footage/a.mp4={clip.gt}", "--out", "r")
+    assert result.exit_code == 0, result.output
+    assert "no run of input" not in result.stderr, result.stderr
+    with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
+        (row,) = list(csv.DictReader(handle))
+    assert row["ground_truth"] == str(clip.gt) and row["frames_evaluated"] == "20", row
+
+
 def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """``--gt INPUT=FILE`` for runs that recorded their own ground truth warned only "no run

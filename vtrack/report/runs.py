@@ -180,12 +180,20 @@ class GroundTruth:
             return cls.read(Path(path), origin, name)
         return cls.read(Path(text), origin)
 
-    def belongs_to(self, name: str, request: dict[str, Any]) -> bool:
-        """Whether this file is for the run of input ``name`` (True for a plain ``--gt``)."""
+    def belongs_to(self, name: str, request: dict[str, Any], found: str | None = None) -> bool:
+        """Whether this file is for the run of input ``name`` (True for a plain ``--gt``):
+        INPUT is its name, its path as the run recorded it, or a path to the same file as
+        ``found`` (where the run's input is found from here: a batch records absolute paths,
+        and ``--gt footage/a.mp4=...`` names one of them)."""
         if self.input is None:
             return True
         given = str(request.get("input") or "").rstrip("/")
-        return self.input.rstrip("/") in (name, given, Path(given).name)
+        if self.input.rstrip("/") in (name, given, Path(given).name):
+            return True
+        try:
+            return found is not None and os.path.samefile(self.input, found)
+        except (OSError, ValueError):  # (not a file here: a name, a URL, -)
+            return False
 
     def misfit(self, frames: int, whole: bool, start: int = 0) -> str | None:
         """Why these boxes cannot be a run's ground truth: a run over the whole input (from
@@ -198,10 +206,11 @@ class GroundTruth:
         return None
 
 
-def pick_ground_truth(truths: Sequence[GroundTruth], name: str,
-                      request: dict[str, Any]) -> GroundTruth | None:
-    """The ``--gt`` for the run of input ``name``: its own (``INPUT=FILE``) before a plain one."""
-    own = [t for t in truths if t.input is not None and t.belongs_to(name, request)]
+def pick_ground_truth(truths: Sequence[GroundTruth], name: str, request: dict[str, Any],
+                      found: str | None = None) -> GroundTruth | None:
+    """The ``--gt`` for the run of input ``name`` (its input ``found`` here, see
+    :meth:`GroundTruth.belongs_to`): its own (``INPUT=FILE``) before a plain one."""
+    own = [t for t in truths if t.input is not None and t.belongs_to(name, request, found)]
     plain = [t for t in truths if t.input is None]
     return (own or plain or [None])[0]
 
@@ -512,7 +521,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
                                                                       result.truth)
         elif gt is not None:
             truths = [gt] if isinstance(gt, GroundTruth) else list(gt)
-            truth = pick_ground_truth(truths, result.input, request)
+            truth = pick_ground_truth(truths, result.input, request, found_input)
             # Frames the run spans (skipped frames included); one stopped by --frames (N or
             # a duration) is scored on its frames like one that stopped on an error
             frames = len(rows)
