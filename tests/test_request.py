@@ -55,8 +55,9 @@ def test_changing_any_field_of_the_request_makes_resume_run_again(
     clip_factory: ClipFactory, tmp_path: Path
 ) -> None:
     clip = clip_factory("smooth", width=160, height=120, frames=20)
-    request = RunRequest(input=str(clip.path), out_dir=tmp_path / "a", config=load_config("s0"),
-                         gt_path=clip.gt, max_frames=12)  # (a video: --preset, --crf count)
+    # (s1 draws random numbers and makes a video: --seed, --preset and --crf count)
+    request = RunRequest(input=str(clip.path), out_dir=tmp_path / "a", config=load_config("s1"),
+                         gt_path=clip.gt, max_frames=12)
     assert run(request).status == STATUS_COMPLETE
     assert completed_summary(request) is not None  # the same request: reused
     assert {f.name for f in fields(RunRequest)} == set(OTHER)  # a new field needs a value here
@@ -109,7 +110,8 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
 ) -> None:
     """`vtrack batch in --no-video`, then `vtrack batch in --no-video --crf 30 --preset slow`
     refused every pair, 'made with other settings: --preset, --crf' (exit 1), though neither
-    writes a video for them to change; --gt-origin without ground truth likewise. Now such a
+    writes a video for them to change; --gt-origin without ground truth and --seed for a
+    config that draws no random numbers (all but s1) likewise. Now such a
     pair is reused ('already complete: not run again'); with a video they still count, and a
     --video-out run is named by its option (was 'the video's place (--video)')."""
     clip = clip_factory("smooth", width=160, height=120, frames=20)
@@ -119,7 +121,7 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
     (folder / "smooth.init.txt").write_text(clip.gt.read_text().splitlines()[0])  # no --gt
     out = tmp_path / "out"
     outputs = []
-    for extra in ([], ["--crf", "30", "--preset", "slow", "--gt-origin", "1"]):
+    for extra in ([], ["--crf", "30", "--preset", "slow", "--gt-origin", "1", "--seed", "5"]):
         result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--jobs", "1",
                                            "--no-video", "--out", str(out), *extra])
         assert result.exit_code == 0, result.output
@@ -128,5 +130,7 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
     record = (out / "smooth" / "s0" / "run.json").read_text()
     video = replace(RunRequest.from_dict(json.loads(record)["request"]), video=True)
     assert video.differences(replace(video, crf=30).to_dict()) == ["--crf"]
+    particles = replace(video, config=load_config("s1"))
+    assert particles.differences(replace(particles, seed=5).to_dict()) == ["--seed"]
     assert video.differences(replace(video, video_out="udp://127.0.0.1:5000").to_dict()) == [
         "--video-out"]

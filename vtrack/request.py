@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
+from vtrack.errors import ConfigError
 from vtrack.geometry import Box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
@@ -201,14 +202,23 @@ class RunRequest:
 
 def _moot(request: dict[str, Any]) -> set[str]:
     """The fields of ``request`` (a ``run.json`` ``"request"``) that change nothing in its run:
-    the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``), and
-    ``--gt-origin`` without ground truth. Two requests that both leave one moot are the same
-    run whatever it says."""
+    the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``),
+    ``--gt-origin`` without ground truth, and ``--seed`` for a chain no stage of which draws
+    random numbers (none ``requires`` the run's ``rng``: all but the particle filter). Two
+    requests that both leave one moot are the same run whatever it says."""
     moot = set()
     if request.get("video") is False:
         moot |= {"preset", "crf"}
     if request.get("gt") is None:
         moot.add("gt_origin")
+    stages = (request.get("config") or {}).get("stages")
+    if isinstance(stages, list) and all(isinstance(s, dict) for s in stages):
+        try:
+            if not any("rng" in stage_class(str(s.get("name")), "run.json").requires
+                       for s in stages):
+                moot.add("seed")
+        except ConfigError:  # (a stage this vtrack does not know: the config differs)
+            pass
     return moot
 
 

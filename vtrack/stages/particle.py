@@ -157,7 +157,7 @@ class ParticleFilter(Stage):
               "draw the particles (their centres, as dots) in annotated.mp4 (S1 [0048]: the "
               "display shows centroid, box and caption only)"),
     )
-    requires = frozenset({"frame", "box"})
+    requires = frozenset({"frame", "box", "rng"})  # (rng: the run's --seed)
     provides = frozenset({"box", "state", "score"})
     columns = ("weight_ratio", "reference_weight", "particle_cx", "particle_cy")
 
