@@ -141,19 +141,8 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     files in FOLDER; the README lists every name a batch takes, and only those."""
     folder = tmp_path / "shoot"
     folder.mkdir()
-    with av.open(str(folder / "A001.MXF"), "w", format="mxf") as out:
-        stream = out.add_stream("mpeg2video", rate=25)
-        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
-        for i in range(3):
-            pixels = np.full((48, 64, 3), 90, np.uint8)
-            pixels[10:30, 10 + i:30 + i] = (40, 60, 210)  # a red target moving right
-            picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
-            picture.pts = i
-            for packet in stream.encode(picture):
-                out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
-    (folder / "A001.init.txt").write_text("10,10,20,20\n")
+    _red_target_clip(folder / "A001.MXF", "mxf", "mpeg2video", frames=3, rate=25)
+    (folder / "A001.init.txt").write_text("5,10,20,20\n")
     result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
                                        "-o", str(tmp_path / "out")], catch_exceptions=False)
     with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
@@ -165,16 +154,16 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)
 
 
-def _recording(path: Path, fmt: str, options: dict[str, str]) -> Path:
-    """A recording as it is written while it goes (OBS, a phone): ``fmt`` with muxer
-    ``options`` (fragmented MP4: an empty index first, a fragment from each key frame; live
-    Matroska: no duration, clusters of unknown size), a key frame every 5 of 30 frames of a red
-    target moving right."""
-    with av.open(str(path), "w", format=fmt, options=options) as out:
-        stream = out.add_stream("libx264", rate=30)
+def _red_target_clip(path: Path, fmt: str, codec: str, *, frames: int, rate: int,
+                     options: dict[str, str] | None = None,
+                     codec_options: dict[str, str] | None = None) -> Path:
+    """A 64x48 clip of ``frames`` frames of a red 20x20 target moving right a pixel a frame from
+    (5, 10), written as ``fmt`` (muxer ``options``) by ``codec`` (``codec_options``)."""
+    with av.open(str(path), "w", format=fmt, options=options or {}) as out:
+        stream = out.add_stream(codec, rate=rate)
         stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
-        stream.options = {"preset": "ultrafast", "x264-params": "keyint=5:min-keyint=5"}
-        for i in range(30):
+        stream.options = codec_options or {}
+        for i in range(frames):
             pixels = np.full((48, 64, 3), 90, np.uint8)
             pixels[10:30, 5 + i:25 + i] = (40, 60, 210)
             picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
@@ -184,6 +173,15 @@ def _recording(path: Path, fmt: str, options: dict[str, str]) -> Path:
         for packet in stream.encode():
             out.mux(packet)
     return path
+
+
+def _recording(path: Path, fmt: str, options: dict[str, str]) -> Path:
+    """A recording as it is written while it goes (OBS, a phone): ``fmt`` with muxer
+    ``options`` (fragmented MP4: an empty index first, a fragment from each key frame; live
+    Matroska: no duration, clusters of unknown size), a key frame every 5 of 30 frames."""
+    return _red_target_clip(path, fmt, "libx264", frames=30, rate=30, options=options,
+                            codec_options={"preset": "ultrafast",
+                                           "x264-params": "keyint=5:min-keyint=5"})
 
 
 @pytest.mark.parametrize(("name", "fmt", "options", "cut_inside"), [
