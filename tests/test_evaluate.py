@@ -252,7 +252,10 @@ def test_read_boxes_origin_one(tmp_path):
     [
         ("1,2,3,4\nabc\n", "line 2: expected 4 or 8 numbers, got 'abc'"),
         ("1,2,3\n", "line 1: expected 4 or 8 numbers, got '1,2,3'"),
-        ("1,2,3,4\n\n1,2,3,4\n", "line 2: expected 4 or 8 numbers, got ''"),
+        ("1,2,3,4\n\n1,2,3,4\n", "line 2: blank; the file holds one box per frame (0,0,0,0 "
+         "or NaN where the target is out of view)"),
+        ("x,y,w,h\n1,2,3,4\n", "line 1: expected 4 or 8 numbers, got 'x,y,w,h' (no header "
+         "line: the file holds only numbers)"),
         ("1,2,inf,4\n", "line 1: infinite coordinate"),
     ],
 )

@@ -236,6 +236,19 @@ def test_start_tracks_from_a_later_frame(clip_factory, tmp_path: Path) -> None:
                                  "-o", str(tmp_path / "late")))
     assert line.endswith("has no frame 40 (frames 0..39)"), line  # was: "ground-truth box of
     # frame 40 is missing (... is frame 40 past the input's end?)": the input says it is
+    # a file shorter than the input is named as one cause (was only: 'is frame 30 past the
+    # input's end?' of a 40-frame clip); a box marked absent is said to be so (was: 'empty')
+    short = tmp_path / "short.txt"
+    short.write_text("".join(clip.gt.read_text().splitlines(keepends=True)[:30]))
+    line = one_error_line(vtrack("run", str(clip.path), "--gt", str(short), "--start", "30",
+                                 "-o", str(tmp_path / "late")))
+    assert "the ground-truth box of frame 30 is missing: the file has boxes for frames 0..29 " \
+        "only (a file shorter than the input" in line, line
+    short.write_text("NaN,NaN,NaN,NaN\n" + clip.gt.read_text().split("\n", 1)[1])
+    line = one_error_line(vtrack("run", str(clip.path), "--gt", str(short), "-o",
+                                 str(tmp_path / "late")))
+    assert line.endswith("the first ground-truth box is marked absent (NaN, or w or h <= 0: the "
+                         "target out of view); give --init x,y,w,h"), line
     line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
                                  "40", "-o", str(tmp_path / "late")))
     assert line.endswith("has no frame 40 (frames 0..39)")  # was: "frames are numbered from 0"

@@ -785,9 +785,10 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     if init_box is None and gt is not None and pipeline.needs_init_box:
         if start >= len(gt) or gt[start] is None:
             where = "first ground-truth box" if not start else f"ground-truth box of frame {start}"
-            why = "empty" if start < len(gt) else (
-                f"missing (it has boxes for frames 0..{len(gt) - 1}: is frame {start} past the "
-                "input's end?)")
+            why = ("marked absent (NaN, or w or h <= 0: the target out of view)"
+                   if start < len(gt) else
+                   f"missing: the file has boxes for frames 0..{len(gt) - 1} only (a file "
+                   f"shorter than the input, or frame {start} past the input's end)")
             raise InputError(f"{request.gt_path}: the {where} is {why}; give --init x,y,w,h")
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:

@@ -138,8 +138,14 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
                 f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
                 "for many targets; a single-target config reads x,y,w,h per frame: use a "
                 "multi-target config (--config fixed_camera, s3 or s4_multi)")
+        if not line.strip():
+            raise InputError(f"{path} line {number}: blank; the file holds one box per frame "
+                             "(0,0,0,0 or NaN where the target is out of view)")
         if len(values) not in (4, 8):
-            raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got {_quote(line)}")
+            header = " (no header line: the file holds only numbers)" if tokens and not values \
+                and number == 1 else ""
+            raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got "
+                             f"{_quote(line)}{header}")
         if any(math.isnan(v) for v in values):
             boxes.append(None)
             continue
