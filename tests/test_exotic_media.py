@@ -27,13 +27,14 @@ from vtrack.io import open_source
 EXIF_ORIENTATION, UPRIGHT_FROM_LANDSCAPE = 0x0112, 6
 
 
-def _phone_photo(path: Path, marker_x: int) -> Path:
-    """A 64x48 stored picture tagged to be shown upright (48x64), a bright marker at its
-    top-left corner shifted right by ``marker_x``."""
+def _phone_photo(path: Path, marker_x: int, orientation: int = UPRIGHT_FROM_LANDSCAPE) -> Path:
+    """A 64x48 stored picture tagged to be shown upright (48x64; or with another EXIF
+    ``orientation``, 1: as stored), a bright marker at its top-left corner shifted right by
+    ``marker_x``."""
     pixels = np.full((48, 64, 3), 60, np.uint8)
     pixels[:12, marker_x:marker_x + 12] = 250
     exif = Image.Exif()
-    exif[EXIF_ORIENTATION] = UPRIGHT_FROM_LANDSCAPE
+    exif[EXIF_ORIENTATION] = orientation
     Image.fromarray(pixels).save(path, exif=exif.tobytes(), quality=95)
     return path
 
@@ -55,6 +56,26 @@ def test_an_image_folder_is_turned_by_each_photos_orientation_as_one_image_is(tm
         assert np.abs(frame.astype(int) - expected).mean() < 2
     # Turned clockwise: the stored top-left marker is at the top-right of the upright frame.
     assert frames[0][:10, -10:].mean() > 200 and frames[0][:10, :10].mean() < 100
+
+
+def test_a_folder_whose_photos_are_tagged_apart_is_turned_as_its_first(tmp_path):
+    """Photos of one stored size whose orientation tags differ (a tag lost in an edit) stopped
+    the run at the first one turned otherwise ('image is 48x64, the sequence is 64x48'), where
+    they were tracked whole, as stored, before photos were turned: a sequence has one
+    orientation, the first image's, and a warning names the first image tagged otherwise."""
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for i in range(6):
+        _phone_photo(folder / f"{i + 1:04d}.jpg", 4 * i, UPRIGHT_FROM_LANDSCAPE if i < 3 else 1)
+    with open_source(str(folder)) as source:
+        frames = [frame.bgr() for frame in source]
+        warnings = list(source.warnings)
+    assert [frame.shape for frame in frames] == [(64, 48, 3)] * 6
+    # each turned as the first: the stored top rows (the marker's) are the upright right side
+    assert all(frame[:, -10:].max() > 200 and frame[:, :10].max() < 100 for frame in frames)
+    assert warnings == [f"{folder / '0004.jpg'}: its orientation tag turns it 0 degrees, the "
+                        "sequence's first image 270: turned as the first (a sequence has one "
+                        "orientation)"], warnings
 
 
 def _song_with_cover(path: Path) -> Path:

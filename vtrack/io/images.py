@@ -1,8 +1,9 @@
 """Image-sequence folders (OTB layout ``seq/img/0001.jpg`` or images directly in the folder).
 
 Images are sorted by name with numbers compared as numbers (``2.png`` before ``10.png``) and
-decoded with PyAV in the reader thread, each turned upright by its own orientation (a phone
-photo's EXIF tag). A sequence whose first image is grey becomes
+decoded with PyAV in the reader thread, turned upright by the first image's orientation (a
+phone photo's EXIF tag): a sequence has one orientation, and an image whose own tag says
+otherwise is turned as the first, with a warning. A sequence whose first image is grey becomes
 :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
 converted to match). There are no timestamps: ``time_s = index / fps``. An image that cannot be
 decoded (after the first) is skipped with a warning; the frames after it keep their indices.
@@ -89,7 +90,13 @@ def frame_places(files: list[Path]) -> list[int]:
 def read_image(path: Path) -> np.ndarray:
     """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR, turned
     upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
-    turns the image given alone and a phone's video.
+    turns the image given alone and a phone's video. InputError as :func:`read_stored`."""
+    return turned(*read_stored(path))
+
+
+def read_stored(path: Path) -> tuple[np.ndarray, int]:
+    """Decode one image as stored (``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR)
+    and the quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
 
     Raises InputError naming the file when it cannot be read (gone, or not readable), FFmpeg
     cannot decode it, or it is a JPEG cut short (which FFmpeg decodes with its missing part
@@ -110,8 +117,8 @@ def read_image(path: Path) -> np.ndarray:
                 raise InputError(f"{path}: a JPEG cut short (no end-of-image marker after its "
                                  "image data): part of the picture is missing")
             grey = picture.format.name.startswith(("gray", "ya"))
-            return turned(picture.to_ndarray(format="gray" if grey else "bgr24"),
-                          quarter_turns(picture.rotation))
+            return (picture.to_ndarray(format="gray" if grey else "bgr24"),
+                    quarter_turns(picture.rotation))
     except (av.FFmpegError, OSError, StopIteration) as exc:
         if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
@@ -169,7 +176,8 @@ class ImageFolderSource(Source):
         self._places = frame_places(self._files)
         self._skipped = 0
         self._missing = 0  # of those, places no image is numbered for
-        self._first = read_image(self._files[0])
+        stored, self._turn = read_stored(self._files[0])
+        self._first = turned(stored, self._turn)
         height, width = self._first.shape[:2]
         fps = fps or sequence_fps(root) or DEFAULT_FPS
         # given the img/ folder itself: named after the sequence
@@ -212,6 +220,7 @@ class ImageFolderSource(Source):
         size = self._first.shape[:2]
         first, self._first = self._first, None
         unreadable = 0
+        turned_apart = False  # an image's own tag said another turn than the first's
         missing = self._places[-1] + 1 - len(self._files)
         if missing:
             self._skipped += missing
@@ -222,7 +231,17 @@ class ImageFolderSource(Source):
                 f"(the first after {self._files[gap - 1].name}); their frames are skipped")
         for index, path in zip(self._places, self._files, strict=True):
             try:
-                pixels = first if index == 0 else read_image(path)
+                if index == 0:
+                    pixels = first
+                else:
+                    pixels, turn = read_stored(path)
+                    pixels = turned(pixels, self._turn)
+                    if turn != self._turn and not turned_apart:
+                        turned_apart = True
+                        self.warnings.append(
+                            f"{path}: its orientation tag turns it {turn} degrees, the "
+                            f"sequence's first image {self._turn}: turned as the first (a "
+                            "sequence has one orientation)")
             except InputError as exc:
                 self._skipped += 1
                 unreadable += 1
