@@ -175,20 +175,25 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)
 
 
-def _red_target_clip(path: Path, fmt: str, codec: str, *, frames: int, rate: int,
+def _red_target_clip(path: Path, fmt: str | None, codec: str, *, frames: int, rate: int,
                      options: dict[str, str] | None = None,
-                     codec_options: dict[str, str] | None = None) -> Path:
+                     codec_options: dict[str, str] | None = None, first_pts: int = 0,
+                     rotation: int = 0) -> Path:
     """A 64x48 clip of ``frames`` frames of a red 20x20 target moving right a pixel a frame from
-    (5, 10), written as ``fmt`` (muxer ``options``) by ``codec`` (``codec_options``)."""
+    (5, 10), written as ``fmt`` (None: as the name says; muxer ``options``) by ``codec``
+    (``codec_options``), its first frame at ``first_pts`` (in frames), its display matrix
+    turning it ``rotation`` degrees."""
     with av.open(str(path), "w", format=fmt, options=options or {}) as out:
         stream = out.add_stream(codec, rate=rate)
         stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
         stream.options = codec_options or {}
+        if rotation:
+            stream.set_display_rotation(rotation)
         for i in range(frames):
             pixels = np.full((48, 64, 3), 90, np.uint8)
             pixels[10:30, 5 + i:25 + i] = (40, 60, 210)
             picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
-            picture.pts = i
+            picture.pts = first_pts + i
             for packet in stream.encode(picture):
                 out.mux(packet)
         for packet in stream.encode():
@@ -205,9 +210,21 @@ def _recording(path: Path, fmt: str, options: dict[str, str]) -> Path:
                                            "x264-params": "keyint=5:min-keyint=5"})
 
 
+def _inside_a_late_mdat(data: bytes) -> int:
+    """An offset 16 bytes into the next-to-last ``mdat`` box of ``data``, an MP4 (its top-level
+    boxes walked by their sizes): a cut there ends the file inside an ``mdat`` whatever size
+    the encoder gave the boxes."""
+    offsets, at = [], 0
+    while at + 8 <= len(data):
+        if data[at + 4:at + 8] == b"mdat":
+            offsets.append(at)
+        at += int.from_bytes(data[at:at + 4], "big")
+    return offsets[-2] + 16
+
+
 @pytest.mark.parametrize(("name", "fmt", "options", "cut_inside"), [
     ("rec.mp4", "mp4", {"movflags": "frag_keyframe+empty_moov"}, "its last mdat box"),
-    ("rec.mkv", "matroska", {"live": "1"}, "a block of its last cluster"),
+    ("rec.mkv", "matroska", {"live": "1"}, "its last cluster"),
 ])
 def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, options, cut_inside):
     """A fragmented MP4 or a live-written Matroska file cut part way (the recorder crashed, a
@@ -216,7 +233,8 @@ def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, optio
     frames. Now it ends partial (exit 1) naming the cut; the whole file is still complete."""
     whole = _recording(tmp_path / name, fmt, options)
     cut = tmp_path / f"cut-{name}"
-    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    data = whole.read_bytes()
+    cut.write_bytes(data[:_inside_a_late_mdat(data) if fmt == "mp4" else len(data) * 2 // 3])
     runs = {}
     for clip in (whole, cut):
         out = tmp_path / f"out-{clip.name}"
@@ -229,6 +247,27 @@ def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, optio
     assert (code, status) == (1, "partial") and 0 < frames < 30
     assert error == (f"{cut}: decoding stopped at frame {frames} (the file ends inside "
                      f"{cut_inside}; truncated file?)")
+
+
+@pytest.mark.parametrize("trailer", [b"\n", b"\0\0\0\0", b"SEFT trailer of a phone"])
+def test_a_whole_file_with_bytes_after_its_end_is_complete(tmp_path, trailer):
+    """Bytes appended after a file's last box or element (a phone's trailer, a stray newline)
+    made every whole MP4 and Matroska file 'partial' ('the file ends inside its last box;
+    truncated file?', exit 1) with all its frames read (review of the cut-recording check):
+    a file that states its frame count or duration is judged by them, a recording that states
+    neither by its last whole box, and bytes that are no box are no cut."""
+    clips = [_recording(tmp_path / "rec.mp4", "mp4", {"movflags": "frag_keyframe+empty_moov"}),
+             _red_target_clip(tmp_path / "plain.mp4", "mp4", "libx264", frames=30, rate=30),
+             _red_target_clip(tmp_path / "plain.mkv", "matroska", "libx264", frames=30,
+                              rate=30)]
+    for clip in clips:
+        clip.write_bytes(clip.read_bytes() + trailer)
+        out = tmp_path / f"out-{clip.name}"
+        result = CliRunner().invoke(main, ["run", str(clip), "--init", "5,10,20,20",
+                                           "--no-video", "-o", str(out)])
+        record = json.loads((out / "run.json").read_text())
+        assert (result.exit_code, record["status"], record["frames"]) == (0, "complete", 30), \
+            (clip.name, record["error"])
 
 
 def test_a_jpeg_cut_short_in_a_folder_is_skipped_with_a_warning(tmp_path):
@@ -289,15 +328,8 @@ def test_a_display_matrix_that_is_no_quarter_turn_is_warned_of(tmp_path):
     is read. Quarter turns are applied without one."""
     clips = {}
     for degrees in (45, 90):
-        clips[degrees] = clip = tmp_path / f"tilt{degrees}.mp4"
-        with av.open(str(clip), "w") as out:
-            stream = out.add_stream("libx264", rate=30)
-            stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
-            stream.set_display_rotation(degrees)
-            picture = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 90, np.uint8),
-                                                 format="bgr24")
-            for packet in [*stream.encode(picture), *stream.encode()]:
-                out.mux(packet)
+        clips[degrees] = _red_target_clip(tmp_path / f"tilt{degrees}.mp4", None, "libx264",
+                                          frames=1, rate=30, rotation=degrees)
     with open_source(str(clips[45])) as tilted, open_source(str(clips[90])) as turned:
         assert (tilted.info.rotation, turned.info.rotation) == (0, 90)
         assert tilted.warnings == [f"{clips[45]}: its display matrix turns the picture 45 "
@@ -310,19 +342,8 @@ def test_time_s_counts_from_the_first_frame_as_the_readme_says(tmp_path):
     """A recording whose timestamps start at 5 s (an MPEG-TS starts at 1.4 s, a later part of
     a recording hours in) has time_s 0 at frame 0: the README said only 'time_s comes from each
     frame's timestamp', and a user comparing with ffprobe's pts_time found it 5 s off."""
-    clip = tmp_path / "part2.mp4"
-    with av.open(str(clip), "w") as out:
-        stream = out.add_stream("libx264", rate=30)
-        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
-        for i in range(3):
-            pixels = np.full((48, 64, 3), 90, np.uint8)
-            pixels[10:30, 5 + i:25 + i] = (40, 60, 210)
-            picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
-            picture.pts = 150 + i
-            for packet in stream.encode(picture):
-                out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
+    clip = _red_target_clip(tmp_path / "part2.mp4", None, "libx264", frames=3, rate=30,
+                            first_pts=150)
     with av.open(str(clip)) as container:
         assert next(container.decode(video=0)).time == pytest.approx(5.0)
     out = tmp_path / "out"

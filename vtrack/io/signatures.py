@@ -91,22 +91,22 @@ def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
     """``"the file ends inside its last mdat box"`` (or ``moof`` ...) when ``path``, an
     MP4/QuickTime file, was cut inside its last top-level box: a fragmented recording (a
     phone's, OBS's) stopped part way, whose whole fragments FFmpeg reads without a word. None
-    when its last box is whole, or it is no such file."""
+    when its last box is whole, when what follows its boxes is no box (bytes appended), or it
+    is no such file."""
     found = _top_boxes(path)
     if found is None:
         return None
     end, boxes = found
     kind, offset, size = boxes[-1]
-    if offset + size <= end:
+    if offset + size <= end or not kind.isalnum():  # whole, or bytes after the boxes
         return None
-    name = kind.decode("latin-1") if kind.isalnum() else ""
-    return f"the file ends inside its last {name + ' ' if name else ''}box"
+    return f"the file ends inside its last {kind.decode('latin-1')} box"
 
 
-#: Matroska elements whose children are read one by one (the Segment and its Clusters, whose
-#: size a live recording leaves unknown); every other element is passed over by its size.
+#: Matroska elements whose children are read one by one when their size is unknown (the Segment
+#: and its Clusters, as a live recording leaves them); every other element is passed over by its
+#: size.
 _MATROSKA_CONTAINERS = frozenset({0x18538067, 0x1F43B675})
-
 
 
 def _vint(data: bytes, at: int, keep_marker: bool) -> tuple[int, int] | None:
@@ -126,7 +126,7 @@ def _vint(data: bytes, at: int, keep_marker: bool) -> tuple[int, int] | None:
 
 
 def matroska_torn_element(path: str | os.PathLike[str]) -> str | None:
-    """``"the file ends inside a block of its last cluster"`` when ``path``, a Matroska/WebM
+    """``"the file ends inside its last cluster"`` (or a block of it) when ``path``, a Matroska/WebM
     file, was cut inside an element (a recording written live, as OBS does, stopped by a crash
     has no duration to fall short of, and FFmpeg reads the whole blocks before the cut without
     a word). None when its last element is whole, it is not such a file or cannot be read."""
@@ -145,14 +145,15 @@ def matroska_torn_element(path: str | os.PathLike[str]) -> str | None:
                     return None
                 elements += 1
                 offset += element[1] + size[1]
-                if element[0] in _MATROSKA_CONTAINERS:
-                    continue  # read its children
+                if element[0] in _MATROSKA_CONTAINERS and size[0] < 0:
+                    continue  # of unknown size (written live): read its children
                 if size[0] < 0:
                     return None  # an element of unknown size that is no container: give up
                 offset += size[0]
                 if offset > end:
-                    where = "a block of its last cluster" if element[0] in (0xA3, 0xA0) else \
-                        "its last element"
+                    where = ("a block of its last cluster" if element[0] in (0xA3, 0xA0) else
+                             "its last cluster" if element[0] == 0x1F43B675 else
+                             "its last element")
                     return f"the file ends inside {where}"
     except OSError:
         return None

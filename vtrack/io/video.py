@@ -741,17 +741,18 @@ class VideoSource(Source):
         return None
 
     def _torn_container(self) -> str | None:
-        """An MP4/QuickTime file ends with a whole top-level box, a Matroska/WebM file with a
-        whole element: one cut inside (a fragmented MP4 or a live-written Matroska recording
-        stopped part way: no frame count or duration to fall short of) was cut, though FFmpeg
-        reads the whole fragments or blocks before it without a word (a regular file read to
-        its end only)."""
+        """A fragmented MP4 (no frame count in its index) ends with a whole top-level box, a
+        Matroska/WebM file written live (no duration) with a whole element: one cut inside (a
+        recording stopped part way: no count or duration to fall short of) was cut, though
+        FFmpeg reads the whole fragments or blocks before it without a word (a regular file
+        read to its end only). A file that states its count or duration is judged by them
+        (:meth:`_Tail.shortfall`): bytes after its last box (a phone's trailer) are no cut."""
         if not self._seekable:
             return None
         demuxer = self._container.format.name
-        if "mp4" in demuxer:
+        if "mp4" in demuxer and not self._stream.frames:
             return mp4_torn_box(self.info.path)
-        if "matroska" in demuxer:
+        if "matroska" in demuxer and self._end_s is None:
             return matroska_torn_element(self.info.path)
         return None
 
