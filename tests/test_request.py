@@ -10,6 +10,7 @@ from dataclasses import fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import pytest
 from click.testing import CliRunner
 
 from vtrack.batch import completed_summary
@@ -134,3 +135,14 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
     assert particles.differences(replace(particles, seed=5).to_dict()) == ["--seed"]
     assert video.differences(replace(video, video_out="udp://127.0.0.1:5000").to_dict()) == [
         "--video-out"]
+
+
+@pytest.mark.parametrize("config", ["s0", 5, ["s0"], None])
+def test_a_recorded_config_of_another_shape_is_a_difference_not_a_crash(config: object) -> None:
+    """A run.json whose request holds a config that is no table (hand-edited, another tool's)
+    made the resume's comparison raise AttributeError ('str' object has no attribute 'get'):
+    vtrack batch printed a traceback. It is now a difference like any other (review)."""
+    request = RunRequest(input="clip.mp4", out_dir=Path("out"), config=load_config("s0"),
+                         init_box=Box(1, 2, 30, 40), video=False)
+    recorded = {**request.to_dict(), "config": config}
+    assert request.differences(recorded) == ["the config (its file or a --set)"]

@@ -211,7 +211,8 @@ def _moot(request: dict[str, Any]) -> set[str]:
         moot |= {"preset", "crf"}
     if request.get("gt") is None:
         moot.add("gt_origin")
-    stages = (request.get("config") or {}).get("stages")
+    config = request.get("config")
+    stages = config.get("stages") if isinstance(config, dict) else None
     if isinstance(stages, list) and all(isinstance(s, dict) for s in stages):
         try:
             if not any("rng" in stage_class(str(s.get("name")), "run.json").requires
