@@ -592,7 +592,9 @@ def test_batch_replaces_results_of_other_settings_only_with_overwrite(clip_facto
     # `vtrack report` found that run complete); the tally counts it as its row does (it
     # said `1 failed` beside a row that said complete)
     assert (tmp_path / "res" / "summary.csv").read_text() == summary
-    assert refused.stdout.startswith("walk [s0]: failed: ")
+    # ... and its line says it was not run (it said `failed` above a tally of `1 complete`)
+    assert refused.stdout.startswith("walk [s0]: not run: ")
+    assert "vtrack: error: walk [s0]: not run: " in refused.stderr
     assert refused.stdout.splitlines()[-1].startswith(
         "1 run (1 complete; 1 of them made with other settings, not run again "
         "(--overwrite replaces them)) -> ")

@@ -64,11 +64,17 @@ class Outcome:
         ``kept`` run's when this job was refused, else the job's own."""
         return self.kept.status if self.kept else self.status
 
+    @property
+    def verdict(self) -> str:
+        """``failed`` (or the run's status) when it did not complete, ``not run`` when it was
+        refused (its folder keeps the earlier run, which its row describes)."""
+        return "not run" if self.kept else self.status
+
     def line(self) -> str:
         """One line for the terminal: the run's summary line, or what went wrong."""
         label = f"{printable(self.input)} [{printable(self.config)}]"
         if self.status == STATUS_FAILED or self.summary is None:
-            line = f"{label}: {self.status}: {self.error}"
+            line = f"{label}: {self.verdict}: {self.error}"
         else:
             line = self.summary.line(label)
         if self.resumed:

@@ -275,5 +275,5 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
         click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
     for outcome in outcomes:
         if not outcome.ok and not (stopped and outcome.status == STATUS_INTERRUPTED):
-            click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.status}: "
+            click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.verdict}: "
                        f"{outcome.error}", err=True)
