@@ -239,7 +239,7 @@ def test_an_empty_path_argument_is_refused(tmp_path: Path, command: list[str]) -
     done = subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
                           timeout=60, check=False, cwd=tmp_path)
     assert done.returncode == 2
-    assert "empty; give a folder or file name" in done.stderr.decode()
+    assert "empty; give " in done.stderr.decode()  # what the argument takes
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 

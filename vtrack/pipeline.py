@@ -48,12 +48,12 @@ class FrameResult:
     frame: Frame | None = None
 
 
-
 def first_box_refused(name: str, instead: str) -> ConfigError:
     """The error for a first box given to a multi-target chain (``name``: the config's, with
     where the box came from), which would ignore it; ``instead`` says what to do."""
     return ConfigError(f"{name} finds its targets itself (it tracks several, each from where it "
                        f"is detected) and takes no first box; {instead}")
+
 
 class Pipeline:
     """An ordered chain of stages sharing one :class:`TrackContext`."""
