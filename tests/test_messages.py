@@ -318,3 +318,20 @@ def test_a_word_for_a_wait_that_excludes_0_says_above_0(args: tuple[str, ...],
     line = one_error_line(vtrack(*args))
     assert said in line, line
     assert "from 0 to" not in line
+
+
+@pytest.mark.parametrize("command", ["run", "batch"])
+def test_encoding_options_with_no_video_are_refused(clip_factory: ClipFactory, tmp_path: Path,
+                                                    command: str) -> None:
+    """`vtrack run clip.mp4 --no-video --preset slow --crf 10` (and `vtrack batch`) took both
+    without a word, though --no-video writes no video for them to encode (--video-out with
+    --no-video is refused). Each is now one line naming it, exit 2, nothing written."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    out = tmp_path / "out"
+    given = [str(clip.path), "--gt", str(clip.gt)] if command == "run" else [str(clip.path.parent)]
+    for option, value in (("--preset", "slow"), ("--crf", "10")):
+        line = one_error_line(vtrack(command, *given, "--no-video", option, value,
+                                     "-o", str(out)))
+        assert line.startswith(f"vtrack: error: {option} {value}: sets the x264 encoding of "
+                               "the annotated video, and --no-video writes none")
+    assert not out.exists()

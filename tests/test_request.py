@@ -114,7 +114,8 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
     writes a video for them to change; --gt-origin without ground truth and --seed for a
     config that draws no random numbers (all but s1) likewise. Now such a
     pair is reused ('already complete: not run again'); with a video they still count, and a
-    --video-out run is named by its option (was 'the video's place (--video)')."""
+    --video-out run is named by its option (was 'the video's place (--video)'). (--crf and
+    --preset with --no-video are now refused by the CLI: the request still ignores them.)"""
     clip = clip_factory("smooth", width=160, height=120, frames=20)
     folder = tmp_path / "in"
     folder.mkdir()
@@ -122,14 +123,16 @@ def test_settings_that_change_nothing_do_not_make_resume_run_again(
     (folder / "smooth.init.txt").write_text(clip.gt.read_text().splitlines()[0])  # no --gt
     out = tmp_path / "out"
     outputs = []
-    for extra in ([], ["--crf", "30", "--preset", "slow", "--gt-origin", "1", "--seed", "5"]):
+    for extra in ([], ["--gt-origin", "1", "--seed", "5"]):
         result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--jobs", "1",
                                            "--no-video", "--out", str(out), *extra])
         assert result.exit_code == 0, result.output
         outputs.append(result.output)
     assert "not run again" not in outputs[0] and "already complete: not run again" in outputs[1]
     record = (out / "smooth" / "s0" / "run.json").read_text()
-    video = replace(RunRequest.from_dict(json.loads(record)["request"]), video=True)
+    request = RunRequest.from_dict(json.loads(record)["request"])
+    assert request.differences(replace(request, crf=30, preset="slow").to_dict()) == []
+    video = replace(request, video=True)
     assert video.differences(replace(video, crf=30).to_dict()) == ["--crf"]
     particles = replace(video, config=load_config("s1"))
     assert particles.differences(replace(particles, seed=5).to_dict()) == ["--seed"]

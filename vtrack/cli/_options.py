@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 import click
+from click.core import ParameterSource
 
 from vtrack.cli._progress import STATS_PERIOD
 
@@ -93,6 +94,20 @@ def stats_period_option() -> Callable[[Any], Any]:
         show_default=True, metavar="SECONDS",
         help="When stderr is not a terminal (a log): a progress line this often, instead of "
              "the bar (as ffmpeg's -stats_period).")
+
+
+def refuse_encoding_without_video(no_video: bool) -> None:
+    """With ``--no-video``, refuse ``--preset`` or ``--crf`` given (``run``, ``batch``): they
+    set the x264 encoding of the annotated video, and none is written (click.UsageError, one
+    line naming the option and its value, exit 2). Their defaults pass."""
+    if not no_video:
+        return
+    ctx = click.get_current_context()
+    for name in ("preset", "crf"):
+        if ctx.get_parameter_source(name) is not ParameterSource.DEFAULT:
+            raise click.UsageError(f"--{name} {ctx.params[name]}: sets the x264 encoding of "
+                                   "the annotated video, and --no-video writes none; give "
+                                   "one of them")
 
 
 def gt_origin_option() -> Callable[[Any], Any]:

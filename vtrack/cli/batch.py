@@ -11,7 +11,13 @@ from typing import TYPE_CHECKING
 import click
 from click.core import ParameterSource
 
-from vtrack.cli._options import MAX_WAIT_S, Seconds, WholeNumber, gt_origin_option
+from vtrack.cli._options import (
+    MAX_WAIT_S,
+    Seconds,
+    WholeNumber,
+    gt_origin_option,
+    refuse_encoding_without_video,
+)
 from vtrack.cli._paths import CONFIG, PATH
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
@@ -176,6 +182,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     from vtrack.request import RunRequest
 
     _check_scheduler_options(scheduler, jobs)
+    refuse_encoding_without_video(no_video)
     configs = _configs(config_specs, overrides)
     inputs = find_inputs(folder, gt_origin)
     _warn_left_out(folder, nested_videos(folder))

@@ -20,6 +20,7 @@ from vtrack.cli._options import (
     StartPoint,
     WholeNumber,
     gt_origin_option,
+    refuse_encoding_without_video,
     stats_period_option,
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
@@ -160,6 +161,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             "the annotated video cannot go out with --no-video" if no_video else
             "expected a URL (udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is "
             "annotated.mp4 in --out"))
+    refuse_encoding_without_video(no_video)
     if len(config_specs) > 1:  # click keeps the last of a repeated option without a word
         raise click.UsageError(f"--config given {len(config_specs)} times "
                                f"({', '.join(config_specs)}): a run tracks with one config; "
