@@ -335,3 +335,27 @@ def test_encoding_options_with_no_video_are_refused(clip_factory: ClipFactory, t
         assert line.startswith(f"vtrack: error: {option} {value}: sets the x264 encoding of "
                                "the annotated video, and --no-video writes none")
     assert not out.exists()
+
+
+def test_a_batch_says_when_multi_target_configs_find_only_single_target_ground_truth(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`vtrack batch d -c s3` with only a.gt.txt (one target's boxes) beside a.mp4 ran
+    unscored without a word: a multi-target config reads MOTChallenge ground truth (a.mot.txt).
+    One warning now names the file, what the config reads instead, and that it is not scored."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    folder = tmp_path / "d"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "a.mp4")
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    result = vtrack("batch", str(folder), "-c", "s3", "--jobs", "1", "--no-video",
+                    "-o", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert [line for line in result.stderr.splitlines() if "warning" in line] == [
+        f"vtrack: warning: {(folder / 'a.gt.txt').resolve()}: one target's ground truth; "
+        "config 's3' tracks several targets and reads MOTChallenge ground truth (a.mot.txt "
+        "beside a.mp4): its run is not scored"]
+    (folder / "a.mot.txt").write_text("1,1,10,10,20,20,1,1,1\n")  # scored with it: no word
+    result = vtrack("batch", str(folder), "-c", "s3", "--jobs", "1", "--no-video",
+                    "-o", str(tmp_path / "out"), "-y")
+    assert result.exit_code == 0, result.output
+    assert "warning" not in result.stderr

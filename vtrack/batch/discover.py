@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-from vtrack.errors import InputError
+from vtrack.errors import InputError, plural
 from vtrack.evaluate.groundtruth import SEQUENCE_GT
 from vtrack.io.files import folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
@@ -163,6 +163,31 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
                 f"folder {_folder(item.name)!r} (names differ only in characters a folder "
                 "name cannot hold): rename one")
     return sorted(found, key=lambda i: i.name)
+
+
+def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -> str | None:
+    """The warning for inputs with single-target ground truth only, when ``configs`` (the
+    batch's multi-target ones) read MOTChallenge ground truth: their runs are not scored. One
+    line, naming the first such file and the MOTChallenge names looked for beside it and
+    counting the others; None when there are none."""
+    unscored = [item for item in inputs if item.problem is None and item.groundtruth
+                and item.mot_groundtruth is None]
+    if not unscored or not configs:
+        return None
+    first = unscored[0]
+    if first.path.is_dir():
+        wanted = f"{' or '.join(SEQUENCE_MOT_GT)} in {first.path.name}/"
+    else:
+        wanted = " or ".join(p.format(first.path.stem) for p in VIDEO_MOT_GT)
+        wanted += f" beside {first.path.name}"
+    more = (f" (and {plural(len(unscored) - 1, 'other input')}'s)" if len(unscored) > 1
+            else "")
+    one = len(configs) == 1
+    return (f"{first.groundtruth}{more}: one target's ground truth; "
+            f"{'config' if one else 'configs'} {' and '.join(repr(c) for c in configs)} "
+            f"{'tracks' if one else 'track'} several targets and {'reads' if one else 'read'} "
+            f"MOTChallenge ground truth ({wanted}): "
+            f"{'its run is' if len(unscored) == 1 and one else 'their runs are'} not scored")
 
 
 def nested_videos(folder: Path) -> list[Path]:

@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from vtrack.batch.discover import SEQUENCE_GT, SEQUENCE_INIT, VIDEO_GT, VIDEO_INIT, BatchInput
+from vtrack.batch.discover import (
+    SEQUENCE_GT,
+    SEQUENCE_INIT,
+    VIDEO_GT,
+    VIDEO_INIT,
+    BatchInput,
+    unscored_by_multi_target,
+)
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError, OutputError
@@ -94,11 +101,13 @@ def _completed(request: RunRequest, record: dict[str, Any] | None) -> RunSummary
 @dataclass
 class Plan:
     """Every input x config of a batch (``order``: input-major): ``jobs`` to run, and
-    ``known`` outcomes that need no run."""
+    ``known`` outcomes that need no run; ``warnings``: what the batch should say before it
+    runs them (one line each)."""
 
     jobs: list[Job]
     known: list[Outcome]
     order: list[tuple[str, str]]
+    warnings: list[str] = field(default_factory=list)
 
 
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,
@@ -159,6 +168,9 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                                             resumed=True))
             else:
                 result.jobs.append(Job(item.name, label, request, threads=threads))
+    unscored = unscored_by_multi_target(
+        inputs, [label for label, pipeline in pipelines.items() if pipeline.multi_target])
+    result.warnings += [unscored] if unscored else []
     return result
 
 

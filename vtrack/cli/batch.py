@@ -210,6 +210,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         batch = plan(inputs, configs, out_dir, settings,
                      threads=max(1, cpu_count() // workers), force=force,
                      overwrite=overwrite or force)
+        for warning in batch.warnings:
+            click.echo(f"vtrack: warning: {warning}", err=True)
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
