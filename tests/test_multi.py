@@ -677,6 +677,29 @@ def test_ground_truth_past_the_end_counts_the_inputs_frames_not_those_tracked(
         "62); they are not evaluated"]
 
 
+def test_detections_past_the_end_are_a_warning_as_ground_truth_is(tmp_path,
+                                                                    clip_factory) -> None:
+    """Probe 52: a mot_detections det.txt with rows past the input's last frame gave no word
+    (ground truth past the end does). It is now a warning alike, unless --frames ended the
+    run before the input's end."""
+    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{i},-1,40,40,20,20,0.9\n" for i in (*range(1, 21), 22, 25)))
+    config = tmp_path / "det.toml"
+    config.write_text(f'[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    warnings = []
+    for extra in ([], ["--frames", "10"]):
+        out = tmp_path / f"out{len(extra)}"
+        result = CliRunner().invoke(main, ["run", str(clip.path), "-c", str(config),
+                                           "--no-video", "--out", str(out), "--quiet", *extra])
+        assert result.exit_code == 0, result.output
+        warnings.append(json.loads((out / "run.json").read_text())["warnings"])
+    assert warnings == [[f"{det}: the file has detections in 2 frames past the input's 20 "
+                         "frames (up to frame 25); they were not used (is it this input's "
+                         "det.txt?)"], []]
+
+
 @pytest.mark.parametrize("start", [0, 40])
 def test_a_run_scores_as_it_goes_what_its_tracks_csv_scores(tmp_path, clip_factory,
                                                            start) -> None:

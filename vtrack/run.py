@@ -55,7 +55,12 @@ from vtrack.errors import (
     plural,
     printable,
 )
-from vtrack.evaluate.groundtruth import all_dropped_note, read_boxes, read_mot_counting
+from vtrack.evaluate.groundtruth import (
+    all_dropped_note,
+    past_end_note,
+    read_boxes,
+    read_mot_counting,
+)
 from vtrack.evaluate.metrics import SKIPPED, score_frame, summarize_scores
 from vtrack.frame import Frame
 from vtrack.geometry import Box, check_init_box
@@ -501,12 +506,8 @@ class _MultiTargetRows:
         """The warning for ground-truth rows in frames after the run's last one
         (:attr:`end`: the input's frames up to there, not only those tracked), which are not
         evaluated; None when there are none."""
-        past = [f for f in self.gt or {} if f >= self.end]
-        if not past:
-            return None
-        return (f"{gt_path}: ground truth has boxes in {plural(len(past), 'frame')} past the "
-                f"input's {plural(self.end, 'frame')} (up to frame {max(past) + 1}); they are "
-                "not evaluated")
+        return past_end_note(gt_path, "ground truth has boxes", self.gt or {}, self.end,
+                             "they are not evaluated")
 
     def _score_until(self, end: int) -> None:
         """Score the frames from the next one to ``end`` (excluded) as frames without tracks."""
@@ -1093,6 +1094,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         past = formatter.past_truth_note(request.gt_path)
         if past is not None and status == STATUS_COMPLETE and not resolved.span.given:
             summary.warnings.append(past)
+    if status == STATUS_COMPLETE and not resolved.span.given:  # the input was read to its end
+        summary.warnings += [note for stage in resolved.pipeline.stages
+                             for note in stage.past_end_notes()]
 
     record = {
         "status": status,

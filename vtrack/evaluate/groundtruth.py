@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 import re
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from os import PathLike
 from pathlib import Path
 from typing import NamedTuple
 
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
 
@@ -285,6 +285,19 @@ def all_dropped_note(path: str | PathLike[str], dropped: Counter[str]) -> str:
     why = "; ".join(f"{count} with {reason}" for reason, count in dropped.most_common())
     return (f"{path}: all {sum(dropped.values())} ground-truth rows are ignored ({why}): "
             "nothing to score against (gt_boxes 0, mota null)")
+
+
+def past_end_note(path: object, rows: str, frames: Iterable[int], end: int,
+                  fate: str) -> str | None:
+    """The warning for a file's rows in 0-based ``frames`` from ``end`` on, past the input's
+    ``end`` frames: ``rows`` (what the file has there, e.g. ``ground truth has boxes``), in how
+    many frames, up to which (1-based, as the file numbers them), and their ``fate``; None when
+    no frame is past the end."""
+    past = [f for f in frames if f >= end]
+    if not past:
+        return None
+    return (f"{path}: {rows} in {plural(len(past), 'frame')} past the input's "
+            f"{plural(end, 'frame')} (up to frame {max(past) + 1}); {fate}")
 
 
 def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, float]]]:

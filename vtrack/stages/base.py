@@ -282,6 +282,12 @@ class Stage:
         each; a run prints them and records them in ``run.json``). Default: nothing."""
         return []
 
+    def past_end_notes(self) -> list[str]:
+        """What the stage warns of about what it was given for frames after the last one it
+        processed (rows of a file past the input's end); a run asks only when it read its
+        input to the end (complete, no ``--frames``). Default: nothing."""
+        return []
+
 
 
 _REGISTRY: dict[str, type[Stage]] = {}

@@ -17,7 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from vtrack.errors import ConfigError, plural
-from vtrack.evaluate.groundtruth import read_mot_detections
+from vtrack.evaluate.groundtruth import past_end_note, read_mot_detections
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, register
 from vtrack.stages.detect import Detection
@@ -70,6 +70,7 @@ class MotDetections(Stage):
         """This frame's boxes scoring ``min_score`` or more; those wholly outside the frame are
         dropped (no tracker could follow them there) and counted for :meth:`notes`."""
         width, height = ctx.frame.width, ctx.frame.height
+        self._end = ctx.frame.index + 1
         for box, score in self._frames.get(ctx.frame.index, ()):
             if box.outside(width, height):
                 self._outside += 1
@@ -84,3 +85,12 @@ class MotDetections(Stage):
         return [f"{self.path}: {plural(self._outside, 'detection')} lay wholly outside the "
                 f"{width}x{height} frame and were ignored (are its boxes in this input's "
                 "pixels?)"]
+
+    def past_end_notes(self) -> list[str]:
+        """The file's detections in frames after the last one processed, if any: they were not
+        used (is the file this input's?)."""
+        if not hasattr(self, "_end"):
+            return []
+        note = past_end_note(self.path, "the file has detections", self._frames, self._end,
+                             "they were not used (is it this input's det.txt?)")
+        return [] if note is None else [note]
