@@ -129,6 +129,23 @@ def test_batch_lines_name_the_config(clip_factory: ClipFactory, tmp_path: Path) 
     assert sorted(line.split(":")[0] for line in lines) == ["clip [camshift]", "clip [s0]"]
 
 
+def test_batch_lines_name_folders_as_the_tally_does(clip_factory: ClipFactory, tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack batch in -o results` printed each run's folder absolute ('-> /abs/results/clip/
+    s0') and its tally relative ('-> results/summary.csv'); both now name it as -o gave it."""
+    clip = clip_factory("smooth", width=W, height=H, frames=12)
+    monkeypatch.chdir(tmp_path)
+    Path("in").mkdir()
+    shutil.copy(clip.path, "in/clip.mp4")
+    shutil.copy(clip.gt, "in/clip.gt.txt")
+    for _ in ("run", "resumed"):
+        result = vtrack("batch", "in", "-c", "s0", "--jobs", "1", "--no-video", "-o", "results")
+        assert result.exit_code == 0, result.output
+        lines = result.stdout.splitlines()
+        assert lines[0].startswith("clip [s0]: 12 frames")
+        assert " -> results/clip/s0" in lines[0] and lines[1].endswith(" -> results/summary.csv")
+
+
 def test_multi_target_summaries_show_only_multi_target_numbers(clip_factory: ClipFactory,
                                                                 tmp_path: Path) -> None:
     clip = clip_factory("multi", width=W, height=H, frames=60)

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from vtrack.errors import printable
@@ -70,13 +71,19 @@ class Outcome:
         refused (its folder keeps the earlier run, which its row describes)."""
         return "not run" if self.kept else self.status
 
-    def line(self) -> str:
-        """One line for the terminal: the run's summary line, or what went wrong."""
+    def line(self, results: Path | None = None) -> str:
+        """One line for the terminal: the run's summary line, or what went wrong. With
+        ``results``, the batch's results folder as the user gave it (``-o``), the run's folder
+        is named inside it as given (``results/a/s0``), not by the absolute path it ran in."""
         label = f"{printable(self.input)} [{printable(self.config)}]"
         if self.status == STATUS_FAILED or self.summary is None:
             line = f"{label}: {self.verdict}: {self.error}"
         else:
-            line = self.summary.line(label)
+            summary = self.summary
+            if results is not None:
+                summary = replace(summary, out_dir=str(_as_given(Path(summary.out_dir),
+                                                                 results)))
+            line = summary.line(label)
         if self.resumed:
             line += " (already complete: not run again)"
         if self.attempt > 1:
@@ -104,3 +111,12 @@ class Outcome:
 
 def _round(value: float | None, digits: int) -> float | None:
     return None if value is None else round(value, digits)
+
+
+def _as_given(folder: Path, results: Path) -> Path:
+    """``folder`` named inside ``results`` (as the user gave it) when it lies there, else as
+    it is."""
+    try:
+        return results / folder.relative_to(results.resolve())
+    except ValueError:  # a run recorded elsewhere
+        return folder

@@ -223,7 +223,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                 for outcome in running:
                     outcomes.append(outcome)
                     if not quiet:
-                        progress.write(outcome.line())
+                        progress.write(outcome.line(out_dir))
                     if (outcome.input, outcome.config) in to_run:
                         progress.finished(outcome.input, outcome.config,
                                           outcome.summary.frames if outcome.summary else 0)
@@ -235,7 +235,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             for outcome in late:
                 outcomes.append(outcome)
                 if not quiet:
-                    click.echo(outcome.line())
+                    click.echo(outcome.line(out_dir))
         _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None)
     if stopped is not None:
         raise stopped
