@@ -108,3 +108,14 @@ def test_readme_speed_ratios_are_the_latest_measured() -> None:
     readme = _readme_text()
     assert f"{no_video:.2f}x a decode-only PyAV process" in readme.replace("**", "")
     assert f"{video:.2f}x (robust)" in readme
+
+
+def test_readme_architecture_names_each_package_where_it_is() -> None:
+    """README's architecture block listed report/ under vtrack/batch/ (it is vtrack/report/),
+    and left out vtrack/features/. Every path opening one of its lines exists, and every
+    package of vtrack/ opens one."""
+    block = (ROOT / "README.md").read_text().split("## Architecture", 1)[1].split("```")[1]
+    named = [line.split()[0] for line in block.splitlines() if line.startswith("vtrack/")]
+    assert [path for path in named if not (ROOT / path).exists()] == []
+    packages = sorted(f"vtrack/{p.parent.name}/" for p in (ROOT / "vtrack").glob("*/*.py"))
+    assert sorted(set(packages) - set(named)) == []
