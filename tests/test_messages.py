@@ -337,6 +337,18 @@ def test_a_word_for_a_wait_that_excludes_0_says_above_0(args: tuple[str, ...],
     assert "from 0 to" not in line
 
 
+def test_follow_taking_the_input_as_its_seconds_says_how_to_give_both() -> None:
+    """`vtrack run --follow rec.ts --init ...` takes rec.ts as --follow's seconds (its number
+    may be left out); the refusal said only that rec.ts is no number. It now says how to give
+    both: INPUT before --follow, or the seconds after it. A timeout's refusal has no such
+    words (its number is never left out)."""
+    line = one_error_line(vtrack("run", "--follow", "rec.ts", "--init", "1,2,3,4"))
+    assert ("'rec.ts' is not a number of seconds above 0 and at most 86400; if it is INPUT, "
+            "put it before --follow or give the seconds (--follow 5 rec.ts)") in line, line
+    line = one_error_line(vtrack("run", "--timeout", "rec.ts", "in.ts"))
+    assert "INPUT" not in line and "'rec.ts' is not a number of seconds" in line
+
+
 @pytest.mark.parametrize("command", ["run", "batch"])
 def test_encoding_options_with_no_video_are_refused(clip_factory: ClipFactory, tmp_path: Path,
                                                     command: str) -> None:

@@ -20,18 +20,31 @@ MAX_WAIT_S = 24 * 3600.0
 
 class Seconds(click.FloatRange):
     """A duration in seconds from ``min`` to ``max`` (both finite): click's FloatRange lets
-    ``nan`` through every bound (it compares false), and ``inf`` through an open one."""
+    ``nan`` through every bound (it compares false), and ``inf`` through an open one.
+    ``optional``: the option's own flag (``--follow``) may come without a number, so a word
+    after it may be the argument that was meant to follow it: its refusal says how to give
+    that."""
 
     name = "seconds"
+
+    def __init__(self, *args: Any, optional: str | None = None, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.optional = optional
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> Any:
         try:  # (click's own words for a word: "'x' is not a valid seconds.")
-            seconds = float(value)
+            seconds, word = float(value), False
         except (TypeError, ValueError):
-            seconds = math.nan
+            seconds, word = math.nan, True
         if not math.isfinite(seconds):
-            self.fail(f"{value!r} is not a number of seconds {self.range_words()}", param, ctx)
+            hint = ""
+            if word and self.optional and isinstance(param, click.Option):
+                flag = max(param.opts, key=len)
+                hint = (f"; if it is {self.optional}, put it before {flag} or give the "
+                        f"seconds ({flag} 5 {value})")
+            self.fail(f"{value!r} is not a number of seconds {self.range_words()}{hint}",
+                      param, ctx)
         return super().convert(value, param, ctx)
 
     def range_words(self) -> str:

@@ -98,7 +98,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Keep up with the source: when a frame arrives while the tracker is busy, "
                    "track the newest and count the skipped ones. Default: on for stream URLs "
                    "(rtsp, rtp, udp, tcp) and capture devices, off for files, stdin and http.")
-@click.option("--follow", "follow_s", type=Seconds(min=0, max=MAX_WAIT_S, min_open=True),
+@click.option("--follow", "follow_s",
+              type=Seconds(min=0, max=MAX_WAIT_S, min_open=True, optional="INPUT"),
               is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
               help=f"Read a file that is still being written, until it has not grown for "
                    f"SECONDS (default {FOLLOW_S:g}), as tail -f: the file opened, not one later "
