@@ -291,6 +291,49 @@ def test_a_jpeg_cut_short_in_a_folder_is_skipped_with_a_warning(tmp_path):
                                "image data): part of the picture is missing; frame 1 skipped"]
 
 
+def test_an_empty_file_followed_says_it_stayed_empty(tmp_path):
+    """`vtrack run rec.ts --follow 1` on a file nothing was written to said 'an empty file (0
+    bytes), not a video', as if it had not been waited for; it now says it stayed empty for
+    --follow's wait."""
+    empty = tmp_path / "rec.ts"
+    empty.write_bytes(b"")
+    result = CliRunner().invoke(main, ["run", str(empty), "--follow", "0.2", "--init",
+                                       "10,10,20,20", "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (f"vtrack: error: {empty}: stayed empty (0 bytes) for "
+                                      "--follow's wait of 0.2 s: nothing was written to it")
+
+
+def test_an_animated_webp_is_named_as_what_ffmpeg_cannot_decode(tmp_path):
+    """An animated WebP (FFmpeg bundled with PyAV decodes only still ones) said only 'no frame
+    could be decoded'; it now names what the file is and that it cannot be decoded."""
+    path = tmp_path / "anim.webp"
+    with av.open(str(path), "w", format="webp") as out:
+        stream = out.add_stream("libwebp_anim", rate=10)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        for value in (0, 120, 240):
+            picture = np.full((48, 64, 3), value, np.uint8)
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(picture, format="bgr24")))
+        out.mux(stream.encode())
+    result = CliRunner().invoke(main, ["run", str(path), "--init", "1,1,8,8",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result).startswith(
+        f"vtrack: error: {path}: an animated WebP, which the FFmpeg vtrack reads with cannot "
+        "decode (it decodes still WebP only)")
+
+
+def test_a_yuv4mpeg2_header_larger_than_its_file_says_the_size_does_not_fit(tmp_path):
+    """A .y4m whose header declares 16000x16000 frames (within vtrack's limit) in a 1 kB file
+    said 'no frame could be decoded'; it now says the header's size does not fit the data."""
+    y4m = tmp_path / "big.y4m"
+    y4m.write_bytes(b"YUV4MPEG2 W16000 H16000 F30:1 Ip A1:1 C420jpeg\nFRAME\n" + bytes(1000))
+    result = CliRunner().invoke(main, ["run", str(y4m), "--init", "1,1,8,8",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (
+        f"vtrack: error: {y4m}: its YUV4MPEG2 header declares 16000x16000 frames, whose luma "
+        f"alone (256000000 bytes) is more than the whole file holds ({y4m.stat().st_size} "
+        "bytes): the header's frame size does not fit the data")
+
+
 def _png_declaring(path: Path, width: int, height: int) -> Path:
     """A small PNG file whose header declares a ``width`` x ``height`` grey picture (its data
     holds one row)."""

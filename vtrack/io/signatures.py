@@ -221,3 +221,27 @@ def declared_size_problem(path: str | os.PathLike[str]) -> str | None:
     except OSError:
         return None
     return frame_size_problem(*size) if size else None
+
+
+def header_problem(path: str | os.PathLike[str]) -> str | None:
+    """Why FFmpeg finds no frame in ``path`` that its first bytes tell: an animated WebP (the
+    FFmpeg PyAV bundles decodes still WebP only), or a YUV4MPEG2 header declaring frames whose
+    luma alone is more than the whole file holds (:func:`declared_size`); None otherwise, or
+    when it cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(64)
+            size = os.fstat(handle.fileno()).st_size
+    except OSError:
+        return None
+    if head[:4] == b"RIFF" and head[8:16] == b"WEBPVP8X" and len(head) > 20 and head[20] & 2:
+        return ("an animated WebP, which the FFmpeg vtrack reads with cannot decode (it decodes "
+                "still WebP only): write its frames as images (an img/ folder) or a video "
+                "with another tool first")
+    declared = declared_size(head) if head.startswith(b"YUV4MPEG2 ") else None
+    if declared and declared[0] * declared[1] > size:
+        width, height = declared
+        return (f"its YUV4MPEG2 header declares {width}x{height} frames, whose luma alone "
+                f"({width * height} bytes) is more than the whole file holds ({size} bytes): "
+                "the header's frame size does not fit the data")
+    return None

@@ -51,6 +51,7 @@ from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.signatures import (
     declared_size_problem,
+    header_problem,
     matroska_torn_element,
     mp4_index_problem,
     mp4_torn_box,
@@ -333,16 +334,20 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
     return BgrFrame(index, time_s, turned(decoded.to_ndarray(format="bgr24"), rotation))
 
 
-def _cut_file(path: str) -> str | None:
-    """The line for ``path``, a local file, when it is empty, declares pictures larger than
-    vtrack takes, or is an MP4 whose index is missing or cut short
-    (:func:`~vtrack.io.signatures.mp4_index_problem`: FFmpeg then finds no frames, or no
-    streams at all); None otherwise."""
+def _cut_file(path: str, follow_s: float | None) -> str | None:
+    """The line for ``path``, a local file, when it is empty (and stayed so for ``--follow``'s
+    ``follow_s``), declares pictures larger than vtrack takes, has a header FFmpeg cannot
+    decode from (:func:`~vtrack.io.signatures.header_problem`), or is an MP4 whose index is
+    missing or cut short (:func:`~vtrack.io.signatures.mp4_index_problem`: FFmpeg then finds
+    no frames, or no streams at all); None otherwise."""
     if path == "-" or not os.path.isfile(path):
         return None
     if os.path.getsize(path) == 0:
+        if follow_s is not None:
+            return (f"{path}: stayed empty (0 bytes) for --follow's wait of {follow_s:g} s: "
+                    "nothing was written to it")
         return f"{path}: an empty file (0 bytes), not a video"
-    too_big = declared_size_problem(path)
+    too_big = declared_size_problem(path) or header_problem(path)
     if too_big:
         return f"{path}: {too_big}"
     problem = mp4_index_problem(path)
@@ -367,7 +372,7 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
                 "MP4 without --follow")
-    cut = _cut_file(path)
+    cut = _cut_file(path, how.follow_s)
     if cut:
         return cut
     if path.lower().endswith(RAW_SUFFIXES):
@@ -418,7 +423,7 @@ def _no_frame(path: str, how: FFmpegInput) -> str:
     which may have held its only key frame (every frame after needs it)."""
     value = _nobuffer(how)
     if value is None:
-        return _cut_file(path) or f"{path}: no frame could be decoded"
+        return _cut_file(path, how.follow_s) or f"{path}: no frame could be decoded"
     return (f"{path}: no frame could be decoded; --input-option fflags={value} may have "
             "dropped the stream's only key frame (FFmpeg drops the packets it reads probing "
             "the input): try without it")
@@ -474,7 +479,7 @@ class VideoSource(Source):
         """Pick the video stream, decode the first frame, describe the input."""
         _refuse_unused_options(path, self._how, container)
         if not any(not _is_cover(s) for s in container.streams.video):
-            cut = _cut_file(path)
+            cut = _cut_file(path, self._how.follow_s)
             if cut:
                 raise InputError(cut)
             kinds = ", ".join(sorted({"cover picture" if _is_cover(s) else s.type
