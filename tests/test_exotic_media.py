@@ -73,9 +73,30 @@ def test_a_folder_whose_photos_are_tagged_apart_is_turned_as_its_first(tmp_path)
     assert [frame.shape for frame in frames] == [(64, 48, 3)] * 6
     # each turned as the first: the stored top rows (the marker's) are the upright right side
     assert all(frame[:, -10:].max() > 200 and frame[:, :10].max() < 100 for frame in frames)
-    assert warnings == [f"{folder / '0004.jpg'}: its orientation tag turns it 0 degrees, the "
-                        "sequence's first image 270: turned as the first (a sequence has one "
-                        "orientation)"], warnings
+    assert warnings == [f"{folder / '0004.jpg'}: turned 0 degrees as its orientation tag says, "
+                        "it would not be the sequence's size: turned as the first image (270 "
+                        "degrees)"], warnings
+
+
+def test_a_folder_of_photos_turned_by_an_editor_and_tagged_photos_is_read_whole(tmp_path):
+    """Photos an editor turned upright (pixels turned, tag 1) among a phone's tagged photos
+    (stored on their side, tag 6) are each upright by their own tag: all are tracked, without
+    a warning (turning every image as the first stopped at the first edited one)."""
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for i in range(6):
+        photo = _phone_photo(folder / f"{i + 1:04d}.jpg", 4 * i)
+        if i >= 3:  # edited: the pixels turned upright, the tag saying so
+            upright = np.rot90(np.asarray(Image.open(photo)), -1)
+            exif = Image.Exif()
+            exif[EXIF_ORIENTATION] = 1
+            Image.fromarray(np.ascontiguousarray(upright)).save(photo, exif=exif.tobytes(),
+                                                                quality=95)
+    with open_source(str(folder)) as source:
+        frames = [frame.bgr() for frame in source]
+        assert source.warnings == []
+    assert [frame.shape for frame in frames] == [(64, 48, 3)] * 6
+    assert all(frame[:, -10:].max() > 200 and frame[:, :10].max() < 100 for frame in frames)
 
 
 def _song_with_cover(path: Path) -> Path:
@@ -224,6 +245,8 @@ def _inside_a_late_mdat(data: bytes) -> int:
 
 @pytest.mark.parametrize(("name", "fmt", "options", "cut_inside"), [
     ("rec.mp4", "mp4", {"movflags": "frag_keyframe+empty_moov"}, "its last mdat box"),
+    # the first fragment in the index (moov lists its frames only)
+    ("first-in-moov.mp4", "mp4", {"movflags": "frag_keyframe"}, "its last mdat box"),
     ("rec.mkv", "matroska", {"live": "1"}, "its last cluster"),
 ])
 def test_a_recording_cut_inside_a_fragment_is_partial(tmp_path, name, fmt, options, cut_inside):

@@ -67,8 +67,8 @@ class Outcome:
 
     @property
     def verdict(self) -> str:
-        """``failed`` (or the run's status) when it did not complete, ``not run`` when it was
-        refused (its folder keeps the earlier run, which its row describes)."""
+        """The run's status (``complete``, ``failed`` ...), or ``not run`` when it was refused
+        (its folder keeps the earlier run, which its row describes)."""
         return "not run" if self.kept else self.status
 
     def line(self, results: Path | None = None) -> str:

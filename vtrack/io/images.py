@@ -1,12 +1,13 @@
 """Image-sequence folders (OTB layout ``seq/img/0001.jpg`` or images directly in the folder).
 
 Images are sorted by name with numbers compared as numbers (``2.png`` before ``10.png``) and
-decoded with PyAV in the reader thread, turned upright by the first image's orientation (a
-phone photo's EXIF tag): a sequence has one orientation, and an image whose own tag says
-otherwise is turned as the first, with a warning. A sequence whose first image is grey becomes
-:class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s (later images are
-converted to match). There are no timestamps: ``time_s = index / fps``. An image that cannot be
-decoded (after the first) is skipped with a warning; the frames after it keep their indices.
+decoded with PyAV in the reader thread, each turned upright by its orientation (a phone
+photo's EXIF tag); one that its own tag would not turn to the sequence's size (a tag lost or
+added in an edit) is turned as the first image, with a warning. A sequence whose first image
+is grey becomes :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s
+(later images are converted to match). There are no timestamps: ``time_s = index / fps``.
+An image that cannot be decoded (after the first) is skipped with a warning; the frames after
+it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
 one count of digits) take their frame index from their number (the first image's is index 0),
 so an image missing from the numbering leaves its frame's place empty, counted as skipped with
@@ -85,13 +86,6 @@ def frame_places(files: list[Path]) -> list[int]:
         if len(set(parts)) == 1 and all(b > a for a, b in zip(numbers, numbers[1:], strict=False)):
             return [n - numbers[0] for n in numbers]
     return list(range(len(files)))
-
-
-def read_image(path: Path) -> np.ndarray:
-    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR, turned
-    upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
-    turns the image given alone and a phone's video. InputError as :func:`read_stored`."""
-    return turned(*read_stored(path))
 
 
 def read_stored(path: Path) -> tuple[np.ndarray, int]:
@@ -234,14 +228,16 @@ class ImageFolderSource(Source):
                 if index == 0:
                     pixels = first
                 else:
-                    pixels, turn = read_stored(path)
-                    pixels = turned(pixels, self._turn)
-                    if turn != self._turn and not turned_apart:
-                        turned_apart = True
-                        self.warnings.append(
-                            f"{path}: its orientation tag turns it {turn} degrees, the "
-                            f"sequence's first image {self._turn}: turned as the first (a "
-                            "sequence has one orientation)")
+                    stored, turn = read_stored(path)
+                    pixels = turned(stored, turn)
+                    if pixels.shape[:2] != size and turn != self._turn:
+                        pixels = turned(stored, self._turn)  # a tag lost or added in an edit
+                        if not turned_apart:
+                            turned_apart = True
+                            self.warnings.append(
+                                f"{path}: turned {turn} degrees as its orientation tag says, it "
+                                "would not be the sequence's size: turned as the first image "
+                                f"({self._turn} degrees)")
             except InputError as exc:
                 self._skipped += 1
                 unreadable += 1
@@ -268,4 +264,4 @@ class ImageFolderSource(Source):
                                  f"in all (the first {_NAMED_SKIPS} are named above)")
 
     def _release(self) -> None:
-        """Nothing stays open: each image is opened and closed by :func:`read_image`."""
+        """Nothing stays open: each image is opened and closed by :func:`read_stored`."""

@@ -91,12 +91,14 @@ def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
     """``"the file ends inside its last mdat box"`` (or ``moof`` ...) when ``path``, an
     MP4/QuickTime file, was cut inside its last top-level box: a fragmented recording (a
     phone's, OBS's) stopped part way, whose whole fragments FFmpeg reads without a word. None
-    when its last box is whole, when what follows its boxes is no box (bytes appended), or it
-    is no such file."""
+    when its last box is whole, when what follows its boxes is no box (bytes appended), when
+    it holds no fragment (``moof``: its index lists every frame), or it is no such file."""
     found = _top_boxes(path)
     if found is None:
         return None
     end, boxes = found
+    if not any(kind == b"moof" for kind, _, _ in boxes):  # not fragmented: its index counts
+        return None
     kind, offset, size = boxes[-1]
     if offset + size <= end or not kind.isalnum():  # whole, or bytes after the boxes
         return None

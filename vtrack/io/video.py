@@ -746,16 +746,17 @@ class VideoSource(Source):
         return None
 
     def _torn_container(self) -> str | None:
-        """A fragmented MP4 (no frame count in its index) ends with a whole top-level box, a
-        Matroska/WebM file written live (no duration) with a whole element: one cut inside (a
-        recording stopped part way: no count or duration to fall short of) was cut, though
-        FFmpeg reads the whole fragments or blocks before it without a word (a regular file
-        read to its end only). A file that states its count or duration is judged by them
-        (:meth:`_Tail.shortfall`): bytes after its last box (a phone's trailer) are no cut."""
+        """A fragmented MP4 (``moof`` boxes: its index lists the first fragment's frames at
+        most) ends with a whole top-level box, a Matroska/WebM file written live (no duration)
+        with a whole element: one cut inside (a recording stopped part way: no count or
+        duration to fall short of) was cut, though FFmpeg reads the whole fragments or blocks
+        before it without a word (a regular file read to its end only). Other files are judged
+        by the count or duration they state (:meth:`_Tail.shortfall`): bytes after a file's
+        last box (a phone's trailer) are no cut."""
         if not self._seekable:
             return None
         demuxer = self._container.format.name
-        if "mp4" in demuxer and not self._stream.frames:
+        if "mp4" in demuxer:
             return mp4_torn_box(self.info.path)
         if "matroska" in demuxer and self._end_s is None:
             return matroska_torn_element(self.info.path)
