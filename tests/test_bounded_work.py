@@ -1,8 +1,8 @@
 """Issue 21 items 11 and 12: work and memory per frame stay bounded at every declared value.
-Multi-target runs keep no boxes for metrics without ground truth; `kalman_tracks` keeps at most
-`max_tracks` tracks, `mht` as many per hypothesis; large morphology kernels, many particles over
-a large box and many kernel mean-shift steps over a large box are capped per frame, while the
-shipped configs' own values give exactly what they gave before."""
+Multi-target runs keep no boxes for metrics without ground truth; `kalman_tracks` and
+`byte_tracks` keep at most `max_tracks` tracks, `mht` as many per hypothesis; large morphology
+kernels, many particles over a large box and many kernel mean-shift steps over a large box are
+capped per frame, while the shipped configs' own values give exactly what they gave before."""
 
 from __future__ import annotations
 
@@ -20,15 +20,16 @@ from vtrack.stages.detect import MAX_KERNEL, _morphology, cleaning_steps
 from vtrack.stages.kernel_meanshift import ITERATION_BUDGET, SAMPLED_ABOVE, sampling_stride
 
 
-def specks(count: int, width: int = 160, height: int = 120) -> list[np.ndarray]:
-    """A black frame, then frames of 60 white 2x2 specks at new random places each."""
+def specks(count: int, width: int = 160, height: int = 120, speck: int = 2) -> list[np.ndarray]:
+    """A black frame, then frames of 60 white ``speck`` x ``speck`` squares at new random places
+    each."""
     rng = np.random.default_rng(0)
     frames = [np.zeros((height, width, 3), np.uint8)]
     for _ in range(count - 1):
         frame = np.zeros((height, width, 3), np.uint8)
-        for x, y in zip(rng.integers(0, width - 2, 60), rng.integers(0, height - 2, 60),
-                        strict=True):
-            frame[y:y + 2, x:x + 2] = 255
+        for x, y in zip(rng.integers(0, width - speck, 60),
+                        rng.integers(0, height - speck, 60), strict=True):
+            frame[y:y + speck, x:x + speck] = 255
         frames.append(frame)
     return frames
 
@@ -50,6 +51,24 @@ def test_mht_tracks_are_capped_whatever_miss_delete_and_max_coast_let_live() -> 
                              mht__delete=-1e6, mht__max_coast=100000, mht__confirm=1.0,
                              mht__max_tracks=40)
     frames = specks(30)
+    tracker.init(frames[0])
+    counts = [len(tracker.update(frame).tracks) for frame in frames[1:]]
+    assert max(counts) == 40  # the specks make far more; the cap holds every frame
+
+
+def test_byte_tracks_are_capped_whatever_max_coast_lets_live() -> None:
+    # fixed_camera set to keep every speck (no opening, no learnt shape) and never match one to
+    # a track (no motion gate to speak of): each frame's specks start tracks that all coast on
+    tracker = vtrack.Tracker(
+        "fixed_camera", background__method="mean", background__frames=1, background__open=1,
+        background__close=1, background__open_share=0.0, background__close_share=0.0,
+        background__max_pixels=0, background__gain=False, blobs__min_area=1,
+        blobs__min_area_share=0.0, group_blobs__aspect=1.0, group_blobs__learn=False,
+        group_blobs__split=0.0, group_blobs__max_shape=100.0, group_blobs__min_share=0.0,
+        byte_tracks__max_coast=100000, byte_tracks__confirm=1, byte_tracks__colour_gate=1.0,
+        byte_tracks__q=0.0, byte_tracks__p0=0.0, byte_tracks__gate=0.1,
+        byte_tracks__max_tracks=40)
+    frames = specks(30, speck=6)
     tracker.init(frames[0])
     counts = [len(tracker.update(frame).tracks) for frame in frames[1:]]
     assert max(counts) == 40  # the specks make far more; the cap holds every frame

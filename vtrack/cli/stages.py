@@ -41,7 +41,8 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
   most `max_hypotheses` (<= 64) hypotheses and extends each branch with at most `max_branches`
   (<= 16) measurements, searching a bounded number of combinations per hypothesis, each of
   at most `max_tracks` (<= 1000) tracks whatever `miss`, `delete` and `max_coast` allow;
-  `kalman_tracks` keeps at most `max_tracks` (<= 1000) tracks whatever `max_coast` allows;
+  `kalman_tracks` and `byte_tracks` keep at most `max_tracks` (<= 1000) tracks whatever
+  `max_coast` allows;
   multi-target runs keep no track boxes of past frames (with ground truth each frame is
   scored as it goes);
 - memory: a few frame-sized buffers (at most ~32 N bytes beyond the decoded frames and the

@@ -21,6 +21,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import Protocol, TypeVar
 
 import cv2
 import numpy as np
@@ -91,6 +92,23 @@ def track_state(confirmed: bool, updated: bool) -> TrackStatus:
     if not confirmed:
         return TrackStatus.TENTATIVE
     return TrackStatus.CONFIRMED if updated else TrackStatus.COASTING
+
+
+class _Coasting(Protocol):
+    misses: int  # frames in a row without a measurement
+
+
+_T = TypeVar("_T", bound=_Coasting)
+
+
+def fewest_misses(tracks: list[_T], limit: int) -> list[_T]:
+    """``tracks`` (each with an int ``misses``: frames in a row unmeasured) cut to at most
+    ``limit``, those coasting longest dropped first; the kept ones in their order, ties kept
+    by it (a multi-target stage's cap on its tracks, bounding a frame's work and memory)."""
+    if len(tracks) <= limit:
+        return tracks
+    kept = {id(t) for t in sorted(tracks, key=lambda t: t.misses)[:limit]}
+    return [t for t in tracks if id(t) in kept]
 
 
 def centroids(detections: list[Detection]) -> np.ndarray:

@@ -34,7 +34,8 @@ Life of a track: tentative -> confirmed after ``confirm`` measured frames (a ten
 missing a frame is deleted) -> coasting while unmeasured (it keeps its identity through short
 occlusions and is matched again as in 2, its gate widening with its uncertainty) -> deleted
 after more than ``max_coast`` frames in a row without a measurement, or once its box has left
-the frame: a track wholly outside the frame is never reported.
+the frame: a track wholly outside the frame is never reported. At most ``max_tracks`` tracks are
+kept, those coasting longest dropped first.
 
 The measurement noise of a detection grows with its size (``noise`` x the square root of its
 box area, in pixels, as DeepSORT scales it by height): a person's centre from background
@@ -45,7 +46,7 @@ to ``tracks.csv`` and drawn), ``coasting`` or ``tentative``; the box is the filt
 with the smoothed size, the confidence the score of its last detection. Ids start at 1, one per
 track created, never reused. ``ctx.target_shape``: the median aspect and area of the boxes
 confirmed tracks were measured with (the last ``SHAPE_SAMPLES``), for ``group_blobs``.
-Work per frame: ``O(T M)`` for ``T`` tracks and ``M`` detections, and an assignment.
+Work per frame: ``O(T M)`` for ``T <= max_tracks`` tracks and ``M`` detections, and an assignment.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ from vtrack.geometry import Box
 from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TargetShape, Track, TrackContext, register
-from vtrack.stages.detect import Detection, track_state
+from vtrack.stages.detect import Detection, fewest_misses, track_state
 
 #: Boxes of confirmed tracks remembered for the learnt shape (``ctx.target_shape``).
 SHAPE_SAMPLES = 500
@@ -168,6 +169,9 @@ class ByteTracks(Stage):
         Param("max_coast", int, 30,
               "a confirmed track unmeasured for more frames in a row than this is deleted",
               min=0, max=100000),
+        Param("max_tracks", int, 1000,
+              "at most this many tracks are kept, those coasting longest dropped first (bounds "
+              "each frame's work and memory whatever max_coast lets live)", min=1, max=1000),
         Param("colour_gate", float, 1.0,
               "largest colour distance (Hellinger, 0..1) of a track and a high-score detection "
               "that may match (DeepSORT's appearance gate; refused without detection_colours "
@@ -239,7 +243,7 @@ class ByteTracks(Stage):
                 track = self._start(detections[index])
                 kept.append(track)
                 updated.add(id(track))
-        self._tracks = kept
+        self._tracks = fewest_misses(kept, self.max_tracks)
         if self._areas:
             ctx.target_shape = TargetShape(float(np.median(self._aspects)),
                                            float(np.median(self._areas)), len(self._areas))

@@ -42,7 +42,13 @@ from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_mod
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
-from vtrack.stages.detect import Detection, centroids, pairwise_distances, track_state
+from vtrack.stages.detect import (
+    Detection,
+    centroids,
+    fewest_misses,
+    pairwise_distances,
+    track_state,
+)
 
 
 @dataclass(eq=False)
@@ -155,9 +161,7 @@ class KalmanTracks(Stage):
             if column not in taken and not detection.box.outside(width, height):
                 self._tracks.append(self._start(detection))
                 updated.add(id(self._tracks[-1]))
-        if len(self._tracks) > self.max_tracks:  # the longest coasting go first (stable)
-            kept = {id(t) for t in sorted(self._tracks, key=lambda t: t.misses)[:self.max_tracks]}
-            self._tracks = [t for t in self._tracks if id(t) in kept]
+        self._tracks = fewest_misses(self._tracks, self.max_tracks)
         ctx.tracks = [
             Track(
                 t.id,
