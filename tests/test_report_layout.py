@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_hex
 
 from vtrack.report import build_report, plots
 from vtrack.report.runs import load_run
@@ -147,3 +148,30 @@ def test_a_one_frame_run_is_drawn_at_a_whole_frame(tmp_path: Path) -> None:
     assert (np.abs(panel - colour).max(axis=2) < 40).sum() >= 4, "the run's frame is not drawn"
     low, high = axis.get_xlim()
     assert [t for t in axis.get_xticks() if low <= t <= high] == [0]  # not -0.4, -0.2 ...
+
+
+def test_curves_of_configurations_sharing_a_colour_differ_in_style() -> None:
+    # 14 configurations: the colours come round again (c10 took c00's blue, c09 now does),
+    # and the best 10 here hold four such pairs
+    names = [f"c{n:02d}" for n in range(14)]
+    best = {n: 0.9 - n / 100 if n < 6 or n >= 9 else 0.1 for n in range(14)}
+    curves = {name: plots.OVERLAP_THRESHOLDS * 0 + best[n] for n, name in enumerate(names)}
+    precision = {c: plots.ERROR_THRESHOLDS * 0 + v[0] for c, v in curves.items()}
+    figure = plots.curves_figure("many", curves, precision, plots.colours(names))
+    for axis in figure.axes:
+        drawn = [(line.get_label(), line.get_color(), line.get_linestyle())
+                 for line in axis.get_lines() if not line.get_label().startswith("_")]
+        assert len(drawn) == plots.MAX_LEGEND and {"c00", "c09"} <= {d[0][:3] for d in drawn}
+        looks = [look for _, *look in drawn]
+        assert len(set(map(tuple, looks))) == len(looks), drawn  # each curve told apart
+
+
+def test_no_curve_a_legend_names_is_grey_as_those_it_does_not() -> None:
+    names = [f"c{n:02d}" for n in range(12)]  # the 8th by name took tab10's grey, C7
+    curves = {name: plots.OVERLAP_THRESHOLDS * 0 + 0.9 - n / 100 for n, name in enumerate(names)}
+    precision = {c: plots.ERROR_THRESHOLDS * 0 + v[0] for c, v in curves.items()}
+    figure = plots.curves_figure("many", curves, precision, plots.colours(names))
+    for axis in figure.axes:
+        named = {line.get_label()[:3]: to_hex(line.get_color()) for line in axis.get_lines()
+                 if not line.get_label().startswith("_")}
+        assert "c07" in named and to_hex("C7") not in named.values(), named

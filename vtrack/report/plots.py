@@ -31,10 +31,26 @@ SHADES = {TrackState.OCCLUDED: ("#f5a623", "occluded"), TrackState.LOST: ("#d002
 NO_GT_SHADE = "#9b9b9b"
 
 
+#: Configurations' colours: matplotlib's tab10 without its grey (C7), the grey of the curves
+#: a legend does not name.
+CONFIG_COLOURS = tuple(f"C{n}" for n in range(10) if n != 7)
+#: Line styles of the success and precision plots' curves, one per round of the colours.
+CURVE_STYLES = ("-", "--", ":", "-.")
+
+
 def colours(configs: Sequence[str]) -> dict[str, str]:
-    """One colour per configuration, the same in every figure (matplotlib's tab10 cycle)."""
-    cycle = [f"C{n % 10}" for n in range(len(configs))]
+    """One colour per configuration, the same in every figure (:data:`CONFIG_COLOURS` in turn:
+    past 9 configurations colours repeat, and :func:`curve_style` tells their curves apart)."""
+    cycle = [CONFIG_COLOURS[n % len(CONFIG_COLOURS)] for n in range(len(configs))]
     return dict(zip(configs, cycle, strict=True))
+
+
+def curve_style(palette: Mapping[str, str], config: str) -> str:
+    """The line style of ``config``'s curves: solid for the first 9 configurations of
+    ``palette`` (from :func:`colours`), then dashed, dotted, dash-dotted for each further round
+    of its colours, so no two of the first 36 share both colour and style in a legend."""
+    rounds = list(palette).index(config) // len(CONFIG_COLOURS)
+    return CURVE_STYLES[rounds % len(CURVE_STYLES)]
 
 
 def runs_of(values: Sequence[object]) -> list[tuple[int, int, object]]:
@@ -141,12 +157,14 @@ def state_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
 
 def _ranked_curves(axis, thresholds: np.ndarray, curves: Mapping[str, np.ndarray],
                    palette: Mapping[str, str], score: Callable[[np.ndarray], float]) -> None:
-    """Draw ``curves`` best ``score`` first, each labelled with its score; past the best
+    """Draw ``curves`` best ``score`` first, each labelled with its score, in its colour and
+    line style (:func:`curve_style`); past the best
     :data:`MAX_LEGEND` the others are thin grey lines under one legend entry that counts them
     (the legend stays within the figure however many configurations there are)."""
     ranked = sorted(curves, key=lambda c: -score(curves[c]))
     for config in ranked[:MAX_LEGEND]:
         axis.plot(thresholds, curves[config], color=palette[config], lw=1.8, zorder=3,
+                  ls=curve_style(palette, config),
                   label=f"{printable(config)} [{score(curves[config]):.3f}]")
     others = ranked[MAX_LEGEND:]
     if others:  # one collection: drawn as fast as a line, however many
