@@ -22,6 +22,7 @@ from vtrack.stages.detect import Detection
 from vtrack.stages.kalman_bytetrack import ByteTracks
 from vtrack.stages.kalman_tracks import KalmanTracks
 from vtrack.stages.mht import MultipleHypothesis
+from vtrack.stages.mot_detections import MotDetections
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -81,6 +82,26 @@ def test_detections_wholly_outside_the_frame_are_dropped_with_a_warning(
         tracks = list(csv.DictReader(handle))
     assert not [row for row in tracks
                 if Box(*(float(row[k]) for k in "xywh")).outside(320, 240)]
+
+
+def test_a_det_txt_crowding_a_frame_gives_its_highest_scoring_detections_with_a_warning(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    # the docs bound a frame's detections (blobs.max_blobs <= 1000); a det.txt listing 5,000 in
+    # a frame made byte_tracks take 11 s and 1.6 GB a frame: now its highest-scoring are kept
+    clip = clip_factory("multi", frames=60)
+    det = tmp_path / "det_crowded.txt"
+    det.write_text("".join(f"{frame},-1,{10 + 7 * (n % 40)},{10 + 7 * (n // 40)},5,5,{n},-1,-1,-1\n"
+                           for frame in (1, 2) for n in range(1, 9)))
+    stage = MotDetections(path=str(det), max_detections=5)
+    ctx = TrackContext(frame=GrayFrame(0, 0.0, np.zeros((240, 320), np.uint8)), seed=0)
+    stage.start(ctx)
+    assert [d.score for d in ctx.detections] == [8, 7, 6, 5, 4]
+    out = tmp_path / "out"
+    result = vtrack("run", str(clip.path), "-c", str(_config(tmp_path, det, "kalman_tracks")),
+                    "-s", "mot_detections.max_detections=5", "--no-video", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert (f"vtrack: warning: {det}: 2 frames listed more than 5 detections; each kept its 5 "
+            "highest-scoring (mot_detections.max_detections)") in result.stderr
 
 
 @pytest.mark.parametrize("stage", [KalmanTracks(confirm=1), ByteTracks(confirm=1)],

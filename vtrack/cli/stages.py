@@ -37,7 +37,8 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
   `background.open`/`close` (<= 255) apply kernels of at most {MAX_KERNEL} working pixels
   (a larger one runs on the mask shrunk to fit); search windows
   are clipped to the frame (`hue.search_scale` <= 16, widened by `occlusion.max_growth` <= 16);
-- multi-target work: at most `blobs.max_blobs` (<= 1000) detections a frame; `mht` keeps at
+- multi-target work: at most `blobs.max_blobs` (<= 1000) detections a frame (a det.txt's:
+  `mot_detections.max_detections`, <= 1000); `mht` keeps at
   most `max_hypotheses` (<= 64) hypotheses and extends each branch with at most `max_branches`
   (<= 16) measurements, searching a bounded number of combinations per hypothesis, each of
   at most `max_tracks` (<= 1000) tracks whatever `miss`, `delete` and `max_coast` allow;

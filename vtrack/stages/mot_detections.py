@@ -47,6 +47,14 @@ class MotDetections(Stage):
             "lower it to keep them)",
             min=-1e9, max=1e9,
         ),
+        Param(
+            "max_detections",
+            int,
+            1000,
+            "at most this many detections a frame, the highest-scoring (bounds the trackers' "
+            "work, as blobs.max_blobs does)",
+            min=1, max=1000,
+        ),
     )
     provides = frozenset({"detections"})
     #: Parameters naming a file the stage reads: a run's request makes them absolute, and a
@@ -63,28 +71,41 @@ class MotDetections(Stage):
                               f"{self.name}.path=FILE)")
         self._frames = read_mot_detections(Path(self.path))
         self._outside = 0
+        self._crowded = 0  # frames that listed more than max_detections
         self._frame_size = (ctx.frame.width, ctx.frame.height)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
-        """This frame's boxes scoring ``min_score`` or more; those wholly outside the frame are
-        dropped (no tracker could follow them there) and counted for :meth:`notes`."""
+        """This frame's boxes scoring ``min_score`` or more, at most ``max_detections`` of them,
+        the highest-scoring (ties in the file's order); those wholly outside the frame are
+        dropped (no tracker could follow them there). Both are counted for :meth:`notes`."""
         width, height = ctx.frame.width, ctx.frame.height
         self._end = ctx.frame.index + 1
+        found = []
         for box, score in self._frames.get(ctx.frame.index, ()):
             if box.outside(width, height):
                 self._outside += 1
             elif score >= self.min_score:
-                ctx.detections.append(Detection(box, box.cx, box.cy, box.area, score=score))
+                found.append(Detection(box, box.cx, box.cy, box.area, score=score))
+        if len(found) > self.max_detections:
+            self._crowded += 1
+            found = sorted(found, key=lambda d: -d.score)[: self.max_detections]
+        ctx.detections.extend(found)
 
     def notes(self) -> list[str]:
-        """How many of the file's detections lay wholly outside the frame, if any."""
-        if not getattr(self, "_outside", 0):
-            return []
-        width, height = self._frame_size
-        return [f"{self.path}: {plural(self._outside, 'detection')} lay wholly outside the "
-                f"{width}x{height} frame and were ignored (are its boxes in this input's "
-                "pixels?)"]
+        """How many of the file's detections lay wholly outside the frame, and how many frames
+        listed more than ``max_detections``, if any."""
+        notes = []
+        if getattr(self, "_outside", 0):
+            width, height = self._frame_size
+            notes.append(f"{self.path}: {plural(self._outside, 'detection')} lay wholly outside "
+                         f"the {width}x{height} frame and were ignored (are its boxes in this "
+                         "input's pixels?)")
+        if getattr(self, "_crowded", 0):
+            notes.append(f"{self.path}: {plural(self._crowded, 'frame')} listed more than "
+                         f"{self.max_detections} detections; each kept its {self.max_detections} "
+                         "highest-scoring (mot_detections.max_detections)")
+        return notes
 
     def past_end_notes(self) -> list[str]:
         """The file's detections in frames after the last one processed, if any: they were not
