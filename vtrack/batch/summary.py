@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import time
-from collections.abc import Generator, Iterable
+from collections.abc import Callable, Generator, Iterable
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,12 @@ from vtrack.batch.plan import Plan, recorded_summary
 from vtrack.errors import passing_stop_to
 from vtrack.io.files import write_text_atomic
 from vtrack.run import STATUS_INTERRUPTED
+
+#: A run's end writes ``summary.csv`` again once this many times the last write's own time has
+#: passed since it: writing takes at most about 1/20 of a batch's time however many pairs it
+#: has (each write is of every row: writing at every end made a batch's bookkeeping grow as the
+#: square of its pairs).
+WRITE_SPACING = 19.0
 
 #: The error of a pair the batch had not finished when it last wrote ``summary.csv``.
 UNFINISHED = "not finished when the batch last wrote this file (it was still running, or killed)"
@@ -47,6 +54,7 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
             for outcome in outcomes:
                 summary.add(outcome)
                 yield outcome
+        summary.flush()
         finished = True
     finally:
         if not finished:
@@ -75,14 +83,20 @@ def earlier_rows(path: Path) -> dict[tuple[str, str], dict[str, Any]]:
 
 class SummaryWriter:
     """``OUT/summary.csv``: one row per input x config, rewritten atomically (temporary file +
-    rename) each time an outcome arrives, so it is never half written.
+    rename), so it is never half written: as an outcome arrives, unless the last write was
+    less than :data:`WRITE_SPACING` times its own time ago (then at the next outcome after
+    that, or :meth:`flush`).
 
     The rows of an earlier batch into the same folder (other configs, other inputs) are kept:
     the summary covers every run in the folder, input by input, each input's configs in the
-    order they first ran."""
+    order they first ran. ``clock``: seconds, for the spacing of writes."""
 
-    def __init__(self, path: Path, order: Iterable[tuple[str, str]]) -> None:
+    def __init__(self, path: Path, order: Iterable[tuple[str, str]],
+                 clock: Callable[[], float] = time.monotonic) -> None:
         self.path = path
+        self.clock = clock
+        self._next_write = -math.inf  # the clock's time from which an outcome writes again
+        self._pending = False  # outcomes added since the last write
         order = list(order)
         planned, earlier = set(order), earlier_rows(path)
         # input-major; sorted() is stable: each input's configs in the order they first ran
@@ -91,8 +105,16 @@ class SummaryWriter:
             key: None if key in planned else earlier[key] for key in keys}
 
     def add(self, outcome: Outcome, write: bool = True) -> None:
+        """Record ``outcome``'s row; with ``write``, write the file unless the last write was
+        too recent (:data:`WRITE_SPACING`)."""
         self.rows[(outcome.input, outcome.config)] = outcome.row()
-        if write:
+        self._pending = True
+        if write and self.clock() >= self._next_write:
+            self.write()
+
+    def flush(self) -> None:
+        """Write the file if an outcome was added since the last write."""
+        if self._pending:
             self.write()
 
     def write(self, stopped: bool = False) -> None:
@@ -100,6 +122,7 @@ class SummaryWriter:
         runs, with the error :data:`UNFINISHED` (so a batch killed outright, ``kill -9``,
         leaves a row for each pair it did not finish, not a summary of fewer pairs that looks
         whole); once it has ``stopped`` early (Ctrl-C, SIGTERM), with none (never ran)."""
+        began = self.clock()
         buffer = io.StringIO()
         writer = csv.DictWriter(buffer, SUMMARY_COLUMNS, lineterminator="\n")
         writer.writeheader()
@@ -110,3 +133,6 @@ class SummaryWriter:
             writer.writerow(row)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path, buffer.getvalue())
+        ended = self.clock()
+        self._pending = False
+        self._next_write = ended + WRITE_SPACING * (ended - began)
