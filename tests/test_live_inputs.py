@@ -652,7 +652,10 @@ def test_keeping_up_works_through_a_decoders_bursts_when_quick_on_average() -> N
     is worked through within the latency budget, not passed over."""
     from vtrack.io.threads import KeepingUp
 
-    period = 0.02
+    # a short period, so that the consumer's 3 ms an item is far inside the 50 ms budget: a
+    # loaded machine's late wake-ups (it failed once at load 10 with 12 ms an item) must add
+    # over 20 ms an item before the consumer looks too slow to work through a pair
+    period = 0.005
 
     def pairs():
         for i in range(0, 30, 2):
