@@ -88,6 +88,14 @@ def frame_places(files: list[Path]) -> list[int]:
     return list(range(len(files)))
 
 
+def read_image(path: Path) -> np.ndarray:
+    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR, turned
+    upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
+    turns an image given alone (the benchmarks read sequences through it). InputError as
+    :func:`read_stored`."""
+    return turned(*read_stored(path))
+
+
 def read_stored(path: Path) -> tuple[np.ndarray, int]:
     """Decode one image as stored (``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR)
     and the quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
