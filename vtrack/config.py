@@ -49,6 +49,11 @@ class Config:
         """Construct the stages (values were validated when the config was loaded)."""
         return [build_stage(name, values, self.source) for name, values in self.stages]
 
+    def stage_classes(self) -> list[type[Stage]]:
+        """The stages' classes (their declarations: parameters, requires/provides, kind), no
+        stage built."""
+        return [stage_class(name, self.source) for name, _ in self.stages]
+
     def resolved(self) -> dict[str, Any]:
         """Every stage with every parameter value, defaults included (for ``run.json``)."""
         return {
@@ -210,7 +215,7 @@ def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
     value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`), and a chain
     that cannot track (:func:`_check_tracks`)."""
-    classes = [stage_class(name, config.source) for name, _ in config.stages]
+    classes = config.stage_classes()
     _check_tracks(config.source, classes)
     available = set(PIPELINE_PROVIDES)
     before: list[str] = []

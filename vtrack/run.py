@@ -77,11 +77,10 @@ from vtrack.io.csvfile import as_written, scores_as_written
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
-from vtrack.io.source import TIME_SLACK_S
+from vtrack.io.source import TIME_SLACK_S, past_end, past_end_text
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.latency import Latencies
-from vtrack.picker.frames import past_end, past_end_text
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus

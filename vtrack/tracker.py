@@ -21,7 +21,6 @@ from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
 from vtrack.params import check_seed
 from vtrack.pipeline import FrameResult, Pipeline
-from vtrack.stages.base import Stage, stage_class
 
 #: A frame as :meth:`Tracker.update` takes it.
 FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported only if used)
@@ -101,16 +100,12 @@ class Tracker:
     @property
     def multi_target(self) -> bool:
         """True for the configs that detect and return several tracks (no initial box)."""
-        return any(stage.multi_target for stage in self._stage_classes())
+        return any(stage.multi_target for stage in self.config.stage_classes())
 
     @property
     def needs_init_box(self) -> bool:
         """True for the configs that start from the target's first box (all but s3, s4, ...)."""
-        return any(stage.needs_init_box for stage in self._stage_classes())
-
-    def _stage_classes(self) -> list[type[Stage]]:
-        """The config's stage classes (their declarations), no stage built."""
-        return [stage_class(name, self.config.source) for name, _ in self.config.stages]
+        return any(stage.needs_init_box for stage in self.config.stage_classes())
 
     def _new_pipeline(self) -> Pipeline:
         return Pipeline(self.config.build(), seed=self.seed)

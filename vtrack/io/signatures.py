@@ -213,35 +213,42 @@ def declared_size(head: bytes) -> tuple[int, int] | None:
     return None
 
 
+def _head(path: str | os.PathLike[str]) -> tuple[bytes, int] | None:
+    """The first 64 bytes of ``path`` and its size; None when it cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(64), os.fstat(handle.fileno()).st_size
+    except OSError:
+        return None
+
+
 def declared_size_problem(path: str | os.PathLike[str]) -> str | None:
     """Why the pictures the header of ``path`` declares (:func:`declared_size`) cannot be
     tracked, ``the frames are 50000x50000; vtrack accepts at most ...``; None when they can,
     it declares none, or it cannot be read."""
-    try:
-        with open(path, "rb") as handle:
-            size = declared_size(handle.read(64))
-    except OSError:
-        return None
+    read = _head(path)
+    size = read and declared_size(read[0])
     return frame_size_problem(*size) if size else None
 
 
 def header_problem(path: str | os.PathLike[str]) -> str | None:
-    """Why FFmpeg finds no frame in ``path`` that its first bytes tell: an animated WebP (the
-    FFmpeg PyAV bundles decodes still WebP only), or a YUV4MPEG2 header declaring frames whose
-    luma alone is more than the whole file holds (:func:`declared_size`); None otherwise, or
-    when it cannot be read."""
-    try:
-        with open(path, "rb") as handle:
-            head = handle.read(64)
-            size = os.fstat(handle.fileno()).st_size
-    except OSError:
+    """Why FFmpeg cannot track ``path`` that its first bytes tell: frames larger than vtrack
+    takes (:func:`declared_size_problem`), an animated WebP (the FFmpeg PyAV bundles decodes
+    still WebP only), or a YUV4MPEG2 header declaring frames whose luma alone is more than the
+    whole file holds; None otherwise, or when it cannot be read."""
+    read = _head(path)
+    if read is None:
         return None
+    head, size = read
+    declared = declared_size(head)
+    too_big = declared and frame_size_problem(*declared)
+    if too_big:
+        return too_big
     if head[:4] == b"RIFF" and head[8:16] == b"WEBPVP8X" and len(head) > 20 and head[20] & 2:
         return ("an animated WebP, which the FFmpeg vtrack reads with cannot decode (it decodes "
                 "still WebP only): write its frames as images (an img/ folder) or a video "
                 "with another tool first")
-    declared = declared_size(head) if head.startswith(b"YUV4MPEG2 ") else None
-    if declared and declared[0] * declared[1] > size:
+    if declared and head.startswith(b"YUV4MPEG2 ") and declared[0] * declared[1] > size:
         width, height = declared
         return (f"its YUV4MPEG2 header declares {width}x{height} frames, whose luma alone "
                 f"({width * height} bytes) is more than the whole file holds ({size} bytes): "

@@ -50,7 +50,6 @@ from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.signatures import (
-    declared_size_problem,
     header_problem,
     matroska_torn_element,
     mp4_index_problem,
@@ -347,9 +346,9 @@ def _cut_file(path: str, follow_s: float | None) -> str | None:
             return (f"{path}: stayed empty (0 bytes) for --follow's wait of {follow_s:g} s: "
                     "nothing was written to it")
         return f"{path}: an empty file (0 bytes), not a video"
-    too_big = declared_size_problem(path) or header_problem(path)
-    if too_big:
-        return f"{path}: {too_big}"
+    problem = header_problem(path)
+    if problem:
+        return f"{path}: {problem}"
     problem = mp4_index_problem(path)
     if problem is None:
         return None
@@ -471,8 +470,11 @@ class VideoSource(Source):
             container.close()
             raise
         super().__init__(info)
-        if self._odd_turn:
-            self.warnings.append(self._odd_turn)
+        turn = self._first.rotation  # the display matrix's angle, read at a quarter turn
+        if abs((turn - self._rotation + 180) % 360 - 180) > 1:
+            self.warnings.append(f"{path}: its display matrix turns the picture {turn:g} "
+                                 "degrees, not a quarter turn; it is read turned "
+                                 f"{self._rotation} degrees (the nearest quarter turn)")
 
     def _open(self, path: str, container: av.container.InputContainer, live: bool
               ) -> InputInfo:
@@ -533,10 +535,6 @@ class VideoSource(Source):
         self._start = 0  # the index of the frame iteration begins at (start_near)
 
         self._rotation = quarter_turns(self._first.rotation)
-        off = (self._first.rotation - self._rotation + 180) % 360 - 180
-        self._odd_turn = (f"{path}: its display matrix turns the picture {self._first.rotation:g}"
-                          f" degrees, not a quarter turn; it is read turned {self._rotation} "
-                          "degrees (the nearest quarter turn)") if abs(off) > 1 else None
         width, height = self._first.width, self._first.height
         self._coded_size = (width, height)
         if self._rotation in (90, 270):

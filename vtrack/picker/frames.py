@@ -23,7 +23,7 @@ from vtrack.frame import Frame
 from vtrack.io import open_source
 from vtrack.io.images import encode_image
 from vtrack.io.sidecar import has_sidecar
-from vtrack.io.source import InputInfo, Source
+from vtrack.io.source import InputInfo, Source, no_frame_text, past_end, past_end_text
 
 #: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
 CACHE_BYTES = 64 << 20
@@ -167,37 +167,6 @@ class FrameStore:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
-
-
-def past_end(info: InputInfo, index: int) -> bool:
-    """Whether the input's frame count says it has no frame ``index``: the count its container
-    lists (or an image folder's numbering, a raw file's size), or, estimated from its duration
-    and frame rate, that count with the slack the video reader allows such an estimate. False
-    when the count is unknown (a pipe, a URL)."""
-    from vtrack.io.video import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE
-
-    count = info.frame_count
-    if count is None:
-        return False
-    if info.frame_count_estimated:
-        return index >= count + ESTIMATE_SLACK_FRAMES + ESTIMATE_SLACK_SHARE * count
-    return index >= count
-
-
-def no_frame_text(index: int, count: int | None, estimated: bool = False) -> str:
-    """``no frame N (frames 0..M)``: what is said of a frame past the input's end, with the
-    input's frame ``count`` (``estimated``: from its duration and frame rate; no range when
-    it is unknown)."""
-    if count is None:
-        return f"no frame {index}"
-    about = " by its duration and frame rate, about" if estimated else ""
-    return f"no frame {index} (frames{about} 0..{count - 1})"
-
-
-def past_end_text(input_spec: str, index: int, info: InputInfo) -> str:
-    """What is said of frame ``index`` when :func:`past_end` holds: the frames there are."""
-    return (f"{input_spec}: has "
-            f"{no_frame_text(index, info.frame_count, info.frame_count_estimated)}")
 
 
 def start_toward(source: Source, index: int) -> int | None:
