@@ -129,6 +129,11 @@ MAX_KERNEL = 31
 #: 960x540): their cost per pixel (several times the mean model's) must keep a frame's work
 #: bounded (issue 21: no declared value over 10x the default's work).
 ADAPTIVE_MAX_PIXELS = 1920 * 1080 // 4
+#: ``gain`` starts once the model has learnt the scene's light: the first frame whose median
+#: grey level is within this share of its background's (the frame after the first, unless the
+#: light changed by more between the two; after black first frames or a fade from black, once
+#: the model has caught up with the lit scene).
+GAIN_START = 0.05
 
 
 def cleaning_steps(opening: float, closing: float, shrink: int) -> list[tuple[int, int, int]]:
@@ -212,7 +217,9 @@ class Background(Stage):
     to its own (medians, so targets covering less than half the frame do not move them). The
     pixel models alone call every pixel foreground when a camera's exposure or a cloud changes
     the whole scene's brightness faster than they learn (Toyama et al., Wallflower, ICCV 1999,
-    add a frame level to pixel-level background models for such global changes).
+    add a frame level to pixel-level background models for such global changes). It starts once
+    the model has learnt the scene's light (:data:`GAIN_START`): the model learns the frames as
+    scaled, so frames scaled to a background learnt from black first frames would stay as dark.
 
     ``max_pixels`` (0: off; MOG2 and KNN at most ``ADAPTIVE_MAX_PIXELS`` in any case) makes the
     foreground at a reduced resolution: the frame is halved
@@ -346,7 +353,9 @@ class Background(Stage):
             bool,
             False,
             "mog2, knn: scale each frame by the ratio of the background's median grey level to "
-            "its own first, so a global change of exposure or light is not foreground",
+            "its own first, so a global change of exposure or light is not foreground; from the "
+            f"first frame within {GAIN_START:.0%} of the background on (after black first "
+            "frames or a fade from black, once the model has learnt the lit scene)",
         ),
         Param(
             "max_pixels",
@@ -368,6 +377,7 @@ class Background(Stage):
         self._seen = 0
         self._background: np.ndarray | None = None
         self._model: cv2.BackgroundSubtractor | None = None
+        self._gain_started = False
         frame = ctx.frame
         pixels = frame.width * frame.height
         budget = self.max_pixels
@@ -439,11 +449,19 @@ class Background(Stage):
 
     def _gain_compensated(self, image: np.ndarray) -> np.ndarray:
         """``image`` scaled (saturating at 255) so that its median grey level is the
-        background's; unchanged while the model has no background yet (KNN's is black for its
-        first frames) or within half a percent."""
+        background's; unchanged within half a percent, and until the model has learnt the
+        scene's light: until, for the first time, its background's median is within
+        :data:`GAIN_START` of a frame's (KNN's background is black for its first frames; after
+        black first frames or a fade from black, MOG2's is darker than the scene). Scaled to a
+        background learnt from them, every later frame would be as dark, for good: the model
+        learns the scaled frames."""
         assert self._model is not None
         background = _median_grey(self._model.getBackgroundImage())
         ratio = background / max(_median_grey(image), 1.0)
+        if not self._gain_started:
+            if abs(ratio - 1.0) > GAIN_START:
+                return image
+            self._gain_started = True
         if background < 1.0 or abs(ratio - 1.0) < 0.005:
             return image
         return cv2.convertScaleAbs(image, alpha=ratio)
