@@ -545,6 +545,35 @@ def test_vtrack_run_s3_with_mot_ground_truth_and_no_init(tmp_path, clip_factory)
     assert metrics["mota"] > 0.85 and metrics["idf1"] > 0.9
 
 
+@pytest.mark.parametrize("seed", range(2))
+def test_tracks_csv_sizes_stay_positive_and_scored_as_written(tmp_path, clip_factory,
+                                                               seed: int) -> None:
+    """A det.txt's boxes of 0.0001 pixels (w > 0, so kept) were written to tracks.csv with
+    w and h 0, rows no MOTChallenge box has; they are the least size the cells hold now, and
+    run.json's metrics are those of the boxes as written."""
+    clip = clip_factory("multi", seed=seed, frames=MULTI_FRAMES)
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{i + 1},-1,{b.cx},{b.cy},0.0001,0.0001,0.9\n"
+                           for i, frame in enumerate(clip.scene.tracks) for _, b in frame))
+    config = tmp_path / "tiny.toml"
+    config.write_text(f'name = "tiny"\n[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "-c", str(config), "--gt",
+                                       str(clip.mot), "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    with open(out / "tracks.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) > 100
+    assert all(float(row["w"]) > 0 and float(row["h"]) > 0 for row in rows)
+    tracks: dict[int, list] = {}
+    for row in rows:
+        tracks.setdefault(int(row["frame"]) - 1, []).append(
+            (int(row["id"]), Box(*(float(row[k]) for k in "xywh"))))
+    metrics = json.loads((out / "run.json").read_text())["metrics"]
+    assert mot_summary(tracks, clip.mot, MULTI_FRAMES) == metrics
+
+
 def _rewritten_mot(clip, tmp_path, columns: str):
     """The clip's MOTChallenge ground truth with columns 7.. replaced by ``columns``."""
     rows = clip.mot.read_text().splitlines()

@@ -73,7 +73,7 @@ from vtrack.io import (
     open_source,
     write_json,
 )
-from vtrack.io.csvfile import as_written, scores_as_written
+from vtrack.io.csvfile import box_as_written, scores_as_written
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
@@ -393,7 +393,7 @@ class _SingleTargetRows:
         if self.gt is None or index >= len(self.gt):
             return None, None
         if box is not None:  # scored as written, so a reader's rescoring gives the same
-            box = Box(*(as_written(v, "x") for v in box))
+            box = box_as_written(box)
         return scores_as_written(*score_frame(box, self.gt[index]))
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
@@ -409,7 +409,7 @@ class _SingleTargetRows:
             self.errors.append(error)
             self.states += [SKIPPED] * (at - len(self.states))  # no state of the tracker's
             self.states.append(result.state)
-        geometry = [None] * 6 if box is None else [box.x, box.y, box.w, box.h, box.cx, box.cy]
+        geometry = [None] * 6 if box is None else [*box_as_written(box), box.cx, box.cy]
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
                overlap, _fmt(error)]
         return [row + [result.extras.get(column) for column in self.extras]]
@@ -454,8 +454,8 @@ class _MultiTargetRows:
         for track in result.tracks:
             if track.state != TrackStatus.CONFIRMED:
                 continue
-            boxes.append((track.id, track.box))
-            b = track.box
+            b = box_as_written(track.box)  # scored as written, as track.csv's box
+            boxes.append((track.id, b))
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
         if self.score is not None:

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.errors import OutputError
+from vtrack.geometry import Box
 from vtrack.io.files import Closing, os_reason, remove_quietly, temp_path
 
 #: Decimals of float columns: pixels to a thousandth, times/scores to 4 places, overlaps to 6
@@ -47,6 +48,16 @@ def as_written(value: float | None, column: str) -> float | None:
     if value is None or not math.isfinite(value):
         return value
     return float(format_cell(float(value), DECIMALS.get(column, DEFAULT_DECIMALS)))
+
+
+def box_as_written(box: Box) -> Box:
+    """``box`` as ``track.csv``'s and ``tracks.csv``'s cells give it back (pixels to
+    :data:`DEFAULT_DECIMALS`), its width and height never under the least positive size they
+    hold: a box's sizes are positive (MOTChallenge's too), and a tiny one (a ``det.txt``'s box
+    of 0.0001 pixels) was written as 0."""
+    least = 10.0 ** -DEFAULT_DECIMALS
+    x, y, w, h = (float(format_cell(float(v))) for v in box)
+    return Box(x, y, max(w, least), max(h, least))
 
 
 def scores_as_written(overlap: float | None, error: float | None
