@@ -59,8 +59,9 @@ class RobustSearch(Stage):
               min=0.0, max=1.0),
         Param("scale_area", int, 512, "pixels of a scale sample at most (DSST: 512)",
               min=64, max=2048),
-        Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side, "
-              "unless the frame is too small for that: the box never grows so large that its "
+        Param("min_side", float, 5.0, "the box never gets smaller than this many pixels a side "
+              "(a first box with a shorter side never shrinks below its first size), unless the "
+              "frame is too small for that: the box never grows so large that its "
               "search region (the box and its padding) outgrows the frame (or its first size), "
               "and that limit wins", min=1.0, max=1000.0),
     )
@@ -95,7 +96,9 @@ class RobustSearch(Stage):
             assert colour is not None
             target.usual_colour = float(colour[target.rows // 2, target.cols // 2])
             target.colour_frames = 1
-        self._min_scale = self.min_side / min(ctx.box.w, ctx.box.h)
+        # a first box thinner than min_side is never stretched to it (a uniform scale would
+        # widen its long side too, and the filter would search at a size it never learnt)
+        self._min_scale = min(self.min_side / min(ctx.box.w, ctx.box.h), 1.0)
         self._max_scale = max(min(ctx.frame.width / target.region_w,
                                   ctx.frame.height / target.region_h), 1.0)
 
