@@ -40,7 +40,11 @@ filter's own response (``robust_search``), not a hand-set similarity:
   100-111; real sequences even, benchmarks/RESULTS.md section 8, thirteenth round), and a
   strong peak on the replicated border past the frame's edge was called tracking with the
   box wholly outside (a box given as the whole frame; every box on the 28 sequences from the
-  given box, on the 14 outside them and on the hard scenes unchanged).
+  given box, on the 14 outside them and on the hard scenes unchanged). "Mostly outside" is
+  measured against the first box: less than half of its area inside the frame, or, for a
+  first box partly outside (a target entering the view), less than half of the share of it
+  that was inside then (such a box was lost on the first frame after it, whatever the
+  response, and the target was never taken back as it came into view).
   The size is not measured on a doubtful frame, as on a hidden one (fDSST's scale samples
   there show the occluder too): a target passing slowly behind a plain occluder grew its box
   by a quarter on the occluder's edge and then followed the edge (generated `slab`, seeds
@@ -174,6 +178,9 @@ class RobustFailure(Stage):
 
     def start(self, ctx: TrackContext) -> None:
         ctx.state = TrackState.TRACKING
+        assert ctx.box is not None
+        # a box with less than this share of its area inside the frame is leaving the view
+        self._least_inside = 0.5 * min(_inside_share(ctx.box, ctx.frame), 1.0)
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
@@ -199,7 +206,7 @@ class RobustFailure(Stage):
         # leaving the view (without this, weak peaks on the border it left by were followed
         # as doubtful frames, never lost, and strong ones on the replicated border past the
         # frame's edge were called tracking)
-        off_frame = _mostly_outside(ctx.measurement, ctx.frame)
+        off_frame = _mostly_outside(ctx.measurement, ctx.frame, self._least_inside)
         target.unseen = False
         if (ctx.measurement is not None and sharp and retaken and not off_frame
                 and (was == TrackState.TRACKING or strong)):
@@ -220,7 +227,7 @@ class RobustFailure(Stage):
             ctx.measurement = None  # S0 item 7: coast on the prediction
             if ctx.prediction is not None:
                 ctx.box = ctx.prediction
-        gone = _mostly_outside(ctx.box, ctx.frame)
+        gone = _mostly_outside(ctx.box, ctx.frame, self._least_inside)
         lost = target.hidden_frames > self.lost_after or gone or was == TrackState.LOST
         ctx.state = TrackState.LOST if lost else TrackState.OCCLUDED
         target.unseen = self.coast_unseen and colour_disagrees and not lost
@@ -262,11 +269,16 @@ def _remember(target: RobustTarget) -> None:
     target.usual_colour += (target.colour_peak - target.usual_colour) / target.colour_frames
 
 
-def _mostly_outside(box: Box | None, frame: Frame) -> bool:
-    """Whether less than half of ``box``'s area lies inside the frame (False without a box)."""
-    if box is None:
-        return False
+def _mostly_outside(box: Box | None, frame: Frame, least: float) -> bool:
+    """Whether less than ``least`` of ``box``'s area lies inside the frame (False without a
+    box)."""
+    return box is not None and _inside_share(box, frame) < least
+
+
+def _inside_share(box: Box, frame: Frame) -> float:
+    """The share of ``box``'s area that its pixels inside the frame cover (0 for none; whole
+    pixels, so a sub-pixel box inside may give a little more than 1)."""
     window = box.window(frame.width, frame.height)
     if window is None or box.area <= 0:
-        return True
-    return window.width * window.height < 0.5 * box.area
+        return 0.0
+    return window.width * window.height / box.area
