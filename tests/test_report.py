@@ -388,14 +388,15 @@ def test_rows_without_results_of_two_batches_name_their_batch(
     assert result.exit_code == 0, result.output
     markdown = (report / "summary.md").read_text()
     listed = sorted(line for line in markdown.splitlines() if line.startswith("- **"))
-    assert listed == [
-        f"- **{name}** [s0] interrupted: never ran (the batch stopped first)"
-        for name in ("never (batch-a)", "never (batch-b)", "smooth (batch-b)")]
+    assert listed == [  # (each batch's s0 one label: both ran occlusion [s0])
+        f"- **{name}** [s0 ({batch})] interrupted: never ran (the batch stopped first)"
+        for name, batch in (("never (batch-a)", "batch-a"), ("never (batch-b)", "batch-b"),
+                            ("smooth (batch-b)", "batch-b"))]
     with (report / "summary.csv").open(newline="") as handle:
         statuses = {(row["input"], row["config"]): row["status"]
                     for row in csv.DictReader(handle)}
-    assert statuses[("smooth", "s0")] == "complete"  # batch-a's run, the only one
-    assert statuses[("smooth (batch-b)", "s0")] == "interrupted"
+    assert statuses[("smooth", "s0 (batch-a)")] == "complete"  # batch-a's run, the only one
+    assert statuses[("smooth (batch-b)", "s0 (batch-b)")] == "interrupted"
 
 
 def test_rows_without_results_are_listed_and_failed_runs_not_averaged(
@@ -602,6 +603,35 @@ def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
     markdown = (tmp_path / "report" / "summary.md").read_text()
     assert _table_labels(markdown) == {("jump", "mine (bA)"), ("smooth", "mine (bA)"),
                                        ("smooth", "mine (bB)")}
+
+
+def test_a_batch_s_config_keeps_one_label_beside_a_run_of_one_of_its_inputs(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """`vtrack report batch byhand`, byhand a `vtrack run` of one of the batch's inputs with one
+    of its configs: that input's batch run was labelled "s0 (batch)" and the batch's other runs
+    "s0", so the All inputs table averaged the batch's s0 as two configurations (one input
+    each), neither the batch's mean; its row without results stayed "s0"."""
+    inputs, original = batch_out
+    batch = tmp_path / "batch"
+    shutil.copytree(original, batch)
+    with (batch / "summary.csv").open("a", newline="") as handle:
+        csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS).writerow(
+            {"input": "never", "config": "s0", "status": "interrupted"})
+    byhand = tmp_path / "byhand"
+    ran = vtrack("run", str(inputs / "smooth.mp4"), "-c", "s0", "--gt",
+                 str(inputs / "smooth.gt.txt"), "--no-video", "--out", str(byhand))
+    assert ran.exit_code == 0, ran.output
+    report = tmp_path / "report"
+    result = vtrack("report", str(batch), str(byhand), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    markdown = (report / "summary.md").read_text()
+    assert _table_labels(markdown) == {
+        ("occlusion", "s0 (batch)"), ("smooth", "s0 (batch)"), ("smooth", "s0 (byhand)"),
+        ("occlusion", "camshift"), ("smooth", "camshift")}
+    header, averages = html_rows((report / "index.html").read_text(), 0)
+    inputs_of = {row[0]: row[header.index("Inputs")] for row in averages}
+    assert inputs_of == {"s0 (batch)": "2", "s0 (byhand)": "1", "camshift": "2"}
+    assert "- **never** [s0 (batch)] interrupted" in markdown
 
 
 def test_a_motchallenge_gt_given_to_report_says_what_report_scores(

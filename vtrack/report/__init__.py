@@ -106,10 +106,14 @@ def _distinct_inputs(runs: list[RunResult]) -> None:
                 run.input = labels[key]
 
 
-def _distinct_labels(runs: list[RunResult]) -> None:
+def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[FailedRun]:
     """Give runs of one config name distinct config labels, suffixed with where they differ
     (``s0 (batch-a)``): configs of that name whose chains differ (two TOML files), each one
-    label over every input; then runs of the same input and config label (two batch folders)."""
+    label over every input; then, where one input has several runs of a config label (two
+    batch folders, a batch and a ``vtrack run``), every run of that label by the results it
+    belongs to (its batch folder, else its own), so one batch's runs keep one label over
+    every input and are averaged together (and a batch row of that label without results
+    takes its batch's label: the ``failed`` returned)."""
     for name, group in _group(runs, lambda r: r.config).items():
         chains = _group(group, lambda r: r.config_key)
         if len(chains) > 1:
@@ -117,10 +121,31 @@ def _distinct_labels(runs: list[RunResult]) -> None:
             for same, place in zip(chains.values(), places, strict=True):
                 for run in same:
                     run.config = f"{name} ({place})"
+    for label, group in _group(runs, lambda r: r.config).items():
+        if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
+            continue
+        origins = _group(group, lambda r: str(_results_of(r)))
+        if len(origins) < 2:
+            continue
+        places = dict(zip(origins, _places([Path(origin) for origin in origins]), strict=True))
+        for origin, same in origins.items():
+            for run in same:
+                run.config = f"{label} ({places[origin]})"
+        failed = [replace(row, config=f"{label} ({places[str(row.batch.resolve())]})")
+                  if row.config == label and row.batch is not None
+                  and str(row.batch.resolve()) in places else row for row in failed]
     for group in _group(runs, lambda r: f"{r.input}\0{r.config}").values():
-        if len(group) > 1:
+        if len(group) > 1:  # (several runs of one input still from one results folder)
             for run, place in zip(group, _places([r.folder for r in group]), strict=True):
                 run.config = f"{run.config} ({place})"
+    return failed
+
+
+def _results_of(run: RunResult) -> Path:
+    """The results ``run`` belongs to: its batch's folder (``<batch>/<input>/<config>/``),
+    else its own folder (a ``vtrack run``)."""
+    batch = run.folder.resolve().parent.parent
+    return batch if is_batch_folder(batch) else run.folder.resolve()
 
 
 def _counts(runs: Sequence[RunResult], failed: Sequence[FailedRun]) -> str:
@@ -305,7 +330,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                          "folders)")
     failed = _distinct_failed(failed, runs)  # (by the runs' input names, not yet told apart)
     _distinct_inputs(runs)
-    _distinct_labels(runs)
+    failed = _distinct_labels(runs, failed)
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]
     multi = [r for r in runs if r.multi_target]
