@@ -650,22 +650,34 @@ def test_a_motchallenge_gt_given_to_report_says_what_report_scores(
 
 def test_a_report_made_from_another_folder_reads_the_runs_relative_input_and_ground_truth(
         clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A report made from another folder reads a run's relative input and ground truth from
+    the folder the run was started in. The one ground truth a run named relatively (`--gt
+    clip.gt.txt`) and another by its absolute path (as `vtrack batch` records it) was called
+    two: "scored against different ground truth (.../clip.gt.txt for camshift; clip.gt.txt
+    for s0)", and summary.csv named clip.gt.txt, not there from the report's folder."""
     clip = clip_factory("occlusion", width=W, height=H, frames=60)
     started = tmp_path / "project"
     started.mkdir()
     shutil.copy(clip.path, started / "clip.mp4")
     shutil.copy(clip.gt, started / "clip.gt.txt")
     monkeypatch.chdir(started)
-    assert vtrack("run", "clip.mp4", "--gt", "clip.gt.txt", "-c", "s0", "--no-video",
-                  "--quiet", "--out", "runs").exit_code == 0
+    for config, gt, out in (("s0", "clip.gt.txt", "runs"),
+                            ("camshift", str(started / "clip.gt.txt"), "runs-abs")):
+        assert vtrack("run", "clip.mp4", "--gt", gt, "-c", config, "--no-video",
+                      "--quiet", "--out", out).exit_code == 0
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
 
     # the failure thumbnails need the input's frames and the ground truth's boxes
-    found = vtrack("report", str(started / "runs"), "--out", "found")
+    found = vtrack("report", str(started / "runs"), str(started / "runs-abs"), "--out", "found")
     assert found.exit_code == 0 and "left out" not in found.stderr, found.output
+    assert "different ground truth" not in found.stderr
     assert (elsewhere / "found" / "plots" / "failures_clip.png").is_file()
+    with (elsewhere / "found" / "summary.csv").open(newline="") as handle:
+        truths = {row["config"]: row["ground_truth"] for row in csv.DictReader(handle)}
+    assert truths == {"s0": str(started / "clip.gt.txt"),
+                      "camshift": str(started / "clip.gt.txt")}
 
     # a ground truth no longer there: scored as the run recorded, the thumbnails left out
     # with a word (not silently)

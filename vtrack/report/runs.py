@@ -508,12 +508,12 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             else:
                 result.source = found_input
         if found_gt and _changed_since_run(record, "gt", found_gt):
-            result.ground_truth = str(request["gt"])
+            result.ground_truth = found_gt
             result.overlaps, result.errors = _recorded_scores(rows)
             result.note = (f"{folder}: the ground truth {request['gt']} changed after the run; "
                            "scored with the overlaps the run recorded")
         elif found_gt:
-            result.ground_truth = str(request["gt"])
+            result.ground_truth = found_gt  # (one file, however each run named it)
             (result.overlaps, result.errors), result.truth = _rescored(rows, request, found_gt,
                                                                       start)
             if result.truth is not None:
