@@ -19,6 +19,7 @@ Everything is checked at load time; errors name the file, the stage and the para
 from __future__ import annotations
 
 import os
+import sys
 import tomllib
 from collections import Counter
 from collections.abc import Mapping
@@ -159,6 +160,12 @@ def load_config(spec: str | Path | None = None) -> Config:
         raise ConfigError(str(exc).replace(str(path), where, 1)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{where}: not valid TOML ({exc})") from None
+    except RecursionError:  # tomllib reads nested arrays and tables recursively
+        raise ConfigError(f"{where}: arrays or tables nested too deeply to read (a config's "
+                          "values are numbers, text and true/false)") from None
+    except ValueError:  # tomllib's int() of a decimal integer longer than Python converts
+        raise ConfigError(f"{where}: an integer of more than {sys.get_int_max_str_digits()} "
+                          "digits, too long to read") from None
     return parse_config(data, where, default_name=path.stem)
 
 
