@@ -11,6 +11,8 @@ from click.testing import CliRunner, Result
 from conftest import one_error_line
 
 from vtrack.cli import main
+from vtrack.errors import ConfigError
+from vtrack.tracker import Tracker
 
 CHAIN_TAIL = '[[stage]]\nname = "backproject"\n[[stage]]\nname = "meanshift"\n'
 
@@ -47,3 +49,45 @@ def test_a_config_toml_cannot_turn_into_values_is_one_line(text: str, said: str,
     config.write_text(text)
     for line in refusals(config, tmp_path):
         assert line.startswith(f"vtrack: error: {config}: ") and said in line, line
+
+
+@pytest.mark.parametrize(("param", "value", "said"), [
+    ("sat_min", "0x" + "f" * 5000, "parameter 'sat_min' must be in the range 0 to 255, got an "
+                                   "integer of more than 4000 digits"),
+    ("search_scale", "0x" + "f" * 5000, "parameter 'search_scale' must be in the range 1 to 16, "
+                                        "got an integer of more than 4000 digits"),
+    ("mask_model_only", "0x" + "f" * 5000, "parameter 'mask_model_only' must be true or false, "
+                                           "got an integer of more than 4000 digits"),
+    ("hue_scale", '"' + "x" * 900_000 + '"', "parameter 'hue_scale' must be one of 'full', "
+                                            "'opencv', got 'xxxxxxxx"),
+    ("sat_min", "[" + "1, " * 200_000 + "]", "parameter 'sat_min' must be an integer, got "
+                                             "[1, 1, 1, 1, 1, 1, ...]"),
+    ("k" * 900_000, "1", "unknown parameter 'kkkkkkkk"),
+], ids=["int", "float", "bool", "long-text", "long-array", "long-name"])
+def test_a_huge_value_in_a_config_is_named_in_a_short_line(param: str, value: str, said: str,
+                                                           tmp_path: Path) -> None:
+    """`sat_min = 0xfff...` (5000 hex digits) ended vtrack with a traceback, 'ValueError:
+    Exceeds the limit (4300 digits) for integer string conversion' (search_scale:
+    'OverflowError: int too large to convert to float'); a 900 kB string, array or parameter
+    name was echoed whole: a 900 kB error line."""
+    config = tmp_path / "huge.toml"
+    config.write_text(f'name = "x"\n[[stage]]\nname = "hue"\n{param} = {value}\n{CHAIN_TAIL}')
+    for line in refusals(config, tmp_path):
+        assert line.startswith(f"vtrack: error: {config}: stage 'hue': "), line[:300]
+        assert said in line and len(line) < 400, line[:300]
+
+
+def test_a_huge_value_given_to_the_tracker_is_named_in_a_short_line() -> None:
+    """Tracker("s0", hue__search_scale=10**400) raised 'OverflowError: int too large to convert
+    to float', hue__sat_min=16**5000 'ValueError: Exceeds the limit (4300 digits)', and a
+    1,000,000-character hue_scale was echoed twice: a 2 MB message."""
+    with pytest.raises(ConfigError, match=r"^hue.search_scale=an integer of 401 digits: stage "
+                       r"'hue': parameter 'search_scale' must be in the range 1 to 16, got an "
+                       r"integer of 401 digits$"):
+        Tracker("s0", hue__search_scale=10**400)
+    with pytest.raises(ConfigError, match="parameter 'sat_min' must be in the range 0 to 255, "
+                       "got an integer of more than 4000 digits$"):
+        Tracker("s0", hue__sat_min=16**5000)
+    with pytest.raises(ConfigError, match="parameter 'hue_scale' must be one of") as caught:
+        Tracker("s0", hue__hue_scale="x" * 1_000_000)
+    assert len(str(caught.value)) < 400

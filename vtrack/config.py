@@ -34,6 +34,7 @@ from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
+from vtrack.params import shown
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
 
@@ -78,7 +79,7 @@ class Config:
         """Apply ``{"stage.param": value}`` Python values (the API's keyword overrides), each
         checked as a config file's value is (a NumPy scalar counts as its Python number)."""
         return self._changed([(key, value.item() if isinstance(value, np.generic) else value,
-                               f"{key}={value!r}", False) for key, value in values.items()])
+                               f"{key}={shown(value)}", False) for key, value in values.items()])
 
     def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
         """This chain with each ``(stage.param, value, where, is_text)`` applied: text is
@@ -91,12 +92,13 @@ class Config:
             matches = [values for name, values in stages if name == stage_name]
             if not matches:
                 chain = " -> ".join(name for name, _ in stages)
-                raise ConfigError(f"{where}: stage {stage_name!r} is not in the chain ({chain})")
+                raise ConfigError(f"{where}: stage {shown(stage_name)} is not in the chain "
+                                  f"({chain})")
             declared = {p.name: p for p in stage_class(stage_name, where).params}
             if param_name not in declared:
                 known = ", ".join(declared) or "none"
                 raise ConfigError(
-                    f"{where}: stage '{stage_name}' has no parameter {param_name!r} "
+                    f"{where}: stage '{stage_name}' has no parameter {shown(param_name)} "
                     f"(parameters: {known})"
                 )
             param, place = declared[param_name], f"{where}: stage '{stage_name}'"
@@ -174,7 +176,7 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
     unknown = set(data) - {"name", "description", "stage"}
     if unknown:
         raise ConfigError(
-            f"{where}: unknown top-level key(s) {', '.join(sorted(unknown))} "
+            f"{where}: unknown top-level key(s) {', '.join(shown(k) for k in sorted(unknown))} "
             "(expected name, description, [[stage]])"
         )
     raw_stages = data.get("stage")
@@ -184,18 +186,18 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
     for position, table in enumerate(raw_stages, start=1):
         if not isinstance(table, dict):
             raise ConfigError(f"{where}: stage #{position} is not a [[stage]] table, got "
-                              f"{table!r}")
+                              f"{shown(table)}")
         if "name" not in table:
             raise ConfigError(f"{where}: stage #{position} has no name")
         if not isinstance(table["name"], str):
             raise ConfigError(f"{where}: stage #{position}: name must be text (a stage's "
-                              f"name, e.g. name = \"hue\"), got {table['name']!r}")
+                              f"name, e.g. name = \"hue\"), got {shown(table['name'])}")
         values = {k: v for k, v in table.items() if k != "name"}
         build_stage(table["name"], values, where)  # validates names, parameters, types
         stages.append((table["name"], values))
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
-            raise ConfigError(f"{where}: {key} must be text, got {data[key]!r}")
+            raise ConfigError(f"{where}: {key} must be text, got {shown(data[key])}")
     name = data.get("name", default_name)
     if not name.strip():
         raise ConfigError(f"{where}: name is empty: a config's name names its results folder")

@@ -8,6 +8,7 @@ validation (:meth:`Param.validate`), ``--set stage.param=value`` parsing (:meth:
 from __future__ import annotations
 
 import math
+import reprlib
 from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
@@ -67,11 +68,15 @@ class Param:
         """
         expected = _A_TYPE[self.type]
         if self.type is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:  # beyond any float, so beyond the range too
+                raise ConfigError(f"{where}: parameter '{self.name}' must be in the range "
+                                  f"{self.range_text()}, got {_number(value)}") from None
         wrong_bool = self.type is not bool and isinstance(value, bool)
         if wrong_bool or not isinstance(value, self.type):
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be {expected}, got {value!r}"
+                f"{where}: parameter '{self.name}' must be {expected}, got {shown(value)}"
             )
         if self.type is float and not math.isfinite(value):
             raise ConfigError(
@@ -86,7 +91,7 @@ class Param:
         if self.choices is not None and value not in self.choices:
             options = ", ".join(repr(c) for c in self.choices)
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be one of {options}, got {value!r}"
+                f"{where}: parameter '{self.name}' must be one of {options}, got {shown(value)}"
             )
         too_low = self.min is not None and value < self.min
         if too_low or (self.max is not None and value > self.max):
@@ -117,7 +122,8 @@ class Param:
                 value = float(text)
         except ValueError:
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got {text!r}"
+                f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got "
+                f"{shown(text)}"
             ) from None
         return self.validate(value, where)
 
@@ -137,10 +143,33 @@ class Param:
         return str(value).lower() if self.type is bool else repr(value)
 
 
+#: Digits of the longest integer a message spells out in full ("an integer of 25 digits").
+_SHOWN_DIGITS = 20
+#: Integers from this far are "of more than 4000 digits" (Python turns at most 4300 into text).
+_COUNTED_DIGITS = 4000
+
+
 def _number(value: float) -> str:
     """A bound or value for messages and docs: ``5``, ``0.25``, ``1e+06``, ``1e-09``; every
     digit a value needs to differ from a bound it breaks (``10.000000000000002``)."""
     if isinstance(value, int) and not isinstance(value, bool):
+        if abs(value) >= 10**_COUNTED_DIGITS:  # (a TOML 0xfff... of 5000 digits)
+            return f"an integer of more than {_COUNTED_DIGITS} digits"
         text = str(value)
-        return text if len(text) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
+        digits = len(text.lstrip("-"))
+        return text if digits <= _SHOWN_DIGITS else f"an integer of {digits} digits"
     return number_text(value)
+
+
+_SHORT = reprlib.Repr()
+_SHORT.maxstring = _SHORT.maxother = 80
+
+
+def shown(value: object) -> str:
+    """A value a user gave, for a one-line message: an integer as :func:`_number` writes it
+    (a 5000-digit one is not spelt out), anything else as its ``repr`` cut to about 80
+    characters (``'aaaa...aaaa'``, ``[1, 2, 3, 4, 5, 6, ...]``): a 1 MB string in a config
+    file is not echoed whole."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        return _number(value)
+    return _SHORT.repr(value)

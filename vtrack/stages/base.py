@@ -37,7 +37,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import Overlay
-from vtrack.params import Param
+from vtrack.params import Param, shown
 
 if TYPE_CHECKING:
     from vtrack.golden.record import FixedRecord
@@ -334,7 +334,7 @@ def stage_class(name: str, where: str) -> type[Stage]:
         _find_stage(name)
     if name not in _REGISTRY:
         raise ConfigError(
-            f"{where}: unknown stage {name!r} (known stages: {', '.join(all_stages())})"
+            f"{where}: unknown stage {shown(name)} (known stages: {', '.join(all_stages())})"
         )
     return _REGISTRY[name]
 
@@ -348,6 +348,6 @@ def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
     for key, value in values.items():
         if key not in declared:
             known = ", ".join(declared) or "none"
-            raise ConfigError(f"{where}: unknown parameter {key!r} (parameters: {known})")
+            raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})")
         checked[key] = declared[key].validate(value, where)
     return cls(**checked)
