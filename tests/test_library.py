@@ -330,3 +330,19 @@ def test_track_without_the_first_box_a_config_needs_names_init_box() -> None:
                        r"give init_box=\(x, y, w, h\)$"):
         next(vtrack.track("no-such-clip.mp4", "s0"))  # not opened: the box is asked for first
     assert [r.index for r in vtrack.track(_red_block(2), "s4_multi")] == [0, 1]
+
+
+@pytest.mark.parametrize("channels", [4, 1])
+def test_one_bgra_or_one_channel_image_as_the_frames_is_refused_not_read_row_by_row(
+        channels: int) -> None:
+    """One 120x160x4 BGRA image (a PNG read with its alpha) given as ``frames`` was tracked as
+    120 grey frames of 4x160: track(image, "robust", (0, 10, 4, 20)) yielded 120 results;
+    a 0-d array raised NumPy's own 'iteration over a 0-d array'."""
+    image = np.zeros((120, 160, channels), np.uint8)
+    image[40:70, 50:90] = 255
+    with pytest.raises(TypeError, match=r"^frames: expected an iterable of frames, got one "
+                       rf"image of 120x160x{channels} \(give \[image\] for a single frame\)$"):
+        list(vtrack.track(image, "robust", (0, 10, 4, 20)))
+    with pytest.raises(TypeError, match=r"^frames: expected an iterable of frames, got a NumPy "
+                       r"array of shape \(\), no picture$"):
+        list(vtrack.track(np.array(5), "robust", (0, 10, 4, 20)))

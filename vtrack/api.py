@@ -94,15 +94,26 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     return inputs.open_source(os.fsdecode(spec), raw, fps=fps, **options)
 
 
+#: The last axis of an ``HxWxC`` NumPy image: BGR, BGRA (a PNG with alpha) or one channel.
+#: An array ending in 1 or 4 is one such image, not a sequence of grey frames 1 or 4 pixels
+#: wide.
+IMAGE_CHANNELS = (1, 3, 4)
+
+
 def _refuse_one_frame(frames: object) -> None:
     """TypeError for one picture given where a sequence of frames is expected: a NumPy image
-    would be iterated row by row (a 240x320x3 image as 240 grey 3x320 frames); and for what is
-    neither a path nor iterable (None, a number), named as ``frames``."""
+    would be iterated row by row (a 240x320x3 image as 240 grey 3x320 frames, a 240x320x4 BGRA
+    one as 240 grey 4x320 frames); for a NumPy array of no or one dimension (numbers, not
+    pictures); and for what is neither a path nor iterable (None, a number), named as
+    ``frames``."""
     if isinstance(frames, np.ndarray) and (frames.ndim == 2 or frames.ndim == 3
-                                           and frames.shape[2] == 3):
+                                           and frames.shape[2] in IMAGE_CHANNELS):
         shape = "x".join(str(n) for n in frames.shape)
         raise TypeError(f"frames: expected an iterable of frames, got one image of {shape} "
                         "(give [image] for a single frame)")
+    if isinstance(frames, np.ndarray) and frames.ndim < 2:
+        raise TypeError(f"frames: expected an iterable of frames, got a NumPy array of shape "
+                        f"{frames.shape}, no picture")
     if isinstance(frames, Frame) or type(frames).__module__.split(".")[0] == "av":
         raise TypeError(f"frames: expected an iterable of frames, got one "
                         f"{type(frames).__name__} (give [frame] for a single frame)")
