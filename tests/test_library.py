@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -346,3 +347,17 @@ def test_one_bgra_or_one_channel_image_as_the_frames_is_refused_not_read_row_by_
     with pytest.raises(TypeError, match=r"^frames: expected an iterable of frames, got a NumPy "
                        r"array of shape \(\), no picture$"):
         list(vtrack.track(np.array(5), "robust", (0, 10, 4, 20)))
+
+
+@pytest.mark.parametrize("value", ["no", 1, None])
+def test_keep_frames_other_than_true_or_false_is_refused_naming_it(value: object) -> None:
+    """track(frames, keep_frames="no") kept every frame ("no" is true to Python), as did
+    Tracker(keep_frames="no"): a value that says the opposite of what it did."""
+    image = _red_block(1)[0]
+    said = rf"^keep_frames {re.escape(repr(value))}: must be True or False$"
+    with pytest.raises(ConfigError, match=said):
+        list(vtrack.track([image], "robust", (50, 40, 40, 30), keep_frames=value))
+    with pytest.raises(ConfigError, match=said):
+        vtrack.Tracker("robust", keep_frames=value)
+    kept = vtrack.Tracker("robust", keep_frames=np.bool_(True)).init(image, (50, 40, 40, 30))
+    assert kept.frame is not None

@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
-from vtrack.params import check_seed
+from vtrack.params import check_seed, shown
 from vtrack.pipeline import FrameResult, Pipeline
 
 #: A frame as :meth:`Tracker.update` takes it.
@@ -72,6 +72,14 @@ def _decoded(item: Any, index: int, fps: float) -> Frame:
                         f"format {item.format.name} to BGR ({exc.strerror})") from None
 
 
+def check_flag(value: object, name: str) -> bool:
+    """``value`` if it is True or False (NumPy's too); ConfigError naming ``name`` otherwise: a
+    string such as ``"no"`` is true to Python, not the answer given."""
+    if not isinstance(value, bool | np.bool_):
+        raise ConfigError(f"{name} {shown(value)}: must be True or False")
+    return bool(value)
+
+
 class Tracker:
     """A per-frame tracker over any shipped or own config.
 
@@ -93,7 +101,7 @@ class Tracker:
         self.config = chain
         self.seed = check_seed(seed)
         self.fps = checked_fps(fps, "fps")
-        self.keep_frames = keep_frames
+        self.keep_frames = check_flag(keep_frames, "keep_frames")
         self._pipeline: Pipeline | None = None
         self._index = 0
 
