@@ -91,3 +91,11 @@ def test_a_huge_value_given_to_the_tracker_is_named_in_a_short_line() -> None:
     with pytest.raises(ConfigError, match="parameter 'hue_scale' must be one of") as caught:
         Tracker("s0", hue__hue_scale="x" * 1_000_000)
     assert len(str(caught.value)) < 400
+
+
+def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
+    """`vtrack stages ''` said ': not a stage, a shipped config or a config file (stages: ...)',
+    naming nothing, where `vtrack run -c ''` says what --config takes."""
+    line = one_error_line(vtrack("stages", "s0", ""))
+    assert "'[STAGE|CONFIG]...': empty; give a stage's name, a shipped config's name or a TOML " \
+           "file (vtrack stages lists them)" in line, line

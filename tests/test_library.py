@@ -361,3 +361,23 @@ def test_keep_frames_other_than_true_or_false_is_refused_naming_it(value: object
         vtrack.Tracker("robust", keep_frames=value)
     kept = vtrack.Tracker("robust", keep_frames=np.bool_(True)).init(image, (50, 40, 40, 30))
     assert kept.frame is not None
+
+
+@pytest.mark.parametrize("empty", ["", " "])
+def test_an_empty_input_or_config_names_the_argument(empty: str) -> None:
+    """track("") said ': no such file', open_source("") the same, and load_config("") (or
+    track(frames, "") and Tracker("")) ': is a folder, not a config file': a message naming
+    nothing, as `vtrack run -c ""` said before the CLI refused an empty value."""
+    image = _red_block(1)[0]
+    with pytest.raises(InputError, match="^frames: empty; give a video file, an image folder, "
+                       "a URL or a capture device$"):
+        list(vtrack.track(empty, "robust", (50, 40, 40, 30)))
+    with pytest.raises(InputError, match="^spec: empty; give a video file"):
+        vtrack.open_source(empty)
+    said = r"^config: empty; give a shipped config's name \(vtrack stages lists them\) or a TOML"
+    with pytest.raises(ConfigError, match=said):
+        vtrack.load_config(empty)
+    with pytest.raises(ConfigError, match=said):
+        list(vtrack.track([image], empty, (50, 40, 40, 30)))
+    with pytest.raises(ConfigError, match=said):
+        vtrack.Tracker(empty)

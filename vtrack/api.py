@@ -15,7 +15,7 @@ import numpy as np
 
 from vtrack.config import Config
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
@@ -64,7 +64,7 @@ def track(frames: FrameInput,
     if box is not None and tracker.multi_target:  # (Tracker.init's words name init())
         raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
-        path = os.fsdecode(frames)
+        path = _path_text(frames, "frames")
         # an image folder is timed at fps; a video keeps its own timestamps
         with open_source(path, fps=fps if os.path.isdir(path) else None) as source:
             yield from _run(tracker, source, box)
@@ -91,7 +91,17 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")
-    return inputs.open_source(os.fsdecode(spec), raw, fps=fps, **options)
+    return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, **options)
+
+
+def _path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:
+    """``path`` as text; InputError naming the argument ``name`` for an empty one (it would be
+    opened as the current folder, or named in a message as nothing: ``: no such file``)."""
+    text = os.fsdecode(path)
+    if not text.strip():
+        raise InputError(f"{name}: empty; give a video file, an image folder, a URL or a "
+                         "capture device")
+    return text
 
 
 #: The last axis of an ``HxWxC`` NumPy image: BGR, BGRA (a PNG with alpha) or one channel.

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.configs import DEFAULT_CONFIG
+from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
@@ -138,6 +138,8 @@ def load_config(spec: str | Path | None = None) -> Config:
     if not isinstance(spec, str | os.PathLike):
         raise TypeError(f"config: expected a shipped config name, a TOML file path or a "
                         f"vtrack.Config, got {type(spec).__name__}")
+    if not os.fspath(spec).strip():  # Path("") is the current folder
+        raise ConfigError(f"config: empty; give {CONFIG_HINT}")
     path = Path(spec)
     shipped = shipped_configs()
     if str(spec) in shipped:

@@ -8,6 +8,8 @@ from typing import Any
 
 import click
 
+from vtrack.configs import CONFIG_HINT
+
 #: The longest file or folder name the common file systems take (bytes).
 NAME_MAX = 255
 #: The longest path a command takes (bytes): Linux takes 4096 (PATH_MAX), and vtrack adds
@@ -96,4 +98,4 @@ class FileOrDash(NonEmptyText):
 #: An input argument (``vtrack run``, ``frame``, ``select``, ``vectors``).
 INPUT = NonEmptyText("a video file, an image folder, a URL or - (stdin)")
 #: A ``--config`` value.
-CONFIG = NonEmptyText("a shipped config's name (vtrack stages lists them) or a TOML file")
+CONFIG = NonEmptyText(CONFIG_HINT)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import click
 
+from vtrack.cli._paths import NonEmptyText
+
 
 def limits_text() -> str:
     """The "Limits" section of docs/stages.md: the limits every run keeps (tests/test_fuzz.py
@@ -144,7 +146,9 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
 
 
 @click.command("stages")
-@click.argument("names", nargs=-1, metavar="[STAGE|CONFIG]...")
+@click.argument("names", nargs=-1, metavar="[STAGE|CONFIG]...",
+                type=NonEmptyText("a stage's name, a shipped config's name or a TOML file "
+                                  "(vtrack stages lists them)"))
 @click.option("--markdown", is_flag=True, help="Print Markdown (the source of docs/stages.md).")
 def command(names: tuple[str, ...], markdown: bool) -> None:
     """List the stages, their parameters (type, default, help) and the shipped configs; with

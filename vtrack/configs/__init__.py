@@ -7,3 +7,7 @@ imports nothing, so ``--help`` stays cheap.
 
 #: The config used when none is given.
 DEFAULT_CONFIG = "robust"
+
+#: What a config is given as, for a message refusing an empty one (``--config ""``,
+#: ``load_config("")``).
+CONFIG_HINT = "a shipped config's name (vtrack stages lists them) or a TOML file"
