@@ -99,3 +99,16 @@ def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     line = one_error_line(vtrack("stages", "s0", ""))
     assert "'[STAGE|CONFIG]...': empty; give a stage's name, a shipped config's name or a TOML " \
            "file (vtrack stages lists them)" in line, line
+
+
+def test_a_config_saved_as_utf16_says_so(tmp_path: Path) -> None:
+    """A config saved by Windows Notepad as "Unicode" (UTF-16 with its byte-order mark) was
+    refused 'config is not text (not UTF-8)': it is text, in another encoding."""
+    config = tmp_path / "mine.toml"
+    config.write_bytes(f'name = "x"\n[[stage]]\nname = "hue"\n{CHAIN_TAIL}'.encode("utf-16"))
+    for line in refusals(config, tmp_path):
+        assert line == f"vtrack: error: {config}: config is UTF-16 text; vtrack reads UTF-8 " \
+                       "(save it as UTF-8)", line
+    config.write_bytes(b'\xef\xbb\xbfname = "x"\r\n[[stage]]\r\nname = "hue"\r\n'
+                       + CHAIN_TAIL.replace("\n", "\r\n").encode())  # UTF-8, BOM, CRLF: read
+    assert vtrack("stages", str(config)).exit_code == 0

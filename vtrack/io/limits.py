@@ -8,6 +8,7 @@ that kind.
 
 from __future__ import annotations
 
+import codecs
 import os
 import stat
 from pathlib import Path
@@ -85,9 +86,25 @@ def read_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -
 
 def read_text_bounded(path: str | os.PathLike[str], limit: int, what: str = "file") -> str:
     """:func:`read_bounded` as UTF-8 text, a leading byte-order mark dropped (Windows editors
-    write one). InputError when the bytes are not UTF-8."""
+    write one). InputError when the bytes are not UTF-8 (saying so of UTF-16 with its
+    byte-order mark, which Windows editors also write)."""
     data = read_bounded(path, limit, what)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError:
+        if _utf16_text(data):  # Notepad's "Unicode"
+            raise InputError(f"{Path(path)}: {what} is UTF-16 text; vtrack reads UTF-8 (save "
+                             "it as UTF-8)") from None
         raise InputError(f"{Path(path)}: {what} is not text (not UTF-8)") from None
+
+
+def _utf16_text(data: bytes) -> bool:
+    """Whether ``data`` reads as UTF-16 text of the kind vtrack's files hold: a byte-order mark,
+    then characters that are mostly ASCII (binary bytes after FF FE decode as UTF-16 too)."""
+    if not data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return False
+    try:
+        text = data.decode("utf-16")
+    except UnicodeDecodeError:
+        return False
+    return sum(char.isascii() for char in text) >= 0.9 * len(text) > 0
