@@ -112,3 +112,24 @@ def test_a_config_saved_as_utf16_says_so(tmp_path: Path) -> None:
     config.write_bytes(b'\xef\xbb\xbfname = "x"\r\n[[stage]]\r\nname = "hue"\r\n'
                        + CHAIN_TAIL.replace("\n", "\r\n").encode())  # UTF-8, BOM, CRLF: read
     assert vtrack("stages", str(config)).exit_code == 0
+
+
+@pytest.mark.parametrize(("chain", "said"), [
+    (("hue_bp_fixed", "kernel_meanshift_int"),
+     "stages hue_bp_fixed and kernel_meanshift_int both keep the chain's fixed-point record, "
+     "each of its own document's model (S0, S2): a chain computes one"),
+    (("kernel_meanshift_int", "kalman_f32"),
+     "stage 'kalman_f32': it reads the S0 fixed-point record of hue_bp_fixed, which must come "
+     "before it (kernel_meanshift_int keeps S2's, another model)"),
+], ids=["two-records", "s2-record-read-as-s0"])
+def test_a_chain_mixing_the_fixed_point_models_is_refused_when_loaded(
+        chain: tuple[str, ...], said: str, tmp_path: Path) -> None:
+    """A config chaining hue_bp_fixed (S0's fixed-point stages) with kernel_meanshift_int
+    (S2's) was taken, then its run failed at frame 1, after writing its outputs, with
+    'meanshift_fixed and kalman_f32 read the S0 record of hue_bp_fixed, which must be the last
+    fixed-point stage before them', naming two stages not in the chain and no file;
+    kernel_meanshift_int then kalman_f32 the same at frame 0."""
+    config = tmp_path / "mix.toml"
+    config.write_text('name = "mix"\n' + "".join(f'[[stage]]\nname = "{n}"\n' for n in chain))
+    for line in refusals(config, tmp_path):
+        assert line == f"vtrack: error: {config}: {said}", line

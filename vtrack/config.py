@@ -252,7 +252,8 @@ SINGLE_TARGET_OUTPUTS = frozenset({"box", "measurement"})
 
 def _check_tracks(source: str, classes: list[type[Stage]]) -> None:
     """ConfigError for a chain whose result would not be what it computes: a stage named twice
-    (one stage runs once a frame); a single-target chain in which no stage sets the box (it
+    (one stage runs once a frame); two stages keeping a fixed-point record (S0's and S2's,
+    each reads its own back); a single-target chain in which no stage sets the box (it
     would report the first box on every frame), or a multi-target one with no stage, or two,
     setting the tracks; a multi-target chain with a stage of a single target (its box would be
     thrown away, or it would need a first box the chain refuses)."""
@@ -261,6 +262,11 @@ def _check_tracks(source: str, classes: list[type[Stage]]) -> None:
         if count > 1:
             raise ConfigError(f"{source}: stage '{name}' appears {count} times; a chain runs "
                               "each stage once")
+    records = [cls.name for cls in classes if "fixed" in cls.provides]
+    if len(records) > 1:
+        raise ConfigError(f"{source}: stages {' and '.join(records)} both keep the chain's "
+                          "fixed-point record, each of its own document's model (S0, S2): "
+                          "a chain computes one")
     if not any(cls.multi_target for cls in classes):
         if not any("box" in cls.provides for cls in classes):
             raise ConfigError(f"{source}: no stage of the chain ({' -> '.join(names)}) "

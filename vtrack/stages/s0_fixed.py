@@ -24,6 +24,7 @@ in ``ctx.fixed``; ``ctx.fixed.trace`` is the frame's row of ``vtrack vectors``' 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -44,6 +45,15 @@ def integer_window(box: Box) -> tuple[int, int, int, int, int, int]:
     w, h = max(round(box.w), 1), max(round(box.h), 1)
     cx, cy = math.floor(box.cx), math.floor(box.cy)
     return cx - w // 2, cy - h // 2, w, h, cx, cy
+
+
+def _s0_record_problem(before: list[str]) -> str | None:
+    """Why a stage reading hue_bp_fixed's S0 record cannot follow the stages ``before`` (the
+    chain's fixed-point record is then another document's, S2's; None: it can)."""
+    if "hue_bp_fixed" not in before:
+        return ("it reads the S0 fixed-point record of hue_bp_fixed, which must come before "
+                "it (kernel_meanshift_int keeps S2's, another model)")
+    return None
 
 
 def _record(ctx: TrackContext) -> FixedRecord:
@@ -188,6 +198,10 @@ class MeanShiftFixed(Stage):
     provides = frozenset({"measurement", "box", "state", "score"})
     columns = ("sum_bp", "step_x", "step_y")
 
+    @classmethod
+    def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
+        return _s0_record_problem(before)
+
     normalization: str
     step_frac_bits: int
     rounding: str
@@ -298,6 +312,10 @@ class KalmanF32Stage(Stage):
     requires = frozenset({"measurement", "box", "fixed"})
     provides = frozenset({"box", "prediction"})
     columns = ("pred_cx", "pred_cy")
+
+    @classmethod
+    def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
+        return _s0_record_problem(before)
 
     q: float
     r: float
