@@ -165,12 +165,17 @@ def test_every_numeric_parameter_declares_a_range() -> None:
 @given(name=st.text(max_size=40))
 def test_any_config_name_plans_one_folder_inside_the_results(tmp_path, name: str) -> None:
     """Issue 21 item 5: whatever a config's ``name`` holds (``/``, ``..``, NUL, nothing), the
-    batch plans its results one folder below the input's, inside ``--out``."""
+    batch plans its results one folder below the input's, inside ``--out``; a blank one is
+    refused as the Config is made, as a config file's is."""
     from dataclasses import replace
 
     from vtrack.batch import BatchInput, plan
     from vtrack.request import RunRequest
 
+    if not name.strip():
+        with pytest.raises(ConfigError, match="^s4: name is empty: a config's name names its "):
+            replace(load_config("s4"), name=name)
+        return
     config = replace(load_config("s4"), name=name)
     out = tmp_path / "out"
     item = BatchInput(name="clip", path=tmp_path / "clip.mp4")

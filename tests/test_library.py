@@ -381,3 +381,29 @@ def test_an_empty_input_or_config_names_the_argument(empty: str) -> None:
         list(vtrack.track([image], empty, (50, 40, 40, 30)))
     with pytest.raises(ConfigError, match=said):
         vtrack.Tracker(empty)
+
+
+def test_a_config_made_in_python_is_checked_as_a_config_file_is() -> None:
+    """vtrack.Config made in Python skipped the chain's checks: Config("mine", "mine", "",
+    [("hue", {}), ("backproject", {})]) tracked 3 frames "tracking" at the first box (no stage
+    sets a box), meanshift before hue raised a bare AssertionError, a stage named twice ran
+    twice, and stages="hue" raised 'ValueError: not enough values to unpack'."""
+    def chain(*names: str) -> list[tuple[str, dict]]:
+        return [(name, {}) for name in names]
+
+    with pytest.raises(ConfigError, match=r"^mine: no stage of the chain \(hue -> backproject\) "
+                       "tracks: none sets the target's box"):
+        vtrack.Config("mine", "mine", "", chain("hue", "backproject"))
+    with pytest.raises(ConfigError, match="^mine: stage 'meanshift' needs likelihood, "
+                       "search_box, target_model, window, which no earlier stage provides"):
+        vtrack.Config("mine", "mine", "", chain("meanshift", "hue", "backproject"))
+    with pytest.raises(ConfigError, match="^mine: stage 'meanshift' appears 2 times"):
+        vtrack.Config("mine", "mine", "", chain("hue", "backproject", "meanshift", "meanshift"))
+    with pytest.raises(ConfigError, match="^mine: no stages: a config is a chain of stages$"):
+        vtrack.Config("mine", "mine", "", [])
+    with pytest.raises(TypeError, match=r"^Config stages: expected a list of \(stage name, "
+                       r"\{parameter: value\}\) pairs, got 'hue'$"):
+        vtrack.Config("mine", "mine", "", "hue")  # type: ignore[arg-type]
+    good = vtrack.Config("mine", "mine", "", chain("hue", "backproject", "meanshift"))
+    image = _red_block(1)[0]
+    assert [r.index for r in vtrack.track([image], good, (50, 40, 40, 30))] == [0]

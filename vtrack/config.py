@@ -40,12 +40,40 @@ from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, s
 
 @dataclass
 class Config:
-    """A validated chain: ``stages`` is a list of (stage name, explicitly set parameters)."""
+    """A validated chain: ``stages`` is a list of (stage name, explicitly set parameters),
+    checked when the Config is made (:meth:`__post_init__`)."""
 
     name: str
     source: str
     description: str = ""
     stages: list[tuple[str, dict[str, Any]]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        """Check the chain as a config file's is checked, however the Config was made (by
+        :func:`load_config` or in Python): ConfigError naming ``source`` for no stage, an
+        unknown stage, a parameter value its declaration refuses, a name or description that
+        is not text, and a chain :func:`check_chain` refuses; TypeError for ``stages`` that
+        are not a list of (stage name, parameters) pairs."""
+        if not isinstance(self.source, str):
+            raise TypeError(f"Config source: expected text (where the config came from), got "
+                            f"{type(self.source).__name__}")
+        if not isinstance(self.stages, list) or not all(
+                isinstance(stage, tuple) and len(stage) == 2 and isinstance(stage[0], str)
+                and isinstance(stage[1], dict) for stage in self.stages):
+            raise TypeError("Config stages: expected a list of (stage name, {parameter: "
+                            f"value}}) pairs, got {shown(self.stages)}")
+        if not self.stages:
+            raise ConfigError(f"{self.source}: no stages: a config is a chain of stages")
+        for name, values in self.stages:
+            build_stage(name, values, self.source)  # validates names, parameters, types
+        for key in ("name", "description"):
+            if not isinstance(getattr(self, key), str):
+                raise ConfigError(f"{self.source}: {key} must be text, got "
+                                  f"{shown(getattr(self, key))}")
+        if not self.name.strip():
+            raise ConfigError(f"{self.source}: name is empty: a config's name names its "
+                              "results folder")
+        check_chain(self)
 
     def build(self) -> list[Stage]:
         """Construct the stages (values were validated when the config was loaded)."""
@@ -105,9 +133,7 @@ class Config:
             value = param.parse(given, place) if is_text else param.validate(given, place)
             for values in matches:
                 values[param_name] = value
-        config = Config(self.name, self.source, self.description, stages)
-        check_chain(config)
-        return config
+        return Config(self.name, self.source, self.description, stages)  # checked
 
 
 def config_from_resolved(data: dict[str, Any]) -> Config:
@@ -194,23 +220,13 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
         if not isinstance(table["name"], str):
             raise ConfigError(f"{where}: stage #{position}: name must be text (a stage's "
                               f"name, e.g. name = \"hue\"), got {shown(table['name'])}")
-        values = {k: v for k, v in table.items() if k != "name"}
-        build_stage(table["name"], values, where)  # validates names, parameters, types
-        stages.append((table["name"], values))
-    for key in ("name", "description"):
-        if key in data and not isinstance(data[key], str):
-            raise ConfigError(f"{where}: {key} must be text, got {shown(data[key])}")
-    name = data.get("name", default_name)
-    if not name.strip():
-        raise ConfigError(f"{where}: name is empty: a config's name names its results folder")
-    config = Config(
-        name=name,
+        stages.append((table["name"], {k: v for k, v in table.items() if k != "name"}))
+    return Config(  # its values, name and chain are checked as it is made
+        name=data.get("name", default_name),
         source=where,
         description=data.get("description", ""),
         stages=stages,
     )
-    check_chain(config)
-    return config
 
 
 def _is_file(path: Path, spec: str) -> bool:
