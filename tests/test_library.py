@@ -407,3 +407,22 @@ def test_a_config_made_in_python_is_checked_as_a_config_file_is() -> None:
     good = vtrack.Config("mine", "mine", "", chain("hue", "backproject", "meanshift"))
     image = _red_block(1)[0]
     assert [r.index for r in vtrack.track([image], good, (50, 40, 40, 30))] == [0]
+
+
+def test_a_pipeline_checks_its_stages_as_a_config_is_checked() -> None:
+    """Pipeline("s0") raised "AttributeError: 's' object has no attribute 'name'" (a str's
+    characters taken for stages), Pipeline([1]) the same for 'int'; s0's stages reversed
+    raised a bare AssertionError (backproject.py) on the first frame, and s0's stages twice
+    over ran each twice a frame."""
+    stages = vtrack.load_config("s0").build()
+    for given, shown in (("s0", "'s0'"), ([1], r"\[1\]"), (None, "None")):
+        with pytest.raises(TypeError, match=r"^stages: expected a list of built stages \(e.g. "
+                           rf"vtrack.load_config\(name\).build\(\)\), got {shown}$"):
+            vtrack.Pipeline(given)  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="^pipeline: stage 'kalman' needs measurement, which "
+                       r"no earlier stage provides \(check the order of the chain\)$"):
+        vtrack.Pipeline(stages[::-1])
+    with pytest.raises(ConfigError, match="^pipeline: stage 'hue' appears 2 times"):
+        vtrack.Pipeline(stages + vtrack.load_config("s0").build())
+    frames = [vtrack.BgrFrame(0, 0.0, _red_block(1)[0])]
+    assert [r.index for r in vtrack.Pipeline(stages).track(frames, (50, 40, 40, 30))] == [0]

@@ -242,21 +242,26 @@ def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
     value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`), and a chain
     that cannot track (:func:`_check_tracks`)."""
-    classes = config.stage_classes()
-    _check_tracks(config.source, classes)
+    check_stages(config.source, config.stage_classes(), [values for _, values in config.stages])
+
+
+def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str, Any]]) -> None:
+    """:func:`check_chain` of a chain given as its stages' classes, in order, each with its
+    parameter values (those set, or all of a built stage's): ConfigError naming ``source``."""
+    _check_tracks(source, classes)
     available = set(PIPELINE_PROVIDES)
     before: list[str] = []
-    for (name, values), cls in zip(config.stages, classes, strict=True):
+    for settings, cls in zip(values, classes, strict=True):
         missing = cls.requires - available
         if missing:
             raise ConfigError(
-                f"{config.source}: stage '{name}' needs {', '.join(sorted(missing))}, "
+                f"{source}: stage '{cls.name}' needs {', '.join(sorted(missing))}, "
                 "which no earlier stage provides (check the order of the chain)"
             )
-        problem = cls.chain_problem(values, before)
+        problem = cls.chain_problem(settings, before)
         if problem:
-            raise ConfigError(f"{config.source}: stage '{name}': {problem}")
-        before.append(name)
+            raise ConfigError(f"{source}: stage '{cls.name}': {problem}")
+        before.append(cls.name)
         for provided in cls.provides:  # what an older value was computed from is stale now
             available -= DERIVED.get(provided, frozenset()) - cls.provides
         available |= cls.provides

@@ -3,7 +3,8 @@
 ``Pipeline(stages).track(frames, init_box)`` yields one :class:`FrameResult` per frame, in order.
 Stage timings are accumulated in ``pipeline.stage_seconds`` for ``run.json``. It is the layer
 under :class:`vtrack.Tracker`: its frames are :class:`Frame` objects (the Tracker also takes
-NumPy images and ``av.VideoFrame``); its first box is checked as the Tracker's is.
+NumPy images and ``av.VideoFrame``); its first box is checked as the Tracker's is, its stages
+as a config's chain is (:func:`vtrack.config.check_stages`).
 """
 
 from __future__ import annotations
@@ -13,11 +14,12 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from vtrack.config import check_stages
 from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame, GrayFrame
 from vtrack.geometry import Box, as_box, check_init_box
 from vtrack.overlays import Overlay
-from vtrack.params import check_seed
+from vtrack.params import check_seed, shown
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 #: A box that lies entirely outside the frame for more than this many frames in a row is
@@ -59,9 +61,15 @@ class Pipeline:
     """An ordered chain of stages sharing one :class:`TrackContext`."""
 
     def __init__(self, stages: list[Stage], seed: int = 0) -> None:
+        """``stages`` built stages (``load_config(...).build()``), checked as a config's chain
+        is (ConfigError naming ``pipeline``); TypeError for anything else."""
         check_seed(seed)
+        if not isinstance(stages, list | tuple) or not all(isinstance(s, Stage) for s in stages):
+            raise TypeError("stages: expected a list of built stages (e.g. "
+                            f"vtrack.load_config(name).build()), got {shown(stages)}")
         if not stages:
             raise ConfigError("a pipeline needs at least one stage")
+        check_stages("pipeline", [type(s) for s in stages], [s.settings() for s in stages])
         self.stages = stages
         self.seed = seed
         self.stage_seconds = {s.name: 0.0 for s in stages}
