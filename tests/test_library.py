@@ -426,3 +426,22 @@ def test_a_pipeline_checks_its_stages_as_a_config_is_checked() -> None:
         vtrack.Pipeline(stages + vtrack.load_config("s0").build())
     frames = [vtrack.BgrFrame(0, 0.0, _red_block(1)[0])]
     assert [r.index for r in vtrack.Pipeline(stages).track(frames, (50, 40, 40, 30))] == [0]
+
+
+def test_fps_given_for_a_video_is_refused_and_a_sequence_keeps_its_own_rate(
+        tmp_path: Path) -> None:
+    """track("clip.mp4", ..., fps=5) ignored fps without a word (vtrack run --fps refuses it
+    for a video file), and track(folder) timed a MOTChallenge sequence at 30 frames a second
+    whatever its seqinfo.ini said (vtrack run takes its frameRate)."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    with pytest.raises(ConfigError, match=f"^--fps: {re.escape(str(clip))} is a video file, "
+                       "whose frames carry their own timestamps"):
+        list(vtrack.track(clip, "s0", scene.boxes[0], fps=5))
+    assert len(list(vtrack.track(clip, "s0", scene.boxes[0]))) == 10
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    (folder / "seqinfo.ini").write_text("[Sequence]\nframeRate=10\n")
+    times = [r.time_s for r in vtrack.track(folder, "s0", scene.boxes[0])]
+    assert times == pytest.approx([i / 10 for i in range(10)])
+    frames = [r.time_s for r in vtrack.track(list(scene.frames()), "s0", scene.boxes[0])]
+    assert frames == pytest.approx([i / 30 for i in range(10)])  # NumPy frames: 30 unless told

@@ -19,6 +19,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
+from vtrack.io.images import DEFAULT_FPS
 from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
 from vtrack.pipeline import FrameResult, first_box_refused
@@ -31,7 +32,7 @@ BoxInput = Box | Sequence[float]
 
 def track(frames: FrameInput,
           config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG,
-          init_box: BoxInput | None = None, seed: int = 0, fps: float = 30.0,
+          init_box: BoxInput | None = None, seed: int = 0, fps: float | None = None,
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
@@ -40,7 +41,9 @@ def track(frames: FrameInput,
     frames the tracker keeps up with), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
     of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images (timed at
-    ``fps``) or of ``av.VideoFrame``; ``config`` a shipped config name, a TOML path or a
+    ``fps``, default 30, as an image folder is) or of ``av.VideoFrame``; ``fps`` given for a
+    video file, URL or device (whose frames carry their own timestamps) is a ConfigError, as
+    ``vtrack run --fps`` is; ``config`` a shipped config name, a TOML path or a
     :class:`Config`; ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)``
     (not needed by the detecting trackers s3/s4). Results hold their decoded frame only with
     ``keep_frames=True``. One image or frame on its own (not in a sequence) is a TypeError.
@@ -57,16 +60,16 @@ def track(frames: FrameInput,
             yield from _run(tracker, requested, box)
         return
     box = None if init_box is None else as_box(init_box)
-    tracker = Tracker(config, seed=seed, fps=fps, keep_frames=keep_frames)
+    tracker = Tracker(config, seed=seed, fps=DEFAULT_FPS if fps is None else fps,
+                      keep_frames=keep_frames)
     if box is None and tracker.needs_init_box:  # said before the input is opened
         raise ConfigError(f"init_box: {tracker.config.name} starts from the target's first "
                           "box: give init_box=(x, y, w, h)")
     if box is not None and tracker.multi_target:  # (Tracker.init's words name init())
         raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
-        path = _path_text(frames, "frames")
-        # an image folder is timed at fps; a video keeps its own timestamps
-        with open_source(path, fps=fps if os.path.isdir(path) else None) as source:
+        # an image folder is timed at fps; a video keeps its own timestamps (fps refused)
+        with open_source(_path_text(frames, "frames"), fps=fps) as source:
             yield from _run(tracker, source, box)
     else:
         yield from _run(tracker, frames, box)
