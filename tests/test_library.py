@@ -445,3 +445,31 @@ def test_fps_given_for_a_video_is_refused_and_a_sequence_keeps_its_own_rate(
     assert times == pytest.approx([i / 10 for i in range(10)])
     frames = [r.time_s for r in vtrack.track(list(scene.frames()), "s0", scene.boxes[0])]
     assert frames == pytest.approx([i / 30 for i in range(10)])  # NumPy frames: 30 unless told
+
+
+@pytest.mark.parametrize(("field", "value", "said"), [
+    ("max_frames", -1, r"max_frames -1: must be a whole number >= 1 \(how many frames to "
+                       r"track; None: to the end\)"),
+    ("max_frames", 0, "max_frames 0: must be a whole number >= 1"),
+    ("start", -5, r"start -5: must be a whole number >= 0 \(the first frame tracked, 0-based\)"),
+    ("start", "3", "start '3': must be a whole number >= 0"),
+    ("start_s", -1.0, r"start_s -1.0: must be a time in seconds from 0 to 3.16224e\+07 "
+                      r"\(a year\)"),
+    ("max_s", float("nan"), "max_s nan: must be a time in seconds above 0 to 3.16224e"),
+    ("seed", -1, "seed -1: must be a whole number from 0 to 4294967295"),
+])
+def test_a_run_request_made_in_python_checks_its_values(field: str, value: object, said: str,
+                                                        tmp_path: Path) -> None:
+    """RunRequest checked nothing the CLI checks before making one: max_frames=-1 or 0 tracked
+    no frame without a word, start=-5 said 'frame -5 of clip.mp4 could not be decoded
+    (damaged)', start="3" raised "TypeError: '>=' not supported between instances of 'str'
+    and 'int'", start_s=-1 and max_s=nan were taken, config="s0" raised "AttributeError: 'str'
+    object has no attribute 'stages'"."""
+    config = vtrack.load_config("s0")
+    with pytest.raises(ConfigError, match=f"^{said}"):
+        vtrack.RunRequest("clip.mp4", tmp_path, config, (50, 40, 40, 30), **{field: value})
+    with pytest.raises(TypeError, match=r"^config: expected a vtrack.Config \(vtrack.load_"
+                       r"config\(name\)\), got str$"):
+        vtrack.RunRequest("clip.mp4", tmp_path, "s0")  # type: ignore[arg-type]
+    request = vtrack.RunRequest("clip.mp4", tmp_path, config, (50, 40, 40, 30), max_frames=3)
+    assert request.init_box == vtrack.Box(50, 40, 40, 30)

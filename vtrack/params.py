@@ -15,6 +15,10 @@ from typing import Any
 
 from vtrack.errors import ConfigError, number_text
 
+#: The longest time a run's start or span takes in seconds (``--start Ts``, ``--frames Ts``,
+#: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
+MAX_SECONDS = 366 * 24 * 3600.0
+
 #: The largest seed of the stochastic stages (NumPy seeds 0 .. 2**32 - 1 as given, like
 #: ``numpy.random.seed``): ``--seed`` and ``seed=`` take 0 .. MAX_SEED.
 MAX_SEED = 2**32 - 1

@@ -15,15 +15,17 @@ import math
 import os
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
+from numbers import Integral
 from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
 from vtrack.errors import ConfigError
-from vtrack.geometry import Box
+from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
 from vtrack.io.video import FFmpegInput
+from vtrack.params import MAX_SECONDS, check_seed, shown
 from vtrack.stages.base import stage_class
 
 
@@ -76,6 +78,27 @@ class RunRequest:
     video_out: str | None = None
 
     def __post_init__(self) -> None:
+        """Check the values the CLI checks before it makes a request (one made in Python
+        too): ConfigError naming the field for a value out of its range, TypeError for a
+        ``config`` that is not a :class:`Config`; a box given as 4 numbers becomes a Box."""
+        if not isinstance(self.config, Config):
+            raise TypeError(f"config: expected a vtrack.Config (vtrack.load_config(name)), got "
+                            f"{type(self.config).__name__}")
+        if self.init_box is not None:
+            object.__setattr__(self, "init_box", as_box(self.init_box))
+        check_seed(self.seed)  # (fps: checked as the input opens, where --fps applies)
+        _check_whole("start", self.start, 0, "the first frame tracked, 0-based")
+        if self.max_frames is not None:
+            _check_whole("max_frames", self.max_frames, 1, "how many frames to track; None: "
+                         "to the end")
+        for name, value, least in (("start_s", self.start_s, "from 0"),
+                                   ("max_s", self.max_s, "above 0")):
+            if value is not None and not (isinstance(value, int | float)
+                                          and not isinstance(value, bool)
+                                          and (value >= 0 if name == "start_s" else value > 0)
+                                          and value <= MAX_SECONDS):
+                raise ConfigError(f"{name} {shown(value)}: must be a time in seconds {least} "
+                                  f"to {MAX_SECONDS:g} (a year)")
         # files a stage reads (mot_detections' det.txt) relative to the folder the request was
         # made in, not the one a worker runs in (a Dask worker's: another file, or none)
         object.__setattr__(self, "config", _absolute_files(self.config))
@@ -250,6 +273,14 @@ def _file_values(config: Config) -> Iterator[tuple[int, str, str]]:
 def _stage_files(config: Config) -> list[str]:
     """The files the stages of ``config`` read."""
     return [path for _, _, path in _file_values(config)]
+
+
+def _check_whole(name: str, value: object, least: int, meaning: str) -> None:
+    """ConfigError unless ``value`` is a whole number (a NumPy one too) of at least ``least``;
+    ``meaning`` says what the number is."""
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < least:
+        raise ConfigError(f"{name} {shown(value)}: must be a whole number >= {least} "
+                          f"({meaning})")
 
 
 def _absolute_files(config: Config) -> Config:

@@ -10,10 +10,8 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._progress import STATS_PERIOD
+from vtrack.params import MAX_SECONDS
 
-#: The longest time ``--start Ts`` and ``--frames Ts`` accept (a year), so a frame number fits
-#: any rate.
-MAX_SECONDS = 366 * 24 * 3600.0
 #: The longest wait an option sets (--follow, --worker-timeout, --scheduler-timeout): a day.
 MAX_WAIT_S = 24 * 3600.0
 
