@@ -473,3 +473,20 @@ def test_a_run_request_made_in_python_checks_its_values(field: str, value: objec
         vtrack.RunRequest("clip.mp4", tmp_path, "s0")  # type: ignore[arg-type]
     request = vtrack.RunRequest("clip.mp4", tmp_path, config, (50, 40, 40, 30), max_frames=3)
     assert request.init_box == vtrack.Box(50, 40, 40, 30)
+
+
+def test_track_refuses_settings_a_run_request_would_override(tmp_path: Path) -> None:
+    """track(request, config="s1") tracked with the request's s0, and init_box=, seed= and fps=
+    beside a request were dropped the same way, without a word."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    request = vtrack.RunRequest(str(clip), tmp_path / "out", vtrack.load_config("s0"),
+                                scene.boxes[0])
+    with pytest.raises(ConfigError, match=r"^config: the RunRequest carries its own; set it in "
+                       r"the request \(dataclasses.replace\(request, ...\)\)$"):
+        list(vtrack.track(request, "s1"))
+    with pytest.raises(ConfigError, match="^init_box, seed: the RunRequest carries its own; "
+                       "set them in the request"):
+        list(vtrack.track(request, init_box=(1, 1, 9, 9), seed=3))
+    assert len(list(vtrack.track(request))) == 10
+    assert len(list(vtrack.track(clip, init_box=scene.boxes[0]))) == 10  # robust, seed 0

@@ -32,7 +32,7 @@ BoxInput = Box | Sequence[float]
 
 def track(frames: FrameInput,
           config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG,
-          init_box: BoxInput | None = None, seed: int = 0, fps: float | None = None,
+          init_box: BoxInput | None = None, seed: int | None = None, fps: float | None = None,
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
@@ -44,12 +44,22 @@ def track(frames: FrameInput,
     ``fps``, default 30, as an image folder is) or of ``av.VideoFrame``; ``fps`` given for a
     video file, URL or device (whose frames carry their own timestamps) is a ConfigError, as
     ``vtrack run --fps`` is; ``config`` a shipped config name, a TOML path or a
-    :class:`Config`; ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)``
-    (not needed by the detecting trackers s3/s4). Results hold their decoded frame only with
+    :class:`Config` (None: ``DEFAULT_CONFIG``); ``seed`` seeds the stochastic stages (None:
+    0); ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)`` (not
+    needed by the detecting trackers s3/s4). A RunRequest carries its own ``config``,
+    ``init_box``, ``seed`` and ``fps``: giving any of them beside it (a config other than the
+    default) is a ConfigError. Results hold their decoded frame only with
     ``keep_frames=True``. One image or frame on its own (not in a sequence) is a TypeError.
     """
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
+        given = [name for name, value in (("config", config), ("init_box", init_box),
+                                          ("seed", seed), ("fps", fps))
+                 if value is not None and not (name == "config" and value == DEFAULT_CONFIG)]
+        if given:  # it would be ignored
+            raise ConfigError(f"{', '.join(given)}: the RunRequest carries its own; set "
+                              f"{'it' if len(given) == 1 else 'them'} in the request "
+                              "(dataclasses.replace(request, ...))")
         request = frames
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
         with open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
@@ -60,7 +70,8 @@ def track(frames: FrameInput,
             yield from _run(tracker, requested, box)
         return
     box = None if init_box is None else as_box(init_box)
-    tracker = Tracker(config, seed=seed, fps=DEFAULT_FPS if fps is None else fps,
+    tracker = Tracker(config, seed=0 if seed is None else seed,
+                      fps=DEFAULT_FPS if fps is None else fps,
                       keep_frames=keep_frames)
     if box is None and tracker.needs_init_box:  # said before the input is opened
         raise ConfigError(f"init_box: {tracker.config.name} starts from the target's first "
