@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import re
 from dataclasses import replace
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -490,3 +491,18 @@ def test_track_refuses_settings_a_run_request_would_override(tmp_path: Path) -> 
         list(vtrack.track(request, init_box=(1, 1, 9, 9), seed=3))
     assert len(list(vtrack.track(request))) == 10
     assert len(list(vtrack.track(clip, init_box=scene.boxes[0]))) == 10  # robust, seed 0
+
+
+def test_decimal_numbers_are_taken_for_a_box_and_a_frame_rate() -> None:
+    """Decimal("29.97") as fps was refused 'fps 29.97: must be a frame rate from 0.01 to 10000
+    frames per second' (it is one), and a box of Decimals 'init_box: expected (x, y, w, h)
+    numbers': Decimal is no numbers.Real, though it is a number (Fraction was taken)."""
+    image = _red_block(1)[0]
+    box = tuple(Decimal(v) for v in ("50", "40.5", "40", "30"))
+    results = list(vtrack.track([image], "robust", box, fps=Decimal("29.97")))
+    assert results[0].box == vtrack.Box(50, 40.5, 40, 30)
+    assert vtrack.Tracker("s1", fps=Decimal("29.97")).fps == 29.97
+    with pytest.raises(ConfigError, match="^fps nan: must be a frame rate"):
+        vtrack.Tracker("s1", fps=Decimal("NaN"))
+    with pytest.raises(ConfigError, match=r"^init_box: expected \(x, y, w, h\) numbers"):
+        list(vtrack.track([image], "robust", (1j, 40, 40, 30)))

@@ -7,6 +7,8 @@ import threading
 import unicodedata
 from collections.abc import Callable, Generator, Iterator
 from contextlib import contextmanager
+from decimal import Decimal
+from numbers import Real
 from typing import Any
 
 
@@ -24,6 +26,13 @@ def number_text(value: float) -> str:
         return str(value)
     short = f"{value:g}"
     return short if float(short) == value else repr(float(value))
+
+
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number a user may give for a number: an int, float,
+    ``Fraction``, ``Decimal`` or NumPy number; not a bool (True is not the number 1), a string
+    or a complex number."""
+    return isinstance(value, Real | Decimal) and not isinstance(value, bool)
 
 
 def printable(text: str) -> str:

@@ -8,13 +8,12 @@ already clipped to the frame, used to cut the part of a frame a stage works on.
 from __future__ import annotations
 
 import math
-import numbers
 import re
 import reprlib
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
-from vtrack.errors import ConfigError, number_text
+from vtrack.errors import ConfigError, is_real, number_text
 
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
 #: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
@@ -164,14 +163,14 @@ def parse_box_text(text: str, where: str, error: type[Exception],
 
 
 def as_box(box: Box | Any, where: str = "init_box") -> Box:
-    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)`` (real numbers, NumPy's
-    too; not booleans nor strings); ConfigError naming ``where`` otherwise (what ``--init``
+    """A :class:`Box` from a ``Box`` or any 4 numbers ``(x, y, w, h)`` (real numbers:
+    :func:`~vtrack.errors.is_real`); ConfigError naming ``where`` otherwise (what ``--init``
     raises). Whether it can be tracked in a frame is :func:`check_init_box`'s to say."""
     try:  # a Box too: Box("10", 1, 2, 3) is built without a check
         if isinstance(box, str | bytes):  # "1234" would be 4 digits
             raise TypeError
         items = tuple(box)
-        if any(isinstance(v, bool) or not isinstance(v, numbers.Real) for v in items):
+        if not all(is_real(v) for v in items):
             raise TypeError  # True is not the number 1, nor '10' the number 10
         values = tuple(float(v) for v in items)
     except (TypeError, ValueError, OverflowError):
