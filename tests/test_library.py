@@ -506,3 +506,13 @@ def test_decimal_numbers_are_taken_for_a_box_and_a_frame_rate() -> None:
         vtrack.Tracker("s1", fps=Decimal("NaN"))
     with pytest.raises(ConfigError, match=r"^init_box: expected \(x, y, w, h\) numbers"):
         list(vtrack.track([image], "robust", (1j, 40, 40, 30)))
+
+
+def test_a_parameter_given_twice_to_the_tracker_is_refused() -> None:
+    """Tracker("s0", **{"meanshift.iterations": 2}, meanshift__iterations=3) ran with 3 and
+    dropped the 2 without a word (the two spellings name one parameter)."""
+    with pytest.raises(ConfigError, match=r"^meanshift.iterations: given twice "
+                       r"\(meanshift.iterations=2, meanshift__iterations=3\); give it once$"):
+        vtrack.Tracker("s0", **{"meanshift.iterations": 2}, meanshift__iterations=3)
+    tracker = vtrack.Tracker("s0", meanshift__iterations=3, kalman__q=2.0)
+    assert dict(tracker.config.stages)["meanshift"]["iterations"] == 3

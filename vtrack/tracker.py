@@ -80,6 +80,21 @@ def check_flag(value: object, name: str) -> bool:
     return bool(value)
 
 
+def _by_parameter(params: dict[str, Any]) -> dict[str, Any]:
+    """``params`` keyed ``"stage.param"`` (``stage__param`` is written so); ConfigError for one
+    parameter given twice (``meanshift__iterations=3`` and ``**{"meanshift.iterations": 2}``),
+    which would leave one value unused without a word."""
+    values: dict[str, Any] = {}
+    given: dict[str, str] = {}
+    for key, value in params.items():
+        name = key.replace("__", ".", 1).strip()
+        if name in given:
+            raise ConfigError(f"{name}: given twice ({given[name]}={shown(params[given[name]])}, "
+                              f"{key}={shown(value)}); give it once")
+        values[name], given[name] = value, key
+    return values
+
+
 class Tracker:
     """A per-frame tracker over any shipped or own config.
 
@@ -96,8 +111,7 @@ class Tracker:
                  **params: Any) -> None:
         chain = config if isinstance(config, Config) else load_config(config)
         if params:
-            chain = chain.with_values({key.replace("__", ".", 1): value
-                                       for key, value in params.items()})
+            chain = chain.with_values(_by_parameter(params))
         self.config = chain
         self.seed = check_seed(seed)
         self.fps = checked_fps(fps, "fps")
