@@ -133,3 +133,16 @@ def test_a_chain_mixing_the_fixed_point_models_is_refused_when_loaded(
     config.write_text('name = "mix"\n' + "".join(f'[[stage]]\nname = "{n}"\n' for n in chain))
     for line in refusals(config, tmp_path):
         assert line == f"vtrack: error: {config}: {said}", line
+
+
+def test_a_folder_given_to_stages_is_named_a_folder_as_run_names_it(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack stages mine` (mine a folder) said 'mine: not a stage, a shipped config or a
+    config file (stages: ...)' where `vtrack run -c mine` says 'mine: is a folder, not a config
+    file'."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine").mkdir()
+    assert one_error_line(vtrack("stages", "mine")) == \
+        "vtrack: error: mine: is a folder, not a config file"
+    (tmp_path / "hue").mkdir()  # a stage's name is the stage
+    assert vtrack("stages", "hue").output.startswith("hue: ")

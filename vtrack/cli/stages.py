@@ -92,7 +92,7 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
         if name in known:
             chosen.setdefault(name, [])
         elif name in configs or Path(name).suffix == ".toml" or "/" in name \
-                or Path(name).is_file():
+                or Path(name).exists():  # a folder too: load_config says what it is
             for stage, settings in load_config(name).stages:
                 chosen.setdefault(stage, []).append((name, settings))
         else:
