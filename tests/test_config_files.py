@@ -5,6 +5,7 @@ the config (``run``, ``batch``, ``stages``)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from click.testing import CliRunner, Result
@@ -13,6 +14,9 @@ from conftest import one_error_line
 from vtrack.cli import main
 from vtrack.errors import ConfigError
 from vtrack.tracker import Tracker
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
 
 CHAIN_TAIL = '[[stage]]\nname = "backproject"\n[[stage]]\nname = "meanshift"\n'
 
@@ -146,3 +150,34 @@ def test_a_folder_given_to_stages_is_named_a_folder_as_run_names_it(
         "vtrack: error: mine: is a folder, not a config file"
     (tmp_path / "hue").mkdir()  # a stage's name is the stage
     assert vtrack("stages", "hue").output.startswith("hue: ")
+
+
+def test_a_detections_file_left_unnamed_is_refused_before_a_batch_runs(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A config of mot_detections -> byte_tracks without `path` was taken: `vtrack batch` ran
+    every input, each failing with "stage 'mot_detections': parameter 'path' must name a
+    det.txt file (...)", no config file named, then '1 run (1 failed)', exit 1; `vtrack run`
+    and Tracker said the same at the first frame. It is one line naming the file now, before
+    anything runs (exit 2); --set names the file as before."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    config = tmp_path / "det.toml"
+    config.write_text('name = "det"\n[[stage]]\nname = "mot_detections"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    said = (f"vtrack: error: {config}: stage 'mot_detections': parameter 'path' must name the "
+            'file it reads (path = "FILE" in its [[stage]] table, or --set '
+            "mot_detections.path=FILE)")
+    folder = tmp_path / "inputs"
+    folder.mkdir()
+    (folder / clip.path.name).symlink_to(clip.path)
+    assert one_error_line(vtrack("batch", str(folder), "-c", str(config), "--no-video",
+                                 "--out", str(tmp_path / "b"))) == said
+    assert not (tmp_path / "b").exists()
+    assert one_error_line(vtrack("run", str(clip.path), "-c", str(config), "--no-video",
+                                 "--out", str(tmp_path / "r"))) == said
+    with pytest.raises(ConfigError, match="parameter 'path' must name the file it reads"):
+        Tracker(str(config))
+    det = tmp_path / "det.txt"
+    det.write_text("1,-1,10,10,20,20,0.9,-1,-1,-1\n")
+    result = vtrack("run", str(clip.path), "-c", str(config), "--set",
+                    f"mot_detections.path={det}", "--no-video", "--out", str(tmp_path / "s"))
+    assert result.exit_code == 0, result.output

@@ -79,6 +79,18 @@ class Config:
         """Construct the stages (values were validated when the config was loaded)."""
         return [build_stage(name, values, self.source) for name, values in self.stages]
 
+    def check_files_named(self) -> None:
+        """ConfigError naming ``source``, the stage and the parameter for a parameter naming a
+        file its stage reads (its ``file_params``: mot_detections.path) left empty. Not asked
+        of a config file as it loads (``--set`` may name the file), but of a run's request and
+        a Tracker, before any frame is read."""
+        for stage, values in self.stages:
+            for name in stage_class(stage, self.source).file_params:
+                if not values.get(name):
+                    raise ConfigError(f"{self.source}: stage '{stage}': parameter '{name}' must "
+                                      f"name the file it reads ({name} = \"FILE\" in its "
+                                      f"[[stage]] table, or --set {stage}.{name}=FILE)")
+
     def stage_classes(self) -> list[type[Stage]]:
         """The stages' classes (their declarations: parameters, requires/provides, kind), no
         stage built."""

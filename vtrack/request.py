@@ -84,6 +84,7 @@ class RunRequest:
         if not isinstance(self.config, Config):
             raise TypeError(f"config: expected a vtrack.Config (vtrack.load_config(name)), got "
                             f"{type(self.config).__name__}")
+        self.config.check_files_named()
         if self.init_box is not None:
             object.__setattr__(self, "init_box", as_box(self.init_box))
         check_seed(self.seed)  # (fps: checked as the input opens, where --fps applies)

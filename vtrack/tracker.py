@@ -112,6 +112,7 @@ class Tracker:
         chain = config if isinstance(config, Config) else load_config(config)
         if params:
             chain = chain.with_values(_by_parameter(params))
+        chain.check_files_named()
         self.config = chain
         self.seed = check_seed(seed)
         self.fps = checked_fps(fps, "fps")
