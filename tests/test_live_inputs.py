@@ -663,12 +663,21 @@ def test_keeping_up_works_through_a_decoders_bursts_when_quick_on_average() -> N
             yield i + 1
             time.sleep(2 * period)
 
-    source = KeepingUp(pairs(), "pairs", period_s=period)
-    taken = []
-    for item in source:
-        taken.append(item)
-        time.sleep(0.6 * period)  # a pair takes longer than one period, less than two
-    assert taken == list(range(30)) and source.passed == 0
+    def run() -> tuple[list[int], int]:
+        source = KeepingUp(pairs(), "pairs", period_s=period)
+        taken = []
+        for item in source:
+            taken.append(item)
+            time.sleep(0.6 * period)  # a pair takes longer than one period, less than two
+        return taken, source.passed
+
+    # Up to three tries: at load 10 (the suite beside other jobs) one wake-up over 20 ms late
+    # still passed an item over once. A KeepingUp that passes a pair's second item over does so
+    # on every pair of every try.
+    tries = [run()]
+    while tries[-1] != (list(range(30)), 0) and len(tries) < 3:
+        tries.append(run())
+    assert tries[-1] == (list(range(30)), 0), tries
 
 
 def test_keeping_up_works_through_a_burst_longer_than_its_queue() -> None:
