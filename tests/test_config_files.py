@@ -181,3 +181,30 @@ def test_a_detections_file_left_unnamed_is_refused_before_a_batch_runs(
     result = vtrack("run", str(clip.path), "-c", str(config), "--set",
                     f"mot_detections.path={det}", "--no-video", "--out", str(tmp_path / "s"))
     assert result.exit_code == 0, result.output
+
+
+@pytest.mark.parametrize("shipped", ["robust", "fixed_camera", "s0"])
+def test_a_shipped_config_printed_as_toml_loads_back_as_the_same_chain(
+        tmp_path: Path, shipped: str) -> None:
+    """A config file leaves its stages' defaults where it says nothing (robust's stages'
+    defaults are not robust's values): ``vtrack stages CONFIG --toml`` prints the whole shipped
+    file to start one's own from, and that file is the same chain as the shipped config."""
+    from vtrack.config import load_config
+
+    printed = vtrack("stages", shipped, "--toml")
+    assert printed.exit_code == 0, printed.output
+    mine = tmp_path / "mine.toml"
+    mine.write_text(printed.stdout)
+    assert load_config(str(mine)).stages == load_config(shipped).stages
+    again = vtrack("stages", str(mine), "--toml")
+    assert again.exit_code == 0 and again.stdout == printed.stdout
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("stages", "hue", "--toml"), "hue: a stage, not a config"),
+    (("stages", "--toml"), "give one CONFIG"),
+    (("stages", "s0", "s2", "--toml"), "give one CONFIG"),
+    (("stages", "missing.toml", "--toml"), "missing.toml: config file not found"),
+])
+def test_toml_of_anything_but_one_config_is_one_line(args: tuple[str, ...], said: str) -> None:
+    assert said in one_error_line(vtrack(*args))

@@ -145,16 +145,48 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
     return "\n".join(lines)
 
 
+def config_toml(name: str) -> str:
+    """The TOML text of config ``name`` (a shipped config's name or a config file, as
+    ``--config`` takes it), checked first as ``vtrack run`` checks it: a shipped config's own
+    file, with the comments that say where each value comes from, to copy and change (a value
+    a config file leaves out is its stage's default, not the config it was copied from).
+    ConfigError for a stage's name, or a config that does not load."""
+    from vtrack.config import load_config, shipped_configs
+    from vtrack.errors import ConfigError, InputError
+    from vtrack.io.limits import CONFIG_BYTES, read_text_bounded
+    from vtrack.stages.base import all_stages
+
+    if name in all_stages():
+        raise ConfigError(f"{name}: a stage, not a config: --toml prints a config's file "
+                          "(vtrack stages lists the shipped configs)")
+    load_config(name)  # its mistakes said as run says them
+    path = shipped_configs().get(name, name)
+    try:
+        return read_text_bounded(path, CONFIG_BYTES, "config")
+    except InputError as exc:  # (changed since it loaded)
+        raise ConfigError(str(exc)) from None
+
+
 @click.command("stages")
 @click.argument("names", nargs=-1, metavar="[STAGE|CONFIG]...",
                 type=NonEmptyText("a stage's name, a shipped config's name or a TOML file "
                                   "(vtrack stages lists them)"))
 @click.option("--markdown", is_flag=True, help="Print Markdown (the source of docs/stages.md).")
-def command(names: tuple[str, ...], markdown: bool) -> None:
+@click.option("--toml", is_flag=True,
+              help="Print the one CONFIG named as its TOML file, to start a config of your own "
+                   "from (vtrack stages robust --toml > mine.toml): values a file leaves out "
+                   "are the stages' defaults, not robust's.")
+def command(names: tuple[str, ...], markdown: bool, toml: bool) -> None:
     """List the stages, their parameters (type, default, help) and the shipped configs; with
     STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0, vtrack stages
     mine.toml), only those stages, and for a CONFIG (a shipped name or a file, as --config
     takes) the values it sets."""
     if names and markdown:
         raise click.UsageError("--markdown prints the whole reference; give no names with it")
+    if toml:
+        if markdown or len(names) != 1:
+            raise click.UsageError("--toml prints one config's file: give one CONFIG "
+                                   "(vtrack stages robust --toml > mine.toml)")
+        click.echo(config_toml(names[0]), nl=False)
+        return
     click.echo(stages_text(markdown, names))
