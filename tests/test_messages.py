@@ -279,8 +279,8 @@ def test_a_batch_and_report_of_one_run_count_it_singular(clip_factory: ClipFacto
 def test_help_names_the_ground_truth_files_batch_finds_and_scene_writes() -> None:
     """vtrack scene writes an image folder's MOTChallenge truth as groundtruth_mot.txt, which
     vtrack batch reads; its --help named only gt.txt. Scene's named one multi-target scenario."""
-    from vtrack.batch.discover import SEQUENCE_MOT_GT, VIDEO_GT, VIDEO_MOT_GT
-    from vtrack.evaluate.groundtruth import SEQUENCE_GT
+    from vtrack.batch.discover import SEQUENCE_MOT_GT, VIDEO_MOT_GT
+    from vtrack.evaluate.groundtruth import SEQUENCE_GT, VIDEO_GT
 
     batch = vtrack("batch", "--help").output.split("Options:")[0]
     batch = " ".join(batch.split())  # lines wrapped anywhere
@@ -388,3 +388,25 @@ def test_a_batch_says_when_multi_target_configs_find_only_single_target_ground_t
                     "-o", str(tmp_path / "out"), "-y")
     assert result.exit_code == 0, result.output
     assert "warning" not in result.stderr
+
+
+@pytest.mark.parametrize("fmt", ["images", "mp4"])
+def test_a_run_without_a_first_box_names_the_ground_truth_batch_would_take(
+        clip_factory: ClipFactory, tmp_path: Path, fmt: str) -> None:
+    """``vtrack run Bird2/`` (no --gt) said only "give --init x,y,w,h, --gt FILE ...", though
+    the folder holds the ground truth ``vtrack batch`` takes by itself; the message now names it
+    as a --gt to give. An input without one is told --gt FILE, as before."""
+    clip = clip_factory("smooth", frames=30, fmt=fmt)
+    copy = tmp_path / ("seq" if fmt == "images" else "clip.mp4")
+    if fmt == "images":
+        shutil.copytree(clip.path, copy)
+        truth = copy / "groundtruth_rect.txt"
+    else:
+        shutil.copy(clip.path, copy)
+        truth = tmp_path / "clip.gt.txt"
+        shutil.copy(clip.gt, truth)
+    said = one_error_line(vtrack("run", str(copy), "--no-video", "--out", str(tmp_path / "o")))
+    assert f"give --gt {truth} (its ground truth" in said
+    truth.unlink()
+    said = one_error_line(vtrack("run", str(copy), "--no-video", "--out", str(tmp_path / "o")))
+    assert "give --gt FILE, --init x,y,w,h" in said

@@ -57,6 +57,7 @@ from vtrack.errors import (
 )
 from vtrack.evaluate.groundtruth import (
     all_dropped_note,
+    groundtruth_beside,
     past_end_note,
     read_boxes,
     read_mot_counting,
@@ -802,9 +803,12 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
             raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
                               f"--init x,y,w,h (or --gt FILE); {request.input} has no sidecar "
                               "file to hold one")
+        beside = groundtruth_beside(request.input)
+        gt_hint = ("--gt FILE" if beside is None else
+                   f"--gt {beside} (its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
-            f"{request.config.source}: this tracker needs an initial box: give --init x,y,w,h, "
-            f"--gt FILE or write x,y,w,h into {sidecar_path(request.input).name} "
+            f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
+            f"--init x,y,w,h or write x,y,w,h into {sidecar_path(request.input).name} "
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,

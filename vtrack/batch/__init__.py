@@ -41,10 +41,8 @@ is ``partial``. A worker process that dies is retried once, then reported ``fail
 from __future__ import annotations
 
 from vtrack.batch.discover import (
-    SEQUENCE_GT,
     SEQUENCE_INIT,
     SEQUENCE_MOT_GT,
-    VIDEO_GT,
     VIDEO_INIT,
     VIDEO_MOT_GT,
     VIDEO_SUFFIXES,
@@ -58,6 +56,7 @@ from vtrack.batch.jobs import SUMMARY_COLUMNS, Job, Outcome
 from vtrack.batch.plan import Plan, completed_summary, plan
 from vtrack.batch.summary import SummaryWriter, run_batch
 from vtrack.batch.worker import execute
+from vtrack.evaluate.groundtruth import SEQUENCE_GT, VIDEO_GT
 from vtrack.machine import cpu_count
 from vtrack.run import STATUS_FAILED
 

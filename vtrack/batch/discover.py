@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError, plural
-from vtrack.evaluate.groundtruth import SEQUENCE_GT
+from vtrack.evaluate.groundtruth import groundtruth_beside
 from vtrack.io.files import folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import sequence_images
@@ -28,8 +28,6 @@ VIDEO_SUFFIXES = frozenset({
 })
 #: MOTChallenge ground truth inside a sequence folder, first found wins.
 SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
-#: Single-target ground truth beside ``name.mp4`` (``{}`` is the name), first found wins.
-VIDEO_GT = ("{}.gt.txt", "{}.txt")
 #: MOTChallenge ground truth beside ``name.mp4``.
 VIDEO_MOT_GT = ("{}.mot.txt",)
 #: Initial box of an input without single-target ground truth (video, sequence folder).
@@ -63,7 +61,7 @@ def _sequence(folder: Path, gt_origin: int | None) -> BatchInput:
     return BatchInput(
         name=folder.name,
         path=folder,
-        groundtruth=_first(folder, SEQUENCE_GT),
+        groundtruth=groundtruth_beside(folder),
         mot_groundtruth=_first(folder, SEQUENCE_MOT_GT),
         init=_first(folder, [SEQUENCE_INIT]),
         gt_origin=1 if gt_origin is None else gt_origin,
@@ -75,7 +73,7 @@ def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
     return BatchInput(
         name=name,
         path=path,
-        groundtruth=_first(path.parent, (p.format(stem) for p in VIDEO_GT)),
+        groundtruth=groundtruth_beside(path),
         mot_groundtruth=_first(path.parent, (p.format(stem) for p in VIDEO_MOT_GT)),
         init=_first(path.parent, [VIDEO_INIT.format(stem)]),
         gt_origin=0 if gt_origin is None else gt_origin,

@@ -8,9 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.batch.discover import (
-    SEQUENCE_GT,
     SEQUENCE_INIT,
-    VIDEO_GT,
     VIDEO_INIT,
     BatchInput,
     unscored_by_multi_target,
@@ -18,6 +16,7 @@ from vtrack.batch.discover import (
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError, OutputError
+from vtrack.evaluate.groundtruth import SEQUENCE_GT, VIDEO_GT
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact

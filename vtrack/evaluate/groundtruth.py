@@ -39,6 +39,20 @@ _QUOTE_MAX = 60
 #: Single-target ground truth inside an OTB-style sequence folder (one holding ``img/``), first
 #: found wins. OTB, VOT, UAV123 and LaSOT ship these with MATLAB's 1-based boxes.
 SEQUENCE_GT = ("groundtruth_rect.txt", "groundtruth.txt")
+#: Single-target ground truth beside a video ``name.mp4`` (``{}`` is its stem), first found wins.
+VIDEO_GT = ("{}.gt.txt", "{}.txt")
+
+
+def groundtruth_beside(path: str | PathLike[str]) -> Path | None:
+    """The single-target ground truth ``vtrack batch`` takes for input ``path`` (as given): a
+    sequence folder's :data:`SEQUENCE_GT` file, else a video's :data:`VIDEO_GT` file beside
+    it; None when there is none."""
+    path = Path(path)
+    if path.is_dir():
+        candidates = [path / name for name in SEQUENCE_GT]
+    else:
+        candidates = [path.parent / name.format(path.stem) for name in VIDEO_GT]
+    return next((c for c in candidates if c.is_file()), None)
 
 
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
