@@ -516,3 +516,26 @@ def test_a_parameter_given_twice_to_the_tracker_is_refused() -> None:
         vtrack.Tracker("s0", **{"meanshift.iterations": 2}, meanshift__iterations=3)
     tracker = vtrack.Tracker("s0", meanshift__iterations=3, kalman__q=2.0)
     assert dict(tracker.config.stages)["meanshift"]["iterations"] == 3
+
+
+def test_the_readme_scorer_gives_the_metrics_vtrack_run_records(tmp_path: Path) -> None:
+    """README's library section scores a run with vtrack.evaluate (read_boxes, summarize): the
+    numbers are run.json's for the same frames (run scores the boxes as track.csv writes them,
+    to a thousandth of a pixel), from an OTB folder's 1-based ground truth."""
+    import json
+
+    from vtrack.evaluate import read_boxes, summarize
+
+    scene = make_scene("occlusion", seed=2, width=160, height=120, frames=60)
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    truth = read_boxes(folder / "groundtruth_rect.txt", origin=1)
+    results = list(vtrack.track(folder, "robust", truth[0]))
+    scores = summarize([r.box for r in results], truth, [r.state for r in results])
+    out = tmp_path / "out"
+    run(vtrack.RunRequest(str(folder), out, vtrack.load_config("robust"),
+                          gt_path=str(folder / "groundtruth_rect.txt"), gt_origin=1,
+                          video=False))
+    recorded = json.loads((out / "run.json").read_text())["metrics"]
+    assert recorded.keys() == scores.keys() and scores["frames_evaluated"] == 60
+    for name, value in scores.items():
+        assert value == pytest.approx(recorded[name], abs=1e-3), name
