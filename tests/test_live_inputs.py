@@ -275,15 +275,14 @@ def test_following_a_plain_mp4_says_it_cannot_be_followed(tmp_path: Path) -> Non
     assert b"follow fragmented MP4, MPEG-TS or Matroska" in done.stderr
 
 
-def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) -> None:
-    """Sent in real time to a receiver already listening (``--no-live``: every frame tracked),
-    a UDP stream gives every frame, the ones the decoder still held when the stream went quiet
-    included; the run then ends partial, saying the stream stopped."""
+def _sent_whole(tmp_path: Path, options: list[str]) -> tuple[int, bytes]:
+    """A 45-frame clip sent in real time over UDP to ``vtrack run -c s2 ... --no-video -o
+    tmp_path/out`` with ``options``, listening before the sender starts: its exit code and
+    stderr."""
     clip, box = _live_clip(tmp_path, frames=45)
     port = _free_port(socket.SOCK_DGRAM)
-    # --timeout 3: on a loaded machine a real-time sender may pause for over a second
-    receiver = _receiver([f"udp://127.0.0.1:{port}", "--no-live", "-c", "s2", "--init", box,
-                          "--timeout", "3", "--no-video", "-o", str(tmp_path / "out")])
+    receiver = _receiver([f"udp://127.0.0.1:{port}", *options, "-c", "s2", "--init", box,
+                          "--no-video", "-o", str(tmp_path / "out")])
     try:
         _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)
         subprocess.run([*SENDER, str(clip), f"udp://127.0.0.1:{port}"], check=True, timeout=60)
@@ -292,8 +291,30 @@ def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) ->
         if receiver.poll() is None:
             receiver.kill()
             receiver.wait()
-    assert receiver.returncode == 1 and b"the stream stopped at frame 45" in stderr, stderr
+    return receiver.returncode, stderr
+
+
+def test_a_udp_stream_sent_whole_is_tracked_to_its_last_frame(tmp_path: Path) -> None:
+    """Sent in real time to a receiver already listening (``--no-live``: every frame tracked),
+    a UDP stream gives every frame, the ones the decoder still held when the stream went quiet
+    included; the run then ends partial, saying the stream stopped."""
+    # --timeout 3: on a loaded machine a real-time sender may pause for over a second
+    code, stderr = _sent_whole(tmp_path, ["--no-live", "--timeout", "3"])
+    assert code == 1 and b"the stream stopped at frame 45" in stderr, stderr
     assert [int(r["frame"]) for r in _rows(tmp_path / "out" / "track.csv")] == list(range(45))
+
+
+def test_a_udp_streams_timeout_after_its_last_packet_is_not_counted_as_tracking(
+        tmp_path: Path) -> None:
+    """The frames the decoder still held come only after --timeout found the stream quiet:
+    their wait was counted in run.json's ``timing.seconds`` and the fps (a 45-frame stream
+    sent in 1.5 s with --timeout 10: seconds 10.7, 4.2 fps); they leave it out now."""
+    began = time.monotonic()
+    code, stderr = _sent_whole(tmp_path, ["--timeout", "10"])
+    wall = time.monotonic() - began  # the receiver's whole life, its 10 s wait at the end too
+    assert code == 1 and b"the stream stopped at frame" in stderr, stderr
+    timing = json.loads((tmp_path / "out" / "run.json").read_text())["timing"]
+    assert timing["seconds"] + 10 <= wall, (timing, wall)
 
 
 @pytest.mark.parametrize("sender_kind", ["pyav", "ffmpeg"])

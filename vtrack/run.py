@@ -960,8 +960,9 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         signals.drain = None  # first: a signal from here on is held, not taken for a drain
         signals.hold()  # a signal now must not cut the closing and the records short
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
-        # the loop's wait for frames while the input waited at its end (--follow) is not
-        # tracking: the decoder's frame threads hand over its last frames only after it
+        # the loop's wait for frames while the input waited at its end (--follow, a live
+        # stream's --timeout) is not tracking: the decoder's frame threads hand over its last
+        # frames only after it
         end_wait = source.end_wait
         waited = 0.0 if frames_in is None or end_wait is None else frames_in.during(
             (max(end_wait[0], started), min(end_wait[1], wall)))

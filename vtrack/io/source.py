@@ -163,7 +163,8 @@ class Source(Closing, ABC):
     @property
     def end_wait(self) -> tuple[float, float] | None:
         """When the input waited at its end for data that never came (``--follow``'s idle
-        time: ``perf_counter`` start and end), which is no reading; None if it did not."""
+        time; a network input's ``--timeout`` after its last packet: ``perf_counter`` start
+        and end), which is no reading; None if it did not."""
         return None
 
     def stop_at_end(self) -> bool:

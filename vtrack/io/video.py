@@ -34,6 +34,7 @@ from __future__ import annotations
 import itertools
 import os
 import re
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -499,6 +500,9 @@ class VideoSource(Source):
         self._corrupt = 0  # pictures the decoder marked as decoded with errors
         self._damaged = False  # damage seen: later frames keep their places in the stream
         self._damage_warned = False
+        #: A network input that went quiet: the timeout that ended it (``perf_counter`` start
+        #: and end), a wait that only found the end (see :attr:`end_wait`).
+        self._quiet: tuple[float, float] | None = None
         # Bounded before the decoder allocates a picture (the size is in the stream header).
         too_big = frame_size_problem(stream.codec_context.width, stream.codec_context.height)
         if too_big and stream.codec_context.width and stream.codec_context.height:
@@ -568,8 +572,10 @@ class VideoSource(Source):
 
     @property
     def end_wait(self) -> tuple[float, float] | None:
+        """Also a network input's ``--timeout`` wait after its last packet, once it went
+        quiet: the frames the decoder still held come only after it."""
         read = _python_file(self._container)
-        return read.end_wait if isinstance(read, GrowingFile) else None
+        return read.end_wait if isinstance(read, GrowingFile) else self._quiet
 
     def stop_at_end(self) -> bool:
         read = _python_file(self._container)
@@ -593,6 +599,9 @@ class VideoSource(Source):
             if isinstance(read, CapturingStream):  # a signal while a read waited
                 read.raise_interruption()
         except av.error.ExitError:
+            # the demuxer hands over the packet it held only now: the quiet began a timeout ago
+            now = time.perf_counter()
+            self._quiet = (now - self._how.timeout_s, now)
             for frame in self._stream.decode(None):
                 frame.time_base = self._stream.time_base  # a flushed frame comes without one
                 yield frame
