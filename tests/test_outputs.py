@@ -416,7 +416,8 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
     """... and the stopped batch says what it did, as a finished one does: a line per run it
     has a record of (also one that finished in the grace period), the tally with where
     summary.csv is, then that it was interrupted. It used to print only "vtrack: interrupted"
-    after the lines of the runs done before the signal."""
+    after the lines of the runs done before the signal. The pairs it never started say so in
+    summary.csv's error, and how to run them (the error was empty; the tally did not say)."""
     out = tmp_path / "out"
     process = start("batch", str(inputs), "-c", "s0", "-c", "camshift", "--jobs", "1",
                     "--out", str(out))
@@ -437,8 +438,10 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
             record = assert_records_agree(folder)
             assert row["status"] == record["status"], (row, record["status"])
             assert row["frames"] == str(record["frames"])
-        else:
+        else:  # its error says it never ran and how to run it (it was empty)
             assert row["status"] == "interrupted", row
+            assert row["error"].startswith("never ran (the batch stopped first): the same "
+                                           "vtrack batch command runs it"), row
         statuses.append(row["status"])
     assert "interrupted" in statuses  # the batch did stop early
     assert "complete" in statuses  # the job running at the signal finished in the grace
@@ -449,7 +452,7 @@ def test_a_signal_to_the_batch_alone_leaves_a_summary_that_agrees_with_the_runs(
             assert sum(line.startswith(label) for line in stdout_lines) == 1, (label, stdout)
     tally = stdout_lines[-1]
     assert tally.startswith("8 runs (") and tally.endswith(f"-> {out / 'summary.csv'}"), stdout
-    assert "not started: the batch was stopped" in tally
+    assert "not started: the batch was stopped, the same command runs them" in tally
     assert stderr.splitlines()[-1] == "vtrack: interrupted", stderr
 
 

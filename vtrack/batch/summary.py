@@ -26,6 +26,11 @@ WRITE_SPACING = 19.0
 
 #: The error of a pair the batch had not finished when it last wrote ``summary.csv``.
 UNFINISHED = "not finished when the batch last wrote this file (it was still running, or killed)"
+#: What a pair a stopped batch never started is (``vtrack report`` says so of such a row).
+NEVER_RAN = "never ran (the batch stopped first)"
+#: The error of such a pair in ``summary.csv``: also what to do.
+NEVER_STARTED = (f"{NEVER_RAN}: the same vtrack batch command runs it (the runs complete "
+                 "are not run again)")
 
 
 def run_batch(batch: Plan, executor: Executor, summary_path: Path,
@@ -121,7 +126,7 @@ class SummaryWriter:
         """Write the file. Pairs without an outcome yet are ``interrupted``: while the batch
         runs, with the error :data:`UNFINISHED` (so a batch killed outright, ``kill -9``,
         leaves a row for each pair it did not finish, not a summary of fewer pairs that looks
-        whole); once it has ``stopped`` early (Ctrl-C, SIGTERM), with none (never ran)."""
+        whole); once it has ``stopped`` early (Ctrl-C, SIGTERM), with :data:`NEVER_STARTED`."""
         began = self.clock()
         buffer = io.StringIO()
         writer = csv.DictWriter(buffer, SUMMARY_COLUMNS, lineterminator="\n")
@@ -129,7 +134,7 @@ class SummaryWriter:
         for (name, config), row in self.rows.items():
             if row is None:
                 row = {"input": name, "config": config, "status": STATUS_INTERRUPTED,
-                       "error": None if stopped else UNFINISHED}
+                       "error": NEVER_STARTED if stopped else UNFINISHED}
             writer.writerow(row)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path, buffer.getvalue())

@@ -272,7 +272,8 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
         tally = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
         unstarted = pairs - len(outcomes) if stopped else 0
         if unstarted:
-            tally += (", " if tally else "") + f"{unstarted} not started: the batch was stopped"
+            tally += (", " if tally else "") + (f"{unstarted} not started: the batch was "
+                                               "stopped, the same command runs them")
         resumed = sum(outcome.resumed for outcome in outcomes)
         if resumed:
             tally += f"; {resumed} of them complete before, not run again"

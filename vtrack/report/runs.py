@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.batch import SUMMARY_COLUMNS
+from vtrack.batch.summary import NEVER_RAN
 from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
@@ -668,8 +669,8 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
                 if folder.resolve() in ran:
                     continue
                 if r["status"] != STATUS_COMPLETE:
-                    failed.append(FailedRun(r["input"], r["config"], r["error"] or
-                                            "never ran (the batch stopped first)", r["status"],
+                    failed.append(FailedRun(r["input"], r["config"], r["error"] or NEVER_RAN,
+                                            r["status"],
                                             summary.parent.resolve()))
                 elif not (folder / "run.json").exists():  # (one that is: warned as left out)
                     gone.append(f"{r['input']} [{r['config']}]")
