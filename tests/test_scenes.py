@@ -388,6 +388,26 @@ def test_cli_writes_clip_and_groundtruth(tmp_path):
     assert "60 frames, 160x120" in result.output
 
 
+@pytest.mark.parametrize("fmt", ["mp4", "images", "raw"])
+def test_cli_writing_into_a_log_says_how_far_it_is(tmp_path, fmt):
+    """With stderr a log or a pipe (a job, ``2> log``) `vtrack scene` said nothing until it
+    was done: a 20-minute clip (`--frames 36000`) took 8 minutes with an empty log. It now
+    writes a progress line every --stats-period seconds, as run, batch and report do."""
+    import subprocess
+    import sys
+
+    out = tmp_path / ("clip" if fmt == "images" else f"clip.{fmt}")
+    done = subprocess.run(
+        [sys.executable, "-m", "vtrack", "scene", "smooth", str(out), "--frames", "40",
+         "--size", "160x120", "--preset", "ultrafast", "--format", fmt, "--stats-period", "0"],
+        capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    assert lines and all(line.startswith(f"{out.name}: ") for line in lines), lines
+    assert lines[-1].startswith(f"{out.name}: 40/40 frames (100%), "), lines
+    assert "40 frames, 160x120" in done.stdout
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -98,8 +98,8 @@ def _origin(ctx: click.Context, param: click.Parameter, value: str) -> int | Non
 
 
 def stats_period_option() -> Callable[[Any], Any]:
-    """``--stats-period SECONDS`` of ``run``, ``batch`` and ``report``: how often a progress
-    line is written when stderr is a log."""
+    """``--stats-period SECONDS`` of ``run``, ``batch``, ``report`` and ``scene``: how often
+    a progress line is written when stderr is a log."""
     return click.option(
         "--stats-period", type=Seconds(min=0, max=3600), default=STATS_PERIOD,
         show_default=True, metavar="SECONDS",

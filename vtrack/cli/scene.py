@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import re
-import sys
 from pathlib import Path
 
 import click
 
-from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber
+from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
 from vtrack.cli._paths import CLIP_PATH
+from vtrack.cli._progress import StepProgress
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_SEED
@@ -60,6 +60,7 @@ def _scenario_list() -> str:
               help="x264 quality of mp4 output (lower is better and larger).")
 @click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
               help="x264 preset of mp4 output.")
+@stats_period_option()
 def command(
     name: str,
     out: Path,
@@ -71,6 +72,7 @@ def command(
     pix_fmt: str | None,
     crf: int,
     preset: str,
+    stats_period: float,
 ) -> None:
     """Write scenario NAME to OUT with its exact ground truth beside it.
 
@@ -78,6 +80,7 @@ def command(
     frame) and, for the scenarios with several targets (multi, pedestrians), OUT.mot.txt
     (MOTChallenge). An image folder holds
     its groundtruth_rect.txt (and groundtruth_mot.txt). Same arguments, same pixels.
+    Progress: a bar in a terminal, else a line every --stats-period seconds.
     """
     if str(out) == "-":  # elsewhere "-" is standard input or output; here it would be a file
         raise ConfigError("OUT -: vtrack scene writes files (the clip and its ground truth "
@@ -93,9 +96,12 @@ def command(
                           f"{first.w:.1f}x{first.h:.1f} pixels, under the "
                           f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} a tracker starts from: give a "
                           "larger --size")
-    files = write_clip(
-        scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset, progress=sys.stderr.isatty()
-    )
+    progress = StepProgress(False, out.name, "frames", stats_period)
+    try:
+        files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
+                           progress=progress)
+    finally:
+        progress.close()
     extra = f" and {files.mot}" if files.mot else ""
     layout = f", {pix_fmt or 'bgr24'}" if fmt == "raw" else ""
     click.echo(

@@ -18,7 +18,7 @@ failed write leaves no partial file and the earlier one as it was) and turns an 
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from fractions import Fraction
@@ -92,8 +92,16 @@ def _check_folder(folder: Path) -> None:
                           "(img/0001.jpg ... and its ground truth): name a folder")
 
 
-def _progress(scene: Scene, enabled: bool, what: str) -> Iterable[np.ndarray]:
-    """The scene's frames, with a tqdm bar on stderr when ``enabled``."""
+#: Progress of a clip's writing: True for a tqdm bar on stderr, or a function called with
+#: (frames done, frames) after each frame (``vtrack scene``'s bar or lines in a log).
+Progress = bool | Callable[[int, int], None]
+
+
+def _progress(scene: Scene, enabled: Progress, what: str) -> Iterable[np.ndarray]:
+    """The scene's frames, with a tqdm bar on stderr when ``enabled`` is True, or telling
+    ``enabled`` after each frame when it is a function."""
+    if callable(enabled):
+        return _telling(scene, enabled)
     return tqdm(
         scene.frames(),
         total=len(scene),
@@ -103,6 +111,13 @@ def _progress(scene: Scene, enabled: bool, what: str) -> Iterable[np.ndarray]:
         disable=not enabled,
         leave=False,
     )
+
+
+def _telling(scene: Scene, progress: Callable[[int, int], None]) -> Iterator[np.ndarray]:
+    total = len(scene)
+    for done, bgr in enumerate(scene.frames(), 1):
+        yield bgr
+        progress(done, total)
 
 
 def _need_even(scene: Scene, what: str) -> None:
@@ -136,7 +151,7 @@ def write_video(
     preset: str = "medium",
     codec: str = CODEC,
     pix_fmt: str = "yuv420p",
-    progress: bool = False,
+    progress: Progress = False,
     keyint: int | None = None,
 ) -> Path:
     """Encode every frame of ``scene`` to ``path`` (container from the suffix, e.g. ``.mp4``).
@@ -178,7 +193,7 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
 
 
 def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, codec: str,
-                  pix_fmt: str, progress: bool, keyint: int | None) -> None:
+                  pix_fmt: str, progress: Progress, keyint: int | None) -> None:
     """What :func:`write_video` promises, written to ``temp`` (errors name ``path``)."""
     rate = Fraction(scene.fps).limit_denominator(1001)
     with _writing(path), av.open(ffmpeg_file(temp), "w") as container:
@@ -254,7 +269,7 @@ def _mot_groundtruth_to(scene: Scene, path: Path, temp: Path) -> None:
 
 
 def write_image_sequence(
-    scene: Scene, folder: str | Path, ext: str = IMAGE_EXT, progress: bool = False
+    scene: Scene, folder: str | Path, ext: str = IMAGE_EXT, progress: Progress = False
 ) -> Path:
     """OTB layout: ``folder/img/0001.<ext>`` ... (1-based, >= 4 digits) and
     ``folder/groundtruth_rect.txt`` with 1-based boxes, as OTB writes them (read it with
@@ -275,7 +290,7 @@ def _check_image_ext(ext: str) -> None:
         raise ConfigError(f"image format {ext!r}: choose jpg or png")
 
 
-def _images_to(scene: Scene, images: Path, temp: Path, ext: str, progress: bool) -> None:
+def _images_to(scene: Scene, images: Path, temp: Path, ext: str, progress: Progress) -> None:
     """The numbered images of :func:`write_image_sequence`, in the new folder ``temp``
     (errors name ``images``)."""
     digits = max(4, len(str(len(scene))))
@@ -296,7 +311,7 @@ _RAW_CONVERSIONS = {
 
 
 def write_raw(
-    scene: Scene, path: str | Path, pix_fmt: str = "bgr24", progress: bool = False
+    scene: Scene, path: str | Path, pix_fmt: str = "bgr24", progress: Progress = False
 ) -> Path:
     """Frames back to back, no header, in ``pix_fmt`` (one of :data:`RAW_PIX_FMTS`);
     ``path`` appears only once every frame is written."""
@@ -314,7 +329,7 @@ def _check_raw(scene: Scene, path: Path, pix_fmt: str) -> None:
         _need_even(scene, f"{path}: pixel format yuv420p")
 
 
-def _raw_to(scene: Scene, path: Path, temp: Path, pix_fmt: str, progress: bool) -> None:
+def _raw_to(scene: Scene, path: Path, temp: Path, pix_fmt: str, progress: Progress) -> None:
     """What :func:`write_raw` promises, written to ``temp`` (errors name ``path``)."""
     code = _RAW_CONVERSIONS[pix_fmt]
     with _writing(path), temp.open("wb") as out:
@@ -343,7 +358,7 @@ def write_clip(
     pix_fmt: str | None = None,
     crf: int = 23,
     preset: str = "medium",
-    progress: bool = False,
+    progress: Progress = False,
 ) -> ClipFiles:
     """Write ``scene`` and its ground truth the way ``vtrack scene`` does.
 
@@ -357,7 +372,7 @@ def write_clip(
     together once all are complete: when a write fails none of them appears, and an earlier
     clip there is left as it was. Written over an earlier clip, nothing of that one is left:
     ``out/img`` is replaced as a whole, and a MOTChallenge file the new scene does not have is
-    removed.
+    removed. ``progress``: see :data:`Progress`.
     """
     out = Path(out)
     if fmt not in CLIP_FORMATS:
