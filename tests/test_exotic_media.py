@@ -323,7 +323,27 @@ def test_an_empty_file_followed_says_it_stayed_empty(tmp_path):
     result = CliRunner().invoke(main, ["run", str(empty), "--follow", "0.2", "--init",
                                        "10,10,20,20", "-o", str(tmp_path / "out")])
     assert one_error_line(result) == (f"vtrack: error: {empty}: stayed empty (0 bytes) for "
-                                      "--follow's wait of 0.2 s: nothing was written to it")
+                                      "--follow's wait of 0.2 s: nothing was written to it (a "
+                                      "writer that starts later, or holds its first bytes "
+                                      "longer, needs a longer --follow)")
+
+
+def test_a_followed_recording_that_stops_growing_mid_frame_says_to_wait_longer(tmp_path):
+    """A recorder that pauses longer than --follow's wait, its file ending inside a block:
+    the run ended partial saying '...; truncated file?', blaming the file, not the wait, and
+    saying nothing of what to do. It now says the file had not grown for the wait and that a
+    writer pausing longer needs a longer --follow."""
+    data = _recording(tmp_path / "rec.ts", "mpegts", {}).read_bytes()
+    cut = tmp_path / "cut-rec.ts"
+    cut.write_bytes(data[:len(data) * 2 // 3 // 188 * 188 + 100])  # as a 4 KB write leaves it
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(cut), "--follow", "0.2", "--init",
+                                       "5,10,20,20", "--no-video", "-o", str(out)])
+    record = json.loads((out / "run.json").read_text())
+    assert (result.exit_code, record["status"]) == (1, "partial"), result.output
+    assert record["error"].startswith(f"{cut}: decoding stopped at frame {record['frames']} ")
+    assert record["error"].endswith("; it had not grown for --follow's 0.2 s: if its writer "
+                                    "pauses longer, give a longer --follow)"), record["error"]
 
 
 def test_an_animated_webp_is_named_as_what_ffmpeg_cannot_decode(tmp_path):

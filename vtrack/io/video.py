@@ -345,7 +345,8 @@ def _cut_file(path: str, follow_s: float | None) -> str | None:
     if os.path.getsize(path) == 0:
         if follow_s is not None:
             return (f"{path}: stayed empty (0 bytes) for --follow's wait of {follow_s:g} s: "
-                    "nothing was written to it")
+                    "nothing was written to it (a writer that starts later, or holds its "
+                    "first bytes longer, needs a longer --follow)")
         return f"{path}: an empty file (0 bytes), not a video"
     problem = header_problem(path)
     if problem:
@@ -733,10 +734,12 @@ class VideoSource(Source):
         shortfall = (tail.shortfall(self._stream.frames, self._end_s, fps)
                      or self._torn_packet() or self._torn_container())
         if shortfall:
+            follow_s = self._how.follow_s
+            cause = ("truncated file?" if follow_s is None else
+                     f"it had not grown for --follow's {follow_s:g} s: if its writer pauses "
+                     "longer, give a longer --follow")
             raise PartialInputError(
-                f"{info.path}: decoding stopped at frame {index} ({shortfall}; truncated file?)",
-                index,
-            )
+                f"{info.path}: decoding stopped at frame {index} ({shortfall}; {cause})", index)
         if not self._stream.frames:  # read to its end: the count is known now
             info.frame_count, info.frame_count_estimated = index, False
 
