@@ -328,14 +328,24 @@ def test_an_empty_file_followed_says_it_stayed_empty(tmp_path):
                                       "longer, needs a longer --follow)")
 
 
-def test_a_followed_recording_that_stops_growing_mid_frame_says_to_wait_longer(tmp_path):
-    """A recorder that pauses longer than --follow's wait, its file ending inside a block:
-    the run ended partial saying '...; truncated file?', blaming the file, not the wait, and
-    saying nothing of what to do. It now says the file had not grown for the wait and that a
-    writer pausing longer needs a longer --follow."""
-    data = _recording(tmp_path / "rec.ts", "mpegts", {}).read_bytes()
-    cut = tmp_path / "cut-rec.ts"
-    cut.write_bytes(data[:len(data) * 2 // 3 // 188 * 188 + 100])  # as a 4 KB write leaves it
+@pytest.mark.parametrize(("name", "fmt", "options"), [
+    ("rec.ts", "mpegts", {}),
+    ("rec.mkv", "matroska", {"live": "1"}),
+    ("rec.mp4", "mp4", {"movflags": "frag_keyframe+empty_moov"}),
+])
+def test_a_followed_recording_that_stops_growing_mid_frame_says_to_wait_longer(
+        tmp_path, name, fmt, options):
+    """A recorder that pauses longer than --follow's wait, its file ending inside a packet,
+    fragment or block: an MPEG-TS run ended partial saying '...; truncated file?', blaming the
+    file, not the wait, and saying nothing of what to do; a fragmented MP4 or live Matroska
+    one ended complete (exit 0), its torn end unchecked when followed, though the same file
+    read without --follow is partial. Each now ends partial saying the file had not grown for
+    the wait and that a writer pausing longer needs a longer --follow."""
+    data = _recording(tmp_path / name, fmt, options).read_bytes()
+    cut = tmp_path / f"cut-{name}"
+    ends = {"mpegts": len(data) * 2 // 3 // 188 * 188 + 100,  # inside a transport packet
+            "matroska": len(data) * 2 // 3}
+    cut.write_bytes(data[:ends.get(fmt) or _inside_a_late_mdat(data)])
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["run", str(cut), "--follow", "0.2", "--init",
                                        "5,10,20,20", "--no-video", "-o", str(out)])

@@ -762,8 +762,9 @@ class VideoSource(Source):
         duration to fall short of) was cut, though FFmpeg reads the whole fragments or blocks
         before it without a word (a regular file read to its end only). Other files are judged
         by the count or duration they state (:meth:`_Tail.shortfall`): bytes after a file's
-        last box (a phone's trailer) are no cut."""
-        if not self._seekable:
+        last box (a phone's trailer) are no cut. A followed file (``--follow``) is judged the
+        same way once it stopped growing: the file at its path is then what was read."""
+        if not self._seekable and not isinstance(_python_file(self._container), GrowingFile):
             return None
         demuxer = self._container.format.name
         if "mp4" in demuxer:
