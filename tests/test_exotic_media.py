@@ -339,8 +339,9 @@ def test_a_followed_recording_that_stops_growing_mid_frame_says_to_wait_longer(
     fragment or block: an MPEG-TS run ended partial saying '...; truncated file?', blaming the
     file, not the wait, and saying nothing of what to do; a fragmented MP4 or live Matroska
     one ended complete (exit 0), its torn end unchecked when followed, though the same file
-    read without --follow is partial. Each now ends partial saying the file had not grown for
-    the wait and that a writer pausing longer needs a longer --follow."""
+    read without --follow is partial. Each now ends partial saying the file is cut or its
+    writer paused longer than the wait, and that a writer pausing longer needs a longer
+    --follow."""
     data = _recording(tmp_path / name, fmt, options).read_bytes()
     cut = tmp_path / f"cut-{name}"
     ends = {"mpegts": len(data) * 2 // 3 // 188 * 188 + 100,  # inside a transport packet
@@ -352,8 +353,9 @@ def test_a_followed_recording_that_stops_growing_mid_frame_says_to_wait_longer(
     record = json.loads((out / "run.json").read_text())
     assert (result.exit_code, record["status"]) == (1, "partial"), result.output
     assert record["error"].startswith(f"{cut}: decoding stopped at frame {record['frames']} ")
-    assert record["error"].endswith("; it had not grown for --follow's 0.2 s: if its writer "
-                                    "pauses longer, give a longer --follow)"), record["error"]
+    assert record["error"].endswith("; truncated, or its writer paused longer than --follow's "
+                                    "0.2 s: give a longer --follow if it was still being "
+                                    "written)"), record["error"]
 
 
 def test_an_animated_webp_is_named_as_what_ffmpeg_cannot_decode(tmp_path):

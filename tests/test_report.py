@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import re
 import shutil
 from pathlib import Path
@@ -737,3 +738,73 @@ def test_a_report_of_a_batch_whose_every_run_failed_counts_those_runs(tmp_path: 
     markdown = (report / "summary.md").read_text()
     assert "2 runs without results of 1 input with 2 configurations;" in markdown, markdown
     assert "0 runs" not in markdown
+
+
+def test_runs_of_vtrack_run_only_keep_their_labels_and_a_run_inside_a_batch_is_named(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """Telling a batch's runs apart from a `vtrack run` of one of its inputs relabelled runs
+    of `vtrack run` only too: each run folder its own origin, so the only run of another input
+    became "s0 (b/s0)" (it is "s0", and those of one input "s0 (s0)" / "s0 (s0-again)"); and a
+    `vtrack run` folder inside the batch's folder made the batch's label "s0 (.)"."""
+    inputs, original = batch_out
+    runs = tmp_path / "runs"
+    for name, out in (("smooth", "smooth/s0"), ("smooth", "smooth/s0-again"),
+                      ("occlusion", "occlusion/s0")):
+        ran = vtrack("run", str(inputs / f"{name}.mp4"), "-c", "s0", "--gt",
+                     str(inputs / f"{name}.gt.txt"), "--no-video", "--out", str(runs / out))
+        assert ran.exit_code == 0, ran.output
+    result = vtrack("report", str(runs), "--out", str(tmp_path / "r1"))
+    assert result.exit_code == 0, result.output
+    assert _table_labels((tmp_path / "r1" / "summary.md").read_text()) == {
+        ("smooth", "s0 (s0)"), ("smooth", "s0 (s0-again)"), ("occlusion", "s0")}
+    batch = tmp_path / "batch"
+    shutil.copytree(original, batch)
+    ran = vtrack("run", str(inputs / "smooth.mp4"), "-c", "s0", "--gt",
+                 str(inputs / "smooth.gt.txt"), "--no-video", "--out", str(batch / "extra"))
+    assert ran.exit_code == 0, ran.output
+    result = vtrack("report", str(batch), "--out", str(tmp_path / "r2"))
+    assert result.exit_code == 0, result.output
+    labels = _table_labels((tmp_path / "r2" / "summary.md").read_text())
+    assert ("smooth", "s0 (batch)") in labels and ("smooth", "s0 (extra)") in labels, labels
+    assert not any("(.)" in label for _, label in labels), labels
+
+
+def test_one_ground_truth_is_one_path_in_the_summary_also_through_dot_dot(
+        batch_out: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run given `--gt ../clips/b.gt.txt` was listed with `/.../sub/../clips/b.gt.txt` beside
+    the batch's `/.../clips/b.gt.txt`."""
+    inputs, batch = batch_out
+    sub = tmp_path / "sub"
+    sub.mkdir()
+    monkeypatch.chdir(sub)
+    relative = os.path.relpath(inputs / "smooth.gt.txt", sub)
+    ran = vtrack("run", str(inputs / "smooth.mp4"), "-c", "camshift", "--gt", relative,
+                 "--no-video", "--out", str(tmp_path / "byhand"))
+    assert ran.exit_code == 0, ran.output
+    monkeypatch.chdir(tmp_path)
+    result = vtrack("report", str(batch), str(tmp_path / "byhand"), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
+        truths = {row["ground_truth"] for row in csv.DictReader(handle)
+                  if row["input"] == "smooth"}
+    assert truths == {str((inputs / "smooth.gt.txt").resolve())}, truths
+
+
+def test_a_multi_target_runs_ground_truth_is_named_where_it_is_found(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A multi-target run's ground truth was listed as typed (`m.mot.txt`), a path that does
+    not exist from the report's folder; a single target's is the file found from the run's."""
+    clip = clip_factory("multi", frames=60)
+    work = tmp_path / "work"
+    work.mkdir()
+    shutil.copy(clip.path, work / "m.mp4")
+    shutil.copy(clip.mot, work / "m.mot.txt")
+    monkeypatch.chdir(work)
+    ran = vtrack("run", "m.mp4", "-c", "s3", "--gt", "m.mot.txt", "--no-video", "--out", "run")
+    assert ran.exit_code == 0, ran.output
+    monkeypatch.chdir(tmp_path)
+    result = vtrack("report", str(work / "run"), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
+        (row,) = list(csv.DictReader(handle))
+    assert row["ground_truth"] == str(work / "m.mot.txt")

@@ -29,8 +29,8 @@ UNFINISHED = "not finished when the batch last wrote this file (it was still run
 #: What a pair a stopped batch never started is (``vtrack report`` says so of such a row).
 NEVER_RAN = "never ran (the batch stopped first)"
 #: The error of such a pair in ``summary.csv``: also what to do.
-NEVER_STARTED = (f"{NEVER_RAN}: the same vtrack batch command runs it (the runs complete "
-                 "are not run again)")
+NEVER_STARTED = (f"{NEVER_RAN}: the same vtrack batch command runs it (without --force, "
+                 "the runs complete are not run again)")
 
 
 def run_batch(batch: Plan, executor: Executor, summary_path: Path,

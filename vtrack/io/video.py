@@ -736,8 +736,8 @@ class VideoSource(Source):
         if shortfall:
             follow_s = self._how.follow_s
             cause = ("truncated file?" if follow_s is None else
-                     f"it had not grown for --follow's {follow_s:g} s: if its writer pauses "
-                     "longer, give a longer --follow")
+                     f"truncated, or its writer paused longer than --follow's {follow_s:g} s: "
+                     "give a longer --follow if it was still being written")
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({shortfall}; {cause})", index)
         if not self._stream.frames:  # read to its end: the count is known now

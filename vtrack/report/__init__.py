@@ -125,8 +125,8 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
         if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
             continue
         origins = _group(group, lambda r: str(_results_of(r)))
-        if len(origins) < 2:
-            continue
+        if len(origins) < 2 or not any(is_batch_folder(Path(o)) for o in origins):
+            continue  # (runs of vtrack run only: told apart per input, below)
         places = dict(zip(origins, _places([Path(origin) for origin in origins]), strict=True))
         for origin, same in origins.items():
             for run in same:
@@ -141,10 +141,15 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
     return failed
 
 
+def _batch_of(run: RunResult) -> Path:
+    """The folder of the batch ``run`` would belong to (``<batch>/<input>/<config>/``)."""
+    return run.folder.resolve().parent.parent
+
+
 def _results_of(run: RunResult) -> Path:
-    """The results ``run`` belongs to: its batch's folder (``<batch>/<input>/<config>/``),
-    else its own folder (a ``vtrack run``)."""
-    batch = run.folder.resolve().parent.parent
+    """The results ``run`` belongs to: its batch's folder, else its own folder (a ``vtrack
+    run``)."""
+    batch = _batch_of(run)
     return batch if is_batch_folder(batch) else run.folder.resolve()
 
 
@@ -169,15 +174,12 @@ def _distinct_failed(failed: list[FailedRun], runs: Sequence[RunResult]) -> list
     (``v3 (batch-b)``) where that input's name is also that of a run or failed row of another
     folder: two batches' ``v3`` need not be one input, and ``v3 [robust] never ran`` beside a
     complete ``v3 [robust]`` of another batch read as that run's."""
-    def batch_of(run: RunResult) -> Path:
-        return run.folder.resolve().parent.parent  # (<batch>/<input>/<config>/)
-
     elsewhere: dict[str, set[Path]] = {}
     for row in failed:
         elsewhere.setdefault(row.input, set()).add(row.batch or Path())
     for run in runs:
         if run.input in elsewhere:
-            elsewhere[run.input].add(batch_of(run))
+            elsewhere[run.input].add(_batch_of(run))
     named = {name: dict(zip(sorted(folders), _places(sorted(folders)), strict=True))
              for name, folders in elsewhere.items() if len(folders) > 1}
     return [replace(row, input=f"{row.input} ({named[row.input][row.batch or Path()]})")
@@ -188,7 +190,9 @@ def _places(folders: Sequence[Path]) -> list[str]:
     """Where each of ``folders`` differs from the others: its first folder below their common
     one, or its whole path from there when those are not distinct."""
     common = os.path.commonpath(folders)
-    paths = [os.path.relpath(folder, common) for folder in folders]
+    # (a folder that is the common one, a batch holding a vtrack run's folder: by its name)
+    paths = [os.path.relpath(folder, common) if os.path.relpath(folder, common) != os.curdir
+             else os.path.basename(common) for folder in folders]
     heads = [path.split(os.sep)[0] for path in paths]
     return heads if len(set(heads)) == len(heads) else paths
 

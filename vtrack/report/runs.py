@@ -369,7 +369,7 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
     started_in = record.get("working_dir")
     if not isinstance(started_in, str) or path == "-" or is_url(path) or os.path.isabs(path):
         return path
-    there = os.path.join(started_in, path)
+    there = os.path.normpath(os.path.join(started_in, path))  # (one file, one name)
     return there if os.path.exists(there) else path
 
 
@@ -480,7 +480,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result = _run_result(folder, record, summary)
         if result.multi_target:
             result.mot = _mot_metrics(record)
-            result.ground_truth = _text_or_none(request.get("gt"))
+            result.ground_truth = _found_path(record, "gt")  # (as a single target's)
     except (TypeError, ValueError, OverflowError):
         raise InputError(f"{record_path}: not a vtrack run record") from None
     if result.multi_target:
