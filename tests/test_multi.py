@@ -831,3 +831,20 @@ def test_motchallenge_ground_truth_is_read_as_written_whatever_gt_origin_says(
     text = " ".join(CliRunner().invoke(main, ["run", "--help"]).output.split())
     assert "Origin of single-target ground-truth boxes" in text
     assert "MOTChallenge ground truth is read as written" in text
+
+
+def test_a_box_as_written_keeps_sizes_positive_rounds_like_the_cells_and_keeps_nan():
+    """box_as_written: pixels to a thousandth as the cells hold them, a width or height never
+    under 0.001 (a det.txt's box of 1e-06 pixels was written 0), a non-finite value kept (its
+    cell is empty; it raised ValueError)."""
+    import math
+
+    from vtrack.geometry import Box
+    from vtrack.io.csvfile import box_as_written
+
+    assert tuple(box_as_written(Box(1.23449, 2.0005001, 1e-06, 0.0))) == (1.234, 2.001, 0.001,
+                                                                          0.001)
+    assert tuple(box_as_written(Box(10.0, 20.0, 30.4444, 40.5556))) == (10.0, 20.0, 30.444,
+                                                                         40.556)
+    kept = box_as_written(Box(math.nan, 1.0, 5.0, math.nan))
+    assert math.isnan(kept.x) and math.isnan(kept.h) and (kept.y, kept.w) == (1.0, 5.0)

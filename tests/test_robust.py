@@ -324,20 +324,21 @@ def test_a_box_mostly_outside_the_frame_is_never_called_tracking(tmp_path: Path)
             assert window is not None and window.width * window.height >= 0.5 * box.area, row
 
 
-@pytest.mark.parametrize(("seed", "track_id"), [(1, 1), (4, 2), (6, 2), (11, 2)])
-def test_a_first_box_thinner_than_min_side_is_not_stretched(scene_factory, seed: int,
-                                                            track_id: int) -> None:
-    """A blob of the `multi` scene (640x480) halved to 320x240: a round target 4.0 to 4.6
-    pixels across, a legal first box (at least 4x4). The size floor (min_side 5) was applied
-    to it on the first update, so the box jumped to 5x5 (x1.10 to x1.24) whatever the target
-    did; the scale filter itself moves the size by a step or two of 2% a frame."""
+@pytest.mark.parametrize("seed", [1, 4, 6, 9, 11, 14])
+def test_a_first_box_thinner_than_min_side_is_not_stretched(scene_factory, seed: int) -> None:
+    """Each blob of the `multi` scene (640x480) halved to 320x240 that is 4 to 5 pixels
+    across: a legal first box (at least 4x4). The size floor (min_side 5) was applied to it on
+    the first update, so the box jumped to 5x5 (x1.10 to x1.24) whatever the target did; the
+    scale filter itself moves the size by up to three steps of 2% a frame (x1.061)."""
     scene = scene_factory("multi", seed, width=640, height=480, frames=120)
     half = [cv2.resize(scene.frame(i), (320, 240), interpolation=cv2.INTER_AREA)
             for i in range(2)]
-    first = next(b for tid, b in scene.tracks[0] if tid == track_id)
-    first = Box(first.x / 2, first.y / 2, first.w / 2, first.h / 2)
-    assert 4.0 <= first.w < 5.0
-    tracker = Tracker("robust")
-    tracker.init(half[0], first)
-    box = tracker.update(half[1]).box
-    assert box is not None and box.w / first.w < 1.06 and box.h / first.h < 1.06, (box, first)
+    thin = [Box(b.x / 2, b.y / 2, b.w / 2, b.h / 2) for _, b in scene.tracks[0]
+            if 4.0 <= b.w / 2 < 5.0 and b.h / 2 >= 4.0]
+    assert thin
+    for first in thin:
+        tracker = Tracker("robust")
+        tracker.init(half[0], first)
+        box = tracker.update(half[1]).box
+        assert box is not None and box.w / first.w < 1.09 and box.h / first.h < 1.09, (box,
+                                                                                        first)

@@ -101,7 +101,7 @@ def test_a_target_given_entering_the_view_is_followed_in(seed):
     first box is legal, but robust called the target lost on the very next frame (a box
     mostly outside the frame was taken for a target leaving the view) and only took it back
     3-5 frames later; a 200x150 target entering slowly from a corner was never taken back. It
-    is followed in now: on frames 1-8 not lost, IoU 0.66 or more."""
+    is followed in now: on frames 1-8 not lost, IoU 0.5 or more (0.63-0.77 on seeds 0-7)."""
     scene = make_scene("leave_return", seed=seed, frames=FRAMES)
     start = 77
     first = scene.boxes[start]
@@ -113,6 +113,30 @@ def test_a_target_given_entering_the_view_is_followed_in(seed):
     scores, _ = frame_scores([r.box for r in results], scene.boxes[start:start + 9])
     assert all(r.state != "lost" for r in results), [r.state for r in results]
     assert min(scores) >= 0.5, scores
+
+
+def test_a_target_given_entering_the_view_is_lost_when_it_leaves_again():
+    """The share of a box that counts as "mostly outside" was fixed by a first box entering the
+    view (28% inside: 14%), so the same target leaving again later by that edge was followed
+    as `tracking` with 34-41% of its box inside, where a run started inside calls it lost. The
+    limit rises as the target comes in: a `tracking` box is at least half inside."""
+    scene = make_scene("leave_return", seed=0, frames=FRAMES)
+    order = [*range(77, FRAMES), *range(FRAMES - 1, 29, -1)]  # in, then back out by its edge
+    first = scene.boxes[77]
+    assert first is not None
+
+    def inside(box):
+        window = None if box is None else box.window(scene.width, scene.height)
+        return 0.0 if window is None else window.width * window.height / box.area
+
+    came_in = left = False
+    for i, result in zip(order, track([scene.frame(i) for i in order], "robust", first),
+                         strict=True):
+        came_in = came_in or (result.state == "tracking" and inside(result.box) >= 1.0)
+        left = left or (came_in and inside(scene.boxes[i]) < 0.5)
+        if came_in and result.state == "tracking":  # (coming in, less may be inside)
+            assert inside(result.box) >= 0.5, result
+    assert came_in and left  # the clip shows what the test is about
 
 
 @pytest.mark.parametrize("name, seeds, frames, size", [

@@ -389,17 +389,16 @@ class _SingleTargetRows:
         self.states: list[str] = []
 
     def _score(self, index: int, box: Box | None) -> tuple[float | None, float | None]:
-        """Frame ``index``'s (overlap, centre error) as ``track.csv`` holds them (an error of
-        ``inf``, no box claimed, is an empty cell)."""
+        """Frame ``index``'s (overlap, centre error) of ``box`` (as ``track.csv`` writes it)
+        as ``track.csv`` holds them (an error of ``inf``, no box claimed, is an empty cell)."""
         if self.gt is None or index >= len(self.gt):
             return None, None
-        if box is not None:  # scored as written, so a reader's rescoring gives the same
-            box = box_as_written(box)
         return scores_as_written(*score_frame(box, self.gt[index]))
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
-        box = result.box
-        overlap, error = self._score(result.index, box)
+        # scored as written, so a reader's rescoring of track.csv gives the same
+        written = None if result.box is None else box_as_written(result.box)
+        overlap, error = self._score(result.index, written)
         if self.gt is not None:  # kept for the metrics only: without ground truth, nothing
             at = result.index - self.start
             for skipped in range(self.start + len(self.overlaps), result.index):
@@ -410,7 +409,8 @@ class _SingleTargetRows:
             self.errors.append(error)
             self.states += [SKIPPED] * (at - len(self.states))  # no state of the tracker's
             self.states.append(result.state)
-        geometry = [None] * 6 if box is None else [*box_as_written(box), box.cx, box.cy]
+        box = result.box
+        geometry = [None] * 6 if box is None else [*written, box.cx, box.cy]
         row = [result.index, result.time_s, *geometry, result.state, _fmt(result.score),
                overlap, _fmt(error)]
         return [row + [result.extras.get(column) for column in self.extras]]

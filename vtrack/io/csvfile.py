@@ -54,10 +54,11 @@ def box_as_written(box: Box) -> Box:
     """``box`` as ``track.csv``'s and ``tracks.csv``'s cells give it back (pixels to
     :data:`DEFAULT_DECIMALS`), its width and height never under the least positive size they
     hold: a box's sizes are positive (MOTChallenge's too), and a tiny one (a ``det.txt``'s box
-    of 0.0001 pixels) was written as 0."""
+    of 0.0001 pixels) was written as 0. A non-finite value is kept as it is (its cell is
+    empty), as :func:`as_written` keeps it."""
     least = 10.0 ** -DEFAULT_DECIMALS
-    x, y, w, h = (float(format_cell(float(v))) for v in box)
-    return Box(x, y, max(w, least), max(h, least))
+    x, y, w, h = (as_written(float(v), "x") for v in box)
+    return Box(x, y, max(w, least), max(h, least))  # (max keeps a NaN: it compares False)
 
 
 def scores_as_written(overlap: float | None, error: float | None

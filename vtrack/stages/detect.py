@@ -129,10 +129,11 @@ MAX_KERNEL = 31
 #: 960x540): their cost per pixel (several times the mean model's) must keep a frame's work
 #: bounded (issue 21: no declared value over 10x the default's work).
 ADAPTIVE_MAX_PIXELS = 1920 * 1080 // 4
-#: ``gain`` starts once the model has learnt the scene's light: the first frame whose median
-#: grey level is within this share of its background's (the frame after the first, unless the
-#: light changed by more between the two; after black first frames or a fade from black, once
-#: the model has caught up with the lit scene).
+#: ``gain`` starts once the model has learnt the scene's light: at the first frame its background
+#: is not darker than by more than this share (the frame after the first, unless the scene grew
+#: brighter between the two; after black first frames or a fade from black, once the model has
+#: caught up with the lit scene). A scene that grows darker is no background still being learnt:
+#: the gain undoes it at once.
 GAIN_START = 0.05
 
 
@@ -354,8 +355,8 @@ class Background(Stage):
             False,
             "mog2, knn: scale each frame by the ratio of the background's median grey level to "
             "its own first, so a global change of exposure or light is not foreground; from the "
-            f"first frame within {GAIN_START:.0%} of the background on (after black first "
-            "frames or a fade from black, once the model has learnt the lit scene)",
+            f"first frame whose background is at most {GAIN_START:.0%} darker on (after black "
+            "first frames or a fade from black, once the model has learnt the lit scene)",
         ),
         Param(
             "max_pixels",
@@ -450,16 +451,16 @@ class Background(Stage):
     def _gain_compensated(self, image: np.ndarray) -> np.ndarray:
         """``image`` scaled (saturating at 255) so that its median grey level is the
         background's; unchanged within half a percent, and until the model has learnt the
-        scene's light: until, for the first time, its background's median is within
-        :data:`GAIN_START` of a frame's (KNN's background is black for its first frames; after
-        black first frames or a fade from black, MOG2's is darker than the scene). Scaled to a
-        background learnt from them, every later frame would be as dark, for good: the model
-        learns the scaled frames."""
+        scene's light: until, for the first time, its background's median is at most
+        :data:`GAIN_START` darker than a frame's (KNN's background is black for its first
+        frames; after black first frames or a fade from black, MOG2's is darker than the
+        scene). Scaled to a background learnt from them, every later frame would be as dark,
+        for good: the model learns the scaled frames."""
         assert self._model is not None
         background = _median_grey(self._model.getBackgroundImage())
         ratio = background / max(_median_grey(image), 1.0)
         if not self._gain_started:
-            if abs(ratio - 1.0) > GAIN_START:
+            if ratio < 1.0 - GAIN_START:  # a background darker than the scene: still learning
                 return image
             self._gain_started = True
         if background < 1.0 or abs(ratio - 1.0) < 0.005:

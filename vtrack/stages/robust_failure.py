@@ -218,6 +218,9 @@ class RobustFailure(Stage):
             ctx.state = TrackState.OCCLUDED if weak else TrackState.TRACKING
             if weak:
                 _hold_size(target, ctx)
+            else:  # a target given entering the view: its limit rises as it comes in
+                self._least_inside = max(self._least_inside, 0.5 * min(
+                    _inside_share(ctx.measurement, ctx.frame), 1.0))
             if may_learn and not (weak and colour_disagrees):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
