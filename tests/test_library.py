@@ -539,3 +539,34 @@ def test_the_readme_scorer_gives_the_metrics_vtrack_run_records(tmp_path: Path) 
     assert recorded.keys() == scores.keys() and scores["frames_evaluated"] == 60
     for name, value in scores.items():
         assert value == pytest.approx(recorded[name], abs=1e-3), name
+
+
+def test_decimal_and_numpy_numbers_become_floats_in_what_a_run_writes(tmp_path: Path) -> None:
+    """A Decimal frame rate was taken (d2cb0c5) but kept: track.csv's times were Decimals
+    (`0E+2`, `0.03336670003336670003336670003`) and run.json's fps a string; a NumPy float32
+    start_s was refused. They are floats from the request on; a signalling NaN is refused as a
+    frame rate (it raised a bare ValueError)."""
+    import json
+
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10)
+    folder = write_image_sequence(scene, tmp_path / "seq")
+    times = [r.time_s for r in vtrack.track(folder, "s0", scene.boxes[0], fps=Decimal("29.97"))]
+    assert all(type(t) is float for t in times) and times[1] == pytest.approx(1 / 29.97)
+    request = vtrack.RunRequest(str(folder), tmp_path / "out", vtrack.load_config("s0"),
+                                scene.boxes[0], fps=Decimal("29.97"), start_s=np.float32(0.0),
+                                video=False)
+    assert type(request.fps) is float and type(request.start_s) is float
+    run(request)
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["request"]["fps"] == 29.97
+    with (tmp_path / "out" / "track.csv").open(newline="") as handle:
+        assert [row["time_s"] for row in csv.DictReader(handle)][:2] == ["0", "0.0334"]
+    with pytest.raises(ConfigError, match="must be a frame rate"):
+        vtrack.Tracker("s1", fps=Decimal("sNaN"))
+
+
+def test_a_huge_integer_inside_a_list_is_named_in_a_short_line() -> None:
+    """An integer of 5000 digits inside a list or a table of a parameter's value raised
+    ValueError (Python's repr of it) while its message was made."""
+    with pytest.raises(ConfigError) as caught:
+        vtrack.Tracker("s0", hue__sat_min=[16**5000])
+    assert "an integer of more than" in str(caught.value) and len(str(caught.value)) < 300

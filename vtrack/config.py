@@ -76,7 +76,7 @@ class Config:
         check_chain(self)
 
     def build(self) -> list[Stage]:
-        """Construct the stages (values were validated when the config was loaded)."""
+        """Construct the stages (values were validated when the Config was made)."""
         return [build_stage(name, values, self.source) for name, values in self.stages]
 
     def check_files_named(self) -> None:
@@ -176,7 +176,7 @@ def load_config(spec: str | Path | None = None) -> Config:
     if not isinstance(spec, str | os.PathLike):
         raise TypeError(f"config: expected a shipped config name, a TOML file path or a "
                         f"vtrack.Config, got {type(spec).__name__}")
-    if not os.fspath(spec).strip():  # Path("") is the current folder
+    if not os.fspath(spec).strip():  # ("" would be opened as the current folder)
         raise ConfigError(f"config: empty; give {CONFIG_HINT}")
     path = Path(spec)
     shipped = shipped_configs()

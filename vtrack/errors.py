@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import signal
 import threading
 import unicodedata
@@ -33,6 +34,18 @@ def is_real(value: object) -> bool:
     ``Fraction``, ``Decimal`` or NumPy number; not a bool (True is not the number 1), a string
     or a complex number."""
     return isinstance(value, Real | Decimal) and not isinstance(value, bool)
+
+
+def real_or_nan(value: object) -> float:
+    """``value`` as a float when it is a real number (:func:`is_real`) that converts to one; NaN
+    otherwise (text, a bool, a signalling NaN, a Decimal beyond a float's range), for a range
+    check to refuse."""
+    if not is_real(value):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (ValueError, OverflowError):
+        return math.nan
 
 
 def printable(text: str) -> str:

@@ -165,7 +165,15 @@ def _number(value: float) -> str:
     return number_text(value)
 
 
-_SHORT = reprlib.Repr()
+class _ShortRepr(reprlib.Repr):
+    """``repr`` cut short, an integer written by :func:`_number` also inside a list or a table
+    (the built-in ``repr`` of a 5000-digit one raises ValueError)."""
+
+    def repr_int(self, x: int, level: int) -> str:
+        return _number(x)
+
+
+_SHORT = _ShortRepr()
 _SHORT.maxstring = _SHORT.maxother = 80
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, real_or_nan
 from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
@@ -88,18 +88,22 @@ class RunRequest:
         if self.init_box is not None:
             object.__setattr__(self, "init_box", as_box(self.init_box))
         check_seed(self.seed)  # (fps: checked as the input opens, where --fps applies)
+        if self.fps is not None and math.isfinite(real_or_nan(self.fps)):
+            object.__setattr__(self, "fps", real_or_nan(self.fps))  # (a Decimal: a number)
         _check_whole("start", self.start, 0, "the first frame tracked, 0-based")
         if self.max_frames is not None:
             _check_whole("max_frames", self.max_frames, 1, "how many frames to track; None: "
                          "to the end")
         for name, value, least in (("start_s", self.start_s, "from 0"),
                                    ("max_s", self.max_s, "above 0")):
-            if value is not None and not (isinstance(value, int | float)
-                                          and not isinstance(value, bool)
-                                          and (value >= 0 if name == "start_s" else value > 0)
-                                          and value <= MAX_SECONDS):
+            if value is None:
+                continue
+            seconds = real_or_nan(value)
+            if not ((seconds >= 0 if name == "start_s" else seconds > 0)
+                    and seconds <= MAX_SECONDS):
                 raise ConfigError(f"{name} {shown(value)}: must be a time in seconds {least} "
                                   f"to {MAX_SECONDS:g} (a year)")
+            object.__setattr__(self, name, seconds)  # (a NumPy or Decimal number: a float)
         # files a stage reads (mot_detections' det.txt) relative to the folder the request was
         # made in, not the one a worker runs in (a Dask worker's: another file, or none)
         object.__setattr__(self, "config", _absolute_files(self.config))

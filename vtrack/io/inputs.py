@@ -43,7 +43,7 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
     if fps is not None:
-        checked_fps(fps)
+        fps = checked_fps(fps)  # a float from here (a Decimal, a NumPy number)
     unfollowable = _not_followed(spec, raw) if ffmpeg.follow_s is not None else None
     if unfollowable:
         raise ConfigError(f"--follow reads a video file that is still being written; "

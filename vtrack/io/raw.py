@@ -26,7 +26,14 @@ from typing import BinaryIO
 import cv2
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError, PartialInputError, is_real, number_text
+from vtrack.errors import (
+    ConfigError,
+    InputError,
+    PartialInputError,
+    is_real,
+    number_text,
+    real_or_nan,
+)
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
@@ -50,12 +57,12 @@ MIN_FPS, MAX_FPS = 0.01, 10_000.0
 def checked_fps(fps: object, name: str = "--fps") -> float:
     """``fps`` if it is a frame rate from :data:`MIN_FPS` to :data:`MAX_FPS`; ConfigError
     naming it (``name``) otherwise."""
-    number = is_real(fps)
-    if not (number and math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
-        shown = number_text(fps) if number else repr(fps)
+    value = real_or_nan(fps)
+    if not (math.isfinite(value) and MIN_FPS <= value <= MAX_FPS):
+        shown = number_text(value) if is_real(fps) else repr(fps)
         raise ConfigError(f"{name} {shown}: must be a frame rate from {MIN_FPS:g} to "
                           f"{MAX_FPS:g} frames per second")
-    return float(fps)
+    return value
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import InputError
 from vtrack.geometry import Box, Window
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
@@ -57,10 +57,9 @@ def _s0_record_problem(before: list[str]) -> str | None:
 
 
 def _record(ctx: TrackContext) -> FixedRecord:
-    """The S0 record of ``hue_bp_fixed``; ConfigError in a chain without it (e.g. after S2's)."""
-    if ctx.fixed is None or ctx.fixed.model != "s0":
-        raise ConfigError("meanshift_fixed and kalman_f32 read the S0 record of hue_bp_fixed, "
-                          "which must be the last fixed-point stage before them")
+    """The S0 record of ``hue_bp_fixed`` (a chain's check refuses one without it, or with
+    another model's record: config.check_chain, Pipeline)."""
+    assert ctx.fixed is not None and ctx.fixed.model == "s0", "S0's record: checked chain"
     return ctx.fixed
 
 
