@@ -502,8 +502,10 @@ def test_decimal_numbers_are_taken_for_a_box_and_a_frame_rate() -> None:
     results = list(vtrack.track([image], "robust", box, fps=Decimal("29.97")))
     assert results[0].box == vtrack.Box(50, 40.5, 40, 30)
     assert vtrack.Tracker("s1", fps=Decimal("29.97")).fps == 29.97
-    with pytest.raises(ConfigError, match="^fps nan: must be a frame rate"):
+    with pytest.raises(ConfigError, match=r"^fps Decimal\('NaN'\): must be a frame rate"):
         vtrack.Tracker("s1", fps=Decimal("NaN"))
+    with pytest.raises(ConfigError, match="^fps an integer of 401 digits: must be a frame rate"):
+        vtrack.Tracker("s1", fps=10**400)  # (as given: a float of it is no number)
     with pytest.raises(ConfigError, match=r"^init_box: expected \(x, y, w, h\) numbers"):
         list(vtrack.track([image], "robust", (1j, 40, 40, 30)))
 

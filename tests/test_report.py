@@ -765,7 +765,7 @@ def test_runs_of_vtrack_run_only_keep_their_labels_and_a_run_inside_a_batch_is_n
     result = vtrack("report", str(batch), "--out", str(tmp_path / "r2"))
     assert result.exit_code == 0, result.output
     labels = _table_labels((tmp_path / "r2" / "summary.md").read_text())
-    assert ("smooth", "s0 (batch)") in labels and ("smooth", "s0 (extra)") in labels, labels
+    assert ("smooth", "s0 (batch)") in labels and ("smooth", "s0 (batch/extra)") in labels, labels
     assert not any("(.)" in label for _, label in labels), labels
 
 
@@ -808,3 +808,29 @@ def test_a_multi_target_runs_ground_truth_is_named_where_it_is_found(
     with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
         (row,) = list(csv.DictReader(handle))
     assert row["ground_truth"] == str(work / "m.mot.txt")
+
+
+def test_a_ground_truth_reached_through_a_link_and_dot_dot_is_the_file_the_run_read(
+        batch_out: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`--gt link/../clips/smooth.gt.txt`, link a symbolic link to a folder elsewhere: the
+    report named the path with `link/..` removed as text, another file (here another clip's
+    truth), and warned that the ground truth had changed since the run."""
+    inputs, _ = batch_out
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "deep").mkdir(parents=True)
+    shutil.copytree(inputs, elsewhere / "clips")
+    work = tmp_path / "work"
+    (work / "clips").mkdir(parents=True)
+    shutil.copy(inputs / "occlusion.gt.txt", work / "clips" / "smooth.gt.txt")  # another's
+    (work / "link").symlink_to(elsewhere / "deep")
+    monkeypatch.chdir(work)
+    ran = vtrack("run", str(elsewhere / "clips" / "smooth.mp4"), "-c", "s0", "--gt",
+                 "link/../clips/smooth.gt.txt", "--no-video", "--out", str(tmp_path / "run"))
+    assert ran.exit_code == 0, ran.output
+    monkeypatch.chdir(tmp_path)
+    result = vtrack("report", str(tmp_path / "run"), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert "Warning" not in result.output and "changed" not in result.output, result.output
+    with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
+        (row,) = list(csv.DictReader(handle))
+    assert row["ground_truth"] == str((elsewhere / "clips" / "smooth.gt.txt").resolve())

@@ -324,21 +324,23 @@ def test_a_box_mostly_outside_the_frame_is_never_called_tracking(tmp_path: Path)
             assert window is not None and window.width * window.height >= 0.5 * box.area, row
 
 
-@pytest.mark.parametrize("seed", [1, 4, 6, 9, 11, 14])
+@pytest.mark.parametrize("seed", [1, 4, 6, 11, 14])
 def test_a_first_box_thinner_than_min_side_is_not_stretched(scene_factory, seed: int) -> None:
-    """Each blob of the `multi` scene (640x480) halved to 320x240 that is 4 to 5 pixels
+    """Each blob of the `multi` scene (640x480) halved to 320x240 that is 4 to 4.7 pixels
     across: a legal first box (at least 4x4). The size floor (min_side 5) was applied to it on
     the first update, so the box jumped to 5x5 (x1.10 to x1.24) whatever the target did; the
     scale filter itself moves the size by up to three steps of 2% a frame (x1.061)."""
     scene = scene_factory("multi", seed, width=640, height=480, frames=120)
     half = [cv2.resize(scene.frame(i), (320, 240), interpolation=cv2.INTER_AREA)
             for i in range(2)]
+    steps = 1.02**3 + 1e-3  # three scale steps of 2%
+    # blobs that a stretch to 5 px would grow by more than the steps (under 4.7 px across)
     thin = [Box(b.x / 2, b.y / 2, b.w / 2, b.h / 2) for _, b in scene.tracks[0]
-            if 4.0 <= b.w / 2 < 5.0 and b.h / 2 >= 4.0]
+            if min(b.w, b.h) / 2 >= 4.0 and 5.0 / min(b.w, b.h) * 2 > steps]
     assert thin
     for first in thin:
         tracker = Tracker("robust")
         tracker.init(half[0], first)
         box = tracker.update(half[1]).box
-        assert box is not None and box.w / first.w < 1.09 and box.h / first.h < 1.09, (box,
-                                                                                        first)
+        assert box is not None and box.w / first.w < steps and box.h / first.h < steps, (
+            box, first)

@@ -30,7 +30,6 @@ from vtrack.errors import (
     ConfigError,
     InputError,
     PartialInputError,
-    is_real,
     number_text,
     real_or_nan,
 )
@@ -39,6 +38,7 @@ from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
 from vtrack.io.signatures import container_kind
 from vtrack.io.source import InputInfo, Source
+from vtrack.params import shown
 
 PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
 _F_SETPIPE_SZ = 1031  # fcntl.F_SETPIPE_SZ (Linux), missing from the fcntl module before 3.10
@@ -59,8 +59,8 @@ def checked_fps(fps: object, name: str = "--fps") -> float:
     naming it (``name``) otherwise."""
     value = real_or_nan(fps)
     if not (math.isfinite(value) and MIN_FPS <= value <= MAX_FPS):
-        shown = number_text(value) if is_real(fps) else repr(fps)
-        raise ConfigError(f"{name} {shown}: must be a frame rate from {MIN_FPS:g} to "
+        given = number_text(value) if math.isfinite(value) else shown(fps)  # as given
+        raise ConfigError(f"{name} {given}: must be a frame rate from {MIN_FPS:g} to "
                           f"{MAX_FPS:g} frames per second")
     return value
 

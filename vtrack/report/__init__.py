@@ -190,9 +190,9 @@ def _places(folders: Sequence[Path]) -> list[str]:
     """Where each of ``folders`` differs from the others: its first folder below their common
     one, or its whole path from there when those are not distinct."""
     common = os.path.commonpath(folders)
-    # (a folder that is the common one, a batch holding a vtrack run's folder: by its name)
-    paths = [os.path.relpath(folder, common) if os.path.relpath(folder, common) != os.curdir
-             else os.path.basename(common) for folder in folders]
+    if any(os.path.relpath(folder, common) == os.curdir for folder in folders):
+        common = os.path.dirname(common)  # (a batch holding a vtrack run's folder: by names)
+    paths = [os.path.relpath(folder, common) for folder in folders]
     heads = [path.split(os.sep)[0] for path in paths]
     return heads if len(set(heads)) == len(heads) else paths
 

@@ -369,8 +369,9 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
     started_in = record.get("working_dir")
     if not isinstance(started_in, str) or path == "-" or is_url(path) or os.path.isabs(path):
         return path
-    there = os.path.normpath(os.path.join(started_in, path))  # (one file, one name)
-    return there if os.path.exists(there) else path
+    there = os.path.join(started_in, path)
+    # one file, one name: its real path (`..` after a link is not removed as text)
+    return os.path.realpath(there) if os.path.exists(there) else path
 
 
 def read_once(spec: str) -> bool:
