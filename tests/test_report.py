@@ -834,3 +834,15 @@ def test_a_ground_truth_reached_through_a_link_and_dot_dot_is_the_file_the_run_r
     with (tmp_path / "r" / "summary.csv").open(newline="") as handle:
         (row,) = list(csv.DictReader(handle))
     assert row["ground_truth"] == str((elsewhere / "clips" / "smooth.gt.txt").resolve())
+
+
+def test_the_definitions_say_the_all_inputs_lost_frames_are_a_total(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """The All inputs row adds the inputs' lost frames up but averages every other column,
+    while the page said only that averages over inputs are means."""
+    _, batch = batch_out
+    result = vtrack("report", str(batch), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    for page in ("index.html", "summary.md"):
+        text = (tmp_path / "r" / page).read_text()
+        assert "means of the per-input curves and scores (lost frames: their total)" in text

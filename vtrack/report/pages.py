@@ -24,7 +24,8 @@ DEFINITIONS = (
     "centre error is <= t pixels, t = 0 ... 50; the score is the value at 20 px. Frames whose "
     "ground truth is empty or marked absent (target out of view) are not evaluated; a frame "
     "where the tracker claims no box (lost) counts as a failure (overlap 0, infinite centre "
-    "error). Averages over inputs are means of the per-input curves and scores. Best value per "
+    "error). Averages over inputs are means of the per-input curves and scores (lost frames: "
+    "their total). Best value per "
     "column (among the configurations of an input, or among configurations) in bold; columns "
     "that describe rather than rank (frames, miss flagged, lost frames) mark none.{sorting} "
     + " ".join(f"{title}: {note}." for title, note in NOTES.items()
