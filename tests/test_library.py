@@ -439,8 +439,9 @@ def test_fps_given_for_a_video_is_refused_and_a_sequence_keeps_its_own_rate(
     whatever its seqinfo.ini said (vtrack run takes its frameRate)."""
     scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
-    with pytest.raises(ConfigError, match=f"^--fps: {re.escape(str(clip))} is a video file, "
-                       "whose frames carry their own timestamps"):
+    with pytest.raises(ConfigError, match=f"^fps: {re.escape(str(clip))} is a video file, "
+                       r"whose frames carry their own timestamps; fps applies to raw "
+                       r"input \(raw=\)"):
         list(vtrack.track(clip, "s0", scene.boxes[0], fps=5))
     assert len(list(vtrack.track(clip, "s0", scene.boxes[0]))) == 10
     folder = write_image_sequence(scene, tmp_path / "seq")

@@ -93,7 +93,7 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     ``pathlib.Path``; ``raw`` a :class:`RawFormat` or, as ``vtrack run --raw`` takes it,
     ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
     ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
-    for a raw format vtrack cannot read."""
+    for a raw format vtrack cannot read; a frame rate's messages name it ``fps``."""
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", 30.0 if fps is None else fps)
     elif raw is not None and not isinstance(raw, RawFormat):
@@ -105,7 +105,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")
-    return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, **options)
+    return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
+                              **options)
 
 
 def _path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:

@@ -22,7 +22,8 @@ def check_input(spec: str) -> None:
 
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
-                ffmpeg: FFmpegInput | None = None, live: bool | None = None) -> Source:
+                ffmpeg: FFmpegInput | None = None, live: bool | None = None,
+                fps_name: str = "--fps") -> Source:
     """Open an input and decode its first frame; raise InputError if that is impossible.
 
     - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
@@ -38,12 +39,13 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
 
     ``live`` (None: :func:`is_live`) makes the source hand over the frames its consumer keeps
     up with and pass over the others, counted (:attr:`Source.frames_passed`,
-    :class:`~vtrack.io.threads.KeepingUp`).
+    :class:`~vtrack.io.threads.KeepingUp`). Messages about ``fps`` name it ``fps_name``
+    (the command's ``--fps``, the library's ``fps``).
     """
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
     if fps is not None:
-        fps = checked_fps(fps)  # a float from here (a Decimal, a NumPy number)
+        fps = checked_fps(fps, fps_name)  # a float from here (a Decimal, a NumPy number)
     unfollowable = _not_followed(spec, raw) if ffmpeg.follow_s is not None else None
     if unfollowable:
         raise ConfigError(f"--follow reads a video file that is still being written; "
@@ -68,7 +70,8 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
                 f"{spec} is a video file, whose frames carry their own timestamps"
                 if device is None and not is_url(spec) else
                 f"{spec} carries its own timestamps")
-        raise ConfigError(f"--fps: {what}; --fps applies to raw input (--raw WxH) and image "
+        raise ConfigError(f"{fps_name}: {what}; {fps_name} applies to raw input "
+                          f"({'--raw WxH' if fps_name == '--fps' else 'raw='}) and image "
                           "folders only")
     if device is not None:
         from vtrack.io.capture import CaptureSource
