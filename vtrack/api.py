@@ -95,7 +95,7 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
     for a raw format vtrack cannot read; a frame rate's messages name it ``fps``."""
     if isinstance(raw, str):
-        raw = RawFormat.parse(raw, pix_fmt or "bgr24", 30.0 if fps is None else fps)
+        raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps)
     elif raw is not None and not isinstance(raw, RawFormat):
         raise ConfigError(f"raw: expected a vtrack.io.RawFormat or 'WIDTHxHEIGHT', got "
                           f"{type(raw).__name__}")

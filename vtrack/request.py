@@ -88,8 +88,9 @@ class RunRequest:
         if self.init_box is not None:
             object.__setattr__(self, "init_box", as_box(self.init_box))
         check_seed(self.seed)  # (fps: checked as the input opens, where --fps applies)
-        if self.fps is not None and math.isfinite(real_or_nan(self.fps)):
-            object.__setattr__(self, "fps", real_or_nan(self.fps))  # (a Decimal: a number)
+        fps = real_or_nan(self.fps)
+        if self.fps is not None and math.isfinite(fps):
+            object.__setattr__(self, "fps", fps)  # (a Decimal: a number)
         _check_whole("start", self.start, 0, "the first frame tracked, 0-based")
         if self.max_frames is not None:
             _check_whole("max_frames", self.max_frames, 1, "how many frames to track; None: "

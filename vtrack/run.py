@@ -1066,6 +1066,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     metrics: Mapping[str, Any] = {}
     start = resolved.start
     stopped = resolved.span.stopped  # by --frames
+    read_to_end = status == STATUS_COMPLETE and not resolved.span.given  # the whole input
     if isinstance(formatter, _SingleTargetRows) and gt is not None:
         gt = gt[start:]  # the frames tracked (--start)
         metrics = summarize_scores(formatter.overlaps, formatter.errors, formatter.states)
@@ -1096,9 +1097,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         if note is not None and status == STATUS_COMPLETE:
             summary.warnings.append(note)
         past = formatter.past_truth_note(request.gt_path)
-        if past is not None and status == STATUS_COMPLETE and not resolved.span.given:
+        if past is not None and read_to_end:
             summary.warnings.append(past)
-    if status == STATUS_COMPLETE and not resolved.span.given:  # the input was read to its end
+    if read_to_end:
         summary.warnings += [note for stage in resolved.pipeline.stages
                              for note in stage.past_end_notes()]
 

@@ -184,12 +184,18 @@ class Source(Closing, ABC):
             self._release()
 
 
+#: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the
+#: first), plus this share of its number, before a frame count estimated from the duration at
+#: that rate is given up (a gap in the timestamps, a variable frame rate).
+ESTIMATE_SLACK_FRAMES = 2
+ESTIMATE_SLACK_SHARE = 0.1
+
+
 def past_end(info: InputInfo, index: int) -> bool:
     """Whether the input's frame count says it has no frame ``index``: the count its container
     lists (or an image folder's numbering, a raw file's size), or, estimated from its duration
     and frame rate, that count with the slack the video reader allows such an estimate. False
     when the count is unknown (a pipe, a URL)."""
-    from vtrack.io.video import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE
 
     count = info.frame_count
     if count is None:

@@ -56,7 +56,7 @@ from vtrack.io.signatures import (
     mp4_index_problem,
     mp4_torn_box,
 )
-from vtrack.io.source import InputInfo, Source
+from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
 
@@ -76,11 +76,6 @@ STEADY_RATE_FORMATS = frozenset({"mpegts"})
 #: of a frame).
 STEADY_INTERVALS = 4
 STEADY_TOLERANCE = 0.1
-#: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the
-#: first), plus this share of its number, before a frame count estimated from the duration at
-#: that rate is given up (a gap in the timestamps, a variable frame rate).
-ESTIMATE_SLACK_FRAMES = 2
-ESTIMATE_SLACK_SHARE = 0.1
 #: FFmpeg's readers that render text as pictures (ANSI art): such an input is a text file.
 TEXT_FORMATS = frozenset({"tty"})
 #: Decoded layouts handed over as I420 planes without conversion.

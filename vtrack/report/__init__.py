@@ -121,19 +121,24 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
             for same, place in zip(chains.values(), places, strict=True):
                 for run in same:
                     run.config = f"{name} ({place})"
+    # the results each run belongs to: its batch's folder, else its own (a vtrack run); each
+    # batch's summary.csv read once
+    batches = {str(b) for b in {_batch_of(r) for r in runs} if is_batch_folder(b)}
+    results = {id(r): str(_batch_of(r)) if str(_batch_of(r)) in batches
+               else str(r.folder.resolve()) for r in runs}
     for label, group in _group(runs, lambda r: r.config).items():
         if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
             continue
-        origins = _group(group, lambda r: str(_results_of(r)))
-        if len(origins) < 2 or not any(is_batch_folder(Path(o)) for o in origins):
+        origins = _group(group, lambda r: results[id(r)])
+        if len(origins) < 2 or not origins.keys() & batches:
             continue  # (runs of vtrack run only: told apart per input, below)
         places = dict(zip(origins, _places([Path(origin) for origin in origins]), strict=True))
         for origin, same in origins.items():
             for run in same:
                 run.config = f"{label} ({places[origin]})"
-        failed = [replace(row, config=f"{label} ({places[str(row.batch.resolve())]})")
-                  if row.config == label and row.batch is not None
-                  and str(row.batch.resolve()) in places else row for row in failed]
+        failed = [replace(row, config=f"{label} ({places[str(row.batch)]})")
+                  if row.config == label and str(row.batch) in places else row
+                  for row in failed]
     for group in _group(runs, lambda r: f"{r.input}\0{r.config}").values():
         if len(group) > 1:  # (several runs of one input still from one results folder)
             for run, place in zip(group, _places([r.folder for r in group]), strict=True):
@@ -144,13 +149,6 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
 def _batch_of(run: RunResult) -> Path:
     """The folder of the batch ``run`` would belong to (``<batch>/<input>/<config>/``)."""
     return run.folder.resolve().parent.parent
-
-
-def _results_of(run: RunResult) -> Path:
-    """The results ``run`` belongs to: its batch's folder, else its own folder (a ``vtrack
-    run``)."""
-    batch = _batch_of(run)
-    return batch if is_batch_folder(batch) else run.folder.resolve()
 
 
 def _counts(runs: Sequence[RunResult], failed: Sequence[FailedRun]) -> str:

@@ -479,9 +479,10 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     request = record.get("request") or {}
     try:
         result = _run_result(folder, record, summary)
+        # one file, however each run named it: found from the folder the run started in
+        found_gt = result.ground_truth = _found_path(record, "gt")
         if result.multi_target:
             result.mot = _mot_metrics(record)
-            result.ground_truth = _found_path(record, "gt")  # (as a single target's)
     except (TypeError, ValueError, OverflowError):
         raise InputError(f"{record_path}: not a vtrack run record") from None
     if result.multi_target:
@@ -499,7 +500,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.states = [row["state"] for row in rows]
         result.confidence = [_number(row.get("score")) for row in rows]
         result.boxes, result.first_frame = _boxes(rows), start
-        found_input, found_gt = _found_path(record, "input"), _found_path(record, "gt")
+        found_input = _found_path(record, "input")
         if found_input is not None and read_once(found_input):
             result.live_input = True
         elif not request.get("raw") and found_input is not None:
@@ -510,12 +511,10 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             else:
                 result.source = found_input
         if found_gt and _changed_since_run(record, "gt", found_gt):
-            result.ground_truth = found_gt
             result.overlaps, result.errors = _recorded_scores(rows)
             result.note = (f"{folder}: the ground truth {request['gt']} changed after the run; "
                            "scored with the overlaps the run recorded")
         elif found_gt:
-            result.ground_truth = found_gt  # (one file, however each run named it)
             (result.overlaps, result.errors), result.truth = _rescored(rows, request, found_gt,
                                                                       start)
             if result.truth is not None:

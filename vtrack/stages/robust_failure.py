@@ -180,7 +180,7 @@ class RobustFailure(Stage):
         ctx.state = TrackState.TRACKING
         assert ctx.box is not None
         # a box with less than this share of its area inside the frame is leaving the view
-        self._least_inside = 0.5 * min(_inside_share(ctx.box, ctx.frame), 1.0)
+        self._least_inside = _leaving_share(ctx.box, ctx.frame)
 
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
@@ -218,9 +218,10 @@ class RobustFailure(Stage):
             ctx.state = TrackState.OCCLUDED if weak else TrackState.TRACKING
             if weak:
                 _hold_size(target, ctx)
-            else:  # a target given entering the view: its limit rises as it comes in
-                self._least_inside = max(self._least_inside, 0.5 * min(
-                    _inside_share(ctx.measurement, ctx.frame), 1.0))
+            elif self._least_inside < LEAVING:  # a target given entering the view: its
+                # limit rises as it comes in
+                self._least_inside = max(self._least_inside,
+                                         _leaving_share(ctx.measurement, ctx.frame))
             if may_learn and not (weak and colour_disagrees):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
@@ -270,6 +271,16 @@ def _remember(target: RobustTarget) -> None:
     target.response_frames = n
     target.colour_frames += 1
     target.usual_colour += (target.colour_peak - target.usual_colour) / target.colour_frames
+
+
+#: A box with less than this share of its area inside the frame is leaving the view (a first
+#: box partly outside lowers it to this share of its own inside share, until it comes in).
+LEAVING = 0.5
+
+
+def _leaving_share(box: Box, frame: Frame) -> float:
+    """The inside share below which ``box``, seen now, would be leaving the view."""
+    return LEAVING * min(_inside_share(box, frame), 1.0)
 
 
 def _mostly_outside(box: Box | None, frame: Frame, least: float) -> bool:
