@@ -115,12 +115,13 @@ def test_a_target_given_entering_the_view_is_followed_in(seed):
     assert min(scores) >= 0.5, scores
 
 
-def test_a_target_given_entering_the_view_is_lost_when_it_leaves_again():
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_target_given_entering_the_view_is_lost_when_it_leaves_again(seed):
     """The share of a box that counts as "mostly outside" was fixed by a first box entering the
     view (28% inside: 14%), so the same target leaving again later by that edge was followed
     as `tracking` with 34-41% of its box inside, where a run started inside calls it lost. The
     limit rises as the target comes in: a `tracking` box is at least half inside."""
-    scene = make_scene("leave_return", seed=0, frames=FRAMES)
+    scene = make_scene("leave_return", seed=seed, frames=FRAMES)
     order = [*range(77, FRAMES), *range(FRAMES - 1, 29, -1)]  # in, then back out by its edge
     first = scene.boxes[77]
     assert first is not None
