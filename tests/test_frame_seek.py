@@ -4,10 +4,12 @@ video is read from the key frame before it, the very frame a full decode gives."
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
 
+import av
 import cv2
 import numpy as np
 import pytest
@@ -89,3 +91,32 @@ def test_run_refuses_a_start_past_the_stated_count_before_asking_for_a_box(
         assert done.stderr == (f"vtrack: error: --start {FRAMES}: {long_clip}: has no frame "
                                f"{FRAMES} (frames 0..{FRAMES - 1})\n")
     assert not (tmp_path / "out").exists()
+
+
+def test_run_starts_from_the_key_frame_before_its_start_with_the_same_frames(
+        long_clip: Path, tmp_path: Path) -> None:
+    """`vtrack run long.mp4 --start N` (or `--start Ts`) decoded every frame before N to drop
+    them. A seekable video is now read from the key frame at or before N (run.json
+    ``read_from_frame``), and tracks the very frames, numbered and timed as before: the same
+    track.csv as the input read whole through stdin (which cannot jump). The clip has B-frames
+    (x264's default), so the frames come out of the decoder in another order than stored."""
+    with av.open(str(long_clip)) as container:
+        assert container.streams.video[0].codec_context.has_b_frames
+    init = ("--init", "10,10,12,12", "--no-video", "--frames", "20")
+    for start, first, key in (("157", 157, 150), (str(4 * KEYINT), 4 * KEYINT, 4 * KEYINT),
+                              (str(4 * KEYINT - 1), 4 * KEYINT - 1, 3 * KEYINT),
+                              ("5.1s", 153, 150), ("2s", 60, 60)):
+        jumped, whole = tmp_path / f"file{start}", tmp_path / f"stdin{start}"
+        done = vtrack("run", str(long_clip), "--start", start, *init, "-o", str(jumped))
+        assert done.returncode == 0, done.stderr
+        with long_clip.open("rb") as stdin:
+            done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", "--start", start,
+                                   *init, "-o", str(whole)], stdin=stdin, capture_output=True,
+                                  text=True, timeout=60, check=False)
+        assert done.returncode == 0, done.stderr
+        records = [json.loads((out / "run.json").read_text()) for out in (jumped, whole)]
+        assert [(r["start_frame"], r["read_from_frame"], r["frames"]) for r in records] == [
+            (first, key, 20), (first, 0, 20)], start
+        rows = (jumped / "track.csv").read_text()
+        assert rows.splitlines()[1].startswith(f"{first},{round(first / 30, 4):g},"), start
+        assert rows == (whole / "track.csv").read_text(), start

@@ -535,6 +535,10 @@ class _Resolved:
     identity: dict[str, Any] = field(default_factory=dict)
     #: The first frame tracked (``--start``; a time found in the frames' timestamps).
     start: int = 0
+    #: The frame the input is read from: 0, or for a later ``start`` the key frame at or before
+    #: it a seekable video jumped to (the frames before it are not decoded; run.json
+    #: ``read_from_frame``).
+    read_from: int = 0
     #: How much to track from ``start`` on (``--frames``: a count, or a duration measured in
     #: the frames' timestamps).
     span: _Span = field(default_factory=_Span)
@@ -780,7 +784,7 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
                             "first detection, after learning the background) and does not use "
                             "a first box: no box is reported until it detects the target")
             ignored, init_box = init_box, None
-    start = _first_frame(request, source)
+    start, read_from = _first_frame(request, source)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
@@ -812,8 +816,8 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
-                     request.file_identities(), start, _Span(request.max_frames, request.max_s),
-                     warnings, distractors)
+                     request.file_identities(), start, read_from,
+                     _Span(request.max_frames, request.max_s), warnings, distractors)
 
 
 def _refuse_unreadable(request: RunRequest) -> None:
@@ -826,22 +830,28 @@ def _refuse_unreadable(request: RunRequest) -> None:
                     live=request.live).close()
 
 
-def _first_frame(request: RunRequest, source: Source | None) -> int:
-    """The first frame to track: ``--start N``, or for ``--start Ts`` the first frame of
+def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
+    """The first frame to track, ``--start N``, or for ``--start Ts`` the first frame of
     ``source`` whose timestamp is at or after T (decoded up to it: a variable frame rate is
-    followed, where T x fps would miss). InputError when the input ends before T, or
-    (``source`` opened) its frame count says it has no frame N, before any is decoded."""
+    followed, where T x fps would miss); and the frame ``source`` is read from: a seekable
+    video jumps to the key frame at or before it (:meth:`Source.start_near`; for a time, before
+    the frame T x fps names), other inputs are read from their first. InputError when the input
+    ends before T, or (``source`` opened) its frame count says it has no frame N, before any is
+    decoded."""
     if request.start_s is None:
-        if request.start and source is not None and past_end(source.info, request.start):
+        if not request.start or source is None:
+            return request.start, 0
+        if past_end(source.info, request.start):
             raise InputError(f"--start {request.start_text}: "
                              + past_end_text(request.input, request.start, source.info))
-        return request.start
+        return request.start, source.start_near(request.start)
     assert source is not None, "a start time needs the opened input"
+    read_from = source.start_near(request.start_estimate(source.info.fps))
     found = source.skip_to(request.start_s)
     if found is None:
         raise InputError(f"--start {request.start_text}: {request.input} has no frame at or "
                          f"after {request.start_s:g} s (it ends before)")
-    return found
+    return found, read_from
 
 
 def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, Iterator[Frame]]:
@@ -1111,6 +1121,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "input": source.info.to_dict(),
         "request": request.to_dict(),
         "start_frame": resolved.start,
+        # where the input was read from: a key frame at or before start_frame a seekable video
+        # jumped to (the frames before it were not decoded), else 0
+        "read_from_frame": resolved.read_from,
         # --frames ended the run, not the input: ground truth past it belongs to frames not read
         "stopped_by_frames": stopped,
         "init": list(resolved.init_box) if resolved.init_box is not None else None,
