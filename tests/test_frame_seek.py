@@ -120,3 +120,19 @@ def test_run_starts_from_the_key_frame_before_its_start_with_the_same_frames(
         rows = (jumped / "track.csv").read_text()
         assert rows.splitlines()[1].startswith(f"{first},{round(first / 30, 4):g},"), start
         assert rows == (whole / "track.csv").read_text(), start
+
+
+def test_frame_takes_a_time_as_run_start_does(long_clip: Path, tmp_path: Path) -> None:
+    """`vtrack frame long.mp4 --at 5.1s` was refused ('5.1s' is not a whole number) while
+    `vtrack run --start 5.1s` took it: both read N or Ts with one parser now, and the frame
+    written is the one a run from that time starts at (153 at 30 fps), named by its index."""
+    out = tmp_path / "f.png"
+    done = vtrack("frame", str(long_clip), "--at", "5.1s", "--no-grid", "-o", str(out))
+    assert (done.returncode, done.stderr) == (0, ""), done.stderr
+    assert done.stdout == f"wrote {out} (frame 153, 64x48)\n"
+    assert np.array_equal(cv2.imread(str(out)), read_frame(str(long_clip), 153))
+    done = vtrack("frame", str(long_clip), "--at", "10s", "-o", str(tmp_path / "g.png"))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: {long_clip} has no frame at or after 10 s (it ends "
+                           "before)\n")
+    assert not (tmp_path / "g.png").exists()

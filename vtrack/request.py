@@ -24,6 +24,7 @@ from vtrack.errors import ConfigError, real_or_nan
 from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
+from vtrack.io.source import frame_at_time
 from vtrack.io.video import FFmpegInput
 from vtrack.params import MAX_SECONDS, check_seed, shown
 from vtrack.stages.base import stage_class
@@ -184,9 +185,7 @@ class RunRequest:
         first frame whose timestamp is at or after ``start_s``."""
         if self.start_s is None:
             return self.start
-        if fps is None or not math.isfinite(fps) or fps <= 0:
-            return 0
-        return max(0, math.ceil(self.start_s * fps - 1e-6))
+        return frame_at_time(self.start_s, fps)
 
     def frames_expected(self, frame_count: int | None, fps: float | None) -> int | None:
         """The frames the run will track, as far as the input's ``frame_count`` (None:

@@ -78,7 +78,13 @@ from vtrack.io.csvfile import box_as_written, scores_as_written
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
-from vtrack.io.source import TIME_SLACK_S, past_end, past_end_text
+from vtrack.io.source import (
+    TIME_SLACK_S,
+    no_frame_after_text,
+    past_end,
+    past_end_text,
+    seek_time,
+)
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
 from vtrack.latency import Latencies
@@ -846,11 +852,10 @@ def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
                              + past_end_text(request.input, request.start, source.info))
         return request.start, source.start_near(request.start)
     assert source is not None, "a start time needs the opened input"
-    read_from = source.start_near(request.start_estimate(source.info.fps))
-    found = source.skip_to(request.start_s)
+    found, read_from = seek_time(source, request.start_s)
     if found is None:
-        raise InputError(f"--start {request.start_text}: {request.input} has no frame at or "
-                         f"after {request.start_s:g} s (it ends before)")
+        raise InputError(f"--start {request.start_text}: "
+                         + no_frame_after_text(request.input, request.start_s))
     return found, read_from
 
 

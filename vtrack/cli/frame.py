@@ -1,4 +1,5 @@
-"""``vtrack frame INPUT --at N -o frame.png``: one frame with a pixel grid, to read a box off."""
+"""``vtrack frame INPUT --at N|Ts -o frame.png``: one frame (a number, or a time as ``vtrack run
+--start`` takes it) with a pixel grid, to read a box off."""
 
 from __future__ import annotations
 
@@ -7,34 +8,55 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import WholeNumber
+from vtrack.cli._options import StartPoint, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 
 
 @click.command("frame")
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
-@click.option("--at", "index", type=WholeNumber(min=0), default=0, show_default=True,
-              help="Frame number (0-based).")
+@click.option("--at", "at", type=StartPoint(), default="0", show_default=True,
+              metavar="N|Ts", help="The frame: a 0-based frame number N (as track.csv numbers "
+              "them), or a time T like ffmpeg -ss (2.5s: the first frame whose timestamp is at "
+              "or after it), as vtrack run --start takes them.")
 @click.option("--out", "-o", "out", type=IMAGE_PATH, metavar="FILE",
               help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
 @click.option("--step", type=WholeNumber(min=2), default=None, metavar="PX",
               help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
-def command(input_spec: str, index: int, out: Path | None, step: int | None,
-            no_grid: bool) -> None:
+def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
+            step: int | None, no_grid: bool) -> None:
     """Write frame N of INPUT as an image with a light pixel grid and its scale (x along the
     top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError
     from vtrack.io.files import write_bytes_atomic
     from vtrack.io.images import encode_image
     from vtrack.io.specs import input_name
-    from vtrack.picker.frames import read_frame
+    from vtrack.picker.frames import read_frame, read_frame_at
     from vtrack.picker.grid import draw_grid
 
     if no_grid and step is not None:
         raise ConfigError(f"--step {step}: spaces the grid's lines, and --no-grid draws none; "
                           "give one of them")
-    out = out or Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
+    if out is not None:  # refused before a frame is decoded
+        ext = _checked_ext(out, input_spec)
+    index, seconds = at
+    if seconds is None:
+        bgr = read_frame(input_spec, index)
+    else:
+        index, bgr = read_frame_at(input_spec, seconds)
+    if out is None:
+        out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
+        ext = _checked_ext(out, input_spec)
+    image = bgr if no_grid else draw_grid(bgr, step)
+    write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old image
+    click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
+
+
+def _checked_ext(out: Path, input_spec: str) -> str:
+    """The image type ``out`` names (``.png`` or ``.jpg``); ConfigError when it names neither,
+    or is (or is inside) the input."""
+    from vtrack.errors import ConfigError
+
     ext = out.suffix.lower().replace(".jpeg", ".jpg")
     if ext not in (".png", ".jpg"):
         raise ConfigError(f"--out {out}: write a .png or .jpg image")
@@ -44,7 +66,4 @@ def command(input_spec: str, index: int, out: Path | None, step: int | None,
             or (source.is_dir() and source.resolve() in out.resolve().parents)):
         raise ConfigError(f"--out {out}: is, or is inside, the input {input_spec} (it would "
                           "replace or add one of its frames); write the image elsewhere")
-    bgr = read_frame(input_spec, index)
-    image = bgr if no_grid else draw_grid(bgr, step)
-    write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old image
-    click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
+    return ext

@@ -9,6 +9,7 @@ leaving its ``with`` block) stops that thread and releases the file, also mid-st
 from __future__ import annotations
 
 import itertools
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
@@ -182,6 +183,30 @@ class Source(Closing, ABC):
         finished = self._prefetch.close() if self._prefetch is not None else True
         if finished:  # else the reader is stuck in a blocking read and still owns the file
             self._release()
+
+
+def frame_at_time(seconds: float, fps: float | None) -> int:
+    """The first frame at or after ``seconds`` at a constant ``fps`` frames a second
+    (:data:`TIME_SLACK_S` of rounding; 0 without a frame rate): exact for a constant rate,
+    an estimate for another (the frames' own timestamps tell, :func:`seek_time`)."""
+    if fps is None or not math.isfinite(fps) or fps <= 0:
+        return 0
+    return max(0, math.ceil(seconds * fps - TIME_SLACK_S))
+
+
+def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
+    """Make ``source`` (opened, not yet iterated) begin at its first frame whose timestamp is
+    at or after ``seconds`` (:meth:`Source.skip_to`, a variable frame rate followed), a
+    seekable video read from the key frame at or before the frame ``seconds`` x fps names
+    (:meth:`Source.start_near`), other inputs from their first frame. Returns that frame's
+    index (None when the input ends before) and the index reading began at."""
+    read_from = source.start_near(frame_at_time(seconds, source.info.fps))
+    return source.skip_to(seconds), read_from
+
+
+def no_frame_after_text(input_spec: str, seconds: float) -> str:
+    """What is said when :func:`seek_time` found no frame at or after ``seconds``."""
+    return f"{input_spec} has no frame at or after {seconds:g} s (it ends before)"
 
 
 #: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the

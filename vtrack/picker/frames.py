@@ -23,7 +23,15 @@ from vtrack.frame import Frame
 from vtrack.io import open_source
 from vtrack.io.images import encode_image
 from vtrack.io.sidecar import has_sidecar
-from vtrack.io.source import InputInfo, Source, no_frame_text, past_end, past_end_text
+from vtrack.io.source import (
+    InputInfo,
+    Source,
+    no_frame_after_text,
+    no_frame_text,
+    past_end,
+    past_end_text,
+    seek_time,
+)
 
 #: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
 CACHE_BYTES = 64 << 20
@@ -195,6 +203,17 @@ def read_frame(input_spec: str, index: int) -> np.ndarray:
                 raise InputError(absent_text(input_spec, index, source, frame.index))
             last = frame.index
     raise InputError(f"{input_spec}: has {no_frame_text(index, last + 1)}")
+
+
+def read_frame_at(input_spec: str, seconds: float) -> tuple[int, np.ndarray]:
+    """The first frame of an input whose timestamp is at or after ``seconds`` (as ``vtrack run
+    --start Ts`` finds it, :func:`~vtrack.io.source.seek_time`): its index and BGR image;
+    InputError naming the input when it ends before."""
+    with open_source(input_spec) as source:
+        found, _ = seek_time(source, seconds)
+        if found is None:
+            raise InputError(no_frame_after_text(input_spec, seconds))
+        return found, next(iter(source)).bgr().copy()
 
 
 def absent_text(input_spec: str, index: int, source: Source, following: int) -> str:
