@@ -266,7 +266,10 @@ def test_progress_lines_when_stderr_is_not_a_terminal(clip_factory, tmp_path: Pa
                     "--stats-period", "0", "-o", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     lines = result.stderr.splitlines()
-    name = clip.path.stem
+    # the input named as the summary line names it (the progress said clip, the summary clip.mp4)
+    name = re.escape(str(clip.path))
+    assert re.fullmatch(rf"{name}: 10 frames, .* -> {re.escape(str(tmp_path / 'out'))}",
+                        result.stdout.strip()), result.stdout
     assert [int(m.group(1)) for line in lines
             if (m := re.fullmatch(rf"{name}: (\d+)/10 frames \(\d+%\), [\d.]+ fps, [\d:?]+ left",
                                   line))] == list(range(1, 11)), lines

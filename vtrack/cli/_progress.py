@@ -23,6 +23,8 @@ from collections.abc import Callable
 from datetime import timedelta
 from typing import TYPE_CHECKING
 
+from vtrack.errors import printable
+
 if TYPE_CHECKING:
     from tqdm import tqdm
 
@@ -179,7 +181,8 @@ class FrameProgress(_Shown):
         # reads (None once the timestamps depart from it, the exact count at the end)
         total = self.expected(self.info.frame_count, self.info.fps)
         if self.bar is None:
-            self.bar = self._open(self.info.name, total, started=self._started)
+            # the input as given, as the summary line names it (long.mp4, not long)
+            self.bar = self._open(printable(self.info.path), total, started=self._started)
         if isinstance(self.bar, ProgressLines):
             self.bar.total = total
             self.bar.update(done)
