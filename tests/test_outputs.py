@@ -710,3 +710,41 @@ def test_batch_summary_counts_skipped_frames(clip_factory: ClipFactory, tmp_path
         assert record["summary"]["frames_skipped"] == skipped
         assert rows[name]["frames_skipped"] == str(skipped)
         assert rows[name]["frames"] == str(FRAMES - skipped)
+
+
+def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Path) -> None:
+    """SIGTERM to `vtrack run long.mp4 --init ... --frames 2500` said only 'interrupted by
+    SIGTERM; partial results in OUT', and run.json not which frame was the last written. Now
+    run.json has last_frame and a line gives the options that go on from there (the last frame
+    tracked, its box as track.csv wrote it, the frames left of --frames): the run they make
+    starts on that row and ends where the whole run would have."""
+    from vtrack.scenes import make_scene, write_video
+
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=3000, fps=30)
+    clip = write_video(scene, tmp_path / "long.mp4", preset="ultrafast", keyint=30)
+    first, out = tmp_path / "first", tmp_path / "out"
+    init = ",".join(f"{v:.2f}" for v in scene.boxes[0])
+    process = start("run", str(clip), "--init", init, "--frames", "2500", "--no-video",
+                    "-o", str(first))
+    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 20
+                         for p in first.glob(".track.tmp*")), process, "20 rows")
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal.SIGTERM, stderr
+    record = assert_records_agree(first)
+    rows = csv_rows(first / "track.csv")
+    assert record["status"] == "interrupted" and 20 <= record["frames"] < 2500
+    assert record["last_frame"] == int(rows[-1][0]) == record["frames"] - 1
+    last = next(row for row in reversed(rows) if row[8] == "tracking")
+    options = (f"--start {last[0]} --init {','.join(last[2:6])} "
+               f"--frames {2500 - int(last[0])}")
+    assert record["summary"]["resume"] == options
+    hint = stderr.splitlines()[-1]
+    assert hint == (f"vtrack: {clip}: to go on from where it stopped, run the same command "
+                    f"with {options} and another --out"), stderr
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), *options.split(),
+                           "--no-video", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    again = csv_rows(out / "track.csv")
+    assert again[0][:6] == last[:6] and again[-1][0] == "2499"

@@ -52,6 +52,7 @@ from vtrack.errors import (
     StreamReaderGone,
     VtrackError,
     handling_stop_signals,
+    number_text,
     plural,
     printable,
 )
@@ -139,6 +140,10 @@ class RunSummary:
     multi_target: bool = False
     #: The signal that interrupted the run (``SIGINT``, ``SIGTERM``), if one did.
     interrupted_by: str | None = None
+    #: An interrupted run: the options that go on from where it stopped (``--start 157 --init
+    #: 9.74,9.83,10.4,10.4``: the last frame tracked and its box as written), given again with
+    #: the run's other options; None when there is nothing to go on from (a live source).
+    resume: str | None = None
 
     def line(self, label: str | None = None) -> str:
         """The one-line summary printed at the end of ``vtrack run`` (headed by ``label``,
@@ -556,6 +561,17 @@ class _Resolved:
 
 
 @dataclass
+class _Resumable:
+    """A frame written by the frame loop that a run can go on from."""
+
+    index: int
+    time_s: float
+    #: Frames written before it.
+    before: int
+    box: Box | None = None
+
+
+@dataclass
 class _Tracked:
     """How the frame loop ended."""
 
@@ -577,6 +593,12 @@ class _Tracked:
         default_factory=lambda: {TrackState.OCCLUDED: 0, TrackState.LOST: 0})
     #: Live sources: each frame's time from decoded to its result written.
     latency: Latencies = field(default_factory=Latencies)
+    #: Where an interrupted run can be taken up again (:func:`_resume_options`): the last
+    #: frame written, and the last one the single target was ``tracking`` in, with its box.
+    last_frame: _Resumable | None = None
+    last_tracked: _Resumable | None = None
+    #: The first frame's timestamp (None: no frame was written).
+    first_time_s: float | None = None
     timeline: _Timeline = field(default_factory=_Timeline)
 
     def interrupted(self, by: Interrupted) -> None:
@@ -934,6 +956,12 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     raise
                 if result.state in out.states:
                     out.states[result.state] += 1
+                if out.first_time_s is None:
+                    out.first_time_s = result.time_s
+                out.last_frame = _Resumable(result.index, result.time_s, out.frames)
+                if result.state is TrackState.TRACKING and result.box is not None:
+                    out.last_tracked = _Resumable(result.index, result.time_s, out.frames,
+                                                  result.box)
                 out.frames += 1  # its row is on disk; a video error below loses only the video
                 out.timeline.add(result.index, result.time_s)
                 if video is not None and annotator is not None:
@@ -1045,6 +1073,28 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     return outputs
 
 
+def _resume_options(resolved: _Resolved, tracked: _Tracked) -> str | None:
+    """The options that take an interrupted run up again: ``--start`` the last frame written
+    (a multi-target chain, or one that finds its target itself), else the last frame the
+    target was tracked in with ``--init`` its box as ``track.csv`` wrote it; and what is left
+    of ``--frames`` from there (a count, or a time). None when there is no such frame."""
+    pipeline = resolved.pipeline
+    needs_box = pipeline.needs_init_box and not pipeline.multi_target
+    at = tracked.last_tracked if needs_box else tracked.last_frame
+    if at is None:
+        return None
+    options = f"--start {at.index}"
+    if at.box is not None:
+        options += " --init " + ",".join(number_text(v) for v in box_as_written(at.box))
+    span = resolved.span
+    if span.count is not None:
+        options += f" --frames {span.count - at.before}"
+    elif span.seconds is not None and tracked.first_time_s is not None:
+        left = span.seconds - (at.time_s - tracked.first_time_s)
+        options += f" --frames {number_text(round(left, 6))}s"
+    return options
+
+
 def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
             tracked: _Tracked) -> RunSummary:
     """Metrics, the summary and ``run.json`` (written last, atomically; listing only the
@@ -1071,6 +1121,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         warnings=[*resolved.warnings, *source.warnings,
                   *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
+        resume=(_resume_options(resolved, tracked)
+                if status == STATUS_INTERRUPTED and not source.live else None),
     )
     jumped = tracked.timeline.warning(request.input, request.gt_path)
     if jumped is not None:
@@ -1126,6 +1178,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "input": source.info.to_dict(),
         "request": request.to_dict(),
         "start_frame": resolved.start,
+        # the last frame whose results were written (None: none was)
+        "last_frame": None if tracked.last_frame is None else tracked.last_frame.index,
         # where the input was read from: a key frame at or before start_frame a seekable video
         # jumped to (the frames before it were not decoded), else 0
         "read_from_frame": resolved.read_from,

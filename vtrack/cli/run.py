@@ -25,7 +25,7 @@ from vtrack.cli._options import (
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError
+from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError, printable
 from vtrack.params import MAX_SEED
 
 if TYPE_CHECKING:
@@ -223,6 +223,10 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         elif summary.status == STATUS_INTERRUPTED:  # says why
             _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
                  err=True)
+            if summary.resume is not None:
+                _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
+                               f"the same command with {summary.resume} and another --out"),
+                     err=True)
         elif summary.status != STATUS_COMPLETE:
             _say(f"vtrack: error: {summary.error}; results up to there are in "
                  f"{summary.out_dir}", err=True)
