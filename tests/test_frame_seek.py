@@ -136,3 +136,31 @@ def test_frame_takes_a_time_as_run_start_does(long_clip: Path, tmp_path: Path) -
     assert done.stderr == (f"vtrack: error: {long_clip} has no frame at or after 10 s (it ends "
                            "before)\n")
     assert not (tmp_path / "g.png").exists()
+
+
+def test_a_frame_just_before_a_key_frame_of_an_hevc_clip_is_reached_from_the_one_before(
+        tmp_path: Path) -> None:
+    """x265's B-frames put a key frame's decoding time up to 3 frames before its display time,
+    and FFmpeg seeks by decoding time: `vtrack run h265.mp4 --start 119` (key frames every 30)
+    found key frame 120, after 119, and fell back to decoding frames 0..118 (start_near gave 0
+    for 59, 117..119, 146..149, ...). It now aims further back until it finds key frame 90;
+    the frames read from there are the very frames a full decode gives."""
+    try:
+        av.codec.Codec("libx265", "w")
+    except ValueError:  # an FFmpeg built without x265
+        pytest.skip("no libx265 encoder")
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=FRAMES, fps=30)
+    clip = write_video(scene, tmp_path / "h265.mp4", keyint=KEYINT, codec="libx265")
+    with open_source(str(clip)) as source:
+        every = {frame.index: frame.bgr().copy() for frame in source}
+    for index in range(KEYINT, FRAMES, 7):
+        with open_source(str(clip)) as source:
+            assert source.start_near(index) == index // KEYINT * KEYINT, index
+    for index in (4 * KEYINT - 1, 5 * KEYINT - 2, 2 * KEYINT - 1):
+        with open_source(str(clip)) as source:
+            begin = source.start_near(index)
+            assert begin == index // KEYINT * KEYINT
+            for frame in source:
+                assert np.array_equal(frame.bgr(), every[frame.index]), (index, frame.index)
+                if frame.index == index:
+                    break

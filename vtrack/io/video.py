@@ -608,20 +608,29 @@ class VideoSource(Source):
         from their timestamps, ``round((t - t0) * fps)`` (a local file of constant frame rate:
         its listed count is its duration times its rate; not AVI, whose pictures carry no
         times of their own). The frame found there is checked: a clean picture on that
-        timeline, at or before ``index``; else (or when FFmpeg cannot seek) the reader goes
-        back to the first frame, and iteration begins there as it would have. Returns the
-        index iteration begins at."""
+        timeline, at or before ``index`` (a key frame after it, which FFmpeg finds where
+        B-frames put its decoding time before ``index``'s, makes it aim 1, 2, 4... frames
+        earlier); else (or when FFmpeg cannot seek) the reader goes back to the first frame,
+        and iteration begins there as it would have. Returns the index iteration begins at."""
         fps = self.info.fps
         if (index <= 0 or self._prefetch is not None or not self._seekable or not fps
                 or not self._constant_rate or self._frame_order or self._t0 is None):
             return 0
         dropped = self._dropped
+        back = 0  # frames the seek aims before ``index``
         try:
-            first = self._seek(round((self._t0 + index / fps) / self._stream.time_base))
-            place = (first.time - self._t0) * fps
-            if abs(place - round(place)) <= 0.25 and 0 <= round(place) <= index:
-                self._first, self._start, self._dropped = first, round(place), 0
-                return self._start
+            while back <= index:
+                first = self._seek(round((self._t0 + (index - back) / fps)
+                                         / self._stream.time_base))
+                place = (first.time - self._t0) * fps
+                if abs(place - round(place)) > 0.25 or round(place) < 0:
+                    break
+                if round(place) <= index:
+                    self._first, self._start, self._dropped = first, round(place), 0
+                    return self._start
+                # a key frame shown after ``index`` but decoded before it (B-frames: FFmpeg
+                # seeks by decoding times): aim further back
+                back = 2 * back or 1
         except (av.FFmpegError, StopIteration, TypeError):  # TypeError: a frame without time
             pass
         try:
