@@ -120,3 +120,30 @@ def test_the_report_says_why_evaluated_frames_may_exceed_the_frames(numbered: Pa
     assert (int(row["frames"]), int(row["frames_evaluated"])) == (9, 12)
     html = (tmp_path / "report" / "index.html").read_text()
     assert "skipped among them included (misses: no box), so it may exceed Frames" in html
+
+
+def test_a_late_start_neither_reads_nor_counts_the_images_before_it(
+        numbered: Path, tmp_path: Path) -> None:
+    """`vtrack run seq --start 8` read every image before frame 8 and its summary and warnings
+    counted those it could not (``skipped 1 undecodable, skipped 3 missing from the
+    numbering``, two warnings), frames the run did not track. It now begins at the image
+    numbered 8 (run.json ``read_from_frame``): the run's frames 8..11 skipped none."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 12, 30), folder)
+    for number in (4, 5, 6):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    (folder / "img" / "0002.jpg").write_bytes(b"not an image")
+    images = folder / "img"
+    done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--start", "8",
+                  "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == "" and "skipped" not in done.stdout, done.stdout
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["read_from_frame"], record["start_frame"], record["frames"]) == (8, 8, 4)
+    assert (record["summary"]["frames_skipped"], record["warnings"]) == (0, [])
+    with (tmp_path / "out" / "track.csv").open(newline="") as handle:
+        assert [row["frame"] for row in csv.DictReader(handle)] == ["8", "9", "10", "11"]
+    with ImageFolderSource(str(images)) as source:  # a start in a gap: the image before it
+        assert source.start_near(4) == 2
+        assert [frame.index for frame in source] == [2, 6, 7, 8, 9, 10, 11]
+        assert source.frames_skipped == source.frames_missing == 3  # not frame 1's image

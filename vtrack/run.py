@@ -546,8 +546,9 @@ class _Resolved:
     identity: dict[str, Any] = field(default_factory=dict)
     #: The first frame tracked (``--start``; a time found in the frames' timestamps).
     start: int = 0
-    #: The frame the input is read from: 0, or for a later ``start`` the key frame at or before
-    #: it a seekable video jumped to (the frames before it are not decoded; run.json
+    #: The frame the input is read from: 0, or for a later ``start`` where the input can jump
+    #: (:meth:`Source.start_near`: a seekable video's key frame at or before it, an image
+    #: folder's image) the frame it jumped to (the frames before it are not decoded; run.json
     #: ``read_from_frame``).
     read_from: int = 0
     #: How much to track from ``start`` on (``--frames``: a count, or a duration measured in
@@ -861,11 +862,11 @@ def _refuse_unreadable(request: RunRequest) -> None:
 def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
     """The first frame to track, ``--start N``, or for ``--start Ts`` the first frame of
     ``source`` whose timestamp is at or after T (decoded up to it: a variable frame rate is
-    followed, where T x fps would miss); and the frame ``source`` is read from: a seekable
-    video jumps to the key frame at or before it (:meth:`Source.start_near`; for a time, before
-    the frame T x fps names), other inputs are read from their first. InputError when the input
-    ends before T, or (``source`` opened) its frame count says it has no frame N, before any is
-    decoded."""
+    followed, where T x fps would miss); and the frame ``source`` is read from: where it can
+    jump, a frame at or before it (:meth:`Source.start_near`: a seekable video's key frame, an
+    image folder's image; for a time, before the frame T x fps names), else its first.
+    InputError when the input ends before T, or (``source`` opened) its frame count says it has
+    no frame N, before any is decoded."""
     if request.start_s is None:
         if not request.start or source is None:
             return request.start, 0
@@ -1180,8 +1181,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "start_frame": resolved.start,
         # the last frame whose results were written (None: none was)
         "last_frame": None if tracked.last_frame is None else tracked.last_frame.index,
-        # where the input was read from: a key frame at or before start_frame a seekable video
-        # jumped to (the frames before it were not decoded), else 0
+        # where the input was read from: a frame at or before start_frame it jumped to (a
+        # seekable video's key frame, an image folder's image: those before were not decoded)
         "read_from_frame": resolved.read_from,
         # --frames ended the run, not the input: ground truth past it belongs to frames not read
         "stopped_by_frames": stopped,

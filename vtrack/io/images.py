@@ -176,6 +176,7 @@ class ImageFolderSource(Source):
             raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ "
                              "(img1/)")
         self._places = frame_places(self._files)
+        self._begin = 0  # the file iteration begins at (start_near)
         self._skipped = 0
         self._missing = 0  # of those, places no image is numbered for
         stored, self._turn = read_stored(self._files[0])
@@ -217,21 +218,31 @@ class ImageFolderSource(Source):
                     f"{self._files[after - 1].name} and {self._files[after].name})")
         return super().absent(index)
 
+    def start_near(self, index: int) -> int:
+        """Begin at the image numbered ``index`` (or the last one numbered before it, when no
+        image is): the images before it are not read, and neither they nor the gaps in the
+        numbering before it count as skipped."""
+        if index <= 0 or self._prefetch is not None:
+            return 0
+        self._begin = bisect.bisect_right(self._places, index) - 1
+        return self._places[self._begin]
+
     def _frames(self) -> Iterator[Frame]:
         fps = self.info.fps or DEFAULT_FPS
         size = self._first.shape[:2]
         first, self._first = self._first, None
         unreadable = 0
         turned_apart = False  # an image's own tag said another turn than the first's
-        missing = self._places[-1] + 1 - len(self._files)
+        places, files = self._places[self._begin:], self._files[self._begin:]
+        missing = places[-1] + 1 - places[0] - len(files)
         if missing:
             self._skipped += missing
             self._missing = missing
-            gap = next(i for i, place in enumerate(self._places) if place != i)
+            gap = next(i for i in range(1, len(places)) if places[i] != places[i - 1] + 1)
             self.warnings.append(
                 f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
-                f"(the first after {self._files[gap - 1].name}); their frames are skipped")
-        for index, path in zip(self._places, self._files, strict=True):
+                f"(the first after {files[gap - 1].name}); their frames are skipped")
+        for index, path in zip(places, files, strict=True):
             try:
                 if index == 0:
                     pixels = first

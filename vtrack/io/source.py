@@ -144,9 +144,10 @@ class Source(Closing, ABC):
     def start_near(self, index: int) -> int:
         """Called instead of a first ``iter()``, to reach frame ``index`` without decoding all
         the frames before it: where the input can jump (a seekable video whose timestamps
-        number its frames, :meth:`VideoSource.start_near`), iterating then begins at a frame
-        at or before ``index``, the frames keeping their numbers; elsewhere it begins at the
-        first frame, as without this call. Returns the index iteration begins at."""
+        number its frames, :meth:`VideoSource.start_near`; an image folder), iterating then
+        begins at a frame at or before ``index``, the frames keeping their numbers; elsewhere
+        it begins at the first frame, as without this call. Returns the index iteration
+        begins at."""
         return 0
 
     @property
@@ -198,7 +199,8 @@ def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
     """Make ``source`` (opened, not yet iterated) begin at its first frame whose timestamp is
     at or after ``seconds`` (:meth:`Source.skip_to`, a variable frame rate followed), a
     seekable video read from the key frame at or before the frame ``seconds`` x fps names
-    (:meth:`Source.start_near`), other inputs from their first frame. Returns that frame's
+    (:meth:`Source.start_near`; an image folder from that frame's image), other inputs from
+    their first frame. Returns that frame's
     index (None when the input ends before) and the index reading began at."""
     read_from = source.start_near(frame_at_time(seconds, source.info.fps))
     return source.skip_to(seconds), read_from
