@@ -143,7 +143,8 @@ def test_the_api_refuses_the_boxes_vtrack_run_refuses(config: str, box: tuple, p
 
 
 def test_the_api_refuses_a_number_too_large_for_a_box() -> None:
-    with pytest.raises(ConfigError, match=r"init_box: expected \(x, y, w, h\) numbers"):
+    with pytest.raises(ConfigError, match=r"init_box: \(an integer of 401 digits, 0, 4, 4\): a "
+                                          r"number beyond a float.s range"):
         vtrack.Tracker("s0").init(_frames()[0], (10**400, 0, 4, 4))
 
 

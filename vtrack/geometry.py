@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 import re
-import reprlib
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 from vtrack.errors import ConfigError, is_real, number_text
+from vtrack.params import shown
 
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
 #: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
@@ -173,9 +173,11 @@ def as_box(box: Box | Any, where: str = "init_box") -> Box:
         if not all(is_real(v) for v in items):
             raise TypeError  # True is not the number 1, nor '10' the number 10
         values = tuple(float(v) for v in items)
-    except (TypeError, ValueError, OverflowError):
-        raise ConfigError(f"{where}: expected (x, y, w, h) numbers, got "
-                          f"{reprlib.repr(box)}") from None
+    except OverflowError:  # (an int or Decimal beyond any float: beyond any frame too)
+        raise ConfigError(f"{where}: {shown(box)}: a number beyond a float's range (x, y, w, "
+                          "h are pixels of the frame)") from None
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: expected (x, y, w, h) numbers, got {shown(box)}") from None
     if len(values) != 4:
         raise ConfigError(f"{where}: expected 4 numbers (x, y, w, h), got {len(values)}")
     return Box(*values)

@@ -27,7 +27,7 @@ MAX_SEED = 2**32 - 1
 def check_seed(seed: object) -> int:
     """``seed`` if it is a whole number from 0 to :data:`MAX_SEED`; ConfigError otherwise."""
     if isinstance(seed, bool) or not isinstance(seed, Integral) or not 0 <= seed <= MAX_SEED:
-        raise ConfigError(f"seed {seed!r}: must be a whole number from 0 to {MAX_SEED}")
+        raise ConfigError(f"seed {shown(seed)}: must be a whole number from 0 to {MAX_SEED}")
     return int(seed)
 
 
