@@ -7,10 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from test_cli import assert_one_line_error
+from test_cli import vtrack as vtrack_command
 
 import vtrack
 from vtrack.errors import ConfigError
-from vtrack.scenes import make_scene
+from vtrack.scenes import make_scene, write_video
 
 #: An integer Python will not turn into text (more than 4300 digits): a message that shows it
 #: with ``repr`` raises ValueError instead of saying what is wrong.
@@ -50,3 +52,52 @@ def test_a_first_box_with_a_number_too_long_to_write_is_refused_naming_init_box(
     with pytest.raises(ConfigError, match=r"^init_box: expected \(x, y, w, h\) numbers, got "
                                           r"\[an integer of more than 4000 digits, 'a'\]$"):
         make([HUGE, "a"])
+
+
+@pytest.mark.parametrize(("field", "value", "said"), [
+    ("start", HUGE, "start an integer of more than 4000 digits: must be a whole number from 0 "
+                    "to 1000000000000 (the first frame tracked, 0-based)"),
+    ("start", 10**12 + 1, "start 1000000000001: must be a whole number from 0 to "
+                          "1000000000000 (the first frame tracked, 0-based)"),
+    ("max_frames", HUGE, "max_frames an integer of more than 4000 digits: must be a whole "
+                         "number from 1 to 1000000000000 (how many frames to track; None: to "
+                         "the end)"),
+    ("crf", HUGE, "crf an integer of more than 4000 digits: must be a whole number from 0 to "
+                  "51 (the annotated video's x264 quality)"),
+    ("crf", 52, "crf 52: must be a whole number from 0 to 51 (the annotated video's x264 "
+                "quality)"),
+    ("gt_origin", HUGE, "gt_origin an integer of more than 4000 digits: must be a whole number "
+                        "from 0 to 1 (1: the ground truth's boxes are 1-based)"),
+    ("gt_origin", 2, "gt_origin 2: must be a whole number from 0 to 1 (1: the ground truth's "
+                     "boxes are 1-based)"),
+], ids=["start-huge", "start-past", "max_frames-huge", "crf-huge", "crf-52", "gt_origin-huge",
+        "gt_origin-2"])
+def test_a_run_request_refuses_a_number_past_its_range_naming_the_field(
+        field: str, value: int, said: str) -> None:
+    """RunRequest(start=10**5000) was taken and vtrack.run.run of it raised 'ValueError:
+    Exceeds the limit (4300 digits) for integer string conversion'; max_frames, crf and
+    gt_origin the same (crf=52 or gt_origin=2 were taken, to fail as the video opened or the
+    ground truth was read)."""
+    with pytest.raises(ConfigError) as caught:
+        vtrack.RunRequest(input="c.mp4", out_dir=Path("out"), config=vtrack.load_config("s0"),
+                          **{field: value})
+    assert str(caught.value) == said
+
+
+@pytest.mark.parametrize(("option", "value"), [("--start", "9" * 5000), ("--frames", "9" * 5000),
+                                               ("--start", str(10**12 + 1)),
+                                               ("--frames", str(10**12 + 1))],
+                         ids=["start-5000-digits", "frames-5000-digits", "start-past",
+                              "frames-past"])
+def test_a_frame_number_past_the_range_is_one_short_line_naming_the_option(
+        tmp_path: Path, option: str, value: str) -> None:
+    """``--frames 1000000000001`` was taken; ``--start`` of 5000 digits was refused with all
+    5000 digits in its line."""
+    scene = make_scene("smooth", seed=1, width=96, height=72, frames=10, fps=30.0)
+    clip = write_video(scene, tmp_path / "c.mp4")
+    result = vtrack_command("run", str(clip), "--init", "10,10,20,20", option, value,
+                            "-o", str(tmp_path / "out"))
+    line = assert_one_line_error(result, option, "at most 1000000000000" if option == "--start"
+                                 else "from 1 to 1000000000000")
+    assert len(line) < 400, line
+    assert not (tmp_path / "out").exists()

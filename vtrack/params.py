@@ -19,6 +19,14 @@ from vtrack.errors import ConfigError, number_text
 #: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
 MAX_SECONDS = 366 * 24 * 3600.0
 
+#: The largest frame number and frame count a run takes (``--start N``, ``--frames N``,
+#: RunRequest's ``start`` and ``max_frames``): a year at the highest frame rate (10,000 a
+#: second) is 3.2e11 frames.
+MAX_FRAME_NUMBER = 10**12
+
+#: The highest x264 ``crf`` (``--crf``, RunRequest's ``crf``): 0 is lossless, 51 the worst.
+MAX_CRF = 51
+
 #: The largest seed of the stochastic stages (NumPy seeds 0 .. 2**32 - 1 as given, like
 #: ``numpy.random.seed``): ``--seed`` and ``seed=`` take 0 .. MAX_SEED.
 MAX_SEED = 2**32 - 1

@@ -26,7 +26,7 @@ from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
 from vtrack.io.source import frame_at_time
 from vtrack.io.video import FFmpegInput
-from vtrack.params import MAX_SECONDS, check_seed, shown
+from vtrack.params import MAX_CRF, MAX_FRAME_NUMBER, MAX_SECONDS, check_seed, shown
 from vtrack.stages.base import stage_class
 
 
@@ -90,14 +90,19 @@ class RunRequest:
         self.config.check_files_named()
         if self.init_box is not None:
             object.__setattr__(self, "init_box", as_box(self.init_box))
-        check_seed(self.seed)  # (fps: checked as the input opens, where --fps applies)
+        # (fps: checked as the input opens, where --fps applies)
+        object.__setattr__(self, "seed", check_seed(self.seed))
         fps = real_or_nan(self.fps)
         if self.fps is not None and math.isfinite(fps):
             object.__setattr__(self, "fps", fps)  # (a Decimal: a number)
-        _check_whole("start", self.start, 0, "the first frame tracked, 0-based")
+        _check_whole("start", self.start, 0, MAX_FRAME_NUMBER, "the first frame tracked, "
+                     "0-based")
         if self.max_frames is not None:
-            _check_whole("max_frames", self.max_frames, 1, "how many frames to track; None: "
-                         "to the end")
+            _check_whole("max_frames", self.max_frames, 1, MAX_FRAME_NUMBER, "how many frames "
+                         "to track; None: to the end")
+        _check_whole("crf", self.crf, 0, MAX_CRF, "the annotated video's x264 quality")
+        _check_whole("gt_origin", self.gt_origin, 0, 1, "1: the ground truth's boxes are "
+                     "1-based")
         for name, value, least in (("start_s", self.start_s, "from 0"),
                                    ("max_s", self.max_s, "above 0")):
             if value is None:
@@ -282,12 +287,13 @@ def _stage_files(config: Config) -> list[str]:
     return [path for _, _, path in _file_values(config)]
 
 
-def _check_whole(name: str, value: object, least: int, meaning: str) -> None:
-    """ConfigError unless ``value`` is a whole number (a NumPy one too) of at least ``least``;
-    ``meaning`` says what the number is."""
-    if isinstance(value, bool) or not isinstance(value, Integral) or value < least:
-        raise ConfigError(f"{name} {shown(value)}: must be a whole number >= {least} "
-                          f"({meaning})")
+def _check_whole(name: str, value: object, least: int, most: int, meaning: str) -> None:
+    """ConfigError unless ``value`` is a whole number (a NumPy one too) from ``least`` to
+    ``most``; ``meaning`` says what the number is."""
+    if isinstance(value, bool) or not isinstance(value, Integral) \
+            or not least <= value <= most:
+        raise ConfigError(f"{name} {shown(value)}: must be a whole number from {least} to "
+                          f"{most} ({meaning})")
 
 
 def _absolute_files(config: Config) -> Config:

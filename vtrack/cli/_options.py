@@ -10,7 +10,7 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._progress import STATS_PERIOD
-from vtrack.params import MAX_SECONDS
+from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 #: The longest wait an option sets (--follow, --worker-timeout, --scheduler-timeout): a day.
 MAX_WAIT_S = 24 * 3600.0
@@ -135,16 +135,16 @@ def gt_origin_option() -> Callable[[Any], Any]:
 
 
 def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | None:
-    """``"75"`` -> ``(75, None)``, ``"2.5s"`` -> ``(None, 2.5)``: a whole number of frames of at
-    least ``least``, or a time in seconds (at least 0, or above 0 when ``least`` is 1; at most
-    ``MAX_SECONDS``); None for anything else."""
+    """``"75"`` -> ``(75, None)``, ``"2.5s"`` -> ``(None, 2.5)``: a whole number of frames from
+    ``least`` to ``MAX_FRAME_NUMBER``, or a time in seconds (at least 0, or above 0 when
+    ``least`` is 1; at most ``MAX_SECONDS``); None for anything else."""
     try:
         if text.lower().endswith("s"):
             seconds = float(text[:-1])
             if math.isfinite(seconds) and (seconds > 0 if least else seconds >= 0) \
                     and seconds <= MAX_SECONDS:
                 return None, seconds
-        elif text.isdigit() and int(text) >= least:
+        elif text.isdigit() and least <= int(text) <= MAX_FRAME_NUMBER:
             return int(text), None
     except ValueError:
         pass
@@ -164,7 +164,7 @@ class _FramesOrSeconds(click.ParamType):
             return value
         parsed = _frames_or_seconds(str(value).strip(), self.least)
         if parsed is None:
-            self.fail(f"{value!r}: expected {self.expected}", param, ctx)
+            self.fail(f"{shown(value)}: expected {self.expected}", param, ctx)
         return parsed
 
 
@@ -174,7 +174,8 @@ class StartPoint(_FramesOrSeconds):
 
     name = "start"
     least = 0
-    expected = f"a frame number (75) or a time in seconds (2.5s, at most {MAX_SECONDS:g}s)"
+    expected = (f"a frame number (75, at most {MAX_FRAME_NUMBER}) or a time in seconds (2.5s, "
+                f"at most {MAX_SECONDS:g}s)")
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> tuple[int, float | None]:
@@ -188,5 +189,5 @@ class FrameSpan(_FramesOrSeconds):
 
     name = "frames"
     least = 1
-    expected = ("a number of frames (300, at least 1) or a duration in seconds (10s, above 0 "
-                f"and at most {MAX_SECONDS:g}s)")
+    expected = (f"a number of frames (300, from 1 to {MAX_FRAME_NUMBER}) or a duration in "
+                f"seconds (10s, above 0 and at most {MAX_SECONDS:g}s)")

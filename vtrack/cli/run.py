@@ -26,7 +26,7 @@ from vtrack.cli._options import (
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError, printable
-from vtrack.params import MAX_SEED
+from vtrack.params import MAX_CRF, MAX_SEED
 
 if TYPE_CHECKING:
     from vtrack.io import InputInfo
@@ -112,7 +112,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "FLV (watch it with ffplay, mpv or VLC).")
 @click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
-@click.option("--crf", type=WholeNumber(0, 51), default=23, show_default=True,
+@click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
               help="x264 quality of annotated.mp4 (lower is better and larger).")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")

@@ -12,7 +12,7 @@ from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
-from vtrack.params import MAX_SEED
+from vtrack.params import MAX_CRF, MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 
 #: The options a scene's settings come from, for make_scene's errors to name.
@@ -56,7 +56,7 @@ def _scenario_list() -> str:
     "--pix-fmt",
     help="mp4: encoder pixel format [yuv420p]; raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
-@click.option("--crf", type=WholeNumber(0, 51), default=23, show_default=True,
+@click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
               help="x264 quality of mp4 output (lower is better and larger).")
 @click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
               help="x264 preset of mp4 output.")
