@@ -101,3 +101,23 @@ def test_a_frame_number_past_the_range_is_one_short_line_naming_the_option(
                                  else "from 1 to 1000000000000")
     assert len(line) < 400, line
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("value", "got"), [
+    ("robust_model.working_area=" + "9" * 5000, "in the range 32 to 250, got a 5000-digit "
+                                                "integer"),
+    ("robust_model.padding=" + "9" * 5000, "in the range 0.2 to 4, got a number beyond a "
+                                           "float's range"),
+    ("robust_model.padding=1e400", "in the range 0.2 to 4, got a number beyond a float's "
+                                   "range"),
+], ids=["int-5000-digits", "float-5000-digits", "float-1e400"])
+def test_a_set_value_too_long_or_large_is_one_short_line_naming_the_parameter(
+        tmp_path: Path, value: str, got: str) -> None:
+    """``--set robust_model.working_area=`` 5000 nines was refused with all 5000 digits in its
+    line (the assignment was echoed whole); a float of 5000 digits or 1e400 said 'got inf'."""
+    scene = make_scene("smooth", seed=1, width=96, height=72, frames=10, fps=30.0)
+    clip = write_video(scene, tmp_path / "c.mp4")
+    result = vtrack_command("run", str(clip), "--init", "10,10,20,20", "--set", value,
+                            "-o", str(tmp_path / "out"))
+    line = assert_one_line_error(result, f"--set {value[:30]}", got)
+    assert len(line) < 300, line

@@ -34,7 +34,7 @@ from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
-from vtrack.params import shown
+from vtrack.params import cut, shown
 from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
 
 
@@ -111,8 +111,8 @@ class Config:
         for text in assignments:
             key, sep, raw = text.partition("=")
             if not sep:
-                raise ConfigError(f"--set {text}: expected stage.param=value")
-            changes.append((key, raw.strip(), f"--set {text}", True))
+                raise ConfigError(f"--set {cut(text)}: expected stage.param=value")
+            changes.append((key, raw.strip(), f"--set {cut(text)}", True))
         return self._changed(changes)
 
     def with_values(self, values: Mapping[str, Any]) -> Config:

@@ -132,6 +132,10 @@ class Param:
                 value = int(text)
             elif self.type is float:
                 value = float(text)
+                if math.isinf(value) and "inf" not in text.lower():  # (1e400, 400 nines)
+                    raise ConfigError(f"{where}: parameter '{self.name}' must be in the range "
+                                      f"{self.range_text()}, got a number beyond a float's "
+                                      "range")
         except ValueError:
             raise ConfigError(
                 f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got "
@@ -183,6 +187,12 @@ class _ShortRepr(reprlib.Repr):
 
 _SHORT = _ShortRepr()
 _SHORT.maxstring = _SHORT.maxother = 80
+
+
+def cut(text: str) -> str:
+    """``text`` a user wrote (a ``--set`` assignment), for a one-line message: whole up to 80
+    characters, else its first and last characters around ``...``."""
+    return text if len(text) <= _SHORT.maxstring else f"{text[:60]}...{text[-16:]}"
 
 
 def shown(value: object) -> str:
