@@ -4,8 +4,11 @@ one ConfigError (or TypeError) naming the value, never a traceback from deep ins
 
 from __future__ import annotations
 
+import json
+from fractions import Fraction
 from pathlib import Path
 
+import numpy as np
 import pytest
 from test_cli import assert_one_line_error
 from test_cli import vtrack as vtrack_command
@@ -121,3 +124,48 @@ def test_a_set_value_too_long_or_large_is_one_short_line_naming_the_parameter(
                             "-o", str(tmp_path / "out"))
     line = assert_one_line_error(result, f"--set {value[:30]}", got)
     assert len(line) < 300, line
+
+
+def test_numpy_numbers_in_a_run_request_are_kept_as_python_numbers() -> None:
+    """NumPy numbers stayed NumPy in a RunRequest: RunRequest(..., start=np.int64(3)) kept an
+    int64, and its to_dict() / differences() (batch's resume test) raised 'TypeError: Object
+    of type int64 is not JSON serializable'."""
+    config = vtrack.load_config("s0")
+    request = vtrack.RunRequest(input="c.mp4", out_dir=Path("out"), config=config,
+                                init_box=(np.float32(10), np.int64(10), 20, 20),
+                                start=np.int64(3), max_frames=np.int32(5), crf=np.int64(20),
+                                gt_origin=np.int8(1), seed=np.uint32(7), fps=np.float32(25),
+                                start_s=np.float64(0.5), max_s=np.float32(2))
+    plain = vtrack.RunRequest(input="c.mp4", out_dir=Path("out"), config=config,
+                              init_box=(10, 10, 20, 20), start=3, max_frames=5, crf=20,
+                              gt_origin=1, seed=7, fps=25.0, start_s=0.5, max_s=2.0)
+    for field in ("start", "max_frames", "crf", "gt_origin", "seed"):
+        assert type(getattr(request, field)) is int, field
+    for field in ("fps", "start_s", "max_s"):
+        assert type(getattr(request, field)) is float, field
+    assert request.differences(plain.to_dict()) == []
+    assert json.loads(json.dumps(request.to_dict())) == json.loads(json.dumps(plain.to_dict()))
+
+
+def test_numpy_numbers_in_a_config_made_in_python_are_taken_as_python_values() -> None:
+    """Config('mine', 'python', '', [('robust_model', {'working_area': np.int64(150)}), ...])
+    said "python: stage 'robust_model': parameter 'working_area' must be an integer, got
+    np.int64(150)", np.True_ for a true/false parameter the same, though a Tracker takes NumPy
+    numbers; a NumPy float was taken but kept as np.float64 in the config's stages."""
+    stages = [("robust_model", {"working_area": np.int64(150), "colour": np.True_,
+                                "padding": np.float32(1.5), "lam": Fraction(1, 1000)}),
+              ("robust_search", {"scales": np.uint8(17)}), ("robust_failure", {}),
+              ("robust_motion", {})]
+    config = vtrack.Config("mine", "python", "", stages)
+    values = config.stages[0][1]
+    assert values == {"working_area": 150, "colour": True, "padding": 1.5, "lam": 0.001}
+    assert [type(v) for v in values.values()] == [int, bool, float, float]
+    assert type(config.stages[1][1]["scales"]) is int
+    json.dumps(config.stages)  # plain Python values
+    with pytest.raises(ConfigError, match="parameter 'working_area' must be an integer, got "
+                                          "150.0"):
+        vtrack.Config("mine", "python", "", [("robust_model", {"working_area": np.float64(150)}),
+                                             *stages[1:]])
+    with pytest.raises(ConfigError, match="parameter 'colour' must be true or false, got 1"):
+        vtrack.Config("mine", "python", "", [("robust_model", {"colour": np.int64(1)}),
+                                             *stages[1:]])

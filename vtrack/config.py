@@ -28,14 +28,19 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
 from vtrack.params import cut, shown
-from vtrack.stages.base import DERIVED, PIPELINE_PROVIDES, Stage, build_stage, stage_class
+from vtrack.stages.base import (
+    DERIVED,
+    PIPELINE_PROVIDES,
+    Stage,
+    build_stage,
+    checked_values,
+    stage_class,
+)
 
 
 @dataclass
@@ -64,8 +69,9 @@ class Config:
                             f"value}}) pairs, got {shown(self.stages)}")
         if not self.stages:
             raise ConfigError(f"{self.source}: no stages: a config is a chain of stages")
-        for name, values in self.stages:
-            build_stage(name, values, self.source)  # validates names, parameters, types
+        # names, parameters and types checked; each value kept as its parameter's Python type
+        self.stages = [(name, checked_values(name, values, self.source))
+                       for name, values in self.stages]
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
                 raise ConfigError(f"{self.source}: {key} must be text, got "
@@ -118,8 +124,8 @@ class Config:
     def with_values(self, values: Mapping[str, Any]) -> Config:
         """Apply ``{"stage.param": value}`` Python values (the API's keyword overrides), each
         checked as a config file's value is (a NumPy scalar counts as its Python number)."""
-        return self._changed([(key, value.item() if isinstance(value, np.generic) else value,
-                               f"{key}={shown(value)}", False) for key, value in values.items()])
+        return self._changed([(key, value, f"{key}={shown(value)}", False)
+                              for key, value in values.items()])
 
     def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
         """This chain with each ``(stage.param, value, where, is_text)`` applied: text is

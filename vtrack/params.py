@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
 
-from vtrack.errors import ConfigError, number_text
+from vtrack.errors import ConfigError, is_real, number_text
 
 #: The longest time a run's start or span takes in seconds (``--start Ts``, ``--frames Ts``,
 #: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
@@ -76,15 +76,24 @@ class Param:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
 
         ``where`` names the place the value came from, e.g. ``"configs/s0.toml: stage 'kalman'"``.
-        Integers are accepted for numbers; nothing else is converted (a string is not a number).
+        A NumPy scalar counts as its Python value (``np.int64(5)``, ``np.True_``), a whole
+        number (:class:`~numbers.Integral`) as an ``int`` and any real number
+        (:func:`~vtrack.errors.is_real`: an int, ``Fraction``, ``Decimal``) as a ``float`` for a
+        number; nothing else is converted (a string is not a number, nor True the number 1).
         """
         expected = _A_TYPE[self.type]
-        if self.type is float and isinstance(value, int) and not isinstance(value, bool):
+        if type(value).__module__ == "numpy" and hasattr(value, "item"):
+            value = value.item()  # (a NumPy scalar; NumPy itself is not imported here)
+        if self.type is int and isinstance(value, Integral) and not isinstance(value, bool):
+            value = int(value)
+        if self.type is float and is_real(value):
             try:
                 value = float(value)
             except OverflowError:  # beyond any float, so beyond the range too
                 raise ConfigError(f"{where}: parameter '{self.name}' must be in the range "
-                                  f"{self.range_text()}, got {_number(value)}") from None
+                                  f"{self.range_text()}, got {shown(value)}") from None
+            except ValueError:  # (Decimal('sNaN'): not finite, refused below)
+                value = math.nan
         wrong_bool = self.type is not bool and isinstance(value, bool)
         if wrong_bool or not isinstance(value, self.type):
             raise ConfigError(

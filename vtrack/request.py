@@ -95,14 +95,10 @@ class RunRequest:
         fps = real_or_nan(self.fps)
         if self.fps is not None and math.isfinite(fps):
             object.__setattr__(self, "fps", fps)  # (a Decimal: a number)
-        _check_whole("start", self.start, 0, MAX_FRAME_NUMBER, "the first frame tracked, "
-                     "0-based")
-        if self.max_frames is not None:
-            _check_whole("max_frames", self.max_frames, 1, MAX_FRAME_NUMBER, "how many frames "
-                         "to track; None: to the end")
-        _check_whole("crf", self.crf, 0, MAX_CRF, "the annotated video's x264 quality")
-        _check_whole("gt_origin", self.gt_origin, 0, 1, "1: the ground truth's boxes are "
-                     "1-based")
+        for name, least, most, meaning in _WHOLE_NUMBERS:  # (a NumPy int: an int)
+            if name != "max_frames" or self.max_frames is not None:
+                object.__setattr__(self, name, _whole(name, getattr(self, name), least, most,
+                                                      meaning))
         for name, value, least in (("start_s", self.start_s, "from 0"),
                                    ("max_s", self.max_s, "above 0")):
             if value is None:
@@ -287,13 +283,24 @@ def _stage_files(config: Config) -> list[str]:
     return [path for _, _, path in _file_values(config)]
 
 
-def _check_whole(name: str, value: object, least: int, most: int, meaning: str) -> None:
-    """ConfigError unless ``value`` is a whole number (a NumPy one too) from ``least`` to
-    ``most``; ``meaning`` says what the number is."""
+#: The whole-number fields of a RunRequest: (field, least, most, what the number is).
+_WHOLE_NUMBERS = (
+    ("start", 0, MAX_FRAME_NUMBER, "the first frame tracked, 0-based"),
+    ("max_frames", 1, MAX_FRAME_NUMBER, "how many frames to track; None: to the end"),
+    ("crf", 0, MAX_CRF, "the annotated video's x264 quality"),
+    ("gt_origin", 0, 1, "1: the ground truth's boxes are 1-based"),
+)
+
+
+def _whole(name: str, value: object, least: int, most: int, meaning: str) -> int:
+    """``value`` as an ``int`` if it is a whole number (a NumPy one too) from ``least`` to
+    ``most``; ConfigError naming the field ``name`` otherwise (``meaning`` says what the
+    number is)."""
     if isinstance(value, bool) or not isinstance(value, Integral) \
             or not least <= value <= most:
         raise ConfigError(f"{name} {shown(value)}: must be a whole number from {least} to "
                           f"{most} ({meaning})")
+    return int(value)
 
 
 def _absolute_files(config: Config) -> Config:

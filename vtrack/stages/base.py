@@ -341,6 +341,13 @@ def stage_class(name: str, where: str) -> type[Stage]:
 
 def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
     """Validate ``values`` against the stage's declaration and construct it."""
+    return stage_class(name, where)(**checked_values(name, values, where))
+
+
+def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
+    """``values`` of stage ``name`` each as its parameter's type (:meth:`Param.validate`: a
+    NumPy number as a Python one); ConfigError naming ``where``, the stage and the parameter
+    for one the stage does not declare or whose value it refuses."""
     cls = stage_class(name, where)
     declared = {p.name: p for p in cls.params}
     where = f"{where}: stage '{name}'"
@@ -350,4 +357,4 @@ def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
             known = ", ".join(declared) or "none"
             raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})")
         checked[key] = declared[key].validate(value, where)
-    return cls(**checked)
+    return checked
