@@ -169,3 +169,19 @@ def test_numpy_numbers_in_a_config_made_in_python_are_taken_as_python_values() -
     with pytest.raises(ConfigError, match="parameter 'colour' must be true or false, got 1"):
         vtrack.Config("mine", "python", "", [("robust_model", {"colour": np.int64(1)}),
                                              *stages[1:]])
+
+
+def test_the_default_config_named_beside_a_run_request_is_refused_as_any_other(
+        tmp_path: Path) -> None:
+    """vtrack.track(request, "robust") tracked with the request's s0 without a word: "robust",
+    the default, could not be told from no config given."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    request = vtrack.RunRequest(str(clip), tmp_path / "out", vtrack.load_config("s0"),
+                                scene.boxes[0])
+    for config in ("robust", vtrack.load_config("robust"), request.config):
+        with pytest.raises(ConfigError, match=r"^config: the RunRequest carries its own; set it "
+                           r"in the request \(dataclasses.replace\(request, ...\)\)$"):
+            next(vtrack.track(request, config))
+    assert len(list(vtrack.track(request))) == 10
+    assert len(list(vtrack.track(request, config=None))) == 10

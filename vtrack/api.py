@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config
-from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
@@ -31,7 +30,7 @@ BoxInput = Box | Sequence[float]
 
 
 def track(frames: FrameInput,
-          config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG,
+          config: str | os.PathLike[str] | Config | None = None,
           init_box: BoxInput | None = None, seed: int | None = None, fps: float | None = None,
           keep_frames: bool = False) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
@@ -47,15 +46,16 @@ def track(frames: FrameInput,
     :class:`Config` (None: ``DEFAULT_CONFIG``); ``seed`` seeds the stochastic stages (None:
     0); ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)`` (not
     needed by the detecting trackers s3/s4). A RunRequest carries its own ``config``,
-    ``init_box``, ``seed`` and ``fps``: giving any of them beside it (a config other than the
-    default) is a ConfigError. Results hold their decoded frame only with
-    ``keep_frames=True``. One image or frame on its own (not in a sequence) is a TypeError.
+    ``init_box``, ``seed`` and ``fps``: giving any of them beside it is a ConfigError (the
+    default config's name too: which of two configs was meant cannot be told). Results hold
+    their decoded frame only with ``keep_frames=True``. One image or frame on its own (not in
+    a sequence) is a TypeError.
     """
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
         given = [name for name, value in (("config", config), ("init_box", init_box),
                                           ("seed", seed), ("fps", fps))
-                 if value is not None and not (name == "config" and value == DEFAULT_CONFIG)]
+                 if value is not None]
         if given:  # it would be ignored
             raise ConfigError(f"{', '.join(given)}: the RunRequest carries its own; set "
                               f"{'it' if len(given) == 1 else 'them'} in the request "
