@@ -22,7 +22,7 @@ import os
 import sys
 import tomllib
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -90,12 +90,19 @@ class Config:
         file its stage reads (its ``file_params``: mot_detections.path) left empty. Not asked
         of a config file as it loads (``--set`` may name the file), but of a run's request and
         a Tracker, before any frame is read."""
-        for stage, values in self.stages:
+        for _, stage, name, value in self.file_values():
+            if not value:
+                raise ConfigError(f"{self.source}: stage '{stage}': parameter '{name}' must "
+                                  f"name the file it reads ({name} = \"FILE\" in its "
+                                  f"[[stage]] table, or --set {stage}.{name}=FILE)")
+
+    def file_values(self) -> Iterator[tuple[int, str, str, Any]]:
+        """(stage index, stage, parameter, value: None when not set) of each parameter naming a
+        file its stage reads (the stage's ``file_params``: mot_detections.path), in chain
+        order."""
+        for index, (stage, values) in enumerate(self.stages):
             for name in stage_class(stage, self.source).file_params:
-                if not values.get(name):
-                    raise ConfigError(f"{self.source}: stage '{stage}': parameter '{name}' must "
-                                      f"name the file it reads ({name} = \"FILE\" in its "
-                                      f"[[stage]] table, or --set {stage}.{name}=FILE)")
+                yield index, stage, name, values.get(name)
 
     def stage_classes(self) -> list[type[Stage]]:
         """The stages' classes (their declarations: parameters, requires/provides, kind), no

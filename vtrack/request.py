@@ -272,10 +272,9 @@ _SETTING_NAMES = {
 def _file_values(config: Config) -> Iterator[tuple[int, str, str]]:
     """(stage index, parameter, path) of each file a stage of ``config`` reads (the non-empty
     values of its ``file_params``)."""
-    for index, (stage, values) in enumerate(config.stages):
-        for name in stage_class(stage, config.source).file_params:
-            if isinstance(values.get(name), str) and values[name]:
-                yield index, name, values[name]
+    for index, _, name, value in config.file_values():
+        if isinstance(value, str) and value:
+            yield index, name, value
 
 
 def _stage_files(config: Config) -> list[str]:
