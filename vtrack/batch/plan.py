@@ -7,16 +7,11 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from vtrack.batch.discover import (
-    SEQUENCE_INIT,
-    VIDEO_INIT,
-    BatchInput,
-    unscored_by_multi_target,
-)
+from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError, OutputError
-from vtrack.evaluate.groundtruth import SEQUENCE_GT, VIDEO_GT
+from vtrack.evaluate.groundtruth import groundtruth_names
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact
@@ -191,10 +186,7 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     the sidecar is malformed."""
     box = None if settings.starts_later else read_sidecar(item.path)
     if box is None and gt_path is None:
-        if item.path.is_dir():
-            names = (*SEQUENCE_GT, SEQUENCE_INIT)
-        else:
-            names = tuple(p.format(item.path.stem) for p in (*VIDEO_GT, VIDEO_INIT))
+        names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
         if settings.starts_later:
             raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
                              "needs the target's box in that frame, and there is no ground "

@@ -47,12 +47,16 @@ def groundtruth_beside(path: str | PathLike[str]) -> Path | None:
     """The single-target ground truth ``vtrack batch`` takes for input ``path`` (as given): a
     sequence folder's :data:`SEQUENCE_GT` file, else a video's :data:`VIDEO_GT` file beside
     it; None when there is none."""
+    return next((c for c in groundtruth_names(path) if c.is_file()), None)
+
+
+def groundtruth_names(path: str | PathLike[str]) -> list[Path]:
+    """Where :func:`groundtruth_beside` looks for input ``path``'s ground truth, in order: a
+    folder's :data:`SEQUENCE_GT` files, else a file's :data:`VIDEO_GT` names beside it."""
     path = Path(path)
     if path.is_dir():
-        candidates = [path / name for name in SEQUENCE_GT]
-    else:
-        candidates = [path.parent / name.format(path.stem) for name in VIDEO_GT]
-    return next((c for c in candidates if c.is_file()), None)
+        return [path / name for name in SEQUENCE_GT]
+    return [path.parent / name.format(path.stem) for name in VIDEO_GT]
 
 
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
