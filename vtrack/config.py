@@ -185,6 +185,12 @@ def load_config(spec: str | Path | None = None) -> Config:
     A shipped name (``s2``) always means the shipped config, even when a file of that name is in
     the current folder: give such a file as a path (``./s2``) or with ``.toml``.
     """
+    return config_and_text(spec)[0]
+
+
+def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
+    """:func:`load_config`'s config and the text of its file, read once (``vtrack stages
+    CONFIG --toml`` prints the text of the config it checked)."""
     spec = DEFAULT_CONFIG if spec is None else spec
     if not isinstance(spec, str | os.PathLike):
         raise TypeError(f"config: expected a shipped config name, a TOML file path or a "
@@ -210,7 +216,8 @@ def load_config(spec: str | Path | None = None) -> Config:
             )
     where = str(spec)
     try:
-        data = tomllib.loads(read_text_bounded(path, CONFIG_BYTES, "config"))
+        text = read_text_bounded(path, CONFIG_BYTES, "config")
+        data = tomllib.loads(text)
     except InputError as exc:
         raise ConfigError(str(exc).replace(str(path), where, 1)) from None
     except tomllib.TOMLDecodeError as exc:
@@ -221,7 +228,7 @@ def load_config(spec: str | Path | None = None) -> Config:
     except ValueError:  # tomllib's int() of a decimal integer longer than Python converts
         raise ConfigError(f"{where}: an integer of more than {sys.get_int_max_str_digits()} "
                           "digits, too long to read") from None
-    return parse_config(data, where, default_name=path.stem)
+    return parse_config(data, where, default_name=path.stem), text
 
 
 def parse_config(data: dict[str, Any], where: str, default_name: str = "config") -> Config:

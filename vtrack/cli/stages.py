@@ -151,20 +151,14 @@ def config_toml(name: str) -> str:
     file, with the comments that say where each value comes from, to copy and change (a value
     a config file leaves out is its stage's default, not the config it was copied from).
     ConfigError for a stage's name, or a config that does not load."""
-    from vtrack.config import load_config, shipped_configs
-    from vtrack.errors import ConfigError, InputError
-    from vtrack.io.limits import CONFIG_BYTES, read_text_bounded
+    from vtrack.config import config_and_text
+    from vtrack.errors import ConfigError
     from vtrack.stages.base import all_stages
 
     if name in all_stages():
         raise ConfigError(f"{name}: a stage, not a config: --toml prints a config's file "
                           "(vtrack stages lists the shipped configs)")
-    load_config(name)  # its mistakes said as run says them
-    path = shipped_configs().get(name, name)
-    try:
-        return read_text_bounded(path, CONFIG_BYTES, "config")
-    except InputError as exc:  # (changed since it loaded)
-        raise ConfigError(str(exc)) from None
+    return config_and_text(name)[1]  # its mistakes said as run says them
 
 
 @click.command("stages")
