@@ -5,6 +5,7 @@ one ConfigError (or TypeError) naming the value, never a traceback from deep ins
 from __future__ import annotations
 
 import json
+import pickle
 from fractions import Fraction
 from pathlib import Path
 
@@ -185,3 +186,27 @@ def test_the_default_config_named_beside_a_run_request_is_refused_as_any_other(
             next(vtrack.track(request, config))
     assert len(list(vtrack.track(request))) == 10
     assert len(list(vtrack.track(request, config=None))) == 10
+
+
+def test_a_config_cannot_be_changed_past_its_check() -> None:
+    """A Config was a plain dataclass: config.name = "" or
+    config.stages[0][1]["working_area"] = 10**6 (range 32 to 250) were taken after the check
+    that refuses them when the Config is made, and the list given to Config(...) stayed its
+    stages, so changing that list changed the config."""
+    given = [("robust_model", {"working_area": 150}), ("robust_search", {}),
+             ("robust_failure", {}), ("robust_motion", {})]
+    config = vtrack.Config("mine", "python", "", given)
+    with pytest.raises(AttributeError):
+        config.name = ""  # type: ignore[misc]
+    with pytest.raises(TypeError, match="^a Config's stage values are read-only"):
+        config.stages[0][1]["working_area"] = 10**6
+    with pytest.raises(TypeError, match="^a Config's stage values are read-only"):
+        config.stages[0][1].update(working_area=10**6)
+    with pytest.raises((TypeError, AttributeError)):
+        config.stages.append(("kalman", {}))  # type: ignore[attr-defined]
+    given[0][1]["working_area"] = 10**6
+    assert config.stages[0][1]["working_area"] == 150
+    changed = config.with_values({"robust_model.working_area": 200})
+    assert (changed.stages[0][1]["working_area"], config.stages[0][1]["working_area"]) == (200, 150)
+    assert pickle.loads(pickle.dumps(config)) == config  # (a Dask worker receives it)
+    assert vtrack.Config(config.name, config.source, config.description, config.stages) == config

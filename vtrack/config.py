@@ -22,8 +22,8 @@ import os
 import sys
 import tomllib
 from collections import Counter
-from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -43,26 +43,45 @@ from vtrack.stages.base import (
 )
 
 
-@dataclass
+class StageValues(dict[str, Any]):
+    """A stage's explicitly set parameters in a :class:`Config`: a ``dict`` that refuses
+    changes (TypeError), since the config checked them as they were; ``dict(values)`` is a
+    copy to change, and a Config with other values is made with :meth:`Config.with_values`."""
+
+    def _refuse(self, *args: Any, **kwargs: Any) -> None:
+        raise TypeError("a Config's stage values are read-only (checked as it was made): make "
+                        "another Config, e.g. config.with_values({'stage.param': value})")
+
+    __setitem__ = __delitem__ = __ior__ = clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self) -> tuple[type[StageValues], tuple[dict[str, Any]]]:
+        """Pickled as its values (a Dask worker receives a run's Config)."""
+        return StageValues, (dict(self),)
+
+
+@dataclass(frozen=True)
 class Config:
-    """A validated chain: ``stages`` is a list of (stage name, explicitly set parameters),
-    checked when the Config is made (:meth:`__post_init__`)."""
+    """A validated chain: ``stages`` is a sequence of (stage name, explicitly set parameters),
+    checked when the Config is made (:meth:`__post_init__`). Read-only once made: its fields
+    cannot be set, ``stages`` is kept as a tuple and each stage's parameters as a
+    :class:`StageValues` (a ``dict`` that refuses changes); :meth:`with_values` and
+    :meth:`with_overrides` make a changed copy, checked again."""
 
     name: str
     source: str
     description: str = ""
-    stages: list[tuple[str, dict[str, Any]]] = field(default_factory=list)
+    stages: Sequence[tuple[str, dict[str, Any]]] = ()
 
     def __post_init__(self) -> None:
         """Check the chain as a config file's is checked, however the Config was made (by
         :func:`load_config` or in Python): ConfigError naming ``source`` for no stage, an
         unknown stage, a parameter value its declaration refuses, a name or description that
         is not text, and a chain :func:`check_chain` refuses; TypeError for ``stages`` that
-        are not a list of (stage name, parameters) pairs."""
+        are not a list (or tuple) of (stage name, parameters) pairs."""
         if not isinstance(self.source, str):
             raise TypeError(f"Config source: expected text (where the config came from), got "
                             f"{type(self.source).__name__}")
-        if not isinstance(self.stages, list) or not all(
+        if not isinstance(self.stages, list | tuple) or not all(
                 isinstance(stage, tuple) and len(stage) == 2 and isinstance(stage[0], str)
                 and isinstance(stage[1], dict) for stage in self.stages):
             raise TypeError("Config stages: expected a list of (stage name, {parameter: "
@@ -70,8 +89,9 @@ class Config:
         if not self.stages:
             raise ConfigError(f"{self.source}: no stages: a config is a chain of stages")
         # names, parameters and types checked; each value kept as its parameter's Python type
-        self.stages = [(name, checked_values(name, values, self.source))
-                       for name, values in self.stages]
+        object.__setattr__(self, "stages", tuple(
+            (name, StageValues(checked_values(name, values, self.source)))
+            for name, values in self.stages))
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
                 raise ConfigError(f"{self.source}: {key} must be text, got "
