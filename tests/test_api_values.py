@@ -16,6 +16,8 @@ from test_cli import vtrack as vtrack_command
 
 import vtrack
 from vtrack.errors import ConfigError
+from vtrack.io import RawFormat
+from vtrack.io.video import FFmpegInput
 from vtrack.scenes import make_scene, write_video
 
 #: An integer Python will not turn into text (more than 4300 digits): a message that shows it
@@ -210,3 +212,54 @@ def test_a_config_cannot_be_changed_past_its_check() -> None:
     assert (changed.stages[0][1]["working_area"], config.stages[0][1]["working_area"]) == (200, 150)
     assert pickle.loads(pickle.dumps(config)) == config  # (a Dask worker receives it)
     assert vtrack.Config(config.name, config.source, config.description, config.stages) == config
+
+
+@pytest.mark.parametrize(("given", "said"), [
+    ({"raw": RawFormat(HUGE, 2, "bgr24", 30.0)},
+     "raw (width an integer of more than 4000 digits, height 2): the frames are an integer of "
+     "more than 4000 digitsx2; vtrack accepts at most 16384x16384"),
+    ({"raw": RawFormat(-5, 2, "bgr24", 30.0)},
+     "raw (width -5, height 2): width and height must be positive"),
+    ({"raw": RawFormat(64, 48, "gray", 0.0)},
+     "raw.fps 0: must be a frame rate from 0.01 to 10000 frames per second"),
+    ({"raw": RawFormat(64, 48, "bogus", 30.0)},
+     "raw.pix_fmt 'bogus': expected one of bgr24, rgb24, yuv420p, gray"),
+    ({"ffmpeg": FFmpegInput(timeout_s=HUGE)},
+     "ffmpeg.timeout_s an integer of more than 4000 digits: must be a time in seconds from 0.1 "
+     "to 3600 (how long a network input may send nothing)"),
+    ({"ffmpeg": FFmpegInput(timeout_s=1e308)},
+     "ffmpeg.timeout_s 1e+308: must be a time in seconds from 0.1 to 3600 (how long a network "
+     "input may send nothing)"),
+    ({"ffmpeg": FFmpegInput(follow_s=HUGE)},
+     "ffmpeg.follow_s an integer of more than 4000 digits: must be a time in seconds above 0 "
+     "to 86400 (how long a file being written may not grow)"),
+], ids=["raw-huge", "raw-negative", "raw-fps-0", "raw-pix_fmt", "timeout-huge", "timeout-1e308",
+        "follow-huge"])
+def test_a_run_requests_raw_format_and_input_waits_are_checked_as_the_options_are(
+        given: dict, said: str) -> None:
+    """RunRequest took any RawFormat and FFmpegInput: raw=RawFormat(10**5000, 2, ...) or
+    RawFormat(-5, 2, ...) made vtrack.run.run raise 'ValueError: Maximum allowed dimension
+    exceeded' / 'negative dimensions are not allowed', FFmpegInput(timeout_s=10**5000) or
+    follow_s=10**5000 'ValueError: Exceeds the limit (4300 digits) for integer string
+    conversion', and timeout_s=1e308 (past --timeout's 3600) or a raw rate of 0 were taken."""
+    with pytest.raises(ConfigError) as caught:
+        vtrack.RunRequest(input="-", out_dir=Path("out"), config=vtrack.load_config("s0"),
+                          **given)
+    assert str(caught.value) == said
+
+
+def test_open_source_checks_a_raw_format_made_in_python(tmp_path: Path) -> None:
+    """vtrack.open_source('f.raw', RawFormat(-5, 2, 'bgr24', 30.0)) raised 'ValueError:
+    negative dimensions are not allowed', a rate of 0 'ZeroDivisionError: float division by
+    zero', and a pixel format vtrack has no reader for was taken."""
+    path = tmp_path / "f.raw"
+    path.write_bytes(bytes(64 * 48 * 3))
+    for raw, said in ((RawFormat(-5, 2, "bgr24", 30.0), "raw (width -5, height 2): width and "
+                                                         "height must be positive"),
+                      (RawFormat(64, 48, "gray", 0.0), "raw.fps 0: must be a frame rate"),
+                      (RawFormat(64, 48, "bogus", 30.0), "raw.pix_fmt 'bogus': expected one of")):
+        with pytest.raises(ConfigError) as caught:
+            vtrack.open_source(path, raw)
+        assert str(caught.value).startswith(said)
+    with vtrack.open_source(path, RawFormat(64, 48, "gray", 30.0)) as source:
+        assert sum(1 for _ in source) == 3

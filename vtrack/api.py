@@ -93,7 +93,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     ``pathlib.Path``; ``raw`` a :class:`RawFormat` or, as ``vtrack run --raw`` takes it,
     ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
     ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
-    for a raw format vtrack cannot read; a frame rate's messages name it ``fps``."""
+    for a raw format vtrack cannot read (a RawFormat's naming ``raw``); a frame rate's
+    messages name it ``fps``."""
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps)
     elif raw is not None and not isinstance(raw, RawFormat):
@@ -102,6 +103,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     elif pix_fmt is not None:
         raise ConfigError("pix_fmt is the pixel format of raw input: give raw='WIDTHxHEIGHT' "
                           "with it")
+    elif raw is not None:  # (one made in Python is not checked as it is made)
+        raw = raw.checked()
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")

@@ -26,9 +26,9 @@ MIN_BOX_SIDE = 4.0
 def frame_size_problem(width: int, height: int) -> str | None:
     """Why a ``width`` x ``height`` frame cannot be tracked (None: it can)."""
     if width <= 0 or height <= 0:
-        return f"the frame size {width}x{height} is empty"
+        return f"the frame size {shown(width)}x{shown(height)} is empty"
     if width > MAX_FRAME_SIDE or height > MAX_FRAME_SIDE:
-        return (f"the frames are {width}x{height}; vtrack accepts at most "
+        return (f"the frames are {shown(width)}x{shown(height)}; vtrack accepts at most "
                 f"{MAX_FRAME_SIDE}x{MAX_FRAME_SIDE}")
     return None
 

@@ -24,6 +24,13 @@ MAX_SECONDS = 366 * 24 * 3600.0
 #: second) is 3.2e11 frames.
 MAX_FRAME_NUMBER = 10**12
 
+#: The longest wait a run or batch takes (``--follow``, ``--worker-timeout``,
+#: ``--scheduler-timeout``, RunRequest's ``ffmpeg.follow_s``): a day.
+MAX_WAIT_S = 24 * 3600.0
+
+#: The range of a network input's timeout (``--timeout``, RunRequest's ``ffmpeg.timeout_s``).
+MIN_TIMEOUT_S, MAX_TIMEOUT_S = 0.1, 3600.0
+
 #: The highest x264 ``crf`` (``--crf``, RunRequest's ``crf``): 0 is lossless, 51 the worst.
 MAX_CRF = 51
 

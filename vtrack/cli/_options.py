@@ -12,9 +12,6 @@ from click.core import ParameterSource
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
-#: The longest wait an option sets (--follow, --worker-timeout, --scheduler-timeout): a day.
-MAX_WAIT_S = 24 * 3600.0
-
 
 class Seconds(click.FloatRange):
     """A duration in seconds from ``min`` to ``max`` (both finite): click's FloatRange lets

@@ -12,7 +12,6 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._options import (
-    MAX_WAIT_S,
     Seconds,
     WholeNumber,
     gt_origin_option,
@@ -29,6 +28,7 @@ from vtrack.errors import (
     passing_stop_to,
     plural,
 )
+from vtrack.params import MAX_WAIT_S
 
 if TYPE_CHECKING:
     from vtrack.batch import Outcome

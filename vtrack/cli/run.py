@@ -14,7 +14,6 @@ import click
 
 from vtrack.cli._options import (
     FRAME_RATE,
-    MAX_WAIT_S,
     FrameSpan,
     Seconds,
     StartPoint,
@@ -26,7 +25,7 @@ from vtrack.cli._options import (
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError, printable
-from vtrack.params import MAX_CRF, MAX_SEED
+from vtrack.params import MAX_CRF, MAX_SEED, MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S
 
 if TYPE_CHECKING:
     from vtrack.io import InputInfo
@@ -89,7 +88,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "fflags=nobuffer (a live stream: less delay; it drops what probing read, "
                    "so it is refused for an input that is not live). One FFmpeg did not use "
                    "opening the input is refused.")
-@click.option("--timeout", "timeout_s", type=Seconds(min=0.1, max=3600),
+@click.option("--timeout", "timeout_s", type=Seconds(min=MIN_TIMEOUT_S, max=MAX_TIMEOUT_S),
               default=None, metavar="SECONDS",
               help="A network input that does not open, or sends nothing, this long ends the "
                    "run (recorded as partial once frames came); so does a live output "

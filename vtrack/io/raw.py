@@ -20,6 +20,7 @@ import re
 import stat
 from collections.abc import Iterator
 from dataclasses import dataclass
+from numbers import Integral
 from pathlib import Path
 from typing import BinaryIO
 
@@ -82,18 +83,32 @@ class RawFormat:
         """
         match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", size)
         if not match:
-            raise ConfigError(f"--raw {size!r}: expected WIDTHxHEIGHT, e.g. 1920x1080")
-        width, height = int(match[1]), int(match[2])
+            raise ConfigError(f"--raw {shown(size)}: expected WIDTHxHEIGHT, e.g. 1920x1080")
+        return cls(int(match[1]), int(match[2]), pix_fmt, fps).checked(
+            f"--raw {shown(size)}", "--pix-fmt", "--fps")
+
+    def checked(self, size_name: str | None = None, pix_name: str = "raw.pix_fmt",
+                fps_name: str = "raw.fps") -> RawFormat:
+        """This format, its size as ints and its rate as a float, if vtrack reads it: width and
+        height whole numbers above 0 of a frame vtrack takes (even for yuv420p), one of
+        :data:`PIX_FMTS`, a frame rate :func:`checked_fps` takes; ConfigError otherwise,
+        naming ``size_name`` (default ``raw (width W, height H)``), ``pix_name`` or
+        ``fps_name``."""
+        width, height = self.width, self.height
+        size_name = size_name or f"raw (width {shown(width)}, height {shown(height)})"
+        if not all(isinstance(v, Integral) and not isinstance(v, bool) for v in (width, height)):
+            raise ConfigError(f"{size_name}: width and height must be whole numbers")
         if width <= 0 or height <= 0:
-            raise ConfigError(f"--raw {size!r}: width and height must be positive")
+            raise ConfigError(f"{size_name}: width and height must be positive")
         too_big = frame_size_problem(width, height)
         if too_big:
-            raise ConfigError(f"--raw {size!r}: {too_big}")
-        if pix_fmt not in PIX_FMTS:
-            raise ConfigError(f"--pix-fmt {pix_fmt!r}: expected one of {', '.join(PIX_FMTS)}")
-        if pix_fmt == "yuv420p" and (width % 2 or height % 2):
-            raise ConfigError(f"--raw {size!r}: yuv420p frames need an even width and height")
-        return cls(width, height, pix_fmt, checked_fps(fps))
+            raise ConfigError(f"{size_name}: {too_big}")
+        if self.pix_fmt not in PIX_FMTS:
+            raise ConfigError(f"{pix_name} {shown(self.pix_fmt)}: expected one of "
+                              f"{', '.join(PIX_FMTS)}")
+        if self.pix_fmt == "yuv420p" and (width % 2 or height % 2):
+            raise ConfigError(f"{size_name}: yuv420p frames need an even width and height")
+        return RawFormat(int(width), int(height), self.pix_fmt, checked_fps(self.fps, fps_name))
 
     @property
     def shape(self) -> tuple[int, ...]:
