@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import pickle
+from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
 
@@ -18,6 +19,7 @@ import vtrack
 from vtrack.errors import ConfigError
 from vtrack.io import RawFormat
 from vtrack.io.video import FFmpegInput
+from vtrack.run import run
 from vtrack.scenes import make_scene, write_video
 
 #: An integer Python will not turn into text (more than 4300 digits): a message that shows it
@@ -263,3 +265,35 @@ def test_open_source_checks_a_raw_format_made_in_python(tmp_path: Path) -> None:
         assert str(caught.value).startswith(said)
     with vtrack.open_source(path, RawFormat(64, 48, "gray", 30.0)) as source:
         assert sum(1 for _ in source) == 3
+
+
+def test_a_run_requests_paths_flags_and_preset_are_taken_as_a_user_gives_them(
+        tmp_path: Path) -> None:
+    """RunRequest(input=Path('clip.mp4'), ...) made vtrack.run.run raise "TypeError: argument
+    of type 'PosixPath' is not iterable", out_dir='out' (text) "TypeError: unsupported operand
+    type(s) for /: 'str' and 'str'"; video='no' wrote a video ('no' is true), live='yes' was
+    taken, and preset='bogus' failed only as the video opened ('video encoder libx264 (preset
+    'bogus', crf 23): Invalid argument')."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    config = vtrack.load_config("s0")
+    request = vtrack.RunRequest(clip, str(tmp_path / "out"), config, scene.boxes[0],
+                                gt_path=str(clip) + ".gt.txt", video=np.False_)
+    assert (request.input, request.out_dir, request.gt_path) == (
+        str(clip), tmp_path / "out", Path(str(clip) + ".gt.txt"))
+    assert request.video is False
+    summary = run(replace(request, gt_path=None))
+    assert summary.status == "complete" and (tmp_path / "out" / "track.csv").is_file()
+    assert not (tmp_path / "out" / "annotated.mp4").exists()
+    for field, value, said in (
+            ("video", "no", "video 'no': must be True or False"),
+            ("live", "yes", "live 'yes': must be True or False"),
+            ("preset", "bogus", "preset 'bogus': must be one of ultrafast, superfast, veryfast, "
+                                "faster, fast, medium, slow (the annotated video's x264 "
+                                "preset)")):
+        with pytest.raises(ConfigError) as caught:
+            replace(request, **{field: value})
+        assert str(caught.value) == said
+    for field, value in (("input", 5), ("out_dir", None), ("stream", 1)):
+        with pytest.raises(TypeError, match=f"^{field}: expected "):
+            replace(request, **{field: value})

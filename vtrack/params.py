@@ -46,6 +46,20 @@ def check_seed(seed: object) -> int:
     return int(seed)
 
 
+def check_flag(value: object, name: str) -> bool:
+    """``value`` if it is True or False (NumPy's too); ConfigError naming ``name`` otherwise: a
+    string such as ``"no"`` is true to Python, not the answer given."""
+    numpy_bool = type(value).__module__ == "numpy" and type(value).__name__ in ("bool", "bool_")
+    if not (isinstance(value, bool) or numpy_bool):  # (NumPy is not imported here)
+        raise ConfigError(f"{name} {shown(value)}: must be True or False")
+    return bool(value)
+
+
+#: The x264 presets of the annotated video (``--preset``, RunRequest's ``preset``): those
+#: that keep up with a run (``slower`` and beyond do not).
+VIDEO_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
+
+
 _TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}
 _A_TYPE = {int: "an integer", float: "a number", bool: "true or false", str: "a string"}
 

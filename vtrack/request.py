@@ -33,6 +33,8 @@ from vtrack.params import (
     MAX_TIMEOUT_S,
     MAX_WAIT_S,
     MIN_TIMEOUT_S,
+    VIDEO_PRESETS,
+    check_flag,
     check_seed,
     shown,
 )
@@ -92,7 +94,26 @@ class RunRequest:
     def __post_init__(self) -> None:
         """Check the values the CLI checks before it makes a request (one made in Python
         too): ConfigError naming the field for a value out of its range, TypeError for a
-        ``config`` that is not a :class:`Config`; a box given as 4 numbers becomes a Box."""
+        ``config`` that is not a :class:`Config` and for a path or text field of another type;
+        a box given as 4 numbers becomes a Box, a path given as text a Path (``input`` text)."""
+        for name in ("input", "out_dir", "gt_path"):  # (str or pathlib.Path, as the library)
+            value = getattr(self, name)
+            if value is None and name == "gt_path":
+                continue
+            if not isinstance(value, str | os.PathLike):
+                raise TypeError(f"{name}: expected a path (str or pathlib.Path), got "
+                                f"{type(value).__name__}")
+            object.__setattr__(self, name, os.fspath(value) if name == "input" else Path(value))
+        for name in ("stream", "init_from", "video_out"):
+            if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name}: expected text or None, got "
+                                f"{type(getattr(self, name)).__name__}")
+        object.__setattr__(self, "video", check_flag(self.video, "video"))
+        if self.live is not None:
+            object.__setattr__(self, "live", check_flag(self.live, "live"))
+        if self.preset not in VIDEO_PRESETS:
+            raise ConfigError(f"preset {shown(self.preset)}: must be one of "
+                              f"{', '.join(VIDEO_PRESETS)} (the annotated video's x264 preset)")
         if not isinstance(self.config, Config):
             raise TypeError(f"config: expected a vtrack.Config (vtrack.load_config(name)), got "
                             f"{type(self.config).__name__}")

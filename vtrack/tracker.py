@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
-from vtrack.params import check_seed, shown
+from vtrack.params import check_flag, check_seed, shown
 from vtrack.pipeline import FrameResult, Pipeline
 
 #: A frame as :meth:`Tracker.update` takes it.
@@ -70,14 +70,6 @@ def _decoded(item: Any, index: int, fps: float) -> Frame:
     except av.FFmpegError as exc:
         raise TypeError(f"frame {index}: FFmpeg cannot convert an av.VideoFrame of pixel "
                         f"format {item.format.name} to BGR ({exc.strerror})") from None
-
-
-def check_flag(value: object, name: str) -> bool:
-    """``value`` if it is True or False (NumPy's too); ConfigError naming ``name`` otherwise: a
-    string such as ``"no"`` is true to Python, not the answer given."""
-    if not isinstance(value, bool | np.bool_):
-        raise ConfigError(f"{name} {shown(value)}: must be True or False")
-    return bool(value)
 
 
 def _by_parameter(params: dict[str, Any]) -> dict[str, Any]:

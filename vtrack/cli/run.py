@@ -25,7 +25,14 @@ from vtrack.cli._options import (
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError, printable
-from vtrack.params import MAX_CRF, MAX_SEED, MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S
+from vtrack.params import (
+    MAX_CRF,
+    MAX_SEED,
+    MAX_TIMEOUT_S,
+    MAX_WAIT_S,
+    MIN_TIMEOUT_S,
+    VIDEO_PRESETS,
+)
 
 if TYPE_CHECKING:
     from vtrack.io import InputInfo
@@ -33,7 +40,6 @@ if TYPE_CHECKING:
 
 #: ``--follow`` without a number: seconds a growing file may stay the same size before its end.
 FOLLOW_S = 5.0
-PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
 
 
 def default_out_dir(input_spec: str, config: str | None = None) -> Path:
@@ -109,7 +115,7 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Send the annotated video to this live output instead of annotated.mp4: "
                    "udp://HOST:PORT or tcp://... as MPEG-TS, rtsp://... as RTSP, rtmp://... as "
                    "FLV (watch it with ffplay, mpv or VLC).")
-@click.option("--preset", type=click.Choice(PRESETS), default="ultrafast", show_default=True,
+@click.option("--preset", type=click.Choice(VIDEO_PRESETS), default="ultrafast", show_default=True,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here).")
 @click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
               help="x264 quality of annotated.mp4 (lower is better and larger).")
