@@ -4,14 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from vtrack.errors import printable
 from vtrack.io.outdir import BATCH_COLUMNS
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
 
-#: ``summary.csv`` columns, in order.
+#: ``summary.csv`` columns, in order (a report's ``summary.csv`` has the same).
 SUMMARY_COLUMNS = BATCH_COLUMNS
 
 
@@ -89,28 +88,6 @@ class Outcome:
         if self.attempt > 1:
             line += f" (attempt {self.attempt}: a worker process died on this job before)"
         return line
-
-    def row(self) -> dict[str, Any]:
-        """This job's ``summary.csv`` row (:data:`SUMMARY_COLUMNS`): what its folder holds,
-        the run it ``kept`` when it was refused."""
-        s = self.kept or self.summary
-        return {
-            "input": self.input,
-            "config": self.config,
-            "frames": s.frames if s else None,
-            "fps": _round(s.fps, 1) if s else None,
-            "mean_overlap": _round(s.mean_overlap, 4) if s else None,
-            "auc": _round(s.auc, 4) if s else None,
-            "precision20": _round(s.precision20, 4) if s else None,
-            "frames_lost": s.frames_lost if s else None,
-            "frames_skipped": s.frames_skipped if s else None,
-            "status": self.held,
-            "error": self.kept.error if self.kept else self.error,
-        }
-
-
-def _round(value: float | None, digits: int) -> float | None:
-    return None if value is None else round(value, digits)
 
 
 def _as_given(folder: Path, results: Path) -> Path:

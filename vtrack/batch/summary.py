@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import io
 import math
 import time
 from collections.abc import Callable, Generator, Iterable
@@ -14,7 +13,7 @@ from typing import Any
 from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
 from vtrack.batch.plan import Plan, recorded_summary
-from vtrack.errors import passing_stop_to
+from vtrack.errors import InputError, passing_stop_to
 from vtrack.io.files import write_text_atomic
 from vtrack.run import STATUS_INTERRUPTED
 
@@ -69,10 +68,43 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
                     if recorded is not None:
                         outcome = Outcome(job.input, job.config, recorded.status, recorded,
                                           recorded.error, job.attempt)
-                        summary.rows[(job.input, job.config)] = outcome.row()
+                        summary.rows[(job.input, job.config)] = outcome_row(outcome, summary.path)
                         if late is not None:
                             late.append(outcome)
             summary.write(stopped=True)
+
+
+def outcome_row(outcome: Outcome, summary_path: Path) -> dict[str, Any]:
+    """``outcome``'s ``summary.csv`` row: the row a report's ``summary.csv`` has for the run its
+    folder holds (:func:`vtrack.report.rows.run_row`; the ``kept`` run when the job was
+    refused), under the batch's input and config names, the status and error of what its
+    folder holds (:attr:`Outcome.held`) and its folder named inside the batch's
+    (``clip/s0``). A job without a run folder that can be read (it failed before writing
+    one) has its input, config, status and error only."""
+    from vtrack.report.rows import run_row  # (reading runs: not loaded for --help)
+    from vtrack.report.runs import load_run
+
+    recorded = outcome.kept or outcome.summary
+    row: dict[str, Any] = {}
+    if recorded is not None and recorded.out_dir:
+        folder = Path(recorded.out_dir)
+        try:
+            row = run_row(load_run(folder))
+        except InputError:
+            pass
+        else:
+            row["run"] = _inside(folder, summary_path.parent)
+    row.update(input=outcome.input, config=outcome.config, status=outcome.held,
+               error=outcome.kept.error if outcome.kept else outcome.error)
+    return row
+
+
+def _inside(folder: Path, batch: Path) -> str:
+    """``folder`` relative to the batch's folder ``batch`` when it is inside it, else as it is."""
+    try:
+        return folder.resolve().relative_to(batch.resolve()).as_posix()
+    except ValueError:
+        return str(folder)
 
 
 def earlier_rows(path: Path) -> dict[tuple[str, str], dict[str, Any]]:
@@ -112,7 +144,7 @@ class SummaryWriter:
     def add(self, outcome: Outcome, write: bool = True) -> None:
         """Record ``outcome``'s row; with ``write``, write the file unless the last write was
         too recent (:data:`WRITE_SPACING`)."""
-        self.rows[(outcome.input, outcome.config)] = outcome.row()
+        self.rows[(outcome.input, outcome.config)] = outcome_row(outcome, self.path)
         self._pending = True
         if write and self.clock() >= self._next_write:
             self.write()
@@ -127,17 +159,14 @@ class SummaryWriter:
         runs, with the error :data:`UNFINISHED` (so a batch killed outright, ``kill -9``,
         leaves a row for each pair it did not finish, not a summary of fewer pairs that looks
         whole); once it has ``stopped`` early (Ctrl-C, SIGTERM), with :data:`NEVER_STARTED`."""
+        from vtrack.report.rows import render
+
         began = self.clock()
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, SUMMARY_COLUMNS, lineterminator="\n")
-        writer.writeheader()
-        for (name, config), row in self.rows.items():
-            if row is None:
-                row = {"input": name, "config": config, "status": STATUS_INTERRUPTED,
-                       "error": NEVER_STARTED if stopped else UNFINISHED}
-            writer.writerow(row)
+        rows = [{"input": name, "config": config, "status": STATUS_INTERRUPTED,
+                 "error": NEVER_STARTED if stopped else UNFINISHED} if row is None else row
+                for (name, config), row in self.rows.items()]
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(self.path, buffer.getvalue())
+        write_text_atomic(self.path, render(rows))
         ended = self.clock()
         self._pending = False
         self._next_write = ended + WRITE_SPACING * (ended - began)

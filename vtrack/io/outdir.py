@@ -29,20 +29,40 @@ LOCK_NAME = ".vtrack.lock"
 RUN_OUTPUTS = ("run.json", "track.csv", "tracks.csv", "annotated.mp4", "error.log")
 
 
-#: A batch's own file in its results folder, beside its inputs' folders, and its columns.
+#: A batch's own file in its results folder, beside its inputs' folders (a report writes one
+#: of that name and the same columns beside its ``index.html``).
 BATCH_SUMMARY = "summary.csv"
-BATCH_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc", "precision20",
-                 "frames_lost", "frames_skipped", "status", "error")
+#: The multi-target metrics a run records (``run.json``'s ``metrics``), as ``summary.csv``
+#: columns (``frames``, which they also record, is its own column).
+MOT_METRICS = ("mota", "motp", "idf1", "idp", "idr", "id_switches", "false_positives",
+               "misses", "matches", "mostly_tracked", "partially_tracked", "mostly_lost",
+               "gt_ids", "gt_boxes", "track_ids", "track_boxes")
+#: The columns of every ``summary.csv``, a batch's and a report's: one row per run, the
+#: single-target scores and the multi-target metrics, empty where they do not apply.
+BATCH_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc",
+                 "precision20", "success50", "success75", "norm_precision", "mean_overlap",
+                 "mean_center_error", "tracking_miss", "miss_flagged", "fps", "frames_occluded",
+                 "frames_lost", "frames_skipped", *MOT_METRICS, "ground_truth", "run", "error")
+#: The columns of a batch's ``summary.csv`` written by vtrack before it had the report's:
+#: still a batch's (its rows are read, and resumed).
+EARLIER_BATCH_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc",
+                         "precision20", "frames_lost", "frames_skipped", "status", "error")
+#: The page a report writes beside its ``summary.csv``: what tells that file from a batch's.
+REPORT_PAGE = "index.html"
 
 
 def is_batch_folder(folder: Path | str) -> bool:
     """Whether ``folder`` is a batch's results folder: it holds a ``summary.csv`` whose header
-    is a batch's (:data:`BATCH_COLUMNS`), not any file of that name."""
+    is a batch's (:data:`BATCH_COLUMNS`, or :data:`EARLIER_BATCH_COLUMNS`), not any file of
+    that name, and no report's page (:data:`REPORT_PAGE`: a report's own ``summary.csv``)."""
+    folder = Path(folder)
     try:
-        with (Path(folder) / BATCH_SUMMARY).open(encoding="utf-8", errors="replace") as handle:
-            return handle.readline(4096).strip() == ",".join(BATCH_COLUMNS)
+        with (folder / BATCH_SUMMARY).open(encoding="utf-8", errors="replace") as handle:
+            header = handle.readline(4096).strip()
     except OSError:
         return False
+    return (header in (",".join(BATCH_COLUMNS), ",".join(EARLIER_BATCH_COLUMNS))
+            and not (folder / REPORT_PAGE).exists())
 
 
 def refuse_other_results(folder: Path | str, what: str) -> None:

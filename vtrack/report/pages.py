@@ -3,15 +3,13 @@ and ``summary.csv``. Every file is written under a temporary name and renamed wh
 
 from __future__ import annotations
 
-import csv
 import html
-import io
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from vtrack.errors import printable
+from vtrack.report import rows
 from vtrack.report.runs import FailedRun, RunResult
 from vtrack.report.tables import NOTES, Table
 
@@ -245,38 +243,9 @@ def render_markdown(page: Page) -> str:
 
 # --- CSV -------------------------------------------------------------------------------------
 
-#: ``summary.csv`` of a report: one row per run, then any multi-target metric columns.
-CSV_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc", "precision20",
-               "success50", "success75", "norm_precision",
-               "mean_overlap", "mean_center_error", "tracking_miss", "miss_flagged", "fps",
-               "frames_occluded", "frames_lost", "ground_truth", "run", "error")
-
-
-def _cell(value: object) -> object:
-    if isinstance(value, float):
-        return "" if not math.isfinite(value) else round(value, 6)
-    return "" if value is None else value
-
-
 def render_csv(runs: Sequence[RunResult], failed: Sequence[FailedRun] = ()) -> str:
-    """One row per run: OTB scores (empty without ground truth), speed, states, MOT metrics
-    (those not named as a column already), the error of a run that stopped on one; then one
-    row per batch row without results (input, config, status and error only)."""
-    mot_keys = sorted({k for r in runs for k in r.mot} - set(CSV_COLUMNS))
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(CSV_COLUMNS + tuple(mot_keys))
-    for run in runs:
-        s = run.scores
-        scores = ([s.frames_evaluated, s.auc, s.precision20, s.success50, s.success75,
-                   s.norm_precision, s.mean_overlap, s.mean_center_error, s.tracking_miss,
-                   s.miss_flagged] if s else [None] * 10)
-        row = [run.input, run.config, run.status, run.frames, *scores, run.fps,
-               run.frames_occluded, run.frames_lost, run.ground_truth,
-               str(run.folder), run.error] + [run.mot.get(k) for k in mot_keys]
-        writer.writerow([_cell(v) for v in row])
-    for row_without in failed:
-        writer.writerow([row_without.input, row_without.config, row_without.status]
-                        + [""] * (len(CSV_COLUMNS) - 4) + [row_without.error]
-                        + [""] * len(mot_keys))
-    return buffer.getvalue()
+    """``summary.csv`` (:mod:`.rows`, as a batch writes its own): one row per run, then one row
+    per batch row without results (input, config, status and error only)."""
+    return rows.render([*map(rows.run_row, runs),
+                        *({"input": f.input, "config": f.config, "status": f.status,
+                           "error": f.error} for f in failed)])

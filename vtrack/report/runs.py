@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.batch import SUMMARY_COLUMNS
 from vtrack.batch.summary import NEVER_RAN
 from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
@@ -43,7 +42,13 @@ from vtrack.io.files import folder_name, os_reason
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
 from vtrack.io.limits import special_kind
-from vtrack.io.outdir import LOCK_NAME, live_holder
+from vtrack.io.outdir import (
+    BATCH_COLUMNS,
+    EARLIER_BATCH_COLUMNS,
+    LOCK_NAME,
+    REPORT_PAGE,
+    live_holder,
+)
 from vtrack.io.specs import is_live, is_url
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
@@ -108,6 +113,8 @@ class RunResult:
     frames_occluded: int
     frames_lost: int
     multi_target: bool
+    #: Frames of the input that could not be decoded (or were missing) and were skipped.
+    frames_skipped: int = 0
     ground_truth: str | None = None
     error: str | None = None
     #: Frames of the input as ``run.json`` recorded when it opened (exact or estimated).
@@ -418,6 +425,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         fps=fps,
         frames_occluded=int(summary.get("frames_occluded") or 0),
         frames_lost=int(summary.get("frames_lost") or 0),
+        frames_skipped=int(summary.get("frames_skipped") or 0),
         multi_target=_multi_target(folder, record),
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
@@ -592,22 +600,21 @@ def still_written(paths: Iterable[Path]) -> list[str]:
 BATCH_STATUSES = frozenset({STATUS_COMPLETE, STATUS_PARTIAL, STATUS_INTERRUPTED, STATUS_FAILED})
 
 
-def _batch_rows(summary: Path, problems: list[str], not_batch: Sequence[str] = ()
-                ) -> list[dict[str, str]]:
+def _batch_rows(summary: Path, problems: list[str]) -> list[dict[str, str]]:
     """The rows of a batch's ``summary.csv``, one per (input, config) (a repeated pair: its
     last row, the newest), empty rows skipped. A file that cannot be read, a header other than
     the batch's, rows that are not a batch's (another number of columns, a broken quote, an
     unknown status, no input or config) are each one line appended to ``problems`` naming the
-    file; a file whose header starts with ``not_batch`` (the report's own) is skipped."""
+    file."""
     rows: dict[tuple[str, str], dict[str, str]] = {}
     unread: list[str] = []
     try:
         with summary.open(newline="", encoding="utf-8") as handle:
             reader = csv.reader(handle, strict=True)
             header = next(reader, [])
-            if not header or not_batch and tuple(header[:len(not_batch)]) == tuple(not_batch):
+            if not header:
                 return []
-            if tuple(header) != SUMMARY_COLUMNS:
+            if tuple(header) not in (BATCH_COLUMNS, EARLIER_BATCH_COLUMNS):
                 problems.append(f"{summary}: not a vtrack batch summary (its header is "
                                 f"{printable(','.join(header))[:80]!r}); the runs without "
                                 "results it may list are not shown")
@@ -638,7 +645,7 @@ def _batch_rows(summary: Path, problems: list[str], not_batch: Sequence[str] = (
     if unread:
         problems.append(f"{summary}: line{'s' if len(unread) > 1 or '-' in unread[0] else ''} "
                         f"{', '.join(unread[:5])}{' ...' if len(unread) > 5 else ''} not read "
-                        f"(not a batch row: {len(SUMMARY_COLUMNS)} columns with a known "
+                        f"(not a batch row: {len(header)} columns with a known "
                         "status, or a broken quote); a run without results there is not shown")
     return list(rows.values())
 
@@ -647,23 +654,24 @@ def _lines(first: int, last: int) -> str:
     return str(first) if first >= last else f"{first}-{last}"
 
 
-def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: list[str],
-                not_batch: Sequence[str]) -> list[FailedRun]:
+def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: list[str]
+                ) -> list[FailedRun]:
     """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
     left no results (no run of ``reported`` is in their results folder, the batch's
     ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
-    once. What could not be read of those files is appended to ``problems`` (see
-    :func:`_batch_rows`; ``not_batch``: the leading header of other files of that name), and
-    one line per file naming its complete rows whose results folder holds no ``run.json``."""
+    once (a report's own ``summary.csv``, beside its :data:`~vtrack.io.outdir.REPORT_PAGE`, is
+    no batch's). What could not be read of those files is appended to ``problems`` (see
+    :func:`_batch_rows`), and one line per file naming its complete rows whose results folder
+    holds no ``run.json``."""
     ran = {run.folder.resolve() for run in reported}
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
         for summary in summaries:
-            if summary.name != "summary.csv":
+            if summary.name != "summary.csv" or (summary.parent / REPORT_PAGE).exists():
                 continue
             gone = []
-            for r in _batch_rows(summary, problems, not_batch):
+            for r in _batch_rows(summary, problems):
                 folder = summary.parent / folder_name(r["input"], "input") / folder_name(
                     r["config"])
                 if folder.resolve() in ran:

@@ -1,0 +1,67 @@
+"""``vtrack batch``'s ``summary.csv`` and ``vtrack report``'s: one writer, one column set."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+W, H, FRAMES = 160, 120, 60
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+def read(path: Path) -> tuple[list[str], dict[tuple[str, str], dict[str, str]]]:
+    with path.open(newline="") as handle:
+        header = next(csv.reader(handle))
+        handle.seek(0)
+        return header, {(row["input"], row["config"]): row for row in csv.DictReader(handle)}
+
+
+def test_a_batch_of_multi_target_runs_has_the_reports_columns_and_numbers(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A batch's summary.csv had other columns, in another order and with other decimals
+    (fps 1, scores 4) than the report's of the same runs, and no MOTA or IDF1 column: a batch
+    of `-c fixed_camera` over `vtrack scene pedestrians` clips with their .mot.txt wrote
+    `ped,fixed_camera,60,571.1,,,,0,0,complete,`. Both now write one column set; a run's row
+    is the same in both (its folder named inside the batch in the batch's)."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for scenario, name in (("pedestrians", "ped"), ("occlusion", "occ")):
+        clip = clip_factory(scenario, width=W, height=H, frames=FRAMES)
+        shutil.copy(clip.path, inputs / f"{name}.mp4")
+        shutil.copy(clip.gt, inputs / f"{name}.gt.txt")
+        if clip.mot is not None:
+            shutil.copy(clip.mot, inputs / f"{name}.mot.txt")
+    out = tmp_path / "results"
+    done = vtrack("batch", str(inputs), "-c", "fixed_camera", "-c", "s0", "--no-video",
+                  "--out", str(out))
+    assert done.exit_code == 0, done.output
+    done = vtrack("report", str(out), "--out", str(tmp_path / "report"))
+    assert done.exit_code == 0, done.output
+
+    batch_header, batch_rows = read(out / "summary.csv")
+    report_header, report_rows = read(tmp_path / "report" / "summary.csv")
+    assert batch_header == report_header
+    assert set(batch_rows) == set(report_rows) == {
+        (name, config) for name in ("ped", "occ") for config in ("fixed_camera", "s0")}
+    for key, row in batch_rows.items():
+        assert row["run"] == f"{key[0]}/{key[1]}"
+        assert Path(report_rows[key]["run"]) == (out / key[0] / key[1]).resolve()
+        assert {c: v for c, v in row.items() if c != "run"} == {
+            c: v for c, v in report_rows[key].items() if c != "run"}, key
+    multi, single = batch_rows[("ped", "fixed_camera")], batch_rows[("occ", "s0")]
+    assert float(multi["mota"]) <= 1 and 0 <= float(multi["idf1"]) <= 1
+    assert multi["auc"] == multi["frames_lost"] == ""  # one target's columns do not apply
+    assert 0 <= float(single["auc"]) <= 1 and single["mota"] == single["idf1"] == ""
+    assert len(single["fps"].partition(".")[2]) > 1  # not rounded to 1 decimal any more

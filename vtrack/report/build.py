@@ -1,0 +1,471 @@
+"""Building a report (:func:`build_report`), as :mod:`vtrack.report` describes."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from datetime import datetime
+from pathlib import Path
+from warnings import catch_warnings, simplefilter
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from vtrack import __version__
+from vtrack.errors import InputError, OutputError, plural
+from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
+from vtrack.io.outdir import is_batch_folder
+from vtrack.report import failures, pages, plots, tables
+from vtrack.report.runs import (
+    FailedRun,
+    GroundTruth,
+    RunResult,
+    failed_runs,
+    load_run,
+    run_folders,
+    still_written,
+)
+from vtrack.run import STATUS_COMPLETE, STATUS_FAILED
+
+DEFAULT_TITLE = "vtrack report"
+#: When no run can be reported, the error line names the reasons of at most this many.
+NAMED_REASONS = 4
+#: A section's note of the runs its plots do not draw names at most this many.
+NAMED_LEFT_OUT = 5
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote and read."""
+
+    out_dir: Path
+    index: Path
+    markdown: Path
+    csv: Path
+    plots: list[Path]
+    runs: list[RunResult]
+    warnings: list[str]
+
+
+#: The slug of the plots over all inputs (``curves_all.png``): no input's plots take it.
+ALL_INPUTS = "all"
+
+
+def _slugs(names: Sequence[str]) -> dict[str, str]:
+    """A distinct file-name-safe slug per name, never :data:`ALL_INPUTS` (an input named
+    ``all`` gets ``all-2``: its plots are not replaced by those over all inputs)."""
+    slugs: dict[str, str] = {}
+    for name in names:
+        base = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "input"
+        slug, n = base, 1
+        while slug in slugs.values() or slug.lower() == ALL_INPUTS:  # (case-blind file systems)
+            n += 1
+            slug = f"{base}-{n}"
+        slugs[name] = slug
+    return slugs
+
+
+def _distinct_inputs(runs: list[RunResult]) -> None:
+    """Name runs of one input name but different input files apart: by their file names where
+    those differ (``a.mp4`` and ``a.mkv``, which a batch keeps apart), else by where their
+    results are (two ``clip.mp4`` of two folders: ``clip (batch-x)``). They are different
+    inputs, not different configurations."""
+    for name, group in _group(runs, lambda r: r.input).items():
+        files = _group(group, lambda r: r.input_key)
+        if len(files) < 2:
+            continue
+        names = {key: Path(g[0].source).name for key, g in files.items() if g[0].source}
+        if len(names) == len(files) and len(set(names.values())) == len(names):
+            labels = names
+        else:
+            places = _places([g[0].folder for g in files.values()])
+            labels = {key: f"{name} ({place})" for key, place in zip(files, places, strict=True)}
+        for key, same in files.items():
+            for run in same:
+                run.input = labels[key]
+
+
+def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[FailedRun]:
+    """Give runs of one config name distinct config labels, suffixed with where they differ
+    (``s0 (batch-a)``): configs of that name whose chains differ (two TOML files), each one
+    label over every input; then, where one input has several runs of a config label (two
+    batch folders, a batch and a ``vtrack run``), every run of that label by the results it
+    belongs to (its batch folder, else its own), so one batch's runs keep one label over
+    every input and are averaged together (and a batch row of that label without results
+    takes its batch's label: the ``failed`` returned)."""
+    for name, group in _group(runs, lambda r: r.config).items():
+        chains = _group(group, lambda r: r.config_key)
+        if len(chains) > 1:
+            places = _places([g[0].folder for g in chains.values()])
+            for same, place in zip(chains.values(), places, strict=True):
+                for run in same:
+                    run.config = f"{name} ({place})"
+    # the results each run belongs to: its batch's folder, else its own (a vtrack run); each
+    # batch's summary.csv read once
+    batches = {str(b) for b in {_batch_of(r) for r in runs} if is_batch_folder(b)}
+    results = {id(r): str(_batch_of(r)) if str(_batch_of(r)) in batches
+               else str(r.folder.resolve()) for r in runs}
+    for label, group in _group(runs, lambda r: r.config).items():
+        if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
+            continue
+        origins = _group(group, lambda r: results[id(r)])
+        if len(origins) < 2 or not origins.keys() & batches:
+            continue  # (runs of vtrack run only: told apart per input, below)
+        places = dict(zip(origins, _places([Path(origin) for origin in origins]), strict=True))
+        for origin, same in origins.items():
+            for run in same:
+                run.config = f"{label} ({places[origin]})"
+        failed = [replace(row, config=f"{label} ({places[str(row.batch)]})")
+                  if row.config == label and str(row.batch) in places else row
+                  for row in failed]
+    for group in _group(runs, lambda r: f"{r.input}\0{r.config}").values():
+        if len(group) > 1:  # (several runs of one input still from one results folder)
+            for run, place in zip(group, _places([r.folder for r in group]), strict=True):
+                run.config = f"{run.config} ({place})"
+    return failed
+
+
+def _batch_of(run: RunResult) -> Path:
+    """The folder of the batch ``run`` would belong to (``<batch>/<input>/<config>/``)."""
+    return run.folder.resolve().parent.parent
+
+
+def _counts(runs: Sequence[RunResult], failed: Sequence[FailedRun]) -> str:
+    """What a report shows: ``3 runs of 2 inputs with 2 configurations``, its runs and its batch
+    rows without results (``2 runs and 1 without results of ...``; ``3 runs without results of
+    ...`` when it has only those), the inputs and configurations of both."""
+    inputs = {r.input for r in runs} | {f.input for f in failed}
+    configs = {r.config for r in runs} | {f.config for f in failed}
+    if not failed:
+        shown = plural(len(runs), "run")
+    elif not runs:
+        shown = f"{plural(len(failed), 'run')} without results"
+    else:
+        shown = f"{plural(len(runs), 'run')} and {len(failed)} without results"
+    return (f"{shown} of {plural(len(inputs), 'input')} with "
+            f"{plural(len(configs), 'configuration')}")
+
+
+def _distinct_failed(failed: list[FailedRun], runs: Sequence[RunResult]) -> list[FailedRun]:
+    """``failed`` with the input of a row named after the batch folder it comes from
+    (``v3 (batch-b)``) where that input's name is also that of a run or failed row of another
+    folder: two batches' ``v3`` need not be one input, and ``v3 [robust] never ran`` beside a
+    complete ``v3 [robust]`` of another batch read as that run's."""
+    elsewhere: dict[str, set[Path]] = {}
+    for row in failed:
+        elsewhere.setdefault(row.input, set()).add(row.batch or Path())
+    for run in runs:
+        if run.input in elsewhere:
+            elsewhere[run.input].add(_batch_of(run))
+    named = {name: dict(zip(sorted(folders), _places(sorted(folders)), strict=True))
+             for name, folders in elsewhere.items() if len(folders) > 1}
+    return [replace(row, input=f"{row.input} ({named[row.input][row.batch or Path()]})")
+            if row.input in named else row for row in failed]
+
+
+def _places(folders: Sequence[Path]) -> list[str]:
+    """Where each of ``folders`` differs from the others: its first folder below their common
+    one, or its whole path from there when those are not distinct."""
+    common = os.path.commonpath(folders)
+    if any(os.path.relpath(folder, common) == os.curdir for folder in folders):
+        common = os.path.dirname(common)  # (a batch holding a vtrack run's folder: by names)
+    paths = [os.path.relpath(folder, common) for folder in folders]
+    heads = [path.split(os.sep)[0] for path in paths]
+    return heads if len(set(heads)) == len(heads) else paths
+
+
+def _group(runs: Sequence[RunResult], key: Callable[[RunResult], str]
+           ) -> dict[str, list[RunResult]]:
+    groups: dict[str, list[RunResult]] = {}
+    for run in runs:
+        groups.setdefault(key(run), []).append(run)
+    return groups
+
+
+def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Per config, the mean success and precision curves over its scored runs (for the runs of
+    one input: each run's own curves)."""
+    success: dict[str, list[np.ndarray]] = {}
+    precision: dict[str, list[np.ndarray]] = {}
+    for run in runs:
+        if run.scores is not None and run.scores.frames_evaluated:
+            success.setdefault(run.config, []).append(run.scores.success)
+            precision.setdefault(run.config, []).append(run.scores.precision)
+    return ({c: np.mean(v, axis=0) for c, v in success.items()},
+            {c: np.mean(v, axis=0) for c, v in precision.items()})
+
+
+def _mixed_truth_warning(name: str, runs: Sequence[RunResult]) -> str | None:
+    """A warning when the scored runs of input ``name`` were scored against different ground
+    truth (files whose bytes differ, or that cannot be read and have different paths): the
+    table ranks them side by side as if against one truth."""
+    def content(path: str) -> str:
+        try:
+            return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError:
+            return path
+
+    scored = [r for r in runs if r.scores is not None and r.ground_truth]
+    digests = {path: content(path) for path in {str(r.ground_truth) for r in scored}}
+    truths = _group(scored, lambda r: digests[str(r.ground_truth)])
+    if len(truths) < 2:
+        return None
+    named = "; ".join(sorted(
+        f"{' = '.join(sorted({str(r.ground_truth) for r in group}))} for "
+        f"{', '.join(sorted({r.config for r in group}))}" for group in truths.values()))
+    return (f"{name}: its runs were scored against different ground truth ({named}): their "
+            "scores are not directly comparable")
+
+
+def _mixed_span_warning(name: str, runs: Sequence[RunResult]) -> str | None:
+    """A warning when the complete, scored runs of input ``name`` cover different frames
+    (``--start`` / ``--frames``): the table ranks them side by side as if over one clip."""
+    scored = [r for r in runs if r.scores is not None and r.overlaps
+              and r.status == STATUS_COMPLETE]
+    def span(run: RunResult) -> str:
+        return f"{run.first_frame}..{run.first_frame + len(run.overlaps or ()) - 1}"
+
+    spans = _group(scored, span)
+    if len(spans) < 2:
+        return None
+    named = "; ".join(
+        f"frames {span} for {', '.join(sorted({r.config for r in group}))}"
+        for span, group in sorted(spans.items(), key=lambda item: item[1][0].first_frame))
+    return (f"{name}: its runs cover different frames ({named}): their scores are not "
+            "directly comparable")
+
+
+def _refuse_batch_folder(out_dir: Path) -> None:
+    """Raise OutputError when ``out_dir`` holds a batch's ``summary.csv`` (the report's own
+    ``summary.csv`` would replace it) or a run's ``run.json``."""
+    if is_batch_folder(out_dir):
+        raise OutputError(f"--out {out_dir}: holds a batch's summary.csv, which the report "
+                          "would replace; choose another folder for the report")
+    if (out_dir / "run.json").exists():
+        raise OutputError(f"--out {out_dir}: is a run's results folder; choose another folder "
+                          "for the report")
+
+
+def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
+    """The warning for ``--gt INPUT=FILE`` that scored no run: saying, when it is so, that
+    runs of that input were already scored with the ground truth they recorded (which
+    ``--gt`` does not replace)."""
+    warning = f"--gt {truth.input}={truth.path}: no run of input {truth.input} was scored with it"
+    own = [r for r in runs if truth.belongs_to(r.input, {}) and r.ground_truth]
+    if not own:
+        return warning
+    files = ", ".join(sorted({str(r.ground_truth) for r in own}))
+    return (f"{warning}: {plural(len(own), 'run')} of it {'was' if len(own) == 1 else 'were'} "
+            f"already scored with {'its' if len(own) == 1 else 'their'} own ground truth "
+            f"({files}), which --gt does not replace")
+
+
+def build_report(results: Sequence[Path], out_dir: Path,
+                 gt: Path | str | Sequence[Path | str] | None = None,
+                 gt_origin: int | None = 0, title: str = DEFAULT_TITLE,
+                 on_input: Callable[[int, int], None] | None = None) -> Report:
+    """Read every run below ``results`` and write the report into ``out_dir``.
+
+    ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
+    ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes, None to tell from each file's
+    place): ``FILE`` or ``INPUT=FILE`` specs, one or several; a run is scored only against a
+    file of its own length (else a warning names the run and the file). A run folder that
+    cannot be read is left out with a warning. Raises InputError when nothing below
+    ``results`` is a run (or a failed batch row) and OutputError when ``out_dir`` cannot be
+    written, holds a batch's ``summary.csv`` or is a run's folder. ``on_input(done, inputs)``
+    is called as each input's plots are drawn (the long part: progress).
+    """
+    _refuse_batch_folder(out_dir)
+    specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
+    truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
+    warnings: list[str] = still_written(results)
+    runs: list[RunResult] = []
+    for folder in run_folders(results):
+        try:
+            runs.append(load_run(folder, truths))
+        except InputError as exc:
+            warnings.append(f"left out: {exc}")
+        else:
+            if runs[-1].note:
+                warnings.append(runs[-1].note)
+    for truth in truths:
+        if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
+            warnings.append(_unused_gt_warning(truth, runs))
+        scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
+        if truth.input is None and len(scored) > 1:  # one file is one input's ground truth
+            warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
+                            f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
+                            "for each input")
+    failed = failed_runs(results, runs, warnings)
+    if not runs and not failed:
+        named = ", ".join(str(r) for r in results)
+        if len(warnings) == 1:
+            raise InputError(f"{named}: no run to report; {warnings[0]}")
+        if warnings:  # every reason, up to a few (one line)
+            more = len(warnings) - NAMED_REASONS
+            raise InputError(f"{named}: no run to report, {len(warnings)} left out: "
+                             + "; ".join(w.removeprefix("left out: ")
+                                         for w in warnings[:NAMED_REASONS])
+                             + (f"; and {more} more" if more > 0 else ""))
+        raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
+                         "folders)")
+    failed = _distinct_failed(failed, runs)  # (by the runs' input names, not yet told apart)
+    _distinct_inputs(runs)
+    failed = _distinct_labels(runs, failed)
+    runs.sort(key=lambda r: (r.input, r.config))
+    single = [r for r in runs if not r.multi_target]
+    multi = [r for r in runs if r.multi_target]
+    # (not: failed before frame 1; nor a run --gt's file did not fit: its own warning says so)
+    unscored = [r for r in single if r.overlaps is None and r.note is None]
+    if unscored:
+        warnings.append(f"{plural(len(unscored), 'single-target run')} "
+                        f"{'has' if len(unscored) == 1 else 'have'} no ground truth; give "
+                        "--gt FILE (or --gt INPUT=FILE per input) to score them")
+
+    plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
+    by_input = _group(single, lambda r: r.input)
+    warnings += [line for name, group in by_input.items()
+                 for warn in (_mixed_truth_warning, _mixed_span_warning)
+                 if (line := warn(name, group))]
+    # a run that failed part way is listed with its frames' scores but averaged with no other
+    counted = [r for r in single if r.status != STATUS_FAILED]
+    if len(counted) < len(single):
+        warnings.append(f"{plural(len(single) - len(counted), 'single-target run')} failed "
+                        "part way: "
+                        "listed per input, left out of the averages and the All inputs plot")
+    by_config = _group(counted, lambda r: r.config)
+    palette = plots.colours(sorted({r.config for r in runs}))
+    with StagedFiles() as staged, catch_warnings():  # put in place together when all written
+        # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
+        # drawing, not the runs: the terminal shows vtrack's warnings only
+        simplefilter("ignore", UserWarning)
+        written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
+                                         on_input)
+        overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
+        page = pages.Page(
+            title=title,
+            meta=(f"{_counts(runs, failed)}; generated "
+                  f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
+            warnings=warnings,
+            overall_plot=overall and overall.relative_to(out_dir).as_posix(),
+            averages=tables.average_table(by_config) if by_config else None,
+            results=tables.results_table(list(by_input.values())) if single else None,
+            mot=tables.mot_table(list(_group(multi, lambda r: r.input).values()))
+            if multi else None,
+            failed=failed,
+            sections=sections,
+        )
+        # the pages last: a report whose plots could not all be written has no index.html
+        csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
+        markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
+        index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
+    written += [overall] if overall else []
+    _remove_stale_plots(plot_dir, written)
+    return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv, plots=written,
+                  runs=runs, warnings=warnings)
+
+
+#: The kinds of plot a report writes, as ``plots/<kind>_<input>.png`` (``curves_all.png``).
+PLOT_KINDS = ("state", "overlap", "curves", "failures")
+
+
+def _remove_stale_plots(plot_dir: Path, written: Sequence[Path]) -> None:
+    """Delete the plots an earlier report left in ``plot_dir`` (files named as this report
+    names its plots, :data:`PLOT_KINDS`, that it did not write now); other files are the
+    user's and stay."""
+    for kind in PLOT_KINDS:
+        for path in plot_dir.glob(f"{kind}_*.png"):
+            if path not in written and not path.is_dir():
+                remove_quietly(path)
+
+
+def _stage_text(staged: StagedFiles, path: Path, text: str) -> Path:
+    return staged.write(path, lambda temp: temp.write_text(text, encoding="utf-8"))
+
+
+def _save(staged: StagedFiles, figure: Figure, path: Path) -> Path:
+    return staged.write(path, lambda temp: plots.save(figure, temp))
+
+
+def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[RunResult]],
+                 palette: dict[str, str], warnings: list[str],
+                 on_input: Callable[[int, int], None] | None = None
+                 ) -> tuple[list[Path], list[pages.Section]]:
+    """Stage the plots of each input in ``plot_dir`` (a thumbnail problem is appended to
+    ``warnings``; ``on_input(done, inputs)`` after each input's): the plots written and a
+    section per input (its plots relative to the report folder). OutputError naming the plot
+    that cannot be written."""
+    written: list[Path] = []
+    sections = []
+    once: list[str] = []  # inputs whose failure frames are not drawn: read once, live
+    for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
+        scored = [r for r in by_input[name] if r.scores is not None]
+        unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
+        # a panel (or thumbnail column) per run costs time and height: at most a few drawn
+        left_out = [r.config for r in (scored[plots.MAX_RUNS_DRAWN:]
+                                       + unscored_here[plots.MAX_RUNS_DRAWN:])]
+        scored_drawn, unscored_here = (scored[:plots.MAX_RUNS_DRAWN],
+                                       unscored_here[:plots.MAX_RUNS_DRAWN])
+        figures = []
+        if unscored_here:
+            figures.append(_save(staged, plots.state_figure(name, unscored_here, palette),
+                                 plot_dir / f"state_{slug}.png"))
+            warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_here
+                         if all(c is None for c in r.confidence)]
+        if scored:
+            figures.append(_save(staged, plots.overlap_figure(name, scored_drawn, palette),
+                                 plot_dir / f"overlap_{slug}.png"))
+            success, precision = _mean_curves(scored)
+            if success:
+                figures.append(_save(staged, plots.curves_figure(name, success, precision,
+                                                                 palette),
+                                     plot_dir / f"curves_{slug}.png"))
+            thumbnails, problem = failures.try_failure_figure(name, scored_drawn, palette)
+            if thumbnails is not None:
+                figures.append(_save(staged, thumbnails, plot_dir / f"failures_{slug}.png"))
+            warnings += [problem] if problem else []
+            once += [name] if failures.read_once_misses(scored_drawn) else []
+        written += figures
+        notes = [] if not left_out else [
+            f"{len(left_out)} of the {len(by_input[name])} runs of this input are not drawn "
+            "over time or in the failure frames (each plot draws at most "
+            f"{plots.MAX_RUNS_DRAWN}, the first by configuration name): "
+            + ", ".join(left_out[:NAMED_LEFT_OUT])
+            + (f" and {len(left_out) - NAMED_LEFT_OUT} more" if len(left_out) > NAMED_LEFT_OUT
+               else "")
+            + ". The success and precision plots draw every run; the tables list them all."]
+        sections.append(pages.Section(name, f"input-{slug}", [
+            p.relative_to(plot_dir.parent).as_posix() for p in figures], notes))
+        if on_input is not None:
+            on_input(done, len(by_input))
+    if once:  # one note for them all: nothing was waited for
+        warnings.append(f"failure frames of {plural(len(once), 'input')} left out: "
+                        f"{', '.join(once[:NAMED_LEFT_OUT])}"
+                        + (f" and {len(once) - NAMED_LEFT_OUT} more" if len(once) >
+                           NAMED_LEFT_OUT else "")
+                        + ": a stream, URL, stdin or device, read by the runs as it came and "
+                        "not read again (it would show what it sends now, not the frames "
+                        "tracked)")
+    return written, sections
+
+
+def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list[RunResult]],
+                  palette: dict[str, str], warnings: list[str]) -> Path | None:
+    """Stage the success and precision plots averaged over inputs (None: no config is scored);
+    warn when the configs were scored on different inputs."""
+    counted = [r for runs in by_config.values() for r in runs]
+    success, precision = _mean_curves(counted)
+    if not success:
+        return None
+    scored_inputs = {r.input for r in counted if r.scores is not None}
+    covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
+    # (a config scored nowhere is in no average: the no-ground-truth warning names it)
+    if any(inputs and inputs != scored_inputs for inputs in covered.values()):
+        warnings.append("configurations were scored on different inputs: their averages "
+                        "are not directly comparable")
+    return _save(staged, plots.curves_figure(
+        f"All inputs (mean over {len(scored_inputs)} inputs)", success, precision, palette),
+        plot_dir / f"curves_{ALL_INPUTS}.png")
