@@ -95,6 +95,11 @@ class Scores:
         )
 
 
+#: A run whose box, in the frames it calls tracking, is (by its median) over this many times
+#: the ground truth's area is :attr:`RunResult.oversized`: twice the target's width and height.
+OVERSIZED_AREA = 4.0
+
+
 @dataclass
 class RunResult:
     """One run folder as the report needs it.
@@ -145,6 +150,26 @@ class RunResult:
     input_key: str = ""
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
     config_key: str = ""
+
+    @cached_property
+    def box_to_target(self) -> float | None:
+        """The median, over the evaluated frames this run calls ``tracking``, of its box's area
+        over the ground truth's (None: no such frame, or its ground-truth boxes are not here:
+        scored with the overlaps it recorded)."""
+        if not self.truth:
+            return None
+        ratios = [box.area / truth.area for box, truth, state
+                  in zip(self.boxes, self.truth, self.states, strict=False)
+                  if state == "tracking" and box is not None and truth is not None
+                  and truth.area > 0]
+        return float(np.median(ratios)) if ratios else None
+
+    @property
+    def oversized(self) -> bool:
+        """Whether this run's box is mostly far larger than the target where it says it is
+        tracking (:data:`OVERSIZED_AREA`): a box that covers the frame rarely misses the
+        target (IoU 0), so its tracking miss says nothing of its honesty."""
+        return (self.box_to_target or 0.0) > OVERSIZED_AREA
 
     @cached_property
     def scores(self) -> Scores | None:

@@ -12,11 +12,11 @@ Each column may carry a ``note``, shown as the header's tooltip.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 
 from vtrack.errors import plural
-from vtrack.report.runs import RunResult
+from vtrack.report.runs import OVERSIZED_AREA, RunResult
 from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, STATUS_PARTIAL
 
 #: Multi-target metrics the page shows, in this order, when a run records them: key ->
@@ -87,7 +87,10 @@ NOTES = {
                        "thresholds 0 to 0.5",
     "Tracking miss": "of the frames the tracker calls 'tracking', the share whose box misses "
                      "the target (IoU 0): lower is better, a tracker should not claim a target "
-                     "it has lost",
+                     "it has lost; not ranked for a run whose box in those frames is mostly "
+                     f"(median) over {OVERSIZED_AREA:g} times the target's area, said beside its "
+                     "value ('box 60x'; in the averages, on how many inputs): a box that covers "
+                     "the frame rarely misses, however poorly it tracks",
     "Miss flagged": "of the frames whose box misses the target (or that have no box while it "
                     "is in view; not the frames the input skipped, which the tracker never "
                     "saw), the share the tracker itself calls 'occluded' or 'lost': how "
@@ -120,21 +123,25 @@ def _text(value: float | None, digits: int) -> str:
 
 
 def _add_group(table: Table, labels: list[list[str]], values: list[Values],
-               columns: Sequence[Column], ranked: Sequence[bool] | None = None) -> None:
+               columns: Sequence[Column], ranked: Sequence[bool] | None = None,
+               unranked: Sequence[Collection[int]] | None = None) -> None:
     """Append rows (label cells, then the formatted values) marking each column's best among
-    the ``ranked`` rows (default all: a run that did not complete scores frames it chose)."""
+    the ``ranked`` rows (default all: a run that did not complete scores frames it chose),
+    each row in none of the columns (their indices) ``unranked`` gives it."""
     table.groups.append(len(table.rows))
     rows = [[Cell(t) for t in label] + [Cell(_text(v, c.digits))
                                         for v, c in zip(row, columns, strict=True)]
             for label, row in zip(labels, values, strict=True)]
     offset = len(labels[0]) if labels else 0
     ranked = [True] * len(values) if ranked is None else ranked
+    unranked = [()] * len(values) if unranked is None else unranked
     for c, column in enumerate(columns):
-        present = [row[c] for row, r in zip(values, ranked, strict=True) if r and _finite(row[c])]
+        here = [r and c not in u for r, u in zip(ranked, unranked, strict=True)]
+        present = [row[c] for row, r in zip(values, here, strict=True) if r and _finite(row[c])]
         if column.higher_is_better is None or len(set(present)) < 2:
             continue
         best = max(present) if column.higher_is_better else min(present)
-        for cells, row, r in zip(rows, values, ranked, strict=True):
+        for cells, row, r in zip(rows, values, here, strict=True):
             cells[offset + c].best = r and row[c] == best
     table.rows += rows
 
@@ -185,13 +192,38 @@ def _run_label(run: RunResult) -> list[str]:
     return [run.input, run.config, status_text(run)]
 
 
+#: Where the tracking miss is among :data:`SCORE_COLUMNS`.
+TRACKING_MISS = next(n for n, c in enumerate(SCORE_COLUMNS) if c.title == "Tracking miss")
+
+
+def _say_oversized(table: Table, column: int, notes: Sequence[str | None]) -> None:
+    """Append each note (if any) to its row's value in ``column`` of the rows last added: why
+    that value is not ranked (``0.000 (box 60x)``; the header's note says more)."""
+    for cells, note in zip(table.rows[-len(notes):], notes, strict=True):
+        if note:
+            cells[column].text += f" ({note})"
+
+
+def _times(ratio: float) -> str:
+    """``ratio`` as a cell says it: one decimal under 10 (``4.1``, not ``4``, past a limit of
+    4), none from there (``60``)."""
+    return f"{ratio:.1f}" if ratio < 10 else f"{ratio:.0f}"
+
+
 def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
-    """One row per input x configuration, best per column within each input."""
+    """One row per input x configuration, best per column within each input; a run whose
+    box is :attr:`~vtrack.report.runs.RunResult.oversized` is not ranked by its tracking miss,
+    which says how large its box is."""
     table = _table(RUN_LABELS, RESULT_COLUMNS)
+    miss = len(RESULT_COLUMNS) - len(SCORE_COLUMNS) + TRACKING_MISS
     for runs in by_input:
         _add_group(table, [_run_label(r) for r in runs],
                    [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
-                   RESULT_COLUMNS, [r.status == STATUS_COMPLETE for r in runs])
+                   RESULT_COLUMNS, [r.status == STATUS_COMPLETE for r in runs],
+                   [{miss} if r.oversized else () for r in runs])
+        _say_oversized(table, len(RUN_LABELS) + miss, [
+            f"box {_times(r.box_to_target)}x" if r.oversized and r.box_to_target else None
+            for r in runs])
     return table
 
 
@@ -212,9 +244,10 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
     inputs of the "All inputs" plot), or, for a configuration without any, the runs that
     tracked frames. Each score is the mean over those runs, fps their mean and lost frames
     their total; a configuration whose counted runs include partial (or interrupted) ones says
-    how many."""
+    how many, and one with :attr:`~vtrack.report.runs.RunResult.oversized` runs is not ranked
+    by its tracking miss, which says on how many inputs."""
     table = _table(["Config"], AVERAGE_COLUMNS)
-    values, labels = [], []
+    values, labels, oversized = [], [], []
     for config, runs in by_config.items():
         scored = [r for r in runs if r.scores is not None]
         counted = scored or [r for r in runs if r.frames > 0]
@@ -224,7 +257,12 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
                        sum(r.frames_lost for r in counted)])
         partial = sum(r.status in INCOMPLETE for r in counted)
         labels.append([f"{config} ({partial} partial)" if partial else config])
-    _add_group(table, labels, values, AVERAGE_COLUMNS)
+        oversized.append(sum(r.oversized for r in scored))
+    miss = len(AVERAGE_COLUMNS) - len(SCORE_COLUMNS) + TRACKING_MISS
+    _add_group(table, labels, values, AVERAGE_COLUMNS, None,
+               [{miss} if n else () for n in oversized])
+    _say_oversized(table, 1 + miss, [
+        f"box >{OVERSIZED_AREA:g}x on {plural(n, 'input')}" if n else None for n in oversized])
     return table
 
 
