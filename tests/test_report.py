@@ -602,8 +602,9 @@ def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
                     str(tmp_path / "report"))
     assert result.exit_code == 0, result.output
     markdown = (tmp_path / "report" / "summary.md").read_text()
-    assert _table_labels(markdown) == {("jump", "mine (bA)"), ("smooth", "mine (bA)"),
-                                       ("smooth", "mine (bB)")}
+    assert _table_labels(markdown) == {("jump", "mine (meanshift.iterations=1)"),
+                                       ("smooth", "mine (meanshift.iterations=1)"),
+                                       ("smooth", "mine (meanshift.iterations=10)")}
 
 
 def test_a_batch_s_config_keeps_one_label_beside_a_run_of_one_of_its_inputs(

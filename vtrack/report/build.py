@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 from collections.abc import Callable, Sequence
@@ -89,8 +90,9 @@ def _distinct_inputs(runs: list[RunResult]) -> None:
 
 
 def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[FailedRun]:
-    """Give runs of one config name distinct config labels, suffixed with where they differ
-    (``s0 (batch-a)``): configs of that name whose chains differ (two TOML files), each one
+    """Give runs of one config name distinct config labels: configs of that name whose chains
+    differ (two TOML files) by the values that differ (``robust (robust_search.merge=0.6)``,
+    :func:`_value_labels`), else (other stages) by where they are (``s0 (batch-a)``), each one
     label over every input; then, where one input has several runs of a config label (two
     batch folders, a batch and a ``vtrack run``), every run of that label by the results it
     belongs to (its batch folder, else its own), so one batch's runs keep one label over
@@ -99,7 +101,8 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
     for name, group in _group(runs, lambda r: r.config).items():
         chains = _group(group, lambda r: r.config_key)
         if len(chains) > 1:
-            places = _places([g[0].folder for g in chains.values()])
+            places = (_value_labels(list(chains))
+                      or _places([g[0].folder for g in chains.values()]))
             for same, place in zip(chains.values(), places, strict=True):
                 for run in same:
                     run.config = f"{name} ({place})"
@@ -126,6 +129,32 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
             for run, place in zip(group, _places([r.folder for r in group]), strict=True):
                 run.config = f"{run.config} ({place})"
     return failed
+
+
+#: A label of configs told apart by their values names at most this many.
+NAMED_VALUES = 2
+
+
+def _value_labels(chains: Sequence[str]) -> list[str] | None:
+    """What tells configs of one name apart by their values: for each chain (a run's
+    :attr:`~.runs.RunResult.config_key`), the parameters whose values differ among them
+    (``robust_search.merge=0.6``; the first :data:`NAMED_VALUES`, then how many more); None
+    when that cannot tell them apart (other stages, or the same values)."""
+    flat: list[dict[str, str]] = []
+    for chain in chains:
+        stages = json.loads(chain)
+        if not isinstance(stages, list) or not all(isinstance(s, dict) for s in stages):
+            return None
+        flat.append({f"{s.get('name')}.{key}": json.dumps(value) for s in stages
+                     for key, value in s.items() if key != "name"})
+        flat[-1][""] = json.dumps([s.get("name") for s in stages])  # (the stages, in order)
+    if len({values[""] for values in flat}) > 1:
+        return None
+    differ = [key for key in flat[0] if len({values.get(key) for values in flat}) > 1]
+    more = len(differ) - NAMED_VALUES
+    labels = [", ".join(f"{key}={values.get(key, '-')}" for key in differ[:NAMED_VALUES])
+              + (f" and {more} more" if more > 0 else "") for values in flat]
+    return labels if len(set(labels)) == len(labels) else None
 
 
 def _batch_of(run: RunResult) -> Path:
