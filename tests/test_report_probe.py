@@ -175,10 +175,12 @@ def test_many_runs_of_one_input_draw_a_bounded_figure_and_say_what_is_left_out(
     html = (tmp_path / "report" / "index.html").read_text()
     left_out = copies - drawn
     (note,) = re.findall(r'<p class="note">([^<]*)</p>', html)
-    assert note.startswith(f"{left_out} of the {copies} runs of this input are not drawn")
-    assert f": s0 (r{drawn:02d}), " in note and f" and {left_out - 5} more" in note
+    assert note.startswith(f"Of the {copies} scored runs of this input, {drawn} are drawn")
+    # one AUC for all (copies of one run): the best and the worst by configuration name
+    assert "; and s0 (r11) " in note and "Not drawn: s0 (r03) " in note
+    assert f" and {left_out - 5} more" in note
     markdown = (tmp_path / "report" / "summary.md").read_text()
-    assert f"{left_out} of the {copies} runs" in markdown
+    assert f"Of the {copies} scored runs" in markdown
     assert html.count('<td class="label">s0 (r') == 2 * copies  # every run in both tables
     assert drawn == plots.MAX_RUNS_DRAWN
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import re
 from collections.abc import Callable, Sequence
@@ -434,15 +435,15 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
         # a panel (or thumbnail column) per run costs time and height: at most a few drawn
-        left_out = [r.config for r in (scored[plots.MAX_RUNS_DRAWN:]
-                                       + unscored_here[plots.MAX_RUNS_DRAWN:])]
-        scored_drawn, unscored_here = (scored[:plots.MAX_RUNS_DRAWN],
-                                       unscored_here[:plots.MAX_RUNS_DRAWN])
+        scored_drawn = _drawn_by_auc(scored)
+        unscored_drawn = unscored_here[:plots.MAX_RUNS_DRAWN]
+        notes = [note for note in (_drawn_note(scored, scored_drawn, True),
+                                   _drawn_note(unscored_here, unscored_drawn, False)) if note]
         figures = []
-        if unscored_here:
-            figures.append(_save(staged, plots.state_figure(name, unscored_here, palette),
+        if unscored_drawn:
+            figures.append(_save(staged, plots.state_figure(name, unscored_drawn, palette),
                                  plot_dir / f"state_{slug}.png"))
-            warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_here
+            warnings += [f"{name} [{r.config}]: {plots.NO_SCORE}" for r in unscored_drawn
                          if all(c is None for c in r.confidence)]
         if scored:
             figures.append(_save(staged, plots.overlap_figure(name, scored_drawn, palette),
@@ -458,14 +459,6 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
             warnings += [problem] if problem else []
             once += [name] if failures.read_once_misses(scored_drawn) else []
         written += figures
-        notes = [] if not left_out else [
-            f"{len(left_out)} of the {len(by_input[name])} runs of this input are not drawn "
-            "over time or in the failure frames (each plot draws at most "
-            f"{plots.MAX_RUNS_DRAWN}, the first by configuration name): "
-            + ", ".join(left_out[:NAMED_LEFT_OUT])
-            + (f" and {len(left_out) - NAMED_LEFT_OUT} more" if len(left_out) > NAMED_LEFT_OUT
-               else "")
-            + ". The success and precision plots draw every run; the tables list them all."]
         sections.append(pages.Section(name, f"input-{slug}", [
             p.relative_to(plot_dir.parent).as_posix() for p in figures], notes))
         if on_input is not None:
@@ -479,6 +472,64 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
                         "not read again (it would show what it sends now, not the frames "
                         "tracked)")
     return written, sections
+
+
+def _auc(run: RunResult) -> float:
+    """``run``'s AUC; below every AUC when it has none (no frame evaluated)."""
+    auc = run.scores.auc if run.scores is not None else math.nan
+    return auc if math.isfinite(auc) else -math.inf
+
+
+def _by_auc(runs: Sequence[RunResult]) -> list[RunResult]:
+    """``runs`` from the highest AUC, ties by configuration name."""
+    return sorted(runs, key=lambda r: (-_auc(r), r.config))
+
+
+def _drawn_by_auc(scored: Sequence[RunResult]) -> list[RunResult]:
+    """The scored runs of one input its plots over time and failure frames draw: all of them
+    up to :data:`~.plots.MAX_RUNS_DRAWN`, else the best half and the worst half of that many by
+    AUC (ties by configuration name): the range of what was tracked, in ``scored``'s order
+    (by configuration)."""
+    if len(scored) <= plots.MAX_RUNS_DRAWN:
+        return list(scored)
+    ranked = _by_auc(scored)
+    worst = plots.MAX_RUNS_DRAWN // 2
+    chosen = {id(r) for r in ranked[:plots.MAX_RUNS_DRAWN - worst] + ranked[-worst:]}
+    return [r for r in scored if id(r) in chosen]
+
+
+def _named(runs: Sequence[RunResult], auc: bool = False) -> str:
+    """The configurations of ``runs`` (with their AUC), the first :data:`NAMED_LEFT_OUT`."""
+    names = [f"{r.config} {_auc(r):.3f}" if auc and math.isfinite(_auc(r)) else r.config
+             for r in runs]
+    more = len(names) - NAMED_LEFT_OUT
+    return ", ".join(names[:NAMED_LEFT_OUT]) + (f" and {more} more" if more > 0 else "")
+
+
+def _drawn_note(runs: Sequence[RunResult], drawn: Sequence[RunResult], scored: bool
+                ) -> str | None:
+    """The note under an input's heading when its plots over time (and failure frames) do not
+    draw all its ``scored`` runs (or, not ``scored``, its runs without ground truth): which
+    they draw, why those, and which they do not; None when they draw every run."""
+    if len(drawn) == len(runs):
+        return None
+    drawn_ids = {id(r) for r in drawn}
+    left_out = [r for r in (_by_auc(runs) if scored else runs) if id(r) not in drawn_ids]
+    if scored:
+        ranked = _by_auc(drawn)
+        best = len(drawn) - plots.MAX_RUNS_DRAWN // 2
+        why = (f"the {best} best and the {len(drawn) - best} worst by AUC, the range of what "
+               f"was tracked: {_named(ranked[:best], True)}; and "
+               f"{_named(ranked[best:], True)}")
+        where = "over time and in the failure frames"
+    else:
+        why = (f"the first {len(drawn)} by configuration name (no ground truth: no score to "
+               f"choose by): {_named(drawn)}")
+        where = "in the state plot"
+    return (f"Of the {len(runs)} {'scored ' if scored else 'unscored '}runs of this input, "
+            f"{len(drawn)} are drawn {where} (each plot draws at most {plots.MAX_RUNS_DRAWN}): "
+            f"{why}. Not drawn: {_named(left_out, scored)}. The success and precision plots "
+            "draw every scored run; the tables list them all.")
 
 
 def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list[RunResult]],
