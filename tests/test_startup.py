@@ -100,3 +100,17 @@ def test_an_unknown_stage_still_lists_every_stage() -> None:
     assert {"hue", "kalman", "particle", "hue_bp_fixed"} <= set(names)
     assert f"known stages: {', '.join(names)}" in str(caught.value)
     assert stage_class("hue", "test.toml") is names["hue"]
+
+
+def test_the_errors_a_caller_catches_are_reached_from_a_bare_import_vtrack() -> None:
+    # README's library section names vtrack.errors.ConfigError; after `import vtrack` alone
+    # that was an AttributeError (the submodule was loaded only as a side effect of a tracker)
+    probe = ("import sys, vtrack; "
+             "print(vtrack.errors.InputError.__name__, vtrack.InputError is "
+             "vtrack.errors.InputError, issubclass(vtrack.ConfigError, vtrack.VtrackError), "
+             "vtrack.OutputError.exit_code, vtrack.evaluate.summarize.__name__, "
+             "'vtrack.config' in sys.modules, {'errors', 'InputError'} <= set(dir(vtrack)))")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert done.stdout.split() == ["InputError", "True", "True", "2", "summarize", "False",
+                                   "True"], done.stderr

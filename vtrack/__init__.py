@@ -8,6 +8,8 @@ The library in one call::
 
 The names below are loaded on first use (module ``__getattr__``, PEP 562), so ``import vtrack``
 and the ``vtrack`` command start without the trackers, readers or plotting they do not use.
+What a user can get wrong is a :class:`VtrackError` (``vtrack.ConfigError``, ``InputError``,
+``OutputError``, also reached as ``vtrack.errors.InputError``), with a one-line message.
 """
 
 from __future__ import annotations
@@ -32,11 +34,23 @@ _EXPORTS = {
     "Pipeline": "vtrack.pipeline",
     "RunRequest": "vtrack.request",
     "Tracker": "vtrack.tracker",
+    "VtrackError": "vtrack.errors",
+    "ConfigError": "vtrack.errors",
+    "InputError": "vtrack.errors",
+    "OutputError": "vtrack.errors",
 }
 
+#: Submodules a user names through the package (``vtrack.errors.InputError``,
+#: ``vtrack.evaluate.summarize``), loaded on first use as the names above are.
+_SUBMODULES = ("errors", "evaluate", "io")
+
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads these
+    from vtrack import errors as errors  # submodules reached through the package
+    from vtrack import evaluate as evaluate
+    from vtrack import io as io
     from vtrack.api import open_source, track
     from vtrack.config import Config, load_config
+    from vtrack.errors import ConfigError, InputError, OutputError, VtrackError
     from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
     from vtrack.geometry import Box
     from vtrack.pipeline import FrameResult, Pipeline
@@ -45,19 +59,22 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads t
 
 
 def __getattr__(name: str) -> Any:
-    """Load a public name from its module on first access (PEP 562) and keep it."""
-    module = _EXPORTS.get(name)
-    if module is None:
+    """Load a public name from its module, or a submodule (``vtrack.errors``), on first
+    access (PEP 562) and keep it."""
+    if name in _SUBMODULES:
+        value = importlib.import_module(f"vtrack.{name}")
+    elif name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+    else:
         raise AttributeError(f"module 'vtrack' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBMODULES))
 
 
-__all__ = ["BgrFrame", "Box", "Config", "Frame", "FrameResult", "GrayFrame", "I420Frame",
-           "Pipeline", "RunRequest", "Tracker", "load_config", "open_source", "track",
-           "__version__"]
+__all__ = ["BgrFrame", "Box", "Config", "ConfigError", "Frame", "FrameResult", "GrayFrame",
+           "I420Frame", "InputError", "OutputError", "Pipeline", "RunRequest", "Tracker",
+           "VtrackError", "load_config", "open_source", "track", "__version__"]
