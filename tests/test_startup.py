@@ -114,3 +114,19 @@ def test_the_errors_a_caller_catches_are_reached_from_a_bare_import_vtrack() -> 
                           timeout=60, check=False)
     assert done.stdout.split() == ["InputError", "True", "True", "2", "summarize", "False",
                                    "True"], done.stderr
+
+
+def test_help_of_a_frame_result_says_what_each_of_its_fields_holds() -> None:
+    # help(vtrack.FrameResult) said only "What the tracker says about one frame.": the
+    # fields' comments (#:) are not docstrings, so a library user could not learn from help()
+    # what box None, score NaN or the tracks' states mean
+    import dataclasses
+    import pydoc
+
+    import vtrack
+
+    shown = pydoc.render_doc(vtrack.FrameResult, renderer=pydoc.plaintext)
+    for field in dataclasses.fields(vtrack.FrameResult):
+        assert f"``{field.name}``:" in shown, field.name
+    for promise in ("None while ``lost``", "NaN", "``confirmed``", "keep_frames=True"):
+        assert promise in shown
