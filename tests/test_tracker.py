@@ -239,3 +239,23 @@ def test_a_pyav_frame_of_phone_footage_is_turned_as_vtrack_run_turns_it(tmp_path
     assert result.box == (100, 270, 40, 30) and result.state.value == "tracking"
     with pytest.raises(ConfigError, match="outside the 240x320 frame"):
         tracker.init(first, (250, 10, 40, 30))  # inside the stored 320x240 only
+
+
+def test_images_after_a_frame_numbered_by_the_camera_are_numbered_on_from_it() -> None:
+    """A camera that dropped frames 4..6 gives frame 7 as a BgrFrame numbered 7 and the next
+    ones as images: they were numbered 5, 6, 7 (the count of frames given), back in time after 7,
+    so the track's numbers and times ran backwards and S0's Kalman filter ignored the time."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=12, fps=30)
+    images = list(scene.frames())
+    kept = [0, 1, 2, 3, 7, 8, 9, 10]
+    mixed = vtrack.Tracker("s0")
+    given = [images[i] if i != 7 else vtrack.BgrFrame(7, 7 / 30, images[7]) for i in kept]
+    got = [mixed.init(f, scene.boxes[0]) if n == 0 else mixed.update(f)
+           for n, f in enumerate(given)]
+    assert [r.index for r in got] == kept
+    assert [r.time_s for r in got] == [i / 30 for i in kept]
+    numbered = vtrack.Tracker("s0")  # every frame numbered by the caller
+    frames = [vtrack.BgrFrame(i, i / 30, images[i]) for i in kept]
+    want = [numbered.init(f, scene.boxes[0]) if n == 0 else numbered.update(f)
+            for n, f in enumerate(frames)]
+    assert [(r.box, r.state, r.score) for r in got] == [(r.box, r.state, r.score) for r in want]

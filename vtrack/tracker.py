@@ -127,11 +127,27 @@ class Tracker:
 
     def init(self, frame: FrameLike, box: Box | Any = None) -> FrameResult:
         """Start tracking at ``frame`` with the target's box ``(x, y, w, h)`` in it (None for
-        the detecting configs); returns that frame's result (its box is ``box``)."""
+        the detecting configs); returns that frame's result (its box is ``box``).
+
+        A new track: a NumPy image is numbered 0 (``index``, ``time_s`` 0), also when the
+        tracker was tracking (give a :class:`vtrack.Frame` to keep a camera's numbering).
+        ConfigError for a box the frame cannot start from (as ``vtrack run --init``: not 4
+        finite numbers, under 4x4, larger than the frame or outside it); TypeError or
+        ValueError for a frame :meth:`update` refuses. After an error the tracker holds no
+        target (as :meth:`reset` leaves it): the previous one is forgotten."""
         return self._begin(box, as_frame(frame, 0, self.fps))
 
     def update(self, frame: FrameLike) -> FrameResult:
-        """Track the next frame. Detecting configs may start with ``update`` (no ``init``)."""
+        """Track the next frame. Detecting configs may start with ``update`` (no ``init``).
+
+        A NumPy image (or an ``av.VideoFrame`` without a timestamp) is numbered one after the
+        previous frame and timed ``index / fps``; a :class:`vtrack.Frame` keeps its own
+        ``index`` and ``time_s``, so a frame the camera dropped is told by giving the next one
+        as ``vtrack.BgrFrame(n, n / fps, image)`` (``GrayFrame`` for grey), and the images
+        after it are numbered on from ``n``. InputError for a frame of another size, or grey
+        after colour (the track goes on with the next right one); TypeError for pixels it
+        cannot read (not uint8, not ``HxWx3`` or ``HxW``); ValueError for an empty frame or
+        one over 16384x16384."""
         if self._pipeline is None:
             return self._begin(None, frame)  # ConfigError if the config needs a box
         return self._process(frame)
@@ -164,7 +180,9 @@ class Tracker:
         assert self._pipeline is not None
         # a frame of another size or kind than the first: InputError from the pipeline
         result = self._pipeline.process(as_frame(item, self._index, self.fps))
-        self._index += 1
+        # an image after a vtrack.Frame numbered by the caller (a camera's frame after a
+        # dropped one) is the frame after that one, not the count of frames given
+        self._index = result.index + 1
         if not self.keep_frames:
             result.frame = None
         return result
