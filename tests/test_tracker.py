@@ -259,3 +259,26 @@ def test_images_after_a_frame_numbered_by_the_camera_are_numbered_on_from_it() -
     want = [numbered.init(f, scene.boxes[0]) if n == 0 else numbered.update(f)
             for n, f in enumerate(frames)]
     assert [(r.box, r.state, r.score) for r in got] == [(r.box, r.state, r.score) for r in want]
+
+
+@pytest.mark.parametrize("pix_fmt", ["bgr24", "yuv420p"])
+def test_kept_frames_keep_their_own_pixels(tmp_path: Path, pix_fmt: str) -> None:
+    """``keep_frames=True`` kept a raw input's frame in the reader's ring of buffers, refilled
+    with later frames (143 of a 150-frame clip's kept frames showed another frame's pixels),
+    and a camera's array refilled after update() changed the kept frame too."""
+    scene = make_scene("smooth", seed=2, width=160, height=120, frames=20, fps=30)
+    images = list(scene.frames())
+    raw = write_raw(scene, tmp_path / "clip.raw", pix_fmt)
+    with vtrack.open_source(raw, raw="160x120", pix_fmt=pix_fmt) as source:
+        results = list(vtrack.track(source, "s0", scene.boxes[0], keep_frames=True))
+    with vtrack.open_source(raw, raw="160x120", pix_fmt=pix_fmt) as source:
+        want = [frame.bgr().copy() for frame in source]  # each copied before the next is read
+    assert len(results) == len(want) == 20
+    assert all(np.array_equal(r.frame.bgr(), want[r.index]) for r in results)
+    camera = np.empty_like(images[0])  # one buffer the driver refills for every frame
+    tracker = vtrack.Tracker("s0", keep_frames=True)
+    kept = []
+    for n, image in enumerate(images[:5]):
+        camera[:] = image
+        kept.append(tracker.init(camera, scene.boxes[0]) if n == 0 else tracker.update(camera))
+    assert all(np.array_equal(r.frame.bgr(), images[r.index]) for r in kept)

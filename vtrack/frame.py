@@ -8,6 +8,7 @@ the tracking path. Writers ask for ``frame.i420()`` (planar Y, U, V stacked as o
 
 from __future__ import annotations
 
+import copy
 import math
 from abc import ABC, abstractmethod
 
@@ -93,6 +94,18 @@ class Frame(ABC):
 
     def full_window(self) -> Window:
         return Window(0, 0, self.width, self.height)
+
+    def kept(self) -> Frame:
+        """This frame with pixels of its own, to keep past the next frame: a reader may fill
+        the next frames into the buffers this one's pixels are in (raw input's ring of
+        buffers, a camera's), and the caller may reuse the array it gave."""
+        twin = copy.copy(self)
+        for cls in type(self).__mro__:
+            for name in getattr(cls, "__slots__", ()):
+                value = getattr(self, name, None)
+                if isinstance(value, np.ndarray):
+                    setattr(twin, name, value.copy())
+        return twin
 
     @abstractmethod
     def bgr(self, window: Window | None = None) -> np.ndarray:

@@ -95,7 +95,8 @@ class Tracker:
     values checked as a config file's are; ``config`` None is the default config. Results are
     :class:`FrameResult`: ``box`` (None while lost), ``state``, ``score``, ``extras`` and, for
     the multi-target configs (s3, s4_multi), ``tracks``. A result keeps its decoded frame only
-    with ``keep_frames=True``, so memory stays flat over any number of frames.
+    with ``keep_frames=True`` (a copy of its pixels: a raw reader's or a camera's buffer
+    refilled later leaves it as it was), so memory stays flat over any number of frames.
     """
 
     def __init__(self, config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG, *,
@@ -183,7 +184,8 @@ class Tracker:
         # an image after a vtrack.Frame numbered by the caller (a camera's frame after a
         # dropped one) is the frame after that one, not the count of frames given
         self._index = result.index + 1
-        if not self.keep_frames:
-            result.frame = None
+        # a kept frame's pixels are its own: raw input reads the next frames into a small
+        # ring of buffers, and a camera's array may be refilled after update() returns
+        result.frame = result.frame.kept() if self.keep_frames and result.frame else None
         return result
 
