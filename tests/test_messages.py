@@ -410,3 +410,17 @@ def test_a_run_without_a_first_box_names_the_ground_truth_batch_would_take(
     truth.unlink()
     said = one_error_line(vtrack("run", str(copy), "--no-video", "--out", str(tmp_path / "o")))
     assert "give --gt FILE, --init x,y,w,h" in said
+
+
+def test_live_raw_frames_are_refused_as_the_help_and_readme_say(tmp_path: Path) -> None:
+    # `vtrack run - --raw 1920x1080 --live` was refused ("raw frames are read as they come")
+    # while neither --live's help nor README's Keeping up said raw frames cannot be live
+    raw = tmp_path / "frames.raw"
+    raw.write_bytes(bytes(16 * 16 * 3 * 2))
+    line = one_error_line(vtrack("run", str(raw), "--raw", "16x16", "--live", "--init",
+                                 "2,2,8,8", "-o", str(tmp_path / "out")))
+    assert line.startswith("vtrack: error: --live: raw frames are read as they come")
+    assert "Refused for --raw frames" in " ".join(vtrack("run", "--help").output.split())
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    assert "`--live` with `--raw` is refused" in " ".join(readme.split())
+    assert not (tmp_path / "out").exists()

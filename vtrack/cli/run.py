@@ -102,7 +102,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--live/--no-live", "live", default=None,
               help="Keep up with the source: when a frame arrives while the tracker is busy, "
                    "track the newest and count the skipped ones. Default: on for stream URLs "
-                   "(rtsp, rtp, udp, tcp) and capture devices, off for files, stdin and http.")
+                   "(rtsp, rtp, udp, tcp) and capture devices, off for files, stdin and http. "
+                   "Refused for --raw frames: a pipe holds their sender back instead.")
 @click.option("--follow", "follow_s",
               type=Seconds(min=0, max=MAX_WAIT_S, min_open=True, optional="INPUT"),
               is_flag=False, flag_value=FOLLOW_S, default=None, metavar="[SECONDS]",
