@@ -130,3 +130,27 @@ def test_help_of_a_frame_result_says_what_each_of_its_fields_holds() -> None:
         assert f"``{field.name}``:" in shown, field.name
     for promise in ("None while ``lost``", "NaN", "``confirmed``", "keep_frames=True"):
         assert promise in shown
+
+
+def test_every_public_method_of_the_exported_classes_says_what_it_promises() -> None:
+    # help(vtrack.Pipeline) showed stage_microseconds_per_frame, multi_target and
+    # needs_init_box with no word, and Box.cx/cy/area/from_center/is_valid and
+    # Frame.full_window too
+    import inspect
+
+    import vtrack
+
+    silent = []
+    for name in vtrack.__all__:
+        exported = getattr(vtrack, name)
+        if not inspect.isclass(exported) or issubclass(exported, BaseException):
+            continue
+        for member_name, member in vars(exported).items():
+            if member_name.startswith("_"):
+                continue
+            function = member.fget if isinstance(member, property) else getattr(
+                member, "__func__", member)
+            if (isinstance(member, property) or inspect.isfunction(function)) \
+                    and not inspect.getdoc(function):
+                silent.append(f"{name}.{member_name}")
+    assert silent == []

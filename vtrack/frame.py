@@ -93,6 +93,7 @@ class Frame(ABC):
         self.height = height
 
     def full_window(self) -> Window:
+        """The window of the whole frame (``bgr()`` and ``gray()`` without one)."""
         return Window(0, 0, self.width, self.height)
 
     def kept(self) -> Frame:

@@ -43,18 +43,22 @@ class Box(NamedTuple):
 
     @property
     def cx(self) -> float:
+        """The centre's x: ``x + w / 2``."""
         return self.x + self.w / 2.0
 
     @property
     def cy(self) -> float:
+        """The centre's y: ``y + h / 2``."""
         return self.y + self.h / 2.0
 
     @property
     def area(self) -> float:
+        """``w * h`` in square pixels (0 for a negative width or height)."""
         return max(self.w, 0.0) * max(self.h, 0.0)
 
     @classmethod
     def from_center(cls, cx: float, cy: float, w: float, h: float) -> Box:
+        """The ``w`` x ``h`` box centred on ``(cx, cy)``."""
         return cls(cx - w / 2.0, cy - h / 2.0, w, h)
 
     def moved_to(self, cx: float, cy: float) -> Box:
@@ -62,6 +66,7 @@ class Box(NamedTuple):
         return Box.from_center(cx, cy, self.w, self.h)
 
     def is_valid(self) -> bool:
+        """True when every value is finite and the width and height are above 0."""
         return all(math.isfinite(v) for v in self) and self.w > 0 and self.h > 0
 
     def text(self) -> str:

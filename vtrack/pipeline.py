@@ -93,10 +93,13 @@ class Pipeline:
 
     @property
     def multi_target(self) -> bool:
+        """True for a chain that detects several targets (its results' ``tracks``)."""
         return any(s.multi_target for s in self.stages)
 
     @property
     def needs_init_box(self) -> bool:
+        """True for a chain that starts from the target's first box (all but the detecting
+        ones: s3, s4, ...)."""
         return any(s.needs_init_box for s in self.stages)
 
     def refuse_a_first_box(self, name: str, instead: str) -> None:
@@ -204,6 +207,8 @@ class Pipeline:
                              "Tracker.reset() or Pipeline.begin() starts another)")
 
     def stage_microseconds_per_frame(self) -> dict[str, float]:
+        """Each stage's mean wall time per frame processed so far, in microseconds, by stage
+        name (``run.json``'s ``timing.stage_us_per_frame``)."""
         n = max(self.frames_done, 1)
         return {name: seconds * 1e6 / n for name, seconds in self.stage_seconds.items()}
 
