@@ -55,6 +55,7 @@ class CorrelationFilter:
         self.shape = label.shape
         # real samples: half the spectrum carries everything (rfftn)
         self.label_f = np.fft.rfftn(label, axes=self.axes).astype(np.complex64)[..., None]
+        self._label_conj = np.conj(self.label_f)
         self.lam = lam
         self.rate = rate
         self.numerator: np.ndarray | None = None
@@ -75,17 +76,26 @@ class CorrelationFilter:
 
     def learn_spectrum(self, xf: np.ndarray, rate: float | None = None) -> None:
         """:meth:`learn` from the sample's spectrum."""
-        numerator = np.conj(self.label_f) * xf
+        numerator = self._label_conj * xf
         denominator = np.einsum("...k,...k->...", xf.real, xf.real)
         denominator += np.einsum("...k,...k->...", xf.imag, xf.imag)
         if self.numerator is None or self.denominator is None:
             self.numerator, self.denominator = numerator, denominator
         else:
+            # (1 - eta) * model + eta * sample, in place: the model's arrays are its own
             eta = self.rate if rate is None else rate
-            self.numerator = (1 - eta) * self.numerator + eta * numerator
-            self.denominator = (1 - eta) * self.denominator + eta * denominator
-        # the conjugate filter, as every response takes it (DSST eq. 6)
-        self._filter = np.conj(self.numerator / (self.denominator[..., None] + self.lam))
+            numerator *= eta
+            self.numerator *= 1 - eta
+            self.numerator += numerator
+            denominator *= eta
+            self.denominator *= 1 - eta
+            self.denominator += denominator
+        # the conjugate filter, as every response takes it (DSST eq. 6). NumPy divides a
+        # complex number by a real one as a product with the real's single-precision
+        # reciprocal, which is what this computes, without complex division's extra work.
+        inverse = np.divide(1, self.denominator + self.lam)
+        conjugate = np.multiply(self.numerator, inverse[..., None])
+        self._filter = np.conjugate(conjugate, out=conjugate)
         self._wide = None
 
     def constrain(self, support: np.ndarray) -> None:
