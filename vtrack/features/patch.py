@@ -46,11 +46,12 @@ class ConvertedWindow(NamedTuple):
 
     def sampled(self, window: Window, k: int) -> np.ndarray:
         """``frame.bgr(window)`` (``k`` 1) or ``frame.bgr_sampled(window, k)``: the same
-        values, cut from the converted pixels."""
+        values, cut from the converted pixels: a view, strided for ``k`` > 1 (OpenCV copies
+        it where it must; the single-precision copy of :func:`area_resized` reads it as it
+        is)."""
         o = (k - 1) // 2
-        pixels = self.bgr[window.y0 - self.window.y0 + o: window.y1 - self.window.y0: k,
-                          window.x0 - self.window.x0 + o: window.x1 - self.window.x0: k]
-        return pixels if k == 1 else np.ascontiguousarray(pixels)
+        return self.bgr[window.y0 - self.window.y0 + o: window.y1 - self.window.y0: k,
+                        window.x0 - self.window.x0 + o: window.x1 - self.window.x0: k]
 
 
 def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float,
@@ -83,11 +84,10 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     sy = (iy1 - iy0) / pixels.shape[0]
     scale_x, scale_y = width / sx / out_w, height / sy / out_h
     off_x, off_y = (x0 - ix0) / sx, (y0 - iy0) / sy
+    if min(scale_x, scale_y) > 1.5 and abs(off_x) < 1 and abs(off_y) < 1:  # INTER_AREA
+        return area_resized(pixels, out_w, out_h)
     matrix = np.array([[scale_x, 0.0, off_x + 0.5 * scale_x - 0.5],
                        [0.0, scale_y, off_y + 0.5 * scale_y - 0.5]])
-    interpolation = cv2.INTER_AREA if min(scale_x, scale_y) > 1.5 else cv2.INTER_LINEAR
-    if interpolation == cv2.INTER_AREA and abs(off_x) < 1 and abs(off_y) < 1:
-        return area_resized(pixels, out_w, out_h)
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
