@@ -12,6 +12,8 @@ target needs.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import cv2
 import numpy as np
 
@@ -73,9 +75,17 @@ def cell_response(likelihood: np.ndarray, w: float, h: float, rows: int, cols: i
     whose middle cell is the patch's middle: at each cell's displacement, the mean likelihood
     over the ``w`` x ``h`` box centred there (cells past the patch read its edge)."""
     mean = box_mean(likelihood, w, h)
-    ys = np.clip(mean.shape[0] // 2 + (np.arange(rows) - rows // 2) * cell, 0, mean.shape[0] - 1)
-    xs = np.clip(mean.shape[1] // 2 + (np.arange(cols) - cols // 2) * cell, 0, mean.shape[1] - 1)
-    return mean[np.ix_(ys, xs)]
+    return mean.take(_cell_centres(mean.shape[0], mean.shape[1], rows, cols, cell))
+
+
+@lru_cache(maxsize=32)
+def _cell_centres(height: int, width: int, rows: int, cols: int, cell: int) -> np.ndarray:
+    """(rows, cols) flat indices into a ``height`` x ``width`` image of the pixels
+    :func:`cell_response` reads: each cell's displacement from the middle pixel (clipped to
+    the image)."""
+    ys = np.clip(height // 2 + (np.arange(rows) - rows // 2) * cell, 0, height - 1)
+    xs = np.clip(width // 2 + (np.arange(cols) - cols // 2) * cell, 0, width - 1)
+    return ys[:, None] * width + xs[None, :]
 
 
 def box_mean(likelihood: np.ndarray, w: float, h: float) -> np.ndarray:
