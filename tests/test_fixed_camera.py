@@ -429,9 +429,10 @@ def test_the_tracker_teaches_the_grouping_the_targets_shape() -> None:
 # --- end to end ---------------------------------------------------------------------------------
 
 
-def test_the_pedestrians_scene_crosses_hides_enters_and_leaves() -> None:
+@pytest.mark.parametrize("name", ["pedestrians", "vehicles"])
+def test_the_street_scenes_cross_hide_enter_and_leave(name: str) -> None:
     for seed in range(3):
-        scene = make_scene("pedestrians", seed, 320, 240, 100)
+        scene = make_scene(name, seed, 320, 240, 100)
         ids = [{i for i, _ in tracks} for tracks in scene.tracks]
         assert 1 in ids[0] and 4 not in ids[0]
         assert 4 in ids[scene.events["appear"]] and 3 not in ids[scene.events["exit"]]
@@ -454,3 +455,18 @@ def test_fixed_camera_holds_small_warm_targets_on_grey_footage() -> None:
              "background.close=1"]
     scores = scored("fixed_camera", "multi", 0, small)
     assert scores["mota"] > 0.8 and scores["idf1"] > 0.85 and scores["id_switches"] <= 1
+
+
+# --- wide targets: vehicles ---------------------------------------------------------------------
+
+
+def test_the_vehicles_scene_is_the_pedestrians_street_with_wide_targets() -> None:
+    """`vtrack scene vehicles`: the pedestrians scene's events with vehicles, h/w 0.3-0.8."""
+    for seed in range(3):
+        scene = make_scene("vehicles", seed, 320, 240, 100)
+        assert scene.events["vehicles"] == list(range(1, scene.events["walkers"] + 1))
+        whole = [b for tracks in scene.tracks for _, b in tracks
+                 if b.x >= 0 and b.x + b.w <= scene.width]
+        assert whole and all(0.3 <= b.h / b.w <= 0.8 for b in whole)
+    mixed = make_scene("street", 1, 320, 240, 100).events
+    assert 0 < len(mixed["vehicles"]) < mixed["walkers"]

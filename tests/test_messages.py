@@ -288,7 +288,7 @@ def test_help_names_the_ground_truth_files_batch_finds_and_scene_writes() -> Non
                  *(n.format("name") for n in VIDEO_MOT_GT)):
         assert name in batch, (name, batch)
     scene = " ".join(vtrack("scene", "--help").output.split("Options:")[0].split())
-    assert "(multi, pedestrians), OUT.mot.txt" in scene, scene
+    assert "(multi, pedestrians, vehicles, street), OUT.mot.txt" in scene, scene
 
 
 @pytest.mark.parametrize("command", ["frame", "select", "run"])

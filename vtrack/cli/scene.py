@@ -77,7 +77,8 @@ def command(
     """Write scenario NAME to OUT with its exact ground truth beside it.
 
     OUT.mp4 gets OUT.gt.txt (OTB: x,y,w,h per frame; 0,0,0,0 while the target is out of the
-    frame) and, for the scenarios with several targets (multi, pedestrians), OUT.mot.txt
+    frame) and, for the scenarios with several targets (multi, pedestrians, vehicles,
+    street), OUT.mot.txt
     (MOTChallenge). An image folder holds
     its groundtruth_rect.txt (and groundtruth_mot.txt). Same arguments, same pixels.
     Progress: a bar in a terminal, else a line every --stats-period seconds.

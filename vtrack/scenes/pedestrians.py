@@ -19,11 +19,19 @@ The ground truth (``scene.tracks``) holds every walker at least partly inside th
 while hidden by another, as MOTChallenge's does. Events: ``"cross"`` (frame of the closest
 approach of 1 and 2), ``"cross_ids"``, ``"exit"``/``"exit_id"`` (first frame walker 3 is out),
 ``"appear"``/``"appear_id"`` (first frame walker 4 is in), ``"walkers"`` (N) and ``"params"``.
+
+``vehicles`` is the same street with vehicles instead of people (:data:`VEHICLES`): the same
+paths (1 and 2 pass each other in neighbouring lanes, 3 leaves, 4 enters), each target a
+rounded box of height/width 0.3..0.8 (a car to a bus from the side; 0.4..0.55 of a walker's
+height at the same depth), painted with a body colour, windows and wheels, faster (0.1..0.3
+frame widths per second), with a shorter shadow below it. ``street`` mixes both: each target a
+person or a vehicle (even odds).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +41,7 @@ from vtrack.scenes.render import (
     BackgroundStyle,
     Compositor,
     Ellipse,
+    RoundedBox,
     SensorNoise,
     Shade,
     StaticBackground,
@@ -50,6 +59,14 @@ PEDESTRIAN_RANGES: dict[str, tuple[float, float]] = {
     "ground": (110.0, 170.0),
     "shadow": (0.6, 0.8),
     "drift": (0.05, 0.12),
+}
+#: ... and for vehicles: the same counts, drift and shadows; wide shapes, faster; ``height``: a
+#: vehicle's height as a share of a walker's at the same depth.
+VEHICLE_RANGES: dict[str, tuple[float, float]] = {
+    **PEDESTRIAN_RANGES,
+    "speed": (0.1, 0.3),
+    "aspect": (0.3, 0.8),
+    "height": (0.4, 0.55),
 }
 #: Height of a walker (frame heights) with its feet at the top / bottom of the walkway.
 FAR_HEIGHT, NEAR_HEIGHT = 0.22, 0.5
@@ -77,9 +94,47 @@ class PersonPaint:
         return colours * folds.astype(np.float32)[..., None]
 
 
-def _uniform(rng: np.random.Generator, name: str) -> float:
-    low, high = PEDESTRIAN_RANGES[name]
+@dataclass(frozen=True)
+class VehiclePaint:
+    """A vehicle from the side: a body colour (BGR), dark windows along its upper part (panes
+    ``panes`` wide in shape units, between pillars of the body's colour) and dark wheels at its
+    bottom corners, with a highlight along the body and panels across it (moving with it: a
+    long plain body would be learnt into the background while it drives across its length)."""
+
+    body: tuple[float, float, float]
+    windows: float  # grey level
+    panes: float
+    phase: float
+
+    def __call__(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        colours = np.empty(u.shape + (3,), np.float32)
+        colours[...] = np.asarray(self.body, np.float32)
+        shade = (1.0 + 0.15 * np.cos(np.pi * (v + 0.3))
+                 + 0.12 * np.cos(np.pi * (4.0 * u + self.phase)))
+        colours *= shade.astype(np.float32)[..., None]
+        pillars = np.abs(((u + 1.0) / self.panes) % 1.0 - 0.5) > 0.42
+        glass = (v < -0.25) & (v > -0.85) & (np.abs(u) < 0.75) & ~pillars
+        colours[glass] = self.windows
+        wheels = (np.hypot((np.abs(u) - 0.6) * 2.5, (v - 0.75) * 2.5) < 0.6)
+        colours[wheels] = 25.0
+        return colours
+
+
+def _uniform(rng: np.random.Generator, name: str,
+             ranges: Mapping[str, tuple[float, float]] = PEDESTRIAN_RANGES) -> float:
+    low, high = ranges[name]
     return float(rng.uniform(low, high))
+
+
+def _vehicle_paint(looks: np.random.Generator) -> VehiclePaint:
+    """Random body: saturated, or a dark or a light grey (off the ground's 110..170: a body
+    the ground's grey leaves only windows and wheels, no vehicle); windows dark."""
+    hue_bgr = looks.uniform(20.0, 235.0, 3)
+    grey = looks.uniform(20.0, 80.0) if looks.random() < 0.5 else looks.uniform(200.0, 240.0)
+    body = hue_bgr if looks.random() < 0.6 else np.full(3, grey)
+    return VehiclePaint(tuple(float(c) for c in body),  # type: ignore[arg-type]
+                        float(looks.uniform(20.0, 60.0)), float(looks.uniform(0.3, 0.6)),
+                        float(looks.uniform(0.0, 2.0)))
 
 
 def _paint(looks: np.random.Generator, ground: float) -> PersonPaint:
@@ -94,11 +149,15 @@ def _paint(looks: np.random.Generator, ground: float) -> PersonPaint:
     return PersonPaint(top, (level,) * 3, folds)  # type: ignore[arg-type]
 
 
-def _pedestrians(spec: SceneSpec) -> Scene:
+def _street(spec: SceneSpec, vehicles: float) -> Scene:
+    """People and vehicles along a street: each target a vehicle with odds ``vehicles`` (0:
+    ``pedestrians``, 1: ``vehicles``), drawn from a stream of its own (2)."""
     motion, looks = spec.rng(0), spec.rng(1)
     w, h, n, fps = spec.width, spec.height, spec.frames, spec.fps
     t = np.arange(n, dtype=np.float64)
     walkers = round(_uniform(motion, "walkers"))
+    is_vehicle = [bool(x) for x in spec.rng(2).random(walkers) < vehicles]
+    ranges = [VEHICLE_RANGES if v else PEDESTRIAN_RANGES for v in is_vehicle]
     ground = _uniform(looks, "ground")
     shadow = _uniform(looks, "shadow")
     drift = _uniform(looks, "drift")
@@ -110,42 +169,52 @@ def _pedestrians(spec: SceneSpec) -> Scene:
         share = (feet / h - WALKWAY[0]) / (WALKWAY[1] - WALKWAY[0])
         return h * (FAR_HEIGHT + (NEAR_HEIGHT - FAR_HEIGHT) * share)
 
-    def speed() -> float:
-        return _uniform(motion, "speed") * w / fps
+    def speed(target: int) -> float:
+        return _uniform(motion, "speed", ranges[target - 1]) * w / fps
 
     paths: list[tuple[np.ndarray, float]] = []  # (centre x per frame, feet y)
     # 1 and 2 meet near the middle at mid-clip, at nearly the same depth, walking towards
     # each other; 1 is in view from the first frame.
     meet_x = w * motion.uniform(0.4, 0.6)
     feet = h * motion.uniform(0.62, 0.85)
-    v1 = min(speed(), 0.8 * (meet_x - 0.1 * w) / (n / 2))  # 1 starts inside the frame
+    v1 = min(speed(1), 0.8 * (meet_x - 0.1 * w) / (n / 2))  # 1 starts inside the frame
     paths.append((meet_x + v1 * (t - n / 2), feet))
-    paths.append((meet_x - speed() * (t - n / 2), feet + h * motion.uniform(0.02, 0.05)))
+    paths.append((meet_x - speed(2) * (t - n / 2), feet + h * motion.uniform(0.02, 0.05)))
     # 3 leaves through the side it walks to before the last quarter; 4 enters at about a third.
     side = float(motion.choice((-1.0, 1.0)))
-    v3 = max(speed(), 0.3 * w / (0.6 * n))
+    v3 = max(speed(3), 0.3 * w / (0.6 * n))
     start3 = w / 2 + side * 0.25 * w
     paths.append((start3 + side * v3 * t, h * motion.uniform(*WALKWAY)))
     side = float(motion.choice((-1.0, 1.0)))
     enter = n * motion.uniform(0.25, 0.4)
     feet4 = h * motion.uniform(*WALKWAY)
-    half4 = height_at(feet4) / 2.0 / 2.2 + 1.0
+    widest = ranges[3]["height"][1] if is_vehicle[3] else 1.0  # in walkers' heights ...
+    half4 = height_at(feet4) * widest / 2.0 / ranges[3]["aspect"][0] + 1.0  # ... over aspect
     edge = -half4 if side > 0 else w + half4  # just out of view at frame `enter`
-    paths.append((edge + side * speed() * (t - enter), feet4))
-    for _ in range(walkers - 4):
+    paths.append((edge + side * speed(4) * (t - enter), feet4))
+    for target in range(5, walkers + 1):
         direction = float(motion.choice((-1.0, 1.0)))
-        paths.append((w * motion.uniform(-0.2, 1.2) + direction * speed() * t,
+        paths.append((w * motion.uniform(-0.2, 1.2) + direction * speed(target) * t,
                       h * motion.uniform(*WALKWAY)))
 
     shades, people = [], []
     for track_id, (cx, feet) in enumerate(paths, start=1):
+        vehicle = is_vehicle[track_id - 1]
         tall = height_at(feet)
-        wide = tall / _uniform(looks, "aspect")
+        if vehicle:
+            tall *= _uniform(looks, "height", VEHICLE_RANGES)
+        wide = tall / _uniform(looks, "aspect", ranges[track_id - 1])
         cy = np.full(n, feet - tall / 2)
         ax, ay = np.full(n, wide / 2), np.full(n, tall / 2)
-        people.append((feet, Ellipse(cx, cy, ax, ay, _paint(looks, ground), track_id)))
-        shades.append(Shade(cx + shadow_side * 0.35 * tall, np.full(n, feet - 0.02 * tall),
-                            np.full(n, 0.45 * tall), np.full(n, 0.07 * tall), shadow))
+        if vehicle:
+            people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(looks), track_id)))
+            shades.append(Shade(cx + shadow_side * 0.15 * tall, np.full(n, feet - 0.02 * tall),
+                                np.full(n, wide / 2 + 0.2 * tall), np.full(n, 0.12 * tall),
+                                shadow))
+        else:
+            people.append((feet, Ellipse(cx, cy, ax, ay, _paint(looks, ground), track_id)))
+            shades.append(Shade(cx + shadow_side * 0.35 * tall, np.full(n, feet - 0.02 * tall),
+                                np.full(n, 0.45 * tall), np.full(n, 0.07 * tall), shadow))
     people.sort(key=lambda p: p[0])  # farther (feet higher) first: nearer walkers in front
     style = BackgroundStyle(mean=ground, octaves=((80.0, 10.0), (20.0, 6.0), (4.0, 4.0)),
                             fine=4.0, shapes=2.0, shape_contrast=25.0, tint=(4.0, 0.0, -4.0),
@@ -170,22 +239,35 @@ def _pedestrians(spec: SceneSpec) -> Scene:
             "appear": int(seen[0]) if seen.size else None,
             "appear_id": 4,
             "walkers": walkers,
+            "vehicles": [i for i, v in enumerate(is_vehicle, start=1) if v],
             "params": params,
         }
 
     return assemble(spec, compositor, events)
 
 
-SCENARIOS["pedestrians"] = Scenario(
-    "pedestrians",
-    "random people walking past a fixed camera: crossing, hiding each other, entering and "
-    "leaving, with shadows and a slowly changing brightness",
-    '"cross"/"cross_ids", "exit"/"exit_id", "appear"/"appear_id", "walkers", "params"; '
-    "see scene.tracks",
-    _pedestrians,
-    width=640,
-    height=480,
-    frames=150,
-    fps=25.0,
-    min_frames=60,
-)
+def _pedestrians(spec: SceneSpec) -> Scene:
+    return _street(spec, 0.0)
+
+
+def _vehicles(spec: SceneSpec) -> Scene:
+    return _street(spec, 1.0)
+
+
+def _mixed(spec: SceneSpec) -> Scene:
+    return _street(spec, 0.5)
+
+
+_EVENTS = ('"cross"/"cross_ids", "exit"/"exit_id", "appear"/"appear_id", "walkers" (targets), '
+           '"vehicles" (their ids), "params"; see scene.tracks')
+for _name, _summary, _build in (
+    ("pedestrians", "random people walking past a fixed camera: crossing, hiding each other, "
+     "entering and leaving, with shadows and a slowly changing brightness", _pedestrians),
+    ("vehicles", "random vehicles (height/width 0.3-0.8) driving past a fixed camera: passing, "
+     "hiding each other, entering and leaving, with shadows and a slowly changing brightness",
+     _vehicles),
+    ("street", "random people and vehicles (even odds per target) past a fixed camera, as "
+     "pedestrians and vehicles", _mixed),
+):
+    SCENARIOS[_name] = Scenario(_name, _summary, _EVENTS, _build, width=640, height=480,
+                                frames=150, fps=25.0, min_frames=60)

@@ -282,6 +282,23 @@ class Ellipse:
         image[clipped.slices] = np.clip(np.rint(patch), 0, 255).astype(np.uint8)
 
 
+class RoundedBox(Ellipse):
+    """A box with rounded corners (a superellipse ``|u|^4 + |v|^4 = 1``: a vehicle from the
+    side), moving as :class:`Ellipse` does; its ground-truth box is the same ``2 ax x 2 ay``."""
+
+    POWER = 4.0
+
+    def _alpha(self, index: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        # as Ellipse's: (1 - r) / |grad r| with r = (|u|^p + |v|^p)^(1/p)
+        p, ax, ay = self.POWER, self.ax[index], self.ay[index]
+        au, av = np.abs(u), np.abs(v)
+        r = (au ** p + av ** p) ** (1.0 / p)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            grad = r ** (1.0 - p) * np.sqrt((au ** (p - 1) / ax) ** 2 + (av ** (p - 1) / ay) ** 2)
+            dist = np.where(grad > 0, (1.0 - r) / grad, np.inf)
+        return np.clip(dist + 0.5, 0.0, 1.0)
+
+
 class Shade(Ellipse):
     """A cast shadow: an ellipse that darkens what is under it to ``factor`` of its brightness
     (colour kept), with a soft rim; scenery (no track id)."""
