@@ -1,8 +1,8 @@
 """Multi-target trackers measured: S3 (``mht``), S4 per track (``kalman_tracks``) and
 ``fixed_camera`` (``group_blobs`` + ``byte_tracks``).
 
-    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|people|outside|cost|
-        processes] [--set STAGE.PARAM=VALUE ...]
+    python benchmarks/multi_bench.py [SEEDS] [generated|tud|variants|sizes|people|vehicles|
+        outside|cost|processes] [--set STAGE.PARAM=VALUE ...]
 
 Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in this process):
 
@@ -27,6 +27,10 @@ Prints Markdown tables (per-frame cost: the pipeline's wall time per frame, in t
    300+SEEDS-1: how its sizes in frame pixels (opening, closing, least blob area) hold up.
    ``people``: ``fixed_camera`` (and with the overrides) on ``pedestrians`` at 640x480 and
    768x576, seeds 205 .. 205+SEEDS-1, seed by seed and the mean per seed.
+   ``vehicles``: ``fixed_camera`` (and with the overrides) and ``s4_multi`` on the generated
+   ``vehicles`` (height/width 0.3-0.8) and ``street`` (people and vehicles) scenes at 640x480,
+   seeds 0 .. SEEDS-1 (what ``fixed_camera``'s learning of wide targets was chosen on) and
+   100 .. 100+SEEDS-1 (held out), pooled.
    ``outside``: every tracker on pixels (and ``fixed_camera`` with the overrides) on each
    MOTChallenge sequence named in ``$VTRACK_MOT`` (folders separated as in ``PATH``, each with
    ``gt/gt.txt`` and ``img1/`` or one video file; e.g. MOT15's TUD-Stadtmitte and
@@ -397,6 +401,36 @@ def people(seeds: int, overrides: list[str]) -> None:
     print()
 
 
+#: ``vehicles``: the seeds ``fixed_camera``'s learning of wide targets was chosen on, and the
+#: held-out ones it was confirmed on.
+VEHICLE_SEEDS = {"chosen on": 0, "held out": 100}
+
+
+def vehicles(seeds: int, overrides: list[str]) -> None:
+    """``fixed_camera`` (and with ``overrides``) and ``s4_multi`` on the ``vehicles`` scene
+    (and the ``street`` scene, people and vehicles mixed) at 640x480, seeds 0 .. SEEDS-1 and
+    100 .. 100+SEEDS-1, scores pooled over the seeds; one row per scene and seed group."""
+    runs = [*beside_shipped(overrides, f"`--set {' '.join(overrides)}`"),
+            ("`s4_multi`", load_config("s4_multi"))]
+    print("### Wide targets: `vehicles` (height/width 0.3-0.8) and `street` (people and "
+          "vehicles), 640x480, 150 frames, pooled\n")
+    print("| scene | seeds | " + " | ".join(f"{label}: MOTA / IDF1 (ID sw.)" for label, _ in runs)
+          + " |")
+    print("|---|---|" + "---:|" * len(runs))
+    for scene in ("vehicles", "street"):
+        for group, first in VEHICLE_SEEDS.items():
+            clips = scene_clips([make_scene(scene, seed, 640, 480, 150)
+                                 for seed in range(first, first + seeds)])
+            cells = []
+            for _, config in runs:
+                total = summed([scored(config, frames, truth) for frames, truth in clips])
+                cells.append(f"{mota_idf1(total)} ({total['id_switches']})")
+            print(f"| {scene} | {first}..{first + seeds - 1} ({group}) | "
+                  + " | ".join(cells) + " |")
+            sys.stdout.flush()
+    print()
+
+
 def _contexts(stages: list[Stage], frames: Iterator[Frame]) -> Iterator[TrackContext]:
     """Run stages; the shared context after each frame (the same object, updated)."""
     ctx = None
@@ -624,6 +658,7 @@ SECTIONS: dict[str, Callable[[int, list[str]], None]] = {
     "outside": lambda seeds, overrides: outside(overrides),
     "sizes": sizes,
     "people": people,
+    "vehicles": vehicles,
     "cost": lambda seeds, overrides: cost(),
     "processes": lambda seeds, overrides: whole_processes(),
 }

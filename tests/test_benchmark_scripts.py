@@ -45,4 +45,4 @@ def test_multi_bench_names_its_sections_for_an_unknown_one() -> None:
     assert done.returncode != 0
     assert done.stderr.strip().splitlines() == [
         "multi_bench.py: no section 'everything'; the sections: generated, tud, variants, "
-        "outside, sizes, people, cost, processes"]
+        "outside, sizes, people, vehicles, cost, processes"]

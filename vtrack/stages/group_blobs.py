@@ -37,20 +37,32 @@ and uses low-score ones only to continue existing tracks (ByteTrack's second pas
 What is learnt comes from ``ctx.target_shape`` (the tracker's median over the boxes its
 confirmed tracks were measured with, from the previous frame); the given ``aspect`` counts as
 ``vtrack.stages.base.PRIOR_SAMPLES`` samples, so it gives way as the scene shows its targets.
+But the tracker confirms only tracks of detections that score well, i.e. of about the given
+aspect: targets of another shape (vehicles, h/w 0.3-0.8, told 2.5, a person's) are dropped or
+cut into "people" before any is confirmed, and the tracker learns the pieces. With ``persist``,
+the blobs themselves teach the shape (:class:`PersistentBlobs`): each merged blob, trimmed and
+before any split, that overlaps one of the previous frame's and keeps its height/width steady
+for ``persist`` frames (and is no smaller than ``min_share`` of the usual area) is a sample;
+once there are as many as the given aspect counts for (``PRIOR_SAMPLES``) and their median is
+off the aspect in use by more than a factor ``UNLIKE``, that median is the aspect for the rest
+of the run (on footage of people, where they agree, nothing changes).
 Work per frame: at most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs
-(``blobs.max_blobs`` bounds ``M``), and one column profile per blob that is split.
+(``blobs.max_blobs`` bounds ``M``), one column profile per blob that is split, and with
+``persist`` one per blob and ``M^2`` box overlaps.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
-from vtrack.geometry import Box
+from vtrack.geometry import Box, iou
 from vtrack.params import Param
-from vtrack.stages.base import Stage, TargetShape, TrackContext, register
+from vtrack.stages.base import PRIOR_SAMPLES, Stage, TargetShape, TrackContext, register
 from vtrack.stages.detect import Detection, foreground_under
 
 #: A detection's fill (foreground share of its box) scores 1 from this value on ...
@@ -61,6 +73,18 @@ FULL_SIZE = 0.5
 MAX_PARTS = 4
 #: A blob is cut only at a column holding at most this share of its fullest column's foreground.
 VALLEY = 0.9
+#: A blob is the same one in the next frame when their boxes overlap by this IoU ...
+SAME_BLOB = 0.5
+#: ... and its shape is steady while its height/width stays within this factor over the last
+#: ``persist`` frames.
+STEADY = 1.25
+#: Shapes of persistent blobs remembered (as the tracker's ``SHAPE_SAMPLES``: a passing pair of
+#: targets, one blob for a while, does not outweigh the rest).
+PERSISTENT_SAMPLES = 500
+#: Once as many samples of persistent blobs are in as the given aspect counts for
+#: (``PRIOR_SAMPLES``), their median height/width off the aspect by more than a factor
+#: ``UNLIKE`` (where ``shape_score`` halves) replaces it for the rest of the run.
+UNLIKE = 2.0
 
 
 def usual_shape(aspect: float, learnt: TargetShape | None) -> tuple[float, float | None]:
@@ -206,6 +230,56 @@ def completed_at_border(box: Box, aspect: float, width: int, height: int,
     return Box(x0, y0, x1 - x0, y1 - y0)
 
 
+@dataclass
+class _Blob:
+    box: Box
+    aspects: deque[float]  # height / width over its last frames
+
+
+@dataclass
+class PersistentBlobs:
+    """The shape of the blobs that persist: a blob matched frame to frame (IoU >= ``SAME_BLOB``
+    with one of the previous frame's) whose height/width stayed within ``STEADY`` over its last
+    ``frames`` frames is a sample of the scene's targets' shape, whatever that shape is - what
+    the tracker cannot learn from before its tracks are confirmed, which takes detections of
+    the usual shape. Blobs touching the frame's border are cut and give no sample."""
+
+    frames: int
+    _blobs: list[_Blob] = field(default_factory=list)
+    _aspects: deque[float] = field(default_factory=lambda: deque(maxlen=PERSISTENT_SAMPLES))
+    _areas: deque[float] = field(default_factory=lambda: deque(maxlen=PERSISTENT_SAMPLES))
+
+    def see(self, boxes: list[Box], width: int, height: int, scale: float,
+            least: float = 0.0) -> None:
+        """One frame's blobs: each continues the previous frame's blob it overlaps most (if
+        by ``SAME_BLOB``), and gives a sample once it has been steady for ``frames`` frames
+        and has at least ``least`` square pixels (no target: see ``min_share``)."""
+        blobs = []
+        for box in boxes:
+            if any(at_border(box.x, box.x + box.w, width, scale)) or any(
+                    at_border(box.y, box.y + box.h, height, scale)):
+                continue
+            overlaps = [iou(box, b.box) for b in self._blobs]
+            best = int(np.argmax(overlaps)) if overlaps else -1
+            aspects: deque[float] = (deque(self._blobs[best].aspects, maxlen=self.frames)
+                                     if best >= 0 and overlaps[best] >= SAME_BLOB
+                                     else deque(maxlen=self.frames))
+            aspects.append(box.h / box.w)
+            steady = len(aspects) == self.frames and max(aspects) <= STEADY * min(aspects)
+            if steady and box.area >= least:
+                self._aspects.append(box.h / box.w)
+                self._areas.append(box.area)
+            blobs.append(_Blob(box, aspects))
+        self._blobs = blobs
+
+    def shape(self) -> TargetShape | None:
+        """Median height/width and area of the samples so far (None: none yet)."""
+        if not self._aspects:
+            return None
+        return TargetShape(float(np.median(self._aspects)), float(np.median(self._areas)),
+                           len(self._aspects))
+
+
 @register
 class GroupBlobs(Stage):
     """Blobs -> one scored detection per target: fragments merged, side-by-side targets split,
@@ -237,6 +311,11 @@ class GroupBlobs(Stage):
               "each detection's left and right sides are moved in to the columns that leave "
               "this share of its foreground outside on either side (a stride's foot, an arm, "
               "a shadow's fringe; 0: the foreground's full extent)", min=0.0, max=0.4),
+        Param("persist", int, 0,
+              "blobs that persist this many frames with a steady height/width are samples of "
+              "the targets' shape; once there are 50 and their median is more than a factor 2 "
+              "off the aspect, it is the aspect (targets of another shape than the given one, "
+              "which the tracker cannot learn; 0: off)", min=0, max=1000),
         Param("border", bool, True,
               "a detection cut by the frame's border is carried on beyond it to the usual "
               "aspect (a target entering or leaving; ground truth such as MOTChallenge's "
@@ -246,9 +325,34 @@ class GroupBlobs(Stage):
     provides = frozenset({"detections"})
     needs_init_box = False
 
+    def __init__(self, **values: Any) -> None:
+        super().__init__(**values)
+        self._forget()
+
+    def _forget(self) -> None:
+        self._persistent = PersistentBlobs(self.persist)
+        self._unlike = False  # the persistent blobs are shaped unlike the aspect's targets
+
+    def start(self, ctx: TrackContext) -> None:
+        """Forget the blobs of any previous run, then group this frame's."""
+        self._forget()
+        self.step(ctx)
+
     def step(self, ctx: TrackContext) -> None:
+        learning = self.learn and self.persist > 0
         aspect, area = usual_shape(self.aspect, ctx.target_shape if self.learn else None)
+        persistent = self._persistent.shape() if learning else None
+        if persistent is not None and persistent.samples >= PRIOR_SAMPLES and not self._unlike:
+            self._unlike = abs(math.log(persistent.aspect / aspect)) > math.log(UNLIKE)
+        if self._unlike:  # the scene's targets are not of the aspect's shape: theirs, from now
+            assert persistent is not None
+            aspect = persistent.aspect
         found = merge_fragments(ctx.detections, self.merge_gap, aspect)
+        frame = ctx.frame
+        if learning:  # each blob whole, before it is split by the aspect learnt so far
+            self._persistent.see([self._trimmed(d, ctx).box for d in found], frame.width,
+                                 frame.height, ctx.feature_scale,
+                                 0.0 if area is None else self.min_share * area)
         grouped: list[Detection] = []
         for detection in found:
             b = detection.box
@@ -260,12 +364,7 @@ class GroupBlobs(Stage):
             else:
                 grouped.append(detection)
         scored = []
-        frame = ctx.frame
-        for detection in grouped:
-            if self.trim:
-                assert ctx.likelihood is not None
-                detection = trimmed(detection, self.trim, ctx.likelihood, ctx.feature_scale,
-                                    frame.width)
+        for detection in (self._trimmed(d, ctx) for d in grouped):
             visible = b = detection.box
             if self.border:
                 b = completed_at_border(visible, aspect, frame.width, frame.height,
@@ -280,3 +379,11 @@ class GroupBlobs(Stage):
             seen = visible.area / b.area  # a target half out of view is half the evidence
             scored.append(replace(detection, score=fill * shape * size * seen))
         ctx.detections = sorted(scored, key=lambda d: (d.box.y, d.box.x))
+
+    def _trimmed(self, detection: Detection, ctx: TrackContext) -> Detection:
+        """``detection`` trimmed by ``trim`` (:func:`trimmed`; as it is when ``trim`` is 0)."""
+        if not self.trim:
+            return detection
+        assert ctx.likelihood is not None
+        return trimmed(detection, self.trim, ctx.likelihood, ctx.feature_scale,
+                       ctx.frame.width)
