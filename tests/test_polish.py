@@ -38,8 +38,9 @@ def test_library_defaults_are_the_same_constant() -> None:
     import vtrack
 
     assert inspect.signature(vtrack.Tracker).parameters["config"].default == DEFAULT_CONFIG
-    assert inspect.signature(vtrack.track).parameters["config"].default == DEFAULT_CONFIG
-    assert vtrack.Tracker().config.name == DEFAULT_CONFIG
+    # track's None (so that a config named beside a RunRequest can be told apart) is the same
+    assert inspect.signature(vtrack.track).parameters["config"].default is None
+    assert vtrack.Tracker().config.name == vtrack.Tracker(None).config.name == DEFAULT_CONFIG
 
 
 @pytest.mark.parametrize("args", [
