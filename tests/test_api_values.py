@@ -20,7 +20,7 @@ from vtrack.errors import ConfigError
 from vtrack.io import RawFormat
 from vtrack.io.video import FFmpegInput
 from vtrack.run import run
-from vtrack.scenes import make_scene, write_video
+from vtrack.scenes import make_scene, write_image_sequence, write_video
 
 #: An integer Python will not turn into text (more than 4300 digits): a message that shows it
 #: with ``repr`` raises ValueError instead of saying what is wrong.
@@ -297,3 +297,50 @@ def test_a_run_requests_paths_flags_and_preset_are_taken_as_a_user_gives_them(
     for field, value in (("input", 5), ("out_dir", None), ("stream", 1)):
         with pytest.raises(TypeError, match=f"^{field}: expected "):
             replace(request, **{field: value})
+
+
+def test_library_messages_name_the_requests_fields_and_the_command_its_options(
+        tmp_path: Path) -> None:
+    """vtrack.run.run(RunRequest(init_box=(1e308, 1, 2, 3), ...)) said '--init: the box ...',
+    and a bad frame rate in a request '--fps 0: ...' or '--fps: clip.mp4 is a video file ...;
+    --fps applies to raw input (--raw WxH) ...': options of a command the caller never ran.
+    The library names its fields (init_box, fps); vtrack run its options."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    folder = tmp_path / "seq"
+    write_image_sequence(scene, folder)
+    request = vtrack.RunRequest(clip, tmp_path / "out", vtrack.load_config("s0"),
+                                (1e308, 1, 2, 3))
+    cases = (
+        (request, "init_box: the box 1e+308,1,2,3 is smaller than 4x4 pixels, too small to "
+                  "track"),
+        (replace(request, init_box=(1, 1, 9, 9), fps=25), "fps: " + str(clip) + " is a video "
+         "file, whose frames carry their own timestamps; fps applies to raw input (raw=) and "
+         "image folders only"),
+        (replace(request, input=str(folder), init_box=(1, 1, 9, 9), fps=0),
+         "fps 0: must be a frame rate from 0.01 to 10000 frames per second"),
+        (replace(request, init_box=None, start=3),
+         "--start 3: this tracker needs the target's box in frame 3: give "
+         "init_box=(x, y, w, h) or --gt FILE"),
+        (replace(request, init_box=(1, 1, 9, 9), config=vtrack.load_config("s3")),
+         "init_box: s3 finds its targets itself (it tracks several, each from where it is "
+         "detected) and takes no first box; leave init_box out"),
+    )
+    for made, said in cases:
+        with pytest.raises(ConfigError) as caught:
+            run(made)
+        assert str(caught.value) == said
+        if made.fps is not None:  # vtrack.track of a request opens its input the same way
+            with pytest.raises(ConfigError) as caught:
+                list(vtrack.track(made))
+            assert str(caught.value) == said
+    assert not (tmp_path / "out").exists()
+    for option, value, said in (
+            ("--init", "1e308,1,2,3", "--init: the box 1e+308,1,2,3 is smaller than 4x4 "
+                                      "pixels, too small to track"),
+            ("--fps", "0", "--fps 0: must be a frame rate from 0.01 to 10000 frames per "
+                           "second")):
+        result = vtrack_command("run", str(folder), *(["--init", "1,1,9,9"] if option ==
+                                                      "--fps" else []), option, value,
+                                "-o", str(tmp_path / "cli"))
+        assert_one_line_error(result, said)

@@ -615,9 +615,12 @@ class _Tracked:
 
 
 def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
-        on_open: Callable[[InputInfo], None] | None = None, overwrite: bool = True
-        ) -> RunSummary:
+        on_open: Callable[[InputInfo], None] | None = None, overwrite: bool = True,
+        *, init_name: str = "init_box", fps_name: str = "fps") -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
+
+    Messages about the request's ``init_box`` and ``fps`` name them ``init_name`` and
+    ``fps_name``: the library's field names, or the command's ``--init`` and ``--fps``.
 
     ``overwrite=False`` refuses (OutputError, before anything is tracked) a folder that holds
     an earlier run's results (``vtrack run`` without ``--overwrite``).
@@ -635,11 +638,11 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
         # past the frames the input states is refused at once: that input opens first
         later = request.start_s is not None or request.start > 0
-        source: Source | None = _open(request, signals) if later else None
+        source: Source | None = _open(request, signals, fps_name) if later else None
         try:
-            resolved = _resolve(request, source)
+            resolved = _resolve(request, source, init_name, fps_name)
             if source is None:
-                source = _open(request, signals)
+                source = _open(request, signals, fps_name)
         except BaseException:
             if source is not None:
                 source.close()
@@ -648,7 +651,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             info = source.info
             for box in (resolved.init_box, resolved.init_ignored):
                 if box is not None:
-                    check_init_box(box, info.width, info.height, resolved.init_from or "--init")
+                    check_init_box(box, info.width, info.height, resolved.init_from or init_name)
             _refuse_writing_over_inputs(request, _output_names(request, resolved))
             if not overwrite:
                 refuse_replacing(request.out_dir)
@@ -673,12 +676,13 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     return summary
 
 
-def _open(request: RunRequest, signals: _Signals) -> Source:
-    """The request's input opened; Interrupted when a signal came while it opened, whatever
-    error the interrupted open then gave (FFmpeg turns it into EINTR or "invalid data")."""
+def _open(request: RunRequest, signals: _Signals, fps_name: str) -> Source:
+    """The request's input opened (messages about its frame rate naming it ``fps_name``);
+    Interrupted when a signal came while it opened, whatever error the interrupted open then
+    gave (FFmpeg turns it into EINTR or "invalid data")."""
     try:
         return open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                           live=request.live)
+                           live=request.live, fps_name=fps_name)
     except Exception:
         if signals.received is not None:
             raise Interrupted(signals.received) from None
@@ -781,11 +785,14 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
     return writers
 
 
-def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
+def _resolve(request: RunRequest, source: Source | None, init_name: str, fps_name: str
+             ) -> _Resolved:
     """Build the chain, read the ground truth, settle the first frame and the initial box
-    (user errors raise before the output folder is touched). A start time (``--start 2.5s``)
-    needs the opened ``source``: it is found in its frames' own timestamps
-    (:meth:`Source.skip_to`, which decodes up to it)."""
+    (user errors raise before the output folder is touched; messages name the request's box
+    and frame rate ``init_name`` and ``fps_name``). A start time (``--start 2.5s``) needs the
+    opened ``source``: it is found in its frames' own timestamps (:meth:`Source.skip_to`,
+    which decodes up to it)."""
+    give_box = _box_form(init_name)
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     distractors: dict[int, list[tuple[Box, bool]]] = {}
@@ -804,12 +811,13 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
     # says, vtrack.io.sidecar), else the first ground-truth box
     # (the sidecar holds frame 0's box: not for a run that starts later)
-    init_box, init_from = request.init_box, request.init_from or "--init"
+    init_box, init_from = request.init_box, request.init_from or init_name
     ignored = None
     if init_box is not None and request.init_from is None:
-        pipeline.refuse_a_first_box(f"--init: {request.config.name}", "leave --init out")
+        pipeline.refuse_a_first_box(f"{init_name}: {request.config.name}",
+                                    f"leave {init_name} out")
         if not pipeline.needs_init_box:  # s4: taken, but it would only be drawn, untracked
-            warnings.append(f"--init: {request.config.name} finds its target itself (from its "
+            warnings.append(f"{init_name}: {request.config.name} finds its target itself (from its "
                             "first detection, after learning the background) and does not use "
                             "a first box: no box is reported until it detects the target")
             ignored, init_box = init_box, None
@@ -823,25 +831,25 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
                    if start < len(gt) else
                    f"missing: the file has boxes for frames 0..{len(gt) - 1} only (a file "
                    f"shorter than the input, or frame {start} past the input's end)")
-            raise InputError(f"{request.gt_path}: the {where} is {why}; give --init x,y,w,h")
+            raise InputError(f"{request.gt_path}: the {where} is {why}; give {give_box}")
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         if source is None:
-            _refuse_unreadable(request)
+            _refuse_unreadable(request, fps_name)
         if start:
             raise ConfigError(f"--start {request.start_text}: this tracker needs the target's "
                               f"box in frame "
-                              f"{start}: give --init x,y,w,h or --gt FILE")
+                              f"{start}: give {give_box} or --gt FILE")
         if not has_sidecar(request.input):
             raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
-                              f"--init x,y,w,h (or --gt FILE); {request.input} has no sidecar "
+                              f"{give_box} (or --gt FILE); {request.input} has no sidecar "
                               "file to hold one")
         beside = groundtruth_beside(request.input)
         gt_hint = ("--gt FILE" if beside is None else
                    f"--gt {beside} (its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
-            f"--init x,y,w,h or write x,y,w,h into {sidecar_path(request.input).name} "
+            f"{give_box} or write x,y,w,h into {sidecar_path(request.input).name} "
             "(vtrack select INPUT picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
@@ -849,14 +857,20 @@ def _resolve(request: RunRequest, source: Source | None = None) -> _Resolved:
                      _Span(request.max_frames, request.max_s), warnings, distractors)
 
 
-def _refuse_unreadable(request: RunRequest) -> None:
+def _box_form(init_name: str) -> str:
+    """How a first box is given, for a message's "give ...": ``--init x,y,w,h`` (an option),
+    ``init_box=(x, y, w, h)`` (a library argument)."""
+    return f"{init_name} x,y,w,h" if init_name.startswith("--") else f"{init_name}=(x, y, w, h)"
+
+
+def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:
     """InputError naming a local file or folder input that vtrack cannot read (a folder without
     images, a file that is not a video), found by opening it once: a run told that it lacks a
     first box hears of its input first. Stdin, FIFOs, devices and URLs are read once only, by
     the run itself."""
     if os.path.isfile(request.input) or os.path.isdir(request.input):
         open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                    live=request.live).close()
+                    live=request.live, fps_name=fps_name).close()
 
 
 def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
@@ -886,8 +900,8 @@ def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, I
     """What ``request`` tracks of ``source``, as ``vtrack run`` takes it: the initial box
     (``--init``, else the input's sidecar, else the ground truth's box of the first frame
     tracked) and the frames from ``--start`` on, at most ``--frames`` of them. ConfigError or
-    InputError as ``vtrack run`` gives them (no box for a tracker that needs one, ...)."""
-    resolved = _resolve(request, source)
+    InputError as :func:`run` gives them (no box for a tracker that needs one, ...)."""
+    resolved = _resolve(request, source, "init_box", "fps")
     return resolved.init_box, _frames_to_track(request, resolved, source)
 
 

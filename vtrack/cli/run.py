@@ -213,7 +213,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
 
         try:
             summary = run(request, on_frame=progress.on_frame, on_open=opened,
-                          overwrite=overwrite)
+                          overwrite=overwrite, init_name="--init", fps_name="--fps")
         except VtrackError as exc:  # recorded (if the outputs had opened): exits as it says
             ending.code = exc.exit_code
             raise
