@@ -81,6 +81,29 @@ def test_a_huge_value_in_a_config_is_named_in_a_short_line(param: str, value: st
         assert said in line and len(line) < 400, line[:300]
 
 
+@pytest.mark.parametrize(("value", "got"), [
+    ("1e400", "got a number beyond a float's range"),
+    ("-1_000e400", "got a number beyond a float's range"),
+    ("inf", "got inf, not a finite number"),
+    ("-inf", "got -inf, not a finite number"),
+    ("nan", "got nan, not a number"),
+], ids=["1e400", "-1e400", "inf", "-inf", "nan"])
+def test_a_number_that_is_not_finite_is_named_as_the_user_wrote_it(value: str, got: str,
+                                                                  tmp_path: Path) -> None:
+    """`search_scale = 1e400` in a config file (tomllib reads inf) said 'must be a finite
+    number in the range 1 to 16, got inf', and `--set hue.search_scale=inf` the same, in
+    words the user did not write (1e400 is no inf; a finite number is what it is not)."""
+    config = tmp_path / "big.toml"
+    config.write_text(f'name = "x"\n[[stage]]\nname = "hue"\nsearch_scale = {value}\n'
+                      f"{CHAIN_TAIL}")
+    said = f"stage 'hue': parameter 'search_scale' must be in the range 1 to 16, {got}"
+    for line in refusals(config, tmp_path):
+        assert line == f"vtrack: error: {config}: {said}", line
+    line = one_error_line(vtrack("run", "in.mp4", "-c", "s0", "--set",
+                                 f"hue.search_scale={value}", "--init", "1,1,9,9"))
+    assert line == f"vtrack: error: --set hue.search_scale={value}: {said}", line
+
+
 def test_a_huge_value_given_to_the_tracker_is_named_in_a_short_line() -> None:
     """Tracker("s0", hue__search_scale=10**400) raised 'OverflowError: int too large to convert
     to float', hue__sat_min=16**5000 'ValueError: Exceeds the limit (4300 digits)', and a

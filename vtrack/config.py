@@ -32,7 +32,7 @@ from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
 from vtrack.errors import ConfigError, InputError
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
-from vtrack.params import cut, shown
+from vtrack.params import cut, float_from_text, shown
 from vtrack.stages.base import (
     DERIVED,
     PIPELINE_PROVIDES,
@@ -237,7 +237,7 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     where = str(spec)
     try:
         text = read_text_bounded(path, CONFIG_BYTES, "config")
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=float_from_text)  # (1e400: named as written)
     except InputError as exc:
         raise ConfigError(str(exc).replace(str(path), where, 1)) from None
     except tomllib.TOMLDecodeError as exc:

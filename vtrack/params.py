@@ -93,6 +93,13 @@ class Param:
             return ""
         return f"{_number(self.min)} to {_number(self.max)}"
 
+    def allowed_text(self) -> str:
+        """What a number of this parameter must be, for a message: ``in the range 0 to 1``,
+        or ``one of 1, 3, 5`` for one with choices."""
+        if self.range_text():
+            return f"in the range {self.range_text()}"
+        return "one of " + ", ".join(repr(c) for c in self.choices or ())
+
     def validate(self, value: Any, where: str) -> Any:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
 
@@ -107,7 +114,7 @@ class Param:
             value = value.item()  # (a NumPy scalar; NumPy itself is not imported here)
         if self.type is int and isinstance(value, Integral) and not isinstance(value, bool):
             value = int(value)
-        if self.type is float and is_real(value):
+        if self.type is float and is_real(value) and not isinstance(value, BeyondFloat):
             try:
                 value = float(value)
             except OverflowError:  # beyond any float, so beyond the range too
@@ -121,10 +128,8 @@ class Param:
                 f"{where}: parameter '{self.name}' must be {expected}, got {shown(value)}"
             )
         if self.type is float and not math.isfinite(value):
-            raise ConfigError(
-                f"{where}: parameter '{self.name}' must be a finite number in the range "
-                f"{self.range_text()}, got {value!r}"
-            )
+            raise ConfigError(f"{where}: parameter '{self.name}' must be {self.allowed_text()}, "
+                              f"got {_not_finite(value)}")
         if self.type is float:
             value += 0.0  # -0.0 is 0.0 (NumPy's uniform(-x, x) refuses x = -0.0)
         if self.type is str and "\x00" in value:
@@ -155,17 +160,12 @@ class Param:
             elif self.type is int:
                 digits = text.strip().lstrip("+-")
                 if len(digits) > 4000 and digits.isdigit():  # more than Python reads as an int
-                    allowed = (f"in the range {self.range_text()}" if self.range_text() else
-                               "one of " + ", ".join(repr(c) for c in self.choices or ()))
-                    raise ConfigError(f"{where}: parameter '{self.name}' must be {allowed}, "
-                                      f"got a {len(digits)}-digit integer")
+                    raise ConfigError(f"{where}: parameter '{self.name}' must be "
+                                      f"{self.allowed_text()}, got a {len(digits)}-digit "
+                                      "integer")
                 value = int(text)
             elif self.type is float:
-                value = float(text)
-                if math.isinf(value) and "inf" not in text.lower():  # (1e400, 400 nines)
-                    raise ConfigError(f"{where}: parameter '{self.name}' must be in the range "
-                                      f"{self.range_text()}, got a number beyond a float's "
-                                      "range")
+                value = float_from_text(text)
         except ValueError:
             raise ConfigError(
                 f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got "
@@ -187,6 +187,31 @@ class Param:
     def value_text(self, value: Any) -> str:
         """A value of this parameter as a config file writes it (``true``, ``1.5``)."""
         return str(value).lower() if self.type is bool else repr(value)
+
+
+class BeyondFloat(float):
+    """A number written too large for a float (``1e400``, 400 nines, in a config file or a
+    ``--set``): infinite as a float, and named in messages as what it was written as."""
+
+    def __repr__(self) -> str:
+        return "a number beyond a float's range"
+
+
+def float_from_text(text: str) -> float:
+    """The float ``text`` writes (ValueError if it writes none, as ``float``): a number too
+    large for a float (``1e400``, not ``inf``) as a :class:`BeyondFloat`. Config files are read
+    with it (``tomllib``'s ``parse_float``), as ``--set`` values are."""
+    value = float(text)
+    if math.isinf(value) and "inf" not in text.lower():
+        return BeyondFloat(value)
+    return value
+
+
+def _not_finite(value: float) -> str:
+    """A value that is not a finite number, as a message says what is wrong with it."""
+    if isinstance(value, BeyondFloat):
+        return repr(value)
+    return f"{value!r}, not a number" if math.isnan(value) else f"{value!r}, not a finite number"
 
 
 #: Digits of the longest integer a message spells out in full ("an integer of 25 digits").
