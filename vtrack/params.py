@@ -55,9 +55,13 @@ def check_flag(value: object, name: str) -> bool:
     return bool(value)
 
 
+#: The speed/size presets of the x264 and x265 encoders, fastest first (``vtrack scene
+#: --preset``).
+X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow",
+                "slower", "veryslow", "placebo")
 #: The x264 presets of the annotated video (``--preset``, RunRequest's ``preset``): those
 #: that keep up with a run (``slower`` and beyond do not).
-VIDEO_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow")
+VIDEO_PRESETS = X264_PRESETS[:X264_PRESETS.index("slower")]
 
 
 _TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}

@@ -13,6 +13,8 @@ from vtrack.errors import InputError, plural
 from vtrack.evaluate.groundtruth import groundtruth_beside
 from vtrack.io.files import folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
+from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
+from vtrack.io.sidecar import VIDEO_SIDECAR as VIDEO_INIT
 from vtrack.io.sidecar import sequence_images
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
@@ -30,8 +32,6 @@ VIDEO_SUFFIXES = frozenset({
 SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
 #: MOTChallenge ground truth beside ``name.mp4``.
 VIDEO_MOT_GT = ("{}.mot.txt",)
-#: Initial box of an input without single-target ground truth (video, sequence folder).
-VIDEO_INIT, SEQUENCE_INIT = "{}.init.txt", "init.txt"
 
 
 @dataclass(frozen=True)

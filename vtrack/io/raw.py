@@ -41,6 +41,8 @@ from vtrack.io.signatures import container_kind
 from vtrack.io.source import InputInfo, Source
 from vtrack.params import shown
 
+#: The raw frame layouts vtrack reads (``--pix-fmt``) and ``vtrack scene --format raw`` writes
+#: (bytes per frame: 3wh, 3wh, 1.5wh, wh).
 PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
 _F_SETPIPE_SZ = 1031  # fcntl.F_SETPIPE_SZ (Linux), missing from the fcntl module before 3.10
 PIPE_BYTES = 1 << 20

@@ -32,23 +32,10 @@ from tqdm import tqdm
 from vtrack.errors import ConfigError, OutputError
 from vtrack.io.files import ffmpeg_file, os_reason, replacing
 from vtrack.io.images import encode_image
+from vtrack.io.raw import PIX_FMTS as RAW_PIX_FMTS  # (write_raw's layouts: those vtrack reads)
+from vtrack.params import X264_PRESETS
 from vtrack.scenes.scene import Scene
 
-#: Layouts ``write_raw`` can produce (bytes per frame: 3wh, 3wh, 1.5wh, wh).
-RAW_PIX_FMTS = ("bgr24", "rgb24", "yuv420p", "gray")
-#: Speed/size presets of the x264 and x265 encoders.
-X264_PRESETS = (
-    "ultrafast",
-    "superfast",
-    "veryfast",
-    "faster",
-    "fast",
-    "medium",
-    "slow",
-    "slower",
-    "veryslow",
-    "placebo",
-)
 #: What ``write_clip`` can write.
 CLIP_FORMATS = ("mp4", "images", "raw")
 #: The encoder of ``write_video`` and of ``write_clip``'s mp4 clips.
