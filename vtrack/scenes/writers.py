@@ -40,6 +40,11 @@ from vtrack.scenes.scene import Scene
 CLIP_FORMATS = ("mp4", "images", "raw")
 #: The encoder of ``write_video`` and of ``write_clip``'s mp4 clips.
 CODEC = "libx264"
+#: What makes an x264 encode depend on its frames and parameters alone: mb-tree off (with it,
+#: x264's AVX-512 code reads memory it has not written, and one scene encoded ten times gave
+#: up to seven different files) and a fixed count of frame threads (the bytes depend on the
+#: count, which x264 otherwise takes from the machine's cores).
+DETERMINISTIC_X264 = {"x264-params": "mbtree=0", "threads": "4"}
 #: The image format of ``write_image_sequence`` and of ``write_clip``'s image folders.
 IMAGE_EXT = "jpg"
 
@@ -147,9 +152,9 @@ def write_video(
     ``crf`` / ``preset`` are passed to the encoder (x264 / x265 understand both). For yuv420p
     the BGR -> I420 conversion is done by OpenCV (width and height must be even). ``keyint``:
     a key frame at least every that many frames (a stream a receiver may join part way; None:
-    the encoder's choice). The scene's
-    frames are deterministic, the encoded bytes need not be (x264's mb-tree can vary slightly
-    from run to run). ``path`` appears only once the video is complete.
+    the encoder's choice). With libx264 (the default) the bytes are deterministic too: the
+    same scene and parameters give the same file (:data:`DETERMINISTIC_X264`; another
+    ``codec``'s need not be). ``path`` appears only once the video is complete.
     """
     path = Path(path)
     _check_video(scene, path, preset, codec, pix_fmt)
@@ -184,7 +189,8 @@ def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, c
     """What :func:`write_video` promises, written to ``temp`` (errors name ``path``)."""
     rate = Fraction(scene.fps).limit_denominator(1001)
     with _writing(path), av.open(ffmpeg_file(temp), "w") as container:
-        options = {"crf": str(crf), "preset": preset}
+        options = {"crf": str(crf), "preset": preset,
+                   **(DETERMINISTIC_X264 if codec == "libx264" else {})}
         if keyint is not None:
             options["g"] = str(keyint)
         stream = container.add_stream(codec, rate=rate, options=options)
