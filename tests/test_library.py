@@ -153,11 +153,29 @@ def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: 
     assert read == [(pytest.approx(i / 10), True) for i in range(10)]
     with vtrack.open_source(raw, raw="96x72", pix_fmt="gray") as source:
         assert (source.info.pix_fmt, source.info.frame_count) == ("gray", 30)  # 1/3 the bytes
-    with pytest.raises(ConfigError, match=r"--raw '96x7x': expected WIDTHxHEIGHT"):
+    with pytest.raises(ConfigError, match=r"^raw '96x7x': expected WIDTHxHEIGHT"):
         vtrack.open_source(raw, raw="96x7x")
     with pytest.raises(ConfigError, match="raw: expected a vtrack.io.RawFormat or "
                        "'WIDTHxHEIGHT', got int"):
         vtrack.open_source(raw, raw=96)
+
+
+@pytest.mark.parametrize(("given", "said"), [
+    ({"raw": "96x72", "pix_fmt": "gray", "fps": 0}, "fps 0: must be a frame rate from 0.01"),
+    ({"raw": "96x72", "pix_fmt": "bgra"}, "pix_fmt 'bgra': expected one of bgr24, rgb24"),
+    ({"raw": "96x"}, "raw '96x': expected WIDTHxHEIGHT"),
+    ({"raw": "0x72"}, "raw '0x72': width and height must be positive"),
+    ({"raw": "95x72", "pix_fmt": "yuv420p"}, "raw '95x72': yuv420p frames need an even"),
+])
+def test_open_source_names_its_own_arguments_for_a_raw_format_it_cannot_read(
+        tmp_path: Path, given: dict, said: str) -> None:
+    """open_source("f.bgr", raw="96x72", pix_fmt="gray", fps=0) said '--fps 0: ...' and a bad
+    pix_fmt '--pix-fmt 'bgra': ...', naming vtrack run's options, not the arguments given."""
+    path = tmp_path / "f.bgr"
+    path.write_bytes(bytes(96 * 72 * 3))
+    with pytest.raises(ConfigError) as caught:
+        vtrack.open_source(path, **given)
+    assert str(caught.value).startswith(said)
 
 
 @pytest.mark.parametrize(("box", "problem"), [

@@ -93,10 +93,11 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     ``pathlib.Path``; ``raw`` a :class:`RawFormat` or, as ``vtrack run --raw`` takes it,
     ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
     ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
-    for a raw format vtrack cannot read (a RawFormat's naming ``raw``); a frame rate's
-    messages name it ``fps``."""
+    for a raw format vtrack cannot read, naming this function's arguments: ``raw``,
+    ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``)."""
     if isinstance(raw, str):
-        raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps)
+        raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps,
+                              ("raw", "pix_fmt", "fps"))
     elif raw is not None and not isinstance(raw, RawFormat):
         raise ConfigError(f"raw: expected a vtrack.io.RawFormat or 'WIDTHxHEIGHT', got "
                           f"{type(raw).__name__}")

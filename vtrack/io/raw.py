@@ -78,16 +78,21 @@ class RawFormat:
     fps: float
 
     @classmethod
-    def parse(cls, size: str, pix_fmt: str, fps: float) -> RawFormat:
+    def parse(cls, size: str, pix_fmt: str, fps: float,
+              names: tuple[str, str, str] = ("--raw", "--pix-fmt", "--fps")) -> RawFormat:
         """Check and build a format from ``--raw 1920x1080 --pix-fmt bgr24 --fps 60``.
 
-        Raises ConfigError naming the option and the problem.
+        Raises ConfigError naming the value and the problem; ``names`` are what the size, the
+        pixel format and the rate are called there: the command's options, or the library's
+        arguments (``("raw", "pix_fmt", "fps")``, :func:`vtrack.open_source`).
         """
+        size_name, pix_name, fps_name = names
         match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", size)
         if not match:
-            raise ConfigError(f"--raw {shown(size)}: expected WIDTHxHEIGHT, e.g. 1920x1080")
+            raise ConfigError(f"{size_name} {shown(size)}: expected WIDTHxHEIGHT, e.g. "
+                              "1920x1080")
         return cls(int(match[1]), int(match[2]), pix_fmt, fps).checked(
-            f"--raw {shown(size)}", "--pix-fmt", "--fps")
+            f"{size_name} {shown(size)}", pix_name, fps_name)
 
     def checked(self, size_name: str | None = None, pix_name: str = "raw.pix_fmt",
                 fps_name: str = "raw.fps") -> RawFormat:
