@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import re
+from collections.abc import Iterator
 from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
@@ -353,6 +354,37 @@ def test_track_without_the_first_box_a_config_needs_names_init_box() -> None:
                        r"give init_box=\(x, y, w, h\)$"):
         next(vtrack.track("no-such-clip.mp4", "s0"))  # not opened: the box is asked for first
     assert [r.index for r in vtrack.track(_red_block(2), "s4_multi")] == [0, 1]
+
+
+def test_track_checks_its_arguments_and_opens_its_input_when_called(tmp_path: Path) -> None:
+    """vtrack.track("missing.mp4", "s0", box), an unknown config or a request for a missing
+    file returned a generator and said nothing until its first next() (track was a generator
+    function). Each is raised by the call now; frames are still taken as results are."""
+    missing = tmp_path / "missing.mp4"
+    request = vtrack.RunRequest(str(missing), tmp_path / "out", vtrack.load_config("s0"),
+                                init_box=(50, 40, 40, 30))
+    for call, error, said in (
+            (lambda: vtrack.track(missing, "s0", (50, 40, 40, 30)), InputError,
+             f"{missing}: no such file"),
+            (lambda: vtrack.track(_red_block(2), "no-such-config", (50, 40, 40, 30)),
+             ConfigError, "no-such-config: no such config file or shipped config"),
+            (lambda: vtrack.track(request), InputError, f"{missing}: no such file")):
+        with pytest.raises(error) as caught:
+            call()  # no next()
+        assert str(caught.value).startswith(said)
+    taken: list[int] = []
+
+    def frames() -> Iterator[np.ndarray]:
+        for n, image in enumerate(_red_block(3)):
+            taken.append(n)
+            yield image
+
+    results = vtrack.track(frames(), "s0", (50, 40, 40, 30))
+    assert taken == []
+    assert next(results).index == 0 and taken == [0]
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    assert [r.index for r in vtrack.track(clip, "s0", scene.boxes[0])] == list(range(10))
 
 
 @pytest.mark.parametrize("channels", [4, 1])

@@ -8,6 +8,7 @@ only for what it uses: this module pulls in the config, the stages and the reade
 from __future__ import annotations
 
 import os
+import weakref
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
@@ -50,6 +51,12 @@ def track(frames: FrameInput,
     default config's name too: which of two configs was meant cannot be told). Results hold
     their decoded frame only with ``keep_frames=True``. One image or frame on its own (not in
     a sequence) is a TypeError.
+
+    Everything is checked when ``track`` is called, not at the first ``next()``: the arguments,
+    the config and the first box, and a path's or request's input, which is opened then (a
+    missing or unreadable file is an InputError at once; its first frame is decoded, the
+    others as the results are taken). The input is closed when the results end, when the
+    generator is closed part way, or, if no result is ever taken, when it is discarded.
     """
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
@@ -62,13 +69,16 @@ def track(frames: FrameInput,
                               "(dataclasses.replace(request, ...))")
         request = frames
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
-        with open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                         live=request.live) as source:
+        source = open_source(request.input, request.raw, fps=request.fps,
+                             ffmpeg=request.ffmpeg, live=request.live)
+        try:
             from vtrack.run import requested_frames  # the run machinery only for a request
 
             box, requested = requested_frames(request, source)
-            yield from _run(tracker, requested, box)
-        return
+        except BaseException:
+            source.close()
+            raise
+        return _owning(source, _run(tracker, requested, box))
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=0 if seed is None else seed,
                       fps=DEFAULT_FPS if fps is None else fps,
@@ -80,10 +90,9 @@ def track(frames: FrameInput,
         raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
         # an image folder is timed at fps; a video keeps its own timestamps (fps refused)
-        with open_source(_path_text(frames, "frames"), fps=fps) as source:
-            yield from _run(tracker, source, box)
-    else:
-        yield from _run(tracker, frames, box)
+        source = open_source(_path_text(frames, "frames"), fps=fps)
+        return _owning(source, _run(tracker, source, box))
+    return _run(tracker, frames, box)
 
 
 def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None, *,
@@ -149,6 +158,20 @@ def _refuse_one_frame(frames: object) -> None:
     if not isinstance(frames, str | bytes | os.PathLike | RunRequest | Iterable):
         raise TypeError(f"frames: expected a path (str or pathlib.Path), a RunRequest or an "
                         f"iterable of frames, got {type(frames).__name__}")
+
+
+def _owning(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameResult]:
+    """``results``, taken from the opened ``source``: closed when they end (an error, or the
+    generator closed part way, too) or, when none is ever taken, once the generator returned
+    is discarded (a generator not started runs no ``finally``)."""
+    owned = _closing(source, results)
+    weakref.finalize(owned, source.close)  # (safe twice: Source.close)
+    return owned
+
+
+def _closing(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameResult]:
+    with source:
+        yield from results
 
 
 def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:
