@@ -11,6 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_cli import vtrack as vtrack_command
+from test_io import _remuxed as remuxed
+from test_io import pictures
+from test_io import write_video as encode_pictures
 
 import vtrack
 from vtrack.errors import ConfigError, InputError
@@ -385,6 +389,30 @@ def test_track_checks_its_arguments_and_opens_its_input_when_called(tmp_path: Pa
     scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
     assert [r.index for r in vtrack.track(clip, "s0", scene.boxes[0])] == list(range(10))
+
+
+def test_track_warns_of_the_frames_a_damaged_input_skipped_as_vtrack_run_does(
+        tmp_path: Path) -> None:
+    """A transport stream that lost five pictures (frames 20-24): vtrack.track yielded 35
+    results, a gap in their index and no word, where vtrack run printed 'vtrack: warning:
+    cut.ts: 5 damaged frames could not be decoded and were skipped'. The library warns with
+    that line (vtrack.InputWarning), at the caller's line, however the results end."""
+    clip = encode_pictures(tmp_path / "intra.ts", pictures(40), fmt="mpegts",
+                           x264_params="keyint=1")
+    cut = remuxed(clip, tmp_path / "cut.ts", lambda i, p: None if 20 <= i < 25 else p,
+                  fmt="mpegts")
+    said = f"{cut}: 5 damaged frames could not be decoded and were skipped"
+    with pytest.warns(vtrack.InputWarning) as caught:
+        results = list(vtrack.track(cut, "s0", (0, 40, 20, 20)))
+    assert [r.index for r in results] == list(range(20)) + list(range(25, 40))
+    assert [(str(w.message), w.filename) for w in caught] == [(said, __file__)]
+    command = vtrack_command("run", str(cut), "-c", "s0", "--init", "0,40,20,20", "--out",
+                             str(tmp_path / "out"), "--no-video")
+    assert f"vtrack: warning: {said}" in command.stderr.decode()
+    with pytest.warns(vtrack.InputWarning, match="5 damaged frames"):  # stopped part way
+        for result in vtrack.track(cut, "s0", (0, 40, 20, 20)):
+            if result.index == 30:
+                break
 
 
 @pytest.mark.parametrize("channels", [4, 1])

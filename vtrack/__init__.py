@@ -9,7 +9,8 @@ The library in one call::
 The names below are loaded on first use (module ``__getattr__``, PEP 562), so ``import vtrack``
 and the ``vtrack`` command start without the trackers, readers or plotting they do not use.
 What a user can get wrong is a :class:`VtrackError` (``vtrack.ConfigError``, ``InputError``,
-``OutputError``, also reached as ``vtrack.errors.InputError``), with a one-line message.
+``OutputError``, also reached as ``vtrack.errors.InputError``), with a one-line message; damage
+read past in an input (frames skipped) is a :class:`InputWarning` (``warnings.warn``).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ _EXPORTS = {
     "VtrackError": "vtrack.errors",
     "ConfigError": "vtrack.errors",
     "InputError": "vtrack.errors",
+    "InputWarning": "vtrack.errors",
     "OutputError": "vtrack.errors",
 }
 
@@ -50,7 +52,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads t
     from vtrack import io as io
     from vtrack.api import open_source, track
     from vtrack.config import Config, load_config
-    from vtrack.errors import ConfigError, InputError, OutputError, VtrackError
+    from vtrack.errors import ConfigError, InputError, InputWarning, OutputError, VtrackError
     from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
     from vtrack.geometry import Box
     from vtrack.pipeline import FrameResult, Pipeline
@@ -76,5 +78,5 @@ def __dir__() -> list[str]:
 
 
 __all__ = ["BgrFrame", "Box", "Config", "ConfigError", "Frame", "FrameResult", "GrayFrame",
-           "I420Frame", "InputError", "OutputError", "Pipeline", "RunRequest", "Tracker",
-           "VtrackError", "load_config", "open_source", "track", "__version__"]
+           "I420Frame", "InputError", "InputWarning", "OutputError", "Pipeline", "RunRequest",
+           "Tracker", "VtrackError", "load_config", "open_source", "track", "__version__"]

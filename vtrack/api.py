@@ -8,6 +8,7 @@ only for what it uses: this module pulls in the config, the stages and the reade
 from __future__ import annotations
 
 import os
+import warnings
 import weakref
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, InputWarning
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
@@ -170,8 +171,23 @@ def _owning(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameRes
 
 
 def _closing(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameResult]:
-    with source:
-        yield from results
+    """``results``, then ``source`` closed and its warnings given (:func:`_warn_of_damage`),
+    however they end: the frames' end, the input broken part way (PartialInputError) or the
+    caller stopping (``break``, ``close()``), as ``vtrack run`` warns of them however it
+    ends."""
+    try:
+        with source:  # a video's damage is counted up as it closes
+            yield from results
+    finally:
+        _warn_of_damage(source)
+
+
+def _warn_of_damage(source: Source) -> None:
+    """Each of ``source``'s warnings (what ``vtrack run`` prints as ``vtrack: warning:``) as an
+    :class:`~vtrack.errors.InputWarning`, shown at the caller's line that took the results."""
+    for line in source.warnings:
+        # 1: here, 2: _closing (the generator the caller iterates), 3: the caller
+        warnings.warn(line, InputWarning, stacklevel=3)
 
 
 def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:

@@ -91,6 +91,14 @@ class PartialInputError(InputError):
         self.frames_done = frames_done
 
 
+class InputWarning(UserWarning):
+    """Damage an input had that reading went past: frames that could not be decoded and were
+    skipped (their ``index`` is missing from the results), pictures decoded with errors,
+    images missing or unreadable. :func:`vtrack.track` warns with it (``warnings.warn``) as its
+    frames end; these are the lines ``vtrack run`` prints as ``vtrack: warning:``.
+    ``warnings.simplefilter("error", vtrack.InputWarning)`` makes them errors."""
+
+
 class OutputBrokenError(OutputError):
     """An output that could not be written part way (a full disk): what is on disk is whole
     and ``run.json`` (when it could be written) says what is there. Exit code 1: tracking had
