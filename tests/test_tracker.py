@@ -282,3 +282,33 @@ def test_kept_frames_keep_their_own_pixels(tmp_path: Path, pix_fmt: str) -> None
         camera[:] = image
         kept.append(tracker.init(camera, scene.boxes[0]) if n == 0 else tracker.update(camera))
     assert all(np.array_equal(r.frame.bgr(), images[r.index]) for r in kept)
+
+
+def test_a_one_channel_image_is_grey_and_a_four_channel_one_is_refused_with_a_way_out() -> None:
+    """A camera's HxWx1 image was refused by Tracker and track ('expected an HxWx3 BGR or HxW
+    grey image, got shape (120, 160, 1)') while track([image]) counts it as an image; an HxWx4
+    one too, with the same words, not saying what to give. HxWx1 is grey now (the results of
+    its HxW view); 4 channels are refused, naming them and giving the BGR slice."""
+    scene = make_scene("smooth", seed=5, width=160, height=120, frames=10, fps=30)
+    grey = [np.ascontiguousarray(image[:, :, 1]) for image in scene.frames()]
+    box = scene.boxes[0]
+
+    def results(frames: list[np.ndarray]) -> list[tuple]:
+        tracker = vtrack.Tracker("robust")
+        by_tracker = [tracker.init(f, box) if i == 0 else tracker.update(f)
+                      for i, f in enumerate(frames)]
+        by_track = list(vtrack.track(frames, "robust", box))
+        assert [(r.index, r.box, r.score) for r in by_track] == \
+            [(r.index, r.box, r.score) for r in by_tracker]
+        return [(r.index, r.box, r.state, r.score) for r in by_tracker]
+
+    assert results([image[:, :, None] for image in grey]) == results(grey)
+    bgra = [np.dstack([image, np.full(image.shape[:2], 255, np.uint8)])
+            for image in scene.frames()]
+    said = (r"^frame 0: a 4-channel image 120x160x4 \(BGRA\?\) is not read: give its BGR "
+            r"colour, image\[:, :, :3\] \(cv2.cvtColor\(image, cv2.COLOR_RGBA2BGR\) for RGBA\)$")
+    with pytest.raises(TypeError, match=said):
+        vtrack.Tracker("robust").init(bgra[0], box)
+    with pytest.raises(TypeError, match=said):
+        list(vtrack.track(bgra, "robust", box))
+    assert results([image[:, :, :3] for image in bgra]) == results(list(scene.frames()))

@@ -25,7 +25,7 @@ from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
 from vtrack.pipeline import FrameResult, first_box_refused
 from vtrack.request import RunRequest
-from vtrack.tracker import Tracker
+from vtrack.tracker import Tracker, shape_text
 
 FrameInput = str | os.PathLike[str] | RunRequest | Iterable[Frame] | Iterable[np.ndarray]
 BoxInput = Box | Sequence[float]
@@ -41,8 +41,9 @@ def track(frames: FrameInput,
     or a capture device, opened with :func:`open_source`; a live one hands over the
     frames the tracker keeps up with), a :class:`RunRequest` (its input, raw format,
     frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
-    of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``) uint8 images (timed at
-    ``fps``, default 30, as an image folder is) or of ``av.VideoFrame``; ``fps`` given for a
+    of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``, ``HxWx1``) uint8 images
+    (timed at ``fps``, default 30, as an image folder is; 4 channels are a TypeError saying
+    what to give) or of ``av.VideoFrame``; ``fps`` given for a
     video file, URL or device (whose frames carry their own timestamps) is a ConfigError, as
     ``vtrack run --fps`` is; ``config`` a shipped config name, a TOML path or a
     :class:`Config` (None: ``DEFAULT_CONFIG``); ``seed`` seeds the stochastic stages (None:
@@ -147,9 +148,8 @@ def _refuse_one_frame(frames: object) -> None:
     ``frames``."""
     if isinstance(frames, np.ndarray) and (frames.ndim == 2 or frames.ndim == 3
                                            and frames.shape[2] in IMAGE_CHANNELS):
-        shape = "x".join(str(n) for n in frames.shape)
-        raise TypeError(f"frames: expected an iterable of frames, got one image of {shape} "
-                        "(give [image] for a single frame)")
+        raise TypeError(f"frames: expected an iterable of frames, got one image of "
+                        f"{shape_text(frames)} (give [image] for a single frame)")
     if isinstance(frames, np.ndarray) and frames.ndim < 2:
         raise TypeError(f"frames: expected an iterable of frames, got a NumPy array of shape "
                         f"{frames.shape}, no picture")

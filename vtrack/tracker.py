@@ -1,9 +1,9 @@
 """``vtrack.Tracker``: one frame in, one result out, as OpenCV's and norfair's trackers work.
 
 ``Tracker(config, **params).init(frame, box)`` then ``update(frame)`` for each next frame; frames
-are NumPy BGR (``HxWx3``) or grey (``HxW``) uint8 images, :class:`vtrack.Frame` objects or PyAV
-``av.VideoFrame`` objects. The same chain of stages as ``vtrack run`` runs on them, so a frame
-gives the same box, state and score here as in ``track.csv``.
+are NumPy BGR (``HxWx3``) or grey (``HxW``, ``HxWx1``) uint8 images, :class:`vtrack.Frame`
+objects or PyAV ``av.VideoFrame`` objects. The same chain of stages as ``vtrack run`` runs on
+them, so a frame gives the same box, state and score here as in ``track.csv``.
 """
 
 from __future__ import annotations
@@ -28,18 +28,26 @@ FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported 
 
 def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
     """``item`` as a :class:`Frame` numbered ``index``: a Frame as it is; a uint8 ``HxWx3`` BGR
-    or ``HxW`` grey array timed ``index / fps``; an ``av.VideoFrame`` as ``vtrack run``'s reader
-    takes it (I420 planes, converted as there) and timed by its own timestamp (``index / fps``
-    if it has none). TypeError for anything else, for pixels that are not uint8 and for a
-    picture FFmpeg cannot convert to BGR (rgb4); ValueError for a size vtrack refuses."""
+    or ``HxW`` / ``HxWx1`` grey array (a camera's one-channel image) timed ``index / fps``; an
+    ``av.VideoFrame`` as ``vtrack run``'s reader takes it (I420 planes, converted as there) and
+    timed by its own timestamp (``index / fps`` if it has none). TypeError for anything else:
+    pixels that are not uint8, a 4-channel image (BGRA or RGBA: which, and whether the 4th is
+    alpha, the array does not say; the message says how to give its colour), a picture FFmpeg
+    cannot convert to BGR (rgb4); ValueError for a size vtrack refuses."""
     if isinstance(item, Frame):
         return item
     if isinstance(item, np.ndarray):
         # checked before a copy is made (a huge or float array is refused, not copied)
+        if item.ndim == 3 and item.shape[2] == 1:
+            item = item[:, :, 0]  # grey (a view: contiguous when the image is)
         if item.ndim == 2:
             check_pixels(index, item, 2, "HxW grey")
             frame_type: type[BgrFrame | GrayFrame] = GrayFrame
         else:
+            if item.ndim == 3 and item.shape[2] == 4:
+                raise TypeError(f"frame {index}: a 4-channel image {shape_text(item)} (BGRA?) is "
+                                "not read: give its BGR colour, image[:, :, :3] "
+                                "(cv2.cvtColor(image, cv2.COLOR_RGBA2BGR) for RGBA)")
             check_pixels(index, item, 3, "HxWx3 BGR or HxW grey")
             frame_type = BgrFrame
         problem = frame_size_problem(item.shape[1], item.shape[0])
@@ -53,6 +61,11 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
             return _decoded(item, index, fps)
     raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
                     f"av.VideoFrame, got {type(item).__name__}")
+
+
+def shape_text(image: np.ndarray) -> str:
+    """``image``'s shape as a message writes a picture's: ``120x160x4``."""
+    return "x".join(str(n) for n in image.shape)
 
 
 def _decoded(item: Any, index: int, fps: float) -> Frame:
@@ -147,7 +160,8 @@ class Tracker:
         as ``vtrack.BgrFrame(n, n / fps, image)`` (``GrayFrame`` for grey), and the images
         after it are numbered on from ``n``. InputError for a frame of another size, or grey
         after colour (the track goes on with the next right one); TypeError for pixels it
-        cannot read (not uint8, not ``HxWx3`` or ``HxW``); ValueError for an empty frame or
+        cannot read (not uint8, not ``HxWx3``, ``HxW`` or ``HxWx1``, or 4 channels: see
+        :func:`as_frame`); ValueError for an empty frame or
         one over 16384x16384."""
         if self._pipeline is None:
             return self._begin(None, frame)  # ConfigError if the config needs a box
