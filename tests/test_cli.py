@@ -208,14 +208,26 @@ def test_truncated_video_tracks_what_decodes(tmp_path: Path) -> None:
 
 
 def test_raw_stream_with_partial_frame(smooth_scene, tmp_path: Path) -> None:
+    """Raw stdin is named ``-``, as it was given, in the error as in the summary line (and as
+    a container on stdin is): the error said 'stdin: raw stream ended ...' where the summary
+    line said '- (partial): 10 frames'. run.json's input.name, the output folder's name, is
+    ``stdin`` (``vtrack-out/stdin/``), as for a container on stdin."""
     raw = tmp_path / "frames.bgr"
     write_raw(smooth_scene, raw, "bgr24")
     data = raw.read_bytes()[: W * H * 3 * 10 + 1234]
     out = tmp_path / "out"
     result = vtrack("run", "-", "--raw", f"{W}x{H}", "--fps", "30", "--init",
                     ",".join(map(str, smooth_scene.boxes[0])), "--out", str(out), stdin=data)
-    assert_one_line_error(result, "stdin", "1234")
+    said = "-: raw stream ended with 1234 stray bytes after 10 whole frames"
+    assert assert_one_line_error(result, said).startswith(f"vtrack: error: {said}")
+    assert result.stdout.decode().startswith("- (partial): 10 frames")
     assert len(read_csv(out / "track.csv")) == 10
+    record = json.loads((out / "run.json").read_text())
+    assert record["error"].startswith(said)
+    assert (record["input"]["path"], record["input"]["name"]) == ("-", "stdin")
+    empty = vtrack("run", "-", "--raw", f"{W}x{H}", "--init", "10,10,20,20", "--out",
+                   str(tmp_path / "empty"), stdin=b"")
+    assert assert_one_line_error(empty) == "vtrack: error: -: no raw frames (the input is empty)"
 
 
 @pytest.mark.parametrize(("init", "needle"), [

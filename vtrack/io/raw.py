@@ -21,7 +21,6 @@ import stat
 from collections.abc import Iterator
 from dataclasses import dataclass
 from numbers import Integral
-from pathlib import Path
 from typing import BinaryIO
 
 import cv2
@@ -39,6 +38,7 @@ from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
 from vtrack.io.signatures import container_kind
 from vtrack.io.source import InputInfo, Source
+from vtrack.io.specs import input_name
 from vtrack.params import shown
 
 #: The raw frame layouts vtrack reads (``--pix-fmt``) and ``vtrack scene --format raw`` writes
@@ -166,7 +166,8 @@ class RawSource(Source):
 
     def __init__(self, spec: str, fmt: RawFormat) -> None:
         self._fmt = fmt
-        self._label = "stdin" if spec == "-" else spec  # how messages name the input
+        # messages name the input as it was given (``-``), as a container on stdin's do
+        self._label = spec
         self._stream = self._open(spec)
         try:
             fd = self._stream.fileno()
@@ -179,11 +180,10 @@ class RawSource(Source):
             ring = self.depth + _RING_SLACK
             self._ring = [np.empty(fmt.shape, np.uint8) for _ in range(ring)]
             self._rgb = np.empty(fmt.shape, np.uint8) if fmt.pix_fmt == "rgb24" else None
-            name = "stdin" if spec == "-" else Path(spec).stem
             info = InputInfo(
                 path=spec,
                 kind="raw",
-                name=name,
+                name=input_name(spec),  # the output folder's: ``stdin`` for ``-``
                 width=fmt.width,
                 height=fmt.height,
                 fps=fmt.fps,
