@@ -17,7 +17,7 @@ from test_io import pictures
 from test_io import write_video as encode_pictures
 
 import vtrack
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, PartialInputError
 from vtrack.geometry import center_error
 from vtrack.run import run
 from vtrack.scenes import (
@@ -413,6 +413,28 @@ def test_track_warns_of_the_frames_a_damaged_input_skipped_as_vtrack_run_does(
         for result in vtrack.track(cut, "s0", (0, 40, 20, 20)):
             if result.index == 30:
                 break
+
+
+@pytest.mark.filterwarnings("ignore::vtrack.errors.InputWarning")  # (the cut frame's)
+def test_an_input_cut_short_yields_its_frames_then_raises_partial_input_error(
+        tmp_path: Path) -> None:
+    """vtrack.PartialInputError, which track raises after the good frames' results (a
+    transport stream cut mid-packet), was not exported with the other errors (only as
+    vtrack.errors.PartialInputError) and the README did not name it."""
+    assert "PartialInputError" in vtrack.__all__
+    assert vtrack.PartialInputError is PartialInputError
+    assert issubclass(vtrack.PartialInputError, vtrack.InputError)
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=30, fps=30)
+    whole = write_video(scene, tmp_path / "whole.ts").read_bytes()
+    cut = tmp_path / "cut.ts"
+    cut.write_bytes(whole[:len(whole) * 2 // 3 + 100])
+    taken = []
+    with pytest.raises(vtrack.PartialInputError) as caught:
+        for result in vtrack.track(cut, "s0", scene.boxes[0]):
+            taken.append(result.index)
+    assert taken and taken[-1] < caught.value.frames_done < 30
+    assert str(caught.value).startswith(f"{cut}: decoding stopped at frame "
+                                        f"{caught.value.frames_done}")
 
 
 @pytest.mark.parametrize("channels", [4, 1])

@@ -9,8 +9,10 @@ The library in one call::
 The names below are loaded on first use (module ``__getattr__``, PEP 562), so ``import vtrack``
 and the ``vtrack`` command start without the trackers, readers or plotting they do not use.
 What a user can get wrong is a :class:`VtrackError` (``vtrack.ConfigError``, ``InputError``,
-``OutputError``, also reached as ``vtrack.errors.InputError``), with a one-line message; damage
-read past in an input (frames skipped) is a :class:`InputWarning` (``warnings.warn``).
+``OutputError``, also reached as ``vtrack.errors.InputError``), with a one-line message; an
+input that breaks part way is a ``vtrack.PartialInputError`` (an InputError raised after the
+good frames' results, its ``frames_done`` the frame it stopped at); damage read past in an
+input (frames skipped) is an :class:`InputWarning` (``warnings.warn``).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ _EXPORTS = {
     "ConfigError": "vtrack.errors",
     "InputError": "vtrack.errors",
     "InputWarning": "vtrack.errors",
+    "PartialInputError": "vtrack.errors",
     "OutputError": "vtrack.errors",
 }
 
@@ -52,7 +55,14 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time __getattr__ loads t
     from vtrack import io as io
     from vtrack.api import open_source, track
     from vtrack.config import Config, load_config
-    from vtrack.errors import ConfigError, InputError, InputWarning, OutputError, VtrackError
+    from vtrack.errors import (
+        ConfigError,
+        InputError,
+        InputWarning,
+        OutputError,
+        PartialInputError,
+        VtrackError,
+    )
     from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
     from vtrack.geometry import Box
     from vtrack.pipeline import FrameResult, Pipeline
@@ -78,5 +88,6 @@ def __dir__() -> list[str]:
 
 
 __all__ = ["BgrFrame", "Box", "Config", "ConfigError", "Frame", "FrameResult", "GrayFrame",
-           "I420Frame", "InputError", "InputWarning", "OutputError", "Pipeline", "RunRequest",
-           "Tracker", "VtrackError", "load_config", "open_source", "track", "__version__"]
+           "I420Frame", "InputError", "InputWarning", "OutputError", "PartialInputError",
+           "Pipeline", "RunRequest", "Tracker", "VtrackError", "load_config", "open_source",
+           "track", "__version__"]

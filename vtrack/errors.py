@@ -84,7 +84,10 @@ class FolderInUseError(OutputError):
 
 
 class PartialInputError(InputError):
-    """The input broke part way; everything before ``frames_done`` was tracked and written."""
+    """The input broke part way (a file cut short, a pipe that stopped mid-frame): raised
+    after every good frame before it was read (tracked and written by a run; its result
+    yielded by :func:`vtrack.track`). ``frames_done`` is the number of the frame it stopped at:
+    the frames before it were read, but for any the input skipped."""
 
     def __init__(self, message: str, frames_done: int) -> None:
         super().__init__(message)
