@@ -5,7 +5,10 @@ the file that is whole only once the run has ended. Each line holds ``frame`` (t
 number), ``time_s`` (the frame's timestamp), ``x``, ``y``, ``w``, ``h`` (null while lost),
 ``state``, ``score`` and ``extras`` (the stages' extra columns); the multi-target configs add
 ``tracks``: the confirmed tracks as ``tracks.csv`` lists them (``id``, ``x``, ``y``, ``w``,
-``h``, ``conf``, ``state``). Non-finite numbers are written as null.
+``h``, ``conf``, ``state``). Numbers are the values ``track.csv`` / ``tracks.csv`` hold
+(rounded as they are written, :func:`~vtrack.io.csvfile.as_written`: pixels to 3 decimals,
+``time_s``, ``score`` and ``conf`` to 4), so a line and its row agree; non-finite numbers are
+written as null.
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ from collections.abc import Callable
 from typing import IO, Any
 
 from vtrack.errors import OutputError, StreamReaderGone
+from vtrack.geometry import Box
+from vtrack.io.csvfile import as_written, box_as_written
 from vtrack.io.files import Closing, os_reason
 from vtrack.io.threads import STOP_POLL_S
 from vtrack.pipeline import FrameResult
@@ -32,33 +37,39 @@ from vtrack.stages.base import TrackStatus
 STDOUT = "-"
 
 
-def _number(value: Any) -> Any:
-    """A JSON-ready cell: NumPy scalars as Python ones, NaN and infinities as None."""
+def _number(value: Any, column: str) -> Any:
+    """A JSON-ready cell: what ``column``'s CSV cell holds of ``value``: a float rounded as
+    written (:func:`~vtrack.io.csvfile.as_written`), NaN and infinities as None (an empty
+    cell); NumPy scalars as Python ones; other values as they are."""
     if hasattr(value, "item"):
         value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
+    if isinstance(value, float):
+        return as_written(value, column) if math.isfinite(value) else None
     return value
+
+
+def _box(box: Box | None) -> dict[str, Any]:
+    """``x``, ``y``, ``w``, ``h`` of ``box`` as the CSV files write it (None: all null)."""
+    if box is None:
+        return dict.fromkeys(("x", "y", "w", "h"))
+    written = box_as_written(box)
+    return {key: _number(getattr(written, key), key) for key in ("x", "y", "w", "h")}
 
 
 def frame_record(result: FrameResult, multi_target: bool) -> dict[str, Any]:
     """What one stream line says about ``result`` (see the module docstring)."""
-    box = result.box
     record: dict[str, Any] = {
         "frame": result.index,
-        "time_s": _number(result.time_s),
-        "x": None if box is None else _number(box.x),
-        "y": None if box is None else _number(box.y),
-        "w": None if box is None else _number(box.w),
-        "h": None if box is None else _number(box.h),
+        "time_s": _number(result.time_s, "time_s"),
+        **_box(result.box),
         "state": str(result.state),
-        "score": _number(result.score),
-        "extras": {key: _number(value) for key, value in result.extras.items()},
+        "score": _number(result.score, "score"),
+        "extras": {key: _number(value, key) for key, value in result.extras.items()},
     }
     if multi_target:
         record["tracks"] = [
-            {"id": t.id, "x": _number(t.box.x), "y": _number(t.box.y), "w": _number(t.box.w),
-             "h": _number(t.box.h), "conf": _number(t.confidence), "state": str(t.state)}
+            {"id": t.id, **_box(t.box), "conf": _number(t.confidence, "conf"),
+             "state": str(t.state)}
             for t in result.tracks if t.state == TrackStatus.CONFIRMED]
     return record
 
