@@ -483,7 +483,7 @@ def test_a_refused_packet_of_a_variable_rate_video_leaves_one_place_empty(tmp_pa
     # a reader that stops early (--frames) still hears of the damage it went past
     with open_source(str(broken)) as source:
         assert len(list(itertools.islice(source, 45))) == 45
-    assert source.warnings == [f"{broken}: 1 damaged frames could not be decoded and were "
+    assert source.warnings == [f"{broken}: 1 damaged frame could not be decoded and was "
                                "skipped"]
 
 

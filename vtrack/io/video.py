@@ -735,8 +735,9 @@ class VideoSource(Source):
         self._warn_of_damage()
         # skipped frames were in the file, and so were those before a jump: not a shortfall
         tail.frames += self.frames_skipped + self._start
-        shortfall = (tail.shortfall(self._stream.frames, self._end_s, fps)
-                     or self._torn_packet() or self._torn_container())
+        # a torn last packet is a cut for certain: named before what the frames suggest
+        shortfall = (self._torn_packet() or tail.shortfall(self._stream.frames, self._end_s, fps)
+                     or self._torn_container())
         if shortfall:
             follow_s = self._how.follow_s
             cause = ("truncated file?" if follow_s is None else
@@ -787,8 +788,10 @@ class VideoSource(Source):
         if isinstance(read, CapturingStream) and read.interruption is not None:
             return  # the stream was cut short by a signal, not damaged
         if self.frames_skipped:
-            self.warnings.append(f"{self.info.path}: {self.frames_skipped} damaged frames could "
-                                 "not be decoded and were skipped")
+            damaged = plural(self.frames_skipped, "damaged frame")
+            were = "was" if self.frames_skipped == 1 else "were"
+            self.warnings.append(f"{self.info.path}: {damaged} could not be decoded and "
+                                 f"{were} skipped")
         if self.frames_corrupt:
             self.warnings.append(f"{self.info.path}: {plural(self.frames_corrupt, 'frame')} "
                                  "decoded with errors (damaged file: their pictures may be "
