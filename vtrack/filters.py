@@ -94,14 +94,16 @@ class MotionModel(ABC):
             matrices = self._matrices = self.matrices(dt)
         return matrices
 
-    def predict(self, state: GaussianState, dt: float) -> GaussianState:
+    def predict(self, state: GaussianState, dt: float,
+                Q: np.ndarray | None = None) -> GaussianState:
         """The state ``dt`` later. S0 eq. 10-11 / S4 eq. 5-6: ``x = F x + B u``,
-        ``P = F P F^T + Q``."""
+        ``P = F P F^T + Q`` (with the process noise ``Q`` of this step; default: the
+        model's)."""
         F, B = self.transition(dt)
         x = F @ state.x
         if B is not None and self.u is not None:
             x += B @ self.u
-        return GaussianState(x, F @ state.P @ F.T + self.Q)
+        return GaussianState(x, F @ state.P @ F.T + (self.Q if Q is None else Q))
 
     def update(self, state: GaussianState, z: Sequence[float] | np.ndarray,
                R: np.ndarray | None = None) -> GaussianState:

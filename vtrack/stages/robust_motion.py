@@ -9,6 +9,13 @@ the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard 
 (``ctx.score``), the less it moves the filter.
 
 The next frame's predicted box (``ctx.prediction``) centres ``robust_model``'s search region.
+The filter steps by the frames that elapsed since the frame before (:class:`FrameClock`: the
+index difference, or the time difference over the stream's frame period where the timestamps
+say otherwise, a change of frame rate), not by one a call: a frame passed over
+(dropped by a camera, by ``--live`` falling behind, by a reader skipping a damaged stretch)
+moves the prediction as far as the target went meanwhile, and the process noise grows with the
+elapsed frames (``Q`` per frame). The prediction is made when the frame comes
+(``ctx.forecast``); ``ctx.prediction`` left after a frame is the one for the frame after it.
 While hidden the filter coasts; while lost it stands still at its last position (a lost
 target's velocity is not known), so re-detection searches around where it was last seen; a
 target taken back after being lost restarts the filter at the re-found box (its jump is not a
@@ -24,7 +31,8 @@ where it goes, not on the occluder's edge, and a wrong velocity never moves the 
 Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
 ``ctx.state``, ``ctx.score``, ``ctx.robust`` (whether this frame saw the target); writes
 ``ctx.box`` (the prediction while coasting, the extrapolation on an unseen frame),
-``ctx.prediction`` and ``ctx.robust`` (an unseen frame's peak, for the next search).
+``ctx.prediction``, ``ctx.forecast`` and ``ctx.robust`` (an unseen frame's peak, for the next
+search).
 """
 
 from __future__ import annotations
@@ -34,6 +42,8 @@ import math
 import numpy as np
 
 from vtrack.filters import ConstantVelocity, GaussianState
+from vtrack.frame import Frame
+from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
 
@@ -60,7 +70,7 @@ class RobustMotion(Stage):
               max=1.0),
     )
     requires = frozenset({"measurement", "box", "state", "score", "robust"})
-    provides = frozenset({"box", "prediction", "robust"})
+    provides = frozenset({"box", "prediction", "forecast", "robust"})
 
     # Set from the parameters by Stage.__init__.
     q_rel: float
@@ -76,8 +86,11 @@ class RobustMotion(Stage):
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._was = TrackState.TRACKING
-        #: The filter's state on the last frame that saw the target, and that frame's index.
-        self._seen: tuple[GaussianState, int] | None = None
+        #: The frames elapsed since the first one (:class:`FrameClock`).
+        self._clock = FrameClock(ctx.frame)
+        #: The filter's state on the last frame that saw the target, and that frame's time on
+        #: the clock.
+        self._seen: tuple[GaussianState, float] | None = None
         self._predict(ctx)
 
     def _position(self) -> tuple[float, float]:
@@ -115,14 +128,73 @@ class RobustMotion(Stage):
         if target.unseen and self._seen is not None and ctx.box is not None:
             target.peak_box = ctx.box
             seen, seen_at = self._seen
-            extrapolated = self._model.predict(seen, ctx.frame.index - seen_at)
+            extrapolated = self._model.predict(seen, self._clock.now - seen_at)
             ctx.box = ctx.box.moved_to(*self._model.position(extrapolated))
         elif ctx.state != TrackState.LOST:
-            self._seen = (self._state, ctx.frame.index)
+            self._seen = (self._state, self._clock.now)
 
     def _predict(self, ctx: TrackContext) -> None:
+        """Keep this frame's posterior and box for :meth:`_forecast`; leave the prediction
+        for a frame one frame later (the prior the next frame uses if it comes then)."""
         assert ctx.box is not None
         if ctx.state == TrackState.LOST:
             self._state = self._model.with_velocity(self._state, np.zeros(2))
+        self._posterior, self._box = self._state, ctx.box
         self._state = self._model.predict(self._state, 1.0)
         ctx.prediction = ctx.box.moved_to(*self._position())
+        ctx.forecast = self._forecast
+
+    def _forecast(self, frame: Frame) -> Box:
+        """The prediction for ``frame``: the last posterior moved on by the frames elapsed
+        since it (the one left assumed one), with ``Q`` for each elapsed frame."""
+        steps = self._clock.advance(frame)
+        if steps != 1.0:
+            self._state = self._model.predict(self._posterior, steps,
+                                              Q=self._model.Q * steps)
+        return self._box.moved_to(*self._position())
+
+
+class FrameClock:
+    """Frames elapsed between the frames a tracker is given, counted in the stream's frame
+    period.
+
+    Between two frames, the elapsed frames are the index difference; where the timestamps say
+    otherwise by more than ``JITTER`` of a frame (a change of frame rate, a reader that skipped
+    frames without numbering the gap, numbers that start again), the time difference over the
+    frame period. The period is the time per index step of the first two intervals in a row
+    that agree on it within ``JITTER`` (a first interval stretched by a device starting up, or
+    a gap the numbers do not show, is not taken for it); until then, and where neither tells
+    (indices that do not increase and no usable timestamps), the index difference, or one
+    frame."""
+
+    #: Timestamps that differ from the index difference by at most this many frames agree with
+    #: it (a capture clock's jitter, timestamp rounding).
+    JITTER = 0.25
+
+    def __init__(self, frame: Frame) -> None:
+        self._index, self._time = frame.index, frame.time_s
+        #: The frame period (None until two intervals agree), and the last interval's time
+        #: per index step (None: none usable yet).
+        self._period: float | None = None
+        self._last: float | None = None
+        #: Frames elapsed since the first frame.
+        self.now = 0.0
+
+    def advance(self, frame: Frame) -> float:
+        """The frames elapsed from the last frame given to ``frame`` (more than 0); ``frame``
+        becomes the last one."""
+        indexed = frame.index - self._index
+        interval = frame.time_s - self._time
+        self._index, self._time = frame.index, frame.time_s
+        steps = float(indexed) if indexed > 0 else 1.0
+        if interval > 0 and self._period is not None:
+            timed = interval / self._period
+            if abs(timed - steps) > self.JITTER:
+                steps = timed
+        elif interval > 0 and indexed > 0:
+            per = interval / indexed
+            if self._last is not None and abs(per - self._last) <= self.JITTER * self._last:
+                self._period = self._last
+            self._last = per
+        self.now += steps
+        return steps
