@@ -16,7 +16,10 @@ import pytest
 from vtrack import track
 from vtrack.evaluate import frame_scores, mean_overlap
 from vtrack.frame import BgrFrame
+from vtrack.geometry import Box
 from vtrack.scenes import make_scene
+from vtrack.stages.base import TrackContext, TrackState
+from vtrack.stages.robust_model import RobustModel
 
 SEEDS = (0, 1, 2)
 
@@ -78,3 +81,31 @@ def test_robust_follows_a_frame_rate_that_halves_by_the_timestamps() -> None:
         plain = [frames[i].bgr() for i in keep]
         with_times, without = _mean_iou(scene, keep, timed), _mean_iou(scene, keep, plain)
         assert with_times >= 0.95 and with_times > without + 0.02, (seed, with_times, without)
+
+
+def _ring_regions(numbers: list[int]) -> set[tuple[int, int]]:
+    """The centres of the ring regions ``robust_model`` searches around a lost target over
+    frames given with ``numbers`` (two rings out; the first frame starts the model)."""
+    scene = make_scene("smooth", seed=0, width=960, height=720, frames=12)
+    frames = list(scene.as_frames())
+    stage = RobustModel()
+    ctx = TrackContext(frame=frames[numbers[0]], box=Box(470, 350, 20, 20))  # its rings fit
+    stage.start(ctx)
+    ctx.state, ctx.search_growth = TrackState.LOST, 3.0
+    searched: set[tuple[int, int]] = set()
+    for number in numbers[1:]:
+        ctx.new_frame(frames[number])
+        stage.step(ctx)
+        assert ctx.robust is not None
+        searched |= {(round(r.cx), round(r.cy)) for r in ctx.robust.regions[1:]}
+    return searched
+
+
+def test_a_lost_targets_ring_search_visits_every_region_across_dropped_frames() -> None:
+    """While lost, the regions around the search centre are visited a group a frame: over as
+    many frames given, frames numbered three apart visit the same regions as consecutive ones
+    (before, the group followed the frame number, and numbers three apart visited the first
+    8 of the 24 two rings hold, frame after frame)."""
+    consecutive = _ring_regions(list(range(4)))
+    assert len(consecutive) == 24
+    assert _ring_regions(list(range(0, 12, 3))) == consecutive

@@ -307,6 +307,9 @@ class RobustModel(Stage):
             translation=CorrelationFilter(gaussian_label(rows, cols, sigma), self.lam, 0.0),
             cosine=hann2d(rows, cols), colour=colour)
         target.learn(ctx.frame, box, 1.0, first=True)
+        #: Counts the frames given (from the first one's number): the turn of the regions a
+        #: lost target's ring search visits (frame numbers with gaps skipped some for good).
+        self._turn = ctx.frame.index
         if self.first_support > 0:
             target.translation.constrain(support_mask(
                 rows, cols, box.w * factor / self.cell * self.first_support,
@@ -316,6 +319,7 @@ class RobustModel(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None
+        self._turn += 1
         # The region is centred on the last box: on hand-held or panning footage the filter's
         # own last peak is a better prior than a motion model (on the tune sequences the
         # prediction as the only centre lowered the mean AUC from 0.60 to 0.50). Where the
@@ -342,7 +346,7 @@ class RobustModel(Stage):
             wide.far = ctx.state != TrackState.LOST
             target.regions.append(wide)
         if ctx.search_growth > 1.0:
-            target.regions.extend(self._around(ctx, target, region))
+            target.regions.extend(self._around(ctx, target, region, self._turn))
         target.chosen = None
         ctx.window = region.window(ctx.frame)
         if target.colour is not None:
@@ -351,10 +355,12 @@ class RobustModel(Stage):
             ctx.overlays.append(SearchWindow(ctx.window.as_box()))
 
     @staticmethod
-    def _around(ctx: TrackContext, target: RobustTarget, centre: Region) -> list[Region]:
+    def _around(ctx: TrackContext, target: RobustTarget, centre: Region,
+                turn: int) -> list[Region]:
         """Re-detection while lost: the regions of a ring around the search centre, one region
         apart, as far out as ``ctx.search_growth`` regions (the same filter over a wider
-        window; at most 8 more regions a frame, nearest first)."""
+        window; at most 8 more regions a frame, nearest first, from the ``turn``-th group on:
+        consecutive turns visit them all)."""
         reach = int(min(ctx.search_growth - 1, MAX_RINGS))
         offsets = sorted(((dx, dy) for dy in range(-reach, reach + 1)
                           for dx in range(-reach, reach + 1) if (dx, dy) != (0, 0)),
@@ -366,7 +372,7 @@ class RobustModel(Stage):
         # a bounded cost per frame: the ring's regions are visited in turn over the frames
         if not out:
             return []
-        start = (ctx.frame.index * REGIONS_PER_FRAME) % len(out)
+        start = (turn * REGIONS_PER_FRAME) % len(out)
         picked = (out + out)[start:start + min(REGIONS_PER_FRAME, len(out))]
         return [target.region(ctx.frame, cx, cy) for cx, cy in picked]
 
