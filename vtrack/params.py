@@ -56,12 +56,10 @@ def check_flag(value: object, name: str) -> bool:
 
 
 #: The speed/size presets of the x264 and x265 encoders, fastest first (``vtrack scene
-#: --preset``).
+#: --preset``; the annotated video's ``vtrack run --preset`` and RunRequest's ``preset``: the
+#: slower ones make a run slower, which an offline file may afford).
 X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow",
                 "slower", "veryslow", "placebo")
-#: The x264 presets of the annotated video (``--preset``, RunRequest's ``preset``): those
-#: that keep up with a run (``slower`` and beyond do not).
-VIDEO_PRESETS = X264_PRESETS[:X264_PRESETS.index("slower")]
 
 
 _TYPE_NAMES = {int: "integer", float: "number", bool: "true/false", str: "string"}

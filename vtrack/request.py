@@ -33,7 +33,7 @@ from vtrack.params import (
     MAX_TIMEOUT_S,
     MAX_WAIT_S,
     MIN_TIMEOUT_S,
-    VIDEO_PRESETS,
+    X264_PRESETS,
     check_flag,
     check_seed,
     shown,
@@ -111,9 +111,10 @@ class RunRequest:
         object.__setattr__(self, "video", check_flag(self.video, "video"))
         if self.live is not None:
             object.__setattr__(self, "live", check_flag(self.live, "live"))
-        if self.preset not in VIDEO_PRESETS:
+        if self.preset not in X264_PRESETS:
             raise ConfigError(f"preset {shown(self.preset)}: must be one of "
-                              f"{', '.join(VIDEO_PRESETS)} (the annotated video's x264 preset)")
+                              f"{', '.join(X264_PRESETS)} (the annotated video's x264 "
+                              "preset)")
         if not isinstance(self.config, Config):
             raise TypeError(f"config: expected a vtrack.Config (vtrack.load_config(name)), got "
                             f"{type(self.config).__name__}")
