@@ -286,8 +286,8 @@ def test_a_run_requests_paths_flags_and_preset_are_taken_as_a_user_gives_them(
     assert summary.status == "complete" and (tmp_path / "out" / "track.csv").is_file()
     assert not (tmp_path / "out" / "annotated.mp4").exists()
     for field, value, said in (
-            ("video", "no", "video 'no': must be True or False"),
-            ("live", "yes", "live 'yes': must be True or False"),
+            ("video", "no", "video 'no': must be True or False (or 1 or 0)"),
+            ("live", "yes", "live 'yes': must be True or False (or 1 or 0)"),
             ("preset", "bogus", "preset 'bogus': must be one of ultrafast, superfast, veryfast, "
                                 "faster, fast, medium, slow, slower, veryslow, placebo (the "
                                 "annotated video's x264 preset)")):
@@ -362,3 +362,23 @@ def test_every_x264_preset_makes_the_annotated_video_of_a_request_and_of_vtrack_
                             "placebo", "--out", str(tmp_path / "cli"))
     assert result.returncode == 0, result.stderr.decode()
     assert (tmp_path / "cli" / "annotated.mp4").stat().st_size > 0
+
+
+def test_a_run_requests_stream_path_and_flags_written_1_or_0_are_taken(tmp_path: Path) -> None:
+    """RunRequest(stream=Path('s.jsonl')) raised "TypeError: stream: expected text or None, got
+    PosixPath", and video=0 or live=1 "ConfigError: video 0: must be True or False": both were
+    taken before the fields were checked. A path is kept as its text; 1 and 0 (NumPy's too)
+    are True and False, 2 is refused."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    request = vtrack.RunRequest(clip, tmp_path / "out", vtrack.load_config("s0"),
+                                scene.boxes[0], max_frames=3, stream=tmp_path / "s.jsonl",
+                                video=0, live=np.int64(0))
+    assert (request.stream, request.video, request.live) == (str(tmp_path / "s.jsonl"), False,
+                                                             False)
+    assert run(request).status == "complete"
+    assert len((tmp_path / "s.jsonl").read_text().splitlines()) == 3
+    assert not (tmp_path / "out" / "annotated.mp4").exists()
+    assert (replace(request, video=1).video, replace(request, live=1).live) == (True, True)
+    with pytest.raises(ConfigError, match=r"^video 2: must be True or False \(or 1 or 0\)$"):
+        replace(request, video=2)

@@ -47,11 +47,13 @@ def check_seed(seed: object) -> int:
 
 
 def check_flag(value: object, name: str) -> bool:
-    """``value`` if it is True or False (NumPy's too); ConfigError naming ``name`` otherwise: a
-    string such as ``"no"`` is true to Python, not the answer given."""
+    """``value`` as a bool if it is True or False (NumPy's too) or the whole number 1 or 0 (a
+    NumPy one too: Python's and C's way to write them); ConfigError naming ``name`` otherwise:
+    a string such as ``"no"`` is true to Python, not the answer given, and 2 no clear one."""
     numpy_bool = type(value).__module__ == "numpy" and type(value).__name__ in ("bool", "bool_")
-    if not (isinstance(value, bool) or numpy_bool):  # (NumPy is not imported here)
-        raise ConfigError(f"{name} {shown(value)}: must be True or False")
+    one_or_zero = isinstance(value, Integral) and value in (0, 1)
+    if not (isinstance(value, bool) or numpy_bool or one_or_zero):  # (NumPy not imported here)
+        raise ConfigError(f"{name} {shown(value)}: must be True or False (or 1 or 0)")
     return bool(value)
 
 

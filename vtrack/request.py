@@ -81,7 +81,8 @@ class RunRequest:
     #: Where ``init_box`` came from when the caller read it from a file (batch: the input's
     #: sidecar ``NAME.init.txt``); None: given directly (``--init``, the library).
     init_from: str | None = None
-    #: ``--stream``: write a flushed JSON line per frame to this path, or ``-`` for stdout.
+    #: ``--stream``: write a flushed JSON line per frame to this path, or ``-`` for stdout (a
+    #: pathlib.Path is kept as its text).
     stream: str | None = None
     #: ``--format``, ``--input-option``, ``--timeout``, ``--follow``: how FFmpeg opens the input.
     ffmpeg: FFmpegInput = field(default_factory=FFmpegInput)
@@ -95,7 +96,8 @@ class RunRequest:
         """Check the values the CLI checks before it makes a request (one made in Python
         too): ConfigError naming the field for a value out of its range, TypeError for a
         ``config`` that is not a :class:`Config` and for a path or text field of another type;
-        a box given as 4 numbers becomes a Box, a path given as text a Path (``input`` text)."""
+        a box given as 4 numbers becomes a Box, a path given as text a Path (``input`` and
+        ``stream`` text); ``video`` and ``live`` take 1 and 0 for True and False."""
         for name in ("input", "out_dir", "gt_path"):  # (str or pathlib.Path, as the library)
             value = getattr(self, name)
             if value is None and name == "gt_path":
@@ -104,6 +106,8 @@ class RunRequest:
                 raise TypeError(f"{name}: expected a path (str or pathlib.Path), got "
                                 f"{type(value).__name__}")
             object.__setattr__(self, name, os.fspath(value) if name == "input" else Path(value))
+        if isinstance(self.stream, os.PathLike):  # (a file: a path as the others; "-" stdout)
+            object.__setattr__(self, "stream", os.fspath(self.stream))
         for name in ("stream", "init_from", "video_out"):
             if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
                 raise TypeError(f"{name}: expected text or None, got "
