@@ -382,3 +382,22 @@ def test_a_run_requests_stream_path_and_flags_written_1_or_0_are_taken(tmp_path:
     assert (replace(request, video=1).video, replace(request, live=1).live) == (True, True)
     with pytest.raises(ConfigError, match=r"^video 2: must be True or False \(or 1 or 0\)$"):
         replace(request, video=2)
+
+
+@pytest.mark.parametrize("value", [np.array([150]), np.array([[150]]), np.array([150, 151]),
+                                   np.zeros((300, 300))])
+def test_a_numpy_array_as_a_parameter_is_refused_by_its_shape(value: np.ndarray) -> None:
+    """A NumPy array went through .item(): np.array([150]) and [[150]] were taken silently as
+    150, and a multi-element array raised "ValueError: can only convert an array of size 1 to a
+    Python scalar". Only a NumPy scalar or a 0-d array is a value; an array is refused in one
+    line naming its shape."""
+    rest = [("robust_search", {}), ("robust_failure", {}), ("robust_motion", {})]
+    with pytest.raises(ConfigError) as caught:
+        vtrack.Config("mine", "python", "", [("robust_model", {"working_area": value}), *rest])
+    assert str(caught.value) == ("python: stage 'robust_model': parameter 'working_area' must "
+                                 f"be an integer, got a NumPy array of shape {value.shape}")
+    with pytest.raises(ConfigError, match=r"got a NumPy array of shape"):
+        vtrack.Tracker("robust", **{"robust_model.working_area": value})
+    zero_d = vtrack.Config("mine", "python", "",
+                           [("robust_model", {"working_area": np.array(150)}), *rest])
+    assert type(zero_d.stages[0][1]["working_area"]) is int

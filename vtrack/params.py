@@ -108,14 +108,15 @@ class Param:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
 
         ``where`` names the place the value came from, e.g. ``"configs/s0.toml: stage 'kalman'"``.
-        A NumPy scalar counts as its Python value (``np.int64(5)``, ``np.True_``), a whole
+        A NumPy scalar or 0-d array counts as its Python value (``np.int64(5)``, ``np.True_``;
+        an array of other shapes is refused, ``[150]`` too), a whole
         number (:class:`~numbers.Integral`) as an ``int`` and any real number
         (:func:`~vtrack.errors.is_real`: an int, ``Fraction``, ``Decimal``) as a ``float`` for a
         number; nothing else is converted (a string is not a number, nor True the number 1).
         """
         expected = _A_TYPE[self.type]
-        if type(value).__module__ == "numpy" and hasattr(value, "item"):
-            value = value.item()  # (a NumPy scalar; NumPy itself is not imported here)
+        if type(value).__module__ == "numpy" and getattr(value, "shape", None) == ():
+            value = value.item()  # (a NumPy scalar or 0-d array; NumPy is not imported here)
         if self.type is int and isinstance(value, Integral) and not isinstance(value, bool):
             value = int(value)
         if self.type is float and is_real(value) and not isinstance(value, BeyondFloat):
@@ -258,7 +259,10 @@ def shown(value: object) -> str:
     """A value a user gave, for a one-line message: an integer as :func:`_number` writes it
     (a 5000-digit one is not spelt out), anything else as its ``repr`` cut to about 80
     characters (``'aaaa...aaaa'``, ``[1, 2, 3, 4, 5, 6, ...]``): a 1 MB string in a config
-    file is not echoed whole."""
+    file is not echoed whole; a NumPy array but a 0-d one by its shape (its ``repr`` takes
+    lines)."""
     if isinstance(value, int) and not isinstance(value, bool):
         return _number(value)
+    if type(value).__module__ == "numpy" and getattr(value, "shape", ()) != ():
+        return f"a NumPy array of shape {value.shape}"  # type: ignore[attr-defined]
     return _SHORT.repr(value)
