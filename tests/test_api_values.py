@@ -401,3 +401,27 @@ def test_a_numpy_array_as_a_parameter_is_refused_by_its_shape(value: np.ndarray)
     zero_d = vtrack.Config("mine", "python", "",
                            [("robust_model", {"working_area": np.array(150)}), *rest])
     assert type(zero_d.stages[0][1]["working_area"]) is int
+
+
+@pytest.mark.parametrize(("ffmpeg", "said"), [
+    (FFmpegInput(follow_s=float("nan")), "ffmpeg.follow_s nan: must be a time in seconds above "
+                                         "0 to "),
+    (FFmpegInput(follow_s=HUGE), "ffmpeg.follow_s an integer of more than 4000 digits: "),
+    (FFmpegInput(follow_s=0), "ffmpeg.follow_s 0: must be a time in seconds above 0 to "),
+    (FFmpegInput(timeout_s=-1), "ffmpeg.timeout_s -1: must be a time in seconds from 0.1 to "),
+])
+def test_open_source_checks_an_ffmpeg_input_made_in_python(tmp_path: Path, ffmpeg: FFmpegInput,
+                                                           said: str) -> None:
+    """vtrack.open_source('a.mp4', ffmpeg=FFmpegInput(follow_s=float('nan'))) took the input
+    unchecked and reading it never ended (follow_s=10**5000 too; timeout_s=-1 and follow_s=0
+    were taken): its waits are checked as a RunRequest's are."""
+    clip = write_video(make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30),
+                       tmp_path / "clip.mp4")
+    with pytest.raises(ConfigError) as caught:
+        vtrack.open_source(clip, ffmpeg=ffmpeg)
+    assert str(caught.value).startswith(said)
+    with pytest.raises(TypeError, match="^ffmpeg: expected a vtrack.io.video.FFmpegInput, got "
+                                        "str$"):
+        vtrack.open_source(clip, ffmpeg="-f mp4")
+    with vtrack.open_source(clip, ffmpeg=FFmpegInput(follow_s=0.5)) as source:
+        assert sum(1 for _ in source) == 10

@@ -23,6 +23,7 @@ from vtrack.io import inputs
 from vtrack.io.images import DEFAULT_FPS
 from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
+from vtrack.io.video import checked_ffmpeg
 from vtrack.pipeline import FrameResult, first_box_refused
 from vtrack.request import RunRequest
 from vtrack.tracker import Tracker, shape_text
@@ -105,7 +106,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
     ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
     for a raw format vtrack cannot read, naming this function's arguments: ``raw``,
-    ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``)."""
+    ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``), or an
+    ``ffmpeg`` wait out of its range (:meth:`~vtrack.io.video.FFmpegInput.checked`)."""
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps,
                               ("raw", "pix_fmt", "fps"))
@@ -120,6 +122,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")
+    if "ffmpeg" in options:  # (one made in Python: its waits as RunRequest checks them)
+        options["ffmpeg"] = checked_ffmpeg(options["ffmpeg"])
     return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
                               **options)
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
 
-from vtrack.errors import ConfigError, is_real, number_text
+from vtrack.errors import ConfigError, is_real, number_text, real_or_nan
 
 #: The longest time a run's start or span takes in seconds (``--start Ts``, ``--frames Ts``,
 #: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
@@ -55,6 +55,19 @@ def check_flag(value: object, name: str) -> bool:
     if not (isinstance(value, bool) or numpy_bool or one_or_zero):  # (NumPy not imported here)
         raise ConfigError(f"{name} {shown(value)}: must be True or False (or 1 or 0)")
     return bool(value)
+
+
+def checked_seconds(name: str, value: object, least: float, most: float, above: bool,
+                    meaning: str = "") -> float:
+    """``value`` as a float if it is a real number of seconds from ``least`` (``above``: more
+    than it) to ``most``; ConfigError naming the field ``name`` otherwise (``meaning`` ends the
+    message)."""
+    seconds = real_or_nan(value)
+    if not ((seconds > least if above else seconds >= least) and seconds <= most):
+        bound = f"above {least:g}" if above else f"from {least:g}"
+        raise ConfigError(f"{name} {shown(value)}: must be a time in seconds {bound} to "
+                          f"{most:g}{meaning}")
+    return seconds
 
 
 #: The speed/size presets of the x264 and x265 encoders, fastest first (``vtrack scene

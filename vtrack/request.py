@@ -14,7 +14,7 @@ import json
 import math
 import os
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from numbers import Integral
 from pathlib import Path
 from typing import Any
@@ -25,17 +25,15 @@ from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
 from vtrack.io.source import frame_at_time
-from vtrack.io.video import FFmpegInput
+from vtrack.io.video import FFmpegInput, checked_ffmpeg
 from vtrack.params import (
     MAX_CRF,
     MAX_FRAME_NUMBER,
     MAX_SECONDS,
-    MAX_TIMEOUT_S,
-    MAX_WAIT_S,
-    MIN_TIMEOUT_S,
     X264_PRESETS,
     check_flag,
     check_seed,
+    checked_seconds,
     shown,
 )
 from vtrack.stages.base import stage_class
@@ -135,15 +133,15 @@ class RunRequest:
                 raise TypeError(f"raw: expected a vtrack.io.RawFormat, got "
                                 f"{type(self.raw).__name__}")
             object.__setattr__(self, "raw", self.raw.checked())
-        object.__setattr__(self, "ffmpeg", _checked_ffmpeg(self.ffmpeg))
+        object.__setattr__(self, "ffmpeg", checked_ffmpeg(self.ffmpeg))
         for name, least, most, meaning in _WHOLE_NUMBERS:  # (a NumPy int: an int)
             if name != "max_frames" or self.max_frames is not None:
                 object.__setattr__(self, name, _whole(name, getattr(self, name), least, most,
                                                       meaning))
         for name, above in (("start_s", False), ("max_s", True)):
             if getattr(self, name) is not None:  # (a NumPy or Decimal number: a float)
-                object.__setattr__(self, name, _seconds(name, getattr(self, name), 0,
-                                                        MAX_SECONDS, above, " (a year)"))
+                object.__setattr__(self, name, checked_seconds(
+                    name, getattr(self, name), 0, MAX_SECONDS, above, " (a year)"))
         # files a stage reads (mot_detections' det.txt) relative to the folder the request was
         # made in, not the one a worker runs in (a Dask worker's: another file, or none)
         object.__setattr__(self, "config", _absolute_files(self.config))
@@ -335,35 +333,6 @@ def _whole(name: str, value: object, least: int, most: int, meaning: str) -> int
         raise ConfigError(f"{name} {shown(value)}: must be a whole number from {least} to "
                           f"{most} ({meaning})")
     return int(value)
-
-
-def _seconds(name: str, value: object, least: float, most: float, above: bool,
-             meaning: str = "") -> float:
-    """``value`` as a float if it is a real number of seconds from ``least`` (``above``: more
-    than it) to ``most``; ConfigError naming the field ``name`` otherwise (``meaning`` ends the
-    message)."""
-    seconds = real_or_nan(value)
-    if not ((seconds > least if above else seconds >= least) and seconds <= most):
-        bound = f"above {least:g}" if above else f"from {least:g}"
-        raise ConfigError(f"{name} {shown(value)}: must be a time in seconds {bound} to "
-                          f"{most:g}{meaning}")
-    return seconds
-
-
-def _checked_ffmpeg(how: object) -> FFmpegInput:
-    """``how`` if it is an :class:`FFmpegInput` whose waits are in the command's ranges
-    (``--timeout``: ``timeout_s`` from :data:`MIN_TIMEOUT_S` to :data:`MAX_TIMEOUT_S`;
-    ``--follow``: ``follow_s`` None or above 0 to :data:`MAX_WAIT_S`), as floats; TypeError or
-    ConfigError naming the field otherwise."""
-    if not isinstance(how, FFmpegInput):
-        raise TypeError(f"ffmpeg: expected a vtrack.io.video.FFmpegInput, got "
-                        f"{type(how).__name__}")
-    timeout = _seconds("ffmpeg.timeout_s", how.timeout_s, MIN_TIMEOUT_S, MAX_TIMEOUT_S, False,
-                       " (how long a network input may send nothing)")
-    follow = None if how.follow_s is None else _seconds(
-        "ffmpeg.follow_s", how.follow_s, 0, MAX_WAIT_S, True, " (how long a file being "
-        "written may not grow)")
-    return replace(how, timeout_s=timeout, follow_s=follow)
 
 
 def _absolute_files(config: Config) -> Config:

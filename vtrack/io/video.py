@@ -36,7 +36,7 @@ import os
 import re
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import av
@@ -59,6 +59,7 @@ from vtrack.io.signatures import (
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.machine import cpu_count
+from vtrack.params import MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S, checked_seconds
 
 #: Containers whose pictures carry no presentation time of their own: AVI stores one picture
 #: per chunk in decoding order, and with B-frames the decoder hands the pictures over (in
@@ -236,6 +237,29 @@ class FFmpegInput:
         """``; --timeout SECONDS waits longer`` when the command has the option, else ``""``."""
         return "" if self.timeout_option is None else \
             f"; {self.timeout_option} SECONDS waits longer"
+
+    def checked(self) -> FFmpegInput:
+        """This input's settings, its waits as floats, if they are in the command's ranges
+        (``--timeout``: ``timeout_s`` from :data:`~vtrack.params.MIN_TIMEOUT_S` to
+        :data:`~vtrack.params.MAX_TIMEOUT_S`; ``--follow``: ``follow_s`` None or above 0 to
+        :data:`~vtrack.params.MAX_WAIT_S`); ConfigError naming the field otherwise (a wait
+        of nan or 10**5000 would never end)."""
+        timeout = checked_seconds("ffmpeg.timeout_s", self.timeout_s, MIN_TIMEOUT_S,
+                                  MAX_TIMEOUT_S, False,
+                                  " (how long a network input may send nothing)")
+        follow = None if self.follow_s is None else checked_seconds(
+            "ffmpeg.follow_s", self.follow_s, 0, MAX_WAIT_S, True, " (how long a file being "
+            "written may not grow)")
+        return replace(self, timeout_s=timeout, follow_s=follow)
+
+
+def checked_ffmpeg(how: object) -> FFmpegInput:
+    """``how`` checked (:meth:`FFmpegInput.checked`) if it is an :class:`FFmpegInput` (a
+    RunRequest's or ``open_source``'s ``ffmpeg``); TypeError naming ``ffmpeg`` otherwise."""
+    if not isinstance(how, FFmpegInput):
+        raise TypeError(f"ffmpeg: expected a vtrack.io.video.FFmpegInput, got "
+                        f"{type(how).__name__}")
+    return how.checked()
 
 
 def _python_file(container: av.container.InputContainer) -> object:
