@@ -218,8 +218,8 @@ def test_a_config_cannot_be_changed_past_its_check() -> None:
 
 @pytest.mark.parametrize(("given", "said"), [
     ({"raw": RawFormat(HUGE, 2, "bgr24", 30.0)},
-     "raw (width an integer of more than 4000 digits, height 2): the frames are an integer of "
-     "more than 4000 digitsx2; vtrack accepts at most 16384x16384"),
+     "raw (width an integer of more than 4000 digits, height 2): larger than vtrack accepts "
+     "(at most 16384x16384)"),
     ({"raw": RawFormat(-5, 2, "bgr24", 30.0)},
      "raw (width -5, height 2): width and height must be positive"),
     ({"raw": RawFormat(64, 48, "gray", 0.0)},
@@ -425,3 +425,12 @@ def test_open_source_checks_an_ffmpeg_input_made_in_python(tmp_path: Path, ffmpe
         vtrack.open_source(clip, ffmpeg="-f mp4")
     with vtrack.open_source(clip, ffmpeg=FFmpegInput(follow_s=0.5)) as source:
         assert sum(1 for _ in source) == 10
+
+
+def test_a_raw_size_over_the_limit_is_named_once() -> None:
+    """vtrack run - --raw 50000x50000 said "--raw '50000x50000': the frames are 50000x50000;
+    vtrack accepts at most 16384x16384", the size twice (a RawFormat of 10**5000 x 2: "the
+    frames are an integer of more than 4000 digitsx2")."""
+    result = vtrack_command("run", "-", "--raw", "50000x50000", stdin=b"")
+    assert assert_one_line_error(result) == ("vtrack: error: --raw '50000x50000': larger than "
+                                             "vtrack accepts (at most 16384x16384)")

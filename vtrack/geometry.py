@@ -23,13 +23,16 @@ MAX_FRAME_PIXELS = MAX_FRAME_SIDE * MAX_FRAME_SIDE
 MIN_BOX_SIDE = 4.0
 
 
-def frame_size_problem(width: int, height: int) -> str | None:
-    """Why a ``width`` x ``height`` frame cannot be tracked (None: it can)."""
+def frame_size_problem(width: int, height: int, named: bool = False) -> str | None:
+    """Why a ``width`` x ``height`` frame cannot be tracked (None: it can); ``named``: the
+    message's subject already shows the size (``--raw 50000x50000``), which is not repeated."""
     if width <= 0 or height <= 0:
-        return f"the frame size {shown(width)}x{shown(height)} is empty"
+        return "empty" if named else f"the frame size {shown(width)}x{shown(height)} is empty"
     if width > MAX_FRAME_SIDE or height > MAX_FRAME_SIDE:
-        return (f"the frames are {shown(width)}x{shown(height)}; vtrack accepts at most "
-                f"{MAX_FRAME_SIDE}x{MAX_FRAME_SIDE}")
+        limit = f"{MAX_FRAME_SIDE}x{MAX_FRAME_SIDE}"
+        if named:
+            return f"larger than vtrack accepts (at most {limit})"
+        return f"the frames are {shown(width)}x{shown(height)}; vtrack accepts at most {limit}"
     return None
 
 

@@ -107,7 +107,7 @@ class RawFormat:
             raise ConfigError(f"{size_name}: width and height must be whole numbers")
         if width <= 0 or height <= 0:
             raise ConfigError(f"{size_name}: width and height must be positive")
-        too_big = frame_size_problem(width, height)
+        too_big = frame_size_problem(width, height, named=True)  # (size_name shows it)
         if too_big:
             raise ConfigError(f"{size_name}: {too_big}")
         if self.pix_fmt not in PIX_FMTS:
