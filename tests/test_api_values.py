@@ -434,3 +434,19 @@ def test_a_raw_size_over_the_limit_is_named_once() -> None:
     result = vtrack_command("run", "-", "--raw", "50000x50000", stdin=b"")
     assert assert_one_line_error(result) == ("vtrack: error: --raw '50000x50000': larger than "
                                              "vtrack accepts (at most 16384x16384)")
+
+
+def test_a_long_or_non_text_parameter_key_is_named_short() -> None:
+    """with_values({'robust_model.' + 'y' * 5000: 1}) and Tracker(**{that: 1}) said the key
+    whole (a 5299-character ConfigError), and with_values({5: 1}) raised "AttributeError: 'int'
+    object has no attribute 'strip'"."""
+    config = vtrack.load_config("robust")
+    key = "robust_model." + "y" * 5000
+    for make in (lambda: config.with_values({key: 1}), lambda: vtrack.Tracker("robust",
+                                                                           **{key: 1})):
+        with pytest.raises(ConfigError) as caught:
+            make()
+        assert str(caught.value).startswith("robust_model.yyy")
+        assert "...yyy" in str(caught.value) and len(str(caught.value)) < 500
+    with pytest.raises(TypeError, match=r"^key 5: expected text, 'stage.param', got int$"):
+        config.with_values({5: 1})

@@ -150,8 +150,13 @@ class Config:
 
     def with_values(self, values: Mapping[str, Any]) -> Config:
         """Apply ``{"stage.param": value}`` Python values (the API's keyword overrides), each
-        checked as a config file's value is (a NumPy scalar counts as its Python number)."""
-        return self._changed([(key, value, f"{key}={shown(value)}", False)
+        checked as a config file's value is (a NumPy scalar counts as its Python number); a
+        key that is not text is a TypeError naming it."""
+        for key in values:
+            if not isinstance(key, str):
+                raise TypeError(f"key {shown(key)}: expected text, 'stage.param', got "
+                                f"{type(key).__name__}")
+        return self._changed([(key, value, f"{cut(key)}={shown(value)}", False)
                               for key, value in values.items()])
 
     def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
