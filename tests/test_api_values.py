@@ -450,3 +450,12 @@ def test_a_long_or_non_text_parameter_key_is_named_short() -> None:
         assert "...yyy" in str(caught.value) and len(str(caught.value)) < 500
     with pytest.raises(TypeError, match=r"^key 5: expected text, 'stage.param', got int$"):
         config.with_values({5: 1})
+
+
+def test_a_time_past_a_year_names_the_year_in_seconds_written_out() -> None:
+    """--start 1e9s said 'a time in seconds (2.5s, at most 3.16224e+07s)' and
+    RunRequest(start_s=1e9) 'from 0 to 3.16224e+07 (a year)': a bound written as no user would
+    write it."""
+    for option in ("--start", "--frames"):
+        error = assert_one_line_error(vtrack_command("run", "x.mp4", option, "1e9s"))
+        assert "at most 31622400s)" in error

@@ -559,9 +559,9 @@ def test_fps_given_for_a_video_is_refused_and_a_sequence_keeps_its_own_rate(
     ("start", -5, r"start -5: must be a whole number from 0 to 1000000000000 \(the first frame "
                   r"tracked, 0-based\)"),
     ("start", "3", "start '3': must be a whole number from 0 to"),
-    ("start_s", -1.0, r"start_s -1.0: must be a time in seconds from 0 to 3.16224e\+07 "
+    ("start_s", -1.0, r"start_s -1.0: must be a time in seconds from 0 to 31622400 "
                       r"\(a year\)"),
-    ("max_s", float("nan"), "max_s nan: must be a time in seconds above 0 to 3.16224e"),
+    ("max_s", float("nan"), "max_s nan: must be a time in seconds above 0 to 31622400 "),
     ("seed", -1, "seed -1: must be a whole number from 0 to 4294967295"),
 ])
 def test_a_run_request_made_in_python_checks_its_values(field: str, value: object, said: str,

@@ -17,7 +17,7 @@ from vtrack.errors import ConfigError, is_real, number_text, real_or_nan
 
 #: The longest time a run's start or span takes in seconds (``--start Ts``, ``--frames Ts``,
 #: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
-MAX_SECONDS = 366 * 24 * 3600.0
+MAX_SECONDS = 366 * 24 * 3600  # (an int: written 31622400 in messages, not 3.16224e+07)
 
 #: The largest frame number and frame count a run takes (``--start N``, ``--frames N``,
 #: RunRequest's ``start`` and ``max_frames``): a year at the highest frame rate (10,000 a
@@ -66,7 +66,7 @@ def checked_seconds(name: str, value: object, least: float, most: float, above: 
     if not ((seconds > least if above else seconds >= least) and seconds <= most):
         bound = f"above {least:g}" if above else f"from {least:g}"
         raise ConfigError(f"{name} {shown(value)}: must be a time in seconds {bound} to "
-                          f"{most:g}{meaning}")
+                          f"{_number(most)}{meaning}")
     return seconds
 
 

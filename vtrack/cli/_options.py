@@ -172,7 +172,7 @@ class StartPoint(_FramesOrSeconds):
     name = "start"
     least = 0
     expected = (f"a frame number (75, at most {MAX_FRAME_NUMBER}) or a time in seconds (2.5s, "
-                f"at most {MAX_SECONDS:g}s)")
+                f"at most {MAX_SECONDS}s)")
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> tuple[int, float | None]:
@@ -187,4 +187,4 @@ class FrameSpan(_FramesOrSeconds):
     name = "frames"
     least = 1
     expected = (f"a number of frames (300, from 1 to {MAX_FRAME_NUMBER}) or a duration in "
-                f"seconds (10s, above 0 and at most {MAX_SECONDS:g}s)")
+                f"seconds (10s, above 0 and at most {MAX_SECONDS}s)")
