@@ -459,3 +459,19 @@ def test_a_time_past_a_year_names_the_year_in_seconds_written_out() -> None:
     for option in ("--start", "--frames"):
         error = assert_one_line_error(vtrack_command("run", "x.mp4", option, "1e9s"))
         assert "at most 31622400s)" in error
+
+
+def test_a_config_and_a_run_request_are_hashable_equal_ones_alike(tmp_path: Path) -> None:
+    """hash(load_config('robust')) raised "TypeError: unhashable type: 'StageValues'" though a
+    Config is a frozen dataclass that cannot change (a RunRequest the same): a set or a dict
+    key of configs failed."""
+    robust = vtrack.load_config("robust")
+    assert hash(robust) == hash(vtrack.load_config("robust"))
+    changed = robust.with_values({"robust_model.working_area": 200})
+    assert len({robust, vtrack.load_config("robust"), changed, vtrack.load_config("s0")}) == 3
+    reordered = vtrack.Config(changed.name, changed.source, changed.description,
+                              [(name, dict(reversed(list(values.items()))))
+                               for name, values in changed.stages])
+    assert reordered == changed and hash(reordered) == hash(changed)
+    request = vtrack.RunRequest("a.mp4", tmp_path / "out", robust)
+    assert hash(request) == hash(replace(request, config=vtrack.load_config("robust")))

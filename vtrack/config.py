@@ -54,6 +54,11 @@ class StageValues(dict[str, Any]):
 
     __setitem__ = __delitem__ = __ior__ = clear = pop = popitem = setdefault = update = _refuse
 
+    def __hash__(self) -> int:  # type: ignore[override]
+        """Hashed as its (parameter, value) pairs, in any order (values are checked scalars and
+        text): a Config is hashable, as a frozen dataclass of such values is."""
+        return hash(frozenset(self.items()))
+
     def __reduce__(self) -> tuple[type[StageValues], tuple[dict[str, Any]]]:
         """Pickled as its values (a Dask worker receives a run's Config)."""
         return StageValues, (dict(self),)
@@ -64,8 +69,9 @@ class Config:
     """A validated chain: ``stages`` is a sequence of (stage name, explicitly set parameters),
     checked when the Config is made (:meth:`__post_init__`). Read-only once made: its fields
     cannot be set, ``stages`` is kept as a tuple and each stage's parameters as a
-    :class:`StageValues` (a ``dict`` that refuses changes); :meth:`with_values` and
-    :meth:`with_overrides` make a changed copy, checked again."""
+    :class:`StageValues` (a ``dict`` that refuses changes, hashable: so is a Config, equal
+    Configs alike); :meth:`with_values` and :meth:`with_overrides` make a changed copy, checked
+    again."""
 
     name: str
     source: str
