@@ -65,3 +65,27 @@ def test_a_batch_of_multi_target_runs_has_the_reports_columns_and_numbers(
     assert multi["auc"] == multi["frames_lost"] == ""  # one target's columns do not apply
     assert 0 <= float(single["auc"]) <= 1 and single["mota"] == single["idf1"] == ""
     assert len(single["fps"].partition(".")[2]) > 1  # not rounded to 1 decimal any more
+
+
+def test_a_resumed_multi_target_run_is_printed_with_its_scores(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A resumed multi-target run's line had no MOT scores: 'ped [fixed_camera]: 60 frames, ...
+    -> .../ped/fixed_camera (already complete: not run again)' where the first batch printed
+    '... mota 0.957, ...' (run.json's summary leaves the scores to its "metrics")."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    clip = clip_factory("pedestrians", width=W, height=H, frames=FRAMES)
+    shutil.copy(clip.path, inputs / "ped.mp4")
+    shutil.copy(clip.mot, inputs / "ped.mot.txt")
+    args = ("batch", str(inputs), "-c", "fixed_camera", "--no-video", "--out",
+            str(tmp_path / "results"))
+    lines = []
+    for _ in range(2):
+        done = vtrack(*args)
+        assert done.exit_code == 0, done.output
+        lines.append(next(line for line in done.output.splitlines()
+                          if line.startswith("ped [fixed_camera]")))
+    first, again = lines
+    assert " mota " in first and " idf1 " in first
+    scores = first.partition(" fps, ")[2].partition(" -> ")[0]
+    assert scores and scores in again and again.endswith("(already complete: not run again)")

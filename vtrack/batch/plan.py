@@ -42,12 +42,16 @@ def _of(request: RunRequest, record: dict[str, Any] | None) -> dict[str, Any] | 
 
 def _summary(record: dict[str, Any], out_dir: Path) -> RunSummary | None:
     """The record's summary, its results where they are now: ``out_dir`` (a batch folder may
-    have been moved since)."""
+    have been moved since), a multi-target run's MOT scores (``mot``) from the record's
+    ``metrics`` (its ``summary`` leaves them there), so its line is the one the run printed."""
     try:
         names = {f.name for f in fields(RunSummary)}
         summary = RunSummary(**{k: v for k, v in record["summary"].items() if k in names})
         summary.status = record["status"]
         summary.out_dir = str(out_dir)
+        metrics = record.get("metrics")
+        if summary.multi_target and isinstance(metrics, dict) and metrics:
+            summary.mot = dict(metrics)
     except (KeyError, TypeError, AttributeError):
         return None
     return summary
