@@ -312,3 +312,19 @@ def test_a_one_channel_image_is_grey_and_a_four_channel_one_is_refused_with_a_wa
     with pytest.raises(TypeError, match=said):
         list(vtrack.track(bgra, "robust", box))
     assert results([image[:, :, :3] for image in bgra]) == results(list(scene.frames()))
+
+
+def test_images_after_a_frame_on_a_camera_clock_are_timed_on_from_it() -> None:
+    """``t.init(img0, box); t.update(vtrack.BgrFrame(1, 100.0, img1)); t.update(img2)`` timed
+    the images after the camera's frame ``index / fps``: 0, 100.0, 0.0667, 0.1 (back in time).
+    They are timed on from the camera's frame: 100 + (index - 1) / fps."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=10, fps=30)
+    images = list(scene.frames())[:5]
+    tracker = vtrack.Tracker("s0")
+    got = [tracker.init(images[0], scene.boxes[0]),
+           tracker.update(vtrack.BgrFrame(1, 100.0, images[1])),
+           *(tracker.update(image) for image in images[2:])]
+    assert [r.index for r in got] == [0, 1, 2, 3, 4]
+    assert [r.time_s for r in got] == [0.0, 100.0, 100.0 + 1 / 30, 100.0 + 2 / 30, 100.0 + 3 / 30]
+    assert tracker.init(images[0], scene.boxes[0]).time_s == 0.0  # a new track starts at 0
+    assert tracker.update(images[1]).time_s == 1 / 30

@@ -26,14 +26,15 @@ from vtrack.pipeline import FrameResult, Pipeline
 FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported only if used)
 
 
-def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
+def as_frame(item: FrameLike, index: int, fps: float, time_s: float | None = None) -> Frame:
     """``item`` as a :class:`Frame` numbered ``index``: a Frame as it is; a uint8 ``HxWx3`` BGR
-    or ``HxW`` / ``HxWx1`` grey array (a camera's one-channel image) timed ``index / fps``; an
-    ``av.VideoFrame`` as ``vtrack run``'s reader takes it (I420 planes, converted as there) and
-    timed by its own timestamp (``index / fps`` if it has none). TypeError for anything else:
-    pixels that are not uint8, a 4-channel image (BGRA or RGBA: which, and whether the 4th is
-    alpha, the array does not say; the message says how to give its colour), a picture FFmpeg
-    cannot convert to BGR (rgb4); ValueError for a size vtrack refuses."""
+    or ``HxW`` / ``HxWx1`` grey array (a camera's one-channel image) timed ``time_s``
+    (``index / fps`` when None); an ``av.VideoFrame`` as ``vtrack run``'s reader takes it (I420
+    planes, converted as there) and timed by its own timestamp (``time_s`` if it has none).
+    TypeError for anything else: pixels that are not uint8, a 4-channel image (BGRA or RGBA:
+    which, and whether the 4th is alpha, the array does not say; the message says how to give
+    its colour), a picture FFmpeg cannot convert to BGR (rgb4); ValueError for a size vtrack
+    refuses."""
     if isinstance(item, Frame):
         return item
     if isinstance(item, np.ndarray):
@@ -53,12 +54,13 @@ def as_frame(item: FrameLike, index: int, fps: float) -> Frame:
         problem = frame_size_problem(item.shape[1], item.shape[0])
         if problem:
             raise ValueError(f"frame {index}: {problem}")
-        return frame_type(index, index / fps, np.ascontiguousarray(item))
+        return frame_type(index, index / fps if time_s is None else time_s,
+                          np.ascontiguousarray(item))
     if type(item).__module__.split(".")[0] == "av":  # PyAV only for a PyAV object
         import av
 
         if isinstance(item, av.VideoFrame):
-            return _decoded(item, index, fps)
+            return _decoded(item, index, index / fps if time_s is None else time_s)
     raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
                     f"av.VideoFrame, got {type(item).__name__}")
 
@@ -68,7 +70,7 @@ def shape_text(image: np.ndarray) -> str:
     return "x".join(str(n) for n in image.shape)
 
 
-def _decoded(item: Any, index: int, fps: float) -> Frame:
+def _decoded(item: Any, index: int, untimed_s: float) -> Frame:
     """An ``av.VideoFrame`` as ``vtrack run``'s reader takes it (see :func:`as_frame`)."""
     import av
 
@@ -77,7 +79,7 @@ def _decoded(item: Any, index: int, fps: float) -> Frame:
     problem = frame_size_problem(item.width, item.height)
     if problem:
         raise ValueError(f"frame {index}: {problem}")
-    time_s = index / fps if item.time is None else float(item.time)
+    time_s = untimed_s if item.time is None else float(item.time)
     try:
         return decoded_frame(item, index, time_s)  # as vtrack run reads it
     except av.FFmpegError as exc:
@@ -125,6 +127,9 @@ class Tracker:
         self.keep_frames = check_flag(keep_frames, "keep_frames")
         self._pipeline: Pipeline | None = None
         self._index = 0
+        #: The last frame timed off the ``index / fps`` timeline (its index and time_s), from
+        #: which the images after it are timed.
+        self._timed_at: tuple[int, float] = (0, 0.0)
 
     @property
     def multi_target(self) -> bool:
@@ -155,10 +160,12 @@ class Tracker:
         """Track the next frame. Detecting configs may start with ``update`` (no ``init``).
 
         A NumPy image (or an ``av.VideoFrame`` without a timestamp) is numbered one after the
-        previous frame and timed ``index / fps``; a :class:`vtrack.Frame` keeps its own
-        ``index`` and ``time_s``, so a frame the camera dropped is told by giving the next one
-        as ``vtrack.BgrFrame(n, n / fps, image)`` (``GrayFrame`` for grey), and the images
-        after it are numbered on from ``n``. InputError for a frame of another size, or grey
+        previous frame and timed ``index / fps``, or, after a frame timed otherwise (a
+        :class:`vtrack.Frame` with a camera's clock), that frame's ``time_s`` plus ``(index -
+        its index) / fps``: never back in time. A :class:`vtrack.Frame` keeps its own ``index``
+        and ``time_s``, so a frame the camera dropped is told by giving the next one as
+        ``vtrack.BgrFrame(n, n / fps, image)`` (``GrayFrame`` for grey), and the images after it
+        are numbered on from ``n``. InputError for a frame of another size, or grey
         after colour (the track goes on with the next right one); TypeError for pixels it
         cannot read (not uint8, not ``HxWx3``, ``HxW`` or ``HxWx1``, or 4 channels: see
         :func:`as_frame`); ValueError for an empty frame or
@@ -189,12 +196,18 @@ class Tracker:
     def reset(self) -> None:
         """Forget the target: the next call must be :meth:`init` (or ``update`` for the
         detecting configs), which starts from fresh stages."""
-        self._pipeline, self._index = None, 0
+        self._pipeline, self._index, self._timed_at = None, 0, (0, 0.0)
 
     def _process(self, item: FrameLike) -> FrameResult:
         assert self._pipeline is not None
         # a frame of another size or kind than the first: InputError from the pipeline
-        result = self._pipeline.process(as_frame(item, self._index, self.fps))
+        # an image is timed on from the last frame off the index / fps timeline (a camera's
+        # clock), one interval a frame: not back in time after it
+        at, at_s = self._timed_at
+        frame = as_frame(item, self._index, self.fps, at_s + (self._index - at) / self.fps)
+        if frame.time_s != frame.index / self.fps:
+            self._timed_at = (frame.index, frame.time_s)
+        result = self._pipeline.process(frame)
         # an image after a vtrack.Frame numbered by the caller (a camera's frame after a
         # dropped one) is the frame after that one, not the count of frames given
         self._index = result.index + 1
