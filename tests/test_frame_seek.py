@@ -133,9 +133,12 @@ def test_frame_takes_a_time_as_run_start_does(long_clip: Path, tmp_path: Path) -
     assert np.array_equal(cv2.imread(str(out)), read_frame(str(long_clip), 153))
     done = vtrack("frame", str(long_clip), "--at", "10s", "-o", str(tmp_path / "g.png"))
     assert (done.returncode, done.stdout) == (2, "")
-    assert done.stderr == (f"vtrack: error: {long_clip} has no frame at or after 10 s (it ends "
-                           "before)\n")
+    assert done.stderr == (f"vtrack: error: {long_clip}: has no frame at or after 10 s (it ends "
+                           "before)\n")  # INPUT: problem, as 'has no frame 300 (...)'
     assert not (tmp_path / "g.png").exists()
+    helped = vtrack("frame", "--help")  # it opened 'Write frame N of INPUT'
+    assert "Write one frame of INPUT (--at: frame N, or the first at time T)" in " ".join(
+        helped.stdout.split())
 
 
 def test_a_frame_just_before_a_key_frame_of_an_hevc_clip_is_reached_from_the_one_before(

@@ -381,7 +381,7 @@ def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) ->
         assert "--start" in line and "2.5s" in line, line
     line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
                                  "2s", "-o", str(tmp_path / "bad")))
-    assert line.endswith("--start 2s: " + f"{clip.path} has no frame at or after 2 s (it ends "
+    assert line.endswith("--start 2s: " + f"{clip.path}: has no frame at or after 2 s (it ends "
                          "before)")
     assert not (tmp_path / "bad").exists()
 
@@ -448,7 +448,7 @@ def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
         assert json.loads((tmp_path / start / "run.json").read_text())["start_frame"] == frame
     line = one_error_line(vtrack("run", str(clip), "--gt", str(gt), "--start", "2.25s",
                                  "-o", str(tmp_path / "past")))
-    assert line.endswith(f"--start 2.25s: {clip} has no frame at or after 2.25 s (it ends "
+    assert line.endswith(f"--start 2.25s: {clip}: has no frame at or after 2.25 s (it ends "
                          "before)"), line
     assert not (tmp_path / "past").exists()
 

@@ -25,8 +25,9 @@ from vtrack.cli._paths import IMAGE_PATH, INPUT
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
 def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             step: int | None, no_grid: bool) -> None:
-    """Write frame N of INPUT as an image with a light pixel grid and its scale (x along the
-    top, y down the left), to read the target's box x,y,w,h off for --init or NAME.init.txt."""
+    """Write one frame of INPUT (--at: frame N, or the first at time T) as an image with a
+    light pixel grid and its scale (x along the top, y down the left), to read the target's box
+    x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError
     from vtrack.io.files import write_bytes_atomic
     from vtrack.io.images import encode_image

@@ -208,7 +208,7 @@ def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
 
 def no_frame_after_text(input_spec: str, seconds: float) -> str:
     """What is said when :func:`seek_time` found no frame at or after ``seconds``."""
-    return f"{input_spec} has no frame at or after {seconds:g} s (it ends before)"
+    return f"{input_spec}: has no frame at or after {seconds:g} s (it ends before)"
 
 
 #: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the
