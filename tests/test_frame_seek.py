@@ -167,3 +167,22 @@ def test_a_frame_just_before_a_key_frame_of_an_hevc_clip_is_reached_from_the_one
                 assert np.array_equal(frame.bgr(), every[frame.index]), (index, frame.index)
                 if frame.index == index:
                     break
+
+
+def test_only_the_videos_the_docs_name_jump_to_a_key_frame(long_clip: Path, tmp_path: Path
+                                                           ) -> None:
+    """`--start`'s help, README and RunRequest said "a video file is read from the key frame
+    at or before that frame", but only a constant-rate MP4/MOV file jumps: an MKV of the same
+    frames decodes from frame 0 (the same frames tracked). They name those that jump."""
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=FRAMES, fps=30)
+    mkv = write_video(scene, tmp_path / "long.mkv", keyint=KEYINT)
+    for clip, read_from in ((long_clip, 150), (mkv, 0)):
+        with open_source(str(clip)) as source:
+            assert source.start_near(157) == read_from, clip
+    helped = " ".join(vtrack("run", "--help").stdout.split())
+    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
+    for text in (helped, readme):
+        assert "An MP4 or MOV file of constant frame rate" in text
+        assert "other videos (MKV, WebM, MPEG-TS, AVI, fragmented MP4, a variable frame rate)" \
+            in text
+        assert "A video file is read from the key frame" not in text

@@ -48,9 +48,10 @@ class RunRequest:
     reads 1-based (MATLAB) ground-truth boxes; ``raw`` describes raw-frame input (None: a video
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
     seeds the stochastic stages; ``start`` is the first frame tracked (the input's 0-based
-    frame number; a seekable video is read from the key frame at or before it, an image folder
-    from its image, other inputs decode the frames before it and skip them, as ``ffmpeg -ss``
-    skips time);
+    frame number; an MP4 or MOV file of constant frame rate is read from the key frame at or
+    before it, an image folder from its image, other inputs (MKV, WebM, MPEG-TS, AVI,
+    fragmented MP4, a variable frame rate, streams, raw frames) decode the frames before it and
+    skip them, as ``ffmpeg -ss`` skips time);
     ``start_s``, when set, gives it as a time instead (``--start 2.5s``): the first frame whose
     timestamp is at or after that many seconds (found as the run reads the input; a variable
     frame rate is followed);

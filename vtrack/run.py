@@ -547,9 +547,9 @@ class _Resolved:
     #: The first frame tracked (``--start``; a time found in the frames' timestamps).
     start: int = 0
     #: The frame the input is read from: 0, or for a later ``start`` where the input can jump
-    #: (:meth:`Source.start_near`: a seekable video's key frame at or before it, an image
-    #: folder's image) the frame it jumped to (the frames before it are not decoded; run.json
-    #: ``read_from_frame``).
+    #: (:meth:`Source.start_near`: a constant-rate MP4 or MOV file's key frame at or before it,
+    #: an image folder's image) the frame it jumped to (the frames before it are not decoded;
+    #: run.json ``read_from_frame``).
     read_from: int = 0
     #: How much to track from ``start`` on (``--frames``: a count, or a duration measured in
     #: the frames' timestamps).

@@ -128,8 +128,10 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame "
               "whose timestamp is at or after it). The target's box in it: --init's "
               "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
-              "0's). A video file is read from the key frame before it, an image folder from its "
-              "image; a stream or raw frames decode the earlier frames and skip them.")
+              "0's). An MP4 or MOV file of constant frame rate is read from the key frame "
+              "at or before it, an image folder from its image; other videos (MKV, WebM, "
+              "MPEG-TS, AVI, fragmented MP4, a variable frame rate), streams and raw frames "
+              "decode the earlier frames and skip them.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
               help="Stop after N frames, or after T seconds of the input (10s, like ffmpeg "
                    "-t: the frames whose timestamp is less than T past the first tracked "

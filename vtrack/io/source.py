@@ -198,8 +198,9 @@ def frame_at_time(seconds: float, fps: float | None) -> int:
 def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
     """Make ``source`` (opened, not yet iterated) begin at its first frame whose timestamp is
     at or after ``seconds`` (:meth:`Source.skip_to`, a variable frame rate followed), a
-    seekable video read from the key frame at or before the frame ``seconds`` x fps names
-    (:meth:`Source.start_near`; an image folder from that frame's image), other inputs from
+    video that can jump (:meth:`VideoSource.start_near`: a local file of constant frame rate
+    that lists its frame count, MP4 or MOV) read from the key frame at or before the frame
+    ``seconds`` x fps names (an image folder from that frame's image), other inputs from
     their first frame. Returns that frame's
     index (None when the input ends before) and the index reading began at."""
     read_from = source.start_near(frame_at_time(seconds, source.info.fps))
