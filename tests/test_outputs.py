@@ -35,6 +35,7 @@ from vtrack.io.outdir import LOCK_NAME, OutputFolder
 from vtrack.io.raw import PIPE_BYTES, RawFormat
 from vtrack.request import RunRequest
 from vtrack.run import run
+from vtrack.scenes import make_scene, write_video
 
 if TYPE_CHECKING:
     from conftest import Clip, ClipFactory, SceneFactory
@@ -712,25 +713,32 @@ def test_batch_summary_counts_skipped_frames(clip_factory: ClipFactory, tmp_path
         assert rows[name]["frames"] == str(FRAMES - skipped)
 
 
-def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Path) -> None:
-    """SIGTERM to `vtrack run long.mp4 --init ... --frames 2500` said only 'interrupted by
-    SIGTERM; partial results in OUT', and run.json not which frame was the last written. Now
-    run.json has last_frame and a line gives the options that go on from there (the last frame
-    tracked, its box as track.csv wrote it, the frames left of --frames): the run they make
-    starts on that row and ends where the whole run would have."""
-    from vtrack.scenes import make_scene, write_video
-
+def _interrupted_long_run(tmp_path: Path, *options: str) -> tuple[Path, Path, str]:
+    """`vtrack run long.mp4 OPTIONS --frames 2500` (a 3000-frame clip) stopped by SIGTERM
+    once it has written 20 rows: the clip, the run's folder and its stderr."""
     scene = make_scene("smooth", seed=1, width=W, height=H, frames=3000, fps=30)
     clip = write_video(scene, tmp_path / "long.mp4", preset="ultrafast", keyint=30)
-    first, out = tmp_path / "first", tmp_path / "out"
-    init = ",".join(f"{v:.2f}" for v in scene.boxes[0])
-    process = start("run", str(clip), "--init", init, "--frames", "2500", "--no-video",
+    first = tmp_path / "first"
+    process = start("run", str(clip), *options, "--frames", "2500", "--no-video",
                     "-o", str(first))
     wait_for(lambda: any(len(p.read_bytes().splitlines()) > 20
                          for p in first.glob(".track.tmp*")), process, "20 rows")
     process.send_signal(signal.SIGTERM)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 128 + signal.SIGTERM, stderr
+    return clip, first, stderr
+
+
+def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Path) -> None:
+    """SIGTERM to `vtrack run long.mp4 --init ... --frames 2500` said only 'interrupted by
+    SIGTERM; partial results in OUT', and run.json not which frame was the last written. Now
+    run.json has last_frame and a line gives the options that go on from there (the last frame
+    tracked, its box as track.csv wrote it, the frames left of --frames): the run they make
+    starts on that row and ends where the whole run would have."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=3000, fps=30)
+    init = ",".join(f"{v:.2f}" for v in scene.boxes[0])
+    clip, first, stderr = _interrupted_long_run(tmp_path, "--init", init)
+    out = tmp_path / "out"
     record = assert_records_agree(first)
     rows = csv_rows(first / "track.csv")
     assert record["status"] == "interrupted" and 20 <= record["frames"] < 2500
@@ -748,3 +756,23 @@ def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Pa
     assert done.returncode == 0, done.stderr
     again = csv_rows(out / "track.csv")
     assert again[0][:6] == last[:6] and again[-1][0] == "2499"
+
+
+def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:
+    """SIGTERM to a run of a chain that needs no box (`vtrack run ped.mp4 -c fixed_camera
+    --frames 1400`) said `--start 533 --frames 867` with last_frame 533: the resumed run wrote
+    frame 533 again. It now resumes at the frame after (`--start 534 --frames 866`), and the two
+    runs write each frame of the whole run once."""
+    clip, first, _ = _interrupted_long_run(tmp_path, "-c", "s4")
+    out = tmp_path / "out"
+    record = json.loads((first / "run.json").read_text())
+    last = record["last_frame"]
+    assert record["status"] == "interrupted" and 20 <= last < 2499
+    options = f"--start {last + 1} --frames {2500 - last - 1}"
+    assert record["summary"]["resume"] == options
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s4",
+                           *options.split(), "--no-video", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    frames = [int(row[0]) for row in [*csv_rows(first / "track.csv"), *csv_rows(out / "track.csv")]]
+    assert frames == list(range(2500))

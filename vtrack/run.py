@@ -1088,25 +1088,35 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     return outputs
 
 
-def _resume_options(resolved: _Resolved, tracked: _Tracked) -> str | None:
-    """The options that take an interrupted run up again: ``--start`` the last frame written
-    (a multi-target chain, or one that finds its target itself), else the last frame the
-    target was tracked in with ``--init`` its box as ``track.csv`` wrote it; and what is left
-    of ``--frames`` from there (a count, or a time). None when there is no such frame."""
+def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None
+                    ) -> str | None:
+    """The options that take an interrupted run up again: ``--start`` the frame after the
+    last one written (a multi-target chain, or one that finds its target itself: no frame is
+    written twice), else the last frame the target was tracked in with ``--init`` its box as
+    ``track.csv`` wrote it; and what is left of ``--frames`` from there (a count, or a time:
+    the frame after the last one taken to come one interval of the input's ``fps`` later).
+    None when there is no such frame, or nothing is left of ``--frames``."""
     pipeline = resolved.pipeline
     needs_box = pipeline.needs_init_box and not pipeline.multi_target
     at = tracked.last_tracked if needs_box else tracked.last_frame
     if at is None:
         return None
-    options = f"--start {at.index}"
+    after = 0 if needs_box else 1  # frames the resumed run begins after ``at``
+    options = f"--start {at.index + after}"
     if at.box is not None:
         options += " --init " + ",".join(number_text(v) for v in box_as_written(at.box))
     span = resolved.span
     if span.count is not None:
-        options += f" --frames {span.count - at.before}"
+        left_frames = span.count - at.before - after
+        if left_frames <= 0:
+            return None
+        options += f" --frames {left_frames}"
     elif span.seconds is not None and tracked.first_time_s is not None:
-        left = span.seconds - (at.time_s - tracked.first_time_s)
-        options += f" --frames {number_text(round(left, 6))}s"
+        begins_s = at.time_s + (after / fps if after and fps else 0.0)
+        left = round(span.seconds - (begins_s - tracked.first_time_s), 6)
+        if left <= 0:
+            return None
+        options += f" --frames {number_text(left)}s"
     return options
 
 
@@ -1136,7 +1146,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         warnings=[*resolved.warnings, *source.warnings,
                   *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
-        resume=(_resume_options(resolved, tracked)
+        resume=(_resume_options(resolved, tracked, source.info.fps)
                 if status == STATUS_INTERRUPTED and not source.live else None),
     )
     jumped = tracked.timeline.warning(request.input, request.gt_path)
