@@ -146,4 +146,27 @@ def test_a_late_start_neither_reads_nor_counts_the_images_before_it(
     with ImageFolderSource(str(images)) as source:  # a start in a gap: the image before it
         assert source.start_near(4) == 2
         assert [frame.index for frame in source] == [2, 6, 7, 8, 9, 10, 11]
-        assert source.frames_skipped == source.frames_missing == 3  # not frame 1's image
+        # counted from the first frame tracked, 6: not frames 3..5 (it said 3), nor frame 1
+        assert source.frames_skipped == source.frames_missing == 0
+
+
+def test_a_late_start_by_time_counts_from_the_first_frame_tracked(tmp_path: Path) -> None:
+    """`vtrack run seq --start 0.15s` on 60 images with 0003.jpg junk and 0005..0007 and 0021
+    missing started at frame 7, read from frame 3 (the image before the frame 0.15 s x 30 fps
+    names) and warned of "4 images missing from the numbering", "skipped 4 missing": frames
+    4..6, before the start, counted as the run's. Only frame 20's place counts now."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 60, 30), folder)
+    for number in (5, 6, 7, 21):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    (folder / "img" / "0003.jpg").write_bytes(b"not an image")
+    images = folder / "img"
+    done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--start",
+                  "0.15s", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    assert "skipped 1 missing from the numbering" in done.stdout, done.stdout
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["start_frame"], record["read_from_frame"]) == (7, 3)
+    assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 1)
+    assert record["warnings"] == [f"{images}: 1 image missing from the numbering (the first "
+                                  "after 0020.jpg); their frames are skipped"]

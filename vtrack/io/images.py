@@ -221,7 +221,8 @@ class ImageFolderSource(Source):
     def start_near(self, index: int) -> int:
         """Begin at the image numbered ``index`` (or the last one numbered before it, when no
         image is): the images before it are not read, and neither they nor the gaps in the
-        numbering before it count as skipped."""
+        numbering before ``index`` count as skipped."""
+        super().start_near(index)
         if index <= 0 or self._prefetch is not None:
             return 0
         self._begin = bisect.bisect_right(self._places, index) - 1
@@ -234,15 +235,21 @@ class ImageFolderSource(Source):
         unreadable = 0
         turned_apart = False  # an image's own tag said another turn than the first's
         places, files = self._places[self._begin:], self._files[self._begin:]
-        missing = places[-1] + 1 - places[0] - len(files)
-        if missing:
-            self._skipped += missing
-            self._missing = missing
-            gap = next(i for i in range(1, len(places)) if places[i] != places[i - 1] + 1)
-            self.warnings.append(
-                f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
-                f"(the first after {files[gap - 1].name}); their frames are skipped")
-        for index, path in zip(places, files, strict=True):
+        # counted from the first image tracked (start_near, skip_to): the gaps before it and
+        # the images read before it are not the run's
+        tracked = next((at for at, place in enumerate(places)
+                        if self._tracked(place, place / fps)), len(places))
+        if tracked < len(places):
+            missing = places[-1] + 1 - places[tracked] - (len(places) - tracked)
+            if missing:
+                self._skipped += missing
+                self._missing = missing
+                gap = next(i for i in range(tracked + 1, len(places))
+                           if places[i] != places[i - 1] + 1)
+                self.warnings.append(
+                    f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
+                    f"(the first after {files[gap - 1].name}); their frames are skipped")
+        for at, (index, path) in enumerate(zip(places, files, strict=True)):
             try:
                 if index == 0:
                     pixels = first
@@ -258,6 +265,8 @@ class ImageFolderSource(Source):
                                 "would not be the sequence's size: turned as the first image "
                                 f"({self._turn} degrees)")
             except InputError as exc:
+                if at < tracked:  # before the first image tracked: not the run's
+                    continue
                 self._skipped += 1
                 unreadable += 1
                 if unreadable <= _NAMED_SKIPS:

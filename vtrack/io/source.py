@@ -87,12 +87,18 @@ class Source(Closing, ABC):
         self._closed = False
         #: After :meth:`skip_to`: the frame it stopped at and the frames after it.
         self._resumed: Iterator[Frame] | None = None
+        #: The first frame tracked is the first at or after this index and (when not None)
+        #: this time (:meth:`start_near`, :meth:`skip_to`); frames passed over before it are
+        #: not counted as skipped (:meth:`_tracked`).
+        self._from_index = 0
+        self._from_s: float | None = None
 
     @property
     def frames_skipped(self) -> int:
         """Frames of the input that could not be decoded and were skipped (damage in the middle
-        of a file, an unreadable image); later frames keep their indices. Final once iteration
-        has ended."""
+        of a file, an unreadable image); later frames keep their indices. Counted from the
+        first frame tracked (after :meth:`start_near` or :meth:`skip_to`, the frames passed
+        over before it are not). Final once iteration has ended."""
         return 0
 
     @property
@@ -134,6 +140,8 @@ class Source(Closing, ABC):
         allowed): the index of the first frame at or after it, which iterating the source then
         hands over first; None when the input ends before. Called instead of a first
         ``iter()``; a broken input raises as iterating does."""
+        if self._prefetch is None and self._resumed is None:
+            self._from_index, self._from_s = 0, seconds
         frames = iter(self)
         for frame in frames:
             if frame.time_s >= seconds - TIME_SLACK_S:
@@ -147,8 +155,18 @@ class Source(Closing, ABC):
         number its frames, :meth:`VideoSource.start_near`; an image folder), iterating then
         begins at a frame at or before ``index``, the frames keeping their numbers; elsewhere
         it begins at the first frame, as without this call. Returns the index iteration
-        begins at."""
+        begins at. Either way the frames passed over before ``index`` are not counted as
+        skipped (:attr:`frames_skipped`): they are not the run's."""
+        if self._prefetch is None and self._resumed is None:
+            self._from_index, self._from_s = max(0, index), None
         return 0
+
+    def _tracked(self, index: int, time_s: float) -> bool:
+        """Whether frame ``index`` at ``time_s`` is at or after the first frame tracked
+        (:meth:`start_near`'s index, :meth:`skip_to`'s time): the places passed over before
+        the first such frame are not counted as skipped."""
+        return index >= self._from_index and (self._from_s is None
+                                              or time_s >= self._from_s - TIME_SLACK_S)
 
     @property
     def frames_passed(self) -> int:

@@ -557,6 +557,8 @@ class VideoSource(Source):
         self._frame_order = self._container.format.name in FRAME_ORDER_FORMATS
         self._t0 = self._first.time  # frame 0's timestamp: the others' places count from it
         self._start = 0  # the index of the frame iteration begins at (start_near)
+        #: Frame places left empty before the first frame tracked (None until it is read).
+        self._uncounted: int | None = None
 
         self._rotation = quarter_turns(self._first.rotation)
         width, height = self._first.width, self._first.height
@@ -581,8 +583,10 @@ class VideoSource(Source):
     @property
     def frames_skipped(self) -> int:
         """Packets the decoder refused while decoding; once the stream has ended, every frame
-        place left empty after the damage (some pictures vanish without an error)."""
-        return self._dropped
+        place left empty after the damage (some pictures vanish without an error). Those
+        before the first frame tracked (:meth:`start_near`, :meth:`skip_to`) do not count."""
+        return max(0, self._dropped - (self._dropped if self._uncounted is None
+                                       else self._uncounted))
 
     @property
     def frames_corrupt(self) -> int:
@@ -636,6 +640,7 @@ class VideoSource(Source):
         B-frames put its decoding time before ``index``'s, makes it aim 1, 2, 4... frames
         earlier); else (or when FFmpeg cannot seek) the reader goes back to the first frame,
         and iteration begins there as it would have. Returns the index iteration begins at."""
+        super().start_near(index)
         fps = self.info.fps
         if (index <= 0 or self._prefetch is not None or not self._seekable or not fps
                 or not self._constant_rate or self._frame_order or self._t0 is None):
@@ -738,6 +743,8 @@ class VideoSource(Source):
                 refused = self._dropped
                 if info.frame_count_estimated and t is not None and t0 is not None:
                     _check_estimate(info, index, time_s, fps)
+                if self._uncounted is None and self._tracked(index, time_s):
+                    self._uncounted = index - yielded  # places passed over before it
                 yield decoded_frame(decoded, index, time_s, self._rotation)
                 index += 1
                 yielded += 1
@@ -758,7 +765,7 @@ class VideoSource(Source):
                 self._dropped = max(self._dropped, index - yielded)
         self._warn_of_damage()
         # skipped frames were in the file, and so were those before a jump: not a shortfall
-        tail.frames += self.frames_skipped + self._start
+        tail.frames += self._dropped + self._start
         # a torn last packet is a cut for certain: named before what the frames suggest
         shortfall = (self._torn_packet() or tail.shortfall(self._stream.frames, self._end_s, fps)
                      or self._torn_container())
