@@ -186,3 +186,36 @@ def test_only_the_videos_the_docs_name_jump_to_a_key_frame(long_clip: Path, tmp_
         assert "other videos (MKV, WebM, MPEG-TS, AVI, fragmented MP4, a variable frame rate)" \
             in text
         assert "A video file is read from the key frame" not in text
+
+
+def _fragmented(path: Path, movflags: str) -> Path:
+    """The clip's 300 frames as a fragmented MP4 (a fragment per key frame, every 30)."""
+    scene = make_scene("smooth", seed=1, width=64, height=48, frames=FRAMES, fps=30)
+    with av.open(str(path), "w", options={"movflags": movflags}) as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.options = {"g": str(KEYINT)}
+        for image in scene.frames():
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(image, format="bgr24")))
+        out.mux(stream.encode())
+    return path
+
+
+def test_a_fragmented_mp4_is_not_judged_by_its_first_fragment(tmp_path: Path) -> None:
+    """`cat frag.mp4 | vtrack run - --start 119 ...` (300 frames, movflags
+    frag_keyframe+empty_moov) said "has no frame 119 (frames by its duration and frame rate,
+    about 0..29)": read from a pipe, its duration is its first fragment's. A file written
+    without empty_moov was refused so even read as a file ("frames 0..29": its index lists the
+    first fragment's frames). Both start at 119 now."""
+    init = ("--init", "10,10,12,12", "--no-video", "--frames", "5", "--start", "119")
+    piped = _fragmented(tmp_path / "frag.mp4", "frag_keyframe+empty_moov")
+    listed = _fragmented(tmp_path / "frag2.mp4", "frag_keyframe")
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", *init,  # a pipe
+                           "-o", str(tmp_path / "piped")], input=piped.read_bytes(),
+                          capture_output=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr.decode()
+    done = vtrack("run", str(listed), *init, "-o", str(tmp_path / "listed"))
+    assert done.returncode == 0, done.stderr
+    for out in ("piped", "listed"):
+        record = json.loads((tmp_path / out / "run.json").read_text())
+        assert (record["start_frame"], record["frames"]) == (119, 5), out

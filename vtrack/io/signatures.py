@@ -87,6 +87,19 @@ def mp4_index_problem(path: str | os.PathLike[str]) -> str | None:
     return "its index (moov box) cut short" if sum(index) > end else None
 
 
+def _fragmented(boxes: list[tuple[bytes, int, int]]) -> bool:
+    """Whether an MP4's top-level ``boxes`` hold a fragment (``moof``)."""
+    return any(kind == b"moof" for kind, _, _ in boxes)
+
+
+def mp4_fragmented(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path``, an MP4/QuickTime file, holds fragments (``moof`` boxes): its index
+    (``moov``) then lists the frames of its first fragment at most. False when it holds none,
+    is no such file or cannot be read."""
+    found = _top_boxes(path)
+    return found is not None and _fragmented(found[1])
+
+
 def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
     """``"the file ends inside its last mdat box"`` (or ``moof`` ...) when ``path``, an
     MP4/QuickTime file, was cut inside its last top-level box: a fragmented recording (a
@@ -94,11 +107,9 @@ def mp4_torn_box(path: str | os.PathLike[str]) -> str | None:
     when its last box is whole, when what follows its boxes is no box (bytes appended), when
     it holds no fragment (``moof``: its index lists every frame), or it is no such file."""
     found = _top_boxes(path)
-    if found is None:
+    if found is None or not _fragmented(found[1]):  # not fragmented: its index counts
         return None
     end, boxes = found
-    if not any(kind == b"moof" for kind, _, _ in boxes):  # not fragmented: its index counts
-        return None
     kind, offset, size = boxes[-1]
     if offset + size <= end or not kind.isalnum():  # whole, or bytes after the boxes
         return None

@@ -53,6 +53,7 @@ from vtrack.io.pyfile import CapturingStream, CountedStream
 from vtrack.io.signatures import (
     header_problem,
     matroska_torn_element,
+    mp4_fragmented,
     mp4_index_problem,
     mp4_torn_box,
 )
@@ -547,7 +548,13 @@ class VideoSource(Source):
         if self._end_s is not None and start_s is not None:
             duration = self._end_s - start_s
         frame_count = stream.frames or None
-        estimated = frame_count is None and duration is not None and bool(fps)
+        mp4 = "mp4" in self._container.format.name
+        if frame_count and mp4 and self._seekable and mp4_fragmented(path):
+            frame_count = None  # its index lists the first fragment's frames: its duration counts
+        # a fragmented MP4 read without seeking (stdin, a URL) states the duration of what
+        # FFmpeg read before its first frame, the first fragment: no estimate
+        estimated = (frame_count is None and duration is not None and bool(fps)
+                     and not (mp4 and not self._seekable and not stream.frames))
         if estimated:
             frame_count = round(duration * fps)
         # a gap in a constant-rate stream's timestamps is pictures lost (a variable-rate one
