@@ -133,3 +133,30 @@ def test_a_run_and_a_batch_do_not_write_into_each_others_results(clip, tmp_path:
     assert vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video",
                   "-o", str(other)).returncode == 0
     assert (other / "run.json").is_file()
+
+
+def test_a_batch_folder_holding_another_index_html_is_still_a_batch(clip, tmp_path: Path
+                                                                     ) -> None:
+    """A batch folder holding an index.html that is not a vtrack report's (the user's own page)
+    was no batch: a report of it left out its failed runs and `vtrack report X --out` it
+    replaced its summary.csv. Only a page vtrack wrote makes a report's folder; a batch is
+    refused an --out holding one, as a report is refused a batch's folder."""
+    folder = one_input(tmp_path / "in", clip)
+    (folder / "bad.mp4").write_bytes(b"not a video at all")
+    batch = tmp_path / "mixd"
+    batch.mkdir()
+    (batch / "index.html").write_text("<html>notes</html>\n")
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(batch)
+                  ).returncode == 1
+    kept = (batch / "summary.csv").read_bytes()
+    report = tmp_path / "rep"
+    assert vtrack("report", str(batch), "--out", str(report)).returncode == 0
+    assert "bad" in (report / "index.html").read_text()
+    result = vtrack("report", str(report), "--out", str(batch))
+    assert_one_line_error(result, "summary.csv", "another folder")
+    assert (batch / "summary.csv").read_bytes() == kept
+    before = sorted(p.relative_to(report) for p in report.rglob("*"))
+    result = vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(report))
+    assert_one_line_error(result, str(report), "vtrack report's folder", "another --out")
+    assert result.returncode == 2
+    assert sorted(p.relative_to(report) for p in report.rglob("*")) == before

@@ -47,14 +47,31 @@ BATCH_COLUMNS = ("input", "config", "status", "frames", "frames_evaluated", "auc
 #: still a batch's (its rows are read, and resumed).
 EARLIER_BATCH_COLUMNS = ("input", "config", "frames", "fps", "mean_overlap", "auc",
                          "precision20", "frames_lost", "frames_skipped", "status", "error")
-#: The page a report writes beside its ``summary.csv``: what tells that file from a batch's.
+#: The page a report writes beside its ``summary.csv``.
 REPORT_PAGE = "index.html"
+#: How a report's page begins its generator line in its head (``<meta name="generator"
+#: content="vtrack 0.1.0">``): what tells a report's folder (its ``summary.csv`` has a batch's
+#: header) from a batch's folder holding some other ``index.html`` (the user's own page).
+REPORT_GENERATOR = '<meta name="generator" content="vtrack'
+#: How much of a page's beginning is read for :data:`REPORT_GENERATOR` (its head).
+_PAGE_HEAD = 4096
+
+
+def is_report_folder(folder: Path | str) -> bool:
+    """Whether ``folder`` holds a vtrack report: its :data:`REPORT_PAGE` carries
+    :data:`REPORT_GENERATOR` in its head (any other ``index.html`` is not a report's)."""
+    try:
+        with (Path(folder) / REPORT_PAGE).open(encoding="utf-8", errors="replace") as handle:
+            return REPORT_GENERATOR in handle.read(_PAGE_HEAD)
+    except OSError:
+        return False
 
 
 def is_batch_folder(folder: Path | str) -> bool:
     """Whether ``folder`` is a batch's results folder: it holds a ``summary.csv`` whose header
     is a batch's (:data:`BATCH_COLUMNS`, or :data:`EARLIER_BATCH_COLUMNS`), not any file of
-    that name, and no report's page (:data:`REPORT_PAGE`: a report's own ``summary.csv``)."""
+    that name, and is no vtrack report's (:func:`is_report_folder`: a report's own
+    ``summary.csv`` has the same header)."""
     folder = Path(folder)
     try:
         with (folder / BATCH_SUMMARY).open(encoding="utf-8", errors="replace") as handle:
@@ -62,18 +79,24 @@ def is_batch_folder(folder: Path | str) -> bool:
     except OSError:
         return False
     return (header in (",".join(BATCH_COLUMNS), ",".join(EARLIER_BATCH_COLUMNS))
-            and not (folder / REPORT_PAGE).exists())
+            and not is_report_folder(folder))
 
 
 def refuse_other_results(folder: Path | str, what: str) -> None:
     """Raise OutputError when ``folder`` holds the other kind's results: a run's
     (``run.json``) for a batch (``what`` ``batch``), whose folder per input would sit among
     them, or a batch's (:func:`is_batch_folder`) for a run (any other ``what``), whose files
-    would sit among the batch's: either way a report of it would mix the two."""
+    would sit among the batch's: either way a report of it would mix the two. A batch is
+    refused a vtrack report's folder too (:func:`is_report_folder`): its ``summary.csv``
+    would replace the report's, as a report is refused a batch's folder."""
     folder = Path(folder)
     if what == "batch" and (folder / "run.json").is_file():
         raise OutputError(f"{folder}: is a run's results folder (run.json); a batch there "
                           "would mix its inputs' folders with that run: choose another --out")
+    if what == "batch" and is_report_folder(folder):
+        raise OutputError(f"{folder}: is a vtrack report's folder ({REPORT_PAGE}); a batch "
+                          f"there would replace the report's {BATCH_SUMMARY}: choose another "
+                          "--out")
     if what != "batch" and is_batch_folder(folder):
         raise OutputError(f"{folder}: is a batch's results folder ({BATCH_SUMMARY}); a run "
                           "there would mix its files with the batch's: choose another --out "

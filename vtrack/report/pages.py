@@ -8,7 +8,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from vtrack import __version__
 from vtrack.errors import printable
+from vtrack.io.outdir import REPORT_GENERATOR
 from vtrack.report import rows
 from vtrack.report.runs import FailedRun, RunResult
 from vtrack.report.tables import NOTES, Table
@@ -191,6 +193,7 @@ def render_html(page: Page) -> str:
     parts.append(f"<footer>{_e(_footer(page, html_page=True))}</footer>")
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
+        f'{REPORT_GENERATOR} {_e(__version__)}">\n'
         f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
         f"<title>{_e(page.title)}</title>\n<style>{CSS}</style>\n</head>\n<body>\n"
         + "\n".join(parts) + f"\n<script>{SORT_JS}</script>\n</body>\n</html>\n"

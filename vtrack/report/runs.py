@@ -46,7 +46,7 @@ from vtrack.io.outdir import (
     BATCH_COLUMNS,
     EARLIER_BATCH_COLUMNS,
     LOCK_NAME,
-    REPORT_PAGE,
+    is_report_folder,
     live_holder,
 )
 from vtrack.io.specs import is_live, is_url
@@ -684,8 +684,8 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
     """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
     left no results (no run of ``reported`` is in their results folder, the batch's
     ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
-    once (a report's own ``summary.csv``, beside its :data:`~vtrack.io.outdir.REPORT_PAGE`, is
-    no batch's). What could not be read of those files is appended to ``problems`` (see
+    once (a report's own ``summary.csv``, :func:`~vtrack.io.outdir.is_report_folder`, is no
+    batch's). What could not be read of those files is appended to ``problems`` (see
     :func:`_batch_rows`), and one line per file naming its complete rows whose results folder
     holds no ``run.json``."""
     ran = {run.folder.resolve() for run in reported}
@@ -693,7 +693,7 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
     for path in paths:
         summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
         for summary in summaries:
-            if summary.name != "summary.csv" or (summary.parent / REPORT_PAGE).exists():
+            if summary.name != "summary.csv" or is_report_folder(summary.parent):
                 continue
             gone = []
             for r in _batch_rows(summary, problems):
