@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from click.testing import CliRunner, Result
 
 from vtrack.cli import main
+from vtrack.io.outdir import BATCH_COLUMNS, EARLIER_BATCH_COLUMNS, is_batch_folder
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -89,3 +90,37 @@ def test_a_resumed_multi_target_run_is_printed_with_its_scores(
     assert " mota " in first and " idf1 " in first
     scores = first.partition(" fps, ")[2].partition(" -> ")[0]
     assert scores and scores in again and again.endswith("(already complete: not run again)")
+
+
+def test_a_batch_resuming_an_earlier_header_rebuilds_the_rows_it_keeps(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A batch into a folder whose summary.csv has the header of an earlier vtrack kept the
+    rows it did not run again (other configs) as they were, in the old layout under the new
+    header (no `run`, fps to 1 decimal, scores to 4, every new column empty). Each is now
+    rebuilt from its run's folder: the row this vtrack writes for that run."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    clip = clip_factory("occlusion", width=W, height=H, frames=FRAMES)
+    shutil.copy(clip.path, inputs / "occ.mp4")
+    shutil.copy(clip.gt, inputs / "occ.gt.txt")
+    out = tmp_path / "results"
+    done = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    _, rows = read(out / "summary.csv")
+    assert is_batch_folder(out)
+    now = rows[("occ", "s0")]
+    with (out / "summary.csv").open("w", newline="") as handle:  # as an earlier vtrack wrote it
+        writer = csv.writer(handle)
+        writer.writerow(EARLIER_BATCH_COLUMNS)
+        writer.writerow(["occ", "s0", now["frames"], f"{float(now['fps']):.1f}",
+                         f"{float(now['mean_overlap']):.4f}", f"{float(now['auc']):.4f}",
+                         f"{float(now['precision20']):.4f}", now["frames_lost"],
+                         now["frames_skipped"], "complete", ""])
+    assert is_batch_folder(out)
+    done = vtrack("batch", str(inputs), "-c", "s1", "--no-video", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    header, rows = read(out / "summary.csv")
+    assert header == list(BATCH_COLUMNS)
+    assert set(rows) == {("occ", "s0"), ("occ", "s1")}
+    assert rows[("occ", "s0")] == now
+    assert rows[("occ", "s1")]["run"] == "occ/s1"

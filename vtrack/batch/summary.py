@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import math
 import time
-from collections.abc import Callable, Generator, Iterable
+from collections.abc import Callable, Collection, Generator, Iterable
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -14,7 +14,8 @@ from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
 from vtrack.batch.plan import Plan, recorded_summary
 from vtrack.errors import InputError, passing_stop_to
-from vtrack.io.files import write_text_atomic
+from vtrack.io.files import folder_name, write_text_atomic
+from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
 from vtrack.run import STATUS_INTERRUPTED
 
 #: A run's end writes ``summary.csv`` again once this many times the last write's own time has
@@ -81,21 +82,26 @@ def outcome_row(outcome: Outcome, summary_path: Path) -> dict[str, Any]:
     folder holds (:attr:`Outcome.held`) and its folder named inside the batch's
     (``clip/s0``). A job without a run folder that can be read (it failed before writing
     one) has its input, config, status and error only."""
+    recorded = outcome.kept or outcome.summary
+    row = (folder_row(Path(recorded.out_dir), summary_path)
+           if recorded is not None and recorded.out_dir else {})
+    row.update(input=outcome.input, config=outcome.config, status=outcome.held,
+               error=outcome.kept.error if outcome.kept else outcome.error)
+    return row
+
+
+def folder_row(folder: Path, summary_path: Path) -> dict[str, Any]:
+    """The ``summary.csv`` row of the run ``folder`` holds, as a report's has it
+    (:func:`vtrack.report.rows.run_row`), with its folder named inside the batch's (``run``);
+    empty when the folder holds no run that can be read."""
     from vtrack.report.rows import run_row  # (reading runs: not loaded for --help)
     from vtrack.report.runs import load_run
 
-    recorded = outcome.kept or outcome.summary
-    row: dict[str, Any] = {}
-    if recorded is not None and recorded.out_dir:
-        folder = Path(recorded.out_dir)
-        try:
-            row = run_row(load_run(folder))
-        except InputError:
-            pass
-        else:
-            row["run"] = _inside(folder, summary_path.parent)
-    row.update(input=outcome.input, config=outcome.config, status=outcome.held,
-               error=outcome.kept.error if outcome.kept else outcome.error)
+    try:
+        row = run_row(load_run(folder))
+    except InputError:
+        return {}
+    row["run"] = _inside(folder, summary_path.parent)
     return row
 
 
@@ -107,15 +113,27 @@ def _inside(folder: Path, batch: Path) -> str:
         return str(folder)
 
 
-def earlier_rows(path: Path) -> dict[tuple[str, str], dict[str, Any]]:
+def earlier_rows(path: Path, planned: Collection[tuple[str, str]] = ()
+                 ) -> dict[tuple[str, str], dict[str, Any]]:
     """The rows of an existing ``summary.csv`` by (input, config); none if it is missing or
-    cannot be read."""
+    cannot be read. A file written by an earlier vtrack (:data:`EARLIER_BATCH_COLUMNS`) has
+    each row not ``planned`` now (which this batch writes anew) rebuilt from its run's folder,
+    ``<input>/<config>/`` (:func:`folder_row`), as this batch writes it: its input, config,
+    status and error as they were (the row as it was where the folder holds no run)."""
     try:
         with path.open(newline="", encoding="utf-8") as handle:
-            return {(row["input"], row["config"]): {c: row.get(c) for c in SUMMARY_COLUMNS}
-                    for row in csv.DictReader(handle)}
+            reader = csv.DictReader(handle)
+            rows = {(row["input"], row["config"]): {c: row.get(c) for c in SUMMARY_COLUMNS}
+                    for row in reader}
     except (OSError, KeyError, UnicodeDecodeError, csv.Error):
         return {}
+    if tuple(reader.fieldnames or ()) == EARLIER_BATCH_COLUMNS:
+        for key, row in rows.items():
+            if key not in planned:
+                folder = path.parent / folder_name(key[0], "input") / folder_name(key[1])
+                rows[key] = {**row, **folder_row(folder, path), "input": key[0],
+                             "config": key[1], "status": row["status"], "error": row["error"]}
+    return rows
 
 
 class SummaryWriter:
@@ -135,7 +153,8 @@ class SummaryWriter:
         self._next_write = -math.inf  # the clock's time from which an outcome writes again
         self._pending = False  # outcomes added since the last write
         order = list(order)
-        planned, earlier = set(order), earlier_rows(path)
+        planned = set(order)
+        earlier = earlier_rows(path, planned)
         # input-major; sorted() is stable: each input's configs in the order they first ran
         keys = sorted(dict.fromkeys([*earlier, *order]), key=lambda key: key[0])
         self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
