@@ -39,13 +39,14 @@ confirmed tracks were measured with, from the previous frame); the given ``aspec
 ``vtrack.stages.base.PRIOR_SAMPLES`` samples, so it gives way as the scene shows its targets.
 But the tracker confirms only tracks of detections that score well, i.e. of about the given
 aspect: targets of another shape (vehicles, h/w 0.3-0.8, told 2.5, a person's) are dropped or
-cut into "people" before any is confirmed, and the tracker learns the pieces. With ``persist``,
-the blobs themselves teach the shape (:class:`PersistentBlobs`): each merged blob, trimmed and
-before any split, that overlaps one of the previous frame's and keeps its height/width steady
-for ``persist`` frames (and is no smaller than ``min_share`` of the usual area) is a sample;
-once there are as many as the given aspect counts for (``PRIOR_SAMPLES``) and their median is
-off the aspect in use by more than a factor ``UNLIKE``, that median is the aspect for the rest
-of the run (on footage of people, where they agree, nothing changes).
+cut into "people" before any is confirmed, and the tracker learns the pieces. With ``persist``
+(and ``learn``: without it ``persist`` is not used), the blobs themselves teach the shape
+(:class:`PersistentBlobs`): each merged blob, trimmed and before any split, that overlaps one
+of the previous frame's and keeps its height/width steady for ``persist`` frames (and is no
+smaller than ``min_share`` of the usual area) is a sample; once there are as many as the given
+aspect counts for (``PRIOR_SAMPLES``) and their median is off the aspect in use by more than a
+factor ``UNLIKE``, that median is the aspect for the rest of the run (on footage of people,
+where they agree, nothing changes).
 Work per frame: at most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs
 (``blobs.max_blobs`` bounds ``M``), one column profile per blob that is split, and with
 ``persist`` one per blob and ``M^2`` box overlaps.
@@ -313,9 +314,10 @@ class GroupBlobs(Stage):
               "a shadow's fringe; 0: the foreground's full extent)", min=0.0, max=0.4),
         Param("persist", int, 0,
               "blobs that persist this many frames with a steady height/width are samples of "
-              "the targets' shape; once there are 50 and their median is more than a factor 2 "
-              "off the aspect, it is the aspect (targets of another shape than the given one, "
-              "which the tracker cannot learn; 0: off)", min=0, max=1000),
+              f"the targets' shape; once there are {PRIOR_SAMPLES} and their median is more "
+              f"than a factor {UNLIKE:g} off the aspect, it is the aspect (targets of another "
+              "shape than the given one, which the tracker cannot learn; 0: off; not used "
+              "when learn is false)", min=0, max=1000),
         Param("border", bool, True,
               "a detection cut by the frame's border is carried on beyond it to the usual "
               "aspect (a target entering or leaving; ground truth such as MOTChallenge's "
@@ -349,22 +351,23 @@ class GroupBlobs(Stage):
             aspect = persistent.aspect
         found = merge_fragments(ctx.detections, self.merge_gap, aspect)
         frame = ctx.frame
-        if learning:  # each blob whole, before it is split by the aspect learnt so far
-            self._persistent.see([self._trimmed(d, ctx).box for d in found], frame.width,
-                                 frame.height, ctx.feature_scale,
+        whole = [self._trimmed(d, ctx) for d in found] if learning else None
+        if whole is not None:  # each blob whole, before it is split by the aspect learnt so far
+            self._persistent.see([d.box for d in whole], frame.width, frame.height,
+                                 ctx.feature_scale,
                                  0.0 if area is None else self.min_share * area)
-        grouped: list[Detection] = []
-        for detection in found:
+        grouped: list[Detection] = []  # each trimmed (an unsplit blob once: ``whole``'s)
+        for n, detection in enumerate(found):
             b = detection.box
             parts = round(b.w * aspect / b.h)
             if self.split and b.w * aspect > self.split * b.h and 2 <= parts <= MAX_PARTS:
                 assert ctx.likelihood is not None
-                grouped.extend(split_side_by_side(detection, parts, ctx.likelihood,
-                                                  ctx.feature_scale))
+                grouped.extend(self._trimmed(d, ctx) for d in split_side_by_side(
+                    detection, parts, ctx.likelihood, ctx.feature_scale))
             else:
-                grouped.append(detection)
+                grouped.append(self._trimmed(detection, ctx) if whole is None else whole[n])
         scored = []
-        for detection in (self._trimmed(d, ctx) for d in grouped):
+        for detection in grouped:
             visible = b = detection.box
             if self.border:
                 b = completed_at_border(visible, aspect, frame.width, frame.height,
