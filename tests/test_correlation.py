@@ -46,6 +46,19 @@ def test_fhog_has_31_channels_per_cell_and_is_zero_on_a_flat_patch() -> None:
     assert np.all(fhog(np.full((32, 32, 3), 90, np.uint8), 4) == 0)
 
 
+def test_the_cached_cell_grids_cannot_be_written() -> None:
+    """fhog's cell index and the colour model's cell centres are cached (lru_cache): every
+    caller gets the same array, so one that wrote into it would change every later call's.
+    They are read only."""
+    from vtrack.features.colour import _cell_centres
+    from vtrack.features.fhog import _cell_index
+
+    for grid in (_cell_index(3, 4, 4), _cell_centres(40, 50, 3, 4, 4)):
+        with pytest.raises(ValueError, match="read-only"):
+            grid[0, 0] = 1
+    fhog(np.zeros((16, 16), np.uint8))  # which still reads it
+
+
 def test_fhog_follows_the_image_cell_by_cell() -> None:
     """Shifting the image by one cell shifts the features by one cell (away from the borders)."""
     image = texture(80, 80)

@@ -82,10 +82,12 @@ def cell_response(likelihood: np.ndarray, w: float, h: float, rows: int, cols: i
 def _cell_centres(height: int, width: int, rows: int, cols: int, cell: int) -> np.ndarray:
     """(rows, cols) flat indices into a ``height`` x ``width`` image of the pixels
     :func:`cell_response` reads: each cell's displacement from the middle pixel (clipped to
-    the image)."""
+    the image). Read only: every call with these arguments returns this one array (cached)."""
     ys = np.clip(height // 2 + (np.arange(rows) - rows // 2) * cell, 0, height - 1)
     xs = np.clip(width // 2 + (np.arange(cols) - cols // 2) * cell, 0, width - 1)
-    return ys[:, None] * width + xs[None, :]
+    centres = ys[:, None] * width + xs[None, :]
+    centres.setflags(write=False)
+    return centres
 
 
 def box_mean(likelihood: np.ndarray, w: float, h: float) -> np.ndarray:

@@ -56,10 +56,13 @@ def _gradients(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @lru_cache(maxsize=32)
 def _cell_index(rows: int, cols: int, cell: int) -> np.ndarray:
-    """Per pixel of a (rows*cell, cols*cell) patch: the index of its cell (row-major)."""
+    """Per pixel of a (rows*cell, cols*cell) patch: the index of its cell (row-major). Read
+    only: every call with these arguments returns this one array (cached)."""
     r = np.arange(rows * cell) // cell
     c = np.arange(cols * cell) // cell
-    return (r[:, None] * cols + c[None, :]).astype(np.int32)
+    index = (r[:, None] * cols + c[None, :]).astype(np.int32)
+    index.setflags(write=False)
+    return index
 
 
 def fhog(patch: np.ndarray, cell: int = 4) -> np.ndarray:
