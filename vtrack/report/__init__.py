@@ -28,9 +28,18 @@ from typing import Any
 _BUILD = ("ALL_INPUTS", "DEFAULT_TITLE", "PLOT_KINDS", "Report", "build_report", "_slugs")
 
 
+__all__ = ["ALL_INPUTS", "DEFAULT_TITLE", "PLOT_KINDS", "Report", "build_report"]
+
+
 def __getattr__(name: str) -> Any:
     if name in _BUILD:
         from vtrack.report import build
 
         return getattr(build, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The package's names with those :mod:`.build` gives (``dir()``, ``help()``, completion
+    see ``build_report`` before it is loaded)."""
+    return sorted({*globals(), *_BUILD})

@@ -494,7 +494,8 @@ def _drawn_by_auc(scored: Sequence[RunResult]) -> list[RunResult]:
         return list(scored)
     ranked = _by_auc(scored)
     worst = plots.MAX_RUNS_DRAWN // 2
-    chosen = {id(r) for r in ranked[:plots.MAX_RUNS_DRAWN - worst] + ranked[-worst:]}
+    chosen = {id(r) for r in ranked[:plots.MAX_RUNS_DRAWN - worst]
+              + ranked[len(ranked) - worst:]}
     return [r for r in scored if id(r) in chosen]
 
 

@@ -192,14 +192,16 @@ def _run_label(run: RunResult) -> list[str]:
     return [run.input, run.config, status_text(run)]
 
 
-#: Where the tracking miss is among :data:`SCORE_COLUMNS`.
-TRACKING_MISS = next(n for n, c in enumerate(SCORE_COLUMNS) if c.title == "Tracking miss")
+def _tracking_miss(columns: Sequence[Column]) -> int:
+    """Where the tracking miss is among ``columns`` (a table's value columns)."""
+    return next(n for n, c in enumerate(columns) if c.title == "Tracking miss")
 
 
 def _say_oversized(table: Table, column: int, notes: Sequence[str | None]) -> None:
-    """Append each note (if any) to its row's value in ``column`` of the rows last added: why
-    that value is not ranked (``0.000 (box 60x)``; the header's note says more)."""
-    for cells, note in zip(table.rows[-len(notes):], notes, strict=True):
+    """Append each note (if any) to its row's value in ``column`` of the rows last added, as
+    many as there are notes (none: nothing): why that value is not ranked (``0.000 (box
+    60x)``; the header's note says more)."""
+    for cells, note in zip(table.rows[len(table.rows) - len(notes):], notes, strict=True):
         if note:
             cells[column].text += f" ({note})"
 
@@ -215,7 +217,7 @@ def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
     box is :attr:`~vtrack.report.runs.RunResult.oversized` is not ranked by its tracking miss,
     which says how large its box is."""
     table = _table(RUN_LABELS, RESULT_COLUMNS)
-    miss = len(RESULT_COLUMNS) - len(SCORE_COLUMNS) + TRACKING_MISS
+    miss = _tracking_miss(RESULT_COLUMNS)
     for runs in by_input:
         _add_group(table, [_run_label(r) for r in runs],
                    [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
@@ -258,7 +260,7 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
         partial = sum(r.status in INCOMPLETE for r in counted)
         labels.append([f"{config} ({partial} partial)" if partial else config])
         oversized.append(sum(r.oversized for r in scored))
-    miss = len(AVERAGE_COLUMNS) - len(SCORE_COLUMNS) + TRACKING_MISS
+    miss = _tracking_miss(AVERAGE_COLUMNS)
     _add_group(table, labels, values, AVERAGE_COLUMNS, None,
                [{miss} if n else () for n in oversized])
     _say_oversized(table, 1 + miss, [

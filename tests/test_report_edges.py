@@ -1,0 +1,44 @@
+"""Edges of the report's pieces that its usual inputs do not reach: a table group without
+rows, as few runs drawn as one, the package's names before its builder is loaded."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import vtrack.report
+from vtrack.report import build, plots
+from vtrack.report.runs import RunResult
+from vtrack.report.tables import Cell, Table, _say_oversized
+
+
+def test_no_notes_change_no_row() -> None:
+    """`_say_oversized` with no notes took `table.rows[-0:]`, every row (and failed to pair
+    them with no notes); it touches none now."""
+    table = Table(["Config", "Tracking miss"], [[Cell("s0"), Cell("0.100")],
+                                               [Cell("s1"), Cell("0.200")]])
+    _say_oversized(table, 1, [])
+    assert [c.text for row in table.rows for c in row] == ["s0", "0.100", "s1", "0.200"]
+    _say_oversized(table, 1, ["box 60x"])  # the last row added
+    assert [row[1].text for row in table.rows] == ["0.100", "0.200 (box 60x)"]
+
+
+def _run(config: str, overlap: float) -> RunResult:
+    return RunResult(Path(config), "clip", config, "complete", 4, 30.0, 0, 0, False,
+                     states=["tracking"] * 4, overlaps=[overlap] * 4, errors=[1.0] * 4)
+
+
+def test_one_run_drawn_is_the_best(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With one run drawn per input, none of the worst half (0 runs): `ranked[-0:]` took every
+    run, so all were drawn."""
+    monkeypatch.setattr(plots, "MAX_RUNS_DRAWN", 1)
+    runs = [_run("a", 0.2), _run("b", 0.9), _run("c", 0.5)]
+    assert [r.config for r in build._drawn_by_auc(runs)] == ["b"]
+
+
+def test_the_package_lists_the_names_it_gives() -> None:
+    """`dir(vtrack.report)` (and so `help()`, completion) did not show build_report, which
+    the package gives only when asked for (its builder loads matplotlib)."""
+    assert {"build_report", "Report", "DEFAULT_TITLE"} <= set(dir(vtrack.report))
+    assert "build_report" in vtrack.report.__all__
