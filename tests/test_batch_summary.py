@@ -3,14 +3,21 @@
 from __future__ import annotations
 
 import csv
+import os
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from click.testing import CliRunner, Result
 
+from vtrack.batch import Job, execute
 from vtrack.cli import main
+from vtrack.config import load_config
+from vtrack.io.identity import file_identity
 from vtrack.io.outdir import BATCH_COLUMNS, EARLIER_BATCH_COLUMNS, is_batch_folder
+from vtrack.report.rows import run_row
+from vtrack.report.runs import load_run
+from vtrack.request import RunRequest
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -92,12 +99,10 @@ def test_a_resumed_multi_target_run_is_printed_with_its_scores(
     assert scores and scores in again and again.endswith("(already complete: not run again)")
 
 
-def test_a_batch_resuming_an_earlier_header_rebuilds_the_rows_it_keeps(
-        clip_factory: ClipFactory, tmp_path: Path) -> None:
-    """A batch into a folder whose summary.csv has the header of an earlier vtrack kept the
-    rows it did not run again (other configs) as they were, in the old layout under the new
-    header (no `run`, fps to 1 decimal, scores to 4, every new column empty). Each is now
-    rebuilt from its run's folder: the row this vtrack writes for that run."""
+def _batch_of_one(clip_factory: ClipFactory, tmp_path: Path
+                  ) -> tuple[Path, Path, dict[tuple[str, str], dict[str, str]]]:
+    """A batch of s0 over one occlusion clip: its inputs' folder, its results folder and the
+    rows of its summary.csv."""
     inputs = tmp_path / "in"
     inputs.mkdir()
     clip = clip_factory("occlusion", width=W, height=H, frames=FRAMES)
@@ -106,7 +111,16 @@ def test_a_batch_resuming_an_earlier_header_rebuilds_the_rows_it_keeps(
     out = tmp_path / "results"
     done = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "--out", str(out))
     assert done.exit_code == 0, done.output
-    _, rows = read(out / "summary.csv")
+    return inputs, out, read(out / "summary.csv")[1]
+
+
+def test_a_batch_resuming_an_earlier_header_rebuilds_the_rows_it_keeps(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A batch into a folder whose summary.csv has the header of an earlier vtrack kept the
+    rows it did not run again (other configs) as they were, in the old layout under the new
+    header (no `run`, fps to 1 decimal, scores to 4, every new column empty). Each is now
+    rebuilt from its run's folder: the row this vtrack writes for that run."""
+    inputs, out, rows = _batch_of_one(clip_factory, tmp_path)
     assert is_batch_folder(out)
     now = rows[("occ", "s0")]
     with (out / "summary.csv").open("w", newline="") as handle:  # as an earlier vtrack wrote it
@@ -124,3 +138,51 @@ def test_a_batch_resuming_an_earlier_header_rebuilds_the_rows_it_keeps(
     assert set(rows) == {("occ", "s0"), ("occ", "s1")}
     assert rows[("occ", "s0")] == now
     assert rows[("occ", "s1")]["run"] == "occ/s1"
+
+
+def test_a_resumed_pair_keeps_its_row_while_its_run_json_is_unchanged(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Every resumed pair's row was read again from its run folder (load_run, ~35 us a frame,
+    one pair after another in the batch's process: a thousand resumed 3000-frame runs were a
+    minute of silence before the first new run). A resumed pair now keeps the row summary.csv
+    has for it while its run.json is the very file that row was read from (its size and time,
+    recorded beside summary.csv): a track.csv edited in place (same size, so the run still
+    counts as complete) does not change it; a run.json touched since does, read again."""
+    inputs, out, rows = _batch_of_one(clip_factory, tmp_path)
+    first = rows[("occ", "s0")]
+    track = out / "occ" / "s0" / "track.csv"
+    lines = track.read_text().splitlines(keepends=True)
+    for n in range(5, len(lines)):  # every box's x one hundred pixels off, same digits
+        cells = lines[n].split(",")
+        cells[2] = str((int(cells[2][0]) + 5) % 9 + 1) + cells[2][1:]
+        lines[n] = ",".join(cells)
+    size = track.stat().st_size
+    track.write_text("".join(lines))
+    assert track.stat().st_size == size
+    done = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    assert "not run again" in done.output
+    _, rows = read(out / "summary.csv")
+    assert rows[("occ", "s0")] == first
+    record = out / "occ" / "s0" / "run.json"
+    later = record.stat().st_mtime_ns + 2_000_000_000
+    os.utime(record, ns=(later, later))
+    done = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    _, rows = read(out / "summary.csv")
+    assert float(rows[("occ", "s0")]["auc"]) < float(first["auc"])
+    assert rows[("occ", "s0")]["run"] == "occ/s0"
+
+
+def test_the_worker_reads_its_runs_row(clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """The batch's process read every finished run's row (load_run) one after another; the
+    worker that ran the job reads it now, in parallel, and its outcome carries it with the
+    identity of the run.json it was read from."""
+    clip = clip_factory("occlusion", width=W, height=H, frames=FRAMES)
+    folder = tmp_path / "job"
+    request = RunRequest(input=str(clip.path), out_dir=folder, config=load_config("s0"),
+                         gt_path=clip.gt, video=False)
+    outcome = execute(Job("occ", "s0", request))
+    assert outcome.status == "complete", outcome.error
+    assert outcome.row == run_row(load_run(folder))
+    assert outcome.row_source == file_identity(folder / "run.json")

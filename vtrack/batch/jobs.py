@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
-from vtrack.errors import printable
+from vtrack.errors import InputError, printable
+from vtrack.io.identity import file_identity
 from vtrack.io.outdir import BATCH_COLUMNS
 from vtrack.request import RunRequest
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, RunSummary
@@ -53,6 +55,11 @@ class Outcome:
     #: summary (from its ``run.json``), which the ``summary.csv`` row keeps describing (the
     #: folder still holds it).
     kept: RunSummary | None = None
+    #: The ``summary.csv`` row of the run the job's folder holds (:func:`read_row`), read
+    #: where the job ran (a worker: in parallel, not in the batch's process), and the identity
+    #: of the ``run.json`` it was read from (:func:`read_row`); None: not read there.
+    row: dict[str, Any] | None = None
+    row_source: dict[str, int] | None = None
 
     @property
     def ok(self) -> bool:
@@ -97,3 +104,20 @@ def _as_given(folder: Path, results: Path) -> Path:
         return results / folder.relative_to(results.resolve())
     except ValueError:  # a run recorded elsewhere
         return folder
+
+
+def read_row(folder: Path) -> tuple[dict[str, Any], dict[str, int] | None]:
+    """The ``summary.csv`` row of the run ``folder`` holds, as a report's has it
+    (:func:`vtrack.report.rows.run_row`), and the identity (size, modification time) of the
+    ``run.json`` it was read from: None when that file changed while it was read. ``({},
+    None)`` when the folder holds no run that can be read."""
+    from vtrack.report.rows import run_row  # (reading runs: not loaded for --help)
+    from vtrack.report.runs import load_run
+
+    record = folder / "run.json"
+    source = file_identity(record)
+    try:
+        row = run_row(load_run(folder))
+    except InputError:
+        return {}, None
+    return row, source if source is not None and file_identity(record) == source else None

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import json
 import math
 import time
 from collections.abc import Callable, Collection, Generator, Iterable
@@ -11,10 +13,11 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.batch.executors import Executor
-from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome
+from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome, read_row
 from vtrack.batch.plan import Plan, recorded_summary
-from vtrack.errors import InputError, passing_stop_to
+from vtrack.errors import OutputError, passing_stop_to
 from vtrack.io.files import folder_name, write_text_atomic
+from vtrack.io.identity import file_identity
 from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
 from vtrack.run import STATUS_INTERRUPTED
 
@@ -69,40 +72,35 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
                     if recorded is not None:
                         outcome = Outcome(job.input, job.config, recorded.status, recorded,
                                           recorded.error, job.attempt)
-                        summary.rows[(job.input, job.config)] = outcome_row(outcome, summary.path)
+                        summary.add(outcome, write=False)
                         if late is not None:
                             late.append(outcome)
             summary.write(stopped=True)
 
 
-def outcome_row(outcome: Outcome, summary_path: Path) -> dict[str, Any]:
+def outcome_row(outcome: Outcome, summary_path: Path
+                ) -> tuple[dict[str, Any], dict[str, int] | None]:
     """``outcome``'s ``summary.csv`` row: the row a report's ``summary.csv`` has for the run its
-    folder holds (:func:`vtrack.report.rows.run_row`; the ``kept`` run when the job was
-    refused), under the batch's input and config names, the status and error of what its
-    folder holds (:attr:`Outcome.held`) and its folder named inside the batch's
-    (``clip/s0``). A job without a run folder that can be read (it failed before writing
-    one) has its input, config, status and error only."""
+    folder holds (:func:`vtrack.batch.jobs.read_row`: as the worker read it, else read now;
+    the ``kept`` run when the job was refused), under the batch's input and config names, the
+    status and error of what its folder holds (:attr:`Outcome.held`) and its folder named
+    inside the batch's (``clip/s0``); and the identity of the ``run.json`` it was read from
+    (None: none). A job without a run folder that can be read (it failed before writing one)
+    has its input, config, status and error only."""
     recorded = outcome.kept or outcome.summary
-    row = (folder_row(Path(recorded.out_dir), summary_path)
-           if recorded is not None and recorded.out_dir else {})
+    row: dict[str, Any] = {}
+    source = None
+    if recorded is not None and recorded.out_dir:
+        folder = Path(recorded.out_dir)
+        if outcome.row is not None and outcome.kept is None:
+            row, source = dict(outcome.row), outcome.row_source
+        else:
+            row, source = read_row(folder)
+        if row:
+            row["run"] = _inside(folder, summary_path.parent)
     row.update(input=outcome.input, config=outcome.config, status=outcome.held,
                error=outcome.kept.error if outcome.kept else outcome.error)
-    return row
-
-
-def folder_row(folder: Path, summary_path: Path) -> dict[str, Any]:
-    """The ``summary.csv`` row of the run ``folder`` holds, as a report's has it
-    (:func:`vtrack.report.rows.run_row`), with its folder named inside the batch's (``run``);
-    empty when the folder holds no run that can be read."""
-    from vtrack.report.rows import run_row  # (reading runs: not loaded for --help)
-    from vtrack.report.runs import load_run
-
-    try:
-        row = run_row(load_run(folder))
-    except InputError:
-        return {}
-    row["run"] = _inside(folder, summary_path.parent)
-    return row
+    return row, source
 
 
 def _inside(folder: Path, batch: Path) -> str:
@@ -113,27 +111,57 @@ def _inside(folder: Path, batch: Path) -> str:
         return str(folder)
 
 
+#: Beside ``summary.csv``: the identity (size, modification time) of the ``run.json`` each
+#: of its rows was read from, so a batch resuming the folder keeps the row of a run it does
+#: not run again while that file is unchanged instead of reading the run again (written after
+#: ``summary.csv``: a batch stopped between the two leaves identities that match no newer row).
+SUMMARY_SOURCES = ".summary-sources.json"
+
+
+def _read_sources(path: Path) -> dict[tuple[str, str], dict[str, int]]:
+    """:data:`SUMMARY_SOURCES` beside the ``summary.csv`` at ``path`` by (input, config); none
+    when it is missing or not as written."""
+    try:
+        entries = json.loads((path.parent / SUMMARY_SOURCES).read_text(encoding="utf-8"))
+        return {(name, config): {"size": size, "mtime_ns": mtime}
+                for name, config, size, mtime in entries}
+    except (OSError, ValueError, TypeError):
+        return {}
+
+
 def earlier_rows(path: Path, planned: Collection[tuple[str, str]] = ()
-                 ) -> dict[tuple[str, str], dict[str, Any]]:
-    """The rows of an existing ``summary.csv`` by (input, config); none if it is missing or
-    cannot be read. A file written by an earlier vtrack (:data:`EARLIER_BATCH_COLUMNS`) has
-    each row not ``planned`` now (which this batch writes anew) rebuilt from its run's folder,
-    ``<input>/<config>/`` (:func:`folder_row`), as this batch writes it: its input, config,
-    status and error as they were (the row as it was where the folder holds no run)."""
+                 ) -> tuple[dict[tuple[str, str], dict[str, Any]],
+                            dict[tuple[str, str], dict[str, int]]]:
+    """The rows of an existing ``summary.csv`` by (input, config) (none if it is missing or
+    cannot be read), and the identity of the ``run.json`` each was read from where that is
+    known (:data:`SUMMARY_SOURCES`, for a file with this vtrack's header). A file written by an
+    earlier vtrack (:data:`EARLIER_BATCH_COLUMNS`) has each row not ``planned`` now (which this
+    batch writes anew) rebuilt from its run's folder, ``<input>/<config>/``
+    (:func:`~vtrack.batch.jobs.read_row`), as this batch writes it: its input, config, status
+    and error as they were (the row as it was where the folder holds no run)."""
     try:
         with path.open(newline="", encoding="utf-8") as handle:
             reader = csv.DictReader(handle)
             rows = {(row["input"], row["config"]): {c: row.get(c) for c in SUMMARY_COLUMNS}
                     for row in reader}
     except (OSError, KeyError, UnicodeDecodeError, csv.Error):
-        return {}
-    if tuple(reader.fieldnames or ()) == EARLIER_BATCH_COLUMNS:
+        return {}, {}
+    header = tuple(reader.fieldnames or ())
+    if header == SUMMARY_COLUMNS:
+        return rows, _read_sources(path)
+    sources = {}
+    if header == EARLIER_BATCH_COLUMNS:
         for key, row in rows.items():
             if key not in planned:
                 folder = path.parent / folder_name(key[0], "input") / folder_name(key[1])
-                rows[key] = {**row, **folder_row(folder, path), "input": key[0],
-                             "config": key[1], "status": row["status"], "error": row["error"]}
-    return rows
+                read, source = read_row(folder)
+                if read:
+                    read["run"] = _inside(folder, path.parent)
+                rows[key] = {**row, **read, "input": key[0], "config": key[1],
+                             "status": row["status"], "error": row["error"]}
+                if source is not None:
+                    sources[key] = source
+    return rows, sources
 
 
 class SummaryWriter:
@@ -154,19 +182,47 @@ class SummaryWriter:
         self._pending = False  # outcomes added since the last write
         order = list(order)
         planned = set(order)
-        earlier = earlier_rows(path, planned)
+        earlier, sources = earlier_rows(path, planned)
         # input-major; sorted() is stable: each input's configs in the order they first ran
         keys = sorted(dict.fromkeys([*earlier, *order]), key=lambda key: key[0])
         self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
             key: None if key in planned else earlier[key] for key in keys}
+        #: The identity of the ``run.json`` each row was read from (:data:`SUMMARY_SOURCES`).
+        self.sources = {key: sources[key] for key in keys if key in sources}
+        #: The earlier rows of the pairs planned now, with the identity of the ``run.json``
+        #: each was read from: a resumed pair's row while that file is unchanged.
+        self._resumable = {key: (earlier[key], sources[key])
+                           for key in planned if key in earlier and key in sources}
 
     def add(self, outcome: Outcome, write: bool = True) -> None:
-        """Record ``outcome``'s row; with ``write``, write the file unless the last write was
-        too recent (:data:`WRITE_SPACING`)."""
-        self.rows[(outcome.input, outcome.config)] = outcome_row(outcome, self.path)
+        """Record ``outcome``'s row (a resumed pair's as the file had it when its ``run.json``
+        is the one that row was read from, else :func:`outcome_row`); with ``write``, write
+        the file unless the last write was too recent (:data:`WRITE_SPACING`)."""
+        key = (outcome.input, outcome.config)
+        row, source = self._resumed_row(outcome) or outcome_row(outcome, self.path)
+        self.rows[key] = row
+        if source is None:
+            self.sources.pop(key, None)
+        else:
+            self.sources[key] = source
         self._pending = True
         if write and self.clock() >= self._next_write:
             self.write()
+
+    def _resumed_row(self, outcome: Outcome
+                     ) -> tuple[dict[str, Any], dict[str, int]] | None:
+        """The earlier row of ``outcome``, a pair resumed (complete before, not run again), when
+        its ``run.json`` is the very file that row was read from; None otherwise."""
+        earlier = self._resumable.get((outcome.input, outcome.config))
+        if not outcome.resumed or earlier is None or outcome.summary is None:
+            return None
+        row, source = earlier
+        folder = Path(outcome.summary.out_dir)
+        if file_identity(folder / "run.json") != source:
+            return None
+        return {**row, "input": outcome.input, "config": outcome.config,
+                "status": outcome.held, "error": outcome.error,
+                "run": _inside(folder, self.path.parent)}, source
 
     def flush(self) -> None:
         """Write the file if an outcome was added since the last write."""
@@ -186,6 +242,10 @@ class SummaryWriter:
                 for (name, config), row in self.rows.items()]
         self.path.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path, render(rows))
+        with contextlib.suppress(OutputError):  # (without it, a resumed pair is read again)
+            write_text_atomic(self.path.parent / SUMMARY_SOURCES, json.dumps(
+                [[*key, source["size"], source["mtime_ns"]]
+                 for key, source in self.sources.items()]))
         ended = self.clock()
         self._pending = False
         self._next_write = ended + WRITE_SPACING * (ended - began)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import cv2
 
-from vtrack.batch.jobs import Job, Outcome, Progress
+from vtrack.batch.jobs import Job, Outcome, Progress, read_row
 from vtrack.batch.plan import recorded_summary
 from vtrack.errors import FolderInUseError, Interrupted, OutputError, VtrackError
 from vtrack.io import InputInfo
@@ -64,7 +64,11 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
         return Outcome(job.input, job.config, STATUS_FAILED,
                        error=f"internal error: {type(exc).__name__}: {exc}{where}",
                        attempt=job.attempt)
-    return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt)
+    row, source = None, None
+    with contextlib.suppress(Exception):  # (the batch reads it then: never fails the job)
+        row, source = read_row(Path(summary.out_dir)) if summary.out_dir else ({}, None)
+    return Outcome(job.input, job.config, summary.status, summary, summary.error, job.attempt,
+                   row=row, row_source=source)
 
 
 def stop_signal_name(stop_event: str) -> str:
