@@ -586,3 +586,21 @@ def test_summary_writes_are_spaced_by_their_own_time(tmp_path: Path) -> None:
     assert len(set(shown)) <= 1 + 100 / WRITE_SPACING  # not every end: about one in 20
     writer.flush()
     assert failed() == 100
+
+
+def test_a_batch_run_whose_first_frame_is_absent_names_the_options_as_vtrack_run_does(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A batch's runs share vtrack run's options (--start, --set; a first box as --init gives
+    it): its messages name those, not the library's init_box=(x, y, w, h)."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    clip = clip_factory("smooth", width=W, height=H, frames=FRAMES)
+    shutil.copy(clip.path, folder / "a.mp4")
+    lines = clip.gt.read_text().splitlines()
+    lines[10] = "0,0,0,0"  # the target absent on the frame the batch starts at
+    (folder / "a.gt.txt").write_text("\n".join(lines) + "\n")
+    result = batch(str(folder), "-c", "s0", "--out", str(tmp_path / "out"), "--no-video",
+                   "--start", "10")
+    assert result.exit_code != 0
+    assert "give --init x,y,w,h" in result.output, result.output
+    assert "init_box" not in result.output
