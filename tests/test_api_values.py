@@ -427,6 +427,16 @@ def test_open_source_checks_an_ffmpeg_input_made_in_python(tmp_path: Path, ffmpe
         assert sum(1 for _ in source) == 10
 
 
+def test_open_source_takes_ffmpeg_none_as_the_default(tmp_path: Path) -> None:
+    """vtrack.open_source(clip, ffmpeg=None) was a TypeError ("ffmpeg: expected a
+    vtrack.io.video.FFmpegInput, got NoneType") though vtrack.io.open_source declares
+    ffmpeg=None its default: None is FFmpeg's default way of reading."""
+    clip = write_video(make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30),
+                       tmp_path / "clip.mp4")
+    with vtrack.open_source(clip, ffmpeg=None) as source:
+        assert sum(1 for _ in source) == 10
+
+
 def test_a_raw_size_over_the_limit_is_named_once() -> None:
     """vtrack run - --raw 50000x50000 said "--raw '50000x50000': the frames are 50000x50000;
     vtrack accepts at most 16384x16384", the size twice (a RawFormat of 10**5000 x 2: "the

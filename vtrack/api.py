@@ -122,8 +122,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")
-    if "ffmpeg" in options:  # (one made in Python: its waits as RunRequest checks them)
-        options["ffmpeg"] = checked_ffmpeg(options["ffmpeg"])
+    if options.get("ffmpeg") is not None:  # (one made in Python: its waits as RunRequest
+        options["ffmpeg"] = checked_ffmpeg(options["ffmpeg"])  # checks them; None: the default)
     return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
                               **options)
 
