@@ -286,8 +286,8 @@ def test_a_run_requests_paths_flags_and_preset_are_taken_as_a_user_gives_them(
     assert summary.status == "complete" and (tmp_path / "out" / "track.csv").is_file()
     assert not (tmp_path / "out" / "annotated.mp4").exists()
     for field, value, said in (
-            ("video", "no", "video 'no': must be True or False (or 1 or 0)"),
-            ("live", "yes", "live 'yes': must be True or False (or 1 or 0)"),
+            ("video", "no", "video 'no': must be True or False (or the integers 1 or 0)"),
+            ("live", "yes", "live 'yes': must be True or False (or the integers 1 or 0)"),
             ("preset", "bogus", "preset 'bogus': must be one of ultrafast, superfast, veryfast, "
                                 "faster, fast, medium, slow, slower, veryslow, placebo (the "
                                 "annotated video's x264 preset)")):
@@ -380,7 +380,8 @@ def test_a_run_requests_stream_path_and_flags_written_1_or_0_are_taken(tmp_path:
     assert len((tmp_path / "s.jsonl").read_text().splitlines()) == 3
     assert not (tmp_path / "out" / "annotated.mp4").exists()
     assert (replace(request, video=1).video, replace(request, live=1).live) == (True, True)
-    with pytest.raises(ConfigError, match=r"^video 2: must be True or False \(or 1 or 0\)$"):
+    with pytest.raises(ConfigError, match=r"^video 2: must be True or False \(or the integers 1 "
+                                          r"or 0\)$"):
         replace(request, video=2)
 
 

@@ -453,12 +453,14 @@ def test_one_bgra_or_one_channel_image_as_the_frames_is_refused_not_read_row_by_
         list(vtrack.track(np.array(5), "robust", (0, 10, 4, 20)))
 
 
-@pytest.mark.parametrize("value", ["no", 2, None])
+@pytest.mark.parametrize("value", ["no", 2, None, 1.0])
 def test_keep_frames_other_than_true_or_false_is_refused_naming_it(value: object) -> None:
     """track(frames, keep_frames="no") kept every frame ("no" is true to Python), as did
-    Tracker(keep_frames="no"): a value that says the opposite of what it did."""
+    Tracker(keep_frames="no"): a value that says the opposite of what it did. 1.0 is refused
+    too, and the message says the 1 or 0 taken are integers."""
     image = _red_block(1)[0]
-    said = rf"^keep_frames {re.escape(repr(value))}: must be True or False \(or 1 or 0\)$"
+    said = (rf"^keep_frames {re.escape(repr(value))}: must be True or False \(or the integers 1 "
+            r"or 0\)$")
     with pytest.raises(ConfigError, match=said):
         list(vtrack.track([image], "robust", (50, 40, 40, 30), keep_frames=value))
     with pytest.raises(ConfigError, match=said):

@@ -53,7 +53,8 @@ def check_flag(value: object, name: str) -> bool:
     numpy_bool = type(value).__module__ == "numpy" and type(value).__name__ in ("bool", "bool_")
     one_or_zero = isinstance(value, Integral) and value in (0, 1)
     if not (isinstance(value, bool) or numpy_bool or one_or_zero):  # (NumPy not imported here)
-        raise ConfigError(f"{name} {shown(value)}: must be True or False (or 1 or 0)")
+        raise ConfigError(f"{name} {shown(value)}: must be True or False (or the integers 1 "
+                          "or 0)")
     return bool(value)
 
 
