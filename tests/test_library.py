@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import re
+import warnings
 from collections.abc import Iterator
 from dataclasses import replace
 from decimal import Decimal
@@ -435,6 +436,31 @@ def test_an_input_cut_short_yields_its_frames_then_raises_partial_input_error(
     assert taken and taken[-1] < caught.value.frames_done < 30
     assert str(caught.value).startswith(f"{cut}: decoding stopped at frame "
                                         f"{caught.value.frames_done}")
+
+
+def test_a_warning_made_an_error_does_not_hide_partial_input_error(tmp_path: Path) -> None:
+    """With warnings.simplefilter("error", vtrack.InputWarning), as the README suggests, the
+    InputWarning of a cut transport stream's damaged frame replaced the PartialInputError on
+    its way out ("except vtrack.PartialInputError" caught nothing): it is now a note of the
+    PartialInputError; when the results end without an error it is still raised."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=30, fps=30)
+    whole = write_video(scene, tmp_path / "whole.ts").read_bytes()
+    cut = tmp_path / "cut.ts"
+    cut.write_bytes(whole[:len(whole) * 2 // 3 + 100])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", vtrack.InputWarning)
+        with pytest.raises(vtrack.PartialInputError) as caught:
+            for _ in vtrack.track(cut, "s0", scene.boxes[0]):
+                pass
+        assert caught.value.__notes__ == [f"InputWarning: {cut}: 1 damaged frame could not be "
+                                          "decoded and was skipped"]
+        clip = encode_pictures(tmp_path / "intra.ts", pictures(40), fmt="mpegts",
+                               x264_params="keyint=1")
+        lost = remuxed(clip, tmp_path / "lost.ts", lambda i, p: None if 20 <= i < 25 else p,
+                       fmt="mpegts")
+        with pytest.raises(vtrack.InputWarning, match="^.*lost.ts: 5 damaged frames "):
+            for _ in vtrack.track(lost, "s0", (0, 40, 20, 20)):  # (no error: raised)
+                pass
 
 
 @pytest.mark.parametrize("channels", [4, 1])

@@ -178,20 +178,35 @@ def _closing(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameRe
     """``results``, then ``source`` closed and its warnings given (:func:`_warn_of_damage`),
     however they end: the frames' end, the input broken part way (PartialInputError) or the
     caller stopping (``break``, ``close()``), as ``vtrack run`` warns of them however it
-    ends."""
+    ends. A warning made an error does not hide an error already on its way out: it is a
+    note of that error's (``close()`` is no error: the warning is raised from it)."""
+    failed = None
     try:
         with source:  # a video's damage is counted up as it closes
             yield from results
+    except GeneratorExit:
+        raise
+    except BaseException as error:
+        failed = error
+        raise
     finally:
-        _warn_of_damage(source)
+        _warn_of_damage(source, failed)
 
 
-def _warn_of_damage(source: Source) -> None:
+def _warn_of_damage(source: Source, failed: BaseException | None = None) -> None:
     """Each of ``source``'s warnings (what ``vtrack run`` prints as ``vtrack: warning:``) as an
-    :class:`~vtrack.errors.InputWarning`, shown at the caller's line that took the results."""
+    :class:`~vtrack.errors.InputWarning`, shown at the caller's line that took the results.
+    One made an error (``warnings.simplefilter("error", InputWarning)``) is raised, unless the
+    results ended by the error ``failed``: it is added to that error's notes, which goes on
+    (``except PartialInputError`` still catches a file cut short)."""
     for line in source.warnings:
-        # 1: here, 2: _closing (the generator the caller iterates), 3: the caller
-        warnings.warn(line, InputWarning, stacklevel=3)
+        try:
+            # 1: here, 2: _closing (the generator the caller iterates), 3: the caller
+            warnings.warn(line, InputWarning, stacklevel=3)
+        except InputWarning as made_error:
+            if failed is None:
+                raise
+            failed.add_note(f"{made_error.__class__.__name__}: {made_error}")
 
 
 def _run(tracker: Tracker, frames: Iterable[Any], box: Box | None) -> Iterator[FrameResult]:
