@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import os
 import re
 import warnings
 from collections.abc import Iterator
@@ -10,6 +11,7 @@ from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 from test_cli import vtrack as vtrack_command
@@ -361,22 +363,33 @@ def test_track_without_the_first_box_a_config_needs_names_init_box() -> None:
     assert [r.index for r in vtrack.track(_red_block(2), "s4_multi")] == [0, 1]
 
 
-def test_track_checks_its_arguments_and_opens_its_input_when_called(tmp_path: Path) -> None:
+def test_track_checks_its_arguments_when_called_and_opens_its_input_at_the_first_result(
+        tmp_path: Path) -> None:
     """vtrack.track("missing.mp4", "s0", box), an unknown config or a request for a missing
     file returned a generator and said nothing until its first next() (track was a generator
-    function). Each is raised by the call now; frames are still taken as results are."""
+    function): each is raised by the call. The input itself is opened at the first next():
+    track opened it (and decoded a frame) in the call, so each generator not yet iterated held
+    files open (100 of them under `ulimit -n 64`: "Too many open files"), and a FIFO without a
+    writer blocked inside track(). Frames are taken as results are."""
     missing = tmp_path / "missing.mp4"
     request = vtrack.RunRequest(str(missing), tmp_path / "out", vtrack.load_config("s0"),
                                 init_box=(50, 40, 40, 30))
+    no_video = tmp_path / "notes.mp4"
+    no_video.write_bytes(b"\0" * 4096)
     for call, error, said in (
             (lambda: vtrack.track(missing, "s0", (50, 40, 40, 30)), InputError,
              f"{missing}: no such file"),
             (lambda: vtrack.track(_red_block(2), "no-such-config", (50, 40, 40, 30)),
              ConfigError, "no-such-config: no such config file or shipped config"),
-            (lambda: vtrack.track(request), InputError, f"{missing}: no such file")):
+            (lambda: vtrack.track(request), InputError, f"{missing}: no such file"),
+            (lambda: vtrack.track(tmp_path, "s0", (50, 40, 40, 30)), InputError,
+             f"{tmp_path}: no images")):
         with pytest.raises(error) as caught:
             call()  # no next()
         assert str(caught.value).startswith(said)
+    unreadable = vtrack.track(no_video, "s0", (50, 40, 40, 30))  # (a file: not read yet)
+    with pytest.raises(InputError, match=f"^{re.escape(str(no_video))}: "):
+        next(unreadable)
     taken: list[int] = []
 
     def frames() -> Iterator[np.ndarray]:
@@ -389,7 +402,21 @@ def test_track_checks_its_arguments_and_opens_its_input_when_called(tmp_path: Pa
     assert next(results).index == 0 and taken == [0]
     scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
-    assert [r.index for r in vtrack.track(clip, "s0", scene.boxes[0])] == list(range(10))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for n, image in enumerate(_red_block(3)):
+        cv2.imwrite(str(folder / f"{n:04d}.png"), image)
+    open_files = len(os.listdir("/proc/self/fd"))
+    waiting = [vtrack.track(clip, "s0", scene.boxes[0]) for _ in range(5)]
+    waiting += [vtrack.track(folder, "s0", (50, 40, 40, 30)) for _ in range(5)]
+    waiting.append(vtrack.track(replace(request, input=str(clip), init_box=scene.boxes[0])))
+    assert len(os.listdir("/proc/self/fd")) == open_files  # none opened yet
+    fifo = tmp_path / "fifo.ts"
+    os.mkfifo(fifo)
+    vtrack.track(fifo, "s0", scene.boxes[0])  # (returns: nothing opened, so no writer waited for)
+    assert [r.index for r in waiting[0]] == list(range(10))
+    assert [r.index for r in waiting[-1]] == list(range(10))
+    assert [r.index for r in waiting[5]] == [0, 1, 2]
 
 
 def test_track_warns_of_the_frames_a_damaged_input_skipped_as_vtrack_run_does(

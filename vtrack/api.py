@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import os
 import warnings
-import weakref
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -55,11 +54,15 @@ def track(frames: FrameInput,
     their decoded frame only with ``keep_frames=True``. One image or frame on its own (not in
     a sequence) is a TypeError.
 
-    Everything is checked when ``track`` is called, not at the first ``next()``: the arguments,
-    the config and the first box, and a path's or request's input, which is opened then (a
-    missing or unreadable file is an InputError at once; its first frame is decoded, the
-    others as the results are taken). The input is closed when the results end, when the
-    generator is closed part way, or, if no result is ever taken, when it is discarded.
+    Checked when ``track`` is called, before it returns: the arguments, the config and the
+    first box (a request's too, from its sidecar or ground truth, unless it starts later:
+    ``start``, ``start_s``) and, for a path or a request's input, what needs no opening:
+    ``fps`` and ``raw`` for it, and a local path that exists and can be read (a folder: that
+    it holds an image). Nothing is opened then: the input is opened and its first frame
+    decoded at the first ``next()`` (a file that is no video, a URL that does not answer, a
+    FIFO waiting for its writer show there), the others as the results are taken. A generator
+    never started holds nothing open; a started one closes its input when the results end,
+    however they end (``break`` then ``close()``, or its being discarded).
     """
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
@@ -72,16 +75,17 @@ def track(frames: FrameInput,
                               "(dataclasses.replace(request, ...))")
         request = frames
         tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
-        source = open_source(request.input, request.raw, fps=request.fps,
-                             ffmpeg=request.ffmpeg, live=request.live)
-        try:
-            from vtrack.run import requested_frames  # the run machinery only for a request
+        opener = _source_opener(request.input, request.raw, fps=request.fps,
+                                ffmpeg=request.ffmpeg, live=request.live)
+        from vtrack.run import requested_frames  # the run machinery only for a request
 
-            box, requested = requested_frames(request, source)
-        except BaseException:
-            source.close()
-            raise
-        return _owning(source, _run(tracker, requested, box))
+        requested = requested_frames(request)  # (its box now, unless it starts later)
+
+        def results(source: Source) -> Iterator[FrameResult]:
+            box, taken = requested(source)
+            return _run(tracker, taken, box)
+
+        return _closing(opener, results)
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=0 if seed is None else seed,
                       fps=DEFAULT_FPS if fps is None else fps,
@@ -93,8 +97,8 @@ def track(frames: FrameInput,
         raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
         # an image folder is timed at fps; a video keeps its own timestamps (fps refused)
-        source = open_source(_path_text(frames, "frames"), fps=fps)
-        return _owning(source, _run(tracker, source, box))
+        opener = _source_opener(_path_text(frames, "frames"), fps=fps)
+        return _closing(opener, lambda source: _run(tracker, source, box))
     return _run(tracker, frames, box)
 
 
@@ -108,6 +112,15 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     for a raw format vtrack cannot read, naming this function's arguments: ``raw``,
     ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``), or an
     ``ffmpeg`` wait out of its range (:meth:`~vtrack.io.video.FFmpegInput.checked`)."""
+    return _source_opener(spec, raw, pix_fmt=pix_fmt, fps=fps, **options)()
+
+
+def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = None, *,
+                   pix_fmt: str | None = None, fps: float | None = None,
+                   **options: Any) -> Callable[[], Source]:
+    """:func:`open_source`'s arguments checked as it checks them, with the cheap checks of
+    :func:`vtrack.io.inputs.source_opener` (a local path exists and can be read, a folder has
+    an image); returns the function that opens the input."""
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps,
                               ("raw", "pix_fmt", "fps"))
@@ -124,8 +137,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
                         f"{type(spec).__name__}")
     if options.get("ffmpeg") is not None:  # (one made in Python: its waits as RunRequest
         options["ffmpeg"] = checked_ffmpeg(options["ffmpeg"])  # checks them; None: the default)
-    return inputs.open_source(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
-                              **options)
+    return inputs.source_opener(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
+                                **options)
 
 
 def _path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:
@@ -165,25 +178,20 @@ def _refuse_one_frame(frames: object) -> None:
                         f"iterable of frames, got {type(frames).__name__}")
 
 
-def _owning(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameResult]:
-    """``results``, taken from the opened ``source``: closed when they end (an error, or the
-    generator closed part way, too) or, when none is ever taken, once the generator returned
-    is discarded (a generator not started runs no ``finally``)."""
-    owned = _closing(source, results)
-    weakref.finalize(owned, source.close)  # (safe twice: Source.close)
-    return owned
-
-
-def _closing(source: Source, results: Iterator[FrameResult]) -> Iterator[FrameResult]:
-    """``results``, then ``source`` closed and its warnings given (:func:`_warn_of_damage`),
-    however they end: the frames' end, the input broken part way (PartialInputError) or the
-    caller stopping (``break``, ``close()``), as ``vtrack run`` warns of them however it
-    ends. A warning made an error does not hide an error already on its way out: it is a
-    note of that error's (``close()`` is no error: the warning is raised from it)."""
+def _closing(opener: Callable[[], Source],
+             results: Callable[[Source], Iterator[FrameResult]]) -> Iterator[FrameResult]:
+    """``results`` of the input ``opener`` opens at the first ``next()`` (a generator not
+    started holds nothing open), then the input closed and its warnings given
+    (:func:`_warn_of_damage`), however they end: the frames' end, the input broken part way
+    (PartialInputError) or the caller stopping (``break``, ``close()``), as ``vtrack run``
+    warns of them however it ends. A warning made an error does not hide an error already on
+    its way out: it is a note of that error's (``close()`` is no error: the warning is raised
+    from it)."""
+    source = opener()
     failed = None
     try:
         with source:  # a video's damage is counted up as it closes
-            yield from results
+            yield from results(source)
     except GeneratorExit:
         raise
     except BaseException as error:

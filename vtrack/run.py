@@ -637,7 +637,7 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         check_input(request.input)  # a mistyped name first, before what else it lacks
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
         # past the frames the input states is refused at once: that input opens first
-        later = request.start_s is not None or request.start > 0
+        later = _starts_later(request)
         source: Source | None = _open(request, signals, fps_name) if later else None
         try:
             resolved = _resolve(request, source, init_name, fps_name)
@@ -896,13 +896,29 @@ def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
     return found, read_from
 
 
-def requested_frames(request: RunRequest, source: Source) -> tuple[Box | None, Iterator[Frame]]:
-    """What ``request`` tracks of ``source``, as ``vtrack run`` takes it: the initial box
+def requested_frames(request: RunRequest
+                     ) -> Callable[[Source], tuple[Box | None, Iterator[Frame]]]:
+    """What ``request`` tracks of its opened input, as ``vtrack run`` takes it: the initial box
     (``--init``, else the input's sidecar, else the ground truth's box of the first frame
-    tracked) and the frames from ``--start`` on, at most ``--frames`` of them. ConfigError or
-    InputError as :func:`run` gives them (no box for a tracker that needs one, ...)."""
-    resolved = _resolve(request, source, "init_box", "fps")
-    return resolved.init_box, _frames_to_track(request, resolved, source)
+    tracked) and the frames from ``--start`` on, at most ``--frames`` of them, given by the
+    function returned once it is called with the opened input. ConfigError or InputError as
+    :func:`run` gives them: at once, before the input is opened, as run settles them, unless
+    the request starts later (``start``, ``start_s``: found in the opened input), then from
+    that function."""
+    resolved = None if _starts_later(request) else _resolve(request, None, "init_box", "fps")
+
+    def frames(source: Source) -> tuple[Box | None, Iterator[Frame]]:
+        settled = resolved or _resolve(request, source, "init_box", "fps")
+        return settled.init_box, _frames_to_track(request, settled, source)
+
+    return frames
+
+
+def _starts_later(request: RunRequest) -> bool:
+    """Whether ``request`` starts after its input's first frame (``--start``), which is then
+    settled in the opened input (a start time in its frames' timestamps, a start frame past
+    the frames it states refused at once)."""
+    return request.start_s is not None or request.start > 0
 
 
 def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source

@@ -21,6 +21,7 @@ import configparser
 import math
 import re
 from collections.abc import Iterator
+from itertools import islice
 from pathlib import Path
 
 import av
@@ -67,12 +68,29 @@ def list_images(folder: Path) -> list[Path]:
     """The images of a sequence folder in frame order (those of its ``img/`` or ``img1/`` if
     it has one, :func:`sequence_images`; hidden files such as macOS ``._0001.jpg`` are not
     images)."""
+    return sorted(_image_files(folder), key=lambda p: natural_key(p.name))
+
+
+def _image_files(folder: Path) -> Iterator[Path]:
+    """The images of a sequence folder (:func:`list_images`) as they are listed."""
     where = sequence_images(folder) or folder
-    files = [
-        p for p in where.iterdir()
-        if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
-    ]
-    return sorted(files, key=lambda p: natural_key(p.name))
+    return (p for p in where.iterdir()
+            if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file())
+
+
+def images_of(folder: str, first_only: bool = False) -> list[Path]:
+    """The images of ``folder`` (:func:`list_images`), or with ``first_only`` only the first
+    one listed (a cheap check that it has one, nothing decoded); InputError naming it when it
+    cannot be listed or holds no image."""
+    try:
+        found = (list(islice(_image_files(Path(folder)), 1)) if first_only else
+                 list_images(Path(folder)))
+    except OSError as exc:
+        raise InputError(f"{folder}: cannot list the folder ({os_reason(exc)})") from None
+    if not found:
+        suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
+        raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ (img1/)")
+    return found
 
 
 def frame_places(files: list[Path]) -> list[int]:
@@ -167,14 +185,7 @@ class ImageFolderSource(Source):
 
     def __init__(self, folder: str, fps: float | None = None) -> None:
         root = Path(folder)
-        try:
-            self._files = list_images(root)
-        except OSError as exc:
-            raise InputError(f"{folder}: cannot list the folder ({os_reason(exc)})") from None
-        if not self._files:
-            suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
-            raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ "
-                             "(img1/)")
+        self._files = images_of(folder)
         self._places = frame_places(self._files)
         self._begin = 0  # the file iteration begins at (start_near)
         self._skipped = 0

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from functools import partial
 
 from vtrack.errors import ConfigError
 from vtrack.io.files import check_input_path
-from vtrack.io.images import ImageFolderSource
+from vtrack.io.images import ImageFolderSource, images_of
 from vtrack.io.raw import RawFormat, RawSource, checked_fps
 from vtrack.io.source import Source
 from vtrack.io.specs import device_number, is_live, is_url
@@ -42,6 +44,17 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
     :class:`~vtrack.io.threads.KeepingUp`). Messages about ``fps`` name it ``fps_name``
     (the command's ``--fps``, the library's ``fps``).
     """
+    return source_opener(spec, raw, fps=fps, ffmpeg=ffmpeg, live=live, fps_name=fps_name)()
+
+
+def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
+                  ffmpeg: FFmpegInput | None = None, live: bool | None = None,
+                  fps_name: str = "--fps") -> Callable[[], Source]:
+    """What :func:`open_source` opens, checked without opening it: the arguments (ConfigError,
+    as open_source gives it) and, for a local path, that it exists and can be read, and that
+    a folder holds an image (InputError); nothing is opened (a FIFO, stdin, a URL, a device)
+    or decoded. Returns the function that opens it and decodes its first frame (InputError
+    when that is impossible)."""
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
     if fps is not None:
@@ -59,12 +72,13 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
         if live:
             raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
                               "sender back); give a container (e.g. -f mpegts) to skip frames")
-        return RawSource(spec, raw)
+        return partial(RawSource, spec, raw)
     device = device_number(spec)
     if not (spec == "-" or is_url(spec)):
         check_input_path(spec)
         if os.path.isdir(spec):
-            return ImageFolderSource(spec, fps=fps)
+            images_of(spec, first_only=True)
+            return partial(ImageFolderSource, spec, fps=fps)
     if fps is not None:
         what = ("a container on stdin carries its own timestamps" if spec == "-" else
                 f"{spec} is a video file, whose frames carry their own timestamps"
@@ -73,14 +87,18 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
         raise ConfigError(f"{fps_name}: {what}; {fps_name} applies to raw input "
                           f"({'--raw WxH' if fps_name == '--fps' else 'raw='}) and image "
                           "folders only")
-    if device is not None:
-        from vtrack.io.capture import CaptureSource
 
-        source: Source = CaptureSource(spec, device)
-    else:
-        source = VideoSource(spec, ffmpeg, live)
-    source.live = live
-    return source
+    def opened() -> Source:
+        if device is not None:
+            from vtrack.io.capture import CaptureSource
+
+            source: Source = CaptureSource(spec, device)
+        else:
+            source = VideoSource(spec, ffmpeg, live)
+        source.live = live
+        return source
+
+    return opened
 
 
 def _not_followed(spec: str, raw: RawFormat | None) -> str | None:
