@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
 import re
@@ -441,6 +442,13 @@ def test_track_warns_of_the_frames_a_damaged_input_skipped_as_vtrack_run_does(
         for result in vtrack.track(cut, "s0", (0, 40, 20, 20)):
             if result.index == 30:
                 break
+    with warnings.catch_warnings():  # made an error: raised by close(), as the README says
+        warnings.simplefilter("error", vtrack.InputWarning)
+        with pytest.raises(vtrack.InputWarning, match="5 damaged frames"), \
+                contextlib.closing(vtrack.track(cut, "s0", (0, 40, 20, 20))) as results:
+            for result in results:
+                if result.index == 30:
+                    break
 
 
 @pytest.mark.filterwarnings("ignore::vtrack.errors.InputWarning")  # (the cut frame's)

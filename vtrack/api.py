@@ -63,6 +63,13 @@ def track(frames: FrameInput,
     FIFO waiting for its writer show there), the others as the results are taken. A generator
     never started holds nothing open; a started one closes its input when the results end,
     however they end (``break`` then ``close()``, or its being discarded).
+
+    Damage read past in the input is an :class:`~vtrack.errors.InputWarning` given as the
+    results end; made an error (``warnings.simplefilter("error", InputWarning)``) it is raised
+    there, or, when they end by an error (PartialInputError), added to that error's notes.
+    After a ``break`` they end when closed: call ``close()`` (or iterate them in
+    ``contextlib.closing(track(...))``) to have it raised; a generator the garbage collector
+    closes can only print it ("Exception ignored in").
     """
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
