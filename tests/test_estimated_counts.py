@@ -63,7 +63,9 @@ def test_run_records_the_frames_read_and_progress_drops_a_departed_estimate(
     assert record["frames"] == FRAMES
     assert (record["input"]["frame_count"], record["input"]["frame_count_estimated"]) == (
         FRAMES, False)
-    counts = re.findall(rf"^{name}: (\d+)(?:/(\d+))? frames", done.stderr, re.MULTILINE)
+    # (progress names the input as given, as the summary does)
+    counts = re.findall(rf"^{re.escape(str(clip))}: (\d+)(?:/(\d+))? frames", done.stderr,
+                        re.MULTILINE)
     # the last line's total depends on whether the reader thread reached the end first
     assert counts and counts[-1][0] == str(FRAMES), done.stderr
     late = {total for frames, total in counts if int(frames) > 25}
