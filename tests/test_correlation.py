@@ -4,6 +4,7 @@ what its paper promises, on generated images."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 
@@ -220,6 +221,20 @@ def test_patch_inside_the_frame_is_its_pixels_and_edges_are_replicated() -> None
     assert np.array_equal(corner[10:, 10:], image[:10, :10])
     grey = GrayFrame(0, 0.0, cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
     assert region_patch(grey, 60, 50, 40, 20, 40, 20).shape == (20, 40)
+
+
+def test_a_region_far_outside_the_frame_pads_no_more_than_its_own_size() -> None:
+    """A region however far past an edge (a prediction carried across a long gap) is its edge
+    replicated, the same patch as the region a whole number of pixels nearer, just outside
+    the frame: the fill never spans more than the region (before, the edge was replicated
+    across the whole distance: 10^12 pixels away, cv2.error "Failed to allocate")."""
+    image = texture(100, 120, seed=3)
+    for frame in (BgrFrame(0, 0.0, image), GrayFrame(0, 0.0, image[..., 1].copy())):
+        for dx, dy in ((1e12, 0.0), (-1e12, 0.0), (0.0, 1e12), (0.0, -1e12), (7e11, -3e11)):
+            far = region_patch(frame, 60.3 + dx, 50.6 + dy, 40, 20, 40, 20)
+            near_x = 60.3 + (dx and math.copysign(200, dx))
+            near_y = 50.6 + (dy and math.copysign(200, dy))
+            assert np.array_equal(far, region_patch(frame, near_x, near_y, 40, 20, 40, 20))
 
 
 def test_patch_of_a_large_region_costs_its_output_size() -> None:

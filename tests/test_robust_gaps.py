@@ -13,13 +13,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vtrack import track
+from vtrack import Tracker, track
 from vtrack.evaluate import frame_scores, mean_overlap
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box
 from vtrack.scenes import make_scene
 from vtrack.stages.base import TrackContext, TrackState
 from vtrack.stages.robust_model import RobustModel
+from vtrack.stages.robust_motion import FrameClock
 
 SEEDS = (0, 1, 2)
 
@@ -109,3 +110,53 @@ def test_a_lost_targets_ring_search_visits_every_region_across_dropped_frames() 
     consecutive = _ring_regions(list(range(4)))
     assert len(consecutive) == 24
     assert _ring_regions(list(range(0, 12, 3))) == consecutive
+
+
+#: name: (index, time_s) of the scene's frame i in a stream that breaks at frame JUMP.
+JUMP = 20
+BREAKS = {
+    # a stream resumed an hour later: numbers and time jump (before: cv2.error, "Failed to
+    # allocate 791096873616 bytes", the prediction carried 108,000 frames at full velocity)
+    "numbers and time jump an hour": lambda i, t: (i + 108_000, t + 3600.0) if i >= JUMP
+    else (i, t),
+    # the clock jumps, the numbers go on (a live source that stalled)
+    "time jumps an hour": lambda i, t: (i, t + 3600.0 if i >= JUMP else t),
+    # a 15 s stall (before: the motion region cut 450 frames of motion away, 1.8 GB at 720p)
+    "time jumps 15 s": lambda i, t: (i, t + 15.0 if i >= JUMP else t),
+    # one frame stamped 0 in a stream an hour in (before: the next interval was the hour, and
+    # cv2.error on the frame after the glitch)
+    "one frame stamped 0": lambda i, t: (i, 0.0 if i == JUMP else 3600.0 + t),
+}
+
+
+@pytest.mark.parametrize("name", BREAKS)
+def test_robust_stands_still_across_a_discontinuity(name: str) -> None:
+    """A jump in the frame numbers or times (more than ``FrameClock.GAP`` frames) is a break,
+    not a gap crossed at the target's velocity, and a timestamp that goes back is no base for
+    the next interval: every region searched stays within its own size of the frame (what
+    bounds a frame's memory), and the boxes after the break stay on the target."""
+    scene = make_scene("smooth", seed=0, width=640, height=480, frames=40)
+    tracker = Tracker("robust")
+    overlaps = []
+    for f in scene.as_frames():
+        index, time_s = BREAKS[name](f.index, f.time_s)
+        frame = BgrFrame(index, time_s, f.bgr())
+        result = (tracker.init(frame, scene.boxes[0]) if f.index == 0
+                  else tracker.update(frame))
+        target = tracker._pipeline._ctx.robust  # type: ignore[union-attr]
+        for r in target.regions:
+            assert -r.width <= r.cx <= 640 + r.width and -r.height <= r.cy <= 480 + r.height, \
+                (f.index, r.cx, r.cy)
+        overlaps.append(frame_scores([result.box], [scene.boxes[f.index]])[0][0])
+    assert min(overlaps[JUMP:]) > 0.5, overlaps
+
+
+def test_a_timestamp_that_goes_back_is_no_base_for_the_next_interval() -> None:
+    """One frame stamped 0 in a stream an hour in counts one frame by its number, and so does
+    the frame after it (before, its interval was taken from the 0: an hour of frames)."""
+    image = np.zeros((8, 8, 3), np.uint8)
+    clock = FrameClock(BgrFrame(0, 3600.0, image))
+    steps = [clock.advance(BgrFrame(i, 0.0 if i == 5 else 3600.0 + i / 30, image))
+             for i in range(1, 9)]
+    assert steps == [1.0] * 8
+

@@ -63,7 +63,8 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     ``converted`` are cut from it rather than converted again (the same values)."""
     if width > FAR * frame.width or height > FAR * frame.height:
         return _bounded_patch(frame, cx, cy, width, height, out_w, out_h)
-    x0, y0 = cx - width / 2, cy - height / 2
+    x0 = _within_reach(cx - width / 2, width, frame.width)
+    y0 = _within_reach(cy - height / 2, height, frame.height)
     # the whole pixels the region spans (past the frame too) and those of the frame it covers
     ix0, iy0 = math.floor(x0), math.floor(y0)
     ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
@@ -131,6 +132,19 @@ def _bounded_patch(frame: Frame, cx: float, cy: float, width: float, height: flo
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
+
+
+def _within_reach(start: float, size: float, extent: int) -> float:
+    """``start`` of a region ``size`` long on an axis of ``extent`` pixels, moved by whole
+    pixels to at most a pixel past the frame's far side, or to end at most a pixel before its
+    near side: the patch is the same (every pixel of a region that far outside replicates the
+    edge; the sub-pixel offset is kept), but the edge replicated to fill it never spans more
+    than the region itself, however far the region is."""
+    if start > extent:
+        return start - math.floor(start - extent)
+    if start + size < 0:
+        return start + math.floor(-(start + size))
+    return start
 
 
 def _overlap(frame: Frame, x0: float, y0: float, width: float, height: float) -> Window:

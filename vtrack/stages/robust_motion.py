@@ -14,8 +14,11 @@ index difference, or the time difference over the stream's frame period where th
 say otherwise, a change of frame rate), not by one a call: a frame passed over
 (dropped by a camera, by ``--live`` falling behind, by a reader skipping a damaged stretch)
 moves the prediction as far as the target went meanwhile, and the process noise grows with the
-elapsed frames (``Q`` per frame). The prediction is made when the frame comes
-(``ctx.forecast``); ``ctx.prediction`` left after a frame is the one for the frame after it.
+elapsed frames (``Q`` per frame); more than ``FrameClock.GAP`` frames elapsed (a stream that
+stalled or was cut, a clock or numbering that jumped) is a break, not motion: the prediction
+stays at the last position, its velocity unknown, as while lost. The prediction is made when
+the frame comes (``ctx.forecast``); ``ctx.prediction`` left after a frame is the one for the
+frame after it.
 While hidden the filter coasts; while lost it stands still at its last position (a lost
 target's velocity is not known), so re-detection searches around where it was last seen; a
 target taken back after being lost restarts the filter at the re-found box (its jump is not a
@@ -146,9 +149,21 @@ class RobustMotion(Stage):
 
     def _forecast(self, frame: Frame) -> Box:
         """The prediction for ``frame``: the last posterior moved on by the frames elapsed
-        since it (the one left assumed one), with ``Q`` for each elapsed frame."""
+        since it (the one left assumed one), with ``Q`` for each elapsed frame. After a
+        discontinuity (more than ``FrameClock.GAP`` frames elapsed) the velocity is not known:
+        the prediction stays at the last position, as while lost, with ``Q`` for ``GAP`` frames,
+        and an unseen frame's extrapolation starts again from the last box reported."""
+        before = self._clock.now
         steps = self._clock.advance(frame)
-        if steps != 1.0:
+        if steps > FrameClock.GAP:
+            still = self._model.with_velocity(self._posterior, np.zeros(2))
+            self._state = self._model.predict(still, FrameClock.GAP,
+                                              Q=self._model.Q * FrameClock.GAP)
+            if self._seen is not None:
+                seen, seen_at = self._seen
+                reported = self._model.predict(seen, before - seen_at)
+                self._seen = (self._model.with_velocity(reported, np.zeros(2)), self._clock.now)
+        elif steps != 1.0:
             self._state = self._model.predict(self._posterior, steps,
                                               Q=self._model.Q * steps)
         return self._box.moved_to(*self._position())
@@ -165,14 +180,25 @@ class FrameClock:
     that agree on it within ``JITTER`` (a first interval stretched by a device starting up, or
     a gap the numbers do not show, is not taken for it); until then, and where neither tells
     (indices that do not increase and no usable timestamps), the index difference, or one
-    frame."""
+    frame. A timestamp that did not increase is not the base of the next interval (that one
+    counts by the numbers)."""
 
     #: Timestamps that differ from the index difference by at most this many frames agree with
     #: it (a capture clock's jitter, timestamp rounding).
     JITTER = 0.25
+    #: More frames than this elapsed between two frames is a discontinuity (a stream that
+    #: stalled or was cut, a clock or numbering that jumped), not a gap the target crossed at
+    #: its velocity: about a second at common rates, and as many frames as ``robust_failure``
+    #: lets a hidden target go before it is lost (``lost_after``'s default), after which its
+    #: velocity is not trusted either. Motion extrapolated further moves a prediction (and the
+    #: region cut there) arbitrarily far from the target.
+    GAP = 30.0
 
     def __init__(self, frame: Frame) -> None:
-        self._index, self._time = frame.index, frame.time_s
+        #: The last frame's index and time (None: its timestamp did not increase, so the
+        #: next interval is not timed).
+        self._index: int = frame.index
+        self._time: float | None = frame.time_s
         #: The frame period (None until two intervals agree), and the last interval's time
         #: per index step (None: none usable yet).
         self._period: float | None = None
@@ -184,8 +210,11 @@ class FrameClock:
         """The frames elapsed from the last frame given to ``frame`` (more than 0); ``frame``
         becomes the last one."""
         indexed = frame.index - self._index
-        interval = frame.time_s - self._time
-        self._index, self._time = frame.index, frame.time_s
+        interval = frame.time_s - self._time if self._time is not None else 0.0
+        # a timestamp that did not increase is no base for the next interval either (one frame
+        # stamped 0 in a long stream would make the next interval the whole stream)
+        self._index = frame.index
+        self._time = frame.time_s if interval > 0 or self._time is None else None
         steps = float(indexed) if indexed > 0 else 1.0
         if interval > 0 and self._period is not None:
             timed = interval / self._period
