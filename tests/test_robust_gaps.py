@@ -160,3 +160,29 @@ def test_a_timestamp_that_goes_back_is_no_base_for_the_next_interval() -> None:
              for i in range(1, 9)]
     assert steps == [1.0] * 8
 
+
+def test_a_burst_of_buffered_first_frames_does_not_set_the_frame_period_for_good() -> None:
+    """A camera's first three frames come out of its buffer 1 ms apart, then one every 1/30 s:
+    the period follows the stream, and a few frames on every frame counts one (before, the
+    period stayed 1 ms and each later frame counted 33)."""
+    image = np.zeros((8, 8, 3), np.uint8)
+    clock = FrameClock(BgrFrame(0, 0.0, image))
+    steps = [clock.advance(BgrFrame(i, i * 0.001 if i < 3 else i / 30, image))
+             for i in range(1, 40)]
+    assert steps[8:] == [1.0] * len(steps[8:]), steps
+
+
+def test_robust_tracks_as_well_after_a_burst_of_buffered_first_frames() -> None:
+    """The `occlusion` scene with its first three frames stamped 1 ms apart (a camera's
+    buffered frames, timed by the reader's clock) tracks as the same frames timed at the
+    stream's rate (before: mean IoU 0.780 against 0.848 for seed 0)."""
+    scene = make_scene("occlusion", seed=0)
+    frames = list(scene.as_frames())
+    burst = [BgrFrame(f.index, f.index * 0.001 if f.index < 3 else f.time_s, f.bgr())
+             for f in frames]
+    truth = list(scene.boxes[:len(frames)])
+    with_burst = mean_overlap(frame_scores(
+        [r.box for r in track(burst, "robust", scene.boxes[0])], truth)[0])
+    plain = mean_overlap(frame_scores(
+        [r.box for r in track(frames, "robust", scene.boxes[0])], truth)[0])
+    assert with_burst >= plain - 0.01, (with_burst, plain)

@@ -41,6 +41,7 @@ search).
 from __future__ import annotations
 
 import math
+import statistics
 
 import numpy as np
 
@@ -176,12 +177,14 @@ class FrameClock:
     Between two frames, the elapsed frames are the index difference; where the timestamps say
     otherwise by more than ``JITTER`` of a frame (a change of frame rate, a reader that skipped
     frames without numbering the gap, numbers that start again), the time difference over the
-    frame period. The period is the time per index step of the first two intervals in a row
-    that agree on it within ``JITTER`` (a first interval stretched by a device starting up, or
-    a gap the numbers do not show, is not taken for it); until then, and where neither tells
-    (indices that do not increase and no usable timestamps), the index difference, or one
-    frame. A timestamp that did not increase is not the base of the next interval (that one
-    counts by the numbers)."""
+    frame period. The period starts at the time per index step of the first two intervals in a
+    row that agree on it within ``JITTER`` (a first interval stretched by a device starting up,
+    or a gap the numbers do not show, is not taken for it), then is the median of the
+    ``PERIOD_INTERVALS`` intervals from those two on (a camera's buffered first frames,
+    delivered at once, do not set it for good); until then, and where neither tells (indices
+    that do not increase and no usable timestamps), the index difference, or one frame. A
+    timestamp that did not increase is not the base of the next interval (that one counts by
+    the numbers)."""
 
     #: Timestamps that differ from the index difference by at most this many frames agree with
     #: it (a capture clock's jitter, timestamp rounding).
@@ -193,16 +196,23 @@ class FrameClock:
     #: velocity is not trusted either. Motion extrapolated further moves a prediction (and the
     #: region cut there) arbitrarily far from the target.
     GAP = 30.0
+    #: The period is the median time per index step of this many intervals from the first two
+    #: that agree (of those so far until then): a few frames at the start timed otherwise (a
+    #: camera's buffered first frames delivered at once) are outvoted rather than taken for the
+    #: period for good, while a rate that changes later does not change it (the timestamps
+    #: then count the frames elapsed: a rate that halves after the first five intervals still
+    #: counts two frames an interval).
+    PERIOD_INTERVALS = 9
 
     def __init__(self, frame: Frame) -> None:
         #: The last frame's index and time (None: its timestamp did not increase, so the
         #: next interval is not timed).
         self._index: int = frame.index
         self._time: float | None = frame.time_s
-        #: The frame period (None until two intervals agree), and the last interval's time
-        #: per index step (None: none usable yet).
+        #: The frame period (None until two intervals in a row agree), and the times per index
+        #: step it is the median of (until then: the last interval's).
         self._period: float | None = None
-        self._last: float | None = None
+        self._first: list[float] = []
         #: Frames elapsed since the first frame.
         self.now = 0.0
 
@@ -220,10 +230,21 @@ class FrameClock:
             timed = interval / self._period
             if abs(timed - steps) > self.JITTER:
                 steps = timed
-        elif interval > 0 and indexed > 0:
-            per = interval / indexed
-            if self._last is not None and abs(per - self._last) <= self.JITTER * self._last:
-                self._period = self._last
-            self._last = per
+        if interval > 0 and indexed > 0:
+            self._learn(interval / indexed)
         self.now += steps
         return steps
+
+    def _learn(self, per: float) -> None:
+        """Take an interval's time per index step into the period: the first that agrees with
+        the one before it within ``JITTER`` starts it (a first interval stretched by a device
+        starting up is not taken for it); from then on it is the median of the intervals since
+        those two, up to ``PERIOD_INTERVALS``."""
+        if self._period is None:
+            last = self._first[-1] if self._first else None
+            self._first = [per]
+            if last is not None and abs(per - last) <= self.JITTER * last:
+                self._period, self._first = last, [last, per]
+        elif len(self._first) < self.PERIOD_INTERVALS:
+            self._first.append(per)
+            self._period = statistics.median(self._first)
