@@ -328,3 +328,8 @@ def test_images_after_a_frame_on_a_camera_clock_are_timed_on_from_it() -> None:
     assert [r.time_s for r in got] == [0.0, 100.0, 100.0 + 1 / 30, 100.0 + 2 / 30, 100.0 + 3 / 30]
     assert tracker.init(images[0], scene.boxes[0]).time_s == 0.0  # a new track starts at 0
     assert tracker.update(images[1]).time_s == 1 / 30
+    # a frame back on the index / fps clock is the clock the images after it follow
+    tracker.init(vtrack.BgrFrame(0, 50.0, images[0]), scene.boxes[0])
+    back = [tracker.update(images[1]), tracker.update(vtrack.BgrFrame(2, 2 / 30, images[2])),
+            tracker.update(images[3])]
+    assert [r.time_s for r in back] == [50.0 + 1 / 30, 2 / 30, 3 / 30]

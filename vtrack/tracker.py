@@ -201,12 +201,13 @@ class Tracker:
     def _process(self, item: FrameLike) -> FrameResult:
         assert self._pipeline is not None
         # a frame of another size or kind than the first: InputError from the pipeline
-        # an image is timed on from the last frame off the index / fps timeline (a camera's
-        # clock), one interval a frame: not back in time after it
+        # an image is timed on from the last frame that came with its own time (a camera's
+        # clock), one interval a frame: neither back in time after it nor on an older clock
         at, at_s = self._timed_at
         frame = as_frame(item, self._index, self.fps, at_s + (self._index - at) / self.fps)
-        if frame.time_s != frame.index / self.fps:
-            self._timed_at = (frame.index, frame.time_s)
+        if not isinstance(item, np.ndarray):  # (on the index / fps clock: it, exactly)
+            on_clock = frame.time_s == frame.index / self.fps
+            self._timed_at = (0, 0.0) if on_clock else (frame.index, frame.time_s)
         result = self._pipeline.process(frame)
         # an image after a vtrack.Frame numbered by the caller (a camera's frame after a
         # dropped one) is the frame after that one, not the count of frames given
