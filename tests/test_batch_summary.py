@@ -11,10 +11,16 @@ from typing import TYPE_CHECKING
 from click.testing import CliRunner, Result
 
 from vtrack.batch import Job, execute
+from vtrack.batch.summary import SummaryWriter
 from vtrack.cli import main
 from vtrack.config import load_config
 from vtrack.io.identity import file_identity
-from vtrack.io.outdir import BATCH_COLUMNS, EARLIER_BATCH_COLUMNS, is_batch_folder
+from vtrack.io.outdir import (
+    BATCH_COLUMNS,
+    EARLIER_BATCH_COLUMNS,
+    is_batch_folder,
+    is_report_folder,
+)
 from vtrack.report.rows import run_row
 from vtrack.report.runs import load_run
 from vtrack.request import RunRequest
@@ -186,3 +192,38 @@ def test_the_worker_reads_its_runs_row(clip_factory: ClipFactory, tmp_path: Path
     assert outcome.status == "complete", outcome.error
     assert outcome.row == run_row(load_run(folder))
     assert outcome.row_source == file_identity(folder / "run.json")
+
+
+def test_a_batch_resumed_after_a_stopped_force_run_writes_its_scores(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A batch stopped while `--force` ran a pair again wrote that pair's row as interrupted but
+    kept its run.json's identity beside it; the next resume (run.json unchanged) took that row
+    for the pair's own and wrote `occ,s0,complete,,,,...`: complete with every score empty.
+    The identity of a pair without a row is not written, and only a complete row is kept."""
+    inputs, out, rows = _batch_of_one(clip_factory, tmp_path)
+    first = rows[("occ", "s0")]
+    stopped = SummaryWriter(out / "summary.csv", [("occ", "s0")])  # --force, stopped at once
+    stopped.write(stopped=True)
+    _, rows = read(out / "summary.csv")
+    assert rows[("occ", "s0")]["status"] == "interrupted"
+    done = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    _, rows = read(out / "summary.csv")
+    assert rows[("occ", "s0")]["status"] == "complete"
+    assert rows[("occ", "s0")]["auc"] == first["auc"] != ""
+
+
+def test_a_folder_holding_an_earlier_vtracks_report_or_a_fifo_page(tmp_path: Path) -> None:
+    """A report written before its page carried the generator line (index.html beside
+    summary.md) is a report's folder, not a batch's; an index.html that is no regular file
+    (a FIFO) is not opened (is_report_folder blocked on it)."""
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "index.html").write_text("<html><head><title>vtrack report</title></head></html>")
+    (old / "summary.md").write_text("# vtrack report\n")
+    (old / "summary.csv").write_text(",".join(BATCH_COLUMNS) + "\n")
+    assert is_report_folder(old) and not is_batch_folder(old)
+    fifo = tmp_path / "fifo"
+    fifo.mkdir()
+    os.mkfifo(fifo / "index.html")
+    assert not is_report_folder(fifo)

@@ -19,7 +19,7 @@ from vtrack.errors import OutputError, passing_stop_to
 from vtrack.io.files import folder_name, write_text_atomic
 from vtrack.io.identity import file_identity
 from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
-from vtrack.run import STATUS_INTERRUPTED
+from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED
 
 #: A run's end writes ``summary.csv`` again once this many times the last write's own time has
 #: passed since it: writing takes at most about 1/20 of a batch's time however many pairs it
@@ -191,8 +191,10 @@ class SummaryWriter:
         self.sources = {key: sources[key] for key in keys if key in sources}
         #: The earlier rows of the pairs planned now, with the identity of the ``run.json``
         #: each was read from: a resumed pair's row while that file is unchanged.
+        #: (only a complete row: a pair a stopped batch was running again is no result)
         self._resumable = {key: (earlier[key], sources[key])
-                           for key in planned if key in earlier and key in sources}
+                           for key in planned if key in earlier and key in sources
+                           and earlier[key].get("status") == STATUS_COMPLETE}
 
     def add(self, outcome: Outcome, write: bool = True) -> None:
         """Record ``outcome``'s row (a resumed pair's as the file had it when its ``run.json``
@@ -245,7 +247,7 @@ class SummaryWriter:
         with contextlib.suppress(OutputError):  # (without it, a resumed pair is read again)
             write_text_atomic(self.path.parent / SUMMARY_SOURCES, json.dumps(
                 [[*key, source["size"], source["mtime_ns"]]
-                 for key, source in self.sources.items()]))
+                 for key, source in self.sources.items() if self.rows.get(key) is not None]))
         ended = self.clock()
         self._pending = False
         self._next_write = ended + WRITE_SPACING * (ended - began)

@@ -57,11 +57,23 @@ REPORT_GENERATOR = '<meta name="generator" content="vtrack'
 _PAGE_HEAD = 4096
 
 
+#: What every report writes beside its page, and a batch never: a report written before its
+#: page carried :data:`REPORT_GENERATOR` is told by it.
+REPORT_TABLES = "summary.md"
+
+
 def is_report_folder(folder: Path | str) -> bool:
-    """Whether ``folder`` holds a vtrack report: its :data:`REPORT_PAGE` carries
-    :data:`REPORT_GENERATOR` in its head (any other ``index.html`` is not a report's)."""
+    """Whether ``folder`` holds a vtrack report: its :data:`REPORT_PAGE`, a regular file (a
+    FIFO of that name is never opened), carries :data:`REPORT_GENERATOR` in its head, or sits
+    beside :data:`REPORT_TABLES` (an earlier vtrack's report); any other ``index.html`` is not
+    a report's."""
+    page = Path(folder) / REPORT_PAGE
     try:
-        with (Path(folder) / REPORT_PAGE).open(encoding="utf-8", errors="replace") as handle:
+        if not page.is_file():
+            return False
+        if (page.parent / REPORT_TABLES).is_file():
+            return True
+        with page.open(encoding="utf-8", errors="replace") as handle:
             return REPORT_GENERATOR in handle.read(_PAGE_HEAD)
     except OSError:
         return False
