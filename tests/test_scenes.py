@@ -358,6 +358,23 @@ def test_image_sequence_has_otb_layout(clip_factory):
     assert cv2.imread(str(images[0])).shape == (240, 320, 3)
 
 
+@pytest.mark.parametrize("fps", [25.0, 29.97])
+def test_an_image_folder_is_read_at_the_scenes_frame_rate(tmp_path, fps):
+    """vtrack scene street seq --format images said '25 fps', but the folder kept no rate:
+    vtrack run / frame read it at 30 fps (vtrack frame seq --at 1s wrote frame 30, not 25).
+    Its seqinfo.ini gives the scene's frame rate, which the folder (and its img/) is read at."""
+    scene = make_scene("smooth", frames=10, width=64, height=48, fps=fps)
+    out = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    for spec in (out, out / "img"):
+        source = open_source(str(spec))
+        try:
+            times = [frame.time_s for frame in source]
+        finally:
+            source.close()
+        assert source.info.fps == fps
+        assert times == pytest.approx([i / fps for i in range(10)])
+
+
 @pytest.mark.parametrize(
     ("pix_fmt", "code", "per_frame"),
     [

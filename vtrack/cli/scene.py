@@ -80,7 +80,8 @@ def command(
     frame) and, for the scenarios with several targets (multi, pedestrians, vehicles,
     street), OUT.mot.txt
     (MOTChallenge). An image folder holds
-    its groundtruth_rect.txt (and groundtruth_mot.txt). Same arguments, same files, byte for byte.
+    its groundtruth_rect.txt (and groundtruth_mot.txt) and seqinfo.ini (its frame rate, which vtrack
+    reads it at). Same arguments, same files, byte for byte.
     Progress: a bar in a terminal, else a line every --stats-period seconds.
     """
     if str(out) == "-":  # elsewhere "-" is standard input or output; here it would be a file

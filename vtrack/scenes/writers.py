@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError
 from vtrack.io.files import ffmpeg_file, os_reason, replacing
-from vtrack.io.images import encode_image
+from vtrack.io.images import SEQUENCE_INFO, encode_image
 from vtrack.io.raw import PIX_FMTS as RAW_PIX_FMTS  # (write_raw's layouts: those vtrack reads)
 from vtrack.params import X264_PRESETS
 from vtrack.scenes.scene import Scene
@@ -294,6 +294,16 @@ def _images_to(scene: Scene, images: Path, temp: Path, ext: str, progress: Progr
             name.write_bytes(encode_image(bgr, f".{ext}", quality=95))
 
 
+def _sequence_info_to(scene: Scene, path: Path, temp: Path) -> None:
+    """A MOTChallenge ``seqinfo.ini`` giving the image folder's frame rate (``frameRate``, which
+    ``vtrack run`` / ``frame`` read it at), written to ``temp`` (errors name ``path``)."""
+    rate = repr(float(scene.fps)).removesuffix(".0")  # 25, 29.97: as given
+    with _writing(path):
+        temp.write_text(f"[Sequence]\nimDir=img\nframeRate={rate}\n"
+                        f"seqLength={len(scene)}\nimWidth={scene.width}\n"
+                        f"imHeight={scene.height}\nimExt=.{IMAGE_EXT}\n")
+
+
 #: The conversion from BGR of each layout ``write_raw`` writes (None: as it is).
 _RAW_CONVERSIONS = {
     "bgr24": None,
@@ -357,7 +367,8 @@ def write_clip(
 
     - ``mp4``: video ``out`` (``pix_fmt`` default yuv420p) and ``out`` -> ``<stem>.gt.txt``;
     - ``raw``: raw frames ``out`` (``pix_fmt`` default bgr24) and ``<stem>.gt.txt``;
-    - ``images``: OTB folder ``out`` (``out/img/0001.jpg``, ``out/groundtruth_rect.txt``).
+    - ``images``: OTB folder ``out`` (``out/img/0001.jpg``, ``out/groundtruth_rect.txt``) and
+      its frame rate in ``out/seqinfo.ini`` (MOTChallenge's ``frameRate``), as vtrack reads it.
 
     Scenes with more than one tracked object (``multi``) also get MOTChallenge ground truth:
     ``<stem>.mot.txt`` beside a file, ``out/groundtruth_mot.txt`` in an image folder.
@@ -381,16 +392,18 @@ def write_clip(
     clip = out / "img" if fmt == "images" else out
     gt = out / "groundtruth_rect.txt" if fmt == "images" else sidecar(out, "gt")
     mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
-    with replacing(clip, gt, *([mot] if multi else [])) as temps:
+    rate = [out / SEQUENCE_INFO] if fmt == "images" else []  # the folder's frame rate
+    with replacing(clip, gt, *rate, *([mot] if multi else [])) as temps:
         if fmt == "mp4":
             _encode_video(scene, out, temps[0], crf, preset, CODEC, pix, progress, keyint=None)
         elif fmt == "raw":
             _raw_to(scene, out, temps[0], pix, progress)
         else:
             _images_to(scene, clip, temps[0], IMAGE_EXT, progress)
+            _sequence_info_to(scene, rate[0], temps[2])
         _groundtruth_to(scene, gt, temps[1], origin=1 if fmt == "images" else 0)
         if multi:
-            _mot_groundtruth_to(scene, mot, temps[2])
+            _mot_groundtruth_to(scene, mot, temps[-1])
     if not multi:
         with _writing(mot):
             mot.unlink(missing_ok=True)
