@@ -37,6 +37,8 @@ def as_frame(item: FrameLike, index: int, fps: float, time_s: float | None = Non
     refuses."""
     if isinstance(item, Frame):
         return item
+    if time_s is None:
+        time_s = index / fps
     if isinstance(item, np.ndarray):
         # checked before a copy is made (a huge or float array is refused, not copied)
         if item.ndim == 3 and item.shape[2] == 1:
@@ -54,13 +56,12 @@ def as_frame(item: FrameLike, index: int, fps: float, time_s: float | None = Non
         problem = frame_size_problem(item.shape[1], item.shape[0])
         if problem:
             raise ValueError(f"frame {index}: {problem}")
-        return frame_type(index, index / fps if time_s is None else time_s,
-                          np.ascontiguousarray(item))
+        return frame_type(index, time_s, np.ascontiguousarray(item))
     if type(item).__module__.split(".")[0] == "av":  # PyAV only for a PyAV object
         import av
 
         if isinstance(item, av.VideoFrame):
-            return _decoded(item, index, index / fps if time_s is None else time_s)
+            return _decoded(item, index, time_s)
     raise TypeError(f"frame {index}: expected a vtrack.Frame, a NumPy image or an "
                     f"av.VideoFrame, got {type(item).__name__}")
 
