@@ -41,9 +41,19 @@ MAX_SEED = 2**32 - 1
 
 def check_seed(seed: object) -> int:
     """``seed`` if it is a whole number from 0 to :data:`MAX_SEED`; ConfigError otherwise."""
-    if isinstance(seed, bool) or not isinstance(seed, Integral) or not 0 <= seed <= MAX_SEED:
-        raise ConfigError(f"seed {shown(seed)}: must be a whole number from 0 to {MAX_SEED}")
-    return int(seed)
+    return check_whole("seed", seed, 0, MAX_SEED)
+
+
+def check_whole(name: str, value: object, least: int, most: int, meaning: str = "") -> int:
+    """``value`` as an ``int`` if it is a whole number (a NumPy one too; not a bool) from
+    ``least`` to ``most``; ConfigError naming ``name`` otherwise (``meaning``, when given, says
+    in brackets what the number is)."""
+    if isinstance(value, bool) or not isinstance(value, Integral) \
+            or not least <= value <= most:
+        said = f" ({meaning})" if meaning else ""
+        raise ConfigError(f"{name} {shown(value)}: must be a whole number from {least} to "
+                          f"{most}{said}")
+    return int(value)
 
 
 def check_flag(value: object, name: str) -> bool:

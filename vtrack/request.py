@@ -15,7 +15,6 @@ import math
 import os
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
-from numbers import Integral
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +32,7 @@ from vtrack.params import (
     X264_PRESETS,
     check_flag,
     check_seed,
+    check_whole,
     checked_seconds,
     shown,
 )
@@ -137,8 +137,8 @@ class RunRequest:
         object.__setattr__(self, "ffmpeg", checked_ffmpeg(self.ffmpeg))
         for name, least, most, meaning in _WHOLE_NUMBERS:  # (a NumPy int: an int)
             if name != "max_frames" or self.max_frames is not None:
-                object.__setattr__(self, name, _whole(name, getattr(self, name), least, most,
-                                                      meaning))
+                object.__setattr__(self, name, check_whole(name, getattr(self, name), least,
+                                                           most, meaning))
         for name, above in (("start_s", False), ("max_s", True)):
             if getattr(self, name) is not None:  # (a NumPy or Decimal number: a float)
                 object.__setattr__(self, name, checked_seconds(
@@ -323,17 +323,6 @@ _WHOLE_NUMBERS = (
     ("crf", 0, MAX_CRF, "the annotated video's x264 quality"),
     ("gt_origin", 0, 1, "1: the ground truth's boxes are 1-based"),
 )
-
-
-def _whole(name: str, value: object, least: int, most: int, meaning: str) -> int:
-    """``value`` as an ``int`` if it is a whole number (a NumPy one too) from ``least`` to
-    ``most``; ConfigError naming the field ``name`` otherwise (``meaning`` says what the
-    number is)."""
-    if isinstance(value, bool) or not isinstance(value, Integral) \
-            or not least <= value <= most:
-        raise ConfigError(f"{name} {shown(value)}: must be a whole number from {least} to "
-                          f"{most} ({meaning})")
-    return int(value)
 
 
 def _absolute_files(config: Config) -> Config:
