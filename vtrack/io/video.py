@@ -592,8 +592,9 @@ class VideoSource(Source):
         """Packets the decoder refused while decoding; once the stream has ended, every frame
         place left empty after the damage (some pictures vanish without an error). Those
         before the first frame tracked (:meth:`start_near`, :meth:`skip_to`) do not count."""
-        return max(0, self._dropped - (self._dropped if self._uncounted is None
-                                       else self._uncounted))
+        if self._uncounted is None:  # no frame tracked yet
+            return 0
+        return max(0, self._dropped - self._uncounted)
 
     @property
     def frames_corrupt(self) -> int:
