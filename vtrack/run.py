@@ -82,9 +82,9 @@ from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.source import (
     TIME_SLACK_S,
     no_frame_after_text,
-    past_end,
     past_end_text,
     seek_time,
+    start_toward,
 )
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import verify_video
@@ -884,10 +884,11 @@ def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
     if request.start_s is None:
         if not request.start or source is None:
             return request.start, 0
-        if past_end(source.info, request.start):
+        read_from = start_toward(source, request.start)
+        if read_from is None:
             raise InputError(f"--start {request.start_text}: "
                              + past_end_text(request.input, request.start, source.info))
-        return request.start, source.start_near(request.start)
+        return request.start, read_from
     assert source is not None, "a start time needs the opened input"
     found, read_from = seek_time(source, request.start_s)
     if found is None:

@@ -213,6 +213,16 @@ def frame_at_time(seconds: float, fps: float | None) -> int:
     return max(0, math.ceil(seconds * fps - TIME_SLACK_S))
 
 
+def start_toward(source: Source, index: int) -> int | None:
+    """Make ``source`` (opened, not yet iterated) reach frame ``index`` without reading all
+    the frames before it: None, reading nothing, when its frame count says it has no such
+    frame (:func:`past_end`); else the index its iteration begins at, at or before ``index``
+    (a key frame near it where the input can jump there, :meth:`Source.start_near`; else 0)."""
+    if past_end(source.info, index):
+        return None
+    return source.start_near(index)
+
+
 def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
     """Make ``source`` (opened, not yet iterated) begin at its first frame whose timestamp is
     at or after ``seconds`` (:meth:`Source.skip_to`, a variable frame rate followed), a

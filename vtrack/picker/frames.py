@@ -31,6 +31,7 @@ from vtrack.io.source import (
     past_end,
     past_end_text,
     seek_time,
+    start_toward,
 )
 
 #: Encoded frames kept for stepping back and forth (bytes; a 1080p JPEG is ~0.5-1 MB).
@@ -175,16 +176,6 @@ class FrameStore:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
-
-
-def start_toward(source: Source, index: int) -> int | None:
-    """Make ``source`` (opened, not yet iterated) reach frame ``index`` without reading all
-    the frames before it: None, reading nothing, when its frame count says it has no such
-    frame (:func:`past_end`); else the index its iteration begins at, at or before ``index``
-    (a key frame near it where the input can jump there, :meth:`Source.start_near`; else 0)."""
-    if past_end(source.info, index):
-        return None
-    return source.start_near(index)
 
 
 def read_frame(input_spec: str, index: int) -> np.ndarray:
