@@ -169,13 +169,13 @@ def _run_when_free(job: Job, report: Report | None = None) -> RunSummary:
     its record): then the run replaces what that one recorded."""
     deadline = time.monotonic() + LOCK_WAIT_S
     progress = _Reporter(job, report) if report is not None else None
+    on_frame = progress.on_frame if progress is not None else None
+    on_open = progress.on_open if progress is not None else None
     while True:
         try:
             # a batch's messages name the options its runs share with vtrack run, as before
             # the library's names (init_box, fps) were given to run()'s own callers
-            if progress is None:
-                return run(job.request, init_name="--init", fps_name="--fps")
-            return run(job.request, on_frame=progress.on_frame, on_open=progress.on_open,
+            return run(job.request, on_frame=on_frame, on_open=on_open,
                        init_name="--init", fps_name="--fps")
         except FolderInUseError:
             if time.monotonic() >= deadline:
