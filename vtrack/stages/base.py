@@ -26,6 +26,7 @@ from __future__ import annotations
 import importlib
 import math
 import pkgutil
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -113,6 +114,26 @@ class TargetShape:
         :data:`PRIOR_SAMPLES` measured boxes, so it gives way as the scene shows its targets."""
         weight = self.samples / (self.samples + PRIOR_SAMPLES)
         return (1 - weight) * given + weight * learnt
+
+
+class ShapeSamples:
+    """The height/width and area of the last ``limit`` boxes added, and their usual shape."""
+
+    def __init__(self, limit: int) -> None:
+        self._aspects: deque[float] = deque(maxlen=limit)
+        self._areas: deque[float] = deque(maxlen=limit)
+
+    def add(self, box: Box) -> None:
+        """Take ``box``'s height/width and area as a sample (the oldest goes past ``limit``)."""
+        self._aspects.append(box.h / box.w)
+        self._areas.append(box.area)
+
+    def shape(self) -> TargetShape | None:
+        """Median height/width and area of the samples (None: none yet)."""
+        if not self._areas:
+            return None
+        return TargetShape(float(np.median(self._aspects)), float(np.median(self._areas)),
+                           len(self._areas))
 
 
 @dataclass(frozen=True)

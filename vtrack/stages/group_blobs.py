@@ -63,7 +63,14 @@ import numpy as np
 
 from vtrack.geometry import Box, iou
 from vtrack.params import Param
-from vtrack.stages.base import PRIOR_SAMPLES, Stage, TargetShape, TrackContext, register
+from vtrack.stages.base import (
+    PRIOR_SAMPLES,
+    ShapeSamples,
+    Stage,
+    TargetShape,
+    TrackContext,
+    register,
+)
 from vtrack.stages.detect import Detection, foreground_under
 
 #: A detection's fill (foreground share of its box) scores 1 from this value on ...
@@ -247,8 +254,7 @@ class PersistentBlobs:
 
     frames: int
     _blobs: list[_Blob] = field(default_factory=list)
-    _aspects: deque[float] = field(default_factory=lambda: deque(maxlen=PERSISTENT_SAMPLES))
-    _areas: deque[float] = field(default_factory=lambda: deque(maxlen=PERSISTENT_SAMPLES))
+    _samples: ShapeSamples = field(default_factory=lambda: ShapeSamples(PERSISTENT_SAMPLES))
 
     def see(self, boxes: list[Box], width: int, height: int, scale: float,
             least: float = 0.0) -> None:
@@ -268,17 +274,13 @@ class PersistentBlobs:
             aspects.append(box.h / box.w)
             steady = len(aspects) == self.frames and max(aspects) <= STEADY * min(aspects)
             if steady and box.area >= least:
-                self._aspects.append(box.h / box.w)
-                self._areas.append(box.area)
+                self._samples.add(box)
             blobs.append(_Blob(box, aspects))
         self._blobs = blobs
 
     def shape(self) -> TargetShape | None:
         """Median height/width and area of the samples so far (None: none yet)."""
-        if not self._aspects:
-            return None
-        return TargetShape(float(np.median(self._aspects)), float(np.median(self._areas)),
-                           len(self._aspects))
+        return self._samples.shape()
 
 
 @register

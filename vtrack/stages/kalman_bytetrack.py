@@ -52,7 +52,6 @@ Work per frame: ``O(T M)`` for ``T <= max_tracks`` tracks and ``M`` detections, 
 from __future__ import annotations
 
 import itertools
-from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
@@ -62,7 +61,7 @@ from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_mod
 from vtrack.geometry import Box
 from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
-from vtrack.stages.base import Stage, TargetShape, Track, TrackContext, register
+from vtrack.stages.base import ShapeSamples, Stage, Track, TrackContext, register
 from vtrack.stages.detect import Detection, fewest_misses, track_state
 
 #: Boxes of confirmed tracks remembered for the learnt shape (``ctx.target_shape``).
@@ -198,8 +197,7 @@ class ByteTracks(Stage):
         self._model: MotionModel = motion_model(self.model, self.q, 1.0, self.p0, g=0.0)
         self._tracks: list[_Track] = []
         self._ids = itertools.count(1)
-        self._aspects: deque[float] = deque(maxlen=SHAPE_SAMPLES)
-        self._areas: deque[float] = deque(maxlen=SHAPE_SAMPLES)
+        self._shapes = ShapeSamples(SHAPE_SAMPLES)
         ctx.target_shape = None
         self.step(ctx)
 
@@ -244,9 +242,8 @@ class ByteTracks(Stage):
                 kept.append(track)
                 updated.add(id(track))
         self._tracks = fewest_misses(kept, self.max_tracks)
-        if self._areas:
-            ctx.target_shape = TargetShape(float(np.median(self._aspects)),
-                                           float(np.median(self._areas)), len(self._areas))
+        if (shape := self._shapes.shape()) is not None:
+            ctx.target_shape = shape
         ctx.tracks = [Track(t.id, self._box(t), t.score, track_state(t.confirmed,
                                                                      id(t) in updated))
                       for t in self._tracks]
@@ -310,8 +307,7 @@ class ByteTracks(Stage):
         track.misses = 0
         track.confirmed = track.confirmed or track.hits >= self.confirm
         if track.confirmed and detection.score >= self.high:
-            self._aspects.append(box.h / box.w)
-            self._areas.append(box.area)
+            self._shapes.add(box)
 
     def _start(self, detection: Detection) -> _Track:
         box = detection.box
