@@ -17,12 +17,16 @@ filter's own response (``robust_search``), not a hand-set similarity:
   on the occluder's edge until it came out (generated `slab`, seeds 100-111: mean IoU 0.731
   -> 0.862; `occlusion` and `cover` 0.72-0.94 -> 0.82-0.99), at a cost where a hand-held
   target's colours fail the check while the filter still has it (DragonBaby; real sequences
-  -0.001 on both sets; benchmarks/RESULTS.md section 8, sixteenth round). After
-  ``lost_after`` such frames in a row, or at once when the box is mostly outside the frame,
-  the state is **lost**: no box is claimed, and with
-  ``redetect`` the next frames search a growing ring of regions around the motion model's last
-  position with the same filter (``ctx.search_growth``,
-  :class:`vtrack.stages.robust_model.RobustModel`).
+  -0.001 on both sets; benchmarks/RESULTS.md section 8, sixteenth round). Once the target has
+  been hidden for more than ``lost_after`` frames, or at once when the box is mostly outside
+  the frame, the state is **lost**: no box is claimed, and with
+  ``redetect`` the next frames search a ring of regions around the motion model's last
+  position with the same filter, a ring farther a frame (``ctx.search_growth``,
+  :class:`vtrack.stages.robust_model.RobustModel`). Both count the frames elapsed, not the
+  frames given (:class:`vtrack.stages.robust_clock.FrameClock`: the frame numbers, or the
+  timestamps where they say otherwise): a camera that delivers every other frame loses a
+  hidden target after the same second as one that delivers all, and searches as far by then
+  (before, a second later, its rings growing half as fast).
 - **Doubtful**: a sharp peak below ``hidden_peak`` of its mean over the frames so far (Wang et
   al., LMCF, CVPR 2017: beta_2 = 0.45; a background texture can give a sharp peak, not a strong
   one) is called occluded too, but followed and learnt like a tracking frame, and it is no step
@@ -89,7 +93,13 @@ filter's own response (``robust_search``), not a hand-set similarity:
   2017, section 3.3: learn only when APCE and peak reach ``update_apce`` = 0.7 and
   ``update_peak`` = 0.45 of their means over the frames so far) froze the model through
   appearance changes here and lowered the mean AUC on both the tune and the check sequences:
-  it is off by default (0), kept for the ablation.
+  it is off by default (0), kept for the ablation. The learning rates (``rate``, and the
+  colour's and the scale's) are per frame learnt, not per frame elapsed, as in Staple, DSST
+  and MOSSE, whose models are running averages of the samples they learn from: a frame after
+  a gap is one sample, and weighing it as the frames missed (``1 - (1 - rate)^k``) would let
+  one look at the target (or at what hides it) replace that many frames of the model. LMCF's
+  means (above) are over the frames given for the same reason: they describe the responses
+  seen.
 
 Pipeline contract of stage ``robust_failure``: reads ``ctx.measurement``, ``ctx.robust``,
 ``ctx.prediction``, ``ctx.state``; writes ``ctx.state``, ``ctx.box`` (with ``coast``, the
@@ -131,8 +141,9 @@ class RobustFailure(Stage):
               "sharp and strong suffice)", min=0.0, max=10.0),
         Param("retake_colour", bool, False, "a hidden target is taken back only where the colour "
               "response at the peak passes doubtful_colour's check too (both learners agree)"),
-        Param("lost_after", int, 30, "hidden frames in a row before the target is lost",
-              min=0, max=100000),
+        Param("lost_after", int, 30, "frames the target may stay hidden before it is lost "
+              "(frames elapsed: frames missing from the input count, by their numbers or "
+              "timestamps)", min=0, max=100000),
         Param("coast", bool, False, "while occluded, the box follows the motion model's "
               "prediction (false: it stays on the response's peak, unlearnt)"),
         Param("coast_unseen", bool, False, "on an occluded frame whose colour response at the "
@@ -225,7 +236,8 @@ class RobustFailure(Stage):
             if may_learn and not (weak and colour_disagrees):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
-        target.hidden_frames += 1
+        # time, not calls: frames missing from the input count as hidden too
+        target.hidden_frames += target.clock.elapsed
         _hold_size(target, ctx)
         if self.coast:
             ctx.measurement = None  # S0 item 7: coast on the prediction
@@ -239,7 +251,7 @@ class RobustFailure(Stage):
                 and not colour_disagrees):
             target.learn(ctx.frame, ctx.measurement, self.rate)
         if lost and self.redetect:
-            ctx.search_growth = min(ctx.search_growth + 1.0, MAX_RINGS + 1.0)
+            ctx.search_growth = min(ctx.search_growth + target.clock.elapsed, MAX_RINGS + 1.0)
 
     def _strong(self, target: RobustTarget) -> bool:
         """LMCF's test: APCE and peak at their shares of the usual values (always true before

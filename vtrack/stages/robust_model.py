@@ -27,7 +27,8 @@ Pipeline contract of stage ``robust_model``: reads ``ctx.frame``, ``ctx.box`` (o
 whose reported box was the motion model's extrapolation, ``ctx.robust``'s peak there),
 ``ctx.state``, ``ctx.prediction`` (the search centre while the target is lost),
 ``ctx.search_growth``;
-writes ``ctx.robust``, ``ctx.window`` (the region's part inside the frame), ``ctx.likelihood``.
+writes ``ctx.robust`` (its frame clock moved on to this frame), ``ctx.window`` (the region's
+part inside the frame), ``ctx.likelihood``.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ from vtrack.geometry import Box, Window
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.robust_clock import FrameClock
 
 #: Re-detection reaches at most this many rings of regions around the search centre.
 MAX_RINGS = 4
@@ -114,6 +116,9 @@ class RobustTarget:
     translation: CorrelationFilter
     cosine: np.ndarray
     colour: ColourHistograms | None
+    #: The frames elapsed since the first frame, and from the frame before to this one (moved
+    #: on by ``robust_model`` as each frame starts).
+    clock: FrameClock
     #: DSST's scale filter (``robust_search``; None: the size is kept), and this frame's scale
     #: samples with the box they were taken around: when the size did not change, the same
     #: samples are what learning would take again.
@@ -142,8 +147,9 @@ class RobustTarget:
     usual_colour: float = 0.0
     response_frames: int = 0
     colour_frames: int = 0
-    #: Frames hidden in a row (``robust_failure``).
-    hidden_frames: int = 0
+    #: Frames elapsed since the last frame that saw the target (``robust_failure``; 0 while it
+    #: is seen).
+    hidden_frames: float = 0.0
     #: The next frame also searches where the merged response peaks over the whole frame
     #: (``robust_failure.redetect_on_colour``: this frame's colours at the peak are not the
     #: target's).
@@ -305,7 +311,7 @@ class RobustModel(Stage):
             cols=cols, rows=rows, cell=self.cell, grey_channel=self.grey_channel,
             shift_within=self.shift_within,
             translation=CorrelationFilter(gaussian_label(rows, cols, sigma), self.lam, 0.0),
-            cosine=hann2d(rows, cols), colour=colour)
+            cosine=hann2d(rows, cols), colour=colour, clock=FrameClock(ctx.frame))
         target.learn(ctx.frame, box, 1.0, first=True)
         #: Counts the frames given (from the first one's number): the turn of the regions a
         #: lost target's ring search visits (frame numbers with gaps skipped some for good).
@@ -320,6 +326,7 @@ class RobustModel(Stage):
         target = ctx.robust
         assert target is not None
         self._turn += 1
+        target.clock.advance(ctx.frame)
         # The region is centred on the last box: on hand-held or panning footage the filter's
         # own last peak is a better prior than a motion model (on the tune sequences the
         # prediction as the only centre lowered the mean AUC from 0.60 to 0.50). Where the

@@ -9,16 +9,16 @@ the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard 
 (``ctx.score``), the less it moves the filter.
 
 The next frame's predicted box (``ctx.prediction``) centres ``robust_model``'s search region.
-The filter steps by the frames that elapsed since the frame before (:class:`FrameClock`: the
-index difference, or the time difference over the stream's frame period where the timestamps
-say otherwise, a change of frame rate), not by one a call: a frame passed over
-(dropped by a camera, by ``--live`` falling behind, by a reader skipping a damaged stretch)
-moves the prediction as far as the target went meanwhile, and the process noise grows with the
-elapsed frames (``Q`` per frame); more than ``FrameClock.GAP`` frames elapsed (a stream that
-stalled or was cut, a clock or numbering that jumped) is a break, not motion: the prediction
-stays at the last position, its velocity unknown, as while lost. The prediction is made when
-the frame comes (``ctx.forecast``); ``ctx.prediction`` left after a frame is the one for the
-frame after it.
+The filter steps by the frames that elapsed since the frame before (the chain's
+:class:`~vtrack.stages.robust_clock.FrameClock`, ``ctx.robust.clock``: the index difference, or
+the time difference over the stream's frame period where the timestamps say otherwise, a change
+of frame rate), not by one a call: a frame passed over (dropped by a camera, by ``--live``
+falling behind, by a reader skipping a damaged stretch) moves the prediction as far as the
+target went meanwhile, and the process noise grows with the elapsed frames (``Q`` per frame);
+more than ``FrameClock.GAP`` frames elapsed (a stream that stalled or was cut, a clock or
+numbering that jumped) is a break, not motion: the prediction stays at the last position, its
+velocity unknown, as while lost. The prediction is made when the frame comes
+(``ctx.forecast``); ``ctx.prediction`` left after a frame is the one for the frame after it.
 While hidden the filter coasts; while lost it stands still at its last position (a lost
 target's velocity is not known), so re-detection searches around where it was last seen; a
 target taken back after being lost restarts the filter at the re-found box (its jump is not a
@@ -41,7 +41,6 @@ search).
 from __future__ import annotations
 
 import math
-import statistics
 
 import numpy as np
 
@@ -50,6 +49,7 @@ from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.robust_clock import FrameClock
 
 
 @register
@@ -90,8 +90,10 @@ class RobustMotion(Stage):
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._was = TrackState.TRACKING
-        #: The frames elapsed since the first one (:class:`FrameClock`).
-        self._clock = FrameClock(ctx.frame)
+        assert ctx.robust is not None
+        #: The frames elapsed since the first one (the chain's :class:`FrameClock`, moved on
+        #: by ``robust_model``).
+        self._clock = ctx.robust.clock
         #: The filter's state on the last frame that saw the target, and that frame's time on
         #: the clock.
         self._seen: tuple[GaussianState, float] | None = None
@@ -155,7 +157,7 @@ class RobustMotion(Stage):
         the prediction stays at the last position, as while lost, with ``Q`` for ``GAP`` frames,
         and an unseen frame's extrapolation starts again from the last box reported."""
         before = self._clock.now
-        steps = self._clock.advance(frame)
+        steps = self._clock.peek(frame)  # robust_model moves the clock on when the frame runs
         if steps > FrameClock.GAP:
             still = self._model.with_velocity(self._posterior, np.zeros(2))
             self._state = self._model.predict(still, FrameClock.GAP,
@@ -163,88 +165,8 @@ class RobustMotion(Stage):
             if self._seen is not None:
                 seen, seen_at = self._seen
                 reported = self._model.predict(seen, before - seen_at)
-                self._seen = (self._model.with_velocity(reported, np.zeros(2)), self._clock.now)
+                self._seen = (self._model.with_velocity(reported, np.zeros(2)), before + steps)
         elif steps != 1.0:
             self._state = self._model.predict(self._posterior, steps,
                                               Q=self._model.Q * steps)
         return self._box.moved_to(*self._position())
-
-
-class FrameClock:
-    """Frames elapsed between the frames a tracker is given, counted in the stream's frame
-    period.
-
-    Between two frames, the elapsed frames are the index difference; where the timestamps say
-    otherwise by more than ``JITTER`` of a frame (a change of frame rate, a reader that skipped
-    frames without numbering the gap, numbers that start again), the time difference over the
-    frame period. The period starts at the time per index step of the first two intervals in a
-    row that agree on it within ``JITTER`` (a first interval stretched by a device starting up,
-    or a gap the numbers do not show, is not taken for it), then is the median of the
-    ``PERIOD_INTERVALS`` intervals from those two on (a camera's buffered first frames,
-    delivered at once, do not set it for good); until then, and where neither tells (indices
-    that do not increase and no usable timestamps), the index difference, or one frame. A
-    timestamp that did not increase is not the base of the next interval (that one counts by
-    the numbers)."""
-
-    #: Timestamps that differ from the index difference by at most this many frames agree with
-    #: it (a capture clock's jitter, timestamp rounding).
-    JITTER = 0.25
-    #: More frames than this elapsed between two frames is a discontinuity (a stream that
-    #: stalled or was cut, a clock or numbering that jumped), not a gap the target crossed at
-    #: its velocity: about a second at common rates, and as many frames as ``robust_failure``
-    #: lets a hidden target go before it is lost (``lost_after``'s default), after which its
-    #: velocity is not trusted either. Motion extrapolated further moves a prediction (and the
-    #: region cut there) arbitrarily far from the target.
-    GAP = 30.0
-    #: The period is the median time per index step of this many intervals from the first two
-    #: that agree (of those so far until then): a few frames at the start timed otherwise (a
-    #: camera's buffered first frames delivered at once) are outvoted rather than taken for the
-    #: period for good, while a rate that changes later does not change it (the timestamps
-    #: then count the frames elapsed: a rate that halves after the first five intervals still
-    #: counts two frames an interval).
-    PERIOD_INTERVALS = 9
-
-    def __init__(self, frame: Frame) -> None:
-        #: The last frame's index and time (None: its timestamp did not increase, so the
-        #: next interval is not timed).
-        self._index: int = frame.index
-        self._time: float | None = frame.time_s
-        #: The frame period (None until two intervals in a row agree), and the times per index
-        #: step it is the median of (until then: the last interval's).
-        self._period: float | None = None
-        self._first: list[float] = []
-        #: Frames elapsed since the first frame.
-        self.now = 0.0
-
-    def advance(self, frame: Frame) -> float:
-        """The frames elapsed from the last frame given to ``frame`` (more than 0); ``frame``
-        becomes the last one."""
-        indexed = frame.index - self._index
-        interval = frame.time_s - self._time if self._time is not None else 0.0
-        # a timestamp that did not increase is no base for the next interval either (one frame
-        # stamped 0 in a long stream would make the next interval the whole stream)
-        self._index = frame.index
-        self._time = frame.time_s if interval > 0 or self._time is None else None
-        steps = float(indexed) if indexed > 0 else 1.0
-        if interval > 0 and self._period is not None:
-            timed = interval / self._period
-            if abs(timed - steps) > self.JITTER:
-                steps = timed
-        if interval > 0 and indexed > 0:
-            self._learn(interval / indexed)
-        self.now += steps
-        return steps
-
-    def _learn(self, per: float) -> None:
-        """Take an interval's time per index step into the period: the first that agrees with
-        the one before it within ``JITTER`` starts it (a first interval stretched by a device
-        starting up is not taken for it); from then on it is the median of the intervals since
-        those two, up to ``PERIOD_INTERVALS``."""
-        if self._period is None:
-            last = self._first[-1] if self._first else None
-            self._first = [per]
-            if last is not None and abs(per - last) <= self.JITTER * last:
-                self._period, self._first = last, [last, per]
-        elif len(self._first) < self.PERIOD_INTERVALS:
-            self._first.append(per)
-            self._period = statistics.median(self._first)
