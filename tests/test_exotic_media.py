@@ -7,6 +7,8 @@ import csv
 import json
 import re
 import struct
+import subprocess
+import sys
 import zlib
 from pathlib import Path
 
@@ -175,6 +177,34 @@ def test_a_container_given_as_raw_frames_is_refused_naming_what_it_is(clip_facto
         f"vtrack: error: {clip}: an MP4/QuickTime file, not raw frames: read it without --raw "
         "(its frames carry their own size and pixel format)")
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("name", "options"), [
+    ("c.ts", {}),
+    ("c.m2ts", {"mpegts_m2ts_mode": "1"}),  # 192-byte packets: a camcorder's AVCHD .mts
+])
+@pytest.mark.parametrize("piped", [False, True])
+def test_an_mpegts_stream_given_as_raw_frames_is_refused(tmp_path, name, options, piped):
+    """cat c.ts | vtrack run - --raw 32x24 tracked the MPEG-TS bytes as pixels: '- (partial):
+    41 frames ...', then 'raw stream ended with 1980 stray bytes after 41 whole frames' (its
+    signature, a 0x47 sync byte every 188 bytes, was not looked for). Now it is refused as the
+    other containers are, from a pipe or a file; a grey raw frame of 0x47 bytes is still one."""
+    clip = _red_target_clip(tmp_path / name, "mpegts", "libx264", frames=30, rate=30,
+                            options=options, codec_options={"preset": "ultrafast"})
+    command = [sys.executable, "-m", "vtrack", "run", "-" if piped else str(clip),
+               "--raw", "32x24", "--init", "1,1,8,8", "--no-video", "-o", str(tmp_path / "out")]
+    with clip.open("rb") as stdin:
+        done = subprocess.run(command, stdin=stdin, capture_output=True, timeout=120)
+    label = "-" if piped else str(clip)
+    assert (done.returncode, done.stderr.decode()) == (2, (
+        f"vtrack: error: {label}: an MPEG-TS stream, not raw frames: read it without --raw "
+        "(its frames carry their own size and pixel format)\n"))
+    assert not (tmp_path / "out").exists()
+    grey = tmp_path / "grey.raw"
+    grey.write_bytes(b"\x47" * 32 * 24 * 3 * 2)  # two flat frames: sync bytes everywhere
+    command[4] = str(grey)
+    assert subprocess.run(command[:-2] + ["-o", str(tmp_path / "grey")], capture_output=True,
+                          timeout=120).returncode == 0
 
 
 def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):

@@ -36,7 +36,7 @@ from vtrack.errors import (
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import check_input_path, os_reason, piped_stdin
-from vtrack.io.signatures import container_kind
+from vtrack.io.signatures import SIGNATURE_BYTES, container_kind
 from vtrack.io.source import InputInfo, Source
 from vtrack.io.specs import input_name
 from vtrack.params import shown
@@ -232,7 +232,7 @@ class RawSource(Source):
             if got == 0:
                 return
             if index == 0:
-                _refuse_a_container(label, memoryview(target).cast("B")[:16].tobytes())
+                _refuse_a_container(label, memoryview(target).cast("B")[:SIGNATURE_BYTES].tobytes())
             if got < fmt.frame_bytes:
                 raise PartialInputError(
                     f"{label}: raw stream ended with {got} stray bytes after {index} whole "

@@ -3,7 +3,8 @@ image given as raw frames (``--raw``), an MP4 cut off before its index was writt
 its last fragment, a Matroska/WebM recording cut inside a block.
 
 Only signatures of four bytes or more are taken, so raw pixels are not mistaken for one
-(MPEG-TS's one sync byte and JPEG's three are not).
+(JPEG's three are not); MPEG-TS, whose signature is one sync byte, is known by three packets'
+headers in a row.
 """
 
 from __future__ import annotations
@@ -16,11 +17,35 @@ from vtrack.geometry import frame_size_problem
 #: handful, a fragmented recording two a fragment (a day at a fragment a second: 172,800).
 _MAX_BOXES = 1_000_000
 
+#: MPEG-TS packets as (offset of the first sync byte, packet size): plain 188-byte packets, and
+#: M2TS's 192 (a 4-byte time stamp before each: AVCHD and Blu-ray .m2ts/.mts).
+_TS_LAYOUTS = ((0, 188), (4, 192))
+#: Packets in a row whose headers make an MPEG-TS stream.
+_TS_PACKETS = 3
+#: Bytes :func:`container_kind` looks at, at most: three M2TS packet headers.
+SIGNATURE_BYTES = 4 + (_TS_PACKETS - 1) * 192 + 4
+
+
+def _mpegts(head: bytes) -> bool:
+    """Whether ``head`` begins :data:`_TS_PACKETS` MPEG-TS (or M2TS) packets: each a sync byte
+    0x47, no transport error flag, and an adaptation field control that is not the reserved 0
+    (so a flat run of 0x47 bytes, a grey raw frame, is none)."""
+    for first, size in _TS_LAYOUTS:
+        starts = range(first, first + _TS_PACKETS * size, size)
+        if len(head) >= starts[-1] + 4 and all(
+                head[at] == 0x47 and not head[at + 1] & 0x80 and head[at + 3] & 0x30
+                for at in starts):
+            return True
+    return False
+
 
 def container_kind(head: bytes) -> str | None:
-    """What ``head`` (a file's or stream's first 12 bytes or more) begins, ``"an MP4/QuickTime
+    """What ``head`` (a file's or stream's first :data:`SIGNATURE_BYTES` bytes; an MPEG-TS
+    stream is known only from that many, the others from 12) begins, ``"an MP4/QuickTime
     file"`` ... ``"a PNG image"``, when it is a container's or an image's signature; None
     otherwise (raw pixels)."""
+    if _mpegts(head):
+        return "an MPEG-TS stream"
     if head[4:8] == b"ftyp" and 8 <= int.from_bytes(head[:4], "big") <= 4096:
         return "an MP4/QuickTime file"
     if head[:4] == b"\x1a\x45\xdf\xa3":
