@@ -189,7 +189,8 @@ def test_only_the_videos_the_docs_name_jump_to_a_key_frame(long_clip: Path, tmp_
 
 
 def _fragmented(path: Path, movflags: str) -> Path:
-    """The clip's 300 frames as a fragmented MP4 (a fragment per key frame, every 30)."""
+    """The clip's 300 frames (a key frame every 30) as an MP4 written with ``movflags``: a
+    fragmented one (frag_keyframe: a fragment per key frame), or a plain one (faststart)."""
     scene = make_scene("smooth", seed=1, width=64, height=48, frames=FRAMES, fps=30)
     with av.open(str(path), "w", options={"movflags": movflags}) as out:
         stream = out.add_stream("libx264", rate=30)
@@ -219,3 +220,42 @@ def test_a_fragmented_mp4_is_not_judged_by_its_first_fragment(tmp_path: Path) ->
     for out in ("piped", "listed"):
         record = json.loads((tmp_path / out / "run.json").read_text())
         assert (record["start_frame"], record["frames"]) == (119, 5), out
+
+
+
+def _run_on_stdin(stdin: Path | bytes, *args: str) -> subprocess.CompletedProcess:
+    """``vtrack run`` with ``stdin`` redirected from a file, or piped ``bytes``."""
+    command = [sys.executable, "-m", "vtrack", "run", *args]
+    if isinstance(stdin, bytes):
+        return subprocess.run(command, input=stdin, capture_output=True, text=False,
+                              timeout=60, check=False)
+    with stdin.open("rb") as handle:
+        return subprocess.run(command, stdin=handle, capture_output=True, timeout=60,
+                              check=False)
+
+
+@pytest.mark.parametrize("how", ["pipe", "redirected", "followed"])
+def test_a_fragmented_mp4_read_without_seeking_is_not_judged_by_its_index(
+        tmp_path: Path, how: str) -> None:
+    """`cat frag.mp4 | vtrack run - --start 119 ...` (300 frames, movflags frag_keyframe
+    only: its index lists the first fragment's 30 frames) said "--start 119: -: has no frame
+    119 (frames 0..29)", as did `vtrack run - < frag.mp4` and `vtrack run frag.mp4 --follow`:
+    only a file read by seeking was looked at for fragments. Now the movie-extends box (mvex)
+    in the index, read in the first bytes, says so, and all start at 119. An MP4 whose index
+    comes first (faststart) piped keeps its frame count."""
+    clip = _fragmented(tmp_path / "frag.mp4", "frag_keyframe")
+    init = ("--init", "10,10,12,12", "--no-video", "--frames", "5", "-o")
+    if how == "followed":
+        done = vtrack("run", str(clip), "--follow", "0.5", "--start", "119", *init,
+                      str(tmp_path / "out"))
+    else:
+        stdin = clip.read_bytes() if how == "pipe" else clip
+        done = _run_on_stdin(stdin, "-", "--start", "119", *init, str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["start_frame"], record["frames"]) == (119, 5)
+    faststart = _fragmented(tmp_path / "fast.mp4", "faststart")
+    done = _run_on_stdin(faststart.read_bytes(), "-", "--start", str(FRAMES), *init,
+                         str(tmp_path / "fast"))
+    assert done.stderr.decode().strip() == (
+        f"vtrack: error: --start {FRAMES}: -: has no frame {FRAMES} (frames 0..{FRAMES - 1})")

@@ -45,12 +45,22 @@ class CapturingStream(io.RawIOBase):
             raise self.interruption
 
 
+#: The first bytes of a stream that cannot seek kept for a look at its layout (an MP4's index:
+#: :func:`vtrack.io.signatures.mp4_head_fragmented`).
+HEAD_BYTES = 1 << 20
+
+
 class CountedStream(CapturingStream):
-    """A stream that cannot seek (a pipe on stdin), read through as it arrives."""
+    """A stream that cannot seek (a pipe on stdin), read through as it arrives; its first
+    :data:`HEAD_BYTES` bytes are kept in :attr:`head`."""
 
     def __init__(self, raw: IO[bytes]) -> None:
         super().__init__()
         self._raw = raw
+        self.head = bytearray()
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
-        return self._raw.readinto1(buffer) or 0  # type: ignore[attr-defined]  # what has arrived
+        got = self._raw.readinto1(buffer) or 0  # type: ignore[attr-defined]  # what has arrived
+        if len(self.head) < HEAD_BYTES:
+            self.head += buffer[:min(got, HEAD_BYTES - len(self.head))]
+        return got

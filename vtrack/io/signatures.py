@@ -10,6 +10,7 @@ headers in a row.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 
 from vtrack.geometry import frame_size_problem
 
@@ -61,6 +62,45 @@ def container_kind(head: bytes) -> str | None:
     return None
 
 
+def _box_header(header: bytes, room: int) -> tuple[bytes, int, int] | None:
+    """The type, header length and size of the MP4 box whose header (8 bytes or more, 16 for a
+    64-bit size) ``header`` begins, ``room`` bytes before its file's end (a size of 0 runs to
+    it); None when it is no box as MP4 lays them out (a size under its header's)."""
+    size, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
+    if size == 1 and len(header) >= 16:  # a 64-bit size follows the type
+        size, length = int.from_bytes(header[8:16], "big"), 16
+    elif size == 0:  # the box runs to the end of the file
+        size = room
+    return (kind, length, size) if size >= length else None
+
+
+def _boxes_in(head: bytes, start: int, stop: int) -> Iterator[tuple[bytes, int, int, int]]:
+    """The boxes laid out from ``head[start:]`` to ``stop`` (an offset in ``head`` or past its
+    end) as (type, offset, header length, size), as far as ``head`` holds their headers."""
+    offset = start
+    while offset + 8 <= min(stop, len(head)):
+        box = _box_header(head[offset:offset + 16], stop - offset)
+        if box is None:
+            return
+        yield box[0], offset, box[1], box[2]
+        offset += box[2]
+
+
+def mp4_head_fragmented(head: bytes) -> bool:
+    """Whether ``head``, the first bytes of an MP4/QuickTime file or stream (one read without
+    seeking: a pipe), shows it fragmented: a fragment (``moof``) among its top-level boxes, or
+    in its index (``moov``) the movie-extends box (``mvex``) that announces fragments (the index
+    then lists the first fragment's frames at most, ``-movflags frag_keyframe``). False when it
+    shows neither: a plain MP4, or one whose index goes on past ``head``."""
+    for kind, offset, header, size in _boxes_in(head, 0, len(head)):
+        if kind == b"moof":
+            return True
+        if kind == b"moov":
+            return any(child == b"mvex" for child, *_ in
+                       _boxes_in(head, offset + header, offset + size))
+    return False
+
+
 def _top_boxes(path: str | os.PathLike[str]) -> tuple[int, list[tuple[bytes, int, int]]] | None:
     """The size of ``path``, an MP4/QuickTime file (its first box ``ftyp``), and its top-level
     boxes in file order as (type, offset, size), the last one's size as its header says (past
@@ -80,15 +120,10 @@ def _top_boxes(path: str | os.PathLike[str]) -> tuple[int, list[tuple[bytes, int
                 if len(header) < 8:
                     boxes.append((b"", offset, 8))
                     break
-                size, kind = int.from_bytes(header[:4], "big"), header[4:8]
-                if not boxes and kind != b"ftyp":
-                    return None
-                if size == 1 and len(header) == 16:  # a 64-bit size follows the type
-                    size = int.from_bytes(header[8:], "big")
-                elif size == 0:  # the box runs to the end of the file
-                    size = end - offset
-                if size < 8:
-                    return None  # not boxes as MP4 lays them out
+                box = _box_header(header, end - offset)
+                if box is None or (not boxes and box[0] != b"ftyp"):
+                    return None  # not boxes as MP4 lays them out, or no MP4
+                kind, _, size = box
                 boxes.append((kind, offset, size))
                 offset += size
     except OSError:

@@ -49,11 +49,12 @@ from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
-from vtrack.io.pyfile import CapturingStream, CountedStream
+from vtrack.io.pyfile import HEAD_BYTES, CapturingStream, CountedStream
 from vtrack.io.signatures import (
     header_problem,
     matroska_torn_element,
     mp4_fragmented,
+    mp4_head_fragmented,
     mp4_index_problem,
     mp4_torn_box,
 )
@@ -549,12 +550,13 @@ class VideoSource(Source):
             duration = self._end_s - start_s
         frame_count = stream.frames or None
         mp4 = "mp4" in self._container.format.name
-        if frame_count and mp4 and self._seekable and mp4_fragmented(path):
+        fragmented = mp4 and self._fragmented_mp4(path)
+        if fragmented:
             frame_count = None  # its index lists the first fragment's frames: its duration counts
-        # a fragmented MP4 read without seeking (stdin, a URL) states the duration of what
-        # FFmpeg read before its first frame, the first fragment: no estimate
+        # a fragmented MP4 read without seeking (stdin, a followed file, a URL) states the
+        # duration of what FFmpeg read before its first frame, the first fragment: no estimate
         estimated = (frame_count is None and duration is not None and bool(fps)
-                     and not (mp4 and not self._seekable and not stream.frames))
+                     and not (mp4 and not self._seekable and (fragmented or not stream.frames)))
         if estimated:
             frame_count = round(duration * fps)
         # a gap in a constant-rate stream's timestamps is pictures lost (a variable-rate one
@@ -586,6 +588,30 @@ class VideoSource(Source):
             rotation=self._rotation,
             frame_count_estimated=estimated,
         )
+
+    def _fragmented_mp4(self, path: str) -> bool:
+        """Whether ``path``, an MP4 being read, holds fragments, so that its index lists the
+        first fragment's frames at most: a file read by seeking by its boxes
+        (:func:`~vtrack.io.signatures.mp4_fragmented`), a pipe on stdin, a redirected stdin or
+        a followed file by its first bytes
+        (:func:`~vtrack.io.signatures.mp4_head_fragmented`). False when it holds none, or for
+        what cannot be looked at again (a FIFO, a URL)."""
+        if self._seekable:
+            return mp4_fragmented(path)
+        read = _python_file(self._container)
+        if isinstance(read, CountedStream):
+            return mp4_head_fragmented(bytes(read.head))
+        try:
+            if path == "-" and read is not None:  # stdin redirected from a file
+                head = os.pread(read.fileno(), HEAD_BYTES, 0)  # type: ignore[attr-defined]
+            elif isinstance(read, GrowingFile):
+                with open(path, "rb") as handle:
+                    head = handle.read(HEAD_BYTES)
+            else:
+                return False
+        except OSError:
+            return False
+        return mp4_head_fragmented(head)
 
     @property
     def frames_skipped(self) -> int:
