@@ -170,3 +170,27 @@ def test_a_late_start_by_time_counts_from_the_first_frame_tracked(tmp_path: Path
     assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 1)
     assert record["warnings"] == [f"{images}: 1 image missing from the numbering (the first "
                                   "after 0020.jpg); their frames are skipped"]
+
+
+def test_an_undecodable_image_at_a_start_by_time_is_not_the_runs(tmp_path: Path) -> None:
+    """`vtrack run seq --start 1s` on 60 images (30 fps) with 0031.jpg (frame 30, at 1 s) junk
+    and 0032.jpg missing started at frame 32 but warned "0031.jpg: not an image FFmpeg can
+    decode ...; frame 30 skipped" and counted frames 30 and 31 as the run's ("skipped 1
+    undecodable, skipped 1 missing from the numbering"), though an image missing at the
+    start, or a damaged frame there in a video, is not. The run now begins at its first frame
+    tracked, 32: nothing before it is counted; an undecodable image after it still is."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 60, 30), folder)
+    (folder / "img" / "0032.jpg").unlink()
+    for number in (31, 41):
+        (folder / "img" / f"{number:04d}.jpg").write_bytes(b"not an image")
+    images = folder / "img"
+    done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--start",
+                  "1s", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == (f"vtrack: warning: {images / '0041.jpg'}: not an image FFmpeg can "
+                           "decode (Invalid data found when processing input); frame 40 "
+                           "skipped\n")
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["start_frame"], record["frames"]) == (32, 27)
+    assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 0)

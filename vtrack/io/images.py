@@ -246,20 +246,12 @@ class ImageFolderSource(Source):
         unreadable = 0
         turned_apart = False  # an image's own tag said another turn than the first's
         places, files = self._places[self._begin:], self._files[self._begin:]
-        # counted from the first image tracked (start_near, skip_to): the gaps before it and
-        # the images read before it are not the run's
+        # counted from the first image tracked (start_near, skip_to: the first decoded at or
+        # after the start): the gaps before it and the images read or undecodable before it
+        # are not the run's
         tracked = next((at for at, place in enumerate(places)
                         if self._tracked(place, place / fps)), len(places))
-        if tracked < len(places):
-            missing = places[-1] + 1 - places[tracked] - (len(places) - tracked)
-            if missing:
-                self._skipped += missing
-                self._missing = missing
-                gap = next(i for i in range(tracked + 1, len(places))
-                           if places[i] != places[i - 1] + 1)
-                self.warnings.append(
-                    f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
-                    f"(the first after {files[gap - 1].name}); their frames are skipped")
+        began = False  # the first image tracked was decoded
         for at, (index, path) in enumerate(zip(places, files, strict=True)):
             try:
                 if index == 0:
@@ -276,7 +268,7 @@ class ImageFolderSource(Source):
                                 "would not be the sequence's size: turned as the first image "
                                 f"({self._turn} degrees)")
             except InputError as exc:
-                if at < tracked:  # before the first image tracked: not the run's
+                if not began:  # before the first image tracked: not the run's
                     continue
                 self._skipped += 1
                 unreadable += 1
@@ -289,6 +281,9 @@ class ImageFolderSource(Source):
                     f"{size[1]}x{size[0]} (stopped at frame {index})",
                     index,
                 )
+            if not began and at >= tracked:
+                began = True
+                self._count_missing(places[at:], files[at:])
             time_s = index / fps
             if first.ndim == 2:  # the first image decides: a sequence is grey or colour
                 if pixels.ndim == 3:
@@ -301,6 +296,18 @@ class ImageFolderSource(Source):
         if unreadable > _NAMED_SKIPS:
             self.warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
                                  f"in all (the first {_NAMED_SKIPS} are named above)")
+
+    def _count_missing(self, places: list[int], files: list[Path]) -> None:
+        """Count as skipped (and missing, with a warning) the gaps in the numbering of
+        ``places`` (the images from the first one tracked on, named ``files``)."""
+        missing = places[-1] + 1 - places[0] - len(places)
+        if missing:
+            self._skipped += missing
+            self._missing = missing
+            gap = next(i for i in range(1, len(places)) if places[i] != places[i - 1] + 1)
+            self.warnings.append(
+                f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
+                f"(the first after {files[gap - 1].name}); their frames are skipped")
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_stored`."""
