@@ -18,7 +18,13 @@ What a multi-target tracker meets on real fixed-camera footage, with exact groun
 The ground truth (``scene.tracks``) holds every walker at least partly inside the frame, also
 while hidden by another, as MOTChallenge's does. Events: ``"cross"`` (frame of the closest
 approach of 1 and 2), ``"cross_ids"``, ``"exit"``/``"exit_id"`` (first frame walker 3 is out),
-``"appear"``/``"appear_id"`` (first frame walker 4 is in), ``"walkers"`` (N) and ``"params"``.
+``"appear"``/``"appear_id"`` (first frame walker 4 is in), ``"walkers"`` (N, newcomers
+included) and ``"params"``.
+
+A clip longer than the default 150 frames (:data:`PLOT_FRAMES`) keeps moving to its end: walker 1
+walks at its own speed, turning back at the sides of the frame until it walks to meet 2 at
+mid-clip, and from frame 150 on newcomers (ids N+1, ...) enter from a side every 1..3 s and
+cross the street. A clip of 150 frames or fewer is as it was, byte for byte.
 
 ``vehicles`` is the same street with vehicles instead of people (:data:`VEHICLES`): the same
 paths (1 and 2 pass each other in neighbouring lanes, 3 leaves, 4 enters), each target a
@@ -59,6 +65,7 @@ PEDESTRIAN_RANGES: dict[str, tuple[float, float]] = {
     "ground": (110.0, 170.0),
     "shadow": (0.6, 0.8),
     "drift": (0.05, 0.12),
+    "arrival": (1.0, 3.0),
 }
 #: ... and for vehicles: the same counts, drift and shadows; wide shapes, faster; ``height``: a
 #: vehicle's height as a share of a walker's at the same depth.
@@ -72,6 +79,13 @@ VEHICLE_RANGES: dict[str, tuple[float, float]] = {
 FAR_HEIGHT, NEAR_HEIGHT = 0.22, 0.5
 #: The walkway: feet between these shares of the frame height.
 WALKWAY = (0.5, 0.95)
+#: The frames the scene's own events are laid out over, at most (its default length): a clip no
+#: longer is as it always was; in a longer one target 1 turns back at the sides of the frame
+#: until it walks to meet 2, and new targets keep entering after this frame (``arrival``
+#: seconds apart), so that its second half does not empty.
+PLOT_FRAMES = 150
+#: Target 1 turns back with its centre at these shares of the frame width.
+TURNS = (0.1, 0.9)
 
 
 @dataclass(frozen=True)
@@ -177,42 +191,61 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
     # each other; 1 is in view from the first frame.
     meet_x = w * motion.uniform(0.4, 0.6)
     feet = h * motion.uniform(0.62, 0.85)
-    v1 = min(speed(1), 0.8 * (meet_x - 0.1 * w) / (n / 2))  # 1 starts inside the frame
-    paths.append((meet_x + v1 * (t - n / 2), feet))
+    # 1 starts inside the frame (turning back at its sides in a long clip)
+    v1 = min(speed(1), 0.8 * (meet_x - TURNS[0] * w) / (min(n, PLOT_FRAMES) / 2))
+    x1 = meet_x + v1 * (t - n / 2)
+    paths.append((np.where(t < n / 2, _pace(x1, TURNS[0] * w, TURNS[1] * w), x1), feet))
     paths.append((meet_x - speed(2) * (t - n / 2), feet + h * motion.uniform(0.02, 0.05)))
     # 3 leaves through the side it walks to before the last quarter; 4 enters at about a third.
     side = float(motion.choice((-1.0, 1.0)))
     v3 = max(speed(3), 0.3 * w / (0.6 * n))
     start3 = w / 2 + side * 0.25 * w
     paths.append((start3 + side * v3 * t, h * motion.uniform(*WALKWAY)))
+
+    def outside(target: int, side: float, feet: float) -> float:
+        """The centre x of ``target`` just out of view on ``side`` (-1 left), feet at ``feet``."""
+        widest = ranges[target - 1]["height"][1] if is_vehicle[target - 1] else 1.0  # walkers'
+        half = height_at(feet) * widest / 2.0 / ranges[target - 1]["aspect"][0] + 1.0  # heights
+        return -half if side > 0 else w + half
+
     side = float(motion.choice((-1.0, 1.0)))
     enter = n * motion.uniform(0.25, 0.4)
-    feet4 = h * motion.uniform(*WALKWAY)
-    widest = ranges[3]["height"][1] if is_vehicle[3] else 1.0  # in walkers' heights ...
-    half4 = height_at(feet4) * widest / 2.0 / ranges[3]["aspect"][0] + 1.0  # ... over aspect
-    edge = -half4 if side > 0 else w + half4  # just out of view at frame `enter`
-    paths.append((edge + side * speed(4) * (t - enter), feet4))
+    feet4 = h * motion.uniform(*WALKWAY)  # just out of view at frame `enter`
+    paths.append((outside(4, side, feet4) + side * speed(4) * (t - enter), feet4))
     for target in range(5, walkers + 1):
         direction = float(motion.choice((-1.0, 1.0)))
         paths.append((w * motion.uniform(-0.2, 1.2) + direction * speed(target) * t,
                       h * motion.uniform(*WALKWAY)))
+    # a long clip: newcomers from a stream of their own (3), so the first targets stay as drawn
+    # (looks from another, 4), entering just out of view
+    arrivals = spec.rng(3)
+    arrive = float(PLOT_FRAMES)
+    while arrive < n:
+        is_vehicle.append(bool(arrivals.random() < vehicles))
+        ranges.append(VEHICLE_RANGES if is_vehicle[-1] else PEDESTRIAN_RANGES)
+        side, depth = float(arrivals.choice((-1.0, 1.0))), h * arrivals.uniform(*WALKWAY)
+        pace = _uniform(arrivals, "speed", ranges[-1]) * w / fps
+        paths.append((outside(len(ranges), side, depth) + side * pace * (t - arrive), depth))
+        arrive += _uniform(arrivals, "arrival") * fps
+    newcomers = spec.rng(4)
 
     shades, people = [], []
     for track_id, (cx, feet) in enumerate(paths, start=1):
         vehicle = is_vehicle[track_id - 1]
+        drawn = looks if track_id <= walkers else newcomers  # (the background's draws after)
         tall = height_at(feet)
         if vehicle:
-            tall *= _uniform(looks, "height", VEHICLE_RANGES)
-        wide = tall / _uniform(looks, "aspect", ranges[track_id - 1])
+            tall *= _uniform(drawn, "height", VEHICLE_RANGES)
+        wide = tall / _uniform(drawn, "aspect", ranges[track_id - 1])
         cy = np.full(n, feet - tall / 2)
         ax, ay = np.full(n, wide / 2), np.full(n, tall / 2)
         if vehicle:
-            people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(looks), track_id)))
+            people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(drawn), track_id)))
             shades.append(Shade(cx + shadow_side * 0.15 * tall, np.full(n, feet - 0.02 * tall),
                                 np.full(n, wide / 2 + 0.2 * tall), np.full(n, 0.12 * tall),
                                 shadow))
         else:
-            people.append((feet, Ellipse(cx, cy, ax, ay, _paint(looks, ground), track_id)))
+            people.append((feet, Ellipse(cx, cy, ax, ay, _paint(drawn, ground), track_id)))
             shades.append(Shade(cx + shadow_side * 0.35 * tall, np.full(n, feet - 0.02 * tall),
                                 np.full(n, 0.45 * tall), np.full(n, 0.07 * tall), shadow))
     people.sort(key=lambda p: p[0])  # farther (feet higher) first: nearer walkers in front
@@ -238,12 +271,20 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
             "exit_id": 3,
             "appear": int(seen[0]) if seen.size else None,
             "appear_id": 4,
-            "walkers": walkers,
+            "walkers": len(paths),
             "vehicles": [i for i, v in enumerate(is_vehicle, start=1) if v],
             "params": params,
         }
 
     return assemble(spec, compositor, events)
+
+
+def _pace(x: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``x`` (positions along a straight walk) folded back into ``[low, high]``: walking to and
+    fro between them; the positions already inside are ``x``'s, bit for bit."""
+    span = high - low
+    folded = low + span - np.abs((x - low) % (2.0 * span) - span)
+    return np.where((x < low) | (x > high), folded, x)
 
 
 def _pedestrians(spec: SceneSpec) -> Scene:
@@ -270,4 +311,4 @@ for _name, _summary, _build in (
      "pedestrians and vehicles", _mixed),
 ):
     SCENARIOS[_name] = Scenario(_name, _summary, _EVENTS, _build, width=640, height=480,
-                                frames=150, fps=25.0, min_frames=60)
+                                frames=PLOT_FRAMES, fps=25.0, min_frames=60)

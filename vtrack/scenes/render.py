@@ -470,6 +470,11 @@ class SensorNoise:
 # ------------------------------------------------------------------------------ compositor
 
 
+def _meet(a: Window, b: Window) -> bool:
+    """Whether pixel regions ``a`` and ``b`` share a pixel."""
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
 @dataclass(frozen=True)
 class Compositor:
     """Renders frame i: background, sprites back to front, global gain, sensor noise.
@@ -510,12 +515,12 @@ class Compositor:
             rows = truth.setdefault(sprite.track_id, [])
             for index in range(frames):
                 region = sprite.region(index)
-                alpha = sprite.coverage(index, region)
-                total = float(alpha.sum())
                 inside = region.as_box().window(width, height)
                 if inside is None:
                     rows.append((sprite.box(index), 0.0, 0.0))
                     continue
+                alpha = sprite.coverage(index, region)
+                total = float(alpha.sum())
                 cut = (
                     slice(inside.y0 - region.y0, inside.y1 - region.y0),
                     slice(inside.x0 - region.x0, inside.x1 - region.x0),
@@ -523,6 +528,7 @@ class Compositor:
                 seen = alpha[cut].copy()
                 in_frame = float(seen.sum()) / total
                 for front in self.sprites[depth + 1 :]:
-                    seen *= 1.0 - front.coverage(index, inside)
+                    if _meet(front.region(index), inside):  # nothing covered outside its region
+                        seen *= 1.0 - front.coverage(index, inside)
                 rows.append((sprite.box(index), in_frame, float(seen.sum()) / total))
         return truth
