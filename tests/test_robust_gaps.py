@@ -164,6 +164,18 @@ def test_a_timestamp_that_goes_back_is_no_base_for_the_next_interval() -> None:
     assert steps == [1.0] * 8
 
 
+def test_a_halved_rate_counts_whole_frames() -> None:
+    """Frames numbered on from one whose timestamps go two frames of 1/30 s apart from the
+    sixth count exactly 2 frames each (before, 1.9999999999999996 and the like: a lost target's
+    search, which reaches whole rings, reached one fewer)."""
+    image = np.zeros((8, 8, 3), np.uint8)
+    clock = FrameClock(BgrFrame(0, 0.0, image))
+    steps = [clock.advance(BgrFrame(j, (j if j < 6 else 2 * j - 6) / 30, image))
+             for j in range(1, 40)]
+    assert steps[6:] == [2.0] * len(steps[6:]), steps
+    assert clock.now == 72.0
+
+
 def test_a_burst_of_buffered_first_frames_does_not_set_the_frame_period_for_good() -> None:
     """A camera's first three frames come out of its buffer 1 ms apart, then one every 1/30 s:
     the period follows the stream, and a few frames on every frame counts one (before, the

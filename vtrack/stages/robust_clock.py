@@ -42,6 +42,10 @@ class FrameClock:
     #: velocity is not trusted either. Motion extrapolated further moves a prediction (and the
     #: region cut there) arbitrarily far from the target.
     GAP = 30.0
+    #: Timed steps are rounded to this many decimals of a frame: a container's time base
+    #: (1/90000 s, milliseconds) tells no finer, and two frames' worth of timestamps divided by
+    #: the period should count 2, not 1.9999999999999996 (whose whole rings are one fewer).
+    DECIMALS = 6
     #: The period is the median time per index step of this many intervals from the first two
     #: that agree (of those so far until then): a few frames at the start timed otherwise (a
     #: camera's buffered first frames delivered at once) are outvoted rather than taken for the
@@ -70,7 +74,7 @@ class FrameClock:
         indexed, interval = self._since(frame)
         steps = float(indexed) if indexed > 0 else 1.0
         if interval > 0 and self._period is not None:
-            timed = interval / self._period
+            timed = round(interval / self._period, self.DECIMALS)
             if abs(timed - steps) > self.JITTER:
                 steps = timed
         return steps
