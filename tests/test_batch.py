@@ -476,17 +476,23 @@ def test_a_replaced_detections_file_runs_again(tmp_path: Path, clip_factory: Cli
     assert tracks.read_text() != before
 
 
+def mot_sequence(seq: Path, clip_factory: ClipFactory) -> Path:
+    """A MOTChallenge sequence folder ``seq`` (img1/000001.jpg ..., gt/gt.txt) of 60 frames of
+    the generated ``multi`` scene."""
+    clip = clip_factory("multi", frames=60, fmt="images")
+    shutil.copytree(clip.path / "img", seq / "img1")
+    (seq / "gt").mkdir()
+    shutil.copy(clip.mot, seq / "gt" / "gt.txt")
+    return seq
+
+
 def test_a_motchallenge_sequence_folder_is_an_input(tmp_path: Path,
                                                     clip_factory: ClipFactory) -> None:
     """Probe 51c: a MOTChallenge sequence (SEQ/img1/000001.jpg, SEQ/gt/gt.txt) was no input:
     `vtrack batch` of a folder of them said 'no inputs (... sequence folders with an img/
     folder)' though its --help names gt/gt.txt, and `vtrack run SEQ` 'no images in the folder
     or its img/'. img1/ is now a sequence's image folder as img/ is, and SEQ/img1 is SEQ."""
-    clip = clip_factory("multi", frames=60, fmt="images")
-    seq = tmp_path / "MOT" / "SEQ-01"
-    shutil.copytree(clip.path / "img", seq / "img1")
-    (seq / "gt").mkdir()
-    shutil.copy(clip.mot, seq / "gt" / "gt.txt")
+    seq = mot_sequence(tmp_path / "MOT" / "SEQ-01", clip_factory)
     out = tmp_path / "out"
     result = batch(str(seq.parent), "-c", "s3", "--no-video", "-j", "1", "-o", str(out), "-q")
     assert result.exit_code == 0, result.output
@@ -604,3 +610,21 @@ def test_a_batch_run_whose_first_frame_is_absent_names_the_options_as_vtrack_run
     assert result.exit_code != 0
     assert "give --init x,y,w,h" in result.output, result.output
     assert "init_box" not in result.output
+
+
+def test_a_single_target_config_on_a_motchallenge_sequence_names_its_ground_truth(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """Probe R: `vtrack batch MOT/ -c robust` over a MOTChallenge sequence (SEQ/img1,
+    SEQ/gt/gt.txt) failed its row with 'there is no ground truth or initial box
+    (groundtruth_rect.txt, groundtruth.txt, init.txt)', as if the folder had none: it has
+    gt/gt.txt, which only a multi-target config reads. The row now names that file and the
+    configs that read it."""
+    seq = mot_sequence(tmp_path / "MOT" / "SEQ-01", clip_factory)
+    out = tmp_path / "out"
+    result = batch(str(seq.parent), "-c", "robust", "--no-video", "-j", "1", "-o", str(out),
+                   "-q")
+    assert result.exit_code == 1, result.output
+    error = summary(out)[("SEQ-01", "robust")]["error"]
+    assert "SEQ-01/gt/gt.txt is MOTChallenge ground truth" in error, error
+    assert "--config fixed_camera, s3 or s4_multi" in error, error
+    assert f"vtrack: error: SEQ-01 [robust]: failed: {error}" in result.stderr.splitlines()

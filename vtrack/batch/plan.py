@@ -11,7 +11,7 @@ from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError, OutputError
-from vtrack.evaluate.groundtruth import groundtruth_names
+from vtrack.evaluate.groundtruth import MULTI_TARGET_CONFIGS, groundtruth_names
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact
@@ -186,8 +186,9 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     sequence folder: 0-based pixels whatever ``--gt-origin`` says, as ``vtrack run`` reads it);
     None when it has none but has ground truth (the run takes its first box). The sidecar
     holds frame 0's box: a batch that starts later (``--start``) takes the ground truth's box
-    of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither, or
-    the sidecar is malformed."""
+    of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither
+    (naming the MOTChallenge ground truth the input has, which only multi-target configs read),
+    or the sidecar is malformed."""
     box = None if settings.starts_later else read_sidecar(item.path)
     if box is None and gt_path is None:
         names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
@@ -195,6 +196,11 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
             raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
                              "needs the target's box in that frame, and there is no ground "
                              f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
+        found = ""
+        if item.mot_groundtruth is not None:  # a MOTChallenge sequence: its targets are many
+            mot = item.mot_groundtruth.relative_to(item.path.parent)
+            found = (f"; {mot} is MOTChallenge ground truth, of many targets, which a "
+                     f"multi-target config reads (--config {MULTI_TARGET_CONFIGS})")
         raise InputError(f"{item.path}: config '{config}' tracks a given target, but there is "
-                         f"no ground truth or initial box ({', '.join(names)})")
+                         f"no ground truth or initial box ({', '.join(names)}){found}")
     return box

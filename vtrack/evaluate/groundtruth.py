@@ -111,6 +111,11 @@ def _check_coordinates(path: str | PathLike[str], number: int, line: str,
         )
 
 
+#: The shipped configs that track many targets and read MOTChallenge ground truth, as a
+#: message names them.
+MULTI_TARGET_CONFIGS = "fixed_camera, s3 or s4_multi"
+
+
 class MultiTargetTruthError(InputError):
     """Many targets' ground truth (MOTChallenge) where one target's boxes were expected."""
 
@@ -155,7 +160,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             raise MultiTargetTruthError(
                 f"{path} line {number}: this is MOTChallenge ground truth (frame,id,x,y,w,h,...), "
                 "for many targets; a single-target config reads x,y,w,h per frame: use a "
-                "multi-target config (--config fixed_camera, s3 or s4_multi)")
+                f"multi-target config (--config {MULTI_TARGET_CONFIGS})")
         if not line.strip():
             raise InputError(f"{path} line {number}: blank; the file holds one box per frame "
                              "(0,0,0,0 or NaN where the target is out of view)")
