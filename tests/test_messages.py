@@ -390,6 +390,33 @@ def test_a_batch_says_when_multi_target_configs_find_only_single_target_ground_t
     assert "warning" not in result.stderr
 
 
+def test_the_unscored_warning_counts_other_inputs_and_lists_configs_in_plain_english(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Probe R: with three such inputs and three multi-target configs the warning read
+    '.../a.gt.txt (and 2 other inputs's): ...; configs 's3' and 's4_multi' and 'fixed_camera'
+    track several targets ...'. It now says "(and 2 other inputs')" ("1 other input's") and
+    "'s3', 's4_multi' and 'fixed_camera'"."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    folder = tmp_path / "d"
+    folder.mkdir()
+    for name in "abc":
+        shutil.copy(clip.path, folder / f"{name}.mp4")
+        shutil.copy(clip.gt, folder / f"{name}.gt.txt")
+    result = vtrack("batch", str(folder), "-c", "s3", "-c", "s4_multi", "-c", "fixed_camera",
+                    "--jobs", "1", "--no-video", "-o", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert [line for line in result.stderr.splitlines() if "warning" in line] == [
+        f"vtrack: warning: {(folder / 'a.gt.txt').resolve()} (and 2 other inputs'): one "
+        "target's ground truth; configs 's3', 's4_multi' and 'fixed_camera' track several "
+        "targets and read MOTChallenge ground truth (a.mot.txt beside a.mp4): their runs are "
+        "not scored"]
+    (folder / "c.mp4").unlink()
+    result = vtrack("batch", str(folder), "-c", "s3", "--jobs", "1", "--no-video",
+                    "-o", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert f"{(folder / 'a.gt.txt').resolve()} (and 1 other input's): " in result.stderr
+
+
 @pytest.mark.parametrize("fmt", ["images", "mp4"])
 def test_a_run_without_a_first_box_names_the_ground_truth_batch_would_take(
         clip_factory: ClipFactory, tmp_path: Path, fmt: str) -> None:

@@ -178,11 +178,13 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
     else:
         wanted = " or ".join(p.format(first.path.stem) for p in VIDEO_MOT_GT)
         wanted += f" beside {first.path.name}"
-    more = (f" (and {plural(len(unscored) - 1, 'other input')}'s)" if len(unscored) > 1
-            else "")
+    others = len(unscored) - 1
+    more = f" (and {plural(others, 'other input')}'{'s' if others == 1 else ''})" if others else ""
     one = len(configs) == 1
+    named = [repr(c) for c in configs]
+    named = [", ".join(named[:-1]), named[-1]] if len(named) > 1 else named
     return (f"{first.groundtruth}{more}: one target's ground truth; "
-            f"{'config' if one else 'configs'} {' and '.join(repr(c) for c in configs)} "
+            f"{'config' if one else 'configs'} {' and '.join(named)} "
             f"{'tracks' if one else 'track'} several targets and {'reads' if one else 'read'} "
             f"MOTChallenge ground truth ({wanted}): "
             f"{'its run is' if len(unscored) == 1 and one else 'their runs are'} not scored")
