@@ -257,6 +257,12 @@ def test_read_boxes_origin_one(tmp_path):
         ("x,y,w,h\n1,2,3,4\n", "line 1: expected 4 or 8 numbers, got 'x,y,w,h' (no header "
          "line: the file holds only numbers)"),
         ("1,2,inf,4\n", "line 1: infinite coordinate"),
+        # Probe R: a semicolon CSV (a spreadsheet's where the comma is the decimal mark) was
+        # told "(no header line: the file holds only numbers)", which it does
+        ("262.2;71.35;40.8;31.2\n", "line 1: expected 4 or 8 numbers, got "
+         "'262.2;71.35;40.8;31.2' (numbers are separated by commas, tabs or spaces, not ';')"),
+        ("1,2,3,4\n5|6|7|8\n", "line 2: expected 4 or 8 numbers, got '5|6|7|8' (numbers are "
+         "separated by commas, tabs or spaces, not '|')"),
     ],
 )
 def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):

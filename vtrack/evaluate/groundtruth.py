@@ -79,6 +79,24 @@ def _tokens(line: str) -> list[str]:
     return [t for t in _SEPARATORS.split(line) if t]
 
 
+#: Characters that separate numbers in files vtrack does not read (a semicolon CSV, as
+#: spreadsheets write it where the comma is the decimal mark; bars; slashes).
+_OTHER_SEPARATORS = re.compile(r"[;|/]+")
+
+
+def _other_separator(line: str) -> str | None:
+    """The separator vtrack does not take that splits ``line`` into numbers (``;`` in
+    ``10;20;30;40``), or None when the line is not numbers so separated."""
+    found = _OTHER_SEPARATORS.search(line)
+    if found is None:
+        return None
+    try:
+        [float(t) for t in _tokens(_OTHER_SEPARATORS.sub(",", line))]
+    except ValueError:
+        return None
+    return found.group()[0]
+
+
 def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
     """The file's lines without trailing blank lines; InputError if unreadable, larger than
     :data:`~vtrack.io.limits.GROUND_TRUTH_BYTES`, not UTF-8 or empty."""
@@ -165,10 +183,15 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             raise InputError(f"{path} line {number}: blank; the file holds one box per frame "
                              "(0,0,0,0 or NaN where the target is out of view)")
         if len(values) not in (4, 8):
-            header = " (no header line: the file holds only numbers)" if tokens and not values \
-                and number == 1 else ""
+            separator = None if values else _other_separator(line)
+            if separator is not None:
+                hint = f" (numbers are separated by commas, tabs or spaces, not {separator!r})"
+            elif tokens and not values and number == 1:
+                hint = " (no header line: the file holds only numbers)"
+            else:
+                hint = ""
             raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got "
-                             f"{_quote(line)}{header}")
+                             f"{_quote(line)}{hint}")
         if any(math.isnan(v) for v in values):
             boxes.append(None)
             continue
