@@ -451,3 +451,30 @@ def test_live_raw_frames_are_refused_as_the_help_and_readme_say(tmp_path: Path) 
     readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
     assert "`--live` with `--raw` is refused" in " ".join(readme.split())
     assert not (tmp_path / "out").exists()
+
+
+def test_gt_origin_without_gt_is_refused_by_run_and_report(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Probe R: `vtrack report results --gt-origin 0` (a researcher re-scoring OTB runs as
+    0-based) and `vtrack run clip.mp4 --init ... --gt-origin 1` ran as if it was not given:
+    without --gt nothing reads it, and the report's numbers stayed the recorded ones. Both now
+    refuse it in one line (exit 2), before anything is written; 'auto', the default, passes."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    box = clip.gt.read_text().splitlines()[0]
+    out = tmp_path / "run"
+    ran = vtrack("run", str(clip.path), "--init", box, "--no-video", "-q", "-o", str(out),
+                 "--gt-origin", "auto")
+    assert ran.exit_code == 0, ran.output
+    expected = ("vtrack: error: --gt-origin {}: sets the origin of --gt's boxes, and no --gt is "
+                "given; give both or neither")
+    refused = vtrack("run", str(clip.path), "--init", box, "--no-video", "-q",
+                     "-o", str(tmp_path / "other"), "--gt-origin", "1")
+    assert one_error_line(refused).startswith(expected.format(1))
+    assert not (tmp_path / "other").exists()
+    report = tmp_path / "report"
+    refused = vtrack("report", str(out), "-o", str(report), "--gt-origin", "0")
+    assert one_error_line(refused).startswith(expected.format(0))
+    assert not report.exists()
+    scored = vtrack("report", str(out), "-o", str(report), "-q", "--gt-origin", "0",
+                    "--gt", str(clip.gt))
+    assert scored.exit_code == 0, scored.output

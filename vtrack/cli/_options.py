@@ -131,6 +131,16 @@ def gt_origin_option() -> Callable[[Any], Any]:
              "MOTChallenge ground truth is read as written, as TrackEval reads it.")
 
 
+def refuse_gt_origin_without_gt(gt_given: bool) -> None:
+    """Without ``--gt``, refuse ``--gt-origin 0`` or ``1`` (``run``, ``report``): it sets the
+    origin of ``--gt``'s boxes and would change nothing (click.UsageError, one line, exit 2).
+    ``auto``, the default, passes."""
+    origin = click.get_current_context().params.get("gt_origin")
+    if not gt_given and origin is not None:
+        raise click.UsageError(f"--gt-origin {origin}: sets the origin of --gt's boxes, and no "
+                               "--gt is given; give both or neither")
+
+
 def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | None:
     """``"75"`` -> ``(75, None)``, ``"2.5s"`` -> ``(None, 2.5)``: a whole number of frames from
     ``least`` to ``MAX_FRAME_NUMBER``, or a time in seconds (at least 0, or above 0 when

@@ -6,7 +6,11 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._options import gt_origin_option, stats_period_option
+from vtrack.cli._options import (
+    gt_origin_option,
+    refuse_gt_origin_without_gt,
+    stats_period_option,
+)
 from vtrack.cli._paths import PATH, NonEmptyText
 from vtrack.cli._progress import StepProgress
 from vtrack.errors import plural
@@ -35,6 +39,7 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""
+    refuse_gt_origin_without_gt(bool(gt_specs))
     from vtrack.report import build_report  # plotting loads only for this command
 
     progress = StepProgress(quiet, "report", "inputs", stats_period)

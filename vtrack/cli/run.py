@@ -20,6 +20,7 @@ from vtrack.cli._options import (
     WholeNumber,
     gt_origin_option,
     refuse_encoding_without_video,
+    refuse_gt_origin_without_gt,
     stats_period_option,
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
@@ -173,6 +174,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             "expected a URL (udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is "
             "annotated.mp4 in --out"))
     refuse_encoding_without_video(no_video)
+    refuse_gt_origin_without_gt(gt_path is not None)
     if len(config_specs) > 1:  # click keeps the last of a repeated option without a word
         raise click.UsageError(f"--config given {len(config_specs)} times "
                                f"({', '.join(config_specs)}): a run tracks with one config; "
