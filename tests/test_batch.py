@@ -628,3 +628,29 @@ def test_a_single_target_config_on_a_motchallenge_sequence_names_its_ground_trut
     assert "SEQ-01/gt/gt.txt is MOTChallenge ground truth" in error, error
     assert "--config fixed_camera, s3 or s4_multi" in error, error
     assert f"vtrack: error: SEQ-01 [robust]: failed: {error}" in result.stderr.splitlines()
+
+
+def test_a_batch_says_its_runs_warnings(tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """Probe R: a sequence whose groundtruth_rect.txt has 100 boxes for 120 frames gets from
+    `vtrack run` 'vtrack: warning: ...: ground truth has 100 boxes for 120 frames (fewer);
+    overlap is empty from frame 100 on', but `vtrack batch` of its folder said nothing (the
+    warning was only in run.json): its last 20 frames went unscored without a word. The batch
+    now says each run's warnings after it, named by input and config (with -q too, as
+    vtrack run does), and not again for a run complete before."""
+    clip = clip_factory("smooth", frames=30, fmt="images")
+    folder = tmp_path / "in"
+    shutil.copytree(clip.path, folder / "seq")
+    truth = folder / "seq" / "groundtruth_rect.txt"
+    truth.write_text("".join(truth.read_text().splitlines(keepends=True)[:20]))
+    out = tmp_path / "out"
+    for quiet in ((), ("-q",)):
+        result = batch(str(folder), "-c", "s0", "--no-video", "-j", "1", "-o", str(out), "-y",
+                       "--force", *quiet)
+        assert result.exit_code == 0, result.output
+        recorded = json.loads((out / "seq" / "s0" / "run.json").read_text())["warnings"]
+        assert len(recorded) == 1 and "20 boxes for 30 frames" in recorded[0], recorded
+        said = [line for line in result.stderr.splitlines() if "warning" in line]
+        assert said == [f"vtrack: warning: seq [s0]: {recorded[0]}"]
+    again = batch(str(folder), "-c", "s0", "--no-video", "-j", "1", "-o", str(out))
+    assert "already complete: not run again" in again.output
+    assert "warning" not in again.stderr

@@ -97,6 +97,16 @@ class Outcome:
         return line
 
 
+    def warnings(self) -> list[str]:
+        """The warnings of the run this job made (``vtrack: warning: NAME [CONFIG]: ...``, as
+        ``vtrack run`` says them after its run; they are in its ``run.json`` too): none for a
+        run not made now (complete before, or refused)."""
+        if self.summary is None or self.resumed or self.kept is not None:
+            return []
+        label = f"{printable(self.input)} [{printable(self.config)}]"
+        return [f"vtrack: warning: {label}: {warning}" for warning in self.summary.warnings]
+
+
 def _as_given(folder: Path, results: Path) -> Path:
     """``folder`` named inside ``results`` (as the user gave it) when it lies there, else as
     it is."""

@@ -122,12 +122,13 @@ class BatchProgress(_Shown):
         self.done_runs += 1
         self._show()
 
-    def write(self, line: str) -> None:
-        """A line on stdout that does not break the bar."""
+    def write(self, line: str, err: bool = False) -> None:
+        """A line on stdout (``err``: stderr) that does not break the bar."""
+        stream = sys.stderr if err else sys.stdout
         if self.bar is not None and not isinstance(self.bar, ProgressLines):
-            self.bar.write(line, file=sys.stdout)
+            self.bar.write(line, file=stream)
         else:
-            print(line, flush=True)
+            print(line, file=stream, flush=True)
 
     def _total(self) -> int | None:
         known = [total for _, total in self.frames.values() if total]

@@ -224,6 +224,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                     outcomes.append(outcome)
                     if not quiet:
                         progress.write(outcome.line(out_dir))
+                    for warning in outcome.warnings():
+                        progress.write(warning, err=True)
                     if (outcome.input, outcome.config) in to_run:
                         progress.finished(outcome.input, outcome.config,
                                           outcome.summary.frames if outcome.summary else 0)
@@ -236,6 +238,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                 outcomes.append(outcome)
                 if not quiet:
                     click.echo(outcome.line(out_dir))
+                for warning in outcome.warnings():
+                    click.echo(warning, err=True)
         _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None)
     if stopped is not None:
         raise stopped
