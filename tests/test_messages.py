@@ -478,3 +478,24 @@ def test_gt_origin_without_gt_is_refused_by_run_and_report(
     scored = vtrack("report", str(out), "-o", str(report), "-q", "--gt-origin", "0",
                     "--gt", str(clip.gt))
     assert scored.exit_code == 0, scored.output
+
+
+def test_a_config_given_twice_to_a_batch_is_said_so(tmp_path: Path) -> None:
+    """Probe R: `vtrack batch in -c robust -c s0 -c robust` said 'vtrack: error: --config
+    robust: another config has the results folder of 'robust' (robust); results are kept per
+    name, rename one', as if two configs clashed: there is one, given twice. It now says so;
+    two configs of one name (s0 and a copy of its file) still get the rename message."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    out = tmp_path / "out"
+    line = one_error_line(vtrack("batch", str(folder), "-c", "robust", "-c", "s0", "-c",
+                                 "robust", "-o", str(out)))
+    assert line == "vtrack: error: --config robust: given twice; each config runs once on " \
+                   "every input"
+    copy = tmp_path / "s0.toml"
+    copy.write_text(vtrack("stages", "s0", "--toml").output)
+    line = one_error_line(vtrack("batch", str(folder), "-c", "s0", "-c", str(copy),
+                                 "-o", str(out)))
+    assert line.startswith(f"vtrack: error: --config {copy}: another config has the results "
+                           "folder of 's0'")
+    assert not out.exists()

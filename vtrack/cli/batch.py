@@ -80,6 +80,9 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
             raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
                               "--config") from None
         other = configs.get(config.name) or folders.get(folder_name(config.name))
+        if other is not None and other.source == config.source:
+            raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
+                              "input")
         if other is not None:
             raise ConfigError(
                 f"--config {spec}: another config has the results folder of '{config.name}' "
