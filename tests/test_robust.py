@@ -25,7 +25,7 @@ from vtrack.frame import BgrFrame, GrayFrame
 from vtrack.geometry import Box
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
-from vtrack.run import run
+from vtrack.run import TRACK_COLUMNS, run
 from vtrack.scenes import Scene
 from vtrack.stages.base import TrackState
 
@@ -271,6 +271,17 @@ def test_run_writes_empty_box_while_lost(clip_factory, tmp_path: Path) -> None:
     assert lost and all(row["x"] == "" and row["w"] == "" for row in lost)
     tracked = [row for row in rows if row["state"] == "tracking"]
     assert tracked and all(0.0 <= float(row["score"]) <= 1.0 for row in tracked)
+
+
+def test_track_csv_gives_the_score_once(clip_factory, tmp_path: Path) -> None:
+    """robust's track.csv had a ``confidence`` column that was ``score`` again (rounded to 3
+    decimals instead of 4): the row's confidence is ``score`` alone, ``psr`` its own column."""
+    clip = clip_factory("occlusion", 0, frames=60)
+    run(RunRequest(input=str(clip.path), out_dir=tmp_path, config=load_config("robust"),
+                   gt_path=clip.gt, video=False))
+    with open(tmp_path / "track.csv", newline="") as handle:
+        header = next(csv.reader(handle))
+    assert header == [*TRACK_COLUMNS, "psr"]
 
 
 @pytest.mark.parametrize("override", [

@@ -105,8 +105,8 @@ Pipeline contract of stage ``robust_failure``: reads ``ctx.measurement``, ``ctx.
 ``ctx.prediction``, ``ctx.state``; writes ``ctx.state``, ``ctx.box`` (with ``coast``, the
 prediction while hidden), ``ctx.measurement`` (None while hidden with ``coast``),
 ``ctx.search_growth``, ``ctx.robust`` (usual confidence, hidden frames, whether the next frame
-searches the whole frame, whether this frame saw the target) and the ``confidence`` and
-``psr`` columns.
+searches the whole frame, whether this frame saw the target) and the ``psr`` column (its
+confidence is the row's ``score``).
 """
 
 from __future__ import annotations
@@ -169,7 +169,7 @@ class RobustFailure(Stage):
     )
     requires = frozenset({"measurement", "robust", "prediction", "state"})
     provides = frozenset({"state", "box", "measurement", "search_growth", "robust"})
-    columns = ("confidence", "psr")
+    columns = ("psr",)
 
     hidden_psr: float
     hidden_peak: float
@@ -196,7 +196,6 @@ class RobustFailure(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None
-        ctx.extras["confidence"] = ctx.score
         ctx.extras["psr"] = target.psr
         # LMCF's means are of the frames before this one
         sharp = target.psr >= self.hidden_psr
