@@ -133,9 +133,12 @@ def test_frame_takes_a_time_as_run_start_does(long_clip: Path, tmp_path: Path) -
     assert np.array_equal(cv2.imread(str(out)), read_frame(str(long_clip), 153))
     done = vtrack("frame", str(long_clip), "--at", "10s", "-o", str(tmp_path / "g.png"))
     assert (done.returncode, done.stdout) == (2, "")
-    assert done.stderr == (f"vtrack: error: {long_clip}: has no frame at or after 10 s (it ends "
-                           "before)\n")  # INPUT: problem, as 'has no frame 300 (...)'
+    assert done.stderr == (f"vtrack: error: {long_clip}: has no frame at or after 10 s (its last "
+                           "frame is frame 299, at 9.96667 s)\n")  # as 'no frame 300 (...)'
     assert not (tmp_path / "g.png").exists()
+    for negative in ("-1s", "-1"):  # refused as negative, not only as "expected a number"
+        done = vtrack("frame", str(long_clip), "--at", negative, "-o", str(tmp_path / "g.png"))
+        assert done.returncode == 2 and f"'{negative}': is negative; expected" in done.stderr
     helped = vtrack("frame", "--help")  # it opened 'Write frame N of INPUT'
     assert "Write one frame of INPUT (--at: frame N, or the first at time T)" in " ".join(
         helped.stdout.split())

@@ -379,10 +379,11 @@ def test_start_also_takes_a_time_like_ffmpeg_ss(clip_factory, tmp_path: Path) ->
         line = one_error_line(vtrack("run", str(clip.path), "--start", bad, "-o",
                                      str(tmp_path / "bad")))
         assert "--start" in line and "2.5s" in line, line
+        assert ("is negative" in line) == (bad == "-1s"), line  # said, not only implied
     line = one_error_line(vtrack("run", str(clip.path), "--init", "10,10,20,20", "--start",
                                  "2s", "-o", str(tmp_path / "bad")))
-    assert line.endswith("--start 2s: " + f"{clip.path}: has no frame at or after 2 s (it ends "
-                         "before)")
+    assert line.endswith("--start 2s: " + f"{clip.path}: has no frame at or after 2 s (its last "
+                         "frame is frame 39, at 1.3 s)")  # where the clip ends
     assert not (tmp_path / "bad").exists()
 
     folder = tmp_path / "in"
@@ -448,8 +449,8 @@ def test_a_start_time_in_a_variable_rate_video_is_found_by_the_timestamps(
         assert json.loads((tmp_path / start / "run.json").read_text())["start_frame"] == frame
     line = one_error_line(vtrack("run", str(clip), "--gt", str(gt), "--start", "2.25s",
                                  "-o", str(tmp_path / "past")))
-    assert line.endswith(f"--start 2.25s: {clip}: has no frame at or after 2.25 s (it ends "
-                         "before)"), line
+    assert line.endswith(f"--start 2.25s: {clip}: has no frame at or after 2.25 s (its last "
+                         "frame is frame 39, at 2.2 s)"), line
     assert not (tmp_path / "past").exists()
 
 

@@ -893,7 +893,7 @@ def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
     found, read_from = seek_time(source, request.start_s)
     if found is None:
         raise InputError(f"--start {request.start_text}: "
-                         + no_frame_after_text(request.input, request.start_s))
+                         + no_frame_after_text(request.input, request.start_s, source))
     return found, read_from
 
 

@@ -141,21 +141,25 @@ def refuse_gt_origin_without_gt(gt_given: bool) -> None:
                                "--gt is given; give both or neither")
 
 
-def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | None:
+def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | str:
     """``"75"`` -> ``(75, None)``, ``"2.5s"`` -> ``(None, 2.5)``: a whole number of frames from
     ``least`` to ``MAX_FRAME_NUMBER``, or a time in seconds (at least 0, or above 0 when
-    ``least`` is 1; at most ``MAX_SECONDS``); None for anything else."""
+    ``least`` is 1; at most ``MAX_SECONDS``); for anything else what is wrong with it, for a
+    message (``is negative``, ``is past the limit``; empty: not such a number at all)."""
+    seconds = text.lower().endswith("s")
     try:
-        if text.lower().endswith("s"):
-            seconds = float(text[:-1])
-            if math.isfinite(seconds) and (seconds > 0 if least else seconds >= 0) \
-                    and seconds <= MAX_SECONDS:
-                return None, seconds
-        elif text.isdigit() and least <= int(text) <= MAX_FRAME_NUMBER:
-            return int(text), None
+        number = float(text[:-1] if seconds else text)
     except ValueError:
-        pass
-    return None
+        return ""
+    if not math.isfinite(number):
+        return ""
+    if number < 0:
+        return "is negative"
+    if number > (MAX_SECONDS if seconds else MAX_FRAME_NUMBER):
+        return "is past the limit"
+    if seconds:
+        return (None, number) if number > 0 or not least else ""
+    return (int(text), None) if text.isdigit() and int(text) >= least else ""
 
 
 class _FramesOrSeconds(click.ParamType):
@@ -170,8 +174,9 @@ class _FramesOrSeconds(click.ParamType):
         if isinstance(value, tuple):
             return value
         parsed = _frames_or_seconds(str(value).strip(), self.least)
-        if parsed is None:
-            self.fail(f"{shown(value)}: expected {self.expected}", param, ctx)
+        if isinstance(parsed, str):
+            self.fail(f"{shown(value)}: {parsed + '; ' if parsed else ''}expected "
+                      f"{self.expected}", param, ctx)
         return parsed
 
 

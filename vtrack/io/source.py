@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Literal
 
+from vtrack.errors import plural
 from vtrack.frame import Frame
 from vtrack.io.files import Closing
 from vtrack.io.threads import KeepingUp, Prefetcher
@@ -92,6 +93,9 @@ class Source(Closing, ABC):
         #: not counted as skipped (:meth:`_tracked`).
         self._from_index = 0
         self._from_s: float | None = None
+        #: The last frame :meth:`skip_to` decoded and dropped, ``(index, time_s)``: where an
+        #: input that ends before its time ends (None: it dropped none).
+        self.passed_last: tuple[int, float] | None = None
 
     @property
     def frames_skipped(self) -> int:
@@ -147,6 +151,7 @@ class Source(Closing, ABC):
             if frame.time_s >= seconds - TIME_SLACK_S:
                 self._resumed = itertools.chain((frame,), frames)
                 return frame.index
+            self.passed_last = (frame.index, frame.time_s)
         return None
 
     def start_near(self, index: int) -> int:
@@ -235,9 +240,18 @@ def seek_time(source: Source, seconds: float) -> tuple[int | None, int]:
     return source.skip_to(seconds), read_from
 
 
-def no_frame_after_text(input_spec: str, seconds: float) -> str:
-    """What is said when :func:`seek_time` found no frame at or after ``seconds``."""
-    return f"{input_spec}: has no frame at or after {seconds:g} s (it ends before)"
+def no_frame_after_text(input_spec: str, seconds: float, source: Source) -> str:
+    """What is said when :func:`seek_time` found no frame of ``source`` at or after
+    ``seconds``: where the input ends (the last frame it decoded, its index and time; else
+    the frames its count states)."""
+    if source.passed_last is not None:
+        index, time_s = source.passed_last
+        end = f"its last frame is frame {index}, at {time_s:.6g} s"
+    elif source.info.frame_count is not None and not source.info.frame_count_estimated:
+        end = f"it has {plural(source.info.frame_count, 'frame')}"
+    else:
+        end = "it ends before"
+    return f"{input_spec}: has no frame at or after {seconds:g} s ({end})"
 
 
 #: Frames a frame's place may be off the nominal rate's timeline (frame n at n / fps from the

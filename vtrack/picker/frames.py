@@ -203,7 +203,7 @@ def read_frame_at(input_spec: str, seconds: float) -> tuple[int, np.ndarray]:
     with open_source(input_spec) as source:
         found, _ = seek_time(source, seconds)
         if found is None:
-            raise InputError(no_frame_after_text(input_spec, seconds))
+            raise InputError(no_frame_after_text(input_spec, seconds, source))
         return found, next(iter(source)).bgr().copy()
 
 
