@@ -160,3 +160,30 @@ def test_a_batch_folder_holding_another_index_html_is_still_a_batch(clip, tmp_pa
     assert_one_line_error(result, str(report), "vtrack report's folder", "another --out")
     assert result.returncode == 2
     assert sorted(p.relative_to(report) for p in report.rglob("*")) == before
+
+
+def test_a_run_does_not_write_into_a_reports_folder(clip, tmp_path: Path) -> None:
+    """`vtrack run ... -o REPORT` (a folder `vtrack report` wrote) was taken, exit 0: its
+    run.json and track.csv went beside the report's index.html and summary.csv. It is one line
+    naming the folder, exit 2, nothing written; a folder that already holds an earlier run's
+    results (run.json) keeps the overwrite rules, whatever else it holds."""
+    folder = one_input(tmp_path / "in", clip)
+    batch = tmp_path / "batch"
+    assert vtrack("batch", str(folder), "-c", "s0", "--no-video", "-o", str(batch)
+                  ).returncode == 0
+    report = tmp_path / "rep"
+    assert vtrack("report", str(batch), "--out", str(report)).returncode == 0
+    before = sorted(p.relative_to(report) for p in report.rglob("*"))
+    result = vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video",
+                    "-y", "-o", str(report))
+    assert_one_line_error(result, f"{report}: is a vtrack report's folder", "another --out")
+    assert result.returncode == 2
+    assert sorted(p.relative_to(report) for p in report.rglob("*")) == before
+    ran = batch / "occ" / "s0"  # an earlier run's folder that also holds a report's page
+    for name in ("index.html", "summary.md"):
+        shutil.copy(report / name, ran / name)
+    result = vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video",
+                    "-o", str(ran))
+    assert_one_line_error(result, "earlier run", "--overwrite")
+    assert vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video", "-y",
+                  "-o", str(ran)).returncode == 0

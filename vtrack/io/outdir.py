@@ -98,17 +98,22 @@ def refuse_other_results(folder: Path | str, what: str) -> None:
     """Raise OutputError when ``folder`` holds the other kind's results: a run's
     (``run.json``) for a batch (``what`` ``batch``), whose folder per input would sit among
     them, or a batch's (:func:`is_batch_folder`) for a run (any other ``what``), whose files
-    would sit among the batch's: either way a report of it would mix the two. A batch is
-    refused a vtrack report's folder too (:func:`is_report_folder`): its ``summary.csv``
-    would replace the report's, as a report is refused a batch's folder."""
+    would sit among the batch's: either way a report of it would mix the two. A vtrack
+    report's folder (:func:`is_report_folder`) is refused too: to a batch, whose
+    ``summary.csv`` would replace the report's, as a report is refused a batch's folder; to a
+    run, whose files would sit among the report's pages, unless an earlier run's results are
+    already there (``run.json``: what ``--overwrite`` decides on)."""
     folder = Path(folder)
-    if what == "batch" and (folder / "run.json").is_file():
+    ran = (folder / "run.json").is_file()
+    if what == "batch" and ran:
         raise OutputError(f"{folder}: is a run's results folder (run.json); a batch there "
                           "would mix its inputs' folders with that run: choose another --out")
-    if what == "batch" and is_report_folder(folder):
-        raise OutputError(f"{folder}: is a vtrack report's folder ({REPORT_PAGE}); a batch "
-                          f"there would replace the report's {BATCH_SUMMARY}: choose another "
-                          "--out")
+    if (what == "batch" or not ran) and is_report_folder(folder):
+        would = (f"replace the report's {BATCH_SUMMARY}" if what == "batch" else
+                 "mix its files with the report's pages")
+        raise OutputError(f"{folder}: is a vtrack report's folder ({REPORT_PAGE}); a "
+                          f"{'batch' if what == 'batch' else 'run'} there would {would}: "
+                          "choose another --out")
     if what != "batch" and is_batch_folder(folder):
         raise OutputError(f"{folder}: is a batch's results folder ({BATCH_SUMMARY}); a run "
                           "there would mix its files with the batch's: choose another --out "
