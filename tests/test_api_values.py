@@ -320,8 +320,8 @@ def test_library_messages_name_the_requests_fields_and_the_command_its_options(
         (replace(request, input=str(folder), init_box=(1, 1, 9, 9), fps=0),
          "fps 0: must be a frame rate from 0.01 to 10000 frames per second"),
         (replace(request, init_box=None, start=3),
-         "--start 3: this tracker needs the target's box in frame 3: give "
-         "init_box=(x, y, w, h) or --gt FILE"),
+         "start 3: this tracker needs the target's box in frame 3: give "
+         "init_box=(x, y, w, h) or gt_path=FILE"),
         (replace(request, init_box=(1, 1, 9, 9), config=vtrack.load_config("s3")),
          "init_box: s3 finds its targets itself (it tracks several, each from where it is "
          "detected) and takes no first box; leave init_box out"),
@@ -344,6 +344,66 @@ def test_library_messages_name_the_requests_fields_and_the_command_its_options(
                                                       "--fps" else []), option, value,
                                 "-o", str(tmp_path / "cli"))
         assert_one_line_error(result, said)
+
+
+def test_library_messages_name_start_gt_out_stream_and_overwrite_as_the_library_does(
+        tmp_path: Path) -> None:
+    """vtrack.run.run(RunRequest(start=50, ...)) said '--start 50: ...', and its other
+    refusals '--gt FILE', '--stream F: ...', 'give --overwrite (-y) ..., or another --out':
+    options of a command the caller never ran. The library names its fields and keywords
+    (start, start_s, gt_path, stream, out_dir, overwrite=True); vtrack run keeps its options."""
+    scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = scene.boxes[0]
+    request = vtrack.RunRequest(clip, tmp_path / "out", vtrack.load_config("s0"), box,
+                                video=False)
+    earlier = replace(request, out_dir=tmp_path / "earlier", max_frames=2)
+    assert run(earlier).status == "complete"
+    filled = tmp_path / "rows.jsonl"
+    filled.write_text("{}\n")
+    report = tmp_path / "report"
+    report.mkdir()
+    for name in ("index.html", "summary.md"):  # what tells a vtrack report's folder
+        (report / name).write_text("vtrack report\n")
+    cases = (
+        (replace(request, start=50), f"start 50: {clip}: has no frame 50 (frames 0..9)"),
+        (replace(request, start_s=5), f"start_s 5: {clip}: has no frame at or after 5 s (its "
+                                      "last frame is frame 9, at 0.3 s)"),
+        (replace(request, init_box=None), "s0: this tracker needs an initial box: give "
+         "gt_path=FILE, init_box=(x, y, w, h) or write x,y,w,h into clip.init.txt (vtrack "
+         "select INPUT picks it)"),
+        (replace(request, stream=str(clip)), f"stream {clip}: is the input of this run "
+                                             f"({clip}); write the results elsewhere"),
+        (replace(request, out_dir=report), f"{report}: is a vtrack report's folder "
+         "(index.html); a run there would mix its files with the report's pages: choose "
+         "another out_dir"),
+    )
+    for made, said in cases:
+        with pytest.raises(vtrack.VtrackError) as caught:
+            run(made)
+        assert str(caught.value) == said
+    with pytest.raises(vtrack.OutputError) as caught:
+        run(earlier, overwrite=False)
+    assert str(caught.value).endswith("; give overwrite=True to replace them, or another "
+                                      "out_dir")
+    with pytest.raises(vtrack.OutputError) as caught:
+        run(replace(request, stream=str(filled)), overwrite=False)
+    assert str(caught.value) == f"stream {filled}: holds 3 bytes already; overwrite=True " \
+                                "replaces it"
+    assert not (tmp_path / "out").exists()
+    for options, said in (
+            (["--start", "50"], f"--start 50: {clip}: has no frame 50 (frames 0..9)"),
+            (["--start", "5s"], f"--start 5s: {clip}: has no frame at or after 5 s (its last "
+                                "frame is frame 9, at 0.3 s)"),
+            (["--stream", str(filled)], f"--stream {filled}: holds 3 bytes already; "
+                                        "--overwrite (-y) replaces it")):
+        result = vtrack_command("run", str(clip), "-c", "s0", "--init", box.text(), *options,
+                                "-o", str(tmp_path / "cli"))
+        assert_one_line_error(result, said)
+    result = vtrack_command("run", str(clip), "-c", "s0", "--start", "3", "-o",
+                            str(tmp_path / "cli"))
+    assert_one_line_error(result, "--start 3: this tracker needs the target's box in frame 3: "
+                                  "give --init x,y,w,h or --gt FILE")
 
 
 def test_every_x264_preset_makes_the_annotated_video_of_a_request_and_of_vtrack_run(

@@ -8,6 +8,7 @@ import threading
 import unicodedata
 from collections.abc import Callable, Generator, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from decimal import Decimal
 from numbers import Real
 from typing import Any
@@ -27,6 +28,55 @@ def number_text(value: float) -> str:
         return str(value)
     short = f"{value:g}"
     return short if float(short) == value else repr(float(value))
+
+
+@dataclass(frozen=True)
+class OptionNames:
+    """How a run's messages name what its caller gave: ``vtrack run``'s options
+    (:data:`COMMAND_NAMES`: ``--start 2.5s: ...``, ``give --init x,y,w,h``) or the library's
+    (:data:`LIBRARY_NAMES`: the :class:`~vtrack.request.RunRequest` fields and
+    :func:`~vtrack.run.run` keywords, ``start_s 2.5: ...``, ``give init_box=(x, y, w, h)``)."""
+
+    init: str
+    fps: str
+    start: str
+    #: The start given as a time (``--start 2.5s``; ``start_s``).
+    start_s: str
+    gt: str
+    stream: str
+    out: str
+    #: How the caller says "replace what is there".
+    overwrite: str
+
+    @property
+    def options(self) -> bool:
+        """Whether these are a command's options (``--init``), not the library's names."""
+        return self.init.startswith("--")
+
+    def give(self, name: str, value: str) -> str:
+        """How ``name`` is given ``value``, for a message's "give ...": ``--gt FILE`` (an
+        option), ``gt_path=FILE`` (a library argument)."""
+        return f"{name} {value}" if self.options else f"{name}={value}"
+
+    @property
+    def give_box(self) -> str:
+        """How a first box is given: ``--init x,y,w,h``, ``init_box=(x, y, w, h)``."""
+        return self.give(self.init, "x,y,w,h" if self.options else "(x, y, w, h)")
+
+    def start_given(self, start: int, start_s: float | None) -> str:
+        """The first frame as the caller gave it, to begin a message: ``--start 75``,
+        ``--start 2.5s``; ``start 75``, ``start_s 2.5``."""
+        if start_s is None:
+            return f"{self.start} {start}"
+        return f"{self.start_s} {start_s:g}{'s' if self.options else ''}"
+
+
+COMMAND_NAMES = OptionNames(init="--init", fps="--fps", start="--start", start_s="--start",
+                            gt="--gt", stream="--stream", out="--out",
+                            overwrite="--overwrite (-y)")
+LIBRARY_NAMES = OptionNames(init="init_box", fps="fps", start="start", start_s="start_s",
+                            gt="gt_path", stream="stream", out="out_dir",
+                            overwrite="overwrite=True")
 
 
 def is_real(value: object) -> bool:

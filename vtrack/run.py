@@ -43,9 +43,11 @@ import numpy as np
 from vtrack import __version__
 from vtrack.annotate import Annotator
 from vtrack.errors import (
+    LIBRARY_NAMES,
     ConfigError,
     InputError,
     Interrupted,
+    OptionNames,
     OutputBrokenError,
     OutputError,
     PartialInputError,
@@ -280,11 +282,11 @@ def _numbering(info: InputInfo) -> str:
     return "frames are numbered from 0"
 
 
-def _from(source: Source, start: int, what: str) -> Iterator[Frame]:
+def _from(source: Source, start: int, what: str, option: str) -> Iterator[Frame]:
     """``source``'s frames numbered ``start`` and on (the earlier ones are decoded and
     dropped). InputError when frame ``start`` itself is missing (damaged, or no image numbered
     for it: ``what`` is the input's name) and a later one comes first: the initial box is frame
-    ``start``'s, not that one's."""
+    ``start``'s, not that one's (the message names the start ``option``)."""
     if start == 0:
         yield from source
         return
@@ -293,7 +295,7 @@ def _from(source: Source, start: int, what: str) -> Iterator[Frame]:
         if frame.index < start:
             continue
         if first and frame.index > start:
-            raise InputError(f"--start {start}: frame {start} of {what} {source.absent(start)}"
+            raise InputError(f"{option} {start}: frame {start} of {what} {source.absent(start)}"
                              f"; the next is frame {frame.index}: start at a frame it has")
         first = False
         yield frame
@@ -559,6 +561,8 @@ class _Resolved:
     #: The MOTChallenge rows that take track boxes on distractors out of the score
     #: (:attr:`~vtrack.evaluate.groundtruth.MotTruth.distractors`).
     mot_distractors: dict[int, list[tuple[Box, bool]]] = field(default_factory=dict)
+    #: How messages call what the caller gave (``--start``, ``start``).
+    names: OptionNames = LIBRARY_NAMES
 
 
 @dataclass
@@ -616,11 +620,13 @@ class _Tracked:
 
 def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         on_open: Callable[[InputInfo], None] | None = None, overwrite: bool = True,
-        *, init_name: str = "init_box", fps_name: str = "fps") -> RunSummary:
+        *, names: OptionNames = LIBRARY_NAMES) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
 
-    Messages about the request's ``init_box`` and ``fps`` name them ``init_name`` and
-    ``fps_name``: the library's field names, or the command's ``--init`` and ``--fps``.
+    Messages about what the caller gave (the request's ``init_box``, ``start``, ``gt_path``,
+    ``out_dir``, ...; ``overwrite``) call it by ``names``: the library's field and keyword
+    names (:data:`~vtrack.errors.LIBRARY_NAMES`), or the command's ``--init``, ``--start``,
+    ``--gt``, ``--out`` (:data:`~vtrack.errors.COMMAND_NAMES`).
 
     ``overwrite=False`` refuses (OutputError, before anything is tracked) a folder that holds
     an earlier run's results (``vtrack run`` without ``--overwrite``).
@@ -638,11 +644,11 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
         # past the frames the input states is refused at once: that input opens first
         later = _starts_later(request)
-        source: Source | None = _open(request, signals, fps_name) if later else None
+        source: Source | None = _open(request, signals, names.fps) if later else None
         try:
-            resolved = _resolve(request, source, init_name, fps_name)
+            resolved = _resolve(request, source, names)
             if source is None:
-                source = _open(request, signals, fps_name)
+                source = _open(request, signals, names.fps)
         except BaseException:
             if source is not None:
                 source.close()
@@ -651,16 +657,16 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
             info = source.info
             for box in (resolved.init_box, resolved.init_ignored):
                 if box is not None:
-                    check_init_box(box, info.width, info.height, resolved.init_from or init_name)
-            _refuse_writing_over_inputs(request, _output_names(request, resolved))
+                    check_init_box(box, info.width, info.height, resolved.init_from or names.init)
+            _refuse_writing_over_inputs(request, _output_names(request, resolved), names)
             if not overwrite:
-                refuse_replacing(request.out_dir)
-                _refuse_replacing_stream(_stream_file(request))
+                refuse_replacing(request.out_dir, names)
+                _refuse_replacing_stream(_stream_file(request), names)
             # from taking the folder until the frame loop, a signal is only noted (the loop
             # then ends at once, interrupted): none cuts the opening of the outputs short and
             # leaves their temporary files (or the folder's lock) behind without a record
             signals.hold()
-            with OutputFolder(request.out_dir) as folder:
+            with OutputFolder(request.out_dir, names=names) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
                 writers = _open_writers(request, resolved, info, signals)
@@ -700,15 +706,17 @@ class _Writers:
     stream: StreamWriter | None = None  # --stream: a JSON line per frame
 
 
-def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
-    """ConfigError when a file this run would write (``names`` in its folder, the ``--stream``
+def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: OptionNames
+                                ) -> None:
+    """ConfigError when a file this run would write (``files`` in its folder, the ``--stream``
     file) is the input or the ground truth it reads, or the stream is one of its own outputs
     (any file of ``RUN_OUTPUTS``: the folder's clearing would remove it):
-    ``--overwrite`` replaces an earlier run's results, never what this run reads."""
-    outputs = [(request.out_dir / name, "--out") for name in names]
+    ``--overwrite`` replaces an earlier run's results, never what this run reads. Messages
+    call the folder and the stream by ``names``."""
+    outputs = [(request.out_dir / name, names.out) for name in files]
     stream = _stream_file(request)
     reads = [(Path(request.input), "the input"), (request.gt_path, "the ground truth")]
-    for output, option in outputs + ([(stream, "--stream")] if stream else []):
+    for output, option in outputs + ([(stream, names.stream)] if stream else []):
         for source, what in reads:
             if source is not None and output.exists() and source.exists() \
                     and os.path.samefile(output, source):
@@ -716,8 +724,8 @@ def _refuse_writing_over_inputs(request: RunRequest, names: list[str]) -> None:
                                   "write the results elsewhere")
     own = [request.out_dir / name for name in (*RUN_OUTPUTS, LOCK_NAME)]  # all it clears
     if stream is not None and any(stream.resolve() == output.resolve() for output in own):
-        raise ConfigError(f"--stream {stream}: is one of this run's own outputs; name another "
-                          "file")
+        raise ConfigError(f"{names.stream} {stream}: is one of this run's own outputs; name "
+                          "another file")
 
 
 def _stream_file(request: RunRequest) -> Path | None:
@@ -725,10 +733,10 @@ def _stream_file(request: RunRequest) -> Path | None:
     return None if request.stream in (None, STDOUT) else Path(request.stream)
 
 
-def _refuse_replacing_stream(stream: Path | None) -> None:
+def _refuse_replacing_stream(stream: Path | None, names: OptionNames) -> None:
     """OutputError when ``--stream`` names a file that holds something (an earlier run's
-    lines, or anything else): replaced only with ``--overwrite``. A pipe, a device or an empty
-    file is written to as it is."""
+    lines, or anything else): replaced only with ``--overwrite`` (both called by ``names``).
+    A pipe, a device or an empty file is written to as it is."""
     if stream is None:
         return
     try:
@@ -736,8 +744,8 @@ def _refuse_replacing_stream(stream: Path | None) -> None:
     except OSError:
         return
     if stat.S_ISREG(held.st_mode) and held.st_size > 0:
-        raise OutputError(f"--stream {stream}: holds {plural(held.st_size, 'byte')} already; "
-                          "--overwrite (-y) replaces it")
+        raise OutputError(f"{names.stream} {stream}: holds {plural(held.st_size, 'byte')} "
+                          f"already; {names.overwrite} replaces it")
 
 
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
@@ -785,14 +793,13 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
     return writers
 
 
-def _resolve(request: RunRequest, source: Source | None, init_name: str, fps_name: str
-             ) -> _Resolved:
+def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> _Resolved:
     """Build the chain, read the ground truth, settle the first frame and the initial box
-    (user errors raise before the output folder is touched; messages name the request's box
-    and frame rate ``init_name`` and ``fps_name``). A start time (``--start 2.5s``) needs the
+    (user errors raise before the output folder is touched; messages call what the caller
+    gave by ``names``). A start time (``--start 2.5s``) needs the
     opened ``source``: it is found in its frames' own timestamps (:meth:`Source.skip_to`,
     which decodes up to it)."""
-    give_box = _box_form(init_name)
+    init_name, give_box = names.init, names.give_box
     pipeline = Pipeline(request.config.build(), seed=request.seed)
     gt = mot_gt = None
     distractors: dict[int, list[tuple[Box, bool]]] = {}
@@ -821,7 +828,7 @@ def _resolve(request: RunRequest, source: Source | None, init_name: str, fps_nam
                             "first detection, after learning the background) and does not use "
                             "a first box: no box is reported until it detects the target")
             ignored, init_box = init_box, None
-    start, read_from = _first_frame(request, source)
+    start, read_from = _first_frame(request, source, names)
     if init_box is None and pipeline.needs_init_box and request.raw is None and not start:
         init_box, init_from = read_sidecar(request.input), str(sidecar_path(request.input))
     if init_box is None and gt is not None and pipeline.needs_init_box:
@@ -835,18 +842,19 @@ def _resolve(request: RunRequest, source: Source | None, init_name: str, fps_nam
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         if source is None:
-            _refuse_unreadable(request, fps_name)
+            _refuse_unreadable(request, names.fps)
+        give_gt = names.give(names.gt, "FILE")
         if start:
-            raise ConfigError(f"--start {request.start_text}: this tracker needs the target's "
-                              f"box in frame "
-                              f"{start}: give {give_box} or --gt FILE")
+            raise ConfigError(f"{names.start_given(request.start, request.start_s)}: this "
+                              f"tracker needs the target's box in frame {start}: give "
+                              f"{give_box} or {give_gt}")
         if not has_sidecar(request.input):
             raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
-                              f"{give_box} (or --gt FILE); {request.input} has no sidecar "
+                              f"{give_box} (or {give_gt}); {request.input} has no sidecar "
                               "file to hold one")
         beside = groundtruth_beside(request.input)
-        gt_hint = ("--gt FILE" if beside is None else
-                   f"--gt {beside} (its ground truth, which vtrack batch takes by itself)")
+        gt_hint = (give_gt if beside is None else f"{names.give(names.gt, str(beside))} (its "
+                   "ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
             f"{give_box} or write x,y,w,h into {sidecar_path(request.input).name} "
@@ -854,13 +862,7 @@ def _resolve(request: RunRequest, source: Source | None, init_name: str, fps_nam
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, read_from,
-                     _Span(request.max_frames, request.max_s), warnings, distractors)
-
-
-def _box_form(init_name: str) -> str:
-    """How a first box is given, for a message's "give ...": ``--init x,y,w,h`` (an option),
-    ``init_box=(x, y, w, h)`` (a library argument)."""
-    return f"{init_name} x,y,w,h" if init_name.startswith("--") else f"{init_name}=(x, y, w, h)"
+                     _Span(request.max_frames, request.max_s), warnings, distractors, names)
 
 
 def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:
@@ -873,26 +875,28 @@ def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:
                     live=request.live, fps_name=fps_name).close()
 
 
-def _first_frame(request: RunRequest, source: Source | None) -> tuple[int, int]:
+def _first_frame(request: RunRequest, source: Source | None, names: OptionNames
+                 ) -> tuple[int, int]:
     """The first frame to track, ``--start N``, or for ``--start Ts`` the first frame of
     ``source`` whose timestamp is at or after T (decoded up to it: a variable frame rate is
     followed, where T x fps would miss); and the frame ``source`` is read from: where it can
     jump, a frame at or before it (:meth:`Source.start_near`: a seekable video's key frame, an
     image folder's image; for a time, before the frame T x fps names), else its first.
     InputError when the input ends before T, or (``source`` opened) its frame count says it has
-    no frame N, before any is decoded."""
+    no frame N, before any is decoded (naming the start as ``names`` call it)."""
+    given = names.start_given(request.start, request.start_s)
     if request.start_s is None:
         if not request.start or source is None:
             return request.start, 0
         read_from = start_toward(source, request.start)
         if read_from is None:
-            raise InputError(f"--start {request.start_text}: "
+            raise InputError(f"{given}: "
                              + past_end_text(request.input, request.start, source.info))
         return request.start, read_from
     assert source is not None, "a start time needs the opened input"
     found, read_from = seek_time(source, request.start_s)
     if found is None:
-        raise InputError(f"--start {request.start_text}: "
+        raise InputError(f"{given}: "
                          + no_frame_after_text(request.input, request.start_s, source))
     return found, read_from
 
@@ -906,10 +910,10 @@ def requested_frames(request: RunRequest
     :func:`run` gives them: at once, before the input is opened, as run settles them, unless
     the request starts later (``start``, ``start_s``: found in the opened input), then from
     that function."""
-    resolved = None if _starts_later(request) else _resolve(request, None, "init_box", "fps")
+    resolved = None if _starts_later(request) else _resolve(request, None, LIBRARY_NAMES)
 
     def frames(source: Source) -> tuple[Box | None, Iterator[Frame]]:
-        settled = resolved or _resolve(request, source, "init_box", "fps")
+        settled = resolved or _resolve(request, source, LIBRARY_NAMES)
         return settled.init_box, _frames_to_track(request, settled, source)
 
     return frames
@@ -926,7 +930,8 @@ def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
                      ) -> Iterator[Frame]:
     """``source``'s frames from the resolved first one on, within the resolved span (a frame
     count or a duration, ``--frames``)."""
-    return resolved.span.take(_from(source, resolved.start, request.input))
+    return resolved.span.take(_from(source, resolved.start, request.input,
+                                    resolved.names.start))
 
 
 class _Waits:
@@ -1013,7 +1018,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         if signals.draining is not None:  # the frames the followed file held are tracked
             raise Interrupted(signals.draining)
         if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
-            raise InputError(f"--start {request.start_text}: {request.input} has no frame "
+            given = resolved.names.start_given(request.start, request.start_s)
+            raise InputError(f"{given}: {request.input} has no frame "
                              f"{resolved.start} ({_numbering(source.info)})")
     except PartialInputError as exc:
         if signals.draining is None:

@@ -17,7 +17,13 @@ import cv2
 
 from vtrack.batch.jobs import Job, Outcome, Progress, read_row
 from vtrack.batch.plan import recorded_summary
-from vtrack.errors import FolderInUseError, Interrupted, OutputError, VtrackError
+from vtrack.errors import (
+    COMMAND_NAMES,
+    FolderInUseError,
+    Interrupted,
+    OutputError,
+    VtrackError,
+)
 from vtrack.io import InputInfo
 from vtrack.io.outdir import OutputFolder
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
@@ -174,9 +180,9 @@ def _run_when_free(job: Job, report: Report | None = None) -> RunSummary:
     while True:
         try:
             # a batch's messages name the options its runs share with vtrack run, as before
-            # the library's names (init_box, fps) were given to run()'s own callers
+            # the library's names (init_box, start, out_dir) are for run()'s own callers
             return run(job.request, on_frame=on_frame, on_open=on_open,
-                       init_name="--init", fps_name="--fps")
+                       names=COMMAND_NAMES)
         except FolderInUseError:
             if time.monotonic() >= deadline:
                 raise

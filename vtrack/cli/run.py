@@ -25,7 +25,7 @@ from vtrack.cli._options import (
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import STOP_SIGNALS, Interrupted, VtrackError, printable
+from vtrack.errors import COMMAND_NAMES, STOP_SIGNALS, Interrupted, VtrackError, printable
 from vtrack.params import (
     MAX_CRF,
     MAX_SEED,
@@ -218,7 +218,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
 
         try:
             summary = run(request, on_frame=progress.on_frame, on_open=opened,
-                          overwrite=overwrite, init_name="--init", fps_name="--fps")
+                          overwrite=overwrite, names=COMMAND_NAMES)
         except VtrackError as exc:  # recorded (if the outputs had opened): exits as it says
             ending.code = exc.exit_code
             raise

@@ -20,7 +20,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Self
 
-from vtrack.errors import FolderInUseError, OutputError
+from vtrack.errors import COMMAND_NAMES, FolderInUseError, OptionNames, OutputError
 from vtrack.io.files import is_temp_of, os_reason, prepare_output_dir
 
 LOCK_NAME = ".vtrack.lock"
@@ -94,7 +94,8 @@ def is_batch_folder(folder: Path | str) -> bool:
             and not is_report_folder(folder))
 
 
-def refuse_other_results(folder: Path | str, what: str) -> None:
+def refuse_other_results(folder: Path | str, what: str,
+                         names: OptionNames = COMMAND_NAMES) -> None:
     """Raise OutputError when ``folder`` holds the other kind's results: a run's
     (``run.json``) for a batch (``what`` ``batch``), whose folder per input would sit among
     them, or a batch's (:func:`is_batch_folder`) for a run (any other ``what``), whose files
@@ -102,22 +103,25 @@ def refuse_other_results(folder: Path | str, what: str) -> None:
     report's folder (:func:`is_report_folder`) is refused too: to a batch, whose
     ``summary.csv`` would replace the report's, as a report is refused a batch's folder; to a
     run, whose files would sit among the report's pages, unless an earlier run's results are
-    already there (``run.json``: what ``--overwrite`` decides on)."""
+    already there (``run.json``: what ``--overwrite`` decides on). The message calls the folder
+    by ``names`` (``--out``; ``out_dir``)."""
     folder = Path(folder)
     ran = (folder / "run.json").is_file()
     if what == "batch" and ran:
         raise OutputError(f"{folder}: is a run's results folder (run.json); a batch there "
-                          "would mix its inputs' folders with that run: choose another --out")
+                          f"would mix its inputs' folders with that run: choose another "
+                          f"{names.out}")
     if (what == "batch" or not ran) and is_report_folder(folder):
         would = (f"replace the report's {BATCH_SUMMARY}" if what == "batch" else
                  "mix its files with the report's pages")
         raise OutputError(f"{folder}: is a vtrack report's folder ({REPORT_PAGE}); a "
                           f"{'batch' if what == 'batch' else 'run'} there would {would}: "
-                          "choose another --out")
+                          f"choose another {names.out}")
     if what != "batch" and is_batch_folder(folder):
         raise OutputError(f"{folder}: is a batch's results folder ({BATCH_SUMMARY}); a run "
-                          "there would mix its files with the batch's: choose another --out "
-                          "(the batch's own runs are in its <input>/<config>/ folders)")
+                          f"there would mix its files with the batch's: choose another "
+                          f"{names.out} (the batch's own runs are in its <input>/<config>/ "
+                          "folders)")
 
 
 def _holder(path: Path) -> str:
@@ -174,14 +178,15 @@ def earlier_results(folder: Path | str) -> list[str]:
     return [name for name in RUN_OUTPUTS if (folder / name).is_file()]
 
 
-def refuse_replacing(folder: Path | str) -> None:
+def refuse_replacing(folder: Path | str, names: OptionNames = COMMAND_NAMES) -> None:
     """Raise OutputError when ``folder`` holds an earlier run's results (as ffmpeg without
-    ``-y`` will not replace a file): the user says ``--overwrite`` or picks another ``--out``."""
+    ``-y`` will not replace a file): the user says ``--overwrite`` or picks another ``--out``
+    (as ``names`` call them: ``overwrite=True``, ``out_dir`` in the library)."""
     found = earlier_results(folder)
     if found:
         raise OutputError(
             f"{folder}: holds the results of an earlier run ({', '.join(found)}); give "
-            "--overwrite (-y) to replace them, or another --out")
+            f"{names.overwrite} to replace them, or another {names.out}")
 
 
 class OutputFolder:
@@ -195,14 +200,16 @@ class OutputFolder:
     but the lock was left in it.
     """
 
-    def __init__(self, folder: Path | str, what: str = "run") -> None:
+    def __init__(self, folder: Path | str, what: str = "run",
+                 names: OptionNames = COMMAND_NAMES) -> None:
         self.folder = Path(folder)
         self.what = what
+        self.names = names  # how a refusal calls the folder (--out; out_dir)
         self._fd: int | None = None
         self._created: list[Path] = []
 
     def __enter__(self) -> Self:
-        refuse_other_results(self.folder, self.what)
+        refuse_other_results(self.folder, self.what, self.names)
         missing = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
         prepare_output_dir(self.folder)
         self._created = missing  # deepest first: the order to remove them in
