@@ -194,3 +194,44 @@ def test_an_undecodable_image_at_a_start_by_time_is_not_the_runs(tmp_path: Path)
     record = json.loads((tmp_path / "out" / "run.json").read_text())
     assert (record["start_frame"], record["frames"]) == (32, 27)
     assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 0)
+
+
+def test_the_resume_hint_of_a_chain_without_a_box_goes_on_over_a_missing_image(
+        tmp_path: Path) -> None:
+    """A chain that needs no first box (s4) interrupted in a folder whose every other image is
+    missing was told to go on with '--start LAST+1', a frame with no image, and that run was
+    refused ('--start 85: frame 85 of SEQ is missing from the numbering ...; start at a frame
+    it has'). A start frame without a picture is refused only where the first box is that
+    frame's; such a chain starts at the next frame it has, so the hint goes on."""
+    import signal
+    import time
+
+    from conftest import wait_for_stop_handlers
+
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 1, 64, 48, 3000, 30), folder)
+    images = sorted((folder / "img").iterdir())
+    for image in images[1:-1:2]:  # frames 1, 3, 5, ... have no image
+        image.unlink()
+    first = tmp_path / "first"
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", "run", str(folder), "-c", "s4",
+                                "--no-video", "-o", str(first)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for_stop_handlers(process)
+    deadline = time.monotonic() + 60
+    while not any(len(p.read_bytes().splitlines()) > 20 for p in first.glob(".track*")):
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate()
+        time.sleep(0.01)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    last = json.loads((first / "run.json").read_text())["last_frame"]
+    assert last % 2 == 0  # the frames written are the even ones: LAST+1 has no image
+    hint = stderr.splitlines()[-1]
+    assert hint.endswith(f"run the same command with --start {last + 1} and another --out")
+    done = vtrack("run", str(folder), "-c", "s4", "--start", str(last + 1), "--frames", "10",
+                  "--no-video", "-o", str(tmp_path / "again"))
+    assert done.returncode == 0, done.stderr
+    with (tmp_path / "again" / "track.csv").open(newline="") as handle:
+        frames = [int(row["frame"]) for row in csv.DictReader(handle)]
+    assert frames[0] == last + 2  # the next frame the folder has: none written twice

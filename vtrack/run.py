@@ -282,11 +282,14 @@ def _numbering(info: InputInfo) -> str:
     return "frames are numbered from 0"
 
 
-def _from(source: Source, start: int, what: str, option: str) -> Iterator[Frame]:
+def _from(source: Source, start: int, what: str, option: str, boxed: bool) -> Iterator[Frame]:
     """``source``'s frames numbered ``start`` and on (the earlier ones are decoded and
-    dropped). InputError when frame ``start`` itself is missing (damaged, or no image numbered
-    for it: ``what`` is the input's name) and a later one comes first: the initial box is frame
-    ``start``'s, not that one's (the message names the start ``option``)."""
+    dropped). With a first box (``boxed``), InputError when frame ``start`` itself is missing
+    (damaged, or no image numbered for it: ``what`` is the input's name) and a later one comes
+    first: the initial box is frame ``start``'s, not that one's (the message names the start
+    ``option``). A chain without one (it finds its targets itself) starts at the next frame
+    there is, as it would go past that frame in a whole run (the way an interrupted run's
+    ``--start`` goes on)."""
     if start == 0:
         yield from source
         return
@@ -294,7 +297,7 @@ def _from(source: Source, start: int, what: str, option: str) -> Iterator[Frame]
     for frame in source:
         if frame.index < start:
             continue
-        if first and frame.index > start:
+        if first and boxed and frame.index > start:
             raise InputError(f"{option} {start}: frame {start} of {what} {source.absent(start)}"
                              f"; the next is frame {frame.index}: start at a frame it has")
         first = False
@@ -931,7 +934,7 @@ def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
     """``source``'s frames from the resolved first one on, within the resolved span (a frame
     count or a duration, ``--frames``)."""
     return resolved.span.take(_from(source, resolved.start, request.input,
-                                    resolved.names.start))
+                                    resolved.names.start, resolved.init_box is not None))
 
 
 class _Waits:
