@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from vtrack import Tracker, track
+from vtrack.clock import FrameClock
 from vtrack.evaluate import frame_scores, mean_overlap
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box
 from vtrack.scenes import Scene, make_scene
 from vtrack.stages.base import TrackContext, TrackState
-from vtrack.stages.robust_clock import FrameClock
 from vtrack.stages.robust_model import RobustModel
 
 SEEDS = (0, 1, 2)

@@ -25,9 +25,18 @@ from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 #: A box that lies entirely outside the frame for more than this many frames in a row is
 #: reported ``lost`` (no box is claimed) until it overlaps the frame again: a predictor coasting
 #: away (S2 at x = -457996 in a 640x480 frame, issue 11 item 8) is not a target still tracked.
-#: One rule for every single-target tracker, applied to the output; the stages keep their own
-#: state. README and docs/architecture.md state it.
+#: Frames elapsed, not frames given (``ctx.clock``: frames missing from the input count, by
+#: the frame numbers or the timestamps): a camera that delivers every other frame loses the box
+#: after the same time as one that delivers all. The first frame given with the box outside
+#: counts one, each after it the frames elapsed since the one before, or one where the clock
+#: says fewer than ``MISSED`` (timestamps a little off, no frame missing: on an input without
+#: gaps the count is the frames given, as it always was). One rule for every single-target tracker,
+#: applied to the output; the stages keep their own state. README and docs/architecture.md
+#: state it.
 OFF_FRAME_FRAMES = 10
+#: Frames elapsed from one frame given to the next from which a frame is missing between them
+#: (the nearest whole number is 2); fewer count one (timestamps a little off).
+MISSED = 1.5
 
 
 @dataclass
@@ -143,7 +152,8 @@ class Pipeline:
         self._ctx: TrackContext | None = None
         #: (width, height, grey) of the track's first frame: every later one must match
         self._shape: tuple[int, int, bool] | None = None
-        self._off_frame = 0  # frames in a row the box has been entirely outside the frame
+        #: frames the box has been entirely outside the frame, in a row (OFF_FRAME_FRAMES)
+        self._off_frames = 0.0
 
     def process(self, frame: Frame) -> FrameResult:
         """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
@@ -155,7 +165,7 @@ class Pipeline:
                             f"I420Frame), got {type(frame).__name__}; vtrack.Tracker and "
                             "vtrack.track also take NumPy images and av.VideoFrame")
         self._check_shape(frame)
-        clock = time.perf_counter
+        timer = time.perf_counter
         ctx = self._ctx
         if ctx is None:
             init_box = self._init_box
@@ -164,25 +174,27 @@ class Pipeline:
             ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
             ctx.new_frame(frame)
             for stage in self.stages:
-                started = clock()
+                started = timer()
                 stage.start(ctx)
-                self.stage_seconds[stage.name] += clock() - started
+                self.stage_seconds[stage.name] += timer() - started
             if init_box is not None:
                 ctx.box = init_box  # the first frame's answer is the box we were given
         else:
+            ctx.clock.advance(frame)  # before the forecast and the stages: they read it
             ctx.new_frame(frame)
             for stage in self.stages:
-                started = clock()
+                started = timer()
                 stage.step(ctx)
-                self.stage_seconds[stage.name] += clock() - started
+                self.stage_seconds[stage.name] += timer() - started
         self.frames_done += 1
         state = ctx.state
         if ctx.box is not None and ctx.box.outside(frame.width, frame.height):
-            self._off_frame += 1
-            if self._off_frame > OFF_FRAME_FRAMES:
+            elapsed = ctx.clock.elapsed
+            self._off_frames += elapsed if self._off_frames and elapsed >= MISSED else 1.0
+            if self._off_frames > OFF_FRAME_FRAMES:
                 state = TrackState.LOST
         else:
-            self._off_frame = 0
+            self._off_frames = 0.0
         return FrameResult(
             index=frame.index,
             time_s=frame.time_s,

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from vtrack.clock import FrameClock
 from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
@@ -66,7 +67,8 @@ class TrackStatus(StrEnum):
 
 
 #: Context fields the pipeline itself provides before the first stage runs.
-PIPELINE_PROVIDES = frozenset({"frame", "box", "prediction", "state", "rng", "search_growth"})
+PIPELINE_PROVIDES = frozenset({"frame", "clock", "box", "prediction", "state", "rng",
+                               "search_growth"})
 
 #: Fields computed from another field: a stage that sets the key field without setting these
 #: leaves them describing an older value, so later stages may not read them (a new search
@@ -158,6 +160,11 @@ class TrackContext:
     """Per-run state shared by the stages; per-frame fields are reset by ``new_frame``."""
 
     frame: Frame
+    #: The frames elapsed since the first frame, and from the frame before to this one (made
+    #: on the first frame, :attr:`frame` when the context is made; the pipeline moves it on to
+    #: each later frame before :meth:`new_frame`). Counts time where calls would not: frames
+    #: missing from the input count as elapsed.
+    clock: FrameClock = field(init=False)
     #: Seed of :attr:`rng`.
     seed: int = 0
     #: Current estimate of the target box (single-target). The pipeline's output for the frame.
@@ -165,7 +172,8 @@ class TrackContext:
     #: Where this frame's search starts: set by a predictor on the previous frame (None: use box).
     prediction: Box | None = None
     #: Set by a predictor whose prediction depends on when the next frame comes: the prediction
-    #: for a frame. :meth:`new_frame` replaces ``prediction`` with ``forecast(frame)``.
+    #: for a frame. :meth:`new_frame` replaces ``prediction`` with ``forecast(frame)`` (the
+    #: :attr:`clock` already moved on to it).
     forecast: Callable[[Frame], Box | None] | None = None
     state: TrackState = TrackState.TRACKING
     #: Tracker-specific quality of this frame's estimate (similarity, weight, bp mass ...).
@@ -215,6 +223,9 @@ class TrackContext:
     robust: RobustTarget | None = None
 
     _rng: np.random.Generator | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.clock = FrameClock(self.frame)
 
     @property
     def rng(self) -> np.random.Generator:

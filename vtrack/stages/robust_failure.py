@@ -23,7 +23,7 @@ filter's own response (``robust_search``), not a hand-set similarity:
   ``redetect`` the next frames search a ring of regions around the motion model's last
   position with the same filter, a ring farther a frame (``ctx.search_growth``,
   :class:`vtrack.stages.robust_model.RobustModel`). Both count the frames elapsed, not the
-  frames given (:class:`vtrack.stages.robust_clock.FrameClock`: the frame numbers, or the
+  frames given (``ctx.clock``, :class:`vtrack.clock.FrameClock`: the frame numbers, or the
   timestamps where they say otherwise): a camera that delivers every other frame loses a
   hidden target after the same second as one that delivers all, and searches as far by then
   (before, a second later, its rings growing half as fast).
@@ -102,8 +102,8 @@ filter's own response (``robust_search``), not a hand-set similarity:
   seen.
 
 Pipeline contract of stage ``robust_failure``: reads ``ctx.measurement``, ``ctx.robust``,
-``ctx.prediction``, ``ctx.state``; writes ``ctx.state``, ``ctx.box`` (with ``coast``, the
-prediction while hidden), ``ctx.measurement`` (None while hidden with ``coast``),
+``ctx.prediction``, ``ctx.state``, ``ctx.clock``; writes ``ctx.state``, ``ctx.box`` (with
+``coast``, the prediction while hidden), ``ctx.measurement`` (None while hidden with ``coast``),
 ``ctx.search_growth``, ``ctx.robust`` (usual confidence, hidden frames, whether the next frame
 searches the whole frame, whether this frame saw the target) and the ``psr`` column (its
 confidence is the row's ``score``).
@@ -167,7 +167,7 @@ class RobustFailure(Stage):
         Param("update_peak", float, 0.0, "... and this share of the usual peak (LMCF beta_2: "
               "0.45; 0: on every tracking frame)", min=0.0, max=10.0),
     )
-    requires = frozenset({"measurement", "robust", "prediction", "state"})
+    requires = frozenset({"measurement", "robust", "prediction", "state", "clock"})
     provides = frozenset({"state", "box", "measurement", "search_growth", "robust"})
     columns = ("psr",)
 
@@ -236,7 +236,7 @@ class RobustFailure(Stage):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
         # time, not calls: frames missing from the input count as hidden too
-        target.hidden_frames += target.clock.elapsed
+        target.hidden_frames += ctx.clock.elapsed
         _hold_size(target, ctx)
         if self.coast:
             ctx.measurement = None  # S0 item 7: coast on the prediction
@@ -250,7 +250,7 @@ class RobustFailure(Stage):
                 and not colour_disagrees):
             target.learn(ctx.frame, ctx.measurement, self.rate)
         if lost and self.redetect:
-            ctx.search_growth = min(ctx.search_growth + target.clock.elapsed, MAX_RINGS + 1.0)
+            ctx.search_growth = min(ctx.search_growth + ctx.clock.elapsed, MAX_RINGS + 1.0)
 
     def _strong(self, target: RobustTarget) -> bool:
         """LMCF's test: APCE and peak at their shares of the usual values (always true before

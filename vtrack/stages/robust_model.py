@@ -27,8 +27,7 @@ Pipeline contract of stage ``robust_model``: reads ``ctx.frame``, ``ctx.box`` (o
 whose reported box was the motion model's extrapolation, ``ctx.robust``'s peak there),
 ``ctx.state``, ``ctx.prediction`` (the search centre while the target is lost),
 ``ctx.search_growth``;
-writes ``ctx.robust`` (its frame clock moved on to this frame), ``ctx.window`` (the region's
-part inside the frame), ``ctx.likelihood``.
+writes ``ctx.robust``, ``ctx.window`` (the region's part inside the frame), ``ctx.likelihood``.
 """
 
 from __future__ import annotations
@@ -50,7 +49,6 @@ from vtrack.geometry import Box, Window
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
-from vtrack.stages.robust_clock import FrameClock
 
 #: Re-detection reaches at most this many rings of regions around the search centre.
 MAX_RINGS = 4
@@ -116,9 +114,6 @@ class RobustTarget:
     translation: CorrelationFilter
     cosine: np.ndarray
     colour: ColourHistograms | None
-    #: The frames elapsed since the first frame, and from the frame before to this one (moved
-    #: on by ``robust_model`` as each frame starts).
-    clock: FrameClock
     #: DSST's scale filter (``robust_search``; None: the size is kept), and this frame's scale
     #: samples with the box they were taken around: when the size did not change, the same
     #: samples are what learning would take again.
@@ -311,7 +306,7 @@ class RobustModel(Stage):
             cols=cols, rows=rows, cell=self.cell, grey_channel=self.grey_channel,
             shift_within=self.shift_within,
             translation=CorrelationFilter(gaussian_label(rows, cols, sigma), self.lam, 0.0),
-            cosine=hann2d(rows, cols), colour=colour, clock=FrameClock(ctx.frame))
+            cosine=hann2d(rows, cols), colour=colour)
         target.learn(ctx.frame, box, 1.0, first=True)
         #: Counts the frames given (from the first one's number): the turn of the regions a
         #: lost target's ring search visits (frame numbers with gaps skipped some for good).
@@ -326,7 +321,6 @@ class RobustModel(Stage):
         target = ctx.robust
         assert target is not None
         self._turn += 1
-        target.clock.advance(ctx.frame)
         # The region is centred on the last box: on hand-held or panning footage the filter's
         # own last peak is a better prior than a motion model (on the tune sequences the
         # prediction as the only centre lowered the mean AUC from 0.60 to 0.50). Where the

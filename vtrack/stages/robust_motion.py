@@ -10,7 +10,7 @@ the first box's diagonal. Each measurement's noise is ``r / score^4`` (standard 
 
 The next frame's predicted box (``ctx.prediction``) centres ``robust_model``'s search region.
 The filter steps by the frames that elapsed since the frame before (the chain's
-:class:`~vtrack.stages.robust_clock.FrameClock`, ``ctx.robust.clock``: the index difference, or
+:class:`~vtrack.clock.FrameClock`, ``ctx.clock``: the index difference, or
 the time difference over the stream's frame period where the timestamps say otherwise, a change
 of frame rate), not by one a call: a frame passed over (dropped by a camera, by ``--live``
 falling behind, by a reader skipping a damaged stretch) moves the prediction as far as the
@@ -32,8 +32,8 @@ score says) and the next search stays there: a target passing behind an occluder
 where it goes, not on the occluder's edge, and a wrong velocity never moves the search.
 
 Pipeline contract of stage ``robust_motion``: reads ``ctx.measurement``, ``ctx.box``,
-``ctx.state``, ``ctx.score``, ``ctx.robust`` (whether this frame saw the target); writes
-``ctx.box`` (the prediction while coasting, the extrapolation on an unseen frame),
+``ctx.state``, ``ctx.score``, ``ctx.robust`` (whether this frame saw the target), ``ctx.clock``;
+writes ``ctx.box`` (the prediction while coasting, the extrapolation on an unseen frame),
 ``ctx.prediction``, ``ctx.forecast`` and ``ctx.robust`` (an unseen frame's peak, for the next
 search).
 """
@@ -44,12 +44,12 @@ import math
 
 import numpy as np
 
+from vtrack.clock import FrameClock
 from vtrack.filters import ConstantVelocity, GaussianState
 from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
-from vtrack.stages.robust_clock import FrameClock
 
 
 @register
@@ -73,7 +73,7 @@ class RobustMotion(Stage):
               "the longer the filter lags a target that changes as it speeds up", min=0.01,
               max=1.0),
     )
-    requires = frozenset({"measurement", "box", "state", "score", "robust"})
+    requires = frozenset({"measurement", "box", "state", "score", "robust", "clock"})
     provides = frozenset({"box", "prediction", "forecast", "robust"})
 
     # Set from the parameters by Stage.__init__.
@@ -90,10 +90,9 @@ class RobustMotion(Stage):
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
         self._was = TrackState.TRACKING
-        assert ctx.robust is not None
-        #: The frames elapsed since the first one (the chain's :class:`FrameClock`, moved on
-        #: by ``robust_model``).
-        self._clock = ctx.robust.clock
+        #: The frames elapsed since the first one (the pipeline's :class:`FrameClock`, moved
+        #: on to a frame before its forecast is asked).
+        self._clock = ctx.clock
         #: The filter's state on the last frame that saw the target, and that frame's time on
         #: the clock.
         self._seen: tuple[GaussianState, float] | None = None
@@ -156,8 +155,7 @@ class RobustMotion(Stage):
         discontinuity (more than ``FrameClock.GAP`` frames elapsed) the velocity is not known:
         the prediction stays at the last position, as while lost, with ``Q`` for ``GAP`` frames,
         and an unseen frame's extrapolation starts again from the last box reported."""
-        before = self._clock.now
-        steps = self._clock.peek(frame)  # robust_model moves the clock on when the frame runs
+        before, steps = self._clock.before, self._clock.elapsed  # the clock is at ``frame``
         if steps > FrameClock.GAP:
             still = self._model.with_velocity(self._posterior, np.zeros(2))
             self._state = self._model.predict(still, FrameClock.GAP,
@@ -165,7 +163,7 @@ class RobustMotion(Stage):
             if self._seen is not None:
                 seen, seen_at = self._seen
                 reported = self._model.predict(seen, before - seen_at)
-                self._seen = (self._model.with_velocity(reported, np.zeros(2)), before + steps)
+                self._seen = (self._model.with_velocity(reported, np.zeros(2)), self._clock.now)
         elif steps != 1.0:
             self._state = self._model.predict(self._posterior, steps,
                                               Q=self._model.Q * steps)

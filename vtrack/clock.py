@@ -1,12 +1,14 @@
-"""The frames elapsed between the frames a tracker is given (the ``robust`` chain's clock).
+"""The frames elapsed between the frames a tracker is given: the pipeline's frame clock.
 
 A tracker is given frames, not time: a camera drops some, ``vtrack run --live`` passes over
 those it cannot keep up with, a reader skips a damaged stretch, a stream's rate changes. What
-measures time in the ``robust`` chain counts on :class:`FrameClock` instead of the calls: the
-motion model's steps (``robust_motion``), the hidden time before a target is lost and the lost
-target's growing search (``robust_failure``). It is made on the first frame and moved on once a
-frame by ``robust_model`` (the chain's first link); ``robust_motion``'s forecast, asked before
-any link runs, reads the coming step with :meth:`FrameClock.peek`.
+measures time counts on :class:`FrameClock` instead of the calls: the pipeline's rule that a box
+entirely outside the frame for ``OFF_FRAME_FRAMES`` frames is lost (:mod:`vtrack.pipeline`),
+and in the ``robust`` chain the motion model's steps (``robust_motion``), the hidden time before
+a target is lost and the lost target's growing search (``robust_failure``). The pipeline makes
+one per track on its first frame (``ctx.clock``, a field of
+:class:`~vtrack.stages.base.TrackContext`) and moves it on to each later frame before anything
+else is asked about that frame (the predictors' ``ctx.forecast``, the stages).
 """
 
 from __future__ import annotations
@@ -67,29 +69,26 @@ class FrameClock:
         #: given (1 on the first).
         self.now = 0.0
         self.elapsed = 1.0
+        #: :attr:`now` at the frame before the last one given (exactly: ``now - elapsed`` may
+        #: differ in the last bit; 0 on the first).
+        self.before = 0.0
 
-    def peek(self, frame: Frame) -> float:
-        """The frames elapsed from the last frame given to ``frame`` (more than 0), as
-        :meth:`advance` counts them; the clock does not move."""
+    def advance(self, frame: Frame) -> float:
+        """The frames elapsed from the last frame given to ``frame`` (more than 0, also kept as
+        :attr:`elapsed`); ``frame`` becomes the last one."""
         indexed, interval = self._since(frame)
         steps = float(indexed) if indexed > 0 else 1.0
         if interval > 0 and self._period is not None:
             timed = round(interval / self._period, self.DECIMALS)
             if abs(timed - steps) > self.JITTER:
                 steps = timed
-        return steps
-
-    def advance(self, frame: Frame) -> float:
-        """The frames elapsed from the last frame given to ``frame`` (more than 0, also kept as
-        :attr:`elapsed`); ``frame`` becomes the last one."""
-        steps = self.peek(frame)
-        indexed, interval = self._since(frame)
         # a timestamp that did not increase is no base for the next interval either (one frame
         # stamped 0 in a long stream would make the next interval the whole stream)
         self._index = frame.index
         self._time = frame.time_s if interval > 0 or self._time is None else None
         if interval > 0 and indexed > 0:
             self._learn(interval / indexed)
+        self.before = self.now
         self.now += steps
         self.elapsed = steps
         return steps
