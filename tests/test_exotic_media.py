@@ -156,6 +156,20 @@ def test_an_mp4_cut_before_its_index_was_written_says_so(clip_factory, tmp_path,
         "be found without it")
 
 
+@pytest.mark.parametrize("data", [b"hi\n", b"\x00\x00", b"\x00\x00\x00\x20fty"])
+def test_a_file_shorter_than_a_box_header_is_no_cut_mp4(tmp_path, data):
+    """A file of 1 to 7 bytes (a text file named clip.avi, a copy that stopped at once) was
+    'an MP4 with no index (moov box): the recording was cut off ...', whatever it held; too
+    short to be known as an MP4, it is now what FFmpeg says of it."""
+    short = tmp_path / "clip.avi"
+    short.write_bytes(data)
+    result = CliRunner().invoke(main, ["run", str(short), "--init", "10,10,20,20",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result) == (f"vtrack: error: {short}: not a video FFmpeg can decode "
+                                      "(Invalid data found when processing input)")
+    assert not (tmp_path / "out").exists()
+
+
 def test_an_empty_file_is_called_empty(tmp_path):
     """A 0-byte clip.mp4 (a copy that failed, a recording never begun) was 'not a video FFmpeg
     can decode (Invalid data found when processing input)'."""

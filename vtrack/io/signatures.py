@@ -104,8 +104,9 @@ def mp4_head_fragmented(head: bytes) -> bool:
 def _top_boxes(path: str | os.PathLike[str]) -> tuple[int, list[tuple[bytes, int, int]]] | None:
     """The size of ``path``, an MP4/QuickTime file (its first box ``ftyp``), and its top-level
     boxes in file order as (type, offset, size), the last one's size as its header says (past
-    the file's end when the file was cut inside it; a header cut short is type ``b""``). None
-    when it is no such file, cannot be read, is not laid out in boxes, or holds more than
+    the file's end when the file was cut inside it; a header cut short after the first box is
+    type ``b""``). None when it is no such file, cannot be read, is shorter than a box header
+    (8 bytes), is not laid out in boxes, or holds more than
     :data:`_MAX_BOXES`."""
     boxes: list[tuple[bytes, int, int]] = []
     try:
@@ -118,6 +119,8 @@ def _top_boxes(path: str | os.PathLike[str]) -> tuple[int, list[tuple[bytes, int
                 handle.seek(offset)
                 header = handle.read(16)
                 if len(header) < 8:
+                    if not boxes:  # too short to say it is an MP4 (3 bytes of text)
+                        return None
                     boxes.append((b"", offset, 8))
                     break
                 box = _box_header(header, end - offset)
