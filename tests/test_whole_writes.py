@@ -73,3 +73,26 @@ def test_a_failed_scene_leaves_no_partial_clip_and_keeps_the_earlier_one(
     after = snapshot(tmp_path / "sc")
     assert after == before  # the 30-frame clip and its 30-line ground truth, as they were
     assert sum(name.endswith("gt.txt") or name.endswith("rect.txt") for name in after) == 1
+
+
+def test_a_stream_file_cut_by_a_full_disk_holds_whole_lines(tmp_path: Path) -> None:
+    """vtrack run --stream s.jsonl on a full disk ended 'failed' as it should, but s.jsonl
+    ended inside a line ('{"frame":1367,...,"state":"tracking","'): a reader of JSON lines
+    then fails on it. The file is now cut back to its last whole line, as track.csv is to its
+    last whole row."""
+    import csv
+    import json
+
+    assert vtrack("scene", "smooth", "in.mp4", "--frames", "300", "--size", "160x120",
+                  "--preset", "ultrafast", cwd=tmp_path).returncode == 0
+    result = limited("run", "in.mp4", "--gt", "in.gt.txt", "-c", "s0", "--no-video",
+                     "--stream", "s.jsonl", "-o", "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    assert "vtrack: error: --stream s.jsonl: File too large" in result.stderr
+    data = (tmp_path / "s.jsonl").read_bytes()
+    assert 0 < len(data) <= LIMIT and data.endswith(b"\n")
+    frames = [json.loads(line)["frame"] for line in data.decode().splitlines()]
+    with open(tmp_path / "out" / "track.csv", newline="") as rows:
+        tracked = [int(row["frame"]) for row in csv.DictReader(rows)]
+    assert frames == tracked[:len(frames)] and len(frames) >= len(tracked) - 1

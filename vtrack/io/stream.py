@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import json
 import math
 import os
@@ -81,7 +82,8 @@ class StreamWriter(Closing):
     went away) or when the reader of a pipe takes
     nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
     reading). A line none of which is out yet gives way to a stop (see :meth:`write`), so
-    Ctrl-C or SIGTERM does not wait for ``stall_s``."""
+    Ctrl-C or SIGTERM does not wait for ``stall_s``. A regular file whose line could not be
+    written whole (a full disk) is cut back to its last whole line."""
 
     def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0) -> None:
         self.target = target
@@ -97,6 +99,7 @@ class StreamWriter(Closing):
             self._fd: int | None = self._file.fileno()
         except (OSError, ValueError):  # standard output replaced by an object (a test runner)
             self._fd = None
+        self._regular = self._fd is not None and _regular_file(self._fd)
 
     def write(self, result: FrameResult, stop: Callable[[], bool] | None = None) -> bool:
         """Write ``result``'s line; True once it is out. False, with nothing of the line
@@ -104,6 +107,7 @@ class StreamWriter(Closing):
         (a line already begun is finished). OutputError as the class says."""
         line = json.dumps(frame_record(result, self.multi_target), separators=(",", ":"))
         data = (line + "\n").encode("utf-8")
+        start = _line_start(self._fd) if self._regular and self._fd is not None else None
         try:
             if self._fd is None:
                 self._file.write(data)
@@ -115,6 +119,10 @@ class StreamWriter(Closing):
                                    f"pipe) after {self.lines} lines: the run stopped there "
                                    "(SIGPIPE)") from None
         except (OSError, ValueError) as exc:
+            if start is not None and self._fd is not None:  # a full disk: no half line left
+                with contextlib.suppress(OSError):
+                    os.ftruncate(self._fd, start)
+                    os.lseek(self._fd, start, os.SEEK_SET)
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
         self.lines += 1
         return True
@@ -147,6 +155,26 @@ class StreamWriter(Closing):
             self._file.close()
         except (OSError, ValueError) as exc:
             raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
+
+
+def _regular_file(fd: int) -> bool:
+    """Whether ``fd`` is a regular file (not a pipe, FIFO, terminal or device)."""
+    try:
+        return stat.S_ISREG(os.fstat(fd).st_mode)
+    except OSError:
+        return False
+
+
+def _line_start(fd: int) -> int | None:
+    """Where the next line written to ``fd``, a regular file, begins: its end when it was
+    opened to append (``--stream - >> log``), else its offset; None when that cannot be
+    told."""
+    try:
+        if fcntl.fcntl(fd, fcntl.F_GETFL) & os.O_APPEND:
+            return os.fstat(fd).st_size
+        return os.lseek(fd, 0, os.SEEK_CUR)
+    except OSError:
+        return None
 
 
 #: How often the opening of a FIFO looks for its reader (seconds).
