@@ -10,6 +10,7 @@ import click
 
 from vtrack.cli._options import StartPoint, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
+from vtrack.cli._signals import stopping_as_interrupted
 
 
 @click.command("frame")
@@ -41,15 +42,16 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
     if out is not None:  # refused before a frame is decoded
         ext = _checked_ext(out, input_spec)
     index, seconds = at
-    if seconds is None:
-        bgr = read_frame(input_spec, index)
-    else:
-        index, bgr = read_frame_at(input_spec, seconds)
-    if out is None:
-        out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
-        ext = _checked_ext(out, input_spec)
-    image = bgr if no_grid else draw_grid(bgr, step)
-    write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old image
+    with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary image left behind
+        if seconds is None:
+            bgr = read_frame(input_spec, index)
+        else:
+            index, bgr = read_frame_at(input_spec, seconds)
+        if out is None:
+            out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
+            ext = _checked_ext(out, input_spec)
+        image = bgr if no_grid else draw_grid(bgr, step)
+        write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old one
     click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
 
 

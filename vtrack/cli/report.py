@@ -13,6 +13,7 @@ from vtrack.cli._options import (
 )
 from vtrack.cli._paths import PATH, NonEmptyText
 from vtrack.cli._progress import StepProgress
+from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.errors import plural
 
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
@@ -44,8 +45,9 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
 
     progress = StepProgress(quiet, "report", "inputs", stats_period)
     try:
-        report = build_report(list(results), out_dir, gt=list(gt_specs), gt_origin=gt_origin,
-                              title=title, on_input=progress)
+        with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no staged plot left behind
+            report = build_report(list(results), out_dir, gt=list(gt_specs),
+                                  gt_origin=gt_origin, title=title, on_input=progress)
     finally:
         progress.close()
     for warning in report.warnings:

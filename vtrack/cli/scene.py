@@ -10,6 +10,7 @@ import click
 from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
+from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_CRF, MAX_SEED
@@ -100,8 +101,9 @@ def command(
                           "larger --size")
     progress = StepProgress(False, out.name, "frames", stats_period)
     try:
-        files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
-                           progress=progress)
+        with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary clip left behind
+            files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
+                               progress=progress)
     finally:
         progress.close()
     extra = f" and {files.mot}" if files.mot else ""

@@ -1,0 +1,70 @@
+"""SIGTERM (``kill``, ``timeout``, ``docker stop``) to the commands that write files without a
+run's record, ``vtrack scene`` and ``vtrack report``: handled as Ctrl-C, so the files they
+stage under temporary names are removed and the command ends ``vtrack: interrupted``, exit
+143. The commands run as a user runs them, in subprocesses."""
+
+from __future__ import annotations
+
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from conftest import wait_for_stop_handlers
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+
+def _terminated(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """``vtrack ARGS`` sent SIGTERM once it handles it (its start-up over, its work begun)."""
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", *args], cwd=cwd,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_stop_handlers(process)
+        process.send_signal(signal.SIGTERM)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    return subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+
+
+def _files(folder: Path) -> list[str]:
+    """Every file under ``folder``, hidden ones too."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+
+
+def test_sigterm_to_vtrack_scene_leaves_no_temporary_clip(tmp_path: Path) -> None:
+    """`vtrack scene smooth c.mp4 --frames 3000` sent SIGTERM died at once (exit -15, not a
+    word) and left its half-written '.c.tmp-PID-XXXX.mp4' beside (an image folder: a hidden
+    folder of the JPEGs written so far)."""
+    result = _terminated(["scene", "smooth", "c.mp4", "--frames", "3000"], tmp_path)
+    assert result.returncode == 143, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
+    assert "Traceback" not in result.stderr
+    assert _files(tmp_path) == []
+
+
+def test_sigterm_to_vtrack_report_leaves_no_staged_plot(clip_factory: ClipFactory,
+                                                        tmp_path: Path) -> None:
+    """`vtrack report RESULTS -o rep` sent SIGTERM died at once (exit -15, not a word) and
+    left the plots it had staged ('plots/.curves_a.tmp-PID-XXXX.png' ...) in the report
+    folder."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for name in ("a", "b", "c"):
+        clip = clip_factory("smooth", width=160, height=120, frames=40)
+        shutil.copy(clip.path, inputs / f"{name}.mp4")
+        shutil.copy(clip.gt, inputs / f"{name}.gt.txt")
+    batch = subprocess.run([sys.executable, "-m", "vtrack", "batch", "in", "-c", "s0", "-c",
+                            "s2", "--jobs", "2", "--no-video", "-o", "results"], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300, check=False)
+    assert batch.returncode == 0, batch.stderr
+    (tmp_path / "rep").mkdir()
+    result = _terminated(["report", "results", "-o", "rep"], tmp_path)
+    assert result.returncode == 143, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
+    assert "Traceback" not in result.stderr
+    assert _files(tmp_path / "rep") == []

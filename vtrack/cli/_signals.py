@@ -1,0 +1,31 @@
+"""SIGINT and SIGTERM for the commands that write files without a run's record (``vtrack
+report``, ``scene``, ``frame``): both stop the work as Ctrl-C does, so the files staged under
+temporary names are removed and the command ends ``vtrack: interrupted`` (exit 130 or 143)."""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import click
+
+from vtrack.errors import STOP_SIGNALS, handling_stop_signals, interrupt
+
+
+@contextmanager
+def stopping_as_interrupted() -> Iterator[None]:
+    """SIGINT and SIGTERM inside the block raise :class:`~vtrack.errors.Interrupted` (SIGTERM
+    killed the process before, leaving its temporary files, with no word). Once the block has
+    returned its files are in place and final: in a process of its own (the ``vtrack``
+    command) the signals are then ignored until it exits (a Ctrl-C in the interpreter's
+    teardown raised inside a library's finaliser: a traceback, and exit 0 all the same); under
+    click's test runner the previous handlers are back after the block."""
+    with handling_stop_signals(interrupt):
+        yield
+    root = click.get_current_context().find_root().command
+    if (getattr(root, "owns_process", False)
+            and threading.current_thread() is threading.main_thread()):
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
