@@ -485,3 +485,16 @@ def test_an_option_the_input_would_ignore_is_refused(occlusion_clip, tmp_path: P
     clip, _, _ = occlusion_clip
     assert_one_line_error(vtrack("run", str(clip), *options, "--init", "10,10,20,20",
                                  "--no-video", "--out", str(tmp_path / "o")), flag)
+
+
+def test_vtrack_batch_says_a_missing_folder_is_missing(tmp_path: Path) -> None:
+    """`vtrack batch footag/` (a typo) said 'footag: not a folder', as for a file, where
+    `vtrack run` says 'no such file' and `vtrack report` 'no such file or folder'."""
+    a_file = tmp_path / "clip.mp4"
+    a_file.write_bytes(b"")
+    (tmp_path / "gone").symlink_to(tmp_path / "nowhere")
+    for name, problem in (("footag", "no such folder"), ("gone", "no such folder (broken link)"),
+                          ("clip.mp4", "not a folder")):
+        line = assert_one_line_error(vtrack("batch", name, "-o", "res", cwd=tmp_path))
+        assert line == f"vtrack: error: {name}: {problem}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.mp4", "gone"]

@@ -135,7 +135,8 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     """
     folder = Path(folder)
     if not folder.is_dir():
-        raise InputError(f"{folder}: not a folder")
+        missing = ("no such folder (broken link)" if folder.is_symlink() else "no such folder")
+        raise InputError(f"{folder}: {missing if not folder.exists() else 'not a folder'}")
     if is_sequence_folder(folder):
         return [_sequence(folder.resolve(), gt_origin)]
     entries = sorted(folder.resolve().iterdir())
