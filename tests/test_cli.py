@@ -498,3 +498,17 @@ def test_vtrack_batch_says_a_missing_folder_is_missing(tmp_path: Path) -> None:
         line = assert_one_line_error(vtrack("batch", name, "-o", "res", cwd=tmp_path))
         assert line == f"vtrack: error: {name}: {problem}"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.mp4", "gone"]
+
+
+def test_an_error_naming_a_file_with_a_newline_is_one_line(occlusion_clip,
+                                                           tmp_path: Path) -> None:
+    """`vtrack run $'a\\nb.mp4'` without a box said '... write x,y,w,h into a' and, on the next
+    line, 'b.init.txt (vtrack select INPUT picks it)': the file's newline broke the one error
+    line; it is now written '\\n', as the summary line and vtrack batch's labels write it."""
+    clip, _, _ = occlusion_clip
+    odd = tmp_path / "a\nb.mp4"
+    odd.write_bytes(clip.read_bytes())
+    result = vtrack("run", odd.name, "-c", "s0", "-o", "out", cwd=tmp_path)
+    line = assert_one_line_error(result, "this tracker needs an initial box")
+    assert result.stderr.decode().count("\n") == 1
+    assert "into a\\nb.init.txt (vtrack select INPUT picks it)" in line

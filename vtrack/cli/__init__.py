@@ -21,7 +21,7 @@ from typing import Any
 import click
 
 from vtrack import __version__
-from vtrack.errors import VtrackError
+from vtrack.errors import VtrackError, printable
 
 
 class _Group(click.Group):
@@ -71,8 +71,8 @@ class _Group(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except VtrackError as exc:
-            click.echo(f"vtrack: error: {exc}", err=True)
+        except VtrackError as exc:  # one line, whatever names it quotes (a newline in one)
+            click.echo(f"vtrack: error: {printable(str(exc))}", err=True)
             sys.exit(exc.exit_code)
         except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM as errors.Interrupted
             click.echo("vtrack: interrupted", err=True)
