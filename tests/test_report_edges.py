@@ -42,3 +42,28 @@ def test_the_package_lists_the_names_it_gives() -> None:
     the package gives only when asked for (its builder loads matplotlib)."""
     assert {"build_report", "Report", "DEFAULT_TITLE"} <= set(dir(vtrack.report))
     assert "build_report" in vtrack.report.__all__
+
+
+def test_a_title_and_a_warning_with_a_newline_stay_one_markdown_line(clip_factory,
+                                                                    tmp_path: Path) -> None:
+    """summary.md wrote `--title $'a\\nb'` as '# a' and a line 'b' below the heading, and a
+    warning naming an input with a newline ('x\\ny [s4]: no score ...') as a quote line and a
+    plain one; both are now one line, the newline written '\\n' as in the page's tables."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=160, height=120, frames=40)
+    odd = tmp_path / "x\ny.mp4"
+    odd.write_bytes(clip.path.read_bytes())
+    ran = CliRunner().invoke(main, ["run", str(odd), "-c", "s4", "--no-video", "-q",
+                                    "-o", str(tmp_path / "run")])
+    assert ran.exit_code == 0, ran.output
+    made = CliRunner().invoke(main, ["report", str(tmp_path / "run"), "--title", "a\nb",
+                                     "-q", "-o", str(tmp_path / "rep")])
+    assert made.exit_code == 0, made.output
+    lines = (tmp_path / "rep" / "summary.md").read_text().splitlines()
+    assert lines[0] == "# a\\nb"
+    warned = [line for line in lines if line.startswith("> Warning: ")]
+    assert any(line.startswith("> Warning: x\\ny [s4]: ") for line in warned), warned
+    assert not any(line.startswith(("b", "y [s4]")) for line in lines)

@@ -220,8 +220,8 @@ def markdown_table(table: Table, labels: int) -> str:
 
 def render_markdown(page: Page) -> str:
     """The report's tables (and links to its plots) as Markdown."""
-    parts = [f"# {page.title}", page.meta]
-    parts += [f"> Warning: {w}" for w in page.warnings]
+    parts = [f"# {printable(page.title)}", page.meta]  # one line each, whatever they name
+    parts += [f"> Warning: {printable(w)}" for w in page.warnings]
     if page.averages is not None:
         parts.append("## All inputs")
         if page.overall_plot:
