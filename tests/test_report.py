@@ -636,6 +636,34 @@ def test_a_batch_s_config_keeps_one_label_beside_a_run_of_one_of_its_inputs(
     assert "- **never** [s0 (batch)] interrupted" in markdown
 
 
+def test_the_vtrack_runs_under_one_results_argument_keep_one_label(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """`vtrack report batch runs`, runs/<input> a `vtrack run -o runs/<input>` of each of the
+    batch's inputs with one of its configs: each was labelled by its own folder ("s0
+    (runs/smooth)", "s0 (runs/occlusion)"), one input each in All inputs, with a warning that
+    the configurations were scored on different inputs. The runs found under one argument, of
+    one config with the same values, are one label: "s0 (runs)", averaged over both inputs."""
+    inputs, original = batch_out
+    batch = tmp_path / "batch"
+    shutil.copytree(original, batch)
+    runs = tmp_path / "runs"
+    for name in ("smooth", "occlusion"):
+        ran = vtrack("run", str(inputs / f"{name}.mp4"), "-c", "s0", "--gt",
+                     str(inputs / f"{name}.gt.txt"), "--no-video", "--out", str(runs / name))
+        assert ran.exit_code == 0, ran.output
+    report = tmp_path / "report"
+    result = vtrack("report", str(batch), str(runs), "--out", str(report))
+    assert result.exit_code == 0, result.output
+    markdown = (report / "summary.md").read_text()
+    assert _table_labels(markdown) == {
+        (name, config) for name in ("smooth", "occlusion")
+        for config in ("s0 (batch)", "s0 (runs)", "camshift")}
+    header, averages = html_rows((report / "index.html").read_text(), 0)
+    inputs_of = {row[0]: row[header.index("Inputs")] for row in averages}
+    assert inputs_of == {"s0 (batch)": "2", "s0 (runs)": "2", "camshift": "2"}
+    assert "scored on different inputs" not in result.output
+
+
 def test_a_motchallenge_gt_given_to_report_says_what_report_scores(
         batch_out: tuple[Path, Path], tmp_path: Path) -> None:
     """It said to use a multi-target config (--config s3): report has no --config."""

@@ -90,15 +90,38 @@ def _distinct_inputs(runs: list[RunResult]) -> None:
                 run.input = labels[key]
 
 
-def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[FailedRun]:
+def _origins(runs: Sequence[RunResult], results: Sequence[Path]) -> tuple[dict[int, str],
+                                                                          set[str]]:
+    """The results each run belongs to (by ``id``), and the batch folders among them: a batch's
+    run, its batch's folder; a ``vtrack run``'s, the folder common to the ``vtrack run``
+    folders found under the same one of ``results`` (``runs`` for ``runs/Bird2``,
+    ``runs/Couple``: one user's runs of one config, one label over every input), else (that
+    folder is a batch's) its own."""
+    batches = {str(b) for b in {_batch_of(r) for r in runs} if is_batch_folder(b)}
+    places = [path.resolve() if path.is_dir() else path.resolve().parent for path in results]
+    origins = {id(r): str(_batch_of(r)) for r in runs if str(_batch_of(r)) in batches}
+    alone = [r for r in runs if id(r) not in origins]
+    under = _group(alone, lambda r: str(next((n for n, place in enumerate(places)
+                                              if r.folder.resolve().is_relative_to(place)), -1)))
+    for group in under.values():
+        common = os.path.commonpath([r.folder.resolve() for r in group])
+        origins.update({id(r): common if common not in batches else str(r.folder.resolve())
+                        for r in group})
+    return origins, batches
+
+
+def _distinct_labels(runs: list[RunResult], failed: list[FailedRun],
+                     results: Sequence[Path] = ()) -> list[FailedRun]:
     """Give runs of one config name distinct config labels: configs of that name whose chains
     differ (two TOML files) by the values that differ (``robust (robust_search.merge=0.6)``,
     :func:`_value_labels`), else (other stages) by where they are (``s0 (batch-a)``), each one
     label over every input; then, where one input has several runs of a config label (two
     batch folders, a batch and a ``vtrack run``), every run of that label by the results it
-    belongs to (its batch folder, else its own), so one batch's runs keep one label over
-    every input and are averaged together (and a batch row of that label without results
-    takes its batch's label: the ``failed`` returned)."""
+    belongs to (:func:`_origins`: its batch folder, else the ``vtrack run`` folders found
+    under one of ``results``, the arguments the runs were found under), so one batch's runs,
+    and one argument's ``vtrack run`` folders, keep one label over every input and are
+    averaged together (and a batch row of that label without results takes its batch's
+    label: the ``failed`` returned)."""
     for name, group in _group(runs, lambda r: r.config).items():
         chains = _group(group, lambda r: r.config_key)
         if len(chains) > 1:
@@ -107,17 +130,14 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun]) -> list[Fai
             for same, place in zip(chains.values(), places, strict=True):
                 for run in same:
                     run.config = f"{name} ({place})"
-    # the results each run belongs to: its batch's folder, else its own (a vtrack run); each
-    # batch's summary.csv read once
-    batches = {str(b) for b in {_batch_of(r) for r in runs} if is_batch_folder(b)}
-    results = {id(r): str(_batch_of(r)) if str(_batch_of(r)) in batches
-               else str(r.folder.resolve()) for r in runs}
+    belongs, batches = _origins(runs, results or [r.folder for r in runs])
     for label, group in _group(runs, lambda r: r.config).items():
         if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
             continue
-        origins = _group(group, lambda r: results[id(r)])
-        if len(origins) < 2 or not origins.keys() & batches:
-            continue  # (runs of vtrack run only: told apart per input, below)
+        origins = _group(group, lambda r: belongs[id(r)])
+        if len(origins) < 2 or (not origins.keys() & batches
+                                and all(len(same) == 1 for same in origins.values())):
+            continue  # (each a vtrack run of its own: told apart per input, below)
         places = dict(zip(origins, _places([Path(origin) for origin in origins]), strict=True))
         for origin, same in origins.items():
             for run in same:
@@ -344,7 +364,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                          "folders)")
     failed = _distinct_failed(failed, runs)  # (by the runs' input names, not yet told apart)
     _distinct_inputs(runs)
-    failed = _distinct_labels(runs, failed)
+    failed = _distinct_labels(runs, failed, results)
     runs.sort(key=lambda r: (r.input, r.config))
     single = [r for r in runs if not r.multi_target]
     multi = [r for r in runs if r.multi_target]
