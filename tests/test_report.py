@@ -875,3 +875,34 @@ def test_the_definitions_say_the_all_inputs_lost_frames_are_a_total(
     for page in ("index.html", "summary.md"):
         text = (tmp_path / "r" / page).read_text()
         assert "means of the per-input curves and scores (lost frames: their total)" in text
+
+
+def test_mean_center_error_leaves_lost_frames_out_and_the_docs_say_so(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A run lost in frames where the target is in view (scored: overlap 0) has a
+    mean_center_error over its other frames only (run.json, summary.csv), and nothing said so:
+    the report's notes said a lost frame counts as an infinite centre error, and a run lost
+    most of the time showed a small mean error. The notes and the README now say it."""
+    clip = clip_factory("leave_return", width=W, height=H, frames=90)
+    out = tmp_path / "run"
+    ran = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--out", str(out))
+    assert ran.exit_code == 0, ran.output
+    with (out / "track.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert any(r["state"] == "lost" and r["overlap"] != "" for r in rows)  # lost and scored
+    errors = [float(r["center_error"]) for r in rows if r["center_error"] != ""]
+    recorded = json.loads((out / "run.json").read_text())["metrics"]["mean_center_error"]
+    assert recorded == pytest.approx(sum(errors) / len(errors), abs=1e-3)
+    result = vtrack("report", str(out), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        (row,) = csv.DictReader(handle)
+    assert float(row["mean_center_error"]) == pytest.approx(recorded, abs=1e-6)
+    said = ("mean_center_error is the mean over the evaluated frames where the tracker claims "
+            "a box, lost frames left out")
+    assert said in (tmp_path / "report" / "summary.md").read_text()
+    assert said in (tmp_path / "report" / "index.html").read_text()
+    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
+    assert ("`mean_center_error` is the mean centre error in px over the evaluated frames "
+            "where the tracker claims a box: its `lost` frames") in readme
+    assert "`mean_center_error` leaves the `lost` frames out" in readme
