@@ -13,7 +13,9 @@ sub-folders are not inputs: :func:`nested_videos` finds them, for the batch to w
 - video files (by suffix, :data:`VIDEO_SUFFIXES`), with ground truth beside them:
   ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
   (MOTChallenge, for multi-target configs);
-- sequence folders (OTB layout: an ``img/`` folder), with ground truth inside them:
+- sequence folders (OTB layout: an ``img/`` folder; MOTChallenge's ``img1/``; VOT2017+'s
+  ``color/``; or VOT's older layout, images directly beside ``groundtruth.txt``), with ground
+  truth inside them:
   ``groundtruth_rect.txt`` or ``groundtruth.txt`` (single target) and ``groundtruth_mot.txt``,
   ``gt.txt`` or ``gt/gt.txt`` (MOTChallenge).
 
@@ -22,8 +24,10 @@ nothing, single-target ones take their first box from ``name.init.txt`` beside t
 ``init.txt`` in the sequence folder (one ``x,y,w,h`` line); its ``track.csv`` then has no overlap.
 
 Ground-truth origin (``gt_origin=None``, the CLI's ``--gt-origin auto``): a sequence folder's
-file is read as OTB's 1-based MATLAB boxes (OTB, VOT, UAV123 and LaSOT ship them that way), a file
-beside a video as 0-based (what ``vtrack scene`` writes). ``0`` or ``1`` forces one origin on all.
+``groundtruth_rect.txt`` is read as OTB's 1-based MATLAB boxes, its ``groundtruth.txt`` as VOT's
+0-based ones (in every layout: the VOT toolkit's pixel 0 is the image's first), a file beside a
+video as 0-based (what ``vtrack scene`` writes)
+(:func:`~vtrack.evaluate.groundtruth.gt_origin_of`). ``0`` or ``1`` forces one origin on all.
 
 Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,
 ground truth, seed and output settings is not run again (its row says ``complete``, as its

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError, plural
-from vtrack.evaluate.groundtruth import groundtruth_beside
+from vtrack.evaluate.groundtruth import groundtruth_beside, gt_origin_of
 from vtrack.io.files import folder_name
+from vtrack.io.images import holds_images
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
 from vtrack.io.sidecar import VIDEO_SIDECAR as VIDEO_INIT
@@ -58,13 +59,15 @@ def _first(folder: Path, names: Iterable[str]) -> Path | None:
 
 
 def _sequence(folder: Path, gt_origin: int | None) -> BatchInput:
+    groundtruth = groundtruth_beside(folder)
     return BatchInput(
         name=folder.name,
         path=folder,
-        groundtruth=groundtruth_beside(folder),
+        groundtruth=groundtruth,
         mot_groundtruth=_first(folder, SEQUENCE_MOT_GT),
         init=_first(folder, [SEQUENCE_INIT]),
-        gt_origin=1 if gt_origin is None else gt_origin,
+        gt_origin=(gt_origin_of(groundtruth, gt_origin) if groundtruth is not None
+                   else 1 if gt_origin is None else gt_origin),
     )
 
 
@@ -118,9 +121,14 @@ def _unusable(path: Path) -> BatchInput:
 
 
 def is_sequence_folder(path: Path) -> bool:
-    """An image-sequence folder: it holds an ``img/`` folder (OTB) or ``img1/``
-    (MOTChallenge), :func:`~vtrack.io.sidecar.sequence_images`."""
-    return sequence_images(path) is not None
+    """An image-sequence folder: it holds an ``img/`` folder (OTB), ``img1/`` (MOTChallenge)
+    or ``color/`` (VOT2017+), :func:`~vtrack.io.sidecar.sequence_images`; or its images
+    directly beside its ground truth (VOT before 2017, GOT-10k: ``groundtruth.txt``), the
+    images ``vtrack run FOLDER`` reads (:func:`~vtrack.io.images.holds_images`). A folder of
+    images without ground truth (a report's ``plots/``) is none."""
+    if sequence_images(path) is not None:
+        return True
+    return groundtruth_beside(path) is not None and holds_images(path)
 
 
 def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
@@ -148,7 +156,8 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
     if not found:
         raise InputError(
-            f"{folder}: no inputs (video files or sequence folders with an img/ or img1/ folder)"
+            f"{folder}: no inputs (video files or sequence folders with an img/, img1/ or "
+            "color/ folder, or images beside their groundtruth.txt)"
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:

@@ -158,8 +158,9 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
 
     Inputs are the video files directly in FOLDER, known by their names (.mp4, .mov, .mkv,
     .mxf, .ts, .avi ...: the README lists them; ground truth beside them: name.gt.txt or
-    name.txt, MOTChallenge name.mot.txt) and its sequence folders holding img/ or MOTChallenge's
-    img1/ (ground truth inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge
+    name.txt, MOTChallenge name.mot.txt) and its sequence folders holding img/, MOTChallenge's
+    img1/ or VOT's color/, or their images beside their ground truth (VOT's layout; ground
+    truth inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge
     groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt); videos in other
     sub-folders are not inputs (a warning counts them: give such a folder as FOLDER). Without
     ground truth, single-target configs start from the box in name.init.txt (init.txt in a
@@ -259,8 +260,8 @@ def _warn_left_out(folder: Path, videos: list[Path]) -> None:
     verb = "is not an input" if len(videos) == 1 else "are not inputs"
     click.echo(f"vtrack: warning: {folder}: {plural(len(videos), 'video file')} in sub-folders "
                f"{verb} ({videos[0]}{more}): a batch takes the videos directly in the folder "
-               "and its sequence folders (img/, img1/); run vtrack batch on a sub-folder to "
-               "track its videos", err=True)
+               "and its sequence folders (img/, img1/, color/); run vtrack batch on a sub-folder "
+               "to track its videos", err=True)
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,

@@ -18,6 +18,7 @@ from typing import NamedTuple
 from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
+from vtrack.io.sidecar import sequence_images
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
 _SEPARATORS = re.compile(r"[,\s]+")
@@ -36,9 +37,12 @@ MOT_DISTRACTORS = frozenset({2, 7, 8, 12})
 
 _QUOTE_MAX = 60
 
-#: Single-target ground truth inside an OTB-style sequence folder (one holding ``img/``), first
-#: found wins. OTB, VOT, UAV123 and LaSOT ship these with MATLAB's 1-based boxes.
+#: Single-target ground truth inside a sequence folder, first found wins: OTB's
+#: ``groundtruth_rect.txt`` (MATLAB's 1-based boxes) and VOT's ``groundtruth.txt`` (0-based: the
+#: VOT toolkit's pixel (0, 0) is the image's top-left pixel).
 SEQUENCE_GT = ("groundtruth_rect.txt", "groundtruth.txt")
+#: The ground truth ``--gt-origin auto`` reads as 1-based inside a sequence folder: OTB's.
+ONE_BASED_GT = SEQUENCE_GT[0]
 #: Single-target ground truth beside a video ``name.mp4`` (``{}`` is its stem), first found wins.
 VIDEO_GT = ("{}.gt.txt", "{}.txt")
 
@@ -61,12 +65,14 @@ def groundtruth_names(path: str | PathLike[str]) -> list[Path]:
 
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
     """The origin to read ``path``'s boxes with: ``origin`` when given (0 or 1); for None
-    (``--gt-origin auto``) 1 when the file is a :data:`SEQUENCE_GT` name inside a sequence
-    folder (its folder holds ``img/``), else 0 (``vtrack scene``'s ``NAME.gt.txt``)."""
+    (``--gt-origin auto``) 1 when the file is OTB's :data:`ONE_BASED_GT` inside a sequence
+    folder (one holding ``img/``, ``img1/`` or ``color/``:
+    :func:`~vtrack.io.sidecar.sequence_images`), else 0: VOT's ``groundtruth.txt`` in any
+    layout, ``vtrack scene``'s ``NAME.gt.txt``."""
     if origin is not None:
         return origin
     path = Path(path)
-    return 1 if path.name in SEQUENCE_GT and (path.parent / "img").is_dir() else 0
+    return 1 if path.name == ONE_BASED_GT and sequence_images(path.parent) is not None else 0
 
 
 def _quote(text: str) -> str:

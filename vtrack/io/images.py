@@ -78,6 +78,15 @@ def _image_files(folder: Path) -> Iterator[Path]:
             if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file())
 
 
+def holds_images(folder: Path) -> bool:
+    """Whether ``folder`` (or its images' folder, :func:`sequence_images`) holds an image, as
+    :func:`list_images` lists them; False when it cannot be listed."""
+    try:
+        return next(_image_files(folder), None) is not None
+    except OSError:
+        return False
+
+
 def images_of(folder: str, first_only: bool = False) -> list[Path]:
     """The images of ``folder`` (:func:`list_images`), or with ``first_only`` only the first
     one listed (a cheap check that it has one, nothing decoded); InputError naming it when it
@@ -89,7 +98,8 @@ def images_of(folder: str, first_only: bool = False) -> list[Path]:
         raise InputError(f"{folder}: cannot list the folder ({os_reason(exc)})") from None
     if not found:
         suffixes = "/".join(sorted(s.lstrip(".") for s in IMAGE_SUFFIXES))
-        raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ (img1/)")
+        raise InputError(f"{folder}: no images ({suffixes}) in the folder or its img/ (img1/, "
+                         "color/)")
     return found
 
 
