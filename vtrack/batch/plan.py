@@ -11,7 +11,11 @@ from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
 from vtrack.errors import InputError, OutputError
-from vtrack.evaluate.groundtruth import MULTI_TARGET_CONFIGS, groundtruth_names
+from vtrack.evaluate.groundtruth import (
+    MULTI_TARGET_CONFIGS,
+    groundtruth_names,
+    numbered_groundtruth,
+)
 from vtrack.geometry import Box
 from vtrack.io.files import folder_name
 from vtrack.io.identity import outputs_intact
@@ -196,6 +200,13 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
             raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
                              "needs the target's box in that frame, and there is no ground "
                              f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
+        targets = numbered_groundtruth(item.path) if item.path.is_dir() else []
+        if targets:  # OTB's sequences of several targets: which one is the user's to say
+            raise InputError(
+                f"{item.path}: config '{config}' tracks one given target, and the sequence has "
+                f"{len(targets)} targets' ground truth ({', '.join(p.name for p in targets)}), "
+                "none of which a batch takes by itself: track each with vtrack run, e.g. "
+                f"vtrack run {item.path} -c {config} --gt {targets[0]}")
         found = ""
         if item.mot_groundtruth is not None:  # a MOTChallenge sequence: its targets are many
             mot = item.mot_groundtruth.relative_to(item.path.parent)

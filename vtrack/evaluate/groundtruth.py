@@ -63,16 +63,30 @@ def groundtruth_names(path: str | PathLike[str]) -> list[Path]:
     return [path.parent / name.format(path.stem) for name in VIDEO_GT]
 
 
+def numbered_groundtruth(folder: str | PathLike[str]) -> list[Path]:
+    """The ground truth of each target of an OTB sequence with several (``Jogging``,
+    ``Skating2``, ``Human4``: ``groundtruth_rect.1.txt``, ``groundtruth_rect.2.txt`` ...), by
+    their number; empty for any other folder."""
+    found = [(int(m[1]), p) for p in Path(folder).glob("groundtruth_rect.*.txt")
+             if (m := _NUMBERED_GT.fullmatch(p.name)) and p.is_file()]
+    return [p for _, p in sorted(found)]
+
+
+#: The name of one target's ground truth in an OTB sequence of several (its number captured).
+_NUMBERED_GT = re.compile(r"groundtruth_rect\.(\d+)\.txt")
+
+
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
     """The origin to read ``path``'s boxes with: ``origin`` when given (0 or 1); for None
-    (``--gt-origin auto``) 1 when the file is OTB's :data:`ONE_BASED_GT` inside a sequence
-    folder (one holding ``img/``, ``img1/`` or ``color/``:
-    :func:`~vtrack.io.sidecar.sequence_images`), else 0: VOT's ``groundtruth.txt`` in any
-    layout, ``vtrack scene``'s ``NAME.gt.txt``."""
+    (``--gt-origin auto``) 1 when the file is OTB's :data:`ONE_BASED_GT` (or one target's
+    ``groundtruth_rect.N.txt``, :func:`numbered_groundtruth`) inside a sequence folder (one
+    holding ``img/``, ``img1/`` or ``color/``: :func:`~vtrack.io.sidecar.sequence_images`),
+    else 0: VOT's ``groundtruth.txt`` in any layout, ``vtrack scene``'s ``NAME.gt.txt``."""
     if origin is not None:
         return origin
     path = Path(path)
-    return 1 if path.name == ONE_BASED_GT and sequence_images(path.parent) is not None else 0
+    otb = path.name == ONE_BASED_GT or _NUMBERED_GT.fullmatch(path.name) is not None
+    return 1 if otb and sequence_images(path.parent) is not None else 0
 
 
 def _quote(text: str) -> str:
