@@ -656,29 +656,30 @@ def test_a_batch_says_its_runs_warnings(tmp_path: Path, clip_factory: ClipFactor
     assert "warning" not in again.stderr
 
 
-def test_vot_layouts_are_batch_inputs_and_their_ground_truth_is_read_alike(
+def test_vot_layouts_are_batch_inputs_and_their_ground_truth_is_read_as_vot_writes_it(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """VOT's layouts were no batch inputs: images directly in the sequence folder beside
     groundtruth.txt, or VOT2017+'s color/, gave 'vot: no inputs ...' (vtrack run read the
-    first, not the second); and --gt-origin auto read one groundtruth.txt as 1-based under img/
-    and as 0-based beside the images. VOT's boxes are 0-based (the VOT toolkit's pixel 0 is the
-    image's first): every layout now reads them so, as batch inputs and with vtrack run."""
+    first, not the second). VOT's boxes are 0-based (the VOT toolkit's pixel 0 is the image's
+    first): both VOT layouts read them so, as batch inputs and with vtrack run; groundtruth.txt
+    beside img/ (UAV123's, LaSOT's layout, MATLAB toolkits) stays 1-based."""
     from vtrack.evaluate import read_boxes
 
     clip = clip_factory("smooth", width=160, height=120, frames=20, fmt="images")
     truth = read_boxes(clip.gt, origin=1)  # (vtrack scene writes OTB's 1-based boxes)
     vot = "".join(f"{b.x},{b.y},{b.w},{b.h}\n" for b in truth)  # VOT's: 0-based
     folder = tmp_path / "vot"
-    for name, images in (("flat", "."), ("vot17", "color"), ("otb", "img")):
+    one_based = "".join(f"{b.x + 1},{b.y + 1},{b.w},{b.h}\n" for b in truth)
+    for name, images in (("flat", "."), ("vot17", "color"), ("uav", "img")):
         shutil.copytree(clip.path / "img", folder / name / images, dirs_exist_ok=True)
-        (folder / name / "groundtruth.txt").write_text(vot)
+        (folder / name / "groundtruth.txt").write_text(one_based if images == "img" else vot)
     (folder / "plots").mkdir()  # images without ground truth: no input
     shutil.copy(next((clip.path / "img").iterdir()), folder / "plots" / "curves_all.jpg")
     result = batch(str(folder), "-c", "s0", "--no-video", "-j", "1", "-o", str(tmp_path / "out"))
     assert result.exit_code == 0, result.output
     with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
         rows = {row["input"]: row for row in csv.DictReader(handle)}
-    assert sorted(rows) == ["flat", "otb", "vot17"], rows
+    assert sorted(rows) == ["flat", "uav", "vot17"], rows
     first = [truth[0].x, truth[0].y, truth[0].w, truth[0].h]
     for name in rows:
         assert rows[name]["status"] == "complete" and rows[name]["frames"] == "20", rows[name]

@@ -24,9 +24,10 @@ nothing, single-target ones take their first box from ``name.init.txt`` beside t
 ``init.txt`` in the sequence folder (one ``x,y,w,h`` line); its ``track.csv`` then has no overlap.
 
 Ground-truth origin (``gt_origin=None``, the CLI's ``--gt-origin auto``): a sequence folder's
-``groundtruth_rect.txt`` is read as OTB's 1-based MATLAB boxes, its ``groundtruth.txt`` as VOT's
-0-based ones (in every layout: the VOT toolkit's pixel 0 is the image's first), a file beside a
-video as 0-based (what ``vtrack scene`` writes)
+``groundtruth_rect.txt``, and a ``groundtruth.txt`` beside ``img/`` (UAV123, LaSOT), are read
+as the MATLAB toolkits' 1-based boxes, a ``groundtruth.txt`` in VOT's layouts (images beside it,
+or ``color/``) as VOT's 0-based ones (the VOT toolkit's pixel 0 is the image's first), a file
+beside a video as 0-based (what ``vtrack scene`` writes)
 (:func:`~vtrack.evaluate.groundtruth.gt_origin_of`). ``0`` or ``1`` forces one origin on all.
 
 Resume: a job whose ``run.json`` says ``complete`` and records the same configuration, input,

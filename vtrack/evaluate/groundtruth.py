@@ -78,15 +78,20 @@ _NUMBERED_GT = re.compile(r"groundtruth_rect\.(\d+)\.txt")
 
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
     """The origin to read ``path``'s boxes with: ``origin`` when given (0 or 1); for None
-    (``--gt-origin auto``) 1 when the file is OTB's :data:`ONE_BASED_GT` (or one target's
-    ``groundtruth_rect.N.txt``, :func:`numbered_groundtruth`) inside a sequence folder (one
-    holding ``img/``, ``img1/`` or ``color/``: :func:`~vtrack.io.sidecar.sequence_images`),
-    else 0: VOT's ``groundtruth.txt`` in any layout, ``vtrack scene``'s ``NAME.gt.txt``."""
+    (``--gt-origin auto``) 1 for the layouts of the MATLAB toolkits (OTB, UAV123, LaSOT):
+    OTB's :data:`ONE_BASED_GT` (or one target's ``groundtruth_rect.N.txt``,
+    :func:`numbered_groundtruth`) inside a sequence folder
+    (:func:`~vtrack.io.sidecar.sequence_images`), and ``groundtruth.txt`` beside an ``img/``
+    folder; else 0: VOT's ``groundtruth.txt`` in VOT's own layouts (images beside it, or
+    VOT2017+'s ``color/``: the VOT toolkit's pixel 0 is the image's first), ``vtrack scene``'s
+    ``NAME.gt.txt``."""
     if origin is not None:
         return origin
     path = Path(path)
     otb = path.name == ONE_BASED_GT or _NUMBERED_GT.fullmatch(path.name) is not None
-    return 1 if otb and sequence_images(path.parent) is not None else 0
+    if otb:
+        return 1 if sequence_images(path.parent) is not None else 0
+    return 1 if path.name in SEQUENCE_GT and (path.parent / "img").is_dir() else 0
 
 
 def _quote(text: str) -> str:
