@@ -330,3 +330,24 @@ def test_no_track_colour_passes_for_the_ground_truths_green() -> None:
         hue, saturation, _ = hsv(colour)
         distance = min(abs(hue - truth_hue), 180 - abs(hue - truth_hue))  # OpenCV: 0..180
         assert saturation < 64 or distance >= 30, colour
+
+
+@pytest.mark.parametrize("box", [Box(-40, 60, 80, 70), Box(150, -20, 40, 80),
+                                 Box(290, 0, 60, 70), Box(-30, -30, 70, 90)],
+                         ids=["left", "top", "right-top", "top-left"])
+def test_a_track_cut_by_the_frames_border_shows_its_id(box: Box) -> None:
+    """Probe O: a track boxed beyond the frame's left or top border (fixed_camera boxes a person
+    cut by the border whole) had its id drawn above its top-left corner, outside the frame: the
+    box was there, its id nowhere. Tracks 1 and 11 share a colour: only their ids differ."""
+    def drawn(track_id: int) -> np.ndarray:
+        buf = blank()
+        Annotator(W, H, multi_target=True, legend=False).draw(
+            buf, result(box=None, tracks=[Track(track_id, box, 0.9, TrackStatus.CONFIRMED)]))
+        return planes(buf)[0].copy()
+
+    assert TRACK_PALETTE[1] == TRACK_PALETTE[11 % len(TRACK_PALETTE)]
+    one, eleven = drawn(1), drawn(11)
+    differ = np.argwhere(one != eleven)
+    assert len(differ) > 10  # the ids are written where they can be seen
+    caption_h = 20  # the "1 TRACK" caption covers the top-left corner
+    assert ((differ[:, 0] >= caption_h) | (differ[:, 1] >= 80)).any()

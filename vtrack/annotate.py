@@ -7,7 +7,8 @@ and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
 What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack.overlays`:
 ``SearchWindow`` as a thin rectangle, ``Particles`` as dots sized like the lines; another kind
 is a ``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
-confirmed multi-target tracks (a stable colour and a short trail per id, the id as text), the
+confirmed multi-target tracks (a stable colour and a short trail per id, the id as text above
+the box, kept inside the frame and clear of the caption), the
 state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box), and
 bottom-left the frame number (``track.csv``'s ``frame``, 0-based; for multi-target results
 ``tracks.csv``'s, 1-based as MOTChallenge numbers frames) above a legend of the colours.
@@ -39,7 +40,7 @@ from vtrack.geometry import Box
 from vtrack.io.planes import i420_planes
 from vtrack.overlays import Overlay, Particles, SearchWindow
 from vtrack.pipeline import FrameResult
-from vtrack.stages.base import TrackState, TrackStatus
+from vtrack.stages.base import Track, TrackState, TrackStatus
 
 
 class Yuv(NamedTuple):
@@ -153,6 +154,11 @@ class Canvas:
                         self.y[2 * cy + dy, 2 * cx + dx] = colour.y
                 self.u[cy, cx] = colour.u
                 self.v[cy, cx] = colour.v
+
+
+def _shown(track: Track) -> bool:
+    """Whether a multi-target track is drawn: confirmed, with a box that can be drawn."""
+    return track.state == TrackStatus.CONFIRMED and _drawable(track.box)
 
 
 def _drawable(box: Box | None) -> bool:
@@ -333,10 +339,11 @@ class Annotator:
                     canvas.rectangle(*_corners(box), GROUND_TRUTH, 1)
                     drawn.add("ground truth")
         drawn.update(_draw_overlay(canvas, overlay, self.thickness) for overlay in result.overlays)
-        shown = self._draw_tracks(canvas, result)
-        if shown:
+        shown = sum(_shown(track) for track in result.tracks)
+        caption = f"{shown} track" + ("" if shown == 1 else "s")
+        if self._draw_tracks(canvas, result, clear_of=self._caption_box(canvas, caption)[1]):
             drawn.add("track id")
-        self._caption(canvas, f"{shown} track" + ("" if shown == 1 else "s"), TRACKED)
+        self._caption(canvas, caption, TRACKED)
         return drawn
 
     @staticmethod
@@ -350,12 +357,14 @@ class Annotator:
                 runs[-1].append(p)
         return [r for r in runs if len(r) > 1]
 
-    def _draw_tracks(self, canvas: Canvas, result: FrameResult) -> int:
-        """Draw the confirmed tracks (box, id, trail); returns how many."""
+    def _draw_tracks(self, canvas: Canvas, result: FrameResult,
+                     clear_of: tuple[int, int] = (0, 0)) -> int:
+        """Draw the confirmed tracks (box, id, trail); returns how many. Their ids keep clear
+        of ``clear_of``, the (width, height) of the top-left caption drawn over them."""
         t = self.thickness
         shown = 0
         for track in result.tracks:
-            if track.state != TrackStatus.CONFIRMED or not _drawable(track.box):
+            if not _shown(track):
                 continue
             colour = TRACK_PALETTE[track.id % len(TRACK_PALETTE)]
             b = track.box
@@ -365,20 +374,45 @@ class Annotator:
             canvas.polyline(list(trail), colour, max(1, t // 2))
             p0, p1 = _corners(b)
             canvas.rectangle(p0, p1, colour, t)
-            canvas.text((p0[0], p0[1] - 2 * t), str(track.id), colour, self.font_scale * 0.8, t)
+            label = str(track.id)
+            canvas.text(self._label_origin(canvas, p0, label, clear_of), label, colour,
+                        self.font_scale * 0.8, t)
             shown += 1
         stale = [i for i, seen in self._last_seen.items() if result.index - seen > self.track_trail]
         for track_id in stale:
             del self._tracks[track_id], self._last_seen[track_id]
         return shown
 
+    def _label_origin(self, canvas: Canvas, corner: tuple[int, int], text: str,
+                      clear_of: tuple[int, int]) -> tuple[int, int]:
+        """Where a track's id ``text`` starts (its baseline's left end): above the box's
+        top-left ``corner``, moved into the frame when that is outside it (a box cut by the
+        frame's left or top border: the id goes inside the box, under its top edge) and below
+        the top-left caption (``clear_of``: its width and height), so every drawn track shows
+        its id."""
+        t = self.thickness
+        (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale * 0.8, t)
+        x = min(max(corner[0], 0), max(canvas.width - w, 0))
+        top = clear_of[1] if x < clear_of[0] else 0  # the first row the id may cover
+        y = corner[1] - 2 * t
+        if y - h < top:  # no room above the box: under its top edge (and the caption)
+            y = max(corner[1], top) + 2 * t + h
+        return x, min(y, canvas.height - 1 - baseline)
+
+    def _caption_box(self, canvas: Canvas, caption: str, right: bool = False,
+                     ) -> tuple[int, tuple[int, int]]:
+        """The left edge of ``caption``'s black box and the box's (right edge, bottom)."""
+        t = self.thickness
+        (w, h), baseline = cv2.getTextSize(caption.upper(), FONT, self.font_scale, t)
+        pad = 2 * t + 2
+        x0 = canvas.width - w - 2 * pad if right else 0
+        return x0, (x0 + w + 2 * pad, h + baseline + 2 * pad)
+
     def _caption(self, canvas: Canvas, caption: str, colour: Yuv, right: bool = False) -> None:
         """``caption`` in capitals on black, top-left (``right``: top-right)."""
         text = caption.upper()
-        t = self.thickness
-        (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
-        pad = 2 * t + 2
-        x0 = canvas.width - w - 2 * pad if right else 0
-        canvas.rectangle((x0, 0), (x0 + w + 2 * pad, h + baseline + 2 * pad), CAPTION_BACKGROUND,
-                         -1)
-        canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, t)
+        x0, corner = self._caption_box(canvas, caption, right)
+        pad = 2 * self.thickness + 2
+        canvas.rectangle((x0, 0), corner, CAPTION_BACKGROUND, -1)
+        h = cv2.getTextSize(text, FONT, self.font_scale, self.thickness)[0][1]
+        canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, self.thickness)
