@@ -187,3 +187,27 @@ def test_a_run_does_not_write_into_a_reports_folder(clip, tmp_path: Path) -> Non
     assert_one_line_error(result, "earlier run", "--overwrite")
     assert vtrack("run", str(clip[0]), "--gt", str(clip[1]), "-c", "s0", "--no-video", "-y",
                   "-o", str(ran)).returncode == 0
+
+
+def test_a_sequences_images_given_as_input_name_the_results_after_the_sequence(
+        clip_factory, tmp_path: Path) -> None:
+    """Probe O: `vtrack run PETS/img1 -c fixed_camera` wrote vtrack-out/img1/fixed_camera (its
+    run.json naming the input PETS), so `vtrack run TUD/img1 -c fixed_camera` of a second camera
+    was refused: 'vtrack-out/img1/fixed_camera: holds the results of an earlier run'. A
+    sequence's img/ or img1/ now names its results after the sequence, as the run records it
+    and a batch names its folder."""
+    images = clip_factory("multi", width=W, height=H, frames=60, fmt="images").path
+    for camera, folder in (("camA", "img1"), ("camB", "img1"), ("camC", "img")):
+        shutil.copytree(images / "img", tmp_path / camera / folder)
+    for camera, folder in (("camA", "img1"), ("camB", "img1/"), ("camC", "img")):
+        result = vtrack("run", f"{camera}/{folder}", "-c", "fixed_camera", "--no-video",
+                        cwd=tmp_path)
+        assert result.returncode == 0, result.stderr.decode()
+        assert (tmp_path / "vtrack-out" / camera / "fixed_camera" / "run.json").is_file()
+    inside = tmp_path / "camC" / "img"
+    assert vtrack("run", ".", "-c", "fixed_camera", "--no-video", "-o", "x", cwd=inside
+                  ).returncode == 0
+    assert (inside / "x" / "run.json").is_file()
+    result = vtrack("frame", "img", "--at", "0", cwd=inside.parent)
+    assert result.returncode == 0, result.stderr.decode()
+    assert (inside.parent / "camC-frame0.png").is_file()  # not img-frame0.png

@@ -38,8 +38,9 @@ def is_live(spec: str) -> bool:
 
 
 def input_name(spec: str) -> str:
-    """A short name for ``spec`` (output folders, progress): a file's stem, a folder's name,
-    ``stdin`` for ``-``, ``udp-127.0.0.1-5000`` for a URL, ``video0`` for a device."""
+    """A short name for ``spec`` (output folders, progress): a file's stem, a folder's name
+    (a sequence's images, ``SEQ/img`` or ``SEQ/img1``: ``SEQ``), ``stdin`` for ``-``,
+    ``udp-127.0.0.1-5000`` for a URL, ``video0`` for a device."""
     if spec == "-":
         return "stdin"
     if is_url(spec):
@@ -47,4 +48,9 @@ def input_name(spec: str) -> str:
         rest = rest.split("?", 1)[0].strip("/")
         return folder_name(f"{scheme}-{rest}".replace(":", "-").replace("/", "-"), "stream")
     path = Path(spec.rstrip("/") or "/")
+    if path.is_dir():  # SEQ/img, SEQ/img1: the sequence's name, as the images' reader names
+        # the input (run.json, the report) and a batch its results folder
+        from vtrack.io.sidecar import sequence_of
+
+        path = sequence_of(path.resolve()) or path
     return (path.stem if path.suffix else path.name) or "input"
