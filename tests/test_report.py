@@ -311,8 +311,33 @@ def test_only_the_html_page_says_its_headers_sort_and_hover(tmp_path: Path) -> N
     footer = (tmp_path / "report" / "index.html").read_text().split("<footer>")[1]
     assert "Click a column&#x27;s header to sort by it" in footer and "hover a header" in footer
     markdown = (tmp_path / "report" / "summary.md").read_text()
-    assert "CLEAR MOT" in markdown and "mark none. Tracking miss:" in markdown
+    assert "CLEAR MOT" in markdown and "mark none." in markdown
     assert "click" not in markdown.lower() and "hover" not in markdown.lower()
+
+
+def test_a_multi_target_report_explains_only_what_it_shows(
+        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+    """Probe O: `vtrack report` of fixed_camera runs (a MOTA/IDF1 table, no plot) ended with
+    the single-target footer: overlap, the success and precision plots, AUC, tracking miss,
+    miss flagged and lost frames, none of them on the page. It now explains the multi-target
+    table alone; a report with single-target runs too keeps both."""
+    write_multi_target_run(tmp_path / "runs" / "mht", {"mota": 0.5, "id_switches": 2})
+    result = vtrack("report", str(tmp_path / "runs"), "--out", str(tmp_path / "report"))
+    assert result.exit_code == 0, result.output
+    for page in ("index.html", "summary.md"):
+        text = (tmp_path / "report" / page).read_text()
+        footer = text.split("<footer>")[1] if page == "index.html" else text.split("---")[-1]
+        assert "CLEAR MOT" in footer and "in bold" in footer
+        for single in ("Overlap is", "Success plot", "AUC", "Tracking miss", "Miss flagged",
+                       "Lost frames"):
+            assert single not in footer, (page, single)
+    mixed = tmp_path / "mixed"
+    shutil.copytree(tmp_path / "runs" / "mht", mixed / "mht")
+    shutil.copytree(batch_out[1] / "smooth", mixed / "smooth")
+    result = vtrack("report", str(mixed), "--out", str(tmp_path / "report2"))
+    assert result.exit_code == 0, result.output
+    footer = (tmp_path / "report2" / "index.html").read_text().split("<footer>")[1]
+    assert "Overlap is" in footer and "Tracking miss" in footer and "CLEAR MOT" in footer
 
 
 def test_the_multi_target_table_ranks_each_metric_its_own_way(tmp_path: Path) -> None:

@@ -15,8 +15,9 @@ from vtrack.report import rows
 from vtrack.report.runs import FailedRun, RunResult
 from vtrack.report.tables import NOTES, Table
 
-#: The footer of every report: what the numbers mean (OTB conventions, vtrack.evaluate.metrics).
-#: ``{sorting}`` is :data:`SORTING` in index.html, nothing in summary.md.
+#: The footer of a report with single-target runs: what the numbers mean (OTB conventions,
+#: vtrack.evaluate.metrics). ``{sorting}`` is :data:`SORTING` in index.html, nothing in
+#: summary.md.
 DEFINITIONS = (
     "Overlap is the intersection over union (IoU) of the tracker's box and the ground-truth box. "
     "Success plot: share of evaluated frames whose overlap is > t, for t = 0, 0.05, ..., 1; "
@@ -32,6 +33,12 @@ DEFINITIONS = (
     "that describe rather than rank (frames, miss flagged, lost frames) mark none.{sorting} "
     + " ".join(f"{title}: {note}." for title, note in NOTES.items()
                if title in ("Tracking miss", "Miss flagged", "Lost frames"))
+)
+#: The footer's start when only multi-target runs are shown (none of the overlap measures
+#: above is on the page); ``{sorting}`` as above.
+MOT_ONLY_DEFINITIONS = (
+    "Best value per column (among the configurations of an input) in bold; columns that "
+    "describe rather than rank (Frames, PT, GT ids, Tracks) mark none.{sorting}"
 )
 #: How index.html's tables answer the mouse (a Markdown table neither sorts nor hovers).
 SORTING = " Click a column's header to sort by it; hover it for what it means."
@@ -93,7 +100,9 @@ class Page:
 def _footer(page: Page, html_page: bool) -> str:
     """What the numbers mean; how the tables sort and explain themselves in ``html_page`` only
     (index.html, not summary.md)."""
-    text = DEFINITIONS.format(sorting=SORTING if html_page else "")
+    only_mot = page.mot is not None and page.results is None and page.averages is None
+    text = (MOT_ONLY_DEFINITIONS if only_mot else DEFINITIONS).format(
+        sorting=SORTING if html_page else "")
     if page.mot is not None:
         text += " " + MOT_DEFINITIONS.format(hover="; hover a header" if html_page else "")
     return text
