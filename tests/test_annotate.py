@@ -351,3 +351,16 @@ def test_a_track_cut_by_the_frames_border_shows_its_id(box: Box) -> None:
     assert len(differ) > 10  # the ids are written where they can be seen
     caption_h = 20  # the "1 TRACK" caption covers the top-left corner
     assert ((differ[:, 0] >= caption_h) | (differ[:, 1] >= 80)).any()
+
+
+def test_a_tracks_id_reads_on_a_target_of_its_own_colour() -> None:
+    """Probe O: ids were bare text in the track's colour: on `vtrack scene street` track 25's
+    magenta id over a magenta vehicle could not be read. An id is now on a black plate."""
+    colour = TRACK_PALETTE_BGR[5 % len(TRACK_PALETTE_BGR)]
+    frame = cv2.cvtColor(np.full((H, W, 3), colour, np.uint8), cv2.COLOR_BGR2YUV_I420)
+    box = Box(100, 100, 60, 80)
+    Annotator(W, H, multi_target=True, legend=False).draw(
+        frame, result(box=None, tracks=[Track(5, box, 0.9, TrackStatus.CONFIRMED)]))
+    y = planes(frame)[0]
+    above = y[60:int(box.y) - 1, int(box.x):int(box.x) + 30]  # where the id is written
+    assert int(above.min()) <= 40 < TRACK_PALETTE[5].y - 40  # dark under the id: it reads

@@ -7,8 +7,8 @@ and back, and only the drawn pixels are touched (~0.1 ms per 1080p frame).
 What is drawn: the ground-truth box (if given), the stage overlays (:mod:`vtrack.overlays`:
 ``SearchWindow`` as a thin rectangle, ``Particles`` as dots sized like the lines; another kind
 is a ``TypeError``), the trajectory of the last ``trail`` centres, the tracked box and its centre,
-confirmed multi-target tracks (a stable colour and a short trail per id, the id as text above
-the box, kept inside the frame and clear of the caption), the
+confirmed multi-target tracks (a stable colour and a short trail per id, the id as text on a
+black plate above the box, kept inside the frame and clear of the caption), the
 state caption: ``TRACKING`` / ``OCCLUDED`` top-left, ``LOST`` top-right (with no box), and
 bottom-left the frame number (``track.csv``'s ``frame``, 0-based; for multi-target results
 ``tracks.csv``'s, 1-based as MOTChallenge numbers frames) above a legend of the colours.
@@ -374,30 +374,30 @@ class Annotator:
             canvas.polyline(list(trail), colour, max(1, t // 2))
             p0, p1 = _corners(b)
             canvas.rectangle(p0, p1, colour, t)
-            label = str(track.id)
-            canvas.text(self._label_origin(canvas, p0, label, clear_of), label, colour,
-                        self.font_scale * 0.8, t)
+            self._label(canvas, p0, str(track.id), colour, clear_of)
             shown += 1
         stale = [i for i, seen in self._last_seen.items() if result.index - seen > self.track_trail]
         for track_id in stale:
             del self._tracks[track_id], self._last_seen[track_id]
         return shown
 
-    def _label_origin(self, canvas: Canvas, corner: tuple[int, int], text: str,
-                      clear_of: tuple[int, int]) -> tuple[int, int]:
-        """Where a track's id ``text`` starts (its baseline's left end): above the box's
-        top-left ``corner``, moved into the frame when that is outside it (a box cut by the
-        frame's left or top border: the id goes inside the box, under its top edge) and below
-        the top-left caption (``clear_of``: its width and height), so every drawn track shows
-        its id."""
-        t = self.thickness
-        (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale * 0.8, t)
+    def _label(self, canvas: Canvas, corner: tuple[int, int], text: str, colour: Yuv,
+               clear_of: tuple[int, int]) -> None:
+        """A track's id ``text`` in its ``colour`` on a black plate (readable on a target of
+        that colour too), above the box's top-left ``corner``, moved into the frame when that
+        is outside it (a box cut by the frame's left or top border: the id goes inside the
+        box, under its top edge) and below the top-left caption (``clear_of``: its width and
+        height), so every drawn track shows its id."""
+        t, scale = self.thickness, self.font_scale * 0.8
+        (w, h), baseline = cv2.getTextSize(text, FONT, scale, t)
         x = min(max(corner[0], 0), max(canvas.width - w, 0))
         top = clear_of[1] if x < clear_of[0] else 0  # the first row the id may cover
         y = corner[1] - 2 * t
         if y - h < top:  # no room above the box: under its top edge (and the caption)
             y = max(corner[1], top) + 2 * t + h
-        return x, min(y, canvas.height - 1 - baseline)
+        y = min(y, canvas.height - 1 - baseline)
+        canvas.rectangle((x - t, y - h - t), (x + w + t - 1, y + t), CAPTION_BACKGROUND, -1)
+        canvas.text((x, y), text, colour, scale, t)
 
     def _caption_box(self, canvas: Canvas, caption: str, right: bool = False,
                      ) -> tuple[int, tuple[int, int]]:
