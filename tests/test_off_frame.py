@@ -103,7 +103,9 @@ def test_a_box_off_the_frame_is_lost_after_the_same_time_with_frames_dropped(
     0.4 of a frame late and one 0.4 early (more than the clock's JITTER: it counts 1.4 and 0.6
     frames around the one, 0.6 and 1.4 around the other), s0 (whose stages do not read the
     times) is lost on the same frame as with regular timestamps. Adding up the clock's frames
-    from the first frame outside (74) reached 10.4 on the late 83rd, a frame early."""
+    from the first frame outside (74) reached 10.4 on the late 83rd, a frame early; so does
+    every fourth frame stamped 0.55 of a frame late (the whole frames since the first frame
+    outside are counted: before, the late steps of 1.55 frames added up, lost at 82, not 84)."""
     pictures, box = gone_frames()
     frames = [BgrFrame(i, i / 30, picture) for i, picture in enumerate(pictures)]
     off, lost = _off_and_lost(frames, config, box)
@@ -116,3 +118,6 @@ def test_a_box_off_the_frame_is_lost_after_the_same_time_with_frames_dropped(
         uneven = [BgrFrame(i, (i + late[i % 10]) / 30, picture)
                   for i, picture in enumerate(pictures)]
         assert _off_and_lost(uneven, config, box) == (off, lost)
+        later = [BgrFrame(i, (i + (0.55 if i % 4 == 1 else 0.0)) / 30, picture)
+                 for i, picture in enumerate(pictures)]
+        assert _off_and_lost(later, config, box)[1] == lost

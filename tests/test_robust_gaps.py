@@ -270,3 +270,31 @@ def test_a_hidden_target_is_lost_after_the_same_time_on_every_other_frame(name: 
     assert lost is not None and abs(lost - full_lost) <= 2, (lost, full_lost)
     for number, reach in rings.items():
         assert abs(reach - full_rings[number]) <= 1.0, (number, reach, full_rings[number])
+
+
+@pytest.mark.parametrize("seed", (0, 1, 5))
+def test_timestamps_a_little_late_do_not_make_a_hidden_target_lost_sooner(seed: int) -> None:
+    """Every frame given, every fourth stamped 0.3 of a frame late (a live camera's clock read
+    when the frame is): the target hidden for good is lost on the same frame as with regular
+    timestamps, and its ring search reaches as far on every frame (before, the clock's steps of
+    1.3 frames were added up as hidden time: lost at 104, not 105)."""
+    scene, frames, start = _covered_for_good(seed)
+    numbers = list(range(len(frames)))
+    full_lost, full_rings = _lost_and_rings(scene, frames, numbers)
+    late = [BgrFrame(f.index, (f.index + (0.3 if f.index % 4 == 0 else 0.0)) / 30, f.bgr())
+            for f in frames]
+    lost, rings = _lost_and_rings(scene, late, numbers)
+    assert lost == full_lost == start + 30, (lost, full_lost)
+    assert rings == full_rings
+
+
+def test_a_hidden_target_is_lost_at_once_after_a_break() -> None:
+    """A stream that stalls for 15 s while the target is hidden: the first frame after the
+    break has more than ``lost_after`` (30) frames elapsed since the last sight, so the target
+    is `lost` there, not `occluded` with a box held from 15 s before (README says so)."""
+    scene, frames, start = _covered_for_good(0)
+    stalled = [BgrFrame(f.index, f.time_s + (15.0 if f.index >= start + 3 else 0.0), f.bgr())
+               for f in frames]
+    numbers = list(range(len(frames)))
+    lost, _ = _lost_and_rings(scene, stalled, numbers)
+    assert lost == start + 3, (lost, start)

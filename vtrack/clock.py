@@ -93,6 +93,20 @@ class FrameClock:
         self.elapsed = steps
         return steps
 
+    @property
+    def frame(self) -> int:
+        """Whole frames elapsed since the first frame (:attr:`now` to the nearest): what the
+        counts of frames take differences of (frames hidden, frames outside the picture), so
+        that a timestamp a fraction of a frame late or early (a live camera's clock) makes no
+        frame more or fewer, and such offsets do not add up over the frames."""
+        return round(self.now)
+
+    @property
+    def whole_elapsed(self) -> int:
+        """Whole frames from the frame before the last one given to the last one:
+        :attr:`frame`'s step (1 on an input without gaps; 0 after a frame stamped late)."""
+        return round(self.now) - round(self.before)
+
     def _since(self, frame: Frame) -> tuple[int, float]:
         """``frame``'s index difference and time difference from the last frame (0 s when the
         last frame's time is no base)."""

@@ -28,15 +28,13 @@ from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 #: Frames elapsed, not frames given (``ctx.clock``: frames missing from the input count, by
 #: the frame numbers or the timestamps): a camera that delivers every other frame loses the box
 #: after the same time as one that delivers all. The first frame given with the box outside
-#: counts one, each after it the frames elapsed since the one before, or one where the clock
-#: says fewer than ``MISSED`` (timestamps a little off, no frame missing: on an input without
-#: gaps the count is the frames given, as it always was). One rule for every single-target tracker,
+#: counts one, and each after it the whole frames the clock says have elapsed since that one
+#: (:attr:`vtrack.clock.FrameClock.frame`: timestamps a fraction of a frame off count no frame
+#: more; on an input without gaps the count is the frames given, as it always was). One rule for
+#: every single-target tracker,
 #: applied to the output; the stages keep their own state. README and docs/architecture.md
 #: state it.
 OFF_FRAME_FRAMES = 10
-#: Frames elapsed from one frame given to the next from which a frame is missing between them
-#: (the nearest whole number is 2); fewer count one (timestamps a little off).
-MISSED = 1.5
 
 
 @dataclass
@@ -152,8 +150,9 @@ class Pipeline:
         self._ctx: TrackContext | None = None
         #: (width, height, grey) of the track's first frame: every later one must match
         self._shape: tuple[int, int, bool] | None = None
-        #: frames the box has been entirely outside the frame, in a row (OFF_FRAME_FRAMES)
-        self._off_frames = 0.0
+        #: the clock's whole frame at the first of the frames in a row whose box lies entirely
+        #: outside the frame (None: the last frame's box was not; OFF_FRAME_FRAMES)
+        self._off_since: int | None = None
 
     def process(self, frame: Frame) -> FrameResult:
         """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
@@ -189,12 +188,12 @@ class Pipeline:
         self.frames_done += 1
         state = ctx.state
         if ctx.box is not None and ctx.box.outside(frame.width, frame.height):
-            elapsed = ctx.clock.elapsed
-            self._off_frames += elapsed if self._off_frames and elapsed >= MISSED else 1.0
-            if self._off_frames > OFF_FRAME_FRAMES:
+            if self._off_since is None:
+                self._off_since = ctx.clock.frame
+            if ctx.clock.frame - self._off_since + 1 > OFF_FRAME_FRAMES:
                 state = TrackState.LOST
         else:
-            self._off_frames = 0.0
+            self._off_since = None
         return FrameResult(
             index=frame.index,
             time_s=frame.time_s,

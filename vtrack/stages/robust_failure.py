@@ -220,7 +220,7 @@ class RobustFailure(Stage):
         target.unseen = False
         if (ctx.measurement is not None and sharp and retaken and not off_frame
                 and (was == TrackState.TRACKING or strong)):
-            target.hidden_frames = 0
+            target.hidden_frames, target.seen_at = 0, ctx.clock.frame
             ctx.search_growth = 1.0
             # a sharp but weak peak is doubtful: called occluded, yet followed and learnt as a
             # tracking frame (freezing the model there lost more targets than it kept: the
@@ -235,8 +235,9 @@ class RobustFailure(Stage):
             if may_learn and not (weak and colour_disagrees):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
-        # time, not calls: frames missing from the input count as hidden too
-        target.hidden_frames += ctx.clock.elapsed
+        # time, not calls: frames missing from the input count as hidden too (whole frames
+        # since the last sight: timestamps a fraction of a frame off do not add up)
+        target.hidden_frames = ctx.clock.frame - target.seen_at
         _hold_size(target, ctx)
         if self.coast:
             ctx.measurement = None  # S0 item 7: coast on the prediction
@@ -250,7 +251,8 @@ class RobustFailure(Stage):
                 and not colour_disagrees):
             target.learn(ctx.frame, ctx.measurement, self.rate)
         if lost and self.redetect:
-            ctx.search_growth = min(ctx.search_growth + ctx.clock.elapsed, MAX_RINGS + 1.0)
+            ctx.search_growth = min(ctx.search_growth + ctx.clock.whole_elapsed,
+                                    MAX_RINGS + 1.0)
 
     def _strong(self, target: RobustTarget) -> bool:
         """LMCF's test: APCE and peak at their shares of the usual values (always true before

@@ -142,9 +142,11 @@ class RobustTarget:
     usual_colour: float = 0.0
     response_frames: int = 0
     colour_frames: int = 0
-    #: Frames elapsed since the last frame that saw the target (``robust_failure``; 0 while it
-    #: is seen).
-    hidden_frames: float = 0.0
+    #: Whole frames elapsed since the last frame that saw the target (``robust_failure``; 0
+    #: while it is seen), and the frame clock's whole frame on that frame
+    #: (:attr:`vtrack.clock.FrameClock.frame`; 0: the first).
+    hidden_frames: int = 0
+    seen_at: int = 0
     #: The next frame also searches where the merged response peaks over the whole frame
     #: (``robust_failure.redetect_on_colour``: this frame's colours at the peak are not the
     #: target's).
