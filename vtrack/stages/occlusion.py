@@ -102,7 +102,8 @@ class Occlusion(Stage):
         ),
         Param(
             "lost_after", int, 60,
-            "hidden frames after which the state is lost, not occluded (1 s at 60 fps)",
+            "hidden frames after which the state is lost, not occluded (1 s at 60 fps; frames "
+            "given: S0 steps a frame at a time, frames missing from the input do not count)",
             min=1, max=100000,
         ),
         Param(

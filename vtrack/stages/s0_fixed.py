@@ -180,7 +180,8 @@ class MeanShiftFixed(Stage):
               "visible again when 1000 sum_bp >= this x the first frame's (hysteresis)",
               min=0, max=1000),
         Param("lost_after", int, 60,
-              "hidden frames after which the state is lost, not occluded", min=1,
+              "hidden frames after which the state is lost, not occluded (frames given, as "
+              "s0's occlusion counts them)", min=1,
               max=100000),
         Param("growth_permille", int, 1100,
               "while hidden the window widens by this / 1000 per frame (integer, floor), and "
