@@ -60,8 +60,15 @@ def test_stream_on_stdout_matches_the_csv_and_the_summary_goes_to_stderr(tmp_pat
     assert "frames" in done.stdout
     lines = [json.loads(t) for t in (tmp_path / "m.jsonl").read_text().splitlines()]
     assert len(lines) == 60
+    # a multi-target line is the run's frame number (from 0, as track.csv's), its time and its
+    # tracks: no single-target fields (they held "x":null,"state":"tracking","score":null)
+    assert [line["frame"] for line in lines] == list(range(60))
+    assert all(set(line) == {"frame", "time_s", "tracks"} for line in lines), lines[0]
+    assert all(set(t) == {"id", "x", "y", "w", "h", "conf", "state"}
+               for line in lines for t in line["tracks"])
     with (tmp_path / "m" / "tracks.csv").open() as f:
         rows = list(csv.DictReader(f))
+    # a track's row in tracks.csv (MOTChallenge numbers frames from 1) is the line's frame + 1
     streamed = [(line["frame"] + 1, t["id"], t["x"], t["y"], t["w"], t["h"], t["conf"])
                 for line in lines for t in line["tracks"]]
     assert streamed == [(int(r["frame"]), int(r["id"]), *(_cell(r[key]) for key in

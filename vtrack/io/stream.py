@@ -1,14 +1,16 @@
 """``--stream FILE|-``: one JSON line per tracked frame, flushed as soon as the frame is done.
 
 A reader downstream (``tail -f``, a pipe) follows the target while it moves; ``track.csv`` stays
-the file that is whole only once the run has ended. Each line holds ``frame`` (the source's own
-number), ``time_s`` (the frame's timestamp), ``x``, ``y``, ``w``, ``h`` (null while lost),
-``state``, ``score`` and ``extras`` (the stages' extra columns); the multi-target configs add
-``tracks``: the confirmed tracks as ``tracks.csv`` lists them (``id``, ``x``, ``y``, ``w``,
-``h``, ``conf``, ``state``). Numbers are the values ``track.csv`` / ``tracks.csv`` hold
-(rounded as they are written, :func:`~vtrack.io.csvfile.as_written`: pixels to 3 decimals,
-``time_s``, ``score`` and ``conf`` to 4), so a line and its row agree; non-finite numbers are
-written as null.
+the file that is whole only once the run has ended. Each line holds ``frame`` (the run's frame
+number, from 0 as ``track.csv``'s and ``--start``'s) and ``time_s`` (the frame's timestamp).
+A single-target line adds ``x``, ``y``, ``w``, ``h`` (null while lost), ``state``, ``score`` and
+``extras`` (the stages' extra columns): its ``track.csv`` row's values. A multi-target line adds
+only ``tracks``: the frame's confirmed tracks, each its ``tracks.csv`` row (the rows whose
+MOTChallenge ``frame``, numbered from 1, is the line's ``frame`` + 1) as ``id``, ``x``, ``y``,
+``w``, ``h``, ``conf``, ``state``. Numbers are the values the CSV files hold (rounded as they
+are written, :func:`~vtrack.io.csvfile.as_written`: pixels to 3 decimals, ``time_s``,
+``score`` and ``conf`` to 4), so a line and its rows agree; non-finite numbers are written as
+null.
 """
 
 from __future__ import annotations
@@ -58,21 +60,19 @@ def _box(box: Box | None) -> dict[str, Any]:
 
 
 def frame_record(result: FrameResult, multi_target: bool) -> dict[str, Any]:
-    """What one stream line says about ``result`` (see the module docstring)."""
-    record: dict[str, Any] = {
-        "frame": result.index,
-        "time_s": _number(result.time_s, "time_s"),
-        **_box(result.box),
-        "state": str(result.state),
-        "score": _number(result.score, "score"),
-        "extras": {key: _number(value, key) for key, value in result.extras.items()},
-    }
+    """What one stream line says about ``result`` (see the module docstring): a multi-target
+    line holds no single-target fields (no box, state, score or extras of one target)."""
+    record: dict[str, Any] = {"frame": result.index,
+                              "time_s": _number(result.time_s, "time_s")}
     if multi_target:
         record["tracks"] = [
             {"id": t.id, **_box(t.box), "conf": _number(t.confidence, "conf"),
              "state": str(t.state)}
             for t in result.tracks if t.state == TrackStatus.CONFIRMED]
-    return record
+        return record
+    return {**record, **_box(result.box), "state": str(result.state),
+            "score": _number(result.score, "score"),
+            "extras": {key: _number(value, key) for key, value in result.extras.items()}}
 
 
 class StreamWriter(Closing):
