@@ -165,6 +165,29 @@ def test_multi_target_summaries_show_only_multi_target_numbers(clip_factory: Cli
     assert "mota -1.000" in summary.line()
 
 
+def test_a_multi_target_run_without_ground_truth_counts_its_tracks(clip_factory: ClipFactory,
+                                                                   tmp_path: Path) -> None:
+    """Without ground truth a multi-target run said nothing of its tracks: the summary line
+    was 'clip.mp4: 60 frames, 240.1 fps -> a', run.json's metrics {} and the report's columns
+    all '—'. The line, run.json and the report now give the ids tracks.csv holds."""
+    clip = clip_factory("multi", width=W, height=H, frames=60)
+    out = tmp_path / "a"
+    result = vtrack("run", str(clip.path), "-c", "s3", "--no-video", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    ids = {line.split(",")[1] for line in (out / "tracks.csv").read_text().splitlines()[1:]}
+    assert ids
+    assert re.search(rf"60 frames, [\d.]+ fps, {len(ids)} tracks -> ", result.stdout), \
+        result.stdout
+    record = json.loads((out / "run.json").read_text())
+    assert record["metrics"]["track_ids"] == record["summary"]["tracks"] == len(ids)
+    report = vtrack("report", str(out), "--out", str(tmp_path / "rep"))
+    assert report.exit_code == 0, report.output
+    table = [line.split(" | ") for line in
+             (tmp_path / "rep" / "summary.md").read_text().splitlines() if "| " in line]
+    column = table[0].index("Tracks")
+    assert table[2][column] == str(len(ids)), table
+
+
 @pytest.mark.parametrize("args, usage", [((), "Usage: vtrack [OPTIONS] COMMAND"),
                                          (("vectors",), "Usage: vtrack vectors [OPTIONS]")])
 def test_a_group_given_no_command_prints_its_help_not_an_error_line(

@@ -29,7 +29,7 @@ import signal
 import stat
 import sys
 import time
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
@@ -127,6 +127,8 @@ class RunSummary:
     precision20: float | None = None
     frames_occluded: int = 0
     frames_lost: int = 0
+    #: A multi-target run: the track ids ``tracks.csv`` holds (None: single target).
+    tracks: int | None = None
     #: Frames of the input that could not be decoded and were skipped (damaged file), and
     #: those with no picture at all (``frames_missing``).
     frames_skipped: int = 0
@@ -151,6 +153,8 @@ class RunSummary:
         """The one-line summary printed at the end of ``vtrack run`` (headed by ``label``,
         default the input)."""
         parts = [plural(self.frames, "frame"), f"{self.fps:.1f} fps"]
+        if self.tracks is not None:
+            parts.append(plural(self.tracks, "track"))
         if self.mean_overlap is not None:
             parts.append(f"mean overlap {self.mean_overlap:.3f}")
             parts.append(f"AUC {self.auc:.3f}")
@@ -465,6 +469,8 @@ class _MultiTargetRows:
         #: scored after it (each a false positive: the warning of :meth:`after_truth_note`).
         self.truth_end = max((*(gt or {}), *self.distractors), default=-1)
         self.boxes_after_truth = 0
+        #: The rows written per track id.
+        self.written: Counter[int] = Counter()
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         rows, boxes = [], []
@@ -475,6 +481,7 @@ class _MultiTargetRows:
             boxes.append((track.id, b))
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
+        self.written.update(track_id for track_id, _ in boxes)
         if self.score is not None:
             self._score_pending()
             self._pending = (result.index, boxes)
@@ -485,8 +492,17 @@ class _MultiTargetRows:
         """Forget ``result`` (its rows could not be written)."""
         if self._pending is not None and self._pending[0] == result.index:
             self._pending = None
+        self.written.subtract(track.id for track in result.tracks
+                              if track.state == TrackStatus.CONFIRMED)
+        self.written = +self.written  # ids left with no row are gone
         if self.end == result.index + 1:
             self.end = result.index
+
+    def counts(self, frames: int) -> dict[str, int]:
+        """What a run without ground truth records of its tracks: the ids and rows of
+        ``tracks.csv`` (``track_ids``, ``track_boxes``) over its ``frames``."""
+        return {"track_ids": len(self.written), "track_boxes": self.written.total(),
+                "frames": frames}
 
     def mot(self, frames: int) -> dict[str, Any]:
         """The MOT measures of the ``frames`` frames from the start (ground truth only where no
@@ -1208,15 +1224,19 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                 f"{request.gt_path}: the ground truth marks the target absent (NaN, or w or "
                 f"h <= 0) in all {plural(absent, 'frame')} of the run it has boxes for: no "
                 "frame is scored (frames_evaluated 0; mean_overlap, auc, precision20 null)")
-    elif isinstance(formatter, _MultiTargetRows) and resolved.mot_gt is not None:
-        summary.mot = formatter.mot(frames)
-        metrics = dict(summary.mot)
-        note = formatter.after_truth_note(request.gt_path)
-        if note is not None and status == STATUS_COMPLETE:
-            summary.warnings.append(note)
-        past = formatter.past_truth_note(request.gt_path)
-        if past is not None and read_to_end:
-            summary.warnings.append(past)
+    elif isinstance(formatter, _MultiTargetRows):
+        summary.tracks = len(formatter.written)
+        if resolved.mot_gt is None:
+            metrics = formatter.counts(frames)
+        else:
+            metrics = formatter.mot(frames)
+            note = formatter.after_truth_note(request.gt_path)
+            if note is not None and status == STATUS_COMPLETE:
+                summary.warnings.append(note)
+            past = formatter.past_truth_note(request.gt_path)
+            if past is not None and read_to_end:
+                summary.warnings.append(past)
+        summary.mot = dict(metrics)
     if read_to_end:
         summary.warnings += [note for stage in resolved.pipeline.stages
                              for note in stage.past_end_notes()]
