@@ -12,8 +12,11 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -39,7 +42,9 @@ SKIPPED = {
     "/dev/video": "needs a camera (tests/test_live_inputs.py)",
     "--follow": "needs a program writing the file (tests/test_live_inputs.py)",
     "drone.h264": "needs a raw H.264 recording (--format is tested in tests/test_live_inputs.py)",
-    "--scheduler": "needs a Dask cluster (tests/test_dask_wait.py)",
+    "--scheduler": "needs a Dask cluster (test_readme_dask_cluster_recipe_runs)",
+    "dask scheduler": "starts a Dask cluster (test_readme_dask_cluster_recipe_runs)",
+    "dask worker": "starts a Dask cluster (test_readme_dask_cluster_recipe_runs)",
 }
 
 
@@ -114,6 +119,59 @@ def test_readme_block_runs(block: str, inputs: Path, tmp_path: Path) -> None:
         promised = re.search(r"#\s*-> (\S+/)", line)
         if promised:
             assert (work / promised.group(1)).is_dir(), (text, promised.group(1))
+
+
+def test_readme_dask_cluster_recipe_runs(inputs: Path, tmp_path: Path) -> None:
+    """README's recipe for a Dask cluster (``dask scheduler``, ``dask worker ADDRESS
+    --nworkers 2 --nthreads 1`` started from another folder) runs its ``vtrack batch
+    --scheduler`` line to the end; README said nothing of how to start one. On loopback: a free
+    port for the scheduler's and no dashboard (its port may be taken)."""
+    pytest.importorskip("distributed")
+    lines = [command for block in _blocks() for command in _commands(block)]
+    scheduler = next(c for c in lines if c.startswith("dask scheduler"))
+    worker = next(c for c in lines if c.startswith("dask worker"))
+    batch = next(c for c in lines if c.startswith("vtrack batch") and "--scheduler" in c)
+    address = re.search(r"tcp://\S+", worker).group(0)
+    assert f"--scheduler {address}" in batch
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    env = _shell(tmp_path)
+    shim = tmp_path / ".bin" / "dask"
+    shim.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m dask "$@"\n')
+    shim.chmod(0o755)
+    work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
+    shutil.copytree(inputs, work)
+    elsewhere.mkdir()
+    local = f"tcp://127.0.0.1:{port}"
+    started: list[subprocess.Popen[bytes]] = []
+
+    def start(command: str) -> None:
+        started.append(subprocess.Popen(["bash", "-c", f"exec {command}"], cwd=elsewhere,
+                                        env=env, start_new_session=True,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+
+    try:
+        start(f"{scheduler} --host 127.0.0.1 --port {port} --no-dashboard")
+        deadline = time.monotonic() + 60
+        while True:  # listening before the batch asks (a refused connection is an error)
+            with socket.socket() as probe:
+                if probe.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            assert time.monotonic() < deadline and started[0].poll() is None, scheduler
+            time.sleep(0.2)
+        start(f"{worker.replace(address, local)} --no-dashboard")
+        command = batch.replace(address, local).replace("/shared/results", "results")
+        done = subprocess.run(["bash", "-c", command], cwd=work, env=env, capture_output=True,
+                              text=True, timeout=300, check=False)
+        assert done.returncode == 0, f"{command}\n{done.stderr}"
+        assert "(1 complete)" in done.stdout, done.stdout
+        assert (work / "results" / "clip" / DEFAULT_CONFIG / "run.json").is_file()
+    finally:
+        for process in started:
+            if process.poll() is None:
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
 
 
 def test_readme_sample_summary_is_what_the_command_prints(inputs: Path, tmp_path: Path) -> None:
