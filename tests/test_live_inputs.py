@@ -317,6 +317,20 @@ def test_a_udp_streams_timeout_after_its_last_packet_is_not_counted_as_tracking(
     assert timing["seconds"] + 10 <= wall, (timing, wall)
 
 
+def test_a_udp_streams_progress_lines_count_its_rate_as_the_summary_does(
+        tmp_path: Path) -> None:
+    """The progress lines' clock went on through --timeout's wait at the stream's end, which
+    the summary leaves out: 'udp://127.0.0.1:5000: 260 frames, 13.5 fps' as the summary said
+    28.5 fps. The last line (a line per frame: --stats-period 0) now gives the summary's."""
+    code, stderr = _sent_whole(tmp_path, ["--no-live", "--timeout", "3",
+                                          "--stats-period", "0"])
+    assert code == 1 and b"the stream stopped at frame" in stderr, stderr
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    lines = [line for line in stderr.decode().splitlines() if line.endswith(" fps")]
+    assert lines[-1].endswith(f": {record['frames']} frames, {record['timing']['fps']:.1f} fps"), \
+        (lines[-3:], record["timing"])
+
+
 @pytest.mark.parametrize("sender_kind", ["pyav", "ffmpeg"])
 def test_rtsp_pushed_to_vtrack_listening_gives_every_frame(tmp_path: Path,
                                                              sender_kind: str) -> None:

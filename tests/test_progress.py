@@ -8,6 +8,7 @@ percentage and the ETA, and for the absence of any bar before an input error.
 from __future__ import annotations
 
 import fcntl
+import json
 import os
 import pty
 import re
@@ -151,21 +152,39 @@ def test_report_shows_its_progress_through_the_inputs(clip: Path, tmp_path: Path
 
 
 def test_a_progress_line_counts_the_first_frames_time_in_its_rate(
-        clip_factory: ClipFactory, capsys: pytest.CaptureFixture[str]) -> None:
+        clip_factory: ClipFactory, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """`--stats-period 0` printed '1/N frames, 306184.7 fps' after the first frame: the rate's
-    clock started once that frame was done. It starts when the input opens."""
+    clock started once that frame was done. A line's rate is now the run's frames over its
+    seconds as ``run.json``'s ``timing.seconds`` counts them (from before the first frame is
+    read): after the last frame, the summary line's fps."""
     from vtrack.cli._progress import FrameProgress
-    from vtrack.io import open_source
+    from vtrack.config import load_config
+    from vtrack.geometry import Box
+    from vtrack.request import RunRequest
+    from vtrack.run import run
 
     clip = clip_factory("smooth", width=160, height=120, frames=10)
     progress = FrameProgress(quiet=False, period=0)
-    with open_source(str(clip.path)) as source:
-        progress.on_open(source.info)
-        opened = time.monotonic()
-        next(iter(source))  # the first frame's work, however long it takes here
-        done = time.monotonic()
-        progress.on_frame(1)
-    line = capsys.readouterr().err.strip()
-    rate = float(re.search(r", ([\d.]+) fps", line).group(1))
-    assert line.startswith(f"{clip.path}: 1/10 frames"), line
-    assert rate <= 1 / (done - opened) + 0.05, line  # at least the first frame's time counted
+    calls: list[tuple[int, float, float]] = []
+    opened: list[float] = []
+
+    def on_open(info: object) -> None:
+        progress.on_open(info)
+        opened.append(time.monotonic())
+
+    def on_frame(done: int, seconds: float) -> None:
+        calls.append((done, seconds, time.monotonic()))
+        progress.on_frame(done, seconds)
+
+    summary = run(RunRequest(str(clip.path), tmp_path / "out", load_config("s0"),
+                             init_box=Box(*clip.scene.boxes[0]), video=False),
+                  on_frame=on_frame, on_open=on_open)
+    lines = capsys.readouterr().err.splitlines()
+    assert [done for done, _, _ in calls] == list(range(1, 11))
+    assert 0 < calls[0][1] <= calls[0][2] - opened[0]  # the first frame's time counted
+    assert [s for _, s, _ in calls] == sorted(s for _, s, _ in calls)
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert calls[-1][1] == record["timing"]["seconds"] == summary.seconds
+    assert lines[0].startswith(f"{clip.path}: 1/10 frames"), lines
+    assert lines[-1].startswith(f"{clip.path}: 10/10 frames (100%), {summary.fps:.1f} fps, "), \
+        (lines[-1], summary.line())

@@ -637,7 +637,7 @@ class _Tracked:
                 and not isinstance(self.failure, OutputError))
 
 
-def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
+def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = None,
         on_open: Callable[[InputInfo], None] | None = None, overwrite: bool = True,
         *, names: OptionNames = LIBRARY_NAMES) -> RunSummary:
     """Track one input and write its outputs; see the module docstring for what is written.
@@ -651,7 +651,9 @@ def run(request: RunRequest, on_frame: Callable[[int], None] | None = None,
     an earlier run's results (``vtrack run`` without ``--overwrite``).
 
     ``on_open(info)`` is called once the input has opened and checked (its frame count sizes a
-    progress bar); ``on_frame(n)`` after each frame with the number of frames done. Called in
+    progress bar); ``on_frame(n, seconds)`` after each frame with the number of frames done and
+    the seconds the frame loop has taken so far, counted as ``run.json``'s ``timing.seconds``
+    is (:func:`_loop_seconds`: after the last frame they are that record's). Called in
     the main thread, it handles SIGINT and SIGTERM itself while it works: the run ends
     ``interrupted`` (``summary.interrupted_by`` names the signal) and the caller decides how to
     exit (``vtrack run``: 128 + the signal's number).
@@ -983,7 +985,7 @@ WAITS_KEPT = 64
 
 
 def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
-           signals: _Signals, on_frame: Callable[[int], None] | None,
+           signals: _Signals, on_frame: Callable[[int, float], None] | None,
            folder: OutputFolder) -> _Tracked:
     """The signal-safe frame loop: each frame's CSV rows and picture are written together;
     a broken input, Ctrl-C, SIGTERM, a full disk or a tracker error ends it with every output
@@ -1031,9 +1033,9 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             received = source.received
             if received is not None:
                 out.latency.add(time.perf_counter() - received)
-            if on_frame is not None:
-                on_frame(out.frames)
             handled = time.perf_counter(), time.thread_time()
+            if on_frame is not None:
+                on_frame(out.frames, _loop_seconds(started, handled[0], frames_in, source))
         if signals.draining is not None:  # the frames the followed file held are tracked
             raise Interrupted(signals.draining)
         if out.frames == 0 and resolved.start:  # a user error: the folder stays as it was
@@ -1060,13 +1062,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         signals.drain = None  # first: a signal from here on is held, not taken for a drain
         signals.hold()  # a signal now must not cut the closing and the records short
         wall, cpu = handled or (time.perf_counter(), time.thread_time())
-        # the loop's wait for frames while the input waited at its end (--follow, a live
-        # stream's --timeout) is not tracking: the decoder's frame threads hand over its last
-        # frames only after it
-        end_wait = source.end_wait
-        waited = 0.0 if frames_in is None or end_wait is None else frames_in.during(
-            (max(end_wait[0], started), min(end_wait[1], wall)))
-        out.seconds, out.cpu_seconds = wall - started - waited, cpu - cpu_started
+        out.seconds = _loop_seconds(started, wall, frames_in, source)
+        out.cpu_seconds = cpu - cpu_started
         source.close()
         if out.untouched:
             for dropped in (csv, video):
@@ -1084,6 +1081,18 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             except OutputError as exc:
                 _fail(out, str(exc))
     return out
+
+
+def _loop_seconds(started: float, wall: float, frames_in: _Waits | None, source: Source
+                  ) -> float:
+    """The frame loop's seconds from ``started`` to ``wall`` (``perf_counter``) as
+    ``timing.seconds`` counts them: the loop's wait for frames while the input waited at its
+    end (--follow, a live stream's --timeout) is left out, it is not tracking (the decoder's
+    frame threads hand over its last frames only after it)."""
+    end_wait = source.end_wait
+    waited = 0.0 if frames_in is None or end_wait is None else frames_in.during(
+        (max(end_wait[0], started), min(end_wait[1], wall)))
+    return wall - started - waited
 
 
 def _fail(out: _Tracked, message: str) -> None:

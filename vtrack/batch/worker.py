@@ -154,7 +154,7 @@ class _Reporter:
             return None
         return self.job.request.frames_expected(self.info.frame_count, self.info.fps)
 
-    def on_frame(self, done: int) -> None:
+    def on_frame(self, done: int, seconds: float) -> None:
         now = time.monotonic()
         if now - self.last >= PROGRESS_PERIOD:
             self.last = now

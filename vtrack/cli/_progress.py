@@ -62,13 +62,17 @@ class ProgressLines:
         self.name, self.total, self.period, self.unit = name, total, period, unit
         self.started = self.last = time.monotonic() if started is None else started
 
-    def update(self, done: int, note: str = "") -> None:
+    def update(self, done: int, note: str = "", seconds: float | None = None) -> None:
+        """A line if ``period`` has passed since the last one: ``done`` over ``seconds`` (by
+        default, the time since ``started``)."""
         now = time.monotonic()
         if now - self.last >= self.period:
             self.last = now
             total = max(self.total, done) if self.total else None
+            if seconds is None:
+                seconds = now - self.started
             try:
-                print(progress_line(self.name, done, total, now - self.started, self.unit)
+                print(progress_line(self.name, done, total, seconds, self.unit)
                       + note, file=sys.stderr, flush=True)
             except (OSError, ValueError):  # the log's reader went away: the run goes on
                 self.period = float("inf")
@@ -171,11 +175,14 @@ class FrameProgress(_Shown):
         self._started: float | None = None
 
     def on_open(self, info: InputInfo) -> None:
-        """The input opened: the rate's clock starts, so the first frame's time counts."""
+        """The input opened: the first progress line comes a period after (its rate is the
+        run's own, see :meth:`on_frame`)."""
         self.info = info
         self._started = time.monotonic()
 
-    def on_frame(self, done: int) -> None:
+    def on_frame(self, done: int, seconds: float) -> None:
+        """``done`` frames tracked in the run's ``seconds`` (a line's rate is the summary
+        line's: :func:`vtrack.run.run` counts them as ``timing.seconds``)."""
         if self.quiet or self.info is None:
             return
         # the input's count is read again each time: the reader replaces an estimate as it
@@ -186,7 +193,7 @@ class FrameProgress(_Shown):
             self.bar = self._open(printable(self.info.path), total, started=self._started)
         if isinstance(self.bar, ProgressLines):
             self.bar.total = total
-            self.bar.update(done)
+            self.bar.update(done, seconds=seconds)
             return
         if total is not None and done > total:  # the estimate was short
             total = done
