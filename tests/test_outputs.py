@@ -719,14 +719,19 @@ def _interrupted_long_run(tmp_path: Path, *options: str) -> tuple[Path, Path, st
     scene = make_scene("smooth", seed=1, width=W, height=H, frames=3000, fps=30)
     clip = write_video(scene, tmp_path / "long.mp4", preset="ultrafast", keyint=30)
     first = tmp_path / "first"
-    process = start("run", str(clip), *options, "--frames", "2500", "--no-video",
-                    "-o", str(first))
-    wait_for(lambda: any(len(p.read_bytes().splitlines()) > 20
-                         for p in first.glob(".track.tmp*")), process, "20 rows")
+    return clip, first, _stopped_after(20, first, "run", str(clip), *options, "--frames", "2500")
+
+
+def _stopped_after(rows: int, first: Path, *args: str) -> str:
+    """`vtrack ARGS --no-video -o FIRST` stopped by SIGTERM once its CSV (track.csv or
+    tracks.csv) has ``rows`` rows: its stderr."""
+    process = start(*args, "--no-video", "-o", str(first))
+    wait_for(lambda: any(len(p.read_bytes().splitlines()) > rows
+                         for p in first.glob(".track*.tmp*")), process, f"{rows} rows")
     process.send_signal(signal.SIGTERM)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 128 + signal.SIGTERM, stderr
-    return clip, first, stderr
+    return stderr
 
 
 def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Path) -> None:
@@ -756,6 +761,29 @@ def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Pa
     assert done.returncode == 0, done.stderr
     again = csv_rows(out / "track.csv")
     assert again[0][:6] == last[:6] and again[-1][0] == "2499"
+
+
+def test_an_interrupted_multi_target_runs_hint_says_its_ids_start_again(tmp_path: Path) -> None:
+    """The hint of an interrupted multi-target run (`--start 534 --frames 866`) did not say
+    that the run it makes numbers its tracks from 1 again: the two tracks.csv use the same ids
+    for other targets. The hint says so, with this run's highest id (run.json's
+    ``summary.last_track_id``), which joins them."""
+    scene = make_scene("multi", seed=2, width=W, height=H, frames=900, fps=30)
+    clip = write_video(scene, tmp_path / "multi.mp4", preset="ultrafast", keyint=30)
+    first = tmp_path / "first"
+    stderr = _stopped_after(40, first, "run", str(clip), "-c", "s3", "--frames", "800")
+    record = json.loads((first / "run.json").read_text())
+    ids = [int(row[1]) for row in csv_rows(first / "tracks.csv")]
+    assert record["summary"]["last_track_id"] == max(ids), record["summary"]
+    options = record["summary"]["resume"]
+    assert stderr.splitlines()[-1].endswith(
+        f"with {options} and another --out (its track ids start again at 1: add {max(ids)}, "
+        "this run's highest, to them to join the two tracks.csv)"), stderr
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s3",
+                           *options.split(), "--no-video", "-o", str(tmp_path / "again")],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert min(int(row[1]) for row in csv_rows(tmp_path / "again" / "tracks.csv")) == 1
 
 
 def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:

@@ -127,8 +127,10 @@ class RunSummary:
     precision20: float | None = None
     frames_occluded: int = 0
     frames_lost: int = 0
-    #: A multi-target run: the track ids ``tracks.csv`` holds (None: single target).
+    #: A multi-target run: the track ids ``tracks.csv`` holds (None: single target), and the
+    #: highest of them (None: no track): a resumed run numbers its tracks from 1 again.
     tracks: int | None = None
+    last_track_id: int | None = None
     #: Frames of the input that could not be decoded and were skipped (damaged file), and
     #: those with no picture at all (``frames_missing``).
     frames_skipped: int = 0
@@ -1235,6 +1237,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                 "frame is scored (frames_evaluated 0; mean_overlap, auc, precision20 null)")
     elif isinstance(formatter, _MultiTargetRows):
         summary.tracks = len(formatter.written)
+        summary.last_track_id = max(formatter.written, default=None)
         if resolved.mot_gt is None:
             metrics = formatter.counts(frames)
         else:

@@ -236,13 +236,22 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
                  err=True)
             if summary.resume is not None:
                 _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
-                               f"the same command with {summary.resume} and another --out"),
-                     err=True)
+                               f"the same command with {summary.resume} and another --out"
+                               + _ids_again(summary)), err=True)
         elif summary.status != STATUS_COMPLETE:
             _say(f"vtrack: error: {summary.error}; results up to there are in "
                  f"{summary.out_dir}", err=True)
     if ending.code:
         sys.exit(ending.code)
+
+
+def _ids_again(summary: RunSummary) -> str:
+    """What the resume hint of a multi-target run adds: the resumed run numbers its tracks
+    from 1 again, so its ids are not this run's (add this run's highest to join them)."""
+    if summary.last_track_id is None:
+        return ""
+    return (f" (its track ids start again at 1: add {summary.last_track_id}, this run's "
+            "highest, to them to join the two tracks.csv)")
 
 
 def _exit_code(summary: RunSummary) -> int:
