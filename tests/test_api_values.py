@@ -4,7 +4,9 @@ one ConfigError (or TypeError) naming the value, never a traceback from deep ins
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
 import pickle
 from dataclasses import replace
 from fractions import Fraction
@@ -351,7 +353,9 @@ def test_library_messages_name_start_gt_out_stream_and_overwrite_as_the_library_
     """vtrack.run.run(RunRequest(start=50, ...)) said '--start 50: ...', and its other
     refusals '--gt FILE', '--stream F: ...', 'give --overwrite (-y) ..., or another --out':
     options of a command the caller never ran. The library names its fields and keywords
-    (start, start_s, gt_path, stream, out_dir, overwrite=True); vtrack run keeps its options."""
+    (start, start_s, gt_path, stream, out_dir, overwrite=True); vtrack run keeps its options.
+    So do the refusals met once the run opens its outputs, which said '--stream F: No such
+    file or directory', '(--timeout)' and 'choose another --out' to the library too."""
     scene = make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
     box = scene.boxes[0]
@@ -391,14 +395,44 @@ def test_library_messages_name_start_gt_out_stream_and_overwrite_as_the_library_
     assert str(caught.value) == f"stream {filled}: holds 3 bytes already; overwrite=True " \
                                 "replaces it"
     assert not (tmp_path / "out").exists()
+    # The stream and the output folder refused once the run opens them: named as given too.
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    no_dir = tmp_path / "no" / "s.jsonl"
+    shelved = tmp_path / "shelved"
+    (shelved / "track.csv").mkdir(parents=True)
+    held = tmp_path / "held"
+    held.mkdir()
+    opened = (
+        (replace(request, stream=str(no_dir)), f"stream {no_dir}: No such file or directory"),
+        (replace(request, stream=str(fifo), ffmpeg=FFmpegInput(timeout_s=1)),
+         f"stream {fifo}: a FIFO that no reader opened within 1 s (ffmpeg.timeout_s)"),
+        (replace(request, out_dir=shelved), f"{shelved / 'track.csv'}: is a folder, where "
+         "vtrack writes a file; move it away or choose another out_dir"))
+    for made, said in opened:
+        with pytest.raises(vtrack.OutputError) as caught:
+            run(made)
+        assert str(caught.value) == said
+    with (held / ".vtrack.lock").open("w") as lock:  # another vtrack's lock on the folder
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        with pytest.raises(vtrack.OutputError) as caught:
+            run(replace(request, out_dir=held))
+        assert str(caught.value).endswith("; wait for it to finish or choose another out_dir")
+        result = vtrack_command("run", str(clip), "-c", "s0", "--init", box.text(), "-o",
+                                str(held))
+        assert result.stderr.decode().strip().endswith(
+            "; wait for it to finish or choose another --out")
     for options, said in (
             (["--start", "50"], f"--start 50: {clip}: has no frame 50 (frames 0..9)"),
             (["--start", "5s"], f"--start 5s: {clip}: has no frame at or after 5 s (its last "
                                 "frame is frame 9, at 0.3 s)"),
             (["--stream", str(filled)], f"--stream {filled}: holds 3 bytes already; "
-                                        "--overwrite (-y) replaces it")):
-        result = vtrack_command("run", str(clip), "-c", "s0", "--init", box.text(), *options,
-                                "-o", str(tmp_path / "cli"))
+                                        "--overwrite (-y) replaces it"),
+            (["--stream", str(no_dir)], f"--stream {no_dir}: No such file or directory"),
+            (["-o", str(shelved)], f"{shelved / 'track.csv'}: is a folder, where vtrack "
+                                   "writes a file; move it away or choose another --out")):
+        result = vtrack_command("run", str(clip), "-c", "s0", "--init", box.text(), "-o",
+                                str(tmp_path / "cli"), *options)
         assert_one_line_error(result, said)
     result = vtrack_command("run", str(clip), "-c", "s0", "--start", "3", "-o",
                             str(tmp_path / "cli"))

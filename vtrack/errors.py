@@ -47,6 +47,8 @@ class OptionNames:
     out: str
     #: How the caller says "replace what is there".
     overwrite: str
+    #: What sets how long a run waits on the network and on a stream's reader.
+    timeout: str
 
     @property
     def options(self) -> bool:
@@ -73,10 +75,10 @@ class OptionNames:
 
 COMMAND_NAMES = OptionNames(init="--init", fps="--fps", start="--start", start_s="--start",
                             gt="--gt", stream="--stream", out="--out",
-                            overwrite="--overwrite (-y)")
+                            overwrite="--overwrite (-y)", timeout="--timeout")
 LIBRARY_NAMES = OptionNames(init="init_box", fps="fps", start="start", start_s="start_s",
                             gt="gt_path", stream="stream", out="out_dir",
-                            overwrite="overwrite=True")
+                            overwrite="overwrite=True", timeout="ffmpeg.timeout_s")
 
 
 def is_real(value: object) -> bool:

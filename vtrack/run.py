@@ -692,7 +692,7 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
             with OutputFolder(request.out_dir, names=names) as folder:
                 folder.refuse_folders(_output_names(request, resolved))
                 folder.clear(temporaries_only=True)
-                writers = _open_writers(request, resolved, info, signals)
+                writers = _open_writers(request, resolved, info, signals, names)
                 if on_open is not None:
                     on_open(info)
                 tracked = _track(request, resolved, source, writers, signals, on_frame, folder)
@@ -779,8 +779,9 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
 
 
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
-                  signals: _Signals) -> _Writers:
-    """The run's writers, opened while ``signals`` are held; on an error none is left open.
+                  signals: _Signals, names: OptionNames) -> _Writers:
+    """The run's writers, opened while ``signals`` are held; on an error none is left open
+    (the stream's messages call it by ``names``).
     The wait for a ``--stream`` FIFO's reader is cut short by a signal: the run then goes on
     without the stream, its signal noted (the frame loop ends at once, interrupted)."""
     pipeline = resolved.pipeline
@@ -805,7 +806,7 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
         try:
             with signals.live():
                 writers.stream = StreamWriter(request.stream, pipeline.multi_target,
-                                              stall_s=request.ffmpeg.timeout_s)
+                                              stall_s=request.ffmpeg.timeout_s, names=names)
         except Interrupted as exc:
             signals.pending = signals.pending or exc.signum
         except BaseException:

@@ -234,7 +234,7 @@ class OutputFolder:
                 os.close(fd)
                 raise FolderInUseError(
                     f"{self.folder}: in use by another vtrack ({_holder(path)}); wait for it "
-                    "to finish or choose another --out") from None
+                    f"to finish or choose another {self.names.out}") from None
             # The holder before us may have removed the file between our open and our lock:
             # then we locked a file nobody else will see. Only the file at ``path`` counts.
             try:
@@ -274,7 +274,7 @@ class OutputFolder:
         for name in names:
             if (self.folder / name).is_dir():
                 raise OutputError(f"{self.folder / name}: is a folder, where vtrack writes a "
-                                  "file; move it away or choose another --out")
+                                  f"file; move it away or choose another {self.names.out}")
 
     def release(self) -> None:
         """Release the lock (remove the lock file first, while it is still held)."""

@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable
 from typing import IO, Any
 
-from vtrack.errors import OutputError, StreamReaderGone
+from vtrack.errors import COMMAND_NAMES, OptionNames, OutputError, StreamReaderGone
 from vtrack.geometry import Box
 from vtrack.io.csvfile import as_written, box_as_written
 from vtrack.io.files import Closing, os_reason
@@ -83,18 +83,24 @@ class StreamWriter(Closing):
     nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
     reading). A line none of which is out yet gives way to a stop (see :meth:`write`), so
     Ctrl-C or SIGTERM does not wait for ``stall_s``. A regular file whose line could not be
-    written whole (a full disk) is cut back to its last whole line."""
+    written whole (a full disk) is cut back to its last whole line. Its messages call the
+    target and the wait by ``names`` (``--stream F``, ``--timeout``; ``stream F``,
+    ``ffmpeg.timeout_s``)."""
 
-    def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0) -> None:
+    def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0,
+                 names: OptionNames = COMMAND_NAMES) -> None:
         self.target = target
+        #: How a message begins: the target as the caller gave it (``--stream F``).
+        self.given = f"{names.stream} {target}"
         self.multi_target = multi_target
         self.stall_s = stall_s
         self.lines = 0
         try:
-            self._file: IO[bytes] = (_stdout_bytes() if target == STDOUT
-                                     else _open_for_lines(target, stall_s))
+            self._file: IO[bytes] = (
+                _stdout_bytes() if target == STDOUT
+                else _open_for_lines(target, stall_s, self.given, names.timeout))
         except OSError as exc:
-            raise OutputError(f"--stream {target}: {os_reason(exc)}") from None
+            raise OutputError(f"{self.given}: {os_reason(exc)}") from None
         try:
             self._fd: int | None = self._file.fileno()
         except (OSError, ValueError):  # standard output replaced by an object (a test runner)
@@ -115,7 +121,7 @@ class StreamWriter(Closing):
             elif not self._send(memoryview(data), stop):
                 return False
         except BrokenPipeError:
-            raise StreamReaderGone(f"--stream {self.target}: its reader went away (closed the "
+            raise StreamReaderGone(f"{self.given}: its reader went away (closed the "
                                    f"pipe) after {self.lines} lines: the run stopped there "
                                    "(SIGPIPE)") from None
         except (OSError, ValueError) as exc:
@@ -123,7 +129,7 @@ class StreamWriter(Closing):
                 with contextlib.suppress(OSError):
                     os.ftruncate(self._fd, start)
                     os.lseek(self._fd, start, os.SEEK_SET)
-            raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
+            raise OutputError(f"{self.given}: {os_reason(exc)}") from None
         self.lines += 1
         return True
 
@@ -140,7 +146,7 @@ class StreamWriter(Closing):
                 if first and stop is not None and stop():
                     return False
                 if time.monotonic() >= deadline:
-                    raise OutputError(f"--stream {self.target}: its reader took nothing for "
+                    raise OutputError(f"{self.given}: its reader took nothing for "
                                       f"{self.stall_s:g} s")
             data = data[os.write(self._fd, data[:select.PIPE_BUF]):]
             first = False
@@ -154,7 +160,7 @@ class StreamWriter(Closing):
         try:
             self._file.close()
         except (OSError, ValueError) as exc:
-            raise OutputError(f"--stream {self.target}: {os_reason(exc)}") from None
+            raise OutputError(f"{self.given}: {os_reason(exc)}") from None
 
 
 def _regular_file(fd: int) -> bool:
@@ -181,9 +187,10 @@ def _line_start(fd: int) -> int | None:
 READER_POLL_S = 0.05
 
 
-def _open_for_lines(target: str, wait_s: float) -> IO[bytes]:
+def _open_for_lines(target: str, wait_s: float, given: str, wait_name: str) -> IO[bytes]:
     """``target`` opened to write. A FIFO is opened once a reader has opened it, waiting at
-    most ``wait_s`` (a plain open would wait for ever: OutputError)."""
+    most ``wait_s`` (a plain open would wait for ever: OutputError beginning ``given``, the
+    target as the caller named it, and naming ``wait_name``, what sets the wait)."""
     try:
         fifo = stat.S_ISFIFO(os.stat(target).st_mode)
     except OSError:
@@ -199,8 +206,8 @@ def _open_for_lines(target: str, wait_s: float) -> IO[bytes]:
             if exc.errno != errno.ENXIO:
                 raise
             if time.monotonic() >= deadline:
-                raise OutputError(f"--stream {target}: a FIFO that no reader opened within "
-                                  f"{wait_s:g} s (--timeout)") from None
+                raise OutputError(f"{given}: a FIFO that no reader opened within "
+                                  f"{wait_s:g} s ({wait_name})") from None
             time.sleep(READER_POLL_S)
     os.set_blocking(fd, True)
     return open(fd, "wb")  # noqa: SIM115
