@@ -204,11 +204,6 @@ class RunRequest:
         )
 
     @property
-    def start_text(self) -> str:
-        """``--start`` as the user gave it (``75`` or ``2.5s``), for messages."""
-        return str(self.start) if self.start_s is None else f"{self.start_s:g}s"
-
-    @property
     def starts_later(self) -> bool:
         """Whether ``--start`` names a point after the input's beginning (a sidecar box, frame
         0's, is then not the target's first box)."""

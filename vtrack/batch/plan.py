@@ -10,7 +10,7 @@ from typing import Any
 from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
-from vtrack.errors import InputError, OutputError
+from vtrack.errors import COMMAND_NAMES, InputError, OutputError
 from vtrack.evaluate.groundtruth import (
     MULTI_TARGET_CONFIGS,
     groundtruth_names,
@@ -197,8 +197,9 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     if box is None and gt_path is None:
         names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
         if settings.starts_later:
-            raise InputError(f"{item.path}: --start {settings.start_text}: config '{config}' "
-                             "needs the target's box in that frame, and there is no ground "
+            given = COMMAND_NAMES.start_given(settings.start, settings.start_s)
+            raise InputError(f"{item.path}: {given}: config '{config}' needs the target's box "
+                             "in that frame, and there is no ground "
                              f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
         targets = numbered_groundtruth(item.path) if item.path.is_dir() else []
         if targets:  # OTB's sequences of several targets: which one is the user's to say
