@@ -5,8 +5,10 @@ video is read from the key frame before it, the very frame a full decode gives."
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import av
@@ -15,6 +17,8 @@ import numpy as np
 import pytest
 
 from vtrack.io import open_source
+from vtrack.io.pyfile import CountedStream
+from vtrack.io.video import _python_file
 from vtrack.picker.frames import FrameStore, read_frame
 from vtrack.scenes import make_scene, write_video
 
@@ -262,3 +266,30 @@ def test_a_fragmented_mp4_read_without_seeking_is_not_judged_by_its_index(
                          str(tmp_path / "fast"))
     assert done.stderr.decode().strip() == (
         f"vtrack: error: --start {FRAMES}: -: has no frame {FRAMES} (frames 0..{FRAMES - 1})")
+
+
+def test_a_pipes_first_mib_is_let_go_once_its_layout_was_read(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`cat frag.mp4 | vtrack run - ...` kept the pipe's first MiB (read for the look at an
+    MP4's layout) for the whole run: CountedStream.head was never released. Now it is let go
+    once the input is open, the look made (the fragments still found: no frame count)."""
+    clip = _fragmented(tmp_path / "frag.mp4", "frag_keyframe")
+    data = clip.read_bytes()
+    read_fd, write_fd = os.pipe()
+
+    def feed() -> None:
+        with open(write_fd, "wb") as pipe:
+            pipe.write(data)
+
+    feeder = threading.Thread(target=feed, daemon=True)
+    with open(read_fd, "rb") as stdin:
+        monkeypatch.setattr(sys, "stdin", stdin)
+        feeder.start()
+        with open_source("-") as source:
+            pipe = _python_file(source._container)
+            assert isinstance(pipe, CountedStream)
+            assert source.info.frame_count is None  # fragmented: not judged by its index
+            assert pipe.head is None
+            assert sum(1 for _ in source) == FRAMES
+            assert pipe.head is None and pipe.bytes_read == len(data)
+    feeder.join()

@@ -52,15 +52,19 @@ HEAD_BYTES = 1 << 20
 
 class CountedStream(CapturingStream):
     """A stream that cannot seek (a pipe on stdin), read through as it arrives; its first
-    :data:`HEAD_BYTES` bytes are kept in :attr:`head`."""
+    :data:`HEAD_BYTES` bytes are kept in :attr:`head` until :meth:`drop_head` (then None)."""
 
     def __init__(self, raw: IO[bytes]) -> None:
         super().__init__()
         self._raw = raw
-        self.head = bytearray()
+        self.head: bytearray | None = bytearray()
 
     def _read_into(self, buffer: bytearray | memoryview) -> int:
         got = self._raw.readinto1(buffer) or 0  # type: ignore[attr-defined]  # what has arrived
-        if len(self.head) < HEAD_BYTES:
+        if self.head is not None and len(self.head) < HEAD_BYTES:
             self.head += buffer[:min(got, HEAD_BYTES - len(self.head))]
         return got
+
+    def drop_head(self) -> None:
+        """Keep no more of the first bytes, and free those kept (the look at them is over)."""
+        self.head = None

@@ -551,6 +551,9 @@ class VideoSource(Source):
         frame_count = stream.frames or None
         mp4 = "mp4" in self._container.format.name
         fragmented = mp4 and self._fragmented_mp4(path)
+        read = _python_file(self._container)
+        if isinstance(read, CountedStream):  # its first MiB was kept for that look only
+            read.drop_head()
         if fragmented:
             frame_count = None  # its index lists the first fragment's frames: its duration counts
         # a fragmented MP4 read without seeking (stdin, a followed file, a URL) states the
@@ -600,7 +603,7 @@ class VideoSource(Source):
             return mp4_fragmented(path)
         read = _python_file(self._container)
         if isinstance(read, CountedStream):
-            return mp4_head_fragmented(bytes(read.head))
+            return read.head is not None and mp4_head_fragmented(bytes(read.head))
         try:
             if path == "-" and read is not None:  # stdin redirected from a file
                 head = os.pread(read.fileno(), HEAD_BYTES, 0)  # type: ignore[attr-defined]
