@@ -221,6 +221,29 @@ def test_an_mpegts_stream_given_as_raw_frames_is_refused(tmp_path, name, options
                           timeout=120).returncode == 0
 
 
+def test_raw_rows_repeating_every_188_bytes_are_pixels_and_null_packets_a_stream(tmp_path):
+    """`vtrack run ramp.gray --raw 188x8 --pix-fmt gray ...`, a grey ramp 0x47, 0x4a, 0x4d, ...
+    on each row, was refused as 'an MPEG-TS stream': its rows put three byte-identical
+    packet headers (47 4a 4d 50) 188 bytes apart. A stream's headers differ (each PID's
+    continuity counter advances: c.ts begins 47401110, 47400010, 47500010), but for null
+    packets (PID 0x1FFF): the ramp tracks, a stream of null packets is still refused."""
+    ramp = np.array([(0x47 + 3 * x) % 256 for x in range(188)], np.uint8)
+    frames = tmp_path / "ramp.gray"
+    frames.write_bytes(np.tile(ramp, (8 * 3, 1)).tobytes())  # three 188x8 frames
+    nulls = tmp_path / "nulls.gray"
+    nulls.write_bytes((b"\x47\x1f\xff\x10" + b"\xff" * 184) * 24)  # 3 frames' bytes
+    command = ["run", "--raw", "188x8", "--pix-fmt", "gray", "--init", "1,1,4,4", "--no-video"]
+    done = CliRunner().invoke(main, [*command, str(frames), "-o", str(tmp_path / "ramp")])
+    assert done.exit_code == 0, done.output
+    rows = (tmp_path / "ramp" / "track.csv").read_text().splitlines()
+    assert len(rows) == 1 + 3
+    done = CliRunner().invoke(main, [*command, str(nulls), "-o", str(tmp_path / "nulls")])
+    assert one_error_line(done) == (f"vtrack: error: {nulls}: an MPEG-TS stream, not raw "
+                                    "frames: read it without --raw (its frames carry their own "
+                                    "size and pixel format)")
+    assert not (tmp_path / "nulls").exists()
+
+
 def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):
     """vtrack batch of a folder of a camera's .MXF clips said 'no inputs (video files or
     sequence folders ...)' though vtrack run tracks them and --help said inputs are the video

@@ -4,7 +4,7 @@ its last fragment, a Matroska/WebM recording cut inside a block.
 
 Only signatures of four bytes or more are taken, so raw pixels are not mistaken for one
 (JPEG's three are not); MPEG-TS, whose signature is one sync byte, is known by three packets'
-headers in a row.
+headers in a row whose continuity counters advance as a stream's do.
 """
 
 from __future__ import annotations
@@ -27,17 +27,42 @@ _TS_PACKETS = 3
 SIGNATURE_BYTES = 4 + (_TS_PACKETS - 1) * 192 + 4
 
 
+#: The PID of MPEG-TS null (stuffing) packets: their headers may repeat byte for byte.
+_TS_NULL_PID = 0x1FFF
+
+
 def _mpegts(head: bytes) -> bool:
     """Whether ``head`` begins :data:`_TS_PACKETS` MPEG-TS (or M2TS) packets: each a sync byte
     0x47, no transport error flag, and an adaptation field control that is not the reserved 0
-    (so a flat run of 0x47 bytes, a grey raw frame, is none)."""
+    (so a flat run of 0x47 bytes, a grey raw frame, is none), in an order a stream has
+    (:func:`_ts_sequence`: a raw frame whose rows repeat every packet is none)."""
     for first, size in _TS_LAYOUTS:
         starts = range(first, first + _TS_PACKETS * size, size)
         if len(head) >= starts[-1] + 4 and all(
                 head[at] == 0x47 and not head[at + 1] & 0x80 and head[at + 3] & 0x30
-                for at in starts):
+                for at in starts) and _ts_sequence([head[at + 1:at + 4] for at in starts]):
             return True
     return False
+
+
+def _ts_sequence(headers: list[bytes]) -> bool:
+    """Whether packet headers (their three bytes after the sync byte) follow one another as in
+    a stream: a packet of a PID that carries a payload advances that PID's continuity counter
+    by one (mod 16) from its last packet's, one without a payload keeps it. Null packets
+    (PID 0x1FFF) count no counter. Three identical headers of another PID (a raw frame's
+    repeating rows) break this rule."""
+    last: dict[int, int] = {}
+    for header in headers:
+        pid = (header[0] & 0x1F) << 8 | header[1]
+        counter = header[2] & 0x0F
+        if pid == _TS_NULL_PID:
+            continue
+        if pid in last:
+            step = 1 if header[2] & 0x10 else 0
+            if counter != (last[pid] + step) % 16:
+                return False
+        last[pid] = counter
+    return True
 
 
 def container_kind(head: bytes) -> str | None:
