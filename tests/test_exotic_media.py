@@ -221,6 +221,29 @@ def test_an_mpegts_stream_given_as_raw_frames_is_refused(tmp_path, name, options
                           timeout=120).returncode == 0
 
 
+def test_an_mpegts_stream_given_as_frames_smaller_than_its_signature_is_refused(tmp_path):
+    """`cat c.ts | vtrack run - --raw 8x8 --pix-fmt gray --init 1,1,4,4 --no-video` tracked the
+    MPEG-TS bytes as pixels (exit 0): only the first frame's bytes, 64 of the 392 that show
+    three packet headers, were looked at (and a first read shorter than the signature looked
+    at what the frame's buffer held before). The first 392 bytes are gathered across the
+    frames before any is tracked now."""
+    clip = _red_target_clip(tmp_path / "c.ts", "mpegts", "libx264", frames=10, rate=30,
+                            codec_options={"preset": "ultrafast"})
+    options = ["--raw", "8x8", "--pix-fmt", "gray", "--init", "1,1,4,4", "--no-video", "-o"]
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", *options,
+                           str(tmp_path / "out")], input=clip.read_bytes(),
+                          capture_output=True, timeout=120)
+    assert (done.returncode, done.stderr.decode()) == (2, (
+        "vtrack: error: -: an MPEG-TS stream, not raw frames: read it without --raw (its "
+        "frames carry their own size and pixel format)\n"))
+    assert not (tmp_path / "out").exists()
+    frames = tmp_path / "frames.gray"
+    frames.write_bytes(bytes(range(64)) * 3 + b"\x07" * 10)  # 3 frames, then stray bytes
+    result = CliRunner().invoke(main, ["run", str(frames), *options, str(tmp_path / "frames")])
+    assert result.exit_code == 1, result.output  # tracked as far as it goes
+    assert len((tmp_path / "frames" / "track.csv").read_text().splitlines()) == 1 + 3
+
+
 def test_raw_rows_repeating_every_188_bytes_are_pixels_and_null_packets_a_stream(tmp_path):
     """`vtrack run ramp.gray --raw 188x8 --pix-fmt gray ...`, a grey ramp 0x47, 0x4a, 0x4d, ...
     on each row, was refused as 'an MPEG-TS stream': its rows put three byte-identical

@@ -140,7 +140,7 @@ def _enlarge_pipe(fd: int) -> None:
         fcntl.fcntl(fd, _F_SETPIPE_SZ, PIPE_BYTES)
 
 
-def _read_full(stream: BinaryIO, view: memoryview) -> int:
+def _read_full(stream: BinaryIO | _AfterHead, view: memoryview) -> int:
     """Fill ``view`` from ``stream``; the number of bytes read (short only at end of stream)."""
     got = 0
     size = len(view)
@@ -150,6 +150,23 @@ def _read_full(stream: BinaryIO, view: memoryview) -> int:
             break
         got += n
     return got
+
+
+class _AfterHead:
+    """``stream`` read on from its first bytes ``head``, already read: what it hands over
+    starts with those (a read ends at their end)."""
+
+    def __init__(self, head: bytes, stream: BinaryIO) -> None:
+        self._head = memoryview(head)
+        self._stream = stream
+
+    def readinto(self, view: memoryview) -> int | None:
+        if not self._head:
+            return self._stream.readinto(view)
+        n = min(len(view), len(self._head))
+        view[:n] = self._head[:n]
+        self._head = self._head[n:]
+        return n
 
 
 def _refuse_a_container(label: str, head: bytes) -> None:
@@ -217,22 +234,32 @@ class RawSource(Source):
         except OSError as exc:
             raise InputError(f"{spec}: cannot be read ({os_reason(exc)})") from None
 
+    def _read_into(self, stream: BinaryIO | _AfterHead, view: memoryview, index: int) -> int:
+        """:func:`_read_full` of ``view`` (for frame ``index``): PartialInputError when
+        reading fails."""
+        try:
+            return _read_full(stream, view)
+        except OSError as exc:
+            raise PartialInputError(
+                f"{self._label}: reading stopped at frame {index} ({os_reason(exc)})", index
+            ) from None
+
     def _read_frames(self) -> Iterator[Frame]:
+        """The frames, once the input's first :data:`SIGNATURE_BYTES` bytes (across as many
+        frames as they take: a container given as tiny frames) were found to be no
+        container's or image's (:func:`_refuse_a_container`)."""
         fmt, ring, label = self._fmt, self._ring, self._label
+        head = bytearray(SIGNATURE_BYTES)
+        got = self._read_into(self._stream, memoryview(head), 0)
+        _refuse_a_container(label, bytes(head[:got]))
+        stream = _AfterHead(bytes(head[:got]), self._stream)
         index = 0
         while True:
             slot = ring[index % len(ring)]
             target = self._rgb if self._rgb is not None else slot
-            try:
-                got = _read_full(self._stream, memoryview(target).cast("B"))
-            except OSError as exc:
-                raise PartialInputError(
-                    f"{label}: reading stopped at frame {index} ({os_reason(exc)})", index
-                ) from None
+            got = self._read_into(stream, memoryview(target).cast("B"), index)
             if got == 0:
                 return
-            if index == 0:
-                _refuse_a_container(label, memoryview(target).cast("B")[:SIGNATURE_BYTES].tobytes())
             if got < fmt.frame_bytes:
                 raise PartialInputError(
                     f"{label}: raw stream ended with {got} stray bytes after {index} whole "
