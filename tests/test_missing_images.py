@@ -146,8 +146,9 @@ def test_a_late_start_neither_reads_nor_counts_the_images_before_it(
     with ImageFolderSource(str(images)) as source:  # a start in a gap: the image before it
         assert source.start_near(4) == 2
         assert [frame.index for frame in source] == [2, 6, 7, 8, 9, 10, 11]
-        # counted from the first frame tracked, 6: not frames 3..5 (it said 3), nor frame 1
-        assert source.frames_skipped == source.frames_missing == 0
+        # counted from the start, 4: frames 4 and 5 are the run's, missing as in a whole run;
+        # not frame 3 before it (it was counted), nor frame 1
+        assert source.frames_skipped == source.frames_missing == 2
 
 
 def test_a_late_start_by_time_counts_from_the_first_frame_tracked(tmp_path: Path) -> None:
@@ -194,6 +195,38 @@ def test_an_undecodable_image_at_a_start_by_time_is_not_the_runs(tmp_path: Path)
     record = json.loads((tmp_path / "out" / "run.json").read_text())
     assert (record["start_frame"], record["frames"]) == (32, 27)
     assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 0)
+
+
+def _started_at(given: Path, start: str, out: Path) -> tuple[str, int, int, int]:
+    """``vtrack run GIVEN -c s4 --start START``'s warnings, run.json ``start_frame``, the first
+    row of track.csv and ``frames_skipped``."""
+    done = vtrack("run", str(given), "-c", "s4", "--no-video", "--start", start, "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    record = json.loads((out / "run.json").read_text())
+    with (out / "track.csv").open(newline="") as handle:
+        first_row = int(next(csv.DictReader(handle))["frame"])
+    return done.stderr, record["start_frame"], first_row, record["summary"]["frames_skipped"]
+
+
+def test_a_chain_without_a_box_started_at_a_damaged_image_says_so(tmp_path: Path) -> None:
+    """In a folder whose 0011.jpg (frame 10) is junk, `vtrack run seq -c s4 --start 8` warned
+    "frame 10 skipped" (frames_skipped 1), but `--start 10` began at frame 11 saying nothing:
+    no warning, frames_skipped 0, start_frame 10 while track.csv began at 11. A start given as
+    a frame number is that frame, decoded or not, as in a whole run: frame 10 is warned of and
+    counted (and an image missing from the numbering there, frame 12 of `--start 12`, too).
+    A start by time begins at the first image decoded at or after it, as before."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 96, 72, 20, 30), folder)
+    images = folder / "img"
+    (images / "0011.jpg").write_bytes(b"not an image")
+    (images / "0013.jpg").unlink()
+    junk = (f"vtrack: warning: {images / '0011.jpg'}: not an image FFmpeg can decode (Invalid "
+            "data found when processing input); frame 10 skipped\n")
+    gap = (f"vtrack: warning: {images}: 1 image missing from the numbering (the first after "
+           "0012.jpg); their frames are skipped\n")
+    for start, said in (("8", (gap + junk, 8, 8, 2)), ("10", (gap + junk, 10, 11, 2)),
+                        ("12", (gap, 12, 13, 1)), ("0.33s", (gap, 11, 11, 1))):
+        assert _started_at(images, start, tmp_path / start) == said, start
 
 
 def test_the_resume_hint_of_a_chain_without_a_box_goes_on_over_a_missing_image(

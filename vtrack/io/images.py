@@ -256,13 +256,18 @@ class ImageFolderSource(Source):
         unreadable = 0
         turned_apart = False  # an image's own tag said another turn than the first's
         places, files = self._places[self._begin:], self._files[self._begin:]
-        # counted from the first image tracked (start_near, skip_to: the first decoded at or
-        # after the start): the gaps before it and the images read or undecodable before it
-        # are not the run's
+        # Skips count from the run's first frame on: a start given as a frame number
+        # (start_near) is that frame, decoded or not, as in a whole run; a start by time
+        # (skip_to) the first image decoded at or after it. The gaps before it and the images
+        # read or undecodable before it are not the run's.
         tracked = next((at for at, place in enumerate(places)
                         if self._tracked(place, place / fps)), len(places))
-        began = False  # the first image tracked was decoded
+        by_number = self._from_s is None
+        began = False  # the run's first frame was reached
         for at, (index, path) in enumerate(zip(places, files, strict=True)):
+            if by_number and not began and at >= tracked:
+                began = True
+                self._count_missing(self._begin + at, self._run_begins(index))
             try:
                 if index == 0:
                     pixels = first
@@ -291,9 +296,9 @@ class ImageFolderSource(Source):
                     f"{size[1]}x{size[0]} (stopped at frame {index})",
                     index,
                 )
-            if not began and at >= tracked:
+            if not began and at >= tracked:  # a start by time: its first image decoded
                 began = True
-                self._count_missing(places[at:], files[at:])
+                self._count_missing(self._begin + at, self._run_begins(index))
             time_s = index / fps
             if first.ndim == 2:  # the first image decides: a sequence is grey or colour
                 if pixels.ndim == 3:
@@ -307,17 +312,20 @@ class ImageFolderSource(Source):
             self.warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
                                  f"in all (the first {_NAMED_SKIPS} are named above)")
 
-    def _count_missing(self, places: list[int], files: list[Path]) -> None:
-        """Count as skipped (and missing, with a warning) the gaps in the numbering of
-        ``places`` (the images from the first one tracked on, named ``files``)."""
-        missing = places[-1] + 1 - places[0] - len(places)
+    def _count_missing(self, at: int, first: int) -> None:
+        """Count as skipped (and missing, with a warning) the places from frame ``first`` on
+        that no image is numbered for (the run's images are those from ``self._files[at]``,
+        the first numbered at or after ``first``, on)."""
+        places = self._places[at:]
+        missing = places[-1] + 1 - first - len(places)
         if missing:
             self._skipped += missing
             self._missing = missing
-            gap = next(i for i in range(1, len(places)) if places[i] != places[i - 1] + 1)
+            gap = next(i for i in range(at, len(places) + at)
+                       if self._places[i] != (first if i == at else self._places[i - 1] + 1))
             self.warnings.append(
                 f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
-                f"(the first after {files[gap - 1].name}); their frames are skipped")
+                f"(the first after {self._files[gap - 1].name}); their frames are skipped")
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_stored`."""

@@ -101,8 +101,8 @@ class Source(Closing, ABC):
     def frames_skipped(self) -> int:
         """Frames of the input that could not be decoded and were skipped (damage in the middle
         of a file, an unreadable image); later frames keep their indices. Counted from the
-        first frame tracked (after :meth:`start_near` or :meth:`skip_to`, the frames passed
-        over before it are not). Final once iteration has ended."""
+        run's first frame (:meth:`_run_begins`: after :meth:`start_near` or :meth:`skip_to`,
+        the frames passed over before it are not). Final once iteration has ended."""
         return 0
 
     @property
@@ -165,6 +165,13 @@ class Source(Closing, ABC):
         if self._prefetch is None and self._resumed is None:
             self._from_index, self._from_s = max(0, index), None
         return 0
+
+    def _run_begins(self, index: int) -> int:
+        """The place the run's frames begin at, given ``index``, the first frame tracked: a
+        start given as a frame number (:meth:`start_near`) is that frame, decoded or not (one
+        lost at or after it is the run's, skipped as in a whole run); a start by time
+        (:meth:`skip_to`) the first frame decoded at or after it, ``index``."""
+        return self._from_index if self._from_s is None else index
 
     def _tracked(self, index: int, time_s: float) -> bool:
         """Whether frame ``index`` at ``time_s`` is at or after the first frame tracked
