@@ -9,10 +9,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import av
 import pytest
 
 from vtrack.io.images import ImageFolderSource
-from vtrack.scenes import make_scene, write_image_sequence
+from vtrack.scenes import make_scene, write_image_sequence, write_video
 
 
 def vtrack(*args: str) -> subprocess.CompletedProcess:
@@ -213,8 +214,9 @@ def test_a_chain_without_a_box_started_at_a_damaged_image_says_so(tmp_path: Path
     "frame 10 skipped" (frames_skipped 1), but `--start 10` began at frame 11 saying nothing:
     no warning, frames_skipped 0, start_frame 10 while track.csv began at 11. A start given as
     a frame number is that frame, decoded or not, as in a whole run: frame 10 is warned of and
-    counted (and an image missing from the numbering there, frame 12 of `--start 12`, too).
-    A start by time begins at the first image decoded at or after it, as before."""
+    counted (and an image missing from the numbering there, frame 12 of `--start 12`, too;
+    and a video's frames lost there). A start by time begins at the first frame decoded at or
+    after it, as before."""
     folder = tmp_path / "seq"
     write_image_sequence(make_scene("smooth", 0, 96, 72, 20, 30), folder)
     images = folder / "img"
@@ -227,6 +229,21 @@ def test_a_chain_without_a_box_started_at_a_damaged_image_says_so(tmp_path: Path
     for start, said in (("8", (gap + junk, 8, 8, 2)), ("10", (gap + junk, 10, 11, 2)),
                         ("12", (gap, 12, 13, 1)), ("0.33s", (gap, 11, 11, 1))):
         assert _started_at(images, start, tmp_path / start) == said, start
+    # A video whose frames 10 and 11 were lost (a key frame each, cut out of the stream): the
+    # same, `--start 10` said nothing of them.
+    clip = write_video(make_scene("smooth", 0, 96, 72, 20, 30), tmp_path / "intra.ts",
+                       keyint=1)
+    cut = tmp_path / "cut.ts"
+    with av.open(str(clip)) as whole, av.open(str(cut), "w", format="mpegts") as target:
+        stream = target.add_stream_from_template(whole.streams.video[0])
+        for at, packet in enumerate(p for p in whole.demux(video=0) if p.size):
+            if at not in (10, 11):
+                packet.stream = stream
+                target.mux(packet)
+    lost = f"vtrack: warning: {cut}: 2 damaged frames could not be decoded and were skipped\n"
+    for start, said in (("8", (lost, 8, 8, 2)), ("10", (lost, 10, 12, 2)),
+                        ("0.33s", ("", 12, 12, 0))):
+        assert _started_at(cut, start, tmp_path / f"video{start}") == said, start
 
 
 def test_the_resume_hint_of_a_chain_without_a_box_goes_on_over_a_missing_image(

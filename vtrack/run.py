@@ -567,9 +567,8 @@ class _Resolved:
     init_ignored: Box | None = None
     #: The input's and ground truth's identity when the run started (run.json ``identity``).
     identity: dict[str, Any] = field(default_factory=dict)
-    #: The run's first frame (``--start N``, tracked unless the input skipped it: an image
-    #: folder's images skipped from it on are the run's; a time's first frame decoded at or
-    #: after it).
+    #: The run's first frame (``--start N``, tracked unless the input skipped it: the frames
+    #: skipped from it on are the run's; for a time the first frame decoded at or after it).
     start: int = 0
     #: The frame the input is read from: 0, or for a later ``start`` where the input can jump
     #: (:meth:`Source.start_near`: a constant-rate MP4 or MOV file's key frame at or before it,

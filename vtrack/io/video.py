@@ -569,7 +569,7 @@ class VideoSource(Source):
         self._frame_order = self._container.format.name in FRAME_ORDER_FORMATS
         self._t0 = self._first.time  # frame 0's timestamp: the others' places count from it
         self._start = 0  # the index of the frame iteration begins at (start_near)
-        #: Frame places left empty before the first frame tracked (None until it is read).
+        #: Frame places left empty before the run's first frame (None until it is read).
         self._uncounted: int | None = None
 
         self._rotation = quarter_turns(self._first.rotation)
@@ -620,7 +620,7 @@ class VideoSource(Source):
     def frames_skipped(self) -> int:
         """Packets the decoder refused while decoding; once the stream has ended, every frame
         place left empty after the damage (some pictures vanish without an error). Those
-        before the first frame tracked (:meth:`start_near`, :meth:`skip_to`) do not count."""
+        before the run's first frame (:meth:`_run_begins`) do not count."""
         if self._uncounted is None:  # no frame tracked yet
             return 0
         return max(0, self._dropped - self._uncounted)
@@ -781,7 +781,8 @@ class VideoSource(Source):
                 if info.frame_count_estimated and t is not None and t0 is not None:
                     _check_estimate(info, index, time_s, fps)
                 if self._uncounted is None and self._tracked(index, time_s):
-                    self._uncounted = index - yielded  # places passed over before it
+                    # places passed over before the run's frames (see _run_begins)
+                    self._uncounted = self._run_begins(index) - yielded
                 yield decoded_frame(decoded, index, time_s, self._rotation)
                 index += 1
                 yielded += 1
