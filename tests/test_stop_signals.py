@@ -68,3 +68,16 @@ def test_sigterm_to_vtrack_report_leaves_no_staged_plot(clip_factory: ClipFactor
     assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
     assert "Traceback" not in result.stderr
     assert _files(tmp_path / "rep") == []
+
+
+def test_sigterm_while_vtrack_scene_makes_its_scene_says_interrupted(tmp_path: Path) -> None:
+    """`vtrack scene smooth c.mp4 --frames 108000` spends its first seconds making the scene
+    (measuring every frame's ground truth) before it writes a frame; SIGTERM then killed it
+    without a word (exit 143, stderr empty): its stop handlers came only with the writing.
+    The clip's name here is one the writing refuses (.xyz), so the command's handlers are in
+    place only while the scene is made: the signal must land there."""
+    result = _terminated(["scene", "smooth", "c.xyz", "--frames", "108000"], tmp_path)
+    assert result.returncode == 143, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
+    assert "Traceback" not in result.stderr
+    assert _files(tmp_path) == []

@@ -91,21 +91,23 @@ def command(
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
-    scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps,
-                       names=_OPTION_NAMES)
-    first = scene.boxes[0] if scene.boxes else None
-    if first is not None and 0 < min(first.w, first.h) < MIN_BOX_SIDE:  # what run would refuse
-        raise ConfigError(f"scene {name} at {scene.width}x{scene.height}: its target starts "
-                          f"{first.w:.1f}x{first.h:.1f} pixels, under the "
-                          f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} a tracker starts from: give a "
-                          "larger --size")
-    progress = StepProgress(False, out.name, "frames", stats_period)
-    try:
-        with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary clip left behind
+    # SIGTERM as Ctrl-C from here on, while the scene is made too (a long clip's takes
+    # seconds): a word said, and no temporary clip left behind
+    with stopping_as_interrupted():
+        scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps,
+                           names=_OPTION_NAMES)
+        first = scene.boxes[0] if scene.boxes else None
+        if first is not None and 0 < min(first.w, first.h) < MIN_BOX_SIDE:  # run would refuse
+            raise ConfigError(f"scene {name} at {scene.width}x{scene.height}: its target "
+                              f"starts {first.w:.1f}x{first.h:.1f} pixels, under the "
+                              f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} a tracker starts from: give "
+                              "a larger --size")
+        progress = StepProgress(False, out.name, "frames", stats_period)
+        try:
             files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
                                progress=progress)
-    finally:
-        progress.close()
+        finally:
+            progress.close()
     extra = f" and {files.mot}" if files.mot else ""
     layout = f", {pix_fmt or 'bgr24'}" if fmt == "raw" else ""
     click.echo(
