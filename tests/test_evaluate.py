@@ -263,6 +263,11 @@ def test_read_boxes_origin_one(tmp_path):
          "'262.2;71.35;40.8;31.2' (numbers are separated by commas, tabs or spaces, not ';')"),
         ("1,2,3,4\n5|6|7|8\n", "line 2: expected 4 or 8 numbers, got '5|6|7|8' (numbers are "
          "separated by commas, tabs or spaces, not '|')"),
+        # the same with decimal commas: told to separate by commas, which read '262,20;71,35;
+        # 40,80;31,20' as 8 numbers, a polygon, without a word
+        ("262,20;71,35;40,80;31,20\n", "line 1: expected 4 or 8 numbers, got "
+         "'262,20;71,35;40,80;31,20' (decimal commas: write 262.20, not 262,20; numbers are "
+         "separated by commas, tabs or spaces, not ';')"),
     ],
 )
 def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):

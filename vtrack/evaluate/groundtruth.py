@@ -109,17 +109,28 @@ def _tokens(line: str) -> list[str]:
 _OTHER_SEPARATORS = re.compile(r"[;|/]+")
 
 
-def _other_separator(line: str) -> str | None:
-    """The separator vtrack does not take that splits ``line`` into numbers (``;`` in
-    ``10;20;30;40``), or None when the line is not numbers so separated."""
+def _separator_hint(line: str) -> str:
+    """What to change in ``line`` when a separator vtrack does not take splits it into numbers
+    (`` (numbers are separated by commas, tabs or spaces, not ';')`` for ``10;20;30;40``; with
+    decimal commas, ``262,20;71,35;...``, that they are to be points: putting commas for the
+    semicolons would give twice the numbers); else ``""``."""
     found = _OTHER_SEPARATORS.search(line)
     if found is None:
-        return None
+        return ""
+    separator = found.group()[0]
+    fields = [t.strip() for t in _OTHER_SEPARATORS.split(line.strip()) if t.strip()]
+    decimal = next((f for f in fields if "," in f), None)
     try:
-        [float(t) for t in _tokens(_OTHER_SEPARATORS.sub(",", line))]
+        if decimal is None:
+            [float(t) for t in _tokens(_OTHER_SEPARATORS.sub(",", line))]
+        else:
+            [float(t.replace(",", ".")) for t in fields]
     except ValueError:
-        return None
-    return found.group()[0]
+        return ""
+    rule = f"numbers are separated by commas, tabs or spaces, not {separator!r}"
+    if decimal is None:
+        return f" ({rule})"
+    return f" (decimal commas: write {decimal.replace(',', '.')}, not {decimal}; {rule})"
 
 
 def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
@@ -208,13 +219,9 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             raise InputError(f"{path} line {number}: blank; the file holds one box per frame "
                              "(0,0,0,0 or NaN where the target is out of view)")
         if len(values) not in (4, 8):
-            separator = None if values else _other_separator(line)
-            if separator is not None:
-                hint = f" (numbers are separated by commas, tabs or spaces, not {separator!r})"
-            elif tokens and not values and number == 1:
+            hint = "" if values else _separator_hint(line)
+            if not hint and tokens and not values and number == 1:
                 hint = " (no header line: the file holds only numbers)"
-            else:
-                hint = ""
             raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got "
                              f"{_quote(line)}{hint}")
         if any(math.isnan(v) for v in values):
