@@ -522,3 +522,23 @@ def test_a_config_given_twice_to_a_batch_is_said_so(tmp_path: Path) -> None:
     assert line.startswith(f"vtrack: error: --config {copy}: another config has the results "
                            "folder of 's0'")
     assert not out.exists()
+
+
+def test_a_config_file_given_twice_by_two_names_to_a_batch_is_said_so(tmp_path: Path) -> None:
+    """`vtrack batch in -c mine.toml -c ./mine.toml` (or `-c s0 -c .../vtrack/configs/s0.toml`,
+    the shipped file itself) said '--config ./mine.toml: another config has the results folder
+    of 'mine' (mine.toml); results are kept per name, rename one': the two spellings of one
+    file were compared as written. One file is one config, given twice."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    out = tmp_path / "out"
+    mine = tmp_path / "mine.toml"
+    mine.write_text(vtrack("stages", "s0", "--toml").output.replace('name = "s0"',
+                                                                    'name = "mine"'))
+    for first, second in ((str(mine), f"{tmp_path}/in/../mine.toml"),
+                          ("s0", str(shipped_configs()["s0"]))):
+        line = one_error_line(vtrack("batch", str(folder), "-c", first, "-c", second,
+                                     "-o", str(out)))
+        assert line == f"vtrack: error: --config {second}: given twice; each config runs " \
+                       "once on every input"
+    assert not out.exists()

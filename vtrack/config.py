@@ -210,6 +210,12 @@ def shipped_configs() -> dict[str, Path]:
     }
 
 
+def config_file(spec: str | os.PathLike[str]) -> Path:
+    """The file a config ``spec`` names, as :func:`load_config` reads it: a shipped config's
+    file for its name (``s2``), else the path given (not checked)."""
+    return shipped_configs().get(os.fspath(spec), Path(spec))
+
+
 def load_config(spec: str | Path | None = None) -> Config:
     """Load a shipped config by name (default: ``DEFAULT_CONFIG``) or a config file by path.
 
@@ -228,11 +234,8 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
                         f"vtrack.Config, got {type(spec).__name__}")
     if not os.fspath(spec).strip():  # ("" would be opened as the current folder)
         raise ConfigError(f"config: empty; give {CONFIG_HINT}")
-    path = Path(spec)
-    shipped = shipped_configs()
-    if str(spec) in shipped:
-        path = shipped[str(spec)]
-    elif not _is_file(path, str(spec)):
+    path = config_file(spec)
+    if not _is_file(path, str(spec)):
         kind = special_kind(path)
         if kind is not None:
             raise ConfigError(not_a_file(spec, kind, "config"))
@@ -243,7 +246,7 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
         else:
             raise ConfigError(
                 f"{spec}: no such config file or shipped config "
-                f"(shipped: {', '.join(sorted(shipped))})"
+                f"(shipped: {', '.join(sorted(shipped_configs()))})"
             )
     where = str(spec)
     try:

@@ -67,11 +67,12 @@ class _StopOnce:
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
-    from vtrack.config import load_config
+    from vtrack.config import config_file, load_config
     from vtrack.io.files import folder_name
 
     configs: dict[str, Config] = {}
     folders: dict[str, Config] = {}
+    files: dict[str, Path] = {}  # by results folder: the file each config was read from
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec)
         try:
@@ -79,8 +80,10 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
         except ConfigError as exc:  # name the config: the chain alone did not say which
             raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
                               "--config") from None
-        other = configs.get(config.name) or folders.get(folder_name(config.name))
-        if other is not None and other.source == config.source:
+        folder = folder_name(config.name)
+        other = configs.get(config.name) or folders.get(folder)
+        file = config_file(spec).resolve()  # ./mine.toml is mine.toml; s0 its shipped file
+        if other is not None and files.get(folder) == file:
             raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
                               "input")
         if other is not None:
@@ -88,7 +91,8 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
                 f"--config {spec}: another config has the results folder of '{config.name}' "
                 f"({other.source}); results are kept per name, rename one"
             )
-        configs[config.name] = folders[folder_name(config.name)] = config
+        configs[config.name] = folders[folder] = config
+        files[folder] = file
     return configs
 
 
