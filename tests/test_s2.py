@@ -145,7 +145,7 @@ def slab_scene(seed: int, lead: int = 30, hidden: int = 15) -> Scene:
     ]
 
     def events(truth: Truth) -> dict[str, tuple[int, int]]:
-        hidden_frames = np.flatnonzero([visible == 0.0 for _, _, visible in truth[1]])
+        hidden_frames = np.flatnonzero([visible == 0.0 for _, _, visible in truth[1].values()])
         return {"occluded": (int(hidden_frames[0]), int(hidden_frames[-1]) + 1)}
 
     compositor = Compositor(background, sprites, SensorNoise(3.0), seed)

@@ -218,14 +218,20 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
                       h * motion.uniform(*WALKWAY)))
     # a long clip: newcomers from a stream of their own (3), so the first targets stay as drawn
     # (looks from another, 4), entering just out of view
+    # (each kept over the frames it crosses the frame in only: a clip's memory and time grow
+    # with its length, not with its length times its newcomers)
     arrivals = spec.rng(3)
     arrive = float(PLOT_FRAMES)
+    starts: list[int | None] = [None] * len(paths)  # the first frame of a path's arrays
     while arrive < n:
         is_vehicle.append(bool(arrivals.random() < vehicles))
         ranges.append(VEHICLE_RANGES if is_vehicle[-1] else PEDESTRIAN_RANGES)
         side, depth = float(arrivals.choice((-1.0, 1.0))), h * arrivals.uniform(*WALKWAY)
         pace = _uniform(arrivals, "speed", ranges[-1]) * w / fps
-        paths.append((outside(len(ranges), side, depth) + side * pace * (t - arrive), depth))
+        start = outside(len(ranges), side, depth)
+        first, stop = _crossing(start, side * pace, arrive, _reach(height_at(depth)), w, n)
+        paths.append((start + side * pace * (t[first:stop] - arrive), depth))
+        starts.append(first)
         arrive += _uniform(arrivals, "arrival") * fps
     newcomers = spec.rng(4)
 
@@ -233,21 +239,27 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
     for track_id, (cx, feet) in enumerate(paths, start=1):
         vehicle = is_vehicle[track_id - 1]
         drawn = looks if track_id <= walkers else newcomers  # (the background's draws after)
+        first, frames = starts[track_id - 1], len(cx)
         tall = height_at(feet)
         if vehicle:
             tall *= _uniform(drawn, "height", VEHICLE_RANGES)
         wide = tall / _uniform(drawn, "aspect", ranges[track_id - 1])
-        cy = np.full(n, feet - tall / 2)
-        ax, ay = np.full(n, wide / 2), np.full(n, tall / 2)
+        cy = np.full(frames, feet - tall / 2)
+        ax, ay = np.full(frames, wide / 2), np.full(frames, tall / 2)
         if vehicle:
-            people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(drawn), track_id)))
-            shades.append(Shade(cx + shadow_side * 0.15 * tall, np.full(n, feet - 0.02 * tall),
-                                np.full(n, wide / 2 + 0.2 * tall), np.full(n, 0.12 * tall),
-                                shadow))
+            people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(drawn), track_id,
+                                            first)))
+            shades.append(Shade(cx + shadow_side * 0.15 * tall,
+                                np.full(frames, feet - 0.02 * tall),
+                                np.full(frames, wide / 2 + 0.2 * tall),
+                                np.full(frames, 0.12 * tall), shadow, first))
         else:
-            people.append((feet, Ellipse(cx, cy, ax, ay, _paint(drawn, ground), track_id)))
-            shades.append(Shade(cx + shadow_side * 0.35 * tall, np.full(n, feet - 0.02 * tall),
-                                np.full(n, 0.45 * tall), np.full(n, 0.07 * tall), shadow))
+            people.append((feet, Ellipse(cx, cy, ax, ay, _paint(drawn, ground), track_id,
+                                         first)))
+            shades.append(Shade(cx + shadow_side * 0.35 * tall,
+                                np.full(frames, feet - 0.02 * tall),
+                                np.full(frames, 0.45 * tall), np.full(frames, 0.07 * tall),
+                                shadow, first))
     people.sort(key=lambda p: p[0])  # farther (feet higher) first: nearer walkers in front
     style = BackgroundStyle(mean=ground, octaves=((80.0, 10.0), (20.0, 6.0), (4.0, 4.0)),
                             fine=4.0, shapes=2.0, shape_contrast=25.0, tint=(4.0, 0.0, -4.0),
@@ -277,6 +289,28 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
         }
 
     return assemble(spec, compositor, events)
+
+
+def _reach(tall: float) -> float:
+    """How far from its centre x a target ``tall`` pixels tall (a walker's height at its
+    depth, the tallest a target there is) or its shadow touches a pixel, at most: the widest
+    shape (a vehicle 1/0.3 times as wide as tall, 0.55 of a walker's height) or the farthest
+    shadow (0.35 + 0.45 of the height, a walker's), and the pixel a region adds on each side."""
+    vehicle = VEHICLE_RANGES["height"][1] * tall
+    widest = max(vehicle / VEHICLE_RANGES["aspect"][0] / 2 + 0.2 * vehicle + 0.15 * vehicle,
+                 tall / PEDESTRIAN_RANGES["aspect"][0] / 2, 0.8 * tall)
+    return widest + 2.0
+
+
+def _crossing(x0: float, velocity: float, arrive: float, reach: float, width: int,
+              frames: int) -> tuple[int, int]:
+    """The frames ``[first, stop)`` of ``0..frames`` on which something at
+    ``x0 + velocity * (t - arrive)`` (``velocity`` not 0) comes within ``reach`` pixels of the
+    frame's ``width`` (a frame more on either side, for rounding): the others it is out of view
+    on, with its shadow."""
+    ends = sorted((arrive + (-reach - x0) / velocity, arrive + (width + reach - x0) / velocity))
+    first = min(max(math.floor(ends[0]) - 1, 0), frames)
+    return first, min(max(math.ceil(ends[1]) + 2, first), frames)
 
 
 def _pace(x: np.ndarray, low: float, high: float) -> np.ndarray:

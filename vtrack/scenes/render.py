@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from statistics import NormalDist
 from typing import Protocol
 
@@ -198,9 +199,14 @@ class GlowPaint:
 
 
 class Sprite(Protocol):
-    """Something drawn over the background, frame by frame; later sprites are in front."""
+    """Something drawn over the background, frame by frame; later sprites are in front.
+
+    ``span``: the frames ``[start, stop)`` it may touch a pixel of the frame on, outside which
+    it is neither drawn nor measured (and its methods are not called); None: every frame.
+    """
 
     track_id: int | None
+    span: tuple[int, int] | None
 
     def box(self, index: int) -> Box:
         """Exact bounding box of the continuous shape on frame ``index``."""
@@ -222,7 +228,10 @@ class Sprite(Protocol):
 class Ellipse:
     """An axis-aligned ellipse moving along per-frame centres and semi-axes (float arrays).
 
-    ``track_id`` names it in the ground truth (None: scenery, e.g. a distractor).
+    ``track_id`` names it in the ground truth (None: scenery, e.g. a distractor). ``start``:
+    the arrays hold frames ``start, start + 1, ...`` only (its :attr:`span`; the caller
+    promises that it touches no pixel of the frame on the others: something that crosses the
+    frame once in a long clip keeps only those frames); None: they hold every frame.
     """
 
     def __init__(
@@ -233,12 +242,16 @@ class Ellipse:
         ay: np.ndarray,
         paint: Paint,
         track_id: int | None,
+        start: int | None = None,
     ) -> None:
         self.cx, self.cy, self.ax, self.ay = cx, cy, ax, ay
         self.paint = paint
         self.track_id = track_id
+        self.start = start or 0
+        self.span = None if start is None else (start, start + len(cx))
 
     def box(self, index: int) -> Box:
+        index -= self.start
         ax, ay = float(self.ax[index]), float(self.ay[index])
         return Box(float(self.cx[index]) - ax, float(self.cy[index]) - ay, 2.0 * ax, 2.0 * ay)
 
@@ -249,6 +262,7 @@ class Ellipse:
 
     def _local(self, index: int, region: Window) -> tuple[np.ndarray, np.ndarray]:
         """Normalised coordinates (u, v) of the pixel centres of ``region``."""
+        index -= self.start
         xs = np.arange(region.x0, region.x1, dtype=np.float64) + 0.5 - self.cx[index]
         ys = np.arange(region.y0, region.y1, dtype=np.float64) + 0.5 - self.cy[index]
         u = np.broadcast_to(xs[None, :] / self.ax[index], (region.height, region.width))
@@ -258,7 +272,7 @@ class Ellipse:
     def _alpha(self, index: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         # Signed distance to the rim to first order: (1 - r) / |grad r| with r = sqrt(u² + v²);
         # coverage of a pixel cut by a straight edge at distance d from its centre is d + 1/2.
-        ax, ay = self.ax[index], self.ay[index]
+        ax, ay = self.ax[index - self.start], self.ay[index - self.start]
         r = np.sqrt(u * u + v * v)
         grad_r_times_r = np.sqrt((u / ax) ** 2 + (v / ay) ** 2)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -290,7 +304,7 @@ class RoundedBox(Ellipse):
 
     def _alpha(self, index: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         # as Ellipse's: (1 - r) / |grad r| with r = (|u|^p + |v|^p)^(1/p)
-        p, ax, ay = self.POWER, self.ax[index], self.ay[index]
+        p, ax, ay = self.POWER, self.ax[index - self.start], self.ay[index - self.start]
         au, av = np.abs(u), np.abs(v)
         r = (au ** p + av ** p) ** (1.0 / p)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -304,8 +318,8 @@ class Shade(Ellipse):
     (colour kept), with a soft rim; scenery (no track id)."""
 
     def __init__(self, cx: np.ndarray, cy: np.ndarray, ax: np.ndarray, ay: np.ndarray,
-                 factor: float) -> None:
-        super().__init__(cx, cy, ax, ay, GlowPaint(0.0), track_id=None)
+                 factor: float, start: int | None = None) -> None:
+        super().__init__(cx, cy, ax, ay, GlowPaint(0.0), track_id=None, start=start)
         self.factor = factor
 
     def coverage(self, index: int, region: Window) -> np.ndarray:
@@ -328,6 +342,7 @@ class Pillar:
     """A static full-height foreground slab over columns ``[x0, x1)`` with its own texture."""
 
     track_id = None
+    span = None
 
     def __init__(self, x0: int, texture: np.ndarray) -> None:
         self.x0 = x0
@@ -354,6 +369,7 @@ class Panel:
     ``[start, end)`` (absent on the others): something that hides a target at once."""
 
     track_id = None
+    span = None
 
     def __init__(self, window: Window, colour: tuple[int, int, int], start: int, end: int) -> None:
         self.window, self.colour, self.start, self.end = window, colour, start, end
@@ -489,46 +505,69 @@ class Compositor:
     seed: int
     gain: np.ndarray | None = None
 
+    @cached_property
+    def _spans(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each sprite's first frame and the frame after its last (0 and no end: every frame)."""
+        spans = [sprite.span or (0, np.iinfo(np.int64).max) for sprite in self.sprites]
+        return np.array([s[0] for s in spans], np.int64), np.array([s[1] for s in spans], np.int64)
+
+    def _on(self, index: int) -> list[int]:
+        """The depths of the sprites whose span holds frame ``index``, back to front."""
+        starts, stops = self._spans
+        return np.flatnonzero((starts <= index) & (index < stops)).tolist()
+
     def render(self, index: int) -> np.ndarray:
         """Frame ``index`` as a uint8 BGR array of shape (height, width, 3)."""
         image = self.background.at(index)
-        for sprite in self.sprites:
-            sprite.draw(image, index)
+        for depth in self._on(index):
+            self.sprites[depth].draw(image, index)
         if self.gain is not None:
             lut = np.clip(np.rint(np.arange(256) * self.gain[index]), 0, 255).astype(np.uint8)
             image = cv2.LUT(image, lut)
         self.noise.apply(image, np.random.default_rng([self.seed, 2, index]))
         return image
 
-    def measure(
-        self, width: int, height: int, frames: int
-    ) -> dict[int, list[tuple[Box, float, float]]]:
-        """Per tracked sprite id, per frame: (box, in-frame fraction, visible fraction).
+    def measure(self, width: int, height: int, frames: int) -> dict[int, dict[int, Measured]]:
+        """Per tracked sprite id, per frame of its span (every frame without one): (box,
+        in-frame fraction, visible fraction).
 
         Fractions are of the shape's drawn coverage: in-frame counts what lies inside the frame,
         visible also removes what sprites drawn in front of it cover.
         """
-        truth: dict[int, list[tuple[Box, float, float]]] = {}
-        for depth, sprite in enumerate(self.sprites):
-            if sprite.track_id is None:
-                continue
-            rows = truth.setdefault(sprite.track_id, [])
-            for index in range(frames):
-                region = sprite.region(index)
-                inside = region.as_box().window(width, height)
-                if inside is None:
-                    rows.append((sprite.box(index), 0.0, 0.0))
-                    continue
-                alpha = sprite.coverage(index, region)
-                total = float(alpha.sum())
-                cut = (
-                    slice(inside.y0 - region.y0, inside.y1 - region.y0),
-                    slice(inside.x0 - region.x0, inside.x1 - region.x0),
-                )
-                seen = alpha[cut].copy()
-                in_frame = float(seen.sum()) / total
-                for front in self.sprites[depth + 1 :]:
-                    if _meet(front.region(index), inside):  # nothing covered outside its region
-                        seen *= 1.0 - front.coverage(index, inside)
-                rows.append((sprite.box(index), in_frame, float(seen.sum()) / total))
+        truth: dict[int, dict[int, Measured]] = {
+            sprite.track_id: {} for sprite in self.sprites if sprite.track_id is not None}
+        for index in range(frames):
+            on = self._on(index)
+            for place, depth in enumerate(on):
+                sprite = self.sprites[depth]
+                if sprite.track_id is not None:
+                    fronts = [self.sprites[front] for front in on[place + 1:]]
+                    truth[sprite.track_id][index] = _measured(sprite, fronts, index, width,
+                                                              height)
         return truth
+
+
+#: A sprite on one frame: (box, in-frame fraction, visible fraction).
+Measured = tuple[Box, float, float]
+
+
+def _measured(sprite: Sprite, fronts: Sequence[Sprite], index: int, width: int,
+              height: int) -> Measured:
+    """``sprite`` on frame ``index`` of a ``width`` x ``height`` frame, the sprites ``fronts``
+    in front of it: see :meth:`Compositor.measure`."""
+    region = sprite.region(index)
+    inside = region.as_box().window(width, height)
+    if inside is None:
+        return sprite.box(index), 0.0, 0.0
+    alpha = sprite.coverage(index, region)
+    total = float(alpha.sum())
+    cut = (
+        slice(inside.y0 - region.y0, inside.y1 - region.y0),
+        slice(inside.x0 - region.x0, inside.x1 - region.x0),
+    )
+    seen = alpha[cut].copy()
+    in_frame = float(seen.sum()) / total
+    for front in fronts:
+        if _meet(front.region(index), inside):  # nothing covered outside its region
+            seen *= 1.0 - front.coverage(index, inside)
+    return sprite.box(index), in_frame, float(seen.sum()) / total

@@ -120,12 +120,12 @@ def _first_run(mask: np.ndarray) -> tuple[int, int] | None:
 
 def _fractions(truth: Truth, track_id: int) -> tuple[np.ndarray, np.ndarray]:
     """(in-frame, visible) fractions of one track as arrays."""
-    rows = truth[track_id]
+    rows = truth[track_id].values()
     return np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
 
 
 def _centres(truth: Truth, track_id: int) -> np.ndarray:
-    return np.array([(r[0].cx, r[0].cy) for r in truth[track_id]])
+    return np.array([(r[0].cx, r[0].cy) for r in truth[track_id].values()])
 
 
 # -------------------------------------------------------------------------------- scenarios

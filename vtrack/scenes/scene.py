@@ -10,7 +10,7 @@ import numpy as np
 
 from vtrack.frame import BgrFrame
 from vtrack.geometry import Box
-from vtrack.scenes.render import Compositor
+from vtrack.scenes.render import Compositor, Measured
 
 
 @dataclass(frozen=True)
@@ -69,8 +69,9 @@ class Scene:
             yield BgrFrame(index, index / self.fps, bgr)
 
 
-#: Per track id, per frame: (box, in-frame fraction, visible fraction).
-Truth = dict[int, list[tuple[Box, float, float]]]
+#: Per track id, per frame (0-based; only those of its span for a track drawn on some frames
+#: only, see :class:`~vtrack.scenes.render.Sprite`): (box, in-frame fraction, visible fraction).
+Truth = dict[int, dict[int, Measured]]
 
 
 @dataclass(frozen=True)
@@ -100,9 +101,12 @@ def assemble(
     frames out of view, ...), so events always agree with the boxes and visibility.
     """
     truth = compositor.measure(spec.width, spec.height, spec.frames)
-    target = truth[1]
-    in_view = [[tid for tid, rows in sorted(truth.items()) if rows[i][1] > 0.0]
-               for i in range(spec.frames)]
+    target = [truth[1].get(i, (None, 0.0, 0.0)) for i in range(spec.frames)]
+    in_view: list[list[int]] = [[] for _ in range(spec.frames)]
+    for tid, rows in sorted(truth.items()):
+        for i, (_, in_frame, _) in rows.items():
+            if in_frame > 0.0:
+                in_view[i].append(tid)
     return Scene(
         name=spec.name,
         width=spec.width,
