@@ -661,13 +661,17 @@ def test_a_batch_s_config_keeps_one_label_beside_a_run_of_one_of_its_inputs(
     assert "- **never** [s0 (batch)] interrupted" in markdown
 
 
+@pytest.mark.parametrize("arguments", [["runs"], ["runs/smooth", "runs/occlusion"]])
 def test_the_vtrack_runs_under_one_results_argument_keep_one_label(
-        batch_out: tuple[Path, Path], tmp_path: Path) -> None:
+        batch_out: tuple[Path, Path], tmp_path: Path, arguments: list[str]) -> None:
     """`vtrack report batch runs`, runs/<input> a `vtrack run -o runs/<input>` of each of the
     batch's inputs with one of its configs: each was labelled by its own folder ("s0
     (runs/smooth)", "s0 (runs/occlusion)"), one input each in All inputs, with a warning that
     the configurations were scored on different inputs. The runs found under one argument, of
-    one config with the same values, are one label: "s0 (runs)", averaged over both inputs."""
+    one config with the same values, are one label: "s0 (runs)", averaged over both inputs.
+    So are they given as one argument each (`vtrack report batch runs/*`, the shell's glob:
+    they were labelled by their own arguments, with the warning): `vtrack run` results of
+    different inputs are one label, whichever argument each came from."""
     inputs, original = batch_out
     batch = tmp_path / "batch"
     shutil.copytree(original, batch)
@@ -677,7 +681,8 @@ def test_the_vtrack_runs_under_one_results_argument_keep_one_label(
                      str(inputs / f"{name}.gt.txt"), "--no-video", "--out", str(runs / name))
         assert ran.exit_code == 0, ran.output
     report = tmp_path / "report"
-    result = vtrack("report", str(batch), str(runs), "--out", str(report))
+    result = vtrack("report", str(batch), *(str(tmp_path / a) for a in arguments), "--out",
+                    str(report))
     assert result.exit_code == 0, result.output
     markdown = (report / "summary.md").read_text()
     assert _table_labels(markdown) == {

@@ -134,7 +134,7 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun],
     for label, group in _group(runs, lambda r: r.config).items():
         if all(len(same) == 1 for same in _group(group, lambda r: r.input).values()):
             continue
-        origins = _group(group, lambda r: belongs[id(r)])
+        origins = _joined(_group(group, lambda r: belongs[id(r)]), batches)
         if len(origins) < 2 or (not origins.keys() & batches
                                 and all(len(same) == 1 for same in origins.values())):
             continue  # (each a vtrack run of its own: told apart per input, below)
@@ -150,6 +150,33 @@ def _distinct_labels(runs: list[RunResult], failed: list[FailedRun],
             for run, place in zip(group, _places([r.folder for r in group]), strict=True):
                 run.config = f"{run.config} ({place})"
     return failed
+
+
+def _joined(origins: dict[str, list[RunResult]], batches: set[str]
+            ) -> dict[str, list[RunResult]]:
+    """``origins`` (results folder: its runs of one config label) with the ``vtrack run``
+    results (those not in ``batches``) of different inputs put together, whichever RESULTS
+    argument each came from (`vtrack report res runs/A runs/B`, a shell's glob: one results,
+    their common folder ``runs``); results that share an input stay apart, as do batches."""
+    kept = {origin: same for origin, same in origins.items() if origin in batches}
+    joined: list[tuple[list[str], list[RunResult]]] = []
+    for origin, same in origins.items():
+        if origin in batches:
+            continue
+        inputs = {r.input for r in same}
+        into = next((j for j in joined if not inputs & {r.input for r in j[1]}), None)
+        if into is None:
+            joined.append(([origin], list(same)))
+        else:
+            into[0].append(origin)
+            into[1].extend(same)
+    for places, same in joined:
+        common = os.path.commonpath(places) if len(places) > 1 else places[0]
+        if common in kept or common in origins and common not in places:
+            kept.update({place: origins[place] for place in places})  # (its name is taken)
+        else:
+            kept[common] = same
+    return kept
 
 
 #: A label of configs told apart by their values names at most this many.
