@@ -334,7 +334,8 @@ def test_an_input_named_like_the_batch_summary_gets_its_own_folder(
     input could never run."""
     folder = clips_folder(tmp_path, clip_factory, "summary.csv")
     (folder / "summary.csv").mkdir()  # a sequence folder of that name cannot be renamed
-    (folder / "summary.csv" / "img").mkdir()
+    shutil.copytree(clip_factory("smooth", width=W, height=H, frames=FRAMES,
+                                 fmt="images").path / "img", folder / "summary.csv" / "img")
     refused = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "no"))
     assert refused.exit_code != 0 and "'summary.csv' would have the results folder" in \
         refused.output
@@ -724,3 +725,36 @@ def test_a_sequence_of_two_targets_is_refused_by_a_batch_naming_its_files_and_th
     first = read_boxes(clip.gt, origin=1)[0]
     record = json.loads((tmp_path / "run" / "run.json").read_text())
     assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h])
+
+
+def test_only_folders_of_a_sequences_images_are_sequences_and_results_are_no_inputs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Any folder holding a color/ folder was a sequence, images in it or not: in5/ with a.mp4,
+    a.gt.txt and color/graded.mp4 (a colourist's output) failed as one input 'in5' ('no ground
+    truth or initial box') and a.mp4 was not run; a batch whose --out was in7/res took res
+    (its color/ results) as an input the second time; and in6/ with clip.mp4, clip.gt.txt,
+    one thumbnail.jpg and a groundtruth.txt ran as one sequence of 1 frame, clip not run."""
+    clips = clips_folder(tmp_path, clip_factory, "a")
+    image = next((clip_factory("smooth", width=W, height=H, frames=FRAMES,
+                               fmt="images").path / "img").iterdir())
+    in5, in6, in7 = (tmp_path / n for n in ("in5", "in6", "in7"))
+    (in5 / "color").mkdir(parents=True)
+    for name in ("a.mp4", "a.gt.txt"):
+        shutil.copy(clips / name, in5 / name)
+    shutil.copy(clips / "a.mp4", in5 / "color" / "graded.mp4")
+    in6.mkdir()
+    shutil.copy(clips / "a.mp4", in6 / "clip.mp4")
+    shutil.copy(clips / "a.gt.txt", in6 / "clip.gt.txt")
+    shutil.copy(clips / "a.gt.txt", in6 / "groundtruth.txt")
+    shutil.copy(image, in6 / "thumbnail.jpg")
+    in7.mkdir()
+    shutil.copy(clips / "a.mp4", in7 / "color.mp4")
+    shutil.copy(clips / "a.gt.txt", in7 / "color.gt.txt")
+    for folder, name in ((in5, "a"), (in6, "clip"), (in7, "color"), (in7, "color")):
+        out = in7 / "res" if folder == in7 else tmp_path / f"out-{folder.name}"
+        result = batch(str(folder), "-c", "s0", "--no-video", "-j", "1", "-o", str(out))
+        assert result.exit_code == 0, result.output
+        assert set(summary(out)) == {(name, "s0")}, result.output
+        assert summary(out)[name, "s0"]["status"] == "complete"
+    assert "1 video file in sub-folders is not an input" in batch(
+        str(in5), "-c", "s0", "--no-video", "-o", str(tmp_path / "out-in5")).stderr

@@ -121,14 +121,39 @@ def _unusable(path: Path) -> BatchInput:
 
 
 def is_sequence_folder(path: Path) -> bool:
-    """An image-sequence folder: it holds an ``img/`` folder (OTB), ``img1/`` (MOTChallenge)
-    or ``color/`` (VOT2017+), :func:`~vtrack.io.sidecar.sequence_images`; or its images
-    directly beside its ground truth (VOT before 2017, GOT-10k: ``groundtruth.txt``), the
-    images ``vtrack run FOLDER`` reads (:func:`~vtrack.io.images.holds_images`). A folder of
-    images without ground truth (a report's ``plots/``) is none."""
-    if sequence_images(path) is not None:
-        return True
-    return groundtruth_beside(path) is not None and holds_images(path)
+    """An image-sequence folder, one input: its images are those ``vtrack run FOLDER`` reads
+    (:func:`~vtrack.io.images.list_images`) and
+
+    - they are in ``img/`` (OTB) or ``img1/`` (MOTChallenge), names only sequences use; or
+    - in ``color/`` (VOT2017+), a name other folders have too (a colourist's output), beside
+      the sequence's ground truth (``groundtruth.txt``, ``groundtruth_rect.txt``); or
+    - directly in the folder (VOT before 2017, GOT-10k), beside its ground truth, at least
+      two (a folder's thumbnail is no sequence) and no video file (the folder is one of
+      videos: its ground truth is a video's).
+
+    A folder of images without ground truth (a report's ``plots/``) is none."""
+    images = sequence_images(path)
+    if images is not None and images.name != "color":
+        return holds_images(path)
+    if groundtruth_beside(path) is None:
+        return False
+    return holds_images(path) if images is not None else (
+        holds_images(path, 2) and not _holds_videos(path))
+
+
+def _holds_videos(folder: Path) -> bool:
+    """Whether ``folder`` holds a video file (by suffix) directly; False when it cannot be
+    listed."""
+    try:
+        return any(p.suffix.lower() in VIDEO_SUFFIXES for p in folder.iterdir())
+    except OSError:
+        return False
+
+
+def _results_folder(folder: Path) -> bool:
+    """Whether ``folder`` holds vtrack's results: a run's (``run.json``) or a batch's
+    (:func:`~vtrack.io.outdir.is_batch_folder`), whose files and folders are no inputs."""
+    return (folder / "run.json").is_file() or is_batch_folder(folder)
 
 
 def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
@@ -150,14 +175,15 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     entries = sorted(folder.resolve().iterdir())
     named = [p for p in entries if p.suffix.lower() in VIDEO_SUFFIXES]
     videos = [p for p in named if p.is_file()]
-    found = [_sequence(p, gt_origin) for p in entries if p.is_dir() and is_sequence_folder(p)]
+    found = [_sequence(p, gt_origin) for p in entries
+             if p.is_dir() and not _results_folder(p) and is_sequence_folder(p)]
     found += [_unusable(p) for p in named if not p.is_file() and not p.is_dir()]
     found += [_video(p, name, gt_origin) for p, name in _video_names(
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
     if not found:
         raise InputError(
-            f"{folder}: no inputs (video files or sequence folders with an img/, img1/ or "
-            "color/ folder, or images beside their groundtruth.txt)"
+            f"{folder}: no inputs (video files or sequence folders: images in img/ or img1/, "
+            "or in color/ or the folder itself beside their groundtruth.txt)"
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:
@@ -215,7 +241,7 @@ def nested_videos(folder: Path) -> list[Path]:
             continue
         for root, dirs, files in os.walk(top):
             here = Path(root)
-            if (here / "run.json").is_file() or is_batch_folder(here):
+            if _results_folder(here):
                 dirs.clear()
                 continue
             dirs[:] = [d for d in dirs if not is_sequence_folder(here / d)]

@@ -78,11 +78,12 @@ def _image_files(folder: Path) -> Iterator[Path]:
             if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file())
 
 
-def holds_images(folder: Path) -> bool:
-    """Whether ``folder`` (or its images' folder, :func:`sequence_images`) holds an image, as
-    :func:`list_images` lists them; False when it cannot be listed."""
+def holds_images(folder: Path, count: int = 1) -> bool:
+    """Whether ``folder`` (or its images' folder, :func:`sequence_images`) holds at least
+    ``count`` (>= 1) images, as :func:`list_images` lists them; False when it cannot be
+    listed."""
     try:
-        return next(_image_files(folder), None) is not None
+        return len(list(islice(_image_files(folder), count))) == count
     except OSError:
         return False
 
