@@ -758,3 +758,25 @@ def test_only_folders_of_a_sequences_images_are_sequences_and_results_are_no_inp
         assert summary(out)[name, "s0"]["status"] == "complete"
     assert "1 video file in sub-folders is not an input" in batch(
         str(in5), "-c", "s0", "--no-video", "-o", str(tmp_path / "out-in5")).stderr
+
+
+def test_a_flat_sequence_is_one_input_by_one_rule_with_otbs_boxes_and_an_init_box(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """Discovery and --gt-origin auto each had a rule of what a sequence folder is: images
+    directly beside groundtruth_rect.txt were a batch input whose OTB boxes were read 0-based
+    (one pixel off), and images beside the init.txt of vtrack select (which vtrack run reads)
+    were none: 'no inputs'. One rule (is_sequence_folder) now decides for both."""
+    from vtrack.evaluate import read_boxes
+
+    clip = clip_factory("smooth", width=W, height=H, frames=20, fmt="images")
+    first = read_boxes(clip.gt, origin=1)[0]  # vtrack scene writes OTB's 1-based boxes
+    for name, box_file in (("otb", "groundtruth_rect.txt"), ("picked", "init.txt")):
+        shutil.copytree(clip.path / "img", tmp_path / name / "seq")
+        shutil.copy(clip.gt, tmp_path / name / "seq" / box_file)
+    (tmp_path / "picked" / "seq" / "init.txt").write_text(first.text() + "\n")
+    for name in ("otb", "picked"):
+        out = tmp_path / f"out-{name}"
+        result = batch(str(tmp_path / name), "-c", "s0", "--no-video", "-o", str(out))
+        assert result.exit_code == 0, result.output
+        record = json.loads((out / "seq" / "s0" / "run.json").read_text())
+        assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h]), name

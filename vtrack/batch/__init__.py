@@ -14,9 +14,9 @@ sub-folders are not inputs: :func:`nested_videos` finds them, for the batch to w
   ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
   (MOTChallenge, for multi-target configs);
 - sequence folders (:func:`is_sequence_folder`: images in OTB's ``img/`` or MOTChallenge's
-  ``img1/``; in VOT2017+'s ``color/`` beside ``groundtruth.txt``; or VOT's older layout, at
-  least two images directly beside ``groundtruth.txt`` and no video), with ground truth inside
-  them (results folders, a run's or a batch's, are none):
+  ``img1/``; in VOT2017+'s ``color/`` beside ``groundtruth.txt`` (``groundtruth_rect.txt``,
+  ``init.txt``); or VOT's older layout, at least two images directly beside it and no video),
+  with ground truth inside them (results folders, a run's or a batch's, are none):
   ``groundtruth_rect.txt`` or ``groundtruth.txt`` (single target) and ``groundtruth_mot.txt``,
   ``gt.txt`` or ``gt/gt.txt`` (MOTChallenge).
 

@@ -10,25 +10,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError, plural
-from vtrack.evaluate.groundtruth import groundtruth_beside, gt_origin_of
+from vtrack.evaluate.groundtruth import groundtruth_beside, gt_origin_of, is_sequence_folder
 from vtrack.io.files import folder_name
-from vtrack.io.images import holds_images
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
 from vtrack.io.sidecar import VIDEO_SIDECAR as VIDEO_INIT
-from vtrack.io.sidecar import sequence_images
+from vtrack.io.specs import VIDEO_SUFFIXES
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
 SUMMARY_FILE = BATCH_SUMMARY
-#: File suffixes taken as video inputs (anything else beside them is ignored): what phones,
-#: cameras (MXF, DV, HDV .m2t, camcorders' .mod/.tod, GoPro's .lrv), DVDs, IP cameras (ASF,
-#: Dahua's .dav) and tools write.
-VIDEO_SUFFIXES = frozenset({
-    ".mp4", ".m4v", ".mov", ".qt", ".mkv", ".webm", ".avi", ".divx", ".ts", ".mts", ".m2ts",
-    ".m2t", ".mpg", ".mpeg", ".m2v", ".vob", ".mod", ".tod", ".mxf", ".dv", ".flv", ".f4v",
-    ".wmv", ".asf", ".ogv", ".3gp", ".3g2", ".lrv", ".dav", ".nut", ".ivf", ".y4m", ".h264",
-    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg",
-})
 #: MOTChallenge ground truth inside a sequence folder, first found wins.
 SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
 #: MOTChallenge ground truth beside ``name.mp4``.
@@ -120,36 +110,6 @@ def _unusable(path: Path) -> BatchInput:
     return BatchInput(name=path.name, path=path, problem=f"{path}: {reason}")
 
 
-def is_sequence_folder(path: Path) -> bool:
-    """An image-sequence folder, one input: its images are those ``vtrack run FOLDER`` reads
-    (:func:`~vtrack.io.images.list_images`) and
-
-    - they are in ``img/`` (OTB) or ``img1/`` (MOTChallenge), names only sequences use; or
-    - in ``color/`` (VOT2017+), a name other folders have too (a colourist's output), beside
-      the sequence's ground truth (``groundtruth.txt``, ``groundtruth_rect.txt``); or
-    - directly in the folder (VOT before 2017, GOT-10k), beside its ground truth, at least
-      two (a folder's thumbnail is no sequence) and no video file (the folder is one of
-      videos: its ground truth is a video's).
-
-    A folder of images without ground truth (a report's ``plots/``) is none."""
-    images = sequence_images(path)
-    if images is not None and images.name != "color":
-        return holds_images(path)
-    if groundtruth_beside(path) is None:
-        return False
-    return holds_images(path) if images is not None else (
-        holds_images(path, 2) and not _holds_videos(path))
-
-
-def _holds_videos(folder: Path) -> bool:
-    """Whether ``folder`` holds a video file (by suffix) directly; False when it cannot be
-    listed."""
-    try:
-        return any(p.suffix.lower() in VIDEO_SUFFIXES for p in folder.iterdir())
-    except OSError:
-        return False
-
-
 def _results_folder(folder: Path) -> bool:
     """Whether ``folder`` holds vtrack's results: a run's (``run.json``) or a batch's
     (:func:`~vtrack.io.outdir.is_batch_folder`), whose files and folders are no inputs."""
@@ -183,7 +143,8 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     if not found:
         raise InputError(
             f"{folder}: no inputs (video files or sequence folders: images in img/ or img1/, "
-            "or in color/ or the folder itself beside their groundtruth.txt)"
+            "or in color/ or the folder itself beside their groundtruth.txt, "
+            "groundtruth_rect.txt or init.txt)"
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:

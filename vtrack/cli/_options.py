@@ -127,7 +127,8 @@ def gt_origin_option() -> Callable[[Any], Any]:
         show_default=True, callback=_origin,
         help="Origin of single-target ground-truth boxes: 1 for MATLAB-style 1-based boxes "
              "(OTB), 0 for 0-based. auto: 1 for OTB's groundtruth_rect.txt (.N.txt) in a sequence "
-             "folder (one holding img/, img1/ or color/) and groundtruth.txt beside img/ "
+             "folder (img/, img1/, color/ or its images beside it: the folders vtrack batch "
+             "takes) and groundtruth.txt beside img/ "
              "(UAV123, LaSOT), else 0 (VOT's groundtruth.txt beside its images or color/, "
              "name.gt.txt beside a video). "
              "MOTChallenge ground truth is read as written, as TrackEval reads it.")

@@ -162,9 +162,10 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
 
     Inputs are the video files directly in FOLDER, known by their names (.mp4, .mov, .mkv,
     .mxf, .ts, .avi ...: the README lists them; ground truth beside them: name.gt.txt or
-    name.txt, MOTChallenge name.mot.txt) and its sequence folders holding img/, MOTChallenge's
-    img1/ or VOT's color/, or their images beside their ground truth (VOT's layout; ground
-    truth inside: groundtruth_rect.txt or groundtruth.txt, MOTChallenge
+    name.txt, MOTChallenge name.mot.txt) and its sequence folders: images in img/ or
+    MOTChallenge's img1/, or in VOT's color/ or the folder itself (two or more, no video
+    beside them) beside their ground truth or init.txt (ground truth inside:
+    groundtruth_rect.txt or groundtruth.txt, MOTChallenge
     groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt); videos in other
     sub-folders are not inputs (a warning counts them: give such a folder as FOLDER). Without
     ground truth, single-target configs start from the box in name.init.txt (init.txt in a

@@ -17,8 +17,10 @@ from typing import NamedTuple
 
 from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
+from vtrack.io.images import holds_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
-from vtrack.io.sidecar import sequence_images
+from vtrack.io.sidecar import SEQUENCE_SIDECAR, sequence_images
+from vtrack.io.specs import VIDEO_SUFFIXES
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
 _SEPARATORS = re.compile(r"[,\s]+")
@@ -80,18 +82,60 @@ def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
     """The origin to read ``path``'s boxes with: ``origin`` when given (0 or 1); for None
     (``--gt-origin auto``) 1 for the layouts of the MATLAB toolkits (OTB, UAV123, LaSOT):
     OTB's :data:`ONE_BASED_GT` (or one target's ``groundtruth_rect.N.txt``,
-    :func:`numbered_groundtruth`) inside a sequence folder
-    (:func:`~vtrack.io.sidecar.sequence_images`), and ``groundtruth.txt`` beside an ``img/``
-    folder; else 0: VOT's ``groundtruth.txt`` in VOT's own layouts (images beside it, or
-    VOT2017+'s ``color/``: the VOT toolkit's pixel 0 is the image's first), ``vtrack scene``'s
-    ``NAME.gt.txt``."""
+    :func:`numbered_groundtruth`) inside a sequence folder (:func:`is_sequence_folder`, the
+    folders ``vtrack batch`` takes: in any of its layouts), and ``groundtruth.txt`` in a
+    sequence folder whose images are in ``img/``; else 0: VOT's ``groundtruth.txt`` in VOT's
+    own layouts (images beside it, or VOT2017+'s ``color/``: the VOT toolkit's pixel 0 is the
+    image's first), ``vtrack scene``'s ``NAME.gt.txt``, any file outside a sequence folder."""
     if origin is not None:
         return origin
     path = Path(path)
     otb = path.name == ONE_BASED_GT or _NUMBERED_GT.fullmatch(path.name) is not None
-    if otb:
-        return 1 if sequence_images(path.parent) is not None else 0
-    return 1 if path.name in SEQUENCE_GT and (path.parent / "img").is_dir() else 0
+    if not (otb or path.name in SEQUENCE_GT) or not is_sequence_folder(path.parent):
+        return 0
+    images = sequence_images(path.parent)
+    return 1 if otb or (images is not None and images.name == "img") else 0
+
+
+def is_sequence_folder(path: str | PathLike[str]) -> bool:
+    """Whether ``path`` is an image-sequence folder, one input (``vtrack batch`` takes it as
+    one; ``--gt-origin auto`` reads OTB's boxes in it as 1-based, :func:`gt_origin_of`): the
+    images ``vtrack run FOLDER`` reads (:func:`~vtrack.io.images.list_images`) are
+
+    - in ``img/`` (OTB) or ``img1/`` (MOTChallenge), names only sequences use; or
+    - in ``color/`` (VOT2017+), a name other folders have too (a colourist's output), beside
+      what says which target to track (:func:`_names_a_target`); or
+    - directly in the folder (VOT before 2017, GOT-10k, a folder ``vtrack select`` gave a
+      box), beside what says which target to track, at least two of them (a folder's
+      thumbnail is no sequence) and no video file (a folder of videos: its ground truth is
+      theirs).
+
+    A folder of images without any of these files (a report's ``plots/``) is none."""
+    path = Path(path)
+    images = sequence_images(path)
+    if images is not None and images.name != "color":
+        return holds_images(path)
+    if not _names_a_target(path):
+        return False
+    return holds_images(path) if images is not None else (
+        holds_images(path, 2) and not _holds_videos(path))
+
+
+def _names_a_target(folder: Path) -> bool:
+    """Whether ``folder`` holds a sequence's single-target ground truth (:data:`SEQUENCE_GT`,
+    :func:`numbered_groundtruth`) or its first box (``init.txt``, what ``vtrack select``
+    writes)."""
+    return (groundtruth_beside(folder) is not None or bool(numbered_groundtruth(folder))
+            or (folder / SEQUENCE_SIDECAR).is_file())
+
+
+def _holds_videos(folder: Path) -> bool:
+    """Whether ``folder`` holds a video file (by suffix, :data:`~vtrack.io.specs.VIDEO_SUFFIXES`)
+    directly; False when it cannot be listed."""
+    try:
+        return any(p.suffix.lower() in VIDEO_SUFFIXES for p in folder.iterdir())
+    except OSError:
+        return False
 
 
 def _quote(text: str) -> str:
