@@ -695,13 +695,16 @@ def test_vot_layouts_are_batch_inputs_and_their_ground_truth_is_read_as_vot_writ
         assert record["init"] == pytest.approx(first), name
 
 
+@pytest.mark.parametrize("start", [None, "5"])
 def test_a_sequence_of_two_targets_is_refused_by_a_batch_naming_its_files_and_the_way_out(
-        clip_factory: ClipFactory, tmp_path: Path) -> None:
+        clip_factory: ClipFactory, tmp_path: Path, start: str | None) -> None:
     """OTB's two-target sequences (img/ and groundtruth_rect.1.txt, groundtruth_rect.2.txt:
     Jogging, Skating2, Human4) failed in a batch with 'no ground truth or initial box
     (groundtruth_rect.txt, groundtruth.txt, init.txt)', as if they had none; and the way out,
     vtrack run with --gt groundtruth_rect.1.txt, read OTB's 1-based boxes as 0-based. The row
-    now names the files and the command; that command reads them as OTB's."""
+    now names the files and the command; that command reads them as OTB's. With --start 5
+    the row said '... needs the target's box in that frame, and there is no ground truth
+    (groundtruth_rect.txt, groundtruth.txt; ...)', as if there were none: it says the same."""
     from vtrack.evaluate import read_boxes
 
     clip = clip_factory("smooth", width=160, height=120, frames=20, fmt="images")
@@ -709,7 +712,9 @@ def test_a_sequence_of_two_targets_is_refused_by_a_batch_naming_its_files_and_th
     shutil.copytree(clip.path / "img", sequence / "img")
     for n in (1, 2):
         shutil.copy(clip.gt, sequence / f"groundtruth_rect.{n}.txt")
-    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-o", str(tmp_path / "out"))
+    starts = [] if start is None else ["--start", start]
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-o", str(tmp_path / "out"),
+                   *starts)
     assert result.exit_code == 1, result.output
     with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
         (row,) = csv.DictReader(handle)
@@ -718,11 +723,11 @@ def test_a_sequence_of_two_targets_is_refused_by_a_batch_naming_its_files_and_th
             in row["error"]), row["error"]
     way_out = row["error"].rsplit("e.g. vtrack ", 1)[1].split()
     assert way_out == ["run", str(sequence), "-c", "s0", "--gt",
-                       str(sequence / "groundtruth_rect.1.txt")], row["error"]
+                       str(sequence / "groundtruth_rect.1.txt"), *starts], row["error"]
     ran = CliRunner().invoke(main, [*way_out, "--no-video", "-o", str(tmp_path / "run")],
                              catch_exceptions=False)
     assert ran.exit_code == 0, ran.output
-    first = read_boxes(clip.gt, origin=1)[0]
+    first = read_boxes(clip.gt, origin=1)[int(start or 0)]
     record = json.loads((tmp_path / "run" / "run.json").read_text())
     assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h])
 

@@ -191,23 +191,25 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     None when it has none but has ground truth (the run takes its first box). The sidecar
     holds frame 0's box: a batch that starts later (``--start``) takes the ground truth's box
     of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither
-    (naming the MOTChallenge ground truth the input has, which only multi-target configs read),
-    or the sidecar is malformed."""
+    (for an OTB sequence of several targets, naming their files and the ``vtrack run`` that
+    tracks one, whether or not it starts later; else naming the MOTChallenge ground truth the
+    input has, which only multi-target configs read), or the sidecar is malformed."""
     box = None if settings.starts_later else read_sidecar(item.path)
     if box is None and gt_path is None:
-        names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
-        if settings.starts_later:
-            given = COMMAND_NAMES.start_given(settings.start, settings.start_s)
-            raise InputError(f"{item.path}: {given}: config '{config}' needs the target's box "
-                             "in that frame, and there is no ground "
-                             f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
+        given = COMMAND_NAMES.start_given(settings.start, settings.start_s)
         targets = numbered_groundtruth(item.path) if item.path.is_dir() else []
         if targets:  # OTB's sequences of several targets: which one is the user's to say
             raise InputError(
                 f"{item.path}: config '{config}' tracks one given target, and the sequence has "
                 f"{len(targets)} targets' ground truth ({', '.join(p.name for p in targets)}), "
                 "none of which a batch takes by itself: track each with vtrack run, e.g. "
-                f"vtrack run {item.path} -c {config} --gt {targets[0]}")
+                f"vtrack run {item.path} -c {config} --gt {targets[0]}"
+                + (f" {given}" if settings.starts_later else ""))
+        names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
+        if settings.starts_later:
+            raise InputError(f"{item.path}: {given}: config '{config}' needs the target's box "
+                             "in that frame, and there is no ground "
+                             f"truth ({', '.join(names[:-1])}; a sidecar box is frame 0's)")
         found = ""
         if item.mot_groundtruth is not None:  # a MOTChallenge sequence: its targets are many
             mot = item.mot_groundtruth.relative_to(item.path.parent)
