@@ -785,3 +785,26 @@ def test_a_flat_sequence_is_one_input_by_one_rule_with_otbs_boxes_and_an_init_bo
         assert result.exit_code == 0, result.output
         record = json.loads((out / "seq" / "s0" / "run.json").read_text())
         assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h]), name
+
+
+def test_a_batch_run_from_an_init_box_records_the_origin_vtrack_run_does(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A sequence folder without ground truth (its first box from init.txt, 0-based whatever
+    the origin) was found with gt_origin 1, which its run.json recorded ('gt_origin': 1 for a
+    run with no ground truth) where `vtrack run` of the same folder records 0."""
+    from vtrack.evaluate import read_boxes
+
+    clip = clip_factory("smooth", width=W, height=H, frames=20, fmt="images")
+    first = read_boxes(clip.gt, origin=1)[0]
+    sequence = tmp_path / "in" / "seq"
+    shutil.copytree(clip.path / "img", sequence / "img")
+    (sequence / "init.txt").write_text(first.text() + "\n")
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-o", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    ran = CliRunner().invoke(main, ["run", str(sequence), "-c", "s0", "--no-video", "-o",
+                                    str(tmp_path / "run")], catch_exceptions=False)
+    assert ran.exit_code == 0, ran.output
+    records = [json.loads((out / "run.json").read_text())["request"]
+               for out in (tmp_path / "out" / "seq" / "s0", tmp_path / "run")]
+    assert [r["gt_origin"] for r in records] == [0, 0]
+    assert records[0]["init"] == pytest.approx(list(first))

@@ -30,8 +30,9 @@ class BatchInput:
     """One input of a batch folder: its unique name (the results folder), path and ground truth.
 
     ``groundtruth`` is for single-target configs, ``mot_groundtruth`` for multi-target ones;
-    ``init`` holds the first box when there is no ``groundtruth``; ``gt_origin`` is the origin
-    of the boxes of ``groundtruth`` and ``init`` (see the module docstring).
+    ``init`` holds the first box when there is no ``groundtruth`` (0-based pixels, as every
+    sidecar file); ``gt_origin`` is the origin of the boxes of ``groundtruth`` (see the
+    module docstring), 0 when there is none, as ``vtrack run`` records it.
     """
 
     name: str
@@ -56,21 +57,28 @@ def _sequence(folder: Path, gt_origin: int | None) -> BatchInput:
         groundtruth=groundtruth,
         mot_groundtruth=_first(folder, SEQUENCE_MOT_GT),
         init=_first(folder, [SEQUENCE_INIT]),
-        gt_origin=(gt_origin_of(groundtruth, gt_origin) if groundtruth is not None
-                   else 1 if gt_origin is None else gt_origin),
+        gt_origin=_origin(groundtruth, gt_origin),
     )
 
 
 def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
     stem = path.stem
+    groundtruth = groundtruth_beside(path)
     return BatchInput(
         name=name,
         path=path,
-        groundtruth=groundtruth_beside(path),
+        groundtruth=groundtruth,
         mot_groundtruth=_first(path.parent, (p.format(stem) for p in VIDEO_MOT_GT)),
         init=_first(path.parent, [VIDEO_INIT.format(stem)]),
-        gt_origin=0 if gt_origin is None else gt_origin,
+        gt_origin=_origin(groundtruth, gt_origin),
     )
+
+
+def _origin(groundtruth: Path | None, gt_origin: int | None) -> int:
+    """The origin of ``groundtruth``'s boxes, as ``vtrack run --gt`` reads them
+    (:func:`~vtrack.evaluate.groundtruth.gt_origin_of`; ``gt_origin`` None: auto); 0 when
+    there is no ground truth (a sidecar's box is 0-based whatever the origin)."""
+    return 0 if groundtruth is None else gt_origin_of(groundtruth, gt_origin)
 
 
 def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:

@@ -65,9 +65,9 @@ def natural_key(name: str) -> tuple[tuple[int, int | str], ...]:
 
 
 def list_images(folder: Path) -> list[Path]:
-    """The images of a sequence folder in frame order (those of its ``img/`` or ``img1/`` if
-    it has one, :func:`sequence_images`; hidden files such as macOS ``._0001.jpg`` are not
-    images)."""
+    """The images of a sequence folder in frame order (those of its ``img/``, ``img1/`` or
+    ``color/`` if it has one, :func:`sequence_images`; hidden files such as macOS
+    ``._0001.jpg`` are not images)."""
     return sorted(_image_files(folder), key=lambda p: natural_key(p.name))
 
 

@@ -35,8 +35,8 @@ def sequence_images(folder: Path) -> Path | None:
 
 def sequence_of(folder: Path) -> Path | None:
     """The sequence folder ``SEQ`` when ``folder`` is its images' folder (``SEQ/img``,
-    ``SEQ/img1``: :data:`SEQUENCE_IMAGES`; ``.`` and ``..`` are resolved first, other paths
-    kept as given), else None."""
+    ``SEQ/img1``, ``SEQ/color``: :data:`SEQUENCE_IMAGES`; ``.`` and ``..`` are resolved
+    first, other paths kept as given), else None."""
     named = folder if folder.name not in ("", "..") else folder.resolve()
     return named.parent if named.name in SEQUENCE_IMAGES else None
 
