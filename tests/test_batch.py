@@ -370,6 +370,42 @@ def test_names_with_control_characters_keep_one_line_in_messages_and_the_report(
                for line in markdown) == 2
 
 
+def test_warnings_and_errors_naming_a_newline_are_one_line_in_every_command(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`vtrack batch` wrote a failed run's error and a run's warning (a ground truth shorter
+    than the clip) as 'vtrack: error: new' then 'line [s0]: failed: ...' on the next line,
+    when the input's name held a newline; `vtrack run` and `vtrack report` their warnings
+    alike. Every such line now writes the newline as '\\n' (vtrack.cli._messages)."""
+    folder = clips_folder(tmp_path, clip_factory, "new\nline", "no\ntruth")
+    (folder / "no\ntruth.gt.txt").unlink()  # s0 has no first box: the run fails
+    short = folder / "new\nline.gt.txt"  # fewer boxes than frames: a warning
+    short.write_text("".join(short.read_text().splitlines(keepends=True)[:5]))
+    runner = CliRunner()
+    out = tmp_path / "out"
+    done = runner.invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-o", str(out),
+                                "-j", "1"])
+    assert done.exit_code == 1, done.output
+    rest = [line for line in done.stderr.splitlines() if not line.startswith("vtrack: ")]
+    assert rest == [], done.stderr
+    assert "vtrack: error: no\\ntruth [s0]: failed: " in done.stderr
+    assert "vtrack: warning: new\\nline [s0]: " in done.stderr
+    assert all(line.startswith(("new\\nline [s0]: ", "no\\ntruth [s0]: ", "2 runs "))
+               for line in done.stdout.splitlines()), done.stdout
+    ran = runner.invoke(main, ["run", str(folder / "new\nline.mp4"), "-c", "s0", "--no-video",
+                               "--gt", str(short), "-o", str(tmp_path / "run"), "-q"])
+    assert ran.exit_code == 0, ran.output
+    assert ran.stderr.count("\n") == 1 and "new\\nline.gt.txt: ground truth has 5 boxes" in \
+        ran.stderr, ran.stderr
+    other = tmp_path / "other.gt.txt"  # for an input the report has no run of: a warning
+    other.write_text(short.read_text())
+    shown = runner.invoke(main, ["report", str(tmp_path / "run"), "-q", "-o",
+                                 str(tmp_path / "report"), "--gt", f"x\ny={other}"])
+    assert shown.exit_code == 0, shown.output
+    assert "vtrack: warning: --gt x\\ny=" in shown.stderr
+    assert all(line.startswith("vtrack: warning: ") for line in shown.stderr.splitlines()), \
+        shown.stderr
+
+
 def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
                                                   clip_factory: ClipFactory) -> None:
     folder = clips_folder(tmp_path, clip_factory, "good")

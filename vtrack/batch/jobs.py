@@ -83,7 +83,7 @@ class Outcome:
         is named inside it as given (``results/a/s0``), not by the absolute path it ran in."""
         label = f"{printable(self.input)} [{printable(self.config)}]"
         if self.status == STATUS_FAILED or self.summary is None:
-            line = f"{label}: {self.verdict}: {self.error}"
+            line = printable(f"{label}: {self.verdict}: {self.error}")  # one line
         else:
             summary = self.summary
             if results is not None:
@@ -98,13 +98,14 @@ class Outcome:
 
 
     def warnings(self) -> list[str]:
-        """The warnings of the run this job made (``vtrack: warning: NAME [CONFIG]: ...``, as
-        ``vtrack run`` says them after its run; they are in its ``run.json`` too): none for a
-        run not made now (complete before, or refused)."""
+        """The warnings of the run this job made, each headed by its input and config (``NAME
+        [CONFIG]: ...``; ``vtrack batch`` prints them as ``vtrack: warning:`` lines, as ``vtrack
+        run`` does after its run; they are in its ``run.json`` too): none for a run not made
+        now (complete before, or refused)."""
         if self.summary is None or self.resumed or self.kept is not None:
             return []
         label = f"{printable(self.input)} [{printable(self.config)}]"
-        return [f"vtrack: warning: {label}: {warning}" for warning in self.summary.warnings]
+        return [f"{label}: {warning}" for warning in self.summary.warnings]
 
 
 def _as_given(folder: Path, results: Path) -> Path:

@@ -21,7 +21,8 @@ from typing import Any
 import click
 
 from vtrack import __version__
-from vtrack.errors import VtrackError, printable
+from vtrack.cli._messages import error_line
+from vtrack.errors import VtrackError
 
 
 class _Group(click.Group):
@@ -58,10 +59,10 @@ class _Group(click.Group):
             sys.exit(exc.exit_code)
         except click.UsageError as exc:
             where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
-            click.echo(f"vtrack: error: {exc.format_message()}{where}", err=True)
+            click.echo(error_line(f"{exc.format_message()}{where}"), err=True)
             sys.exit(exc.exit_code)
         except click.ClickException as exc:
-            click.echo(f"vtrack: error: {exc.format_message()}", err=True)
+            click.echo(error_line(exc.format_message()), err=True)
             sys.exit(exc.exit_code)
         except click.Abort:
             click.echo("vtrack: interrupted", err=True)
@@ -72,7 +73,7 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except VtrackError as exc:  # one line, whatever names it quotes (a newline in one)
-            click.echo(f"vtrack: error: {printable(str(exc))}", err=True)
+            click.echo(error_line(str(exc)), err=True)
             sys.exit(exc.exit_code)
         except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM as errors.Interrupted
             click.echo("vtrack: interrupted", err=True)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import click
 from click.core import ParameterSource
 
+from vtrack.cli._messages import error_line, warn, warning_line
 from vtrack.cli._options import (
     Seconds,
     WholeNumber,
@@ -220,7 +221,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                      threads=max(1, cpu_count() // workers), force=force,
                      overwrite=overwrite or force)
         for warning in batch.warnings:
-            click.echo(f"vtrack: warning: {warning}", err=True)
+            warn(warning)
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
@@ -234,7 +235,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                     if not quiet:
                         progress.write(outcome.line(out_dir))
                     for warning in outcome.warnings():
-                        progress.write(warning, err=True)
+                        progress.write(warning_line(warning), err=True)
                     if (outcome.input, outcome.config) in to_run:
                         progress.finished(outcome.input, outcome.config,
                                           outcome.summary.frames if outcome.summary else 0)
@@ -248,7 +249,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                 if not quiet:
                     click.echo(outcome.line(out_dir))
                 for warning in outcome.warnings():
-                    click.echo(warning, err=True)
+                    warn(warning)
         _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None)
     if stopped is not None:
         raise stopped
@@ -263,10 +264,10 @@ def _warn_left_out(folder: Path, videos: list[Path]) -> None:
         return
     more = f" and {len(videos) - 1} more" if len(videos) > 1 else ""
     verb = "is not an input" if len(videos) == 1 else "are not inputs"
-    click.echo(f"vtrack: warning: {folder}: {plural(len(videos), 'video file')} in sub-folders "
-               f"{verb} ({videos[0]}{more}): a batch takes the videos directly in the folder "
-               "and its sequence folders (img/, img1/, color/); run vtrack batch on a sub-folder "
-               "to track its videos", err=True)
+    warn(f"{folder}: {plural(len(videos), 'video file')} in sub-folders {verb} "
+         f"({videos[0]}{more}): a batch takes the videos directly in the folder and its "
+         "sequence folders (img/, img1/, color/); run vtrack batch on a sub-folder to track "
+         "its videos")
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
@@ -298,5 +299,5 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
         click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
     for outcome in outcomes:
         if not outcome.ok and not (stopped and outcome.status == STATUS_INTERRUPTED):
-            click.echo(f"vtrack: error: {outcome.input} [{outcome.config}]: {outcome.verdict}: "
-                       f"{outcome.error}", err=True)
+            click.echo(error_line(f"{outcome.input} [{outcome.config}]: {outcome.verdict}: "
+                                  f"{outcome.error}"), err=True)

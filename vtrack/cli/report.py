@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._messages import warn
 from vtrack.cli._options import (
     gt_origin_option,
     refuse_gt_origin_without_gt,
@@ -51,7 +52,7 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     finally:
         progress.close()
     for warning in report.warnings:
-        click.echo(f"vtrack: warning: {warning}", err=True)
+        warn(warning)
     if not quiet:
         click.echo(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
                    f"-> {report.index}")

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from vtrack.cli._messages import error_line, warning_line
 from vtrack.cli._options import (
     FRAME_RATE,
     FrameSpan,
@@ -226,21 +227,20 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             progress.close()
         ending.code = _exit_code(summary)
         for warning in summary.warnings:
-            _say(f"vtrack: warning: {warning}", err=True)
+            _say(warning_line(warning), err=True)
         if not quiet:
             _say(summary.line(), err=stream == "-")
         if summary.interrupted_by == "SIGPIPE":
             pass  # the --stream reader went away (| head): quiet, as a pipe's writer; run.json
         elif summary.status == STATUS_INTERRUPTED:  # says why
-            _say(f"vtrack: error: {summary.error}; partial results in {summary.out_dir}",
-                 err=True)
+            _say(error_line(f"{summary.error}; partial results in {summary.out_dir}"), err=True)
             if summary.resume is not None:
                 _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
                                f"the same command with {summary.resume} and another --out"
                                + _ids_again(summary)), err=True)
         elif summary.status != STATUS_COMPLETE:
-            _say(f"vtrack: error: {summary.error}; results up to there are in "
-                 f"{summary.out_dir}", err=True)
+            _say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"),
+                 err=True)
     if ending.code:
         sys.exit(ending.code)
 

@@ -6,6 +6,7 @@ import contextlib
 
 import click
 
+from vtrack.cli._messages import warn
 from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
 
@@ -42,8 +43,7 @@ def command(input_spec: str, frame: int, port: int) -> None:
                    f"(Ctrl-C to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "
                    "HOST)", err=True)
         if server.unreadable:
-            click.echo(f"vtrack: warning: {server.unreadable}; the box you confirm replaces it",
-                       err=True)
+            warn(f"{server.unreadable}; the box you confirm replaces it")
         selection = server.wait()
     if selection.frame != 0:  # not saved: a sidecar box is frame 0's
         _print(f"--start {selection.frame} --init {format_box(selection.box)}", "it was not "

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._messages import warn
 from vtrack.cli._options import NumberWord
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 
@@ -104,10 +105,10 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
         frames = itertools.islice(iter(source), count)
         written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
         for warning in source.warnings:  # frames skipped as undecodable, as vtrack run says
-            click.echo(f"vtrack: warning: {warning}", err=True)
+            warn(warning)
     if written < count:
-        click.echo(f"vtrack: warning: {input_spec}: {plural(written, 'frame')} to write of the "
-                   f"{count} asked for (--frames)", err=True)
+        warn(f"{input_spec}: {plural(written, 'frame')} to write of the {count} asked for "
+             "(--frames)")
     click.echo(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
 
 
