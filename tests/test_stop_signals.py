@@ -47,11 +47,22 @@ def test_sigterm_to_vtrack_scene_leaves_no_temporary_clip(tmp_path: Path) -> Non
     assert _files(tmp_path) == []
 
 
+def test_sigterm_to_vtrack_scene_leaves_no_folder_it_created(tmp_path: Path) -> None:
+    """`vtrack scene smooth d/e --format images` sent SIGTERM left the folders it had created,
+    d/ and d/e/, empty; those that were there before (tmp_path) stay."""
+    result = _terminated(["scene", "smooth", "d/e", "--format", "images", "--frames", "3000"],
+                         tmp_path)
+    assert result.returncode == 143, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_sigterm_to_vtrack_report_leaves_no_staged_plot(clip_factory: ClipFactory,
                                                         tmp_path: Path) -> None:
     """`vtrack report RESULTS -o rep` sent SIGTERM died at once (exit -15, not a word) and
     left the plots it had staged ('plots/.curves_a.tmp-PID-XXXX.png' ...) in the report
-    folder."""
+    folder; `-o new/rep`, a folder it made, left new/rep/plots/ empty: it is removed, the
+    folder that was there is not."""
     inputs = tmp_path / "in"
     inputs.mkdir()
     for name in ("a", "b", "c"):
@@ -68,6 +79,10 @@ def test_sigterm_to_vtrack_report_leaves_no_staged_plot(clip_factory: ClipFactor
     assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
     assert "Traceback" not in result.stderr
     assert _files(tmp_path / "rep") == []
+    assert (tmp_path / "rep").is_dir()
+    result = _terminated(["report", "results", "-o", "new/rep"], tmp_path)
+    assert result.returncode == 143, result.stderr
+    assert not (tmp_path / "new").exists()
 
 
 def test_sigterm_while_vtrack_scene_makes_its_scene_says_interrupted(tmp_path: Path) -> None:

@@ -123,6 +123,26 @@ def prepare_output_dir(folder: Path) -> Path:
     return folder
 
 
+@contextlib.contextmanager
+def removing_new_folders(folder: Path) -> Iterator[None]:
+    """For a block that may create ``folder`` and its missing parents: when the block raises
+    (an error, Ctrl-C, SIGTERM), those of them that were not there before it and are empty are
+    removed, deepest first, so a write that stopped leaves no empty folder behind. A folder that
+    was there, or that holds anything, is left as it is."""
+    new: list[Path] = []
+    for each in (folder, *folder.parents):
+        if os.path.lexists(each):
+            break
+        new.append(each)
+    try:
+        yield
+    except BaseException:
+        for each in new:
+            with contextlib.suppress(OSError):
+                each.rmdir()
+        raise
+
+
 class StagedFiles:
     """Files (or folders) written under :func:`temp_path` names and put in place together by
     :meth:`commit`, in the order staged: when one of them cannot be written, none is put in

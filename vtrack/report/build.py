@@ -18,7 +18,12 @@ from matplotlib.figure import Figure
 
 from vtrack import __version__
 from vtrack.errors import InputError, OutputError, plural
-from vtrack.io.files import StagedFiles, prepare_output_dir, remove_quietly
+from vtrack.io.files import (
+    StagedFiles,
+    prepare_output_dir,
+    remove_quietly,
+    removing_new_folders,
+)
 from vtrack.io.outdir import is_batch_folder
 from vtrack.report import failures, pages, plots, tables
 from vtrack.report.runs import (
@@ -402,45 +407,47 @@ def build_report(results: Sequence[Path], out_dir: Path,
                         f"{'has' if len(unscored) == 1 else 'have'} no ground truth; give "
                         "--gt FILE (or --gt INPUT=FILE per input) to score them")
 
-    plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
-    by_input = _group(single, lambda r: r.input)
-    warnings += [line for name, group in by_input.items()
-                 for warn in (_mixed_truth_warning, _mixed_span_warning)
-                 if (line := warn(name, group))]
-    # a run that failed part way is listed with its frames' scores but averaged with no other
-    counted = [r for r in single if r.status != STATUS_FAILED]
-    if len(counted) < len(single):
-        warnings.append(f"{plural(len(single) - len(counted), 'single-target run')} failed "
-                        "part way: "
-                        "listed per input, left out of the averages and the All inputs plot")
-    by_config = _group(counted, lambda r: r.config)
-    palette = plots.colours(sorted({r.config for r in runs}))
-    with StagedFiles() as staged, catch_warnings():  # put in place together when all written
-        # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
-        # drawing, not the runs: the terminal shows vtrack's warnings only
-        simplefilter("ignore", UserWarning)
-        written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
-                                         on_input)
-        overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
-        page = pages.Page(
-            title=title,
-            meta=(f"{_counts(runs, failed)}; generated "
-                  f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
-            warnings=warnings,
-            overall_plot=overall and overall.relative_to(out_dir).as_posix(),
-            averages=tables.average_table(by_config) if by_config else None,
-            results=tables.results_table(list(by_input.values())) if single else None,
-            mot=tables.mot_table(list(_group(multi, lambda r: r.input).values()))
-            if multi else None,
-            failed=failed,
-            sections=sections,
-        )
-        # the pages last: a report whose plots could not all be written has no index.html
-        csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
-        markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
-        index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
-    written += [overall] if overall else []
-    _remove_stale_plots(plot_dir, written)
+    # a report stopped part way (an error, Ctrl-C, SIGTERM) leaves no folder it created
+    with removing_new_folders(out_dir / "plots"):
+        plot_dir = prepare_output_dir(prepare_output_dir(out_dir) / "plots")
+        by_input = _group(single, lambda r: r.input)
+        warnings += [line for name, group in by_input.items()
+                     for warn in (_mixed_truth_warning, _mixed_span_warning)
+                     if (line := warn(name, group))]
+        # a run that failed part way is listed with its frames' scores but averaged with no other
+        counted = [r for r in single if r.status != STATUS_FAILED]
+        if len(counted) < len(single):
+            warnings.append(f"{plural(len(single) - len(counted), 'single-target run')} failed "
+                            "part way: "
+                            "listed per input, left out of the averages and the All inputs plot")
+        by_config = _group(counted, lambda r: r.config)
+        palette = plots.colours(sorted({r.config for r in runs}))
+        with StagedFiles() as staged, catch_warnings():  # put in place together when all written
+            # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
+            # drawing, not the runs: the terminal shows vtrack's warnings only
+            simplefilter("ignore", UserWarning)
+            written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
+                                             on_input)
+            overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
+            page = pages.Page(
+                title=title,
+                meta=(f"{_counts(runs, failed)}; generated "
+                      f"{datetime.now():%Y-%m-%d %H:%M} by vtrack {__version__}"),
+                warnings=warnings,
+                overall_plot=overall and overall.relative_to(out_dir).as_posix(),
+                averages=tables.average_table(by_config) if by_config else None,
+                results=tables.results_table(list(by_input.values())) if single else None,
+                mot=tables.mot_table(list(_group(multi, lambda r: r.input).values()))
+                if multi else None,
+                failed=failed,
+                sections=sections,
+            )
+            # the pages last: a report whose plots could not all be written has no index.html
+            csv = _stage_text(staged, out_dir / "summary.csv", pages.render_csv(runs, failed))
+            markdown = _stage_text(staged, out_dir / "summary.md", pages.render_markdown(page))
+            index = _stage_text(staged, out_dir / "index.html", pages.render_html(page))
+        written += [overall] if overall else []
+        _remove_stale_plots(plot_dir, written)
     return Report(out_dir=out_dir, index=index, markdown=markdown, csv=csv, plots=written,
                   runs=runs, warnings=warnings)
 

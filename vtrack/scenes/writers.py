@@ -30,7 +30,7 @@ import numpy as np
 from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError
-from vtrack.io.files import ffmpeg_file, os_reason, replacing
+from vtrack.io.files import ffmpeg_file, os_reason, removing_new_folders, replacing
 from vtrack.io.images import SEQUENCE_INFO, encode_image
 from vtrack.io.raw import PIX_FMTS as RAW_PIX_FMTS  # (write_raw's layouts: those vtrack reads)
 from vtrack.params import X264_PRESETS
@@ -393,7 +393,9 @@ def write_clip(
     gt = out / "groundtruth_rect.txt" if fmt == "images" else sidecar(out, "gt")
     mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
     rate = [out / SEQUENCE_INFO] if fmt == "images" else []  # the folder's frame rate
-    with replacing(clip, gt, *rate, *([mot] if multi else [])) as temps:
+    # stopped part way (an error, Ctrl-C, SIGTERM), it leaves no folder it created
+    with (removing_new_folders(clip.parent),
+          replacing(clip, gt, *rate, *([mot] if multi else [])) as temps):
         if fmt == "mp4":
             _encode_video(scene, out, temps[0], crf, preset, CODEC, pix, progress, keyint=None)
         elif fmt == "raw":
