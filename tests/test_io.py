@@ -7,6 +7,7 @@ import fcntl
 import itertools
 import json
 import os
+import signal
 import sys
 import threading
 from collections.abc import Callable
@@ -19,7 +20,7 @@ import numpy as np
 import pytest
 
 from vtrack.annotate import Annotator
-from vtrack.errors import ConfigError, InputError, OutputError, PartialInputError
+from vtrack.errors import ConfigError, InputError, Interrupted, OutputError, PartialInputError
 from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Box, Window
 from vtrack.io import (
@@ -581,6 +582,27 @@ def test_prefetcher_hands_over_items_then_the_producer_error():
     prefetch = Prefetcher(endless(), depth=2, name="test-endless")
     assert next(iter(prefetch)) == 0
     assert prefetch.close() is True
+
+
+def test_a_prefetcher_whose_start_a_signal_interrupted_closes_without_an_error():
+    """SIGTERM to `vtrack vectors` as its reader's thread was being started raised in
+    Thread.start's wait for the new thread (launched, not yet running); closing the source
+    then said 'RuntimeError: cannot join thread before it is started', a traceback and exit
+    1. close() now waits for that thread to run, then for it to end."""
+    prefetch = Prefetcher(iter(range(5)), depth=2, name="test-interrupted")
+    thread = prefetch._thread
+
+    def interrupted_start() -> None:  # as Thread.start when a signal arrives in its wait:
+        # the thread is launched and runs a moment later (here: once close() has begun)
+        threading.Thread(target=lambda: (prefetch._stop.wait(), threading.Thread.start(thread)),
+                         daemon=True).start()
+        raise Interrupted(signal.SIGTERM)
+
+    thread.start = interrupted_start  # type: ignore[method-assign]
+    with pytest.raises(Interrupted):
+        next(iter(prefetch))
+    assert prefetch.close(timeout=60) is True
+    assert not thread.is_alive()
 
 
 # --- image folders ----------------------------------------------------------------------------

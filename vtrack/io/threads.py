@@ -10,7 +10,7 @@ import queue
 import threading
 import time
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
 T = TypeVar("T")
@@ -32,6 +32,29 @@ class _Failure:
         self.error = error
 
 
+class _Producer(threading.Thread):
+    """A producer's daemon thread that can be waited for even when a signal interrupted its
+    ``start()`` (Ctrl-C, SIGTERM raising in the wait for the new thread: launched, not yet
+    running), where ``Thread.join`` raises ``RuntimeError``."""
+
+    def __init__(self, target: Callable[[], None], name: str) -> None:
+        super().__init__(target=target, name=name, daemon=True)
+        self._producing = threading.Event()
+
+    def run(self) -> None:
+        self._producing.set()
+        super().run()
+
+    def finish(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` seconds for the thread (its ``start()`` called) to end; True
+        once it has."""
+        deadline = time.monotonic() + timeout
+        if not self._producing.wait(timeout):
+            return False
+        self.join(max(0.0, deadline - time.monotonic()))
+        return not self.is_alive()
+
+
 class Prefetcher(Generic[T]):
     """Iterate ``items`` in a daemon thread at most ``depth`` items ahead of the consumer.
 
@@ -44,7 +67,7 @@ class Prefetcher(Generic[T]):
         self._items = items
         self._queue: queue.Queue[object] = queue.Queue(maxsize=max(depth, 1))
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._produce, name=name, daemon=True)
+        self._thread = _Producer(self._produce, name)
         self._started = False
 
     def _put(self, item: object) -> bool:
@@ -96,8 +119,7 @@ class Prefetcher(Generic[T]):
                 self._queue.get_nowait()
             except queue.Empty:
                 break
-        self._thread.join(timeout)
-        return not self._thread.is_alive()
+        return self._thread.finish(timeout)
 
 
 class KeepingUp(Generic[T]):
@@ -129,7 +151,7 @@ class KeepingUp(Generic[T]):
         self._ready = threading.Condition()
         self._end: object | None = None  # _END or a _Failure once the producer has finished
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._produce, name=name, daemon=True)
+        self._thread = _Producer(self._produce, name)
         self._started = False
         self._busy_s = 0.0  # the consumer's time per item, a running mean
         self.passed = 0
@@ -217,5 +239,4 @@ class KeepingUp(Generic[T]):
             self._ready.notify_all()
         if not self._started:
             return True
-        self._thread.join(timeout)
-        return not self._thread.is_alive()
+        return self._thread.finish(timeout)
