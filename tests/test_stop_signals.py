@@ -9,6 +9,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -74,13 +75,62 @@ def test_sigterm_to_vtrack_report_leaves_no_staged_plot(clip_factory: ClipFactor
                            capture_output=True, text=True, timeout=300, check=False)
     assert batch.returncode == 0, batch.stderr
     (tmp_path / "rep").mkdir()
-    result = _terminated(["report", "results", "-o", "rep"], tmp_path)
+    result = _terminated_while_staging(["report", "results", "-o", "rep"], tmp_path,
+                                       tmp_path / "rep" / "plots")
     assert result.returncode == 143, result.stderr
     assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
     assert "Traceback" not in result.stderr
     assert _files(tmp_path / "rep") == []
     assert (tmp_path / "rep").is_dir()
-    result = _terminated(["report", "results", "-o", "new/rep"], tmp_path)
+    result = _terminated_while_staging(["report", "results", "-o", "new/rep"], tmp_path,
+                                       tmp_path / "new" / "rep" / "plots")
+    assert result.returncode == 143, result.stderr
+    assert not (tmp_path / "new").exists()
+
+
+def _terminated_while_staging(args: list[str], cwd: Path, out: Path) -> subprocess.CompletedProcess:
+    """``vtrack ARGS`` sent SIGTERM once it handles it and has staged a file in ``out`` (a
+    hidden temporary name): part way through its writing."""
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", *args], cwd=cwd,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_stop_handlers(process)
+        deadline = time.monotonic() + 60
+        while not (out.is_dir() and any(p.name.startswith(".") for p in out.iterdir())):
+            assert process.poll() is None, "vtrack ended before it staged a file"
+            assert time.monotonic() < deadline, "vtrack staged no file within the time"
+            time.sleep(0.01)
+        process.send_signal(signal.SIGTERM)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    return subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+
+
+def test_sigterm_to_vtrack_vectors_leaves_the_earlier_vectors_whole(clip_factory: ClipFactory,
+                                                                    tmp_path: Path) -> None:
+    """`vtrack vectors c.mp4 --frames 300 --out v` sent SIGTERM died at once (exit -15, not a
+    word) leaving v/frame_0000 ... half of them, the last with rgb.hex but no hue.hex, a
+    trace.csv cut short and no manifest.json, beside what was left of earlier vectors. It now
+    ends 'vtrack: interrupted' (143) with the earlier vectors as they were, no temporary file,
+    and no folder it created (--out new/v)."""
+    clip = clip_factory("smooth", width=640, height=480, frames=300)
+    box = clip.scene.boxes[0]
+    vectors = ["vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}"]
+    earlier = subprocess.run([sys.executable, "-m", "vtrack", *vectors, "--frames", "2",
+                              "-o", "v"], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=120, check=False)
+    assert earlier.returncode == 0, earlier.stderr
+    before = {name: (tmp_path / "v" / name).read_bytes() for name in _files(tmp_path / "v")}
+    result = _terminated_while_staging([*vectors, "--frames", "300", "-o", "v"], tmp_path,
+                                       tmp_path / "v")
+    assert result.returncode == 143, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
+    assert "Traceback" not in result.stderr
+    after = {name: (tmp_path / "v" / name).read_bytes() for name in _files(tmp_path / "v")}
+    assert after == before
+    result = _terminated_while_staging([*vectors, "--frames", "300", "-o", "new/v"], tmp_path,
+                                       tmp_path / "new" / "v")
     assert result.returncode == 143, result.stderr
     assert not (tmp_path / "new").exists()
 

@@ -7,7 +7,7 @@ function: ``vtrack run --help`` never loads the report's plotting, Dask or the s
 User errors (:class:`~vtrack.errors.VtrackError`) and click's usage errors (an unknown option, a
 value out of range) become one line on stderr, ``vtrack: error: ...``, and exit code 2 (1 for an
 output that broke part way); Ctrl-C exits 130, SIGTERM (where a command handles it: run,
-batch, select, report, scene, frame) 143. A group given no command (``vtrack``, ``vtrack
+batch, select, report, scene, frame, vectors) 143. A group given no command (``vtrack``, ``vtrack
 vectors``) prints its help on stderr, as click does, and exits 2.
 """
 

@@ -1,6 +1,7 @@
 """SIGINT and SIGTERM for the commands that write files without a run's record (``vtrack
-report``, ``scene``, ``frame``): both stop the work as Ctrl-C does, so the files staged under
-temporary names are removed and the command ends ``vtrack: interrupted`` (exit 130 or 143)."""
+report``, ``scene``, ``frame``, ``vectors``): both stop the work as Ctrl-C does, so the files
+staged under temporary names are removed and the command ends ``vtrack: interrupted`` (exit
+130 or 143)."""
 
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ import click
 from vtrack.cli._messages import warn
 from vtrack.cli._options import NumberWord
 from vtrack.cli._paths import CONFIG, INPUT, PATH
+from vtrack.cli._signals import stopping_as_interrupted
 
 
 class _DefaultGroup(click.Group):
@@ -100,7 +101,8 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     init_box = parse_box(init_text)
     extra = {"input": Path(input_spec).name, "config": config.name, "init": list(init_box),
              "vtrack": __version__}
-    with open_source(input_spec) as source:
+    # SIGTERM as Ctrl-C: the staged vector files are removed, earlier vectors stay whole
+    with stopping_as_interrupted(), open_source(input_spec) as source:
         check_init_box(init_box, source.info.width, source.info.height, "--init")
         frames = itertools.islice(iter(source), count)
         written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)

@@ -28,11 +28,16 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, OutputError
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
-from vtrack.io.files import os_reason, prepare_output_dir
+from vtrack.io.files import (
+    StagedFiles,
+    os_reason,
+    prepare_output_dir,
+    removing_new_folders,
+)
 
 #: Largest --frames: a 1080p frame writes ~25 MB of hex text (rgb + hue + bp).
 MAX_FRAMES = 300
@@ -84,21 +89,37 @@ def _formats(record: FixedRecord, width: int, height: int) -> dict[str, Any]:
     return files
 
 
-def write_frame(folder: Path, frame_bgr: np.ndarray, record: FixedRecord, index: int) -> None:
-    """The frame's ``.hex`` files (see the module docstring)."""
-    folder.mkdir(parents=True, exist_ok=True)
+def frame_files(frame_bgr: np.ndarray, record: FixedRecord, index: int) -> dict[str, bytes]:
+    """The frame's ``.hex`` files (see the module docstring), by name: their text."""
     r, g, b = s0.split_rgb(frame_bgr)
-    (folder / "rgb.hex").write_bytes(hex_lines(*(p.astype(np.uint8) for p in (r, g, b))))
+    files = {"rgb.hex": hex_lines(*(p.astype(np.uint8) for p in (r, g, b)))}
     if record.model == "s0":
         hue = s0.hue8(r, g, b, record.hue_divider_bits)
-        (folder / "hue.hex").write_bytes(hex_lines(hue))
+        files["hue.hex"] = hex_lines(hue)
         if index >= 1:
             assert record.bp_lut is not None
             mask = s0.optional_mask(r, g, b, record.sat_min, record.val_min)
             bp = s0.back_project(record.bp_lut, hue, mask)
-            (folder / "bp.hex").write_bytes(hex_lines(bp))
+            files["bp.hex"] = hex_lines(bp)
     else:
-        (folder / "gray.hex").write_bytes(hex_lines(gray8(r, g, b)))
+        files["gray.hex"] = hex_lines(gray8(r, g, b))
+    return files
+
+
+def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> None:
+    """Stage ``files`` in ``folder``: as a new folder, or one by one into the folder there
+    (which may hold files of the user's own: they stay)."""
+    if folder.is_dir():
+        for name, data in files.items():
+            staged.write(folder / name, lambda temp, data=data: temp.write_bytes(data))
+        return
+    temp = staged.temp(folder)
+    try:
+        temp.mkdir()
+        for name, data in files.items():
+            (temp / name).write_bytes(data)
+    except OSError as exc:
+        raise OutputError(f"{folder}: cannot write ({os_reason(exc)})") from None
 
 
 def _cell(value: Any) -> str:
@@ -194,25 +215,47 @@ _S2_COLUMNS: dict[str, str] = {
 def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: Any,
              out_dir: Path, extra: dict[str, Any]) -> int:
     """Run the chain over ``frames`` and write the vectors to ``out_dir``; returns the number of
-    frames written."""
+    frames written. Every file is written under a temporary name and they are put in place
+    together, ``manifest.json`` last, once all are complete (the vector files an earlier
+    ``generate`` left there are removed then): when the writing stops part way (an error,
+    Ctrl-C, SIGTERM) the temporary files are removed, an earlier set of vectors stays as it
+    was, and a folder it created for them is removed."""
     owner = fixed_stage(stages, str(extra.get("config")))
-    prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
-    _remove_earlier_vectors(out_dir)
-    trace = TraceWriter(out_dir / "trace.csv")
+    with removing_new_folders(out_dir), StagedFiles() as staged:
+        prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
+        count, size, record = _stage_vectors(staged, pipeline.track(frames, init_box), owner,
+                                             out_dir)
+        if record is None:
+            raise InputError(f"{extra.get('input')}: no frame decoded")
+        data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
+        staged.write(out_dir / "manifest.json",
+                     lambda temp: temp.write_text(json.dumps(data, indent=2) + "\n",
+                                                  encoding="utf-8"))
+        _remove_earlier_vectors(out_dir)  # then the staged files are put in place
+    return count
+
+
+def _stage_vectors(staged: StagedFiles, results: Iterator[Any], owner: Any, out_dir: Path
+                   ) -> tuple[int, tuple[int, int], FixedRecord | None]:
+    """Stage the frame folders, ``trace.csv`` and ``iterations.csv`` of ``results`` in
+    ``out_dir``: the frames written, the last frame's size and the last golden record (None:
+    no frame)."""
+    trace = TraceWriter(staged.temp(out_dir / "trace.csv"))
     iterations: TraceWriter | None = None
     count, size, record = 0, (0, 0), None
     try:
-        for result in pipeline.track(frames, init_box):
+        for result in results:
             record = owner.record
             assert record is not None and result.frame is not None
             frame = result.frame
             size = (frame.width, frame.height)
             # named by the input's frame number, as trace.csv's rows (a skipped frame: a gap)
-            write_frame(out_dir / f"frame_{result.index:04d}", frame.bgr(), record, count)
+            folder = out_dir / f"frame_{result.index:04d}"
+            _stage_frame(staged, folder, frame_files(frame.bgr(), record, count))
             trace.write(record.trace)
             if record.model == "s2":
                 if iterations is None:
-                    iterations = TraceWriter(out_dir / "iterations.csv")
+                    iterations = TraceWriter(staged.temp(out_dir / "iterations.csv"))
                 for row in record.iterations:
                     iterations.write(row)
             count += 1
@@ -220,11 +263,7 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
         trace.close()
         if iterations is not None:
             iterations.close()
-    if record is None:
-        raise InputError(f"{extra.get('input')}: no frame decoded")
-    data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
-    (out_dir / "manifest.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
-    return count
+    return count, size, record
 
 
 def _remove_earlier_vectors(out_dir: Path) -> None:
@@ -235,7 +274,8 @@ def _remove_earlier_vectors(out_dir: Path) -> None:
     for folder in out_dir.glob("frame_*"):
         if folder.is_dir() and folder.name.removeprefix("frame_").isdigit():
             for vector in folder.glob("*.hex"):
-                vector.unlink()
+                if not vector.name.startswith("."):  # (not one staged to replace it)
+                    vector.unlink()
             with contextlib.suppress(OSError):  # a folder holding files of the user's own
                 folder.rmdir()
 
