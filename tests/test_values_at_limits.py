@@ -192,6 +192,26 @@ def test_a_pixel_format_whose_chroma_is_not_halved_that_way_takes_an_odd_size(
     assert out.stat().st_size > 0
 
 
+@pytest.mark.parametrize("size", ["1x1", "1x1000"])
+def test_a_picture_too_small_for_the_video_says_the_way_out_before_tracking(
+        tmp_path: Path, size: str) -> None:
+    """`vtrack run r.raw --raw 1x1 --pix-fmt gray -c s4` said 'annotated.mp4: cannot encode a
+    1x1 video', exit 2, and not that --no-video tracks it. It says so, before a frame is
+    tracked (no results folder), and --no-video tracks it."""
+    width, height = (int(n) for n in size.split("x"))
+    raw = tmp_path / "r.raw"
+    raw.write_bytes(np.random.default_rng(0).integers(0, 256, 100 * width * height,
+                                                      np.uint8).tobytes())
+    args = ["run", str(raw), "--raw", size, "--pix-fmt", "gray", "-c", "s4"]
+    line = one_error_line(vtrack(*args, "-o", str(tmp_path / "out")))
+    assert line == (f"vtrack: error: {tmp_path / 'out' / 'annotated.mp4'}: cannot encode a "
+                    f"{size} video (H.264 in yuv420p needs at least 2x2 pixels); give "
+                    "--no-video to track it without the video")
+    assert not (tmp_path / "out").exists()
+    done = vtrack(*args, "--no-video", "-o", str(tmp_path / "out"))
+    assert done.exit_code == 0, done.output
+
+
 # --- a config given as a pipe or a device -------------------------------------------------------
 
 

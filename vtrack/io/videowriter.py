@@ -58,6 +58,12 @@ class _Slot:
         return frame
 
 
+class VideoTooSmallError(OutputError):
+    """Pictures too small for the annotated video (under 2x2 pixels), refused as the writer
+    opens, before a frame is tracked: the input can be tracked without the video (``vtrack run
+    --no-video``, ``RunRequest(video=False)``)."""
+
+
 class VideoWriter(Closing):
     """Encode I420 pictures to an H.264 MP4 at ``path`` (yuv420p, ``preset``, ``crf``).
 
@@ -95,8 +101,9 @@ class VideoWriter(Closing):
         #: A picture gave way to a stop while a live output's receiver took nothing.
         self._gave_way = False
         self.width, self.height = width & ~1, height & ~1
-        if self.width <= 0 or self.height <= 0:
-            raise OutputError(f"{self.path}: cannot encode a {width}x{height} video")
+        if self.width <= 0 or self.height <= 0:  # before anything is written
+            raise VideoTooSmallError(f"{url or self.path}: cannot encode a {width}x{height} "
+                                     "video (H.264 in yuv420p needs at least 2x2 pixels)")
         self._temp = temp_path(self.path) if url is None else None
         self._rate = Fraction(fps).limit_denominator(1001) if fps and fps > 0 else Fraction(30)
         self._container = self._open(preset, crf, codec)
