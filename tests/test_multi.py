@@ -602,6 +602,29 @@ def test_ground_truth_whose_every_row_is_ignored_is_a_warning(tmp_path, clip_fac
     assert record["metrics"]["gt_boxes"] == 0 and any(note in w for w in record["warnings"])
 
 
+def test_ground_truth_rows_with_an_empty_box_are_a_warning(tmp_path, clip_factory) -> None:
+    """Rows of a MOTChallenge gt.txt with a negative width or height were dropped without a
+    word (the run's MOTA went up: those targets were no longer missed). The run now warns how
+    many there are and the line of the first, on stderr and in run.json."""
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    rows = clip.mot.read_text().splitlines()
+    bad = [2, 5, 9]  # 0-based: lines 3, 6 and 10
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(
+        (",".join([*row.split(",")[:4], f"-{row.split(',')[4]}", *row.split(",")[5:]])
+         if index in bad else row) + "\n" for index, row in enumerate(rows)))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    note = (f"{gt}: 3 ground-truth rows with w or h <= 0 ignored (the first on line 3): not "
+            "scored, as if the file did not have them")
+    assert result.stderr == f"vtrack: warning: {note}\n"
+    record = json.loads((out / "run.json").read_text())
+    assert note in record["warnings"]
+    assert record["metrics"]["gt_boxes"] == len(rows) - 3
+
+
 def test_a_class_column_that_holds_no_motchallenge_class_is_refused(tmp_path,
                                                                     clip_factory) -> None:
     """Probe 48 item 2: MOT15 rows cut to 9 columns (world coordinates -1 read as the class) were

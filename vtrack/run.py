@@ -59,7 +59,7 @@ from vtrack.errors import (
     printable,
 )
 from vtrack.evaluate.groundtruth import (
-    all_dropped_note,
+    dropped_notes,
     groundtruth_beside,
     past_end_note,
     read_boxes,
@@ -831,13 +831,13 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     warnings: list[str] = []
     if request.gt_path is not None and pipeline.multi_target:
         try:
-            mot_gt, dropped, distractors = read_mot_counting(request.gt_path)
+            truth = read_mot_counting(request.gt_path)
         except InputError as exc:
             raise InputError(
                 f"{exc}; {request.config.name} tracks several targets and scores them against "
                 "MOTChallenge ground truth (gt.txt lines frame,id,x,y,w,h,...)") from None
-        if not mot_gt and dropped:
-            warnings.append(all_dropped_note(request.gt_path, dropped))
+        mot_gt, distractors = truth.boxes, truth.distractors
+        warnings += dropped_notes(request.gt_path, truth)
     elif request.gt_path is not None:
         gt = read_boxes(request.gt_path, origin=request.gt_origin)
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin

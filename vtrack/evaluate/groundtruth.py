@@ -337,7 +337,8 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
       that is not one of MOTChallenge's (:data:`MOT_CLASSES`, e.g. the ``-1``
       of a MOT15 row cut to 9 columns) is an error, as in TrackEval. The 10-column layout has
       no class column and is not filtered;
-    - a row whose box has ``w <= 0`` or ``h <= 0`` is dropped.
+    - a row whose box has ``w <= 0`` or ``h <= 0`` is dropped (:func:`dropped_notes` warns of
+      them).
 
     Frames without kept rows are not keys; keys are ascending, rows keep file order. Frame 1 of
     the file is key 0; boxes are taken as written (MOTChallenge's top-left corner). Blank lines
@@ -348,14 +349,32 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
     return read_mot_counting(path).boxes
 
 
+#: The reason a MOTChallenge row with an empty box is dropped, as :class:`Dropped` counts it.
+EMPTY_BOX = "w or h <= 0"
+
+
+class Dropped(Counter[str]):
+    """How many MOTChallenge rows were not scored, for each reason, and the line of the first
+    dropped for each (``first``)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.first: dict[str, int] = {}
+
+    def drop(self, reason: str, line: int) -> None:
+        """Count a row of ``line`` dropped for ``reason``."""
+        self[reason] += 1
+        self.first.setdefault(reason, line)
+
+
 class MotTruth(NamedTuple):
     """MOTChallenge ground truth as :func:`read_mot_counting` reads it."""
 
     #: The scored boxes, as :func:`read_mot` returns them.
     boxes: dict[int, list[tuple[int, Box]]]
     #: How many rows were not scored, for each reason (``"the consider flag 0 in column 7"``,
-    #: ``"class 7 in column 8, not pedestrian 1"``, ``"w or h <= 0"``).
-    dropped: Counter[str]
+    #: ``"class 7 in column 8, not pedestrian 1"``, :data:`EMPTY_BOX`).
+    dropped: Dropped
     #: Only for the frames holding a row of a :data:`MOT_DISTRACTORS` class: every row of that
     #: frame with a box, ``(box, is a distractor)``, whatever its consider flag or class (what
     #: TrackEval matches track boxes against before it takes out those on distractors).
@@ -367,7 +386,7 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
     track boxes on distractors out of the score (:class:`MotTruth`)."""
     frames: dict[int, list[tuple[int, Box]]] = {}
     seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
-    dropped: Counter[str] = Counter()
+    dropped = Dropped()
     rows: dict[int, list[tuple[Box, bool]]] = {}  # every row with a box, for the distractors
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
@@ -383,13 +402,13 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
         if kind is not None and box.w > 0 and box.h > 0:
             rows.setdefault(frame, []).append((box, kind in MOT_DISTRACTORS))
         if len(values) >= 7 and values[6] == 0:
-            dropped["the consider flag 0 in column 7"] += 1
+            dropped.drop("the consider flag 0 in column 7", number)
             continue
         if kind is not None and kind != MOT_PEDESTRIAN:
-            dropped[f"class {kind:g} in column 8, not pedestrian {MOT_PEDESTRIAN}"] += 1
+            dropped.drop(f"class {kind:g} in column 8, not pedestrian {MOT_PEDESTRIAN}", number)
             continue
         if not (box.w > 0 and box.h > 0):
-            dropped["w or h <= 0"] += 1
+            dropped.drop(EMPTY_BOX, number)
             continue
         target = int(values[1])
         first = seen.setdefault((frame, target), number)
@@ -401,12 +420,23 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
     return MotTruth(dict(sorted(frames.items())), dropped, distractors)
 
 
-def all_dropped_note(path: str | PathLike[str], dropped: Counter[str]) -> str:
-    """The warning for MOTChallenge ground truth whose every row :func:`read_mot_counting`
-    dropped: how many, and why (``dropped`` as it returns it)."""
-    why = "; ".join(f"{count} with {reason}" for reason, count in dropped.most_common())
-    return (f"{path}: all {sum(dropped.values())} ground-truth rows are ignored ({why}): "
-            "nothing to score against (gt_boxes 0, mota null)")
+def dropped_notes(path: str | PathLike[str], truth: MotTruth) -> list[str]:
+    """The warnings for the rows of MOTChallenge ground truth :func:`read_mot_counting` did not
+    score: when it dropped every row, how many and why; else, when rows had an empty box (w or
+    h <= 0: no MOTChallenge row has one, the file is wrong there), how many and the line of the
+    first. Rows MOTChallenge itself leaves out (consider flag 0, classes other than
+    pedestrian) are not warned about when others are scored."""
+    dropped = truth.dropped
+    if not truth.boxes and dropped:
+        why = "; ".join(f"{count} with {reason}" for reason, count in dropped.most_common())
+        return [f"{path}: all {sum(dropped.values())} ground-truth rows are ignored ({why}): "
+                "nothing to score against (gt_boxes 0, mota null)"]
+    empty = dropped.get(EMPTY_BOX, 0)
+    if not empty:
+        return []
+    return [f"{path}: {plural(empty, 'ground-truth row')} with {EMPTY_BOX} ignored (the first "
+            f"on line {dropped.first[EMPTY_BOX]}): not scored, as if the file did not have "
+            f"{'it' if empty == 1 else 'them'}"]
 
 
 def past_end_note(path: object, rows: str, frames: Iterable[int], end: int,
