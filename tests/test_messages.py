@@ -503,6 +503,28 @@ def test_gt_origin_without_gt_is_refused_by_run_and_report(
     assert scored.exit_code == 0, scored.output
 
 
+def test_configs_whose_names_differ_only_in_case_are_refused_by_a_batch(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`vtrack batch in -c s0 -c mine.toml`, mine.toml a copy of s0 named "S0", ran both into
+    out/<input>/s0/ and out/<input>/S0/: one folder on a case-insensitive disk (macOS,
+    Windows), where the second run's files replaced the first's. It is refused, as two configs
+    of one name are, before anything is written."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    clip = clip_factory("smooth", width=160, height=120, frames=10)
+    shutil.copy(clip.path, folder / "a.mp4")
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    mine = tmp_path / "mine.toml"
+    mine.write_text(vtrack("stages", "s0", "--toml").output.replace('name = "s0"', 'name = "S0"'))
+    out = tmp_path / "out"
+    line = one_error_line(vtrack("batch", str(folder), "-c", "s0", "-c", str(mine),
+                                 "-o", str(out)))
+    assert line == (f"vtrack: error: --config {mine}: the results folders of 'S0' and of 's0' "
+                    "(s0) differ only in case, one folder on a case-insensitive disk (macOS, "
+                    "Windows): rename one")
+    assert not out.exists()
+
+
 def test_a_config_given_twice_to_a_batch_is_said_so(tmp_path: Path) -> None:
     """Probe R: `vtrack batch in -c robust -c s0 -c robust` said 'vtrack: error: --config
     robust: another config has the results folder of 'robust' (robust); results are kept per

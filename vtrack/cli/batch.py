@@ -67,7 +67,10 @@ class _StopOnce:
 
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
-    """Load every ``--config`` (with the ``--set`` overrides), keyed by config name."""
+    """Load every ``--config`` (with the ``--set`` overrides), keyed by config name. Configs
+    whose results folders would be one are refused: names the same, or the same but for
+    characters a folder name cannot hold or for case (``s0`` and ``S0`` are one folder on a
+    case-insensitive disk: macOS's, Windows')."""
     from vtrack.config import config_file, load_config
     from vtrack.io.files import folder_name
 
@@ -81,12 +84,17 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
         except ConfigError as exc:  # name the config: the chain alone did not say which
             raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
                               "--config") from None
-        folder = folder_name(config.name)
+        folder = folder_name(config.name).casefold()
         other = configs.get(config.name) or folders.get(folder)
         file = config_file(spec).resolve()  # ./mine.toml is mine.toml; s0 its shipped file
         if other is not None and files.get(folder) == file:
             raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
                               "input")
+        if other is not None and folder_name(other.name) != folder_name(config.name):
+            raise ConfigError(
+                f"--config {spec}: the results folders of '{config.name}' and of "
+                f"'{other.name}' ({other.source}) differ only in case, one folder on a "
+                "case-insensitive disk (macOS, Windows): rename one")
         if other is not None:
             raise ConfigError(
                 f"--config {spec}: another config has the results folder of '{config.name}' "
