@@ -67,3 +67,21 @@ def test_a_title_and_a_warning_with_a_newline_stay_one_markdown_line(clip_factor
     warned = [line for line in lines if line.startswith("> Warning: ")]
     assert any(line.startswith("> Warning: x\\ny [s4]: ") for line in warned), warned
     assert not any(line.startswith(("b", "y [s4]")) for line in lines)
+
+
+@pytest.mark.parametrize("title", ["", "  "])
+def test_an_empty_title_is_refused_in_one_line(tmp_path: Path, title: str) -> None:
+    """`vtrack report R --title ""` wrote a page with an empty <title> and a bare '# ' heading
+    in summary.md. The page's title is some text: an empty one is refused, naming the
+    default, before anything is read or written."""
+    from click.testing import CliRunner
+    from conftest import one_error_line
+
+    from vtrack.cli import main
+
+    refused = CliRunner().invoke(main, ["report", str(tmp_path / "none"), "--title", title,
+                                        "-o", str(tmp_path / "rep")])
+    assert one_error_line(refused) == (
+        "vtrack: error: Invalid value for '--title': empty; give the page's title, or leave "
+        "--title out for 'vtrack report' (see 'main report --help')")
+    assert list(tmp_path.iterdir()) == []

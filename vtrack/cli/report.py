@@ -33,7 +33,9 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
                    "whose frame count differs from the file's boxes is not scored (a warning "
                    "names it).")
 @gt_origin_option()
-@click.option("--title", default=DEFAULT_TITLE, show_default=True, help="Page title.")
+@click.option("--title", default=DEFAULT_TITLE, show_default=True,
+              type=NonEmptyText(f"the page's title, or leave --title out for {DEFAULT_TITLE!r}"),
+              help="Page title.")
 @stats_period_option()
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
