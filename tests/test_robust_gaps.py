@@ -298,3 +298,23 @@ def test_a_hidden_target_is_lost_at_once_after_a_break() -> None:
     numbers = list(range(len(frames)))
     lost, _ = _lost_and_rings(scene, stalled, numbers)
     assert lost == start + 3, (lost, start)
+
+
+def test_a_hidden_frame_stamped_early_still_counts_as_hidden() -> None:
+    """The first frame behind the panel stamped 0.6 of a frame early (its whole frame on the
+    clock is the last sight's): the target is hidden there for one frame, not 0 (0 means seen
+    on the last frame, and the next frame would take back any sharp peak without the
+    take-back test)."""
+    scene, frames, start = _covered_for_good(0)
+    early = [BgrFrame(f.index, (f.index - (0.6 if f.index == start else 0.0)) / 30, f.bgr())
+             for f in frames]
+    tracker = Tracker("robust")
+    hidden = {}
+    for frame in early[: start + 3]:
+        if frame.index == 0:
+            tracker.init(frame, scene.boxes[0])
+            continue
+        result = tracker.update(frame)
+        if result.state != TrackState.TRACKING:
+            hidden[frame.index] = tracker._pipeline._ctx.robust.hidden_frames  # type: ignore[union-attr]
+    assert hidden and min(hidden.values()) >= 1, hidden

@@ -236,8 +236,9 @@ class RobustFailure(Stage):
                 target.learn(ctx.frame, ctx.measurement, self.rate)
             return
         # time, not calls: frames missing from the input count as hidden too (whole frames
-        # since the last sight: timestamps a fraction of a frame off do not add up)
-        target.hidden_frames = ctx.clock.frame - target.seen_at
+        # since the last sight: timestamps a fraction of a frame off do not add up); at least
+        # one, since 0 means seen on the last frame (a frame stamped early rounds back to it)
+        target.hidden_frames = max(ctx.clock.frame - target.seen_at, 1)
         _hold_size(target, ctx)
         if self.coast:
             ctx.measurement = None  # S0 item 7: coast on the prediction
