@@ -282,6 +282,9 @@ def test_vectors_help_lists_the_options_of_vtrack_vectors_input() -> None:
     for option in ("--config", "--init", "--frames", "--out", "--set"):
         assert option in options, text
     assert "[default: 10]" in options and "Commands:" in text and "check" in text
+    # every row is an option (click 8.5.1 gave the argument INPUT a bare row of its own)
+    rows = [line.split()[0] for line in options.splitlines() if line[2:3].strip()]
+    assert rows and all(row.startswith("-") for row in rows), options
 
 
 def _s2_vectors(clip, out: Path, frames: int) -> Path:

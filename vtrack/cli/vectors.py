@@ -31,8 +31,11 @@ class _DefaultGroup(click.Group):
         """The group's options and commands, then those of ``vtrack vectors INPUT`` (the hidden
         ``generate``), so ``vtrack vectors --help`` shows what the first form takes."""
         super().format_options(ctx, formatter)
+        # its options only: INPUT is in the usage line above (click 8.5.1 gives an argument a
+        # help row too, which showed as a bare 'INPUT' among the options)
         rows = [record for param in self.commands["generate"].params
-                if (record := param.get_help_record(ctx)) is not None]
+                if isinstance(param, click.Option)
+                and (record := param.get_help_record(ctx)) is not None]
         with formatter.section("Options of vtrack vectors INPUT"):
             formatter.write_dl(rows)
 
