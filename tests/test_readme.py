@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import shutil
 import signal
 import socket
@@ -119,6 +120,32 @@ def test_readme_block_runs(block: str, inputs: Path, tmp_path: Path) -> None:
         promised = re.search(r"#\s*-> (\S+/)", line)
         if promised:
             assert (work / promised.group(1)).is_dir(), (text, promised.group(1))
+
+
+def test_readme_run_lines_in_order_each_write_a_folder_of_their_own() -> None:
+    """A reader who runs the README's commands in order in one folder is never refused for an
+    earlier example's results: each ``vtrack run`` line writes its own folder (its ``--out``,
+    else ``vtrack-out/<input>/<config>/``), unless it is the same command shown again. (Four
+    lines on stdin all wrote ``vtrack-out/stdin/robust``, the ``--start 60`` one the
+    ``clip.mp4`` one's, the ``--video-out`` one the UDP one's: each was refused, 'holds the
+    results of an earlier run'.)"""
+    from vtrack.cli.run import command, default_out_dir
+
+    written: dict[Path, str] = {}
+    for block in _blocks():
+        for line in _commands(block):
+            for part in re.split(r"\||&&|;", line):
+                words = shlex.split(part.split("<")[0])
+                if words[:2] != ["vtrack", "run"]:
+                    continue
+                params = command.make_context("run", words[2:], resilient_parsing=True).params
+                assert not params["overwrite"], line  # -y would replace, not say so
+                configs = params["config_specs"]
+                name = load_config(configs[0]).name if configs else DEFAULT_CONFIG
+                folder = params["out_dir"] or default_out_dir(params["input_spec"], name)
+                earlier = written.setdefault(Path(folder), part.strip())
+                assert earlier == part.strip(), f"{folder}: {earlier!r}, then {part.strip()!r}"
+    assert len(written) >= 10
 
 
 def test_readme_dask_cluster_recipe_runs(inputs: Path, tmp_path: Path) -> None:
