@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import socket
 import subprocess
 import sys
@@ -74,6 +75,24 @@ def test_stream_on_stdout_matches_the_csv_and_the_summary_goes_to_stderr(tmp_pat
     assert streamed == [(int(r["frame"]), int(r["id"]), *(_cell(r[key]) for key in
                                                          ("x", "y", "w", "h", "conf")))
                         for r in rows] and streamed
+
+
+def test_stream_help_names_every_key_of_a_line(tmp_path: Path) -> None:
+    """`vtrack run --help` said a --stream line holds 'frame, time_s, x, y, w, h, state, score,
+    extras': a multi-target config's line holds frame, time_s and tracks (id, conf ...)."""
+    helped = _vtrack("run", "--help")
+    assert helped.returncode == 0, helped.stderr
+    text = helped.stdout.split("--stream FILE|-")[1].split("--stats-period")[0]
+    named = set(re.findall(r"\w+", text))
+    clip = write_video(make_scene("multi", seed=2, width=W, height=H, frames=60, fps=30),
+                       tmp_path / "multi.mp4")
+    done = _vtrack("run", str(clip), "--config", "s3", "--no-video", "--out",
+                   str(tmp_path / "m"), "--stream", "-")
+    assert done.returncode == 0, done.stderr
+    lines = [json.loads(line) for line in done.stdout.splitlines()]
+    keys = {key for line in lines for key in line}
+    keys |= {key for line in lines for track in line["tracks"] for key in track}
+    assert "id" in keys and keys <= named, sorted(keys - named)
 
 
 def test_each_line_arrives_while_the_input_is_still_open(tmp_path: Path) -> None:

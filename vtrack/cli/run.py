@@ -140,9 +140,10 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
                    "one's, so a variable frame rate is followed).")
 @click.option("--stream", "stream", metavar="FILE|-", type=FileOrDash(), default=None,
               help="Also write one JSON line per frame (frame, time_s, x, y, w, h, state, "
-                   "score, extras), flushed as each frame is done; '-' is stdout (the summary "
-                   "line then goes to stderr). A file holding anything is replaced only with "
-                   "--overwrite.")
+                   "score, extras; a multi-target config's: frame, time_s and tracks, each "
+                   "with its id, x, y, w, h, conf and state), flushed as each frame is done; "
+                   "'-' is stdout (the summary line then goes to stderr). A file holding "
+                   "anything is replaced only with --overwrite.")
 @stats_period_option()
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | None,
