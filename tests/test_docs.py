@@ -119,3 +119,15 @@ def test_readme_architecture_names_each_package_where_it_is() -> None:
     assert [path for path in named if not (ROOT / path).exists()] == []
     packages = sorted(f"vtrack/{p.parent.name}/" for p in (ROOT / "vtrack").glob("*/*.py"))
     assert sorted(set(packages) - set(named)) == []
+
+
+def test_readme_names_the_files_a_batch_takes_as_a_videos_ground_truth() -> None:
+    """README's batch section never said where `vtrack batch` finds a video's ground truth
+    (`clip.gt.txt` beside `clip.mp4`: its own example's data/ holds one); `vtrack batch
+    --help` did."""
+    from vtrack.batch import VIDEO_GT, VIDEO_INIT, VIDEO_MOT_GT
+
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    section = readme.split("A batch's inputs are", 1)[1].split("### As a library", 1)[0]
+    for pattern in (*VIDEO_GT, *VIDEO_MOT_GT, VIDEO_INIT):
+        assert f"`{pattern.format('NAME')}`" in section, pattern
