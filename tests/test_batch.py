@@ -328,6 +328,23 @@ def test_inputs_whose_results_folders_would_be_one_are_refused(tmp_path: Path,
     assert not (tmp_path / "out" / "summary.csv").exists()
 
 
+def test_inputs_whose_names_differ_only_in_case_get_folders_of_their_own(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`a.mp4` and `A.mp4` in one folder ran into out/a/ and out/A/: one folder on a
+    case-insensitive disk (macOS, Windows), where the second run replaced the first's files.
+    Stems that differ only in case now clash as any two of one folder do (`a.mp4` and `A.avi`
+    keep their full names); full names that differ only in case are refused, as configs are."""
+    folder = clips_folder(tmp_path, clip_factory, "a", "A")
+    out = tmp_path / "out"
+    line = one_error_line(batch(str(folder), "-c", "s0", "--no-video", "--out", str(out)))
+    assert line == (f"vtrack: error: {folder}: the results folders of 'A.mp4' and of 'a.mp4' "
+                    "differ only in case, one folder on a case-insensitive disk (macOS, "
+                    "Windows): rename one")
+    assert not out.exists()
+    (folder / "A.mp4").rename(folder / "A.avi")
+    assert [item.name for item in find_inputs(folder)] == ["A.avi", "a.mp4"]
+
+
 def test_an_input_named_like_the_batch_summary_gets_its_own_folder(
         tmp_path: Path, clip_factory: ClipFactory) -> None:
     """``summary.csv.mp4``'s results folder was ``summary.csv``, the batch's own file: the

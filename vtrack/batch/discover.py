@@ -83,15 +83,16 @@ def _origin(groundtruth: Path | None, gt_origin: int | None) -> int:
 
 def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
     """A distinct name per video: its stem, or its full file name where stems (or another
-    input's name) clash, as results folders (:func:`~vtrack.io.files.folder_name`: ``a b`` and
-    ``a_b`` are one folder). Switching a clashing name to the full one may make it clash with
-    another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated until nothing clashes or every
-    clashing name is a full file name (:func:`find_inputs` then refuses the folder)."""
+    input's name) clash, as results folders (:func:`_folder_key`: ``a b`` and ``a_b`` are one
+    folder, ``a`` and ``A`` one on a case-insensitive disk). Switching a clashing name to the
+    full one may make it clash with another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated
+    until nothing clashes or every clashing name is a full file name (:func:`find_inputs` then
+    refuses the folder)."""
     names = {path: path.stem for path in videos}
     while True:
-        counts = Counter(_folder(name) for name in [*taken, *names.values()])
+        counts = Counter(_folder_key(name) for name in [*taken, *names.values()])
         clashing = [p for p, name in names.items()
-                    if counts[_folder(name)] > 1 and name != p.name]
+                    if counts[_folder_key(name)] > 1 and name != p.name]
         if not clashing:
             return names
         for path in clashing:
@@ -101,6 +102,13 @@ def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
 def _folder(name: str) -> str:
     """The results folder of an input named ``name``."""
     return folder_name(name, "input")
+
+
+def _folder_key(name: str) -> str:
+    """What two inputs' names must differ in for their results folders to be two on any disk:
+    their folders (:func:`_folder`) case-folded (``a`` and ``A`` are one folder on a
+    case-insensitive disk: macOS's, Windows')."""
+    return _folder(name).casefold()
 
 
 def _unusable(path: Path) -> BatchInput:
@@ -129,10 +137,12 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     sorted by name, with the ground truth found beside or inside each (module docstring).
 
     Inputs are named after their file stem (folder name for sequences); videos whose stem is
-    taken twice (``a.mp4`` and ``a.avi``, a folder ``a/``, ``a.mp4`` and ``a.mp4.mkv``, or
-    ``summary.csv.mp4`` and the batch's ``summary.csv``) keep their full file names, so every
-    input has a results folder of its own.
-    Raises InputError when ``folder`` is not a folder or holds no input.
+    taken twice (``a.mp4`` and ``a.avi`` or ``A.avi``, a folder ``a/``, ``a.mp4`` and
+    ``a.mp4.mkv``, or ``summary.csv.mp4`` and the batch's ``summary.csv``) keep their full file
+    names, so every input has a results folder of its own.
+    Raises InputError when ``folder`` is not a folder or holds no input, or when two inputs
+    would still share a results folder (``a.mp4`` and ``A.mp4``: one folder on a
+    case-insensitive disk).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -156,15 +166,23 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
         )
     by_folder: dict[str, BatchInput] = {}
     for item in found:
-        if _folder(item.name) == SUMMARY_FILE:
+        if _folder_key(item.name) == SUMMARY_FILE:
+            own = "" if _folder(item.name) == SUMMARY_FILE else (
+                f" {SUMMARY_FILE} on a case-insensitive disk (macOS, Windows)")
             raise InputError(f"{folder}: {item.path.name!r} would have the results folder "
-                             f"{SUMMARY_FILE!r}, the batch's own summary: rename it")
-        other = by_folder.setdefault(_folder(item.name), item)
-        if other is not item:
+                             f"{_folder(item.name)!r}, the batch's own summary{own}: rename it")
+        other = by_folder.setdefault(_folder_key(item.name), item)
+        if other is item:
+            continue
+        if _folder(other.name) != _folder(item.name):
             raise InputError(
-                f"{folder}: {other.path.name!r} and {item.path.name!r} would share the results "
-                f"folder {_folder(item.name)!r} (names differ only in characters a folder "
-                "name cannot hold): rename one")
+                f"{folder}: the results folders of {other.path.name!r} and of "
+                f"{item.path.name!r} differ only in case, one folder on a case-insensitive "
+                "disk (macOS, Windows): rename one")
+        raise InputError(
+            f"{folder}: {other.path.name!r} and {item.path.name!r} would share the results "
+            f"folder {_folder(item.name)!r} (names differ only in characters a folder "
+            "name cannot hold): rename one")
     return sorted(found, key=lambda i: i.name)
 
 
