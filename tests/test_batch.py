@@ -24,6 +24,7 @@ from vtrack.batch import SUMMARY_COLUMNS, LocalExecutor, Outcome, SummaryWriter,
 from vtrack.batch.summary import WRITE_SPACING
 from vtrack.cli import main
 from vtrack.config import DEFAULT_CONFIG, load_config
+from vtrack.errors import ConfigError
 from vtrack.request import RunRequest
 from vtrack.scenes import make_scene, write_groundtruth
 
@@ -442,6 +443,29 @@ def test_a_broken_link_and_a_fifo_are_failed_rows(tmp_path: Path,
     assert "a link in a loop (to loop.mp4" in rows[("loop.mp4", "s0")]["error"]
     assert rows[("pipe.mp4", "s0")]["status"] == "failed"
     assert "not a regular file" in rows[("pipe.mp4", "s0")]["error"]
+
+
+def test_the_library_plan_refuses_configs_of_one_results_folder(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`plan(inputs, {"s0": s0, "S0": s0}, out, settings)` planned both, into out/a/s0/ and
+    out/a/S0/ (one folder on a case-insensitive disk), and `{"x y": ..., "x_y": ...}` two jobs
+    into the one folder out/a/x_y/: only `vtrack batch` checked its configs. plan() refuses
+    them itself now, worded as `vtrack batch` is, before anything is planned."""
+    folder = clips_folder(tmp_path, clip_factory, "a")
+    config = load_config("s0")
+    out = tmp_path / "out"
+    request = RunRequest(input=str(folder), out_dir=out, config=config, video=False)
+    with pytest.raises(ConfigError) as case:
+        plan(find_inputs(folder), {"s0": config, "S0": config}, out, request)
+    assert str(case.value) == ("the results folders of 'S0' and of 's0' (s0) differ only in "
+                               "case, one folder on a case-insensitive disk (macOS, Windows): "
+                               "rename one")
+    with pytest.raises(ConfigError) as same:
+        plan(find_inputs(folder), {"x y": config, "x_y": config}, out, request)
+    assert str(same.value) == ("another config has the results folder of 'x_y' (s0); results "
+                               "are kept per name, rename one")
+    assert not out.exists()
+    assert len(plan(find_inputs(folder), {"s0": config, "t0": config}, out, request).jobs) == 2
 
 
 def test_more_jobs_than_runs_start_a_worker_per_run(tmp_path: Path,

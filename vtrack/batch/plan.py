@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -10,7 +10,7 @@ from typing import Any
 from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
-from vtrack.errors import COMMAND_NAMES, InputError, OutputError
+from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OutputError
 from vtrack.evaluate.groundtruth import (
     MULTI_TARGET_CONFIGS,
     groundtruth_names,
@@ -112,6 +112,36 @@ class Plan:
     warnings: list[str] = field(default_factory=list)
 
 
+def folder_clash(label: str, configs: Mapping[str, Config]) -> tuple[str, str] | None:
+    """The label of the first of ``configs`` (by label) whose results folder would be the one of
+    a config labelled ``label``, and why (one phrase, naming both and that config's source,
+    ending in what to do); None when ``label``'s folder is its own. One folder: the same
+    :func:`~vtrack.io.files.folder_name`, or names that differ only in case (``s0`` and
+    ``S0`` are one folder on a case-insensitive disk: macOS's, Windows')."""
+    folder = folder_name(label)
+    for other, config in configs.items():
+        if folder_name(other).casefold() != folder.casefold():
+            continue
+        if folder_name(other) != folder:
+            return other, (f"the results folders of '{label}' and of '{other}' "
+                           f"({config.source}) differ only in case, one folder on a "
+                           "case-insensitive disk (macOS, Windows): rename one")
+        return other, (f"another config has the results folder of '{label}' "
+                       f"({config.source}); results are kept per name, rename one")
+    return None
+
+
+def _refuse_shared_folders(configs: Mapping[str, Config]) -> None:
+    """ConfigError (:func:`folder_clash`'s phrase) when two of ``configs`` would write into
+    one results folder."""
+    earlier: dict[str, Config] = {}
+    for label, config in configs.items():
+        clash = folder_clash(label, earlier)
+        if clash is not None:
+            raise ConfigError(clash[1])
+        earlier[label] = config
+
+
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,
          settings: RunRequest, threads: int = 1, force: bool = False,
          overwrite: bool = True) -> Plan:
@@ -128,7 +158,10 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     initial box, and, unless ``overwrite``, for a folder holding the results of a run made
     with other settings (as ``vtrack run`` without ``--overwrite``; the same run unfinished is
     run again). ``threads`` is the number of OpenCV threads of each job.
+    Raises ConfigError when two ``configs`` would write into one results folder
+    (:func:`folder_clash`), before anything is planned.
     """
+    _refuse_shared_folders(configs)
     result = Plan([], [], [])
     out_dir = out_dir.resolve()
     pipelines = {label: Pipeline(config.build()) for label, config in configs.items()}

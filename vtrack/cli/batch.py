@@ -68,15 +68,14 @@ class _StopOnce:
 
 def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Config]:
     """Load every ``--config`` (with the ``--set`` overrides), keyed by config name. Configs
-    whose results folders would be one are refused: names the same, or the same but for
-    characters a folder name cannot hold or for case (``s0`` and ``S0`` are one folder on a
-    case-insensitive disk: macOS's, Windows')."""
+    whose results folders would be one are refused (:func:`~vtrack.batch.plan.folder_clash`:
+    names the same, or the same but for characters a folder name cannot hold or for case),
+    naming the ``--config`` that clashes; one given twice is said so."""
+    from vtrack.batch.plan import folder_clash
     from vtrack.config import config_file, load_config
-    from vtrack.io.files import folder_name
 
     configs: dict[str, Config] = {}
-    folders: dict[str, Config] = {}
-    files: dict[str, Path] = {}  # by results folder: the file each config was read from
+    files: dict[str, Path] = {}  # by config name: the file each config was read from
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec)
         try:
@@ -84,24 +83,15 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
         except ConfigError as exc:  # name the config: the chain alone did not say which
             raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
                               "--config") from None
-        folder = folder_name(config.name).casefold()
-        other = configs.get(config.name) or folders.get(folder)
         file = config_file(spec).resolve()  # ./mine.toml is mine.toml; s0 its shipped file
-        if other is not None and files.get(folder) == file:
+        clash = folder_clash(config.name, configs)
+        if clash is not None and files[clash[0]] == file:
             raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
                               "input")
-        if other is not None and folder_name(other.name) != folder_name(config.name):
-            raise ConfigError(
-                f"--config {spec}: the results folders of '{config.name}' and of "
-                f"'{other.name}' ({other.source}) differ only in case, one folder on a "
-                "case-insensitive disk (macOS, Windows): rename one")
-        if other is not None:
-            raise ConfigError(
-                f"--config {spec}: another config has the results folder of '{config.name}' "
-                f"({other.source}); results are kept per name, rename one"
-            )
-        configs[config.name] = folders[folder] = config
-        files[folder] = file
+        if clash is not None:
+            raise ConfigError(f"--config {spec}: {clash[1]}")
+        configs[config.name] = config
+        files[config.name] = file
     return configs
 
 
