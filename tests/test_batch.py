@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import av
 import cv2
+import numpy as np
 import pytest
 from click.testing import CliRunner, Result
 from conftest import one_error_line
@@ -25,7 +26,9 @@ from vtrack.batch.summary import WRITE_SPACING
 from vtrack.cli import main
 from vtrack.config import DEFAULT_CONFIG, load_config
 from vtrack.errors import ConfigError
+from vtrack.io.videowriter import VideoTooSmallError
 from vtrack.request import RunRequest
+from vtrack.run import run
 from vtrack.scenes import make_scene, write_groundtruth
 
 if TYPE_CHECKING:
@@ -466,6 +469,32 @@ def test_the_library_plan_refuses_configs_of_one_results_folder(
                                "are kept per name, rename one")
     assert not out.exists()
     assert len(plan(find_inputs(folder), {"s0": config, "t0": config}, out, request).jobs) == 2
+
+
+def test_a_picture_too_small_for_the_video_names_no_video_in_its_row(tmp_path: Path) -> None:
+    """A batch's run of a sequence of 1x1 pictures failed with 'cannot encode a 1x1 video (H.264
+    in yuv420p needs at least 2x2 pixels)' and no way out, where `vtrack run` names --no-video:
+    its row and its error line name --no-video now (the library's run() names video=False),
+    and --no-video tracks it."""
+    images = tmp_path / "in" / "seq" / "img"
+    images.mkdir(parents=True)
+    for n in range(1, 6):
+        cv2.imwrite(str(images / f"{n:04d}.png"), np.zeros((1, 1, 3), np.uint8))
+    out = tmp_path / "out"
+    result = batch(str(tmp_path / "in"), "-c", "s4", "-j", "1", "--out", str(out))
+    assert result.exit_code == 1
+    error = summary(out)[("seq", "s4")]["error"]
+    assert error == (f"{out / 'seq' / 's4' / 'annotated.mp4'}: cannot encode a 1x1 video "
+                     "(H.264 in yuv420p needs at least 2x2 pixels); give --no-video to track "
+                     "it without the video")
+    assert f"vtrack: error: seq [s4]: failed: {error}" in result.output
+    with pytest.raises(VideoTooSmallError, match=r"; give video=False to track it without"):
+        run(RunRequest(input=str(images.parent), out_dir=tmp_path / "lib",
+                       config=load_config("s4")))
+    done = batch(str(tmp_path / "in"), "-c", "s4", "-j", "1", "--no-video", "--out",
+                 str(tmp_path / "out2"))
+    assert done.exit_code == 0, done.output
+    assert summary(tmp_path / "out2")[("seq", "s4")]["status"] == "complete"
 
 
 def test_more_jobs_than_runs_start_a_worker_per_run(tmp_path: Path,

@@ -49,6 +49,10 @@ class OptionNames:
     overwrite: str
     #: What sets how long a run waits on the network and on a stream's reader.
     timeout: str
+    #: How the caller says "no annotated video".
+    no_video: str
+    #: What sends the annotated video to a live output instead of a file.
+    video_out: str
 
     @property
     def options(self) -> bool:
@@ -75,10 +79,12 @@ class OptionNames:
 
 COMMAND_NAMES = OptionNames(init="--init", fps="--fps", start="--start", start_s="--start",
                             gt="--gt", stream="--stream", out="--out",
-                            overwrite="--overwrite (-y)", timeout="--timeout")
+                            overwrite="--overwrite (-y)", timeout="--timeout",
+                            no_video="--no-video", video_out="--video-out")
 LIBRARY_NAMES = OptionNames(init="init_box", fps="fps", start="start", start_s="start_s",
                             gt="gt_path", stream="stream", out="out_dir",
-                            overwrite="overwrite=True", timeout="ffmpeg.timeout_s")
+                            overwrite="overwrite=True", timeout="ffmpeg.timeout_s",
+                            no_video="video=False", video_out="video_out")
 
 
 def is_real(value: object) -> bool:

@@ -89,7 +89,7 @@ from vtrack.io.source import (
     start_toward,
 )
 from vtrack.io.stream import STDOUT, StreamWriter
-from vtrack.io.videowriter import verify_video
+from vtrack.io.videowriter import VideoTooSmallError, verify_video
 from vtrack.latency import Latencies
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
@@ -782,7 +782,8 @@ def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
 def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
                   signals: _Signals, names: OptionNames) -> _Writers:
     """The run's writers, opened while ``signals`` are held; on an error none is left open
-    (the stream's messages call it by ``names``).
+    (the stream's messages call it by ``names``, and a picture too small for the video names
+    the way out: ``names.no_video``).
     The wait for a ``--stream`` FIFO's reader is cut short by a signal: the run then goes on
     without the stream, its signal noted (the frame loop ends at once, interrupted)."""
     pipeline = resolved.pipeline
@@ -797,6 +798,11 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
                                         info.height, info.fps or 30.0, preset=request.preset,
                                         crf=request.crf, url=request.video_out,
                                         stall_s=request.ffmpeg.timeout_s)
+        except VideoTooSmallError as exc:  # the way out, as the caller names it
+            writers.csv.abort()
+            way = (f"leave {names.video_out} out" if request.video_out
+                   else f"give {names.no_video}")
+            raise VideoTooSmallError(f"{exc}; {way} to track it without the video") from None
         except BaseException:
             writers.csv.abort()
             raise

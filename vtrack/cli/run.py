@@ -168,7 +168,6 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     from vtrack.evaluate.groundtruth import gt_origin_of, parse_box
     from vtrack.io import RawFormat
     from vtrack.io.video import FFmpegInput
-    from vtrack.io.videowriter import VideoTooSmallError
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
     if video_out is not None and (no_video or "://" not in video_out):
@@ -224,10 +223,6 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
                           overwrite=overwrite, names=COMMAND_NAMES)
         except VtrackError as exc:  # recorded (if the outputs had opened): exits as it says
             ending.code = exc.exit_code
-            if isinstance(exc, VideoTooSmallError):  # the way out, as this command names it
-                way = "leave --video-out out" if video_out else "give --no-video"
-                raise VideoTooSmallError(f"{exc}; {way} to track it without the video"
-                                         ) from None
             raise
         finally:
             progress.close()
