@@ -228,6 +228,27 @@ def test_a_box_drawn_on_a_later_frame_is_printed_with_its_frame_not_saved(clip: 
     assert read_sidecar(clip) == Box(1, 2, 30, 40)  # frame 0's box, as it was
 
 
+def test_select_says_a_name_with_a_newline_in_one_line(clip: Path, tmp_path: Path) -> None:
+    """`vtrack select 'new<newline>line.mp4'` said 'vtrack select: saved in .../new' and, on a
+    line of its own, 'line.init.txt (vtrack run and vtrack batch use it ...)': its lines
+    printed the name as it is, where its errors and warnings escape control characters. They
+    do too now (`new\\nline.init.txt`), one line each."""
+    video = tmp_path / "new\nline.mp4"
+    shutil.copy(clip, video)
+    select = Select(str(video))
+    try:
+        status, answer = post(select.url + "select", {"box": [10, 20, 30, 40], "frame": 0})
+        code, out, err = select.finish()
+    finally:
+        select.stop()
+    assert status == 200 and code == 0, err
+    assert read_sidecar(video) == Box(10, 20, 30, 40)
+    lines = err.splitlines()
+    assert all(line.startswith("vtrack select: ") for line in lines), err
+    assert lines[-1] == (f"vtrack select: saved in {tmp_path}/new\\nline.init.txt (vtrack run "
+                         "and vtrack batch use it when no --init is given)")
+
+
 def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> None:
     """The page's server without a browser: info, frames, a rejected box, a confirmed one."""
     sidecar_path(clip).unlink(missing_ok=True)

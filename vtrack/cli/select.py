@@ -6,7 +6,7 @@ import contextlib
 
 import click
 
-from vtrack.cli._messages import warn
+from vtrack.cli._messages import note, warn
 from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
 
@@ -39,28 +39,26 @@ def command(input_spec: str, frame: int, port: int) -> None:
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
                              f"(frames 0..{store.count - 1})")
         server = SelectionServer(input_spec, store, frame, port)
-        click.echo(f"vtrack select: drag a box around the target at {server.url}  "
-                   f"(Ctrl-C to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "
-                   "HOST)", err=True)
+        note("select", f"drag a box around the target at {server.url}  (Ctrl-C to cancel; "
+                       f"over SSH: ssh -L {server.port}:127.0.0.1:{server.port} HOST)")
         if server.unreadable:
             warn(f"{server.unreadable}; the box you confirm replaces it")
         selection = server.wait()
     if selection.frame != 0:  # not saved: a sidecar box is frame 0's
         _print(f"--start {selection.frame} --init {format_box(selection.box)}", "it was not "
                "saved (the sidecar holds frame 0's box)")
-        click.echo(f"vtrack select: not saved (the sidecar holds frame 0's box): the box was "
-                   f"drawn on frame {selection.frame}; give both options to vtrack run",
-                   err=True)
+        note("select", "not saved (the sidecar holds frame 0's box): the box was drawn on "
+                       f"frame {selection.frame}; give both options to vtrack run")
         return
     if selection.sidecar is None:
         _print(f"--init {format_box(selection.box)}", f"it was not saved ({input_spec} has "
                "no sidecar file)")
-        click.echo(f"vtrack select: {input_spec} has no sidecar file (stdin, a URL or a "
-                   "device): give the box to vtrack run as --init", err=True)
+        note("select", f"{input_spec} has no sidecar file (stdin, a URL or a device): give "
+                       "the box to vtrack run as --init")
     else:
         _print(f"--init {format_box(selection.box)}", f"it is saved in {selection.sidecar}")
-        click.echo(f"vtrack select: saved in {selection.sidecar} (vtrack run and vtrack batch "
-                   "use it when no --init is given)", err=True)
+        note("select", f"saved in {selection.sidecar} (vtrack run and vtrack batch use it "
+                       "when no --init is given)")
 
 
 def _print(line: str, kept: str) -> None:
