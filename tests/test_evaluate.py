@@ -268,6 +268,12 @@ def test_read_boxes_origin_one(tmp_path):
         ("262,20;71,35;40,80;31,20\n", "line 1: expected 4 or 8 numbers, got "
          "'262,20;71,35;40,80;31,20' (decimal commas: write 262.20, not 262,20; numbers are "
          "separated by commas, tabs or spaces, not ';')"),
+        # decimal commas between spaces were read as 8 numbers, a polygon (Box(x=31.0, y=2.0,
+        # ...)), without a word; a polygon's points written x,y apart are as ambiguous
+        ("1,2,3,4\n262,2 71,35 40,8 31,2\n", "line 2: '262,2 71,35 40,8 31,2' is 8 numbers "
+         "only if its commas separate numbers as its spaces do (decimal commas: write 262.2, "
+         "not 262,2; numbers are separated by commas, tabs or spaces; a polygon's four x,y "
+         "points: commas between them too)"),
     ],
 )
 def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):

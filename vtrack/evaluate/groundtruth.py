@@ -174,7 +174,27 @@ def _separator_hint(line: str) -> str:
     rule = f"numbers are separated by commas, tabs or spaces, not {separator!r}"
     if decimal is None:
         return f" ({rule})"
+    return _decimal_hint(decimal, rule)
+
+
+def _decimal_hint(decimal: str, rule: str) -> str:
+    """`` (decimal commas: write 262.2, not 262,2; RULE)`` for the field ``decimal``."""
     return f" (decimal commas: write {decimal.replace(',', '.')}, not {decimal}; {rule})"
+
+
+def _spaced_decimal_commas(line: str) -> str | None:
+    """The first field of ``line`` when its 8 numbers are 8 only because each of its 4
+    space-separated fields holds one comma (``262,2 71,35 40,8 31,2``: decimal commas, a box,
+    or a polygon's points ``x,y`` apart), and each such field is a number with a decimal comma;
+    else None."""
+    fields = line.split()
+    if len(fields) != 4 or any(f.count(",") != 1 for f in fields):
+        return None
+    try:
+        [float(f.replace(",", ".")) for f in fields]
+    except ValueError:
+        return None
+    return fields[0]
 
 
 def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
@@ -240,6 +260,8 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
     from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
     4 or 8 numbers, an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
+    line of 8 numbers only because each of its 4 space-separated fields holds a comma
+    (``262,2 71,35 40,8 31,2``: decimal commas, or a polygon's points; said which to write), a
     missing, unreadable or empty file. A file whose first line is a MOTChallenge row
     (:func:`_is_mot_row`) raises :class:`MultiTargetTruthError`; in a file of boxes, a later
     line of 8 numbers is a polygon, also one that could be read as such a row (a polygon
@@ -268,6 +290,13 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
                 hint = " (no header line: the file holds only numbers)"
             raise InputError(f"{path} line {number}: expected 4 or 8 numbers, got "
                              f"{_quote(line)}{hint}")
+        decimal = _spaced_decimal_commas(line) if len(values) == 8 else None
+        if decimal is not None:
+            raise InputError(
+                f"{path} line {number}: {_quote(line)} is 8 numbers only if its commas "
+                "separate numbers as its spaces do" + _decimal_hint(
+                    decimal, "numbers are separated by commas, tabs or spaces; a polygon's "
+                    "four x,y points: commas between them too"))
         if any(math.isnan(v) for v in values):
             boxes.append(None)
             continue
