@@ -893,6 +893,32 @@ def test_a_flat_sequence_is_one_input_by_one_rule_with_otbs_boxes_and_an_init_bo
         assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h]), name
 
 
+def test_an_empty_img_folder_beside_flat_images_does_not_hide_them(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A sequence of images directly in its folder beside its groundtruth_rect.txt and an
+    empty img/ was refused: `vtrack run seq` said 'seq: no images (...) in the folder or its
+    img/ (img1/, color/)' and `vtrack batch` 'no inputs', as the first of img/, img1/, color/
+    that existed was taken, empty or not. The first that holds images is taken now."""
+    from vtrack.evaluate import read_boxes
+
+    clip = clip_factory("smooth", width=W, height=H, frames=20, fmt="images")
+    first = read_boxes(clip.gt, origin=1)[0]
+    sequence = tmp_path / "in" / "seq"
+    shutil.copytree(clip.path / "img", sequence)
+    shutil.copy(clip.gt, sequence / "groundtruth_rect.txt")
+    (sequence / "img").mkdir()
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-o", str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    record = json.loads((tmp_path / "out" / "seq" / "s0" / "run.json").read_text())
+    assert record["summary"]["frames"] == 20
+    assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h])
+    ran = CliRunner().invoke(main, ["run", str(sequence), "-c", "s0", "--no-video", "--gt",
+                                    str(sequence / "groundtruth_rect.txt"), "-o",
+                                    str(tmp_path / "run")], catch_exceptions=False)
+    assert ran.exit_code == 0, ran.output
+    assert json.loads((tmp_path / "run" / "run.json").read_text())["summary"]["frames"] == 20
+
+
 def test_a_batch_run_from_an_init_box_records_the_origin_vtrack_run_does(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A sequence folder without ground truth (its first box from init.txt, 0-based whatever

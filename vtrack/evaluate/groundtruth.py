@@ -17,9 +17,9 @@ from typing import NamedTuple
 
 from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
-from vtrack.io.images import holds_images
+from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
-from vtrack.io.sidecar import SEQUENCE_SIDECAR, sequence_images
+from vtrack.io.sidecar import SEQUENCE_SIDECAR
 from vtrack.io.specs import VIDEO_SUFFIXES
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.

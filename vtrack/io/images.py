@@ -19,6 +19,7 @@ from __future__ import annotations
 import bisect
 import configparser
 import math
+import os
 import re
 from collections.abc import Iterator
 from itertools import islice
@@ -34,7 +35,7 @@ from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
-from vtrack.io.sidecar import sequence_images, sequence_of
+from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
 from vtrack.io.signatures import declared_size_problem, jpeg_cut_short
 from vtrack.io.source import InputInfo, Source
 
@@ -74,8 +75,31 @@ def list_images(folder: Path) -> list[Path]:
 def _image_files(folder: Path) -> Iterator[Path]:
     """The images of a sequence folder (:func:`list_images`) as they are listed."""
     where = sequence_images(folder) or folder
-    return (p for p in where.iterdir()
-            if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file())
+    return (p for p in where.iterdir() if _image_name(p.name) and p.is_file())
+
+
+def _image_name(name: str) -> bool:
+    """Whether a file named ``name`` is an image of a sequence: by suffix, not hidden (macOS's
+    ``._0001.jpg``)."""
+    return Path(name).suffix.lower() in IMAGE_SUFFIXES and not name.startswith(".")
+
+
+def sequence_images(folder: Path) -> Path | None:
+    """The folder of ``folder``'s images when it is a sequence folder: the first of
+    :data:`~vtrack.io.sidecar.SEQUENCE_IMAGES` (OTB's ``img/``, MOTChallenge's ``img1/``,
+    VOT2017+'s ``color/``) that holds an image, or that cannot be listed (reading it then says
+    why); else None (an empty ``img/`` beside images in ``folder`` itself is not theirs)."""
+    for name in SEQUENCE_IMAGES:
+        where = folder / name
+        if not where.is_dir():
+            continue
+        try:
+            with os.scandir(where) as entries:
+                if any(_image_name(e.name) and e.is_file() for e in entries):
+                    return where
+        except OSError:
+            return where
+    return None
 
 
 def holds_images(folder: Path, count: int = 1) -> bool:

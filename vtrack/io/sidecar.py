@@ -20,17 +20,11 @@ from vtrack.io.specs import is_url
 
 VIDEO_SIDECAR = "{}.init.txt"  # beside NAME.EXT
 SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
-#: The folder of a sequence's images, first found wins: OTB's SEQ/img, MOTChallenge's SEQ/img1,
+#: The folder of a sequence's images, the first that holds images wins
+#: (:func:`~vtrack.io.images.sequence_images`): OTB's SEQ/img, MOTChallenge's SEQ/img1,
 #: VOT2017+'s SEQ/color. SEQ/img (img1, color) and SEQ are one input: they share SEQ/init.txt
 #: and SEQ's name.
 SEQUENCE_IMAGES = ("img", "img1", "color")
-
-
-def sequence_images(folder: Path) -> Path | None:
-    """The folder of ``folder``'s images when it is a sequence folder (it holds one of
-    :data:`SEQUENCE_IMAGES`: OTB's ``img/``, MOTChallenge's ``img1/``, VOT2017+'s ``color/``),
-    else None."""
-    return next((folder / n for n in SEQUENCE_IMAGES if (folder / n).is_dir()), None)
 
 
 def sequence_of(folder: Path) -> Path | None:
