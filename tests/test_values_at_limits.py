@@ -208,6 +208,11 @@ def test_a_picture_too_small_for_the_video_says_the_way_out_before_tracking(
                     f"{size} video (H.264 in yuv420p needs at least 2x2 pixels); give "
                     "--no-video to track it without the video")
     assert not (tmp_path / "out").exists()
+    # with --video-out the way out is both: without it the video is annotated.mp4, as small
+    line = one_error_line(vtrack(*args, "--video-out", "udp://127.0.0.1:9", "-o",
+                                 str(tmp_path / "out")))
+    assert line.endswith("; leave --video-out out and give --no-video to track it without the "
+                         "video"), line
     done = vtrack(*args, "--no-video", "-o", str(tmp_path / "out"))
     assert done.exit_code == 0, done.output
 

@@ -800,8 +800,8 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
                                         stall_s=request.ffmpeg.timeout_s)
         except VideoTooSmallError as exc:  # the way out, as the caller names it
             writers.csv.abort()
-            way = (f"leave {names.video_out} out" if request.video_out
-                   else f"give {names.no_video}")
+            way = (f"leave {names.video_out} out and give {names.no_video}" if request.video_out
+                   else f"give {names.no_video}")  # without --video-out: annotated.mp4, as small
             raise VideoTooSmallError(f"{exc}; {way} to track it without the video") from None
         except BaseException:
             writers.csv.abort()
