@@ -871,6 +871,25 @@ def test_only_folders_of_a_sequences_images_are_sequences_and_results_are_no_inp
         str(in5), "-c", "s0", "--no-video", "-o", str(tmp_path / "out-in5")).stderr
 
 
+def test_a_sequence_whose_img_folder_holds_no_image_is_a_failed_row_not_passed_over(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """An OTB sequence whose img/ holds no image (a download that failed; or its images one
+    folder deeper) beside a video: the batch passed over it without a word (exit 0, one row),
+    where it used to fail its row saying so. img/ and img1/ are names only sequences use: the
+    folder is a sequence, and its row says it has no images."""
+    clips = clips_folder(tmp_path, clip_factory, "a")
+    folder = tmp_path / "in-seq"
+    (folder / "seq" / "img" / "sub").mkdir(parents=True)
+    shutil.copy(clips / "a.mp4", folder / "a.mp4")
+    shutil.copy(clips / "a.gt.txt", folder / "a.gt.txt")
+    shutil.copy(clips / "a.gt.txt", folder / "seq" / "groundtruth_rect.txt")
+    result = batch(str(folder), "-c", "s0", "--no-video", "-j", "1", "-o", str(tmp_path / "o"))
+    rows = summary(tmp_path / "o")
+    assert set(rows) == {("a", "s0"), ("seq", "s0")}, result.output
+    assert rows["seq", "s0"]["status"] == "failed"
+    assert "no images" in result.stderr, result.stderr
+
+
 def test_a_flat_sequence_is_one_input_by_one_rule_with_otbs_boxes_and_an_init_box(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Discovery and --gt-origin auto each had a rule of what a sequence folder is: images

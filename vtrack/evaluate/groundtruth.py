@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
-from vtrack.io.sidecar import SEQUENCE_SIDECAR
+from vtrack.io.sidecar import SEQUENCE_ONLY_IMAGES, SEQUENCE_SIDECAR
 from vtrack.io.specs import VIDEO_SUFFIXES
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
@@ -102,7 +102,9 @@ def is_sequence_folder(path: str | PathLike[str]) -> bool:
     one; ``--gt-origin auto`` reads OTB's boxes in it as 1-based, :func:`gt_origin_of`): the
     images ``vtrack run FOLDER`` reads (:func:`~vtrack.io.images.list_images`) are
 
-    - in ``img/`` (OTB) or ``img1/`` (MOTChallenge), names only sequences use; or
+    - in ``img/`` (OTB) or ``img1/`` (MOTChallenge), names only sequences use (such a folder
+      is a sequence even when it holds no image: a download that failed is said so when read,
+      not passed over); or
     - in ``color/`` (VOT2017+), a name other folders have too (a colourist's output), beside
       what says which target to track (:func:`_names_a_target`); or
     - directly in the folder (VOT before 2017, GOT-10k, a folder ``vtrack select`` gave a
@@ -112,9 +114,9 @@ def is_sequence_folder(path: str | PathLike[str]) -> bool:
 
     A folder of images without any of these files (a report's ``plots/``) is none."""
     path = Path(path)
+    if any((path / name).is_dir() for name in SEQUENCE_ONLY_IMAGES):
+        return True
     images = sequence_images(path)
-    if images is not None and images.name != "color":
-        return holds_images(path)
     if not _names_a_target(path):
         return False
     return holds_images(path) if images is not None else (

@@ -25,6 +25,8 @@ SEQUENCE_SIDECAR = "init.txt"  # inside the sequence folder
 #: VOT2017+'s SEQ/color. SEQ/img (img1, color) and SEQ are one input: they share SEQ/init.txt
 #: and SEQ's name.
 SEQUENCE_IMAGES = ("img", "img1", "color")
+#: ... of which these names only sequences use (``color/`` other folders have too).
+SEQUENCE_ONLY_IMAGES = SEQUENCE_IMAGES[:2]
 
 
 def sequence_of(folder: Path) -> Path | None:
