@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -512,3 +513,24 @@ def test_an_error_naming_a_file_with_a_newline_is_one_line(occlusion_clip,
     line = assert_one_line_error(result, "this tracker needs an initial box")
     assert result.stderr.decode().count("\n") == 1
     assert "into a\\nb.init.txt (vtrack select INPUT picks it)" in line
+
+
+@pytest.mark.parametrize("command, option, limits", [
+    ("run", "--fps", ("0.01", "10000")),
+    ("run", "--start", ("1000000000000", "31622400s")),
+    ("run", "--frames", ("1000000000000", "31622400s")),
+    ("scene", "--frames", ("108000",)),
+    ("scene", "--size", ("64x48", "7680x4320")),
+    ("scene", "--fps", ("0.01", "10000")),
+])
+def test_an_options_help_says_its_range(command: str, option: str, limits: tuple[str, ...]
+                                        ) -> None:
+    """Every value a user gives has a declared range, and --help says it (run's --fps,
+    --start, --frames and scene's --frames, --size, --fps said none, though each is refused
+    outside it)."""
+    help_text = vtrack(command, "--help").stdout.decode()
+    row = re.search(rf"^ +(-\w, )?{option} .*?(?=^ +-)", help_text, re.M | re.S)
+    assert row is not None, help_text
+    entry = " ".join(row.group().split())
+    for limit in limits:
+        assert limit in entry, (option, entry)

@@ -29,6 +29,8 @@ from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import COMMAND_NAMES, STOP_SIGNALS, Interrupted, VtrackError, printable
 from vtrack.params import (
     MAX_CRF,
+    MAX_FRAME_NUMBER,
+    MAX_SECONDS,
     MAX_SEED,
     MAX_TIMEOUT_S,
     MAX_WAIT_S,
@@ -84,7 +86,8 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
 @click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
               default="bgr24", show_default=True, help="Pixel format of --raw input.")
 @click.option("--fps", type=FRAME_RATE, default=None,
-              help="Frame rate of --raw input or an image folder (default 30; a MOTChallenge "
+              help="Frame rate of --raw input or an image folder, from 0.01 to 10000 (default "
+                   "30; a MOTChallenge "
                    "sequence's seqinfo.ini frameRate): time_s = frame index / fps. Refused "
                    "for a video file, whose frames carry their own timestamps.")
 @click.option("--format", "-f", "input_format", metavar="NAME", default=None,
@@ -127,15 +130,17 @@ def default_out_dir(input_spec: str, config: str | None = None) -> Path:
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
-              "(as track.csv numbers them) or a time T like ffmpeg -ss (2.5s: the first frame "
-              "whose timestamp is at or after it). The target's box in it: --init's "
+              f"(as track.csv numbers them; at most {MAX_FRAME_NUMBER}) or a time T like ffmpeg "
+              f"-ss (2.5s, at most {MAX_SECONDS}s: the first frame whose timestamp is at or "
+              "after it). The target's box in it: --init's "
               "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
               "0's). An MP4 or MOV file of constant frame rate is read from the key frame "
               "at or before it, an image folder from its image; other videos (MKV, WebM, "
               "MPEG-TS, AVI, fragmented MP4, a variable frame rate), streams and raw frames "
               "decode the earlier frames and skip them.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
-              help="Stop after N frames, or after T seconds of the input (10s, like ffmpeg "
+              help=f"Stop after N frames (1 to {MAX_FRAME_NUMBER}), or after T seconds of the "
+                   f"input (10s, above 0 and at most {MAX_SECONDS}s, like ffmpeg "
                    "-t: the frames whose timestamp is less than T past the first tracked "
                    "one's, so a variable frame rate is followed).")
 @click.option("--stream", "stream", metavar="FILE|-", type=FileOrDash(), default=None,

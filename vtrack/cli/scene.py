@@ -15,6 +15,7 @@ from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.params import MAX_CRF, MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
+from vtrack.scenes.scenarios import MAX_FRAMES, MAX_HEIGHT, MAX_WIDTH, MIN_HEIGHT, MIN_WIDTH
 
 #: The options a scene's settings come from, for make_scene's errors to name.
 _OPTION_NAMES = {"seed": "--seed", "size": "--size", "frames": "--frames", "fps": "--fps"}
@@ -40,9 +41,13 @@ def _scenario_list() -> str:
 @click.argument("name")
 @click.argument("out", type=CLIP_PATH)
 @click.option("--frames", type=NumberWord(int, "a whole number of frames"),
-              help="Number of frames [scenario default, mostly 150].")
-@click.option("--size", metavar="WxH", help="Frame size [scenario default, mostly 320x240].")
-@click.option("--fps", type=FRAME_RATE, help="Frame rate [scenario default, mostly 30].")
+              help=f"Number of frames, at most {MAX_FRAMES} (a scenario needs at least a few: "
+                   "its message says how many) [scenario default, mostly 150].")
+@click.option("--size", metavar="WxH",
+              help=f"Frame size, from {MIN_WIDTH}x{MIN_HEIGHT} to {MAX_WIDTH}x{MAX_HEIGHT} "
+                   "[scenario default, mostly 320x240].")
+@click.option("--fps", type=FRAME_RATE,
+              help="Frame rate, from 0.01 to 10000 [scenario default, mostly 30].")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Random seed.")
 @click.option(
