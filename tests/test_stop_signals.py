@@ -146,3 +146,31 @@ def test_sigterm_while_vtrack_scene_makes_its_scene_says_interrupted(tmp_path: P
     assert result.stderr.strip().splitlines()[-1] == "vtrack: interrupted"
     assert "Traceback" not in result.stderr
     assert _files(tmp_path) == []
+
+
+def test_a_signal_once_the_files_go_in_place_changes_nothing() -> None:
+    """`stopping_as_interrupted()` raised Interrupted for a signal at any point of its block,
+    also once the block's staged files were put in place (vtrack vectors then closed its
+    input, vtrack report removed stale plots): the files were final and the command ended
+    'interrupted' (143). The block's ``settled()`` now ends that: a signal after it is
+    ignored, and the block runs to its end."""
+    import os
+
+    import click
+    from click.testing import CliRunner
+
+    from vtrack.cli._signals import stopping_as_interrupted
+
+    steps: list[str] = []
+
+    @click.command()
+    def settle() -> None:
+        with stopping_as_interrupted() as settled:
+            settled()
+            os.kill(os.getpid(), signal.SIGTERM)
+            steps.append("after the signal")
+
+    result = CliRunner().invoke(settle, [])
+    assert result.exception is None, result.output
+    assert steps == ["after the signal"]
+

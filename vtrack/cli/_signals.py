@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import click
@@ -16,17 +16,26 @@ from vtrack.errors import STOP_SIGNALS, handling_stop_signals, interrupt
 
 
 @contextmanager
-def stopping_as_interrupted() -> Iterator[None]:
+def stopping_as_interrupted() -> Iterator[Callable[[], None]]:
     """SIGINT and SIGTERM inside the block raise :class:`~vtrack.errors.Interrupted` (SIGTERM
-    killed the process before, leaving its temporary files, with no word). Once the block has
-    returned its files are in place and final: in a process of its own (the ``vtrack``
-    command) the signals are then ignored until it exits (a Ctrl-C in the interpreter's
-    teardown raised inside a library's finaliser: a traceback, and exit 0 all the same); under
-    click's test runner the previous handlers are back after the block."""
+    killed the process before, leaving its temporary files, with no word) until the block
+    calls the function it is given, ``settled()``, as its staged files start to be put in
+    place: from then on a signal changes nothing (the work after it, removing files of an
+    earlier set, closing an input, ends as it would have). Once the block has returned its
+    files are in place and final: in a process of its own (the ``vtrack`` command) the
+    signals are then ignored until it exits (a Ctrl-C in the interpreter's teardown raised
+    inside a library's finaliser: a traceback, and exit 0 all the same); under click's test
+    runner the previous handlers are back after the block."""
     with handling_stop_signals(interrupt):
-        yield
+        yield _ignore_stop_signals
     root = click.get_current_context().find_root().command
-    if (getattr(root, "owns_process", False)
-            and threading.current_thread() is threading.main_thread()):
+    if getattr(root, "owns_process", False):
+        _ignore_stop_signals()
+
+
+def _ignore_stop_signals() -> None:
+    """Ignore SIGINT and SIGTERM from now on (outside the main thread: nothing to do, no
+    handler of ours is set there)."""
+    if threading.current_thread() is threading.main_thread():
         for signum in STOP_SIGNALS:
             signal.signal(signum, signal.SIG_IGN)

@@ -48,9 +48,11 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
 
     progress = StepProgress(quiet, "report", "inputs", stats_period)
     try:
-        with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no staged plot left behind
+        # SIGTERM as Ctrl-C: no staged plot left behind; once they go in place, nothing
+        with stopping_as_interrupted() as settled:
             report = build_report(list(results), out_dir, gt=list(gt_specs),
-                                  gt_origin=gt_origin, title=title, on_input=progress)
+                                  gt_origin=gt_origin, title=title, on_input=progress,
+                                  settled=settled)
     finally:
         progress.close()
     for warning in report.warnings:

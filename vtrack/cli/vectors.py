@@ -104,11 +104,13 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     init_box = parse_box(init_text)
     extra = {"input": Path(input_spec).name, "config": config.name, "init": list(init_box),
              "vtrack": __version__}
-    # SIGTERM as Ctrl-C: the staged vector files are removed, earlier vectors stay whole
-    with stopping_as_interrupted(), open_source(input_spec) as source:
+    # SIGTERM as Ctrl-C: the staged vector files are removed, earlier vectors stay whole;
+    # once they go in place, a signal changes nothing (the input's closing included)
+    with stopping_as_interrupted() as settled, open_source(input_spec) as source:
         check_init_box(init_box, source.info.width, source.info.height, "--init")
         frames = itertools.islice(iter(source), count)
-        written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra)
+        written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra,
+                                settled)
         for warning in source.warnings:  # frames skipped as undecodable, as vtrack run says
             warn(warning)
     if written < count:

@@ -22,7 +22,7 @@ import csv
 import json
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -213,15 +213,17 @@ _S2_COLUMNS: dict[str, str] = {
 
 
 def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: Any,
-             out_dir: Path, extra: dict[str, Any]) -> int:
+             out_dir: Path, extra: dict[str, Any],
+             settled: Callable[[], object] | None = None) -> int:
     """Run the chain over ``frames`` and write the vectors to ``out_dir``; returns the number of
     frames written. Every file is written under a temporary name and they are put in place
     together, ``manifest.json`` last, once all are complete (the vector files an earlier
     ``generate`` left there are removed then): when the writing stops part way (an error,
     Ctrl-C, SIGTERM) the temporary files are removed, an earlier set of vectors stays as it
-    was, and a folder it created for them is removed."""
+    was, and a folder it created for them is removed. ``settled()`` is called as they start
+    to be put in place (:class:`~vtrack.io.files.StagedFiles`)."""
     owner = fixed_stage(stages, str(extra.get("config")))
-    with removing_new_folders(out_dir), StagedFiles() as staged:
+    with removing_new_folders(out_dir), StagedFiles(settled) as staged:
         prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
         count, size, record = _stage_vectors(staged, pipeline.track(frames, init_box), owner,
                                              out_dir)

@@ -148,10 +148,13 @@ class StagedFiles:
     :meth:`commit`, in the order staged: when one of them cannot be written, none is put in
     place (an earlier set of these files stays whole) and :meth:`discard` removes every
     temporary name. As a ``with`` block: committed when the block completes, discarded however
-    it ends. :func:`replacing` and the report's pages and plots both write through it."""
+    it ends. :func:`replacing` and the report's pages and plots both write through it.
+    ``settled`` is called as :meth:`commit` starts (a command's ``settled()``: a stop signal
+    from then on no longer interrupts, the files are going in place)."""
 
-    def __init__(self) -> None:
+    def __init__(self, settled: Callable[[], object] | None = None) -> None:
         self._pending: list[tuple[Path, Path]] = []
+        self._settled = settled
 
     def __enter__(self) -> Self:
         return self
@@ -186,6 +189,8 @@ class StagedFiles:
         """Rename every temporary name over its path, in the order staged (a folder replaces
         the folder there, whatever that held). Raises OutputError naming the path that could
         not be (the temporary names not yet renamed are left to :meth:`discard`)."""
+        if self._settled is not None:
+            self._settled()
         while self._pending:
             temp, path = self._pending[0]
             try:

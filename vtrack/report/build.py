@@ -348,7 +348,8 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
 def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
                  gt_origin: int | None = 0, title: str = DEFAULT_TITLE,
-                 on_input: Callable[[int, int], None] | None = None) -> Report:
+                 on_input: Callable[[int, int], None] | None = None,
+                 settled: Callable[[], object] | None = None) -> Report:
     """Read every run below ``results`` and write the report into ``out_dir``.
 
     ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
@@ -358,7 +359,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
     cannot be read is left out with a warning. Raises InputError when nothing below
     ``results`` is a run (or a failed batch row) and OutputError when ``out_dir`` cannot be
     written, holds a batch's ``summary.csv`` or is a run's folder. ``on_input(done, inputs)``
-    is called as each input's plots are drawn (the long part: progress).
+    is called as each input's plots are drawn (the long part: progress); ``settled()`` as
+    the written files start to be put in place (:class:`~vtrack.io.files.StagedFiles`).
     """
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
@@ -422,7 +424,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                             "listed per input, left out of the averages and the All inputs plot")
         by_config = _group(counted, lambda r: r.config)
         palette = plots.colours(sorted({r.config for r in runs}))
-        with StagedFiles() as staged, catch_warnings():  # put in place together when all written
+        with StagedFiles(settled) as staged, catch_warnings():  # in place together once all written
             # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
             # drawing, not the runs: the terminal shows vtrack's warnings only
             simplefilter("ignore", UserWarning)
