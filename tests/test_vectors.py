@@ -263,6 +263,52 @@ def test_vectors_written_again_leave_nothing_of_the_earlier_ones(vectors, tmp_pa
     assert sorted(p.name for p in (out / "frame_0000").iterdir()) == ["gray.hex", "rgb.hex"]
 
 
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def test_a_file_at_a_frame_folders_path_is_refused_and_the_earlier_vectors_stay(
+        vectors, tmp_path) -> None:
+    """`vtrack vectors c.mp4 ... --frames 10 -o v`, then `rm -r v/frame_0005; echo x >
+    v/frame_0005` and the same command again: 'v/frame_0005: cannot write (Not a
+    directory)', exit 2, with the earlier vectors removed first, the new ones put in place
+    part way (frame_0000..0004) and no manifest.json. The file is now refused before
+    anything is put in place or removed: one line, and the folder as it was."""
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+    out = tmp_path / "v"
+    args = ("vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}",
+            "--frames", "10", "--out", str(out))
+    assert vtrack(*args).returncode == 0
+    shutil.rmtree(out / "frame_0005")
+    (out / "frame_0005").write_text("x\n")
+    before = _tree(out)
+    result = vtrack(*args)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        f"vtrack: error: {out / 'frame_0005'}: cannot write (a file, not a folder, is in the "
+        "way)"]
+    assert _tree(out) == before
+    assert not [p for p in out.rglob(".*")]  # no temporary name left
+
+
+def test_a_folder_named_trace_csv_in_the_output_is_one_error_line(vectors, tmp_path) -> None:
+    """`mkdir -p v2/trace.csv; vtrack vectors ... -o v2` ended in a traceback
+    (IsADirectoryError from unlink). Now one line naming it, exit 2, nothing written."""
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+    out = tmp_path / "v2"
+    (out / "trace.csv").mkdir(parents=True)
+    result = vtrack("vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}",
+                    "--frames", "3", "--out", str(out))
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        f"vtrack: error: {out / 'trace.csv'}: cannot write (a folder of that name is in the "
+        "way)"]
+    assert [p.name for p in out.iterdir()] == ["trace.csv"]
+
 def test_a_clip_shorter_than_the_frames_asked_for_is_said(vectors, tmp_path) -> None:
     _, clip = vectors
     box = clip.scene.boxes[0]

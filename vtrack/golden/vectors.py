@@ -21,6 +21,7 @@ import contextlib
 import csv
 import json
 import math
+import os
 import re
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -106,13 +107,17 @@ def frame_files(frame_bgr: np.ndarray, record: FixedRecord, index: int) -> dict[
     return files
 
 
-def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> None:
+def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> list[Path]:
     """Stage ``files`` in ``folder``: as a new folder, or one by one into the folder there
-    (which may hold files of the user's own: they stay)."""
+    (which may hold files of the user's own: they stay); their paths. OutputError naming
+    ``folder`` when something other than a folder is at its path."""
+    paths = [folder / name for name in files]
     if folder.is_dir():
-        for name, data in files.items():
-            staged.write(folder / name, lambda temp, data=data: temp.write_bytes(data))
-        return
+        for path, data in zip(paths, files.values(), strict=True):
+            staged.write(path, lambda temp, data=data: temp.write_bytes(data))
+        return paths
+    if os.path.lexists(folder):
+        raise OutputError(f"{folder}: cannot write (a file, not a folder, is in the way)")
     temp = staged.temp(folder)
     try:
         temp.mkdir()
@@ -120,6 +125,7 @@ def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> 
             (temp / name).write_bytes(data)
     except OSError as exc:
         raise OutputError(f"{folder}: cannot write ({os_reason(exc)})") from None
+    return paths
 
 
 def _cell(value: Any) -> str:
@@ -217,32 +223,40 @@ def generate(frames: Iterator[Any], stages: list[Any], pipeline: Any, init_box: 
              settled: Callable[[], object] | None = None) -> int:
     """Run the chain over ``frames`` and write the vectors to ``out_dir``; returns the number of
     frames written. Every file is written under a temporary name and they are put in place
-    together, ``manifest.json`` last, once all are complete (the vector files an earlier
-    ``generate`` left there are removed then): when the writing stops part way (an error,
-    Ctrl-C, SIGTERM) the temporary files are removed, an earlier set of vectors stays as it
-    was, and a folder it created for them is removed. ``settled()`` is called as they start
+    together, ``manifest.json`` last, once all are complete; then the vector files an earlier
+    ``generate`` left there that were not replaced are removed: when the writing stops part
+    way (an error, Ctrl-C, SIGTERM) the temporary files are removed, an earlier set of
+    vectors stays as it was, and a folder it created for them is removed. A folder at the
+    path of one of its files, or something else at a frame folder's, is refused (OutputError)
+    before anything is put in place. ``settled()`` is called as they start
     to be put in place (:class:`~vtrack.io.files.StagedFiles`)."""
     owner = fixed_stage(stages, str(extra.get("config")))
-    with removing_new_folders(out_dir), StagedFiles(settled) as staged:
-        prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
-        count, size, record = _stage_vectors(staged, pipeline.track(frames, init_box), owner,
-                                             out_dir)
-        if record is None:
-            raise InputError(f"{extra.get('input')}: no frame decoded")
-        data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
-        staged.write(out_dir / "manifest.json",
-                     lambda temp: temp.write_text(json.dumps(data, indent=2) + "\n",
-                                                  encoding="utf-8"))
-        _remove_earlier_vectors(out_dir)  # then the staged files are put in place
+    with removing_new_folders(out_dir):
+        with StagedFiles(settled) as staged:
+            prepare_output_dir(out_dir)  # OutputError naming it: a file, read-only, ...
+            for name in _TABLES:  # (refused before a frame is read, and before any rename)
+                if (out_dir / name).is_dir():
+                    raise OutputError(f"{out_dir / name}: cannot write (a folder of that name "
+                                      "is in the way)")
+            count, size, record, written = _stage_vectors(
+                staged, pipeline.track(frames, init_box), owner, out_dir)
+            if record is None:
+                raise InputError(f"{extra.get('input')}: no frame decoded")
+            data = manifest(record, size[0], size[1], stages, {**extra, "frames": count})
+            written.add(staged.write(out_dir / "manifest.json",
+                                     lambda temp: temp.write_text(
+                                         json.dumps(data, indent=2) + "\n", encoding="utf-8")))
+        _remove_earlier_vectors(out_dir, written)  # the staged files are in place now
     return count
 
 
 def _stage_vectors(staged: StagedFiles, results: Iterator[Any], owner: Any, out_dir: Path
-                   ) -> tuple[int, tuple[int, int], FixedRecord | None]:
+                   ) -> tuple[int, tuple[int, int], FixedRecord | None, set[Path]]:
     """Stage the frame folders, ``trace.csv`` and ``iterations.csv`` of ``results`` in
-    ``out_dir``: the frames written, the last frame's size and the last golden record (None:
-    no frame)."""
+    ``out_dir``: the frames written, the last frame's size, the last golden record (None:
+    no frame) and the paths of the files staged."""
     trace = TraceWriter(staged.temp(out_dir / "trace.csv"))
+    written = {out_dir / "trace.csv"}
     iterations: TraceWriter | None = None
     count, size, record = 0, (0, 0), None
     try:
@@ -253,11 +267,13 @@ def _stage_vectors(staged: StagedFiles, results: Iterator[Any], owner: Any, out_
             size = (frame.width, frame.height)
             # named by the input's frame number, as trace.csv's rows (a skipped frame: a gap)
             folder = out_dir / f"frame_{result.index:04d}"
-            _stage_frame(staged, folder, frame_files(frame.bgr(), record, count))
+            written.update(_stage_frame(staged, folder, frame_files(frame.bgr(), record,
+                                                                    count)))
             trace.write(record.trace)
             if record.model == "s2":
                 if iterations is None:
                     iterations = TraceWriter(staged.temp(out_dir / "iterations.csv"))
+                    written.add(out_dir / "iterations.csv")
                 for row in record.iterations:
                     iterations.write(row)
             count += 1
@@ -265,21 +281,29 @@ def _stage_vectors(staged: StagedFiles, results: Iterator[Any], owner: Any, out_
         trace.close()
         if iterations is not None:
             iterations.close()
-    return count, size, record
+    return count, size, record, written
 
 
-def _remove_earlier_vectors(out_dir: Path) -> None:
-    """Remove the vector files an earlier ``generate`` left in ``out_dir`` (its frame folders,
-    traces and manifest; nothing else), so that no frame of another run is checked against."""
-    for name in ("manifest.json", "trace.csv", "iterations.csv"):
-        (out_dir / name).unlink(missing_ok=True)
-    for folder in out_dir.glob("frame_*"):
-        if folder.is_dir() and folder.name.removeprefix("frame_").isdigit():
-            for vector in folder.glob("*.hex"):
-                if not vector.name.startswith("."):  # (not one staged to replace it)
-                    vector.unlink()
-            with contextlib.suppress(OSError):  # a folder holding files of the user's own
-                folder.rmdir()
+#: The files of a set of vectors beside its frame folders.
+_TABLES = ("manifest.json", "trace.csv", "iterations.csv")
+
+
+def _remove_earlier_vectors(out_dir: Path, written: set[Path]) -> None:
+    """Remove the vector files an earlier ``generate`` left in ``out_dir`` that are not among
+    those just ``written`` (its frame folders, traces and manifest; nothing else), so that no
+    frame of another run is checked against. Best effort: one that cannot be removed stays."""
+    folders = [folder for folder in out_dir.glob("frame_*")
+               if folder.is_dir() and folder.name.removeprefix("frame_").isdigit()]
+    stale = [out_dir / name for name in _TABLES] + [
+        vector for folder in folders for vector in folder.glob("*.hex")
+        if not vector.name.startswith(".")]  # (not a temporary name)
+    for path in stale:
+        if path not in written and path.is_file():
+            with contextlib.suppress(OSError):
+                path.unlink()
+    for folder in folders:
+        with contextlib.suppress(OSError):  # one holding new vectors or the user's files
+            folder.rmdir()
 
 
 # --- check ---------------------------------------------------------------------------------------
