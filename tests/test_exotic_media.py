@@ -267,6 +267,26 @@ def test_raw_rows_repeating_every_188_bytes_are_pixels_and_null_packets_a_stream
     assert not (tmp_path / "nulls").exists()
 
 
+
+@pytest.mark.parametrize(("width", "top"), [(188, 71), (192, 111)])  # M2TS: sync byte at 4
+def test_raw_rows_whose_repeating_headers_carry_no_payload_are_pixels(tmp_path, width, top):
+    """A 188x8 grey frame whose every row is the falling ramp clip(71 - 10 x) was refused
+    as 'an MPEG-TS stream, not raw frames': its rows put three byte-identical headers
+    (47 3d 33 29) 188 bytes apart, whose 4th byte reads 'adaptation field only' (no
+    payload), so the continuity counter rightly stayed; 192 bytes apart (M2TS, from byte 4)
+    alike. Byte-identical headers (but null packets') are no stream now: both ramps track
+    (a real .ts or .m2ts is still refused:
+    test_an_mpegts_stream_given_as_raw_frames_is_refused)."""
+    ramp = np.clip(top - 10 * np.arange(width), 0, 255).astype(np.uint8)
+    assert ramp[width - 188: width - 184].tolist() == [0x47, 0x3D, 0x33, 0x29]
+    frames = tmp_path / "ramp.gray"
+    frames.write_bytes(np.tile(ramp, (8 * 3, 1)).tobytes())  # three frames
+    done = CliRunner().invoke(main, ["run", "--raw", f"{width}x8", "--pix-fmt", "gray",
+                                     "--init", "1,1,4,4", "--no-video", str(frames), "-o",
+                                     str(tmp_path / "ramp")])
+    assert done.exit_code == 0, done.output
+    assert len((tmp_path / "ramp" / "track.csv").read_text().splitlines()) == 1 + 3
+
 def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):
     """vtrack batch of a folder of a camera's .MXF clips said 'no inputs (video files or
     sequence folders ...)' though vtrack run tracks them and --help said inputs are the video

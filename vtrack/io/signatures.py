@@ -45,15 +45,24 @@ def _mpegts(head: bytes) -> bool:
     return False
 
 
+def _ts_pid(header: bytes) -> int:
+    """The PID of an MPEG-TS packet header (its three bytes after the sync byte)."""
+    return (header[0] & 0x1F) << 8 | header[1]
+
+
 def _ts_sequence(headers: list[bytes]) -> bool:
     """Whether packet headers (their three bytes after the sync byte) follow one another as in
     a stream: a packet of a PID that carries a payload advances that PID's continuity counter
     by one (mod 16) from its last packet's, one without a payload keeps it. Null packets
-    (PID 0x1FFF) count no counter. Three identical headers of another PID (a raw frame's
-    repeating rows) break this rule."""
+    (PID 0x1FFF) count no counter. Byte-identical headers of another PID are none: a raw
+    frame's rows repeating every packet (those with a payload break the counter rule; those
+    without, an "adaptation field only" 4th byte such as a falling ramp's 0x29, would keep
+    it), where a stream starts with tables (PAT, PMT) that carry one."""
+    if len(set(headers)) == 1:
+        return _ts_pid(headers[0]) == _TS_NULL_PID
     last: dict[int, int] = {}
     for header in headers:
-        pid = (header[0] & 0x1F) << 8 | header[1]
+        pid = _ts_pid(header)
         counter = header[2] & 0x0F
         if pid == _TS_NULL_PID:
             continue
