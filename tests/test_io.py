@@ -20,7 +20,15 @@ import numpy as np
 import pytest
 
 from vtrack.annotate import Annotator
-from vtrack.errors import ConfigError, InputError, Interrupted, OutputError, PartialInputError
+from vtrack.errors import (
+    ConfigError,
+    InputError,
+    Interrupted,
+    OutputError,
+    PartialInputError,
+    handling_stop_signals,
+    interrupt,
+)
 from vtrack.frame import BgrFrame, GrayFrame, I420Frame
 from vtrack.geometry import Box, Window
 from vtrack.io import (
@@ -588,22 +596,49 @@ def test_a_prefetcher_whose_start_a_signal_interrupted_closes_without_an_error()
     """SIGTERM to `vtrack vectors` as its reader's thread was being started raised in
     Thread.start's wait for the new thread (launched, not yet running); closing the source
     then said 'RuntimeError: cannot join thread before it is started', a traceback and exit
-    1. close() now waits for that thread to run, then for it to end."""
+    1. close() now waits for that thread to run, then for it to end. (The main thread holds
+    the signals off in start() now; a signal another thread took can still raise there.)"""
     prefetch = Prefetcher(iter(range(5)), depth=2, name="test-interrupted")
     thread = prefetch._thread
 
     def interrupted_start() -> None:  # as Thread.start when a signal arrives in its wait:
         # the thread is launched and runs a moment later (here: once close() has begun)
+        thread._launching = True
         threading.Thread(target=lambda: (prefetch._stop.wait(), threading.Thread.start(thread)),
                          daemon=True).start()
         raise Interrupted(signal.SIGTERM)
 
-    thread.start = interrupted_start  # type: ignore[method-assign]
+    thread._launch = interrupted_start  # type: ignore[method-assign]
     with pytest.raises(Interrupted):
         next(iter(prefetch))
     assert prefetch.close(timeout=60) is True
     assert not thread.is_alive()
 
+
+
+def test_a_signal_as_a_prefetchers_thread_is_started_waits_for_the_start() -> None:
+    """SIGTERM landing inside Thread.start before the reader's thread was launched raised
+    there; close() then waited its whole timeout for a thread that would never run and said
+    the reader was stuck (False; the source warned so). The main thread now holds SIGINT and
+    SIGTERM off while it starts the thread: the signal is handled once start() is over, and
+    close() finds the thread started and ends it. The signal is sent to the main thread as
+    Thread.start begins (a trace function)."""
+    prefetch = Prefetcher(iter(range(5)), depth=2, name="test-signal-in-start")
+
+    def send_in_start(frame, event, arg):
+        if event == "call" and frame.f_code is threading.Thread.start.__code__:
+            sys.settrace(None)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
+        return None
+
+    with handling_stop_signals(interrupt), pytest.raises(Interrupted):
+        sys.settrace(send_in_start)
+        try:
+            next(iter(prefetch))
+        finally:
+            sys.settrace(None)
+    assert prefetch.close(timeout=10) is True
+    assert not prefetch._thread.is_alive()
 
 # --- image folders ----------------------------------------------------------------------------
 

@@ -7,11 +7,14 @@ file reads release the GIL, so a second core does the I/O while the first one tr
 from __future__ import annotations
 
 import queue
+import signal
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
+
+from vtrack.errors import STOP_SIGNALS
 
 T = TypeVar("T")
 
@@ -33,13 +36,34 @@ class _Failure:
 
 
 class _Producer(threading.Thread):
-    """A producer's daemon thread that can be waited for even when a signal interrupted its
-    ``start()`` (Ctrl-C, SIGTERM raising in the wait for the new thread: launched, not yet
-    running), where ``Thread.join`` raises ``RuntimeError``."""
+    """A producer's daemon thread whose ``start()`` a stop signal does not cut in two.
+
+    Started from the main thread, it holds SIGINT and SIGTERM off (``pthread_sigmask``)
+    until the thread is launched and running: a signal meanwhile is handled as ``start()``
+    returns (its ``Interrupted`` raised there), so the thread is either never launched (the
+    signal was handled before) or can be joined. A signal another thread took may still raise
+    inside ``start()``: then :meth:`finish` waits for the launched thread to run before
+    joining it (``Thread.join`` would raise ``RuntimeError``)."""
 
     def __init__(self, target: Callable[[], None], name: str) -> None:
         super().__init__(target=target, name=name, daemon=True)
         self._producing = threading.Event()
+        self._launching = False
+
+    def start(self) -> None:
+        """Launch the thread (see the class), a signal held off meanwhile."""
+        if threading.current_thread() is not threading.main_thread():
+            self._launch()
+            return
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)  # (handles one due)
+        try:
+            self._launch()
+        finally:  # a signal that came meanwhile is handled here, the thread started
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+    def _launch(self) -> None:
+        self._launching = True
+        super().start()
 
     def run(self) -> None:
         self._producing.set()
@@ -47,7 +71,9 @@ class _Producer(threading.Thread):
 
     def finish(self, timeout: float) -> bool:
         """Wait up to ``timeout`` seconds for the thread (its ``start()`` called) to end; True
-        once it has."""
+        once it has, or when a signal came before it was launched."""
+        if not self._launching:
+            return True
         deadline = time.monotonic() + timeout
         if not self._producing.wait(timeout):
             return False
