@@ -174,3 +174,45 @@ def test_a_signal_once_the_files_go_in_place_changes_nothing() -> None:
     assert result.exception is None, result.output
     assert steps == ["after the signal"]
 
+
+
+def test_a_command_of_its_own_process_never_has_the_default_sigterm_after_its_files() -> None:
+    """`vtrack vectors ... -o v` sent SIGTERM as soon as v/manifest.json appeared was killed
+    (exit -15, not a word) 1 run in 6: as the block ended its previous handlers (the
+    default's, which kills) were put back, and only then were the signals ignored. They now
+    go from vtrack's handler (or ignored) straight to ignored. Seen line by line: SIGTERM's
+    handler at every line run in the block's code, from its handler's install to its end."""
+    import click
+    from click.testing import CliRunner
+
+    from vtrack.cli._signals import stopping_as_interrupted
+
+    seen: list[object] = []
+
+    def trace(frame, event, arg):
+        if frame.f_code.co_filename.endswith(("_signals.py", "errors.py")):
+            seen.append(signal.getsignal(signal.SIGTERM))
+            return trace
+        return None
+
+    @click.command()
+    def settle() -> None:
+        with stopping_as_interrupted():
+            pass
+
+    settle.owns_process = True  # as the vtrack command: a process of its own
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        sys.settrace(trace)
+        try:
+            result = CliRunner().invoke(settle, [])
+        finally:
+            sys.settrace(None)
+        assert result.exception is None, result.output
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    handled = [i for i, h in enumerate(seen) if h not in (signal.SIG_DFL, None)]
+    assert handled, seen
+    assert signal.SIG_DFL not in seen[handled[0]:], seen

@@ -213,15 +213,20 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextmanager
-def handling_stop_signals(handler: Callable[[int, Any], None]) -> Iterator[None]:
+def handling_stop_signals(handler: Callable[[int, Any], None],
+                          ignored_after: bool = False) -> Iterator[None]:
     """Call ``handler`` on SIGINT and SIGTERM inside the block, then restore the previous
-    handlers. Outside the main thread (where handlers cannot be set) it does nothing."""
+    handlers; with ``ignored_after``, a block that completes leaves the signals ignored
+    instead (set in the handler's place: no moment with the default handler, which kills).
+    Outside the main thread (where handlers cannot be set) it does nothing."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    completed = False
     try:
         yield
+        completed = True
     finally:
         for signum, old in previous.items():
-            signal.signal(signum, old)
+            signal.signal(signum, signal.SIG_IGN if completed and ignored_after else old)

@@ -26,11 +26,9 @@ def stopping_as_interrupted() -> Iterator[Callable[[], None]]:
     signals are then ignored until it exits (a Ctrl-C in the interpreter's teardown raised
     inside a library's finaliser: a traceback, and exit 0 all the same); under click's test
     runner the previous handlers are back after the block."""
-    with handling_stop_signals(interrupt):
-        yield _ignore_stop_signals
     root = click.get_current_context().find_root().command
-    if getattr(root, "owns_process", False):
-        _ignore_stop_signals()
+    with handling_stop_signals(interrupt, ignored_after=getattr(root, "owns_process", False)):
+        yield _ignore_stop_signals
 
 
 def _ignore_stop_signals() -> None:
