@@ -216,3 +216,39 @@ def test_a_command_of_its_own_process_never_has_the_default_sigterm_after_its_fi
     handled = [i for i, h in enumerate(seen) if h not in (signal.SIG_DFL, None)]
     assert handled, seen
     assert signal.SIG_DFL not in seen[handled[0]:], seen
+
+
+def test_a_signal_as_vtrack_scene_puts_its_files_in_place_changes_nothing(tmp_path: Path
+                                                                           ) -> None:
+    """`vtrack scene smooth c.mp4` sent SIGTERM as it renamed its staged files into place
+    (the clip, then c.gt.txt) stopped there, 'vtrack: interrupted' (143), part way through
+    the renames (a signal after them: the files final, and the command still said
+    interrupted). Once the files start to go in place a signal changes nothing now: exit 0,
+    both files there. The signal is sent to the main thread as the first rename begins (a
+    trace function)."""
+    import threading
+
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+    from vtrack.io import files
+
+    def send_in_rename(frame, event, arg):
+        if event == "call" and frame.f_code is files._rename_over.__code__:
+            sys.settrace(None)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
+        return None
+
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        sys.settrace(send_in_rename)
+        try:
+            result = CliRunner().invoke(main, ["scene", "smooth", str(tmp_path / "c.mp4"),
+                                               "--frames", "10", "--size", "64x48"])
+        finally:
+            sys.settrace(None)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    assert result.exit_code == 0, result.output
+    assert sorted(_files(tmp_path)) == ["c.gt.txt", "c.mp4"]

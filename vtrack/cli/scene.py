@@ -98,7 +98,7 @@ def command(
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
     # SIGTERM as Ctrl-C from here on, while the scene is made too (a long clip's takes
     # seconds): a word said, and no temporary clip left behind
-    with stopping_as_interrupted():
+    with stopping_as_interrupted() as settled:
         scene = make_scene(name, seed=seed, width=width, height=height, frames=frames, fps=fps,
                            names=_OPTION_NAMES)
         first = scene.boxes[0] if scene.boxes else None
@@ -110,7 +110,7 @@ def command(
         progress = StepProgress(False, out.name, "frames", stats_period)
         try:
             files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
-                               progress=progress)
+                               progress=progress, settled=settled)
         finally:
             progress.close()
     extra = f" and {files.mot}" if files.mot else ""

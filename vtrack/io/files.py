@@ -207,14 +207,16 @@ class StagedFiles:
 
 
 @contextlib.contextmanager
-def replacing(*paths: Path) -> Iterator[tuple[Path, ...]]:
+def replacing(*paths: Path, settled: Callable[[], object] | None = None
+              ) -> Iterator[tuple[Path, ...]]:
     """A :func:`temp_path` for each of ``paths``, for the block to write (a file, or a folder
     it creates). When the block completes, each is renamed over its path in turn (a folder
     replaces the folder there, whatever that held); when it raises, every temporary name is
     removed and ``paths`` are left as they were, so a failed write never leaves a file that
     looks complete nor spoils the one that was there. OutputError naming a path whose rename
-    fails (:class:`StagedFiles` for files not all known at the start)."""
-    with StagedFiles() as staged:
+    fails (:class:`StagedFiles` for files not all known at the start; ``settled`` as
+    there)."""
+    with StagedFiles(settled) as staged:
         yield tuple(staged.temp(path) for path in paths)
 
 

@@ -362,8 +362,10 @@ def write_clip(
     crf: int = 23,
     preset: str = "medium",
     progress: Progress = False,
+    settled: Callable[[], object] | None = None,
 ) -> ClipFiles:
-    """Write ``scene`` and its ground truth the way ``vtrack scene`` does.
+    """Write ``scene`` and its ground truth the way ``vtrack scene`` does (``settled()`` is
+    called as the files start to be put in place: :class:`~vtrack.io.files.StagedFiles`).
 
     - ``mp4``: video ``out`` (``pix_fmt`` default yuv420p) and ``out`` -> ``<stem>.gt.txt``;
     - ``raw``: raw frames ``out`` (``pix_fmt`` default bgr24) and ``<stem>.gt.txt``;
@@ -395,7 +397,7 @@ def write_clip(
     rate = [out / SEQUENCE_INFO] if fmt == "images" else []  # the folder's frame rate
     # stopped part way (an error, Ctrl-C, SIGTERM), it leaves no folder it created
     with (removing_new_folders(clip.parent),
-          replacing(clip, gt, *rate, *([mot] if multi else [])) as temps):
+          replacing(clip, gt, *rate, *([mot] if multi else []), settled=settled) as temps):
         if fmt == "mp4":
             _encode_video(scene, out, temps[0], crf, preset, CODEC, pix, progress, keyint=None)
         elif fmt == "raw":
