@@ -309,6 +309,46 @@ def test_a_folder_named_trace_csv_in_the_output_is_one_error_line(vectors, tmp_p
         "way)"]
     assert [p.name for p in out.iterdir()] == ["trace.csv"]
 
+
+def test_a_signal_once_the_vectors_are_in_place_changes_nothing(vectors, tmp_path) -> None:
+    """SIGTERM as soon as v/manifest.json appeared on `vtrack vectors big.mp4 --init ...
+    --frames 20 -o v` (1280x720) ended 'vtrack: interrupted' (143) in 6 runs of 8, the
+    vectors whole and final: the signal still interrupted while the staged files' names were
+    cleared, the input's warnings told and the input closed. Now exit 0. The signal is sent
+    to the main thread as the staged files' leftovers are discarded, after their commit (a
+    trace function)."""
+    import signal
+    import threading
+
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+    from vtrack.io.files import StagedFiles
+
+    _, clip = vectors
+    box = clip.scene.boxes[0]
+
+    def send_after_commit(frame, event, arg):
+        if event == "call" and frame.f_code is StagedFiles.discard.__code__:
+            sys.settrace(None)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
+        return None
+
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        sys.settrace(send_after_commit)
+        try:
+            result = CliRunner().invoke(main, [
+                "vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}",
+                "--frames", "3", "--out", str(tmp_path / "v")])
+        finally:
+            sys.settrace(None)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    assert result.exit_code == 0, result.output
+    assert len(list((tmp_path / "v").glob("frame_*"))) == 3
+
 def test_a_clip_shorter_than_the_frames_asked_for_is_said(vectors, tmp_path) -> None:
     _, clip = vectors
     box = clip.scene.boxes[0]
