@@ -16,11 +16,14 @@ from __future__ import annotations
 import queue
 import signal
 import subprocess
+import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from types import CodeType
 from typing import IO, TYPE_CHECKING
 
 import pytest
@@ -109,6 +112,27 @@ def wait_for_stop_handlers(process: subprocess.Popen, timeout_s: float = 60) -> 
         assert process.poll() is None, "vtrack ended before it handled signals"
         assert time.monotonic() < deadline, "vtrack did not start within the time"
         time.sleep(0.05)
+
+
+@contextmanager
+def sigterm_as_called(code: CodeType) -> Iterator[None]:
+    """Inside the block, SIGTERM is sent to the main thread as ``code`` (a function's
+    ``__code__``) is first called: a signal at that very point, no timing (a trace function
+    watches the calls). The SIGINT and SIGTERM handlers are put back after the block."""
+    def trace(frame, event, arg):  # noqa: ANN001, ANN202
+        if event == "call" and frame.f_code is code:
+            sys.settrace(None)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
+        return None
+
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    sys.settrace(trace)
+    try:
+        yield
+    finally:
+        sys.settrace(None)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def one_error_line(result: Result) -> str:

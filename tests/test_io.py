@@ -18,6 +18,7 @@ import av
 import cv2
 import numpy as np
 import pytest
+from conftest import sigterm_as_called
 
 from vtrack.annotate import Annotator
 from vtrack.errors import (
@@ -624,19 +625,9 @@ def test_a_signal_as_a_prefetchers_thread_is_started_waits_for_the_start() -> No
     close() finds the thread started and ends it. The signal is sent to the main thread as
     Thread.start begins (a trace function)."""
     prefetch = Prefetcher(iter(range(5)), depth=2, name="test-signal-in-start")
-
-    def send_in_start(frame, event, arg):
-        if event == "call" and frame.f_code is threading.Thread.start.__code__:
-            sys.settrace(None)
-            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
-        return None
-
-    with handling_stop_signals(interrupt), pytest.raises(Interrupted):
-        sys.settrace(send_in_start)
-        try:
-            next(iter(prefetch))
-        finally:
-            sys.settrace(None)
+    with (sigterm_as_called(threading.Thread.start.__code__),
+          handling_stop_signals(interrupt), pytest.raises(Interrupted)):
+        next(iter(prefetch))
     assert prefetch.close(timeout=10) is True
     assert not prefetch._thread.is_alive()
 

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from conftest import wait_for_stop_handlers
+from conftest import sigterm_as_called, wait_for_stop_handlers
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -226,29 +226,13 @@ def test_a_signal_as_vtrack_scene_puts_its_files_in_place_changes_nothing(tmp_pa
     interrupted). Once the files start to go in place a signal changes nothing now: exit 0,
     both files there. The signal is sent to the main thread as the first rename begins (a
     trace function)."""
-    import threading
-
     from click.testing import CliRunner
 
     from vtrack.cli import main
     from vtrack.io import files
 
-    def send_in_rename(frame, event, arg):
-        if event == "call" and frame.f_code is files._rename_over.__code__:
-            sys.settrace(None)
-            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
-        return None
-
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        sys.settrace(send_in_rename)
-        try:
-            result = CliRunner().invoke(main, ["scene", "smooth", str(tmp_path / "c.mp4"),
-                                               "--frames", "10", "--size", "64x48"])
-        finally:
-            sys.settrace(None)
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+    with sigterm_as_called(files._rename_over.__code__):
+        result = CliRunner().invoke(main, ["scene", "smooth", str(tmp_path / "c.mp4"),
+                                           "--frames", "10", "--size", "64x48"])
     assert result.exit_code == 0, result.output
     assert sorted(_files(tmp_path)) == ["c.gt.txt", "c.mp4"]

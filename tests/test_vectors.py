@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import sigterm_as_called
 
 from vtrack.golden.s0 import hue8
 from vtrack.scenes import write_image_sequence
@@ -317,9 +318,6 @@ def test_a_signal_once_the_vectors_are_in_place_changes_nothing(vectors, tmp_pat
     cleared, the input's warnings told and the input closed. Now exit 0. The signal is sent
     to the main thread as the staged files' leftovers are discarded, after their commit (a
     trace function)."""
-    import signal
-    import threading
-
     from click.testing import CliRunner
 
     from vtrack.cli import main
@@ -327,25 +325,10 @@ def test_a_signal_once_the_vectors_are_in_place_changes_nothing(vectors, tmp_pat
 
     _, clip = vectors
     box = clip.scene.boxes[0]
-
-    def send_after_commit(frame, event, arg):
-        if event == "call" and frame.f_code is StagedFiles.discard.__code__:
-            sys.settrace(None)
-            signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
-        return None
-
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        sys.settrace(send_after_commit)
-        try:
-            result = CliRunner().invoke(main, [
-                "vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}",
-                "--frames", "3", "--out", str(tmp_path / "v")])
-        finally:
-            sys.settrace(None)
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+    with sigterm_as_called(StagedFiles.discard.__code__):
+        result = CliRunner().invoke(main, [
+            "vectors", str(clip.path), "--init", f"{box.x},{box.y},{box.w},{box.h}",
+            "--frames", "3", "--out", str(tmp_path / "v")])
     assert result.exit_code == 0, result.output
     assert len(list((tmp_path / "v").glob("frame_*"))) == 3
 
