@@ -7,6 +7,11 @@ from pathlib import Path
 
 import click
 
+# NumPy loads numpy.random at its first use; loaded here, before the stop handlers are set, no
+# signal lands inside that import, whose machinery swallowed the handler's exception (the
+# scene then ran to the end and exited 0)
+import numpy.random  # noqa: F401
+
 from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
