@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, number_text
 from vtrack.evaluate import (
     ERROR_THRESHOLDS,
     OVERLAP_THRESHOLDS,
@@ -379,6 +379,15 @@ def test_parse_box():
 def test_init_takes_the_forms_a_sidecar_file_takes(text: str) -> None:
     """``--init "64 177 40 31"`` was refused while a sidecar file holding that line was taken."""
     assert parse_box(text) == parse_sidecar(text, "init.txt") == Box(64, 177, 40, 31)
+
+
+def test_a_box_written_with_minus_zero_is_recorded_as_zero() -> None:
+    """``vtrack run clip.mp4 --init -0,-0,20,20`` recorded and echoed the box as -0,-0,20,20
+    (run.json: ``"init": [-0.0, -0.0, 20.0, 20.0]``): -0 is the number 0, in --init and in a
+    sidecar file alike."""
+    for box in (parse_box("-0,-0,20,20"), parse_sidecar("-0 -0.0 20 20", "init.txt")):
+        assert ",".join(number_text(v) for v in box) == "0,0,20,20"
+        assert json.dumps(list(box)) == "[0.0, 0.0, 20.0, 20.0]"
 
 
 @pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d", "1,2,3,4,5", "1,2,nan,4", "", "1 2 3",

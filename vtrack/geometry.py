@@ -138,12 +138,12 @@ def center_error(a: Box, b: Box) -> float:
 
 def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
                    error: type[Exception]) -> Box:
-    """The box ``x, y, w, h`` of 4 number texts: all finite, ``w, h > 0``. Otherwise raises
-    ``error`` naming ``where`` and showing ``shown`` (what the user wrote): "expected
-    ``expected``" when the numbers are not 4 finite ones, else that width and height must be
-    positive. One rule for ``--init`` and sidecar files."""
-    try:
-        values = [float(part) for part in parts]
+    """The box ``x, y, w, h`` of 4 number texts (``-0`` read as 0): all finite, ``w, h > 0``.
+    Otherwise raises ``error`` naming ``where`` and showing ``shown`` (what the user wrote):
+    "expected ``expected``" when the numbers are not 4 finite ones, else that width and height
+    must be positive. One rule for ``--init`` and sidecar files."""
+    try:  # (+ 0.0: "-0" is the number 0, recorded and echoed as 0, not -0)
+        values = [float(part) + 0.0 for part in parts]
     except ValueError:
         values = []
     if len(values) != 4 or not all(math.isfinite(v) for v in values):
