@@ -677,6 +677,30 @@ def test_a_second_run_replaces_only_vtracks_own_outputs(clip: Clip, tmp_path: Pa
     assert (out / "notes.txt").read_text() == "mine\n"
 
 
+def test_a_config_file_named_as_another_config_says_why_its_folder_is_taken(
+        clip: Clip, tmp_path: Path) -> None:
+    """`vtrack stages robust --toml > mine.toml` keeps `name = "robust"`: after a plain robust
+    run, `vtrack run clip.mp4 -c mine.toml` was refused with only 'vtrack-out/clip/robust:
+    holds the results of an earlier run ...', which did not say why mine.toml writes to
+    robust/. The refusal of the default folder now says it is named after the config's name."""
+    run_args = (str(clip.path), "--gt", str(clip.gt), "--no-video", "--frames", "5")
+    assert vtrack("run", *run_args, cwd=tmp_path).returncode == 0
+    copied = vtrack("stages", "robust", "--toml", cwd=tmp_path)
+    (tmp_path / "mine.toml").write_text(copied.stdout)
+    refused = vtrack("run", *run_args, "-c", "mine.toml", cwd=tmp_path)
+    assert refused.returncode == 2
+    folder = Path("vtrack-out") / clip.path.stem / "robust"
+    assert error_line(refused.stderr) == (
+        f"vtrack: error: {folder}: holds the results of an earlier run (run.json, track.csv); "
+        "give --overwrite (-y) to replace them, or another --out (the folder is named after "
+        "the config's name, 'robust' in mine.toml: give the config a name of its own)")
+    # --out names the folder itself, and a shipped config's folder is its own name: no note
+    for args in (("-c", "mine.toml", "--out", str(folder)), ("-c", "robust")):
+        refused = vtrack("run", *run_args, *args, cwd=tmp_path)
+        assert refused.returncode == 2
+        assert error_line(refused.stderr).endswith("or another --out")
+
+
 @pytest.mark.parametrize("args", [
     ("missing.mp4",),
     ("CLIP", "--init", "500,500,20,20"),

@@ -137,6 +137,11 @@ class StreamReaderGone(OutputError):
     SIGPIPE (exit 141), its outputs whole, not failed."""
 
 
+class EarlierResultsError(OutputError):
+    """An output folder holding an earlier run's results, refused without ``--overwrite``:
+    nothing was written."""
+
+
 class FolderInUseError(OutputError):
     """An output folder another vtrack process holds (its lock): nothing was written."""
 

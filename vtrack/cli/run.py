@@ -26,7 +26,14 @@ from vtrack.cli._options import (
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import COMMAND_NAMES, STOP_SIGNALS, Interrupted, VtrackError, printable
+from vtrack.errors import (
+    COMMAND_NAMES,
+    STOP_SIGNALS,
+    EarlierResultsError,
+    Interrupted,
+    VtrackError,
+    printable,
+)
 from vtrack.params import (
     MAX_CRF,
     MAX_FRAME_NUMBER,
@@ -39,6 +46,7 @@ from vtrack.params import (
 )
 
 if TYPE_CHECKING:
+    from vtrack.config import Config
     from vtrack.io import InputInfo
     from vtrack.run import RunSummary
 
@@ -228,6 +236,8 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
                           overwrite=overwrite, names=COMMAND_NAMES)
         except VtrackError as exc:  # recorded (if the outputs had opened): exits as it says
             ending.code = exc.exit_code
+            if isinstance(exc, EarlierResultsError) and out_dir is None:
+                raise EarlierResultsError(f"{exc}{_named_folder(config_spec, config)}") from None
             raise
         finally:
             progress.close()
@@ -249,6 +259,20 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
                  err=True)
     if ending.code:
         sys.exit(ending.code)
+
+
+def _named_folder(config_spec: str | None, config: Config) -> str:
+    """What the refusal of an earlier run's default folder adds when the config is a file
+    whose ``name`` (which names the folder) is not its file's (``vtrack stages robust --toml
+    > mine.toml`` keeps ``name = "robust"``): where the folder's name came from; else
+    nothing."""
+    from vtrack.config import shipped_configs
+
+    if config_spec is None or config_spec in shipped_configs() \
+            or config.name == Path(config_spec).stem:
+        return ""
+    return (f" (the folder is named after the config's name, {config.name!r} in "
+            f"{config_spec}: give the config a name of its own)")
 
 
 def _ids_again(summary: RunSummary) -> str:

@@ -20,7 +20,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Self
 
-from vtrack.errors import COMMAND_NAMES, FolderInUseError, OptionNames, OutputError
+from vtrack.errors import (
+    COMMAND_NAMES,
+    EarlierResultsError,
+    FolderInUseError,
+    OptionNames,
+    OutputError,
+)
 from vtrack.io.files import is_temp_of, os_reason, prepare_output_dir
 
 LOCK_NAME = ".vtrack.lock"
@@ -179,12 +185,13 @@ def earlier_results(folder: Path | str) -> list[str]:
 
 
 def refuse_replacing(folder: Path | str, names: OptionNames = COMMAND_NAMES) -> None:
-    """Raise OutputError when ``folder`` holds an earlier run's results (as ffmpeg without
-    ``-y`` will not replace a file): the user says ``--overwrite`` or picks another ``--out``
-    (as ``names`` call them: ``overwrite=True``, ``out_dir`` in the library)."""
+    """Raise EarlierResultsError (an OutputError) when ``folder`` holds an earlier run's
+    results (as ffmpeg without ``-y`` will not replace a file): the user says ``--overwrite``
+    or picks another ``--out`` (as ``names`` call them: ``overwrite=True``, ``out_dir`` in the
+    library)."""
     found = earlier_results(folder)
     if found:
-        raise OutputError(
+        raise EarlierResultsError(
             f"{folder}: holds the results of an earlier run ({', '.join(found)}); give "
             f"{names.overwrite} to replace them, or another {names.out}")
 
