@@ -216,6 +216,22 @@ def test_a_summary_reader_that_goes_away_leaves_the_exit_status_to_the_run(
     assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "complete"
 
 
+def test_a_summary_line_stdout_cannot_take_fails_the_run_in_one_line(tmp_path: Path) -> None:
+    """`vtrack run ... > /dev/full`: the summary line met a full device (ENOSPC) and the run
+    exited 0, saying nothing (the failed write was taken for a reader that went away)."""
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    with open("/dev/full", "wb") as full:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                               "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+                               "--no-video", "-o", str(tmp_path / "out")],
+                              stdout=full, stderr=subprocess.PIPE, timeout=120, check=False)
+    assert done.returncode == 1
+    assert done.stderr.decode() == ("vtrack: error: standard output: No space left on device: "
+                                    "the summary line was not printed there\n")
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "complete"
+
+
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:
     """`--stream OUT/.vtrack.lock` was accepted, and the lines were deleted with the lock at the
     end of the run."""

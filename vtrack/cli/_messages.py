@@ -5,6 +5,11 @@ control characters are written as their escapes (:func:`~vtrack.errors.printable
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import os
+import sys
+
 import click
 
 from vtrack.errors import printable
@@ -29,3 +34,21 @@ def note(command: str, message: str) -> None:
     """Write ``vtrack COMMAND: MESSAGE`` on stderr as one line: what ``vtrack COMMAND`` says
     of its work (``vtrack select: saved in clip.init.txt ...``)."""
     click.echo(f"vtrack {command}: {printable(message)}", err=True)
+
+
+def echo_stdout(line: str) -> OSError | ValueError | None:
+    """Write ``line`` on standard output. None when it was written; else the error that
+    stopped it (BrokenPipeError when its reader went away, ENOSPC for ``> /dev/full``; an
+    EBADF OSError "closed before vtrack started" when there was no standard output at all:
+    ``>&-``). After a failed write standard output is pointed at the null device, so the
+    interpreter's last flush adds nothing; a descriptor closed from the start is left alone
+    (it may be another file's now)."""
+    if sys.stdout is None:
+        return OSError(errno.EBADF, "closed before vtrack started")
+    try:
+        click.echo(line)
+    except (OSError, ValueError) as exc:
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return exc
+    return None

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from vtrack.cli._messages import error_line, warning_line
+from vtrack.cli._messages import echo_stdout, error_line, warning_line
 from vtrack.cli._options import (
     FRAME_RATE,
     FrameSpan,
@@ -243,20 +243,21 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             progress.close()
         ending.code = _exit_code(summary)
         for warning in summary.warnings:
-            _say(warning_line(warning), err=True)
-        if not quiet:
-            _say(summary.line(), err=stream == "-")
+            _say(warning_line(warning))
+        if not quiet and stream == "-":
+            _say(summary.line())
+        elif not quiet and not _said_on_stdout(summary.line()):
+            ending.code = ending.code or 1
         if summary.interrupted_by == "SIGPIPE":
             pass  # the --stream reader went away (| head): quiet, as a pipe's writer; run.json
         elif summary.status == STATUS_INTERRUPTED:  # says why
-            _say(error_line(f"{summary.error}; partial results in {summary.out_dir}"), err=True)
+            _say(error_line(f"{summary.error}; partial results in {summary.out_dir}"))
             if summary.resume is not None:
                 _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
                                f"the same command with {summary.resume} and another --out"
-                               + _ids_again(summary)), err=True)
+                               + _ids_again(summary)))
         elif summary.status != STATUS_COMPLETE:
-            _say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"),
-                 err=True)
+            _say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"))
     if ending.code:
         sys.exit(ending.code)
 
@@ -333,11 +334,26 @@ class _Ending:
             signal.signal(signum, old)
 
 
-def _say(line: str, err: bool) -> None:
-    """``line`` on stderr (or stdout); nothing when its reader went away (``2>&1 | head``):
-    the run's exit status says how the run ended, its files and run.json what it did."""
+def _said_on_stdout(line: str) -> bool:
+    """``line`` on stdout. True when it was written, or when its reader went away (``|
+    head``: quiet, as a pipe's writer; the run's exit status says how it ended); else (``>
+    /dev/full``, an I/O error, stdout closed) False, after one error line naming standard
+    output and the problem on stderr."""
+    from vtrack.io.files import os_reason
+
+    failure = echo_stdout(line)
+    if failure is None or isinstance(failure, BrokenPipeError):
+        return True
+    _say(error_line(f"standard output: {os_reason(failure)}: the summary line was not "
+                    "printed there"))
+    return False
+
+
+def _say(line: str) -> None:
+    """``line`` on stderr; nothing when its reader went away (``2>&1 | head``): the run's exit
+    status says how the run ended, its files and run.json what it did."""
     with contextlib.suppress(OSError, ValueError):
-        click.echo(line, err=err)
+        click.echo(line, err=True)
 
 
 def _refuse_pix_fmt_without_raw(raw: bool) -> None:

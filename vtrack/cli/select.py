@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
-
 import click
 
-from vtrack.cli._messages import note, warn
+from vtrack.cli._messages import echo_stdout, note, warn
 from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
 
@@ -68,19 +66,10 @@ def _print(line: str, kept: str) -> None:
     at /dev/null, so the interpreter's last flush adds nothing. So too when stdout was closed
     before vtrack started (``vtrack select clip.mp4 >&-``: Python has no ``sys.stdout`` then,
     and click would print nothing without a word)."""
-    import os
-    import sys
-
     from vtrack.errors import OutputBrokenError
     from vtrack.io.files import os_reason
 
-    if sys.stdout is None:  # its descriptor may be another file's now: leave it alone
-        raise OutputBrokenError(f"standard output: closed before vtrack started: {line} was "
-                                f"not printed there; {kept}")
-    try:
-        click.echo(line)
-    except (OSError, ValueError) as exc:
-        with contextlib.suppress(OSError, ValueError):
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        raise OutputBrokenError(f"standard output: {os_reason(exc)}: {line} was not printed "
-                                f"there; {kept}") from None
+    failure = echo_stdout(line)
+    if failure is not None:
+        raise OutputBrokenError(f"standard output: {os_reason(failure)}: {line} was not "
+                                f"printed there; {kept}")
