@@ -546,6 +546,25 @@ def test_a_display_matrix_that_is_no_quarter_turn_is_warned_of(tmp_path):
         assert turned.warnings == []
 
 
+def test_a_file_with_two_video_streams_warns_which_it_tracks(clip_factory, tmp_path):
+    """`ffmpeg -i a.mp4 -i b.mp4 -map 0:v -map 1:v -c copy two.mkv`: vtrack run tracked the
+    first stream without a word that there was another; now one warning line says so, on
+    stderr and in run.json."""
+    first = clip_factory("smooth", width=160, height=120, frames=10)
+    second = clip_factory("smooth", seed=1, width=160, height=120, frames=10)
+    two = tmp_path / "two.mkv"
+    subprocess.run(["ffmpeg", "-v", "error", "-i", str(first.path), "-i", str(second.path),
+                    "-map", "0:v", "-map", "1:v", "-c", "copy", str(two)], check=True,
+                   timeout=60)
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(two), "--gt",
+                           str(first.gt), "-c", "s0", "--no-video", "-q", "-o",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    warning = f"{two}: 2 video streams; tracking the first (#0)"
+    assert (done.returncode, done.stderr) == (0, f"vtrack: warning: {warning}\n")
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert (record["status"], record["warnings"]) == ("complete", [warning])
+
+
 def test_time_s_counts_from_the_first_frame_as_the_readme_says(tmp_path):
     """A recording whose timestamps start at 5 s (an MPEG-TS starts at 1.4 s, a later part of
     a recording hours in) has time_s 0 at frame 0: the README said only 'time_s comes from each

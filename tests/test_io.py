@@ -499,7 +499,7 @@ def test_a_refused_packet_of_a_variable_rate_video_leaves_one_place_empty(tmp_pa
 
 def test_the_video_stream_is_the_one_ffmpeg_takes(tmp_path):
     """A file whose first video stream is a 64x64 picture and whose second, marked default,
-    is the video: the picture's one frame was tracked."""
+    is the video: the picture's one frame was tracked. A warning names the one tracked."""
     clip = tmp_path / "two.mkv"
     with av.open(str(clip), "w") as out:
         cover = out.add_stream("mpeg4", rate=1)
@@ -513,6 +513,7 @@ def test_the_video_stream_is_the_one_ffmpeg_takes(tmp_path):
     with open_source(str(clip)) as source:
         assert (source.info.width, source.info.height) == (W, H)
         assert len(list(source)) == 20
+    assert source.warnings == [f"{clip}: 2 video streams; tracking the one ffmpeg takes (#1)"]
 
 
 def test_a_text_file_is_not_tracked_as_a_video(tmp_path):

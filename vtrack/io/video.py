@@ -25,8 +25,9 @@ constant-rate stream, once damage was seen, a frame's index comes from its times
 (``round(time_s * fps)``, never less than the next index), and a stale picture out of order is
 dropped; in a variable-rate one, whose timestamps cannot tell, each refused packet leaves one
 place. Only a stream that really ends early is partial. Of several video streams, the one
-``ffmpeg`` would take is read (not a cover picture; the default; the largest); a file whose
-only picture is a cover picture (an audio file's album art) has no video to read.
+``ffmpeg`` would take is read (not a cover picture; the default; the largest), with a
+warning naming it; a file whose only picture is a cover picture (an audio file's album art)
+has no video to read.
 """
 
 from __future__ import annotations
@@ -154,6 +155,19 @@ def _main_video_stream(container: av.container.InputContainer) -> av.VideoStream
                 0 if context is None else (context.width or 0) * (context.height or 0))
 
     return max(container.streams.video, key=rank)
+
+
+def _several_videos(path: str, container: av.container.InputContainer,
+                    chosen: av.VideoStream) -> str | None:
+    """The warning of a file holding more than one video stream (cover pictures left out),
+    naming the one tracked (``chosen``) by its number among the video streams, as ``ffmpeg
+    -map 0:v:N`` counts them; None for one."""
+    videos = [s for s in container.streams.video if not _is_cover(s)]
+    if len(videos) < 2:
+        return None
+    number = list(container.streams.video).index(chosen)
+    which = "the first" if chosen is videos[0] else "the one ffmpeg takes"
+    return f"{path}: {len(videos)} video streams; tracking {which} (#{number})"
 
 
 class _Tail:
@@ -493,6 +507,9 @@ class VideoSource(Source):
             container.close()
             raise
         super().__init__(info)
+        several = _several_videos(path, container, self._stream)
+        if several:
+            self.warnings.append(several)
         turn = self._first.rotation  # the display matrix's angle, read at a quarter turn
         if abs((turn - self._rotation + 180) % 360 - 180) > 1:
             self.warnings.append(f"{path}: its display matrix turns the picture {turn:g} "
