@@ -217,6 +217,14 @@ def interrupt(signum: int, frame: object) -> None:
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+def ignore_stop_signals() -> None:
+    """Ignore SIGINT and SIGTERM from now on (outside the main thread: nothing to do, a handler
+    is only ever set there): a vtrack process whose outputs are final."""
+    if threading.current_thread() is threading.main_thread():
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
+
+
 @contextmanager
 def handling_stop_signals(handler: Callable[[int, Any], None],
                           ignored_after: bool = False) -> Iterator[None]:

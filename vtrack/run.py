@@ -473,6 +473,7 @@ class _MultiTargetRows:
         self.boxes_after_truth = 0
         #: The rows written per track id.
         self.written: Counter[int] = Counter()
+        self._last_ids: list[int] = []
 
     def rows(self, result: FrameResult) -> list[list[Any]]:
         rows, boxes = [], []
@@ -483,7 +484,9 @@ class _MultiTargetRows:
             boxes.append((track.id, b))
             rows.append([result.index + 1, track.id, b.x, b.y, b.w, b.h, track.confidence,
                          -1, -1, -1, track.state])
-        self.written.update(track_id for track_id, _ in boxes)
+        #: the ids whose rows this frame gave (what :meth:`undo` takes back)
+        self._last_ids = [track_id for track_id, _ in boxes]
+        self.written.update(self._last_ids)
         if self.score is not None:
             self._score_pending()
             self._pending = (result.index, boxes)
@@ -491,11 +494,11 @@ class _MultiTargetRows:
         return rows
 
     def undo(self, result: FrameResult) -> None:
-        """Forget ``result`` (its rows could not be written)."""
+        """Forget ``result``, the frame :meth:`rows` was last given (its rows could not be
+        written)."""
         if self._pending is not None and self._pending[0] == result.index:
             self._pending = None
-        self.written.subtract(track.id for track in result.tracks
-                              if track.state == TrackStatus.CONFIRMED)
+        self.written.subtract(self._last_ids)
         self.written = +self.written  # ids left with no row are gone
         if self.end == result.index + 1:
             self.end = result.index

@@ -5,14 +5,12 @@ staged under temporary names are removed and the command ends ``vtrack: interrup
 
 from __future__ import annotations
 
-import signal
-import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import click
 
-from vtrack.errors import STOP_SIGNALS, handling_stop_signals, interrupt
+from vtrack.errors import handling_stop_signals, ignore_stop_signals, interrupt
 
 
 @contextmanager
@@ -28,12 +26,5 @@ def stopping_as_interrupted() -> Iterator[Callable[[], None]]:
     runner the previous handlers are back after the block."""
     root = click.get_current_context().find_root().command
     with handling_stop_signals(interrupt, ignored_after=getattr(root, "owns_process", False)):
-        yield _ignore_stop_signals
+        yield ignore_stop_signals
 
-
-def _ignore_stop_signals() -> None:
-    """Ignore SIGINT and SIGTERM from now on (outside the main thread: nothing to do, no
-    handler of ours is set there)."""
-    if threading.current_thread() is threading.main_thread():
-        for signum in STOP_SIGNALS:
-            signal.signal(signum, signal.SIG_IGN)

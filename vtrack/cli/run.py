@@ -32,6 +32,7 @@ from vtrack.errors import (
     EarlierResultsError,
     Interrupted,
     VtrackError,
+    ignore_stop_signals,
     printable,
 )
 from vtrack.params import (
@@ -327,8 +328,7 @@ class _Ending:
 
     def __exit__(self, *exc_info: object) -> None:
         if self.whole_process and self.recording and self._previous:
-            for signum in STOP_SIGNALS:
-                signal.signal(signum, signal.SIG_IGN)
+            ignore_stop_signals()
             return
         for signum, old in self._previous.items():
             signal.signal(signum, old)

@@ -7,11 +7,6 @@ from pathlib import Path
 
 import click
 
-# NumPy loads numpy.random at its first use; loaded here, before the stop handlers are set, no
-# signal lands inside that import, whose machinery swallowed the handler's exception (the
-# scene then ran to the end and exited 0)
-import numpy.random  # noqa: F401
-
 from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
@@ -101,6 +96,12 @@ def command(
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
+    # NumPy loads numpy.random at its first use: loaded before the stop handlers are set, no
+    # signal lands inside that import, whose machinery swallowed the handler's exception (the
+    # scene then ran to the end and exited 0); here, not at the module's top, so that `vtrack
+    # --help` (which imports every command's module) does not pay for it
+    import numpy.random  # noqa: F401
+
     # SIGTERM as Ctrl-C from here on, while the scene is made too (a long clip's takes
     # seconds): a word said, and no temporary clip left behind
     with stopping_as_interrupted() as settled:

@@ -91,10 +91,12 @@ def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:
         return origin
     path = Path(path)
     otb = path.name == ONE_BASED_GT or _NUMBERED_GT.fullmatch(path.name) is not None
-    if not (otb or path.name in SEQUENCE_GT) or not is_sequence_folder(path.parent):
-        return 0
-    images = sequence_images(path.parent)
-    return 1 if otb or (images is not None and images.name == "img") else 0
+    if otb:
+        return int(is_sequence_folder(path.parent))
+    if path.name in SEQUENCE_GT:  # images in img/ make the folder a sequence folder
+        images = sequence_images(path.parent)
+        return int(images is not None and images.name == "img")
+    return 0
 
 
 def is_sequence_folder(path: str | PathLike[str]) -> bool:
@@ -116,11 +118,11 @@ def is_sequence_folder(path: str | PathLike[str]) -> bool:
     path = Path(path)
     if any((path / name).is_dir() for name in SEQUENCE_ONLY_IMAGES):
         return True
-    images = sequence_images(path)
-    if not _names_a_target(path):
+    if not _names_a_target(path):  # (cheap: most folders a batch walks stop here)
         return False
-    return holds_images(path) if images is not None else (
-        holds_images(path, 2) and not _holds_videos(path))
+    if sequence_images(path) is not None:  # color/
+        return holds_images(path)
+    return holds_images(path, 2) and not _holds_videos(path)
 
 
 def _names_a_target(folder: Path) -> bool:

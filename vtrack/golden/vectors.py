@@ -118,14 +118,15 @@ def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> 
         return paths
     if os.path.lexists(folder):
         raise OutputError(f"{folder}: cannot write (a file, not a folder, is in the way)")
-    temp = staged.temp(folder)
-    try:
-        temp.mkdir()
-        for name, data in files.items():
-            (temp / name).write_bytes(data)
-    except OSError as exc:
-        raise OutputError(f"{folder}: cannot write ({os_reason(exc)})") from None
+    staged.write(folder, lambda temp: _write_folder(temp, files))
     return paths
+
+
+def _write_folder(folder: Path, files: dict[str, bytes]) -> None:
+    """Make ``folder`` holding ``files`` (name -> bytes)."""
+    folder.mkdir()
+    for name, data in files.items():
+        (folder / name).write_bytes(data)
 
 
 def _cell(value: Any) -> str:

@@ -55,8 +55,9 @@ def _box(box: Box | None) -> dict[str, Any]:
     """``x``, ``y``, ``w``, ``h`` of ``box`` as the CSV files write it (None: all null)."""
     if box is None:
         return dict.fromkeys(("x", "y", "w", "h"))
-    written = box_as_written(box)
-    return {key: _number(getattr(written, key), key) for key in ("x", "y", "w", "h")}
+    written = box_as_written(box)  # rounded as the cells are: only non-finite values to null
+    return {key: value if math.isfinite(value) else None
+            for key, value in zip(("x", "y", "w", "h"), written, strict=True)}
 
 
 def frame_record(result: FrameResult, multi_target: bool) -> dict[str, Any]:

@@ -118,10 +118,15 @@ class TargetShape:
         return (1 - weight) * given + weight * learnt
 
 
+#: Boxes a learnt shape is the median of (the tracker's confirmed boxes, ``group_blobs``'
+#: persistent blobs): a passing pair of targets, one box for a while, does not outweigh the rest.
+SHAPE_SAMPLES = 500
+
+
 class ShapeSamples:
     """The height/width and area of the last ``limit`` boxes added, and their usual shape."""
 
-    def __init__(self, limit: int) -> None:
+    def __init__(self, limit: int = SHAPE_SAMPLES) -> None:
         self._aspects: deque[float] = deque(maxlen=limit)
         self._areas: deque[float] = deque(maxlen=limit)
 

@@ -86,9 +86,6 @@ SAME_BLOB = 0.5
 #: ... and its shape is steady while its height/width stays within this factor over the last
 #: ``persist`` frames.
 STEADY = 1.25
-#: Shapes of persistent blobs remembered (as the tracker's ``SHAPE_SAMPLES``: a passing pair of
-#: targets, one blob for a while, does not outweigh the rest).
-PERSISTENT_SAMPLES = 500
 #: Once as many samples of persistent blobs are in as the given aspect counts for
 #: (``PRIOR_SAMPLES``), their median height/width off the aspect by more than a factor
 #: ``UNLIKE`` (where ``shape_score`` halves) replaces it for the rest of the run.
@@ -254,7 +251,7 @@ class PersistentBlobs:
 
     frames: int
     _blobs: list[_Blob] = field(default_factory=list)
-    _samples: ShapeSamples = field(default_factory=lambda: ShapeSamples(PERSISTENT_SAMPLES))
+    _samples: ShapeSamples = field(default_factory=ShapeSamples)
 
     def see(self, boxes: list[Box], width: int, height: int, scale: float,
             least: float = 0.0) -> None:

@@ -45,7 +45,7 @@ Output (``ctx.tracks``): every track; ``confirmed`` (confirmed and measured this
 to ``tracks.csv`` and drawn), ``coasting`` or ``tentative``; the box is the filtered centre
 with the smoothed size, the confidence the score of its last detection. Ids start at 1, one per
 track created, never reused. ``ctx.target_shape``: the median aspect and area of the boxes
-confirmed tracks were measured with (the last ``SHAPE_SAMPLES``), for ``group_blobs``.
+confirmed tracks were measured with (the last ``base.SHAPE_SAMPLES``), for ``group_blobs``.
 Work per frame: ``O(T M)`` for ``T <= max_tracks`` tracks and ``M`` detections, and an assignment.
 """
 
@@ -64,8 +64,6 @@ from vtrack.params import Param
 from vtrack.stages.base import ShapeSamples, Stage, Track, TrackContext, register
 from vtrack.stages.detect import Detection, fewest_misses, track_state
 
-#: Boxes of confirmed tracks remembered for the learnt shape (``ctx.target_shape``).
-SHAPE_SAMPLES = 500
 #: The cost of a pair that may not match (above any allowed pair's: at most 1 + 1).
 _FORBIDDEN = 1e6
 #: Weight of a track's colours against a new detection's (JDE/FairMOT's embedding momentum).
@@ -197,7 +195,7 @@ class ByteTracks(Stage):
         self._model: MotionModel = motion_model(self.model, self.q, 1.0, self.p0, g=0.0)
         self._tracks: list[_Track] = []
         self._ids = itertools.count(1)
-        self._shapes = ShapeSamples(SHAPE_SAMPLES)
+        self._shapes = ShapeSamples()
         ctx.target_shape = None
         self.step(ctx)
 
