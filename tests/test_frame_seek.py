@@ -97,6 +97,23 @@ def test_run_refuses_a_start_past_the_stated_count_before_asking_for_a_box(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_start_at_0s_is_the_first_frame_as_no_start_is(tmp_path: Path) -> None:
+    """`vtrack run bad.mp4 --gt badgt.txt --start 0s` opened the input before reading the
+    ground truth, as for a later start, and named the input (not a video) where the same run
+    without --start, or with --start 0, names the ground truth: 0 s is the first frame's time,
+    which needs no opened input to be found (RunRequest.starts_later, as vtrack batch takes
+    it: a sidecar box is that frame's)."""
+    bad, gt = tmp_path / "bad.mp4", tmp_path / "badgt.txt"
+    bad.write_bytes(b"garbage")
+    gt.write_text("1,2\n")
+    for start in ((), ("--start", "0"), ("--start", "0s")):
+        done = vtrack("run", str(bad), "--gt", str(gt), *start, "-o", str(tmp_path / "out"))
+        assert (done.returncode, done.stdout) == (2, ""), start
+        assert done.stderr == (f"vtrack: error: {gt} line 1: expected 4 or 8 numbers, got "
+                               "'1,2'\n"), start
+    assert not (tmp_path / "out").exists()
+
+
 def test_run_starts_from_the_key_frame_before_its_start_with_the_same_frames(
         long_clip: Path, tmp_path: Path) -> None:
     """`vtrack run long.mp4 --start N` (or `--start Ts`) decoded every frame before N to drop

@@ -205,8 +205,11 @@ class RunRequest:
 
     @property
     def starts_later(self) -> bool:
-        """Whether ``--start`` names a point after the input's beginning (a sidecar box, frame
-        0's, is then not the target's first box)."""
+        """Whether ``--start`` names a point after the input's first frame: a frame number
+        or a time above 0 (timestamps count from the first frame, so ``--start 0s`` is its
+        beginning, as ``--start 0`` is). Such a start is settled in the opened input (a time
+        in its frames' timestamps, a frame past the frames it states refused at once), and a
+        sidecar box, frame 0's, is then not the target's first box."""
         return bool(self.start or self.start_s)
 
     def start_estimate(self, fps: float | None) -> int:

@@ -670,7 +670,7 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
         check_input(request.input)  # a mistyped name first, before what else it lacks
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
         # past the frames the input states is refused at once: that input opens first
-        later = _starts_later(request)
+        later = request.starts_later
         source: Source | None = _open(request, signals, names.fps) if later else None
         try:
             resolved = _resolve(request, source, names)
@@ -916,18 +916,21 @@ def _first_frame(request: RunRequest, source: Source | None, names: OptionNames
     followed, where T x fps would miss); and the frame ``source`` is read from: where it can
     jump, a frame at or before it (:meth:`Source.start_near`: a seekable video's key frame, an
     image folder's image; for a time, before the frame T x fps names), else its first.
-    InputError when the input ends before T, or (``source`` opened) its frame count says it has
-    no frame N, before any is decoded (naming the start as ``names`` call it)."""
+    A request that does not start later (:attr:`RunRequest.starts_later`: no ``--start``,
+    ``--start 0`` or ``--start 0s``, the first frame's time) begins at frame 0 without
+    ``source``; one that does needs it opened.
+    InputError when the input ends before T, or its frame count says it has no frame N,
+    before any is decoded (naming the start as ``names`` call it)."""
+    if not request.starts_later:
+        return 0, 0
+    assert source is not None, "a start after the first frame needs the opened input"
     given = names.start_given(request.start, request.start_s)
     if request.start_s is None:
-        if not request.start or source is None:
-            return request.start, 0
         read_from = start_toward(source, request.start)
         if read_from is None:
             raise InputError(f"{given}: "
                              + past_end_text(request.input, request.start, source.info))
         return request.start, read_from
-    assert source is not None, "a start time needs the opened input"
     found, read_from = seek_time(source, request.start_s)
     if found is None:
         raise InputError(f"{given}: "
@@ -944,20 +947,13 @@ def requested_frames(request: RunRequest
     :func:`run` gives them: at once, before the input is opened, as run settles them, unless
     the request starts later (``start``, ``start_s``: found in the opened input), then from
     that function."""
-    resolved = None if _starts_later(request) else _resolve(request, None, LIBRARY_NAMES)
+    resolved = None if request.starts_later else _resolve(request, None, LIBRARY_NAMES)
 
     def frames(source: Source) -> tuple[Box | None, Iterator[Frame]]:
         settled = resolved or _resolve(request, source, LIBRARY_NAMES)
         return settled.init_box, _frames_to_track(request, settled, source)
 
     return frames
-
-
-def _starts_later(request: RunRequest) -> bool:
-    """Whether ``request`` starts after its input's first frame (``--start``), which is then
-    settled in the opened input (a start time in its frames' timestamps, a start frame past
-    the frames it states refused at once)."""
-    return request.start_s is not None or request.start > 0
 
 
 def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
