@@ -7,7 +7,7 @@ import csv
 import json
 import math
 import time
-from collections.abc import Callable, Collection, Generator, Iterable
+from collections.abc import Callable, Collection, Generator, Iterable, Mapping
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -88,19 +88,31 @@ def outcome_row(outcome: Outcome, summary_path: Path
     (None: none). A job without a run folder that can be read (it failed before writing one)
     has its input, config, status and error only."""
     recorded = outcome.kept or outcome.summary
-    row: dict[str, Any] = {}
-    source = None
+    read: dict[str, Any] = {}
+    source = folder = None
     if recorded is not None and recorded.out_dir:
         folder = Path(recorded.out_dir)
         if outcome.row is not None and outcome.kept is None:
-            row, source = dict(outcome.row), outcome.row_source
+            read, source = outcome.row, outcome.row_source
         else:
-            row, source = read_row(folder)
-        if row:
-            row["run"] = _inside(folder, summary_path.parent)
-    row.update(input=outcome.input, config=outcome.config, status=outcome.held,
-               error=outcome.kept.error if outcome.kept else outcome.error)
-    return row, source
+            read, source = read_row(folder)
+    return summary_row(read, folder, summary_path.parent, outcome.input, outcome.config,
+                       outcome.held, outcome.kept.error if outcome.kept else outcome.error
+                       ), source
+
+
+def summary_row(read: Mapping[str, Any], folder: Path | None, batch: Path, name: str,
+                config: str, status: str, error: str | None) -> dict[str, Any]:
+    """A ``summary.csv`` row: ``read``, the columns of the run in ``folder`` (as
+    :func:`~vtrack.batch.jobs.read_row` reads them, or an earlier row of it), with ``run``
+    naming ``folder`` inside the batch's folder ``batch`` (as it is when outside) when there
+    are any, under the pair's input ``name`` and ``config``, with its ``status`` and
+    ``error``. Without ``read`` the row has those four only."""
+    row = dict(read)
+    if row and folder is not None:
+        row["run"] = _inside(folder, batch)
+    row.update(input=name, config=config, status=status, error=error)
+    return row
 
 
 def _inside(folder: Path, batch: Path) -> str:
@@ -155,10 +167,8 @@ def earlier_rows(path: Path, planned: Collection[tuple[str, str]] = ()
             if key not in planned:
                 folder = path.parent / folder_name(key[0], "input") / folder_name(key[1])
                 read, source = read_row(folder)
-                if read:
-                    read["run"] = _inside(folder, path.parent)
-                rows[key] = {**row, **read, "input": key[0], "config": key[1],
-                             "status": row["status"], "error": row["error"]}
+                rows[key] = {**row, **summary_row(read, folder, path.parent, *key,
+                                                  row["status"], row["error"])}
                 if source is not None:
                     sources[key] = source
     return rows, sources
@@ -222,9 +232,8 @@ class SummaryWriter:
         folder = Path(outcome.summary.out_dir)
         if file_identity(folder / "run.json") != source:
             return None
-        return {**row, "input": outcome.input, "config": outcome.config,
-                "status": outcome.held, "error": outcome.error,
-                "run": _inside(folder, self.path.parent)}, source
+        return summary_row(row, folder, self.path.parent, outcome.input, outcome.config,
+                           outcome.held, outcome.error), source
 
     def flush(self) -> None:
         """Write the file if an outcome was added since the last write."""
