@@ -11,7 +11,7 @@ from pathlib import Path
 
 from vtrack.errors import InputError, plural
 from vtrack.evaluate.groundtruth import groundtruth_beside, gt_origin_of, is_sequence_folder
-from vtrack.io.files import folder_name
+from vtrack.io.files import SharedFolders, folder_key, folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
 from vtrack.io.sidecar import VIDEO_SIDECAR as VIDEO_INIT
@@ -83,16 +83,16 @@ def _origin(groundtruth: Path | None, gt_origin: int | None) -> int:
 
 def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
     """A distinct name per video: its stem, or its full file name where stems (or another
-    input's name) clash, as results folders (:func:`_folder_key`: ``a b`` and ``a_b`` are one
-    folder, ``a`` and ``A`` one on a case-insensitive disk). Switching a clashing name to the
-    full one may make it clash with another's stem (``a.mp4`` and ``a.mp4.mkv``): repeated
-    until nothing clashes or every clashing name is a full file name (:func:`find_inputs` then
-    refuses the folder)."""
+    input's name) clash, as results folders (:func:`~vtrack.io.files.folder_key`: ``a b``
+    and ``a_b`` are one folder, ``a`` and ``A`` one on a case-insensitive disk). Switching a
+    clashing name to the full one may make it clash with another's stem (``a.mp4`` and
+    ``a.mp4.mkv``): repeated until nothing clashes or every clashing name is a full file name
+    (:func:`find_inputs` then refuses the folder)."""
     names = {path: path.stem for path in videos}
     while True:
-        counts = Counter(_folder_key(name) for name in [*taken, *names.values()])
+        counts = Counter(folder_key(name, "input") for name in [*taken, *names.values()])
         clashing = [p for p, name in names.items()
-                    if counts[_folder_key(name)] > 1 and name != p.name]
+                    if counts[folder_key(name, "input")] > 1 and name != p.name]
         if not clashing:
             return names
         for path in clashing:
@@ -102,13 +102,6 @@ def _video_names(videos: list[Path], taken: set[str]) -> dict[Path, str]:
 def _folder(name: str) -> str:
     """The results folder of an input named ``name``."""
     return folder_name(name, "input")
-
-
-def _folder_key(name: str) -> str:
-    """What two inputs' names must differ in for their results folders to be two on any disk:
-    their folders (:func:`_folder`) case-folded (``a`` and ``A`` are one folder on a
-    case-insensitive disk: macOS's, Windows')."""
-    return _folder(name).casefold()
 
 
 def _unusable(path: Path) -> BatchInput:
@@ -164,17 +157,19 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
             "or in color/ or the folder itself beside their groundtruth.txt, "
             "groundtruth_rect.txt or init.txt)"
         )
-    by_folder: dict[str, BatchInput] = {}
+    folders: SharedFolders[BatchInput | None] = SharedFolders("input")
+    folders.take(SUMMARY_FILE, None)  # the batch's own file, no input's
     for item in found:
-        if _folder_key(item.name) == SUMMARY_FILE:
-            own = "" if _folder(item.name) == SUMMARY_FILE else (
-                f" {SUMMARY_FILE} on a case-insensitive disk (macOS, Windows)")
-            raise InputError(f"{folder}: {item.path.name!r} would have the results folder "
-                             f"{_folder(item.name)!r}, the batch's own summary{own}: rename it")
-        other = by_folder.setdefault(_folder_key(item.name), item)
-        if other is item:
+        clash = folders.clash(item.name)
+        if clash is None:
+            folders.take(item.name, item)
             continue
-        if _folder(other.name) != _folder(item.name):
+        other, by_case = clash
+        if other is None:
+            case = f" {SUMMARY_FILE} on a case-insensitive disk (macOS, Windows)" if by_case else ""
+            raise InputError(f"{folder}: {item.path.name!r} would have the results folder "
+                             f"{_folder(item.name)!r}, the batch's own summary{case}: rename it")
+        if by_case:
             raise InputError(
                 f"{folder}: the results folders of {other.path.name!r} and of "
                 f"{item.path.name!r} differ only in case, one folder on a case-insensitive "

@@ -17,7 +17,7 @@ from vtrack.evaluate.groundtruth import (
     numbered_groundtruth,
 )
 from vtrack.geometry import Box
-from vtrack.io.files import folder_name
+from vtrack.io.files import SharedFolders, folder_name
 from vtrack.io.identity import outputs_intact
 from vtrack.io.jsonfile import read_run_record
 from vtrack.io.outdir import refuse_replacing
@@ -118,17 +118,19 @@ def folder_clash(label: str, configs: Mapping[str, Config]) -> tuple[str, str] |
     ending in what to do); None when ``label``'s folder is its own. One folder: the same
     :func:`~vtrack.io.files.folder_name`, or names that differ only in case (``s0`` and
     ``S0`` are one folder on a case-insensitive disk: macOS's, Windows')."""
-    folder = folder_name(label)
+    folders: SharedFolders[tuple[str, Config]] = SharedFolders()
     for other, config in configs.items():
-        if folder_name(other).casefold() != folder.casefold():
-            continue
-        if folder_name(other) != folder:
-            return other, (f"the results folders of '{label}' and of '{other}' "
-                           f"({config.source}) differ only in case, one folder on a "
-                           "case-insensitive disk (macOS, Windows): rename one")
-        return other, (f"another config has the results folder of '{label}' "
-                       f"({config.source}); results are kept per name, rename one")
-    return None
+        folders.take(other, (other, config))
+    clash = folders.clash(label)
+    if clash is None:
+        return None
+    (other, config), by_case = clash
+    if by_case:
+        return other, (f"the results folders of '{label}' and of '{other}' "
+                       f"({config.source}) differ only in case, one folder on a "
+                       "case-insensitive disk (macOS, Windows): rename one")
+    return other, (f"another config has the results folder of '{label}' "
+                   f"({config.source}); results are kept per name, rename one")
 
 
 def _refuse_shared_folders(configs: Mapping[str, Config]) -> None:

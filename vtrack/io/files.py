@@ -14,7 +14,7 @@ import shutil
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import BinaryIO, Self
+from typing import BinaryIO, Generic, Self, TypeVar
 
 from vtrack.errors import InputError, OutputError
 
@@ -79,6 +79,39 @@ def folder_name(text: str, fallback: str = "config") -> str:
     digest = hashlib.sha256(text.encode("utf-8", "surrogateescape")).hexdigest()[:12]
     head = name.encode("utf-8", "surrogateescape")[:MAX_FOLDER_BYTES - 13]
     return f"{head.decode('utf-8', 'ignore')}-{digest}"
+
+
+T = TypeVar("T")
+
+
+def folder_key(name: str, fallback: str = "config") -> str:
+    """What two names must differ in for their results folders (:func:`folder_name`) to be two
+    on any disk: the folder name case-folded (``a`` and ``A`` are one folder on a
+    case-insensitive disk: macOS's, Windows')."""
+    return folder_name(name, fallback).casefold()
+
+
+class SharedFolders(Generic[T]):
+    """Results folders taken so far (each the :func:`folder_name` of a name, ``fallback`` for a
+    name with none), told apart as every disk tells them (:func:`folder_key`), each with what
+    took it: which one a new name would share."""
+
+    def __init__(self, fallback: str = "config") -> None:
+        self._fallback = fallback
+        self._taken: dict[str, tuple[str, T]] = {}
+
+    def take(self, name: str, taker: T) -> None:
+        """``name``'s folder taken by ``taker``, unless something took it first."""
+        folder = folder_name(name, self._fallback)
+        self._taken.setdefault(folder.casefold(), (folder, taker))
+
+    def clash(self, name: str) -> tuple[T, bool] | None:
+        """What took ``name``'s folder first, and whether the two are one folder only on a
+        case-insensitive disk (their folder names differ in case alone); None when the
+        folder is free on every disk."""
+        folder = folder_name(name, self._fallback)
+        taken = self._taken.get(folder.casefold())
+        return None if taken is None else (taken[1], taken[0] != folder)
 
 
 def temp_path(path: Path) -> Path:
