@@ -170,6 +170,20 @@ def test_a_folder_in_use_is_refused_and_a_killed_holder_releases_it(
     assert assert_records_agree(out)["status"] == "complete"
 
 
+def test_a_folder_removed_while_taken_leaves_no_parent_it_created(tmp_path: Path) -> None:
+    """OutputFolder created out/new/run (out/new too) and, the run's folder removed while it
+    was taken (`rm -r out/new/run` during a run), left out/new behind empty: it stopped at the
+    first folder it could not remove, gone. The folders it created are removed however each
+    of them went, as a stopped report or scene removes its own (removing_new_folders)."""
+    folder = tmp_path / "new" / "run"
+    with OutputFolder(folder):
+        shutil.rmtree(folder)
+    assert list(tmp_path.iterdir()) == []
+    with OutputFolder(folder):  # one that holds a file is kept, and so is its parent
+        (folder / "note.txt").write_text("mine")
+    assert [p.name for p in folder.iterdir()] == ["note.txt"]
+
+
 # --- a full disk ------------------------------------------------------------------------------
 
 

@@ -156,23 +156,38 @@ def prepare_output_dir(folder: Path) -> Path:
     return folder
 
 
+class NewFolders:
+    """``folder`` and those of its parents that are not there yet, noted before something may
+    create them (deepest first), to be removed again once they are empty."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folders: list[Path] = []
+        for each in (folder, *folder.parents):
+            if os.path.lexists(each):
+                break
+            self.folders.append(each)
+
+    def remove_empty(self) -> None:
+        """Remove those of the folders that are there and empty, deepest first: a folder that
+        holds anything (a file, a folder not noted) is left as it is, and so its parents
+        are."""
+        for each in self.folders:
+            with contextlib.suppress(OSError):  # not empty (or gone: its parent may be)
+                each.rmdir()
+
+
 @contextlib.contextmanager
-def removing_new_folders(folder: Path) -> Iterator[None]:
+def removing_new_folders(folder: Path) -> Iterator[NewFolders]:
     """For a block that may create ``folder`` and its missing parents: when the block raises
     (an error, Ctrl-C, SIGTERM), those of them that were not there before it and are empty are
     removed, deepest first, so a write that stopped leaves no empty folder behind. A folder that
-    was there, or that holds anything, is left as it is."""
-    new: list[Path] = []
-    for each in (folder, *folder.parents):
-        if os.path.lexists(each):
-            break
-        new.append(each)
+    was there, or that holds anything, is left as it is. Gives the :class:`NewFolders`, for a
+    caller that removes them later too."""
+    new = NewFolders(folder)
     try:
-        yield
+        yield new
     except BaseException:
-        for each in new:
-            with contextlib.suppress(OSError):
-                each.rmdir()
+        new.remove_empty()
         raise
 
 

@@ -27,7 +27,13 @@ from vtrack.errors import (
     OptionNames,
     OutputError,
 )
-from vtrack.io.files import is_temp_of, os_reason, prepare_output_dir
+from vtrack.io.files import (
+    NewFolders,
+    is_temp_of,
+    os_reason,
+    prepare_output_dir,
+    removing_new_folders,
+)
 
 LOCK_NAME = ".vtrack.lock"
 #: Files a run writes into its folder; a new run removes these (and only these) first, with
@@ -213,18 +219,14 @@ class OutputFolder:
         self.what = what
         self.names = names  # how a refusal calls the folder (--out; out_dir)
         self._fd: int | None = None
-        self._created: list[Path] = []
+        self._created: NewFolders | None = None  # the folders entering created
 
     def __enter__(self) -> Self:
         refuse_other_results(self.folder, self.what, self.names)
-        missing = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
-        prepare_output_dir(self.folder)
-        self._created = missing  # deepest first: the order to remove them in
-        try:
+        with removing_new_folders(self.folder) as created:
+            prepare_output_dir(self.folder)
             self._lock()
-        except BaseException:
-            self._remove_if_empty()
-            raise
+        self._created = created
         return self
 
     def _lock(self) -> None:
@@ -292,13 +294,7 @@ class OutputFolder:
         os.close(self._fd)
         self._fd = None
 
-    def _remove_if_empty(self) -> None:
-        for folder in self._created:
-            try:
-                folder.rmdir()
-            except OSError:
-                return  # not empty (or gone): keep it and every parent
-
     def __exit__(self, *exc_info: object) -> None:
         self.release()
-        self._remove_if_empty()
+        if self._created is not None:
+            self._created.remove_empty()
