@@ -28,7 +28,7 @@ from vtrack.evaluate import (
     tracking_miss_rate,
 )
 from vtrack.evaluate.groundtruth import MultiTargetTruthError
-from vtrack.geometry import Box, center_error, iou
+from vtrack.geometry import Box, center_error, iou, iou_matrix
 from vtrack.io.sidecar import parse_sidecar
 
 G = Box(0, 0, 10, 10)
@@ -432,3 +432,23 @@ def test_the_overlap_of_a_box_with_itself_is_exactly_one() -> None:
     assert iou(box, box) == 1.0
     overlaps, _ = frame_scores([box], [box])
     assert auc(overlaps) == pytest.approx(20 / 21)
+
+
+def test_the_overlaps_of_all_pairs_at_once_are_iou_of_each_pair_bit_for_bit() -> None:
+    """The tracker's association, the blobs that persist and the MOT metrics take every pair's
+    IoU at once; the multi-target tracker's own matrix gave 1.0000000000000002 for a box with
+    itself where iou gives 1.0 (one less the cost of a pair, a different assignment)."""
+    rng = np.random.default_rng(7)
+    boxes = [Box(*(float(v) for v in rng.uniform(0, 300, 2)), *(float(v) for v in
+                                                                 rng.uniform(1, 80, 2)))
+             for _ in range(40)]
+    boxes += [Box(117.48570015844837, 267.0823056014377, 18.945449889137, 50.23178443019735),
+              Box(10, 10, 20, 20), Box(30, 10, 20, 20), Box(15, 15, 5, 5), Box(12, 12, 0, 8)]
+    others = boxes[::-1] + [Box(14, 12, 20, 20)]
+    overlaps = iou_matrix(boxes, others)
+    assert overlaps.shape == (len(boxes), len(others))
+    assert overlaps.tolist() == [[iou(a, b) for b in others] for a in boxes]
+    assert np.diagonal(iou_matrix(boxes, boxes)).tolist() == [iou(b, b) for b in boxes]
+    assert overlaps.max() == 1.0  # never a hair above
+    assert iou_matrix([], boxes).shape == (0, len(boxes))
+    assert iou_matrix(boxes, np.zeros((0, 4))).shape == (len(boxes), 0)

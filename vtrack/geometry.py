@@ -10,10 +10,14 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vtrack.errors import ConfigError, is_real, number_text
 from vtrack.params import shown
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import ArrayLike
 
 #: Largest frame side vtrack accepts, checked before any frame is allocated (a 16384 x 16384
 #: bgr24 frame is 768 MiB; nothing a user tracks is bigger). See README, value ranges.
@@ -129,6 +133,26 @@ def iou(a: Box, b: Box) -> float:
     union = a.area + b.area - inter
     # rounding can put the intersection a hair above the union of two equal boxes
     return min(inter / union, 1.0) if union > 0 else 0.0
+
+
+def iou_matrix(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """IoU of every box of ``a`` with every box of ``b`` (boxes, or ``(N, 4)`` and ``(M, 4)``
+    arrays of x, y, w, h): an ``(N, M)`` float array whose every value is, bit for bit, what
+    :func:`iou` gives for the pair (finite boxes), computed for all pairs at once."""
+    import numpy as np  # here: `vtrack.Box` alone loads no numpy
+
+    p = np.asarray(a, float).reshape(-1, 1, 4)
+    q = np.asarray(b, float).reshape(1, -1, 4)
+    ix = np.minimum(p[..., 0] + p[..., 2], q[..., 0] + q[..., 2]) - np.maximum(p[..., 0],
+                                                                              q[..., 0])
+    iy = np.minimum(p[..., 1] + p[..., 3], q[..., 1] + q[..., 3]) - np.maximum(p[..., 1],
+                                                                              q[..., 1])
+    inter = ix * iy
+    union = (np.maximum(p[..., 2], 0.0) * np.maximum(p[..., 3], 0.0)
+             + np.maximum(q[..., 2], 0.0) * np.maximum(q[..., 3], 0.0) - inter)
+    overlapping = (ix > 0) & (iy > 0) & (union > 0)
+    ratio = np.where(overlapping, inter / np.where(overlapping, union, 1.0), 0.0)
+    return np.minimum(ratio, 1.0)  # as iou: never a hair above 1 (two equal boxes)
 
 
 def center_error(a: Box, b: Box) -> float:

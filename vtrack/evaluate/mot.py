@@ -41,7 +41,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from vtrack.evaluate.groundtruth import read_mot_counting
-from vtrack.geometry import Box, iou
+from vtrack.geometry import Box, iou_matrix
 
 #: A ground-truth box and a track box may be matched when their IoU is at least this.
 MATCH_IOU = 0.5
@@ -55,10 +55,6 @@ FrameBoxes = Mapping[int, Sequence[tuple[int, Box]]]
 #: A frame's ground-truth rows of every class, ``[(box, is a distractor), ...]``
 #: (:attr:`~vtrack.evaluate.groundtruth.MotTruth.distractors` holds them by frame).
 TruthRows = Sequence[tuple[Box, bool]]
-
-
-def _iou_matrix(a: Sequence[Box], b: Sequence[Box]) -> np.ndarray:
-    return np.array([[iou(x, y) for y in b] for x in a], dtype=float).reshape(len(a), len(b))
 
 
 def _forbidding(cost: np.ndarray, allowed: np.ndarray) -> np.ndarray:
@@ -81,7 +77,7 @@ def _off_distractors(hyps: Sequence[tuple[int, Box]],
     frame's ground-truth ``rows`` (pairs of IoU >= 0.5) gives to a distractor."""
     if not hyps or not any(d for _, d in rows):
         return hyps
-    overlap = _iou_matrix([b for b, _ in rows], [b for _, b in hyps])
+    overlap = iou_matrix([b for b, _ in rows], [b for _, b in hyps])
     overlap[overlap < MATCH_IOU] = 0.0
     out = {int(c) for r, c in zip(*linear_sum_assignment(-overlap), strict=True)
            if overlap[r, c] > 0 and rows[r][1]}
@@ -130,7 +126,7 @@ class MotScore:
         hids = [h for h, _ in hyps]
         self.present.update(oids)
         self.track_boxes.update(hids)
-        overlap = _iou_matrix([b for _, b in objects], [b for _, b in hyps])
+        overlap = iou_matrix([b for _, b in objects], [b for _, b in hyps])
         allowed = overlap >= MATCH_IOU
         for i, j in zip(*np.nonzero(allowed), strict=True):
             self.pair_frames[oids[i], hids[j]] += 1

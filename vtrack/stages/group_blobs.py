@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.geometry import Box, iou
+from vtrack.geometry import Box, iou_matrix
 from vtrack.params import Param
 from vtrack.stages.base import (
     PRIOR_SAMPLES,
@@ -258,15 +258,15 @@ class PersistentBlobs:
         """One frame's blobs: each continues the previous frame's blob it overlaps most (if
         by ``SAME_BLOB``), and gives a sample once it has been steady for ``frames`` frames
         and has at least ``least`` square pixels (no target: see ``min_share``)."""
+        inside = [box for box in boxes
+                  if not any(at_border(box.x, box.x + box.w, width, scale))
+                  and not any(at_border(box.y, box.y + box.h, height, scale))]
+        overlaps = iou_matrix(inside, [b.box for b in self._blobs])  # (new, previous)
         blobs = []
-        for box in boxes:
-            if any(at_border(box.x, box.x + box.w, width, scale)) or any(
-                    at_border(box.y, box.y + box.h, height, scale)):
-                continue
-            overlaps = [iou(box, b.box) for b in self._blobs]
-            best = int(np.argmax(overlaps)) if overlaps else -1
+        for box, row in zip(inside, overlaps, strict=True):
+            best = int(np.argmax(row)) if row.size else -1
             aspects: deque[float] = (deque(self._blobs[best].aspects, maxlen=self.frames)
-                                     if best >= 0 and overlaps[best] >= SAME_BLOB
+                                     if best >= 0 and row[best] >= SAME_BLOB
                                      else deque(maxlen=self.frames))
             aspects.append(box.h / box.w)
             steady = len(aspects) == self.frames and max(aspects) <= STEADY * min(aspects)

@@ -58,7 +58,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.filters import MOTION_MODELS, GaussianState, MotionModel, motion_model
-from vtrack.geometry import Box
+from vtrack.geometry import Box, iou_matrix
 from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
 from vtrack.stages.base import ShapeSamples, Stage, Track, TrackContext, register
@@ -80,20 +80,6 @@ class _Track:
     hits: int = 1  # frames with a measurement
     misses: int = 0  # frames in a row without one
     confirmed: bool = False
-
-
-def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of every box of ``a`` with every box of ``b`` (``(N, 4)`` and ``(M, 4)`` arrays of
-    x, y, w, h): ``(N, M)``."""
-    p = np.asarray(a, float).reshape(-1, 1, 4)
-    q = np.asarray(b, float).reshape(1, -1, 4)
-    w = np.minimum(p[..., 0] + p[..., 2], q[..., 0] + q[..., 2]) - np.maximum(p[..., 0],
-                                                                             q[..., 0])
-    h = np.minimum(p[..., 1] + p[..., 3], q[..., 1] + q[..., 3]) - np.maximum(p[..., 1],
-                                                                             q[..., 1])
-    inter = np.clip(w, 0, None) * np.clip(h, 0, None)
-    union = p[..., 2] * p[..., 3] + q[..., 2] * q[..., 3] - inter
-    return np.where(union > 0, inter / np.where(union > 0, union, 1), 0.0)
 
 
 def colour_distances(tracks: list[np.ndarray | None],
