@@ -89,6 +89,26 @@ TURNS = (0.1, 0.9)
 
 
 @dataclass(frozen=True)
+class ShadowShape:
+    """Where a target's shadow lies, in shares of the target's height: its centre ``offset``
+    to the side of the target's (the scene's one side), ``SHADOW_LIFT`` above its feet;
+    ``half_width`` (beyond the target's own half-width when ``widened``) and ``half_height``."""
+
+    offset: float
+    half_width: float
+    half_height: float
+    widened: bool
+
+
+#: A walker's long shadow beside it, and a vehicle's short one under it, as wide as the vehicle
+#: and a little more (:func:`_reach` bounds how far either reaches).
+WALKER_SHADOW = ShadowShape(offset=0.35, half_width=0.45, half_height=0.07, widened=False)
+VEHICLE_SHADOW = ShadowShape(offset=0.15, half_width=0.2, half_height=0.12, widened=True)
+#: A shadow's centre lies this share of the target's height above its feet.
+SHADOW_LIFT = 0.02
+
+
+@dataclass(frozen=True)
 class PersonPaint:
     """A person seen from the side: a skin-coloured head, a top and trousers (BGR), with folds
     (brightness varying +-25% across the body and down it, moving with the person)."""
@@ -249,17 +269,15 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
         if vehicle:
             people.append((feet, RoundedBox(cx, cy, ax, ay, _vehicle_paint(drawn), track_id,
                                             first)))
-            shades.append(Shade(cx + shadow_side * 0.15 * tall,
-                                np.full(frames, feet - 0.02 * tall),
-                                np.full(frames, wide / 2 + 0.2 * tall),
-                                np.full(frames, 0.12 * tall), shadow, first))
         else:
             people.append((feet, Ellipse(cx, cy, ax, ay, _paint(drawn, ground), track_id,
                                          first)))
-            shades.append(Shade(cx + shadow_side * 0.35 * tall,
-                                np.full(frames, feet - 0.02 * tall),
-                                np.full(frames, 0.45 * tall), np.full(frames, 0.07 * tall),
-                                shadow, first))
+        cast = VEHICLE_SHADOW if vehicle else WALKER_SHADOW
+        spread = cast.half_width * tall
+        shades.append(Shade(cx + shadow_side * cast.offset * tall,
+                            np.full(frames, feet - SHADOW_LIFT * tall),
+                            np.full(frames, wide / 2 + spread if cast.widened else spread),
+                            np.full(frames, cast.half_height * tall), shadow, first))
     people.sort(key=lambda p: p[0])  # farther (feet higher) first: nearer walkers in front
     style = BackgroundStyle(mean=ground, octaves=((80.0, 10.0), (20.0, 6.0), (4.0, 4.0)),
                             fine=4.0, shapes=2.0, shape_contrast=25.0, tint=(4.0, 0.0, -4.0),
@@ -294,11 +312,13 @@ def _street(spec: SceneSpec, vehicles: float) -> Scene:
 def _reach(tall: float) -> float:
     """How far from its centre x a target ``tall`` pixels tall (a walker's height at its
     depth, the tallest a target there is) or its shadow touches a pixel, at most: the widest
-    shape (a vehicle 1/0.3 times as wide as tall, 0.55 of a walker's height) or the farthest
-    shadow (0.35 + 0.45 of the height, a walker's), and the pixel a region adds on each side."""
+    vehicle (1/0.3 times as wide as tall, 0.55 of a walker's height) with its shadow, the
+    widest walker or a walker's shadow, and the pixel a region adds on each side."""
     vehicle = VEHICLE_RANGES["height"][1] * tall
-    widest = max(vehicle / VEHICLE_RANGES["aspect"][0] / 2 + 0.2 * vehicle + 0.15 * vehicle,
-                 tall / PEDESTRIAN_RANGES["aspect"][0] / 2, 0.8 * tall)
+    widest = max(vehicle / VEHICLE_RANGES["aspect"][0] / 2 + VEHICLE_SHADOW.half_width * vehicle
+                 + VEHICLE_SHADOW.offset * vehicle,
+                 tall / PEDESTRIAN_RANGES["aspect"][0] / 2,
+                 (WALKER_SHADOW.offset + WALKER_SHADOW.half_width) * tall)
     return widest + 2.0
 
 
