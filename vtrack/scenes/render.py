@@ -270,14 +270,24 @@ class Ellipse:
         return u, v
 
     def _alpha(self, index: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        # Signed distance to the rim to first order: (1 - r) / |grad r| with r = sqrt(u² + v²);
-        # coverage of a pixel cut by a straight edge at distance d from its centre is d + 1/2.
-        ax, ay = self.ax[index - self.start], self.ay[index - self.start]
-        r = np.sqrt(u * u + v * v)
-        grad_r_times_r = np.sqrt((u / ax) ** 2 + (v / ay) ** 2)
+        """Coverage (0..1) of the pixels centred at ``(u, v)`` on frame ``index``: their signed
+        distance to the rim to first order, ``(1 - r) / |grad r|`` (:meth:`_rim`; infinite
+        where the gradient is 0), as a pixel cut by a straight edge at distance ``d`` from its
+        centre is covered ``d + 1/2``."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            dist = np.where(grad_r_times_r > 0, (1.0 - r) * r / grad_r_times_r, np.inf)
+            inside, slope = self._rim(u, v, self.ax[index - self.start],
+                                      self.ay[index - self.start])
+            dist = np.where(slope > 0, inside / slope, np.inf)
         return np.clip(dist + 0.5, 0.0, 1.0)
+
+    def _rim(self, u: np.ndarray, v: np.ndarray, ax: float,
+             ay: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(1 - r) k`` and ``|grad r| k`` at ``(u, v)`` (their ratio: the distance to the rim
+        in pixels, to first order), ``r`` the shape's radius (1 on its rim), ``grad`` over
+        pixels (semi-axes ``ax``, ``ay``), ``k > 0`` whatever is exact to compute: here
+        ``r = sqrt(u² + v²)``, ``k = r``."""
+        r = np.sqrt(u * u + v * v)
+        return (1.0 - r) * r, np.sqrt((u / ax) ** 2 + (v / ay) ** 2)
 
     def coverage(self, index: int, region: Window) -> np.ndarray:
         u, v = self._local(index, region)
@@ -302,15 +312,14 @@ class RoundedBox(Ellipse):
 
     POWER = 4.0
 
-    def _alpha(self, index: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        # as Ellipse's: (1 - r) / |grad r| with r = (|u|^p + |v|^p)^(1/p)
-        p, ax, ay = self.POWER, self.ax[index - self.start], self.ay[index - self.start]
+    def _rim(self, u: np.ndarray, v: np.ndarray, ax: float,
+             ay: float) -> tuple[np.ndarray, np.ndarray]:
+        """As :class:`Ellipse`'s with ``r = (|u|^p + |v|^p)^(1/p)``, ``k = 1``."""
+        p = self.POWER
         au, av = np.abs(u), np.abs(v)
         r = (au ** p + av ** p) ** (1.0 / p)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            grad = r ** (1.0 - p) * np.sqrt((au ** (p - 1) / ax) ** 2 + (av ** (p - 1) / ay) ** 2)
-            dist = np.where(grad > 0, (1.0 - r) / grad, np.inf)
-        return np.clip(dist + 0.5, 0.0, 1.0)
+        grad = r ** (1.0 - p) * np.sqrt((au ** (p - 1) / ax) ** 2 + (av ** (p - 1) / ay) ** 2)
+        return 1.0 - r, grad
 
 
 class Shade(Ellipse):
