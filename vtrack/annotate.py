@@ -252,6 +252,16 @@ def _even(n: int) -> int:
     return n - n % 2
 
 
+class _Plate(NamedTuple):
+    """A caption laid out: its ``text``, its black plate from ``(x0, 0)`` to ``corner`` (right
+    edge, bottom) and the text's ``origin`` (baseline-left, as ``cv2.putText`` takes it)."""
+
+    text: str
+    x0: int
+    corner: tuple[int, int]
+    origin: tuple[int, int]
+
+
 class Annotator:
     """Draws one :class:`~vtrack.pipeline.FrameResult` per frame into an I420 buffer.
 
@@ -324,7 +334,8 @@ class Annotator:
             drawn.add("track id")
         colour = {TrackState.LOST: LOST_TEXT, TrackState.OCCLUDED: OCCLUDED_BOX}.get(
             result.state, TRACKED)
-        self._caption(canvas, result.state, colour, right=result.state == TrackState.LOST)
+        self._caption(canvas, self._caption_plate(canvas, result.state,
+                                                  right=result.state == TrackState.LOST), colour)
         if result.state == TrackState.LOST:
             drawn.add("lost (no box)")
         return drawn
@@ -341,9 +352,10 @@ class Annotator:
         drawn.update(_draw_overlay(canvas, overlay, self.thickness) for overlay in result.overlays)
         shown = sum(_shown(track) for track in result.tracks)
         caption = f"{shown} track" + ("" if shown == 1 else "s")
-        if self._draw_tracks(canvas, result, clear_of=self._caption_box(canvas, caption)[1]):
+        plate = self._caption_plate(canvas, caption)
+        if self._draw_tracks(canvas, result, clear_of=plate.corner):
             drawn.add("track id")
-        self._caption(canvas, caption, TRACKED)
+        self._caption(canvas, plate, TRACKED)
         return drawn
 
     @staticmethod
@@ -399,20 +411,17 @@ class Annotator:
         canvas.rectangle((x - t, y - h - t), (x + w + t - 1, y + t), CAPTION_BACKGROUND, -1)
         canvas.text((x, y), text, colour, scale, t)
 
-    def _caption_box(self, canvas: Canvas, caption: str, right: bool = False,
-                     ) -> tuple[int, tuple[int, int]]:
-        """The left edge of ``caption``'s black box and the box's (right edge, bottom)."""
+    def _caption_plate(self, canvas: Canvas, caption: str, right: bool = False) -> _Plate:
+        """Where ``caption`` goes, in capitals on a black plate, top-left (``right``:
+        top-right): the text measured once for the plate and the text in it."""
+        text = caption.upper()
         t = self.thickness
-        (w, h), baseline = cv2.getTextSize(caption.upper(), FONT, self.font_scale, t)
+        (w, h), baseline = cv2.getTextSize(text, FONT, self.font_scale, t)
         pad = 2 * t + 2
         x0 = canvas.width - w - 2 * pad if right else 0
-        return x0, (x0 + w + 2 * pad, h + baseline + 2 * pad)
+        return _Plate(text, x0, (x0 + w + 2 * pad, h + baseline + 2 * pad), (x0 + pad, pad + h))
 
-    def _caption(self, canvas: Canvas, caption: str, colour: Yuv, right: bool = False) -> None:
-        """``caption`` in capitals on black, top-left (``right``: top-right)."""
-        text = caption.upper()
-        x0, corner = self._caption_box(canvas, caption, right)
-        pad = 2 * self.thickness + 2
-        canvas.rectangle((x0, 0), corner, CAPTION_BACKGROUND, -1)
-        h = cv2.getTextSize(text, FONT, self.font_scale, self.thickness)[0][1]
-        canvas.text((x0 + pad, pad + h), text, colour, self.font_scale, self.thickness)
+    def _caption(self, canvas: Canvas, plate: _Plate, colour: Yuv) -> None:
+        """Draw the caption ``plate`` (:meth:`_caption_plate`), its text in ``colour``."""
+        canvas.rectangle((plate.x0, 0), plate.corner, CAPTION_BACKGROUND, -1)
+        canvas.text(plate.origin, plate.text, colour, self.font_scale, self.thickness)
