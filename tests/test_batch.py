@@ -801,41 +801,108 @@ def test_vot_layouts_are_batch_inputs_and_their_ground_truth_is_read_as_vot_writ
         assert record["init"] == pytest.approx(first), name
 
 
-@pytest.mark.parametrize("start", [None, "5"])
-def test_a_sequence_of_two_targets_is_refused_by_a_batch_naming_its_files_and_the_way_out(
-        clip_factory: ClipFactory, tmp_path: Path, start: str | None) -> None:
-    """OTB's two-target sequences (img/ and groundtruth_rect.1.txt, groundtruth_rect.2.txt:
-    Jogging, Skating2, Human4) failed in a batch with 'no ground truth or initial box
-    (groundtruth_rect.txt, groundtruth.txt, init.txt)', as if they had none; and the way out,
-    vtrack run with --gt groundtruth_rect.1.txt, read OTB's 1-based boxes as 0-based. The row
-    now names the files and the command; that command reads them as OTB's. With --start 5
-    the row said '... needs the target's box in that frame, and there is no ground truth
-    (groundtruth_rect.txt, groundtruth.txt; ...)', as if there were none: it says the same."""
+def otb_two_targets(clip_factory: ClipFactory, folder: Path) -> tuple[Path, list[list[float]]]:
+    """An OTB sequence of two targets, ``folder/Jogging`` (``img/``,
+    ``groundtruth_rect.1.txt`` and ``groundtruth_rect.2.txt``, OTB's 1-based boxes, target 2
+    3 pixels right of target 1), and a plain one, ``folder/Plain``; each target's 0-based
+    boxes."""
     from vtrack.evaluate import read_boxes
 
     clip = clip_factory("smooth", width=160, height=120, frames=20, fmt="images")
-    sequence = tmp_path / "in" / "Jogging"
+    sequence = folder / "Jogging"
     shutil.copytree(clip.path / "img", sequence / "img")
-    for n in (1, 2):
-        shutil.copy(clip.gt, sequence / f"groundtruth_rect.{n}.txt")
+    shutil.copytree(clip.path, folder / "Plain")
+    truth = read_boxes(clip.gt, origin=1)
+    boxes = []
+    for n, dx in ((1, 0), (2, 3)):
+        rows = [[b.x + dx, b.y, b.w, b.h] for b in truth]
+        (sequence / f"groundtruth_rect.{n}.txt").write_text(
+            "".join(f"{x + 1},{y + 1},{w},{h}\n" for x, y, w, h in rows))
+        boxes.append(rows)
+    return sequence, boxes
+
+
+@pytest.mark.parametrize("start", [None, "5"])
+def test_each_target_of_an_otb_sequence_is_an_input_of_its_own(
+        clip_factory: ClipFactory, tmp_path: Path, start: str | None) -> None:
+    """OTB's two-target sequences (img/ and groundtruth_rect.1.txt, groundtruth_rect.2.txt:
+    Jogging, Skating2, Human4) were one failed row in a batch ('config 's0' tracks one given
+    target, and the sequence has 2 targets' ground truth (...), none of which a batch takes by
+    itself: track each with vtrack run, e.g. vtrack run .../Jogging -c s0 --gt
+    .../groundtruth_rect.1.txt'), so a batch over OTB100 gave no result for them. Each target
+    is now an input, named as OTB names it (Jogging-1, Jogging-2), tracked from its own boxes
+    (at --start 5 too), with its results folder, its row and a run.json recording the
+    sequence folder and the target; a second batch resumes them, an older run.json without a
+    target resumes too, and the report lists Jogging-1, Jogging-2 and Plain."""
+    sequence, boxes = otb_two_targets(clip_factory, tmp_path / "in")
     starts = [] if start is None else ["--start", start]
-    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-o", str(tmp_path / "out"),
+    out = tmp_path / "out"
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o", str(out),
                    *starts)
-    assert result.exit_code == 1, result.output
-    with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
-        (row,) = csv.DictReader(handle)
-    assert row["status"] == "failed"
-    assert ("2 targets' ground truth (groundtruth_rect.1.txt, groundtruth_rect.2.txt)"
-            in row["error"]), row["error"]
-    way_out = row["error"].rsplit("e.g. vtrack ", 1)[1].split()
-    assert way_out == ["run", str(sequence), "-c", "s0", "--gt",
-                       str(sequence / "groundtruth_rect.1.txt"), *starts], row["error"]
-    ran = CliRunner().invoke(main, [*way_out, "--no-video", "-o", str(tmp_path / "run")],
+    assert result.exit_code == 0, result.output
+    rows = summary(out)
+    assert sorted(rows) == [("Jogging-1", "s0"), ("Jogging-2", "s0"), ("Plain", "s0")]
+    assert all(row["status"] == "complete" for row in rows.values()), rows
+    first = int(start or 0)
+    for n in (1, 2):
+        record = json.loads((out / f"Jogging-{n}" / "s0" / "run.json").read_text())
+        assert record["status"] == "complete"
+        assert record["request"]["input"] == str(sequence)
+        assert record["request"]["gt"] == str(sequence / f"groundtruth_rect.{n}.txt")
+        assert record["request"]["target"] == n
+        assert record["init"] == pytest.approx(boxes[n - 1][first]), n
+    plain = out / "Plain" / "s0" / "run.json"
+    older = json.loads(plain.read_text())
+    assert older["request"].pop("target") is None
+    plain.write_text(json.dumps(older))  # a run.json of before targets were recorded
+    again = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o", str(out),
+                  *starts)
+    assert again.exit_code == 0, again.output
+    assert again.output.count("already complete: not run again") == 3, again.output
+    shown = CliRunner().invoke(main, ["report", str(out), "-q", "-o", str(tmp_path / "report")],
+                               catch_exceptions=False)
+    assert shown.exit_code == 0, shown.output
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        assert sorted(row["input"] for row in csv.DictReader(handle)) == [
+            "Jogging-1", "Jogging-2", "Plain"]
+
+
+def test_a_run_of_one_target_of_an_otb_sequence_is_named_after_it(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """vtrack run Jogging --gt Jogging/groundtruth_rect.2.txt wrote vtrack-out/Jogging/s0, the
+    folder of target 1's run too, and the report named it Jogging: joined with a batch's
+    Jogging-2 it was another input. It now writes vtrack-out/Jogging-2/s0, records target 2,
+    and the report joins it with the batch's Jogging-2 (two results of one input)."""
+    sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    monkeypatch.chdir(tmp_path)
+    ran = CliRunner().invoke(main, ["run", str(sequence), "-c", "s0", "--no-video", "--gt",
+                                    str(sequence / "groundtruth_rect.2.txt")],
                              catch_exceptions=False)
     assert ran.exit_code == 0, ran.output
-    first = read_boxes(clip.gt, origin=1)[int(start or 0)]
-    record = json.loads((tmp_path / "run" / "run.json").read_text())
-    assert record["init"] == pytest.approx([first.x, first.y, first.w, first.h])
+    record = json.loads((tmp_path / "vtrack-out" / "Jogging-2" / "s0" / "run.json").read_text())
+    assert record["request"]["target"] == 2
+    assert batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o",
+                 str(tmp_path / "out")).exit_code == 0
+    shown = CliRunner().invoke(main, ["report", str(tmp_path / "out"), "vtrack-out", "-q",
+                                      "-o", str(tmp_path / "report")], catch_exceptions=False)
+    assert shown.exit_code == 0, shown.output
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        inputs = sorted(row["input"] for row in csv.DictReader(handle))
+    assert inputs == ["Jogging-1", "Jogging-2", "Jogging-2", "Plain"], inputs
+
+
+def test_a_folder_named_like_a_target_of_a_sequence_beside_it_stops_the_batch(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A sequence folder Jogging-1 beside Jogging (groundtruth_rect.1.txt) would write the
+    results folder of Jogging's target 1: the batch stops before it starts, naming both."""
+    _, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    shutil.copytree(tmp_path / "in" / "Plain", tmp_path / "in" / "Jogging-1")
+    result = CliRunner().invoke(main, ["batch", str(tmp_path / "in"), "-c", "s0",
+                                       "-o", str(tmp_path / "out")])
+    assert one_error_line(result).endswith(
+        "'Jogging/groundtruth_rect.1.txt' and 'Jogging-1' would share the results folder "
+        "'Jogging-1' (both are named 'Jogging-1'): rename one"), result.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_only_folders_of_a_sequences_images_are_sequences_and_results_are_no_inputs(

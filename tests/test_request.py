@@ -49,6 +49,7 @@ OTHER: dict[str, Any] = {
                           follow_s=1.0),
     "live": True,
     "video_out": "udp://127.0.0.1:5000",
+    "target": 2,
 }
 
 
@@ -80,7 +81,7 @@ def test_the_request_round_trips_through_its_dict() -> None:
                          init_box=Box(1.5, 2, 30, 40), gt_path=Path("gt.txt"), gt_origin=1,
                          raw=RawFormat(64, 48, "gray", 25.0), video=False, seed=3,
                          max_frames=9, ffmpeg=FFmpegInput("h264", (("fflags", "nobuffer"),),
-                                                          3.0, 2.0), live=False)
+                                                          3.0, 2.0), live=False, target=2)
     again = RunRequest.from_dict(request.to_dict())
     assert again.to_dict() == request.to_dict()
     assert again.config.resolved() == request.config.resolved()

@@ -90,6 +90,10 @@ class RunRequest:
     live: bool | None = None
     #: ``--video-out URL``: the annotated video goes to this live output instead of a file.
     video_out: str | None = None
+    #: Which target of an OTB sequence of several (``groundtruth_rect.N.txt``: N, at least 0)
+    #: the run tracks, its input then named ``SEQ-N`` (``vtrack batch`` takes each as an input;
+    #: ``vtrack run SEQ --gt SEQ/groundtruth_rect.N.txt`` sets it); None: the input's only one.
+    target: int | None = None
 
     def __post_init__(self) -> None:
         """Check the values the CLI checks before it makes a request (one made in Python
@@ -136,7 +140,7 @@ class RunRequest:
             object.__setattr__(self, "raw", self.raw.checked())
         object.__setattr__(self, "ffmpeg", checked_ffmpeg(self.ffmpeg))
         for name, least, most, meaning in _WHOLE_NUMBERS:  # (a NumPy int: an int)
-            if name != "max_frames" or self.max_frames is not None:
+            if name not in _OPTIONAL or getattr(self, name) is not None:
                 object.__setattr__(self, name, check_whole(name, getattr(self, name), least,
                                                            most, meaning))
         for name, above in (("start_s", False), ("max_s", True)):
@@ -173,6 +177,7 @@ class RunRequest:
                        "options": dict(self.ffmpeg.options)},
             "live": self.live,
             "video_out": self.video_out,
+            "target": self.target,
         }
 
     @classmethod
@@ -201,6 +206,7 @@ class RunRequest:
             ffmpeg=_ffmpeg_input(data.get("ffmpeg")),
             live=data.get("live"),
             video_out=data.get("video_out"),
+            target=None if data.get("target") is None else int(data["target"]),
         )
 
     @property
@@ -256,6 +262,7 @@ class RunRequest:
         if not isinstance(recorded, dict):
             return ["the whole request (run.json records none)"]
         mine = json.loads(json.dumps(self.to_dict()))
+        recorded = {**_RECORDED_LATER, **recorded}
         moot = _moot(mine) & _moot(recorded)
         keys = [k for k in dict.fromkeys([*mine, *recorded])
                 if k != "out_dir" and k not in moot
@@ -288,6 +295,9 @@ def _moot(request: dict[str, Any]) -> set[str]:
 
 #: (A field missing from one of two requests compared.)
 _ABSENT = object()
+#: Fields ``run.json`` records since a later version, with what a record without one meant
+#: (a run of an input's only target): its results still resume.
+_RECORDED_LATER = {"target": None}
 #: How a user sets each field of :meth:`RunRequest.to_dict` (named when it differs).
 _SETTING_NAMES = {
     "input": "the input's path", "config": "the config (its file or a --set)",
@@ -297,7 +307,7 @@ _SETTING_NAMES = {
     "max_frames": "--frames", "max_s": "--frames", "start": "--start", "start_s": "--start",
     "init_from": "the first box (--init or NAME.init.txt)", "stream": "--stream",
     "ffmpeg": "the input options (--input-option ...)", "live": "--live",
-    "video_out": "--video-out",
+    "video_out": "--video-out", "target": "the target (--gt SEQ/groundtruth_rect.N.txt)",
 }
 
 
@@ -320,7 +330,10 @@ _WHOLE_NUMBERS = (
     ("max_frames", 1, MAX_FRAME_NUMBER, "how many frames to track; None: to the end"),
     ("crf", 0, MAX_CRF, "the annotated video's x264 quality"),
     ("gt_origin", 0, 1, "1: the ground truth's boxes are 1-based"),
+    ("target", 0, MAX_FRAME_NUMBER, "the N of the target's groundtruth_rect.N.txt"),
 )
+#: The whole numbers of :data:`_WHOLE_NUMBERS` that may be None.
+_OPTIONAL = ("max_frames", "target")
 
 
 def _absolute_files(config: Config) -> Config:

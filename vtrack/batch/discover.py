@@ -10,7 +10,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vtrack.errors import InputError, plural
-from vtrack.evaluate.groundtruth import groundtruth_beside, gt_origin_of, is_sequence_folder
+from vtrack.evaluate.groundtruth import (
+    groundtruth_beside,
+    gt_origin_of,
+    is_sequence_folder,
+    numbered_groundtruth,
+    target_input,
+    target_number,
+)
 from vtrack.io.files import SharedFolders, folder_key, folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
@@ -43,22 +50,39 @@ class BatchInput:
     gt_origin: int = 0
     #: Why this input cannot be run (a broken link, a FIFO): it is reported ``failed``.
     problem: str | None = None
+    #: Which target of an OTB sequence of several it is (``groundtruth``:
+    #: ``groundtruth_rect.N.txt``, N; the name ``SEQ-N``); None: the input's only one.
+    target: int | None = None
+
+    @property
+    def shown(self) -> str:
+        """The input as a user finds it in the batch's folder: its file or folder name, and a
+        target's ground truth (``Jogging/groundtruth_rect.1.txt``)."""
+        if self.target is None or self.groundtruth is None:
+            return self.path.name
+        return f"{self.path.name}/{self.groundtruth.name}"
 
 
 def _first(folder: Path, names: Iterable[str]) -> Path | None:
     return next((folder / n for n in names if (folder / n).is_file()), None)
 
 
-def _sequence(folder: Path, gt_origin: int | None) -> BatchInput:
+def _sequence(folder: Path, gt_origin: int | None) -> list[BatchInput]:
+    """The inputs of sequence folder ``folder``: one per target of an OTB sequence of several
+    (``groundtruth_rect.N.txt``: ``SEQ-N``, tracked from its own boxes), and the folder itself
+    (``SEQ``) unless those are all it says of its targets (no other ground truth or box)."""
     groundtruth = groundtruth_beside(folder)
-    return BatchInput(
-        name=folder.name,
-        path=folder,
-        groundtruth=groundtruth,
-        mot_groundtruth=_first(folder, SEQUENCE_MOT_GT),
-        init=_first(folder, [SEQUENCE_INIT]),
-        gt_origin=_origin(groundtruth, gt_origin),
-    )
+    mot_groundtruth = _first(folder, SEQUENCE_MOT_GT)
+    init = _first(folder, [SEQUENCE_INIT])
+    targets = [BatchInput(name=target_input(folder.name, target_number(path)), path=folder,
+                          groundtruth=path, mot_groundtruth=mot_groundtruth,
+                          gt_origin=_origin(path, gt_origin), target=target_number(path))
+               for path in numbered_groundtruth(folder)]
+    if targets and groundtruth is None and mot_groundtruth is None and init is None:
+        return targets
+    return [BatchInput(name=folder.name, path=folder, groundtruth=groundtruth,
+                       mot_groundtruth=mot_groundtruth, init=init,
+                       gt_origin=_origin(groundtruth, gt_origin)), *targets]
 
 
 def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
@@ -129,25 +153,28 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     """Every input directly inside ``folder`` (or ``folder`` itself if it is a sequence folder),
     sorted by name, with the ground truth found beside or inside each (module docstring).
 
-    Inputs are named after their file stem (folder name for sequences); videos whose stem is
+    Inputs are named after their file stem (folder name for sequences; ``SEQ-N`` for target N
+    of an OTB sequence of several, :func:`_sequence`); videos whose stem is
     taken twice (``a.mp4`` and ``a.avi`` or ``A.avi``, a folder ``a/``, ``a.mp4`` and
     ``a.mp4.mkv``, or ``summary.csv.mp4`` and the batch's ``summary.csv``) keep their full file
     names, so every input has a results folder of its own.
     Raises InputError when ``folder`` is not a folder or holds no input, or when two inputs
     would still share a results folder (``a.mp4`` and ``A.mp4``: one folder on a
-    case-insensitive disk).
+    case-insensitive disk; a folder ``Jogging-1`` beside ``Jogging``'s target 1).
     """
     folder = Path(folder)
     if not folder.is_dir():
         missing = ("no such folder (broken link)" if folder.is_symlink() else "no such folder")
         raise InputError(f"{folder}: {missing if not folder.exists() else 'not a folder'}")
     if is_sequence_folder(folder):
-        return [_sequence(folder.resolve(), gt_origin)]
+        found = _sequence(folder.resolve(), gt_origin)
+        _refuse_shared_folders(folder, found)
+        return sorted(found, key=lambda i: i.name)
     entries = sorted(folder.resolve().iterdir())
     named = [p for p in entries if p.suffix.lower() in VIDEO_SUFFIXES]
     videos = [p for p in named if p.is_file()]
-    found = [_sequence(p, gt_origin) for p in entries
-             if p.is_dir() and not _results_folder(p) and is_sequence_folder(p)]
+    found = [item for p in entries if p.is_dir() and not _results_folder(p)
+             and is_sequence_folder(p) for item in _sequence(p, gt_origin)]
     found += [_unusable(p) for p in named if not p.is_file() and not p.is_dir()]
     found += [_video(p, name, gt_origin) for p, name in _video_names(
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
@@ -157,6 +184,13 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
             "or in color/ or the folder itself beside their groundtruth.txt, "
             "groundtruth_rect.txt or init.txt)"
         )
+    _refuse_shared_folders(folder, found)
+    return sorted(found, key=lambda i: i.name)
+
+
+def _refuse_shared_folders(folder: Path, found: list[BatchInput]) -> None:
+    """InputError when two of the inputs ``found`` in ``folder`` (or one and the batch's own
+    summary) would share a results folder, naming both (:attr:`BatchInput.shown`)."""
     folders: SharedFolders[BatchInput | None] = SharedFolders("input")
     folders.take(SUMMARY_FILE, None)  # the batch's own file, no input's
     for item in found:
@@ -167,18 +201,18 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
         other, by_case = clash
         if other is None:
             case = f" {SUMMARY_FILE} on a case-insensitive disk (macOS, Windows)" if by_case else ""
-            raise InputError(f"{folder}: {item.path.name!r} would have the results folder "
+            raise InputError(f"{folder}: {item.shown!r} would have the results folder "
                              f"{_folder(item.name)!r}, the batch's own summary{case}: rename it")
         if by_case:
             raise InputError(
-                f"{folder}: the results folders of {other.path.name!r} and of "
-                f"{item.path.name!r} differ only in case, one folder on a case-insensitive "
+                f"{folder}: the results folders of {other.shown!r} and of "
+                f"{item.shown!r} differ only in case, one folder on a case-insensitive "
                 "disk (macOS, Windows): rename one")
+        why = (f"both are named {item.name!r}" if other.name == item.name else
+               "names differ only in characters a folder name cannot hold")
         raise InputError(
-            f"{folder}: {other.path.name!r} and {item.path.name!r} would share the results "
-            f"folder {_folder(item.name)!r} (names differ only in characters a folder "
-            "name cannot hold): rename one")
-    return sorted(found, key=lambda i: i.name)
+            f"{folder}: {other.shown!r} and {item.shown!r} would share the results "
+            f"folder {_folder(item.name)!r} ({why}): rename one")
 
 
 def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -> str | None:

@@ -14,7 +14,6 @@ from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OutputError
 from vtrack.evaluate.groundtruth import (
     MULTI_TARGET_CONFIGS,
     groundtruth_names,
-    numbered_groundtruth,
 )
 from vtrack.geometry import Box
 from vtrack.io.files import SharedFolders, folder_name
@@ -186,7 +185,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             folder = out_dir / folder_name(item.name, "input") / folder_name(label)
             request = replace(settings, input=str(item.path), out_dir=folder,
                               config=config, init_box=init, gt_path=gt_path, gt_origin=gt_origin,
-                              init_from=None if init is None else str(sidecar_path(item.path)))
+                              init_from=None if init is None else str(sidecar_path(item.path)),
+                              target=item.target)
             # the folder's run.json, read once: whether it stands, is this run's, or another's
             on_disk = _read(folder) if not (force and overwrite) else None
             same = _of(request, on_disk)
@@ -225,21 +225,14 @@ def _init_box(item: BatchInput, config: str, gt_path: Path | None,
     sequence folder: 0-based pixels whatever ``--gt-origin`` says, as ``vtrack run`` reads it);
     None when it has none but has ground truth (the run takes its first box). The sidecar
     holds frame 0's box: a batch that starts later (``--start``) takes the ground truth's box
-    of that frame instead, as ``vtrack run`` does. Raises InputError when there is neither
-    (for an OTB sequence of several targets, naming their files and the ``vtrack run`` that
-    tracks one, whether or not it starts later; else naming the MOTChallenge ground truth the
-    input has, which only multi-target configs read), or the sidecar is malformed."""
-    box = None if settings.starts_later else read_sidecar(item.path)
+    of that frame instead, as ``vtrack run`` does; one target of an OTB sequence of several
+    (``item.target``) starts from its own ground truth, never the sequence's sidecar. Raises
+    InputError when there is neither (naming the MOTChallenge ground truth the input has,
+    which only multi-target configs read), or the sidecar is malformed."""
+    own_box = settings.starts_later or item.target is not None
+    box = None if own_box else read_sidecar(item.path)
     if box is None and gt_path is None:
         given = COMMAND_NAMES.start_given(settings.start, settings.start_s)
-        targets = numbered_groundtruth(item.path) if item.path.is_dir() else []
-        if targets:  # OTB's sequences of several targets: which one is the user's to say
-            raise InputError(
-                f"{item.path}: config '{config}' tracks one given target, and the sequence has "
-                f"{len(targets)} targets' ground truth ({', '.join(p.name for p in targets)}), "
-                "none of which a batch takes by itself: track each with vtrack run, e.g. "
-                f"vtrack run {item.path} -c {config} --gt {targets[0]}"
-                + (f" {given}" if settings.starts_later else ""))
         names = [p.name for p in (*groundtruth_names(item.path), sidecar_path(item.path))]
         if settings.starts_later:
             raise InputError(f"{item.path}: {given}: config '{config}' needs the target's box "

@@ -165,7 +165,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     MOTChallenge's img1/, or in VOT's color/ or the folder itself (two or more, no video
     beside them) beside their ground truth or init.txt (ground truth inside:
     groundtruth_rect.txt or groundtruth.txt, MOTChallenge
-    groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt); videos in other
+    groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt; each target of an
+    OTB sequence of several, groundtruth_rect.N.txt, is an input SEQ-N); videos in other
     sub-folders are not inputs (a warning counts them: give such a folder as FOLDER). Without
     ground truth, single-target configs start from the box in name.init.txt (init.txt in a
     sequence folder). Results already complete are not run again (resume) unless --force;

@@ -55,14 +55,17 @@ if TYPE_CHECKING:
 FOLLOW_S = 5.0
 
 
-def default_out_dir(input_spec: str, config: str | None = None) -> Path:
+def default_out_dir(input_spec: str, config: str | None = None,
+                    target: int | None = None) -> Path:
     """``./vtrack-out/<name>/<config>/``: name is the input's file stem or folder name
-    (``stdin`` for -, ``udp-127.0.0.1-5000`` for a URL); config the config's name (a TOML
-    file's stem). Without ``config``, ``./vtrack-out/<name>/`` (a batch's results folder)."""
+    (``stdin`` for -, ``udp-127.0.0.1-5000`` for a URL; ``SEQ-N`` for ``target`` N of an OTB
+    sequence of several); config the config's name (a TOML file's stem). Without ``config``,
+    ``./vtrack-out/<name>/`` (a batch's results folder)."""
+    from vtrack.evaluate.groundtruth import target_input
     from vtrack.io.files import folder_name
     from vtrack.io.specs import input_name
 
-    name = input_name(input_spec)
+    name = target_input(input_name(input_spec), target)
     folder = Path("vtrack-out") / name
     # a config's own name (``name = "..."`` in its TOML) may hold characters a folder cannot
     return folder / folder_name(config) if config else folder
@@ -179,7 +182,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     # imported here, not at the top: `vtrack --help` and the other commands start without them
     from vtrack.cli._progress import FrameProgress
     from vtrack.config import load_config
-    from vtrack.evaluate.groundtruth import gt_origin_of, parse_box
+    from vtrack.evaluate.groundtruth import gt_origin_of, parse_box, target_of
     from vtrack.io import RawFormat
     from vtrack.io.video import FFmpegInput
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
@@ -200,9 +203,10 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     config = load_config(config_spec).with_overrides(list(overrides))
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
     raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
+    target = target_of(input_spec, gt_path)  # SEQ --gt SEQ/groundtruth_rect.N.txt: SEQ-N
     request = RunRequest(
         input=input_spec,
-        out_dir=out_dir or default_out_dir(input_spec, config.name),
+        out_dir=out_dir or default_out_dir(input_spec, config.name, target),
         config=config,
         init_box=parse_box(init_text) if init_text is not None else None,
         gt_path=gt_path,
@@ -223,6 +227,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
                            **({} if timeout_s is None else {"timeout_s": timeout_s})),
         live=live,
         video_out=video_out,
+        target=target,
     )
     progress = FrameProgress(quiet, request.frames_expected, stats_period)
     root = click.get_current_context().find_root().command

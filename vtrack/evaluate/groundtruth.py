@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError, InputError, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
-from vtrack.io.sidecar import SEQUENCE_ONLY_IMAGES, SEQUENCE_SIDECAR
+from vtrack.io.sidecar import SEQUENCE_ONLY_IMAGES, SEQUENCE_SIDECAR, sequence_of
 from vtrack.io.specs import VIDEO_SUFFIXES
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
@@ -74,8 +74,44 @@ def numbered_groundtruth(folder: str | PathLike[str]) -> list[Path]:
     return [p for _, p in sorted(found)]
 
 
-#: The name of one target's ground truth in an OTB sequence of several (its number captured).
-_NUMBERED_GT = re.compile(r"groundtruth_rect\.(\d+)\.txt")
+#: The name of one target's ground truth in an OTB sequence of several (its number captured,
+#: at most 12 digits: a RunRequest's ``target``).
+_NUMBERED_GT = re.compile(r"groundtruth_rect\.(\d{1,12})\.txt")
+
+
+def target_number(gt_path: str | PathLike[str]) -> int:
+    """The number N of one target's ground truth ``groundtruth_rect.N.txt``
+    (:func:`numbered_groundtruth`); ValueError for a file of another name."""
+    match = _NUMBERED_GT.fullmatch(Path(gt_path).name)
+    if match is None:
+        raise ValueError(f"{gt_path}: not one target's groundtruth_rect.N.txt")
+    return int(match[1])
+
+
+def target_of(input_spec: str, gt_path: str | PathLike[str] | None) -> int | None:
+    """Which target of an OTB sequence of several a run of ``input_spec`` with ground truth
+    ``gt_path`` tracks: N when ``gt_path`` is the sequence's own ``groundtruth_rect.N.txt``
+    (:func:`numbered_groundtruth`; ``input_spec`` the sequence folder ``SEQ`` or its images'
+    ``SEQ/img``), else None (any other input or ground truth)."""
+    if gt_path is None or _NUMBERED_GT.fullmatch(Path(gt_path).name) is None:
+        return None
+    folder = Path(input_spec)
+    if not folder.is_dir():
+        return None
+    folder = sequence_of(folder) or folder
+    try:
+        if not Path(gt_path).parent.resolve().samefile(folder.resolve()):
+            return None
+    except OSError:
+        return None
+    return target_number(gt_path)
+
+
+def target_input(name: str, target: int | None) -> str:
+    """The name of the input ``name`` (a sequence's) when its run tracks target ``target``
+    (:func:`target_of`): ``NAME-N``, as OTB's toolkit and its published results name these
+    sequences (``Jogging-1``, ``Jogging-2``, ``Human4-2``); ``name`` itself for None."""
+    return name if target is None else f"{name}-{target}"
 
 
 def gt_origin_of(path: str | PathLike[str], origin: int | None) -> int:

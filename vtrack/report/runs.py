@@ -35,7 +35,12 @@ import numpy as np
 from vtrack.batch.summary import NEVER_RAN
 from vtrack.errors import InputError, plural, printable
 from vtrack.evaluate import metrics
-from vtrack.evaluate.groundtruth import MultiTargetTruthError, gt_origin_of, read_boxes
+from vtrack.evaluate.groundtruth import (
+    MultiTargetTruthError,
+    gt_origin_of,
+    read_boxes,
+    target_input,
+)
 from vtrack.geometry import Box
 from vtrack.io.csvfile import scores_as_written
 from vtrack.io.files import folder_name, os_reason
@@ -354,12 +359,19 @@ def _boxes(rows: list[dict[str, str]]) -> list[Box | None]:
 
 
 def _input_name(record: dict[str, Any], folder: Path) -> str:
+    """The name of the run's input, as the run named it; ``SEQ-N`` for target N of an OTB
+    sequence of several (its request's ``target``: ``Jogging-1``, ``Jogging-2`` are two
+    sequences). ValueError for a target that is no whole number (a record edited by hand)."""
+    target = (record.get("request") or {}).get("target")
+    if target is not None and (isinstance(target, bool) or not isinstance(target, int)
+                               or target < 0):
+        raise ValueError(f"target {target!r}")
     info = record.get("input") or {}
     if info.get("name"):
-        return str(info["name"])
+        return target_input(str(info["name"]), target)
     given = str((record.get("request") or {}).get("input") or folder.name).rstrip("/")
     path = Path(given)
-    return path.stem if path.suffix else path.name
+    return target_input(path.stem if path.suffix else path.name, target)
 
 
 def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
