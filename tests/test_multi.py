@@ -19,6 +19,7 @@ import shutil
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.config import load_config
@@ -477,6 +478,68 @@ def test_an_identity_is_never_reused(multi_run) -> None:
             frames_of.setdefault(t.id, []).append(result.index)
     for frames in frames_of.values():  # one unbroken run of frames per id
         assert frames == list(range(frames[0], frames[-1] + 1))
+
+
+# --- where the ids start -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("config", ["s3", "s4_multi", "fixed_camera"])
+def test_a_first_track_id_numbers_the_tracks_on_from_it(scene_factory, config: str) -> None:
+    """Every multi-target tracker (mht, kalman_tracks, byte_tracks) numbered its tracks from 1
+    whatever the caller wanted (`vtrack.track(frames, config, first_track_id=40)` was a
+    TypeError), so a run taken up after an interruption gave the first run's ids to other
+    tracks. Now ``first_track_id`` (Tracker's, track's, a RunRequest's, ``--first-id``) is the
+    first id: the same tracks, boxes and states as from 1, each id 39 more."""
+    import vtrack
+
+    frames = list(scene_factory("pedestrians", seed=4, frames=150).as_frames())
+    ones = list(vtrack.track(frames, config))
+    on = list(vtrack.track(frames, config, first_track_id=40))
+    numbered = sorted({t.id for r in ones for t in r.tracks})
+    assert numbered and numbered[0] == 1, numbered  # (tracks were made: ids to move on)
+    assert [[(t.id + 39, t.box, t.state) for t in r.tracks] for r in ones] == \
+        [[(t.id, t.box, t.state) for t in r.tracks] for r in on]
+
+
+def test_a_first_track_id_is_refused_where_no_track_is_numbered(
+        clip_factory, tmp_path) -> None:
+    """`vtrack run clip.mp4 -c s0 --first-id 3` and its library forms: a single-target config
+    numbers no tracks, so a first track id other than 1 is refused in one line naming what was
+    given (before the output folder is made), as one out of its range (1 to 2**31 - 1) is;
+    1 is every config's (the default)."""
+    import vtrack
+    from vtrack.request import RunRequest
+
+    clip = clip_factory("smooth", width=160, height=120, frames=10)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(clip.path), "-c", "s0", "--first-id", "3",
+                                       "--gt", str(clip.gt), "-o", str(out)])
+    assert one_error_line(result) == (
+        "vtrack: error: --first-id 3: s0 tracks one target and numbers no tracks; only a "
+        "multi-target config (s3, s4_multi, fixed_camera, ...: vtrack configs) takes a first "
+        "track id")
+    assert not out.exists()
+    result = CliRunner().invoke(main, ["run", str(clip.path), "-c", "s3", "--first-id", "0",
+                                       "-o", str(out)])
+    assert "--first-id" in one_error_line(result) and "1<=x<=2147483647" in result.stderr
+    said = "first_track_id 3: s0 tracks one target and numbers no tracks"
+    with pytest.raises(ConfigError, match=said):
+        vtrack.Tracker("s0", first_track_id=3)
+    with pytest.raises(ConfigError, match=said):
+        RunRequest(input=str(clip.path), out_dir=out, config=load_config("s0"),
+                   first_track_id=3)
+    with pytest.raises(ConfigError, match=said):
+        vtrack.track(clip.path, "s0", init_box=clip.scene.boxes[0], first_track_id=3)
+    for wrong in (0, 2**31, True, 2.0, "5"):
+        with pytest.raises(ConfigError, match="first_track_id .*: must be a whole number from "
+                                              "1 to 2147483647"):
+            vtrack.Tracker("s3", first_track_id=wrong)
+    request = RunRequest(input=str(clip.path), out_dir=out, config=load_config("s3"),
+                         first_track_id=np.int64(7))
+    assert type(request.first_track_id) is int and request.first_track_id == 7
+    with pytest.raises(ConfigError, match="first_track_id: the RunRequest carries its own"):
+        vtrack.track(request, first_track_id=7)
+    assert vtrack.Tracker("s0", first_track_id=1).first_track_id == 1
 
 
 # --- S4 on the bounce scene ---------------------------------------------------------------------

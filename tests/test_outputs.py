@@ -801,27 +801,39 @@ def test_an_interrupted_run_says_how_to_go_on_from_where_it_stopped(tmp_path: Pa
     assert again[0][:6] == last[:6] and again[-1][0] == "2499"
 
 
-def test_an_interrupted_multi_target_runs_hint_says_its_ids_start_again(tmp_path: Path) -> None:
-    """The hint of an interrupted multi-target run (`--start 534 --frames 866`) did not say
-    that the run it makes numbers its tracks from 1 again: the two tracks.csv use the same ids
-    for other targets. The hint says so, with this run's highest id (run.json's
-    ``summary.last_track_id``), which joins them."""
-    scene = make_scene("multi", seed=2, width=W, height=H, frames=900, fps=30)
-    clip = write_video(scene, tmp_path / "multi.mp4", preset="ultrafast", keyint=30)
+def test_a_multi_target_run_taken_up_with_its_hint_numbers_its_tracks_on(
+        tmp_path: Path) -> None:
+    """SIGTERM to `vtrack run ped.mp4 -c fixed_camera --frames 800` (a generated pedestrians
+    clip) printed `... with --start 73 --frames 727 and another --out (its track ids start
+    again at 1: add 5, this run's highest, to them to join the two tracks.csv)`: the run that
+    hint made numbered its tracks from 1 again (ids 2, 4, 5, 6, ... after the first run's 3
+    and 5), so its tracks.csv gave a first run's id to another track. The hint now gives
+    `--first-id` one after the first run's highest id (run.json's ``summary.last_track_id``)
+    and the run it makes uses none of the first run's ids: its tracks are numbered on from
+    there and it starts after the first run's last frame."""
+    scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=900, fps=30)
+    clip = write_video(scene, tmp_path / "ped.mp4", preset="ultrafast", keyint=30)
     first = tmp_path / "first"
-    stderr = _stopped_after(40, first, "run", str(clip), "-c", "s3", "--frames", "800")
+    stderr = _stopped_after(40, first, "run", str(clip), "-c", "fixed_camera", "--frames", "800")
     record = json.loads((first / "run.json").read_text())
-    ids = [int(row[1]) for row in csv_rows(first / "tracks.csv")]
+    rows = csv_rows(first / "tracks.csv")
+    ids = {int(row[1]) for row in rows}
     assert record["summary"]["last_track_id"] == max(ids), record["summary"]
-    options = record["summary"]["resume"]
-    assert stderr.splitlines()[-1].endswith(
-        f"with {options} and another --out (its track ids start again at 1: add {max(ids)}, "
-        "this run's highest, to them to join the two tracks.csv)"), stderr
-    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s3",
-                           *options.split(), "--no-video", "-o", str(tmp_path / "again")],
+    last = record["last_frame"]  # 0-based; tracks.csv's frames are 1-based
+    options = f"--start {last + 1} --frames {800 - last - 1} --first-id {max(ids) + 1}"
+    assert record["summary"]["resume"] == options
+    prefix = f"vtrack: {clip}: to go on from where it stopped, run the same command with "
+    hint = stderr.splitlines()[-1]
+    assert hint == f"{prefix}{options} and another --out", stderr
+    given = hint.removeprefix(prefix).removesuffix(" and another --out").split()
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c",
+                           "fixed_camera", *given, "--no-video", "-o", str(tmp_path / "again")],
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr
-    assert min(int(row[1]) for row in csv_rows(tmp_path / "again" / "tracks.csv")) == 1
+    again = csv_rows(tmp_path / "again" / "tracks.csv")
+    assert again, "the resumed run confirmed no track: nothing was shown"
+    assert min(int(row[1]) for row in again) > max(ids), (sorted(ids), again[:3])
+    assert int(again[0][0]) > int(rows[-1][0])
 
 
 def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:

@@ -50,6 +50,7 @@ OTHER: dict[str, Any] = {
     "live": True,
     "video_out": "udp://127.0.0.1:5000",
     "target": 2,
+    "first_track_id": 12,  # (a multi-target config's only: its own test below)
 }
 
 
@@ -64,6 +65,8 @@ def test_changing_any_field_of_the_request_makes_resume_run_again(
     assert completed_summary(request) is not None  # the same request: reused
     assert {f.name for f in fields(RunRequest)} == set(OTHER)  # a new field needs a value here
     for name, value in OTHER.items():
+        if name == "first_track_id":  # s1 numbers no tracks: refused (test_multi.py)
+            continue
         if name == "out_dir":
             value = tmp_path / "b"
         changed = replace(request, **{name: value})
@@ -74,6 +77,28 @@ def test_changing_any_field_of_the_request_makes_resume_run_again(
             continue
         assert completed_summary(changed) is None, name
         assert request.differences(changed.to_dict()), name  # (named in a refusal)
+
+
+def test_a_run_numbered_from_another_first_track_id_is_another_run(
+    clip_factory: ClipFactory, tmp_path: Path
+) -> None:
+    """A multi-target request's ``first_track_id`` (``--first-id``) changes its tracks.csv, so
+    a batch does not take a result numbered from another id as this request's: it is a
+    difference named by its option. A run.json written before there was a first track id (its
+    request has none) numbered from 1, as a request of 1 does: the same run."""
+    clip = clip_factory("pedestrians", seed=4, frames=60)
+    request = RunRequest(input=str(clip.path), out_dir=tmp_path / "a",
+                         config=load_config("s4_multi"), video=False)
+    assert run(request).status == STATUS_COMPLETE
+    assert completed_summary(request) is not None
+    later = replace(request, first_track_id=12)
+    assert completed_summary(later) is None
+    assert request.differences(later.to_dict()) == ["--first-id"]
+    assert later.differences(request.to_dict()) == ["--first-id"]
+    older = {k: v for k, v in request.to_dict().items() if k != "first_track_id"}
+    assert request.differences(older) == [] and later.differences(older) == ["--first-id"]
+    assert RunRequest.from_dict(older).first_track_id == 1
+    assert RunRequest.from_dict(later.to_dict()).first_track_id == 12
 
 
 def test_the_request_round_trips_through_its_dict() -> None:

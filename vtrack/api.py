@@ -34,25 +34,27 @@ BoxInput = Box | Sequence[float]
 def track(frames: FrameInput,
           config: str | os.PathLike[str] | Config | None = None,
           init_box: BoxInput | None = None, seed: int | None = None, fps: float | None = None,
-          keep_frames: bool = False) -> Iterator[FrameResult]:
+          keep_frames: bool = False, first_track_id: int | None = None
+          ) -> Iterator[FrameResult]:
     """Yield one :class:`FrameResult` per frame of ``frames``, from a :class:`vtrack.Tracker`.
 
     ``frames`` is an input (``str`` or ``pathlib.Path``: a video file, an image folder, a URL
     or a capture device, opened with :func:`open_source`; a live one hands over the
     frames the tracker keeps up with), a :class:`RunRequest` (its input, raw format,
-    frame rate, config, initial box, seed and frame limit; nothing is written), or any iterable
-    of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``, ``HxWx1``) uint8 images
-    (timed at ``fps``, default 30, as an image folder is; 4 channels are a TypeError saying
-    what to give) or of ``av.VideoFrame``; ``fps`` given for a
+    frame rate, config, initial box, seed, first track id and frame limit; nothing is
+    written), or any iterable of :class:`Frame`, of NumPy BGR (``HxWx3``) / grey (``HxW``,
+    ``HxWx1``) uint8 images (timed at ``fps``, default 30, as an image folder is; 4 channels
+    are a TypeError saying what to give) or of ``av.VideoFrame``; ``fps`` given for a
     video file, URL or device (whose frames carry their own timestamps) is a ConfigError, as
     ``vtrack run --fps`` is; ``config`` a shipped config name, a TOML path or a
     :class:`Config` (None: ``DEFAULT_CONFIG``); ``seed`` seeds the stochastic stages (None:
     0); ``init_box`` the target's first box as a :class:`Box` or ``(x, y, w, h)`` (not
-    needed by the detecting trackers s3/s4). A RunRequest carries its own ``config``,
-    ``init_box``, ``seed`` and ``fps``: giving any of them beside it is a ConfigError (the
-    default config's name too: which of two configs was meant cannot be told). Results hold
-    their decoded frame only with ``keep_frames=True``. One image or frame on its own (not in
-    a sequence) is a TypeError.
+    needed by the detecting trackers s3/s4); ``first_track_id`` the id a multi-target config
+    gives its first track (None: 1; as :class:`vtrack.Tracker`'s). A RunRequest carries its own
+    ``config``, ``init_box``, ``seed``, ``fps`` and ``first_track_id``: giving any of them
+    beside it is a ConfigError (the default config's name too: which of two configs was meant
+    cannot be told). Results hold their decoded frame only with ``keep_frames=True``. One
+    image or frame on its own (not in a sequence) is a TypeError.
 
     Checked when ``track`` is called, before it returns: the arguments, the config and the
     first box (a request's too, from its sidecar or ground truth, unless it starts later:
@@ -74,14 +76,16 @@ def track(frames: FrameInput,
     _refuse_one_frame(frames)
     if isinstance(frames, RunRequest):
         given = [name for name, value in (("config", config), ("init_box", init_box),
-                                          ("seed", seed), ("fps", fps))
+                                          ("seed", seed), ("fps", fps),
+                                          ("first_track_id", first_track_id))
                  if value is not None]
         if given:  # it would be ignored
             raise ConfigError(f"{', '.join(given)}: the RunRequest carries its own; set "
                               f"{'it' if len(given) == 1 else 'them'} in the request "
                               "(dataclasses.replace(request, ...))")
         request = frames
-        tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames)
+        tracker = Tracker(request.config, seed=request.seed, keep_frames=keep_frames,
+                          first_track_id=request.first_track_id)
         opener = _source_opener(request.input, request.raw, fps=request.fps,
                                 ffmpeg=request.ffmpeg, live=request.live)
         from vtrack.run import requested_frames  # the run machinery only for a request
@@ -96,7 +100,8 @@ def track(frames: FrameInput,
     box = None if init_box is None else as_box(init_box)
     tracker = Tracker(config, seed=0 if seed is None else seed,
                       fps=DEFAULT_FPS if fps is None else fps,
-                      keep_frames=keep_frames)
+                      keep_frames=keep_frames,
+                      first_track_id=1 if first_track_id is None else first_track_id)
     if box is None and tracker.needs_init_box:  # said before the input is opened
         raise ConfigError(f"init_box: {tracker.config.name} starts from the target's first "
                           "box: give init_box=(x, y, w, h)")

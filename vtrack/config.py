@@ -135,6 +135,12 @@ class Config:
         stage built."""
         return [stage_class(name, self.source) for name, _ in self.stages]
 
+    @property
+    def multi_target(self) -> bool:
+        """True for a chain that detects several targets and numbers their tracks (s3,
+        s4_multi, fixed_camera, ...: a stage of it is ``multi_target``), no stage built."""
+        return any(cls.multi_target for cls in self.stage_classes())
+
     def resolved(self) -> dict[str, Any]:
         """Every stage with every parameter value, defaults included (for ``run.json``)."""
         return {

@@ -38,6 +38,11 @@ MAX_CRF = 51
 #: ``numpy.random.seed``): ``--seed`` and ``seed=`` take 0 .. MAX_SEED.
 MAX_SEED = 2**32 - 1
 
+#: The largest first track id a multi-target run takes (``--first-id``, RunRequest's and
+#: ``vtrack.Tracker``'s ``first_track_id``; the smallest is 1): the largest 32-bit signed
+#: integer, a bound for tools that read a ``tracks.csv``'s ids as such.
+MAX_TRACK_ID = 2**31 - 1
+
 
 def check_seed(seed: object) -> int:
     """``seed`` if it is a whole number from 0 to :data:`MAX_SEED`; ConfigError otherwise."""

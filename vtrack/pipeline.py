@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError, InputError
 from vtrack.frame import Frame, GrayFrame
 from vtrack.geometry import Box, as_box, check_init_box
 from vtrack.overlays import Overlay
-from vtrack.params import check_seed, shown
+from vtrack.params import MAX_TRACK_ID, check_seed, check_whole, shown
 from vtrack.stages.base import Stage, Track, TrackContext, TrackState
 
 #: A box that lies entirely outside the frame for more than this many frames in a row is
@@ -81,12 +81,28 @@ def first_box_refused(name: str, instead: str) -> ConfigError:
                        f"is detected) and takes no first box; {instead}")
 
 
+def check_first_track_id(value: object, multi_target: bool, chain: str,
+                         name: str = "first_track_id") -> int:
+    """``value``, the id a multi-target chain gives its first new track, as an ``int``:
+    ConfigError naming ``name`` (the caller's: ``--first-id``, ``first_track_id``) for one that
+    is not a whole number from 1 to :data:`~vtrack.params.MAX_TRACK_ID`, and for one other than
+    1 given to a single-target chain (``chain``: its name), which numbers no tracks."""
+    first = check_whole(name, value, 1, MAX_TRACK_ID, "the id of the first new track")
+    if first != 1 and not multi_target:
+        raise ConfigError(f"{name} {first}: {chain} tracks one target and numbers no tracks; "
+                          "only a multi-target config (s3, s4_multi, fixed_camera, ...: "
+                          "vtrack configs) takes a first track id")
+    return first
+
+
 class Pipeline:
     """An ordered chain of stages sharing one :class:`TrackContext`."""
 
-    def __init__(self, stages: list[Stage], seed: int = 0) -> None:
+    def __init__(self, stages: list[Stage], seed: int = 0, first_track_id: int = 1) -> None:
         """``stages`` built stages (``load_config(...).build()``), checked as a config's chain
-        is (ConfigError naming ``pipeline``); TypeError for anything else."""
+        is (ConfigError naming ``pipeline``); TypeError for anything else. ``first_track_id``:
+        the id a multi-target chain gives its first new track, the later ones following on
+        (:func:`check_first_track_id`)."""
         check_seed(seed)
         if not isinstance(stages, list | tuple) or not all(isinstance(s, Stage) for s in stages):
             raise TypeError("stages: expected a list of built stages (e.g. "
@@ -96,6 +112,8 @@ class Pipeline:
         check_stages("pipeline", [type(s) for s in stages], [s.settings() for s in stages])
         self.stages = stages
         self.seed = seed
+        self.first_track_id = check_first_track_id(first_track_id, self.multi_target,
+                                                   "this chain")
         self.stage_seconds = {s.name: 0.0 for s in stages}
         self.frames_done = 0
 
@@ -170,7 +188,8 @@ class Pipeline:
             init_box = self._init_box
             if init_box is not None:
                 check_init_box(init_box, frame.width, frame.height, "init_box")
-            ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box)
+            ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box,
+                                           first_track_id=self.first_track_id)
             ctx.new_frame(frame)
             for stage in self.stages:
                 started = timer()

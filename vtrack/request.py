@@ -36,6 +36,7 @@ from vtrack.params import (
     checked_seconds,
     shown,
 )
+from vtrack.pipeline import check_first_track_id
 from vtrack.stages.base import stage_class
 
 
@@ -57,7 +58,10 @@ class RunRequest:
     frame rate is followed);
     ``max_frames`` stops after that many tracked frames; ``max_s``, when set, gives that as a
     duration instead (``--frames 10s``): the frames whose timestamp is less than ``max_s``
-    past the first tracked one's (a variable frame rate is followed; at least one frame).
+    past the first tracked one's (a variable frame rate is followed; at least one frame);
+    ``first_track_id`` is the id a multi-target config gives the first track it creates, the
+    next ones following on (a run taken up again after an interruption: the first run's
+    highest + 1, so that no id is used twice); a single-target config takes only 1.
     """
 
     input: str
@@ -94,6 +98,10 @@ class RunRequest:
     #: the run tracks, its input then named ``SEQ-N`` (``vtrack batch`` takes each as an input;
     #: ``vtrack run SEQ --gt SEQ/groundtruth_rect.N.txt`` sets it); None: the input's only one.
     target: int | None = None
+    #: ``--first-id N``: a multi-target config numbers its tracks from this id (1 to
+    #: :data:`~vtrack.params.MAX_TRACK_ID`; a single-target config takes only 1:
+    #: :func:`vtrack.pipeline.check_first_track_id`).
+    first_track_id: int = 1
 
     def __post_init__(self) -> None:
         """Check the values the CLI checks before it makes a request (one made in Python
@@ -130,6 +138,8 @@ class RunRequest:
             object.__setattr__(self, "init_box", as_box(self.init_box))
         # (fps: checked as the input opens, where --fps applies)
         object.__setattr__(self, "seed", check_seed(self.seed))
+        object.__setattr__(self, "first_track_id", check_first_track_id(
+            self.first_track_id, self.config.multi_target, self.config.name))
         fps = real_or_nan(self.fps)
         if self.fps is not None and math.isfinite(fps):
             object.__setattr__(self, "fps", fps)  # (a Decimal: a number)
@@ -178,6 +188,7 @@ class RunRequest:
             "live": self.live,
             "video_out": self.video_out,
             "target": self.target,
+            "first_track_id": self.first_track_id,
         }
 
     @classmethod
@@ -207,6 +218,7 @@ class RunRequest:
             live=data.get("live"),
             video_out=data.get("video_out"),
             target=None if data.get("target") is None else int(data["target"]),
+            first_track_id=int(data.get("first_track_id", 1)),
         )
 
     @property
@@ -274,9 +286,13 @@ def _moot(request: dict[str, Any]) -> set[str]:
     """The fields of ``request`` (a ``run.json`` ``"request"``) that change nothing in its run:
     the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``),
     ``--gt-origin`` without ground truth, and ``--seed`` for a chain no stage of which draws
-    random numbers (none ``requires`` the run's ``rng``: all but the particle filter). Two
-    requests that both leave one moot are the same run whatever it says."""
+    random numbers (none ``requires`` the run's ``rng``: all but the particle filter); and
+    ``--first-id`` when it is 1 or not recorded (a ``run.json`` written before there was a
+    first track id: its tracks were numbered from 1). Two requests that both leave one moot
+    are the same run whatever it says."""
     moot = set()
+    if request.get("first_track_id", 1) == 1:
+        moot.add("first_track_id")
     if request.get("video") is False:
         moot |= {"preset", "crf"}
     if request.get("gt") is None:
@@ -308,6 +324,7 @@ _SETTING_NAMES = {
     "init_from": "the first box (--init or NAME.init.txt)", "stream": "--stream",
     "ffmpeg": "the input options (--input-option ...)", "live": "--live",
     "video_out": "--video-out", "target": "the target (--gt SEQ/groundtruth_rect.N.txt)",
+    "first_track_id": "--first-id",
 }
 
 

@@ -128,7 +128,8 @@ class RunSummary:
     frames_occluded: int = 0
     frames_lost: int = 0
     #: A multi-target run: the track ids ``tracks.csv`` holds (None: single target), and the
-    #: highest of them (None: no track): a resumed run numbers its tracks from 1 again.
+    #: highest of them (None: no track): :attr:`resume` numbers the next run's tracks on from
+    #: it (``--first-id``, one more).
     tracks: int | None = None
     last_track_id: int | None = None
     #: Frames of the input that could not be decoded and were skipped (damaged file), and
@@ -147,8 +148,10 @@ class RunSummary:
     #: The signal that interrupted the run (``SIGINT``, ``SIGTERM``), if one did.
     interrupted_by: str | None = None
     #: An interrupted run: the options that go on from where it stopped (``--start 157 --init
-    #: 9.74,9.83,10.4,10.4``: the last frame tracked and its box as written), given again with
-    #: the run's other options; None when there is nothing to go on from (a live source).
+    #: 9.74,9.83,10.4,10.4``: the last frame tracked and its box as written; a multi-target
+    #: run's ``--start 534 --frames 866 --first-id 13``: the frame after the last one written,
+    #: and ids on from this run's), given again with the run's other options; None when there
+    #: is nothing to go on from (a live source).
     resume: str | None = None
 
     def line(self, label: str | None = None) -> str:
@@ -834,7 +837,8 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     opened ``source``: it is found in its frames' own timestamps (:meth:`Source.skip_to`,
     which decodes up to it)."""
     init_name, give_box = names.init, names.give_box
-    pipeline = Pipeline(request.config.build(), seed=request.seed)
+    pipeline = Pipeline(request.config.build(), seed=request.seed,
+                        first_track_id=request.first_track_id)
     gt = mot_gt = None
     distractors: dict[int, list[tuple[Box, bool]]] = {}
     warnings: list[str] = []
@@ -1148,13 +1152,15 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     return outputs
 
 
-def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None
-                    ) -> str | None:
+def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None,
+                    next_id: int) -> str | None:
     """The options that take an interrupted run up again: ``--start`` the frame after the
     last one written (a multi-target chain, or one that finds its target itself: no frame is
     written twice), else the last frame the target was tracked in with ``--init`` its box as
     ``track.csv`` wrote it; and what is left of ``--frames`` from there (a count, or a time:
-    the frame after the last one taken to come one interval of the input's ``fps`` later).
+    the frame after the last one taken to come one interval of the input's ``fps`` later);
+    for a multi-target chain ``--first-id next_id`` (the id after the highest this run wrote,
+    so that the next run's tracks use none of this run's; left out when it is 1).
     None when there is no such frame, or nothing is left of ``--frames``."""
     pipeline = resolved.pipeline
     needs_box = pipeline.needs_init_box and not pipeline.multi_target
@@ -1177,7 +1183,17 @@ def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None
         if left <= 0:
             return None
         options += f" --frames {number_text(left)}s"
+    if pipeline.multi_target and next_id != 1:
+        options += f" --first-id {next_id}"
     return options
+
+
+def _next_track_id(request: RunRequest, formatter: _SingleTargetRows | _MultiTargetRows
+                   ) -> int:
+    """The id a run that goes on from this one numbers its tracks from: one after the highest
+    this run wrote to ``tracks.csv`` (its first track id when it wrote none)."""
+    written = formatter.written if isinstance(formatter, _MultiTargetRows) else ()
+    return max(written, default=request.first_track_id - 1) + 1
 
 
 def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -1206,8 +1222,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         warnings=[*resolved.warnings, *source.warnings,
                   *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
-        resume=(_resume_options(resolved, tracked, source.info.fps)
-                if status == STATUS_INTERRUPTED and not source.live else None),
+        resume=(_resume_options(resolved, tracked, source.info.fps, _next_track_id(
+                    request, formatter)) if status == STATUS_INTERRUPTED and not source.live
+                else None),
     )
     jumped = tracked.timeline.warning(request.input, request.gt_path)
     if jumped is not None:

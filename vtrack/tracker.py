@@ -20,7 +20,7 @@ from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
 from vtrack.params import check_flag, check_seed, shown
-from vtrack.pipeline import FrameResult, Pipeline
+from vtrack.pipeline import FrameResult, Pipeline, check_first_track_id
 
 #: A frame as :meth:`Tracker.update` takes it.
 FrameLike = Frame | np.ndarray | Any  # Any: an av.VideoFrame (PyAV is imported only if used)
@@ -110,20 +110,24 @@ class Tracker:
     (``Tracker("s0", meanshift__iterations=10, kalman__model="ca")``), Python (or NumPy)
     values checked as a config file's are; ``config`` None is the default config. Results are
     :class:`FrameResult`: ``box`` (None while lost), ``state``, ``score``, ``extras`` and, for
-    the multi-target configs (s3, s4_multi), ``tracks``. A result keeps its decoded frame only
+    the multi-target configs (s3, s4_multi), ``tracks``, numbered from ``first_track_id`` (1 to
+    :data:`~vtrack.params.MAX_TRACK_ID`, default 1; a ConfigError for one other than 1 with a
+    single-target config, which numbers no tracks). A result keeps its decoded frame only
     with ``keep_frames=True`` (a copy of its pixels: a raw reader's or a camera's buffer
     refilled later leaves it as it was), so memory stays flat over any number of frames.
     """
 
     def __init__(self, config: str | os.PathLike[str] | Config | None = DEFAULT_CONFIG, *,
                  seed: int = 0, fps: float = 30.0, keep_frames: bool = False,
-                 **params: Any) -> None:
+                 first_track_id: int = 1, **params: Any) -> None:
         chain = config if isinstance(config, Config) else load_config(config)
         if params:
             chain = chain.with_values(_by_parameter(params))
         chain.check_files_named()
         self.config = chain
         self.seed = check_seed(seed)
+        self.first_track_id = check_first_track_id(first_track_id, chain.multi_target,
+                                                   chain.name)
         self.fps = checked_fps(fps, "fps")
         self.keep_frames = check_flag(keep_frames, "keep_frames")
         self._pipeline: Pipeline | None = None
@@ -135,7 +139,7 @@ class Tracker:
     @property
     def multi_target(self) -> bool:
         """True for the configs that detect and return several tracks (no initial box)."""
-        return any(stage.multi_target for stage in self.config.stage_classes())
+        return self.config.multi_target
 
     @property
     def needs_init_box(self) -> bool:
@@ -143,7 +147,7 @@ class Tracker:
         return any(stage.needs_init_box for stage in self.config.stage_classes())
 
     def _new_pipeline(self) -> Pipeline:
-        return Pipeline(self.config.build(), seed=self.seed)
+        return Pipeline(self.config.build(), seed=self.seed, first_track_id=self.first_track_id)
 
     def init(self, frame: FrameLike, box: Box | Any = None) -> FrameResult:
         """Start tracking at ``frame`` with the target's box ``(x, y, w, h)`` in it (None for

@@ -41,6 +41,7 @@ from vtrack.params import (
     MAX_SECONDS,
     MAX_SEED,
     MAX_TIMEOUT_S,
+    MAX_TRACK_ID,
     MAX_WAIT_S,
     MIN_TIMEOUT_S,
     X264_PRESETS,
@@ -140,6 +141,12 @@ def default_out_dir(input_spec: str, config: str | None = None,
               help="x264 quality of annotated.mp4 (lower is better and larger).")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
+@click.option("--first-id", "first_id", type=WholeNumber(1, MAX_TRACK_ID), default=1,
+              show_default=True, metavar="N",
+              help=f"Number a multi-target config's tracks (s3, s4_multi, fixed_camera ...) "
+                   f"from N (1 to {MAX_TRACK_ID}), so that a run taken up again after an "
+                   "interruption (the --first-id its hint gives) uses none of the first run's "
+                   "ids. Refused by a single-target config, which numbers no tracks.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
               f"(as track.csv numbers them; at most {MAX_FRAME_NUMBER}) or a time T like ffmpeg "
@@ -169,7 +176,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
             input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
             live: bool | None, follow_s: float | None, video_out: str | None,
-            crf: int, seed: int, start: tuple[int, float | None],
+            crf: int, seed: int, first_id: int, start: tuple[int, float | None],
             max_frames: tuple[int | None, float | None] | None,
             stream: str | None,
             stats_period: float, quiet: bool) -> None:
@@ -185,6 +192,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     from vtrack.evaluate.groundtruth import gt_origin_of, parse_box, target_of
     from vtrack.io import RawFormat
     from vtrack.io.video import FFmpegInput
+    from vtrack.pipeline import check_first_track_id
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
     if video_out is not None and (no_video or "://" not in video_out):
@@ -201,6 +209,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     _refuse_pix_fmt_without_raw(raw_size is not None)
     config_spec = config_specs[0] if config_specs else None
     config = load_config(config_spec).with_overrides(list(overrides))
+    check_first_track_id(first_id, config.multi_target, config.name, "--first-id")
     # a bad --fps is refused by RawFormat.parse (raw input) or open_source (image folders)
     raw = RawFormat.parse(raw_size, pix_fmt, 30.0 if fps is None else fps) if raw_size else None
     target = target_of(input_spec, gt_path)  # SEQ --gt SEQ/groundtruth_rect.N.txt: SEQ-N
@@ -217,6 +226,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         preset=preset,
         crf=crf,
         seed=seed,
+        first_track_id=first_id,
         max_frames=None if max_frames is None else max_frames[0],
         max_s=None if max_frames is None else max_frames[1],
         start=start[0],
@@ -260,8 +270,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             _say(error_line(f"{summary.error}; partial results in {summary.out_dir}"))
             if summary.resume is not None:
                 _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
-                               f"the same command with {summary.resume} and another --out"
-                               + _ids_again(summary)))
+                               f"the same command with {summary.resume} and another --out"))
         elif summary.status != STATUS_COMPLETE:
             _say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"))
     if ending.code:
@@ -280,15 +289,6 @@ def _named_folder(config_spec: str | None, config: Config) -> str:
         return ""
     return (f" (the folder is named after the config's name, {config.name!r} in "
             f"{config_spec}: give the config a name of its own)")
-
-
-def _ids_again(summary: RunSummary) -> str:
-    """What the resume hint of a multi-target run adds: the resumed run numbers its tracks
-    from 1 again, so its ids are not this run's (add this run's highest to join them)."""
-    if summary.last_track_id is None:
-        return ""
-    return (f" (its track ids start again at 1: add {summary.last_track_id}, this run's "
-            "highest, to them to join the two tracks.csv)")
 
 
 def _exit_code(summary: RunSummary) -> int:

@@ -68,7 +68,7 @@ class TrackStatus(StrEnum):
 
 #: Context fields the pipeline itself provides before the first stage runs.
 PIPELINE_PROVIDES = frozenset({"frame", "clock", "box", "prediction", "state", "rng",
-                               "search_growth"})
+                               "search_growth", "first_track_id"})
 
 #: Fields computed from another field: a stage that sets the key field without setting these
 #: leaves them describing an older value, so later stages may not read them (a new search
@@ -82,7 +82,8 @@ DERIVED: dict[str, frozenset[str]] = {
 
 @dataclass
 class Track:
-    """One target of a multi-target tracker, as written to ``tracks.csv`` (ids start at 1)."""
+    """One target of a multi-target tracker, as written to ``tracks.csv`` (ids start at the
+    run's first track id, 1 unless it says otherwise: :attr:`TrackContext.first_track_id`)."""
 
     id: int
     box: Box
@@ -172,6 +173,10 @@ class TrackContext:
     clock: FrameClock = field(init=False)
     #: Seed of :attr:`rng`.
     seed: int = 0
+    #: The id a multi-target tracker gives the first track it creates, the next ones following
+    #: on (1 unless the run says otherwise: ``--first-id``, a resumed run's ids after the first
+    #: run's); :func:`vtrack.stages.detect.new_track_ids` counts from it.
+    first_track_id: int = 1
     #: Current estimate of the target box (single-target). The pipeline's output for the frame.
     box: Box | None = None
     #: Where this frame's search starts: set by a predictor on the previous frame (None: use box).

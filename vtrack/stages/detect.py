@@ -19,7 +19,9 @@ image) and ``ctx.likelihood`` (the foreground: 0 = background, anything else = f
 from __future__ import annotations
 
 import functools
+import itertools
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Protocol, TypeVar
 
@@ -92,6 +94,13 @@ def track_state(confirmed: bool, updated: bool) -> TrackStatus:
     if not confirmed:
         return TrackStatus.TENTATIVE
     return TrackStatus.CONFIRMED if updated else TrackStatus.COASTING
+
+
+def new_track_ids(ctx: TrackContext) -> Iterator[int]:
+    """The ids a multi-target stage gives the tracks it creates, in order, none twice: the
+    run's first track id (:attr:`TrackContext.first_track_id`, 1 unless the run says
+    otherwise), then each one more."""
+    return itertools.count(ctx.first_track_id)
 
 
 class _Coasting(Protocol):

@@ -43,15 +43,15 @@ subtraction is off by several pixels, a small hot spot's by one.
 
 Output (``ctx.tracks``): every track; ``confirmed`` (confirmed and measured this frame: written
 to ``tracks.csv`` and drawn), ``coasting`` or ``tentative``; the box is the filtered centre
-with the smoothed size, the confidence the score of its last detection. Ids start at 1, one per
-track created, never reused. ``ctx.target_shape``: the median aspect and area of the boxes
-confirmed tracks were measured with (the last ``base.SHAPE_SAMPLES``), for ``group_blobs``.
+with the smoothed size, the confidence the score of its last detection. Ids start at the run's
+first track id (1 unless it gives another: ``--first-id``), one per track created, never
+reused. ``ctx.target_shape``: the median aspect and area of the boxes confirmed tracks were
+measured with (the last ``base.SHAPE_SAMPLES``), for ``group_blobs``.
 Work per frame: ``O(T M)`` for ``T <= max_tracks`` tracks and ``M`` detections, and an assignment.
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -62,7 +62,7 @@ from vtrack.geometry import Box, iou_matrix
 from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
 from vtrack.stages.base import ShapeSamples, Stage, Track, TrackContext, register
-from vtrack.stages.detect import Detection, fewest_misses, track_state
+from vtrack.stages.detect import Detection, fewest_misses, new_track_ids, track_state
 
 #: The cost of a pair that may not match (above any allowed pair's: at most 1 + 1).
 _FORBIDDEN = 1e6
@@ -163,7 +163,7 @@ class ByteTracks(Stage):
               "weight of a new measurement in a track's smoothed width and height "
               "(1: the last detection's)", min=0.0, max=1.0),
     )
-    requires = frozenset({"detections"})
+    requires = frozenset({"detections", "first_track_id"})
     provides = frozenset({"tracks", "target_shape"})
     multi_target = True
     needs_init_box = False
@@ -180,7 +180,7 @@ class ByteTracks(Stage):
         """Forget any previous run (no track, nothing learnt), then track this frame."""
         self._model: MotionModel = motion_model(self.model, self.q, 1.0, self.p0, g=0.0)
         self._tracks: list[_Track] = []
-        self._ids = itertools.count(1)
+        self._ids = new_track_ids(ctx)
         self._shapes = ShapeSamples()
         ctx.target_shape = None
         self.step(ctx)

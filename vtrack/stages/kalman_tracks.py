@@ -26,14 +26,14 @@ which is what S4's method becomes with several targets:
 Output (``ctx.tracks``): one :class:`~vtrack.stages.base.Track` per track, the filtered centre
 with the last measured size, confidence = the share of its frames with a measurement, state
 ``confirmed`` (confirmed and updated this frame: written to ``tracks.csv``), ``coasting``
-(confirmed, predicted only) or ``tentative``. Ids start at 1, one per track created, never
-reused. Work per frame: ``O(T M)`` distances (NumPy) for ``T`` tracks and ``M`` measurements,
-one 4x4 filter step per track.
+(confirmed, predicted only) or ``tentative``. Ids start at the run's first track id (1 unless
+it gives another: ``--first-id``), one per track created, never reused. Work per frame:
+``O(T M)`` distances (NumPy) for ``T`` tracks and ``M`` measurements, one 4x4 filter step per
+track.
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +46,7 @@ from vtrack.stages.detect import (
     Detection,
     centroids,
     fewest_misses,
+    new_track_ids,
     pairwise_distances,
     track_state,
 )
@@ -119,7 +120,7 @@ class KalmanTracks(Stage):
             min=1, max=1000,
         ),
     )
-    requires = frozenset({"detections"})
+    requires = frozenset({"detections", "first_track_id"})
     provides = frozenset({"tracks"})
     multi_target = True
     needs_init_box = False
@@ -128,7 +129,7 @@ class KalmanTracks(Stage):
         """Forget any previous run (no track), then track this frame."""
         self._model: MotionModel = motion_model(self.model, self.q, self.r, self.p0, g=self.g)
         self._tracks: list[_KalmanTrack] = []
-        self._ids = itertools.count(1)
+        self._ids = new_track_ids(ctx)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:

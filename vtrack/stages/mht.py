@@ -37,10 +37,11 @@ The ``mht`` stage takes the measurements of a detecting stage (``ctx.detections`
 The output (``ctx.tracks``) is the best hypothesis: one :class:`~vtrack.stages.base.Track` per
 track with its ``P_R`` as confidence and state ``confirmed`` (confirmed and updated this frame:
 written to ``tracks.csv``), ``coasting`` (confirmed, no measurement this frame) or
-``tentative``. Track ids start at 1, are given when a track survives its first frame, and are
-never reused. A branch coasting on its prediction wholly outside the frame lives on (it may
-meet its target again) but is not reported (as ``kalman_tracks`` and ``byte_tracks``: a track
-wholly outside the frame is never reported).
+``tentative``. Track ids start at the run's first track id (1 unless it gives another:
+``--first-id``), are given when a track survives its first frame, and are never reused. A
+branch coasting on its prediction wholly outside the frame lives on (it may meet its target
+again) but is not reported (as ``kalman_tracks`` and ``byte_tracks``: a track wholly outside
+the frame is never reported).
 
 Bounded work per frame: at most ``max_branches`` + 1 children per branch, ``max_hypotheses``
 hypotheses of at most ``max_tracks`` tracks each (however long ``miss``, ``delete`` and
@@ -64,7 +65,13 @@ import numpy as np
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
-from vtrack.stages.detect import Detection, centroids, pairwise_distances, track_state
+from vtrack.stages.detect import (
+    Detection,
+    centroids,
+    new_track_ids,
+    pairwise_distances,
+    track_state,
+)
 
 #: Association cost of a frame without measurement: as if the measurement sat on the gate's edge.
 _COAST_COST = 1.0
@@ -249,7 +256,7 @@ class MultipleHypothesis(Stage):
             min=1, max=1000,
         ),
     )
-    requires = frozenset({"detections"})
+    requires = frozenset({"detections", "first_track_id"})
     provides = frozenset({"tracks"})
     multi_target = True
     needs_init_box = False
@@ -257,7 +264,7 @@ class MultipleHypothesis(Stage):
     def start(self, ctx: TrackContext) -> None:
         """Forget any previous run: no track, one empty hypothesis; then track this frame."""
         self._hypotheses: list[_Hypothesis] = [()]
-        self._ids = itertools.count(1)
+        self._ids = new_track_ids(ctx)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
