@@ -266,6 +266,25 @@ def test_pipeline_checks_its_frames_and_first_box_as_the_tracker_does(config: st
         track(frames, vtrack.Box(0, 0, 1e9, 1e9))
 
 
+def test_pipeline_process_before_begin_says_to_begin_or_begins_a_detecting_chain() -> None:
+    """Pipeline(...).process(frame) before begin() raised AttributeError: 'Pipeline' object has
+    no attribute '_shape'; so did process() after a begin(None) refused for s0."""
+    frame = vtrack.BgrFrame(0, 0.0, _red_block(1)[0])
+    pipeline = vtrack.Pipeline(vtrack.load_config("s0").build())
+    with pytest.raises(ConfigError, match=r"^pipeline: no track begun: call begin\(\(x, y, w, "
+                       r"h\)\) with the target's box in the first frame, then process\(frame\)$"):
+        pipeline.process(frame)
+    with pytest.raises(ConfigError, match="needs an initial box"):
+        pipeline.begin(None)
+    with pytest.raises(ConfigError, match="no track begun"):
+        pipeline.process(frame)
+    pipeline.begin((50, 40, 40, 30))
+    assert pipeline.process(frame).box == vtrack.Box(50, 40, 40, 30)
+    detecting = vtrack.Pipeline(vtrack.load_config("s4_multi").build())  # begins as update()
+    then = vtrack.BgrFrame(1, 1 / 30, _red_block(1)[0])
+    assert [detecting.process(f).index for f in (frame, then)] == [0, 1]
+
+
 def test_frame_constructors_refuse_what_the_tracker_refuses_with_its_message() -> None:
     """BgrFrame took float32 pixels (and failed later: "no pixel of the initial box passes
     the hue stage's mask"), GrayFrame an HxWx3 array, and either a time of NaN."""

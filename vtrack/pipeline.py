@@ -116,6 +116,15 @@ class Pipeline:
                                                    "this chain")
         self.stage_seconds = {s.name: 0.0 for s in stages}
         self.frames_done = 0
+        #: Whether :meth:`begin` started a track (a chain that needs a box cannot start without)
+        self._begun = False
+        self._init_box: Box | None = None
+        self._ctx: TrackContext | None = None
+        #: (width, height, grey) of the track's first frame: every later one must match
+        self._shape: tuple[int, int, bool] | None = None
+        #: the clock's whole frame at the first of the frames in a row whose box lies entirely
+        #: outside the frame (None: the last frame's box was not; OFF_FRAME_FRAMES)
+        self._off_since: int | None = None
 
     @property
     def multi_target(self) -> bool:
@@ -165,22 +174,24 @@ class Pipeline:
         if init_box is None and self.needs_init_box:
             raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
         self._init_box = None if init_box is None else as_box(init_box)
-        self._ctx: TrackContext | None = None
-        #: (width, height, grey) of the track's first frame: every later one must match
-        self._shape: tuple[int, int, bool] | None = None
-        #: the clock's whole frame at the first of the frames in a row whose box lies entirely
-        #: outside the frame (None: the last frame's box was not; OFF_FRAME_FRAMES)
-        self._off_since: int | None = None
+        self._ctx, self._shape, self._off_since, self._begun = None, None, None, True
 
     def process(self, frame: Frame) -> FrameResult:
         """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
-        else) and return what is said about it. InputError for a frame of another size than
-        the track's first, or grey after colour (or colour after grey): its stages' windows,
-        models and boxes are those of the first frame's pictures."""
+        else) and return what is said about it. Before :meth:`begin`, a chain that starts from
+        the target's box is a ConfigError saying to call it, and a detecting one begins its
+        track here (as :meth:`vtrack.Tracker.update` does). InputError for a frame of another
+        size than the track's first, or grey after colour (or colour after grey): its stages'
+        windows, models and boxes are those of the first frame's pictures."""
         if not isinstance(frame, Frame):
             raise TypeError(f"Pipeline takes vtrack.Frame objects (BgrFrame, GrayFrame, "
                             f"I420Frame), got {type(frame).__name__}; vtrack.Tracker and "
                             "vtrack.track also take NumPy images and av.VideoFrame")
+        if not self._begun:  # as Tracker.update: a detecting chain may start here
+            if self.needs_init_box:
+                raise ConfigError("pipeline: no track begun: call begin((x, y, w, h)) with the "
+                                  "target's box in the first frame, then process(frame)")
+            self.begin(None)
         self._check_shape(frame)
         timer = time.perf_counter
         ctx = self._ctx
