@@ -169,6 +169,23 @@ def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: 
         vtrack.open_source(raw, raw=96)
 
 
+def test_open_source_checks_live_as_a_run_request_does(tmp_path: Path) -> None:
+    """open_source(clip, live="no") read the file live ("no" is true to Python): a slow reader
+    was handed 24 of 151 frames; open_source(clip, bogus=1) named source_opener()."""
+    clip = write_video(make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30),
+                       tmp_path / "clip.mp4")
+    for given in ("no", "yes", 2):
+        with pytest.raises(ConfigError, match=r"^live .*: must be True or False \(or the "
+                           r"integers 1 or 0\)$"):
+            vtrack.open_source(clip, live=given)
+    for given in (0, False):
+        with vtrack.open_source(clip, live=given) as source:
+            assert sum(1 for _ in source) == 10
+    with pytest.raises(TypeError, match=r"open_source\(\) got an unexpected keyword argument "
+                       "'bogus'"):
+        vtrack.open_source(clip, bogus=1)  # type: ignore[call-arg]
+
+
 @pytest.mark.parametrize(("given", "said"), [
     ({"raw": "96x72", "pix_fmt": "gray", "fps": 0}, "fps 0: must be a frame rate from 0.01"),
     ({"raw": "96x72", "pix_fmt": "bgra"}, "pix_fmt 'bgra': expected one of bgr24, rgb24"),

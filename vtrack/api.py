@@ -22,7 +22,8 @@ from vtrack.io import inputs
 from vtrack.io.images import DEFAULT_FPS
 from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
-from vtrack.io.video import checked_ffmpeg
+from vtrack.io.video import FFmpegInput, checked_ffmpeg
+from vtrack.params import check_flag
 from vtrack.pipeline import FrameResult, first_box_refused
 from vtrack.request import RunRequest
 from vtrack.tracker import Tracker, shape_text
@@ -116,23 +117,27 @@ def track(frames: FrameInput,
 
 def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None, *,
                 pix_fmt: str | None = None, fps: float | None = None,
-                **options: Any) -> Source:
+                ffmpeg: FFmpegInput | None = None, live: bool | None = None) -> Source:
     """:func:`vtrack.io.open_source` taking what a user writes: ``spec`` a ``str`` or
     ``pathlib.Path``; ``raw`` a :class:`RawFormat` or, as ``vtrack run --raw`` takes it,
     ``"WIDTHxHEIGHT"`` of ``pix_fmt`` frames (default bgr24) at ``fps`` (default 30);
-    ``options`` (``ffmpeg``, ``live``) as there. ConfigError, with ``vtrack run``'s message,
+    ``ffmpeg`` and ``live`` as there (``live`` True, False or 1, 0, as RunRequest's; None:
+    live for stream URLs and devices). ConfigError, with ``vtrack run``'s message,
     for a raw format vtrack cannot read, naming this function's arguments: ``raw``,
-    ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``), or an
+    ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``), for a
+    ``live`` of another kind (``"no"`` is true to Python, not the answer given), or an
     ``ffmpeg`` wait out of its range (:meth:`~vtrack.io.video.FFmpegInput.checked`)."""
-    return _source_opener(spec, raw, pix_fmt=pix_fmt, fps=fps, **options)()
+    return _source_opener(spec, raw, pix_fmt=pix_fmt, fps=fps, ffmpeg=ffmpeg, live=live)()
 
 
 def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = None, *,
                    pix_fmt: str | None = None, fps: float | None = None,
-                   **options: Any) -> Callable[[], Source]:
+                   ffmpeg: FFmpegInput | None = None,
+                   live: bool | None = None) -> Callable[[], Source]:
     """:func:`open_source`'s arguments checked as it checks them, with the cheap checks of
     :func:`vtrack.io.inputs.source_opener` (a local path exists and can be read, a folder has
     an image); returns the function that opens the input."""
+
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps,
                               ("raw", "pix_fmt", "fps"))
@@ -147,10 +152,12 @@ def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = N
     if not isinstance(spec, str | bytes | os.PathLike):
         raise TypeError(f"spec: expected a path (str or pathlib.Path), a URL or a device, got "
                         f"{type(spec).__name__}")
-    if options.get("ffmpeg") is not None:  # (one made in Python: its waits as RunRequest
-        options["ffmpeg"] = checked_ffmpeg(options["ffmpeg"])  # checks them; None: the default)
+    if ffmpeg is not None:  # (one made in Python: its waits as RunRequest checks them)
+        ffmpeg = checked_ffmpeg(ffmpeg)
+    if live is not None:  # (a RunRequest's is checked as it is made)
+        live = check_flag(live, "live")
     return inputs.source_opener(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
-                                **options)
+                                ffmpeg=ffmpeg, live=live)
 
 
 def _path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:
