@@ -724,6 +724,16 @@ def test_a_parameter_given_twice_to_the_tracker_is_refused() -> None:
     assert dict(tracker.config.stages)["meanshift"]["iterations"] == 3
 
 
+def test_a_keyword_that_names_no_stage_parameter_is_said_as_a_keyword() -> None:
+    """Tracker("s0", iterations=3) (or a misspelt kepp_frames=True) said "iterations=3:
+    expected stage.param=value": --set's syntax, not the keyword a Python caller writes."""
+    for keyword, value in (("iterations", 3), ("kepp_frames", True)):
+        with pytest.raises(ConfigError, match=rf"^{keyword}={value}: not an argument of "
+                           r"Tracker\(\); a stage's parameter is given as stage__param=value "
+                           r"\(e.g. meanshift__iterations=10\)$"):
+            vtrack.Tracker("s0", **{keyword: value})
+
+
 def test_the_readme_scorer_gives_the_metrics_vtrack_run_records(tmp_path: Path) -> None:
     """README's library section scores a run with vtrack.evaluate (read_boxes, summarize): the
     numbers are run.json's for the same frames (run scores the boxes as track.csv writes them,

@@ -19,7 +19,7 @@ from vtrack.errors import ConfigError
 from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
-from vtrack.params import check_flag, check_seed, shown
+from vtrack.params import check_flag, check_seed, cut, shown
 from vtrack.pipeline import FrameResult, Pipeline, check_first_track_id
 
 #: A frame as :meth:`Tracker.update` takes it.
@@ -91,11 +91,17 @@ def _decoded(item: Any, index: int, untimed_s: float) -> Frame:
 def _by_parameter(params: dict[str, Any]) -> dict[str, Any]:
     """``params`` keyed ``"stage.param"`` (``stage__param`` is written so); ConfigError for one
     parameter given twice (``meanshift__iterations=3`` and ``**{"meanshift.iterations": 2}``),
-    which would leave one value unused without a word."""
+    which would leave one value unused without a word, and for a keyword that names no stage
+    parameter (``Tracker("s0", iterations=3)``, a misspelt ``kepp_frames=True``), said as
+    the keyword it is."""
     values: dict[str, Any] = {}
     given: dict[str, str] = {}
     for key, value in params.items():
         name = key.replace("__", ".", 1).strip()
+        if "." not in name:
+            raise ConfigError(f"{cut(key)}={shown(value)}: not an argument of Tracker(); "
+                              "a stage's parameter is given as "
+                              "stage__param=value (e.g. meanshift__iterations=10)")
         if name in given:
             raise ConfigError(f"{name}: given twice ({given[name]}={shown(params[given[name]])}, "
                               f"{key}={shown(value)}); give it once")
