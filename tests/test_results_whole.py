@@ -60,6 +60,23 @@ def test_a_cut_track_csv_is_left_out_with_a_warning(run_dir: Path, tmp_path: Pat
     assert f"{FRAMES} frames" in stderr or "bytes" in stderr, stderr
 
 
+def test_a_track_csv_whose_frames_do_not_increase_is_left_out(run_dir: Path,
+                                                               tmp_path: Path) -> None:
+    """A track.csv whose row of frame 5 was renumbered 9 (same size, same rows) was scored
+    with every later row shifted 4 frames off its ground truth (s0's AUC 0.92 read as 0.12),
+    its run said to cover frames 0..43 of a 40-frame run."""
+    copy = tmp_path / "run"
+    copy.mkdir()
+    (copy / "run.json").write_bytes((run_dir / "run.json").read_bytes())
+    data = (run_dir / "track.csv").read_text()
+    assert "\n5," in data
+    (copy / "track.csv").write_text(data.replace("\n5,", "\n9,", 1))
+    code, stderr = report(copy, tmp_path / "rep")
+    assert code != 0  # the only run is left out: nothing to report
+    assert (f"left out: {copy.resolve() / 'track.csv'}: not a vtrack track.csv (frame 6 "
+            "after frame 9: its frame numbers do not increase)") in stderr, stderr
+
+
 @pytest.mark.parametrize("damage", [
     {"config": 5}, {"input": "clip.mp4"}, {"frames": 1e999}, {"timing": []}, {"summary": "x"},
     "[" * 100_000 + "]" * 100_000, [1, 2], {"timing": {"fps": "fast"}},

@@ -340,14 +340,19 @@ def _start(record: dict[str, Any]) -> int:
 def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dict[str, str]]:
     """One row per frame from ``start`` on: frames the input skipped (damaged, no row in
     ``track.csv``) get an empty row, a frame without a box or a score, so rows line up with the
-    ground truth."""
+    ground truth. ValueError for frame numbers that do not increase from ``start`` (rows
+    moved or edited: vtrack writes each frame once, in order), which would shift every later
+    row off its frame."""
     if all(row.get("frame") == str(start + i) for i, row in enumerate(rows)):
         return rows
     filled: list[dict[str, str]] = []
     for row in rows:
-        frame = int(row["frame"])
+        frame, due = int(row["frame"]), start + len(filled)
+        if frame < due:
+            after = f"after frame {due - 1}" if filled else f"before the first, {start}"
+            raise ValueError(f"frame {frame} {after}: its frame numbers do not increase")
         filled += [{"frame": str(i), "state": metrics.SKIPPED, "x": "", "overlap": "",
-                    "center_error": ""} for i in range(start + len(filled), frame)]
+                    "center_error": ""} for i in range(due, frame)]
         filled.append(row)
     return filled
 
