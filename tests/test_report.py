@@ -168,6 +168,36 @@ def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
             "--gt does not replace") in result.stderr.splitlines()
 
 
+def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said
+    unused as 'already scored with its own ground truth (good), which --gt does not replace',
+    the file given just before it, not the run's; two plain `--gt good --gt other` scored every
+    run with the first and never read the second, exit 0 and not a word."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    run = tmp_path / "run"
+    box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
+    assert vtrack("run", str(clip.path), "--init", box, "--no-video", "--quiet", "--out",
+                  str(run)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    name = clip.path.stem
+    twice = vtrack("report", str(run), "--gt", f"{name}={clip.gt}", "--gt", f"{name}={other}",
+                   "--out", str(tmp_path / "r"))
+    assert twice.exit_code == 2 and twice.stderr.splitlines() == [
+        f"vtrack: error: --gt {name}={other}: input {name} has its ground truth already (--gt "
+        f"{name}={clip.gt}); give one file per input"], twice.stderr
+    plain = vtrack("report", str(run), "--gt", str(clip.gt), "--gt", str(other), "--out",
+                   str(tmp_path / "r"))
+    assert plain.exit_code == 2 and plain.stderr.splitlines() == [
+        f"vtrack: error: --gt {other}: a second ground truth for every run (--gt {clip.gt} is "
+        "the first); give one --gt FILE, or --gt INPUT=FILE for each input"], plain.stderr
+    assert not (tmp_path / "r").exists()
+    mixed = vtrack("report", str(run), "--gt", str(other), "--gt", f"{name}={clip.gt}", "--out",
+                   str(tmp_path / "r"))  # one plain, one per input: the input's own is taken
+    assert mixed.exit_code == 0, mixed.stderr
+
+
 def test_runs_of_one_input_scored_against_different_ground_truth_are_warned_of(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Two configs of one clip, one run with its ground truth and one with a file whose boxes

@@ -29,7 +29,8 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
               type=NonEmptyText("a ground-truth file or INPUT=FILE"),
               help="Ground truth for single-target runs made without it (their track.csv "
                    "boxes are scored against it). INPUT=FILE gives the file of one input "
-                   "(its name as the report shows it, or its path); repeat for several. A run "
+                   "(its name as the report shows it, or its path); repeat for several (one "
+                   "file per input, one plain FILE). A run "
                    "whose frame count differs from the file's boxes is not scored (a warning "
                    "names it).")
 @gt_origin_option()

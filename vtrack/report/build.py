@@ -331,6 +331,24 @@ def _refuse_batch_folder(out_dir: Path) -> None:
                           "for the report")
 
 
+def _refuse_two_files_for_one_input(truths: Sequence[GroundTruth]) -> None:
+    """InputError for two ``--gt`` files meant for the same runs: two plain ``--gt FILE`` (every
+    run would take the first: the second is never read) or two ``--gt INPUT=FILE`` naming one
+    INPUT alike (the second would be said to have been replaced by the first)."""
+    seen: dict[str | None, GroundTruth] = {}
+    for truth in truths:
+        earlier = seen.setdefault(truth.input, truth)
+        if earlier is truth:
+            continue
+        if truth.input is None:
+            raise InputError(f"--gt {truth.path}: a second ground truth for every run (--gt "
+                             f"{earlier.path} is the first); give one --gt FILE, or --gt "
+                             "INPUT=FILE for each input")
+        raise InputError(f"--gt {truth.input}={truth.path}: input {truth.input} has its "
+                         f"ground truth already (--gt {earlier.input}={earlier.path}); give "
+                         "one file per input")
+
+
 def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
     """The warning for ``--gt INPUT=FILE`` that scored no run: saying, when it is so, that
     runs of that input were already scored with the ground truth they recorded (which
@@ -365,6 +383,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
     truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
+    _refuse_two_files_for_one_input(truths)
     warnings: list[str] = still_written(results)
     runs: list[RunResult] = []
     for folder in run_folders(results):
