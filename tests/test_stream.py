@@ -205,6 +205,31 @@ def test_a_stream_file_holding_lines_is_replaced_only_with_overwrite(tmp_path: P
     assert lines.read_bytes().count(b"\n") == 10
 
 
+def test_a_run_refused_at_its_first_frame_leaves_the_stream_file_as_it_was(
+        tmp_path: Path) -> None:
+    """`vtrack run grey.mp4 -c s0 -o out -y --stream lines.jsonl --overwrite` (s0 refuses a
+    grey target at its first frame, exit 2) left out/ holding the earlier run's 10 frames,
+    as promised, but emptied lines.jsonl, that run's lines; a new --stream file was left
+    behind empty."""
+    scene = make_scene("grey", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "grey.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    lines, out = tmp_path / "lines.jsonl", tmp_path / "out"
+    args = ["run", str(clip), "--init", box, "--no-video", "--out", str(out), "-y"]
+    assert _vtrack(*args, "--stream", str(lines)).returncode == 0
+    first, record = lines.read_bytes(), (out / "run.json").read_bytes()
+    assert first.count(b"\n") == 10
+    refused = _vtrack(*args, "-c", "s0", "--stream", str(lines), "--overwrite")
+    assert refused.returncode == 2 and "no pixel of the initial box" in refused.stderr
+    assert (out / "run.json").read_bytes() == record and lines.read_bytes() == first
+    new = tmp_path / "new.jsonl"
+    assert _vtrack(*args, "-c", "s0", "--stream", str(new)).returncode == 2
+    assert not new.exists()
+    assert _vtrack(*args, "--frames", "3", "--stream", str(lines), "--overwrite").returncode == 0
+    assert lines.read_bytes().count(b"\n") == 3 and lines.read_bytes() == first[:len(
+        lines.read_bytes())]  # emptied, then this run's lines
+
+
 def _stalled_run(tmp_path: Path, frames: int, output: list[str], stdout: int | None) -> tuple[
         subprocess.Popen, dict]:
     """``vtrack run`` of a ``frames``-frame clip with ``output`` options whose receiver takes

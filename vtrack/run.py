@@ -1078,8 +1078,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
         out.seconds = _loop_seconds(started, wall, frames_in, source)
         out.cpu_seconds = cpu - cpu_started
         source.close()
-        if out.untouched:
-            for dropped in (csv, video):
+        if out.untouched:  # (an earlier run's --stream file too is left as it was)
+            for dropped in (csv, video, writers.stream):
                 if dropped is not None:
                     dropped.abort()
         else:

@@ -26,12 +26,13 @@ import stat
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import IO, Any
 
 from vtrack.errors import COMMAND_NAMES, OptionNames, OutputError, StreamReaderGone
 from vtrack.geometry import Box
 from vtrack.io.csvfile import as_written, box_as_written
-from vtrack.io.files import Closing, os_reason
+from vtrack.io.files import Closing, os_reason, remove_quietly
 from vtrack.io.threads import STOP_POLL_S
 from vtrack.pipeline import FrameResult
 from vtrack.stages.base import TrackStatus
@@ -84,9 +85,11 @@ class StreamWriter(Closing):
     nothing for ``stall_s`` seconds (the run must not wait for ever on a reader that stopped
     reading). A line none of which is out yet gives way to a stop (see :meth:`write`), so
     Ctrl-C or SIGTERM does not wait for ``stall_s``. A regular file whose line could not be
-    written whole (a full disk) is cut back to its last whole line. Its messages call the
-    target and the wait by ``names`` (``--stream F``, ``--timeout``; ``stream F``,
-    ``ffmpeg.timeout_s``)."""
+    written whole (a full disk) is cut back to its last whole line. A regular file it opens
+    is emptied at the first line (or at :meth:`close`), not as it is opened: a run refused
+    before its first frame (:meth:`abort`) leaves an earlier run's lines as they were, as it
+    leaves its folder. Its messages call the target and the wait by ``names`` (``--stream
+    F``, ``--timeout``; ``stream F``, ``ffmpeg.timeout_s``)."""
 
     def __init__(self, target: str, multi_target: bool, stall_s: float = 10.0,
                  names: OptionNames = COMMAND_NAMES) -> None:
@@ -96,6 +99,8 @@ class StreamWriter(Closing):
         self.multi_target = multi_target
         self.stall_s = stall_s
         self.lines = 0
+        #: Whether this writer made the file (a new one is removed by abort()).
+        self._created = target != STDOUT and not os.path.lexists(target)
         try:
             self._file: IO[bytes] = (
                 _stdout_bytes() if target == STDOUT
@@ -107,6 +112,8 @@ class StreamWriter(Closing):
         except (OSError, ValueError):  # standard output replaced by an object (a test runner)
             self._fd = None
         self._regular = self._fd is not None and _regular_file(self._fd)
+        #: A regular file opened here, not emptied yet (at the first line, or close())
+        self._to_empty = self._regular and target != STDOUT
 
     def write(self, result: FrameResult, stop: Callable[[], bool] | None = None) -> bool:
         """Write ``result``'s line; True once it is out. False, with nothing of the line
@@ -114,6 +121,10 @@ class StreamWriter(Closing):
         (a line already begun is finished). OutputError as the class says."""
         line = json.dumps(frame_record(result, self.multi_target), separators=(",", ":"))
         data = (line + "\n").encode("utf-8")
+        try:
+            self._empty()
+        except OSError as exc:
+            raise OutputError(f"{self.given}: {os_reason(exc)}") from None
         start = _line_start(self._fd) if self._regular and self._fd is not None else None
         try:
             if self._fd is None:
@@ -153,15 +164,37 @@ class StreamWriter(Closing):
             first = False
         return True
 
+    def _empty(self) -> None:
+        """Empty the regular file opened here, once (OSError)."""
+        if self._to_empty and self._fd is not None:
+            os.ftruncate(self._fd, 0)
+            os.lseek(self._fd, 0, os.SEEK_SET)
+            self._to_empty = False
+
     def close(self) -> None:
+        """Close the target, a file holding this run's lines only (none: emptied)."""
         if self.target == STDOUT:
             with contextlib.suppress(OSError, ValueError):  # the reader went away: write()
                 self._file.flush()                           # has said so already
             return
         try:
+            if not self._file.closed:
+                self._empty()
             self._file.close()
         except (OSError, ValueError) as exc:
             raise OutputError(f"{self.given}: {os_reason(exc)}") from None
+
+    def abort(self) -> None:
+        """Close without a line, for a run refused before its first frame: a file that held
+        an earlier run's lines keeps them (it was not emptied), one made here is removed. After
+        a line, as :meth:`close`."""
+        if self.lines or self.target == STDOUT:
+            self.close()
+            return
+        with contextlib.suppress(OSError, ValueError):
+            self._file.close()
+        if self._created and self._regular:
+            remove_quietly(Path(self.target))
 
 
 def _regular_file(fd: int) -> bool:
@@ -196,8 +229,8 @@ def _open_for_lines(target: str, wait_s: float, given: str, wait_name: str) -> I
         fifo = stat.S_ISFIFO(os.stat(target).st_mode)
     except OSError:
         fifo = False
-    if not fifo:
-        return open(target, "wb")  # noqa: SIM115 (closed by StreamWriter.close)
+    if not fifo:  # (not emptied here: StreamWriter empties a regular file at its first line)
+        return open(os.open(target, os.O_WRONLY | os.O_CREAT, 0o666), "wb")  # noqa: SIM115
     deadline = time.monotonic() + wait_s
     while True:
         try:
