@@ -327,6 +327,30 @@ def test_patches_cut_from_one_converted_window_are_the_frames_own(cx, cy, size) 
         assert np.array_equal(alone, cut)
 
 
+@pytest.mark.parametrize("centres, size", [(((160, 120), (175, 110)), 60),
+                                           (((2, 3), (10, 8)), 50), (((316, 237),), 80),
+                                           (((160, 120), (161, 121)), 150)])
+def test_overlapping_regions_converted_once_are_cut_as_alone(centres, size) -> None:
+    """Overlapping search regions (the last box's and the motion model's) converted once for
+    both (no more pixels than converting each) give each region the pixels it gets alone, at
+    the frame's edges and past them too. Regions far apart, or read at every k-th pixel, are
+    not converted together (that would convert more)."""
+    frame = I420Frame(0, 0.0, cv2.cvtColor(texture(240, 320, seed=6), cv2.COLOR_BGR2YUV_I420))
+    regions = [(cx, cy, size * 1.3, size) for cx, cy in centres]
+    converted = ConvertedWindow.spanning(frame, regions, 40, 30)
+    assert converted is not None
+    for cx, cy, width, height in regions:
+        assert converted.covers_region(frame, cx, cy, width, height)
+        assert np.array_equal(region_patch(frame, cx, cy, width, height, 40, 30, converted),
+                              region_patch(frame, cx, cy, width, height, 40, 30))
+    assert ConvertedWindow.spanning(frame, [(40, 40, 60, 40), (280, 200, 60, 40)], 40, 30) \
+        is None  # far apart
+    sampled = [(160, 120, 200, 150), (165, 125, 200, 150)]  # 7.5 pixels a patch pixel
+    assert ConvertedWindow.spanning(frame, sampled, 26, 20) is None
+    grey = GrayFrame(0, 0.0, np.zeros((240, 320), np.uint8))
+    assert ConvertedWindow.spanning(grey, regions, 40, 30) is None
+
+
 def test_fhog_is_the_same_on_a_process_first_call() -> None:
     """The same patch gives the same features on the first call of a fresh process as later
     (``cv2.magnitude`` did not: its first call rounded differently, and runs of one clip

@@ -10,6 +10,7 @@ past the frame's edge is filled by replicating the edge, as those trackers do.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import cv2
@@ -40,6 +41,37 @@ class ConvertedWindow(NamedTuple):
         window = _overlap(frame, cx - width / 2, cy - height / 2, width, height)
         return cls(window, frame.bgr(window))
 
+    @classmethod
+    def spanning(cls, frame: Frame, regions: Sequence[tuple[float, float, float, float]],
+                 out_w: int, out_h: int) -> ConvertedWindow | None:
+        """The frame's pixels that all of ``regions`` (each ``(cx, cy, width, height)`` as
+        :func:`region_patch` cuts it to ``out_w`` x ``out_h``) cover, converted once, when
+        that converts no more pixels than the regions would one by one (overlapping regions;
+        a region :func:`region_patch` reads every ``k``-th pixel of counts 1/``k``^2 of its
+        own); None otherwise, and for a grey frame or a far region."""
+        if isinstance(frame, GrayFrame):
+            return None
+        windows, own = [], 0
+        for cx, cy, width, height in regions:
+            if width > FAR * frame.width or height > FAR * frame.height:
+                return None
+            _, _, window = _reach(frame, cx, cy, width, height)
+            k = _subsampling(width / out_w, height / out_h, window)
+            own += window.width * window.height / (k * k)
+            windows.append(window)
+        if not windows:
+            return None
+        union = Window(min(w.x0 for w in windows), min(w.y0 for w in windows),
+                       max(w.x1 for w in windows), max(w.y1 for w in windows))
+        if union.width * union.height > own:
+            return None
+        return cls(union, frame.bgr(union))
+
+    def covers_region(self, frame: Frame, cx: float, cy: float, width: float,
+                      height: float) -> bool:
+        """Whether the frame's pixels of the region (as :meth:`around` takes it) are here."""
+        return self.covers(_overlap(frame, cx - width / 2, cy - height / 2, width, height))
+
     def covers(self, window: Window) -> bool:
         return (self.window.x0 <= window.x0 and self.window.y0 <= window.y0
                 and window.x1 <= self.window.x1 and window.y1 <= self.window.y1)
@@ -63,12 +95,10 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     ``converted`` are cut from it rather than converted again (the same values)."""
     if width > FAR * frame.width or height > FAR * frame.height:
         return _bounded_patch(frame, cx, cy, width, height, out_w, out_h)
-    x0 = _within_reach(cx - width / 2, width, frame.width)
-    y0 = _within_reach(cy - height / 2, height, frame.height)
+    x0, y0, inside = _reach(frame, cx, cy, width, height)
     # the whole pixels the region spans (past the frame too) and those of the frame it covers
     ix0, iy0 = math.floor(x0), math.floor(y0)
     ix1, iy1 = max(math.ceil(x0 + width), ix0 + 1), max(math.ceil(y0 + height), iy0 + 1)
-    inside = _overlap(frame, x0, y0, width, height)
     # A region much larger than the patch: take every k-th pixel first (k odd, at most half the
     # downscale, so an area resample still averages 2x2 or more), so a big target costs about
     # its patch, not its area.
@@ -132,6 +162,15 @@ def _bounded_patch(frame: Frame, cx: float, cy: float, width: float, height: flo
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
+
+
+def _reach(frame: Frame, cx: float, cy: float, width: float,
+           height: float) -> tuple[float, float, Window]:
+    """The top-left corner :func:`region_patch` places the region at (:func:`_within_reach`)
+    and the frame's pixels it covers there."""
+    x0 = _within_reach(cx - width / 2, width, frame.width)
+    y0 = _within_reach(cy - height / 2, height, frame.height)
+    return x0, y0, _overlap(frame, x0, y0, width, height)
 
 
 def _within_reach(start: float, size: float, extent: int) -> float:

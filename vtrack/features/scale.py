@@ -65,15 +65,18 @@ class ScaleFilter:
         self.template: np.ndarray | None = None  # (features, scales)
         self.denominator: np.ndarray | None = None
 
-    def samples(self, frame: Frame, cx: float, cy: float, width: float,
-                height: float) -> np.ndarray:
+    def samples(self, frame: Frame, cx: float, cy: float, width: float, height: float,
+                converted: ConvertedWindow | None = None) -> np.ndarray:
         """(features, scales) samples of the target centred on (cx, cy) at ``width`` x
         ``height`` times each scale factor, under the Hann window along the scales. The
         samples are laid side by side and described by one fHOG call (each is a whole number
-        of cells wide, so no cell straddles two)."""
+        of cells wide, so no cell straddles two). They are cut from ``converted`` (this
+        frame's pixels already converted) where it holds them all."""
         # the largest sample's pixels are converted once; every sample is cut from them
         largest = float(self.factors.max())
-        converted = ConvertedWindow.around(frame, cx, cy, width * largest, height * largest)
+        if converted is None or not converted.covers_region(frame, cx, cy, width * largest,
+                                                             height * largest):
+            converted = ConvertedWindow.around(frame, cx, cy, width * largest, height * largest)
         strip = np.concatenate(
             [region_patch(frame, cx, cy, width * f, height * f, self.model_w, self.model_h,
                           converted) for f in self.factors], axis=1)

@@ -42,7 +42,7 @@ from vtrack.errors import InputError
 from vtrack.features.colour import ColourHistograms, cell_response
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
-from vtrack.features.patch import region_patch
+from vtrack.features.patch import ConvertedWindow, region_patch
 from vtrack.features.scale import ScaleFilter
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
@@ -158,6 +158,9 @@ class RobustTarget:
     peak_box: Box | None = None
     #: The colour response's weight in the merged response (``robust_search``; 0: none).
     merge: float = 0.0
+    #: The frame whose pixels ``robust_model`` converted once for the frame's regions, and
+    #: those pixels (:meth:`convert`); the frame's other cuts take them where they reach.
+    converted: tuple[Frame, ConvertedWindow | None] | None = None
 
     def merged(self, response: np.ndarray, colour: np.ndarray) -> np.ndarray:
         """Staple's merge of the filter's response with the colour response (eq. 21)."""
@@ -188,11 +191,26 @@ class RobustTarget:
         ``cols x cell`` working pixels across)."""
         return self.cols * self.cell / (self.region_w * self.scale)
 
+    def convert(self, frame: Frame, centres: list[tuple[float, float]]) -> None:
+        """Convert the frame's pixels under the search regions centred on ``centres`` (at the
+        current scale) once, where that converts no more than cutting each would
+        (:meth:`ConvertedWindow.spanning`): this frame's regions, learning sample and scale
+        samples are cut from them where they reach (the same values)."""
+        width, height = self.region_w * self.scale, self.region_h * self.scale
+        self.converted = (frame, ConvertedWindow.spanning(
+            frame, [(cx, cy, width, height) for cx, cy in centres], self.cols * self.cell,
+            self.rows * self.cell))
+
+    def converted_pixels(self, frame: Frame) -> ConvertedWindow | None:
+        """The pixels :meth:`convert` converted, if it did on ``frame``."""
+        return self.converted[1] if self.converted is not None and self.converted[0] is frame \
+            else None
+
     def region(self, frame: Frame, cx: float, cy: float) -> Region:
         """The search region centred on (cx, cy) at the current scale, its patch and features."""
         width, height = self.region_w * self.scale, self.region_h * self.scale
         patch = region_patch(frame, cx, cy, width, height, self.cols * self.cell,
-                             self.rows * self.cell)
+                             self.rows * self.cell, self.converted_pixels(frame))
         return Region(cx, cy, width, height, self.factor, patch,
                       self.translation.spectrum(self.features(patch)))
 
@@ -210,7 +228,8 @@ class RobustTarget:
         if self.scale_filter is not None:
             cached = self.scale_samples
             samples = (cached[1] if cached is not None and cached[0] == box
-                       else self.scale_filter.samples(frame, box.cx, box.cy, box.w, box.h))
+                       else self.scale_filter.samples(frame, box.cx, box.cy, box.w, box.h,
+                                                      self.converted_pixels(frame)))
             self.scale_filter.learn(samples, first=first)
 
     def _learning_sample(self, frame: Frame, box: Box, first: bool) -> tuple[Region, np.ndarray]:
@@ -336,13 +355,15 @@ class RobustModel(Stage):
             centre = ctx.box
         else:
             centre = ctx.search_center
-        region = target.region(ctx.frame, centre.cx, centre.cy)
-        target.regions = [region]
+        centres = [(centre.cx, centre.cy)]
         predicted = ctx.prediction
         if (self.motion_region and predicted is not None and ctx.state != TrackState.LOST
                 and math.hypot(predicted.cx - centre.cx, predicted.cy - centre.cy)
-                > target.cell / region.factor):
-            target.regions.append(target.region(ctx.frame, predicted.cx, predicted.cy))
+                > target.cell / target.factor):
+            centres.append((predicted.cx, predicted.cy))
+        target.convert(ctx.frame, centres)
+        target.regions = [target.region(ctx.frame, cx, cy) for cx, cy in centres]
+        region = target.regions[0]
         if self.filter_redetect and (ctx.state == TrackState.LOST or target.search_wide):
             wide = target.region(ctx.frame, *_filter_peak(ctx.frame, target, centre.cx,
                                                           centre.cy))

@@ -131,7 +131,8 @@ class RobustSearch(Stage):
         target.previous_scale = target.scale
         if self.scale and target.scale_filter is not None:
             w, h = target.size
-            samples = target.scale_filter.samples(ctx.frame, cx, cy, w, h)
+            samples = target.scale_filter.samples(ctx.frame, cx, cy, w, h,
+                                                  target.converted_pixels(ctx.frame))
             ratio = target.scale_filter.ratio(samples)
             target.scale = float(np.clip(target.scale * ratio, self._min_scale, self._max_scale))
             if target.size == (w, h):
