@@ -163,6 +163,35 @@ def test_frame_never_writes_into_its_input(clip: Path, tmp_path: Path) -> None:
     assert done.returncode == 0 and (tmp_path / "stdin-frame0.png").is_file(), done.stderr
 
 
+def test_frame_replaces_an_image_already_there_only_with_overwrite(clip: Path,
+                                                                  tmp_path: Path) -> None:
+    """``vtrack frame CLIP -o f.png`` replaced an f.png already there without a word (a photo,
+    an earlier frame), where vtrack run refuses its earlier results without -y: refused in one
+    line naming the file, the file untouched; --overwrite (-y) replaces it. The default name
+    (``clip-frame0.png``) the same; an empty file is written to."""
+    out = tmp_path / "f.png"
+    out.write_bytes(b"a photo")
+    done = vtrack("frame", str(clip), "--at", "4", "-o", str(out))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: --out {out}: holds 7 bytes already; --overwrite "
+                           "(-y) replaces it\n")
+    assert out.read_bytes() == b"a photo"
+    for flag in ("-y", "--overwrite"):
+        done = vtrack("frame", str(clip), "--at", "4", "-o", str(out), flag)
+        assert done.returncode == 0, done.stderr
+        assert cv2.imread(str(out)).shape == (H, W, 3)
+    assert vtrack("frame", str(clip), cwd=tmp_path).returncode == 0
+    named = tmp_path / f"{clip.stem}-frame0.png"
+    before = named.read_bytes()
+    done = vtrack("frame", str(clip), "--at", "0", "--no-grid", cwd=tmp_path)
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: {named.name}: holds {len(before)} bytes already; "
+                           "--overwrite (-y) replaces it\n")
+    assert named.read_bytes() == before
+    (tmp_path / "empty.png").touch()
+    assert vtrack("frame", str(clip), "-o", str(tmp_path / "empty.png")).returncode == 0
+
+
 class Select:
     """``vtrack select`` running in a subprocess; ``url`` is the page it printed."""
 

@@ -53,7 +53,7 @@ def test_a_failed_frame_keeps_the_image_that_was_there(tmp_path: Path) -> None:
     assert vtrack("frame", "in.mp4", "-o", "fr/a.png", cwd=tmp_path).returncode == 0
     before = snapshot(tmp_path / "fr")
     assert len(before["a.png"]) > LIMIT
-    one_error(limited("frame", "in.mp4", "--at", "5", "-o", "fr/a.png", cwd=tmp_path),
+    one_error(limited("frame", "in.mp4", "--at", "5", "-o", "fr/a.png", "-y", cwd=tmp_path),
               "fr/a.png")
     assert snapshot(tmp_path / "fr") == before  # the good image whole, no temporary file left
 

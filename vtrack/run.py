@@ -26,7 +26,6 @@ import math
 import os
 import platform
 import signal
-import stat
 import sys
 import time
 from collections import Counter, deque
@@ -78,6 +77,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.csvfile import box_as_written, scores_as_written
+from vtrack.io.files import refuse_replacing_file
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
@@ -767,15 +767,8 @@ def _refuse_replacing_stream(stream: Path | None, names: OptionNames) -> None:
     """OutputError when ``--stream`` names a file that holds something (an earlier run's
     lines, or anything else): replaced only with ``--overwrite`` (both called by ``names``).
     A pipe, a device or an empty file is written to as it is."""
-    if stream is None:
-        return
-    try:
-        held = os.stat(stream)
-    except OSError:
-        return
-    if stat.S_ISREG(held.st_mode) and held.st_size > 0:
-        raise OutputError(f"{names.stream} {stream}: holds {plural(held.st_size, 'byte')} "
-                          f"already; {names.overwrite} replaces it")
+    if stream is not None:
+        refuse_replacing_file(stream, f"{names.stream} {stream}", names.overwrite)
 
 
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:

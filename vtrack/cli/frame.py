@@ -20,12 +20,16 @@ from vtrack.cli._signals import stopping_as_interrupted
               "them), or a time T like ffmpeg -ss (2.5s: the first frame whose timestamp is at "
               "or after it), as vtrack run --start takes them.")
 @click.option("--out", "-o", "out", type=IMAGE_PATH, metavar="FILE",
-              help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png")
+              help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png. A "
+                   "file already there is replaced only with --overwrite.")
+@click.option("--overwrite", "-y", is_flag=True,
+              help="Replace the image file already there (as vtrack run -y replaces its "
+                   "results).")
 @click.option("--step", type=WholeNumber(min=2), default=None, metavar="PX",
               help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
 def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
-            step: int | None, no_grid: bool) -> None:
+            overwrite: bool, step: int | None, no_grid: bool) -> None:
     """Write one frame of INPUT (--at: frame N, or the first at time T) as an image with a
     light pixel grid and its scale (x along the top, y down the left), to read the target's box
     x,y,w,h off for --init or NAME.init.txt."""
@@ -41,6 +45,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
                           "give one of them")
     if out is not None:  # refused before a frame is decoded
         ext = _checked_ext(out, input_spec)
+        _refuse_replacing(out, f"--out {out}", overwrite)
     index, seconds = at
     with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary image left behind
         if seconds is None:
@@ -50,6 +55,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
         if out is None:
             out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
             ext = _checked_ext(out, input_spec)
+            _refuse_replacing(out, str(out), overwrite)
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old one
     click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
@@ -70,3 +76,14 @@ def _checked_ext(out: Path, input_spec: str) -> str:
         raise ConfigError(f"--out {out}: is, or is inside, the input {input_spec} (it would "
                           "replace or add one of its frames); write the image elsewhere")
     return ext
+
+
+def _refuse_replacing(out: Path, named: str, overwrite: bool) -> None:
+    """OutputError when ``out`` holds something already and the user did not say
+    ``--overwrite`` (as ``vtrack run`` refuses its earlier results, ffmpeg a file, without
+    ``-y``)."""
+    from vtrack.errors import COMMAND_NAMES
+    from vtrack.io.files import refuse_replacing_file
+
+    if not overwrite:
+        refuse_replacing_file(out, named, COMMAND_NAMES.overwrite)

@@ -11,12 +11,13 @@ import hashlib
 import os
 import re
 import shutil
+import stat
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import BinaryIO, Generic, Self, TypeVar
 
-from vtrack.errors import InputError, OutputError
+from vtrack.errors import InputError, OutputError, plural
 
 
 class Closing:
@@ -137,6 +138,20 @@ def remove_quietly(path: Path) -> None:
         return
     with contextlib.suppress(OSError):
         path.unlink(missing_ok=True)
+
+
+def refuse_replacing_file(path: Path, named: str, overwrite: str) -> None:
+    """OutputError when ``path`` is a file that holds something (an earlier output, or
+    anything else), to be replaced only when the user says ``overwrite`` (as ffmpeg replaces
+    a file only with ``-y``): ``{named}: holds N bytes already; {overwrite} replaces it``.
+    Nothing there, a pipe, a device or an empty file passes."""
+    try:
+        held = os.stat(path)
+    except OSError:
+        return
+    if stat.S_ISREG(held.st_mode) and held.st_size > 0:
+        raise OutputError(f"{named}: holds {plural(held.st_size, 'byte')} already; "
+                          f"{overwrite} replaces it")
 
 
 def prepare_output_dir(folder: Path) -> Path:
