@@ -678,6 +678,40 @@ def test_videos_in_sub_folders_are_counted_in_one_warning(tmp_path: Path,
     assert alone.exit_code == 0 and "1 video file in sub-folders is not an input" in alone.stderr
 
 
+def test_inputs_one_folder_deeper_are_named_with_the_batch_that_tracks_them(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`IN/group/seq/img/...` (a sequence folder in a sub-folder) was passed over without a
+    word, and `vtrack batch IN` with `IN/group/clip.mp4` only said `IN: no inputs (...)`. Now
+    the sequence folders there are counted with the videos, and the line names the first and
+    the `vtrack batch IN/group` that tracks them: a warning when the batch has inputs, else
+    the no-inputs error's end."""
+    folder = tmp_path / "in"
+    (folder / "group").mkdir(parents=True)
+    add_clip(folder / "group", clip_factory, "smooth", "seq", fmt="images")
+    nothing = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "o1"))
+    assert one_error_line(nothing) == (
+        f"vtrack: error: {folder}: no inputs (video files or sequence folders: images in img/ "
+        "or img1/, or in color/ or the folder itself beside their groundtruth.txt, "
+        "groundtruth_rect.txt or init.txt); 1 sequence folder in sub-folders is not an input "
+        f"({folder / 'group' / 'seq'}): a batch takes the videos directly in the folder and "
+        "its sequence folders (img/, img1/, color/); to track it, vtrack batch "
+        f"{folder / 'group'}")
+    add_clip(folder / "group", clip_factory, "smooth", "clip")
+    add_clip(folder, clip_factory, "smooth", "a")
+    result = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "o2"))
+    assert result.exit_code == 0, result.output
+    assert set(summary(tmp_path / "o2")) == {("a", "s0")}
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("vtrack: warn")]
+    assert warnings == [
+        f"vtrack: warning: {folder}: 1 video file and 1 sequence folder in sub-folders are not "
+        f"inputs ({folder / 'group' / 'clip.mp4'} and 1 more): a batch takes the videos "
+        "directly in the folder and its sequence folders (img/, img1/, color/); to track them, "
+        f"vtrack batch {folder / 'group'}"]
+    alone = batch(str(folder / "group"), "-c", "s0", "--no-video", "--out", str(tmp_path / "o3"))
+    assert alone.exit_code == 0 and "vtrack: warning" not in alone.stderr, alone.output
+    assert set(summary(tmp_path / "o3")) == {("clip", "s0"), ("seq", "s0")}
+
+
 def test_summary_writes_are_spaced_by_their_own_time(tmp_path: Path) -> None:
     """Each end wrote every row: 30,000 pairs (227 ms a write) spent 1.9 hours writing 100 GB.
     Now a write comes at an end once WRITE_SPACING times the last write's time has passed; a

@@ -8,7 +8,8 @@ outcomes are in ``jobs``. Each job is one :func:`vtrack.run.run` writing the fil
 config and is rewritten (atomically) as each job finishes.
 
 Inputs (:func:`find_inputs`), looked for directly inside the folder (video files in its other
-sub-folders are not inputs: :func:`nested_videos` finds them, for the batch to warn):
+sub-folders, and sequence folders there, are not inputs: :func:`nested_inputs` finds them, for
+the batch to say so):
 
 - video files (by suffix, :data:`VIDEO_SUFFIXES`), with ground truth beside them:
   ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
@@ -57,7 +58,7 @@ from vtrack.batch.discover import (
     BatchInput,
     find_inputs,
     is_sequence_folder,
-    nested_videos,
+    nested_inputs,
 )
 from vtrack.batch.executors import RETRIES, DaskExecutor, Executor, LocalExecutor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Job, Outcome
@@ -73,5 +74,5 @@ __all__ = [
     "SUMMARY_COLUMNS", "VIDEO_GT", "VIDEO_INIT", "VIDEO_MOT_GT", "VIDEO_SUFFIXES", "BatchInput",
     "DaskExecutor", "Executor", "Job", "LocalExecutor", "Outcome", "Plan", "SummaryWriter",
     "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder",
-    "nested_videos", "plan", "run_batch",
+    "nested_inputs", "plan", "run_batch",
 ]

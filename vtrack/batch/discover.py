@@ -32,6 +32,10 @@ SEQUENCE_MOT_GT = ("groundtruth_mot.txt", "gt.txt", "gt/gt.txt")
 VIDEO_MOT_GT = ("{}.mot.txt",)
 
 
+class NoInputsError(InputError):
+    """A batch folder that holds no input (:func:`find_inputs`)."""
+
+
 @dataclass(frozen=True)
 class BatchInput:
     """One input of a batch folder: its unique name (the results folder), path and ground truth.
@@ -158,9 +162,9 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     taken twice (``a.mp4`` and ``a.avi`` or ``A.avi``, a folder ``a/``, ``a.mp4`` and
     ``a.mp4.mkv``, or ``summary.csv.mp4`` and the batch's ``summary.csv``) keep their full file
     names, so every input has a results folder of its own.
-    Raises InputError when ``folder`` is not a folder or holds no input, or when two inputs
-    would still share a results folder (``a.mp4`` and ``A.mp4``: one folder on a
-    case-insensitive disk; a folder ``Jogging-1`` beside ``Jogging``'s target 1).
+    Raises InputError when ``folder`` is not a folder or holds no input (NoInputsError), or
+    when two inputs would still share a results folder (``a.mp4`` and ``A.mp4``: one folder on
+    a case-insensitive disk; a folder ``Jogging-1`` beside ``Jogging``'s target 1).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -179,7 +183,7 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
     found += [_video(p, name, gt_origin) for p, name in _video_names(
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]
     if not found:
-        raise InputError(
+        raise NoInputsError(
             f"{folder}: no inputs (video files or sequence folders: images in img/ or img1/, "
             "or in color/ or the folder itself beside their groundtruth.txt, "
             "groundtruth_rect.txt or init.txt)"
@@ -242,12 +246,13 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
             f"{'its run is' if len(unscored) == 1 and one else 'their runs are'} not scored")
 
 
-def nested_videos(folder: Path) -> list[Path]:
-    """The video files (by suffix) in sub-folders of ``folder`` that :func:`find_inputs` does
-    not take, sorted: those below a sub-folder that is not a sequence folder, at any depth.
-    Sequence folders and results folders (a run's ``run.json``, a batch's ``summary.csv``:
-    their ``annotated.mp4`` are no inputs) are not looked into; links to folders are not
-    followed. Nothing when ``folder`` is itself a sequence folder."""
+def nested_inputs(folder: Path) -> list[Path]:
+    """What :func:`find_inputs` does not take in sub-folders of ``folder``, sorted: the video
+    files (by suffix) and sequence folders below a sub-folder that is not a sequence folder, at
+    any depth (``IN/group/clip.mp4``, ``IN/group/seq/img/``). Sequence folders and results
+    folders (a run's ``run.json``, a batch's ``summary.csv``: their ``annotated.mp4`` are no
+    inputs) are not looked into; links to folders are not followed. Nothing when ``folder``
+    is itself a sequence folder."""
     folder = Path(folder)
     if not folder.is_dir() or is_sequence_folder(folder):
         return []
@@ -260,6 +265,9 @@ def nested_videos(folder: Path) -> list[Path]:
             if _results_folder(here):
                 dirs.clear()
                 continue
-            dirs[:] = [d for d in dirs if not is_sequence_folder(here / d)]
+            sequences = [d for d in dirs if not _results_folder(here / d)
+                         and is_sequence_folder(here / d)]
+            dirs[:] = [d for d in dirs if d not in sequences]
+            found += [here / d for d in sequences]
             found += [here / f for f in files if Path(f).suffix.lower() in VIDEO_SUFFIXES]
     return sorted(found)

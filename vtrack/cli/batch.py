@@ -181,11 +181,11 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         LocalExecutor,
         cpu_count,
         find_inputs,
-        nested_videos,
+        nested_inputs,
         plan,
         run_batch,
     )
-    from vtrack.batch.discover import SUMMARY_FILE
+    from vtrack.batch.discover import SUMMARY_FILE, NoInputsError
     from vtrack.cli._progress import BatchProgress
     from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
@@ -193,8 +193,15 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     _check_scheduler_options(scheduler, jobs)
     refuse_encoding_without_video(no_video)
     configs = _configs(config_specs, overrides)
-    inputs = find_inputs(folder, gt_origin)
-    _warn_left_out(folder, nested_videos(folder))
+    left_out = _left_out(nested_inputs(folder))
+    try:
+        inputs = find_inputs(folder, gt_origin)
+    except NoInputsError as exc:  # none directly in it: say where the nested ones are
+        if left_out:
+            raise NoInputsError(f"{exc}; {left_out}") from None
+        raise
+    if left_out:
+        warn(f"{folder}: {left_out}")
     workers = jobs or cpu_count()
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / SUMMARY_FILE
@@ -256,17 +263,22 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         sys.exit(1)
 
 
-def _warn_left_out(folder: Path, videos: list[Path]) -> None:
-    """One warning line counting the video files in sub-folders of ``folder`` that are no
-    input (:func:`~vtrack.batch.nested_videos`), naming the first, and how to track them."""
-    if not videos:
-        return
-    more = f" and {len(videos) - 1} more" if len(videos) > 1 else ""
-    verb = "is not an input" if len(videos) == 1 else "are not inputs"
-    warn(f"{folder}: {plural(len(videos), 'video file')} in sub-folders {verb} "
-         f"({videos[0]}{more}): a batch takes the videos directly in the folder and its "
-         "sequence folders (img/, img1/, color/); run vtrack batch on a sub-folder to track "
-         "its videos")
+def _left_out(nested: list[Path]) -> str | None:
+    """What a batch says of the inputs in sub-folders it does not take
+    (:func:`~vtrack.batch.nested_inputs`): their count, the first, and the ``vtrack batch``
+    that tracks them (the first's folder); None when there are none."""
+    if not nested:
+        return None
+    folders = sum(path.is_dir() for path in nested)
+    kinds = [plural(len(nested) - folders, "video file"), plural(folders, "sequence folder")]
+    what = " and ".join(kind for kind in kinds if not kind.startswith("0 "))
+    more = f" and {len(nested) - 1} more" if len(nested) > 1 else ""
+    verb = "is not an input" if len(nested) == 1 else "are not inputs"
+    where = {path.parent for path in nested}
+    example = "" if len(where) == 1 else "e.g. "
+    return (f"{what} in sub-folders {verb} ({nested[0]}{more}): a batch takes the videos "
+            "directly in the folder and its sequence folders (img/, img1/, color/); to track "
+            f"{'it' if len(nested) == 1 else 'them'}, {example}vtrack batch {nested[0].parent}")
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
