@@ -515,6 +515,33 @@ def test_an_error_naming_a_file_with_a_newline_is_one_line(occlusion_clip,
     assert "into a\\nb.init.txt (vtrack select INPUT picks it)" in line
 
 
+def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
+        tmp_path: Path) -> None:
+    """`vtrack run Jogging` (OTB: img/, groundtruth_rect.1.txt and groundtruth_rect.2.txt, no
+    --gt or --init) said 'this tracker needs an initial box: give --gt FILE, --init x,y,w,h or
+    write x,y,w,h into init.txt', as if the sequence had no ground truth. It names the two
+    files and the --gt that tracks each now (given the sequence or its img/, from the start or
+    --start 3); the --gt it names runs."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=12, fps=FPS)
+    sequence = write_image_sequence(scene, tmp_path / "Jogging")
+    (sequence / "groundtruth_rect.txt").rename(sequence / "groundtruth_rect.1.txt")
+    (sequence / "groundtruth_rect.2.txt").write_bytes(
+        (sequence / "groundtruth_rect.1.txt").read_bytes())
+    for given, start in (("Jogging", []), ("Jogging/img", ["--start", "3"])):
+        line = assert_one_line_error(vtrack("run", given, "-c", "s0", "-o", "out", *start,
+                                            cwd=tmp_path))
+        needs = "the target's box in frame 3" if start else "an initial box"
+        assert line == (
+            f"vtrack: error: s0: this tracker needs {needs}, and Jogging has 2 targets' ground "
+            "truth (groundtruth_rect.1.txt, groundtruth_rect.2.txt), none of which a run takes "
+            "by itself: give one per run (--gt Jogging/groundtruth_rect.1.txt, --gt "
+            "Jogging/groundtruth_rect.2.txt), or --init x,y,w,h")
+    assert not (tmp_path / "out").exists()
+    done = vtrack("run", "Jogging", "-c", "s0", "--no-video", "-o", "out", "--gt",
+                  "Jogging/groundtruth_rect.2.txt", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
 @pytest.mark.parametrize("command, option, limits", [
     ("run", "--fps", ("0.01", "10000")),
     ("run", "--start", ("1000000000000", "31622400s")),

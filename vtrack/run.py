@@ -60,6 +60,7 @@ from vtrack.errors import (
 from vtrack.evaluate.groundtruth import (
     dropped_notes,
     groundtruth_beside,
+    numbered_groundtruth,
     past_end_note,
     read_boxes,
     read_mot_counting,
@@ -875,6 +876,16 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         if source is None:
             _refuse_unreadable(request, names.fps)
         give_gt = names.give(names.gt, "FILE")
+        targets = (numbered_groundtruth(sidecar_path(request.input).parent)
+                   if has_sidecar(request.input) and Path(request.input).is_dir() else [])
+        if targets:  # OTB's sequences of several targets: which one is the user's to say
+            needs = f"the target's box in frame {start}" if start else "an initial box"
+            raise ConfigError(
+                f"{request.config.source}: this tracker needs {needs}, and "
+                f"{sidecar_path(request.input).parent} has {len(targets)} targets' ground truth "
+                f"({', '.join(p.name for p in targets)}), none "
+                "of which a run takes by itself: give one per run ("
+                f"{', '.join(names.give(names.gt, str(p)) for p in targets)}), or {give_box}")
         if start:
             raise ConfigError(f"{names.start_given(request.start, request.start_s)}: this "
                               f"tracker needs the target's box in frame {start}: give "
