@@ -662,7 +662,7 @@ def test_an_image_missing_from_a_numbered_sequence_leaves_its_frame_empty(tmp_pa
     assert indices == [0, 1, 2, 3, 5, 6, 7]
     assert source.info.frame_count == 8 and source.frames_skipped == 1
     assert source.warnings == [f"{tmp_path / 'seq'}: 1 image missing from the numbering (the "
-                               "first after 0004.png); their frames are skipped"]
+                               "first: frame 4, after 0004.png); their frames are skipped"]
 
 
 def test_otb_layout_colour_images(tmp_path):

@@ -47,6 +47,33 @@ def test_the_summary_counts_missing_images_as_missing(numbered: Path, tmp_path: 
     assert (summary["frames_skipped"], summary["frames_missing"]) == (3, 3)
 
 
+def test_a_run_counts_the_missing_images_among_the_frames_it_read(tmp_path: Path) -> None:
+    """In 20 images with 0004.jpg and 0015.jpg (frames 3 and 14) missing, `vtrack run seq
+    --frames 3` (frames 0..2) warned "2 images missing from the numbering (the first after
+    0003.jpg)" and said "skipped 2 missing", and `--frames 8` the same: the whole folder's
+    gaps, counted before a frame was read. Now the count covers the frames the run read, to
+    the last one it tracked: none, then frame 3 alone (named with its frame), then both."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 20, 30), folder)
+    for number in (4, 15):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    images = folder / "img"
+    for frames, missing in (("3", 0), ("8", 1), ("20", 2)):
+        out = tmp_path / f"out{frames}"
+        done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--frames",
+                      frames, "-o", str(out))
+        assert done.returncode == 0, done.stderr
+        record = json.loads((out / "run.json").read_text())
+        summary = record["summary"]
+        assert (summary["frames_skipped"], summary["frames_missing"]) == (missing, missing)
+        said = [] if not missing else [
+            f"{images}: {missing} image{'s' if missing > 1 else ''} missing from the numbering "
+            "(the first: frame 3, after 0003.jpg); their frames are skipped"]
+        assert record["warnings"] == said, frames
+        assert done.stderr == "".join(f"vtrack: warning: {line}\n" for line in said)
+        assert ("missing from the numbering" in done.stdout) == bool(missing), done.stdout
+
+
 def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:
     """``vtrack frame --at 4`` said ``frame 4 could not be decoded (damaged; ...)``."""
     picture = vtrack("frame", str(numbered), "--at", "4", "-o", str(tmp_path / "f.png"))
@@ -170,8 +197,8 @@ def test_a_late_start_by_time_counts_from_the_first_frame_tracked(tmp_path: Path
     record = json.loads((tmp_path / "out" / "run.json").read_text())
     assert (record["start_frame"], record["read_from_frame"]) == (7, 3)
     assert (record["summary"]["frames_skipped"], record["summary"]["frames_missing"]) == (1, 1)
-    assert record["warnings"] == [f"{images}: 1 image missing from the numbering (the first "
-                                  "after 0020.jpg); their frames are skipped"]
+    assert record["warnings"] == [f"{images}: 1 image missing from the numbering (the first: "
+                                  "frame 20, after 0020.jpg); their frames are skipped"]
 
 
 def test_an_undecodable_image_at_a_start_by_time_is_not_the_runs(tmp_path: Path) -> None:
@@ -224,8 +251,8 @@ def test_a_chain_without_a_box_started_at_a_damaged_image_says_so(tmp_path: Path
     (images / "0013.jpg").unlink()
     junk = (f"vtrack: warning: {images / '0011.jpg'}: not an image FFmpeg can decode (Invalid "
             "data found when processing input); frame 10 skipped\n")
-    gap = (f"vtrack: warning: {images}: 1 image missing from the numbering (the first after "
-           "0012.jpg); their frames are skipped\n")
+    gap = (f"vtrack: warning: {images}: 1 image missing from the numbering (the first: "
+           "frame 12, after 0012.jpg); their frames are skipped\n")
     for start, said in (("8", (gap + junk, 8, 8, 2)), ("10", (gap + junk, 10, 11, 2)),
                         ("12", (gap, 12, 13, 1)), ("0.33s", (gap, 11, 11, 1))):
         assert _started_at(images, start, tmp_path / start) == said, start

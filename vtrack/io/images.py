@@ -11,7 +11,8 @@ it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
 one count of digits) take their frame index from their number (the first image's is index 0),
 so an image missing from the numbering leaves its frame's place empty, counted as skipped with
-a warning, and ground truth stays aligned.
+a warning (the places up to the last frame handed on: what a run read, not the whole folder),
+and ground truth stays aligned.
 """
 
 from __future__ import annotations
@@ -223,8 +224,13 @@ class ImageFolderSource(Source):
         self._files = images_of(folder)
         self._places = frame_places(self._files)
         self._begin = 0  # the file iteration begins at (start_near)
-        self._skipped = 0
-        self._missing = 0  # of those, places no image is numbered for
+        self._skipped = 0  # images that could not be decoded
+        #: The run's first place (:meth:`_run_begins`), once its first frame was reached, and
+        #: the last frame handed on: the places between them no image is numbered for are
+        #: the run's missing frames (:attr:`frames_missing`).
+        self._run_first: int | None = None
+        self._handed: int | None = None
+        self._warnings: list[str] = []
         stored, self._turn = read_stored(self._files[0])
         self._first = turned(stored, self._turn)
         height, width = self._first.shape[:2]
@@ -248,12 +254,55 @@ class ImageFolderSource(Source):
         )
 
     @property
+    def warnings(self) -> list[str]:  # type: ignore[override]
+        """The reader's warnings, after the one line counting the images missing from the
+        numbering among the frames handed on so far (:attr:`frames_missing`), if any."""
+        missing = self.frames_missing
+        if not missing:
+            return self._warnings
+        place, at = self._first_gap()
+        after = f", after {self._files[at - 1].name}" if at else ""
+        return [f"{self.info.path}: {plural(missing, 'image')} missing from the numbering (the "
+                f"first: frame {place}{after}); their frames are skipped", *self._warnings]
+
+    @warnings.setter
+    def warnings(self, lines: list[str]) -> None:
+        self._warnings = lines
+
+    @property
     def frames_skipped(self) -> int:
-        return self._skipped
+        return self._skipped + self.frames_missing
 
     @property
     def frames_missing(self) -> int:
-        return self._missing
+        """The places from the run's first frame to the last frame handed on (a run that
+        stopped early, ``--frames``, an interrupt: the frames it read) that no image is
+        numbered for."""
+        first, last = self._run_first, self._handed
+        if first is None or last is None or last < first:
+            return 0
+        numbered = (bisect.bisect_right(self._places, last)
+                    - bisect.bisect_left(self._places, first))
+        return last + 1 - first - numbered
+
+    def _first_gap(self) -> tuple[int, int]:
+        """The run's first place no image is numbered for, and the index in ``self._files``
+        of the first image after it (:attr:`frames_missing` is not 0)."""
+        assert self._run_first is not None
+        place, at = self._run_first, bisect.bisect_left(self._places, self._run_first)
+        while at < len(self._places) and self._places[at] == place:
+            place, at = place + 1, at + 1
+        return place, at
+
+    def __iter__(self) -> Iterator[Frame]:
+        return self._handing(super().__iter__())
+
+    def _handing(self, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """``frames``, each noted as handed on as it is (:attr:`frames_missing` counts the
+        places up to the last, not those the reader has gone ahead to)."""
+        for frame in frames:
+            self._handed = frame.index
+            yield frame
 
     def absent(self, index: int) -> str:
         """``is missing from the numbering (no image between 0003.jpg and 0007.jpg)`` for a
@@ -292,7 +341,7 @@ class ImageFolderSource(Source):
         for at, (index, path) in enumerate(zip(places, files, strict=True)):
             if by_number and not began and at >= tracked:
                 began = True
-                self._count_missing(self._begin + at, self._run_begins(index))
+                self._run_first = self._run_begins(index)
             try:
                 if index == 0:
                     pixels = first
@@ -303,7 +352,7 @@ class ImageFolderSource(Source):
                         pixels = turned(stored, self._turn)  # a tag lost or added in an edit
                         if not turned_apart:
                             turned_apart = True
-                            self.warnings.append(
+                            self._warnings.append(
                                 f"{path}: turned {turn} degrees as its orientation tag says, it "
                                 "would not be the sequence's size: turned as the first image "
                                 f"({self._turn} degrees)")
@@ -313,7 +362,7 @@ class ImageFolderSource(Source):
                 self._skipped += 1
                 unreadable += 1
                 if unreadable <= _NAMED_SKIPS:
-                    self.warnings.append(f"{exc}; frame {index} skipped")
+                    self._warnings.append(f"{exc}; frame {index} skipped")
                 continue
             if pixels.shape[:2] != size:
                 raise PartialInputError(
@@ -323,7 +372,7 @@ class ImageFolderSource(Source):
                 )
             if not began and at >= tracked:  # a start by time: its first image decoded
                 began = True
-                self._count_missing(self._begin + at, self._run_begins(index))
+                self._run_first = self._run_begins(index)
             time_s = index / fps
             if first.ndim == 2:  # the first image decides: a sequence is grey or colour
                 if pixels.ndim == 3:
@@ -334,23 +383,8 @@ class ImageFolderSource(Source):
                     pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
                 yield BgrFrame(index, time_s, pixels)
         if unreadable > _NAMED_SKIPS:
-            self.warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
+            self._warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
                                  f"in all (the first {_NAMED_SKIPS} are named above)")
-
-    def _count_missing(self, at: int, first: int) -> None:
-        """Count as skipped (and missing, with a warning) the places from frame ``first`` on
-        that no image is numbered for (the run's images are those from ``self._files[at]``,
-        the first numbered at or after ``first``, on)."""
-        places = self._places[at:]
-        missing = places[-1] + 1 - first - len(places)
-        if missing:
-            self._skipped += missing
-            self._missing = missing
-            gap = next(i for i in range(at, len(places) + at)
-                       if self._places[i] != (first if i == at else self._places[i - 1] + 1))
-            self.warnings.append(
-                f"{self.info.path}: {plural(missing, 'image')} missing from the numbering "
-                f"(the first after {self._files[gap - 1].name}); their frames are skipped")
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_stored`."""
