@@ -51,27 +51,57 @@ def test_a_run_counts_the_missing_images_among_the_frames_it_read(tmp_path: Path
     """In 20 images with 0004.jpg and 0015.jpg (frames 3 and 14) missing, `vtrack run seq
     --frames 3` (frames 0..2) warned "2 images missing from the numbering (the first after
     0003.jpg)" and said "skipped 2 missing", and `--frames 8` the same: the whole folder's
-    gaps, counted before a frame was read. Now the count covers the frames the run read, to
-    the last one it tracked: none, then frame 3 alone (named with its frame), then both."""
+    gaps, counted before a frame was read (and an unreadable 0011.jpg, frame 10, was warned of
+    and counted by `--frames 8` whenever the reader had gone ahead to it). Now the counts and lines
+    cover the frames the run read, to the last one it tracked: none, then frame 3 alone (named
+    with its frame), then all three."""
     folder = tmp_path / "seq"
     write_image_sequence(make_scene("smooth", 0, 160, 120, 20, 30), folder)
     for number in (4, 15):
         (folder / "img" / f"{number:04d}.jpg").unlink()
     images = folder / "img"
-    for frames, missing in (("3", 0), ("8", 1), ("20", 2)):
+    (images / "0011.jpg").write_bytes(b"not an image")
+    junk = (f"{images / '0011.jpg'}: not an image FFmpeg can decode (Invalid data found when "
+            "processing input); frame 10 skipped")
+    for frames, missing, skipped in (("3", 0, 0), ("8", 1, 1), ("20", 2, 3)):
         out = tmp_path / f"out{frames}"
         done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--frames",
                       frames, "-o", str(out))
         assert done.returncode == 0, done.stderr
         record = json.loads((out / "run.json").read_text())
         summary = record["summary"]
-        assert (summary["frames_skipped"], summary["frames_missing"]) == (missing, missing)
+        assert (summary["frames_skipped"], summary["frames_missing"]) == (skipped, missing)
         said = [] if not missing else [
             f"{images}: {missing} image{'s' if missing > 1 else ''} missing from the numbering "
             "(the first: frame 3, after 0003.jpg); their frames are skipped"]
+        said += [junk] if skipped > missing else []
         assert record["warnings"] == said, frames
         assert done.stderr == "".join(f"vtrack: warning: {line}\n" for line in said)
         assert ("missing from the numbering" in done.stdout) == bool(missing), done.stdout
+
+
+def test_an_unreadable_image_the_reader_went_ahead_to_is_not_the_consumers(
+        tmp_path: Path) -> None:
+    """Frames are read ahead of the consumer in a thread, which counted and warned of each
+    unreadable image as it read it: a run that took frame 0 of 5 images whose last is junk
+    said 'frame 4 skipped' (frames_skipped 1) once the reader had got there. Now the frames
+    handed on decide: nothing until frame 4's place is passed, then the line as before."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 96, 72, 10, 30), folder)
+    for number in range(6, 11):
+        (folder / "img" / f"{number:04d}.jpg").unlink()
+    (folder / "img" / "0005.jpg").write_bytes(b"not an image")
+    with ImageFolderSource(str(folder)) as source:
+        frames = iter(source)
+        assert next(frames).index == 0
+        # the reader has room for frames 1..3 and its end: it reads the junk 0005.jpg and ends
+        source._prefetch._thread.join(timeout=60)  # (the reader thread, run to its end)
+        assert (source.frames_skipped, source.warnings) == (0, [])
+        assert [frame.index for frame in frames] == [1, 2, 3]
+        assert source.frames_skipped == 1
+        assert source.warnings == [f"{folder / 'img' / '0005.jpg'}: not an image FFmpeg can "
+                                   "decode (Invalid data found when processing input); frame 4 "
+                                   "skipped"]
 
 
 def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:

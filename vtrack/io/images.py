@@ -11,8 +11,8 @@ it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
 one count of digits) take their frame index from their number (the first image's is index 0),
 so an image missing from the numbering leaves its frame's place empty, counted as skipped with
-a warning (the places up to the last frame handed on: what a run read, not the whole folder),
-and ground truth stays aligned.
+a warning, and ground truth stays aligned. Both are counted, and warned of, among the frames
+handed on (what a run read, not the whole folder nor what the reader went ahead to).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import re
 from collections.abc import Iterator
 from itertools import islice
 from pathlib import Path
+from typing import NamedTuple
 
 import av
 import cv2
@@ -46,6 +47,14 @@ IMAGE_SUFFIXES = frozenset({".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".
 DEFAULT_FPS = 30.0
 #: Unreadable images named one warning line each; beyond them, one line gives the count.
 _NAMED_SKIPS = 3
+
+
+class _Note(NamedTuple):
+    """A warning of the reader's about frame ``index`` (``unreadable``: an image skipped)."""
+
+    index: int
+    line: str
+    unreadable: bool = False
 
 
 def encode_image(bgr: np.ndarray, ext: str = ".jpg", quality: int = 92) -> bytes:
@@ -224,13 +233,14 @@ class ImageFolderSource(Source):
         self._files = images_of(folder)
         self._places = frame_places(self._files)
         self._begin = 0  # the file iteration begins at (start_near)
-        self._skipped = 0  # images that could not be decoded
         #: The run's first place (:meth:`_run_begins`), once its first frame was reached, and
-        #: the last frame handed on: the places between them no image is numbered for are
-        #: the run's missing frames (:attr:`frames_missing`).
+        #: the last frame handed on (or all handed on: ``_ended``): the places between them no
+        #: image is numbered for are the run's missing frames (:attr:`frames_missing`), and
+        #: the reader's notes of frames up to it the run's (:meth:`_reached`).
         self._run_first: int | None = None
         self._handed: int | None = None
-        self._warnings: list[str] = []
+        self._ended = False
+        self._notes: list[_Note] = []
         stored, self._turn = read_stored(self._files[0])
         self._first = turned(stored, self._turn)
         height, width = self._first.shape[:2]
@@ -255,23 +265,40 @@ class ImageFolderSource(Source):
 
     @property
     def warnings(self) -> list[str]:  # type: ignore[override]
-        """The reader's warnings, after the one line counting the images missing from the
-        numbering among the frames handed on so far (:attr:`frames_missing`), if any."""
+        """The warnings of the frames handed on so far (not of those the reader has gone
+        ahead to): one line counting the images missing from the numbering
+        (:attr:`frames_missing`), if any, then the reader's, in its order (the first
+        :data:`_NAMED_SKIPS` unreadable images named, then one line counting them all)."""
+        lines = []
         missing = self.frames_missing
-        if not missing:
-            return self._warnings
-        place, at = self._first_gap()
-        after = f", after {self._files[at - 1].name}" if at else ""
-        return [f"{self.info.path}: {plural(missing, 'image')} missing from the numbering (the "
-                f"first: frame {place}{after}); their frames are skipped", *self._warnings]
+        if missing:
+            place, at = self._first_gap()
+            after = f", after {self._files[at - 1].name}" if at else ""
+            lines.append(f"{self.info.path}: {plural(missing, 'image')} missing from the "
+                         f"numbering (the first: frame {place}{after}); their frames are "
+                         "skipped")
+        notes = self._reached()
+        unreadable = sum(note.unreadable for note in notes)
+        named = [note for note in notes if note.unreadable][:_NAMED_SKIPS]
+        lines += [note.line for note in notes if not note.unreadable or note in named]
+        if unreadable > _NAMED_SKIPS:
+            lines.append(f"{self.info.path}: {unreadable} unreadable images skipped in all "
+                         f"(the first {_NAMED_SKIPS} are named above)")
+        return lines
 
     @warnings.setter
     def warnings(self, lines: list[str]) -> None:
-        self._warnings = lines
+        """Source's ``self.warnings = []``: the lines are made from the notes instead."""
+
+    def _reached(self) -> list[_Note]:
+        """The reader's notes of the frames handed on so far (all once every frame was)."""
+        last = self._handed
+        return [note for note in list(self._notes)
+                if self._ended or (last is not None and note.index <= last)]
 
     @property
     def frames_skipped(self) -> int:
-        return self._skipped + self.frames_missing
+        return sum(note.unreadable for note in self._reached()) + self.frames_missing
 
     @property
     def frames_missing(self) -> int:
@@ -303,6 +330,7 @@ class ImageFolderSource(Source):
         for frame in frames:
             self._handed = frame.index
             yield frame
+        self._ended = True
 
     def absent(self, index: int) -> str:
         """``is missing from the numbering (no image between 0003.jpg and 0007.jpg)`` for a
@@ -327,7 +355,6 @@ class ImageFolderSource(Source):
         fps = self.info.fps or DEFAULT_FPS
         size = self._first.shape[:2]
         first, self._first = self._first, None
-        unreadable = 0
         turned_apart = False  # an image's own tag said another turn than the first's
         places, files = self._places[self._begin:], self._files[self._begin:]
         # Skips count from the run's first frame on: a start given as a frame number
@@ -352,17 +379,14 @@ class ImageFolderSource(Source):
                         pixels = turned(stored, self._turn)  # a tag lost or added in an edit
                         if not turned_apart:
                             turned_apart = True
-                            self._warnings.append(
+                            self._notes.append(_Note(index, (
                                 f"{path}: turned {turn} degrees as its orientation tag says, it "
                                 "would not be the sequence's size: turned as the first image "
-                                f"({self._turn} degrees)")
+                                f"({self._turn} degrees)")))
             except InputError as exc:
                 if not began:  # before the first image tracked: not the run's
                     continue
-                self._skipped += 1
-                unreadable += 1
-                if unreadable <= _NAMED_SKIPS:
-                    self._warnings.append(f"{exc}; frame {index} skipped")
+                self._notes.append(_Note(index, f"{exc}; frame {index} skipped", True))
                 continue
             if pixels.shape[:2] != size:
                 raise PartialInputError(
@@ -382,9 +406,6 @@ class ImageFolderSource(Source):
                 if pixels.ndim == 2:
                     pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
                 yield BgrFrame(index, time_s, pixels)
-        if unreadable > _NAMED_SKIPS:
-            self._warnings.append(f"{self.info.path}: {unreadable} unreadable images skipped "
-                                 f"in all (the first {_NAMED_SKIPS} are named above)")
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_stored`."""
