@@ -156,6 +156,10 @@ class RobustTarget:
     #: where the next frame's search is still centred.
     unseen: bool = False
     peak_box: Box | None = None
+    #: A box with less than this share of its area inside the frame is leaving the view
+    #: (``robust_failure``: half, or half of the first box's share inside while a target given
+    #: entering the view comes in).
+    least_inside: float = 0.5
     #: The colour response's weight in the merged response (``robust_search``; 0: none).
     merge: float = 0.0
     #: The frame whose pixels ``robust_model`` converted once for the frame's regions, and

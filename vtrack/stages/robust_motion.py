@@ -50,6 +50,7 @@ from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.params import Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.robust_failure import mostly_outside
 
 
 @register
@@ -125,8 +126,9 @@ class RobustMotion(Stage):
         """On a frame where neither of ``robust``'s learners sees the target
         (``ctx.robust.unseen``), report the box extrapolated at constant velocity from the last
         frame that saw it (S0 item 7's coasting; the filter itself still takes this frame's
-        peak, as weakly as its score says) and keep the peak for the next search; otherwise
-        remember this frame's position and velocity."""
+        peak, as weakly as its score says), unless that box is mostly outside the frame (then
+        the peak's box, which ``robust_failure`` found in view), and keep the peak for the next
+        search; otherwise remember this frame's position and velocity."""
         target = ctx.robust
         assert target is not None
         target.peak_box = None
@@ -134,7 +136,11 @@ class RobustMotion(Stage):
             target.peak_box = ctx.box
             seen, seen_at = self._seen
             extrapolated = self._model.predict(seen, self._clock.now - seen_at)
-            ctx.box = ctx.box.moved_to(*self._model.position(extrapolated))
+            coasted = ctx.box.moved_to(*self._model.position(extrapolated))
+            # an extrapolation past the edge of the view is no place a hidden target can be
+            # (robust_failure calls a box mostly outside lost): the peak's box is reported
+            if not mostly_outside(coasted, ctx.frame, target.least_inside):
+                ctx.box = coasted
         elif ctx.state != TrackState.LOST:
             self._seen = (self._state, self._clock.now)
 
