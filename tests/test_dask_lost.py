@@ -95,6 +95,17 @@ def start(command: list[str]) -> subprocess.Popen[str]:
                             stderr=subprocess.PIPE, text=True)
 
 
+def start_scheduler() -> tuple[subprocess.Popen[str], str]:
+    """A local scheduler on a free port, and its address once it listens."""
+    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                       "--no-dashboard"])
+    assert scheduler.stderr is not None
+    for line in scheduler.stderr:
+        if "Scheduler at" in line:
+            return scheduler, line.split("Scheduler at:")[1].strip()
+    raise AssertionError("the scheduler did not start")
+
+
 @contextlib.contextmanager
 def batch_on_a_cluster(folder: Path, out: Path) -> Iterator[
         tuple[str, subprocess.Popen[str], subprocess.Popen[str], subprocess.Popen[str]]]:
@@ -102,15 +113,9 @@ def batch_on_a_cluster(folder: Path, out: Path) -> Iterator[
     its job has tracked a few frames (their rows are on disk as they are written: header + 3
     rows): ``(address, scheduler, worker, batch)``. Whatever is still running is killed at
     the end."""
-    scheduler = start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-                       "--no-dashboard"])
+    scheduler, address = start_scheduler()
     worker = batch = None
     try:
-        assert scheduler.stderr is not None
-        for line in scheduler.stderr:
-            if "Scheduler at" in line:
-                address = line.split("Scheduler at:")[1].strip()
-                break
         worker = start(["distributed.cli.dask_worker", address, "--nthreads", "1",
                         "--no-nanny", "--no-dashboard"])
         batch = subprocess.Popen(
@@ -243,3 +248,55 @@ def test_a_scheduler_lost_mid_batch_is_one_line_per_job_and_the_job_carries_on(
     assert "1 of them complete before, not run again" in again.stdout
     with (out / "summary.csv").open() as handle:
         assert [row["status"] for row in csv.DictReader(handle)] == ["complete"]
+
+
+def test_a_job_done_before_its_worker_died_is_not_run_again(tmp_path: Path) -> None:
+    """A worker that had finished job ``a`` died while it ran ``b``: the batch still held
+    ``a``'s future, so Dask ran ``a`` again on the next worker ("lose already computed
+    task(s), which will be recomputed elsewhere"), rewriting a/robust after the batch had
+    reported it: summary.csv's row (its fps) and .summary-sources.json then no longer agreed
+    with a/robust/run.json. A job reported is now released: its folder is not touched again."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name, frames in (("a", 20), ("b", 600)):
+        scene = make_scene("smooth", seed=1, width=320, height=240, frames=frames, fps=30.0)
+        write_video(scene, folder / f"{name}.mp4", preset="veryfast")
+        write_groundtruth(scene, folder / f"{name}.gt.txt")
+    out = tmp_path / "out"
+    scheduler, address = start_scheduler()
+    workers: list[subprocess.Popen[str]] = []
+    batch = None
+    try:
+        worker_args = ["distributed.cli.dask_worker", address, "--nthreads", "1",
+                       "--no-nanny", "--no-dashboard"]
+        workers.append(start(worker_args))
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--preset", "slow", "-o", str(out)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert batch.stdout is not None
+        first = batch.stdout.readline()  # the batch has taken a's outcome
+        assert first.startswith("a [robust]: 20 frames"), first
+        deadline = time.monotonic() + 90
+        while not list((out / "b").glob("*/.track.tmp-*.csv")):  # b runs
+            assert time.monotonic() < deadline and batch.poll() is None, "b should start"
+            time.sleep(0.05)
+        record = out / "a" / "robust" / "run.json"
+        before = (record.read_bytes(), record.stat().st_mtime_ns)
+        workers.append(start(worker_args))
+        workers[0].send_signal(signal.SIGKILL)
+        workers[0].wait()
+        _, stderr = batch.communicate(timeout=120)
+        time.sleep(2)  # (a job run again after the batch ended would be writing now)
+    finally:
+        for process in (batch, *workers, scheduler):
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
+    assert batch.returncode == 0, stderr
+    assert (record.read_bytes(), record.stat().st_mtime_ns) == before
+    with (out / "summary.csv").open() as handle:
+        rows = {row["input"]: row for row in csv.DictReader(handle)}
+    assert rows["a"]["status"] == rows["b"]["status"] == "complete", rows
+    fps = json.loads(record.read_text())["timing"]["fps"]
+    assert float(rows["a"]["fps"]) == pytest.approx(fps, abs=1e-5), (rows["a"], fps)

@@ -315,7 +315,10 @@ class DaskExecutor:
     def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]:
         """Submit every job and yield outcomes as they finish. When no worker has been
         connected for the worker timeout (:meth:`wait_for_workers`; every worker died), the
-        jobs still pending are cancelled and reported ``failed``, naming the scheduler. Stopped
+        jobs still pending are cancelled and reported ``failed``, naming the scheduler. A job
+        is released once its outcome is taken: the scheduler forgets it, so a worker that dies
+        holding its result does not make Dask run it again (rewriting the folder the batch has
+        reported and read its summary row from). Stopped
         part way (Ctrl-C, SIGTERM: the consumer closes this generator), running jobs are stopped
         too (:meth:`_stop_running`), their records naming the signal the batch got."""
         from distributed import Event, as_completed
@@ -335,7 +338,9 @@ class DaskExecutor:
                 while not finished.is_empty():
                     if finished.has_ready():
                         for future in finished.next_batch(block=False):
-                            yield self._outcome(future, futures[future])
+                            outcome = self._outcome(future, futures[future])
+                            future.release()  # (else Dask runs it again if its worker dies)
+                            yield outcome
                         continue
                     time.sleep(0.05)
                     now = time.monotonic()
