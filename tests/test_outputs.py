@@ -241,6 +241,30 @@ def test_a_full_disk_is_one_line_exit_1_and_records_agree(
         assert "annotated.mp4" not in assert_records_agree(out)["outputs"]
 
 
+def test_a_batch_run_that_fails_part_way_has_the_row_of_its_records(
+        clip: Clip, small_disk: Path) -> None:
+    """The disk filled while a batch's run wrote its video: the run's folder kept its records
+    (run.json: failed, 48 frames, track.csv listed) but its summary.csv row said none of it
+    (frames, scores, ground_truth and run empty), against "each row agrees with its folder's
+    run.json" and "a run that failed part way is listed with its frames"."""
+    folder = small_disk.parent / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "a.mp4")
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    fill(small_disk, leave=56 * 1024)  # (room for the records, not for the video)
+    out = small_disk / "out"
+    result = vtrack("batch", str(folder), "--jobs", "1", "--out", str(out))
+    assert result.returncode == 1, result.stderr
+    assert "No space left on device" in error_line(result.stderr)
+    record = assert_records_agree(out / "a" / "robust")
+    assert record["status"] == "failed" and record["frames"] > 0, record
+    row = read_summary(out)["a"]
+    assert (row["status"], row["frames"], row["run"]) == ("failed", str(record["frames"]),
+                                                         "a/robust"), row
+    assert row["auc"] and row["ground_truth"], row
+    assert "No space left on device" in row["error"]
+
+
 def test_a_disk_full_before_the_header_leaves_nothing(clip: Clip, small_disk: Path) -> None:
     """No room even for track.csv's header: the run's new folder stayed behind with an empty
     temporary CSV in it (the README: such a run creates no folder)."""

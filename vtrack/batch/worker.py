@@ -10,6 +10,7 @@ import threading
 import time
 import traceback
 from collections.abc import Callable
+from dataclasses import replace
 from multiprocessing.connection import Connection
 from pathlib import Path
 
@@ -56,7 +57,9 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
     try:
         summary = _run_when_free(job, report)
     except VtrackError as exc:
-        _discard(job, started)
+        recorded = _discard(job, started)
+        if recorded is not None:  # failed part way (a full disk): its row is its run.json's
+            return _outcome(job, replace(recorded, status=STATUS_FAILED, error=str(exc)))
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
     except Exception as exc:  # a bug in one run must not take the batch down: record it
         _discard(job, started)
@@ -70,6 +73,12 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
         return Outcome(job.input, job.config, STATUS_FAILED,
                        error=f"internal error: {type(exc).__name__}: {exc}{where}",
                        attempt=job.attempt)
+    return _outcome(job, summary)
+
+
+def _outcome(job: Job, summary: RunSummary) -> Outcome:
+    """The outcome of ``job``, whose run ended as ``summary`` says, with the ``summary.csv``
+    row of the run its folder holds (read here, in the worker)."""
     row, source = None, None
     with contextlib.suppress(Exception):  # (the batch reads it then: never fails the job)
         row, source = read_row(Path(summary.out_dir)) if summary.out_dir else ({}, None)
@@ -209,13 +218,18 @@ def _die_with_parent(connection: Connection) -> None:
     threading.Thread(target=watch, name="vtrack parent watch", daemon=True).start()
 
 
-def _discard(job: Job, started: float) -> None:
+def _discard(job: Job, started: float) -> RunSummary | None:
     """Remove an earlier run's outputs from the job's folder (unless another run holds it),
-    unless this job's run recorded itself there since ``started`` (it failed part way)."""
+    unless this job's run recorded itself there since ``started`` (it failed part way): then
+    return the summary its ``run.json`` records (else None)."""
     out_dir = job.request.out_dir
-    if out_dir.is_dir() and recorded_summary(job.request, since=started) is None:
+    if not out_dir.is_dir():
+        return None
+    recorded = recorded_summary(job.request, since=started)
+    if recorded is None:
         with contextlib.suppress(OutputError), OutputFolder(out_dir) as folder:
             folder.clear()
+    return recorded
 
 
 def _serve(connection: Connection) -> None:
