@@ -609,6 +609,51 @@ def test_stopped_workers_share_each_wait_and_one_that_cannot_record_is_killed(
     assert not (job.request.out_dir / "run.json").exists()
 
 
+def test_a_job_killed_as_the_batch_stops_is_no_pair_never_started(
+        scene_factory: SceneFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A job still running at a stop that cannot record itself within the grace periods (here
+    held stopped; in use: --preset placebo, whose encoder's flush outlasts them) is killed:
+    its folder keeps track.csv and a temporary video, no run.json. Its summary.csv row said
+    "never ran (the batch stopped first): the same vtrack batch command runs it" and the tally
+    counted it "not started", while that command then refused the pair ("holds the results of
+    an earlier run (track.csv) ... (made with other settings)")."""
+    from vtrack.batch import run_batch
+    from vtrack.batch.plan import Plan
+
+    scene = scene_factory("smooth", width=W, height=H, frames=12)
+    job, writer = _stalled_job(scene, tmp_path, "held")
+    monkeypatch.setattr(executors, "RECORD_GRACE_S", 0.0)
+
+    def on_progress(progress: Progress) -> None:
+        """(The job's first message: it has opened its input.) Hold its worker, stop."""
+        deadline = time.monotonic() + 60
+        while not _ten_rows(job.request.out_dir):
+            assert time.monotonic() < deadline, "no rows"
+            time.sleep(0.01)
+        lock = (job.request.out_dir / LOCK_NAME).read_text()
+        os.kill(int(lock.split(":")[0].removeprefix("pid ")), signal.SIGSTOP)
+        raise Interrupted(signal.SIGTERM)
+
+    plan = Plan(jobs=[job], known=[], order=[(job.input, job.config)])
+    late: list = []
+    summary_path = tmp_path / "results" / "summary.csv"
+    try:
+        with pytest.raises(Interrupted):
+            for _ in run_batch(plan, LocalExecutor(1, on_progress=on_progress), summary_path,
+                               late):
+                pass
+    finally:
+        os.close(writer)
+    assert not (job.request.out_dir / "run.json").exists()  # (killed: it never recorded)
+    with summary_path.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["status"] for row in rows] == ["interrupted"], rows
+    error = rows[0]["error"]
+    assert error.startswith("started, then killed when the batch stopped"), error
+    assert "--overwrite" in error
+    assert [(o.input, o.status, o.error) for o in late] == [("held", "interrupted", error)]
+
+
 def test_a_batch_closed_while_a_job_runs_stops_it_with_its_records_whole(
         scene_factory: SceneFactory, tmp_path: Path) -> None:
     """The consumer of LocalExecutor.run gone while a job runs (the batch command ends on an

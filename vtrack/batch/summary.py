@@ -6,6 +6,7 @@ import contextlib
 import csv
 import json
 import math
+import os
 import time
 from collections.abc import Callable, Collection, Generator, Iterable, Mapping
 from contextlib import closing
@@ -34,6 +35,11 @@ NEVER_RAN = "never ran (the batch stopped first)"
 #: The error of such a pair in ``summary.csv``: also what to do.
 NEVER_STARTED = (f"{NEVER_RAN}: the same vtrack batch command runs it (without --force, "
                  "the runs complete are not run again)")
+#: The error of a pair the stopped batch started whose worker was killed before the run
+#: recorded itself (it could not end within the grace periods: a slow encoder's flush).
+KILLED_UNRECORDED = ("started, then killed when the batch stopped, before it recorded itself "
+                     "(no run.json; its folder may hold part of its outputs): the same vtrack "
+                     "batch command with --overwrite (-y) runs it again")
 
 
 def run_batch(batch: Plan, executor: Executor, summary_path: Path,
@@ -45,9 +51,10 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
     stop are stopped by the signal the batch got, which their records name); a job whose
     outcome did not arrive then gets the row of its own ``run.json`` when this batch wrote one
     (a run that finished in the grace period is ``complete``), else the status
-    ``interrupted``: the summary agrees with the runs' records. The outcomes of those recorded
-    jobs (which the stopped generator can no longer yield) are appended to ``late``, for the
-    caller to report.
+    ``interrupted``: the summary agrees with the runs' records. A job that wrote in its folder
+    during this batch but recorded nothing (its worker killed) is ``interrupted`` with
+    :data:`KILLED_UNRECORDED`, not a pair never started. The outcomes of those jobs (which the
+    stopped generator can no longer yield) are appended to ``late``, for the caller to report.
     """
     summary = SummaryWriter(summary_path, batch.order)
     started = time.time()
@@ -72,10 +79,26 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
                     if recorded is not None:
                         outcome = Outcome(job.input, job.config, recorded.status, recorded,
                                           recorded.error, job.attempt)
-                        summary.add(outcome, write=False)
-                        if late is not None:
-                            late.append(outcome)
+                    elif _written_since(job.request.out_dir, started):
+                        outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED,
+                                          error=KILLED_UNRECORDED, attempt=job.attempt)
+                    else:
+                        continue
+                    summary.add(outcome, write=False)
+                    if late is not None:
+                        late.append(outcome)
             summary.write(stopped=True)
+
+
+def _written_since(folder: Path, since: float) -> bool:
+    """Whether anything in ``folder`` (its lock, a temporary output) was written at or after
+    ``since`` (``time.time()``): a job that took its folder; one not started leaves it as it
+    was."""
+    try:
+        return any(entry.stat(follow_symlinks=False).st_mtime >= since
+                   for entry in os.scandir(folder))
+    except OSError:
+        return False
 
 
 def outcome_row(outcome: Outcome, summary_path: Path
