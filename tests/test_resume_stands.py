@@ -97,6 +97,21 @@ def test_a_moved_batch_folder_resumes_and_a_refusal_names_what_changed(folder: P
     assert "(made with other settings: --no-video, --frames)" in result.stderr.decode()
 
 
+def test_results_without_a_record_are_not_said_made_with_other_settings(
+        folder: Path, tmp_path: Path) -> None:
+    """A pair's folder holding a track.csv and no run.json (its run killed before it
+    recorded itself: a stopped batch's worker killed while its encoder flushed) was refused
+    as '(made with other settings)': nothing said which settings made it."""
+    pair = tmp_path / "r" / "occ" / "s0"
+    pair.mkdir(parents=True)
+    (pair / "track.csv").write_text("frame,time_s\n0,0\n")
+    result = vtrack("batch", str(folder), "-c", "s0", "-o", str(tmp_path / "r"), "-j", "1")
+    assert result.returncode == 1
+    stderr = result.stderr.decode()
+    assert "holds the results of an earlier run (track.csv)" in stderr, stderr
+    assert "other settings" not in stderr and "no run.json says what made them" in stderr
+
+
 def test_force_replaces_results_of_other_settings_as_its_help_says(folder: Path,
                                                                    tmp_path: Path) -> None:
     """--force replaced the results of a run with other settings without -y, while the help

@@ -213,9 +213,12 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
 
 def _other_settings(request: RunRequest, record: dict[str, Any] | None) -> str:
     """``made with other settings``, naming those that differ from ``request``'s in
-    ``record``, the ``run.json`` of its folder (None: none could be read)."""
-    changed = ([] if record is None or "request" not in record
-               else request.differences(record["request"]))
+    ``record``, the ``run.json`` of its folder; None (no ``run.json`` could be read): that
+    what made them is unknown (a run killed before it recorded itself leaves its
+    ``track.csv`` so)."""
+    if record is None:
+        return "no run.json says what made them: a run stopped before it recorded itself?"
+    changed = [] if "request" not in record else request.differences(record["request"])
     return "made with other settings" + (f": {', '.join(changed)}" if changed else "")
 
 
