@@ -347,6 +347,27 @@ def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path)
     assert record["frames"] == 30 and sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
 
 
+def full_pipe() -> tuple[int, int]:
+    """A pipe (read end, write end) full to its last byte: a write to it waits for a read."""
+    read, write = os.pipe()
+    os.set_blocking(write, False)
+    for chunk in (b"x" * 4096, b"x"):
+        with contextlib.suppress(BlockingIOError):
+            while True:
+                os.write(write, chunk)
+    os.set_blocking(write, True)
+    return read, write
+
+
+def signal_until_it_ends(process: subprocess.Popen) -> None:
+    """SIGTERM to ``process`` again and again until it ends (at most 60 s)."""
+    deadline = time.monotonic() + 60
+    while process.poll() is None:
+        process.send_signal(signal.SIGTERM)
+        assert time.monotonic() < deadline, "vtrack did not end"
+        time.sleep(0.01)
+
+
 def test_a_signal_after_a_complete_run_is_recorded_leaves_its_exit_status_0(
         scene_factory: SceneFactory, tmp_path: Path) -> None:
     """SIGTERM once run.json said `complete` (while the summary line was printed, or while
@@ -358,13 +379,7 @@ def test_a_signal_after_a_complete_run_is_recorded_leaves_its_exit_status_0(
     raw = tmp_path / "in.raw"
     raw.write_bytes(b"".join(frame.tobytes() for frame in scene.frames()))
     out = tmp_path / "out"
-    read, write = os.pipe()
-    os.set_blocking(write, False)
-    for chunk in (b"x" * 4096, b"x"):  # full to the last byte
-        with contextlib.suppress(BlockingIOError):
-            while True:
-                os.write(write, chunk)
-    os.set_blocking(write, True)
+    read, write = full_pipe()
     try:
         with raw.open("rb") as stdin, (tmp_path / "stderr.txt").open("wb") as stderr:
             process = subprocess.Popen(
@@ -372,16 +387,45 @@ def test_a_signal_after_a_complete_run_is_recorded_leaves_its_exit_status_0(
                  "--init", ",".join(map(str, scene.boxes[0])), "--no-video", "--out", str(out)],
                 stdin=stdin, stdout=write, stderr=stderr)
         wait_for(lambda: (out / "run.json").exists(), process, "run.json")
-        deadline = time.monotonic() + 60
-        while process.poll() is None:
-            process.send_signal(signal.SIGTERM)
-            assert time.monotonic() < deadline, "vtrack did not end"
-            time.sleep(0.01)
+        signal_until_it_ends(process)
     finally:
         os.close(write)
         os.close(read)
     assert assert_records_agree(out)["status"] == "complete"
     assert process.returncode == 0, (tmp_path / "stderr.txt").read_text()
+
+
+def test_a_signal_once_the_batch_has_said_its_tally_changes_nothing(
+        clip: Clip, tmp_path: Path) -> None:
+    """SIGTERM after the batch's summary.csv was final and its tally printed (while its error
+    lines were written, or once its signal handlers were restored on the way out) ended it
+    143, with no line saying why, or "vtrack: interrupted" after a whole summary (a batch of
+    500 resumed pairs: `kill` 1.2 s in). Now the exit is the one its runs call for: 1 here,
+    a pair that failed. Its error line waits for room in a full stderr pipe while SIGTERM
+    comes again and again once the tally is out."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "a.mp4")  # no ground truth, no box: the pair fails
+    out = tmp_path / "out"
+    read, write = full_pipe()
+    stdout = tmp_path / "stdout.txt"
+    try:
+        with stdout.open("wb") as handle:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "vtrack", "batch", str(folder), "--out", str(out)],
+                stdout=handle, stderr=write)
+        wait_for(lambda: "-> " in stdout.read_text(), process, "the tally")
+        for _ in range(20):
+            process.send_signal(signal.SIGTERM)
+            time.sleep(0.01)
+        drained = threading.Thread(target=lambda: os.read(read, 1 << 20) and None, daemon=True)
+        drained.start()  # (room for the error line: it goes on)
+        signal_until_it_ends(process)
+    finally:
+        os.close(write)
+        os.close(read)
+    assert process.returncode == 1, stdout.read_text()
+    assert read_summary(out)["a"]["status"] == "failed"
 
 
 def test_a_signal_before_the_first_tracked_frame_is_an_interrupted_run(

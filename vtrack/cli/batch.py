@@ -209,7 +209,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     progress = BatchProgress(quiet, stats_period)
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
     # is taken (created, checked, locked) before any job is planned
-    with handling_stop_signals(_StopOnce()), OutputFolder(out_dir, "batch"):
+    stop_once = _StopOnce()
+    with handling_stop_signals(stop_once, ignored_after=True), OutputFolder(out_dir, "batch"):
         executor: Executor
         if scheduler is not None:
             dask = DaskExecutor(scheduler, scheduler_timeout)
@@ -247,7 +248,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                                           outcome.summary.frames if outcome.summary else 0)
         except Interrupted as exc:  # report what was done, then end as interrupted
             stopped = exc
-        finally:
+        finally:  # summary.csv is final: a signal from here on changes nothing (the exit code
+            stop_once.stopping = True  # is the one its rows call for)
             progress.close()
         if stopped is not None:
             for outcome in late:
