@@ -28,7 +28,7 @@ import pytest
 
 from vtrack.batch import SUMMARY_COLUMNS, executors
 from vtrack.batch.executors import LocalExecutor, _context, _Worker, stop_workers
-from vtrack.batch.jobs import Job, Progress
+from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.config import DEFAULT_CONFIG, load_config
 from vtrack.errors import Interrupted
 from vtrack.io.outdir import LOCK_NAME, OutputFolder
@@ -967,3 +967,23 @@ def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path
     assert done.returncode == 0, done.stderr
     frames = [int(row[0]) for row in [*csv_rows(first / "track.csv"), *csv_rows(out / "track.csv")]]
     assert frames == list(range(2500))
+
+
+def test_pairs_known_before_a_stop_are_reported_not_said_not_started(tmp_path: Path) -> None:
+    """A batch of 500 pairs complete before, stopped (SIGTERM 1.15 s in) while it wrote
+    summary.csv or printed their lines, said '500 runs (500 not started: the batch was
+    stopped, the same command runs them)' beside a summary.csv of 500 complete rows: the
+    pairs planned as known (complete before, refused, failed before running) that it had not
+    yet handed over were counted as never started. They now come with the stopped batch's
+    other late outcomes."""
+    from vtrack.batch import run_batch
+    from vtrack.batch.plan import Plan
+
+    known = [Outcome(name, "s0", "failed", error="no box") for name in ("a", "b", "c")]
+    plan = Plan(jobs=[], known=known, order=[(o.input, o.config) for o in known])
+    late: list[Outcome] = []
+    running = run_batch(plan, LocalExecutor(1), tmp_path / "out" / "summary.csv", late)
+    assert next(running) is known[0]
+    with pytest.raises(Interrupted):
+        running.throw(Interrupted(signal.SIGTERM))
+    assert {o.input for o in late} >= {"b", "c"}, late

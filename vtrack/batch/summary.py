@@ -54,17 +54,22 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
     ``interrupted``: the summary agrees with the runs' records. A job that wrote in its folder
     during this batch but recorded nothing (its worker killed) is ``interrupted`` with
     :data:`KILLED_UNRECORDED`, not a pair never started. The outcomes of those jobs (which the
-    stopped generator can no longer yield) are appended to ``late``, for the caller to report.
+    stopped generator can no longer yield) are appended to ``late``, for the caller to report,
+    after the known outcomes not yet handed over (the last one handed may be among them: the
+    caller reports each pair once).
     """
-    summary = SummaryWriter(summary_path, batch.order)
     started = time.time()
     finished = False
-    for outcome in batch.known:  # resumed pairs: one write for all of them
-        summary.add(outcome, write=False)
-    summary.write()
+    handed = 0  # known outcomes the consumer has taken and come back from
+    summary: SummaryWriter | None = None
     try:
+        summary = SummaryWriter(summary_path, batch.order)  # (reads the earlier rows)
+        for outcome in batch.known:  # resumed pairs: one write for all of them
+            summary.add(outcome, write=False)
+        summary.write()
         for outcome in batch.known:
             yield outcome
+            handed += 1
         with closing(executor.run(batch.jobs)) as outcomes, passing_stop_to(outcomes):
             for outcome in outcomes:
                 summary.add(outcome)
@@ -73,21 +78,34 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
         finished = True
     finally:
         if not finished:
-            for job in batch.jobs:
-                if summary.rows.get((job.input, job.config)) is None:
-                    recorded = recorded_summary(job.request, since=started)
-                    if recorded is not None:
-                        outcome = Outcome(job.input, job.config, recorded.status, recorded,
-                                          recorded.error, job.attempt)
-                    elif _written_since(job.request.out_dir, started):
-                        outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED,
-                                          error=KILLED_UNRECORDED, attempt=job.attempt)
-                    else:
-                        continue
-                    summary.add(outcome, write=False)
-                    if late is not None:
-                        late.append(outcome)
-            summary.write(stopped=True)
+            if late is not None:  # (the one being handed when the stop came may come twice)
+                late.extend(batch.known[handed:])
+            if summary is not None:
+                _write_stopped(summary, batch, started, late)
+
+
+def _write_stopped(summary: SummaryWriter, batch: Plan, started: float,
+                   late: list[Outcome] | None) -> None:
+    """Write ``summary`` for a batch stopped early: each job without an outcome gets its own
+    ``run.json``'s row when it recorded itself since ``started``, else ``interrupted`` with
+    :data:`KILLED_UNRECORDED` when it wrote in its folder (those outcomes are appended to
+    ``late``), else the row of a pair never started."""
+    for job in batch.jobs:
+        if summary.rows.get((job.input, job.config)) is not None:
+            continue
+        recorded = recorded_summary(job.request, since=started)
+        if recorded is not None:
+            outcome = Outcome(job.input, job.config, recorded.status, recorded,
+                              recorded.error, job.attempt)
+        elif _written_since(job.request.out_dir, started):
+            outcome = Outcome(job.input, job.config, STATUS_INTERRUPTED,
+                              error=KILLED_UNRECORDED, attempt=job.attempt)
+        else:
+            continue
+        summary.add(outcome, write=False)
+        if late is not None:
+            late.append(outcome)
+    summary.write(stopped=True)
 
 
 def _written_since(folder: Path, since: float) -> bool:

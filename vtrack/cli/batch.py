@@ -252,7 +252,10 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
             stop_once.stopping = True  # is the one its rows call for)
             progress.close()
         if stopped is not None:
+            reported = {(outcome.input, outcome.config) for outcome in outcomes}
             for outcome in late:
+                if (outcome.input, outcome.config) in reported:
+                    continue
                 outcomes.append(outcome)
                 if not quiet:
                     click.echo(outcome.line(out_dir))
