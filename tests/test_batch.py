@@ -901,6 +901,28 @@ def test_each_target_of_an_otb_sequence_is_an_input_of_its_own(
             "Jogging-1", "Jogging-2", "Plain"]
 
 
+def test_a_multi_target_config_runs_once_on_an_otb_sequence_of_several_targets(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A multi-target config (s3) ran an OTB sequence of two targets once per target:
+    Jogging-1 [s3] and Jogging-2 [s3], the same run twice, the report counting the sequence
+    twice. Targets are inputs of single-target configs only: s3 runs once, on Jogging (as
+    vtrack run Jogging -c s3 names it), s0 on each target; the plain sequence gets both."""
+    sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    out = tmp_path / "out"
+    result = batch(str(tmp_path / "in"), "-c", "s0", "-c", "s3", "--no-video", "-j", "1",
+                   "-o", str(out))
+    assert result.exit_code == 0, result.output
+    rows = summary(out)
+    assert list(rows) == [("Jogging", "s3"), ("Jogging-1", "s0"), ("Jogging-2", "s0"),
+                          ("Plain", "s0"), ("Plain", "s3")], rows
+    assert all(row["status"] == "complete" for row in rows.values()), rows
+    assert "5 runs (5 complete)" in result.output, result.output
+    assert not (out / "Jogging-1" / "s3").exists() and not (out / "Jogging" / "s0").exists()
+    record = json.loads((out / "Jogging" / "s3" / "run.json").read_text())
+    assert record["request"]["input"] == str(sequence)
+    assert record["request"]["target"] is None and record["request"]["gt"] is None
+
+
 def test_a_run_of_one_target_of_an_otb_sequence_is_named_after_it(
         clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """vtrack run Jogging --gt Jogging/groundtruth_rect.2.txt wrote vtrack-out/Jogging/s0, the

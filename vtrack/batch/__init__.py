@@ -19,9 +19,10 @@ the batch to say so):
   ``init.txt``); or VOT's older layout, at least two images directly beside it and no video),
   with ground truth inside them (results folders, a run's or a batch's, are none):
   ``groundtruth_rect.txt`` or ``groundtruth.txt`` (single target) and ``groundtruth_mot.txt``,
-  ``gt.txt`` or ``gt/gt.txt`` (MOTChallenge). Each target of an OTB sequence of several
-  (``Jogging``: ``groundtruth_rect.1.txt``, ``groundtruth_rect.2.txt``) is an input of its own,
-  named as OTB names it (``Jogging-1``, ``Jogging-2``) and tracked from its own boxes.
+  ``gt.txt`` or ``gt/gt.txt`` (MOTChallenge). For single-target configs, each target of an
+  OTB sequence of several (``Jogging``: ``groundtruth_rect.1.txt``, ``groundtruth_rect.2.txt``)
+  is an input of its own, named as OTB names it (``Jogging-1``, ``Jogging-2``) and tracked from
+  its own boxes; multi-target configs run once on the sequence (``Jogging``).
 
 An input without single-target ground truth still runs: detecting (multi-target) configs need
 nothing, single-target ones take their first box from ``name.init.txt`` beside the video or

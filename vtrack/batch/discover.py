@@ -57,6 +57,16 @@ class BatchInput:
     #: Which target of an OTB sequence of several it is (``groundtruth``:
     #: ``groundtruth_rect.N.txt``, N; the name ``SEQ-N``); None: the input's only one.
     target: int | None = None
+    #: Whether single-target configs run on it: not on the folder of an OTB sequence of
+    #: several targets that says nothing else of them (its targets are inputs ``SEQ-N``).
+    single_target: bool = True
+
+    def taken_by(self, multi_target: bool) -> bool:
+        """Whether a config runs on this input: a multi-target one (``multi_target``) on every
+        input but a target of an OTB sequence of several (it tracks all the sequence's targets
+        in one run, of the folder ``SEQ``), a single-target one on every input but such a
+        sequence's folder when its targets' files are all it says of them."""
+        return self.target is None if multi_target else self.single_target
 
     @property
     def shown(self) -> str:
@@ -72,9 +82,11 @@ def _first(folder: Path, names: Iterable[str]) -> Path | None:
 
 
 def _sequence(folder: Path, gt_origin: int | None) -> list[BatchInput]:
-    """The inputs of sequence folder ``folder``: one per target of an OTB sequence of several
-    (``groundtruth_rect.N.txt``: ``SEQ-N``, tracked from its own boxes), and the folder itself
-    (``SEQ``) unless those are all it says of its targets (no other ground truth or box)."""
+    """The inputs of sequence folder ``folder``: the folder itself (``SEQ``), and one per
+    target of an OTB sequence of several (``groundtruth_rect.N.txt``: ``SEQ-N``, tracked from
+    its own boxes), which only single-target configs run on (:meth:`BatchInput.taken_by`);
+    those run on the folder too only when it says more of its targets (other ground truth or
+    a box)."""
     groundtruth = groundtruth_beside(folder)
     mot_groundtruth = _first(folder, SEQUENCE_MOT_GT)
     init = _first(folder, [SEQUENCE_INIT])
@@ -82,11 +94,11 @@ def _sequence(folder: Path, gt_origin: int | None) -> list[BatchInput]:
                           groundtruth=path, mot_groundtruth=mot_groundtruth,
                           gt_origin=_origin(path, gt_origin), target=target_number(path))
                for path in numbered_groundtruth(folder)]
-    if targets and groundtruth is None and mot_groundtruth is None and init is None:
-        return targets
+    single = not targets or any(p is not None for p in (groundtruth, mot_groundtruth, init))
     return [BatchInput(name=folder.name, path=folder, groundtruth=groundtruth,
                        mot_groundtruth=mot_groundtruth, init=init,
-                       gt_origin=_origin(groundtruth, gt_origin)), *targets]
+                       gt_origin=_origin(groundtruth, gt_origin), single_target=single),
+            *targets]
 
 
 def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
@@ -225,7 +237,7 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
     line, naming the first such file and the MOTChallenge names looked for beside it and
     counting the others; None when there are none."""
     unscored = [item for item in inputs if item.problem is None and item.groundtruth
-                and item.mot_groundtruth is None]
+                and item.mot_groundtruth is None and item.taken_by(multi_target=True)]
     if not unscored or not configs:
         return None
     first = unscored[0]

@@ -148,7 +148,9 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
          overwrite: bool = True) -> Plan:
     """What to do for every input x config, results in ``out_dir/<input>/<config>/`` (each
     name made one safe folder name, :func:`~vtrack.io.files.folder_name`: a config named
-    ``../x`` or ``/tmp/x`` still writes inside ``out_dir``).
+    ``../x`` or ``/tmp/x`` still writes inside ``out_dir``), but the pairs the input is not for
+    (:meth:`~vtrack.batch.discover.BatchInput.taken_by`: a multi-target config runs once on
+    an OTB sequence of several targets, ``SEQ``, a single-target one on each ``SEQ-N``).
 
     Each job's request is ``settings`` (what ``vtrack batch`` was given: video, preset, crf,
     seed, max_frames) with the input, output folder, config and ground truth of the job.
@@ -168,6 +170,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     pipelines = {label: Pipeline(config.build()) for label, config in configs.items()}
     for item in inputs:
         for label, config in configs.items():
+            if not item.taken_by(pipelines[label].multi_target):
+                continue
             if pipelines[label].multi_target:
                 gt_path, gt_origin = item.mot_groundtruth, 0
             else:
