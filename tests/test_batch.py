@@ -947,6 +947,32 @@ def test_a_run_of_one_target_of_an_otb_sequence_is_named_after_it(
     assert inputs == ["Jogging-1", "Jogging-2", "Jogging-2", "Plain"], inputs
 
 
+def test_a_run_of_a_target_from_its_images_folder_is_joined_with_the_batchs_target(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """vtrack run Jogging/img --gt Jogging/groundtruth_rect.1.txt beside a batch over a folder
+    whose Jogging also holds groundtruth_rect.txt: the report keyed an input by the path the
+    run was given (img, 20 files; the batch's Jogging, 23) and relabelled the two by their file
+    names, so its headings were Jogging (the batch's Jogging and its target 1 under one name),
+    Jogging-2 and img, no Jogging-1. An image sequence is now keyed by its sequence folder and
+    target: the run and the batch's target 1 are two results of Jogging-1."""
+    sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    shutil.copy(sequence / "groundtruth_rect.1.txt", sequence / "groundtruth_rect.txt")
+    ran = CliRunner().invoke(main, ["run", str(sequence / "img"), "-c", "s0", "--no-video",
+                                    "--gt", str(sequence / "groundtruth_rect.1.txt"),
+                                    "-o", str(tmp_path / "v10" / "x")], catch_exceptions=False)
+    assert ran.exit_code == 0, ran.output
+    assert batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o",
+                 str(tmp_path / "o10")).exit_code == 0
+    shown = CliRunner().invoke(main, ["report", str(tmp_path / "o10"), str(tmp_path / "v10"),
+                                      "-q", "-o", str(tmp_path / "report")],
+                               catch_exceptions=False)
+    assert shown.exit_code == 0, shown.output
+    with (tmp_path / "report" / "summary.csv").open(newline="") as handle:
+        rows = sorted((row["input"], row["config"]) for row in csv.DictReader(handle))
+    assert rows == [("Jogging", "s0 (o10)"), ("Jogging-1", "s0 (o10)"), ("Jogging-1", "s0 (v10)"),
+                    ("Jogging-2", "s0 (o10)"), ("Plain", "s0 (o10)")], rows
+
+
 def test_a_folder_named_like_a_target_of_a_sequence_beside_it_stops_the_batch(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A sequence folder Jogging-1 beside Jogging (groundtruth_rect.1.txt) would write the

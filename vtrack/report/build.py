@@ -33,6 +33,7 @@ from vtrack.report.runs import (
     failed_runs,
     load_run,
     run_folders,
+    source_name,
     still_written,
 )
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED
@@ -84,7 +85,7 @@ def _distinct_inputs(runs: list[RunResult]) -> None:
         files = _group(group, lambda r: r.input_key)
         if len(files) < 2:
             continue
-        names = {key: Path(g[0].source).name for key, g in files.items() if g[0].source}
+        names = {key: shown for key, g in files.items() if (shown := source_name(g[0]))}
         if len(names) == len(files) and len(set(names.values())) == len(names):
             labels = names
         else:

@@ -54,6 +54,7 @@ from vtrack.io.outdir import (
     is_report_folder,
     live_holder,
 )
+from vtrack.io.sidecar import sequence_of
 from vtrack.io.specs import is_live, is_url
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
@@ -153,6 +154,8 @@ class RunResult:
     truth: list[Box | None] | None = None
     #: What tells inputs of one name apart (:func:`_input_key`).
     input_key: str = ""
+    #: The target of an OTB sequence of several the run tracked (None: the input's only one).
+    target: int | None = None
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
     config_key: str = ""
 
@@ -367,10 +370,7 @@ def _input_name(record: dict[str, Any], folder: Path) -> str:
     """The name of the run's input, as the run named it; ``SEQ-N`` for target N of an OTB
     sequence of several (its request's ``target``: ``Jogging-1``, ``Jogging-2`` are two
     sequences). ValueError for a target that is no whole number (a record edited by hand)."""
-    target = (record.get("request") or {}).get("target")
-    if target is not None and (isinstance(target, bool) or not isinstance(target, int)
-                               or target < 0):
-        raise ValueError(f"target {target!r}")
+    target = _target(record)
     info = record.get("input") or {}
     if info.get("name"):
         return target_input(str(info["name"]), target)
@@ -394,16 +394,47 @@ def _check_whole(folder: Path, record: dict[str, Any], name: str) -> None:
                          "after the run); not scored")
 
 
+def _target(record: dict[str, Any]) -> int | None:
+    """The target of an OTB sequence of several the run tracked (its request's ``target``),
+    None for none; ValueError for one that is no whole number (a record edited by hand)."""
+    target = (record.get("request") or {}).get("target")
+    if target is not None and (isinstance(target, bool) or not isinstance(target, int)
+                               or target < 0):
+        raise ValueError(f"target {target!r}")
+    return target
+
+
 def _input_key(record: dict[str, Any]) -> str:
     """What tells a run's input from another of the same name: its file name and the file's
     size (and a folder's file count) as the run recorded them, not the modification time (a
     copy of the same clip is the same input) nor the folder (a relative path's depends on where
-    the run was started)."""
+    the run was started). An image sequence is its sequence folder's name (``SEQ`` for
+    ``SEQ/img``, :func:`~vtrack.io.sidecar.sequence_of`: one sequence given either way), the
+    target it tracked and its frames' count and size as the run opened them (its folder's
+    files are not its images': ``SEQ`` holds its ground truth too)."""
     identity = (record.get("identity") or {}).get("input")
-    given = str((record.get("request") or {}).get("input") or "")
-    return json.dumps({"name": Path(given.rstrip("/")).name,
+    given = Path(str((record.get("request") or {}).get("input") or "").rstrip("/"))
+    info = record.get("input") or {}
+    if isinstance(info, dict) and info.get("kind") == "images":
+        return json.dumps({"name": (sequence_of(given) or given).name,
+                           "target": _target(record),
+                           **{k: info.get(k) for k in ("frame_count", "width", "height")}},
+                          sort_keys=True)
+    return json.dumps({"name": given.name,
                        **({k: identity.get(k) for k in ("size", "files")}
                           if isinstance(identity, dict) else {})}, sort_keys=True)
+
+
+def source_name(run: RunResult) -> str | None:
+    """The name of the input ``run`` read (None: it cannot be read again, ``source``) as its
+    file or folder shows it (``a.mkv``), an image sequence's by its sequence folder
+    (``Jogging/img``: ``Jogging``) and one target of an OTB sequence of several by the
+    target too (``Jogging-1``: :func:`~vtrack.evaluate.groundtruth.target_input`)."""
+    if not run.source:
+        return None
+    path = Path(run.source)
+    folder = sequence_of(path) if path.is_dir() else None
+    return target_input((folder or path).name, run.target)
 
 
 def _found_path(record: dict[str, Any], role: str) -> str | None:
@@ -472,6 +503,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
         input_key=_input_key(record),
+        target=_target(record),
         config_key=json.dumps((record.get("config") or {}).get("stages") or "",
                               sort_keys=True),
     )
