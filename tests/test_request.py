@@ -101,6 +101,23 @@ def test_a_run_numbered_from_another_first_track_id_is_another_run(
     assert RunRequest.from_dict(later.to_dict()).first_track_id == 12
 
 
+def test_a_request_recorded_without_a_first_track_id_or_target_is_read_as_before_them() -> None:
+    """RunRequest.from_dict of a request whose "first_track_id" was null stopped on int(None)
+    (TypeError); absent or null, a field recorded since a later version (first_track_id,
+    target) is what a record without it meant: 1, None; and the same run as that."""
+    request = RunRequest(input="clip.mp4", out_dir=Path("out"), config=load_config("s3"),
+                         video=False)
+    for value in ({"first_track_id": None, "target": None}, {}):
+        recorded = {k: v for k, v in request.to_dict().items()
+                    if k not in ("first_track_id", "target")} | value
+        read = RunRequest.from_dict(recorded)
+        assert (read.first_track_id, read.target) == (1, None), value
+        assert read.to_dict() == request.to_dict()
+        assert request.differences(recorded) == [], value
+    numbered = replace(request, first_track_id=7)
+    assert numbered.differences({**request.to_dict(), "first_track_id": None}) == ["--first-id"]
+
+
 def test_the_request_round_trips_through_its_dict() -> None:
     request = RunRequest(input="clip.mp4", out_dir=Path("out"), config=load_config("s2"),
                          init_box=Box(1.5, 2, 30, 40), gt_path=Path("gt.txt"), gt_origin=1,

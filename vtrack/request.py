@@ -194,7 +194,9 @@ class RunRequest:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunRequest:
         """The request :meth:`to_dict` described (KeyError/ValueError/ConfigError if it is not
-        one)."""
+        one). A field recorded since a later version (:data:`_RECORDED_LATER`), absent or
+        null, is what a record without it meant."""
+        data = _with_recorded_later(data)
         return cls(
             input=str(data["input"]),
             out_dir=Path(data["out_dir"]),
@@ -217,8 +219,8 @@ class RunRequest:
             ffmpeg=_ffmpeg_input(data.get("ffmpeg")),
             live=data.get("live"),
             video_out=data.get("video_out"),
-            target=None if data.get("target") is None else int(data["target"]),
-            first_track_id=int(data.get("first_track_id", 1)),
+            target=None if data["target"] is None else int(data["target"]),
+            first_track_id=int(data["first_track_id"]),
         )
 
     @property
@@ -274,7 +276,7 @@ class RunRequest:
         if not isinstance(recorded, dict):
             return ["the whole request (run.json records none)"]
         mine = json.loads(json.dumps(self.to_dict()))
-        recorded = {**_RECORDED_LATER, **recorded}
+        recorded = _with_recorded_later(recorded)
         moot = _moot(mine) & _moot(recorded)
         keys = [k for k in dict.fromkeys([*mine, *recorded])
                 if k != "out_dir" and k not in moot
@@ -286,13 +288,9 @@ def _moot(request: dict[str, Any]) -> set[str]:
     """The fields of ``request`` (a ``run.json`` ``"request"``) that change nothing in its run:
     the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``),
     ``--gt-origin`` without ground truth, and ``--seed`` for a chain no stage of which draws
-    random numbers (none ``requires`` the run's ``rng``: all but the particle filter); and
-    ``--first-id`` when it is 1 or not recorded (a ``run.json`` written before there was a
-    first track id: its tracks were numbered from 1). Two requests that both leave one moot
-    are the same run whatever it says."""
+    random numbers (none ``requires`` the run's ``rng``: all but the particle filter). Two
+    requests that both leave one moot are the same run whatever it says."""
     moot = set()
-    if request.get("first_track_id", 1) == 1:
-        moot.add("first_track_id")
     if request.get("video") is False:
         moot |= {"preset", "crf"}
     if request.get("gt") is None:
@@ -311,9 +309,16 @@ def _moot(request: dict[str, Any]) -> set[str]:
 
 #: (A field missing from one of two requests compared.)
 _ABSENT = object()
-#: Fields ``run.json`` records since a later version, with what a record without one meant
-#: (a run of an input's only target): its results still resume.
-_RECORDED_LATER = {"target": None}
+#: Fields ``run.json`` records since a later version, with what a record without one (or with
+#: null) meant: a run of an input's only target, its tracks numbered from 1 (a ``run.json``
+#: written before there was a first track id); its results still resume.
+_RECORDED_LATER: dict[str, Any] = {"target": None, "first_track_id": 1}
+
+
+def _with_recorded_later(request: dict[str, Any]) -> dict[str, Any]:
+    """``request`` (a ``run.json`` ``"request"``) with each field of :data:`_RECORDED_LATER`
+    it lacks or holds as null set to what a record without it meant."""
+    return {**request, **{k: v for k, v in _RECORDED_LATER.items() if request.get(k) is None}}
 #: How a user sets each field of :meth:`RunRequest.to_dict` (named when it differs).
 _SETTING_NAMES = {
     "input": "the input's path", "config": "the config (its file or a --set)",
