@@ -973,6 +973,33 @@ def test_a_run_of_a_target_from_its_images_folder_is_joined_with_the_batchs_targ
                     ("Jogging-2", "s0 (o10)"), ("Plain", "s0 (o10)")], rows
 
 
+def test_a_batch_over_an_older_batchs_failed_sequence_drops_its_row(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A vtrack before each target was an input failed a two-target sequence as one row,
+    Jogging [s0]. A batch into that folder kept the row beside Jogging-1 and Jogging-2 (the
+    report listed its old advice under "Runs without results"). A row of the sequence itself
+    that holds no run is dropped when its targets are planned; other rows are kept."""
+    sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    out = tmp_path / "out"
+    out.mkdir()
+    blank = [""] * (len(SUMMARY_COLUMNS) - 5)
+    lines = [",".join(SUMMARY_COLUMNS)]
+    lines += [",".join(["Jogging", "s0", "failed", *blank, "", f'"{sequence}: config \'s0\' '
+                        'tracks one given target, and the sequence has 2 targets\' ground '
+                        'truth: track each with vtrack run"'])]
+    lines += [",".join(["Gone", "s0", "failed", *blank, "", "an input since removed"])]
+    (out / "summary.csv").write_text("\n".join(lines) + "\n")
+    assert [key for key in summary(out)] == [("Jogging", "s0"), ("Gone", "s0")]
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert sorted(summary(out)) == [("Gone", "s0"), ("Jogging-1", "s0"), ("Jogging-2", "s0"),
+                                    ("Plain", "s0")]
+    shown = CliRunner().invoke(main, ["report", str(out), "-q", "-o", str(tmp_path / "report")],
+                               catch_exceptions=False)
+    assert shown.exit_code == 0, shown.output
+    assert "targets' ground truth" not in (tmp_path / "report" / "summary.md").read_text()
+
+
 def test_a_folder_named_like_a_target_of_a_sequence_beside_it_stops_the_batch(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A sequence folder Jogging-1 beside Jogging (groundtruth_rect.1.txt) would write the

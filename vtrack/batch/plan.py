@@ -109,6 +109,10 @@ class Plan:
     known: list[Outcome]
     order: list[tuple[str, str]]
     warnings: list[str] = field(default_factory=list)
+    #: The OTB sequences of several targets whose targets (``SEQ-N``) are planned: an earlier
+    #: batch's row of ``SEQ`` itself that has no run is no result (a vtrack before targets
+    #: were inputs failed it), :class:`~vtrack.batch.summary.SummaryWriter` drops it.
+    split: set[str] = field(default_factory=set)
 
 
 def folder_clash(label: str, configs: Mapping[str, Config]) -> tuple[str, str] | None:
@@ -177,6 +181,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             else:
                 gt_path, gt_origin = item.groundtruth, item.gt_origin
             result.order.append((item.name, label))
+            if item.target is not None:
+                result.split.add(item.path.name)
             if item.problem is not None:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=item.problem))
                 continue

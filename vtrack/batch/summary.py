@@ -63,7 +63,8 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
     handed = 0  # known outcomes the consumer has taken and come back from
     summary: SummaryWriter | None = None
     try:
-        summary = SummaryWriter(summary_path, batch.order)  # (reads the earlier rows)
+        summary = SummaryWriter(summary_path, batch.order,  # (reads the earlier rows)
+                                split=batch.split)
         for outcome in batch.known:  # resumed pairs: one write for all of them
             summary.add(outcome, write=False)
         summary.write()
@@ -223,10 +224,14 @@ class SummaryWriter:
 
     The rows of an earlier batch into the same folder (other configs, other inputs) are kept:
     the summary covers every run in the folder, input by input, each input's configs in the
-    order they first ran. ``clock``: seconds, for the spacing of writes."""
+    order they first ran; but an earlier row of an input in ``split`` (an OTB sequence of
+    several targets whose targets ``SEQ-N`` this batch runs, :attr:`Plan.split`) whose folder
+    holds no run (no ``run.json``: a vtrack before targets were inputs failed it) is dropped.
+    ``clock``: seconds, for the spacing of writes."""
 
     def __init__(self, path: Path, order: Iterable[tuple[str, str]],
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 split: Collection[str] = ()) -> None:
         self.path = path
         self.clock = clock
         self._next_write = -math.inf  # the clock's time from which an outcome writes again
@@ -234,6 +239,10 @@ class SummaryWriter:
         order = list(order)
         planned = set(order)
         earlier, sources = earlier_rows(path, planned)
+        earlier = {key: row for key, row in earlier.items()
+                   if key in planned or key[0] not in split
+                   or (path.parent / folder_name(key[0], "input") / folder_name(key[1])
+                       / "run.json").is_file()}
         # input-major; sorted() is stable: each input's configs in the order they first ran
         keys = sorted(dict.fromkeys([*earlier, *order]), key=lambda key: key[0])
         self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
