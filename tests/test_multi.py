@@ -505,7 +505,7 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
         clip_factory, tmp_path) -> None:
     """`vtrack run clip.mp4 -c s0 --first-id 3` and its library forms: a single-target config
     numbers no tracks, so a first track id other than 1 is refused in one line naming what was
-    given (before the output folder is made), as one out of its range (1 to 2**31 - 1) is;
+    given (before the output folder is made), as one out of its range (1 to 2**53) is;
     1 is every config's (the default)."""
     import vtrack
     from vtrack.request import RunRequest
@@ -521,7 +521,7 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
     assert not out.exists()
     result = CliRunner().invoke(main, ["run", str(clip.path), "-c", "s3", "--first-id", "0",
                                        "-o", str(out)])
-    assert "--first-id" in one_error_line(result) and "1<=x<=2147483647" in result.stderr
+    assert "--first-id" in one_error_line(result) and "1<=x<=9007199254740992" in result.stderr
     said = "first_track_id 3: s0 tracks one target and numbers no tracks"
     with pytest.raises(ConfigError, match=said):
         vtrack.Tracker("s0", first_track_id=3)
@@ -530,9 +530,9 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
                    first_track_id=3)
     with pytest.raises(ConfigError, match=said):
         vtrack.track(clip.path, "s0", init_box=clip.scene.boxes[0], first_track_id=3)
-    for wrong in (0, 2**31, True, 2.0, "5"):
+    for wrong in (0, 2**53 + 1, True, 2.0, "5"):
         with pytest.raises(ConfigError, match="first_track_id .*: must be a whole number from "
-                                              "1 to 2147483647"):
+                                              "1 to 9007199254740992"):
             vtrack.Tracker("s3", first_track_id=wrong)
     request = RunRequest(input=str(clip.path), out_dir=out, config=load_config("s3"),
                          first_track_id=np.int64(7))

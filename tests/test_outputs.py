@@ -949,6 +949,39 @@ def test_a_multi_target_run_taken_up_with_its_hint_numbers_its_tracks_on(
     assert int(again[0][0]) > int(rows[-1][0])
 
 
+def test_a_run_numbered_from_the_largest_first_id_gives_a_hint_the_option_takes(
+        tmp_path: Path) -> None:
+    """SIGTERM to `vtrack run ped.mp4 -c fixed_camera --frames 800 --first-id 2147483647`
+    (then the largest first id) wrote ids above it and hinted `--first-id 2147483653`, which
+    the option refuses. The largest is now 2**53 (ids a double holds exactly); a run that
+    reaches it and is stopped hints no --first-id, a warning says the next run numbers its
+    tracks as it did, and the hint's command runs."""
+    largest = 2**53
+    scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=900, fps=30)
+    clip = write_video(scene, tmp_path / "ped.mp4", preset="ultrafast", keyint=30)
+    first = tmp_path / "first"
+    stderr = _stopped_after(40, first, "run", str(clip), "-c", "fixed_camera", "--frames", "800",
+                            "--first-id", str(largest))
+    ids = {int(row[1]) for row in csv_rows(first / "tracks.csv")}
+    assert min(ids) >= largest, sorted(ids)
+    record = json.loads((first / "run.json").read_text())
+    last = record["last_frame"]
+    options = f"--start {last + 1} --frames {800 - last - 1}"
+    assert record["summary"]["resume"] == options
+    assert (f"vtrack: warning: {first / 'tracks.csv'}: its highest track id, {max(ids)}, "
+            f"leaves no --first-id (at most {largest}) for the run the hint below makes: that "
+            "run numbers its tracks as this one did; renumber one of the two tracks.csv to "
+            "join them") in stderr
+    hint = stderr.splitlines()[-1]
+    assert hint == (f"vtrack: {clip}: to go on from where it stopped, run the same command "
+                    f"with {options} and another --out"), stderr
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c",
+                           "fixed_camera", "--first-id", str(largest), *options.split(),
+                           "--frames", "5", "--no-video", "-o", str(tmp_path / "again")],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+
+
 def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:
     """SIGTERM to a run of a chain that needs no box (`vtrack run ped.mp4 -c fixed_camera
     --frames 1400`) said `--start 533 --frames 867` with last_frame 533: the resumed run wrote

@@ -39,9 +39,11 @@ MAX_CRF = 51
 MAX_SEED = 2**32 - 1
 
 #: The largest first track id a multi-target run takes (``--first-id``, RunRequest's and
-#: ``vtrack.Tracker``'s ``first_track_id``; the smallest is 1): the largest 32-bit signed
-#: integer, a bound for tools that read a ``tracks.csv``'s ids as such.
-MAX_TRACK_ID = 2**31 - 1
+#: ``vtrack.Tracker``'s ``first_track_id``; the smallest is 1): 2**53, up to which a double
+#: holds every whole number, so tools that read a ``tracks.csv``'s numbers as doubles
+#: (MATLAB, pandas, JavaScript) read its ids exactly. A run numbers on past it (its ids are
+#: whole numbers of any size), but its hint then gives no ``--first-id`` (a warning says so).
+MAX_TRACK_ID = 2**53
 
 
 def check_seed(seed: object) -> int:

@@ -92,6 +92,7 @@ from vtrack.io.source import (
 from vtrack.io.stream import STDOUT, StreamWriter
 from vtrack.io.videowriter import VideoTooSmallError, verify_video
 from vtrack.latency import Latencies
+from vtrack.params import MAX_TRACK_ID
 from vtrack.pipeline import FrameResult, Pipeline
 from vtrack.request import RunRequest
 from vtrack.stages.base import TrackState, TrackStatus
@@ -1164,7 +1165,8 @@ def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None,
     ``track.csv`` wrote it; and what is left of ``--frames`` from there (a count, or a time:
     the frame after the last one taken to come one interval of the input's ``fps`` later);
     for a multi-target chain ``--first-id next_id`` (the id after the highest this run wrote,
-    so that the next run's tracks use none of this run's; left out when it is 1).
+    so that the next run's tracks use none of this run's; left out when it is 1 or past
+    :data:`~vtrack.params.MAX_TRACK_ID`, which the option refuses: :func:`_past_track_ids`).
     None when there is no such frame, or nothing is left of ``--frames``."""
     pipeline = resolved.pipeline
     needs_box = pipeline.needs_init_box and not pipeline.multi_target
@@ -1187,9 +1189,17 @@ def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None,
         if left <= 0:
             return None
         options += f" --frames {number_text(left)}s"
-    if pipeline.multi_target and next_id != 1:
+    if pipeline.multi_target and 1 < next_id <= MAX_TRACK_ID:
         options += f" --first-id {next_id}"
     return options
+
+
+def _past_track_ids(request: RunRequest, next_id: int) -> str:
+    """The warning of an interrupted run whose hint cannot give ``--first-id next_id``: the
+    id after the highest it wrote is past :data:`~vtrack.params.MAX_TRACK_ID`."""
+    return (f"{request.out_dir / 'tracks.csv'}: its highest track id, {next_id - 1}, leaves "
+            f"no --first-id (at most {MAX_TRACK_ID}) for the run the hint below makes: that run "
+            "numbers its tracks as this one did; renumber one of the two tracks.csv to join them")
 
 
 def _next_track_id(request: RunRequest, formatter: _SingleTargetRows | _MultiTargetRows
@@ -1208,6 +1218,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     formatter = writers.formatter
     status, error, frames, seconds = tracked.status, tracked.error, tracked.frames, tracked.seconds
     gt = resolved.gt
+    next_id = _next_track_id(request, formatter)
     summary = RunSummary(
         input=request.input,
         out_dir=str(request.out_dir),
@@ -1226,10 +1237,11 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         warnings=[*resolved.warnings, *source.warnings,
                   *(note for stage in resolved.pipeline.stages for note in stage.notes())],
         interrupted_by=None if tracked.signum is None else signal.Signals(tracked.signum).name,
-        resume=(_resume_options(resolved, tracked, source.info.fps, _next_track_id(
-                    request, formatter)) if status == STATUS_INTERRUPTED and not source.live
-                else None),
+        resume=(_resume_options(resolved, tracked, source.info.fps, next_id)
+                if status == STATUS_INTERRUPTED and not source.live else None),
     )
+    if summary.resume is not None and summary.multi_target and next_id > MAX_TRACK_ID:
+        summary.warnings.append(_past_track_ids(request, next_id))
     jumped = tracked.timeline.warning(request.input, request.gt_path)
     if jumped is not None:
         summary.warnings.append(jumped)
