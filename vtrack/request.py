@@ -20,6 +20,7 @@ from typing import Any
 
 from vtrack.config import Config, config_from_resolved
 from vtrack.errors import ConfigError, real_or_nan
+from vtrack.evaluate.groundtruth import MAX_TARGET
 from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
 from vtrack.io.identity import file_identity
@@ -352,7 +353,7 @@ _WHOLE_NUMBERS = (
     ("max_frames", 1, MAX_FRAME_NUMBER, "how many frames to track; None: to the end"),
     ("crf", 0, MAX_CRF, "the annotated video's x264 quality"),
     ("gt_origin", 0, 1, "1: the ground truth's boxes are 1-based"),
-    ("target", 0, MAX_FRAME_NUMBER, "the N of the target's groundtruth_rect.N.txt"),
+    ("target", 0, MAX_TARGET, "the N of the target's groundtruth_rect.N.txt"),
 )
 #: The whole numbers of :data:`_WHOLE_NUMBERS` that may be None.
 _OPTIONAL = ("max_frames", "target")

@@ -1202,12 +1202,11 @@ def _past_track_ids(request: RunRequest, next_id: int) -> str:
             "numbers its tracks as this one did; renumber one of the two tracks.csv to join them")
 
 
-def _next_track_id(request: RunRequest, formatter: _SingleTargetRows | _MultiTargetRows
-                   ) -> int:
-    """The id a run that goes on from this one numbers its tracks from: one after the highest
-    this run wrote to ``tracks.csv`` (its first track id when it wrote none)."""
-    written = formatter.written if isinstance(formatter, _MultiTargetRows) else ()
-    return max(written, default=request.first_track_id - 1) + 1
+def _next_track_id(request: RunRequest, last_track_id: int | None) -> int:
+    """The id a run that goes on from this one numbers its tracks from: one after
+    ``last_track_id``, the highest this run wrote to ``tracks.csv`` (its first track id when
+    it wrote none: None)."""
+    return (request.first_track_id - 1 if last_track_id is None else last_track_id) + 1
 
 
 def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,
@@ -1218,7 +1217,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     formatter = writers.formatter
     status, error, frames, seconds = tracked.status, tracked.error, tracked.frames, tracked.seconds
     gt = resolved.gt
-    next_id = _next_track_id(request, formatter)
+    last_id = (max(formatter.written, default=None)
+               if isinstance(formatter, _MultiTargetRows) else None)
+    next_id = _next_track_id(request, last_id)
     summary = RunSummary(
         input=request.input,
         out_dir=str(request.out_dir),
@@ -1277,7 +1278,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                 "frame is scored (frames_evaluated 0; mean_overlap, auc, precision20 null)")
     elif isinstance(formatter, _MultiTargetRows):
         summary.tracks = len(formatter.written)
-        summary.last_track_id = max(formatter.written, default=None)
+        summary.last_track_id = last_id
         if resolved.mot_gt is None:
             metrics = formatter.counts(frames)
         else:

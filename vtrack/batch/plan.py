@@ -115,16 +115,19 @@ class Plan:
     split: set[str] = field(default_factory=set)
 
 
-def folder_clash(label: str, configs: Mapping[str, Config]) -> tuple[str, str] | None:
-    """The label of the first of ``configs`` (by label) whose results folder would be the one of
-    a config labelled ``label``, and why (one phrase, naming both and that config's source,
-    ending in what to do); None when ``label``'s folder is its own. One folder: the same
-    :func:`~vtrack.io.files.folder_name`, or names that differ only in case (``s0`` and
-    ``S0`` are one folder on a case-insensitive disk: macOS's, Windows')."""
-    folders: SharedFolders[tuple[str, Config]] = SharedFolders()
-    for other, config in configs.items():
-        folders.take(other, (other, config))
-    clash = folders.clash(label)
+#: The results folders of configs taken so far, each with its label and config.
+ConfigFolders = SharedFolders[tuple[str, Config]]
+
+
+def folder_clash(label: str, configs: ConfigFolders) -> tuple[str, str] | None:
+    """The label of the first config in ``configs`` (the folders taken so far:
+    :meth:`~vtrack.io.files.SharedFolders.take` each label with ``(label, config)``) whose
+    results folder would be the one of a config labelled ``label``, and why (one phrase,
+    naming both and that config's source, ending in what to do); None when ``label``'s folder
+    is its own. One folder: the same :func:`~vtrack.io.files.folder_name`, or names that
+    differ only in case (``s0`` and ``S0`` are one folder on a case-insensitive disk: macOS's,
+    Windows')."""
+    clash = configs.clash(label)
     if clash is None:
         return None
     (other, config), by_case = clash
@@ -139,12 +142,12 @@ def folder_clash(label: str, configs: Mapping[str, Config]) -> tuple[str, str] |
 def _refuse_shared_folders(configs: Mapping[str, Config]) -> None:
     """ConfigError (:func:`folder_clash`'s phrase) when two of ``configs`` would write into
     one results folder."""
-    earlier: dict[str, Config] = {}
+    earlier: ConfigFolders = SharedFolders()
     for label, config in configs.items():
         clash = folder_clash(label, earlier)
         if clash is not None:
             raise ConfigError(clash[1])
-        earlier[label] = config
+        earlier.take(label, (label, config))
 
 
 def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path,

@@ -71,10 +71,12 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
     whose results folders would be one are refused (:func:`~vtrack.batch.plan.folder_clash`:
     names the same, or the same but for characters a folder name cannot hold or for case),
     naming the ``--config`` that clashes; one given twice is said so."""
-    from vtrack.batch.plan import folder_clash
+    from vtrack.batch.plan import ConfigFolders, folder_clash
     from vtrack.config import config_file, load_config
+    from vtrack.io.files import SharedFolders
 
     configs: dict[str, Config] = {}
+    folders: ConfigFolders = SharedFolders()
     files: dict[str, Path] = {}  # by config name: the file each config was read from
     for spec in specs or (DEFAULT_CONFIG,):
         config = load_config(spec)
@@ -84,13 +86,14 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
             raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
                               "--config") from None
         file = config_file(spec).resolve()  # ./mine.toml is mine.toml; s0 its shipped file
-        clash = folder_clash(config.name, configs)
+        clash = folder_clash(config.name, folders)
         if clash is not None and files[clash[0]] == file:
             raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
                               "input")
         if clash is not None:
             raise ConfigError(f"--config {spec}: {clash[1]}")
         configs[config.name] = config
+        folders.take(config.name, (config.name, config))
         files[config.name] = file
     return configs
 

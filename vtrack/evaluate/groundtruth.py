@@ -74,9 +74,13 @@ def numbered_groundtruth(folder: str | PathLike[str]) -> list[Path]:
     return [p for _, p in sorted(found)]
 
 
-#: The name of one target's ground truth in an OTB sequence of several (its number captured,
-#: at most 12 digits: a RunRequest's ``target``).
-_NUMBERED_GT = re.compile(r"groundtruth_rect\.(\d{1,12})\.txt")
+#: The most digits of N in one target's ground truth, ``groundtruth_rect.N.txt``.
+TARGET_DIGITS = 12
+#: The largest target number (a RunRequest's ``target``): the largest N of
+#: :data:`TARGET_DIGITS` digits.
+MAX_TARGET = 10**TARGET_DIGITS - 1
+#: The name of one target's ground truth in an OTB sequence of several (its number captured).
+_NUMBERED_GT = re.compile(rf"groundtruth_rect\.(\d{{1,{TARGET_DIGITS}}})\.txt")
 
 
 def target_number(gt_path: str | PathLike[str]) -> int:

@@ -103,16 +103,16 @@ class SharedFolders(Generic[T]):
 
     def take(self, name: str, taker: T) -> None:
         """``name``'s folder taken by ``taker``, unless something took it first."""
-        folder = folder_name(name, self._fallback)
-        self._taken.setdefault(folder.casefold(), (folder, taker))
+        self._taken.setdefault(folder_key(name, self._fallback),
+                               (folder_name(name, self._fallback), taker))
 
     def clash(self, name: str) -> tuple[T, bool] | None:
         """What took ``name``'s folder first, and whether the two are one folder only on a
         case-insensitive disk (their folder names differ in case alone); None when the
         folder is free on every disk."""
-        folder = folder_name(name, self._fallback)
-        taken = self._taken.get(folder.casefold())
-        return None if taken is None else (taken[1], taken[0] != folder)
+        taken = self._taken.get(folder_key(name, self._fallback))
+        return (None if taken is None
+                else (taken[1], taken[0] != folder_name(name, self._fallback)))
 
 
 def temp_path(path: Path) -> Path:
