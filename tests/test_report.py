@@ -173,7 +173,9 @@ def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
     """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said
     unused as 'already scored with its own ground truth (good), which --gt does not replace',
     the file given just before it, not the run's; two plain `--gt good --gt other` scored every
-    run with the first and never read the second, exit 0 and not a word."""
+    run with the first and never read the second, exit 0 and not a word. One input named two
+    ways (`--gt clip=good --gt clip.mp4=other`, or its path): both match the run, which took
+    the first, and the second was said 'no run of input clip.mp4 was scored with it'."""
     clip = clip_factory("smooth", width=W, height=H, frames=20)
     run = tmp_path / "run"
     box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
@@ -196,6 +198,13 @@ def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
     mixed = vtrack("report", str(run), "--gt", str(other), "--gt", f"{name}={clip.gt}", "--out",
                    str(tmp_path / "r"))  # one plain, one per input: the input's own is taken
     assert mixed.exit_code == 0, mixed.stderr
+    for second in (clip.path.name, str(clip.path)):
+        both = vtrack("report", str(run), "--gt", f"{name}={clip.gt}", "--gt",
+                      f"{second}={other}", "--out", str(tmp_path / "r2"))
+        assert both.exit_code == 2 and both.stderr.splitlines() == [
+            f"vtrack: error: --gt {second}={other}: input {second} has its ground truth "
+            f"already (--gt {name}={clip.gt}); give one file per input"], both.stderr
+        assert not (tmp_path / "r2").exists()
 
 
 def test_runs_of_one_input_scored_against_different_ground_truth_are_warned_of(

@@ -339,15 +339,8 @@ def _refuse_two_files_for_one_input(truths: Sequence[GroundTruth]) -> None:
     seen: dict[str | None, GroundTruth] = {}
     for truth in truths:
         earlier = seen.setdefault(truth.input, truth)
-        if earlier is truth:
-            continue
-        if truth.input is None:
-            raise InputError(f"--gt {truth.path}: a second ground truth for every run (--gt "
-                             f"{earlier.path} is the first); give one --gt FILE, or --gt "
-                             "INPUT=FILE for each input")
-        raise InputError(f"--gt {truth.input}={truth.path}: input {truth.input} has its "
-                         f"ground truth already (--gt {earlier.input}={earlier.path}); give "
-                         "one file per input")
+        if earlier is not truth:
+            raise InputError(truth.second_to(earlier))
 
 
 def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:

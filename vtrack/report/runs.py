@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.batch.summary import NEVER_RAN
-from vtrack.errors import InputError, plural, printable
+from vtrack.errors import ConfigError, InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import (
     MultiTargetTruthError,
@@ -246,12 +246,26 @@ class GroundTruth:
                     f"{plural(frames, 'frame')}")
         return None
 
+    def second_to(self, earlier: GroundTruth) -> str:
+        """The one line refusing this file as a second ground truth for the runs ``earlier``
+        (given before it) is for: naming both files."""
+        if self.input is None:
+            return (f"--gt {self.path}: a second ground truth for every run (--gt "
+                    f"{earlier.path} is the first); give one --gt FILE, or --gt INPUT=FILE "
+                    "for each input")
+        return (f"--gt {self.input}={self.path}: input {self.input} has its ground truth "
+                f"already (--gt {earlier.input}={earlier.path}); give one file per input")
+
 
 def pick_ground_truth(truths: Sequence[GroundTruth], name: str, request: dict[str, Any],
                       found: str | None = None) -> GroundTruth | None:
     """The ``--gt`` for the run of input ``name`` (its input ``found`` here, see
-    :meth:`GroundTruth.belongs_to`): its own (``INPUT=FILE``) before a plain one."""
+    :meth:`GroundTruth.belongs_to`): its own (``INPUT=FILE``) before a plain one. ConfigError
+    (not a run left out: the options are wrong) naming both files when two ``INPUT=FILE``
+    match the run, however each named its input (``--gt clip=a --gt clip.mp4=b``)."""
     own = [t for t in truths if t.input is not None and t.belongs_to(name, request, found)]
+    if len(own) > 1:
+        raise ConfigError(own[1].second_to(own[0]))
     plain = [t for t in truths if t.input is None]
     return (own or plain or [None])[0]
 
