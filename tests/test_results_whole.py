@@ -60,21 +60,35 @@ def test_a_cut_track_csv_is_left_out_with_a_warning(run_dir: Path, tmp_path: Pat
     assert f"{FRAMES} frames" in stderr or "bytes" in stderr, stderr
 
 
-def test_a_track_csv_whose_frames_do_not_increase_is_left_out(run_dir: Path,
-                                                               tmp_path: Path) -> None:
+@pytest.mark.parametrize(("start", "old", "new", "why"), [
+    (0, "\n5,", "\n9,", "frame 6 after frame 9: its frame numbers do not increase"),
+    (0, f"\n{FRAMES - 1},", f"\n{FRAMES + 3},", f"frame {FRAMES + 3} after the run's last, "
+                                                f"{FRAMES - 1}"),
+    (5, "\n5,", "\n3,", "frame 3: before the run's first frame, 5"),
+])
+def test_a_track_csv_whose_frames_do_not_increase_is_left_out(
+        run_dir: Path, tmp_path: Path, start: int, old: str, new: str, why: str) -> None:
     """A track.csv whose row of frame 5 was renumbered 9 (same size, same rows) was scored
     with every later row shifted 4 frames off its ground truth (s0's AUC 0.92 read as 0.12),
-    its run said to cover frames 0..43 of a 40-frame run."""
+    its run said to cover frames 0..43 of a 40-frame run. Its last row renumbered past the run's
+    last frame was warned of as 'clip.gt.txt has 40 boxes for its 44 frames'; the first row of
+    a run from --start 5 renumbered 3 was said to 'not increase'."""
+    run = run_dir
+    if start:
+        run = tmp_path / "from"
+        clip = run_dir.parent / "clip"
+        assert vtrack("run", f"{clip}.mp4", "--gt", f"{clip}.gt.txt", "-c", "s0", "--start",
+                      str(start), "--no-video", "-o", str(run)).returncode == 0
     copy = tmp_path / "run"
     copy.mkdir()
-    (copy / "run.json").write_bytes((run_dir / "run.json").read_bytes())
-    data = (run_dir / "track.csv").read_text()
-    assert "\n5," in data
-    (copy / "track.csv").write_text(data.replace("\n5,", "\n9,", 1))
+    (copy / "run.json").write_bytes((run / "run.json").read_bytes())
+    data = (run / "track.csv").read_text()
+    assert old in data
+    (copy / "track.csv").write_text(data.replace(old, new, 1))
     code, stderr = report(copy, tmp_path / "rep")
     assert code != 0  # the only run is left out: nothing to report
-    assert (f"left out: {copy.resolve() / 'track.csv'}: not a vtrack track.csv (frame 6 "
-            "after frame 9: its frame numbers do not increase)") in stderr, stderr
+    assert (f"left out: {copy.resolve() / 'track.csv'}: not a vtrack track.csv ({why})"
+            ) in stderr, stderr
 
 
 @pytest.mark.parametrize("damage", [

@@ -354,20 +354,35 @@ def _start(record: dict[str, Any]) -> int:
     return start
 
 
-def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0) -> list[dict[str, str]]:
+def _last_frame(record: dict[str, Any]) -> int | None:
+    """The last frame whose results the run wrote (``last_frame``; None: none was, or a record
+    made before it existed). ValueError when it is not a frame number."""
+    last = record.get("last_frame")
+    if last is not None and (isinstance(last, bool) or not isinstance(last, int) or last < 0):
+        raise ValueError(f"last_frame {last!r}")
+    return last
+
+
+def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0, last: int | None = None
+                         ) -> list[dict[str, str]]:
     """One row per frame from ``start`` on: frames the input skipped (damaged, no row in
     ``track.csv``) get an empty row, a frame without a box or a score, so rows line up with the
-    ground truth. ValueError for frame numbers that do not increase from ``start`` (rows
-    moved or edited: vtrack writes each frame once, in order), which would shift every later
-    row off its frame."""
-    if all(row.get("frame") == str(start + i) for i, row in enumerate(rows)):
+    ground truth. ValueError for frame numbers that do not increase from ``start``, or go past
+    ``last`` (the run's last frame, None: not known) (rows moved or edited: vtrack writes each
+    frame of the run once, in order), which would shift every later row off its frame."""
+    if all(row.get("frame") == str(start + i) for i, row in enumerate(rows)) and (
+            last is None or start + len(rows) - 1 <= last):
         return rows
     filled: list[dict[str, str]] = []
     for row in rows:
         frame, due = int(row["frame"]), start + len(filled)
+        if frame < start:
+            raise ValueError(f"frame {frame}: before the run's first frame, {start}")
         if frame < due:
-            after = f"after frame {due - 1}" if filled else f"before the first, {start}"
-            raise ValueError(f"frame {frame} {after}: its frame numbers do not increase")
+            raise ValueError(f"frame {frame} after frame {due - 1}: its frame numbers do not "
+                             "increase")
+        if last is not None and frame > last:
+            raise ValueError(f"frame {frame} after the run's last, {last}")
         filled += [{"frame": str(i), "state": metrics.SKIPPED, "x": "", "overlap": "",
                     "center_error": ""} for i in range(due, frame)]
         filled.append(row)
@@ -502,7 +517,8 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         raise ValueError("gt_origin")
     if record.get("status", "?") not in (*BATCH_STATUSES, "?"):
         raise ValueError("status")
-    _start(record)  # a frame number (read again with the rows)
+    _start(record)  # frame numbers (read again with the rows)
+    _last_frame(record)
     return RunResult(
         folder=folder,
         input=_input_name(record, folder),
@@ -592,7 +608,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
                              f"run.json records {plural(result.frames, 'frame')} (cut or "
                              "edited after the run); not scored")
         start = _start(record)
-        rows = _with_skipped_frames(written, start)
+        rows = _with_skipped_frames(written, start, _last_frame(record))
         result.states = [row["state"] for row in rows]
         result.confidence = [_number(row.get("score")) for row in rows]
         result.boxes, result.first_frame = _boxes(rows), start
