@@ -178,8 +178,9 @@ def test_open_source_checks_live_as_a_run_request_does(tmp_path: Path) -> None:
         with pytest.raises(ConfigError, match=r"^live .*: must be True or False \(or the "
                            r"integers 1 or 0\)$"):
             vtrack.open_source(clip, live=given)
-    for given in (0, False):
+    for given, live in ((0, False), (False, False), (1, True), (True, True)):
         with vtrack.open_source(clip, live=given) as source:
+            assert source.live is live  # (frames alone: a fast reader gets them all live too)
             assert sum(1 for _ in source) == 10
     with pytest.raises(TypeError, match=r"open_source\(\) got an unexpected keyword argument "
                        "'bogus'"):

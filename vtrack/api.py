@@ -137,7 +137,6 @@ def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = N
     """:func:`open_source`'s arguments checked as it checks them, with the cheap checks of
     :func:`vtrack.io.inputs.source_opener` (a local path exists and can be read, a folder has
     an image); returns the function that opens the input."""
-
     if isinstance(raw, str):
         raw = RawFormat.parse(raw, pix_fmt or "bgr24", DEFAULT_FPS if fps is None else fps,
                               ("raw", "pix_fmt", "fps"))
