@@ -210,7 +210,7 @@ def test_a_run_refused_at_its_first_frame_leaves_the_stream_file_as_it_was(
     """`vtrack run grey.mp4 -c s0 -o out -y --stream lines.jsonl --overwrite` (s0 refuses a
     grey target at its first frame, exit 2) left out/ holding the earlier run's 10 frames,
     as promised, but emptied lines.jsonl, that run's lines; a new --stream file was left
-    behind empty."""
+    behind empty, and so was the file a link to no file names (the link is the user's)."""
     scene = make_scene("grey", seed=1, width=W, height=H, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "grey.mp4")
     box = ",".join(f"{v:g}" for v in scene.boxes[0])
@@ -225,6 +225,10 @@ def test_a_run_refused_at_its_first_frame_leaves_the_stream_file_as_it_was(
     new = tmp_path / "new.jsonl"
     assert _vtrack(*args, "-c", "s0", "--stream", str(new)).returncode == 2
     assert not new.exists()
+    link, named = tmp_path / "link.jsonl", tmp_path / "named.jsonl"
+    link.symlink_to(named)
+    assert _vtrack(*args, "-c", "s0", "--stream", str(link)).returncode == 2
+    assert link.is_symlink() and not named.exists()
     assert _vtrack(*args, "--frames", "3", "--stream", str(lines), "--overwrite").returncode == 0
     assert lines.read_bytes().count(b"\n") == 3 and lines.read_bytes() == first[:len(
         lines.read_bytes())]  # emptied, then this run's lines

@@ -99,11 +99,13 @@ class StreamWriter(Closing):
         self.multi_target = multi_target
         self.stall_s = stall_s
         self.lines = 0
-        #: Whether this writer made the file (a new one is removed by abort()).
-        self._created = target != STDOUT and not os.path.lexists(target)
         try:
-            self._file: IO[bytes] = (
-                _stdout_bytes() if target == STDOUT
+            #: The file this writer made (removed by abort(); None: it was there, or stdout):
+            #: the target, or the file a link at it names, made as the link is written through.
+            self._file: IO[bytes]
+            self._created: str | None
+            self._file, self._created = (
+                (_stdout_bytes(), None) if target == STDOUT
                 else _open_for_lines(target, stall_s, self.given, names.timeout))
         except OSError as exc:
             raise OutputError(f"{self.given}: {os_reason(exc)}") from None
@@ -193,8 +195,8 @@ class StreamWriter(Closing):
             return
         with contextlib.suppress(OSError, ValueError):
             self._file.close()
-        if self._created and self._regular:
-            remove_quietly(Path(self.target))
+        if self._created is not None and self._regular:
+            remove_quietly(Path(self._created))
 
 
 def _regular_file(fd: int) -> bool:
@@ -221,16 +223,18 @@ def _line_start(fd: int) -> int | None:
 READER_POLL_S = 0.05
 
 
-def _open_for_lines(target: str, wait_s: float, given: str, wait_name: str) -> IO[bytes]:
-    """``target`` opened to write. A FIFO is opened once a reader has opened it, waiting at
-    most ``wait_s`` (a plain open would wait for ever: OutputError beginning ``given``, the
-    target as the caller named it, and naming ``wait_name``, what sets the wait)."""
+def _open_for_lines(target: str, wait_s: float, given: str, wait_name: str
+                    ) -> tuple[IO[bytes], str | None]:
+    """``target`` opened to write, and the path of the file the open made (None: one was
+    there). A FIFO is opened once a reader has opened it, waiting at most ``wait_s`` (a plain
+    open would wait for ever: OutputError beginning ``given``, the target as the caller named
+    it, and naming ``wait_name``, what sets the wait)."""
     try:
         fifo = stat.S_ISFIFO(os.stat(target).st_mode)
     except OSError:
         fifo = False
     if not fifo:  # (not emptied here: StreamWriter empties a regular file at its first line)
-        return open(os.open(target, os.O_WRONLY | os.O_CREAT, 0o666), "wb")  # noqa: SIM115
+        return _open_or_make(target)
     deadline = time.monotonic() + wait_s
     while True:
         try:
@@ -244,7 +248,19 @@ def _open_for_lines(target: str, wait_s: float, given: str, wait_name: str) -> I
                                   f"{wait_s:g} s ({wait_name})") from None
             time.sleep(READER_POLL_S)
     os.set_blocking(fd, True)
-    return open(fd, "wb")  # noqa: SIM115
+    return open(fd, "wb"), None  # noqa: SIM115
+
+
+def _open_or_make(target: str) -> tuple[IO[bytes], str | None]:
+    """``target`` opened to write as it is, or made when it is not there, and the path of the
+    file made (None: it was there). A link to no file is written through, as a plain open
+    does: the file made, and the path returned, is the one the link names."""
+    made = os.path.realpath(target)
+    try:
+        fd = os.open(made, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    except FileExistsError:
+        fd, made = os.open(target, os.O_WRONLY), None
+    return open(fd, "wb"), made  # noqa: SIM115
 
 
 def _stdout_bytes() -> IO[bytes]:
