@@ -171,21 +171,27 @@ def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:
     """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was
     filled during the run and then removed by the folder's clearing at its end, exit 0: only
-    the files the run itself writes were refused, not all of RUN_OUTPUTS."""
+    the files the run itself writes were refused, not all of RUN_OUTPUTS. A stream named as
+    their temporaries (`--stream OUT/.track.tmp-1.csv`) was removed by it silently, exit 0."""
     smooth = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
     clip = write_video(smooth, tmp_path / "clip.mp4")
     box = ",".join(f"{v:g}" for v in smooth.boxes[0])
     multi = write_video(make_scene("multi", seed=2, width=W, height=H, frames=60, fps=30),
                         tmp_path / "multi.mp4")
-    cases = [(["-c", "s0", str(clip), "--init", box], name) for name in RUN_OUTPUTS]
-    cases += [(["-c", "s3", str(multi)], name) for name in ("track.csv", "error.log")]
-    for index, (args, name) in enumerate(cases):
+    single = ["-c", "s0", str(clip), "--init", box]
+    own, temporary = ("is one of this run's own outputs", "is named as a temporary file of "
+                      "this run's outputs, which the folder's clean-up removes")
+    cases = [(single, name, own) for name in RUN_OUTPUTS]
+    cases += [(["-c", "s3", str(multi)], name, own) for name in ("track.csv", "error.log")]
+    cases += [(single, name, temporary) for name in (".track.tmp-1.csv", ".run.tmp-1-ab.json",
+                                                      ".error.tmp.log")]
+    for index, (args, name, problem) in enumerate(cases):
         out = tmp_path / f"o{index}"
         done = _vtrack("run", *args, "--no-video", "-q", "--out", str(out),
                        "--stream", str(out / name))
         assert done.returncode == 2, (name, done.stderr)
-        assert done.stderr == (f"vtrack: error: --stream {out / name}: is one of this run's "
-                               "own outputs; name another file\n")
+        assert done.stderr == f"vtrack: error: --stream {out / name}: {problem}; name another " \
+                              "file\n"
         assert not out.exists()
 
 

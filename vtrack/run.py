@@ -78,7 +78,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.csvfile import box_as_written, scores_as_written
-from vtrack.io.files import refuse_replacing_file
+from vtrack.io.files import is_temp_of, refuse_replacing_file
 from vtrack.io.identity import sizes
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
@@ -758,6 +758,12 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
     if stream is not None and any(stream.resolve() == output.resolve() for output in own):
         raise ConfigError(f"{names.stream} {stream}: is one of this run's own outputs; name "
                           "another file")
+    folder = request.out_dir.resolve()  # ... with their temporaries, however the stream is named
+    for place in ({stream.resolve(), stream.parent.resolve() / stream.name} if stream else ()):
+        if place.parent == folder and any(is_temp_of(place.name, n) for n in RUN_OUTPUTS):
+            raise ConfigError(f"{names.stream} {stream}: is named as a temporary file of this "
+                              "run's outputs, which the folder's clean-up removes; name "
+                              "another file")
 
 
 def _stream_file(request: RunRequest) -> Path | None:
