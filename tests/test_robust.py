@@ -188,7 +188,8 @@ def test_a_tracked_frame_converts_its_pixels_once_for_its_cuts(scene_factory, mo
     regions (the last box's and the motion model's), and its learning sample and scale
     samples are cut from that conversion where it reaches them: fewer than two conversions a
     frame, not one per cut (3.7 a frame on this scene when each converted its own), and the
-    target is still followed."""
+    target is still followed. The converted pixels (and their frame) are let go once the
+    frame's cuts are done, not held while the next frame is read nor after the track."""
     from vtrack.frame import I420Frame
 
     convert = I420Frame.bgr
@@ -199,7 +200,12 @@ def test_a_tracked_frame_converts_its_pixels_once_for_its_cuts(scene_factory, mo
     frames = (I420Frame(i, i / scene.fps, cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420))
               for i, bgr in enumerate(scene.frames()))
     assert scene.boxes[0] is not None
-    results = list(Pipeline(load_config("robust").build()).track(frames, scene.boxes[0]))
+    pipeline = Pipeline(load_config("robust").build())
+    results = []
+    for result in pipeline.track(frames, scene.boxes[0]):
+        results.append(result)
+        target = pipeline._ctx.robust  # type: ignore[union-attr]
+        assert target is not None and target.converted is None, result.index
     assert len(calls) < 2 * len(results), len(calls) / len(results)
     assert overlap(scene, results) >= 0.7
 

@@ -199,6 +199,14 @@ class RobustFailure(Stage):
     def step(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None
+        try:
+            self._judge(ctx, target)
+        finally:  # the frame's last cut is done (its learning): its converted pixels go
+            target.frame_done()
+
+    def _judge(self, ctx: TrackContext, target: RobustTarget) -> None:
+        """The frame's state from the response (the module docstring), and the models'
+        learning."""
         ctx.extras["psr"] = target.psr
         # LMCF's means are of the frames before this one
         sharp = target.psr >= self.hidden_psr

@@ -164,6 +164,7 @@ class RobustTarget:
     merge: float = 0.0
     #: The frame whose pixels ``robust_model`` converted once for the frame's regions, and
     #: those pixels (:meth:`convert`); the frame's other cuts take them where they reach.
+    #: None between frames (:meth:`frame_done`).
     converted: tuple[Frame, ConvertedWindow | None] | None = None
 
     def merged(self, response: np.ndarray, colour: np.ndarray) -> np.ndarray:
@@ -204,6 +205,12 @@ class RobustTarget:
         self.converted = (frame, ConvertedWindow.spanning(
             frame, [(cx, cy, width, height) for cx, cy in centres], self.cols * self.cell,
             self.rows * self.cell))
+
+    def frame_done(self) -> None:
+        """Let go of the pixels :meth:`convert` converted, and of their frame, once the frame's
+        last cut is done (``robust_failure``'s learning): they are not held while the next
+        frame is read, nor after the track ends."""
+        self.converted = None
 
     def converted_pixels(self, frame: Frame) -> ConvertedWindow | None:
         """The pixels :meth:`convert` converted, if it did on ``frame``."""
