@@ -122,6 +122,12 @@ class Window(NamedTuple):
     def as_box(self) -> Box:
         return Box(float(self.x0), float(self.y0), float(self.width), float(self.height))
 
+    @classmethod
+    def union(cls, windows: Sequence[Window]) -> Window:
+        """The smallest window holding every one of ``windows`` (at least one)."""
+        return cls(min(w.x0 for w in windows), min(w.y0 for w in windows),
+                   max(w.x1 for w in windows), max(w.y1 for w in windows))
+
 
 def iou(a: Box, b: Box) -> float:
     """Intersection over union of two boxes, 0..1 (0 when either is empty)."""

@@ -38,7 +38,7 @@ class ConvertedWindow(NamedTuple):
         if isinstance(frame, GrayFrame) or width > FAR * frame.width \
                 or height > FAR * frame.height:
             return None
-        window = _overlap(frame, cx - width / 2, cy - height / 2, width, height)
+        window = _reach(frame, cx, cy, width, height)[2]
         return cls(window, frame.bgr(window))
 
     @classmethod
@@ -61,16 +61,16 @@ class ConvertedWindow(NamedTuple):
             windows.append(window)
         if not windows:
             return None
-        union = Window(min(w.x0 for w in windows), min(w.y0 for w in windows),
-                       max(w.x1 for w in windows), max(w.y1 for w in windows))
+        union = Window.union(windows)
         if union.width * union.height > own:
             return None
         return cls(union, frame.bgr(union))
 
     def covers_region(self, frame: Frame, cx: float, cy: float, width: float,
                       height: float) -> bool:
-        """Whether the frame's pixels of the region (as :meth:`around` takes it) are here."""
-        return self.covers(_overlap(frame, cx - width / 2, cy - height / 2, width, height))
+        """Whether the frame's pixels of the region (as :func:`region_patch` and
+        :meth:`around` take it) are here."""
+        return self.covers(_reach(frame, cx, cy, width, height)[2])
 
     def covers(self, window: Window) -> bool:
         return (self.window.x0 <= window.x0 and self.window.y0 <= window.y0

@@ -58,12 +58,7 @@ def hue_windows(frame: Frame, windows: list[Window]) -> list[np.ndarray]:
     """
     if not windows:
         return []
-    union = Window(
-        min(w.x0 for w in windows),
-        min(w.y0 for w in windows),
-        max(w.x1 for w in windows),
-        max(w.y1 for w in windows),
-    )
+    union = Window.union(windows)
     if len(windows) > 1 and union.width * union.height <= sum(w.width * w.height for w in windows):
         hue = cv2.extractChannel(cv2.cvtColor(frame.bgr(union), cv2.COLOR_BGR2HSV_FULL), 0)
         return [
