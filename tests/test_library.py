@@ -286,7 +286,9 @@ def test_pipeline_checks_its_frames_and_first_box_as_the_tracker_does(config: st
 
 def test_pipeline_process_before_begin_says_to_begin_or_begins_a_detecting_chain() -> None:
     """Pipeline(...).process(frame) before begin() raised AttributeError: 'Pipeline' object has
-    no attribute '_shape'; so did process() after a begin(None) refused for s0."""
+    no attribute '_shape'; so did process() after a begin(None) refused for s0. A begin(None)
+    refused during a track left that track going (the next frame followed it), where
+    Tracker.init refused ends it."""
     frame = vtrack.BgrFrame(0, 0.0, _red_block(1)[0])
     pipeline = vtrack.Pipeline(vtrack.load_config("s0").build())
     with pytest.raises(ConfigError, match=r"^pipeline: no track begun: call begin\(\(x, y, w, "
@@ -298,6 +300,10 @@ def test_pipeline_process_before_begin_says_to_begin_or_begins_a_detecting_chain
         pipeline.process(frame)
     pipeline.begin((50, 40, 40, 30))
     assert pipeline.process(frame).box == vtrack.Box(50, 40, 40, 30)
+    with pytest.raises(ConfigError, match="needs an initial box"):
+        pipeline.begin(None)
+    with pytest.raises(ConfigError, match="no track begun"):
+        pipeline.process(vtrack.BgrFrame(1, 1 / 30, _red_block(1)[0]))
     detecting = vtrack.Pipeline(vtrack.load_config("s4_multi").build())  # begins as update()
     then = vtrack.BgrFrame(1, 1 / 30, _red_block(1)[0])
     assert [detecting.process(f).index for f in (frame, then)] == [0, 1]
@@ -352,6 +358,13 @@ def test_pipeline_refuses_a_frame_of_another_size_or_kind_than_the_first(config:
     small[5:25, 5:25] = (0, 0, 255)
     again = pipeline.track([vtrack.BgrFrame(0, 0.0, small)], (5, 5, 20, 20))  # any size
     assert [r.index for r in again] == [0]
+    # a first frame refused (the box outside it) is not the track's first: it was, and a
+    # frame of the box's size was then refused as 'the first frame was 40x30'
+    pipeline.begin((50, 40, 40, 30))
+    with pytest.raises(ConfigError, match="^init_box: the box 50,40,40,30 lies outside the "
+                       "40x30 frame"):
+        pipeline.process(vtrack.BgrFrame(0, 0.0, small))
+    assert pipeline.process(vtrack.BgrFrame(0, 0.0, first)).box == vtrack.Box(50, 40, 40, 30)
 
 
 def test_a_frame_index_that_is_not_a_frame_number_is_one_line_naming_it() -> None:

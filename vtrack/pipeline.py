@@ -170,11 +170,15 @@ class Pipeline:
     def begin(self, init_box: Box | Sequence[float] | None = None) -> None:
         """Start a new track: the next frame given to :meth:`process` is the first, and
         ``init_box`` is the target's box in it (required unless the chain detects targets;
-        checked against that frame by :meth:`process`)."""
+        checked against that frame by :meth:`process`). The track before ends here, also when
+        ``init_box`` is refused (ConfigError): no track is going then, as after
+        :meth:`vtrack.Tracker.reset`."""
+        self._ctx, self._shape, self._off_since, self._begun = None, None, None, False
+        self._init_box = None
         if init_box is None and self.needs_init_box:
             raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
         self._init_box = None if init_box is None else as_box(init_box)
-        self._ctx, self._shape, self._off_since, self._begun = None, None, None, True
+        self._begun = True
 
     def process(self, frame: Frame) -> FrameResult:
         """Track ``frame`` (the next :class:`Frame` after :meth:`begin`; TypeError for anything
@@ -199,8 +203,8 @@ class Pipeline:
             init_box = self._init_box
             if init_box is not None:
                 check_init_box(init_box, frame.width, frame.height, "init_box")
-            ctx = self._ctx = TrackContext(frame=frame, seed=self.seed, box=init_box,
-                                           first_track_id=self.first_track_id)
+            ctx = TrackContext(frame=frame, seed=self.seed, box=init_box,
+                               first_track_id=self.first_track_id)
             ctx.new_frame(frame)
             for stage in self.stages:
                 started = timer()
@@ -208,6 +212,9 @@ class Pipeline:
                 self.stage_seconds[stage.name] += timer() - started
             if init_box is not None:
                 ctx.box = init_box  # the first frame's answer is the box we were given
+            # the track's first frame, once it started there: a frame refused as the first
+            # (its box outside it, a stage that cannot start) sets nothing
+            self._ctx, self._shape = ctx, _shape(frame)
         else:
             ctx.clock.advance(frame)  # before the forecast and the stages: they read it
             ctx.new_frame(frame)
@@ -239,11 +246,9 @@ class Pipeline:
 
     def _check_shape(self, frame: Frame) -> None:
         """InputError naming ``frame`` when its size or kind (grey, colour) is not the track's
-        first frame's; the first frame of a track sets them."""
-        shape = (frame.width, frame.height, isinstance(frame, GrayFrame))
-        if self._shape is None:
-            self._shape = shape
-        elif shape != self._shape:
+        first frame's (none yet: any frame may be the first)."""
+        shape = _shape(frame)
+        if self._shape is not None and shape != self._shape:
             raise InputError(f"frame {frame.index}: {_looks(shape)}, the first frame was "
                              f"{_looks(self._shape)} (one track follows one sequence: "
                              "Tracker.reset() or Pipeline.begin() starts another)")
@@ -253,6 +258,11 @@ class Pipeline:
         name (``run.json``'s ``timing.stage_us_per_frame``)."""
         n = max(self.frames_done, 1)
         return {name: seconds * 1e6 / n for name, seconds in self.stage_seconds.items()}
+
+
+def _shape(frame: Frame) -> tuple[int, int, bool]:
+    """(width, height, grey) of ``frame``: what every frame of a track must share."""
+    return frame.width, frame.height, isinstance(frame, GrayFrame)
 
 
 def _looks(shape: tuple[int, int, bool]) -> str:
