@@ -10,8 +10,10 @@ import sys
 from pathlib import Path
 
 import av
+import cv2
 import pytest
 
+from vtrack.errors import PartialInputError
 from vtrack.io.images import ImageFolderSource
 from vtrack.scenes import make_scene, write_image_sequence, write_video
 
@@ -102,6 +104,37 @@ def test_an_unreadable_image_the_reader_went_ahead_to_is_not_the_consumers(
         assert source.warnings == [f"{folder / 'img' / '0005.jpg'}: not an image FFmpeg can "
                                    "decode (Invalid data found when processing input); frame 4 "
                                    "skipped"]
+
+
+@pytest.mark.parametrize("lost", ["unreadable", "missing"])
+def test_an_image_of_another_size_ends_the_frames_with_those_lost_before_it_counted(
+        tmp_path: Path, lost: str) -> None:
+    """10 images whose 0007.jpg is junk (or deleted) and 0008.jpg 80x60: the run stopped at
+    frame 7 having read frames 0..5, and said neither skip (frames_skipped 0, no warning): the
+    image of another size ended the frames before frame 6 counted as handed on. Now the
+    places before the image that stopped the run are the run's: frame 6 is counted and
+    warned of."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 10, 30), folder)
+    images = folder / "img"
+    if lost == "missing":
+        (images / "0007.jpg").unlink()
+    else:
+        (images / "0007.jpg").write_bytes(b"not an image")
+    small = cv2.resize(cv2.imread(str(images / "0008.jpg")), (80, 60))
+    assert cv2.imwrite(str(images / "0008.jpg"), small)
+    with ImageFolderSource(str(images)) as source:
+        taken: list[int] = []
+        with pytest.raises(PartialInputError, match="stopped at frame 7"):
+            for frame in source:
+                taken.append(frame.index)
+        assert taken == [0, 1, 2, 3, 4, 5]
+        said = ([f"{images}: 1 image missing from the numbering (the first: frame 6, after "
+                 "0006.jpg); their frames are skipped"] if lost == "missing" else
+                [f"{images / '0007.jpg'}: not an image FFmpeg can decode (Invalid data found "
+                 "when processing input); frame 6 skipped"])
+        assert (source.frames_skipped, source.frames_missing, source.warnings) == (
+            1, int(lost == "missing"), said)
 
 
 def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:

@@ -326,10 +326,17 @@ class ImageFolderSource(Source):
 
     def _handing(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """``frames``, each noted as handed on as it is (:attr:`frames_missing` counts the
-        places up to the last, not those the reader has gone ahead to)."""
-        for frame in frames:
-            self._handed = frame.index
-            yield frame
+        places up to the last, not those the reader has gone ahead to). An image of another
+        size ends them (PartialInputError): the places before it were all read, the images
+        missing or unreadable there counted as the run's."""
+        try:
+            for frame in frames:
+                self._handed = frame.index
+                yield frame
+        except PartialInputError as exc:
+            self._handed = max(self._handed if self._handed is not None else -1,
+                               exc.frames_done - 1)
+            raise
         self._ended = True
 
     def absent(self, index: int) -> str:
