@@ -137,6 +137,32 @@ def test_an_image_of_another_size_ends_the_frames_with_those_lost_before_it_coun
             1, int(lost == "missing"), said)
 
 
+def test_the_frame_that_ends_a_duration_leaves_the_gap_before_it_uncounted(
+        tmp_path: Path) -> None:
+    """20 images with 0004.jpg and 0015.jpg (frames 3 and 14) deleted and 0011.jpg (frame 10)
+    junk: `--frames 0.1s` (frames 0..2) said 'skipped 1 missing', and `--frames 0.32s`
+    (frames 0..9 but 3) counted and warned of 0011.jpg: the frame whose time ended the span
+    was handed on and counted as read. Now it is given back: only the gaps among the frames
+    tracked count, as README says ('what a run read')."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 160, 120, 20, 30), folder)
+    images = folder / "img"
+    for number in (4, 15):
+        (images / f"{number:04d}.jpg").unlink()
+    (images / "0011.jpg").write_bytes(b"not an image")
+    gap = (f"{images}: 1 image missing from the numbering (the first: frame 3, after "
+           "0003.jpg); their frames are skipped")
+    for span, frames, skipped, said in (("0.1s", 3, 0, []), ("0.32s", 9, 1, [gap])):
+        out = tmp_path / span
+        done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--frames",
+                      span, "-o", str(out))
+        assert done.returncode == 0, done.stderr
+        record = json.loads((out / "run.json").read_text())
+        summary = record["summary"]
+        assert (summary["frames"], summary["frames_skipped"]) == (frames, skipped), span
+        assert record["warnings"] == said, span
+
+
 def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:
     """``vtrack frame --at 4`` said ``frame 4 could not be decoded (damaged; ...)``."""
     picture = vtrack("frame", str(numbered), "--at", "4", "-o", str(tmp_path / "f.png"))

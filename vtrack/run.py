@@ -341,10 +341,12 @@ class _Span:
         past its duration came) rather than the input's end."""
         return self.ended_by_time or (self.count is not None and self.taken >= self.count)
 
-    def take(self, frames: Iterator[Frame]) -> Iterator[Frame]:
-        """``frames`` up to the end of the span. A count ends it as its last frame is handed
-        on, without asking ``frames`` for one more (a pipe or stream may hold it back for
-        ever); a duration needs the next frame's timestamp to end."""
+    def take(self, source: Source, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """``frames`` (``source``'s) up to the end of the span. A count ends it as its last
+        frame is handed on, without asking ``frames`` for one more (a pipe or stream may hold
+        it back for ever); a duration needs the next frame's timestamp to end, and gives that
+        frame back (:meth:`Source.not_taken`): the places between the last frame taken and it
+        are not the run's."""
         end: float | None = None
         if self.count is not None and self.count <= 0:
             return
@@ -354,6 +356,7 @@ class _Span:
                     end = frame.time_s + self.seconds - TIME_SLACK_S
                 elif frame.time_s >= end:
                     self.ended_by_time = True
+                    source.not_taken(frame)
                     return
             self.taken += 1
             yield frame
@@ -975,8 +978,8 @@ def _frames_to_track(request: RunRequest, resolved: _Resolved, source: Source
                      ) -> Iterator[Frame]:
     """``source``'s frames from the resolved first one on, within the resolved span (a frame
     count or a duration, ``--frames``)."""
-    return resolved.span.take(_from(source, resolved.start, request.input,
-                                    resolved.names.start, resolved.init_box is not None))
+    return resolved.span.take(source, _from(source, resolved.start, request.input,
+                                            resolved.names.start, resolved.init_box is not None))
 
 
 class _Waits:

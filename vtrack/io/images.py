@@ -239,6 +239,7 @@ class ImageFolderSource(Source):
         #: the reader's notes of frames up to it the run's (:meth:`_reached`).
         self._run_first: int | None = None
         self._handed: int | None = None
+        self._before: int | None = None  # the frame handed on before it (:meth:`not_taken`)
         self._ended = False
         self._notes: list[_Note] = []
         stored, self._turn = read_stored(self._files[0])
@@ -331,13 +332,19 @@ class ImageFolderSource(Source):
         missing or unreadable there counted as the run's."""
         try:
             for frame in frames:
-                self._handed = frame.index
+                self._before, self._handed = self._handed, frame.index
                 yield frame
         except PartialInputError as exc:
             self._handed = max(self._handed if self._handed is not None else -1,
                                exc.frames_done - 1)
             raise
         self._ended = True
+
+    def not_taken(self, frame: Frame) -> None:
+        """The last frame handed on was not taken (it ended a ``--frames`` duration): the
+        counts and warnings stop at the one before it."""
+        if frame.index == self._handed:
+            self._handed = self._before
 
     def absent(self, index: int) -> str:
         """``is missing from the numbering (no image between 0003.jpg and 0007.jpg)`` for a

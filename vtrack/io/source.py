@@ -97,6 +97,11 @@ class Source(Closing, ABC):
         #: input that ends before its time ends (None: it dropped none).
         self.passed_last: tuple[int, float] | None = None
 
+    def not_taken(self, frame: Frame) -> None:
+        """``frame``, handed on, was not taken after all (it ended a ``--frames`` duration):
+        the counts and warnings of what the run read (:attr:`frames_skipped`,
+        :attr:`warnings`) stop at the frame before it. Nothing to undo here."""
+
     @property
     def frames_skipped(self) -> int:
         """Frames of the input that could not be decoded and were skipped (damage in the middle
