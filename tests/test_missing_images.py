@@ -7,14 +7,17 @@ import csv
 import json
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import av
 import cv2
+import numpy as np
 import pytest
 
+import vtrack.io.images as images_module
 from vtrack.errors import PartialInputError
-from vtrack.io.images import ImageFolderSource
+from vtrack.io.images import ImageFolderSource, read_stored
 from vtrack.scenes import make_scene, write_image_sequence, write_video
 
 
@@ -83,27 +86,40 @@ def test_a_run_counts_the_missing_images_among_the_frames_it_read(tmp_path: Path
 
 
 def test_an_unreadable_image_the_reader_went_ahead_to_is_not_the_consumers(
-        tmp_path: Path) -> None:
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Frames are read ahead of the consumer in a thread, which counted and warned of each
-    unreadable image as it read it: a run that took frame 0 of 5 images whose last is junk
+    unreadable image as it read it: a run that took frame 0 of 8 images whose fifth is junk
     said 'frame 4 skipped' (frames_skipped 1) once the reader had got there. Now the frames
-    handed on decide: nothing until frame 4's place is passed, then the line as before."""
+    handed on decide: nothing until frame 4's place is passed, then the line as before,
+    while the frames go on (a run of --frames 7 that has not ended counts it)."""
     folder = tmp_path / "seq"
     write_image_sequence(make_scene("smooth", 0, 96, 72, 10, 30), folder)
-    for number in range(6, 11):
+    for number in (9, 10):
         (folder / "img" / f"{number:04d}.jpg").unlink()
-    (folder / "img" / "0005.jpg").write_bytes(b"not an image")
+    junk = folder / "img" / "0005.jpg"
+    junk.write_bytes(b"not an image")
+    past_junk = threading.Event()  # the reader went past 0005.jpg, its note taken
+
+    def reading(path: Path) -> tuple[np.ndarray, int]:
+        if path.name == "0006.jpg":
+            past_junk.set()
+        return read_stored(path)
+
+    monkeypatch.setattr(images_module, "read_stored", reading)
+    line = (f"{junk}: not an image FFmpeg can decode (Invalid data found when processing "
+            "input); frame 4 skipped")
     with ImageFolderSource(str(folder)) as source:
         frames = iter(source)
         assert next(frames).index == 0
-        # the reader has room for frames 1..3 and its end: it reads the junk 0005.jpg and ends
-        source._prefetch._thread.join(timeout=60)  # (the reader thread, run to its end)
+        # the reader has room for frames 1..3 and reads 0006.jpg (frame 5) before it waits
+        assert past_junk.wait(60)
         assert (source.frames_skipped, source.warnings) == (0, [])
-        assert [frame.index for frame in frames] == [1, 2, 3]
-        assert source.frames_skipped == 1
-        assert source.warnings == [f"{folder / 'img' / '0005.jpg'}: not an image FFmpeg can "
-                                   "decode (Invalid data found when processing input); frame 4 "
-                                   "skipped"]
+        assert [next(frames).index for _ in range(3)] == [1, 2, 3]
+        assert (source.frames_skipped, source.warnings) == (0, [])
+        assert next(frames).index == 5  # frame 4's place passed; frames 6 and 7 still to come
+        assert (source.frames_skipped, source.warnings) == (1, [line])
+        assert [frame.index for frame in frames] == [6, 7]
+        assert (source.frames_skipped, source.warnings) == (1, [line])
 
 
 @pytest.mark.parametrize("lost", ["unreadable", "missing"])
