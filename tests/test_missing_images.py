@@ -179,6 +179,15 @@ def test_the_frame_that_ends_a_duration_leaves_the_gap_before_it_uncounted(
         assert record["warnings"] == said, span
 
 
+def test_a_sources_warnings_are_not_assigned(tmp_path: Path) -> None:
+    """An image folder's ``warnings`` took an assignment and dropped it without a word (a
+    setter that did nothing). Now no source's ``warnings`` can be assigned."""
+    folder = tmp_path / "seq"
+    write_image_sequence(make_scene("smooth", 0, 96, 72, 10, 30), folder)
+    with ImageFolderSource(str(folder)) as source, pytest.raises(AttributeError):
+        source.warnings = ["dropped"]  # type: ignore[misc]
+
+
 def test_frame_and_start_call_a_missing_image_missing(numbered: Path, tmp_path: Path) -> None:
     """``vtrack frame --at 4`` said ``frame 4 could not be decoded (damaged; ...)``."""
     picture = vtrack("frame", str(numbered), "--at", "4", "-o", str(tmp_path / "f.png"))

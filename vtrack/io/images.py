@@ -265,7 +265,7 @@ class ImageFolderSource(Source):
         )
 
     @property
-    def warnings(self) -> list[str]:  # type: ignore[override]
+    def warnings(self) -> list[str]:
         """The warnings of the frames handed on so far (not of those the reader has gone
         ahead to): one line counting the images missing from the numbering
         (:attr:`frames_missing`), if any, then the reader's, in its order (the first
@@ -286,10 +286,6 @@ class ImageFolderSource(Source):
             lines.append(f"{self.info.path}: {unreadable} unreadable images skipped in all "
                          f"(the first {_NAMED_SKIPS} are named above)")
         return lines
-
-    @warnings.setter
-    def warnings(self, lines: list[str]) -> None:
-        """Source's ``self.warnings = []``: the lines are made from the notes instead."""
 
     def _reached(self) -> list[_Note]:
         """The reader's notes of the frames handed on so far (all once every frame was)."""

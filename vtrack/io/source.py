@@ -81,9 +81,8 @@ class Source(Closing, ABC):
 
     def __init__(self, info: InputInfo) -> None:
         self.info = info
-        #: One line per problem the reader went past (e.g. an unreadable image it skipped);
-        #: filled by the reader thread, complete once iteration has ended.
-        self.warnings: list[str] = []
+        #: :attr:`warnings`, filled by the reader thread.
+        self._warnings: list[str] = []
         self._prefetch: Prefetcher[Frame] | KeepingUp[Frame] | None = None
         self._closed = False
         #: After :meth:`skip_to`: the frame it stopped at and the frames after it.
@@ -96,6 +95,12 @@ class Source(Closing, ABC):
         #: The last frame :meth:`skip_to` decoded and dropped, ``(index, time_s)``: where an
         #: input that ends before its time ends (None: it dropped none).
         self.passed_last: tuple[int, float] | None = None
+
+    @property
+    def warnings(self) -> list[str]:
+        """One line per problem the reader went past (e.g. an unreadable image it skipped);
+        complete once iteration has ended."""
+        return self._warnings
 
     def not_taken(self, frame: Frame) -> None:
         """``frame``, handed on, was not taken after all (it ended a ``--frames`` duration):

@@ -509,10 +509,10 @@ class VideoSource(Source):
         super().__init__(info)
         several = _several_videos(path, container, self._stream)
         if several:
-            self.warnings.append(several)
+            self._warnings.append(several)
         turn = self._first.rotation  # the display matrix's angle, read at a quarter turn
         if abs((turn - self._rotation + 180) % 360 - 180) > 1:
-            self.warnings.append(f"{path}: its display matrix turns the picture {turn:g} "
+            self._warnings.append(f"{path}: its display matrix turns the picture {turn:g} "
                                  "degrees, not a quarter turn; it is read turned "
                                  f"{self._rotation} degrees (the nearest quarter turn)")
 
@@ -876,10 +876,10 @@ class VideoSource(Source):
         if self.frames_skipped:
             damaged = plural(self.frames_skipped, "damaged frame")
             were = "was" if self.frames_skipped == 1 else "were"
-            self.warnings.append(f"{self.info.path}: {damaged} could not be decoded and "
+            self._warnings.append(f"{self.info.path}: {damaged} could not be decoded and "
                                  f"{were} skipped")
         if self.frames_corrupt:
-            self.warnings.append(f"{self.info.path}: {plural(self.frames_corrupt, 'frame')} "
+            self._warnings.append(f"{self.info.path}: {plural(self.frames_corrupt, 'frame')} "
                                  "decoded with errors (damaged file: their pictures may be "
                                  "wrong)")
 
