@@ -542,6 +542,36 @@ def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
     assert done.returncode == 0, done.stderr
 
 
+def test_run_of_a_sequence_of_targets_names_its_other_ground_truth_and_quotes_the_gt(
+        tmp_path: Path) -> None:
+    """An OTB folder holding groundtruth_rect.txt beside groundtruth_rect.1.txt and .2.txt
+    named only the numbered files (its groundtruth_rect.txt, which the message named before
+    the targets were, was left out); one holding groundtruth_rect.1.txt alone said '1 targets'
+    ground truth ..., none of which ...: give one per run (...)'; and a folder named with a
+    space gave '--gt my seq/groundtruth_rect.1.txt', which breaks when pasted. Now every file
+    is named, one file is given as one --gt, and the paths are quoted for a shell."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=12, fps=FPS)
+    both = write_image_sequence(scene, tmp_path / "J3")
+    for number in (1, 2):
+        (both / f"groundtruth_rect.{number}.txt").write_bytes(
+            (both / "groundtruth_rect.txt").read_bytes())
+    line = assert_one_line_error(vtrack("run", "J3", "-c", "s0", "-o", "out", cwd=tmp_path))
+    assert line == (
+        "vtrack: error: s0: this tracker needs an initial box, and J3 has groundtruth_rect.txt "
+        "and 2 targets' ground truth (groundtruth_rect.1.txt, groundtruth_rect.2.txt), none of "
+        "which a run takes by itself: give one per run (--gt J3/groundtruth_rect.txt, --gt "
+        "J3/groundtruth_rect.1.txt, --gt J3/groundtruth_rect.2.txt), or --init x,y,w,h")
+    one = write_image_sequence(scene, tmp_path / "my seq")
+    (one / "groundtruth_rect.txt").rename(one / "groundtruth_rect.1.txt")
+    line = assert_one_line_error(vtrack("run", "my seq/img", "-c", "s0", "-o", "out",
+                                        "--start", "2", cwd=tmp_path))
+    assert line == (
+        "vtrack: error: s0: this tracker needs the target's box in frame 2, and my seq has 1 "
+        "target's ground truth (groundtruth_rect.1.txt), which a run does not take by itself: "
+        "give --gt 'my seq/groundtruth_rect.1.txt' or --init x,y,w,h")
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("command, option, limits", [
     ("run", "--fps", ("0.01", "10000")),
     ("run", "--start", ("1000000000000", "31622400s")),

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 import platform
+import shlex
 import signal
 import sys
 import time
@@ -886,16 +887,13 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         if source is None:
             _refuse_unreadable(request, names.fps)
         give_gt = names.give(names.gt, "FILE")
-        targets = (numbered_groundtruth(sidecar_path(request.input).parent)
+        sequence = sidecar_path(request.input).parent
+        targets = (numbered_groundtruth(sequence)
                    if has_sidecar(request.input) and Path(request.input).is_dir() else [])
         if targets:  # OTB's sequences of several targets: which one is the user's to say
             needs = f"the target's box in frame {start}" if start else "an initial box"
-            raise ConfigError(
-                f"{request.config.source}: this tracker needs {needs}, and "
-                f"{sidecar_path(request.input).parent} has {len(targets)} targets' ground truth "
-                f"({', '.join(p.name for p in targets)}), none "
-                "of which a run takes by itself: give one per run ("
-                f"{', '.join(names.give(names.gt, str(p)) for p in targets)}), or {give_box}")
+            raise ConfigError(f"{request.config.source}: this tracker needs {needs}, and "
+                              f"{_targets_truth(sequence, targets, names)}")
         if start:
             raise ConfigError(f"{names.start_given(request.start, request.start_s)}: this "
                               f"tracker needs the target's box in frame {start}: give "
@@ -905,8 +903,8 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                               f"{give_box} (or {give_gt}); {request.input} has no sidecar "
                               "file to hold one")
         beside = groundtruth_beside(request.input)
-        gt_hint = (give_gt if beside is None else f"{names.give(names.gt, str(beside))} (its "
-                   "ground truth, which vtrack batch takes by itself)")
+        gt_hint = (give_gt if beside is None else f"{_give_file(names, names.gt, beside)} "
+                   "(its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
             f"{give_box} or write x,y,w,h into {sidecar_path(request.input).name} "
@@ -915,6 +913,30 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, read_from,
                      _Span(request.max_frames, request.max_s), warnings, distractors, names)
+
+
+def _targets_truth(sequence: Path, targets: list[Path], names: OptionNames) -> str:
+    """What OTB ``sequence`` of several targets (their ``groundtruth_rect.N.txt``,
+    ``targets``) holds for a first box, and how a run takes one: ``Jogging has 2 targets'
+    ground truth (groundtruth_rect.1.txt, groundtruth_rect.2.txt), none of which a run takes
+    by itself: give one per run (--gt Jogging/groundtruth_rect.1.txt, --gt ...), or --init
+    x,y,w,h``, its ``groundtruth_rect.txt`` named first when it has one too."""
+    beside = groundtruth_beside(sequence)
+    files = [beside, *targets] if beside is not None else targets
+    truth = plural(len(targets), "target's ground truth", "targets' ground truth")
+    held = f"{truth} ({', '.join(p.name for p in targets)})"
+    held = f"{beside.name} and {held}" if beside is not None else held
+    if len(files) == 1:
+        return (f"{sequence} has {held}, which a run does not take by itself: give "
+                f"{_give_file(names, names.gt, files[0])} or {names.give_box}")
+    return (f"{sequence} has {held}, none of which a run takes by itself: give one per run "
+            f"({', '.join(_give_file(names, names.gt, p) for p in files)}), or {names.give_box}")
+
+
+def _give_file(names: OptionNames, name: str, path: Path) -> str:
+    """How ``name`` is given file ``path`` (:meth:`OptionNames.give`), quoted for a shell
+    when ``names`` are a command's options: ``--gt 'my seq/groundtruth_rect.txt'``."""
+    return names.give(name, shlex.quote(str(path)) if names.options else str(path))
 
 
 def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:
