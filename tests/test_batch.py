@@ -21,7 +21,16 @@ import pytest
 from click.testing import CliRunner, Result
 from conftest import one_error_line
 
-from vtrack.batch import SUMMARY_COLUMNS, LocalExecutor, Outcome, SummaryWriter, find_inputs, plan
+from vtrack.batch import (
+    SUMMARY_COLUMNS,
+    LocalExecutor,
+    Outcome,
+    SummaryWriter,
+    find_inputs,
+    nested_inputs,
+    plan,
+)
+from vtrack.batch.discover import NESTED_LOOKS
 from vtrack.batch.summary import WRITE_SPACING
 from vtrack.cli import main
 from vtrack.config import DEFAULT_CONFIG, load_config
@@ -710,6 +719,31 @@ def test_inputs_one_folder_deeper_are_named_with_the_batch_that_tracks_them(
     alone = batch(str(folder / "group"), "-c", "s0", "--no-video", "--out", str(tmp_path / "o3"))
     assert alone.exit_code == 0 and "vtrack: warning" not in alone.stderr, alone.output
     assert set(summary(tmp_path / "o3")) == {("clip", "s0"), ("seq", "s0")}
+
+
+def test_the_nested_walk_is_bounded_names_the_nearest_and_quotes_its_folder(
+        tmp_path: Path) -> None:
+    """The walk for inputs in sub-folders went through the whole tree before a batch began or
+    said 'no inputs' (`vtrack batch /usr`: seconds), named the first by path (a file 5
+    folders deep), and gave `vtrack batch IN/my group`, which breaks when pasted. Now it looks
+    at NESTED_LOOKS folders at most, breadth first, says so ("at least", "e.g."), names the
+    nearest find, and quotes the folder."""
+    folder = tmp_path / "in"
+    for name in ("a/b/c/deep.mp4", "my group/near.mp4"):
+        (folder / name).parent.mkdir(parents=True)
+        (folder / name).write_bytes(b"not read")
+    for number in range(NESTED_LOOKS):  # more folders than the walk looks at
+        (folder / "zz" / f"d{number:03d}").mkdir(parents=True)
+    nothing = batch(str(folder), "-c", "s0", "--no-video", "--out", str(tmp_path / "o"))
+    assert one_error_line(nothing).endswith(
+        "; at least 1 video file in sub-folders is not an input "
+        f"({folder / 'my group' / 'near.mp4'}, in the first {NESTED_LOOKS} folders looked "
+        "at): a batch takes the videos directly in the folder and its sequence folders "
+        "(img/, img1/, color/); to track them, e.g. "
+        f"vtrack batch '{folder / 'my group'}'"), nothing.output
+    shutil.rmtree(folder / "zz")  # every folder looked at: all counted, the nearest first
+    assert nested_inputs(folder) == ([folder / "my group" / "near.mp4",
+                                      folder / "a" / "b" / "c" / "deep.mp4"], True)
 
 
 def test_summary_writes_are_spaced_by_their_own_time(tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 from vtrack.errors import InputError, plural
 from vtrack.evaluate.groundtruth import (
@@ -258,28 +259,58 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
             f"{'its run is' if len(unscored) == 1 and one else 'their runs are'} not scored")
 
 
-def nested_inputs(folder: Path) -> list[Path]:
-    """What :func:`find_inputs` does not take in sub-folders of ``folder``, sorted: the video
-    files (by suffix) and sequence folders below a sub-folder that is not a sequence folder, at
-    any depth (``IN/group/clip.mp4``, ``IN/group/seq/img/``). Sequence folders and results
-    folders (a run's ``run.json``, a batch's ``summary.csv``: their ``annotated.mp4`` are no
-    inputs) are not looked into; links to folders are not followed. Nothing when ``folder``
-    is itself a sequence folder."""
+#: The folders :func:`nested_inputs` looks at (into, or whether each is a sequence folder) at
+#: most: a batch given a big tree (``/usr``) says what it found near the top at once.
+NESTED_LOOKS = 500
+
+
+class NestedInputs(NamedTuple):
+    """What :func:`nested_inputs` found, and whether it looked at every folder (``whole``:
+    else ``found`` is some of them, those nearest ``folder`` first)."""
+
+    found: list[Path]
+    whole: bool
+
+
+def nested_inputs(folder: Path, looks: int = NESTED_LOOKS) -> NestedInputs:
+    """What :func:`find_inputs` does not take in sub-folders of ``folder``, nearest first (by
+    depth, then name): the video files (by suffix) and sequence folders below a sub-folder
+    that is not a sequence folder (``IN/group/clip.mp4``, ``IN/group/seq/img/``), looking at
+    ``looks`` folders at most, breadth first. Sequence folders and results folders (a run's
+    ``run.json``, a batch's ``summary.csv``: their ``annotated.mp4`` are no inputs) are not
+    looked into; links to folders are not followed. Nothing when ``folder`` is itself a
+    sequence folder."""
     folder = Path(folder)
     if not folder.is_dir() or is_sequence_folder(folder):
-        return []
+        return NestedInputs([], True)
     found: list[Path] = []
-    for top in sorted(folder.iterdir()):
-        if not top.is_dir() or top.is_symlink() or is_sequence_folder(top):
-            continue
-        for root, dirs, files in os.walk(top):
-            here = Path(root)
-            if _results_folder(here):
-                dirs.clear()
-                continue
-            sequences = [d for d in dirs if not _results_folder(here / d)
-                         and is_sequence_folder(here / d)]
-            dirs[:] = [d for d in dirs if d not in sequences]
-            found += [here / d for d in sequences]
-            found += [here / f for f in files if Path(f).suffix.lower() in VIDEO_SUFFIXES]
-    return sorted(found)
+    level = [top for top in sorted(folder.iterdir()) if top.is_dir() and not top.is_symlink()
+             and not _results_folder(top) and not is_sequence_folder(top)]
+    looked = len(level)
+    whole = True
+    while level and whole:
+        deeper: list[Path] = []
+        for entry in (entry for here in level for entry in _listed(here)):
+            if entry.is_dir():
+                looked += 1
+                whole = looked <= looks
+                if not whole:
+                    break
+                if _results_folder(entry):
+                    continue
+                if is_sequence_folder(entry):
+                    found.append(entry)
+                elif not entry.is_symlink():
+                    deeper.append(entry)
+            elif entry.suffix.lower() in VIDEO_SUFFIXES and entry.is_file():
+                found.append(entry)
+        level = deeper
+    return NestedInputs(sorted(found, key=lambda path: (len(path.parts), path)), whole)
+
+
+def _listed(folder: Path) -> list[Path]:
+    """What ``folder`` holds, sorted; nothing when it cannot be listed."""
+    try:
+        return sorted(folder.iterdir())
+    except OSError:
+        return []

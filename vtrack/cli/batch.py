@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 import sys
 from collections.abc import Callable
 from contextlib import closing
@@ -33,6 +34,7 @@ from vtrack.params import MAX_WAIT_S
 
 if TYPE_CHECKING:
     from vtrack.batch import Outcome
+    from vtrack.batch.discover import NestedInputs
     from vtrack.config import Config
 
 #: The most local worker processes ``--jobs`` starts (each a Python process with its own
@@ -169,8 +171,9 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     beside them) beside their ground truth or init.txt (ground truth inside:
     groundtruth_rect.txt or groundtruth.txt, MOTChallenge
     groundtruth_mot.txt as vtrack scene writes it, gt.txt or gt/gt.txt; each target of an
-    OTB sequence of several, groundtruth_rect.N.txt, is an input SEQ-N); videos in other
-    sub-folders are not inputs (a warning counts them: give such a folder as FOLDER). Without
+    OTB sequence of several, groundtruth_rect.N.txt, is an input SEQ-N); videos and sequence
+    folders in other sub-folders are not inputs (a warning counts them, the nearest first,
+    looking at a few hundred folders at most: give such a folder as FOLDER). Without
     ground truth, single-target configs start from the box in name.init.txt (init.txt in a
     sequence folder). Results already complete are not run again (resume) unless --force;
     results of runs with other settings are replaced only with --overwrite (or --force). A
@@ -271,22 +274,29 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         sys.exit(1)
 
 
-def _left_out(nested: list[Path]) -> str | None:
+def _left_out(nested: NestedInputs) -> str | None:
     """What a batch says of the inputs in sub-folders it does not take
-    (:func:`~vtrack.batch.nested_inputs`): their count, the first, and the ``vtrack batch``
-    that tracks them (the first's folder); None when there are none."""
-    if not nested:
+    (:func:`~vtrack.batch.nested_inputs`): their count ("at least" when it did not look at
+    every folder), the first (the nearest), and the ``vtrack batch`` that tracks it (its
+    folder, quoted for a shell); None when there are none."""
+    from vtrack.batch.discover import NESTED_LOOKS
+
+    found = nested.found
+    if not found:
         return None
-    folders = sum(path.is_dir() for path in nested)
-    kinds = [plural(len(nested) - folders, "video file"), plural(folders, "sequence folder")]
+    folders = sum(path.is_dir() for path in found)
+    kinds = [plural(len(found) - folders, "video file"), plural(folders, "sequence folder")]
     what = " and ".join(kind for kind in kinds if not kind.startswith("0 "))
-    more = f" and {len(nested) - 1} more" if len(nested) > 1 else ""
-    verb = "is not an input" if len(nested) == 1 else "are not inputs"
-    where = {path.parent for path in nested}
-    example = "" if len(where) == 1 else "e.g. "
-    return (f"{what} in sub-folders {verb} ({nested[0]}{more}): a batch takes the videos "
-            "directly in the folder and its sequence folders (img/, img1/, color/); to track "
-            f"{'it' if len(nested) == 1 else 'them'}, {example}vtrack batch {nested[0].parent}")
+    what = what if nested.whole else f"at least {what}"
+    more = f" and {len(found) - 1} more" if len(found) > 1 else ""
+    looked = "" if nested.whole else f", in the first {NESTED_LOOKS} folders looked at"
+    verb = "is not an input" if len(found) == 1 else "are not inputs"
+    where = {path.parent for path in found}
+    example = "" if len(where) == 1 and nested.whole else "e.g. "
+    them = "it" if len(found) == 1 and nested.whole else "them"
+    return (f"{what} in sub-folders {verb} ({found[0]}{more}{looked}): a batch takes the "
+            "videos directly in the folder and its sequence folders (img/, img1/, color/); to "
+            f"track {them}, {example}vtrack batch {shlex.quote(str(found[0].parent))}")
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
