@@ -347,6 +347,37 @@ def test_sigterm_is_handled_as_ctrl_c(clip_factory: ClipFactory, tmp_path: Path)
     assert record["frames"] == 30 and sorted(record["outputs"]) == ["annotated.mp4", "track.csv"]
 
 
+#: ``vtrack run`` killed outright (SIGKILL) as its video starts to close: where a slow encoder
+#: (``--preset placebo``) is flushing when a SIGTERM's grace runs out and the kill comes.
+KILLED_AS_THE_VIDEO_CLOSES = """
+import os, runpy, signal, sys
+from vtrack.io.videowriter import VideoWriter
+VideoWriter.close = lambda self: os.kill(os.getpid(), signal.SIGKILL)
+sys.argv = ["vtrack", *sys.argv[1:]]
+runpy.run_module("vtrack", run_name="__main__")
+"""
+
+
+def test_a_run_killed_while_its_video_closes_leaves_no_track_csv_without_a_record(
+        clip: Clip, tmp_path: Path) -> None:
+    """SIGTERM to `vtrack run --preset placebo`, then SIGKILL while the encoder still flushed:
+    the folder held track.csv under its final name (96 of 900 rows) beside the video's
+    temporary and no run.json: a file that looked complete and was not. The CSV is renamed
+    only once the video is closed, just before run.json; the next run clears what is left."""
+    out = tmp_path / "out"
+    killed = subprocess.run(
+        [sys.executable, "-c", KILLED_AS_THE_VIDEO_CLOSES, "run", str(clip.path), "--gt",
+         str(clip.gt), "--out", str(out)], capture_output=True, text=True, timeout=120,
+        check=False)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
+    assert not (out / "run.json").exists()
+    assert not (out / "track.csv").exists(), "track.csv with no record vouching for it"
+    assert len(csv_rows(next(out.glob(".track.tmp-*.csv")))) == FRAMES  # kept aside
+    again = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--out", str(out))
+    assert again.returncode == 0, again.stderr
+    assert assert_records_agree(out)["frames"] == FRAMES  # no temporary left either
+
+
 def full_pipe() -> tuple[int, int]:
     """A pipe (read end, write end) full to its last byte: a write to it waits for a read."""
     read, write = os.pipe()

@@ -11,7 +11,9 @@
   ``interrupted`` (Ctrl-C or SIGTERM) or ``failed`` (an output could not be written, e.g. a full
   disk, or the tracker stopped on an error). A complete-looking file is complete: the CSV and
   video are written under temporary names (unique to the process) and renamed when closed, then
-  checked (CSV rows, the video's frame count); ``outputs`` lists only files that passed.
+  checked (CSV rows, the video's frame count); ``outputs`` lists only files that passed. The
+  CSV is renamed last, once the video is closed, just before ``run.json``: a run killed
+  outright before then leaves no ``track.csv`` without a record.
 
 The folder is taken with :class:`~vtrack.io.outdir.OutputFolder` (a lock: a second run on it is
 refused), only once the input has opened and the request is valid, and the files an earlier run
@@ -1122,7 +1124,11 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             folder.clear()
             if video is not None and video.url is None and video.frames_written == 0:
                 video.abort()  # no picture, no video (a file of none does not open)
-        for writer in (csv, video, writers.stream):
+        try:  # the CSV keeps its temporary name until its record is ready (_publish_csv)
+            csv.finish()
+        except OutputError as exc:
+            _fail(out, str(exc))
+        for writer in (video, writers.stream):
             if writer is None:
                 continue
             try:
@@ -1170,7 +1176,7 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
     outputs = []
     csv_path = writers.csv.path
     try:
-        rows = _count_rows(csv_path)
+        rows = _count_rows(writers.csv.on_disk)
     except OSError:
         rows = None
     if rows == writers.csv.rows:
@@ -1186,6 +1192,18 @@ def _verified_outputs(request: RunRequest, writers: _Writers, tracked: _Tracked)
             video.path.unlink(missing_ok=True)
             _fail(tracked, f"{video.path}: {problem}; removed")
     return outputs
+
+
+def _publish_csv(csv: CsvWriter) -> str | None:
+    """Give the CSV its final name: only once the video is closed and verified, just before
+    ``run.json`` is written, so a run killed before (``kill -9`` while a slow encoder
+    flushes) leaves no ``track.csv`` that no record vouches for, only its temporary (the next
+    run in the folder removes it). The error message when it cannot be renamed, else None."""
+    try:
+        csv.close()
+    except OutputError as exc:
+        return str(exc)
+    return None
 
 
 def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None,
@@ -1325,6 +1343,12 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.warnings += [note for stage in resolved.pipeline.stages
                              for note in stage.past_end_notes()]
 
+    unnamed = _publish_csv(writers.csv)
+    if unnamed is not None:  # the CSV is not there: the run failed
+        _fail(tracked, unnamed)
+        outputs = [name for name in outputs if name != writers.csv.path.name]
+        status = summary.status = STATUS_FAILED if status == STATUS_COMPLETE else status
+        error = summary.error = unnamed if error is None else f"{error}; {unnamed}"
     record = {
         "status": status,
         "error": error,

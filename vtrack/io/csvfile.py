@@ -2,7 +2,8 @@
 
 Rows go to a temporary name (:func:`~vtrack.io.files.temp_path`) and reach the file one by one
 (unbuffered), so an interrupted run leaves whole rows, and a full disk cuts the file back to its
-last whole row; ``close()`` renames the file to its final name.
+last whole row; ``close()`` renames the file to its final name (``finish()`` closes it first
+and keeps the temporary name, for a caller that renames it only once its record is ready).
 """
 
 from __future__ import annotations
@@ -87,6 +88,8 @@ class CsvWriter(Closing):
         self.rows = 0
         self._size = 0  # bytes of whole rows on disk
         self._closed = False
+        self._published: Path | None = None  # the final name, once renamed to it
+        self._aborted = False
         try:
             self._fd = os.open(self._temp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_CLOEXEC,
                                0o644)
@@ -134,20 +137,38 @@ class CsvWriter(Closing):
         if rows:
             self._append([self._cells(row) for row in rows])
 
-    def close(self) -> None:
-        """Close the file and give it its final name. Safe to call twice."""
+    @property
+    def on_disk(self) -> Path:
+        """Where the rows are now: the temporary name until :meth:`close` renamed it."""
+        return self._temp if self._published is None else self._published
+
+    def finish(self) -> None:
+        """Close the file, keeping its temporary name (:attr:`on_disk`): no more rows come,
+        and nothing under the final name claims to be complete yet. Safe to call twice."""
         if self._closed:
             return
         self._closed = True
         try:
             os.close(self._fd)
-            os.replace(self._temp, self.path)
         except OSError as exc:
             remove_quietly(self._temp)
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
 
+    def close(self) -> None:
+        """Close the file (:meth:`finish`) and give it its final name. Safe to call twice."""
+        self.finish()
+        if self._published is not None or self._aborted:
+            return
+        try:
+            os.replace(self._temp, self.path)
+        except OSError as exc:
+            remove_quietly(self._temp)
+            raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
+        self._published = self.path
+
     def abort(self) -> None:
         """Close without a file: the temporary file is removed."""
+        self._aborted = True
         if not self._closed:
             self._closed = True
             with contextlib.suppress(OSError):
