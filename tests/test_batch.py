@@ -1169,3 +1169,40 @@ def test_a_batch_run_from_an_init_box_records_the_origin_vtrack_run_does(
                for out in (tmp_path / "out" / "seq" / "s0", tmp_path / "run")]
     assert [r["gt_origin"] for r in records] == [0, 0]
     assert records[0]["init"] == pytest.approx(list(first))
+
+
+def test_jobs_beyond_what_the_memory_holds_start_fewer_workers_saying_so(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack batch --jobs 512` started a worker per run to do, whatever the memory: 500 runs
+    of ~75 MB workers wanted ~37 GB, and the OOM killer ended the batch. The workers are bounded
+    by what the memory available holds (here 2 of WORKER_MEMORY), in one warning line; a batch
+    that needs no more than that says nothing."""
+    from vtrack.cli import batch as batch_command
+    WORKER_MEMORY = 100 * 2**20  # (vtrack.machine.WORKER_MEMORY)
+
+    started: list[int] = []
+
+    class Counted(LocalExecutor):
+        def __init__(self, workers: int, **kwargs: object) -> None:
+            started.append(workers)
+            super().__init__(workers, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr("vtrack.batch.LocalExecutor", Counted)
+    monkeypatch.setattr(batch_command, "available_memory", lambda: WORKER_MEMORY * 5 // 2,
+                        raising=False)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for n, scenario in enumerate(("smooth", "jump", "bounce")):
+        add_clip(folder, clip_factory, scenario, f"c{n}")
+    result = batch(str(folder), "-c", "s0", "--no-video", "-q", "--jobs", "512", "-o",
+                   str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert started == [2]
+    assert result.stderr.splitlines() == [
+        "vtrack: warning: --jobs 512: starting 2 workers, not 512: the memory available "
+        "(0.2 GiB) holds about 2 of 100 MiB each"]
+    assert {row["status"] for row in summary(tmp_path / "out").values()} == {"complete"}
+    (folder / "c2.mp4").unlink()  # two runs to do: the two workers it holds, no warning
+    again = batch(str(folder), "-c", "s0", "--no-video", "-q", "--jobs", "512", "--force",
+                  "-o", str(tmp_path / "again"))
+    assert again.exit_code == 0 and again.stderr == "", again.output

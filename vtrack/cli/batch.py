@@ -30,6 +30,7 @@ from vtrack.errors import (
     passing_stop_to,
     plural,
 )
+from vtrack.machine import WORKER_MEMORY, available_memory, workers_memory_holds
 from vtrack.params import MAX_WAIT_S
 
 if TYPE_CHECKING:
@@ -40,6 +41,15 @@ if TYPE_CHECKING:
 #: The most local worker processes ``--jobs`` starts (each a Python process with its own
 #: decoder and chain of stages: far more than any machine has cores for).
 MAX_JOBS = 512
+
+
+def _fewer_workers(jobs: int | None, wanted: int, workers: int, available: int) -> str:
+    """The warning of a batch that starts ``workers`` local workers, not the ``wanted`` ones
+    (``--jobs``, else the cores), as the ``available`` bytes of memory hold no more."""
+    asked = f"--jobs {jobs}" if jobs else f"{wanted} cores"
+    return (f"{asked}: starting {plural(workers, 'worker')}, not {wanted}: the memory available "
+            f"({available / 2**30:.1f} GiB) holds about {workers} of "
+            f"{WORKER_MEMORY // 2**20} MiB each")
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -132,8 +142,10 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
               help="Results: DIR/<input>/<config>/ and DIR/summary.csv. "
                    "Default: ./vtrack-out/<folder name>/")
 @click.option("--jobs", "-j", type=WholeNumber(1, MAX_JOBS), default=None,
-              help="Local worker processes (never more than the runs to do). Default: the "
-                   "number of cores.")
+              help="Local worker processes (never more than the runs to do, nor than the "
+                   f"memory available holds at about {WORKER_MEMORY // 2**20} MiB each: a "
+                   "warning says so). "
+                   "Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask distributed scheduler (tcp://host:8786) instead; workers "
                    "must see the input and output paths. Needs: pip install 'vtrack[dask]'.")
@@ -208,7 +220,10 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         raise
     if left_out:
         warn(f"{folder}: {left_out}")
-    workers = jobs or cpu_count()
+    wanted = jobs or cpu_count()
+    available = available_memory()
+    held = workers_memory_holds(available)
+    workers = wanted if held is None else min(wanted, held)  # (a worker per run, at most)
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / SUMMARY_FILE
     outcomes: list[Outcome] = []
@@ -235,6 +250,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                      overwrite=overwrite or force)
         for warning in batch.warnings:
             warn(warning)
+        if scheduler is None and min(wanted, len(batch.jobs)) > workers:
+            warn(_fewer_workers(jobs, wanted, workers, available or 0))
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
