@@ -265,6 +265,28 @@ def test_a_batch_run_that_fails_part_way_has_the_row_of_its_records(
     assert "No space left on device" in row["error"]
 
 
+def test_a_batch_run_with_no_room_for_its_run_json_keeps_its_track_csv(
+        clip: Clip, small_disk: Path) -> None:
+    """No room even for run.json: the error line said so, then the batch's worker removed the
+    run's track.csv and left an empty a/robust/, where `vtrack run` keeps track.csv (whole
+    rows) in the same situation. The batch's run keeps it too."""
+    folder = small_disk.parent / "in"
+    folder.mkdir()
+    shutil.copy(clip.path, folder / "a.mp4")
+    shutil.copy(clip.gt, folder / "a.gt.txt")
+    fill(small_disk, leave=24 * 1024)  # (room for the CSV, not for the video nor run.json)
+    out = small_disk / "out"
+    result = vtrack("batch", str(folder), "--jobs", "1", "--out", str(out))
+    assert result.returncode == 1, result.stderr
+    line = error_line(result.stderr)
+    assert "run.json: cannot write (No space left on device)" in line, line
+    run_dir = out / "a" / "robust"
+    assert not (run_dir / "run.json").exists()
+    assert sorted(p.name for p in run_dir.iterdir()) == ["track.csv"]
+    assert 0 < len(csv_rows(run_dir / "track.csv")) <= FRAMES
+    assert read_summary(out)["a"]["status"] == "failed"
+
+
 def test_a_disk_full_before_the_header_leaves_nothing(clip: Clip, small_disk: Path) -> None:
     """No room even for track.csv's header: the run's new folder stayed behind with an empty
     temporary CSV in it (the README: such a run creates no folder)."""

@@ -22,6 +22,7 @@ from vtrack.errors import (
     COMMAND_NAMES,
     FolderInUseError,
     Interrupted,
+    OutputBrokenError,
     OutputError,
     VtrackError,
 )
@@ -46,7 +47,8 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
     This is what a worker process (local or Dask) calls. The run replaces what an earlier run
     left in the job's folder (:func:`vtrack.run.run`); a job that fails before it starts
     tracking removes those old results too, so no earlier ``run.json`` outlives it, while one
-    that fails part way keeps the records its run wrote (as ``vtrack run`` does). A user
+    that fails part way keeps the outputs and records its run wrote (as ``vtrack run`` does,
+    its ``track.csv`` too when there was no room for its ``run.json``). A user
     error becomes a ``failed`` outcome with its one-line message; an unexpected exception also
     leaves its traceback in ``error.log`` in the job's folder. ``report`` receives the job's
     :class:`Progress` at most every :data:`PROGRESS_PERIOD` seconds while it tracks.
@@ -57,7 +59,10 @@ def execute(job: Job, report: Report | None = None) -> Outcome:
     try:
         summary = _run_when_free(job, report)
     except VtrackError as exc:
-        recorded = _discard(job, started)
+        # failed part way (a full disk): what the run wrote stays, as vtrack run leaves it,
+        # even when there was no room for its run.json
+        recorded = (recorded_summary(job.request, since=started)
+                    if isinstance(exc, OutputBrokenError) else _discard(job, started))
         if recorded is not None:  # failed part way (a full disk): its row is its run.json's
             return _outcome(job, replace(recorded, status=STATUS_FAILED, error=str(exc)))
         return Outcome(job.input, job.config, STATUS_FAILED, error=str(exc), attempt=job.attempt)
