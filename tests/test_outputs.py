@@ -310,10 +310,13 @@ def read_only_folder(tmp_path: Path) -> Iterator[Path]:
 @pytest.mark.parametrize("command", ["batch", "run"])
 def test_a_bad_out_is_one_line_exit_2(clip: Clip, inputs: Path, tmp_path: Path,
                                       command: str) -> None:
+    """A file in --out's place is said as a file inside --out's path is: "(a file, not a
+    folder)" there, "(Not a directory)" for `-o results.txt/sub`, one wording now."""
     source = [str(inputs)] if command == "batch" else [str(clip.path), "--gt", str(clip.gt)]
     a_file = tmp_path / "results.txt"
     a_file.write_text("mine\n")
-    for out, needle in ((a_file, "not a folder"), (a_file / "sub", "")):
+    for out, needle in ((a_file, "here (a file, not a folder)"),
+                        (a_file / "sub", f"here ({a_file} is a file, not a folder)")):
         result = vtrack(command, *source, "--out", str(out))
         assert result.returncode == 2, result.stderr
         line = error_line(result.stderr)

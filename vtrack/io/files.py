@@ -164,11 +164,23 @@ def prepare_output_dir(folder: Path) -> Path:
     """
     try:
         folder.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise OutputError(f"{folder}: cannot write output here (a file, not a folder)") from None
+    except (FileExistsError, NotADirectoryError) as exc:
+        blocked = _file_in_the_way(folder)
+        reason = (os_reason(exc) if blocked is None else "a file, not a folder"
+                  if blocked == folder else f"{blocked} is a file, not a folder")
+        raise OutputError(f"{folder}: cannot write output here ({reason})") from None
     except OSError as exc:
         raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
     return folder
+
+
+def _file_in_the_way(folder: Path) -> Path | None:
+    """The file (not a folder) at ``folder`` or at the deepest of its parents that is there,
+    which keeps ``folder`` from being created; None when there is none."""
+    for each in (folder, *folder.parents):
+        if os.path.lexists(each):
+            return None if each.is_dir() else each
+    return None
 
 
 class NewFolders:
