@@ -227,3 +227,25 @@ def test_a_folder_holding_an_earlier_vtracks_report_or_a_fifo_page(tmp_path: Pat
     fifo.mkdir()
     os.mkfifo(fifo / "index.html")
     assert not is_report_folder(fifo)
+
+
+def test_a_failed_row_of_an_input_that_did_not_open_names_its_ground_truth(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A truncated mp4 (no moov box) beside its c7.gt.txt: its `failed` row had an empty
+    ground_truth column, though the plan had paired the two (a run's row names its file).
+    The row now names it as a run's row does: its real path."""
+    clip = clip_factory("smooth", width=W, height=H, frames=FRAMES)
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    shutil.copy(clip.path, inputs / "a.mp4")
+    shutil.copy(clip.gt, inputs / "a.gt.txt")
+    (inputs / "c7.mp4").write_bytes(clip.path.read_bytes()[:2000])  # the index is at the end
+    shutil.copy(clip.gt, inputs / "c7.gt.txt")
+    out = tmp_path / "results"
+    result = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "-q", "-o", str(out))
+    assert result.exit_code == 1, result.output
+    _, rows = read(out / "summary.csv")
+    failed, ran = rows["c7", "s0"], rows["a", "s0"]
+    assert (failed["status"], failed["run"]) == ("failed", ""), failed
+    assert failed["ground_truth"] == os.path.realpath(inputs / "c7.gt.txt")
+    assert ran["ground_truth"] == os.path.realpath(inputs / "a.gt.txt")

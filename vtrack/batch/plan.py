@@ -103,7 +103,8 @@ def _completed(request: RunRequest, record: dict[str, Any] | None) -> RunSummary
 class Plan:
     """Every input x config of a batch (``order``: input-major): ``jobs`` to run, and
     ``known`` outcomes that need no run; ``warnings``: what the batch should say before it
-    runs them (one line each)."""
+    runs them (one line each); ``ground_truth``: the ground-truth file of each pair that has
+    one (by input and config), for the rows of pairs whose folder holds no run to read."""
 
     jobs: list[Job]
     known: list[Outcome]
@@ -113,6 +114,7 @@ class Plan:
     #: batch's row of ``SEQ`` itself that has no run is no result (a vtrack before targets
     #: were inputs failed it), :class:`~vtrack.batch.summary.SummaryWriter` drops it.
     split: set[str] = field(default_factory=set)
+    ground_truth: dict[tuple[str, str], Path] = field(default_factory=dict)
 
 
 #: The results folders of configs taken so far, each with its label and config.
@@ -186,6 +188,8 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
             result.order.append((item.name, label))
             if item.target is not None:
                 result.split.add(item.path.name)
+            if gt_path is not None:
+                result.ground_truth[item.name, label] = gt_path
             if item.problem is not None:
                 result.known.append(Outcome(item.name, label, STATUS_FAILED, error=item.problem))
                 continue

@@ -64,7 +64,7 @@ def run_batch(batch: Plan, executor: Executor, summary_path: Path,
     summary: SummaryWriter | None = None
     try:
         summary = SummaryWriter(summary_path, batch.order,  # (reads the earlier rows)
-                                split=batch.split)
+                                split=batch.split, ground_truth=batch.ground_truth)
         for outcome in batch.known:  # resumed pairs: one write for all of them
             summary.add(outcome, write=False)
         summary.write()
@@ -227,13 +227,17 @@ class SummaryWriter:
     order they first ran; but an earlier row of an input in ``split`` (an OTB sequence of
     several targets whose targets ``SEQ-N`` this batch runs, :attr:`Plan.split`) whose folder
     holds no run (no ``run.json``: a vtrack before targets were inputs failed it) is dropped.
-    ``clock``: seconds, for the spacing of writes."""
+    ``clock``: seconds, for the spacing of writes. ``ground_truth``: the ground-truth file of
+    each pair that has one, the ``ground_truth`` of a row whose folder holds no run to read it
+    from (an input that failed to open)."""
 
     def __init__(self, path: Path, order: Iterable[tuple[str, str]],
                  clock: Callable[[], float] = time.monotonic,
-                 split: Collection[str] = ()) -> None:
+                 split: Collection[str] = (),
+                 ground_truth: Mapping[tuple[str, str], Path] | None = None) -> None:
         self.path = path
         self.clock = clock
+        self.ground_truth = ground_truth or {}
         self._next_write = -math.inf  # the clock's time from which an outcome writes again
         self._pending = False  # outcomes added since the last write
         order = list(order)
@@ -262,6 +266,10 @@ class SummaryWriter:
         the file unless the last write was too recent (:data:`WRITE_SPACING`)."""
         key = (outcome.input, outcome.config)
         row, source = self._resumed_row(outcome) or outcome_row(outcome, self.path)
+        if "run" not in row and key in self.ground_truth:  # no run of it was read
+            from vtrack.report.runs import found_from  # (as a run's row names it)
+
+            row["ground_truth"] = found_from(str(self.ground_truth[key]), os.getcwd())
         self.rows[key] = row
         if source is None:
             self.sources.pop(key, None)

@@ -474,9 +474,15 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
     given = (record.get("request") or {}).get(role)
     if given is None:
         return None
-    path = str(given)
     started_in = record.get("working_dir")
-    if not isinstance(started_in, str) or path == "-" or is_url(path) or os.path.isabs(path):
+    return found_from(str(given), started_in if isinstance(started_in, str) else None)
+
+
+def found_from(path: str, started_in: str | None) -> str:
+    """Where the file a run was given as ``path`` is found from here: a relative path is read
+    from the folder the run was started in (``started_in``) when that holds it, as its real
+    path, else as given (as is ``-``, a URL or an absolute path)."""
+    if started_in is None or path == "-" or is_url(path) or os.path.isabs(path):
         return path
     there = os.path.join(started_in, path)
     # one file, one name: its real path (`..` after a link is not removed as text)
