@@ -10,6 +10,7 @@ import struct
 import subprocess
 import sys
 import zlib
+from fractions import Fraction
 from pathlib import Path
 
 import av
@@ -583,3 +584,49 @@ def test_time_s_counts_from_the_first_frame_as_the_readme_says(tmp_path):
     readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
     assert "`time_s` comes from each frame's timestamp, counted from the first frame's (frame " \
            "0 is at 0 s, whatever time the container starts at" in readme
+
+
+def _restamped_mkv(path: Path, stamps_ms: list[int]) -> Path:
+    """A Matroska file of ``len(stamps_ms)`` frames (FFV1: each frame its own, nothing
+    reordered) of the red target moving right, each packet stamped ``stamps_ms`` (ms) as a
+    re-stamping tool leaves them, repeats included."""
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("ffv1", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stamps = iter(stamps_ms)
+        for i in [*range(len(stamps_ms)), None]:
+            picture = None
+            if i is not None:
+                pixels = np.full((48, 64, 3), 90, np.uint8)
+                pixels[10:30, 5 + i % 30:25 + i % 30] = (40, 60, 210)
+                picture = av.VideoFrame.from_ndarray(pixels, format="bgr24")
+                picture.pts = i
+            for packet in stream.encode(picture):
+                packet.time_base = Fraction(1, 1000)
+                packet.pts = packet.dts = next(stamps)
+                out.mux(packet)
+    return path
+
+
+def test_frames_repeating_a_timestamp_are_one_warning_as_a_jump_back_is(tmp_path):
+    """An MKV whose frames 19..25 all carry 0.633 s passed without a word, while timestamps
+    that go back are warned of: track.csv held one time_s for seven frames. One warning now,
+    in run.json and on stderr, counting the frames and naming the first."""
+    stamps = [round(i * 1000 / 30) for i in range(40)]
+    stamps[19:26] = [633] * 7
+    clip = _restamped_mkv(tmp_path / "restamped.mkv", stamps)
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "--init",
+                           "5,10,20,20", "--no-video", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    with (out / "track.csv").open(newline="") as handle:
+        times = [row["time_s"] for row in csv.DictReader(handle)]
+    assert times[19:26] == ["0.633"] * 7 and len(times) == 40
+    repeated = [w for w in json.loads((out / "run.json").read_text())["warnings"]
+                if "repeated the timestamp" in w]
+    assert repeated == [f"{clip}: 6 frames repeated the timestamp of the frame before (first "
+                        "at frame 20: 0.6330 s again; a damaged or re-stamped file?): "
+                        "track.csv's time_s is the same for those frames while frame numbers "
+                        "carry on"]
+    assert done.stderr.count("repeated the timestamp") == 1

@@ -370,12 +370,17 @@ class _Span:
 @dataclass
 class _Timeline:
     """The input's own timestamps (``time_s``) as the frames come: how often they went back
-    (a live sender restarted, a stream spliced) while frame numbers carried on."""
+    (a live sender restarted, a stream spliced) while frame numbers carried on, and how many
+    frames repeated the timestamp of the frame before (a muxer that stamped them alike)."""
 
     #: Times a frame's timestamp was earlier than the one before it.
     jumps: int = 0
     #: The first such jump: (frame, the timestamp before, the frame's).
     first: tuple[int, float, float] | None = None
+    #: Frames whose timestamp was the one of the frame before, and the first of them:
+    #: (frame, the timestamp).
+    repeats: int = 0
+    first_repeat: tuple[int, float] | None = None
     _last: float | None = None
 
     def add(self, index: int, time_s: float) -> None:
@@ -383,20 +388,34 @@ class _Timeline:
         if self._last is not None and time_s < self._last:
             self.jumps += 1
             self.first = self.first or (index, self._last, time_s)
+        elif self._last is not None and time_s == self._last:
+            self.repeats += 1
+            self.first_repeat = self.first_repeat or (index, time_s)
         self._last = time_s
 
-    def warning(self, what: str, gt_path: Path | None) -> str | None:
-        """One line for ``run.json`` and stderr when the timestamps went back, else None."""
-        if self.first is None:
-            return None
-        index, before, after = self.first
-        note = (f"{what}: its timestamps jumped back {plural(self.jumps, 'time')} (first at "
-                f"frame {index}: {before:.4f} s -> {after:.4f} s; the source restarted?): "
-                "track.csv's time_s starts again there while frame numbers carry on")
-        if gt_path is not None:
-            note += (f"; {gt_path} is matched by frame number counted from the first frame "
-                     "received, so its boxes after a restart may belong to other frames")
-        return note
+    def warnings(self, what: str, gt_path: Path | None) -> list[str]:
+        """A line each for ``run.json`` and stderr when the timestamps went back, and when
+        frames repeated a timestamp; none when neither happened."""
+        notes = []
+        if self.first is not None:
+            index, before, after = self.first
+            note = (f"{what}: its timestamps jumped back {plural(self.jumps, 'time')} (first "
+                    f"at frame {index}: {before:.4f} s -> {after:.4f} s; the source "
+                    "restarted?): track.csv's time_s starts again there while frame numbers "
+                    "carry on")
+            if gt_path is not None:
+                note += (f"; {gt_path} is matched by frame number counted from the first "
+                         "frame received, so its boxes after a restart may belong to other "
+                         "frames")
+            notes.append(note)
+        if self.first_repeat is not None:
+            index, at = self.first_repeat
+            notes.append(
+                f"{what}: {plural(self.repeats, 'frame')} repeated the timestamp of the frame "
+                f"before (first at frame {index}: {at:.4f} s again; a damaged or re-stamped "
+                "file?): track.csv's time_s is the same for those frames while frame numbers "
+                "carry on")
+        return notes
 
 
 def _fmt(value: float | None) -> float | None:
@@ -1292,9 +1311,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     )
     if summary.resume is not None and summary.multi_target and next_id > MAX_TRACK_ID:
         summary.warnings.append(_past_track_ids(request, next_id))
-    jumped = tracked.timeline.warning(request.input, request.gt_path)
-    if jumped is not None:
-        summary.warnings.append(jumped)
+    summary.warnings += tracked.timeline.warnings(request.input, request.gt_path)
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
         summary.error = error = f"{request.input}: no frame could be decoded"
