@@ -746,6 +746,29 @@ def test_the_nested_walk_is_bounded_names_the_nearest_and_quotes_its_folder(
                                       folder / "a" / "b" / "c" / "deep.mp4"], True)
 
 
+def test_the_nested_walk_counts_a_folder_as_it_lists_it(tmp_path: Path) -> None:
+    """The walk counted the folders at the top before listing them: with more than
+    NESTED_LOOKS of them it stopped at once, found nothing and said nothing (`vtrack batch big`
+    with 521 folders and big/g000/sub/c.mp4: a bare 'no inputs'). Now a folder counts when it
+    is listed: the first listings' finds are kept, and a walk cut short with nothing found
+    says so."""
+    folder = tmp_path / "big"
+    for number in range(5):
+        (folder / f"g{number}" / "sub").mkdir(parents=True)
+    (folder / "g0" / "sub" / "c.mp4").write_bytes(b"not read")
+    # 5 listings at the top, the 6th is g0/sub
+    assert nested_inputs(folder, looks=6) == ([folder / "g0" / "sub" / "c.mp4"], False)
+    assert nested_inputs(folder, looks=5) == ([], False)
+    assert nested_inputs(folder, looks=10) == ([folder / "g0" / "sub" / "c.mp4"], True)
+    empty = tmp_path / "empty"
+    for number in range(NESTED_LOOKS + 1):
+        (empty / f"g{number:03d}").mkdir(parents=True)
+    nothing = batch(str(empty), "-c", "s0", "--no-video", "--out", str(tmp_path / "o"))
+    assert one_error_line(nothing).endswith(
+        "init.txt); none in sub-folders either, in the first "
+        f"{NESTED_LOOKS} folders looked at"), nothing.output
+
+
 def test_summary_writes_are_spaced_by_their_own_time(tmp_path: Path) -> None:
     """Each end wrote every row: 30,000 pairs (227 ms a write) spent 1.9 hours writing 100 GB.
     Now a write comes at an end once WRITE_SPACING times the last write's time has passed; a

@@ -259,8 +259,8 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
             f"{'its run is' if len(unscored) == 1 and one else 'their runs are'} not scored")
 
 
-#: The folders :func:`nested_inputs` looks at (into, or whether each is a sequence folder) at
-#: most: a batch given a big tree (``/usr``) says what it found near the top at once.
+#: The folders :func:`nested_inputs` lists at most (each sub-folder once, those at the top
+#: included): a batch given a big tree (``/usr``) says what it found near the top at once.
 NESTED_LOOKS = 500
 
 
@@ -275,37 +275,41 @@ class NestedInputs(NamedTuple):
 def nested_inputs(folder: Path, looks: int = NESTED_LOOKS) -> NestedInputs:
     """What :func:`find_inputs` does not take in sub-folders of ``folder``, nearest first (by
     depth, then name): the video files (by suffix) and sequence folders below a sub-folder
-    that is not a sequence folder (``IN/group/clip.mp4``, ``IN/group/seq/img/``), looking at
-    ``looks`` folders at most, breadth first. Sequence folders and results folders (a run's
-    ``run.json``, a batch's ``summary.csv``: their ``annotated.mp4`` are no inputs) are not
-    looked into; links to folders are not followed. Nothing when ``folder`` is itself a
-    sequence folder."""
+    that is not a sequence folder (``IN/group/clip.mp4``, ``IN/group/seq/img/``), listing
+    ``looks`` sub-folders at most, breadth first (each counted as it is listed, those at the
+    top included). Sequence folders and results folders (a run's ``run.json``, a batch's
+    ``summary.csv``: their ``annotated.mp4`` are no inputs) are not looked into;
+    links to folders are not followed. Nothing when ``folder`` is itself a sequence folder."""
     folder = Path(folder)
     if not folder.is_dir() or is_sequence_folder(folder):
         return NestedInputs([], True)
     found: list[Path] = []
     level = [top for top in sorted(folder.iterdir()) if top.is_dir() and not top.is_symlink()
              and not _results_folder(top) and not is_sequence_folder(top)]
-    looked = len(level)
-    whole = True
-    while level and whole:
+    listed = 0
+    while level:
         deeper: list[Path] = []
-        for entry in (entry for here in level for entry in _listed(here)):
-            if entry.is_dir():
-                looked += 1
-                whole = looked <= looks
-                if not whole:
-                    break
-                if _results_folder(entry):
-                    continue
-                if is_sequence_folder(entry):
+        for here in level:
+            if listed == looks:
+                return NestedInputs(sorted(found, key=_nearest), False)
+            listed += 1
+            for entry in _listed(here):
+                if entry.is_dir():
+                    if _results_folder(entry):
+                        continue
+                    if is_sequence_folder(entry):
+                        found.append(entry)
+                    elif not entry.is_symlink():
+                        deeper.append(entry)
+                elif entry.suffix.lower() in VIDEO_SUFFIXES and entry.is_file():
                     found.append(entry)
-                elif not entry.is_symlink():
-                    deeper.append(entry)
-            elif entry.suffix.lower() in VIDEO_SUFFIXES and entry.is_file():
-                found.append(entry)
         level = deeper
-    return NestedInputs(sorted(found, key=lambda path: (len(path.parts), path)), whole)
+    return NestedInputs(sorted(found, key=_nearest), True)
+
+
+def _nearest(path: Path) -> tuple[int, Path]:
+    """The order of :func:`nested_inputs`' finds: by depth, then name."""
+    return len(path.parts), path
 
 
 def _listed(folder: Path) -> list[Path]:

@@ -203,7 +203,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         plan,
         run_batch,
     )
-    from vtrack.batch.discover import SUMMARY_FILE, NoInputsError
+    from vtrack.batch.discover import NESTED_LOOKS, SUMMARY_FILE, NoInputsError
     from vtrack.cli._progress import BatchProgress
     from vtrack.io.outdir import OutputFolder
     from vtrack.request import RunRequest
@@ -211,12 +211,16 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     _check_scheduler_options(scheduler, jobs)
     refuse_encoding_without_video(no_video)
     configs = _configs(config_specs, overrides)
-    left_out = _left_out(nested_inputs(folder))
+    nested = nested_inputs(folder)
+    left_out = _left_out(nested)
     try:
         inputs = find_inputs(folder, gt_origin)
     except NoInputsError as exc:  # none directly in it: say where the nested ones are
         if left_out:
             raise NoInputsError(f"{exc}; {left_out}") from None
+        if not nested.whole:
+            raise NoInputsError(f"{exc}; none in sub-folders either, in the first "
+                                f"{NESTED_LOOKS} folders looked at") from None
         raise
     if left_out:
         warn(f"{folder}: {left_out}")
