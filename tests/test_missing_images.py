@@ -159,7 +159,9 @@ def test_the_frame_that_ends_a_duration_leaves_the_gap_before_it_uncounted(
     junk: `--frames 0.1s` (frames 0..2) said 'skipped 1 missing', and `--frames 0.32s`
     (frames 0..9 but 3) counted and warned of 0011.jpg: the frame whose time ended the span
     was handed on and counted as read. Now it is given back: only the gaps among the frames
-    tracked count, as README says ('what a run read')."""
+    tracked count, as README says ('what a run read'). With a start by time (`--start 0.05s
+    --frames 0.05s`: frame 2 alone) frame 3's gap was counted still (the frames were noted
+    as handed on twice, and giving one back undid nothing), where `--start 2` counted 0."""
     folder = tmp_path / "seq"
     write_image_sequence(make_scene("smooth", 0, 160, 120, 20, 30), folder)
     images = folder / "img"
@@ -168,10 +170,13 @@ def test_the_frame_that_ends_a_duration_leaves_the_gap_before_it_uncounted(
     (images / "0011.jpg").write_bytes(b"not an image")
     gap = (f"{images}: 1 image missing from the numbering (the first: frame 3, after "
            "0003.jpg); their frames are skipped")
-    for span, frames, skipped, said in (("0.1s", 3, 0, []), ("0.32s", 9, 1, [gap])):
-        out = tmp_path / span
-        done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", "--frames",
-                      span, "-o", str(out))
+    for span, frames, skipped, said in (
+            (("--frames", "0.1s"), 3, 0, []), (("--frames", "0.32s"), 9, 1, [gap]),
+            (("--start", "0.05s", "--frames", "0.05s"), 1, 0, []),
+            (("--start", "2", "--frames", "0.05s"), 1, 0, [])):
+        out = tmp_path / "-".join(span)
+        done = vtrack("run", str(images), *truth(images), "-c", "s0", "--no-video", *span,
+                      "-o", str(out))
         assert done.returncode == 0, done.stderr
         record = json.loads((out / "run.json").read_text())
         summary = record["summary"]

@@ -319,7 +319,9 @@ class ImageFolderSource(Source):
         return place, at
 
     def __iter__(self) -> Iterator[Frame]:
-        return self._handing(super().__iter__())
+        resuming = self._resumed is not None  # skip_to's pass: its frames are noted already
+        frames = super().__iter__()
+        return frames if resuming else self._handing(frames)
 
     def _handing(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """``frames``, each noted as handed on as it is (:attr:`frames_missing` counts the
