@@ -637,6 +637,27 @@ def test_one_file_name_in_two_folders_is_two_inputs(clip_factory: ClipFactory,
     assert _table_labels(markdown) == {("clip (bx)", "s0"), ("clip (by)", "s0")}
 
 
+def test_a_sequence_run_from_inside_its_img_folder_is_the_same_input(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack run .` from inside SEQ/img and `vtrack run SEQ` from its parent were two inputs
+    ("seq (runs-in)", "seq (runs-out)"): the report found the sequence of `.` from its own
+    folder. Now an image sequence is the one the run recorded."""
+    from vtrack.scenes import make_scene, write_image_sequence
+
+    write_image_sequence(make_scene("smooth", 0, 96, 72, 10, 30), tmp_path / "seq")
+    monkeypatch.chdir(tmp_path / "seq" / "img")
+    assert vtrack("run", ".", "--gt", "../groundtruth_rect.txt", "-c", "s0", "--no-video",
+                  "--quiet", "--out", str(tmp_path / "runs-in")).exit_code == 0
+    monkeypatch.chdir(tmp_path)
+    assert vtrack("run", "seq", "--gt", "seq/groundtruth_rect.txt", "-c", "camshift",
+                  "--no-video", "--quiet", "--out", "runs-out").exit_code == 0
+    result = vtrack("report", "runs-in", "runs-out", "--out", "report")
+    assert result.exit_code == 0, result.output
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert "2 runs of 1 input with 2 configurations;" in markdown, markdown
+    assert _table_labels(markdown) == {("seq", "s0"), ("seq", "camshift")}
+
+
 def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Two TOML files both named "mine": run on different inputs they were averaged as one

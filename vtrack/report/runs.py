@@ -437,15 +437,16 @@ def _input_key(record: dict[str, Any]) -> str:
     """What tells a run's input from another of the same name: its file name and the file's
     size (and a folder's file count) as the run recorded them, not the modification time (a
     copy of the same clip is the same input) nor the folder (a relative path's depends on where
-    the run was started). An image sequence is its sequence folder's name (``SEQ`` for
-    ``SEQ/img``, :func:`~vtrack.io.sidecar.sequence_of`: one sequence given either way), the
-    target it tracked and its frames' count and size as the run opened them (its folder's
-    files are not its images': ``SEQ`` holds its ground truth too)."""
+    the run was started). An image sequence is its sequence folder's name as the run recorded
+    it (``SEQ`` for ``SEQ/img``, :func:`~vtrack.io.sidecar.sequence_of`: one sequence given
+    either way, ``.`` from inside ``SEQ/img`` too), the target it tracked and its frames'
+    count and size as the run opened them (its folder's files are not its images': ``SEQ``
+    holds its ground truth too)."""
     identity = (record.get("identity") or {}).get("input")
     given = Path(str((record.get("request") or {}).get("input") or "").rstrip("/"))
     info = record.get("input") or {}
     if isinstance(info, dict) and info.get("kind") == "images":
-        return json.dumps({"name": (sequence_of(given) or given).name,
+        return json.dumps({"name": info.get("name") or (sequence_of(given) or given).name,
                            "target": _target(record),
                            **{k: info.get(k) for k in ("frame_count", "width", "height")}},
                           sort_keys=True)
