@@ -199,12 +199,41 @@ def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
                    str(tmp_path / "r"))  # one plain, one per input: the input's own is taken
     assert mixed.exit_code == 0, mixed.stderr
     for second in (clip.path.name, str(clip.path)):
-        both = vtrack("report", str(run), "--gt", f"{name}={clip.gt}", "--gt",
-                      f"{second}={other}", "--out", str(tmp_path / "r2"))
-        assert both.exit_code == 2 and both.stderr.splitlines() == [
-            f"vtrack: error: --gt {second}={other}: input {second} has its ground truth "
-            f"already (--gt {name}={clip.gt}); give one file per input"], both.stderr
-        assert not (tmp_path / "r2").exists()
+        refused_as_named_twice(run, f"{name}={clip.gt}", second, other, tmp_path / "r2")
+
+
+def refused_as_named_twice(run: Path, first: str, second: str, other: Path,
+                           out: Path) -> None:
+    """`vtrack report RUN --gt FIRST --gt SECOND=OTHER`, one input named two ways, is refused
+    in one line naming both, and no report is written."""
+    both = vtrack("report", str(run), "--gt", first, "--gt", f"{second}={other}", "--out",
+                  str(out))
+    assert both.exit_code == 2 and both.stderr.splitlines() == [
+        f"vtrack: error: --gt {second}={other}: input {second} has its ground truth already "
+        f"(--gt {first}); give one file per input"], both.stderr
+    assert not out.exists()
+
+
+def test_one_input_named_two_ways_is_refused_for_runs_that_do_not_take_the_gt(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`--gt clip=a --gt clip.mp4=b` was refused only for a run without its own ground truth:
+    for a run that recorded its own, or a multi-target run, it gave two warnings, the second
+    'no run of input clip.mp4 was scored with it', the run named by the --gt's INPUT. README:
+    such pairs 'are refused in one line naming both', whatever the run."""
+    from vtrack.scenes import make_scene, write_video
+
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    own = tmp_path / "own"
+    assert vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--quiet",
+                  "--out", str(own)).exit_code == 0
+    crowd = write_video(make_scene("multi", 0, 160, 120, 60, 30), tmp_path / "crowd.mp4")
+    multi = tmp_path / "multi"
+    assert vtrack("run", str(crowd), "-c", "s4_multi", "--no-video", "--quiet", "--out",
+                  str(multi)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    for run, path in ((own, clip.path), (multi, crowd)):
+        refused_as_named_twice(run, f"{path.stem}={clip.gt}", path.name, other, tmp_path / "r")
 
 
 def test_runs_of_one_input_scored_against_different_ground_truth_are_warned_of(

@@ -596,10 +596,15 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     record = read_run_record(record_path)
     summary = record.get("summary") or {}
     request = record.get("request") or {}
+    truths = [] if gt is None else [gt] if isinstance(gt, GroundTruth) else list(gt)
     try:
         result = _run_result(folder, record, summary)
         # one file, however each run named it: found from the folder the run started in
         found_gt = result.ground_truth = _found_path(record, "gt")
+        found_input = _found_path(record, "input")
+        # the --gt for its input, matched for every run: one input named two ways is refused
+        # whether or not the run takes it (its own ground truth, several targets)
+        truth = pick_ground_truth(truths, result.input, request, found_input)
         if result.multi_target:
             result.mot = _mot_metrics(record)
     except (TypeError, ValueError, OverflowError):
@@ -619,7 +624,6 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         result.states = [row["state"] for row in rows]
         result.confidence = [_number(row.get("score")) for row in rows]
         result.boxes, result.first_frame = _boxes(rows), start
-        found_input = _found_path(record, "input")
         if found_input is not None and read_once(found_input):
             result.live_input = True
         elif not request.get("raw") and found_input is not None:
@@ -639,18 +643,16 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             if result.truth is not None:
                 result.norm_errors = metrics.normalized_center_errors(result.boxes,
                                                                       result.truth)
-        elif gt is not None:
-            truths = [gt] if isinstance(gt, GroundTruth) else list(gt)
-            truth = pick_ground_truth(truths, result.input, request, found_input)
+        elif truth is not None:
             # Frames the run spans (skipped frames included); one stopped by --frames (N or
             # a duration) is scored on its frames like one that stopped on an error
             frames = len(rows)
             whole = result.status == "complete" and not _stopped_by_frames(record, frames)
-            misfit = truth.misfit(frames, whole, start) if truth else None
+            misfit = truth.misfit(frames, whole, start)
             if misfit:
                 result.note = (f"{folder}: input {result.input} not scored: {misfit}; give "
                                f"--gt {result.input}=FILE with its own ground truth")
-            elif truth is not None:
+            else:
                 result.ground_truth = truth.path
                 result.truth = truth.boxes[start:]
                 result.overlaps, result.errors = _scored_as_written(result.boxes,
