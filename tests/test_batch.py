@@ -31,7 +31,7 @@ from vtrack.batch import (
     plan,
 )
 from vtrack.batch.discover import NESTED_LOOKS
-from vtrack.batch.summary import WRITE_SPACING
+from vtrack.batch.summary import NEVER_STARTED, WRITE_SPACING
 from vtrack.cli import main
 from vtrack.config import DEFAULT_CONFIG, load_config
 from vtrack.errors import ConfigError
@@ -1034,8 +1034,10 @@ def test_a_batch_over_an_older_batchs_failed_sequence_drops_its_row(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A vtrack before each target was an input failed a two-target sequence as one row,
     Jogging [s0]. A batch into that folder kept the row beside Jogging-1 and Jogging-2 (the
-    report listed its old advice under "Runs without results"). A row of the sequence itself
-    that holds no run is dropped when its targets are planned; other rows are kept."""
+    report listed its old advice under "Runs without results"). That refusal is dropped when
+    the sequence's targets are planned; other rows are kept, of the sequence itself too: a
+    multi-target config's row a stopped batch never ran (no run in its folder either) was
+    dropped with it."""
     sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
     out = tmp_path / "out"
     out.mkdir()
@@ -1044,13 +1046,17 @@ def test_a_batch_over_an_older_batchs_failed_sequence_drops_its_row(
     lines += [",".join(["Jogging", "s0", "failed", *blank, "", f'"{sequence}: config \'s0\' '
                         'tracks one given target, and the sequence has 2 targets\' ground '
                         'truth: track each with vtrack run"'])]
+    lines += [",".join(["Jogging", "s3", "interrupted", *blank, "", f'"{NEVER_STARTED}"'])]
     lines += [",".join(["Gone", "s0", "failed", *blank, "", "an input since removed"])]
     (out / "summary.csv").write_text("\n".join(lines) + "\n")
-    assert [key for key in summary(out)] == [("Jogging", "s0"), ("Gone", "s0")]
+    assert [key for key in summary(out)] == [("Jogging", "s0"), ("Jogging", "s3"),
+                                             ("Gone", "s0")]
     result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o", str(out))
     assert result.exit_code == 0, result.output
-    assert sorted(summary(out)) == [("Gone", "s0"), ("Jogging-1", "s0"), ("Jogging-2", "s0"),
-                                    ("Plain", "s0")]
+    rows = summary(out)
+    assert sorted(rows) == [("Gone", "s0"), ("Jogging", "s3"), ("Jogging-1", "s0"),
+                            ("Jogging-2", "s0"), ("Plain", "s0")]
+    assert rows["Jogging", "s3"]["error"] == NEVER_STARTED
     shown = CliRunner().invoke(main, ["report", str(out), "-q", "-o", str(tmp_path / "report")],
                                catch_exceptions=False)
     assert shown.exit_code == 0, shown.output

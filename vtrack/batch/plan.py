@@ -111,8 +111,8 @@ class Plan:
     order: list[tuple[str, str]]
     warnings: list[str] = field(default_factory=list)
     #: The OTB sequences of several targets whose targets (``SEQ-N``) are planned: an earlier
-    #: batch's row of ``SEQ`` itself that has no run is no result (a vtrack before targets
-    #: were inputs failed it), :class:`~vtrack.batch.summary.SummaryWriter` drops it.
+    #: batch's row of ``SEQ`` itself that is the refusal of a vtrack before targets were
+    #: inputs is no result, :class:`~vtrack.batch.summary.SummaryWriter` drops it.
     split: set[str] = field(default_factory=set)
     ground_truth: dict[tuple[str, str], Path] = field(default_factory=dict)
 

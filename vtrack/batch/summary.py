@@ -20,7 +20,7 @@ from vtrack.errors import OutputError, passing_stop_to
 from vtrack.io.files import folder_name, write_text_atomic
 from vtrack.io.identity import file_identity
 from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
-from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED
+from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED
 
 #: A run's end writes ``summary.csv`` again once this many times the last write's own time has
 #: passed since it: writing takes at most about 1/20 of a batch's time however many pairs it
@@ -216,6 +216,21 @@ def earlier_rows(path: Path, planned: Collection[tuple[str, str]] = ()
     return rows, sources
 
 
+#: What a vtrack before each target of an OTB sequence of several was an input said of the
+#: sequence, failing a single-target config on it ("config 's0' tracks one given target, and
+#: the sequence has 2 targets' ground truth ...").
+REFUSED_SEVERAL_TARGETS = "tracks one given target, and the sequence has"
+
+
+def _refused_as_several_targets(row: dict[str, Any], folder: Path) -> bool:
+    """Whether ``row`` is that old refusal of an OTB sequence of several targets (a
+    single-target config's row, ``failed`` with :data:`REFUSED_SEVERAL_TARGETS` in its error,
+    no run in its ``folder``): no result once the sequence's targets are inputs."""
+    return (row.get("status") == STATUS_FAILED
+            and REFUSED_SEVERAL_TARGETS in (row.get("error") or "")
+            and not (folder / "run.json").is_file())
+
+
 class SummaryWriter:
     """``OUT/summary.csv``: one row per input x config, rewritten atomically (temporary file +
     rename), so it is never half written: as an outcome arrives, unless the last write was
@@ -225,8 +240,10 @@ class SummaryWriter:
     The rows of an earlier batch into the same folder (other configs, other inputs) are kept:
     the summary covers every run in the folder, input by input, each input's configs in the
     order they first ran; but an earlier row of an input in ``split`` (an OTB sequence of
-    several targets whose targets ``SEQ-N`` this batch runs, :attr:`Plan.split`) whose folder
-    holds no run (no ``run.json``: a vtrack before targets were inputs failed it) is dropped.
+    several targets whose targets ``SEQ-N`` this batch runs, :attr:`Plan.split`) that is the
+    refusal of a vtrack before targets were inputs (:func:`_refused_as_several_targets`) is
+    dropped: any other row of it (a multi-target config's, one a stopped batch never ran) is
+    kept.
     ``clock``: seconds, for the spacing of writes. ``ground_truth``: the ground-truth file of
     each pair that has one, the ``ground_truth`` of a row whose folder holds no run to read it
     from (an input that failed to open)."""
@@ -245,8 +262,8 @@ class SummaryWriter:
         earlier, sources = earlier_rows(path, planned)
         earlier = {key: row for key, row in earlier.items()
                    if key in planned or key[0] not in split
-                   or (path.parent / folder_name(key[0], "input") / folder_name(key[1])
-                       / "run.json").is_file()}
+                   or not _refused_as_several_targets(row, path.parent / folder_name(
+                       key[0], "input") / folder_name(key[1]))}
         # input-major; sorted() is stable: each input's configs in the order they first ran
         keys = sorted(dict.fromkeys([*earlier, *order]), key=lambda key: key[0])
         self.rows: dict[tuple[str, str], dict[str, Any] | None] = {
