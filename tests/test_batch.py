@@ -1077,6 +1077,29 @@ def test_a_folder_named_like_a_target_of_a_sequence_beside_it_stops_the_batch(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_video_beside_a_sequence_of_targets_only_keeps_its_name_unless_the_sequence_runs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """in/Jogging.mp4 beside in/Jogging/ (groundtruth_rect.1.txt and .2.txt only): 'vtrack batch
+    in -c s0' named the video 'Jogging.mp4', as if the folder Jogging were an input, which no
+    single-target config runs on (its targets are). The video is Jogging unless a multi-target
+    config runs on the folder (then both keep folders of their own)."""
+    _, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    add_clip(tmp_path / "in", clip_factory, "smooth", "Jogging")
+    result = batch(str(tmp_path / "in"), "-c", "s0", "--no-video", "-j", "1", "-o",
+                   str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    rows = summary(tmp_path / "out")
+    assert sorted(rows) == [("Jogging", "s0"), ("Jogging-1", "s0"), ("Jogging-2", "s0"),
+                            ("Plain", "s0")], result.output
+    assert rows["Jogging", "s0"]["ground_truth"].endswith("Jogging.gt.txt")
+    both = batch(str(tmp_path / "in"), "-c", "s0", "-c", "s3", "--no-video", "-j", "1", "-o",
+                 str(tmp_path / "out-both"))
+    assert both.exit_code == 0, both.output
+    assert {key for key in summary(tmp_path / "out-both") if key[0].startswith("Jogging")} == {
+        ("Jogging", "s3"), ("Jogging.mp4", "s0"), ("Jogging.mp4", "s3"), ("Jogging-1", "s0"),
+        ("Jogging-2", "s0")}
+
+
 def test_only_folders_of_a_sequences_images_are_sequences_and_results_are_no_inputs(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Any folder holding a color/ folder was a sequence, images in it or not: in5/ with a.mp4,

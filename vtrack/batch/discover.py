@@ -82,12 +82,13 @@ def _first(folder: Path, names: Iterable[str]) -> Path | None:
     return next((folder / n for n in names if (folder / n).is_file()), None)
 
 
-def _sequence(folder: Path, gt_origin: int | None) -> list[BatchInput]:
+def _sequence(folder: Path, gt_origin: int | None, multi_target: bool) -> list[BatchInput]:
     """The inputs of sequence folder ``folder``: the folder itself (``SEQ``), and one per
     target of an OTB sequence of several (``groundtruth_rect.N.txt``: ``SEQ-N``, tracked from
     its own boxes), which only single-target configs run on (:meth:`BatchInput.taken_by`);
     those run on the folder too only when it says more of its targets (other ground truth or
-    a box)."""
+    a box). The folder is left out when no config runs on it (none is ``multi_target``, and
+    single-target ones do not)."""
     groundtruth = groundtruth_beside(folder)
     mot_groundtruth = _first(folder, SEQUENCE_MOT_GT)
     init = _first(folder, [SEQUENCE_INIT])
@@ -96,10 +97,10 @@ def _sequence(folder: Path, gt_origin: int | None) -> list[BatchInput]:
                           gt_origin=_origin(path, gt_origin), target=target_number(path))
                for path in numbered_groundtruth(folder)]
     single = not targets or any(p is not None for p in (groundtruth, mot_groundtruth, init))
-    return [BatchInput(name=folder.name, path=folder, groundtruth=groundtruth,
+    whole = BatchInput(name=folder.name, path=folder, groundtruth=groundtruth,
                        mot_groundtruth=mot_groundtruth, init=init,
-                       gt_origin=_origin(groundtruth, gt_origin), single_target=single),
-            *targets]
+                       gt_origin=_origin(groundtruth, gt_origin), single_target=single)
+    return [whole, *targets] if single or multi_target else targets
 
 
 def _video(path: Path, name: str, gt_origin: int | None) -> BatchInput:
@@ -166,9 +167,14 @@ def _results_folder(folder: Path) -> bool:
     return (folder / "run.json").is_file() or is_batch_folder(folder)
 
 
-def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
+def find_inputs(folder: Path, gt_origin: int | None = None,
+                multi_target: bool = True) -> list[BatchInput]:
     """Every input directly inside ``folder`` (or ``folder`` itself if it is a sequence folder),
     sorted by name, with the ground truth found beside or inside each (module docstring).
+    ``multi_target``: whether the batch has a multi-target config; without one, the folder
+    ``SEQ`` of an OTB sequence of several targets that says nothing else of them is no input
+    (no config runs on it, :meth:`BatchInput.taken_by`: its targets ``SEQ-N`` are), and its
+    name is free for a video (``SEQ.mp4`` is ``SEQ``).
 
     Inputs are named after their file stem (folder name for sequences; ``SEQ-N`` for target N
     of an OTB sequence of several, :func:`_sequence`); videos whose stem is
@@ -184,14 +190,14 @@ def find_inputs(folder: Path, gt_origin: int | None = None) -> list[BatchInput]:
         missing = ("no such folder (broken link)" if folder.is_symlink() else "no such folder")
         raise InputError(f"{folder}: {missing if not folder.exists() else 'not a folder'}")
     if is_sequence_folder(folder):
-        found = _sequence(folder.resolve(), gt_origin)
+        found = _sequence(folder.resolve(), gt_origin, multi_target)
         _refuse_shared_folders(folder, found)
         return sorted(found, key=lambda i: i.name)
     entries = sorted(folder.resolve().iterdir())
     named = [p for p in entries if p.suffix.lower() in VIDEO_SUFFIXES]
     videos = [p for p in named if p.is_file()]
     found = [item for p in entries if p.is_dir() and not _results_folder(p)
-             and is_sequence_folder(p) for item in _sequence(p, gt_origin)]
+             and is_sequence_folder(p) for item in _sequence(p, gt_origin, multi_target)]
     found += [_unusable(p) for p in named if not p.is_file() and not p.is_dir()]
     found += [_video(p, name, gt_origin) for p, name in _video_names(
         videos, {item.name for item in found} | {SUMMARY_FILE}).items()]

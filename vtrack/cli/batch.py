@@ -214,7 +214,8 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     nested = nested_inputs(folder)
     left_out = _left_out(nested)
     try:
-        inputs = find_inputs(folder, gt_origin)
+        inputs = find_inputs(folder, gt_origin,
+                             multi_target=any(c.multi_target for c in configs.values()))
     except NoInputsError as exc:  # none directly in it: say where the nested ones are
         if left_out:
             raise NoInputsError(f"{exc}; {left_out}") from None
