@@ -218,6 +218,37 @@ def test_a_command_of_its_own_process_never_has_the_default_sigterm_after_its_fi
     assert signal.SIG_DFL not in seen[handled[0]:], seen
 
 
+def test_a_batch_called_in_a_host_process_gives_it_its_signal_handlers_back(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """vtrack batch called in a host's process (click's test runner, a library) left SIGINT
+    and SIGTERM ignored once it was done, as the vtrack command does until it exits: the
+    host's Ctrl-C did nothing from then on. It now puts back the host's handlers, as vtrack
+    run and the other commands do."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=64, height=48, frames=10)
+    (tmp_path / "in").mkdir()
+    shutil.copy(clip.path, tmp_path / "in" / "a.mp4")
+    shutil.copy(clip.gt, tmp_path / "in" / "a.gt.txt")
+
+    def host(signum: int, frame: object) -> None:  # the host's own handler
+        raise AssertionError("no signal is sent")
+
+    previous = {s: signal.signal(s, host) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        result = CliRunner().invoke(main, ["batch", str(tmp_path / "in"), "-c", "s0",
+                                           "--no-video", "-j", "1",
+                                           "-o", str(tmp_path / "out")])
+        assert result.exit_code == 0, result.output
+        assert signal.getsignal(signal.SIGINT) is host
+        assert signal.getsignal(signal.SIGTERM) is host
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
 def test_a_signal_as_vtrack_scene_puts_its_files_in_place_changes_nothing(tmp_path: Path
                                                                            ) -> None:
     """`vtrack scene smooth c.mp4` sent SIGTERM as it renamed its staged files into place

@@ -24,7 +24,15 @@ def stopping_as_interrupted() -> Iterator[Callable[[], None]]:
     signals are then ignored until it exits (a Ctrl-C in the interpreter's teardown raised
     inside a library's finaliser: a traceback, and exit 0 all the same); under click's test
     runner the previous handlers are back after the block."""
-    root = click.get_current_context().find_root().command
-    with handling_stop_signals(interrupt, ignored_after=getattr(root, "owns_process", False)):
+    with handling_stop_signals(interrupt, ignored_after=owns_process()):
         yield ignore_stop_signals
+
+
+def owns_process() -> bool:
+    """Whether the running command is the process's own program (the ``vtrack`` command,
+    ``python -m vtrack``: the group's ``owns_process``), not called in a host's
+    process (click's test runner, a library): only then may it leave SIGINT and SIGTERM
+    ignored after its files are final, for the interpreter's teardown."""
+    root = click.get_current_context().find_root().command
+    return bool(getattr(root, "owns_process", False))
 

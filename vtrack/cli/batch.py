@@ -20,6 +20,7 @@ from vtrack.cli._options import (
     refuse_encoding_without_video,
 )
 from vtrack.cli._paths import CONFIG, PATH
+from vtrack.cli._signals import owns_process
 from vtrack.cli.run import command as run_command
 from vtrack.cli.run import default_out_dir
 from vtrack.configs import DEFAULT_CONFIG
@@ -234,9 +235,12 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     outcomes: list[Outcome] = []
     progress = BatchProgress(quiet, stats_period)
     # SIGTERM (kill, timeout, docker stop) stops the batch as Ctrl-C does; the results folder
-    # is taken (created, checked, locked) before any job is planned
+    # is taken (created, checked, locked) before any job is planned. Once the batch is done,
+    # the vtrack command ignores both until it exits; a host process (click's test runner, a
+    # library) gets its own handlers back
     stop_once = _StopOnce()
-    with handling_stop_signals(stop_once, ignored_after=True), OutputFolder(out_dir, "batch"):
+    with handling_stop_signals(stop_once, ignored_after=owns_process()), \
+            OutputFolder(out_dir, "batch"):
         executor: Executor
         if scheduler is not None:
             dask = DaskExecutor(scheduler, scheduler_timeout)

@@ -25,6 +25,7 @@ from vtrack.cli._options import (
     stats_period_option,
 )
 from vtrack.cli._paths import CONFIG, GT_PATH, INPUT, PATH, FileOrDash
+from vtrack.cli._signals import owns_process
 from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import (
     COMMAND_NAMES,
@@ -240,8 +241,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         target=target,
     )
     progress = FrameProgress(quiet, request.frames_expected, stats_period)
-    root = click.get_current_context().find_root().command
-    with _Ending(whole_process=getattr(root, "owns_process", False)) as ending:
+    with _Ending(whole_process=owns_process()) as ending:
 
         def opened(info: InputInfo) -> None:
             ending.recording = True
