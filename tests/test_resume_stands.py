@@ -97,19 +97,29 @@ def test_a_moved_batch_folder_resumes_and_a_refusal_names_what_changed(folder: P
     assert "(made with other settings: --no-video, --frames)" in result.stderr.decode()
 
 
+@pytest.mark.parametrize("record", [None, "{broken"])
 def test_results_without_a_record_are_not_said_made_with_other_settings(
-        folder: Path, tmp_path: Path) -> None:
+        folder: Path, tmp_path: Path, record: str | None) -> None:
     """A pair's folder holding a track.csv and no run.json (its run killed before it
     recorded itself: a stopped batch's worker killed while its encoder flushed) was refused
-    as '(made with other settings)': nothing said which settings made it."""
+    as '(made with other settings)': nothing said which settings made it. Then it said
+    '(no run.json says what made them: a run stopped before it recorded itself?)', a
+    question, and said so too of a folder whose run.json is there but cannot be read: that
+    is now said, and the other is no question."""
     pair = tmp_path / "r" / "occ" / "s0"
     pair.mkdir(parents=True)
     (pair / "track.csv").write_text("frame,time_s\n0,0\n")
+    if record is not None:
+        (pair / "run.json").write_text(record)
     result = vtrack("batch", str(folder), "-c", "s0", "-o", str(tmp_path / "r"), "-j", "1")
     assert result.returncode == 1
     stderr = result.stderr.decode()
-    assert "holds the results of an earlier run (track.csv)" in stderr, stderr
-    assert "other settings" not in stderr and "no run.json says what made them" in stderr
+    held = "track.csv" if record is None else "run.json, track.csv"
+    why = ("no run.json says what made them: a run stopped before it recorded itself leaves "
+           "its files so" if record is None else
+           "its run.json cannot be read: what made them is unknown")
+    assert f"holds the results of an earlier run ({held})" in stderr, stderr
+    assert "other settings" not in stderr and stderr.rstrip().endswith(f"--out ({why})"), stderr
 
 
 def test_force_replaces_results_of_other_settings_as_its_help_says(folder: Path,

@@ -214,7 +214,7 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
                 except OutputError as exc:
                     result.known.append(Outcome(
                         item.name, label, STATUS_FAILED,
-                        error=f"{exc} ({_other_settings(request, on_disk)})",
+                        error=f"{exc} ({_other_settings(request, on_disk, folder)})",
                         kept=None if on_disk is None else _summary(on_disk, folder)))
                     continue
             if done is not None:
@@ -228,13 +228,16 @@ def plan(inputs: Sequence[BatchInput], configs: dict[str, Config], out_dir: Path
     return result
 
 
-def _other_settings(request: RunRequest, record: dict[str, Any] | None) -> str:
+def _other_settings(request: RunRequest, record: dict[str, Any] | None, folder: Path) -> str:
     """``made with other settings``, naming those that differ from ``request``'s in
-    ``record``, the ``run.json`` of its folder; None (no ``run.json`` could be read): that
-    what made them is unknown (a run killed before it recorded itself leaves its
-    ``track.csv`` so)."""
+    ``record``, the ``run.json`` of ``folder``; None (no ``run.json`` could be read): that
+    what made them is unknown, as its ``run.json`` cannot be read, or as there is none (a run
+    killed before it recorded itself leaves its ``track.csv`` so)."""
+    if record is None and (folder / "run.json").is_file():
+        return "its run.json cannot be read: what made them is unknown"
     if record is None:
-        return "no run.json says what made them: a run stopped before it recorded itself?"
+        return ("no run.json says what made them: a run stopped before it recorded itself "
+                "leaves its files so")
     changed = [] if "request" not in record else request.differences(record["request"])
     return "made with other settings" + (f": {', '.join(changed)}" if changed else "")
 
