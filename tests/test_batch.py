@@ -1063,6 +1063,24 @@ def test_a_batch_over_an_older_batchs_failed_sequence_drops_its_row(
     assert "targets' ground truth" not in (tmp_path / "report" / "summary.md").read_text()
 
 
+def test_a_multi_target_config_on_a_sequence_of_targets_only_warns_it_is_not_scored(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """'vtrack batch in/Jogging -c s3' (groundtruth_rect.1.txt and .2.txt, no MOTChallenge
+    ground truth) said nothing of s3's run being not scored once each target was an input: the
+    folder's ground truth was no longer counted. The warning names the folder and its files."""
+    sequence, _ = otb_two_targets(clip_factory, tmp_path / "in")
+    result = batch(str(sequence), "-c", "s3", "--no-video", "-j", "1", "-o",
+                   str(tmp_path / "out"))
+    assert result.exit_code == 0, result.output
+    assert set(summary(tmp_path / "out")) == {("Jogging", "s3")}
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("vtrack: warn")]
+    assert warnings == [
+        f"vtrack: warning: {sequence}: one target's ground truth per file "
+        "(groundtruth_rect.1.txt, groundtruth_rect.2.txt); config 's3' tracks several targets "
+        "and reads MOTChallenge ground truth (groundtruth_mot.txt or gt.txt or gt/gt.txt in "
+        "Jogging/): its run is not scored"], result.stderr
+
+
 def test_a_folder_named_like_a_target_of_a_sequence_beside_it_stops_the_batch(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A sequence folder Jogging-1 beside Jogging (groundtruth_rect.1.txt) would write the

@@ -239,15 +239,26 @@ def _refuse_shared_folders(folder: Path, found: list[BatchInput]) -> None:
 
 
 def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -> str | None:
-    """The warning for inputs with single-target ground truth only, when ``configs`` (the
-    batch's multi-target ones) read MOTChallenge ground truth: their runs are not scored. One
-    line, naming the first such file and the MOTChallenge names looked for beside it and
-    counting the others; None when there are none."""
-    unscored = [item for item in inputs if item.problem is None and item.groundtruth
+    """The warning for inputs with single-target ground truth only (their own, or that of
+    each target of an OTB sequence of several, ``groundtruth_rect.N.txt``), when ``configs``
+    (the batch's multi-target ones) read MOTChallenge ground truth: their runs are not
+    scored. One line, naming the first such file (or sequence folder, with its targets'
+    files) and the MOTChallenge names looked for beside it and counting the others; None
+    when there are none."""
+    inputs = list(inputs)
+    targets: dict[Path, list[str]] = {}  # each sequence folder's targets' files
+    for item in inputs:
+        if item.target is not None and item.groundtruth is not None:
+            targets.setdefault(item.path, []).append(item.groundtruth.name)
+    unscored = [item for item in inputs if item.problem is None
+                and (item.groundtruth or item.path in targets)
                 and item.mot_groundtruth is None and item.taken_by(multi_target=True)]
     if not unscored or not configs:
         return None
     first = unscored[0]
+    truth = (f"{first.groundtruth}{{}}: one target's ground truth" if first.groundtruth else
+             f"{first.path}{{}}: one target's ground truth per file "
+             f"({', '.join(targets[first.path])})")
     if first.path.is_dir():
         wanted = f"{' or '.join(SEQUENCE_MOT_GT)} in {first.path.name}/"
     else:
@@ -258,7 +269,7 @@ def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -
     one = len(configs) == 1
     named = [repr(c) for c in configs]
     named = [", ".join(named[:-1]), named[-1]] if len(named) > 1 else named
-    return (f"{first.groundtruth}{more}: one target's ground truth; "
+    return (f"{truth.format(more)}; "
             f"{'config' if one else 'configs'} {' and '.join(named)} "
             f"{'tracks' if one else 'track'} several targets and {'reads' if one else 'read'} "
             f"MOTChallenge ground truth ({wanted}): "
