@@ -1076,3 +1076,24 @@ def test_pairs_known_before_a_stop_are_reported_not_said_not_started(tmp_path: P
     with pytest.raises(Interrupted):
         running.throw(Interrupted(signal.SIGTERM))
     assert {o.input for o in late} >= {"b", "c"}, late
+
+
+def test_a_failure_while_the_run_is_recorded_leaves_no_temporary_csv(
+        clip: Clip, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An error while the run was recorded, before the CSV got its final name, left
+    `.track.tmp-PID-*.csv` in the folder: the folder's clearing keeps this process's own
+    temporaries (taken to be still written), so it outlived the run, and every later run in the
+    same process (a batch worker's). Now the run's error is raised and its temporary removed."""
+    from vtrack import run as run_module
+
+    def broken(*args: object) -> list[str]:
+        raise RuntimeError("the record broke")
+
+    monkeypatch.setattr(run_module._Timeline, "warnings", broken)
+    out = tmp_path / "out"
+    request = RunRequest(str(clip.path), out, load_config("s0"), init_box=clip.scene.boxes[0],
+                         video=False)
+    with pytest.raises(RuntimeError, match="the record broke"):
+        run(request)
+    left = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    assert left == []  # (the folder it made is removed too, when nothing else is in it)

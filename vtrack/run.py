@@ -731,7 +731,11 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
                     on_open(info)
                 tracked = _track(request, resolved, source, writers, signals, on_frame, folder)
                 if not tracked.untouched:
-                    summary = _record(request, resolved, source, writers, tracked)
+                    try:
+                        summary = _record(request, resolved, source, writers, tracked)
+                    except BaseException:  # its temporary is this process's: clear() keeps it
+                        writers.csv.abort()
+                        raise
         finally:
             source.close()
     if tracked.failure is not None:
