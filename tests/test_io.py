@@ -816,6 +816,20 @@ def test_csv_rows_are_on_disk_as_written_and_renamed_on_close(tmp_path):
         CsvWriter(tmp_path / "t.csv", ["a"]).write([1, 2])
 
 
+def test_a_csv_whose_close_failed_is_not_renamed_after(tmp_path):
+    """When the file's close failed in finish() (the temporary removed, an error raised), a
+    later close() still renamed the missing temporary: a second, wrong error ("No such file or
+    directory") replaced the first. Now close() after it does nothing more."""
+    path = tmp_path / "track.csv"
+    with pytest.raises(OutputError) as raised, CsvWriter(path, ["frame"]) as writer:
+        writer.write([0])
+        os.close(writer._fd)  # the descriptor already gone: closing it fails (EBADF)
+        writer.finish()
+    assert str(raised.value) == f"{path}: cannot write (Bad file descriptor)"
+    writer.close()  # and again: nothing is raised
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_write_json_is_atomic_and_maps_nan_to_null(tmp_path):
     path = tmp_path / "run.json"
     write_json(path, {"fps": float("nan"), "n": np.int64(3), "box": (1.5, 2), "ok": np.bool_(1),

@@ -151,6 +151,7 @@ class CsvWriter(Closing):
         try:
             os.close(self._fd)
         except OSError as exc:
+            self._aborted = True  # no file left: close() renames nothing
             remove_quietly(self._temp)
             raise OutputError(f"{self.path}: cannot write ({os_reason(exc)})") from None
 
