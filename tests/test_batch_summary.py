@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from click.testing import CliRunner, Result
 
 from vtrack.batch import Job, execute
-from vtrack.batch.summary import SummaryWriter
+from vtrack.batch.summary import NEVER_STARTED, UNFINISHED, SummaryWriter
 from vtrack.cli import main
 from vtrack.config import load_config
 from vtrack.io.identity import file_identity
@@ -249,3 +249,19 @@ def test_a_failed_row_of_an_input_that_did_not_open_names_its_ground_truth(
     assert (failed["status"], failed["run"]) == ("failed", ""), failed
     assert failed["ground_truth"] == os.path.realpath(inputs / "c7.gt.txt")
     assert ran["ground_truth"] == os.path.realpath(inputs / "a.gt.txt")
+
+
+def test_rows_of_pairs_without_an_outcome_name_their_ground_truth(tmp_path: Path) -> None:
+    """The rows of pairs a batch has not finished (unfinished while it runs, never started
+    once it stopped) had an empty ground_truth column, while a failed pair's row names its
+    file. They name it too now, as a run's row does; a pair without one names none."""
+    gt = tmp_path / "in" / "a.gt.txt"
+    gt.parent.mkdir()
+    gt.write_text("1,2,3,4\n")
+    path = tmp_path / "out" / "summary.csv"
+    writer = SummaryWriter(path, [("a", "s0"), ("b", "s0")], ground_truth={("a", "s0"): gt})
+    for stopped, error in ((False, UNFINISHED), (True, NEVER_STARTED)):
+        writer.write(stopped=stopped)
+        _, rows = read(path)
+        assert [(rows[name, "s0"]["ground_truth"], rows[name, "s0"]["error"])
+                for name in "ab"] == [(os.path.realpath(gt), error), ("", error)], rows

@@ -246,7 +246,7 @@ class SummaryWriter:
     kept.
     ``clock``: seconds, for the spacing of writes. ``ground_truth``: the ground-truth file of
     each pair that has one, the ``ground_truth`` of a row whose folder holds no run to read it
-    from (an input that failed to open)."""
+    from (an input that failed to open, a pair never started or unfinished)."""
 
     def __init__(self, path: Path, order: Iterable[tuple[str, str]],
                  clock: Callable[[], float] = time.monotonic,
@@ -283,10 +283,8 @@ class SummaryWriter:
         the file unless the last write was too recent (:data:`WRITE_SPACING`)."""
         key = (outcome.input, outcome.config)
         row, source = self._resumed_row(outcome) or outcome_row(outcome, self.path)
-        if "run" not in row and key in self.ground_truth:  # no run of it was read
-            from vtrack.report.runs import found_from  # (as a run's row names it)
-
-            row["ground_truth"] = found_from(str(self.ground_truth[key]), os.getcwd())
+        if "run" not in row:  # no run of it was read
+            row.update(self._planned_ground_truth(key))
         self.rows[key] = row
         if source is None:
             self.sources.pop(key, None)
@@ -295,6 +293,16 @@ class SummaryWriter:
         self._pending = True
         if write and self.clock() >= self._next_write:
             self.write()
+
+    def _planned_ground_truth(self, key: tuple[str, str]) -> dict[str, str]:
+        """The ``ground_truth`` cell of the pair ``key``'s row when no run of it was read (it
+        failed to open, it never started, it is unfinished): its file as a run's row names
+        it; nothing when it has none."""
+        if key not in self.ground_truth:
+            return {}
+        from vtrack.report.runs import found_from
+
+        return {"ground_truth": found_from(str(self.ground_truth[key]), os.getcwd())}
 
     def _resumed_row(self, outcome: Outcome
                      ) -> tuple[dict[str, Any], dict[str, int]] | None:
@@ -324,7 +332,8 @@ class SummaryWriter:
 
         began = self.clock()
         rows = [{"input": name, "config": config, "status": STATUS_INTERRUPTED,
-                 "error": NEVER_STARTED if stopped else UNFINISHED} if row is None else row
+                 "error": NEVER_STARTED if stopped else UNFINISHED,
+                 **self._planned_ground_truth((name, config))} if row is None else row
                 for (name, config), row in self.rows.items()]
         self.path.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path, render(rows))
