@@ -1245,8 +1245,9 @@ def test_jobs_beyond_what_the_memory_holds_start_fewer_workers_saying_so(
         tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
     """`vtrack batch --jobs 512` started a worker per run to do, whatever the memory: 500 runs
     of ~75 MB workers wanted ~37 GB, and the OOM killer ended the batch. The workers are bounded
-    by what the memory available holds (here 2 of WORKER_MEMORY), in one warning line; a batch
-    that needs no more than that says nothing."""
+    by what the memory available holds (here 2 of WORKER_MEMORY), in one warning line that
+    counts the runs to do when they are fewer than --jobs, and says when the memory holds not
+    even one worker (one starts); a batch that needs no more than that says nothing."""
     from vtrack.cli import batch as batch_command
     WORKER_MEMORY = 100 * 2**20  # (vtrack.machine.WORKER_MEMORY)
 
@@ -1268,11 +1269,20 @@ def test_jobs_beyond_what_the_memory_holds_start_fewer_workers_saying_so(
                    str(tmp_path / "out"))
     assert result.exit_code == 0, result.output
     assert started == [2]
-    assert result.stderr.splitlines() == [
-        "vtrack: warning: --jobs 512: starting 2 workers, not 512: the memory available "
-        "(0.2 GiB) holds about 2 of 100 MiB each"]
+    assert result.stderr.splitlines() == [  # (it said "not 512" of 3 runs to do)
+        "vtrack: warning: --jobs 512: starting 2 workers, not 3 (one per run to do): the "
+        "memory available (0.2 GiB) holds about 2 of 100 MiB each"]
     assert {row["status"] for row in summary(tmp_path / "out").values()} == {"complete"}
     (folder / "c2.mp4").unlink()  # two runs to do: the two workers it holds, no warning
     again = batch(str(folder), "-c", "s0", "--no-video", "-q", "--jobs", "512", "--force",
                   "-o", str(tmp_path / "again"))
     assert again.exit_code == 0 and again.stderr == "", again.output
+    # less than one worker's memory: one starts (it said "holds about 1" of 0.0 GiB)
+    monkeypatch.setattr(batch_command, "available_memory", lambda: 60 * 2**20)
+    scarce = batch(str(folder), "-c", "s0", "--no-video", "-q", "--jobs", "2", "--force",
+                   "-o", str(tmp_path / "again"))
+    assert scarce.exit_code == 0, scarce.output
+    assert started == [2, 2, 1]
+    assert scarce.stderr.splitlines() == [
+        "vtrack: warning: --jobs 2: too little memory for one worker of 100 MiB (the memory "
+        "available: 60 MiB): starting 1, not 2"]

@@ -44,13 +44,19 @@ if TYPE_CHECKING:
 MAX_JOBS = 512
 
 
-def _fewer_workers(jobs: int | None, wanted: int, workers: int, available: int) -> str:
-    """The warning of a batch that starts ``workers`` local workers, not the ``wanted`` ones
-    (``--jobs``, else the cores), as the ``available`` bytes of memory hold no more."""
+def _fewer_workers(jobs: int | None, wanted: int, runs: int, workers: int,
+                   available: int) -> str:
+    """The warning of a batch of ``runs`` to do that starts ``workers`` local workers, not the
+    ``wanted`` ones (``--jobs``, else the cores) nor one per run when fewer, as the
+    ``available`` bytes of memory hold no more (less than one worker's: it starts one)."""
     asked = f"--jobs {jobs}" if jobs else f"{wanted} cores"
-    return (f"{asked}: starting {plural(workers, 'worker')}, not {wanted}: the memory available "
-            f"({available / 2**30:.1f} GiB) holds about {workers} of "
-            f"{WORKER_MEMORY // 2**20} MiB each")
+    needed = f"{wanted}" if wanted <= runs else f"{runs} (one per run to do)"
+    each = f"{WORKER_MEMORY // 2**20} MiB"
+    if available < WORKER_MEMORY:
+        return (f"{asked}: too little memory for one worker of {each} (the memory available: "
+                f"{available // 2**20} MiB): starting 1, not {needed}")
+    return (f"{asked}: starting {plural(workers, 'worker')}, not {needed}: the memory available "
+            f"({available / 2**30:.1f} GiB) holds about {workers} of {each} each")
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -260,7 +266,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         for warning in batch.warnings:
             warn(warning)
         if scheduler is None and min(wanted, len(batch.jobs)) > workers:
-            warn(_fewer_workers(jobs, wanted, workers, available or 0))
+            warn(_fewer_workers(jobs, wanted, len(batch.jobs), workers, available or 0))
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
