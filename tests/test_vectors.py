@@ -289,8 +289,8 @@ def test_a_file_at_a_frame_folders_path_is_refused_and_the_earlier_vectors_stay(
     result = vtrack(*args)
     assert result.returncode == 2, result.stderr
     assert result.stderr.strip().splitlines() == [
-        f"vtrack: error: {out / 'frame_0005'}: cannot write (a file, not a folder, is in the "
-        "way)"]
+        f"vtrack: error: {out / 'frame_0005'}: cannot write output here (a file, not a "
+        "folder)"]  # (a third wording: "cannot write (a file, not a folder, is in the way)")
     assert _tree(out) == before
     assert not [p for p in out.rglob(".*")]  # no temporary name left
 

@@ -35,6 +35,7 @@ from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
 from vtrack.io.files import (
     StagedFiles,
+    file_in_the_way,
     os_reason,
     prepare_output_dir,
     removing_new_folders,
@@ -117,7 +118,7 @@ def _stage_frame(staged: StagedFiles, folder: Path, files: dict[str, bytes]) -> 
             staged.write(path, lambda temp, data=data: temp.write_bytes(data))
         return paths
     if os.path.lexists(folder):
-        raise OutputError(f"{folder}: cannot write (a file, not a folder, is in the way)")
+        raise file_in_the_way(folder, folder)
     staged.write(folder, lambda temp: _write_folder(temp, files))
     return paths
 

@@ -166,12 +166,20 @@ def prepare_output_dir(folder: Path) -> Path:
         folder.mkdir(parents=True, exist_ok=True)
     except (FileExistsError, NotADirectoryError) as exc:
         blocked = _file_in_the_way(folder)
-        reason = (os_reason(exc) if blocked is None else "a file, not a folder"
-                  if blocked == folder else f"{blocked} is a file, not a folder")
-        raise OutputError(f"{folder}: cannot write output here ({reason})") from None
+        if blocked is not None:
+            raise file_in_the_way(folder, blocked) from None
+        raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
     except OSError as exc:
         raise OutputError(f"{folder}: cannot write output here ({os_reason(exc)})") from None
     return folder
+
+
+def file_in_the_way(folder: Path, blocked: Path) -> OutputError:
+    """The error of an output ``folder`` that cannot be made because the file ``blocked`` (at
+    its path, or one of its parents) is there: one wording for every command, naming the
+    file."""
+    reason = "a file, not a folder" if blocked == folder else f"{blocked} is a file, not a folder"
+    return OutputError(f"{folder}: cannot write output here ({reason})")
 
 
 def _file_in_the_way(folder: Path) -> Path | None:
