@@ -85,3 +85,27 @@ def test_an_empty_title_is_refused_in_one_line(tmp_path: Path, title: str) -> No
         "vtrack: error: Invalid value for '--title': empty; give the page's title, or leave "
         "--title out for 'vtrack report' (see 'main report --help')")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_names_in_summary_md_are_text_not_markup(clip_factory, tmp_path: Path) -> None:
+    """A config named '<b>x</b>&amp;' (and a title '<i>t</i>') went into summary.md as they
+    are, so a Markdown viewer showed a bold 'x&' (an italic 't'); '&', '<' and '>' are
+    written as HTML entities now, so the viewer shows the names as written."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=160, height=120, frames=30)
+    shipped = Path(vtrack.report.__file__).parents[1] / "configs" / "s0.toml"
+    config = tmp_path / "mine.toml"
+    config.write_text(shipped.read_text().replace('name = "s0"', 'name = "<b>x</b>&amp;"', 1))
+    ran = CliRunner().invoke(main, ["run", str(clip.path), "-c", str(config), "--gt",
+                                    str(clip.gt), "--no-video", "-q", "-o", str(tmp_path / "run")])
+    assert ran.exit_code == 0, ran.output
+    made = CliRunner().invoke(main, ["report", str(tmp_path / "run"), "--title", "<i>t</i>",
+                                     "-q", "-o", str(tmp_path / "rep")])
+    assert made.exit_code == 0, made.output
+    markdown = (tmp_path / "rep" / "summary.md").read_text()
+    assert markdown.splitlines()[0] == "# &lt;i&gt;t&lt;/i&gt;"
+    assert " | &lt;b&gt;x&lt;/b&gt;&amp;amp; | complete | " in markdown
+    assert "<b>" not in markdown and "<i>" not in markdown

@@ -214,8 +214,10 @@ def render_html(page: Page) -> str:
 # --- Markdown --------------------------------------------------------------------------------
 
 def _md(text: object) -> str:
-    """Text for one Markdown line or cell: control characters escaped, ``|`` too."""
-    return printable(str(text)).replace("|", "\\|")
+    """Text for one Markdown line or cell, shown as written: control characters escaped,
+    ``&``, ``<`` and ``>`` as HTML entities (a name is not markup) and ``|`` (not a cell's
+    end)."""
+    return html.escape(printable(str(text)), quote=False).replace("|", "\\|")
 
 
 def markdown_table(table: Table, labels: int) -> str:
@@ -231,8 +233,8 @@ def markdown_table(table: Table, labels: int) -> str:
 
 def render_markdown(page: Page) -> str:
     """The report's tables (and links to its plots) as Markdown."""
-    parts = [f"# {printable(page.title)}", page.meta]  # one line each, whatever they name
-    parts += [f"> Warning: {printable(w)}" for w in page.warnings]
+    parts = [f"# {_md(page.title)}", _md(page.meta)]  # one line each, whatever they name
+    parts += [f"> Warning: {_md(w)}" for w in page.warnings]
     if page.averages is not None:
         parts.append("## All inputs")
         if page.overall_plot:
