@@ -542,6 +542,26 @@ def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
     assert done.returncode == 0, done.stderr
 
 
+def test_run_of_a_sequences_img_without_a_box_names_the_sequences_ground_truth(
+        tmp_path: Path) -> None:
+    """`vtrack run seq/img -c s0 -o out` (an OTB folder: img/ and groundtruth_rect.txt, no --gt
+    or --init) said 'give --gt FILE' though seq/groundtruth_rect.txt exists (given `seq`, it
+    named the file): the hint looked inside img/ only. It names the sequence's file now, and
+    the --gt it names runs."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=12, fps=FPS)
+    write_image_sequence(scene, tmp_path / "seq")
+    line = assert_one_line_error(vtrack("run", "seq/img", "-c", "s0", "-o", "out",
+                                        cwd=tmp_path))
+    assert line == (
+        "vtrack: error: s0: this tracker needs an initial box: give --gt "
+        "seq/groundtruth_rect.txt (its ground truth, which vtrack batch takes by itself), "
+        "--init x,y,w,h or write x,y,w,h into init.txt (vtrack select INPUT picks it)")
+    assert not (tmp_path / "out").exists()
+    done = vtrack("run", "seq/img", "-c", "s0", "--no-video", "-o", "out", "--gt",
+                  "seq/groundtruth_rect.txt", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
 def test_run_of_a_sequence_of_targets_names_its_other_ground_truth_and_quotes_the_gt(
         tmp_path: Path) -> None:
     """An OTB folder holding groundtruth_rect.txt beside groundtruth_rect.1.txt and .2.txt

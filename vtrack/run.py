@@ -928,6 +928,8 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                               f"{give_box} (or {give_gt}); {request.input} has no sidecar "
                               "file to hold one")
         beside = groundtruth_beside(request.input)
+        if beside is None and Path(request.input).is_dir():  # SEQ/img: SEQ's ground truth
+            beside = groundtruth_beside(sequence)
         gt_hint = (give_gt if beside is None else f"{_give_file(names, names.gt, beside)} "
                    "(its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
