@@ -4,6 +4,8 @@ the config (``run``, ``batch``, ``stages``)."""
 
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -231,3 +233,35 @@ def test_a_shipped_config_printed_as_toml_loads_back_as_the_same_chain(
 ])
 def test_toml_of_anything_but_one_config_is_one_line(args: tuple[str, ...], said: str) -> None:
     assert said in one_error_line(vtrack(*args))
+
+
+
+@pytest.mark.parametrize(("first", "second", "equal", "said"), [
+    ("blobs.min_area=100", "blobs.max_area=10", "blobs.max_area=100",
+     "stage 'blobs': min_area (100) is larger than max_area (10): no blob would be kept; "
+     "lower min_area, or raise max_area (0: no limit)"),
+    ("byte_tracks.low=0.9", "byte_tracks.high=0.1", "byte_tracks.high=0.9",
+     "stage 'byte_tracks': low (0.9) is above high (0.1): no detection would score from low "
+     "up to high (ByteTrack's second pass); give low <= high"),
+], ids=["areas", "scores"])
+def test_contradictory_parameter_pairs_are_refused_naming_both(
+        first: str, second: str, equal: str, said: str, clip_factory: ClipFactory,
+        tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 -c fixed_camera --set blobs.min_area=100 --set blobs.max_area=10`
+    (no blob can be kept) and `--set byte_tracks.low=0.9 --set byte_tracks.high=0.1` (no
+    detection reaches the second pass) ran without a word (0 tracks, exit 0). Both are
+    refused in one line naming both parameters, in a run and in the API; equal values (a
+    blob of exactly that area, no second pass) still run."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    line = one_error_line(vtrack("run", str(clip.path), "-c", "fixed_camera", "--set", first,
+                                 "--set", second, "--no-video", "-q", "--out",
+                                 str(tmp_path / "o")))
+    assert line == f"vtrack: error: fixed_camera: {said}"
+    assert not (tmp_path / "o").exists()
+    values = {key.replace(".", "__"): json.loads(value)
+              for key, value in (first.split("="), second.split("="))}
+    with pytest.raises(ConfigError, match=f"^fixed_camera: {re.escape(said)}$"):
+        Tracker("fixed_camera", **values)
+    done = vtrack("run", str(clip.path), "-c", "fixed_camera", "--set", first, "--set", equal,
+                  "--no-video", "-q", "--out", str(tmp_path / "eq"))
+    assert done.exit_code == 0, done.output

@@ -11,6 +11,7 @@ every run) and few, so the whole file takes seconds.
 from __future__ import annotations
 
 import math
+import re
 import tracemalloc
 from functools import cache
 
@@ -144,6 +145,13 @@ def test_stage_parameters_in_and_out_of_range(stage: str) -> None:
             assert "\n" not in message
             assert f"stage '{stage}'" in message and " range " in message
             assert any(f"parameter '{name}'" in message for name in bad)
+            return
+        given = {p.name: p.default for p in cls.params} | dict(dict(base.stages)[stage]) | {
+            p.name: p.parse(values[p.name][0], stage) for p in params if p.name in values}
+        problem = cls.values_problem(given)  # a pair contradicting each other, each in range
+        if problem:
+            with pytest.raises(ConfigError, match=f"stage '{stage}': {re.escape(problem)}$"):
+                base.with_overrides(assignments)
             return
         _run_bounded(base.with_overrides(assignments), multi)
 

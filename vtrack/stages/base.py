@@ -300,6 +300,12 @@ class Stage:
         stages named in ``before`` beyond what ``requires`` says (None: it can)."""
         return None
 
+    @classmethod
+    def values_problem(cls, values: dict[str, Any]) -> str | None:
+        """Why these values of every parameter (checked one by one, defaults for those not
+        set) contradict each other, naming the parameters (None: they do not)."""
+        return None
+
     def initial_box(self, ctx: TrackContext) -> Box:
         """The first frame's box this stage starts from; InputError naming the stage when there
         is none or it is not a finite box of positive size."""
@@ -389,7 +395,8 @@ def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
 def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
     """``values`` of stage ``name`` each as its parameter's type (:meth:`Param.validate`: a
     NumPy number as a Python one); ConfigError naming ``where``, the stage and the parameter
-    for one the stage does not declare or whose value it refuses."""
+    for one the stage does not declare or whose value it refuses, and the parameters of a
+    pair that contradict each other (:meth:`Stage.values_problem`)."""
     cls = stage_class(name, where)
     declared = {p.name: p for p in cls.params}
     where = f"{where}: stage '{name}'"
@@ -399,4 +406,7 @@ def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, A
             known = ", ".join(declared) or "none"
             raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})")
         checked[key] = declared[key].validate(value, where)
+    problem = cls.values_problem({p.name: checked.get(p.name, p.default) for p in cls.params})
+    if problem:
+        raise ConfigError(f"{where}: {problem}")
     return checked

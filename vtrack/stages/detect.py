@@ -23,7 +23,7 @@ import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Protocol, TypeVar
+from typing import Any, Protocol, TypeVar
 
 import cv2
 import numpy as np
@@ -630,6 +630,15 @@ class Blobs(Stage):
     requires = _SEGMENTS
     provides = frozenset({"detections", "candidate_grey"})
     needs_init_box = False
+
+    @classmethod
+    def values_problem(cls, values: dict[str, Any]) -> str | None:
+        """A least blob larger than the largest (``max_area`` set): no blob could be kept."""
+        least, most = values["min_area"], values["max_area"]
+        if most and least > most:
+            return (f"min_area ({least}) is larger than max_area ({most}): no blob would be "
+                    "kept; lower min_area, or raise max_area (0: no limit)")
+        return None
 
     def step(self, ctx: TrackContext) -> None:
         ctx.candidate_grey = None

@@ -169,6 +169,14 @@ class ByteTracks(Stage):
     needs_init_box = False
 
     @classmethod
+    def values_problem(cls, values: dict[str, Any]) -> str | None:
+        """A low score above the high one: no detection would reach the second pass."""
+        if values["low"] > values["high"]:
+            return (f"low ({values['low']:g}) is above high ({values['high']:g}): no detection "
+                    "would score from low up to high (ByteTrack's second pass); give low <= high")
+        return None
+
+    @classmethod
     def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
         default = next(p.default for p in cls.params if p.name == "colour_gate")
         if values.get("colour_gate", default) < 1.0 and "detection_colours" not in before:
