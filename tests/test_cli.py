@@ -536,9 +536,13 @@ def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
             "truth (groundtruth_rect.1.txt, groundtruth_rect.2.txt), none of which a run takes "
             "by itself: give one per run (--gt Jogging/groundtruth_rect.1.txt, --gt "
             "Jogging/groundtruth_rect.2.txt), or --init x,y,w,h")
+    _refused_then_runs_with_gt(tmp_path, "Jogging", "Jogging/groundtruth_rect.2.txt")
+
+
+def _refused_then_runs_with_gt(tmp_path: Path, given: str, gt: str) -> None:
+    """The refused run made no output folder, and the --gt its line names tracks ``given``."""
     assert not (tmp_path / "out").exists()
-    done = vtrack("run", "Jogging", "-c", "s0", "--no-video", "-o", "out", "--gt",
-                  "Jogging/groundtruth_rect.2.txt", cwd=tmp_path)
+    done = vtrack("run", given, "-c", "s0", "--no-video", "-o", "out", "--gt", gt, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
 
 
@@ -556,10 +560,7 @@ def test_run_of_a_sequences_img_without_a_box_names_the_sequences_ground_truth(
         "vtrack: error: s0: this tracker needs an initial box: give --gt "
         "seq/groundtruth_rect.txt (its ground truth, which vtrack batch takes by itself), "
         "--init x,y,w,h or write x,y,w,h into init.txt (vtrack select INPUT picks it)")
-    assert not (tmp_path / "out").exists()
-    done = vtrack("run", "seq/img", "-c", "s0", "--no-video", "-o", "out", "--gt",
-                  "seq/groundtruth_rect.txt", cwd=tmp_path)
-    assert done.returncode == 0, done.stderr
+    _refused_then_runs_with_gt(tmp_path, "seq/img", "seq/groundtruth_rect.txt")
 
 
 def test_run_of_a_sequence_of_targets_names_its_other_ground_truth_and_quotes_the_gt(
