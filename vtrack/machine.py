@@ -88,16 +88,16 @@ def _cgroup_free(files: _CgroupFiles, path: str) -> int | None:
     """The least memory any limit from the cgroup ``path`` up to its hierarchy's root leaves
     free; None where none is set or can be read. A path not under the mount point (a
     container that sees only its own cgroup, as the root) is read at the root."""
-    root = os.path.join(_CGROUP_MOUNT, files.folder)
+    root = os.path.normpath(os.path.join(_CGROUP_MOUNT, files.folder))
     here = os.path.normpath(os.path.join(root, path.lstrip("/")))
-    if not os.path.isdir(here) or os.path.commonpath([root, here]) != os.path.normpath(root):
+    if not os.path.isdir(here) or os.path.commonpath([root, here]) != root:
         here = root
     free: list[int] = []
     while True:
         level = _level_free(here, files)
         if level is not None:
             free.append(level)
-        if os.path.normpath(here) == os.path.normpath(root):
+        if here == root:
             return min(free, default=None)
         here = os.path.dirname(here)
 

@@ -173,8 +173,8 @@ class Pipeline:
         checked against that frame by :meth:`process`). The track before ends here, also when
         ``init_box`` is refused (ConfigError): no track is going then, as after
         :meth:`vtrack.Tracker.reset`."""
-        self._ctx, self._shape, self._off_since, self._begun = None, None, None, False
-        self._init_box = None
+        self._ctx, self._shape, self._off_since, self._begun, self._init_box = (
+            None, None, None, False, None)
         if init_box is None and self.needs_init_box:
             raise ConfigError("this tracker needs an initial box: give init_box (x, y, w, h)")
         self._init_box = None if init_box is None else as_box(init_box)

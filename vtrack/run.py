@@ -718,7 +718,8 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
             _refuse_writing_over_inputs(request, _output_names(request, resolved), names)
             if not overwrite:
                 refuse_replacing(request.out_dir, names)
-                _refuse_replacing_stream(_stream_file(request), names)
+                if (stream := _stream_file(request)) is not None:  # a file holding something
+                    refuse_replacing_file(stream, f"{names.stream} {stream}", names.overwrite)
             # from taking the folder until the frame loop, a signal is only noted (the loop
             # then ends at once, interrupted): none cuts the opening of the outputs short and
             # leaves their temporary files (or the folder's lock) behind without a record
@@ -798,14 +799,6 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
 def _stream_file(request: RunRequest) -> Path | None:
     """The file ``--stream`` names (None: no stream, or stdout)."""
     return None if request.stream in (None, STDOUT) else Path(request.stream)
-
-
-def _refuse_replacing_stream(stream: Path | None, names: OptionNames) -> None:
-    """OutputError when ``--stream`` names a file that holds something (an earlier run's
-    lines, or anything else): replaced only with ``--overwrite`` (both called by ``names``).
-    A pipe, a device or an empty file is written to as it is."""
-    if stream is not None:
-        refuse_replacing_file(stream, f"{names.stream} {stream}", names.overwrite)
 
 
 def _output_names(request: RunRequest, resolved: _Resolved) -> list[str]:
@@ -1280,7 +1273,7 @@ def _next_track_id(request: RunRequest, last_track_id: int | None) -> int:
     """The id a run that goes on from this one numbers its tracks from: one after
     ``last_track_id``, the highest this run wrote to ``tracks.csv`` (its first track id when
     it wrote none: None)."""
-    return (request.first_track_id - 1 if last_track_id is None else last_track_id) + 1
+    return request.first_track_id if last_track_id is None else last_track_id + 1
 
 
 def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _Writers,

@@ -92,10 +92,13 @@ def _sequence(folder: Path, gt_origin: int | None, multi_target: bool) -> list[B
     groundtruth = groundtruth_beside(folder)
     mot_groundtruth = _first(folder, SEQUENCE_MOT_GT)
     init = _first(folder, [SEQUENCE_INIT])
-    targets = [BatchInput(name=target_input(folder.name, target_number(path)), path=folder,
+    numbered = numbered_groundtruth(folder)
+    # every target's file lies in the one folder: one origin for them all
+    origin = _origin(numbered[0], gt_origin) if numbered else 0
+    targets = [BatchInput(name=target_input(folder.name, number), path=folder,
                           groundtruth=path, mot_groundtruth=mot_groundtruth,
-                          gt_origin=_origin(path, gt_origin), target=target_number(path))
-               for path in numbered_groundtruth(folder)]
+                          gt_origin=origin, target=number)
+               for path in numbered for number in [target_number(path)]]
     single = not targets or any(p is not None for p in (groundtruth, mot_groundtruth, init))
     whole = BatchInput(name=folder.name, path=folder, groundtruth=groundtruth,
                        mot_groundtruth=mot_groundtruth, init=init,

@@ -298,11 +298,7 @@ class SummaryWriter:
         """The ``ground_truth`` cell of the pair ``key``'s row when no run of it was read (it
         failed to open, it never started, it is unfinished): its file as a run's row names
         it; nothing when it has none."""
-        if key not in self.ground_truth:
-            return {}
-        from vtrack.report.runs import found_from
-
-        return {"ground_truth": found_from(str(self.ground_truth[key]), os.getcwd())}
+        return {"ground_truth": str(self.ground_truth[key])} if key in self.ground_truth else {}
 
     def _resumed_row(self, outcome: Outcome
                      ) -> tuple[dict[str, Any], dict[str, int]] | None:

@@ -13,6 +13,7 @@ from vtrack.cli._progress import StepProgress
 from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.errors import ConfigError
 from vtrack.geometry import MIN_BOX_SIDE
+from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.params import MAX_CRF, MAX_SEED
 from vtrack.scenes import CLIP_FORMATS, SCENARIOS, X264_PRESETS, make_scene, write_clip
 from vtrack.scenes.scenarios import MAX_FRAMES, MAX_HEIGHT, MAX_WIDTH, MIN_HEIGHT, MIN_WIDTH
@@ -47,7 +48,7 @@ def _scenario_list() -> str:
               help=f"Frame size, from {MIN_WIDTH}x{MIN_HEIGHT} to {MAX_WIDTH}x{MAX_HEIGHT} "
                    "[scenario default, mostly 320x240].")
 @click.option("--fps", type=FRAME_RATE,
-              help="Frame rate, from 0.01 to 10000 [scenario default, mostly 30].")
+              help=f"Frame rate, from {MIN_FPS:g} to {MAX_FPS:g} [scenario default, mostly 30].")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Random seed.")
 @click.option(

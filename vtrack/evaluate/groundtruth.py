@@ -97,7 +97,8 @@ def target_of(input_spec: str, gt_path: str | PathLike[str] | None) -> int | Non
     ``gt_path`` tracks: N when ``gt_path`` is the sequence's own ``groundtruth_rect.N.txt``
     (:func:`numbered_groundtruth`; ``input_spec`` the sequence folder ``SEQ`` or its images'
     ``SEQ/img``), else None (any other input or ground truth)."""
-    if gt_path is None or _NUMBERED_GT.fullmatch(Path(gt_path).name) is None:
+    match = None if gt_path is None else _NUMBERED_GT.fullmatch(Path(gt_path).name)
+    if match is None:
         return None
     folder = Path(input_spec)
     if not folder.is_dir():
@@ -108,7 +109,7 @@ def target_of(input_spec: str, gt_path: str | PathLike[str] | None) -> int | Non
             return None
     except OSError:
         return None
-    return target_number(gt_path)
+    return int(match[1])
 
 
 def target_input(name: str, target: int | None) -> str:

@@ -349,18 +349,21 @@ def _start(record: dict[str, Any]) -> int:
     start = record.get("start_frame")
     if start is None:
         start = (record.get("request") or {}).get("start") or 0
-    if isinstance(start, bool) or not isinstance(start, int) or start < 0:
-        raise ValueError(f"start_frame {start!r}")
-    return start
+    return _whole_number(start, "start_frame")
 
 
 def _last_frame(record: dict[str, Any]) -> int | None:
     """The last frame whose results the run wrote (``last_frame``; None: none was, or a record
     made before it existed). ValueError when it is not a frame number."""
     last = record.get("last_frame")
-    if last is not None and (isinstance(last, bool) or not isinstance(last, int) or last < 0):
-        raise ValueError(f"last_frame {last!r}")
-    return last
+    return None if last is None else _whole_number(last, "last_frame")
+
+
+def _whole_number(value: object, key: str) -> int:
+    """``value``, a record's ``key``, when it is a whole number >= 0; ValueError otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"{key} {value!r}")
+    return value
 
 
 def _with_skipped_frames(rows: list[dict[str, str]], start: int = 0, last: int | None = None
@@ -427,10 +430,7 @@ def _target(record: dict[str, Any]) -> int | None:
     """The target of an OTB sequence of several the run tracked (its request's ``target``),
     None for none; ValueError for one that is no whole number (a record edited by hand)."""
     target = (record.get("request") or {}).get("target")
-    if target is not None and (isinstance(target, bool) or not isinstance(target, int)
-                               or target < 0):
-        raise ValueError(f"target {target!r}")
-    return target
+    return None if target is None else _whole_number(target, "target")
 
 
 def _input_key(record: dict[str, Any]) -> str:
@@ -475,15 +475,9 @@ def _found_path(record: dict[str, Any], role: str) -> str | None:
     given = (record.get("request") or {}).get(role)
     if given is None:
         return None
+    path = str(given)
     started_in = record.get("working_dir")
-    return found_from(str(given), started_in if isinstance(started_in, str) else None)
-
-
-def found_from(path: str, started_in: str | None) -> str:
-    """Where the file a run was given as ``path`` is found from here: a relative path is read
-    from the folder the run was started in (``started_in``) when that holds it, as its real
-    path, else as given (as is ``-``, a URL or an absolute path)."""
-    if started_in is None or path == "-" or is_url(path) or os.path.isabs(path):
+    if not isinstance(started_in, str) or path == "-" or is_url(path) or os.path.isabs(path):
         return path
     there = os.path.join(started_in, path)
     # one file, one name: its real path (`..` after a link is not removed as text)

@@ -125,14 +125,16 @@ SHAPE_SAMPLES = 500
 
 
 class ShapeSamples:
-    """The height/width and area of the last ``limit`` boxes added, and their usual shape."""
+    """The height/width and area of the last :data:`SHAPE_SAMPLES` boxes added, and their
+    usual shape."""
 
-    def __init__(self, limit: int = SHAPE_SAMPLES) -> None:
-        self._aspects: deque[float] = deque(maxlen=limit)
-        self._areas: deque[float] = deque(maxlen=limit)
+    def __init__(self) -> None:
+        self._aspects: deque[float] = deque(maxlen=SHAPE_SAMPLES)
+        self._areas: deque[float] = deque(maxlen=SHAPE_SAMPLES)
 
     def add(self, box: Box) -> None:
-        """Take ``box``'s height/width and area as a sample (the oldest goes past ``limit``)."""
+        """Take ``box``'s height/width and area as a sample (the oldest goes past
+        :data:`SHAPE_SAMPLES`)."""
         self._aspects.append(box.h / box.w)
         self._areas.append(box.area)
 
