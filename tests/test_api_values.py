@@ -374,8 +374,8 @@ def test_library_messages_name_start_gt_out_stream_and_overwrite_as_the_library_
         (replace(request, start_s=5), f"start_s 5: {clip}: has no frame at or after 5 s (its "
                                       "last frame is frame 9, at 0.3 s)"),
         (replace(request, init_box=None), "s0: this tracker needs an initial box: give "
-         "gt_path=FILE, init_box=(x, y, w, h) or write x,y,w,h into clip.init.txt (vtrack "
-         "select INPUT picks it)"),
+         "gt_path=FILE, init_box=(x, y, w, h) or write x,y,w,h into "
+         f"{tmp_path / 'clip.init.txt'} (vtrack select {clip} picks it)"),
         (replace(request, stream=str(clip)), f"stream {clip}: is the input of this run "
                                              f"({clip}); write the results elsewhere"),
         (replace(request, out_dir=report), f"{report}: is a vtrack report's folder "

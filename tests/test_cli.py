@@ -512,7 +512,29 @@ def test_an_error_naming_a_file_with_a_newline_is_one_line(occlusion_clip,
     result = vtrack("run", odd.name, "-c", "s0", "-o", "out", cwd=tmp_path)
     line = assert_one_line_error(result, "this tracker needs an initial box")
     assert result.stderr.decode().count("\n") == 1
-    assert "into a\\nb.init.txt (vtrack select INPUT picks it)" in line
+    assert "into a\\nb.init.txt (vtrack select 'a\\nb.mp4' picks it)" in line
+
+
+def test_a_run_without_a_box_names_where_its_sidecar_goes(occlusion_clip,
+                                                          tmp_path: Path) -> None:
+    """`vtrack run footage/occ.mp4 -c s0` (no box) said 'write x,y,w,h into occ.init.txt
+    (vtrack select INPUT picks it)': a file written as told, in the folder the run was started
+    in, was never read (the sidecar is footage/occ.init.txt). The line names the sidecar's
+    path and the select command of this input; a box written there is the run's first box."""
+    clip, gt, _ = occlusion_clip
+    footage = tmp_path / "my footage"
+    footage.mkdir()
+    (footage / clip.name).write_bytes(clip.read_bytes())
+    given = f"my footage/{clip.name}"
+    line = assert_one_line_error(vtrack("run", given, "-c", "s0", "-o", "out", cwd=tmp_path))
+    assert line.endswith("or write x,y,w,h into my footage/occ.init.txt "
+                         "(vtrack select 'my footage/occ.mp4' picks it)"), line
+    first = ",".join(gt.read_text().splitlines()[0].split(",")[:4])
+    (tmp_path / "my footage/occ.init.txt").write_text(first + "\n")
+    done = vtrack("run", given, "-c", "s0", "--no-video", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads((tmp_path / "out/run.json").read_text())["init_from"].endswith(
+        "occ.init.txt")
 
 
 def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
@@ -559,7 +581,7 @@ def test_run_of_a_sequences_img_without_a_box_names_the_sequences_ground_truth(
     assert line == (
         "vtrack: error: s0: this tracker needs an initial box: give --gt "
         "seq/groundtruth_rect.txt (its ground truth, which vtrack batch takes by itself), "
-        "--init x,y,w,h or write x,y,w,h into init.txt (vtrack select INPUT picks it)")
+        "--init x,y,w,h or write x,y,w,h into seq/init.txt (vtrack select seq/img picks it)")
     _refused_then_runs_with_gt(tmp_path, "seq/img", "seq/groundtruth_rect.txt")
 
 

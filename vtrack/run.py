@@ -927,8 +927,8 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                    "(its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
-            f"{give_box} or write x,y,w,h into {sidecar_path(request.input).name} "
-            "(vtrack select INPUT picks it)"
+            f"{give_box} or write x,y,w,h into {sidecar_path(request.input)} "
+            f"(vtrack select {shlex.quote(str(request.input))} picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, read_from,
