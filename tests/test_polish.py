@@ -56,6 +56,23 @@ def test_usage_errors_are_one_vtrack_error_line(args: tuple[str, ...], tmp_path:
     assert not list(tmp_path.iterdir())
 
 
+def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
+    """`vtrack rnu clip.mp4` said "No such command 'rnu'." and nothing more (click looks for
+    near names only in the commands a group holds; vtrack's loads them on demand); `vtrack
+    configs` did not say where the configs are listed; `vtrack vectors chek vec dump` read
+    'chek' as an INPUT and said "Missing option '--init'"."""
+    assert one_error_line(vtrack("rnu", "clip.mp4", cwd=tmp_path)).startswith(
+        "vtrack: error: No such command 'rnu'. Did you mean 'run'? (see ")
+    assert "vtrack stages lists the shipped configs" in one_error_line(
+        vtrack("configs", cwd=tmp_path))
+    assert one_error_line(vtrack("vectors", "chek", "vec", "dump", cwd=tmp_path)).startswith(
+        "vtrack: error: No such command 'chek'. Did you mean 'check'? (see ")
+    # an input of a name like it is still an input: named as the missing file it is
+    assert one_error_line(vtrack("vectors", "chek.mp4", "--init", "1,2,40,30", "-o", "v",
+                                 cwd=tmp_path)) == "vtrack: error: chek.mp4: no such file"
+    assert not list(tmp_path.iterdir())
+
+
 def test_stages_takes_stage_and_config_names() -> None:
     one = vtrack("stages", "robust_model")
     assert one.returncode == 0 and one.stdout.startswith("robust_model: ")

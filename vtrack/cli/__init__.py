@@ -38,6 +38,20 @@ class _Group(click.Group):
         command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
         return command if isinstance(command, click.Command) else None
 
+    def resolve_command(self, ctx: click.Context,
+                        args: list[str]) -> tuple[str | None, click.Command | None, list[str]]:
+        """As click's, but a mistyped command is offered the near one (``vtrack rnu``: "Did you
+        mean 'run'?"; click looks only in the commands a group holds, and this one loads
+        them on demand), and ``vtrack configs`` is told where the configs are listed."""
+        try:
+            return super().resolve_command(ctx, args)
+        except click.exceptions.NoSuchCommand as exc:
+            near = click.exceptions.NoSuchCommand(exc.command_name, ctx=ctx,
+                                                  possibilities=self.list_commands(ctx))
+            if not near.possibilities and exc.command_name.casefold() in ("config", "configs"):
+                near.message += " (vtrack stages lists the shipped configs and their stages)"
+            raise near from None
+
     #: Set when the group runs as the process's own program (the ``vtrack`` command, ``python
     #: -m vtrack``), not called by click's test runner: a command may then leave signal
     #: handlers for the interpreter's teardown after it (``vtrack run``'s final exit status).

@@ -8,6 +8,7 @@ given as ``./check``.
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -24,6 +25,9 @@ class _DefaultGroup(click.Group):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         if args and args[0] not in self.commands and args[0] not in ("-h", "--help"):
+            _refuse_a_mistyped_command(ctx, args[0], [name for name, command in
+                                                      self.commands.items()
+                                                      if not command.hidden])
             args = ["generate", *args]
         return super().parse_args(ctx, args)
 
@@ -38,6 +42,17 @@ class _DefaultGroup(click.Group):
                 and (record := param.get_help_record(ctx)) is not None]
         with formatter.section("Options of vtrack vectors INPUT"):
             formatter.write_dl(rows)
+
+
+def _refuse_a_mistyped_command(ctx: click.Context, word: str, commands: list[str]) -> None:
+    """Refuse ``word``, given where ``vtrack vectors`` takes INPUT or a command, when it is a
+    near miss of a command (``chek``) and names no file, folder or URL: read as INPUT it was
+    refused for a missing ``--init``, which said nothing of the typo."""
+    if os.path.lexists(word) or any(mark in word for mark in "./:\\"):
+        return
+    mistyped = click.exceptions.NoSuchCommand(word, possibilities=commands, ctx=ctx)
+    if mistyped.possibilities:
+        raise mistyped
 
 
 class _NamedAsTheGroup(click.Context):
