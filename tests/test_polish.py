@@ -73,6 +73,31 @@ def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
     assert not list(tmp_path.iterdir())
 
 
+def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
+    """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
+    `vtrack stages meanshif` listed every name and left the reader to find the one meant;
+    the near one is now named at the end (case aside), and a name near none gets no guess."""
+    import vtrack as library
+
+    s0 = library.load_config("s0")
+    for make, said in (
+            (lambda: library.load_config("robst"), "; did you mean 'robust'?"),
+            (lambda: library.load_config("S0"), "; did you mean 's0'?"),
+            (lambda: s0.with_overrides(["meanshft.iterations=3"]),
+             "is not in the chain (hue -> backproject -> meanshift -> occlusion -> kalman); "
+             "did you mean 'meanshift'?"),
+            (lambda: library.Tracker("s0", meanshift__iteration=3),
+             "; did you mean 'iterations'?")):
+        with pytest.raises(library.ConfigError) as caught:
+            make()
+        assert str(caught.value).endswith(said), caught.value
+    with pytest.raises(library.ConfigError) as caught:
+        library.load_config("xyz")
+    assert "did you mean" not in str(caught.value)
+    assert one_error_line(vtrack("stages", "meanshif")).endswith(
+        "; did you mean 'meanshift'?")
+
+
 def test_stages_takes_stage_and_config_names() -> None:
     one = vtrack("stages", "robust_model")
     assert one.returncode == 0 and one.stdout.startswith("robust_model: ")

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, did_you_mean
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
 from vtrack.params import cut, float_from_text, shown
@@ -182,14 +182,15 @@ class Config:
             matches = [values for name, values in stages if name == stage_name]
             if not matches:
                 chain = " -> ".join(name for name, _ in stages)
+                near = did_you_mean(stage_name, (name for name, _ in stages))
                 raise ConfigError(f"{where}: stage {shown(stage_name)} is not in the chain "
-                                  f"({chain})")
+                                  f"({chain}){near}")
             declared = {p.name: p for p in stage_class(stage_name, where).params}
             if param_name not in declared:
                 known = ", ".join(declared) or "none"
                 raise ConfigError(
                     f"{where}: stage '{stage_name}' has no parameter {shown(param_name)} "
-                    f"(parameters: {known})"
+                    f"(parameters: {known}){did_you_mean(param_name, declared)}"
                 )
             param, place = declared[param_name], f"{where}: stage '{stage_name}'"
             value = param.parse(given, place) if is_text else param.validate(given, place)
@@ -250,9 +251,10 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
         elif path.suffix == ".toml" or "/" in str(spec):
             raise ConfigError(f"{spec}: config file not found")
         else:
+            shipped = sorted(shipped_configs())
             raise ConfigError(
-                f"{spec}: no such config file or shipped config "
-                f"(shipped: {', '.join(sorted(shipped_configs()))})"
+                f"{spec}: no such config file or shipped config (shipped: {', '.join(shipped)})"
+                f"{did_you_mean(str(spec), shipped)}"
             )
     where = str(spec)
     try:

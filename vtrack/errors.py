@@ -6,7 +6,7 @@ import math
 import signal
 import threading
 import unicodedata
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from decimal import Decimal
@@ -18,6 +18,17 @@ def plural(count: int, noun: str, nouns: str | None = None) -> str:
     """``1 frame``, ``2 frames``: a count and its noun for a user message (``nouns``: the plural
     when it is not ``noun + "s"``)."""
     return f"{count} {noun}" if count == 1 else f"{count} {nouns or noun + 's'}"
+
+
+def did_you_mean(given: str, names: Iterable[str]) -> str:
+    """``"; did you mean 'robust'?"`` when ``given`` is a near miss of one of ``names`` (a typo,
+    a letter's case: ``robst``, ``S0``; difflib's closest match, at its default cutoff 0.6, case
+    aside), to end the message that refuses it; ``""`` when none is close."""
+    import difflib
+
+    folded = {name.casefold(): name for name in names}
+    close = difflib.get_close_matches(given.casefold(), folded, n=1)
+    return f"; did you mean '{folded[close[0]]}'?" if close else ""
 
 
 def number_text(value: float) -> str:

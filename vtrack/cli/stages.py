@@ -83,7 +83,7 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
     from pathlib import Path
 
     from vtrack.config import load_config, shipped_configs
-    from vtrack.errors import ConfigError
+    from vtrack.errors import ConfigError, did_you_mean
     from vtrack.stages.base import all_stages
 
     known, configs = all_stages(), shipped_configs()
@@ -98,7 +98,8 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
         else:
             raise ConfigError(f"{name}: not a stage, a shipped config or a config file "
                               f"(stages: {', '.join(known)}; configs: "
-                              f"{', '.join(sorted(configs))})")
+                              f"{', '.join(sorted(configs))})"
+                              f"{did_you_mean(name, [*known, *configs])}")
     return chosen
 
 
