@@ -98,6 +98,19 @@ def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None
         "; did you mean 'meanshift'?")
 
 
+def test_scene_names_a_mistyped_scenario_and_arguments_given_the_other_way_round(
+        tmp_path: Path) -> None:
+    """`vtrack scene occlusoin clip.mp4` listed the 23 scenarios without pointing at the one
+    meant; `vtrack scene clip.mp4 occlusion` said "unknown scenario 'clip.mp4'", not that NAME
+    comes first. Neither writes anything."""
+    assert one_error_line(vtrack("scene", "occlusoin", "clip.mp4", cwd=tmp_path)).endswith(
+        "; did you mean 'occlusion'?")
+    assert one_error_line(vtrack("scene", "clip.mp4", "occlusion", cwd=tmp_path)) == (
+        "vtrack: error: unknown scenario 'clip.mp4': NAME comes before OUT (vtrack scene "
+        "occlusion clip.mp4)")
+    assert not list(tmp_path.iterdir())
+
+
 def test_stages_takes_stage_and_config_names() -> None:
     one = vtrack("stages", "robust_model")
     assert one.returncode == 0 and one.stdout.startswith("robust_model: ")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import shlex
 from pathlib import Path
 
 import click
@@ -94,6 +95,9 @@ def command(
     if str(out) == "-":  # elsewhere "-" is standard input or output; here it would be a file
         raise ConfigError("OUT -: vtrack scene writes files (the clip and its ground truth "
                           "beside it): name one, e.g. clip.mp4 or clip.raw --format raw")
+    if name not in SCENARIOS and str(out) in SCENARIOS:  # `vtrack scene clip.mp4 occlusion`
+        raise ConfigError(f"unknown scenario {name!r}: NAME comes before OUT (vtrack scene "
+                          f"{out} {shlex.quote(name)})")
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")
