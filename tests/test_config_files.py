@@ -236,32 +236,40 @@ def test_toml_of_anything_but_one_config_is_one_line(args: tuple[str, ...], said
 
 
 
-@pytest.mark.parametrize(("first", "second", "equal", "said"), [
-    ("blobs.min_area=100", "blobs.max_area=10", "blobs.max_area=100",
+@pytest.mark.parametrize(("config", "first", "second", "equal", "said"), [
+    ("fixed_camera", "blobs.min_area=100", "blobs.max_area=10", "blobs.max_area=100",
      "stage 'blobs': min_area (100) is larger than max_area (10): no blob would be kept; "
      "lower min_area, or raise max_area (0: no limit)"),
-    ("byte_tracks.low=0.9", "byte_tracks.high=0.1", "byte_tracks.high=0.9",
+    ("fixed_camera", "byte_tracks.low=0.9", "byte_tracks.high=0.1", "byte_tracks.high=0.9",
      "stage 'byte_tracks': low (0.9) is above high (0.1): no detection would score from low "
      "up to high (ByteTrack's second pass); give low <= high"),
-], ids=["areas", "scores"])
+    ("robust", "robust_search.scales=33", "robust_search.interp_scales=17",
+     "robust_search.interp_scales=33",
+     "stage 'robust_search': interp_scales (17) is smaller than scales (33): the response of "
+     "33 scale samples is interpolated up to interp_scales, never down; give interp_scales >= "
+     "scales (equal: no interpolation, DSST)"),
+], ids=["areas", "scores", "scales"])
 def test_contradictory_parameter_pairs_are_refused_naming_both(
-        first: str, second: str, equal: str, said: str, clip_factory: ClipFactory,
-        tmp_path: Path) -> None:
+        config: str, first: str, second: str, equal: str, said: str,
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
     """`vtrack run clip.mp4 -c fixed_camera --set blobs.min_area=100 --set blobs.max_area=10`
     (no blob can be kept) and `--set byte_tracks.low=0.9 --set byte_tracks.high=0.1` (no
-    detection reaches the second pass) ran without a word (0 tracks, exit 0). Both are
+    detection reaches the second pass) ran without a word (0 tracks, exit 0), as did
+    `-c robust --set robust_search.scales=33 --set robust_search.interp_scales=17` (fDSST
+    interpolates the scale response up, never down: it silently ran with 33). All are
     refused in one line naming both parameters, in a run and in the API; equal values (a
-    blob of exactly that area, no second pass) still run."""
+    blob of exactly that area, no second pass, DSST's uninterpolated scales) still run."""
     clip = clip_factory("multi", width=160, height=120, frames=60)
-    line = one_error_line(vtrack("run", str(clip.path), "-c", "fixed_camera", "--set", first,
+    box = ("--init", "20,20,16,16") if config == "robust" else ()
+    line = one_error_line(vtrack("run", str(clip.path), "-c", config, *box, "--set", first,
                                  "--set", second, "--no-video", "-q", "--out",
                                  str(tmp_path / "o")))
-    assert line == f"vtrack: error: fixed_camera: {said}"
+    assert line == f"vtrack: error: {config}: {said}"
     assert not (tmp_path / "o").exists()
     values = {key.replace(".", "__"): json.loads(value)
               for key, value in (first.split("="), second.split("="))}
-    with pytest.raises(ConfigError, match=f"^fixed_camera: {re.escape(said)}$"):
-        Tracker("fixed_camera", **values)
-    done = vtrack("run", str(clip.path), "-c", "fixed_camera", "--set", first, "--set", equal,
+    with pytest.raises(ConfigError, match=f"^{config}: {re.escape(said)}$"):
+        Tracker(config, **values)
+    done = vtrack("run", str(clip.path), "-c", config, *box, "--set", first, "--set", equal,
                   "--no-video", "-q", "--out", str(tmp_path / "eq"))
     assert done.exit_code == 0, done.output

@@ -27,6 +27,8 @@ region, confidence, scale filter).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from vtrack.features.colour import cell_response
@@ -77,6 +79,17 @@ class RobustSearch(Stage):
     scale_area: int
     min_side: float
 
+    @classmethod
+    def values_problem(cls, values: dict[str, Any]) -> str | None:
+        """Fewer interpolated scales than samples: fDSST interpolates the response of
+        ``scales`` samples up to ``interp_scales`` (equal: DSST, no interpolation), never down."""
+        samples, interpolated = values["scales"], values["interp_scales"]
+        if interpolated < samples:
+            return (f"interp_scales ({interpolated}) is smaller than scales ({samples}): the "
+                    f"response of {samples} scale samples is interpolated up to interp_scales, "
+                    "never down; give interp_scales >= scales (equal: no interpolation, DSST)")
+        return None
+
     def start(self, ctx: TrackContext) -> None:
         target = ctx.robust
         assert target is not None and ctx.box is not None
@@ -85,7 +98,7 @@ class RobustSearch(Stage):
         if self.scale:
             target.scale_filter = ScaleFilter(ctx.box.w, ctx.box.h, self.scales, self.scale_step,
                                               self.scale_rate, self.scale_area, target.cell,
-                                              max(self.interp_scales, self.scales))
+                                              self.interp_scales)
             target.scale_filter.learn(target.scale_filter.samples(
                 ctx.frame, ctx.box.cx, ctx.box.cy, ctx.box.w, ctx.box.h), first=True)
         if target.colour is not None and target.merge > 0:
