@@ -208,6 +208,24 @@ def test_a_detections_file_left_unnamed_is_refused_before_a_batch_runs(
     assert result.exit_code == 0, result.output
 
 
+def test_a_detections_file_with_an_empty_box_is_refused_naming_its_line(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """`vtrack run clip.mp4 -c det.toml` (mot_detections -> byte_tracks) on a det.txt whose
+    second row has w -20 ran (exit 0, tracks.csv written), the row dropped without a word. It
+    is one line naming the file and the line now, exit 2, nothing written."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    det = tmp_path / "det.txt"
+    det.write_text("1,-1,10,10,20,20,0.9\n2,-1,10,10,-20,20,0.9\n")
+    config = tmp_path / "det.toml"
+    config.write_text(f'name = "det"\n[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    line = one_error_line(vtrack("run", str(clip.path), "-c", str(config), "--no-video", "-q",
+                                 "--out", str(tmp_path / "o")))
+    assert line == (f"vtrack: error: {det} line 2: a detection's w and h must be > 0, got "
+                    "w -20, h 20")
+    assert not (tmp_path / "o").exists()
+
+
 @pytest.mark.parametrize("shipped", ["robust", "fixed_camera", "s0"])
 def test_a_shipped_config_printed_as_toml_loads_back_as_the_same_chain(
         tmp_path: Path, shipped: str) -> None:

@@ -362,6 +362,20 @@ def test_read_mot_malformed_line_names_file_and_line(tmp_path, text, problem):
     assert str(info.value).startswith(f"{path} {problem}")
 
 
+@pytest.mark.parametrize(("row", "got"), [
+    ("2,-1,10,10,-20,20,0.9", "w -20, h 20"),
+    ("2,-1,10,10,20,0,0.9", "w 20, h 0"),
+], ids=["negative-w", "zero-h"])
+def test_read_mot_detections_refuses_an_empty_box_naming_file_and_line(tmp_path, row, got):
+    """A det.txt row of negative or zero width or height was dropped without a word (a run on
+    it exited 0): no detector gives such a box, the file is wrong there. It is refused as
+    other malformed rows are, naming the file and line."""
+    path = write(tmp_path, f"1,-1,10,10,20,20,0.9\n{row}\n", name="det.txt")
+    with pytest.raises(InputError) as info:
+        read_mot_detections(path)
+    assert str(info.value) == f"{path} line 2: a detection's w and h must be > 0, got {got}"
+
+
 def test_read_mot_detections_needs_confidence(tmp_path):
     with pytest.raises(InputError, match="line 1: expected at least 7 numbers"):
         read_mot_detections(write(tmp_path, "1,-1,1,2,3,4\n"))

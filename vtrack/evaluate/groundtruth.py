@@ -531,14 +531,18 @@ def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, 
 
     Rows are ``frame,id,x,y,w,h,conf,...`` (the id, usually -1, and later columns are ignored).
     Every detection is kept whatever its confidence (detector scores may be 0 or negative;
-    thresholding is the caller's job) except boxes with ``w <= 0`` or ``h <= 0``. Keys are
-    ascending, detections keep file order; frames without detections are not keys.
+    thresholding is the caller's job). A box with ``w <= 0`` or ``h <= 0`` is an InputError
+    naming the file and line, as any malformed row is: a detector gives no empty box, so the
+    file is not what it should be there. Keys are ascending, detections keep file order;
+    frames without detections are not keys.
     """
     frames: dict[int, list[tuple[Box, float]]] = {}
-    for _, frame, values in _mot_rows(path, "frame,id,x,y,w,h,conf"):
+    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h,conf"):
         box = Box(*values[2:6])
-        if box.w > 0 and box.h > 0:
-            frames.setdefault(frame, []).append((box, values[6]))
+        if not (box.w > 0 and box.h > 0):
+            raise InputError(f"{path} line {number}: a detection's w and h must be > 0, got "
+                             f"w {box.w:g}, h {box.h:g}")
+        frames.setdefault(frame, []).append((box, values[6]))
     return dict(sorted(frames.items()))
 
 
