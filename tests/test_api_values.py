@@ -18,6 +18,7 @@ from test_cli import assert_one_line_error
 from test_cli import vtrack as vtrack_command
 
 import vtrack
+from vtrack.config import shipped_configs
 from vtrack.errors import ConfigError
 from vtrack.io import RawFormat
 from vtrack.io.video import FFmpegInput
@@ -580,3 +581,36 @@ def test_a_config_and_a_run_request_are_hashable_equal_ones_alike(tmp_path: Path
     assert reordered == changed and hash(reordered) == hash(changed)
     request = vtrack.RunRequest("a.mp4", tmp_path / "out", robust)
     assert hash(request) == hash(replace(request, config=vtrack.load_config("robust")))
+
+
+def _python_numbers(result: vtrack.FrameResult) -> list[str]:
+    """Where ``result``'s box, prediction, score and tracks hold something else than a Python
+    float (an id than a Python int)."""
+    found = [f"{name}.{field} {type(value).__name__}"
+             for name, box in (("box", result.box), ("prediction", result.prediction))
+             if box is not None for field, value in zip(box._fields, box, strict=True)
+             if type(value) is not float]
+    found += [] if type(result.score) is float else [f"score {type(result.score).__name__}"]
+    for track in result.tracks:
+        found += [f"track {track.id} box {type(v).__name__}" for v in track.box
+                  if type(v) is not float]
+        found += [] if type(track.id) is int else [f"track id {type(track.id).__name__}"]
+    return found
+
+
+@pytest.mark.parametrize("config", sorted(shipped_configs()))
+def test_every_configs_results_hold_python_numbers(config: str) -> None:
+    """s2's FrameResult.box held np.float64 x and y (robust's too after an occlusion) where
+    every other config gave Python floats: `type(result.box.x)` depended on the config. Every
+    shipped config's results now hold Python floats (and track ids Python ints), through
+    vtrack.track and Tracker alike."""
+    multi = vtrack.Tracker(config).multi_target
+    scene = make_scene("multi" if multi else "occlusion", width=160, height=120, frames=90)
+    frames = list(scene.as_frames())
+    first = None if multi else scene.boxes[0]
+    results = list(vtrack.track(frames, config, first))
+    assert [(r.index, _python_numbers(r)) for r in results if _python_numbers(r)] == []
+    tracker = vtrack.Tracker(config)
+    stepped = [tracker.init(frames[0], first) if first else tracker.update(frames[0])]
+    stepped += [tracker.update(frame) for frame in frames[1:]]
+    assert [(r.index, _python_numbers(r)) for r in stepped if _python_numbers(r)] == []

@@ -63,6 +63,11 @@ class Box(NamedTuple):
         """``w * h`` in square pixels (0 for a negative width or height)."""
         return max(self.w, 0.0) * max(self.h, 0.0)
 
+    def plain(self) -> Box:
+        """This box with each value a Python ``float`` (a NumPy number a stage computed it
+        with taken as its value): what the public results hold."""
+        return Box(float(self.x), float(self.y), float(self.w), float(self.h))
+
     @classmethod
     def from_center(cls, cx: float, cy: float, w: float, h: float) -> Box:
         """The ``w`` x ``h`` box centred on ``(cx, cy)``."""

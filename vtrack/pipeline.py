@@ -45,12 +45,12 @@ class FrameResult:
     :class:`vtrack.Frame`'s own, or for an image given to :class:`vtrack.Tracker` one after the
     previous frame's); ``time_s``: its time in seconds (its timestamp, or for a NumPy image
     ``index / fps``, counted on from the last frame timed by a camera's clock); ``box``: the
-    target's :class:`Box` ``(x, y, w, h)``, None while ``lost``; ``state``:
-    ``TrackState.TRACKING``, ``OCCLUDED`` or ``LOST`` (a ``str`` enum: ``result.state ==
-    "lost"`` works); ``score``: the tracker's confidence in its box, never negative (0 for
-    none, 1 as sure as on the first frame), NaN for a chain that gives none (s4);
-    ``prediction``: the box where the next frame's search starts, or None; ``extras``: the
-    stages' own values (``track.csv``'s extra columns, by name);
+    target's :class:`Box` ``(x, y, w, h)`` of Python floats (whatever the config), None while
+    ``lost``; ``state``: ``TrackState.TRACKING``, ``OCCLUDED`` or ``LOST`` (a ``str`` enum:
+    ``result.state == "lost"`` works); ``score``: the tracker's confidence in its box, a
+    ``float`` never negative (0 for none, 1 as sure as on the first frame), NaN for a chain
+    that gives none (s4); ``prediction``: the box where the next frame's search starts (floats
+    too), or None; ``extras``: the stages' own values (``track.csv``'s extra columns, by name);
     ``tracks``: for the multi-target configs, every track held, each with ``id``, ``box``,
     ``confidence`` and ``state`` (``tentative``, ``confirmed``: measured this frame, the only
     ones ``tracks.csv`` writes and draws, or ``coasting``); ``overlays``: what the annotated
@@ -235,10 +235,11 @@ class Pipeline:
             index=frame.index,
             time_s=frame.time_s,
             frame=frame,
-            box=None if state == TrackState.LOST else ctx.box,  # lost: no box is claimed
+            # lost: no box is claimed; a stage's NumPy numbers are the public result's floats
+            box=None if state == TrackState.LOST or ctx.box is None else ctx.box.plain(),
             state=state,
-            score=max(ctx.score, 0.0),  # a signal below its reference is no evidence: 0
-            prediction=ctx.prediction,
+            score=float(max(ctx.score, 0.0)),  # a signal below its reference is no evidence: 0
+            prediction=None if ctx.prediction is None else ctx.prediction.plain(),
             extras=ctx.extras,
             tracks=ctx.tracks,
             overlays=ctx.overlays,
