@@ -1286,3 +1286,44 @@ def test_jobs_beyond_what_the_memory_holds_start_fewer_workers_saying_so(
     assert scarce.stderr.splitlines() == [
         "vtrack: warning: --jobs 2: too little memory for one worker of 100 MiB (the memory "
         "available: 60 MiB): starting 1, not 2"]
+
+
+def test_a_jobs_opencv_threads_come_from_the_machine_that_runs_it(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack batch in/ --scheduler ADDRESS` read this machine's free memory to cap
+    `workers`, which set the jobs' OpenCV threads (cpu_count() // workers), and the Dask
+    executor then gave every job 1 thread whatever the worker's machine: a worker of 1 task on
+    a 2-core machine ran with 1. The local pool keeps its memory cap (its threads: the cores
+    over its workers); with a scheduler the local memory is not read, and each job's threads
+    are its worker's machine's cores over the tasks its workers there run at once
+    (run.json's timing.opencv_threads says how many it had)."""
+    distributed = pytest.importorskip("distributed")
+    from vtrack.cli import batch as batch_command
+    from vtrack.machine import cpu_count
+
+    asked: list[str] = []
+
+    def scarce() -> int:  # room for one local worker of 100 MiB
+        asked.append("memory")
+        return 60 * 2**20
+
+    monkeypatch.setattr(batch_command, "available_memory", scarce)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    add_clip(folder, clip_factory, "smooth", "c0")
+
+    def threads(out: Path) -> int:
+        record = json.loads((out / "c0" / "s0" / "run.json").read_text())
+        return record["timing"]["opencv_threads"]
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        remote = batch(str(folder), "-c", "s0", "--scheduler", cluster.scheduler_address,
+                       "--no-video", "-q", "-o", str(tmp_path / "dask"))
+    assert remote.exit_code == 0, remote.output
+    assert asked == []  # this machine's memory is not read for the cluster's workers
+    assert threads(tmp_path / "dask") == cpu_count()  # 1 task at a time on these cores
+    local = batch(str(folder), "-c", "s0", "--no-video", "-q", "--jobs", "2", "-o",
+                  str(tmp_path / "local"))
+    assert local.exit_code == 0, local.output
+    assert asked == ["memory"] and threads(tmp_path / "local") == cpu_count()  # 1 worker

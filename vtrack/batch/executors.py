@@ -257,8 +257,9 @@ class DaskExecutor:
     the end of :meth:`run`: one run per executor. Only the small :class:`Job` objects travel;
     workers read inputs by path and write results to the output path, which they must share
     with this machine. Dask reschedules a task whose worker died; once the scheduler's
-    ``allowed-failures`` is exceeded it gives up and the job is reported ``failed``. Each job
-    uses one OpenCV thread: the cluster already runs one job per worker thread.
+    ``allowed-failures`` is exceeded it gives up and the job is reported ``failed``. Each job's
+    OpenCV threads are chosen on the worker that runs it, from that machine's cores
+    (:func:`~vtrack.batch.worker.dask_threads`), never from this one's.
     """
 
     def __init__(self, address: str, timeout_s: float = 10) -> None:
@@ -325,7 +326,7 @@ class DaskExecutor:
 
         batch = uuid.uuid4().hex[:8]
         stop = Event(f"vtrack-{batch}-stop", client=self.client)
-        futures = {self.client.submit(execute_on_dask, replace(job, threads=1), stop.name,
+        futures = {self.client.submit(execute_on_dask, job, stop.name,
                                       pure=False,
                                       key=f"vtrack-{batch}-{n}-{job.input}-{job.config}"): job
                    for n, job in enumerate(jobs)}

@@ -23,6 +23,8 @@ class Job:
     input: str
     config: str
     request: RunRequest
+    #: OpenCV threads of the run on a local worker (a Dask worker chooses its own:
+    #: :func:`~vtrack.batch.worker.dask_threads`).
     threads: int = 1
     attempt: int = 1
 

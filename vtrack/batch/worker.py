@@ -28,6 +28,7 @@ from vtrack.errors import (
 )
 from vtrack.io import InputInfo
 from vtrack.io.outdir import OutputFolder
+from vtrack.machine import cpu_count
 from vtrack.run import STATUS_FAILED, STATUS_INTERRUPTED, RunSummary, run
 
 #: How long a job waits for its folder while another vtrack holds it (seconds).
@@ -97,6 +98,23 @@ def stop_signal_name(stop_event: str) -> str:
     return f"{stop_event}-signal"
 
 
+def dask_threads() -> int:
+    """The OpenCV threads of a job on this Dask worker: this machine's cores
+    (:func:`~vtrack.machine.cpu_count`, the worker's own) over the jobs the workers on this
+    machine run at once (the threads of each, as the scheduler lists them; this worker's own
+    when it cannot say), at least 1: as a local batch shares the cores among its workers.
+    ``dask worker --nworkers 2 --nthreads 1`` on 8 cores: 4 a job."""
+    from distributed import get_client, get_worker
+
+    worker = get_worker()
+    tasks = worker.state.nthreads
+    with contextlib.suppress(Exception):  # the scheduler gone, an entry without its host
+        workers = get_client().scheduler_info(n_workers=-1)["workers"]
+        host = workers[worker.address]["host"]
+        tasks = sum(int(w["nthreads"]) for w in workers.values() if w.get("host") == host)
+    return max(1, cpu_count() // max(1, tasks))
+
+
 def execute_on_dask(job: Job, stop_event: str) -> Outcome:
     """:func:`execute` as a Dask task: the batch sets the Dask ``Event`` named ``stop_event``
     when it is stopped (Ctrl-C, SIGTERM), after putting the signal it got in the ``Variable``
@@ -138,7 +156,7 @@ def execute_on_dask(job: Job, stop_event: str) -> Outcome:
             if interrupted is not None:
                 raise interrupted
 
-    return execute(job, check)
+    return execute(replace(job, threads=dask_threads()), check)
 
 
 class _Reporter:

@@ -232,8 +232,10 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         raise
     if left_out:
         warn(f"{folder}: {left_out}")
+    # the local pool's workers: as many as asked (or cores), as many as this machine's memory
+    # holds; a Dask cluster's are its own (a job's threads are chosen where it runs)
     wanted = jobs or cpu_count()
-    available = available_memory()
+    available = available_memory() if scheduler is None else None
     held = workers_memory_holds(available)
     workers = wanted if held is None else min(wanted, held)  # (a worker per run, at most)
     out_dir = out_dir or default_out_dir(str(folder))
@@ -260,9 +262,11 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                               start_s=start[1],
                               max_frames=None if max_frames is None else max_frames[0],
                               max_s=None if max_frames is None else max_frames[1])
+        # a local worker's OpenCV threads: the cores shared among the pool's workers (a Dask
+        # job's are chosen on the worker that runs it, from its machine's: dask_threads)
         batch = plan(inputs, configs, out_dir, settings,
-                     threads=max(1, cpu_count() // workers), force=force,
-                     overwrite=overwrite or force)
+                     threads=max(1, cpu_count() // workers) if scheduler is None else 1,
+                     force=force, overwrite=overwrite or force)
         for warning in batch.warnings:
             warn(warning)
         if scheduler is None and min(wanted, len(batch.jobs)) > workers:
