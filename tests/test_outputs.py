@@ -1005,37 +1005,36 @@ def test_a_multi_target_run_taken_up_with_its_hint_numbers_its_tracks_on(
     assert int(again[0][0]) > int(rows[-1][0])
 
 
-def test_a_run_numbered_from_the_largest_first_id_gives_a_hint_the_option_takes(
-        tmp_path: Path) -> None:
-    """SIGTERM to `vtrack run ped.mp4 -c fixed_camera --frames 800 --first-id 2147483647`
-    (then the largest first id) wrote ids above it and hinted `--first-id 2147483653`, which
-    the option refuses. The largest is now 2**53 (ids a double holds exactly); a run that
-    reaches it and is stopped hints no --first-id, a warning says the next run numbers its
-    tracks as it did, and the hint's command runs."""
+def test_a_run_whose_track_ids_pass_2_to_the_53_stops_at_that_frame(tmp_path: Path) -> None:
+    """`vtrack run ped.mp4 -c fixed_camera --first-id 9007199254740983` (10 ids below 2**53,
+    up to which a double holds every whole number) numbered its tracks on past 2**53
+    (tracks.csv and run.json's last_track_id 9007199254740993 and up, which MATLAB, pandas or
+    JavaScript read as another id), exit 0. A run now numbers no track past 2**53: it stops at
+    the frame whose new track would need such an id, in one line naming the first id and that
+    frame (exit 2), its tracks.csv and run.json whole up to the frame before."""
     largest = 2**53
-    scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=900, fps=30)
+    scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=300, fps=30)
     clip = write_video(scene, tmp_path / "ped.mp4", preset="ultrafast", keyint=30)
-    first = tmp_path / "first"
-    stderr = _stopped_after(40, first, "run", str(clip), "-c", "fixed_camera", "--frames", "800",
-                            "--first-id", str(largest))
-    ids = {int(row[1]) for row in csv_rows(first / "tracks.csv")}
-    assert min(ids) >= largest, sorted(ids)
-    record = json.loads((first / "run.json").read_text())
-    last = record["last_frame"]
-    options = f"--start {last + 1} --frames {800 - last - 1}"
-    assert record["summary"]["resume"] == options
-    assert (f"vtrack: warning: {first / 'tracks.csv'}: its highest track id, {max(ids)}, "
-            f"leaves no --first-id (at most {largest}) for the run the hint below makes: that "
-            "run numbers its tracks as this one did; renumber one of the two tracks.csv to "
-            "join them") in stderr
-    hint = stderr.splitlines()[-1]
-    assert hint == (f"vtrack: {clip}: to go on from where it stopped, run the same command "
-                    f"with {options} and another --out"), stderr
+    out = tmp_path / "out"
     done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c",
-                           "fixed_camera", "--first-id", str(largest), *options.split(),
-                           "--frames", "5", "--no-video", "-o", str(tmp_path / "again")],
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 0, done.stderr
+                           "fixed_camera", "--first-id", str(largest - 9), "--no-video", "-o",
+                           str(out)], capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.splitlines()[-1]
+    stopped_at = int(line.split(" are used up at frame ")[1].split(":")[0])
+    assert line == (f"vtrack: error: the track ids from {largest - 9} are used up at frame "
+                    f"{stopped_at}: a new track would be numbered past {largest} (2^53, the "
+                    "largest id a double holds exactly: MATLAB, pandas and JavaScript would read "
+                    "it as another's); number the tracks from a smaller first id (--first-id N, "
+                    "first_track_id=N)"), done.stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "failed"
+    assert record["error"] == line.removeprefix("vtrack: error: ")
+    assert stopped_at > 0 and record["last_frame"] == stopped_at - 1
+    rows = csv_rows(out / "tracks.csv")
+    assert rows and {int(row[1]) for row in rows} <= set(range(largest - 9, largest + 1))
+    assert max(int(row[0]) for row in rows) <= stopped_at  # (MOTChallenge frames: 1-based)
+    assert record["summary"]["last_track_id"] <= largest
 
 
 def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:

@@ -41,8 +41,9 @@ MAX_SEED = 2**32 - 1
 #: The largest first track id a multi-target run takes (``--first-id``, RunRequest's and
 #: ``vtrack.Tracker``'s ``first_track_id``; the smallest is 1): 2**53, up to which a double
 #: holds every whole number, so tools that read a ``tracks.csv``'s numbers as doubles
-#: (MATLAB, pandas, JavaScript) read its ids exactly. A run numbers on past it (its ids are
-#: whole numbers of any size), but its hint then gives no ``--first-id`` (a warning says so).
+#: (MATLAB, pandas, JavaScript) read its ids exactly. It is also the largest id a run
+#: numbers: one whose new track would need an id past it stops there
+#: (:func:`~vtrack.stages.detect.new_track_ids`).
 MAX_TRACK_ID = 2**53
 
 

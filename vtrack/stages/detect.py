@@ -19,7 +19,6 @@ image) and ``ctx.likelihood`` (the foreground: 0 = background, anything else = f
 from __future__ import annotations
 
 import functools
-import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -28,8 +27,9 @@ from typing import Any, Protocol, TypeVar
 import cv2
 import numpy as np
 
+from vtrack.errors import ConfigError
 from vtrack.geometry import MAX_FRAME_PIXELS, Box, Window
-from vtrack.params import Param
+from vtrack.params import MAX_TRACK_ID, Param
 from vtrack.stages.base import Stage, TrackContext, TrackState, TrackStatus, register
 
 #: What a segmenting stage hands over: the whole frame's grey image (256 levels, every pixel
@@ -99,8 +99,16 @@ def track_state(confirmed: bool, updated: bool) -> TrackStatus:
 def new_track_ids(ctx: TrackContext) -> Iterator[int]:
     """The ids a multi-target stage gives the tracks it creates, in order, none twice: the
     run's first track id (:attr:`TrackContext.first_track_id`, 1 unless the run says
-    otherwise), then each one more."""
-    return itertools.count(ctx.first_track_id)
+    otherwise), then each one more, up to :data:`~vtrack.params.MAX_TRACK_ID` (2**53: ids
+    past it, read as doubles by MATLAB, pandas or JavaScript, would be read as another's).
+    A track that would need an id past it is a ConfigError naming the first id and the frame
+    (the run stops there, its records whole), never an id numbered past it."""
+    yield from range(ctx.first_track_id, MAX_TRACK_ID + 1)
+    raise ConfigError(
+        f"the track ids from {ctx.first_track_id} are used up at frame {ctx.frame.index}: a "
+        f"new track would be numbered past {MAX_TRACK_ID} (2^53, the largest id a double holds "
+        "exactly: MATLAB, pandas and JavaScript would read it as another's); number the "
+        "tracks from a smaller first id (--first-id N, first_track_id=N)")
 
 
 class _Coasting(Protocol):
