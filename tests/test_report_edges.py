@@ -65,8 +65,8 @@ def test_a_title_and_a_warning_with_a_newline_stay_one_markdown_line(clip_factor
     lines = (tmp_path / "rep" / "summary.md").read_text().splitlines()
     assert lines[0] == "# a\\nb"
     warned = [line for line in lines if line.startswith("> Warning: ")]
-    assert any(line.startswith("> Warning: x\\ny [s4]: ") for line in warned), warned
-    assert not any(line.startswith(("b", "y [s4]")) for line in lines)
+    assert any(line.startswith("> Warning: x\\ny \\[s4\\]: ") for line in warned), warned
+    assert not any(line.startswith(("b", "y \\[s4\\]")) for line in lines)
 
 
 @pytest.mark.parametrize("title", ["", "  "])
@@ -109,3 +109,31 @@ def test_names_in_summary_md_are_text_not_markup(clip_factory, tmp_path: Path) -
     assert markdown.splitlines()[0] == "# &lt;i&gt;t&lt;/i&gt;"
     assert " | &lt;b&gt;x&lt;/b&gt;&amp;amp; | complete | " in markdown
     assert "<b>" not in markdown and "<i>" not in markdown
+
+
+def test_markdown_specials_in_names_are_escaped_in_summary_md(clip_factory,
+                                                              tmp_path: Path) -> None:
+    """summary.md escaped '<', '>', '&' and '|' but not Markdown's own characters: an input
+    named '*x*_a_b`c`' showed as an italic 'x', 'a_b' and a code span 'c', a config named
+    '[s](u) ~~z~~\\' as a link and struck-through text (and its bold best cell ended early).
+    Each is written after a backslash now (CommonMark's escapes), shown as named."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=160, height=120, frames=30)
+    odd = tmp_path / "*x*_a_b`c`.mp4"
+    odd.write_bytes(clip.path.read_bytes())
+    shipped = Path(vtrack.report.__file__).parents[1] / "configs" / "s0.toml"
+    config = tmp_path / "mine.toml"
+    config.write_text(shipped.read_text().replace('name = "s0"', 'name = "[s](u) ~~z~~\\\\"', 1))
+    ran = CliRunner().invoke(main, ["run", str(odd), "-c", str(config), "--gt", str(clip.gt),
+                                    "--no-video", "-q", "-o", str(tmp_path / "run")])
+    assert ran.exit_code == 0, ran.output
+    made = CliRunner().invoke(main, ["report", str(tmp_path / "run"), "--title", "_t_ a\\b",
+                                     "-q", "-o", str(tmp_path / "rep")])
+    assert made.exit_code == 0, made.output
+    markdown = (tmp_path / "rep" / "summary.md").read_text()
+    assert markdown.splitlines()[0] == "# \\_t\\_ a\\b"  # (a backslash before a letter is one)
+    assert "| \\*x\\*\\_a\\_b\\`c\\` | \\[s\\](u) \\~\\~z\\~\\~\\\\ | complete | " in markdown
+    assert "## \\*x\\*\\_a\\_b\\`c\\`" in markdown.splitlines()

@@ -4,6 +4,7 @@ and ``summary.csv``. Every file is written under a temporary name and renamed wh
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -213,11 +214,19 @@ def render_html(page: Page) -> str:
 
 # --- Markdown --------------------------------------------------------------------------------
 
+#: Characters that would make inline Markdown of a name (emphasis, code, links, strikethrough,
+#: a cell's end), and a backslash that would escape what follows it (ASCII punctuation, or the
+#: end of a bold cell): each is written after a backslash (CommonMark's escapes). A backslash
+#: before anything else is shown as it is (``\n`` from :func:`~vtrack.errors.printable`).
+MARKDOWN_SPECIALS = re.compile(r"[`*_\[\]~|]|\\(?=[!-/:-@\[-`{-~]|$)")
+
+
 def _md(text: object) -> str:
     """Text for one Markdown line or cell, shown as written: control characters escaped,
-    ``&``, ``<`` and ``>`` as HTML entities (a name is not markup) and ``|`` (not a cell's
-    end)."""
-    return html.escape(printable(str(text)), quote=False).replace("|", "\\|")
+    ``&``, ``<`` and ``>`` as HTML entities (a name is not markup) and each of
+    :data:`MARKDOWN_SPECIALS` after a backslash (``*x*`` is not italics, ``a|b`` not two
+    cells)."""
+    return html.escape(MARKDOWN_SPECIALS.sub(r"\\\g<0>", printable(str(text))), quote=False)
 
 
 def markdown_table(table: Table, labels: int) -> str:
@@ -246,8 +255,8 @@ def render_markdown(page: Page) -> str:
         parts += ["## Multi-target runs", markdown_table(page.mot, 3)]
     if page.failed:
         parts += [f"## {NO_RESULTS}",
-                  "\n".join(f"- **{_md(f.input)}** [{_md(f.config)}] {f.status}: {_md(f.error)}"
-                            for f in page.failed)]
+                  "\n".join(f"- **{_md(f.input)}** [{_md(f.config)}] {_md(f.status)}: "
+                            f"{_md(f.error)}" for f in page.failed)]
     for section in page.sections:
         if section.plots:
             parts.append(f"## {_md(section.name)}")
