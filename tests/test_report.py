@@ -687,6 +687,39 @@ def test_a_sequence_run_from_inside_its_img_folder_is_the_same_input(
     assert _table_labels(markdown) == {("seq", "s0"), ("seq", "camshift")}
 
 
+def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """d1/Car/img and d2/Car/img, other pixels but one name, frame count and frame size, were
+    one input "Car" (their runs two configs, "s0 (a)" and "s0 (b)"): the key left sizes out so
+    that runs of SEQ and SEQ/img join. run.json records the images' total size now, which tells
+    them apart, while d2/Car and d2/Car/img stay one input; records without it join as before."""
+    from vtrack.scenes import make_scene, write_image_sequence
+
+    for dataset, scenario in (("d1", "smooth"), ("d2", "jump")):
+        write_image_sequence(make_scene(scenario, 0, 96, 72, 10, 30), tmp_path / dataset / "Car")
+    monkeypatch.chdir(tmp_path)
+    for given, config, out in (("d1/Car/img", "s0", "a"), ("d2/Car/img", "s0", "b"),
+                               ("d2/Car", "camshift", "c")):
+        gt = f"{given.removesuffix('/img')}/groundtruth_rect.txt"
+        assert vtrack("run", given, "--gt", gt, "-c", config, "--no-video", "--quiet",
+                      "--out", f"runs/{out}").exit_code == 0
+    assert vtrack("report", "runs", "--out", "report").exit_code == 0
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    assert "3 runs of 2 inputs with 2 configurations;" in markdown, markdown
+    labels = _table_labels(markdown)
+    inputs = {config: {i for i, c in labels if c == config} for config in ("s0", "camshift")}
+    assert len(inputs["s0"]) == 2 and len(inputs["camshift"]) == 1, labels
+    assert inputs["camshift"] < inputs["s0"], labels  # d2/Car is d2/Car/img
+    for out in "abc":  # records from before image_bytes
+        record = tmp_path / "runs" / out / "run.json"
+        data = json.loads(record.read_text())
+        del data["input"]["image_bytes"]
+        record.write_text(json.dumps(data))
+    assert vtrack("report", "runs", "--out", "older").exit_code == 0
+    assert _table_labels((tmp_path / "older" / "summary.md").read_text()) == {
+        ("Car", "s0 (a)"), ("Car", "s0 (b)"), ("Car", "camshift")}
+
+
 def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Two TOML files both named "mine": run on different inputs they were averaged as one

@@ -1,9 +1,11 @@
 """Fingerprints of files, so a record can tell later whether they are still the ones it saw.
 
 ``run.json`` records the identity of its input and ground truth (:func:`file_identity`: size
-and modification time) and the size of each output it verified (:func:`sizes`). ``vtrack batch``
-reuses a result only when both still match (:func:`outputs_intact`), and ``vtrack report``
-refuses a ``track.csv`` whose size is not the recorded one.
+and modification time), the size of each output it verified (:func:`sizes`) and, for an image
+sequence, the total size of its images (:func:`total_size`: what tells two sequences of one
+name apart in a report). ``vtrack batch`` reuses a result only when both still match
+(:func:`outputs_intact`), and ``vtrack report`` refuses a ``track.csv`` whose size is not the
+recorded one.
 """
 
 from __future__ import annotations
@@ -41,6 +43,15 @@ def _folder_identity(folder: Path) -> dict[str, int]:
                 continue
             files, size, latest = files + 1, size + stat.st_size, max(latest, stat.st_mtime_ns)
     return {"files": files, "size": size, "mtime_ns": latest}
+
+
+def total_size(paths: Iterable[Path]) -> int | None:
+    """The total size in bytes of the files ``paths`` (an image sequence's images, whose
+    folder holds other files too); None when one cannot be looked at (gone)."""
+    try:
+        return sum(path.stat().st_size for path in paths)
+    except OSError:
+        return None
 
 
 def sizes(folder: Path, names: Iterable[str]) -> dict[str, int]:

@@ -35,6 +35,7 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
+from vtrack.io.identity import total_size
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
@@ -261,6 +262,7 @@ class ImageFolderSource(Source):
                 duration_s=(self._places[-1] + 1) / fps,
                 codec=self._files[0].suffix.lower().lstrip("."),
                 pix_fmt="gray" if self._first.ndim == 2 else "bgr24",
+                image_bytes=total_size(self._files),
             )
         )
 

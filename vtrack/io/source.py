@@ -56,6 +56,9 @@ class InputInfo:
     #: timestamps depart from it, with the exact count (and False here) once it read the
     #: input to its end.
     frame_count_estimated: bool = False
+    #: An image folder's: the total size in bytes of its images when it was opened (what
+    #: tells two sequences of one name, frame count and frame size apart; None for others).
+    image_bytes: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

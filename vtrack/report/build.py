@@ -76,13 +76,28 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
     return slugs
 
 
+def _same_inputs(runs: list[RunResult]) -> dict[str, list[RunResult]]:
+    """``runs`` by the input each read: its ``input_key``, an image sequence's also the size
+    of its images (two datasets' ``Car/img`` of one frame count and size are two inputs). A
+    run whose record has no such size (an older vtrack's) joins the one input of its key that
+    has, when there is only one."""
+    groups = _group(runs, lambda r: f"{r.input_key} {r.image_bytes}")
+    for key, same in list(groups.items()):
+        if same[0].image_bytes is None:
+            known = [k for k, g in groups.items()
+                     if g[0].input_key == same[0].input_key and g[0].image_bytes is not None]
+            if len(known) == 1:
+                groups[known[0]] += groups.pop(key)
+    return groups
+
+
 def _distinct_inputs(runs: list[RunResult]) -> None:
     """Name runs of one input name but different input files apart: by their file names where
     those differ (``a.mp4`` and ``a.mkv``, which a batch keeps apart), else by where their
     results are (two ``clip.mp4`` of two folders: ``clip (batch-x)``). They are different
     inputs, not different configurations."""
     for name, group in _group(runs, lambda r: r.input).items():
-        files = _group(group, lambda r: r.input_key)
+        files = _same_inputs(group)
         if len(files) < 2:
             continue
         names = {key: shown for key, g in files.items() if (shown := source_name(g[0]))}

@@ -154,6 +154,10 @@ class RunResult:
     truth: list[Box | None] | None = None
     #: What tells inputs of one name apart (:func:`_input_key`).
     input_key: str = ""
+    #: An image sequence's: the total size of its images as the run opened them (None: not a
+    #: sequence, or a record from before vtrack recorded it), which tells two sequences of
+    #: one key apart (:func:`vtrack.report.build._distinct_inputs`).
+    image_bytes: int | None = None
     #: The target of an OTB sequence of several the run tracked (None: the input's only one).
     target: int | None = None
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
@@ -534,6 +538,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
         input_key=_input_key(record),
+        image_bytes=_int_or_none((record.get("input") or {}).get("image_bytes")),
         target=_target(record),
         config_key=json.dumps((record.get("config") or {}).get("stages") or "",
                               sort_keys=True),
