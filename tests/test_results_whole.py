@@ -4,6 +4,7 @@ as if it were whole: the run is left out with one warning naming the file."""
 from __future__ import annotations
 
 import csv
+import errno
 import json
 import os
 from pathlib import Path
@@ -201,3 +202,30 @@ def test_a_relative_ground_truth_not_found_from_here_is_not_called_changed(
     code, stderr = report(copy, tmp_path / "rep")
     assert code == 0 and "changed" not in stderr, stderr
     assert float(summary_row(tmp_path / "rep")["auc"]) > 0
+
+
+def test_a_run_json_link_in_a_loop_is_left_out_with_a_warning(run_dir: Path,
+                                                              tmp_path: Path) -> None:
+    """A run.json that is a symbolic link to itself (or to a link in a loop, `ln -s loop loop`)
+    was passed over without a word: the folder walk took it for missing. It is left out with
+    the line other unreadable runs get, found below a folder and given itself."""
+    results = tmp_path / "results"
+    whole = results / "whole"
+    whole.mkdir(parents=True)
+    for name in ("run.json", "track.csv"):
+        (whole / name).write_bytes((run_dir / name).read_bytes())
+    (results / "self").mkdir()
+    (results / "self" / "run.json").symlink_to("run.json")
+    (results / "loop").mkdir()
+    (results / "loop" / "loop").symlink_to("loop")
+    (results / "loop" / "run.json").symlink_to("loop")
+    code, stderr = report(results, tmp_path / "rep")
+    assert code == 0, stderr
+    assert [line for line in stderr.splitlines() if "left out" in line] == [
+        f"vtrack: warning: left out: {results / name / 'run.json'}: cannot read run record "
+        f"({os.strerror(errno.ELOOP)})" for name in ("loop", "self")]
+    assert len((tmp_path / "rep" / "summary.csv").read_text().splitlines()) == 2  # the whole
+    code, stderr = report(results / "self" / "run.json", tmp_path / "rep2")
+    assert code != 0 and stderr == (
+        f"vtrack: error: {results / 'self' / 'run.json'}: no run to report; left out: "
+        f"{results / 'self' / 'run.json'}: cannot read run record ({os.strerror(errno.ELOOP)})\n")

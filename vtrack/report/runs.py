@@ -24,7 +24,7 @@ import csv
 import json
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -670,16 +670,26 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
     """
     found: dict[Path, None] = {}
     for path in paths:
-        if not path.exists():
+        if not os.path.lexists(path):
             raise InputError(f"{path}: no such file or folder")
-        if path.is_file():
-            if path.name != "run.json":
-                raise InputError(f"{path}: not a results folder or run.json")
+        if path.is_dir():
+            for folder in sorted(_record_folders(path)):
+                found.setdefault(folder.resolve())
+        elif path.name != "run.json":
+            raise InputError(f"{path}: not a results folder or run.json")
+        else:  # (one that cannot be read, a link in a loop: reading it says why)
             found.setdefault(path.parent.resolve())
-        else:
-            for record in sorted(path.rglob("run.json")):
-                found.setdefault(record.parent.resolve())
     return list(found)
+
+
+def _record_folders(top: Path) -> Iterator[Path]:
+    """The folders at or below ``top`` (symbolic links to folders not followed, as
+    ``Path.rglob``) that hold an entry named ``run.json``, one that cannot be read included
+    (a symbolic link in a loop or to nothing, which ``rglob`` passes over as missing): reading
+    it says why it is left out."""
+    for folder, folders, files in os.walk(top):
+        if "run.json" in files or "run.json" in folders:
+            yield Path(folder)
 
 
 def still_written(paths: Iterable[Path]) -> list[str]:
@@ -792,7 +802,7 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
                     failed.append(FailedRun(r["input"], r["config"], r["error"] or NEVER_RAN,
                                             r["status"],
                                             summary.parent.resolve()))
-                elif not (folder / "run.json").exists():  # (one that is: warned as left out)
+                elif not os.path.lexists(folder / "run.json"):  # (one that is: left out)
                     gone.append(f"{r['input']} [{r['config']}]")
             if gone:
                 named = ", ".join(sorted(gone)[:5]) + (" ..." if len(gone) > 5 else "")
