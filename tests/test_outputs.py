@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import av
 import pytest
+from conftest import LinesAsTheyCome
 
 from vtrack.batch import SUMMARY_COLUMNS, executors
 from vtrack.batch.executors import LocalExecutor, _context, _Worker, stop_workers
@@ -415,6 +416,12 @@ def full_pipe() -> tuple[int, int]:
     return read, write
 
 
+#: How long a test waits at most for a line of a batch it started: a bound against a hang, not
+#: a measure (on a host loaded many times over its cores, starting Python, PyAV and OpenCV
+#: may take minutes; the 60 s the tally was once waited for by polling fell short).
+START_BOUND_S = 600
+
+
 def signal_until_it_ends(process: subprocess.Popen) -> None:
     """SIGTERM to ``process`` again and again until it ends (at most 60 s)."""
     deadline = time.monotonic() + 60
@@ -464,23 +471,29 @@ def test_a_signal_once_the_batch_has_said_its_tally_changes_nothing(
     shutil.copy(clip.path, folder / "a.mp4")  # no ground truth, no box: the pair fails
     out = tmp_path / "out"
     read, write = full_pipe()
-    stdout = tmp_path / "stdout.txt"
+    said: list[bytes] = []
     try:
-        with stdout.open("wb") as handle:
-            process = subprocess.Popen(
-                [sys.executable, "-m", "vtrack", "batch", str(folder), "--out", str(out)],
-                stdout=handle, stderr=write)
-        wait_for(lambda: "-> " in stdout.read_text(), process, "the tally")
+        process = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--out", str(out)],
+            stdout=subprocess.PIPE, stderr=write)
+        assert process.stdout is not None
+        lines = LinesAsTheyCome(process.stdout)
+        while not said or b" -> " not in said[-1]:  # the tally: the batch's last stdout line
+            line = lines.next(START_BOUND_S)
+            assert line, f"no tally ({'the batch ended' if line == b'' else 'no line'}): {said}"
+            said.append(line)
         for _ in range(20):
             process.send_signal(signal.SIGTERM)
             time.sleep(0.01)
         drained = threading.Thread(target=lambda: os.read(read, 1 << 20) and None, daemon=True)
         drained.start()  # (room for the error line: it goes on)
         signal_until_it_ends(process)
+        assert lines.next(START_BOUND_S) == b""  # (its stdout closed: the reader is done)
+        process.stdout.close()
     finally:
         os.close(write)
         os.close(read)
-    assert process.returncode == 1, stdout.read_text()
+    assert process.returncode == 1, said
     assert read_summary(out)["a"]["status"] == "failed"
 
 
