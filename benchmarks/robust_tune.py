@@ -267,19 +267,45 @@ SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES, HARD_SEEDS = range(6), 200, 3
 
 def hard_means(overrides: list[str], seeds: range, frames: int = 120,
                size: tuple[int, int] | None = None,
-               names: tuple[str, ...] = HARD) -> dict[str, list[float]]:
-    """Per randomised hard scene, robust's (with ``overrides``) mean IoU on each seed."""
+               names: tuple[str, ...] = HARD) -> dict[str, list[float | None]]:
+    """Per randomised hard scene, robust's (with ``overrides``) mean IoU on each seed; None for
+    a seed whose scene robust refuses to start on (at a small ``size`` a target may start under
+    the 4x4 pixels a tracker starts from), with its reason on stderr. A scene that cannot be
+    made at all (``size`` or ``frames`` out of its range) raises VtrackError."""
     config = load_config("robust").with_overrides(overrides)
     width, height = size or (None, None)
-    means: dict[str, list[float]] = {}
+    means: dict[str, list[float | None]] = {}
     for name in names:
         for seed in seeds:
             scene = make_scene(name, seed=seed, frames=frames, width=width, height=height)
-            overlaps, _ = frame_scores(track_clip(Clip(name, list(scene.frames()),
-                                                       list(scene.boxes)), config),
-                                       scene.boxes)
+            try:
+                boxes = track_clip(Clip(name, list(scene.frames()), list(scene.boxes)), config)
+            except VtrackError as exc:
+                print(f"{name} seed {seed}: left out: {exc}", file=sys.stderr)
+                means.setdefault(name, []).append(None)
+                continue
+            overlaps, _ = frame_scores(boxes, scene.boxes)
             means.setdefault(name, []).append(mean_overlap(overlaps))
     return means
+
+
+def seed_cells(values: list[float | None]) -> str:
+    """A table row's per-seed scores ('-' for a seed left out), their mean and their least."""
+    scored = [v for v in values if v is not None]
+    cells = " ".join("-" if v is None else f"{v:.2f}" for v in values)
+    if not scored:
+        return f"{cells} | - | - |"
+    return f"{cells} | {statistics.mean(scored):.3f} | {min(scored):.2f} |"
+
+
+def hard_size(text: str | None) -> tuple[int, int] | None:
+    """``--size`` as (width, height), None when not given; not WxH: one line and exit."""
+    if text is None:
+        return None
+    width, _, height = text.lower().partition("x")
+    if not (width.strip().isdigit() and height.strip().isdigit()):
+        sys.exit(f"robust_tune.py: --size {text!r}: expected WIDTHxHEIGHT, e.g. 320x240")
+    return int(width), int(height)
 
 
 def hard(overrides: list[str], seeds: range, frames: int,
@@ -292,8 +318,7 @@ def hard(overrides: list[str], seeds: range, frames: int,
     print("|---|---|---:|---:|")
     for name in HARD:
         values = hard_means(overrides, seeds, frames, size, (name,))[name]
-        print(f"| {name} | {' '.join(f'{v:.2f}' for v in values)} | "
-              f"{statistics.mean(values):.3f} | {min(values):.2f} |")
+        print(f"| {name} | {seed_cells(values)}")
         sys.stdout.flush()
 
 
@@ -369,8 +394,7 @@ def beyond(overrides: list[str], seeds: range, frames: int,
         finally:
             hard_scenes.RANGES[parameter] = declared
         print(f"| {name} | {parameter}: {declared[0]:g}-{declared[1]:g} -> "
-              f"{drawn[0]:g}-{drawn[1]:g} | {' '.join(f'{v:.2f}' for v in values)} | "
-              f"{statistics.mean(values):.3f} | {min(values):.2f} |")
+              f"{drawn[0]:g}-{drawn[1]:g} | {seed_cells(values)}")
         sys.stdout.flush()
 
 
@@ -509,8 +533,9 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, start
             slab = hard_means(overrides + extra, SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES,
                               names=("slab",))["slab"]
             kinds = hard_means(overrides + extra, range(HARD_SEEDS))
-            scenes_cells = (f" {statistics.mean(slab):.3f} | "
-                            f"{statistics.mean(v for vs in kinds.values() for v in vs):.3f} |")
+            every = [v for vs in kinds.values() for v in vs if v is not None]
+            scenes_cells = (f" {statistics.mean(v for v in slab if v is not None):.3f} | "
+                            f"{statistics.mean(every):.3f} |")
         print(f"| {key} | {what} | {' '.join(f'`{o}`' for o in overrides) or '-'} | {mean:.3f} "
               f"| {mean - base:+.3f} | {tune} | {check} | {false_tracking} | {flagged} |"
               + scenes_cells)
@@ -582,9 +607,12 @@ def main() -> None:
                frames, LOOKS if args.looks else BEYOND)
         return
     if args.hard:
-        size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+        size = hard_size(args.size)
         seeds = range(args.first_seed, args.first_seed + args.seeds)
-        hard(args.overrides, seeds, frames, size)  # type: ignore[arg-type]
+        try:
+            hard(args.overrides, seeds, frames, size)
+        except VtrackError as exc:  # a scene that cannot be made at that --size or --frames
+            sys.exit(f"robust_tune.py: {exc}")
         return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if args.split != "all":

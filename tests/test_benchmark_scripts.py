@@ -46,3 +46,27 @@ def test_multi_bench_names_its_sections_for_an_unknown_one() -> None:
     assert done.stderr.strip().splitlines() == [
         "multi_bench.py: no section 'everything'; the sections: generated, tud, variants, "
         "outside, sizes, people, vehicles, cost, processes"]
+
+
+def test_robust_tune_hard_leaves_out_a_seed_whose_target_starts_too_small() -> None:
+    """At 64x48, seed 812 draws slab's target under the 4x4 pixels a tracker starts from:
+    that seed is left out (a '-' cell, a line on stderr saying why), the table goes on."""
+    done = run_script("robust_tune.py", "--hard", "--size", "64x48", "--frames", "60",
+                      "--first-seed", "811", "--seeds", "2")
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    rows = {line.split(" | ")[0]: line for line in done.stdout.splitlines()
+            if line.startswith("| ") and " seeds " not in line}
+    assert set(rows) == {f"| {name}" for name in ("slab", "exit_return", "clip_ramp", "fast",
+                                                  "grow", "shrink", "crossing", "grey")}
+    slab = rows["| slab"].split(" | ")
+    assert slab[1].split()[1] == "-" and float(slab[1].split()[0]) >= 0, rows["| slab"]
+    assert "slab seed 812: left out:" in done.stderr and "4x4" in done.stderr, done.stderr
+
+
+@pytest.mark.parametrize("size", ["big", "10x10"])
+def test_robust_tune_hard_refuses_a_bad_size_in_one_line(size: str) -> None:
+    done = run_script("robust_tune.py", "--hard", "--size", size, "--seeds", "1")
+    assert done.returncode != 0
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "size" in lines[0] and size in lines[0], done.stderr
