@@ -98,6 +98,25 @@ def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None
         "; did you mean 'meanshift'?")
 
 
+@pytest.mark.parametrize(("stage", "line", "said", "near"), [
+    ("backprojct", "", "unknown stage 'backprojct' (known stages: background, backproject, ",
+     "backproject"),
+    ("backproject", "search_scal = 2", "stage 'hue': unknown parameter 'search_scal' "
+                                      "(parameters: search_scale, ", "search_scale"),
+], ids=["stage", "parameter"])
+def test_a_mistyped_stage_or_parameter_in_a_config_file_is_offered_the_near_name(
+        stage: str, line: str, said: str, near: str, tmp_path: Path) -> None:
+    """`name = "backprojct"` or `search_scal = 2` in a config file listed every name and left
+    the reader to find the one meant, while `--set` and `-c` named it."""
+    config = tmp_path / "bad.toml"
+    config.write_text(f'name = "bad"\n[[stage]]\nname = "hue"\n{line}\n[[stage]]\n'
+                      f'name = "{stage}"\n[[stage]]\nname = "meanshift"\n')
+    for args in (("stages", str(config)), ("run", "clip.mp4", "-c", str(config))):
+        error = one_error_line(vtrack(*args, cwd=tmp_path))
+        assert error.startswith(f"vtrack: error: {config}: {said}"), error
+        assert error.endswith(f"; did you mean '{near}'?"), error
+
+
 def test_scene_names_a_mistyped_scenario_and_arguments_given_the_other_way_round(
         tmp_path: Path) -> None:
     """`vtrack scene occlusoin clip.mp4` listed the 23 scenarios without pointing at the one

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from vtrack.clock import FrameClock
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, InputError, did_you_mean
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import Overlay
@@ -379,13 +379,14 @@ def _find_stage(name: str) -> None:
 
 
 def stage_class(name: str, where: str) -> type[Stage]:
-    """The stage class registered as ``name``; a ConfigError listing every stage otherwise."""
+    """The stage class registered as ``name``; a ConfigError listing every stage otherwise
+    (ending with the near name, :func:`~vtrack.errors.did_you_mean`, for a near miss)."""
     if name not in _REGISTRY:
         _find_stage(name)
     if name not in _REGISTRY:
-        raise ConfigError(
-            f"{where}: unknown stage {shown(name)} (known stages: {', '.join(all_stages())})"
-        )
+        known = all_stages()
+        raise ConfigError(f"{where}: unknown stage {shown(name)} (known stages: "
+                          f"{', '.join(known)}){did_you_mean(str(name), known)}")
     return _REGISTRY[name]
 
 
@@ -397,8 +398,9 @@ def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
 def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
     """``values`` of stage ``name`` each as its parameter's type (:meth:`Param.validate`: a
     NumPy number as a Python one); ConfigError naming ``where``, the stage and the parameter
-    for one the stage does not declare or whose value it refuses, and the parameters of a
-    pair that contradict each other (:meth:`Stage.values_problem`)."""
+    for one the stage does not declare (with the near name for a near miss) or whose value it
+    refuses, and the parameters of a pair that contradict each other
+    (:meth:`Stage.values_problem`)."""
     cls = stage_class(name, where)
     declared = {p.name: p for p in cls.params}
     where = f"{where}: stage '{name}'"
@@ -406,7 +408,8 @@ def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, A
     for key, value in values.items():
         if key not in declared:
             known = ", ".join(declared) or "none"
-            raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})")
+            raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})"
+                              f"{did_you_mean(str(key), declared)}")
         checked[key] = declared[key].validate(value, where)
     problem = cls.values_problem({p.name: checked.get(p.name, p.default) for p in cls.params})
     if problem:
