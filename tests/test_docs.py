@@ -19,6 +19,35 @@ def test_stage_reference_matches_the_declarations() -> None:
     )
 
 
+#: Each document config's paper, as its TOML comments (``vtrack stages CONFIG --toml``) name it.
+PAPERS = {
+    "s0": "Improved Mean Shift target tracking algorithm",
+    "s0-fixed": "Improved Mean Shift target tracking algorithm",
+    "s1": "patent CN105869186A",
+    "s2": "An algorithm for real-time tracking target in complex",
+    "s2-fixed": "An algorithm for real-time tracking target in complex",
+    "s3": "A progressed MHT algorithm for infrared target tracking",
+    "s4": "Modeling and simulation of moving target tracking system",
+    "s4_multi": "Modeling and simulation of moving target tracking system",
+}
+
+
+def test_what_a_user_reads_cites_the_papers_not_files_a_clone_lacks() -> None:
+    """`vtrack stages CONFIG --toml` wrote 'seeds/000_ed28ecd3d98e2ba5.txt; restated in
+    ALGORITHMS.md S0' and "the design card's chain"; `vtrack stages` and docs/stages.md said
+    'ALGORITHMS.md default': files no user has. They cite the papers themselves."""
+    from vtrack.cli.stages import config_toml
+
+    texts = {name: " ".join(config_toml(name).split()) for name in shipped_configs()}
+    texts |= {"vtrack stages": stages_text(), "--markdown": stages_text(markdown=True)}
+    for name, text in texts.items():
+        for unavailable in ("ALGORITHMS.md", "DESIGN.md", "seeds/", "design card"):
+            assert unavailable not in text, (name, unavailable)
+        assert not re.search(r"\b\d{3}_[0-9a-f]{16}\.txt", text), name
+    for name, paper in PAPERS.items():
+        assert paper in texts[name], name
+
+
 def test_readme_configs_exist_and_set_up_commands_come_first() -> None:
     readme = (ROOT / "README.md").read_text()
     table = readme.split("### Trackers", 1)[1].split("\n\n", 1)[0]

@@ -4,7 +4,7 @@ The shape follows Stone Soup's split of a tracker's filter into a transition mod
 predictor/updater on immutable Gaussian states: a :class:`MotionModel` knows its matrices for a
 time step ``dt`` and predicts a :class:`GaussianState` by ``dt`` (:meth:`MotionModel.predict`)
 or corrects it with a measured point (:meth:`MotionModel.update`); nothing is re-timed in
-place. The three models of ``ALGORITHMS.md``, by name in :data:`MOTION_MODELS`
+place. The three models of the documents, by name in :data:`MOTION_MODELS`
 (:func:`motion_model` builds one):
 
 - ``cv``, :class:`ConstantVelocity` - S0 item 6 (Liu et al. 2022, eq. 8-17): per axis

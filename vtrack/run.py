@@ -103,7 +103,7 @@ from vtrack.stages.base import TrackState, TrackStatus
 if TYPE_CHECKING:
     from vtrack.evaluate.mot import MotScore
 
-#: Columns every single-target ``track.csv`` starts with (DESIGN.md contract).
+#: Columns every single-target ``track.csv`` starts with (the columns every tracker writes).
 TRACK_COLUMNS = (
     "frame", "time_s", "x", "y", "w", "h", "cx", "cy", "state", "score", "overlap", "center_error",
 )

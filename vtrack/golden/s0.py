@@ -1,4 +1,4 @@
-"""S0 (Liu et al. 2022, ``000_ed28ecd3d98e2ba5.txt``) in the FPGA's arithmetic, bit for bit.
+"""S0 (Liu et al. 2022) in the FPGA's arithmetic, bit for bit.
 
 Every function here is integer NumPy (int32/int64) except :class:`KalmanF32`, which is IEEE
 float32 scalar arithmetic in the order the paper writes eq. 10-17 (sec. 3: "32 bit single
@@ -131,7 +131,7 @@ def divide(num: int, den: int, rounding: str) -> int:
 def step(sums: WindowSums, normalization: str, frac_bits: int, rounding: str) -> tuple[int, int]:
     """The mean-shift step in units of ``2^-frac_bits`` pixel (eq. 6-7).
 
-    ``weighted``: ``sum_bp_dx * 2^f / sum_bp`` (the weighted centroid, ALGORITHMS.md S0 item 4);
+    ``weighted``: ``sum_bp_dx * 2^f / sum_bp`` (the weighted centroid, the usual mean-shift step);
     ``paper``: ``sum_bp_dx * 2^f / (n * 255)`` as printed. Rounded by ``rounding``; a window
     with ``sum_bp = 0`` does not move.
     """

@@ -1,4 +1,4 @@
-"""S2 (Di & Zhu 2008, ``002_33b2d3d5cc8cc742.txt``) sec. 3: the integer-only DSP loop.
+"""S2 (Di & Zhu 2008) sec. 3: the integer-only DSP loop.
 
 All integer NumPy (int64). The document's steps, with what it leaves open stated:
 

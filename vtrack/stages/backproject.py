@@ -1,6 +1,6 @@
 """Target model and back-projection (S0 items 2-3).
 
-Liu et al. 2022 (``shared/seeds/000_ed28ecd3d98e2ba5.txt`` sec. 2.2, ``ALGORITHMS.md`` S0): the
+Liu et al. 2022 (sec. 2.2): the
 target model is the histogram of the hue inside the initial box, counted once on the first frame
 (eq. 2-3), with its largest bin ``max`` kept; every later frame is back-projected as
 ``BP(p) = histogram[hue(p)] * 255 / max`` (eq. 4), a 0..255 likelihood map, on the search window

@@ -1,6 +1,6 @@
 """Colour features: the hue of this frame's search window (S0 item 1).
 
-Liu et al. 2022 (``shared/seeds/000_ed28ecd3d98e2ba5.txt``, ``ALGORITHMS.md`` S0) track on the
+Liu et al. 2022 (S0) track on the
 hue H of HSV only, computed from RGB888 by the piecewise formula of their eq. (1) (``max == min``
 -> 0) and scaled from 0..360 degrees to an 8-bit 0..255 value. OpenCV's ``COLOR_BGR2HSV_FULL``
 is that formula on that scale; ``hue_scale = "opencv"`` gives OpenCV's usual 0..179 (degrees / 2)

@@ -1,7 +1,7 @@
 """Kernel mean shift with scale adaptation and Kalman failure logic (S2).
 
 Di Nan, Zhu Ming, "An algorithm for real-time tracking target in complex environment", Journal of
-Image and Graphics 13(9), 2008 (``shared/seeds/002_33b2d3d5cc8cc742.txt``, ``ALGORITHMS.md`` S2).
+Image and Graphics 13(9), 2008 (S2).
 A Comaniciu-style kernel tracker simplified for a fixed-point DSP: pyramid kernel, undivided
 histograms, weights ``q_u / p_u`` (no square root), histogram intersection instead of the
 Bhattacharyya coefficient, three bandwidths per frame, and a Kalman predictor that tells fast

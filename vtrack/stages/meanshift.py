@@ -1,6 +1,6 @@
 """Mean shift on the back-projection (S0 items 4-5) and OpenCV's CamShift.
 
-Liu et al. 2022 (``shared/seeds/000_ed28ecd3d98e2ba5.txt`` sec. 2.3, ``ALGORITHMS.md`` S0): the
+Liu et al. 2022 (sec. 2.3): the
 mean-shift vector over a rectangular window ``S_r`` centred at ``(x, y)`` is
 ``A_x = 1/(n*255) * sum BP_i (x_i - x)`` and likewise ``A_y`` (eq. 6-7), ``n`` the window's pixel
 count. Instead of iterating to convergence inside a frame, the window is placed at the Kalman

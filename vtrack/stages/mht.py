@@ -1,4 +1,4 @@
-"""S3: simplified multiple-hypothesis tracking (Zhao, Wu, Li; ALGORITHMS.md S3 items 4-7).
+"""S3: simplified multiple-hypothesis tracking (Zhao, Wu, Li).
 
 The ``mht`` stage takes the measurements of a detecting stage (``ctx.detections``: the blobs of
 ``threshold -> blobs`` in S3's chain) and keeps, frame after frame:

@@ -1,6 +1,6 @@
 """Occlusion and loss: whether this frame's measurement may reach the filter (S0 item 7).
 
-Liu et al. 2022 (``shared/seeds/000_ed28ecd3d98e2ba5.txt`` sec. 1 and 3, ``ALGORITHMS.md`` S0):
+Liu et al. 2022 (sec. 1 and 3):
 "when the target is completely occluded, the Kalman prediction is used, so that the window does
 not drift away and get lost". The document does not say how full occlusion is detected; this
 stage thresholds a declared signal measured on a box:

@@ -1,7 +1,7 @@
 """S1: centroid-corrected particle filter with a tracked/lost state (patent CN105869186A).
 
-One stage runs the document's whole per-frame loop (ALGORITHMS.md S1 items 1-7; patent steps
-1-9, paragraphs [0041]-[0048]):
+One stage runs the document's whole per-frame loop (patent steps 1-9, paragraphs
+[0041]-[0048]):
 
 1. the target model is the hue histogram of the first frame's box;
 2. ``particles`` boxes of the target's size are scattered: while tracked, ``near_share`` of them

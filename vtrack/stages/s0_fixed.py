@@ -1,6 +1,6 @@
 """S0 in the FPGA's own arithmetic (``configs/s0-fixed.toml``): the golden model of an RTL design.
 
-Liu et al. 2022 (``000_ed28ecd3d98e2ba5.txt``, ``ALGORITHMS.md`` S0), with the arithmetic of
+Liu et al. 2022 (S0), with the arithmetic of
 :mod:`vtrack.golden.s0`: integers end to end except the Kalman filter, which is IEEE float32
 as the document's floating-point IP computes it (sec. 3, fig. 13-14). Three stages:
 
@@ -164,7 +164,7 @@ class MeanShiftFixed(Stage):
     summary = "S0 4-5 bit-exact: integer sums of eq. 6-7, one rounded step; integer occlusion test"
     params = (
         Param("normalization", str, "weighted",
-              "step = sum_bp_dx / sum_bp (weighted centroid, ALGORITHMS.md default) or "
+              "step = sum_bp_dx / sum_bp (weighted centroid, the usual mean-shift step) or "
               "sum_bp_dx / (n * 255) (paper: eq. 6-7 as printed)",
               choices=("weighted", "paper")),
         Param("step_frac_bits", int, 0,

@@ -1,6 +1,6 @@
 """S2's integer-only DSP loop (``configs/s2-fixed.toml``): the golden model of a fixed-point port.
 
-Di & Zhu 2008 (``002_33b2d3d5cc8cc742.txt`` sec. 3 and 5, ``ALGORITHMS.md`` S2) with the integer
+Di & Zhu 2008 (S2, sec. 3 and 5) with the integer
 arithmetic of :mod:`vtrack.golden.s2`: integer kernel, undivided ``q_u`` and ``C``, weights
 ``(q_u << F) // p_u``, a rounded integer step, histogram intersection ``sum min(q_u, C p_u //
 C')``, scales 9/10/11 with ``s`` from 1000 and ``s_k = (s_t + 90 s_(k-1)) // 100``. Positions
