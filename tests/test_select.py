@@ -112,6 +112,29 @@ def test_frame_writes_the_frame_with_a_light_grid(clip: Path, tmp_path: Path) ->
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("frame", "--step", "100000000000000000000000"),
+     "'--step': 100000000000000000000000 is not in the range 2<=x<=16384"),
+    (("frame", "--step", "16385"), "'--step': 16385 is not in the range 2<=x<=16384"),
+    (("select", "--frame", "1000000000001"),
+     "'--frame': 1000000000001 is not in the range 0<=x<=1000000000000"),
+], ids=["frame-step-huge", "frame-step-past-a-frame", "select-frame"])
+def test_frame_and_select_numbers_have_an_upper_limit(args: tuple[str, ...], said: str,
+                                                      clip: Path, tmp_path: Path) -> None:
+    """`vtrack frame --step 100000000000000000000000` wrote an image (a grid of one line) and
+    `vtrack select --frame` took any number, where --at stops at 10**12 and a frame is at most
+    16384 pixels a side: each now has its declared range, refused in one line."""
+    command, *options = args
+    out = ["-o", str(tmp_path / "f.png")] if command == "frame" else []
+    done = vtrack(command, str(clip), *options, *out)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and said in lines[0], done.stderr
+    assert not list(tmp_path.iterdir())
+    if command == "frame":  # the largest step is taken
+        done = vtrack(command, str(clip), "--step", "16384", *out)
+        assert done.returncode == 0 and (tmp_path / "f.png").exists(), done.stderr
+
+
 def test_frame_of_a_sequence_folder_default_name(tmp_path: Path) -> None:
     scene = make_scene("smooth", seed=1, width=160, height=120, frames=10, fps=30)
     folder = write_image_sequence(scene, tmp_path / "Seq")

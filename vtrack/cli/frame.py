@@ -11,6 +11,7 @@ import click
 from vtrack.cli._options import StartPoint, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 from vtrack.cli._signals import stopping_as_interrupted
+from vtrack.geometry import MAX_FRAME_SIDE
 
 
 @click.command("frame")
@@ -25,8 +26,9 @@ from vtrack.cli._signals import stopping_as_interrupted
 @click.option("--overwrite", "-y", is_flag=True,
               help="Replace the image file already there (as vtrack run -y replaces its "
                    "results).")
-@click.option("--step", type=WholeNumber(min=2), default=None, metavar="PX",
-              help="Grid spacing in pixels. Default: a round step giving ~16 lines.")
+@click.option("--step", type=WholeNumber(2, MAX_FRAME_SIDE), default=None, metavar="PX",
+              help=f"Grid spacing in pixels, at most {MAX_FRAME_SIDE} (the largest frame side "
+                   "vtrack reads). Default: a round step giving ~16 lines.")
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
 def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             overwrite: bool, step: int | None, no_grid: bool) -> None:

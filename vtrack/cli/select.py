@@ -7,11 +7,13 @@ import click
 from vtrack.cli._messages import echo_stdout, note, warn
 from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
+from vtrack.params import MAX_FRAME_NUMBER
 
 
 @click.command("select")
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
-@click.option("--frame", "frame", type=WholeNumber(min=0), default=0, show_default=True,
+@click.option("--frame", "frame", type=WholeNumber(0, MAX_FRAME_NUMBER), default=0,
+              show_default=True,
               help="Frame shown first (0-based); the page steps back and forth from it.")
 @click.option("--port", type=WholeNumber(0, 65535), default=0,
               help="Port on 127.0.0.1 to serve the page on. Default: a free one (printed).")
