@@ -117,6 +117,17 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
     return configs
 
 
+def _refuse_one_video(folder: Path) -> None:
+    """InputError when FOLDER is a video file (by its suffix, as a batch knows its videos): one
+    line saying it is not a folder and that ``vtrack run`` tracks it."""
+    from vtrack.errors import InputError
+    from vtrack.io.specs import VIDEO_SUFFIXES
+
+    if folder.suffix.lower() in VIDEO_SUFFIXES and folder.is_file():
+        raise InputError(f"{folder}: not a folder: a batch tracks the inputs in a folder; "
+                         f"vtrack run {shlex.quote(str(folder))} tracks one input")
+
+
 def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
     """Refuse a --scheduler address that is wrong before anything connects (an empty one ran
     the batch locally), and the options of a Dask batch given without --scheduler (they were
@@ -218,6 +229,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     _check_scheduler_options(scheduler, jobs)
     refuse_encoding_without_video(no_video)
     configs = _configs(config_specs, overrides)
+    _refuse_one_video(folder)
     nested = nested_inputs(folder)
     left_out = _left_out(nested)
     try:
