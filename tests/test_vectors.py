@@ -211,6 +211,24 @@ def test_a_foreign_vectors_folder_is_one_error_line(vectors, tmp_path, name: str
     assert done.stderr.startswith(f"vtrack: error: {tampered}") and problem in done.stderr
 
 
+def test_a_dump_and_vectors_given_swapped_are_told_the_order(vectors, tmp_path) -> None:
+    """`vtrack vectors check DUMP VECTORS` said 'DUMP: not a vectors folder (manifest.json: No
+    such file or directory)', nothing about the order; two dumps still say only that."""
+    out, _ = vectors
+    dump = tmp_path / "dump"
+    dump.mkdir()
+    shutil.copy(out / "trace.csv", dump / "trace.csv")
+    not_vectors = (f"vtrack: error: {dump}: not a vectors folder (manifest.json: No such file "
+                   "or directory)")
+    done = vtrack("vectors", "check", str(dump), str(out))
+    assert (done.returncode, done.stdout) == (2, ""), done.stdout + done.stderr
+    assert done.stderr == (f"{not_vectors}; {out} is one: the vectors come first, then the "
+                           f"dump (vtrack vectors check {out} {dump})\n")
+    done = vtrack("vectors", "check", str(dump), str(dump))
+    assert (done.returncode, done.stderr) == (2, f"{not_vectors}\n")
+    assert vtrack("vectors", "check", str(out), str(dump)).returncode == 0
+
+
 @pytest.mark.parametrize(("box", "problem"), [
     ("500,500,40,30", "lies outside the"), ("0,0,2,2", "smaller than 4x4"),
     ("0,0,5000,5000", "larger than the"),

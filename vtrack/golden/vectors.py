@@ -23,6 +23,7 @@ import json
 import math
 import os
 import re
+import shlex
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -526,9 +527,18 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
 
     Returns one line per differing file (naming frame, file, line with pixel x, y or trace
     column, and both values for the first :data:`SHOWN` differences) and the number of files
-    compared. Files of ``dump`` the vectors do not have are reported too.
+    compared. Files of ``dump`` the vectors do not have are reported too. InputError for
+    ``vectors`` that are none (saying the order when ``dump`` is the vectors folder), or a
+    ``dump`` that is no folder.
     """
-    width = _frame_width(vectors)
+    try:
+        width = _frame_width(vectors)
+    except InputError as exc:
+        if _config_of(dump) is not None and _config_of(vectors) is None:  # given swapped
+            raise InputError(f"{exc}; {dump} is one: the vectors come first, then the dump "
+                             f"(vtrack vectors check {shlex.quote(str(dump))} "
+                             f"{shlex.quote(str(vectors))})") from None
+        raise
     if not dump.is_dir():
         raise InputError(f"{dump}: no such folder")
     _refuse_another_config(vectors, dump)
