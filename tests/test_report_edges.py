@@ -10,17 +10,17 @@ import pytest
 import vtrack.report
 from vtrack.report import build, plots
 from vtrack.report.runs import RunResult
-from vtrack.report.tables import Cell, Table, _say_oversized
+from vtrack.report.tables import Cell, Table, _say_beside
 
 
 def test_no_notes_change_no_row() -> None:
-    """`_say_oversized` with no notes took `table.rows[-0:]`, every row (and failed to pair
+    """`_say_beside` with no notes took `table.rows[-0:]`, every row (and failed to pair
     them with no notes); it touches none now."""
     table = Table(["Config", "Tracking miss"], [[Cell("s0"), Cell("0.100")],
                                                [Cell("s1"), Cell("0.200")]])
-    _say_oversized(table, 1, [])
+    _say_beside(table, 1, [])
     assert [c.text for row in table.rows for c in row] == ["s0", "0.100", "s1", "0.200"]
-    _say_oversized(table, 1, ["box 60x"])  # the last row added
+    _say_beside(table, 1, ["box 60x"])  # the last row added
     assert [row[1].text for row in table.rows] == ["0.100", "0.200 (box 60x)"]
 
 

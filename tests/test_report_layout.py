@@ -5,6 +5,7 @@ marked partial, and the "All inputs" row counts only the inputs it lists."""
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -175,3 +176,33 @@ def test_no_curve_a_legend_names_is_grey_as_those_it_does_not() -> None:
         named = {line.get_label()[:3]: to_hex(line.get_color()) for line in axis.get_lines()
                  if not line.get_label().startswith("_")}
         assert "c07" in named and to_hex("C7") not in named.values(), named
+
+
+def test_an_average_a_score_some_inputs_lack_says_over_how_many(tmp_path: Path) -> None:
+    """camshift on `jump` misses frames and flags none (miss flagged 0.000) and on `smooth`
+    misses none (miss flagged —): its All inputs row showed 0.000, a mean over one input
+    read as over both. It now says over how many, and is not ranked; a score every input has
+    is as before."""
+    (tmp_path / "in").mkdir()
+    for scenario in ("jump", "smooth"):
+        clip_with_gt(tmp_path / "in", scenario, 90)
+    done = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(tmp_path / "in"),
+                           "-c", "camshift", "-c", "s0", "--no-video", "--quiet", "--out",
+                           str(tmp_path / "res")], capture_output=True, text=True,
+                          timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    runs = {(name, config): load_run(tmp_path / "res" / name / config)
+            for name in ("jump", "smooth") for config in ("camshift", "s0")}
+    for config in ("camshift", "s0"):  # (what the test stands on: smooth's is undefined)
+        assert math.isnan(runs["smooth", config].scores.miss_flagged)
+        assert runs["jump", config].scores.miss_flagged >= 0
+    build_report([tmp_path / "res"], tmp_path / "report")
+    markdown = (tmp_path / "report" / "summary.md").read_text()
+    rows = table_rows(markdown, "## All inputs")
+    header = markdown.split("## All inputs", 1)[1].split("| Config |", 1)[1].split("\n")[0]
+    columns = ["Config", *(c.strip() for c in header.strip("|").split("|"))]
+    averages = {row[0]: dict(zip(columns, row, strict=True)) for row in rows}
+    for config in ("camshift", "s0"):
+        flagged = runs["jump", config].scores.miss_flagged
+        assert averages[config]["Miss flagged"] == f"{flagged:.3f} (on 1 of 2 inputs)"
+        assert averages[config]["Inputs"] == "2" and "inputs" not in averages[config]["AUC"]

@@ -197,10 +197,10 @@ def _tracking_miss(columns: Sequence[Column]) -> int:
     return next(n for n, c in enumerate(columns) if c.title == "Tracking miss")
 
 
-def _say_oversized(table: Table, column: int, notes: Sequence[str | None]) -> None:
+def _say_beside(table: Table, column: int, notes: Sequence[str | None]) -> None:
     """Append each note (if any) to its row's value in ``column`` of the rows last added, as
     many as there are notes (none: nothing): why that value is not ranked (``0.000 (box
-    60x)``; the header's note says more)."""
+    60x)``, ``0.250 (on 1 of 2 inputs)``; the header's note says more)."""
     for cells, note in zip(table.rows[len(table.rows) - len(notes):], notes, strict=True):
         if note:
             cells[column].text += f" ({note})"
@@ -223,7 +223,7 @@ def results_table(by_input: Sequence[Sequence[RunResult]]) -> Table:
                    [[r.frames, *_scores(r), r.fps, r.frames_lost] for r in runs],
                    RESULT_COLUMNS, [r.status == STATUS_COMPLETE for r in runs],
                    [{miss} if r.oversized else () for r in runs])
-        _say_oversized(table, len(RUN_LABELS) + miss, [
+        _say_beside(table, len(RUN_LABELS) + miss, [
             f"box {_times(r.box_to_target)}x" if r.oversized and r.box_to_target else None
             for r in runs])
     return table
@@ -247,23 +247,32 @@ def average_table(by_config: dict[str, list[RunResult]]) -> Table:
     tracked frames. Each score is the mean over those runs, fps their mean and lost frames
     their total; a configuration whose counted runs include partial (or interrupted) ones says
     how many, and one with :attr:`~vtrack.report.runs.RunResult.oversized` runs is not ranked
-    by its tracking miss, which says on how many inputs."""
+    by its tracking miss, which says on how many inputs. A score some of those runs lack
+    (``—`` in their rows: miss flagged where no frame misses) is the mean over the others,
+    said beside it (``0.250 (on 1 of 2 inputs)``) and not ranked; one all of them lack is
+    ``—``."""
     table = _table(["Config"], AVERAGE_COLUMNS)
-    values, labels, oversized = [], [], []
+    values, labels, oversized, fewer = [], [], [], []
     for config, runs in by_config.items():
         scored = [r for r in runs if r.scores is not None]
         counted = scored or [r for r in runs if r.frames > 0]
-        scores = [_scores(r)[1:] for r in scored]
-        means = [_mean(column) for column in zip(*scores, strict=True)] if scores else [None] * 8
+        scores = list(zip(*(_scores(r)[1:] for r in scored), strict=True))
+        means = [_mean(column) for column in scores] if scores else [None] * 8
         values.append([len(counted), *means, _mean([r.fps for r in counted]),
                        sum(r.frames_lost for r in counted)])
         partial = sum(r.status in INCOMPLETE for r in counted)
         labels.append([f"{config} ({partial} partial)" if partial else config])
         oversized.append(sum(r.oversized for r in scored))
+        over = {1 + c: sum(map(_finite, column)) for c, column in enumerate(scores)}
+        fewer.append({c: f"on {n} of {plural(len(scored), 'input')}"
+                      for c, n in over.items() if 0 < n < len(scored)})
     miss = _tracking_miss(AVERAGE_COLUMNS)
     _add_group(table, labels, values, AVERAGE_COLUMNS, None,
-               [{miss} if n else () for n in oversized])
-    _say_oversized(table, 1 + miss, [
+               [set(notes) | ({miss} if n else set()) for notes, n in zip(fewer, oversized,
+                                                                             strict=True)])
+    for c in sorted({c for notes in fewer for c in notes}):
+        _say_beside(table, 1 + c, [notes.get(c) for notes in fewer])
+    _say_beside(table, 1 + miss, [
         f"box >{OVERSIZED_AREA:g}x on {plural(n, 'input')}" if n else None for n in oversized])
     return table
 
