@@ -45,17 +45,17 @@ class FrameResult:
     :class:`vtrack.Frame`'s own, or for an image given to :class:`vtrack.Tracker` one after the
     previous frame's); ``time_s``: its time in seconds (its timestamp, or for a NumPy image
     ``index / fps``, counted on from the last frame timed by a camera's clock); ``box``: the
-    target's :class:`Box` ``(x, y, w, h)`` of Python floats (whatever the config), None while
-    ``lost``; ``state``: ``TrackState.TRACKING``, ``OCCLUDED`` or ``LOST`` (a ``str`` enum:
-    ``result.state == "lost"`` works); ``score``: the tracker's confidence in its box, a
-    ``float`` never negative (0 for none, 1 as sure as on the first frame), NaN for a chain
-    that gives none (s4); ``prediction``: the box where the next frame's search starts (floats
-    too), or None; ``extras``: the stages' own values (``track.csv``'s extra columns, by name);
-    ``tracks``: for the multi-target configs, every track held, each with ``id``, ``box``,
-    ``confidence`` and ``state`` (``tentative``, ``confirmed``: measured this frame, the only
-    ones ``tracks.csv`` writes and draws, or ``coasting``); ``overlays``: what the annotated
-    video draws beside the box (search window, particles); ``frame``: the decoded frame, kept
-    only when asked (``keep_frames=True``), else None.
+    target's :class:`Box` ``(x, y, w, h)`` of Python floats (whatever the config),
+    None while ``lost``; ``state``: ``TrackState.TRACKING``, ``OCCLUDED`` or ``LOST`` (a ``str``
+    enum: ``result.state == "lost"`` works); ``score``: the tracker's confidence in its box, a
+    ``float`` never negative (0 for none, 1 as sure as on the first frame), NaN for a chain that
+    gives none (s4); ``prediction``: the box where the next frame's search starts (floats too), or
+    None; ``extras``: the stages' own values (``track.csv``'s extra columns, by name); ``tracks``:
+    for the multi-target configs, every track held, each with ``id``, ``box``, ``confidence`` and
+    ``state`` (``tentative``, ``confirmed``: measured this frame, the only ones ``tracks.csv``
+    writes and draws, or ``coasting``); ``overlays``: what the annotated video draws beside the box
+    (search window, particles); ``frame``: the decoded frame, kept only when asked
+    (``keep_frames=True``), else None.
     """
 
     index: int
