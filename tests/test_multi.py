@@ -542,6 +542,25 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
     assert vtrack.Tracker("s0", first_track_id=1).first_track_id == 1
 
 
+def test_track_ids_used_up_stay_a_config_error_on_every_later_frame(scene_factory) -> None:
+    """`Tracker("fixed_camera", first_track_id=2**53)` on a 'pedestrians' clip: the second new
+    track raised the ConfigError naming the used-up ids, and every later update that made a
+    track raised a bare StopIteration (the ids were a generator, finished once it had raised).
+    Each such update now raises the same ConfigError, naming its own frame."""
+    import vtrack
+
+    tracker = vtrack.Tracker("fixed_camera", first_track_id=2**53)
+    failed: list[tuple[int, str]] = []
+    for index, frame in enumerate(scene_factory("pedestrians", seed=4, frames=300).as_frames()):
+        try:
+            tracker.update(frame)
+        except ConfigError as error:
+            failed.append((index, str(error)))
+    assert len(failed) > 1, failed  # (a first error, then later frames that needed an id)
+    for index, said in failed:
+        assert said.startswith(f"the track ids from {2**53} are used up at frame {index}"), said
+
+
 # --- S4 on the bounce scene ---------------------------------------------------------------------
 
 

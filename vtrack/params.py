@@ -43,7 +43,7 @@ MAX_SEED = 2**32 - 1
 #: holds every whole number, so tools that read a ``tracks.csv``'s numbers as doubles
 #: (MATLAB, pandas, JavaScript) read its ids exactly. It is also the largest id a run
 #: numbers: one whose new track would need an id past it stops there
-#: (:func:`~vtrack.stages.detect.new_track_ids`).
+#: (:class:`~vtrack.stages.detect.TrackIds`).
 MAX_TRACK_ID = 2**53
 
 

@@ -177,7 +177,7 @@ class TrackContext:
     seed: int = 0
     #: The id a multi-target tracker gives the first track it creates, the next ones following
     #: on (1 unless the run says otherwise: ``--first-id``, a resumed run's ids after the first
-    #: run's); :func:`vtrack.stages.detect.new_track_ids` counts from it.
+    #: run's); :class:`vtrack.stages.detect.TrackIds` counts from it.
     first_track_id: int = 1
     #: Current estimate of the target box (single-target). The pipeline's output for the frame.
     box: Box | None = None

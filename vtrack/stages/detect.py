@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, Protocol, TypeVar
 
@@ -96,19 +95,32 @@ def track_state(confirmed: bool, updated: bool) -> TrackStatus:
     return TrackStatus.CONFIRMED if updated else TrackStatus.COASTING
 
 
-def new_track_ids(ctx: TrackContext) -> Iterator[int]:
+class TrackIds:
     """The ids a multi-target stage gives the tracks it creates, in order, none twice: the
     run's first track id (:attr:`TrackContext.first_track_id`, 1 unless the run says
     otherwise), then each one more, up to :data:`~vtrack.params.MAX_TRACK_ID` (2**53: ids
     past it, read as doubles by MATLAB, pandas or JavaScript, would be read as another's).
-    A track that would need an id past it is a ConfigError naming the first id and the frame
-    (the run stops there, its records whole), never an id numbered past it."""
-    yield from range(ctx.first_track_id, MAX_TRACK_ID + 1)
-    raise ConfigError(
-        f"the track ids from {ctx.first_track_id} are used up at frame {ctx.frame.index}: a "
-        f"new track would be numbered past {MAX_TRACK_ID} (2^53, the largest id a double holds "
-        "exactly: MATLAB, pandas and JavaScript would read it as another's); number the "
-        "tracks from a smaller first id (--first-id N, first_track_id=N)")
+    ``next()`` of a track that would need an id past it is a ConfigError naming the first id
+    and the frame (the run stops there, its records whole), never an id numbered past it;
+    every later ``next()`` raises the same, at its own frame (never StopIteration)."""
+
+    def __init__(self, ctx: TrackContext) -> None:
+        self._ctx = ctx
+        self._next = ctx.first_track_id
+
+    def __iter__(self) -> TrackIds:
+        return self
+
+    def __next__(self) -> int:
+        if self._next > MAX_TRACK_ID:
+            raise ConfigError(
+                f"the track ids from {self._ctx.first_track_id} are used up at frame "
+                f"{self._ctx.frame.index}: a new track would be numbered past {MAX_TRACK_ID} "
+                "(2^53, the largest id a double holds exactly: MATLAB, pandas and JavaScript "
+                "would read it as another's); number the tracks from a smaller first id "
+                "(--first-id N, first_track_id=N)")
+        self._next += 1
+        return self._next - 1
 
 
 class _Coasting(Protocol):

@@ -62,7 +62,7 @@ from vtrack.geometry import Box, iou_matrix
 from vtrack.histograms import bhattacharyya_rows
 from vtrack.params import Param
 from vtrack.stages.base import ShapeSamples, Stage, Track, TrackContext, register
-from vtrack.stages.detect import Detection, fewest_misses, new_track_ids, track_state
+from vtrack.stages.detect import Detection, TrackIds, fewest_misses, track_state
 
 #: The cost of a pair that may not match (above any allowed pair's: at most 1 + 1).
 _FORBIDDEN = 1e6
@@ -188,7 +188,7 @@ class ByteTracks(Stage):
         """Forget any previous run (no track, nothing learnt), then track this frame."""
         self._model: MotionModel = motion_model(self.model, self.q, 1.0, self.p0, g=0.0)
         self._tracks: list[_Track] = []
-        self._ids = new_track_ids(ctx)
+        self._ids = TrackIds(ctx)
         self._shapes = ShapeSamples()
         ctx.target_shape = None
         self.step(ctx)

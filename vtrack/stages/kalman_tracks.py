@@ -44,9 +44,9 @@ from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
 from vtrack.stages.detect import (
     Detection,
+    TrackIds,
     centroids,
     fewest_misses,
-    new_track_ids,
     pairwise_distances,
     track_state,
 )
@@ -129,7 +129,7 @@ class KalmanTracks(Stage):
         """Forget any previous run (no track), then track this frame."""
         self._model: MotionModel = motion_model(self.model, self.q, self.r, self.p0, g=self.g)
         self._tracks: list[_KalmanTrack] = []
-        self._ids = new_track_ids(ctx)
+        self._ids = TrackIds(ctx)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:

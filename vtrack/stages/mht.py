@@ -67,8 +67,8 @@ from vtrack.params import Param
 from vtrack.stages.base import Stage, Track, TrackContext, register
 from vtrack.stages.detect import (
     Detection,
+    TrackIds,
     centroids,
-    new_track_ids,
     pairwise_distances,
     track_state,
 )
@@ -264,7 +264,7 @@ class MultipleHypothesis(Stage):
     def start(self, ctx: TrackContext) -> None:
         """Forget any previous run: no track, one empty hypothesis; then track this frame."""
         self._hypotheses: list[_Hypothesis] = [()]
-        self._ids = new_track_ids(ctx)
+        self._ids = TrackIds(ctx)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
