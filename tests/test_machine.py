@@ -1,9 +1,10 @@
-"""What ``vtrack batch`` takes to be the memory it may still use (:mod:`vtrack.machine`), read
-from files laid out as Linux lays them out (``/proc``, ``/sys/fs/cgroup``), in a temporary
-folder the module's paths point at."""
+"""What ``vtrack batch`` takes to be the memory it may still use, and vtrack the cores it may
+use (:mod:`vtrack.machine`), read from files laid out as Linux lays them out (``/proc``,
+``/sys/fs/cgroup``), in a temporary folder the module's paths point at."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -89,3 +90,78 @@ def test_memory_files_that_cannot_be_read_are_left_out(system: Path) -> None:
     (system / "meminfo").unlink()
     (system / "cgroup/memory.max").unlink()
     assert machine.available_memory() is None
+
+
+def affinity() -> int:
+    """The cores this process may run on, a CPU quota aside."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+        os.cpu_count() or 1)
+
+
+def test_a_cgroup_v2_cpu_quota_bounds_the_cores(system: Path) -> None:
+    """A Kubernetes pod of 1 CPU on a 64-core node (`0::/kubepods/pod1/c1`, the pod's
+    cpu.max "50000 100000"): cpu_count() read the affinity only (64), so the pod ran 64
+    OpenCV and decoder threads. Now the least quota up the tree counts, rounded up, at least 1,
+    at most the affinity; "max" is none."""
+    (system / "self-cgroup").write_text("0::/kubepods/pod1/c1\n")
+    root = system / "cgroup"
+    cgroup(root / "kubepods", cpu_max="max 100000")
+    cgroup(root / "kubepods/pod1", cpu_max="50000 100000")
+    cgroup(root / "kubepods/pod1/c1", cpu_max="max 100000")
+    assert machine.cpu_quota() == 1
+    assert machine.cpu_count() == 1
+    cgroup(root / "kubepods/pod1", cpu_max="150000 100000")  # 1.5 CPUs: 2 threads
+    assert machine.cpu_quota() == 2
+    assert machine.cpu_count() == min(2, affinity())
+    cgroup(root / "kubepods/pod1/c1", cpu_max="1000 100000")  # the container's own is less
+    assert machine.cpu_quota() == 1
+    cgroup(root / "kubepods/pod1", cpu_max="6400000 100000")
+    cgroup(root / "kubepods/pod1/c1", cpu_max="max 100000")
+    assert machine.cpu_quota() == 64
+    assert machine.cpu_count() == min(64, affinity())
+    cgroup(root / "kubepods/pod1", cpu_max="max 100000")
+    assert machine.cpu_quota() is None
+    assert machine.cpu_count() == affinity()
+
+
+def test_a_cgroup_v1_cpu_line_names_the_cgroup_read(system: Path) -> None:
+    """cgroup v1 (`5:cpu,cpuacct:/docker/abc`): cpu.cfs_quota_us over cpu.cfs_period_us in
+    the hierarchy the line names (-1: none); a container that sees only its own cgroup (the
+    path is not there) is read at the hierarchy's root; a hierarchy mounted as the controller
+    alone (`cpu`) is read there."""
+    (system / "self-cgroup").write_text("5:cpu,cpuacct:/docker/abc\n4:memory:/docker/abc\n"
+                                        "0::/\n")
+    hierarchy = system / "cgroup/cpu,cpuacct"
+    cgroup(hierarchy, cpu_cfs_quota_us=-1, cpu_cfs_period_us=100000)
+    cgroup(hierarchy / "docker/abc", cpu_cfs_quota_us=250000, cpu_cfs_period_us=100000)
+    assert machine.cpu_quota() == 3
+    cgroup(hierarchy / "docker/abc", cpu_cfs_quota_us=-1)
+    assert machine.cpu_quota() is None
+    (hierarchy / "docker/abc/cpu.cfs_quota_us").unlink()
+    (hierarchy / "docker/abc/cpu.cfs_period_us").unlink()
+    (hierarchy / "docker/abc").rmdir()
+    cgroup(hierarchy, cpu_cfs_quota_us=100000)  # the container's own, seen as the root
+    assert machine.cpu_quota() == 1
+    hierarchy.rename(system / "cgroup/cpu")
+    assert machine.cpu_quota() == 1
+    assert machine.cpu_count() == 1
+
+
+def test_cpu_files_that_cannot_be_read_are_left_out(system: Path) -> None:
+    """A quota or period that cannot be read, holds no number or a period of 0 bounds
+    nothing; with /proc/self/cgroup unreadable, the hierarchies' roots are read."""
+    (system / "self-cgroup").write_text("0::/job\n")
+    job = system / "cgroup/job"
+    cgroup(job, cpu_max="200000 0")
+    assert machine.cpu_quota() is None
+    cgroup(job, cpu_max="some 100000")
+    assert machine.cpu_quota() is None
+    (job / "cpu.max").unlink()
+    (job / "cpu.max").mkdir()
+    assert machine.cpu_quota() is None
+    assert machine.cpu_count() == affinity()
+    (system / "self-cgroup").unlink()  # then the roots are read: v2's, then v1's cpu
+    cgroup(system / "cgroup/cpu", cpu_cfs_quota_us=200000, cpu_cfs_period_us=100000)
+    assert machine.cpu_quota() == 2
+    cgroup(system / "cgroup", cpu_max="100000 100000")
+    assert machine.cpu_quota() == 1

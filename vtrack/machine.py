@@ -1,18 +1,21 @@
-"""What this machine offers the process: the cores it may run on (batch workers, decoder
-threads) and the memory it may still take (batch workers)."""
+"""What this machine offers the process: the cores it may run on, its CPU quota counted (batch
+workers, decoder threads), and the memory it may still take (batch workers)."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 
 def cpu_count() -> int:
-    """Cores this process may use (its CPU affinity where the system has one, as FFmpeg counts
-    them)."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
+    """Cores this process may use: its CPU affinity where the system has one (as FFmpeg
+    counts them), or fewer where this process's cgroup, or one above it, has a CPU quota (a
+    container's, a Kubernetes pod's, a Slurm job's: :func:`cpu_quota`); at least 1."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+        os.cpu_count() or 1)
+    quota = cpu_quota()
+    return max(1, cores if quota is None else min(cores, quota))
 
 
 #: The memory one local ``vtrack batch`` worker is taken to need: a Python process with NumPy,
@@ -34,19 +37,28 @@ _UNLIMITED = 2**60
 
 @dataclass(frozen=True)
 class _CgroupFiles:
-    """A cgroup version's memory files: its hierarchy's folder under :data:`_CGROUP_MOUNT`,
-    the limit, the use, and ``memory.stat``'s key of the page cache the kernel takes back
-    first (counted in the use, yet free to take)."""
+    """A cgroup version's memory files: the limit, the use, and ``memory.stat``'s key of the
+    page cache the kernel takes back first (counted in the use, yet free to take)."""
 
-    folder: str
     limit: str
     usage: str
     inactive: str
 
 
-_V2 = _CgroupFiles("", "memory.max", "memory.current", "inactive_file")
-_V1 = _CgroupFiles("memory", "memory.limit_in_bytes", "memory.usage_in_bytes",
-                   "total_inactive_file")
+_V2 = _CgroupFiles("memory.max", "memory.current", "inactive_file")
+_V1 = _CgroupFiles("memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file")
+
+
+@dataclass(frozen=True)
+class _Cgroup:
+    """This process's cgroup of one controller: cgroup v1's or v2's (``v1``), its
+    hierarchy's folder under :data:`_CGROUP_MOUNT` (v1's, named by its controllers: ``memory``,
+    ``cpu,cpuacct``; v2's is the mount point itself, ``""``) and its path in that hierarchy,
+    as ``/proc/self/cgroup`` names it."""
+
+    v1: bool
+    hierarchy: str
+    path: str
 
 
 def available_memory() -> int | None:
@@ -62,44 +74,75 @@ def available_memory() -> int | None:
                     break
     except (OSError, ValueError, IndexError):
         pass
-    known += [free for files, path in _own_cgroups()
-              if (free := _cgroup_free(files, path)) is not None]
+    known += [free for group in _own_cgroups("memory")
+              if (free := _least(_level_free(folder, _V1 if group.v1 else _V2)
+                                 for folder in _cgroup_levels(group))) is not None]
     return min(known, default=None)
 
 
-def _own_cgroups() -> list[tuple[_CgroupFiles, str]]:
-    """This process's memory cgroup as ``/proc/self/cgroup`` names it: v1's ``memory`` line
-    (the controller is there, on a hybrid system too), else v2's ``0::`` line; both
-    hierarchies' roots where that file cannot be read."""
+def cpu_quota() -> int | None:
+    """The cores the CPU quota of this process's cgroup, or of one above it, allows: the
+    least of ``ceil(quota / period)`` up the tree (cgroup v2's ``cpu.max``, v1's
+    ``cpu.cfs_quota_us`` over ``cpu.cfs_period_us``), at least 1; None where no quota is set
+    or can be read (not Linux)."""
+    return _least(_level_cpus(folder, group.v1)
+                  for group in _own_cgroups("cpu") for folder in _cgroup_levels(group))
+
+
+def _least(values: Iterable[int | None]) -> int | None:
+    """The least of the ``values`` that are not None; None when none is."""
+    return min((value for value in values if value is not None), default=None)
+
+
+def _own_cgroups(controller: str) -> list[_Cgroup]:
+    """This process's cgroup of ``controller`` (``memory``, ``cpu``) as ``/proc/self/cgroup``
+    names it: v1's line that lists the controller (it is there, on a hybrid system too), else
+    v2's ``0::`` line; both hierarchies' roots where that file cannot be read."""
     try:
         with open(_SELF_CGROUP, encoding="utf-8", errors="surrogateescape") as table:
             lines = [line.rstrip("\n").split(":", 2) for line in table]
     except OSError:
-        return [(_V2, "/"), (_V1, "/")]
+        return [_Cgroup(False, "", "/"), _Cgroup(True, controller, "/")]
     fields = [line for line in lines if len(line) == 3]
     for _, controllers, path in fields:
-        if "memory" in controllers.split(","):
-            return [(_V1, path)]
-    return [(_V2, path) for number, controllers, path in fields
+        if controller in controllers.split(","):  # (mounted as listed, or as the controller)
+            mounted = os.path.isdir(os.path.join(_CGROUP_MOUNT, controllers))
+            return [_Cgroup(True, controllers if mounted else controller, path)]
+    return [_Cgroup(False, "", path) for number, controllers, path in fields
             if number == "0" and not controllers]
 
 
-def _cgroup_free(files: _CgroupFiles, path: str) -> int | None:
-    """The least memory any limit from the cgroup ``path`` up to its hierarchy's root leaves
-    free; None where none is set or can be read. A path not under the mount point (a
-    container that sees only its own cgroup, as the root) is read at the root."""
-    root = os.path.normpath(os.path.join(_CGROUP_MOUNT, files.folder))
-    here = os.path.normpath(os.path.join(root, path.lstrip("/")))
+def _cgroup_levels(group: _Cgroup) -> list[str]:
+    """The folders of ``group`` and of each cgroup above it, up to its hierarchy's root. A
+    path not under the mount point (a container that sees only its own cgroup, as the root)
+    is read at the root."""
+    root = os.path.normpath(os.path.join(_CGROUP_MOUNT, group.hierarchy))
+    here = os.path.normpath(os.path.join(root, group.path.lstrip("/")))
     if not os.path.isdir(here) or os.path.commonpath([root, here]) != root:
         here = root
-    free: list[int] = []
-    while True:
-        level = _level_free(here, files)
-        if level is not None:
-            free.append(level)
-        if here == root:
-            return min(free, default=None)
+    levels = [here]
+    while here != root:
         here = os.path.dirname(here)
+        levels.append(here)
+    return levels
+
+
+def _level_cpus(folder: str, v1: bool) -> int | None:
+    """The cores one cgroup's CPU quota allows (``ceil(quota / period)``, at least 1); None
+    when it has none (v2's ``max``, v1's -1) or its files cannot be read."""
+    try:
+        if v1:
+            with open(os.path.join(folder, "cpu.cfs_quota_us"), encoding="ascii") as quota, \
+                    open(os.path.join(folder, "cpu.cfs_period_us"), encoding="ascii") as period:
+                allowed, every = quota.read().strip(), period.read().strip()
+        else:
+            with open(os.path.join(folder, "cpu.max"), encoding="ascii") as limit:
+                allowed, _, every = limit.read().strip().partition(" ")
+    except (OSError, ValueError):
+        return None
+    if not (allowed.isdigit() and every.isdigit()) or int(every) == 0:  # "max", -1: none
+        return None
+    return max(1, -(-int(allowed) // int(every)))
 
 
 def _level_free(folder: str, files: _CgroupFiles) -> int | None:

@@ -163,7 +163,7 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
               help="Local worker processes (never more than the runs to do, nor than the "
                    f"memory available holds at about {WORKER_MEMORY // 2**20} MiB each: a "
                    "warning says so). "
-                   "Default: the number of cores.")
+                   "Default: the cores this process may use (a container's CPU quota counts).")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask distributed scheduler (tcp://host:8786) instead; workers "
                    "must see the input and output paths. Needs: pip install 'vtrack[dask]'.")
