@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import select
 import signal
@@ -102,16 +103,21 @@ def dask_threads() -> int:
     """The OpenCV threads of a job on this Dask worker: this machine's cores
     (:func:`~vtrack.machine.cpu_count`, the worker's own) over the jobs the workers on this
     machine run at once (the threads of each, as the scheduler lists them; this worker's own
-    when it cannot say), at least 1: as a local batch shares the cores among its workers.
+    when it cannot say, a warning in the worker's log saying why), at least 1: as a local
+    batch shares the cores among its workers.
     ``dask worker --nworkers 2 --nthreads 1`` on 8 cores: 4 a job."""
     from distributed import get_client, get_worker
 
     worker = get_worker()
     tasks = worker.state.nthreads
-    with contextlib.suppress(Exception):  # the scheduler gone, an entry without its host
+    try:
         workers = get_client().scheduler_info(n_workers=-1)["workers"]
         host = workers[worker.address]["host"]
         tasks = sum(int(w["nthreads"]) for w in workers.values() if w.get("host") == host)
+    except (OSError, KeyError, ValueError) as exc:  # the scheduler gone, no entry or host
+        logging.getLogger("distributed.worker").warning(
+            "vtrack: the workers on this machine are not known (%r): a job's OpenCV threads "
+            "are its cores over this worker's %d tasks", exc, worker.state.nthreads)
     return max(1, cpu_count() // max(1, tasks))
 
 
