@@ -558,7 +558,8 @@ def test_track_ids_used_up_stay_a_config_error_on_every_later_frame(scene_factor
             failed.append((index, str(error)))
     assert len(failed) > 1, failed  # (a first error, then later frames that needed an id)
     for index, said in failed:
-        assert said.startswith(f"the track ids from {2**53} are used up at frame {index}"), said
+        assert said.startswith(f"the track ids from {2**53} are used up at frame {index} "
+                               f"(tracks.csv's frame {index + 1}): "), said
 
 
 # --- S4 on the bounce scene ---------------------------------------------------------------------

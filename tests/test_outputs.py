@@ -1024,7 +1024,9 @@ def test_a_run_whose_track_ids_pass_2_to_the_53_stops_at_that_frame(tmp_path: Pa
     (tracks.csv and run.json's last_track_id 9007199254740993 and up, which MATLAB, pandas or
     JavaScript read as another id), exit 0. A run now numbers no track past 2**53: it stops at
     the frame whose new track would need such an id, in one line naming the first id and that
-    frame (exit 2), its tracks.csv and run.json whole up to the frame before."""
+    frame (exit 2), its tracks.csv and run.json whole up to the frame before. The frame is the
+    run's 0-based one and tracks.csv's 1-based one (it said only "frame 56", tracks.csv's last
+    rows being frame 56's)."""
     largest = 2**53
     scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=300, fps=30)
     clip = write_video(scene, tmp_path / "ped.mp4", preset="ultrafast", keyint=30)
@@ -1034,19 +1036,20 @@ def test_a_run_whose_track_ids_pass_2_to_the_53_stops_at_that_frame(tmp_path: Pa
                            str(out)], capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 2, done.stderr
     line = done.stderr.splitlines()[-1]
-    stopped_at = int(line.split(" are used up at frame ")[1].split(":")[0])
+    stopped_at = int(line.split(" are used up at frame ")[1].split(" ")[0])
     assert line == (f"vtrack: error: the track ids from {largest - 9} are used up at frame "
-                    f"{stopped_at}: a new track would be numbered past {largest} (2^53, the "
-                    "largest id a double holds exactly: MATLAB, pandas and JavaScript would read "
-                    "it as another's); number the tracks from a smaller first id (--first-id N, "
-                    "first_track_id=N)"), done.stderr
+                    f"{stopped_at} (tracks.csv's frame {stopped_at + 1}): a new track would "
+                    f"be numbered past {largest} (2^53, the largest id a double holds exactly: "
+                    "MATLAB, pandas and JavaScript would read it as another's); number the "
+                    "tracks from a smaller first id (--first-id N, first_track_id=N)"), \
+        done.stderr
     record = json.loads((out / "run.json").read_text())
     assert record["status"] == "failed"
     assert record["error"] == line.removeprefix("vtrack: error: ")
     assert stopped_at > 0 and record["last_frame"] == stopped_at - 1
     rows = csv_rows(out / "tracks.csv")
     assert rows and {int(row[1]) for row in rows} <= set(range(largest - 9, largest + 1))
-    assert max(int(row[0]) for row in rows) <= stopped_at  # (MOTChallenge frames: 1-based)
+    assert max(int(row[0]) for row in rows) == stopped_at  # (MOTChallenge frames: 1-based)
     assert record["summary"]["last_track_id"] <= largest
 
 

@@ -101,7 +101,8 @@ class TrackIds:
     otherwise), then each one more, up to :data:`~vtrack.params.MAX_TRACK_ID` (2**53: ids
     past it, read as doubles by MATLAB, pandas or JavaScript, would be read as another's).
     ``next()`` of a track that would need an id past it is a ConfigError naming the first id
-    and the frame (the run stops there, its records whole), never an id numbered past it;
+    and the frame (0-based, as the run counts them, and tracks.csv's 1-based number; the run
+    stops there, its records whole), never an id numbered past it;
     every later ``next()`` raises the same, at its own frame (never StopIteration)."""
 
     def __init__(self, ctx: TrackContext) -> None:
@@ -115,7 +116,8 @@ class TrackIds:
         if self._next > MAX_TRACK_ID:
             raise ConfigError(
                 f"the track ids from {self._ctx.first_track_id} are used up at frame "
-                f"{self._ctx.frame.index}: a new track would be numbered past {MAX_TRACK_ID} "
+                f"{self._ctx.frame.index} (tracks.csv's frame {self._ctx.frame.index + 1}): "
+                f"a new track would be numbered past {MAX_TRACK_ID} "
                 "(2^53, the largest id a double holds exactly: MATLAB, pandas and JavaScript "
                 "would read it as another's); number the tracks from a smaller first id "
                 "(--first-id N, first_track_id=N)")
