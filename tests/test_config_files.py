@@ -291,3 +291,23 @@ def test_contradictory_parameter_pairs_are_refused_naming_both(
     done = vtrack("run", str(clip.path), "-c", config, *box, "--set", first, "--set", equal,
                   "--no-video", "-q", "--out", str(tmp_path / "eq"))
     assert done.exit_code == 0, done.output
+
+
+def test_scales_past_interp_scales_run_when_the_scale_filter_is_off(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 -c robust --init ... --set robust_search.scale=false --set
+    robust_search.scales=33 --set robust_search.interp_scales=17` was refused ("interp_scales
+    (17) is smaller than scales (33)"), though with the scale filter off neither is used; as
+    blobs' min_area past a max_area of 0 (no limit), the pair is checked only where it counts:
+    the run and the API take it, and track as with the filter off and the defaults."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    off = ("--set", "robust_search.scale=false")
+    pair = ("--set", "robust_search.scales=33", "--set", "robust_search.interp_scales=17")
+    for name, sets in (("pair", off + pair), ("alone", off)):
+        done = vtrack("run", str(clip.path), "-c", "robust", "--init", "20,20,16,16", *sets,
+                      "--no-video", "-q", "--out", str(tmp_path / name))
+        assert done.exit_code == 0, done.output
+    assert (tmp_path / "pair" / "track.csv").read_text() == \
+        (tmp_path / "alone" / "track.csv").read_text()
+    Tracker("robust", robust_search__scale=False, robust_search__scales=33,
+            robust_search__interp_scales=17)

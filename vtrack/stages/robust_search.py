@@ -81,10 +81,11 @@ class RobustSearch(Stage):
 
     @classmethod
     def values_problem(cls, values: dict[str, Any]) -> str | None:
-        """Fewer interpolated scales than samples: fDSST interpolates the response of
-        ``scales`` samples up to ``interp_scales`` (equal: DSST, no interpolation), never down."""
+        """Fewer interpolated scales than samples with the scale filter on (``scale``; off,
+        neither is used): fDSST interpolates the response of ``scales`` samples up to
+        ``interp_scales`` (equal: DSST, no interpolation), never down."""
         samples, interpolated = values["scales"], values["interp_scales"]
-        if interpolated < samples:
+        if values["scale"] and interpolated < samples:
             return (f"interp_scales ({interpolated}) is smaller than scales ({samples}): the "
                     f"response of {samples} scale samples is interpolated up to interp_scales, "
                     "never down; give interp_scales >= scales (equal: no interpolation, DSST)")
