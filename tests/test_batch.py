@@ -1288,6 +1288,38 @@ def test_jobs_beyond_what_the_memory_holds_start_fewer_workers_saying_so(
         "available: 60 MiB): starting 1, not 2"]
 
 
+def test_a_local_batch_shares_the_cores_among_the_workers_it_starts(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack batch in/ -c s0 --jobs 4` of one input started one worker (one per run to do)
+    yet gave its run the cores over 4 OpenCV threads (on 2 cores: 1, one core idle; with the
+    default --jobs, the cores over the cores: 1). The cores are now shared among the workers
+    that start: one run takes them all, two runs half each (run.json's
+    timing.opencv_threads)."""
+    from vtrack.cli import batch as batch_command
+    from vtrack.machine import cpu_count
+
+    monkeypatch.setattr(batch_command, "available_memory", lambda: None)  # (not a bound)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    add_clip(folder, clip_factory, "smooth", "c0")
+
+    def threads(out: Path, name: str = "c0") -> int:
+        record = json.loads((out / name / "s0" / "run.json").read_text())
+        return record["timing"]["opencv_threads"]
+
+    for name, jobs in (("four", ("--jobs", "4")), ("default", ())):
+        done = batch(str(folder), "-c", "s0", *jobs, "--no-video", "-q", "-o",
+                     str(tmp_path / name))
+        assert done.exit_code == 0, done.output
+        assert threads(tmp_path / name) == cpu_count(), name
+    add_clip(folder, clip_factory, "jump", "c1")
+    two = batch(str(folder), "-c", "s0", "--jobs", "4", "--no-video", "-q", "-o",
+                str(tmp_path / "two"))
+    assert two.exit_code == 0, two.output
+    assert [threads(tmp_path / "two", name) for name in ("c0", "c1")] == \
+        [max(1, cpu_count() // 2)] * 2
+
+
 def test_a_jobs_opencv_threads_come_from_the_machine_that_runs_it(
         tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
     """`vtrack batch in/ --scheduler ADDRESS` read this machine's free memory to cap

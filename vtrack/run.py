@@ -1392,8 +1392,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
             "fps": summary.fps,
             "stage_us_per_frame": resolved.pipeline.stage_microseconds_per_frame(),
             "loop_cpu_us_per_frame": 1e6 * tracked.cpu_seconds / frames if frames else None,
-            # the threads OpenCV's parallel loops had (a batch's worker sets them: a local
-            # one from this machine's cores over its workers, a Dask one from its machine's)
+            # the threads OpenCV's parallel loops had (a batch's worker sets them: a local one
+            # from this machine's cores over the workers started, a Dask one from its machine's)
             "opencv_threads": cv2.getNumThreads(),
             # live sources: frame decoded -> its row, stream line and picture handed over
             "latency": tracked.latency.to_dict() if source.live else None,

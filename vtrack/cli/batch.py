@@ -6,6 +6,7 @@ import shlex
 import sys
 from collections.abc import Callable
 from contextlib import closing
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -35,8 +36,9 @@ from vtrack.machine import WORKER_MEMORY, available_memory, workers_memory_holds
 from vtrack.params import MAX_WAIT_S
 
 if TYPE_CHECKING:
-    from vtrack.batch import Outcome
+    from vtrack.batch import LocalExecutor, Outcome, Plan
     from vtrack.batch.discover import NestedInputs
+    from vtrack.batch.jobs import Progress
     from vtrack.config import Config
 
 #: The most local worker processes ``--jobs`` starts (each a Python process with its own
@@ -57,6 +59,26 @@ def _fewer_workers(jobs: int | None, wanted: int, runs: int, workers: int,
                 f"{available // 2**20} MiB): starting 1, not {needed}")
     return (f"{asked}: starting {plural(workers, 'worker')}, not {needed}: the memory available "
             f"({available / 2**30:.1f} GiB) holds about {workers} of {each} each")
+
+
+def _local_executor(jobs: int | None, batch: Plan,
+                    on_progress: Callable[[Progress], None]) -> LocalExecutor:
+    """The local pool of workers for ``batch``: as many as ``--jobs`` (``jobs``, else the
+    cores) and the runs to do, as this machine's memory holds (a warning when that starts
+    fewer: :func:`_fewer_workers`). Sets each of ``batch``'s jobs' OpenCV threads to the
+    cores shared among the workers that start (one per run to do, at most)."""
+    from vtrack.batch import LocalExecutor, cpu_count
+
+    wanted = jobs or cpu_count()
+    available = available_memory()
+    held = workers_memory_holds(available)
+    workers = wanted if held is None else min(wanted, held)
+    runs = len(batch.jobs)
+    if min(wanted, runs) > workers:
+        warn(_fewer_workers(jobs, wanted, runs, workers, available or 0))
+    threads = max(1, cpu_count() // max(1, min(workers, runs)))
+    batch.jobs[:] = [replace(job, threads=threads) for job in batch.jobs]
+    return LocalExecutor(workers, on_progress=on_progress)
 
 
 def _run_options(*names: str) -> Callable[[click.Command], click.Command]:
@@ -214,8 +236,6 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     from vtrack.batch import (
         DaskExecutor,
         Executor,
-        LocalExecutor,
-        cpu_count,
         find_inputs,
         nested_inputs,
         plan,
@@ -244,12 +264,6 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         raise
     if left_out:
         warn(f"{folder}: {left_out}")
-    # the local pool's workers: as many as asked (or cores), as many as this machine's memory
-    # holds; a Dask cluster's are its own (a job's threads are chosen where it runs)
-    wanted = jobs or cpu_count()
-    available = available_memory() if scheduler is None else None
-    held = workers_memory_holds(available)
-    workers = wanted if held is None else min(wanted, held)  # (a worker per run, at most)
     out_dir = out_dir or default_out_dir(str(folder))
     summary_path = out_dir / SUMMARY_FILE
     outcomes: list[Outcome] = []
@@ -261,28 +275,24 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
     stop_once = _StopOnce()
     with handling_stop_signals(stop_once, ignored_after=owns_process()), \
             OutputFolder(out_dir, "batch"):
-        executor: Executor
+        dask: DaskExecutor | None = None
         if scheduler is not None:
             dask = DaskExecutor(scheduler, scheduler_timeout)
             dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
-            executor = dask
-        else:
-            executor = LocalExecutor(workers, on_progress=progress.on_progress)
         settings = RunRequest(input=str(folder), out_dir=out_dir,
                               config=next(iter(configs.values())), video=not no_video,
                               preset=preset, crf=crf, seed=seed, start=start[0],
                               start_s=start[1],
                               max_frames=None if max_frames is None else max_frames[0],
                               max_s=None if max_frames is None else max_frames[1])
-        # a local worker's OpenCV threads: the cores shared among the pool's workers (a Dask
-        # job's are chosen on the worker that runs it, from its machine's: dask_threads)
-        batch = plan(inputs, configs, out_dir, settings,
-                     threads=max(1, cpu_count() // workers) if scheduler is None else 1,
-                     force=force, overwrite=overwrite or force)
+        batch = plan(inputs, configs, out_dir, settings, force=force,
+                     overwrite=overwrite or force)
         for warning in batch.warnings:
             warn(warning)
-        if scheduler is None and min(wanted, len(batch.jobs)) > workers:
-            warn(_fewer_workers(jobs, wanted, len(batch.jobs), workers, available or 0))
+        # a Dask cluster's workers are its own, and a job's threads are chosen on the worker
+        # that runs it, from its machine's (dask_threads); the local pool's are chosen here
+        executor: Executor = dask if dask is not None else _local_executor(
+            jobs, batch, progress.on_progress)
         # frames tracked over the runs to do (those complete before are not counted)
         progress.runs = len(batch.jobs)
         to_run = {(job.input, job.config) for job in batch.jobs}
