@@ -1053,6 +1053,48 @@ def test_a_run_whose_track_ids_pass_2_to_the_53_stops_at_that_frame(tmp_path: Pa
     assert record["summary"]["last_track_id"] <= largest
 
 
+def test_a_hint_past_2_to_the_53_gives_no_first_id_and_a_warning_says_so(
+        tmp_path: Path) -> None:
+    """An interrupted multi-target run whose highest track id is 2**53 (the largest
+    --first-id; reached with ids numbered up to it, as a run now is) hints no --first-id
+    (2**53 + 1 would be refused) and warns that the run the hint makes numbers its tracks as
+    this one did; an id the option takes is hinted, without the warning. (_resume_options and
+    _past_track_ids, called as run() calls them: the run that reached 2**53 end to end now stops
+    at the id after it.)"""
+    from vtrack.pipeline import Pipeline
+    from vtrack.run import (
+        STATUS_INTERRUPTED,
+        RunSummary,
+        _past_track_ids,
+        _Resolved,
+        _Resumable,
+        _resume_options,
+        _Span,
+        _Tracked,
+    )
+
+    config = load_config("fixed_camera")
+    request = RunRequest(input=str(tmp_path / "ped.mp4"), out_dir=tmp_path / "out",
+                         config=config, max_frames=800, first_track_id=2**53 - 9)
+    resolved = _Resolved(Pipeline(config.build()), None, None, None, span=_Span(count=800))
+    tracked = _Tracked(status=STATUS_INTERRUPTED,
+                       last_frame=_Resumable(index=40, time_s=40 / 30, before=40))
+    past = 2**53 + 1
+    assert _resume_options(resolved, tracked, 30.0, past) == "--start 41 --frames 759"
+    assert _resume_options(resolved, tracked, 30.0, 2**53) == \
+        "--start 41 --frames 759 --first-id 9007199254740992"
+    summary = RunSummary(input=request.input, out_dir=str(request.out_dir), config=config.name,
+                         status=STATUS_INTERRUPTED, frames=41, seconds=1.0, fps=41.0,
+                         multi_target=True, resume="--start 41 --frames 759")
+    assert _past_track_ids(request, summary, past) == (
+        f"{tmp_path / 'out' / 'tracks.csv'}: its highest track id, 9007199254740992, leaves no "
+        "--first-id (at most 9007199254740992) for the run the hint below makes: that run "
+        "numbers its tracks as this one did; renumber one of the two tracks.csv to join them")
+    assert _past_track_ids(request, summary, 2**53) is None  # (the hint gives it)
+    summary.resume = None  # nothing to go on from: no hint to warn of
+    assert _past_track_ids(request, summary, past) is None
+
+
 def test_a_chain_that_needs_no_box_resumes_after_the_last_frame_written(tmp_path: Path) -> None:
     """SIGTERM to a run of a chain that needs no box (`vtrack run ped.mp4 -c fixed_camera
     --frames 1400`) said `--start 533 --frames 867` with last_frame 533: the resumed run wrote

@@ -1261,9 +1261,13 @@ def _resume_options(resolved: _Resolved, tracked: _Tracked, fps: float | None,
     return options
 
 
-def _past_track_ids(request: RunRequest, next_id: int) -> str:
-    """The warning of an interrupted run whose hint cannot give ``--first-id next_id``: the
-    id after the highest it wrote is past :data:`~vtrack.params.MAX_TRACK_ID`."""
+def _past_track_ids(request: RunRequest, summary: RunSummary, next_id: int) -> str | None:
+    """The warning of an interrupted multi-target run whose hint (``summary.resume``) cannot
+    give ``--first-id next_id``: the id after the highest it wrote is past
+    :data:`~vtrack.params.MAX_TRACK_ID`; None for any other run (no hint, a single target,
+    an id the option takes)."""
+    if summary.resume is None or not summary.multi_target or next_id <= MAX_TRACK_ID:
+        return None
     return (f"{request.out_dir / 'tracks.csv'}: its highest track id, {next_id - 1}, leaves "
             f"no --first-id (at most {MAX_TRACK_ID}) for the run the hint below makes: that run "
             "numbers its tracks as this one did; renumber one of the two tracks.csv to join them")
@@ -1308,8 +1312,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         resume=(_resume_options(resolved, tracked, source.info.fps, next_id)
                 if status == STATUS_INTERRUPTED and not source.live else None),
     )
-    if summary.resume is not None and summary.multi_target and next_id > MAX_TRACK_ID:
-        summary.warnings.append(_past_track_ids(request, next_id))
+    past_ids = _past_track_ids(request, summary, next_id)
+    summary.warnings += [past_ids] if past_ids else []
     summary.warnings += tracked.timeline.warnings(request.input, request.gt_path)
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
