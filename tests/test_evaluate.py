@@ -365,11 +365,14 @@ def test_read_mot_malformed_line_names_file_and_line(tmp_path, text, problem):
 @pytest.mark.parametrize(("row", "got"), [
     ("2,-1,10,10,-20,20,0.9", "w -20, h 20"),
     ("2,-1,10,10,20,0,0.9", "w 20, h 0"),
-], ids=["negative-w", "zero-h"])
+    ("2,-1,10,10,-0,20,0.9", "w 0, h 20"),  # (it said "w -0")
+    ("2,-1,10,10,-20.000001,-0.0,0.9", "w -20.000001, h 0"),
+], ids=["negative-w", "zero-h", "minus-zero-w", "minus-zero-h"])
 def test_read_mot_detections_refuses_an_empty_box_naming_file_and_line(tmp_path, row, got):
     """A det.txt row of negative or zero width or height was dropped without a word (a run on
     it exited 0): no detector gives such a box, the file is wrong there. It is refused as
-    other malformed rows are, naming the file and line."""
+    other malformed rows are, naming the file and line, its numbers shown as written (-0 as
+    0, as --init reads it; it said "w -0"; a value a hair past another not rounded to it)."""
     path = write(tmp_path, f"1,-1,10,10,20,20,0.9\n{row}\n", name="det.txt")
     with pytest.raises(InputError) as info:
         read_mot_detections(path)

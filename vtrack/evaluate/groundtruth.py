@@ -15,7 +15,7 @@ from os import PathLike
 from pathlib import Path
 from typing import NamedTuple
 
-from vtrack.errors import ConfigError, InputError, plural
+from vtrack.errors import ConfigError, InputError, number_text, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
@@ -539,9 +539,9 @@ def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, 
     frames: dict[int, list[tuple[Box, float]]] = {}
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h,conf"):
         box = Box(*values[2:6])
-        if not (box.w > 0 and box.h > 0):
+        if not (box.w > 0 and box.h > 0):  # (shown as box_from_parts reads them: -0 as 0)
             raise InputError(f"{path} line {number}: a detection's w and h must be > 0, got "
-                             f"w {box.w:g}, h {box.h:g}")
+                             f"w {number_text(box.w + 0.0)}, h {number_text(box.h + 0.0)}")
         frames.setdefault(frame, []).append((box, values[6]))
     return dict(sorted(frames.items()))
 
