@@ -542,6 +542,19 @@ def test_a_run_without_a_box_names_where_its_sidecar_goes(occlusion_clip,
         "occ.init.txt")
 
 
+def test_a_raw_run_without_a_box_names_no_sidecar_and_no_select(tmp_path: Path) -> None:
+    """`vtrack run clip.raw --raw 64x48 -c s0` (no box) said 'write x,y,w,h into clip.init.txt
+    (vtrack select clip.raw picks it)': a run of raw frames reads no sidecar, and vtrack select
+    refuses raw input. The line names --init and --gt only, and why."""
+    scene = make_scene("smooth", seed=2, width=64, height=48, frames=10, fps=FPS)
+    write_raw(scene, tmp_path / "clip.raw", "bgr24")
+    line = assert_one_line_error(vtrack("run", "clip.raw", "--raw", "64x48", "-c", "s0",
+                                        "-o", "out", cwd=tmp_path))
+    assert line == ("vtrack: error: s0: this tracker needs an initial box: give --init x,y,w,h "
+                    "(or --gt FILE); raw frames have no sidecar file"), line
+    assert not (tmp_path / "out").exists()
+
+
 def test_run_of_a_sequence_of_two_targets_names_their_files_and_a_gt_for_each(
         tmp_path: Path) -> None:
     """`vtrack run Jogging` (OTB: img/, groundtruth_rect.1.txt and groundtruth_rect.2.txt, no

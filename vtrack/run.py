@@ -916,10 +916,11 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
             raise ConfigError(f"{names.start_given(request.start, request.start_s)}: this "
                               f"tracker needs the target's box in frame {start}: give "
                               f"{give_box} or {give_gt}")
-        if not has_sidecar(request.input):
+        if request.raw is not None or not has_sidecar(request.input):  # a run reads none
+            why = ("raw frames have no sidecar file" if request.raw is not None
+                   else f"{request.input} has no sidecar file to hold one")
             raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
-                              f"{give_box} (or {give_gt}); {request.input} has no sidecar "
-                              "file to hold one")
+                              f"{give_box} (or {give_gt}); {why}")
         beside = groundtruth_beside(request.input)
         if beside is None and Path(request.input).is_dir():  # SEQ/img: SEQ's ground truth
             beside = groundtruth_beside(sequence)
