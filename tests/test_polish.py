@@ -76,7 +76,8 @@ def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
     """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
     `vtrack stages meanshif` listed every name and left the reader to find the one meant;
-    the near one is now named at the end (case aside), and a name near none gets no guess."""
+    the near one is now named at the end (case aside), and a name near none gets no guess.
+    `-c fixed` guessed 's2-fixed', though 's0-fixed' is as near: names tied are all named."""
     import vtrack as library
 
     s0 = library.load_config("s0")
@@ -94,6 +95,12 @@ def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None
     with pytest.raises(library.ConfigError) as caught:
         library.load_config("xyz")
     assert "did you mean" not in str(caught.value)
+    # names as near as each other: all of them, not the one a dict's order put first
+    for given, said in (("fixed", "; did you mean one of 's0-fixed', 's2-fixed'?"),
+                        ("s", "; did you mean one of 's0', 's1', 's2', 's3', 's4'?")):
+        with pytest.raises(library.ConfigError) as caught:
+            library.load_config(given)
+        assert str(caught.value).endswith(said), caught.value
     assert one_error_line(vtrack("stages", "meanshif")).endswith(
         "; did you mean 'meanshift'?")
 

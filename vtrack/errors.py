@@ -20,15 +20,36 @@ def plural(count: int, noun: str, nouns: str | None = None) -> str:
     return f"{count} {noun}" if count == 1 else f"{count} {nouns or noun + 's'}"
 
 
-def did_you_mean(given: str, names: Iterable[str]) -> str:
-    """``"; did you mean 'robust'?"`` when ``given`` is a near miss of one of ``names`` (a typo,
-    a letter's case: ``robst``, ``S0``; difflib's closest match, at its default cutoff 0.6, case
-    aside), to end the message that refuses it; ``""`` when none is close."""
+def close_names(given: str, names: Iterable[str]) -> list[str]:
+    """The names ``given`` is a near miss of (a typo, a letter's case: ``robst``, ``S0``):
+    those of ``names`` nearest to it by difflib's ratio, case aside, at difflib's default cutoff
+    0.6; one name when one is nearest, every name tied for nearest otherwise (``fixed``:
+    ``s0-fixed`` and ``s2-fixed``), in the order of ``names``; ``[]`` when none is close."""
     import difflib
 
     folded = {name.casefold(): name for name in names}
-    close = difflib.get_close_matches(given.casefold(), folded, n=1)
-    return f"; did you mean '{folded[close[0]]}'?" if close else ""
+    matcher = difflib.SequenceMatcher()
+    matcher.set_seq2(given.casefold())
+    scores: dict[str, float] = {}
+    for key in folded:
+        matcher.set_seq1(key)
+        scores[key] = matcher.ratio()
+    best = max(scores.values(), default=0.0)
+    return [folded[key] for key, score in scores.items() if score == best >= 0.6]
+
+
+def guess_text(names: list[str]) -> str:
+    """``'run'``, or ``one of 's0-fixed', 's2-fixed'``: what a "did you mean" names."""
+    quoted = ", ".join(f"'{name}'" for name in names)
+    return quoted if len(names) == 1 else f"one of {quoted}"
+
+
+def did_you_mean(given: str, names: Iterable[str]) -> str:
+    """``"; did you mean 'robust'?"`` when ``given`` is a near miss of one of ``names``
+    (:func:`close_names`), ``"; did you mean one of 's0-fixed', 's2-fixed'?"`` when it is as
+    near to several, to end the message that refuses it; ``""`` when none is close."""
+    close = close_names(given, names)
+    return f"; did you mean {guess_text(close)}?" if close else ""
 
 
 def number_text(value: float) -> str:
