@@ -73,6 +73,31 @@ def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
     assert not list(tmp_path.iterdir())
 
 
+def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
+        tmp_path: Path) -> None:
+    """`vtrack scene.mp4` (a file there) said "Did you mean 'scene'?", `vtrack runs/` "Did you
+    mean 'run'?" and `vtrack scene clip.mp4 out.mp4` "did you mean 'clip_ramp'?": a file is
+    no typo of a name. `vtrack RUN` got no guess (click compares case); `vtrack configs` ended
+    in two parentheses in a row. A file or folder now gets the vtrack run that tracks it."""
+    (tmp_path / "scene.mp4").write_bytes(b"")
+    (tmp_path / "my footage").mkdir()
+    for word, said in (
+            ("scene.mp4", "No such command 'scene.mp4'; to track it: vtrack run scene.mp4"),
+            ("runs/", "No such command 'runs/'; to track it: vtrack run runs/"),
+            ("my footage", "No such command 'my footage'; to track it: vtrack run 'my footage'"),
+            ("RUN", "No such command 'RUN'. Did you mean 'run'?"),
+            ("configs", "No such command 'configs'; vtrack stages lists the shipped configs "
+                        "and their stages")):
+        assert one_error_line(vtrack(word, cwd=tmp_path)) == (
+            f"vtrack: error: {said} (see 'python -m vtrack --help')")
+    assert one_error_line(vtrack("vectors", "CHECK", "vec", "dump", cwd=tmp_path)).startswith(
+        "vtrack: error: No such command 'CHECK'. Did you mean 'check'? (see ")
+    line = one_error_line(vtrack("scene", "clip.mp4", "out.mp4", cwd=tmp_path))
+    assert line.startswith("vtrack: error: unknown scenario 'clip.mp4'; choose one of: ")
+    assert "did you mean" not in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["my footage", "scene.mp4"]
+
+
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
     """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
     `vtrack stages meanshif` listed every name and left the reader to find the one meant;

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import signal
 import threading
 import unicodedata
@@ -50,6 +51,13 @@ def did_you_mean(given: str, names: Iterable[str]) -> str:
     near to several, to end the message that refuses it; ``""`` when none is close."""
     close = close_names(given, names)
     return f"; did you mean {guess_text(close)}?" if close else ""
+
+
+def names_a_path(word: str) -> bool:
+    """Whether ``word``, refused as a name (a command, a scenario), is rather a file, folder or
+    URL: one that exists, or holds ``.``, ``/``, ``:`` or ``\\``, which no such name does. No
+    near name is guessed for it (``scene.mp4`` is not a typo of ``scene``)."""
+    return any(mark in word for mark in "./:\\") or os.path.lexists(word)
 
 
 def number_text(value: float) -> str:

@@ -21,7 +21,7 @@ from typing import Any
 import click
 
 from vtrack import __version__
-from vtrack.cli._messages import error_line
+from vtrack.cli._messages import error_line, no_such_command
 from vtrack.errors import VtrackError
 
 
@@ -40,17 +40,15 @@ class _Group(click.Group):
 
     def resolve_command(self, ctx: click.Context,
                         args: list[str]) -> tuple[str | None, click.Command | None, list[str]]:
-        """As click's, but a mistyped command is offered the near one (``vtrack rnu``: "Did you
-        mean 'run'?"; click looks only in the commands a group holds, and this one loads
-        them on demand), and ``vtrack configs`` is told where the configs are listed."""
+        """As click's, but a mistyped command is offered the near one, case aside (``vtrack
+        rnu``, ``vtrack RUN``: "Did you mean 'run'?"; click looks only in the commands a group
+        holds, and this one loads them on demand), a file or folder given as a command is told
+        how to track it (``vtrack clip.mp4``: "to track it: vtrack run clip.mp4", no guess),
+        and ``vtrack configs`` is told where the configs are listed."""
         try:
             return super().resolve_command(ctx, args)
         except click.exceptions.NoSuchCommand as exc:
-            near = click.exceptions.NoSuchCommand(exc.command_name, ctx=ctx,
-                                                  possibilities=self.list_commands(ctx))
-            if not near.possibilities and exc.command_name.casefold() in ("config", "configs"):
-                near.message += " (vtrack stages lists the shipped configs and their stages)"
-            raise near from None
+            raise no_such_command(ctx, exc.command_name, self.list_commands(ctx)) from None
 
     #: Set when the group runs as the process's own program (the ``vtrack`` command, ``python
     #: -m vtrack``), not called by click's test runner: a command may then leave signal

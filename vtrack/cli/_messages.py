@@ -8,16 +8,37 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import shlex
 import sys
 
 import click
 
-from vtrack.errors import printable
+from vtrack.errors import close_names, guess_text, names_a_path, printable
 
 
 def error_line(message: str) -> str:
     """``vtrack: error: MESSAGE`` as one line."""
     return f"vtrack: error: {printable(message)}"
+
+
+def no_such_command(ctx: click.Context, word: str,
+                    commands: list[str]) -> click.exceptions.NoSuchCommand:
+    """The usage error for ``word`` given where ``ctx``'s group takes one of ``commands``:
+    "No such command 'rnu'. Did you mean 'run'?" for a near miss (case aside: ``RUN``);
+    "No such command 'clip.mp4'; to track it: vtrack run clip.mp4" for a file, folder or URL
+    (:func:`~vtrack.errors.names_a_path`: no guess), "No such command 'configs'; vtrack stages
+    lists the shipped configs and their stages" for the word a new user types for those; the
+    bare "No such command 'x'." otherwise."""
+    message = f"No such command {word!r}"
+    if names_a_path(word):
+        message += f"; to track it: vtrack run {shlex.quote(word)}"
+    elif close := close_names(word, commands):
+        message += f". Did you mean {guess_text(close)}?"
+    elif word.casefold() in ("config", "configs"):
+        message += "; vtrack stages lists the shipped configs and their stages"
+    else:
+        message += "."
+    return click.exceptions.NoSuchCommand(word, message=message, ctx=ctx)
 
 
 def warning_line(message: str) -> str:

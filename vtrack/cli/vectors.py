@@ -8,16 +8,16 @@ given as ``./check``.
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import warn
+from vtrack.cli._messages import no_such_command, warn
 from vtrack.cli._options import NumberWord
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 from vtrack.cli._signals import stopping_as_interrupted
+from vtrack.errors import close_names, names_a_path
 
 
 class _DefaultGroup(click.Group):
@@ -46,13 +46,10 @@ class _DefaultGroup(click.Group):
 
 def _refuse_a_mistyped_command(ctx: click.Context, word: str, commands: list[str]) -> None:
     """Refuse ``word``, given where ``vtrack vectors`` takes INPUT or a command, when it is a
-    near miss of a command (``chek``) and names no file, folder or URL: read as INPUT it was
-    refused for a missing ``--init``, which said nothing of the typo."""
-    if os.path.lexists(word) or any(mark in word for mark in "./:\\"):
-        return
-    mistyped = click.exceptions.NoSuchCommand(word, possibilities=commands, ctx=ctx)
-    if mistyped.possibilities:
-        raise mistyped
+    near miss of a command (``chek``, ``CHECK``) and names no file, folder or URL: read as
+    INPUT it was refused for a missing ``--init``, which said nothing of the typo."""
+    if not names_a_path(word) and close_names(word, commands):
+        raise no_such_command(ctx, word, commands)
 
 
 class _NamedAsTheGroup(click.Context):

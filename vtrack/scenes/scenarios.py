@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, did_you_mean, number_text, plural
+from vtrack.errors import ConfigError, did_you_mean, names_a_path, number_text, plural
 from vtrack.geometry import Window
 from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.scenes.render import (
@@ -546,8 +546,9 @@ def make_scene(
     """
     scenario = SCENARIOS.get(name)
     if scenario is None:
+        near = "" if names_a_path(str(name)) else did_you_mean(str(name), SCENARIOS)
         raise ConfigError(f"unknown scenario {name!r}; choose one of: {', '.join(SCENARIOS)}"
-                          f"{did_you_mean(str(name), SCENARIOS)}")
+                          f"{near}")
     spec = SceneSpec(
         name=name,
         seed=seed,
