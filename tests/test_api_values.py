@@ -8,6 +8,7 @@ import fcntl
 import json
 import os
 import pickle
+import shlex
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -376,7 +377,7 @@ def test_library_messages_name_start_gt_out_stream_and_overwrite_as_the_library_
                                       "last frame is frame 9, at 0.3 s)"),
         (replace(request, init_box=None), "s0: this tracker needs an initial box: give "
          "gt_path=FILE, init_box=(x, y, w, h) or write x,y,w,h into "
-         f"{tmp_path / 'clip.init.txt'} (vtrack select {clip} picks it)"),
+         f"{tmp_path / 'clip.init.txt'} (vtrack select {shlex.quote(str(clip))} picks it)"),
         (replace(request, stream=str(clip)), f"stream {clip}: is the input of this run "
                                              f"({clip}); write the results elsewhere"),
         (replace(request, out_dir=report), f"{report}: is a vtrack report's folder "
