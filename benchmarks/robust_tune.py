@@ -35,7 +35,7 @@ import math
 import multiprocessing
 import statistics
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -196,11 +196,17 @@ def combined(results: list[Result]) -> Result:
                   mean("us_per_frame"))
 
 
+def mean_text(values: Iterable[float | None]) -> str:
+    """The mean of ``values`` that are not None (the seeds that ran, the sequences of a part)
+    to three places; ``-`` when there is none."""
+    scored = [v for v in values if v is not None]
+    return f"{statistics.mean(scored):.3f}" if scored else "-"
+
+
 def split_means(values: list[float], names: list[str]) -> tuple[str, str]:
     """Mean of ``values`` over the tune sequences and over the check sequences (``-``: none)."""
-    parts = ([v for v, n in zip(values, names, strict=True) if n not in CHECK_SEQUENCES],
-             [v for v, n in zip(values, names, strict=True) if n in CHECK_SEQUENCES])
-    return tuple(f"{statistics.mean(p):.3f}" if p else "-" for p in parts)  # type: ignore[return-value]
+    return (mean_text(v for v, n in zip(values, names, strict=True) if n not in CHECK_SEQUENCES),
+            mean_text(v for v, n in zip(values, names, strict=True) if n in CHECK_SEQUENCES))
 
 
 def share(part: int, whole: int) -> str:
@@ -291,11 +297,9 @@ def hard_means(overrides: list[str], seeds: range, frames: int = 120,
 
 def seed_cells(values: list[float | None]) -> str:
     """A table row's per-seed scores ('-' for a seed left out), their mean and their least."""
-    scored = [v for v in values if v is not None]
     cells = " ".join("-" if v is None else f"{v:.2f}" for v in values)
-    if not scored:
-        return f"{cells} | - | - |"
-    return f"{cells} | {statistics.mean(scored):.3f} | {min(scored):.2f} |"
+    least = min((v for v in values if v is not None), default=None)
+    return f"{cells} | {mean_text(values)} | {'-' if least is None else f'{least:.2f}'} |"
 
 
 def hard_size(text: str | None) -> tuple[int, int] | None:
@@ -303,15 +307,26 @@ def hard_size(text: str | None) -> tuple[int, int] | None:
     if text is None:
         return None
     width, _, height = text.lower().partition("x")
-    if not (width.strip().isdigit() and height.strip().isdigit()):
+    if not (width.strip().isdecimal() and height.strip().isdecimal()):  # what int() reads
         sys.exit(f"robust_tune.py: --size {text!r}: expected WIDTHxHEIGHT, e.g. 320x240")
     return int(width), int(height)
+
+
+def can_be_made(names: Iterable[str], seed: int, frames: int,
+                size: tuple[int, int] | None) -> None:
+    """Make one scene of each of ``names`` (at ``seed``, ``frames``, ``size``), so that a
+    ``--frames`` or ``--size`` the scenes cannot be made at raises VtrackError before a table's
+    header is printed, not after it."""
+    width, height = size or (None, None)
+    for name in dict.fromkeys(names):
+        make_scene(name, seed=seed, frames=frames, width=width, height=height)
 
 
 def hard(overrides: list[str], seeds: range, frames: int,
          size: tuple[int, int] | None) -> None:
     """Mean IoU of robust (with ``overrides``) on each randomised hard scene, per seed (the
     parameters are drawn per seed; the tests use seeds 0-2 at 120 frames, 320x240)."""
+    can_be_made(HARD, seeds.start, frames, size)
     where = f"{size[0]}x{size[1]}" if size else "320x240"
     print(f"| scene ({where}, {frames} frames) | seeds {seeds.start}-{seeds.stop - 1} | mean "
           "| min |")
@@ -334,6 +349,7 @@ def drift(overrides: list[str], seeds: range, frames: int) -> None:
     of each frame's sub-pixel motion is short of it trails the target more and more (the
     static background in its region matches best where it was)."""
     config = load_config("robust").with_overrides(overrides)
+    can_be_made(("smooth",), seeds.start, frames, (320, 240))
     print(f"| seed (smooth, 320x240, {frames} frames) | mean IoU per 1/{DRIFT_PARTS} of the "
           "clip | mean | last frame |")
     print("|---|---|---:|---:|")
@@ -383,6 +399,7 @@ def beyond(overrides: list[str], seeds: range, frames: int,
            draws: tuple[tuple[str, str, tuple[float, float]], ...] = BEYOND) -> None:
     """Mean IoU of robust (with ``overrides``) on each hard scene with one parameter drawn
     beyond its declared range (``draws``: :data:`BEYOND` or :data:`LOOKS`), per seed."""
+    can_be_made((name for name, _, _ in draws), seeds.start, frames, None)
     print(f"| scene (320x240, {frames} frames) | parameter: declared -> drawn | seeds "
           f"{seeds.start}-{seeds.stop - 1} | mean | min |")
     print("|---|---|---|---:|---:|")
@@ -533,13 +550,25 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, start
             slab = hard_means(overrides + extra, SLOW_SLAB_SEEDS, SLOW_SLAB_FRAMES,
                               names=("slab",))["slab"]
             kinds = hard_means(overrides + extra, range(HARD_SEEDS))
-            every = [v for vs in kinds.values() for v in vs if v is not None]
-            scenes_cells = (f" {statistics.mean(v for v in slab if v is not None):.3f} | "
-                            f"{statistics.mean(every):.3f} |")
+            every = [v for vs in kinds.values() for v in vs]
+            scenes_cells = f" {mean_text(slab)} | {mean_text(every)} |"
         print(f"| {key} | {what} | {' '.join(f'`{o}`' for o in overrides) or '-'} | {mean:.3f} "
               f"| {mean - base:+.3f} | {tune} | {check} | {false_tracking} | {flagged} |"
               + scenes_cells)
         sys.stdout.flush()
+
+
+def whole_number(least: int) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``least`` on; else argparse's one-line error."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r}: not a whole number") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"{text!r}: give {least} or more")
+        return value
+    return parse
 
 
 def main() -> None:
@@ -560,15 +589,15 @@ def main() -> None:
                         help="the hard scenes with one parameter beyond its declared range")
     parser.add_argument("--looks", action="store_true",
                         help="slab with one of its looks beyond its declared range")
-    parser.add_argument("--seeds", type=int, default=9,
+    parser.add_argument("--seeds", type=whole_number(1), default=9,
                         help="--hard, --beyond, --looks, --drift: how many seeds (default 9)")
-    parser.add_argument("--first-seed", type=int, default=0,
+    parser.add_argument("--first-seed", type=whole_number(0), default=0,
                         help="--hard: the first seed (default 0; the tests use 0-5, the tables "
                              "0-8: a higher one scores parameters never looked at)")
     parser.add_argument("--drift", action="store_true",
                         help="mean IoU on a slowly moving target over a long clip (--seeds, "
                              f"--frames: default {DRIFT_FRAMES})")
-    parser.add_argument("--frames", type=int, default=None,
+    parser.add_argument("--frames", type=whole_number(1), default=None,
                         help="--hard: frames per scene (default 120)")
     parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
     parser.add_argument("--variants", action="store_true",
@@ -589,31 +618,26 @@ def main() -> None:
     args = parser.parse_args()
     if not 1 <= args.jobs <= 64:
         parser.error(f"--jobs {args.jobs}: give 1 to 64 worker processes")
-    if args.frames is not None and args.frames < 1:
-        parser.error(f"--frames {args.frames}: give 1 or more")
     if args.speed:
         speed(args.overrides)
         return
     if args.scenes:
         scenes()
         return
-    if args.drift:
-        drift(args.overrides, range(args.first_seed, args.first_seed + args.seeds),
-              args.frames or DRIFT_FRAMES)
-        return
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
     frames = args.frames or 120
-    if args.beyond or args.looks:
-        beyond(args.overrides, range(args.first_seed, args.first_seed + args.seeds),
-               frames, LOOKS if args.looks else BEYOND)
-        return
-    if args.hard:
-        size = hard_size(args.size)
-        seeds = range(args.first_seed, args.first_seed + args.seeds)
-        try:
-            hard(args.overrides, seeds, frames, size)
-        except VtrackError as exc:  # a scene that cannot be made at that --size or --frames
-            sys.exit(f"robust_tune.py: {exc}")
-        return
+    try:  # a scene that cannot be made at that --size or --frames, a --set robust refuses
+        if args.drift:
+            drift(args.overrides, seeds, args.frames or DRIFT_FRAMES)
+            return
+        if args.beyond or args.looks:
+            beyond(args.overrides, seeds, frames, LOOKS if args.looks else BEYOND)
+            return
+        if args.hard:
+            hard(args.overrides, seeds, frames, hard_size(args.size))
+            return
+    except VtrackError as exc:
+        sys.exit(f"robust_tune.py: {exc}")
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if args.split != "all":
         check = args.split == "check"

@@ -64,9 +64,40 @@ def test_robust_tune_hard_leaves_out_a_seed_whose_target_starts_too_small() -> N
     assert "slab seed 812: left out:" in done.stderr and "4x4" in done.stderr, done.stderr
 
 
-@pytest.mark.parametrize("size", ["big", "10x10"])
+@pytest.mark.parametrize("size", ["big", "10x10", "\u00b3x2"])
 def test_robust_tune_hard_refuses_a_bad_size_in_one_line(size: str) -> None:
     done = run_script("robust_tune.py", "--hard", "--size", size, "--seeds", "1")
     assert done.returncode != 0
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "size" in lines[0] and size in lines[0], done.stderr
+
+
+@pytest.mark.parametrize("args", [("--hard", "--frames", "30"), ("--hard", "--size", "10x10"),
+                                  ("--beyond", "--frames", "1"), ("--looks", "--frames", "1"),
+                                  ("--drift", "--frames", "5")])
+def test_robust_tune_refuses_scenes_it_cannot_make_before_any_table(args: tuple[str, ...]
+                                                                     ) -> None:
+    """`--hard --frames 30` (slab needs 60) printed the table's header, then the error;
+    `--beyond --frames 1`, `--looks --frames 1` and `--drift --frames 5` ended in a traceback.
+    Each is one line naming the setting and a non-zero exit, with nothing on stdout."""
+    done = run_script("robust_tune.py", *args, "--seeds", "1")
+    assert done.returncode != 0
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("robust_tune.py: scene "), done.stderr
+    assert args[2] in lines[0], done.stderr
+    assert done.stdout == ""
+
+
+@pytest.mark.parametrize("option, value", [("--seeds", "0"), ("--first-seed", "-1"),
+                                           ("--frames", "0")])
+def test_robust_tune_refuses_a_seed_count_or_first_seed_out_of_range(option: str,
+                                                                     value: str) -> None:
+    """`--hard --seeds 0` ended in KeyError 'slab' (no seed, no row); `--first-seed -1` in a
+    traceback from the scene generator: argparse's usage error naming the option now."""
+    done = run_script("robust_tune.py", "--hard", option, value)
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"robust_tune.py: error: argument {option}: '{value}': give "
+        f"{1 if option != '--first-seed' else 0} or more"), done.stderr
+    assert done.stdout == ""
