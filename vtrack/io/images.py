@@ -262,9 +262,11 @@ class ImageFolderSource(Source):
                 duration_s=(self._places[-1] + 1) / fps,
                 codec=self._files[0].suffix.lower().lstrip("."),
                 pix_fmt="gray" if self._first.ndim == 2 else "bgr24",
-                image_bytes=total_size(self._files),
             )
         )
+
+    def image_bytes(self) -> int | None:
+        return total_size(self._files)
 
     @property
     def warnings(self) -> list[str]:

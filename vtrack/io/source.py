@@ -56,9 +56,6 @@ class InputInfo:
     #: timestamps depart from it, with the exact count (and False here) once it read the
     #: input to its end.
     frame_count_estimated: bool = False
-    #: An image folder's: the total size in bytes of its images when it was opened (what
-    #: tells two sequences of one name, frame count and frame size apart; None for others).
-    image_bytes: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -109,6 +106,13 @@ class Source(Closing, ABC):
         """``frame``, handed on, was not taken after all (it ended a ``--frames`` duration):
         the counts and warnings of what the run read (:attr:`frames_skipped`,
         :attr:`warnings`) stop at the frame before it. Nothing to undo here."""
+
+    def image_bytes(self) -> int | None:
+        """An image sequence's: the total size in bytes of its images, looked at when asked
+        (``run.json`` records it once, at the run's end; opening does not stat every image);
+        what tells two sequences of one name, frame count and frame size apart. None for
+        other inputs, or when an image cannot be looked at (gone)."""
+        return None
 
     @property
     def frames_skipped(self) -> int:
