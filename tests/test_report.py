@@ -687,16 +687,25 @@ def test_a_sequence_run_from_inside_its_img_folder_is_the_same_input(
     assert _table_labels(markdown) == {("seq", "s0"), ("seq", "camshift")}
 
 
+@pytest.mark.parametrize("ext", ["jpg", "bmp"])
 def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ext: str) -> None:
     """d1/Car/img and d2/Car/img, other pixels but one name, frame count and frame size, were
     one input "Car" (their runs two configs, "s0 (a)" and "s0 (b)"): the key left sizes out so
-    that runs of SEQ and SEQ/img join. run.json records the images' total size now, which tells
-    them apart, while d2/Car and d2/Car/img stay one input; records without it join as before."""
+    that runs of SEQ and SEQ/img join. The images' total size told JPEG sequences apart but not
+    uncompressed ones (BMP: every image of both of one size); run.json records a fingerprint
+    of the images now (their total size, the first and last images' bytes), which tells both
+    apart, while d2/Car and d2/Car/img stay one input; records without it join as before."""
     from vtrack.scenes import make_scene, write_image_sequence
 
     for dataset, scenario in (("d1", "smooth"), ("d2", "jump")):
-        write_image_sequence(make_scene(scenario, 0, 96, 72, 10, 30), tmp_path / dataset / "Car")
+        car = write_image_sequence(make_scene(scenario, 0, 96, 72, 10, 30), tmp_path / dataset
+                                   / "Car")
+        for jpg in sorted((car / "img").glob("*.jpg")) if ext != "jpg" else []:
+            assert cv2.imwrite(str(jpg.with_suffix(f".{ext}")), cv2.imread(str(jpg)))
+            jpg.unlink()
+    sizes = {p.stat().st_size for p in tmp_path.glob(f"d?/Car/img/*.{ext}")}
+    assert (len(sizes) == 1) if ext == "bmp" else (len(sizes) > 1), sizes  # bmp: one size
     monkeypatch.chdir(tmp_path)
     for given, config, out in (("d1/Car/img", "s0", "a"), ("d2/Car/img", "s0", "b"),
                                ("d2/Car", "camshift", "c")):
@@ -710,10 +719,10 @@ def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
     inputs = {config: {i for i, c in labels if c == config} for config in ("s0", "camshift")}
     assert len(inputs["s0"]) == 2 and len(inputs["camshift"]) == 1, labels
     assert inputs["camshift"] < inputs["s0"], labels  # d2/Car is d2/Car/img
-    for out in "abc":  # records from before image_bytes
+    for out in "abc":  # records from before image_identity
         record = tmp_path / "runs" / out / "run.json"
         data = json.loads(record.read_text())
-        del data["input"]["image_bytes"]
+        del data["input"]["image_identity"]
         record.write_text(json.dumps(data))
     assert vtrack("report", "runs", "--out", "older").exit_code == 0
     assert _table_labels((tmp_path / "older" / "summary.md").read_text()) == {

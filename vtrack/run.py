@@ -1375,7 +1375,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "error": error,
         "warnings": summary.warnings,
         "frames": frames,
-        "input": {**source.info.to_dict(), "image_bytes": source.image_bytes()},
+        "input": {**source.info.to_dict(), "image_identity": source.image_identity()},
         "request": request.to_dict(),
         "start_frame": resolved.start,
         # the last frame whose results were written (None: none was)

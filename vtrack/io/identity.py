@@ -2,16 +2,17 @@
 
 ``run.json`` records the identity of its input and ground truth (:func:`file_identity`: size
 and modification time), the size of each output it verified (:func:`sizes`) and, for an image
-sequence, the total size of its images (:func:`total_size`: what tells two sequences of one
-name apart in a report). ``vtrack batch`` reuses a result only when both still match
-(:func:`outputs_intact`), and ``vtrack report`` refuses a ``track.csv`` whose size is not the
-recorded one.
+sequence, a fingerprint of its images (:func:`images_identity`: what tells two sequences of one
+name apart in a report). ``vtrack batch`` reuses a result only when its input, ground truth and
+outputs still match (:func:`outputs_intact`), and ``vtrack report`` refuses a ``track.csv``
+whose size is not the recorded one.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -45,13 +46,22 @@ def _folder_identity(folder: Path) -> dict[str, int]:
     return {"files": files, "size": size, "mtime_ns": latest}
 
 
-def total_size(paths: Iterable[Path]) -> int | None:
-    """The total size in bytes of the files ``paths`` (an image sequence's images, whose
-    folder holds other files too); None when one cannot be looked at (gone)."""
+def images_identity(paths: Sequence[Path]) -> str | None:
+    """A fingerprint of an image sequence's images ``paths`` (in frame order, at least one):
+    a hash of their total size and of the first and last images' bytes, which tells two
+    sequences of one name, frame count and frame size apart even when every image of both has
+    one size (uncompressed BMP, PPM, TIFF). None when an image cannot be looked at or read
+    (gone)."""
+    digest = hashlib.blake2b(digest_size=16)
     try:
-        return sum(path.stat().st_size for path in paths)
+        digest.update(str(sum(path.stat().st_size for path in paths)).encode())
+        for path in (paths[0], paths[-1]) if len(paths) > 1 else paths[:1]:
+            with path.open("rb") as file:
+                while chunk := file.read(1 << 20):
+                    digest.update(chunk)
     except OSError:
         return None
+    return digest.hexdigest()
 
 
 def sizes(folder: Path, names: Iterable[str]) -> dict[str, int]:

@@ -35,7 +35,7 @@ from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason
-from vtrack.io.identity import total_size
+from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
@@ -265,8 +265,8 @@ class ImageFolderSource(Source):
             )
         )
 
-    def image_bytes(self) -> int | None:
-        return total_size(self._files)
+    def image_identity(self) -> str | None:
+        return images_identity(self._files)
 
     @property
     def warnings(self) -> list[str]:

@@ -107,11 +107,12 @@ class Source(Closing, ABC):
         the counts and warnings of what the run read (:attr:`frames_skipped`,
         :attr:`warnings`) stop at the frame before it. Nothing to undo here."""
 
-    def image_bytes(self) -> int | None:
-        """An image sequence's: the total size in bytes of its images, looked at when asked
-        (``run.json`` records it once, at the run's end; opening does not stat every image);
-        what tells two sequences of one name, frame count and frame size apart. None for
-        other inputs, or when an image cannot be looked at (gone)."""
+    def image_identity(self) -> str | None:
+        """An image sequence's: a fingerprint of its images
+        (:func:`~vtrack.io.identity.images_identity`), taken when asked (``run.json`` records
+        it once, at the run's end; opening does not look at every image); what tells two
+        sequences of one name, frame count and frame size apart. None for other inputs, or
+        when an image cannot be read (gone)."""
         return None
 
     @property

@@ -77,15 +77,15 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
 
 
 def _same_inputs(runs: list[RunResult]) -> dict[str, list[RunResult]]:
-    """``runs`` by the input each read: its ``input_key``, an image sequence's also the size
-    of its images (two datasets' ``Car/img`` of one frame count and size are two inputs). A
-    run whose record has no such size (an older vtrack's) joins the one input of its key that
-    has, when there is only one."""
-    groups = _group(runs, lambda r: f"{r.input_key} {r.image_bytes}")
+    """``runs`` by the input each read: its ``input_key``, an image sequence's also the
+    fingerprint of its images (two datasets' ``Car/img`` of one frame count and size are two
+    inputs). A run whose record has no fingerprint (an older vtrack's) joins the one input of
+    its key that has one, when there is only one."""
+    groups = _group(runs, lambda r: f"{r.input_key} {r.image_identity}")
     for key, same in list(groups.items()):
-        if same[0].image_bytes is None:
+        if same[0].image_identity is None:
             known = [k for k, g in groups.items()
-                     if g[0].input_key == same[0].input_key and g[0].image_bytes is not None]
+                     if g[0].input_key == same[0].input_key and g[0].image_identity is not None]
             if len(known) == 1:
                 groups[known[0]] += groups.pop(key)
     return groups

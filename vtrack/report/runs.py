@@ -154,10 +154,11 @@ class RunResult:
     truth: list[Box | None] | None = None
     #: What tells inputs of one name apart (:func:`_input_key`).
     input_key: str = ""
-    #: An image sequence's: the total size of its images as the run opened them (None: not a
-    #: sequence, or a record from before vtrack recorded it), which tells two sequences of
-    #: one key apart (:func:`vtrack.report.build._distinct_inputs`).
-    image_bytes: int | None = None
+    #: An image sequence's: the fingerprint of its images the run recorded
+    #: (:func:`vtrack.io.identity.images_identity`; None: not a sequence, or a record from
+    #: before vtrack recorded it), which tells two sequences of one key apart
+    #: (:func:`vtrack.report.build._same_inputs`).
+    image_identity: str | None = None
     #: The target of an OTB sequence of several the run tracked (None: the input's only one).
     target: int | None = None
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
@@ -538,7 +539,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         error=record.get("error"),
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
         input_key=_input_key(record),
-        image_bytes=_int_or_none((record.get("input") or {}).get("image_bytes")),
+        image_identity=_image_identity(record),
         target=_target(record),
         config_key=json.dumps((record.get("config") or {}).get("stages") or "",
                               sort_keys=True),
@@ -562,6 +563,13 @@ def _mot_metrics(record: dict[str, Any]) -> dict[str, int | float | None]:
         if not finite:
             raise ValueError(f"metrics.{key} is not a finite number")
     return metrics
+
+
+def _image_identity(record: dict[str, Any]) -> str | None:
+    """The ``input.image_identity`` of ``record`` when it is text, else None (none recorded:
+    an older vtrack's, or not an image sequence)."""
+    identity = (record.get("input") or {}).get("image_identity")
+    return identity if isinstance(identity, str) else None
 
 
 def _text_or_none(value: object) -> str | None:
