@@ -687,15 +687,10 @@ def test_a_sequence_run_from_inside_its_img_folder_is_the_same_input(
     assert _table_labels(markdown) == {("seq", "s0"), ("seq", "camshift")}
 
 
-@pytest.mark.parametrize("ext", ["jpg", "bmp"])
-def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ext: str) -> None:
-    """d1/Car/img and d2/Car/img, other pixels but one name, frame count and frame size, were
-    one input "Car" (their runs two configs, "s0 (a)" and "s0 (b)"): the key left sizes out so
-    that runs of SEQ and SEQ/img join. The images' total size told JPEG sequences apart but not
-    uncompressed ones (BMP: every image of both of one size); run.json records a fingerprint
-    of the images now (their total size, the first and last images' bytes), which tells both
-    apart, while d2/Car and d2/Car/img stay one input; records without it join as before."""
+def _two_datasets_runs(tmp_path: Path, ext: str) -> None:
+    """d1/Car and d2/Car, two sequences of ``ext`` images (other pixels, one name, frame count
+    and frame size), and from ``tmp_path`` (the working folder) runs/a of d1/Car/img (s0),
+    runs/b of d2/Car/img (s0) and runs/c of d2/Car (camshift)."""
     from vtrack.scenes import make_scene, write_image_sequence
 
     for dataset, scenario in (("d1", "smooth"), ("d2", "jump")):
@@ -706,12 +701,31 @@ def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
             jpg.unlink()
     sizes = {p.stat().st_size for p in tmp_path.glob(f"d?/Car/img/*.{ext}")}
     assert (len(sizes) == 1) if ext == "bmp" else (len(sizes) > 1), sizes  # bmp: one size
-    monkeypatch.chdir(tmp_path)
     for given, config, out in (("d1/Car/img", "s0", "a"), ("d2/Car/img", "s0", "b"),
                                ("d2/Car", "camshift", "c")):
         gt = f"{given.removesuffix('/img')}/groundtruth_rect.txt"
         assert vtrack("run", given, "--gt", gt, "-c", config, "--no-video", "--quiet",
                       "--out", f"runs/{out}").exit_code == 0
+
+
+def _as_older(record: Path) -> None:
+    """``record`` (a run.json) as a vtrack before ``input.image_identity`` wrote it."""
+    data = json.loads(record.read_text())
+    del data["input"]["image_identity"]
+    record.write_text(json.dumps(data))
+
+
+@pytest.mark.parametrize("ext", ["jpg", "bmp"])
+def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ext: str) -> None:
+    """d1/Car/img and d2/Car/img, other pixels but one name, frame count and frame size, were
+    one input "Car" (their runs two configs, "s0 (a)" and "s0 (b)"): the key left sizes out so
+    that runs of SEQ and SEQ/img join. The images' total size told JPEG sequences apart but not
+    uncompressed ones (BMP: every image of both of one size); run.json records a fingerprint
+    of the images now (their total size, the first and last images' bytes), which tells both
+    apart, while d2/Car and d2/Car/img stay one input; records without it join as before."""
+    monkeypatch.chdir(tmp_path)
+    _two_datasets_runs(tmp_path, ext)
     assert vtrack("report", "runs", "--out", "report").exit_code == 0
     markdown = (tmp_path / "report" / "summary.md").read_text()
     assert "3 runs of 2 inputs with 2 configurations;" in markdown, markdown
@@ -720,13 +734,28 @@ def test_two_datasets_sequences_of_one_name_count_and_size_are_two_inputs(
     assert len(inputs["s0"]) == 2 and len(inputs["camshift"]) == 1, labels
     assert inputs["camshift"] < inputs["s0"], labels  # d2/Car is d2/Car/img
     for out in "abc":  # records from before image_identity
-        record = tmp_path / "runs" / out / "run.json"
-        data = json.loads(record.read_text())
-        del data["input"]["image_identity"]
-        record.write_text(json.dumps(data))
+        _as_older(tmp_path / "runs" / out / "run.json")
     assert vtrack("report", "runs", "--out", "older").exit_code == 0
     assert _table_labels((tmp_path / "older" / "summary.md").read_text()) == {
         ("Car", "s0 (a)"), ("Car", "s0 (b)"), ("Car", "camshift")}
+
+
+def test_an_older_record_joins_the_one_input_of_its_key_that_has_a_fingerprint(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run.json without input.image_identity (an older vtrack's) beside runs that have one:
+    it joins the one input of its name, frame count and frame size that has one (d2/Car's
+    camshift run beside d2/Car/img's s0 run: one input "Car"), and stays apart when two such
+    inputs could be its (d1's and d2's), rather than being averaged with the wrong one."""
+    monkeypatch.chdir(tmp_path)
+    _two_datasets_runs(tmp_path, "jpg")
+    _as_older(tmp_path / "runs" / "c" / "run.json")
+    assert vtrack("report", "runs/b", "runs/c", "--out", "joined").exit_code == 0
+    markdown = (tmp_path / "joined" / "summary.md").read_text()
+    assert "2 runs of 1 input with 2 configurations;" in markdown, markdown
+    assert _table_labels(markdown) == {("Car", "s0"), ("Car", "camshift")}
+    assert vtrack("report", "runs", "--out", "apart").exit_code == 0
+    markdown = (tmp_path / "apart" / "summary.md").read_text()
+    assert "3 runs of 3 inputs with 2 configurations;" in markdown, markdown
 
 
 def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
