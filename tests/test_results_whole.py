@@ -229,3 +229,17 @@ def test_a_run_json_link_in_a_loop_is_left_out_with_a_warning(run_dir: Path,
     assert code != 0 and stderr == (
         f"vtrack: error: {results / 'self' / 'run.json'}: no run to report; left out: "
         f"{results / 'self' / 'run.json'}: cannot read run record ({os.strerror(errno.ELOOP)})\n")
+
+
+def test_a_link_to_nothing_or_in_a_loop_given_as_results_is_no_such_folder(
+        tmp_path: Path) -> None:
+    """`vtrack report dangling` (a symbolic link to nothing) or a link in a loop said
+    "not a results folder or run.json", as for a file that is there: it is not there."""
+    (tmp_path / "dangling").symlink_to("nowhere")
+    (tmp_path / "loop").symlink_to("loop")
+    for name, note in (("dangling", " (a symbolic link to nothing)"),
+                       ("loop", " (a symbolic link in a loop)"), ("nothing", "")):
+        code, stderr = report(tmp_path / name, tmp_path / "rep")
+        assert code != 0 and stderr == (
+            f"vtrack: error: {tmp_path / name}: no such file or folder{note}\n"), stderr
+    assert not (tmp_path / "rep").exists()

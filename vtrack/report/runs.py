@@ -21,6 +21,7 @@ nowhere else.
 from __future__ import annotations
 
 import csv
+import errno
 import json
 import math
 import os
@@ -678,16 +679,29 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
     """
     found: dict[Path, None] = {}
     for path in paths:
-        if not os.path.lexists(path):
-            raise InputError(f"{path}: no such file or folder")
         if path.is_dir():
             for folder in sorted(_record_folders(path)):
                 found.setdefault(folder.resolve())
-        elif path.name != "run.json":
+        elif path.name == "run.json" and os.path.lexists(path):
+            found.setdefault(path.parent.resolve())  # (a link in a loop: reading it says why)
+        elif not path.exists():
+            raise InputError(f"{path}: no such file or folder{_link_note(path)}")
+        else:
             raise InputError(f"{path}: not a results folder or run.json")
-        else:  # (one that cannot be read, a link in a loop: reading it says why)
-            found.setdefault(path.parent.resolve())
     return list(found)
+
+
+def _link_note(path: Path) -> str:
+    """What ``path``, which cannot be found, is when it is a symbolic link: `` (a symbolic
+    link to nothing)`` or `` (a symbolic link in a loop)``; else nothing."""
+    if not path.is_symlink():
+        return ""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return " (a symbolic link in a loop)"
+    return " (a symbolic link to nothing)"
 
 
 def _record_folders(top: Path) -> Iterator[Path]:
