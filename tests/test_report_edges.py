@@ -137,3 +137,26 @@ def test_markdown_specials_in_names_are_escaped_in_summary_md(clip_factory,
     assert markdown.splitlines()[0] == "# \\_t\\_ a\\b"  # (a backslash before a letter is one)
     assert "| \\*x\\*\\_a\\_b\\`c\\` | \\[s\\](u) \\~\\~z\\~\\~\\\\ | complete | " in markdown
     assert "## \\*x\\*\\_a\\_b\\`c\\`" in markdown.splitlines()
+
+
+def test_a_title_ending_in_a_hash_keeps_it_in_summary_md(clip_factory, tmp_path: Path) -> None:
+    """`vtrack report R --title 'Ranking #'` wrote '# Ranking #', which CommonMark shows as
+    "Ranking" (the '#'s ending a heading after a space close it); that '#' (and a title's first)
+    is written '\\#' now, while a '#' inside a name ('clip #3') stays as it is."""
+    from click.testing import CliRunner
+
+    from vtrack.cli import main
+
+    clip = clip_factory("smooth", width=160, height=120, frames=30)
+    named = tmp_path / "clip #3.mp4"
+    named.write_bytes(clip.path.read_bytes())
+    ran = CliRunner().invoke(main, ["run", str(named), "-c", "s0", "--gt", str(clip.gt),
+                                    "--no-video", "-q", "-o", str(tmp_path / "run")])
+    assert ran.exit_code == 0, ran.output
+    for title, heading in (("Ranking #", "# Ranking \\#"), ("#1 ##", "# \\#1 \\##")):
+        made = CliRunner().invoke(main, ["report", str(tmp_path / "run"), "--title", title,
+                                         "-q", "-o", str(tmp_path / "rep")])
+        assert made.exit_code == 0, made.output
+        markdown = (tmp_path / "rep" / "summary.md").read_text()
+        assert markdown.splitlines()[0] == heading
+        assert "| clip #3 | s0 | complete | " in markdown, markdown

@@ -217,10 +217,12 @@ def render_html(page: Page) -> str:
 # --- Markdown --------------------------------------------------------------------------------
 
 #: Characters that would make inline Markdown of a name (emphasis, code, links, strikethrough,
-#: a cell's end), and a backslash that would escape what follows it (ASCII punctuation, or the
-#: end of a bold cell): each is written after a backslash (CommonMark's escapes). A backslash
-#: before anything else is shown as it is (``\n`` from :func:`~vtrack.errors.printable`).
-MARKDOWN_SPECIALS = re.compile(r"[`*_\[\]~|]|\\(?=[!-/:-@\[-`{-~]|$)")
+#: a cell's end), a backslash that would escape what follows it (ASCII punctuation, or the
+#: end of a bold cell), and a ``#`` that would make or end a heading (a text's first, or the
+#: first of the ``#``s that end it after a space: ``# Ranking #`` shows "Ranking"): each is
+#: written after a backslash (CommonMark's escapes). A backslash before anything else is shown
+#: as it is (``\n`` from :func:`~vtrack.errors.printable`), and so is another ``#`` (``clip #3``).
+MARKDOWN_SPECIALS = re.compile(r"[`*_\[\]~|]|\\(?=[!-/:-@\[-`{-~]|$)|^#|(?<=\s)#(?=#*\s*$)")
 
 
 def _md(text: object) -> str:
