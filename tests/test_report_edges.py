@@ -3,12 +3,14 @@ rows, as few runs drawn as one, the package's names before its builder is loaded
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
 import vtrack.report
 from vtrack.report import build, plots
+from vtrack.report.pages import _md
 from vtrack.report.runs import RunResult
 from vtrack.report.tables import Cell, Table, _say_beside
 
@@ -116,7 +118,8 @@ def test_markdown_specials_in_names_are_escaped_in_summary_md(clip_factory,
     """summary.md escaped '<', '>', '&' and '|' but not Markdown's own characters: an input
     named '*x*_a_b`c`' showed as an italic 'x', 'a_b' and a code span 'c', a config named
     '[s](u) ~~z~~\\' as a link and struck-through text (and its bold best cell ended early).
-    Each is written after a backslash now (CommonMark's escapes), shown as named."""
+    Each is written after a backslash now (CommonMark's escapes), shown as named; a '_'
+    between two letters or digits ('a_b'), which cannot be emphasis, stays as it is."""
     from click.testing import CliRunner
 
     from vtrack.cli import main
@@ -135,8 +138,8 @@ def test_markdown_specials_in_names_are_escaped_in_summary_md(clip_factory,
     assert made.exit_code == 0, made.output
     markdown = (tmp_path / "rep" / "summary.md").read_text()
     assert markdown.splitlines()[0] == "# \\_t\\_ a\\b"  # (a backslash before a letter is one)
-    assert "| \\*x\\*\\_a\\_b\\`c\\` | \\[s\\](u) \\~\\~z\\~\\~\\\\ | complete | " in markdown
-    assert "## \\*x\\*\\_a\\_b\\`c\\`" in markdown.splitlines()
+    assert "| \\*x\\*\\_a_b\\`c\\` | \\[s\\](u) \\~\\~z\\~\\~\\\\ | complete | " in markdown
+    assert "## \\*x\\*\\_a_b\\`c\\`" in markdown.splitlines()
 
 
 def test_a_title_ending_in_a_hash_keeps_it_in_summary_md(clip_factory, tmp_path: Path) -> None:
@@ -160,3 +163,25 @@ def test_a_title_ending_in_a_hash_keeps_it_in_summary_md(clip_factory, tmp_path:
         markdown = (tmp_path / "rep" / "summary.md").read_text()
         assert markdown.splitlines()[0] == heading
         assert "| clip #3 | s0 | complete | " in markdown, markdown
+
+
+def test_the_example_report_names_things_as_the_report_writes_them() -> None:
+    """docs/example-report/summary.md names TIR_horse, VOT15_ball1, hue.sat_min as they are,
+    but once every '_' was escaped the report wrote 'TIR\\_horse' (raw summary.md noisy,
+    'groundtruth\\_rect.txt') and the shipped example was no longer what it writes. A '_'
+    between two letters or digits cannot be emphasis: each name and error the example shows
+    is written as the report writes it now."""
+    example = Path(__file__).parents[1] / "docs" / "example-report" / "summary.md"
+    written = []
+    for line in example.read_text().splitlines():
+        if line.startswith("## "):
+            written.append(line[3:])
+        elif line.startswith("| ") and not line.startswith("| ---"):
+            written += [cell.strip() for cell in line.strip("|").split("|")[:2]]
+        elif line.startswith("- **"):
+            failed = re.fullmatch(r"- \*\*(.+)\*\* \[(.+)\] (\w+): (.+)", line)
+            assert failed, line
+            written += failed.groups()
+    assert {"TIR_horse", "VOT15_ball1"} <= set(written)
+    assert any("hue.sat_min" in text for text in written)
+    assert {text: _md(text) for text in written if _md(text) != text} == {}

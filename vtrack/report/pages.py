@@ -220,17 +220,28 @@ def render_html(page: Page) -> str:
 #: a cell's end), a backslash that would escape what follows it (ASCII punctuation, or the
 #: end of a bold cell), and a ``#`` that would make or end a heading (a text's first, or the
 #: first of the ``#``s that end it after a space: ``# Ranking #`` shows "Ranking"): each is
-#: written after a backslash (CommonMark's escapes). A backslash before anything else is shown
-#: as it is (``\n`` from :func:`~vtrack.errors.printable`), and so is another ``#`` (``clip #3``).
-MARKDOWN_SPECIALS = re.compile(r"[`*_\[\]~|]|\\(?=[!-/:-@\[-`{-~]|$)|^#|(?<=\s)#(?=#*\s*$)")
+#: written after a backslash (CommonMark's escapes), but for a run of ``_`` between two letters
+#: or digits (:func:`_escaped`). A backslash before anything else is shown as it is (``\n``
+#: from :func:`~vtrack.errors.printable`), and so is another ``#`` (``clip #3``).
+MARKDOWN_SPECIALS = re.compile(r"[`*\[\]~|]|_+|\\(?=[!-/:-@\[-`{-~]|$)|^#|(?<=\s)#(?=#*\s*$)")
+
+
+def _escaped(special: re.Match[str]) -> str:
+    """A match of :data:`MARKDOWN_SPECIALS`, each character after a backslash; a run of ``_``
+    between two letters or digits as it is (``groundtruth_rect``: CommonMark takes no
+    emphasis there, and the raw file stays readable)."""
+    text, start, end = special.string, special.start(), special.end()
+    if special[0][0] == "_" and text[start - 1:start].isalnum() and text[end:end + 1].isalnum():
+        return special[0]
+    return "".join(f"\\{c}" for c in special[0])
 
 
 def _md(text: object) -> str:
     """Text for one Markdown line or cell, shown as written: control characters escaped,
     ``&``, ``<`` and ``>`` as HTML entities (a name is not markup) and each of
     :data:`MARKDOWN_SPECIALS` after a backslash (``*x*`` is not italics, ``a|b`` not two
-    cells)."""
-    return html.escape(MARKDOWN_SPECIALS.sub(r"\\\g<0>", printable(str(text))), quote=False)
+    cells, ``_x_`` not emphasis; ``a_b`` as it is)."""
+    return html.escape(MARKDOWN_SPECIALS.sub(_escaped, printable(str(text))), quote=False)
 
 
 def markdown_table(table: Table, labels: int) -> str:
