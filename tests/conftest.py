@@ -98,7 +98,15 @@ def clip_factory(
     return make
 
 
-def wait_for_stop_handlers(process: subprocess.Popen, timeout_s: float = 60) -> None:
+#: How long a test waits at most for a ``python -m vtrack`` (or a batch's worker) it started to
+#: get somewhere (its stop handlers in place, a line, a file, rows): a bound against a hang,
+#: not a measure. On a host loaded many times over its cores, starting Python, PyAV, OpenCV
+#: and NumPy may take minutes; 60 s fell short.
+START_BOUND_S = 600
+
+
+def wait_for_stop_handlers(process: subprocess.Popen,
+                           timeout_s: float = START_BOUND_S) -> None:
     """Return once ``process`` (a ``python -m vtrack ...``) catches SIGTERM: vtrack's stop
     handlers are in place (Python itself catches only SIGINT), so its start-up is over and a
     signal sent now is vtrack's to handle, however loaded the machine (a fixed sleep was not

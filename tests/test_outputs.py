@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import av
 import pytest
-from conftest import LinesAsTheyCome
+from conftest import START_BOUND_S, LinesAsTheyCome
 
 from vtrack.batch import SUMMARY_COLUMNS, executors
 from vtrack.batch.executors import LocalExecutor, _context, _Worker, stop_workers
@@ -337,9 +337,9 @@ def test_batch_into_a_read_only_folder_is_one_line(inputs: Path,
 
 
 def wait_for(condition, process: subprocess.Popen | _Worker, what: str) -> None:
-    """Wait (at most 60 s) until ``condition()``, failing if ``process`` (a subprocess or a
-    batch's worker) ends first."""
-    deadline = time.monotonic() + 60
+    """Wait until ``condition()``, failing if ``process`` (a subprocess or a batch's worker)
+    ends first, or after START_BOUND_S (a hang)."""
+    deadline = time.monotonic() + START_BOUND_S
     while not condition():
         if isinstance(process, _Worker):
             assert process.process.is_alive(), f"the worker ended before {what}"
@@ -416,12 +416,6 @@ def full_pipe() -> tuple[int, int]:
     return read, write
 
 
-#: How long a test waits at most for a line of a batch it started: a bound against a hang, not
-#: a measure (on a host loaded many times over its cores, starting Python, PyAV and OpenCV
-#: may take minutes; the 60 s the tally was once waited for by polling fell short).
-START_BOUND_S = 600
-
-
 def signal_until_it_ends(process: subprocess.Popen) -> None:
     """SIGTERM to ``process`` again and again until it ends (at most 60 s)."""
     deadline = time.monotonic() + 60
@@ -472,10 +466,10 @@ def test_a_signal_once_the_batch_has_said_its_tally_changes_nothing(
     out = tmp_path / "out"
     read, write = full_pipe()
     said: list[bytes] = []
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vtrack", "batch", str(folder), "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=write)
     try:
-        process = subprocess.Popen(
-            [sys.executable, "-m", "vtrack", "batch", str(folder), "--out", str(out)],
-            stdout=subprocess.PIPE, stderr=write)
         assert process.stdout is not None
         lines = LinesAsTheyCome(process.stdout)
         while not said or b" -> " not in said[-1]:  # the tally: the batch's last stdout line
@@ -491,6 +485,9 @@ def test_a_signal_once_the_batch_has_said_its_tally_changes_nothing(
         assert lines.next(START_BOUND_S) == b""  # (its stdout closed: the reader is done)
         process.stdout.close()
     finally:
+        if process.poll() is None:  # (an assertion failed: no batch is left running)
+            process.kill()
+            process.wait()
         os.close(write)
         os.close(read)
     assert process.returncode == 1, said
@@ -687,7 +684,7 @@ def test_stopped_workers_share_each_wait_and_one_that_cannot_record_is_killed(
                                                     released.set()), daemon=True)
         stopping.start()
         free_out = jobs[1].request.out_dir
-        deadline = time.monotonic() + 60  # (it records, then ends: no wait_for on it)
+        deadline = time.monotonic() + START_BOUND_S  # (it records, then ends: no wait_for)
         while not (free_out / "run.json").exists():
             assert time.monotonic() < deadline, "the free worker did not record itself"
             time.sleep(0.01)
@@ -739,7 +736,7 @@ def test_a_job_killed_as_the_batch_stops_is_no_pair_never_started(
 
     def on_progress(progress: Progress) -> None:
         """(The job's first message: it has opened its input.) Hold its worker, stop."""
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + START_BOUND_S
         while not _ten_rows(job.request.out_dir):
             assert time.monotonic() < deadline, "no rows"
             time.sleep(0.01)
@@ -780,7 +777,7 @@ def test_a_batch_closed_while_a_job_runs_stops_it_with_its_records_whole(
 
     def on_progress(progress: Progress) -> None:
         """(The job's first message: it has opened its input.)"""
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + START_BOUND_S
         while not _ten_rows(job.request.out_dir):
             assert time.monotonic() < deadline, "no rows"
             time.sleep(0.01)
