@@ -243,3 +243,31 @@ def test_a_link_to_nothing_or_in_a_loop_given_as_results_is_no_such_folder(
         assert code != 0 and stderr == (
             f"vtrack: error: {tmp_path / name}: no such file or folder{note}\n"), stderr
     assert not (tmp_path / "rep").exists()
+
+
+def test_a_summary_csv_link_in_a_loop_and_a_linked_run_folder_are_named(
+        run_dir: Path, tmp_path: Path) -> None:
+    """Below a results folder, a batch's summary.csv that is a symbolic link in a loop was
+    passed over without a word (Path.rglob takes it for missing), and so was a run folder that
+    is a symbolic link (not followed): the report showed fewer runs and said nothing. Each is
+    one warning now; the linked folder given itself is reported."""
+    results = tmp_path / "results"
+    whole = results / "whole"
+    whole.mkdir(parents=True)
+    for name in ("run.json", "track.csv"):
+        (whole / name).write_bytes((run_dir / name).read_bytes())
+    (results / "linked").symlink_to(run_dir)
+    (results / "batch").mkdir()
+    (results / "batch" / "summary.csv").symlink_to("summary.csv")
+    code, stderr = report(results, tmp_path / "rep")
+    assert code == 0, stderr
+    named = ("not followed", "summary.csv: ")  # (not the ground truth others have changed)
+    assert [line for line in stderr.splitlines() if any(n in line for n in named)] == [
+        f"vtrack: warning: not followed: {results / 'linked'} (a symbolic link to a folder; "
+        "give it as RESULTS to report the runs in it)",
+        f"vtrack: warning: {results / 'batch' / 'summary.csv'}: cannot read "
+        f"({os.strerror(errno.ELOOP)}); the runs without results it lists are not shown"]
+    assert len((tmp_path / "rep" / "summary.csv").read_text().splitlines()) == 2  # the whole
+    code, stderr = report(results / "linked", tmp_path / "rep2")
+    assert code == 0 and "followed" not in stderr, stderr
+    assert len((tmp_path / "rep2" / "summary.csv").read_text().splitlines()) == 2

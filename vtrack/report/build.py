@@ -395,7 +395,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     _refuse_two_files_for_one_input(truths)
     warnings: list[str] = still_written(results)
     runs: list[RunResult] = []
-    for folder in run_folders(results):
+    for folder in run_folders(results, warnings):
         try:
             runs.append(load_run(folder, truths))
         except InputError as exc:

@@ -672,15 +672,18 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     return result
 
 
-def run_folders(paths: Iterable[Path]) -> list[Path]:
+def run_folders(paths: Iterable[Path], problems: list[str] | None = None) -> list[Path]:
     """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats).
 
     A path may be a run folder, a batch folder, any folder above them, or a ``run.json``.
+    A symbolic link to a folder below one is not followed (it may lead anywhere, or back up):
+    one line naming it is appended to ``problems``.
     """
     found: dict[Path, None] = {}
+    links: dict[Path, None] = {}
     for path in paths:
         if path.is_dir():
-            for folder in sorted(_record_folders(path)):
+            for folder in sorted(_holding(path, "run.json", links)):
                 found.setdefault(folder.resolve())
         elif path.name == "run.json" and os.path.lexists(path):
             found.setdefault(path.parent.resolve())  # (a link in a loop: reading it says why)
@@ -688,6 +691,9 @@ def run_folders(paths: Iterable[Path]) -> list[Path]:
             raise InputError(f"{path}: no such file or folder{_link_note(path)}")
         else:
             raise InputError(f"{path}: not a results folder or run.json")
+    if problems is not None:
+        problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
+                     "to report the runs in it)" for link in sorted(links)]
     return list(found)
 
 
@@ -704,14 +710,17 @@ def _link_note(path: Path) -> str:
     return " (a symbolic link to nothing)"
 
 
-def _record_folders(top: Path) -> Iterator[Path]:
-    """The folders at or below ``top`` (symbolic links to folders not followed, as
-    ``Path.rglob``) that hold an entry named ``run.json``, one that cannot be read included
-    (a symbolic link in a loop or to nothing, which ``rglob`` passes over as missing): reading
-    it says why it is left out."""
+def _holding(top: Path, name: str, links: dict[Path, None] | None = None) -> Iterator[Path]:
+    """The folders at or below ``top`` that hold an entry ``name`` (``run.json``,
+    ``summary.csv``), one that cannot be read included (a symbolic link in a loop or to
+    nothing, which ``Path.rglob`` passes over as missing): reading it says why it is left out.
+    Symbolic links to folders below ``top`` are not followed, each put in ``links``."""
     for folder, folders, files in os.walk(top):
-        if "run.json" in files or "run.json" in folders:
+        if name in files or name in folders:
             yield Path(folder)
+        if links is not None:
+            links.update((Path(folder, f), None) for f in folders
+                         if os.path.islink(os.path.join(folder, f)))
 
 
 def still_written(paths: Iterable[Path]) -> list[str]:
@@ -810,7 +819,8 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
     ran = {run.folder.resolve() for run in reported}
     failed = []
     for path in paths:
-        summaries = [path] if path.is_file() else sorted(path.rglob("summary.csv"))
+        summaries = [path] if path.is_file() else sorted(
+            folder / "summary.csv" for folder in _holding(path, "summary.csv"))
         for summary in summaries:
             if summary.name != "summary.csv" or is_report_folder(summary.parent):
                 continue
