@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -38,6 +39,20 @@ def closed_port() -> int:
         return sock.getsockname()[1]  # closed when the block ends: nothing listens there
 
 
+def start_scheduler() -> tuple[subprocess.Popen[str], str]:
+    """A ``dask scheduler`` on loopback, and its address once it says it."""
+    scheduler = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+         "--port", str(closed_port()), "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert scheduler.stderr is not None
+    for line in scheduler.stderr:  # "Scheduler at:   tcp://127.0.0.1:PORT"
+        if "Scheduler at" in line:
+            return scheduler, line.split()[-1]
+    scheduler.wait(timeout=30)
+    raise AssertionError("the scheduler said no address")
+
+
 def assert_one_error(result: subprocess.CompletedProcess[str], *words: str) -> list[str]:
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr and "Exception ignored" not in result.stderr
@@ -62,17 +77,9 @@ def test_no_worker_says_it_waits_and_gives_up(folder: Path, tmp_path: Path) -> N
 
 def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
                                                              tmp_path: Path) -> None:
-    scheduler = subprocess.Popen(
-        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-         "--port", str(closed_port()), "--no-dashboard"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    scheduler, address = start_scheduler()
     worker = None
     try:
-        address = ""
-        for line in scheduler.stderr:  # "Scheduler at:   tcp://127.0.0.1:PORT"
-            if "Scheduler at" in line:
-                address = line.split()[-1]
-                break
         assert address.startswith("tcp://127.0.0.1:")
         batch = subprocess.Popen(
             [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
@@ -93,6 +100,35 @@ def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
             if process is not None:
                 process.terminate()
                 process.wait(timeout=30)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM])
+def test_a_scheduler_gone_while_the_batch_waits_for_a_worker_is_one_line(
+        folder: Path, tmp_path: Path, signum: int) -> None:
+    """`vtrack batch in/ --scheduler ADDRESS` waiting for a worker when its scheduler stopped
+    (killed, or SIGTERM) ended in Dask's traceback (CommClosedError, or OSError "Timed out
+    trying to connect"), exit 1. It is now one line naming the scheduler, exit 2, as the
+    wait's own timeout is, and nothing is written."""
+    scheduler, address = start_scheduler()
+    try:
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--scheduler-timeout", "2", "--worker-timeout", "90", "--no-video", "--out",
+             str(tmp_path / "out")],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert batch.stderr is not None
+        first = batch.stderr.readline()
+        assert first.startswith("vtrack: waiting for a Dask worker"), first
+        scheduler.send_signal(signum)
+        out, err = batch.communicate(timeout=120)
+    finally:
+        scheduler.kill()
+        scheduler.wait(timeout=30)
+    result = subprocess.CompletedProcess(batch.args, batch.returncode, out, first + err)
+    lines = assert_one_error(result, f"--scheduler {address}: lost the connection to the "
+                                     "scheduler before a worker connected")
+    assert len(lines) == 2 and out == ""
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("address", ["tcp://127.0.0.1:{port}", "foo://127.0.0.1:{port}"])

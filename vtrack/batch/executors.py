@@ -286,32 +286,34 @@ class DaskExecutor:
     def wait_for_workers(self, timeout_s: float | None,
                          say: Callable[[str], None] = lambda line: None) -> None:
         """Return once at least one worker is connected to the scheduler; if none is, ``say``
-        so (one line) and wait up to ``timeout_s`` seconds (None: for ever). On expiry the
-        client is closed and a :class:`VtrackError` names the scheduler and the wait."""
+        so (one line) and wait up to ``timeout_s`` seconds (None: for ever). On expiry, or when
+        the scheduler goes away meanwhile, the client is closed and a :class:`VtrackError`
+        names the scheduler and what happened."""
         self.worker_timeout_s = timeout_s
-        if self.client.scheduler_info().get("workers"):
-            return
-        limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
-        say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
-            f"--worker-timeout)")
         try:
-            self.client.wait_for_workers(1, timeout=timeout_s)
+            if self.client.scheduler_info().get("workers"):
+                return
+            limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
+            say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
+                f"--worker-timeout)")
+            with _client_log_off():  # (its "Failed to reconnect": the error line below says so)
+                self.client.wait_for_workers(1, timeout=timeout_s)
         except TimeoutError:
             self.close()
             raise VtrackError(f"--scheduler {self.address}: no Dask worker connected within "
                               f"{_seconds(timeout_s or 0)} (--worker-timeout)") from None
+        except OSError as exc:  # CommClosedError: the scheduler stopped, its machine went away
+            self.close()
+            reason = str(exc).rsplit(": ", 1)[-1] or type(exc).__name__
+            raise VtrackError(f"--scheduler {self.address}: lost the connection to the "
+                              f"scheduler before a worker connected ({reason})") from None
 
     def close(self) -> None:
         """Disconnect; nothing is printed if the scheduler is already gone (the Client's
         attempt to reconnect to a lost scheduler, cancelled here, logs a traceback at ERROR
         otherwise: the jobs' lines already say the scheduler was lost)."""
-        client_log = logging.getLogger("distributed.client")
-        disabled, client_log.disabled = client_log.disabled, True
-        try:
-            with _quiet_client_teardown(), suppress(Exception):
-                self.client.close()
-        finally:
-            client_log.disabled = disabled
+        with _client_log_off(), _quiet_client_teardown(), suppress(Exception):
+            self.client.close()
 
     def run(self, jobs: Sequence[Job]) -> Generator[Outcome, None, None]:
         """Submit every job and yield outcomes as they finish. When no worker has been
@@ -501,6 +503,18 @@ def _probe(address: str, timeout_s: float) -> None:
 
 def _seconds(value: float) -> str:
     return f"{value:g} s"
+
+
+@contextmanager
+def _client_log_off() -> Iterator[None]:
+    """Dask's ``distributed.client`` logger silenced: what it logs of a lost scheduler (its
+    failed reconnection, at ERROR, with a traceback) is said in vtrack's own one line."""
+    client_log = logging.getLogger("distributed.client")
+    disabled, client_log.disabled = client_log.disabled, True
+    try:
+        yield
+    finally:
+        client_log.disabled = disabled
 
 
 @contextmanager
