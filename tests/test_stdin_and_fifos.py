@@ -4,6 +4,7 @@ them, stdin closed or a terminal, a --stream FIFO nobody reads, --follow where i
 
 from __future__ import annotations
 
+import csv
 import fcntl
 import json
 import os
@@ -21,7 +22,7 @@ from conftest import wait_for_stop_handlers
 
 from vtrack.io import follow
 from vtrack.io.follow import GrowingFile
-from vtrack.scenes import make_scene, write_clip, write_video
+from vtrack.scenes import make_scene, write_clip, write_groundtruth, write_video
 
 FEEDER = """if True:
     import sys, time
@@ -230,6 +231,59 @@ def test_a_summary_line_stdout_cannot_take_fails_the_run_in_one_line(tmp_path: P
     assert done.stderr.decode() == ("vtrack: error: standard output: No space left on device: "
                                     "the summary line was not printed there\n")
     assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "complete"
+
+
+def _batch_folder(tmp_path: Path, clips: int) -> Path:
+    """``clips`` short videos with their ground truth in ``tmp_path/in``."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=20, fps=30)
+    clip = write_video(scene, folder / "c0.mp4")
+    write_groundtruth(scene, folder / "c0.gt.txt")
+    for n in range(1, clips):
+        (folder / f"c{n}.mp4").write_bytes(clip.read_bytes())
+        (folder / f"c{n}.gt.txt").write_bytes((folder / "c0.gt.txt").read_bytes())
+    return folder
+
+
+def _statuses(out: Path) -> list[str]:
+    with (out / "summary.csv").open(newline="") as handle:
+        return [row["status"] for row in csv.DictReader(handle)]
+
+
+def test_a_batch_whose_stdout_reader_went_away_runs_on(tmp_path: Path) -> None:
+    """`vtrack batch in/ -c s0 -j 1 | head -1`: the second run's line met the closed pipe and
+    the batch stopped there, saying nothing, exit 1: the runs not started were `interrupted`
+    in summary.csv ("never ran (the batch stopped first)"). As `vtrack run ... | head`, it now
+    runs on, writes nothing more there and exits as its runs ended."""
+    folder = _batch_folder(tmp_path, 3)
+    batch = subprocess.Popen([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s0",
+                              "--jobs", "1", "--no-video", "-o", str(tmp_path / "out")],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert batch.stdout is not None and batch.stderr is not None
+    assert batch.stdout.readline().startswith("c0 [s0]: ")
+    batch.stdout.close()  # `| head -1`
+    stderr = batch.stderr.read()
+    assert batch.wait(timeout=120) == 0, stderr
+    assert "vtrack: " not in stderr
+    assert _statuses(tmp_path / "out") == ["complete"] * 3
+
+
+def test_a_batch_whose_stdout_cannot_take_its_lines_says_so_in_one_line(tmp_path: Path) -> None:
+    """`vtrack batch in/ -c s0 > /dev/full` ended in a traceback (OSError: [Errno 28] No space
+    left on device, from its first run's line), exit 1. The batch now runs on and says so in
+    one line naming standard output and summary.csv, exit 1."""
+    folder = _batch_folder(tmp_path, 2)
+    out = tmp_path / "out"
+    with open("/dev/full", "wb") as full:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s0",
+                               "--no-video", "-o", str(out)],
+                              stdout=full, stderr=subprocess.PIPE, timeout=120, check=False)
+    assert done.returncode == 1
+    assert done.stderr.decode() == (
+        "vtrack: error: standard output: No space left on device: the batch's lines were not "
+        f"all printed there ({out / 'summary.csv'} lists every run)\n")
+    assert _statuses(out) == ["complete"] * 2
 
 
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:

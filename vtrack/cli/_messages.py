@@ -69,7 +69,13 @@ def echo_stdout(line: str) -> OSError | ValueError | None:
     try:
         click.echo(line)
     except (OSError, ValueError) as exc:
-        with contextlib.suppress(OSError, ValueError):
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        stdout_to_null()
         return exc
     return None
+
+
+def stdout_to_null() -> None:
+    """Point standard output, whose last write failed, at the null device: what is left in
+    its buffer and any later line go nowhere, and the interpreter's last flush adds no error."""
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -17,12 +17,14 @@ does (``-stats_period``); ``--quiet`` silences both.
 
 from __future__ import annotations
 
+import errno
 import sys
 import time
 from collections.abc import Callable
 from datetime import timedelta
 from typing import TYPE_CHECKING
 
+from vtrack.cli._messages import stdout_to_null
 from vtrack.errors import printable
 
 if TYPE_CHECKING:
@@ -116,6 +118,29 @@ class BatchProgress(_Shown):
         self.runs = 0  # runs to do (set once the batch is planned)
         self.done_runs = 0
         self.frames: dict[tuple[str, str], tuple[int, int | None]] = {}
+        #: What stopped the batch's lines on standard output (BrokenPipeError when its reader
+        #: went away, ENOSPC for ``> /dev/full``); None while they are written.
+        self.stdout_failure: OSError | ValueError | None = None
+
+    def write(self, line: str, err: bool = False) -> None:
+        """A line on stdout (``err``: stderr) that does not break the bar, and never stops the
+        batch: once a line fails on stdout (:attr:`stdout_failure`) the later ones are dropped
+        (standard output goes to the null device), as are stderr's when its reader went away."""
+        if not err and self.stdout_failure is not None:
+            return
+        stream = sys.stderr if err else sys.stdout
+        if stream is None and not err:  # (>&-: no standard output from the start)
+            self.stdout_failure = OSError(errno.EBADF, "closed before vtrack started")
+            return
+        try:
+            if self.bar is not None and not isinstance(self.bar, ProgressLines):
+                self.bar.write(line, file=stream)
+            else:
+                print(line, file=stream, flush=True)
+        except (OSError, ValueError) as exc:
+            if not err:
+                self.stdout_failure = exc
+                stdout_to_null()
 
     def on_progress(self, progress: Progress) -> None:
         self.frames[(progress.input, progress.config)] = (progress.frames, progress.total)
@@ -125,14 +150,6 @@ class BatchProgress(_Shown):
         self.frames[(input_name, config)] = (frames, frames)
         self.done_runs += 1
         self._show()
-
-    def write(self, line: str, err: bool = False) -> None:
-        """A line on stdout (``err``: stderr) that does not break the bar."""
-        stream = sys.stderr if err else sys.stdout
-        if self.bar is not None and not isinstance(self.bar, ProgressLines):
-            self.bar.write(line, file=stream)
-        else:
-            print(line, file=stream, flush=True)
 
     def _total(self) -> int | None:
         known = [total for _, total in self.frames.values() if total]

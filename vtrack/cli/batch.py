@@ -322,14 +322,32 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
                     continue
                 outcomes.append(outcome)
                 if not quiet:
-                    click.echo(outcome.line(out_dir))
+                    progress.write(outcome.line(out_dir))
                 for warning in outcome.warnings():
-                    warn(warning)
-        _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None)
+                    progress.write(warning_line(warning), err=True)
+        _report(outcomes, len(batch.order), summary_path, quiet, stopped is not None,
+                progress.write)
+        lost = _lost_stdout(progress.stdout_failure, summary_path)
+        if lost:
+            progress.write(error_line(lost), err=True)
     if stopped is not None:
         raise stopped
-    if any(not o.ok for o in outcomes):
+    if lost or any(not o.ok for o in outcomes):
         sys.exit(1)
+
+
+def _lost_stdout(failure: OSError | ValueError | None, summary_path: Path) -> str | None:
+    """What a batch says of the lines it could not write on standard output (``failure``,
+    :attr:`~vtrack.cli._progress.BatchProgress.stdout_failure`): ``> /dev/full``, an I/O
+    error, no standard output (``>&-``); None when they were all written, or when their
+    reader went away (``| head``: quiet, as a pipe's writer; the batch ran on, its exit
+    status says how its runs ended)."""
+    from vtrack.io.files import os_reason
+
+    if failure is None or isinstance(failure, BrokenPipeError):
+        return None
+    return (f"standard output: {os_reason(failure)}: the batch's lines were not all printed "
+            f"there ({summary_path} lists every run)")
 
 
 def _left_out(nested: NestedInputs) -> str | None:
@@ -358,12 +376,13 @@ def _left_out(nested: NestedInputs) -> str | None:
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,
-            stopped: bool) -> None:
+            stopped: bool, write: Callable[..., None]) -> None:
     """The end of a batch: the tally of its ``pairs`` (input x config) by status, as the rows
     of ``summary.csv`` give it (a run refused for other settings counts as the run its folder
     keeps), and where that file is (unless ``quiet``), then one ``vtrack: error:`` line per run
     that did not complete. A ``stopped`` batch counts the pairs it never started, and names no
-    error for the runs its stop interrupted (its own ``vtrack: interrupted`` line follows)."""
+    error for the runs its stop interrupted (its own ``vtrack: interrupted`` line follows).
+    Each line goes through ``write(line, err=False)``."""
     from vtrack.run import STATUS_INTERRUPTED
 
     counts: dict[str, int] = {}
@@ -383,8 +402,8 @@ def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool
             tally += (f"; {refused} of them made with other settings, not run again "
                       "(--overwrite replaces them)")
         total = len(outcomes) + unstarted
-        click.echo(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
+        write(f"{plural(total, 'run')} ({tally}) -> {summary_path}")
     for outcome in outcomes:
         if not outcome.ok and not (stopped and outcome.status == STATUS_INTERRUPTED):
-            click.echo(error_line(f"{outcome.input} [{outcome.config}]: {outcome.verdict}: "
-                                  f"{outcome.error}"), err=True)
+            write(error_line(f"{outcome.input} [{outcome.config}]: {outcome.verdict}: "
+                             f"{outcome.error}"), err=True)
