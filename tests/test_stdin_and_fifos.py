@@ -286,6 +286,37 @@ def test_a_batch_whose_stdout_cannot_take_its_lines_says_so_in_one_line(tmp_path
     assert _statuses(out) == ["complete"] * 2
 
 
+@pytest.mark.parametrize(("command", "what"), [
+    (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the line naming the files written"),
+    (["report", "OUT/run", "--out", "OUT/report"], "the summary line"),
+    (["stages"], "the listing"),
+    (["stages", "s0", "--toml"], "the config")])
+def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, command: list[str],
+                                                          what: str) -> None:
+    """`vtrack scene smooth clip.mp4 > /dev/full` (and `vtrack report`, `vtrack stages`, `vtrack
+    stages s0 --toml`) ended in a traceback (OSError: [Errno 28] No space left on device from
+    click.echo), exit 1. As `vtrack run`'s summary line, it is now one line naming standard
+    output and what was not printed, exit 1; the files are made as they would be."""
+    if command[0] == "report":  # a run to report on
+        scene = make_scene("smooth", seed=3, width=160, height=120, frames=12, fps=30)
+        clip = write_video(scene, tmp_path / "clip.mp4")
+        subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0", "--init",
+                        ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o",
+                        str(tmp_path / "run")], capture_output=True, timeout=120, check=True)
+    args = [arg.replace("OUT", str(tmp_path)) for arg in command]
+    with open("/dev/full", "wb") as full:
+        done = subprocess.run([sys.executable, "-m", "vtrack", *args], stdout=full,
+                              stderr=subprocess.PIPE, timeout=120, check=False)
+    assert done.returncode == 1
+    assert "Traceback" not in done.stderr.decode()
+    assert [line for line in done.stderr.decode().splitlines() if "error" in line] == [
+        f"vtrack: error: standard output: No space left on device: {what} was not printed there"]
+    if command[0] == "scene":
+        assert (tmp_path / "clip.mp4").is_file() and (tmp_path / "clip.gt.txt").is_file()
+    if command[0] == "report":
+        assert (tmp_path / "report" / "index.html").is_file()
+
+
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:
     """`--stream OUT/.vtrack.lock` was accepted, and the lines were deleted with the lock at the
     end of the run."""

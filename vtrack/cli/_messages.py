@@ -57,7 +57,7 @@ def note(command: str, message: str) -> None:
     click.echo(f"vtrack {command}: {printable(message)}", err=True)
 
 
-def echo_stdout(line: str) -> OSError | ValueError | None:
+def echo_stdout(line: str, nl: bool = True) -> OSError | ValueError | None:
     """Write ``line`` on standard output. None when it was written; else the error that
     stopped it (BrokenPipeError when its reader went away, ENOSPC for ``> /dev/full``; an
     EBADF OSError "closed before vtrack started" when there was no standard output at all:
@@ -67,11 +67,35 @@ def echo_stdout(line: str) -> OSError | ValueError | None:
     if sys.stdout is None:
         return OSError(errno.EBADF, "closed before vtrack started")
     try:
-        click.echo(line)
+        click.echo(line, nl=nl)
     except (OSError, ValueError) as exc:
         stdout_to_null()
         return exc
     return None
+
+
+def stdout_problem(failure: OSError | ValueError | None, what: str) -> str | None:
+    """The error of a command whose lines met ``failure`` on standard output
+    (:func:`echo_stdout`): ``standard output: REASON: WHAT`` (``> /dev/full``, an I/O error,
+    ``>&-``); None when there was none or its reader went away (``| head``: quiet, as a pipe's
+    writer)."""
+    from vtrack.io.files import os_reason
+
+    if failure is None or isinstance(failure, BrokenPipeError):
+        return None
+    return f"standard output: {os_reason(failure)}: {what}"
+
+
+def echo_result(text: str, what: str, nl: bool = True) -> None:
+    """``text``, what a command prints of its result, on standard output. Its reader gone
+    (``| head``), nothing more is said; stdout unwritable (:func:`stdout_problem`), an
+    :class:`~vtrack.errors.OutputBrokenError` (one line, exit code 1) says ``what`` (``the
+    summary line``) was not printed there: the command's files are as it made them."""
+    from vtrack.errors import OutputBrokenError
+
+    problem = stdout_problem(echo_stdout(text, nl), f"{what} was not printed there")
+    if problem:
+        raise OutputBrokenError(problem)
 
 
 def stdout_to_null() -> None:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import click
 from click.core import ParameterSource
 
-from vtrack.cli._messages import error_line, warn, warning_line
+from vtrack.cli._messages import error_line, stdout_problem, warn, warning_line
 from vtrack.cli._options import (
     Seconds,
     WholeNumber,
@@ -342,12 +342,8 @@ def _lost_stdout(failure: OSError | ValueError | None, summary_path: Path) -> st
     error, no standard output (``>&-``); None when they were all written, or when their
     reader went away (``| head``: quiet, as a pipe's writer; the batch ran on, its exit
     status says how its runs ended)."""
-    from vtrack.io.files import os_reason
-
-    if failure is None or isinstance(failure, BrokenPipeError):
-        return None
-    return (f"standard output: {os_reason(failure)}: the batch's lines were not all printed "
-            f"there ({summary_path} lists every run)")
+    return stdout_problem(failure, f"the batch's lines were not all printed there "
+                                   f"({summary_path} lists every run)")
 
 
 def _left_out(nested: NestedInputs) -> str | None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import warn
+from vtrack.cli._messages import echo_result, warn
 from vtrack.cli._options import (
     gt_origin_option,
     refuse_gt_origin_without_gt,
@@ -59,5 +59,5 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     for warning in report.warnings:
         warn(warning)
     if not quiet:
-        click.echo(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
-                   f"-> {report.index}")
+        echo_result(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
+                    f"-> {report.index}", "the summary line")

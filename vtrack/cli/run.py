@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from vtrack.cli._messages import echo_stdout, error_line, warning_line
+from vtrack.cli._messages import echo_stdout, error_line, stdout_problem, warning_line
 from vtrack.cli._options import (
     FRAME_RATE,
     FrameSpan,
@@ -344,13 +344,10 @@ def _said_on_stdout(line: str) -> bool:
     head``: quiet, as a pipe's writer; the run's exit status says how it ended); else (``>
     /dev/full``, an I/O error, stdout closed) False, after one error line naming standard
     output and the problem on stderr."""
-    from vtrack.io.files import os_reason
-
-    failure = echo_stdout(line)
-    if failure is None or isinstance(failure, BrokenPipeError):
+    problem = stdout_problem(echo_stdout(line), "the summary line was not printed there")
+    if problem is None:
         return True
-    _say(error_line(f"standard output: {os_reason(failure)}: the summary line was not "
-                    "printed there"))
+    _say(error_line(problem))
     return False
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._messages import echo_result
 from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
@@ -126,7 +127,6 @@ def command(
             progress.close()
     extra = f" and {files.mot}" if files.mot else ""
     layout = f", {pix_fmt or 'bgr24'}" if fmt == "raw" else ""
-    click.echo(
-        f"wrote {files.clip} ({len(scene)} frames, {scene.width}x{scene.height}{layout}, "
-        f"{scene.fps:g} fps) with ground truth {files.groundtruth}{extra}"
-    )
+    echo_result(f"wrote {files.clip} ({len(scene)} frames, {scene.width}x{scene.height}"
+                f"{layout}, {scene.fps:g} fps) with ground truth {files.groundtruth}{extra}",
+                "the line naming the files written")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from vtrack.cli._messages import echo_result
 from vtrack.cli._paths import NonEmptyText
 
 
@@ -182,6 +183,6 @@ def command(names: tuple[str, ...], markdown: bool, toml: bool) -> None:
         if markdown or len(names) != 1:
             raise click.UsageError("--toml prints one config's file: give one CONFIG "
                                    "(vtrack stages robust --toml > mine.toml)")
-        click.echo(config_toml(names[0]), nl=False)
+        echo_result(config_toml(names[0]), "the config", nl=False)
         return
-    click.echo(stages_text(markdown, names))
+    echo_result(stages_text(markdown, names), "the listing")
