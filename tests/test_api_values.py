@@ -615,3 +615,15 @@ def test_every_configs_results_hold_python_numbers(config: str) -> None:
     stepped = [tracker.init(frames[0], first) if first else tracker.update(frames[0])]
     stepped += [tracker.update(frame) for frame in frames[1:]]
     assert [(r.index, _python_numbers(r)) for r in stepped if _python_numbers(r)] == []
+
+
+def test_fixed_cameras_tracks_hold_python_numbers_in_a_crowd() -> None:
+    """fixed_camera's tracks held np.float64 box x and y (its ByteTrack boxes centred on the
+    Kalman state) from frame 10 of a 320x240 'pedestrians' scene (seed 4), where the 160x120
+    'multi' scene of the test above happens to give Python floats: every track's id is now a
+    Python int and its box and confidence Python floats, as the result's own box."""
+    scene = make_scene("pedestrians", seed=4, width=320, height=240, frames=60)
+    results = list(vtrack.track(list(scene.as_frames()), "fixed_camera"))
+    assert sum(len(r.tracks) for r in results) > 0
+    assert [(r.index, _python_numbers(r)) for r in results if _python_numbers(r)] == []
+    assert all(type(t.confidence) is float for r in results for t in r.tracks)

@@ -9,6 +9,7 @@ as a config's chain is (:func:`vtrack.config.check_stages`).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -51,11 +52,11 @@ class FrameResult:
     ``float`` never negative (0 for none, 1 as sure as on the first frame), NaN for a chain that
     gives none (s4); ``prediction``: the box where the next frame's search starts (floats too), or
     None; ``extras``: the stages' own values (``track.csv``'s extra columns, by name); ``tracks``:
-    for the multi-target configs, every track held, each with ``id``, ``box``, ``confidence`` and
-    ``state`` (``tentative``, ``confirmed``: measured this frame, the only ones ``tracks.csv``
-    writes and draws, or ``coasting``); ``overlays``: what the annotated video draws beside the box
-    (search window, particles); ``frame``: the decoded frame, kept only when asked
-    (``keep_frames=True``), else None.
+    for the multi-target configs, every track held, each with ``id`` (an ``int``), ``box`` and
+    ``confidence`` (Python floats too) and ``state`` (``tentative``, ``confirmed``: measured this
+    frame, the only ones ``tracks.csv`` writes and draws, or ``coasting``); ``overlays``: what the
+    annotated video draws beside the box (search window, particles); ``frame``: the decoded frame,
+    kept only when asked (``keep_frames=True``), else None.
     """
 
     index: int
@@ -241,7 +242,7 @@ class Pipeline:
             score=float(max(ctx.score, 0.0)),  # a signal below its reference is no evidence: 0
             prediction=None if ctx.prediction is None else ctx.prediction.plain(),
             extras=ctx.extras,
-            tracks=ctx.tracks,
+            tracks=[_plain(track) for track in ctx.tracks],
             overlays=ctx.overlays,
         )
 
@@ -259,6 +260,13 @@ class Pipeline:
         name (``run.json``'s ``timing.stage_us_per_frame``)."""
         n = max(self.frames_done, 1)
         return {name: seconds * 1e6 / n for name, seconds in self.stage_seconds.items()}
+
+
+def _plain(track: Track) -> Track:
+    """``track`` with its id a Python ``int`` and its box and confidence Python ``float``s (a
+    stage's NumPy numbers taken as their values): what the public results hold."""
+    return dataclasses.replace(track, id=int(track.id), box=track.box.plain(),
+                               confidence=float(track.confidence))
 
 
 def _shape(frame: Frame) -> tuple[int, int, bool]:
