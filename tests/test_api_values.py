@@ -10,6 +10,7 @@ import os
 import pickle
 import shlex
 from dataclasses import replace
+from decimal import Decimal
 from fractions import Fraction
 from pathlib import Path
 
@@ -627,3 +628,25 @@ def test_fixed_cameras_tracks_hold_python_numbers_in_a_crowd() -> None:
     assert sum(len(r.tracks) for r in results) > 0
     assert [(r.index, _python_numbers(r)) for r in results if _python_numbers(r)] == []
     assert all(type(t.confidence) is float for r in results for t in r.tracks)
+
+
+def test_a_frames_number_and_time_are_python_numbers_whatever_they_were_given_as() -> None:
+    """vtrack.BgrFrame(np.uint8(254), 254 / 30, image) kept its np.uint8 index: the images given
+    to Tracker.update after it were numbered 255, then 0, 1 (uint8 wrapping, with NumPy's
+    overflow warning), and results held np.int64 / np.float32 numbers json.dumps refuses; a
+    Decimal time_s raised "TypeError: unsupported operand type(s) for +: 'decimal.Decimal'
+    and 'float'" at the next image; time_s=True was taken as a time. A frame's index and
+    time are now a Python int and float, and True is refused."""
+    image = np.zeros((120, 160, 3), np.uint8)
+    image[40:80, 60:100] = (0, 0, 255)
+    tracker = vtrack.Tracker("s0")
+    first = tracker.init(vtrack.BgrFrame(np.uint8(254), np.float32(254 / 30), image),
+                         (60, 40, 40, 40))
+    results = [first, *(tracker.update(image) for _ in range(2))]
+    assert [r.index for r in results] == [254, 255, 256]
+    assert all(type(r.index) is int and type(r.time_s) is float for r in results)
+    json.dumps([(r.index, r.time_s) for r in results])
+    tracker.init(vtrack.BgrFrame(3, Decimal("0.1"), image), (60, 40, 40, 40))
+    assert tracker.update(image).time_s == pytest.approx(0.1 + 1 / 30)
+    with pytest.raises(ValueError, match=r"^frame 3: time_s True is not a finite number$"):
+        vtrack.BgrFrame(3, True, image)

@@ -15,6 +15,7 @@ from abc import ABC, abstractmethod
 import cv2
 import numpy as np
 
+from vtrack.errors import real_or_nan
 from vtrack.geometry import Window, frame_size_problem
 
 
@@ -70,8 +71,9 @@ class Frame(ABC):
 
     The constructors refuse what cannot be a frame: an ``index`` that is not a whole number
     >= 0, pixels that are not uint8 or not in the class's layout (TypeError), a size
-    :func:`frame_size_problem` refuses or a ``time_s`` that is not a finite number
-    (ValueError), each naming the frame (``frame 3: ...``).
+    :func:`frame_size_problem` refuses or a ``time_s`` that is not a finite real number
+    (ValueError; True is no time), each naming the frame (``frame 3: ...``). They are kept as
+    a Python ``int`` and ``float`` whatever number types they were given as (NumPy's too).
     """
 
     __slots__ = ("index", "time_s", "width", "height")
@@ -81,14 +83,13 @@ class Frame(ABC):
         problem = frame_size_problem(width, height)
         if problem:
             raise ValueError(f"frame {index}: {problem}")
-        try:
-            finite = math.isfinite(time_s)
-        except TypeError:  # None, a string
-            finite = False
-        if not finite:
+        seconds = real_or_nan(time_s)  # (NaN for None, text, True: no time)
+        if not math.isfinite(seconds):
             raise ValueError(f"frame {index}: time_s {time_s!r} is not a finite number")
-        self.index = index
-        self.time_s = time_s
+        # a Python int and float, whatever number type was given: results and the frames
+        # numbered after this one compute with them (an np.uint8 255 + 1 would be 0)
+        self.index = int(index)
+        self.time_s = seconds
         self.width = width
         self.height = height
 
