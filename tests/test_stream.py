@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import re
 import socket
 import subprocess
@@ -11,10 +12,15 @@ import sys
 import threading
 from pathlib import Path
 
+import pytest
 from conftest import LinesAsTheyCome
 
+from vtrack.errors import StreamReaderGone
 from vtrack.io.outdir import RUN_OUTPUTS
+from vtrack.io.stream import StreamWriter
+from vtrack.pipeline import FrameResult
 from vtrack.scenes import make_scene, write_raw, write_video
+from vtrack.stages.base import TrackState
 
 W, H = 160, 120
 
@@ -319,3 +325,25 @@ def test_a_stream_reader_that_goes_away_stops_the_run_quietly_as_sigpipe(tmp_pat
     assert record["error"].endswith(" lines: the run stopped there (SIGPIPE)")
     with (out / "track.csv").open() as f:
         assert len(list(csv.DictReader(f))) == record["frames"] < 600
+
+
+def test_a_reader_gone_after_one_line_is_told_in_the_singular(tmp_path: Path) -> None:
+    """A --stream FIFO whose reader took one line and closed it stopped the run with
+    '--stream F: its reader went away (closed the pipe) after 1 lines: ...' (run.json's
+    error): one line is now 'after 1 line'."""
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # (the writer opens at once)
+    writer = StreamWriter(str(fifo), multi_target=False, stall_s=5)
+    result = FrameResult(index=0, time_s=0.0, box=None, state=TrackState.LOST, score=0.0,
+                         prediction=None)
+    try:
+        assert writer.write(result)
+        assert os.read(reader, 4096).count(b"\n") == 1
+        os.close(reader)
+        with pytest.raises(StreamReaderGone) as gone:
+            writer.write(result)
+    finally:
+        writer.close()
+    assert str(gone.value) == (f"--stream {fifo}: its reader went away (closed the pipe) after "
+                               "1 line: the run stopped there (SIGPIPE)")

@@ -29,7 +29,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-from vtrack.errors import COMMAND_NAMES, OptionNames, OutputError, StreamReaderGone
+from vtrack.errors import COMMAND_NAMES, OptionNames, OutputError, StreamReaderGone, plural
 from vtrack.geometry import Box
 from vtrack.io.csvfile import as_written, box_as_written
 from vtrack.io.files import Closing, os_reason, remove_quietly
@@ -136,8 +136,8 @@ class StreamWriter(Closing):
                 return False
         except BrokenPipeError:
             raise StreamReaderGone(f"{self.given}: its reader went away (closed the "
-                                   f"pipe) after {self.lines} lines: the run stopped there "
-                                   "(SIGPIPE)") from None
+                                   f"pipe) after {plural(self.lines, 'line')}: the run stopped "
+                                   "there (SIGPIPE)") from None
         except (OSError, ValueError) as exc:
             if start is not None and self._fd is not None:  # a full disk: no half line left
                 with contextlib.suppress(OSError):
