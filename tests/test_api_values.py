@@ -650,3 +650,18 @@ def test_a_frames_number_and_time_are_python_numbers_whatever_they_were_given_as
     assert tracker.update(image).time_s == pytest.approx(0.1 + 1 / 30)
     with pytest.raises(ValueError, match=r"^frame 3: time_s True is not a finite number$"):
         vtrack.BgrFrame(3, True, image)
+
+
+def test_a_container_given_to_open_source_as_raw_frames_is_told_by_raw_not_the_option(
+        tmp_path: Path) -> None:
+    """vtrack.open_source("clip.mp4", raw="160x120") (and vtrack.track of a RunRequest with a
+    raw format) said 'clip.mp4: an MP4/QuickTime file, not raw frames: read it without --raw',
+    an option of vtrack run the caller never gave; it now names the argument, raw=, as the
+    library's other messages do (vtrack run's still says --raw)."""
+    scene = make_scene("smooth", width=160, height=120, frames=10)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    with pytest.raises(vtrack.InputError) as refused:
+        vtrack.open_source(str(clip), raw="160x120")
+    assert str(refused.value) == (f"{clip}: an MP4/QuickTime file, not raw frames: read it "
+                                  "without raw= (its frames carry their own size and pixel "
+                                  "format)")

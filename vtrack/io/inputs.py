@@ -72,7 +72,7 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
         if live:
             raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
                               "sender back); give a container (e.g. -f mpegts) to skip frames")
-        return partial(RawSource, spec, raw)
+        return partial(RawSource, spec, raw, raw_name=_raw_name(fps_name))
     device = device_number(spec)
     if not (spec == "-" or is_url(spec)):
         check_input_path(spec)
@@ -85,7 +85,7 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
                 if device is None and not is_url(spec) else
                 f"{spec} carries its own timestamps")
         raise ConfigError(f"{fps_name}: {what}; {fps_name} applies to raw input "
-                          f"({'--raw WxH' if fps_name == '--fps' else 'raw='}) and image "
+                          f"({_raw_name(fps_name)}) and image "
                           "folders only")
 
     def opened() -> Source:
@@ -99,6 +99,12 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
         return source
 
     return opened
+
+
+def _raw_name(fps_name: str) -> str:
+    """How the caller whose frame rate is called ``fps_name`` gives raw frames' format: the
+    command's ``--raw WxH`` (``--fps``), the library's ``raw=`` (``fps``)."""
+    return "--raw WxH" if fps_name == "--fps" else "raw="
 
 
 def _not_followed(spec: str, raw: RawFormat | None) -> str | None:

@@ -169,20 +169,24 @@ class _AfterHead:
         return n
 
 
-def _refuse_a_container(label: str, head: bytes) -> None:
+def _refuse_a_container(label: str, head: bytes, raw_name: str) -> None:
     """InputError when ``head``, the input's first bytes, begins a container or an image
-    (:func:`~vtrack.io.signatures.container_kind`): its bytes would be tracked as pixels."""
+    (:func:`~vtrack.io.signatures.container_kind`): its bytes would be tracked as pixels.
+    ``raw_name``: how the caller gave the raw format (``--raw WxH``, ``raw=``)."""
     kind = container_kind(head)
     if kind:
-        raise InputError(f"{label}: {kind}, not raw frames: read it without --raw (its frames "
-                         "carry their own size and pixel format)")
+        raise InputError(f"{label}: {kind}, not raw frames: read it without "
+                         f"{raw_name.split()[0]} (its frames carry their own size and pixel "
+                         "format)")
 
 
 class RawSource(Source):
     """Raw frames of a known :class:`RawFormat` from ``-`` (stdin), a FIFO or a regular file."""
 
-    def __init__(self, spec: str, fmt: RawFormat) -> None:
+    def __init__(self, spec: str, fmt: RawFormat, raw_name: str = "--raw") -> None:
+        """``raw_name``: how the caller gave ``fmt``, for a message (``--raw``, ``raw=``)."""
         self._fmt = fmt
+        self._raw_name = raw_name
         # messages name the input as it was given (``-``), as a container on stdin's do
         self._label = spec
         self._stream = self._open(spec)
@@ -251,7 +255,7 @@ class RawSource(Source):
         fmt, ring, label = self._fmt, self._ring, self._label
         head = bytearray(SIGNATURE_BYTES)
         got = self._read_into(self._stream, memoryview(head), 0)
-        _refuse_a_container(label, bytes(head[:got]))
+        _refuse_a_container(label, bytes(head[:got]), self._raw_name)
         stream = _AfterHead(bytes(head[:got]), self._stream)
         index = 0
         while True:
