@@ -665,3 +665,15 @@ def test_a_container_given_to_open_source_as_raw_frames_is_told_by_raw_not_the_o
     assert str(refused.value) == (f"{clip}: an MP4/QuickTime file, not raw frames: read it "
                                   "without raw= (its frames carry their own size and pixel "
                                   "format)")
+
+
+@pytest.mark.parametrize("values", [None, [("kalman.model", "ca")], "kalman.model=ca"])
+def test_config_with_values_refuses_what_is_no_dict_naming_it(values: object) -> None:
+    """Config.with_values(None) raised Python's "'NoneType' object is not iterable", a list
+    of pairs "key ('kalman.model', 'ca'): expected text, 'stage.param', got tuple" (as if one
+    key were wrong) and a --set-like string "'str' object has no attribute 'items'". Each is
+    now a TypeError saying a dict was expected and showing what was given."""
+    with pytest.raises(TypeError) as refused:
+        vtrack.load_config("s0").with_values(values)  # type: ignore[arg-type]
+    assert str(refused.value) == ("with_values: expected a dict {'stage.param': value}, got "
+                                  f"{values!r}")

@@ -163,7 +163,11 @@ class Config:
     def with_values(self, values: Mapping[str, Any]) -> Config:
         """Apply ``{"stage.param": value}`` Python values (the API's keyword overrides), each
         checked as a config file's value is (a NumPy scalar counts as its Python number); a
-        key that is not text is a TypeError naming it."""
+        key that is not text is a TypeError naming it, and so is ``values`` when it is no
+        mapping (None, a list of pairs)."""
+        if not isinstance(values, Mapping):
+            raise TypeError(f"with_values: expected a dict {{'stage.param': value}}, got "
+                            f"{shown(values)}")
         for key in values:
             if not isinstance(key, str):
                 raise TypeError(f"key {shown(key)}: expected text, 'stage.param', got "
