@@ -786,3 +786,30 @@ def test_a_live_video_output_whose_receiver_stalls_gives_way_to_a_stop(tmp_path:
         assert not closing.is_alive(), "closing waited for the receiver after the stop"
         assert errors == []
     assert not (tmp_path / "unused.mp4").exists()
+
+
+@pytest.mark.parametrize("stop", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_while_a_stream_url_opens_ends_the_run_at_once(tmp_path: Path,
+                                                                stop: signal.Signals) -> None:
+    """`vtrack run udp://127.0.0.1:PORT --timeout 3600 --init ...` with no sender, SIGTERM or
+    Ctrl-C while FFmpeg waited for the first packets: nothing happened until the --timeout
+    passed (7 s after a SIGTERM at 3 s with --timeout 10, an hour with 3600; `timeout 30
+    vtrack run ...` never stopped it), though a signal while an input opens ends the run
+    interrupted. FFmpeg now opens a URL in a thread of its own, and the signal ends the run
+    as it comes: exit 143 (130), 'vtrack: interrupted', no folder."""
+    port = _free_port(socket.SOCK_DGRAM)
+    out = tmp_path / "out"
+    receiver = _receiver([f"udp://127.0.0.1:{port}", "--timeout", "3600", "--init",
+                          "10,10,20,20", "--no-video", "-o", str(out)])
+    try:
+        wait_for_stop_handlers(receiver)
+        _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)  # FFmpeg opens it
+        receiver.send_signal(stop)
+        _, stderr = receiver.communicate(timeout=60)  # (before: up to the hour's timeout)
+    finally:
+        if receiver.poll() is None:
+            receiver.kill()
+            receiver.wait()
+    assert receiver.returncode == 128 + stop, stderr
+    assert stderr.decode().splitlines()[-1] == "vtrack: interrupted"
+    assert not out.exists()

@@ -12,7 +12,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 from vtrack.errors import STOP_SIGNALS
 
@@ -266,3 +266,44 @@ class KeepingUp(Generic[T]):
         if not self._started:
             return True
         return self._thread.finish(timeout)
+
+
+def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
+    """``work()``'s result, computed in a daemon thread while this one waits in steps of
+    :data:`STOP_POLL_S`, so that a signal's Python handler runs (and may raise: Ctrl-C,
+    ``vtrack run``'s Interrupted) at once: a C call that holds its thread until its own timeout
+    (FFmpeg opening a network input that sends nothing) delays the handlers of the thread it
+    runs in until it returns. ``work``'s exception is raised here. When this thread leaves by
+    an exception of its own (a handler's), ``work`` finishes aside and what it gives, if
+    anything, is handed to ``discard`` (e.g. closed)."""
+    lock = threading.Lock()
+    outcome: list[tuple[bool, Any]] = []  # [(succeeded, result or exception)]
+    left = False
+
+    def aside() -> None:
+        try:
+            result: tuple[bool, Any] = (True, work())
+        except BaseException as exc:  # noqa: BLE001 - carried to the waiting thread
+            result = (False, exc)
+        with lock:
+            outcome.append(result)
+            abandoned = left
+        if abandoned and result[0]:
+            discard(result[1])
+
+    thread = threading.Thread(target=aside, name="vtrack-aside", daemon=True)
+    thread.start()
+    try:
+        while thread.is_alive():
+            thread.join(STOP_POLL_S)
+    except BaseException:
+        with lock:
+            left = True
+            done = list(outcome)
+        if done and done[0][0]:
+            discard(done[0][1])
+        raise
+    succeeded, value = outcome[0]
+    if not succeeded:
+        raise value
+    return value

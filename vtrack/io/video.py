@@ -61,6 +61,7 @@ from vtrack.io.signatures import (
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
 from vtrack.io.specs import input_name
+from vtrack.io.threads import run_aside
 from vtrack.machine import cpu_count
 from vtrack.params import MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S, checked_seconds
 
@@ -325,7 +326,10 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
     if scheme == "rtsp" and "listen" in options.get("rtsp_flags", "") \
             and "listen_timeout" not in options:  # FFmpeg's own default fails (ERANGE)
         options["listen_timeout"] = str(max(1, round(how.timeout_s)))
-    return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
+    # in a thread of its own: FFmpeg holds the thread that opens a URL until something comes
+    # or the timeout passes (up to an hour), and Ctrl-C or SIGTERM must not wait that long
+    return run_aside(lambda: av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs),
+                     lambda container: container.close())
 
 
 def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputContainer:
