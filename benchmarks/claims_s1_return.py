@@ -99,7 +99,7 @@ def leave_and_return(scene: Scene, results: list[FrameResult]) -> dict:
 
 class ReacquisitionTest:
     """The document's re-acquisition test on one run: does a particle box at a given position
-    weigh at least ``threshold`` x the reference frozen at the loss (S1 item 6)?"""
+    weigh at least ``threshold`` x the reference frozen at the loss (S1 step 8)?"""
 
     def __init__(self, scene: Scene, frames: list[BgrFrame], results: list[FrameResult]) -> None:
         settings = dict(load_config("s1").stages[0][1])

@@ -35,7 +35,8 @@ PAPERS = {
 def test_what_a_user_reads_cites_the_papers_not_files_a_clone_lacks() -> None:
     """`vtrack stages CONFIG --toml` wrote 'seeds/000_ed28ecd3d98e2ba5.txt; restated in
     ALGORITHMS.md S0' and "the design card's chain"; `vtrack stages` and docs/stages.md said
-    'ALGORITHMS.md default': files no user has. They cite the papers themselves."""
+    'ALGORITHMS.md default': files no user has; they and README cited its item numbers ('S1
+    item 6', '(S0 2-3)'). They cite the papers themselves: steps, sections, equations."""
     from vtrack.cli.stages import config_toml
 
     texts = {name: " ".join(config_toml(name).split()) for name in shipped_configs()}
@@ -44,6 +45,11 @@ def test_what_a_user_reads_cites_the_papers_not_files_a_clone_lacks() -> None:
         for unavailable in ("ALGORITHMS.md", "DESIGN.md", "seeds/", "design card"):
             assert unavailable not in text, (name, unavailable)
         assert not re.search(r"\b\d{3}_[0-9a-f]{16}\.txt", text), name
+    # ALGORITHMS.md's item numbers ('S1 item 6', 'S0 2-3'): the papers' steps, sections, eq.
+    texts["README.md"] = (ROOT / "README.md").read_text()
+    for name, text in texts.items():
+        assert not re.search(r"\bS[0-4] (items? )?[0-9]", text), (name, re.findall(
+            r".{30}\bS[0-4] (?:items? )?[0-9].{10}", text))
     for name, paper in PAPERS.items():
         assert paper in texts[name], name
 

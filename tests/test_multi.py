@@ -243,7 +243,7 @@ def test_mog2_background_detects_from_the_second_frame() -> None:
 
 def test_adaptive_threshold_follows_the_last_candidates_grey() -> None:
     stage = AdaptiveThreshold(offset=50.0, initial=100.0, floor=40.0)
-    assert stage.threshold(None) == 100.0  # S3 2.1: nothing learnt yet
+    assert stage.threshold(None) == 100.0  # S3 sec. 2.1: nothing learnt yet
     assert stage.threshold(180.0) == 130.0  # mean candidate grey - offset
     assert stage.threshold(70.0) == 40.0  # never below the floor
     frames = [frame_with([(5, 5, 6, 180), (40, 30, 6, 120)])] * 2

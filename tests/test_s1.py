@@ -64,8 +64,8 @@ WHOLE = Box(0.0, 0.0, 16.0, 16.0)
 def test_weight_is_the_bhattacharyya_coefficient_and_the_output_the_centroid() -> None:
     frames = [_columns(16), _columns(13)]
     corrected = _track(frames, WHOLE, overrides=ONE_PARTICLE)[1]
-    assert corrected.score == pytest.approx(math.sqrt(13 / 16))  # S1 item 4
-    assert corrected.box == Box.from_center(6.5, 8.0, 16.0, 16.0)  # S1 items 3, 5: centroid
+    assert corrected.score == pytest.approx(math.sqrt(13 / 16))  # S1 step 6
+    assert corrected.box == Box.from_center(6.5, 8.0, 16.0, 16.0)  # S1 step 5: centroid
     assert corrected.extras["particle_cx"] == 8.0
     plain = _track(frames, WHOLE, overrides=(*ONE_PARTICLE, "particle.centroid_correction=false"))
     assert plain[1].box == WHOLE  # the plain filter outputs the best particle's centre
@@ -126,7 +126,7 @@ def _reacquired(scene: Scene, results: list[FrameResult], back: int) -> int:
 def test_leaving_the_frame_is_reported_lost_and_the_return_reacquired(seed: int) -> None:
     scene, results = _leave_return(seed)
     out, back = scene.events["leave"]
-    # S1 item 6: lost within 10 frames after the target is fully out, and while it is out.
+    # S1 step 8: lost within 10 frames after the target is fully out, and while it is out.
     assert [r.state for r in results[out + 10 : back]] == [LOST] * (back - out - 10)
     assert all(r.box is None for r in results if r.state == LOST)
     # Re-acquired once back (not before it is mostly in view), within half a box.
@@ -143,7 +143,7 @@ def test_more_lost_particles_reacquire_within_10_frames_of_the_target_being_back
     seed: int,
 ) -> None:
     # "Back" as the document's test sees it: the weight must reach 0.9 x the weight before the
-    # loss, which a partly visible target cannot (S1 item 6), so count from fully in view.
+    # loss, which a partly visible target cannot (S1 step 8), so count from fully in view.
     scene, results = _leave_return(seed, (f"particle.lost_particles={LOST_PARTICLES}",))
     _, back = scene.events["leave"]
     found = _reacquired(scene, results, back)

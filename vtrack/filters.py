@@ -7,11 +7,11 @@ or corrects it with a measured point (:meth:`MotionModel.update`); nothing is re
 place. The three models of the documents, by name in :data:`MOTION_MODELS`
 (:func:`motion_model` builds one):
 
-- ``cv``, :class:`ConstantVelocity` - S0 item 6 (Liu et al. 2022, eq. 8-17): per axis
+- ``cv``, :class:`ConstantVelocity` - S0 (Liu et al. 2022, sec. 3, eq. 8-17): per axis
   ``(x, dx)``;
-- ``ca``, :class:`ConstantAcceleration` - S2 item 8 (Di & Zhu 2008, eq. 14-16): per axis
+- ``ca``, :class:`ConstantAcceleration` - S2 (Di & Zhu 2008, sec. 5, eq. 14-16): per axis
   ``(x, v, a)``, started from the first three positions;
-- ``gravity``, :class:`Gravity` - S4 item 3 (Gan 2018, eq. 11-13): ``(x, y, ux, vy)`` with a
+- ``gravity``, :class:`Gravity` - S4 (Gan 2018, sec. 3, eq. 11-13): ``(x, y, ux, vy)`` with a
   gravity input.
 
 Every model measures a point ``(x, y)`` (a box centre), and :meth:`MotionModel.position` is a
@@ -145,7 +145,7 @@ _CV_VELOCITY = [1, 3]
 
 
 class ConstantVelocity(MotionModel):
-    """S0 item 6: per axis state ``(x, dx)``, started at the first point at rest.
+    """S0 sec. 3, eq. 8-17: per axis state ``(x, dx)``, started at the first point at rest.
 
     S0 eq. 8-9: ``F = [[1, dt], [0, 1]]`` (the paper's ``dt = 1`` frame), ``H = [1, 0]``;
     S0 eq. 11, 13: ``Q = q I`` and ``R = r`` (the paper: ``Q = I``, ``R = 1``). The initial
@@ -180,7 +180,7 @@ class ConstantVelocity(MotionModel):
 
 
 class ConstantAcceleration(MotionModel):
-    """S2 item 8: per axis ``(position, velocity, acceleration)`` from the first three points.
+    """S2 sec. 5: per axis ``(position, velocity, acceleration)`` from the first three points.
 
     S2 eq. 14-16: ``A = [[1, T, T^2], [0, 1, T], [0, 0, 1]]`` as printed (``kinematic``: the
     textbook ``T^2 / 2``), ``C = [1, 0, 0]``, ``R = r`` (S2: ``sigma_r^2 = 1``),
@@ -220,7 +220,7 @@ class ConstantAcceleration(MotionModel):
 
 
 class Gravity(MotionModel):
-    """S4 item 3: state ``(x, y, ux, vy)``, constant velocity plus gravity.
+    """S4 sec. 3, eq. 11-13: state ``(x, y, ux, vy)``, constant velocity plus gravity.
 
     S4 eq. 11: ``X(k+1) = A X(k) + B u`` with ``A`` the constant-velocity matrix for step
     ``dt`` and the gravity input on the vertical velocity, ``B u = (0, 0, 0, g dt)`` (the

@@ -156,7 +156,7 @@ class KalmanF32:
     even, no fused multiply-add), additions left to right as printed. Q = q I, R = r.
 
     :meth:`predict` is eq. 10-12, :meth:`update` eq. 14-17 (with the prior), :meth:`coast` takes
-    the prior as the posterior (no measurement: S0 item 7). ``values`` holds the latest of every
+    the prior as the posterior (no measurement: S0 sec. 3). ``values`` holds the latest of every
     :data:`KALMAN_FIELDS` entry.
     """
 

@@ -1,4 +1,4 @@
-"""Target model and back-projection (S0 items 2-3).
+"""Target model and back-projection (S0 sec. 2.2, eq. 2-4).
 
 Liu et al. 2022 (sec. 2.2): the
 target model is the histogram of the hue inside the initial box, counted once on the first frame
@@ -77,10 +77,11 @@ def bp_mass(ctx: TrackContext, box: Box) -> float:
 
 @register
 class BackProject(Stage):
-    """Hue histogram of the initial box (S0 item 2); its back-projection on each window (item 3)."""
+    """Hue histogram of the initial box (S0 eq. 2-3); its back-projection on each window (eq. 4)."""
 
     name = "backproject"
-    summary = "hue histogram of the first frame's box, back-projected as hist*255/max (S0 2-3)"
+    summary = ("hue histogram of the first frame's box, back-projected as hist*255/max "
+               "(S0 sec. 2.2, eq. 2-4)")
     params = (
         Param(
             "bins", int, 256,

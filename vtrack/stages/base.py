@@ -148,7 +148,7 @@ class ShapeSamples:
 
 @dataclass(frozen=True)
 class TargetModel:
-    """What a colour tracker learnt about its target on the first frame (S0 items 2-3), built by
+    """What a colour tracker learnt about its target on the first frame (S0 sec. 2.2), built by
     ``backproject`` and read by ``meanshift`` and ``occlusion``.
 
     ``histogram``: float64 counts of the initial box's valid feature values, ``bins`` long;
@@ -195,7 +195,7 @@ class TrackContext:
     #: The target's model, from the first frame (``backproject``); None before it is built.
     target_model: TargetModel | None = None
     #: Mean grey of the detections ``blobs`` found in the last frame (None: none), fed back to
-    #: ``threshold`` for the next frame (S3 item 1). Read from the previous frame, so optional.
+    #: ``threshold`` for the next frame (S3 sec. 2.1). Read from the previous frame, so optional.
     candidate_grey: float | None = None
     #: What a multi-target tracker has learnt about its confirmed targets' shape (None: nothing
     #: yet), fed back to the stages that group blobs into targets on the next frame. Read from

@@ -1,4 +1,4 @@
-"""Colour features: the hue of this frame's search window (S0 item 1).
+"""Colour features: the hue of this frame's search window (S0 sec. 2.1, eq. 1).
 
 Liu et al. 2022 (S0) track on the
 hue H of HSV only, computed from RGB888 by the piecewise formula of their eq. (1) (``max == min``
@@ -50,10 +50,10 @@ def search_window(center: Box, scale: float, width: int, height: int) -> Window:
 
 @register
 class Hue(Stage):
-    """Hue of the search window (S0 item 1), with an optional saturation/value validity mask."""
+    """Hue of the search window (S0 eq. 1), with an optional saturation/value validity mask."""
 
     name = "hue"
-    summary = "hue (H of HSV) of the search window around the prediction or the last box (S0 1)"
+    summary = "hue (H of HSV) of the search window around the prediction or the last box (S0 eq. 1)"
     params = (
         Param(
             "search_scale", float, 2.0,

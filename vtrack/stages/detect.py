@@ -3,13 +3,13 @@
 Detecting trackers (S3, S4) look for targets everywhere, so these stages work on the whole grey
 frame (free for yuv420p input: it is the Y plane), with OpenCV doing every per-pixel step.
 
-- ``background`` (S4 items 1-2): background ``B`` = mean of the first ``frames`` frames,
+- ``background`` (S4 sec. 1.1-1.2): background ``B`` = mean of the first ``frames`` frames,
   foreground ``|D - B| >= Th``; or OpenCV's MOG2 for scenes where a fixed mean background fails.
-- ``threshold`` (S3 items 1-2): adaptive grey threshold fed back from the previous frame's
+- ``threshold`` (S3 sec. 2.1): adaptive grey threshold fed back from the previous frame's
   candidates, then a median filter.
-- ``blobs`` (S3 item 3, S4 item 2): connected components -> :class:`Detection` list in
+- ``blobs`` (S3 sec. 2.1, S4 sec. 1.2): connected components -> :class:`Detection` list in
   ``ctx.detections``.
-- ``largest_blob`` (S4 item 2): the largest blob becomes ``ctx.measurement`` for a single-target
+- ``largest_blob`` (S4 sec. 1.2): the largest blob becomes ``ctx.measurement`` for a single-target
   Kalman filter.
 
 The segmenting stages hand over ``ctx.window`` (the whole frame), ``ctx.feature`` (its grey
@@ -297,8 +297,8 @@ class Background(Stage):
             int,
             1,
             "size in frame pixels of a morphological opening of the foreground, removing "
-            "specks (S4 1.2 'after simple processing'; 1 = none; above 31 working pixels it is "
-            "applied to a shrunk mask, bounding its cost)",
+            "specks (S4 sec. 1.2 'after simple processing'; 1 = none; above 31 working pixels it "
+            "is applied to a shrunk mask, bounding its cost)",
             min=1, max=255,
         ),
         Param(
@@ -306,7 +306,7 @@ class Background(Stage):
             int,
             1,
             "size in frame pixels of a morphological closing after the opening, joining the "
-            "fragments of one target (S4 1.2 'after simple processing'; 1 = none; above 31 "
+            "fragments of one target (S4 sec. 1.2 'after simple processing'; 1 = none; above 31 "
             "working pixels applied to a shrunk mask)",
             min=1, max=255,
         ),
@@ -514,10 +514,10 @@ class AdaptiveThreshold(Stage):
     """S3 adaptive segmentation + median filter.
 
     The threshold for frame k+1 is the mean grey of the candidates ``blobs`` found in frame k
-    minus ``offset`` (S3 item 1; on the first frame, and after a frame without candidates, it is
+    minus ``offset`` (S3 sec. 2.1; on the first frame, and after a frame without candidates, it is
     ``initial``, and it never goes below ``floor``). Pixels below it become 0, the others keep
     their grey; a ``median`` x ``median`` median filter then removes the fragments the
-    segmentation leaves around targets (S3 item 2, Fig. 2c).
+    segmentation leaves around targets (S3 sec. 2.1, Fig. 2c).
     """
 
     name = "threshold"
@@ -625,8 +625,8 @@ class Blobs(Stage):
     a cluttered frame costs a bounded amount downstream. Only the parts of the frame that hold
     foreground are labelled (see :func:`foreground_regions`). A foreground made at a reduced
     resolution (``ctx.feature_scale`` > 1) is mapped back: boxes, centroids and areas are in
-    frame pixels. Publishes the candidates' mean grey for ``threshold``'s next frame (S3 item
-    1). Detections are ordered by their box's top edge, then its left edge.
+    frame pixels. Publishes the candidates' mean grey for ``threshold``'s next frame (S3 sec.
+    2.1). Detections are ordered by their box's top edge, then its left edge.
     """
 
     name = "blobs"
@@ -700,13 +700,13 @@ class Blobs(Stage):
         blobs.sort(key=lambda d: (d.box.y, d.box.x))
         ctx.detections.extend(blobs)
         ctx.detections.sort(key=lambda d: (d.box.y, d.box.x))
-        if blobs:  # S3 item 1: the mean grey of this stage's own candidates
+        if blobs:  # S3 sec. 2.1: the mean grey of this stage's own candidates
             ctx.candidate_grey = float(np.mean([d.grey for d in blobs]))
 
 
 @register
 class LargestBlob(Stage):
-    """S4 item 2: the largest detection is this frame's measurement of the single target.
+    """S4 sec. 1.2: the largest detection is this frame's measurement of the single target.
 
     ``ctx.measurement`` is its bounding box centred on its centroid (S4: 'the centre and size of
     the detected target'), and the state is ``tracking``. When nothing was detected the

@@ -3,13 +3,13 @@
 The filter math and the three motion models live in :mod:`vtrack.filters` (``model`` names one
 of :data:`vtrack.filters.MOTION_MODELS`):
 
-- ``cv``: S0 item 6 (Liu et al. 2022, eq. 8-17): per axis ``(x, dx)``, ``F = [[1,1],[0,1]]``,
+- ``cv``: S0 (Liu et al. 2022, sec. 3, eq. 8-17): per axis ``(x, dx)``, ``F = [[1,1],[0,1]]``,
   ``H = [1,0]``, ``Q = q I`` (S0: I), ``R = r`` (S0: 1), ``P0 = p0 I`` (not given; 100 I);
-- ``ca``: S2 item 8 (Di & Zhu 2008, eq. 14-16): per axis ``(x, v, a)``, ``A`` with ``T^2`` as
+- ``ca``: S2 (Di & Zhu 2008, sec. 5, eq. 14-16): per axis ``(x, v, a)``, ``A`` with ``T^2`` as
   printed (``kinematic``: ``T^2/2``), ``W = diag(0, 0, q)``, ``R = r``, started from the first
   three measured positions; until then there is no prediction and the measurement passes
   through;
-- ``gravity``: S4 item 3 (Gan 2018, eq. 11-13): ``(x, y, ux, vy)``, constant velocity plus a
+- ``gravity``: S4 (Gan 2018, sec. 3, eq. 11-13): ``(x, y, ux, vy)``, constant velocity plus a
   gravity input ``g`` on the vertical velocity, ``P(1) = p0 I`` (S4: 100 I); ``init =
   "document"`` starts from ``(w/2, 0, 0, 0)`` (``w`` the image width) corrected by the first
   measurement, ``"first_measurement"`` starts at the first measurement at rest.
@@ -48,7 +48,8 @@ class Kalman(Stage):
     """Kalman filter on the box centre: cv (S0), ca (S2) or gravity (S4) motion model."""
 
     name = "kalman"
-    summary = "Kalman filter on the box centre (cv: S0 6, ca: S2 8, gravity: S4 3); predicts"
+    summary = ("Kalman filter on the box centre (cv: S0 eq. 8-17, ca: S2 eq. 14-16, gravity: "
+               "S4 eq. 11-13); predicts")
     params = (
         Param(
             "model", str, "cv",

@@ -1,4 +1,4 @@
-"""Mean shift on the back-projection (S0 items 4-5) and OpenCV's CamShift.
+"""Mean shift on the back-projection (S0 sec. 2.3) and OpenCV's CamShift.
 
 Liu et al. 2022 (sec. 2.3): the
 mean-shift vector over a rectangular window ``S_r`` centred at ``(x, y)`` is
@@ -96,10 +96,11 @@ def mean_shift(
 
 @register
 class MeanShift(Stage):
-    """One (or a few) mean-shift steps per frame on the back-projection (S0 4-5), or CamShift."""
+    """One (or a few) mean-shift steps per frame on the back-projection (S0 sec. 2.3), or
+    CamShift."""
 
     name = "meanshift"
-    summary = "mean shift on the back-projection, one step per frame (S0 4-5), or cv2.CamShift"
+    summary = "mean shift on the back-projection, one step per frame (S0 sec. 2.3), or cv2.CamShift"
     params = (
         Param(
             "method", str, "meanshift",

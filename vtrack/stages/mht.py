@@ -180,7 +180,7 @@ class MultipleHypothesis(Stage):
             float,
             20.0,
             "association gate: largest distance in pixels between a track's prediction and a "
-            "measurement (S3 2.3: the distance itself is the association measure; size not "
+            "measurement (S3 sec. 2.3: the distance itself is the association measure; size not "
             "given: 20)",
             min=1.0, max=1e5,
         ),
@@ -192,17 +192,18 @@ class MultipleHypothesis(Stage):
             "(bounds the branching; not in S3)",
             min=1, max=16,
         ),
-        Param("initial", float, 1.0, "P_R of a new track (S3 2.3, value not given: 1)",
+        Param("initial", float, 1.0, "P_R of a new track (S3 sec. 2.3, value not given: 1)",
               min=0.0, max=1e6),
-        Param("hit", float, 1.0, "P_R increment on an update (S3 2.3, value not given: 1)",
+        Param("hit", float, 1.0, "P_R increment on an update (S3 sec. 2.3, value not given: 1)",
               min=0.0, max=1e6),
-        Param("miss", float, 1.0, "P_R decrement on a frame without update (S3 2.3, not given: 1)",
+        Param("miss", float, 1.0,
+              "P_R decrement on a frame without update (S3 sec. 2.3, not given: 1)",
               min=0.0, max=1e6),
         Param(
             "confirm",
             float,
             3.0,
-            "a track is confirmed once its P_R reaches this (S3 2.3 confirmation threshold, "
+            "a track is confirmed once its P_R reaches this (S3 sec. 2.3 confirmation threshold, "
             "value not given: 3 = a new track updated twice)",
             min=-1e6, max=1e6,
         ),
@@ -210,7 +211,7 @@ class MultipleHypothesis(Stage):
             "delete",
             float,
             0.5,
-            "a branch whose P_R falls below this is deleted (S3 2.3 deletion threshold, value "
+            "a branch whose P_R falls below this is deleted (S3 sec. 2.3 deletion threshold, value "
             "not given: 0.5 = a new track missed once)",
             min=-1e6, max=1e6,
         ),
@@ -226,7 +227,7 @@ class MultipleHypothesis(Stage):
             "max_hypotheses",
             int,
             8,
-            "hypotheses kept per frame, the best (bounds the work; S3 2.4 deletes low-P_H "
+            "hypotheses kept per frame, the best (bounds the work; S3 sec. 2.4 deletes low-P_H "
             "hypotheses without saying how many remain)",
             min=1, max=64,
         ),
@@ -234,7 +235,7 @@ class MultipleHypothesis(Stage):
             "prune_margin",
             float,
             4.0,
-            "hypotheses whose P_H is more than this below the best are deleted (S3 2.4, value "
+            "hypotheses whose P_H is more than this below the best are deleted (S3 sec. 2.4, value "
             "not given: 4)",
             min=0.0, max=1e6,
         ),
@@ -360,7 +361,7 @@ class MultipleHypothesis(Stage):
     def _coast(self, branch: _Branch, prediction: np.ndarray) -> _Option:
         confidence = branch.confidence - self.miss
         if confidence < self.delete or branch.coasting >= self.max_coast:
-            return _Option((0.0, 0.0, 0.0), None, 0)  # the track ends here (S3 2.3 deletion)
+            return _Option((0.0, 0.0, 0.0), None, 0)  # the track ends here (S3 sec. 2.3 deletion)
         x, y = float(prediction[0]), float(prediction[1])
         child = replace(
             branch,
@@ -379,7 +380,7 @@ class MultipleHypothesis(Stage):
     def _extend(self, options: dict[int, _Choices]) -> list[_Hypothesis]:
         """The ``max_hypotheses`` best extensions of the current hypotheses (without the new
         tracks), best first: branch-and-bound over one option per branch, no measurement used
-        twice (S3 2.4), ranked by :func:`_score`. Branches with a single option (a measurement
+        twice (S3 sec. 2.4), ranked by :func:`_score`. Branches with a single option (a measurement
         no other track gates, or none at all) take it without search."""
         limit = self.max_hypotheses
         found: list[tuple[_Key, int, tuple]] = []  # min-heap of (key, order, path), worst first
@@ -418,7 +419,7 @@ class MultipleHypothesis(Stage):
         return [_unwind(path) for *_, path in sorted(found, reverse=True)]
 
     def _prune(self, hypotheses: list[_Hypothesis]) -> list[_Hypothesis]:
-        """Best first; delete those more than ``prune_margin`` below the best P_H (S3 2.4)."""
+        """Best first; delete those more than ``prune_margin`` below the best P_H (S3 sec. 2.4)."""
         ranked = sorted(hypotheses, key=_score, reverse=True)[: self.max_hypotheses]
         if not ranked:
             return ranked

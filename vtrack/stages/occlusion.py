@@ -1,4 +1,4 @@
-"""Occlusion and loss: whether this frame's measurement may reach the filter (S0 item 7).
+"""Occlusion and loss: whether this frame's measurement may reach the filter (S0 sec. 3).
 
 Liu et al. 2022 (sec. 1 and 3):
 "when the target is completely occluded, the Kalman prediction is used, so that the window does
@@ -19,7 +19,7 @@ States:
 - ``tracking``: the signal is measured on the mean-shift box (``ctx.measurement``); below
   ``threshold`` the target is hidden.
 - hidden (``occluded``, then ``lost`` after ``lost_after`` hidden frames): the measurement is
-  withheld so the Kalman filter coasts and the box follows the prediction (S0 item 7). The
+  withheld so the Kalman filter coasts and the box follows the prediction (S0 sec. 3). The
   search window widens by ``growth`` per hidden frame up to ``max_growth`` (the prediction's
   uncertainty grows with every coasted frame: a velocity learnt while the target was being
   covered - mean shift follows its visible part - is off), and the target's return is looked
@@ -77,10 +77,12 @@ def best_box(likelihood: np.ndarray, window: Window, target: Box) -> Box:
 
 @register
 class Occlusion(Stage):
-    """Tracking / occluded / lost from a target-presence signal; coasting while hidden (S0 7)."""
+    """Tracking / occluded / lost from a target-presence signal; coasting while hidden (S0
+    sec. 3)."""
 
     name = "occlusion"
-    summary = "occluded/lost detection: withhold the measurement so the Kalman filter coasts (S0 7)"
+    summary = ("occluded/lost detection: withhold the measurement so the Kalman filter coasts "
+               "(S0 sec. 3)")
     params = (
         Param(
             "signal", str, "bp_mass",
@@ -155,7 +157,7 @@ class Occlusion(Stage):
         self._hidden += 1
         ctx.state = TrackState.LOST if self._hidden > self.lost_after else TrackState.OCCLUDED
         ctx.search_growth = min(ctx.search_growth * self.growth, self.max_growth)
-        # S0 item 7: under full occlusion the measurement is not used; the position is the
+        # S0 sec. 3: under full occlusion the measurement is not used; the position is the
         # prediction (the search box), so the window does not drift away
         ctx.measurement = None
         ctx.box = search_box

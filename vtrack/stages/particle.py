@@ -103,7 +103,7 @@ class ParticleFilter(Stage):
             float,
             0.75,
             "share of particles scattered near the last position while tracked, the rest over "
-            "the whole frame (S1 item 2: 'most' near, 'a few' elsewhere: 6 of 8)",
+            "the whole frame (S1 step 3, [0011]: 'more' near, 'fewer' elsewhere; 6 of [0042]'s 8)",
             min=0.0,
             max=1.0,
         ),
@@ -120,8 +120,8 @@ class ParticleFilter(Stage):
             "bins",
             int,
             256,
-            "hue bins over 0..360 degrees (S1 item 1: one per degree; 256 is the full "
-            "resolution of 8-bit hue)",
+            "hue bins over 0..360 degrees (S1 step 2, [0041]: one per H value, 0..360; 256 is the "
+            "full resolution of 8-bit hue)",
             min=2,
             max=HUE_LEVELS,
         ),
@@ -129,7 +129,7 @@ class ParticleFilter(Stage):
             "centroid_correction",
             bool,
             True,
-            "output the best particle's target-weighted centroid (S1 item 5); false: its "
+            "output the best particle's target-weighted centroid (S1 step 5, [0013]); false: its "
             "centre (the plain particle filter)",
         ),
         Param(
@@ -137,7 +137,7 @@ class ParticleFilter(Stage):
             float,
             0.9,
             "tracked while best weight / weight `history` frames ago >= threshold "
-            "(S1 item 6: 0.86..0.92)",
+            "(S1 step 8, [0047]: 86% to 92%)",
             min=0.0,
             max=1.0,
         ),
@@ -145,7 +145,7 @@ class ParticleFilter(Stage):
             "history",
             int,
             10,
-            "tracked frames between the compared weights (S1 item 6: 10)",
+            "tracked frames between the compared weights (S1 step 8, [0018]: ten)",
             min=1, max=1000,
         ),
         Param("draw_particles", bool, False,
@@ -167,7 +167,7 @@ class ParticleFilter(Stage):
     draw_particles: bool
 
     def start(self, ctx: TrackContext) -> None:
-        """Build the target model from the initial box (S1 item 1) and clear the history."""
+        """Build the target model from the initial box (S1 step 2) and clear the history."""
         frame = ctx.frame
         box = ctx.box
         assert box is not None  # needs_init_box: the pipeline refuses to start without one
@@ -178,10 +178,10 @@ class ParticleFilter(Stage):
                 f"{frame.width}x{frame.height} frame"
             )
         refuse_colourless(frame.bgr(window), self.name, box.text())
-        # S1 item 1: target feature = hue histogram of the first frame's box.
+        # S1 step 2: target feature = hue histogram of the first frame's box.
         first = hue_windows(frame, [window])[0]
         self._target = hue_histogram(first, None, self.bins, HUE_LEVELS).astype(np.float64)
-        # S1 item 3: q[H] per 8-bit hue value, for the centroid weights (cv2.LUT table).
+        # S1 step 5: q[H] per 8-bit hue value, for the centroid weights (cv2.LUT table).
         bin_of_hue = np.arange(HUE_LEVELS) * self.bins // HUE_LEVELS
         self._q_of_hue = (self._target / self._target.sum())[bin_of_hue].astype(np.float32)
         self._size = (box.w, box.h)
@@ -189,7 +189,7 @@ class ParticleFilter(Stage):
             min(max(round(box.w), 1), frame.width),
             min(max(round(box.h), 1), frame.height),
         )
-        # S1 item 6: best weights of the last `history` tracked frames, oldest first. Empty at
+        # S1 step 8: best weights of the last `history` tracked frames, oldest first. Empty at
         # the start: the first tracked frame is compared with itself and, until `history`
         # weights are stored, later frames with the oldest one. This is the patent's own start
         # ([0047]: the first tracked frame's weight fills the whole shift register).
@@ -203,7 +203,7 @@ class ParticleFilter(Stage):
         assert ctx.box is not None  # set by start and never cleared
         windows, near, corners = self._scatter(ctx)
         hues = hue_windows(frame, windows[:near]) + hue_windows(frame, windows[near:])
-        # S1 items 3-4: each particle's hue histogram and its Bhattacharyya weight.
+        # S1 steps 4 and 6: each particle's hue histogram and its Bhattacharyya weight.
         # Bounded work: past PIXEL_BUDGET frames' worth of window pixels (many particles over a
         # large box), every window is counted on every n-th row.
         counted = sampled_rows(hues, PIXEL_BUDGET * frame.width * frame.height)
@@ -214,10 +214,10 @@ class ParticleFilter(Stage):
         weight = float(weights[best])
         window = windows[best]
         centre = (window.x0 + window.width / 2.0, window.y0 + window.height / 2.0)
-        # S1 item 5: output the best particle's centroid (its centre for the plain filter).
+        # S1 steps 5 and 7: output the best particle's centroid (its centre for the plain filter).
         point = self._centroid(hues[best], window) if self.centroid_correction else centre
 
-        # S1 item 6: tracked/lost ratio against the best weight `history` tracked frames ago
+        # S1 step 8: tracked/lost ratio against the best weight `history` tracked frames ago
         # (while lost every stored weight is the frozen reference, so it is the oldest one too).
         reference = self._weights[0] if self._weights else weight
         tracked = weight >= self.threshold * reference
@@ -226,8 +226,9 @@ class ParticleFilter(Stage):
             ctx.box = Box.from_center(point[0], point[1], *self._size)
             ctx.state = TrackState.TRACKING
         elif ctx.state != TrackState.LOST:
-            # S1 item 6: entering lost freezes the history at the weight `history` frames before
-            # the loss ([0047]: it replaces the other nine entries; this frame is not stored).
+            # S1 step 8 ([0018]): entering lost freezes the history at the weight `history`
+            # frames before the loss ([0047]: it replaces the other nine entries; this frame is
+            # not stored).
             self._weights.extend([reference] * self.history)
             # ctx.box keeps the last tracked box; the pipeline outputs none
             ctx.state = TrackState.LOST
@@ -242,7 +243,7 @@ class ParticleFilter(Stage):
             ctx.overlays.append(Particles(corners + np.array(self._pixels) / 2.0))
 
     def _scatter(self, ctx: TrackContext) -> tuple[list[Window], int, np.ndarray]:
-        """Particle windows of the target's pixel size, inside the frame (S1 item 2).
+        """Particle windows of the target's pixel size, inside the frame (S1 step 3).
 
         While tracked there are ``particles`` windows and the first ``near_share * particles``
         (rounded to the nearest integer) are scattered near the last position; while lost there
@@ -259,7 +260,7 @@ class ParticleFilter(Stage):
         near = 0 if lost else round(self.near_share * self.particles)
         offsets = rng.uniform(-self.spread, self.spread, (near, 2)) * self._size
         near_corners = np.array([ctx.box.cx, ctx.box.cy]) + offsets - size / 2.0
-        # S1 item 2: a few particles (all of them while lost) uniformly over the whole frame.
+        # S1 step 3: a few particles (all of them while lost) uniformly over the whole frame.
         room = np.array([frame.width - pw, frame.height - ph], dtype=np.float64)
         far_corners = rng.uniform(0.0, 1.0, (count - near, 2)) * room
         corners = np.clip(np.rint(np.vstack([near_corners, far_corners])), 0, room).astype(int)
@@ -267,8 +268,8 @@ class ParticleFilter(Stage):
         return windows, near, corners
 
     def _centroid(self, hue: np.ndarray, window: Window) -> tuple[float, float]:
-        """``sum (x, y) q[H] / sum q[H]`` over the window's pixel centres (S1 item 3), ``hue``
-        the window's hue plane; the window's centre when no pixel has a target hue."""
+        """``sum (x, y) q[H] / sum q[H]`` over the window's pixel centres (S1 step 5, [0033]),
+        ``hue`` the window's hue plane; the window's centre when no pixel has a target hue."""
         mass = cv2.LUT(hue, self._q_of_hue.reshape(1, HUE_LEVELS))
         moments = cv2.moments(mass)
         if moments["m00"] <= 0:

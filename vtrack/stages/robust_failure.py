@@ -7,7 +7,7 @@ filter's own response (``robust_search``), not a hand-set similarity:
 - **Occluded** when the response's peak-to-sidelobe ratio falls below ``hidden_psr`` (Bolme et
   al., MOSSE, CVPR 2010, find PSR 20-60 while tracking and below 7 under occlusion or failure).
   The box stays on the response's peak (``coast``: it follows the motion model's prediction
-  instead, S0 item 7, which suits a fixed camera but lowered the mean AUC on hand-held and
+  instead, S0 sec. 3, which suits a fixed camera but lowered the mean AUC on hand-held and
   panning footage); with ``learn_occluded`` the models still learn there when the colours
   agree (below). With ``coast_unseen``, an occluded frame whose colours at the peak fail the
   ``doubtful_colour`` check is one where neither learner sees the target: the box reported
@@ -252,7 +252,7 @@ class RobustFailure(Stage):
         target.hidden_frames = max(ctx.clock.frame - target.seen_at, 1)
         _hold_size(target, ctx)
         if self.coast:
-            ctx.measurement = None  # S0 item 7: coast on the prediction
+            ctx.measurement = None  # S0 sec. 3: coast on the prediction
             if ctx.prediction is not None:
                 ctx.box = ctx.prediction
         gone = mostly_outside(ctx.box, ctx.frame, target.least_inside)

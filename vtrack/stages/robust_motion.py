@@ -27,7 +27,7 @@ velocity).
 On a frame where neither of ``robust``'s learners sees the target (``robust_failure``'s
 ``coast_unseen``: the response says occluded and the colours at its peak are not the
 target's), the box reported is the constant-velocity extrapolation from the last frame that saw
-it (S0 item 7's coasting), while the filter still takes the frame's peak (as weakly as its
+it (S0 sec. 3's coasting), while the filter still takes the frame's peak (as weakly as its
 score says) and the next search stays there: a target passing behind an occluder is reported
 where it goes, not on the occluder's edge, and a wrong velocity never moves the search.
 
@@ -58,8 +58,8 @@ class RobustMotion(Stage):
     """Constant-velocity Kalman filter with size-relative noise; predicts box and uncertainty."""
 
     name = "robust_motion"
-    summary = ("robust: constant-velocity Kalman filter (S0 6) with noise relative to the "
-               "target size; predicts the next centre and its uncertainty")
+    summary = ("robust: constant-velocity Kalman filter (S0 sec. 3, eq. 8-17) with noise "
+               "relative to the target size; predicts the next centre and its uncertainty")
     params = (
         Param("q_rel", float, 0.05, "process noise std per frame, in target diagonals",
               min=0.0, max=10.0),
@@ -86,7 +86,7 @@ class RobustMotion(Stage):
     def start(self, ctx: TrackContext) -> None:
         assert ctx.box is not None
         d = math.hypot(ctx.box.w, ctx.box.h)
-        # S0 item 6's model (vtrack.filters), noises in proportion to the first box's diagonal
+        # S0's model (sec. 3) (vtrack.filters), noises in proportion to the first box's diagonal
         self._model = ConstantVelocity(q=(self.q_rel * d) ** 2, r=(self.r_rel * d) ** 2,
                                        p0=(self.p0_rel * d) ** 2)
         self._state = self._model.initiate([(ctx.box.cx, ctx.box.cy)])
@@ -125,7 +125,7 @@ class RobustMotion(Stage):
     def _report_unseen(self, ctx: TrackContext) -> None:
         """On a frame where neither of ``robust``'s learners sees the target
         (``ctx.robust.unseen``), report the box extrapolated at constant velocity from the last
-        frame that saw it (S0 item 7's coasting; the filter itself still takes this frame's
+        frame that saw it (S0 sec. 3's coasting; the filter itself still takes this frame's
         peak, as weakly as its score says), unless that box is mostly outside the frame (then
         the peak's box, which ``robust_failure`` found in view), and keep the peak for the next
         search; otherwise remember this frame's position and velocity."""

@@ -11,7 +11,7 @@ as the document's floating-point IP computes it (sec. 3, fig. 13-14). Three stag
   document has none);
 - ``meanshift_fixed``: the integer sums of eq. 6-7 about ``ref = win + w // 2`` and one step per
   frame (sec. 2.3), ``weighted`` (/ sum_bp) or ``paper`` (/ (n * 255)), in units of
-  ``2^-step_frac_bits`` pixel with a declared rounding; occlusion (S0 item 7, not specified by
+  ``2^-step_frac_bits`` pixel with a declared rounding; occlusion (S0 sec. 3, not specified by
   the document) as an integer comparison of ``sum_bp`` with the first frame's;
 - ``kalman_f32``: eq. 10-17 per axis in float32 (:class:`vtrack.golden.s0.KalmanF32`); the
   prediction, rounded to the nearest pixel, centres the next window.
@@ -65,10 +65,11 @@ def _record(ctx: TrackContext) -> FixedRecord:
 
 @register
 class HueBpFixed(Stage):
-    """S0 items 1-3 in integers: exact 8-bit hue, 20-bit histogram, BP = floor(hist*255/max)."""
+    """S0 sec. 2.1-2.2 in integers: exact 8-bit hue, 20-bit histogram, BP = floor(hist*255/max)."""
 
     name = "hue_bp_fixed"
-    summary = "S0 1-3 bit-exact: integer hue (eq. 1), histogram (eq. 2-3), BP (eq. 4) on the window"
+    summary = ("S0 sec. 2.1-2.2 bit-exact: integer hue (eq. 1), histogram (eq. 2-3), BP (eq. 4) "
+               "on the window")
     params = (
         Param("hist_bits", int, 20,
               "width of each of the 256 histogram counters; they saturate at 2^bits - 1 (S0 "
@@ -158,10 +159,12 @@ class HueBpFixed(Stage):
 
 @register
 class MeanShiftFixed(Stage):
-    """S0 items 4-5, 7 in integers: eq. 6-7 sums about win + w//2, one rounded step per frame."""
+    """S0 sec. 2.3 and sec. 3's occlusion in integers: eq. 6-7 sums about win + w//2, one rounded
+    step per frame."""
 
     name = "meanshift_fixed"
-    summary = "S0 4-5 bit-exact: integer sums of eq. 6-7, one rounded step; integer occlusion test"
+    summary = ("S0 sec. 2.3 bit-exact: integer sums of eq. 6-7, one rounded step; integer "
+               "occlusion test")
     params = (
         Param("normalization", str, "weighted",
               "step = sum_bp_dx / sum_bp (weighted centroid, the usual mean-shift step) or "
@@ -174,7 +177,7 @@ class MeanShiftFixed(Stage):
               "integer division of the step: nearest (half away from zero), floor, trunc "
               "(toward zero, Verilog /)", choices=("nearest", "floor", "trunc")),
         Param("occlusion_permille", int, 150,
-              "hidden when 1000 sum_bp < this x the first frame's sum_bp (S0 item 7; the "
+              "hidden when 1000 sum_bp < this x the first frame's sum_bp (S0 sec. 3; the "
               "document gives no rule; 0 = never)", min=0, max=1000),
         Param("recover_permille", int, 250,
               "visible again when 1000 sum_bp >= this x the first frame's (hysteresis)",
@@ -247,7 +250,7 @@ class MeanShiftFixed(Stage):
             cy = centre[1] + shift[1] / one + 0.5
             ctx.measurement = ctx.box = Box.from_center(cx, cy, w, h)
         else:
-            # S0 item 7: the measurement is not used; the position is the window (prediction)
+            # S0 sec. 3: the measurement is not used; the position is the window (prediction)
             record.growth = min(
                 max(record.growth, self.search_permille) * self.growth_permille // 1000,
                 self.search_permille * self.max_growth_permille // 1000)
@@ -300,10 +303,11 @@ class MeanShiftFixed(Stage):
 
 @register
 class KalmanF32Stage(Stage):
-    """S0 item 6 in IEEE float32, eq. 10-17 operation by operation, one filter per axis."""
+    """S0 sec. 3 in IEEE float32, eq. 10-17 operation by operation, one filter per axis."""
 
     name = "kalman_f32"
-    summary = "S0 6 bit-exact: per-axis (x, dx) Kalman in float32, eq. 10-17 in the paper's order"
+    summary = ("S0 sec. 3 bit-exact: per-axis (x, dx) Kalman in float32, eq. 10-17 in the "
+               "paper's order")
     params = (
         Param("q", float, 1.0, "Q = q I (S0 eq. 11: I)", min=0.0, max=1e6),
         Param("r", float, 1.0, "R (S0 eq. 13: 1)", min=1e-6, max=1e6),
