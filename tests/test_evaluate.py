@@ -349,7 +349,10 @@ def test_read_mot_detections(tmp_path):
         ("1.5,1,1,2,3,4\n", "line 1: frame must be an integer >= 1"),
         ("1,1,1,2,3\n", "line 1: expected at least 6 numbers"),
         ("1,x,1,2,3,4\n", "line 1: expected at least 6 numbers"),
-        ("1,1.5,1,2,3,4\n", "line 1: id must be an integer"),
+        ("1,1.5,1,2,3,4\n", "line 1: id must be an integer, got 1.5"),
+        # a value a hair off an integer read 'got 1' or 'column 8 is 1, not a ... class'
+        ("1,1.0000001,1,2,3,4\n", "line 1: id must be an integer, got 1.0000001"),
+        ("1,1,1,2,3,4,1,1.0000001\n", "line 1: column 8 is 1.0000001, not a MOTChallenge class"),
         ("1,1,nan,2,3,4\n", "line 1: non-finite number"),
         # probe 51c: taken, and printed whole (301 digits) in the 'past the input' warning
         ("1,1,1,2,3,4\n1e300,1,1,2,3,4\n", "line 2: frame beyond 1,000,000,000 in '1e300,"),

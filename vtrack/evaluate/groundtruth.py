@@ -464,11 +464,12 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
     rows: dict[int, list[tuple[Box, bool]]] = {}  # every row with a box, for the distractors
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
-            raise InputError(f"{path} line {number}: id must be an integer, got {values[1]:g}")
+            raise InputError(f"{path} line {number}: id must be an integer, "
+                             f"got {number_text(values[1])}")
         kind = values[7] if len(values) in (8, 9) else None  # the class column's, if any
         if kind is not None and kind not in MOT_CLASSES:
             raise InputError(
-                f"{path} line {number}: column 8 is {kind:g}, not a MOTChallenge class "
+                f"{path} line {number}: column 8 is {number_text(kind)}, not a MOTChallenge class "
                 f"(1-13, 1 pedestrian): {len(values)} columns are "
                 "frame,id,x,y,w,h,consider,class[,visibility]; MOT15's rows with world "
                 "coordinates have 10 (frame,id,x,y,w,h,conf,x,y,z)")
@@ -479,7 +480,8 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
             dropped.drop("the consider flag 0 in column 7", number)
             continue
         if kind is not None and kind != MOT_PEDESTRIAN:
-            dropped.drop(f"class {kind:g} in column 8, not pedestrian {MOT_PEDESTRIAN}", number)
+            dropped.drop(f"class {number_text(kind)} in column 8, not pedestrian "
+                         f"{MOT_PEDESTRIAN}", number)
             continue
         if not (box.w > 0 and box.h > 0):
             dropped.drop(EMPTY_BOX, number)
