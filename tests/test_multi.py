@@ -559,7 +559,8 @@ def test_track_ids_used_up_stay_a_config_error_on_every_later_frame(scene_factor
     assert len(failed) > 1, failed  # (a first error, then later frames that needed an id)
     for index, said in failed:
         assert said.startswith(f"the track ids from {2**53} are used up at frame {index} "
-                               f"(tracks.csv's frame {index + 1}): "), said
+                               f"(frame {index + 1} counted from 1, as tracks.csv and "
+                               "MOTChallenge number them): "), said
 
 
 # --- S4 on the bounce scene ---------------------------------------------------------------------

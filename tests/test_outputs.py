@@ -1035,10 +1035,11 @@ def test_a_run_whose_track_ids_pass_2_to_the_53_stops_at_that_frame(tmp_path: Pa
     line = done.stderr.splitlines()[-1]
     stopped_at = int(line.split(" are used up at frame ")[1].split(" ")[0])
     assert line == (f"vtrack: error: the track ids from {largest - 9} are used up at frame "
-                    f"{stopped_at} (tracks.csv's frame {stopped_at + 1}): a new track would "
-                    f"be numbered past {largest} (2^53, the largest id a double holds exactly: "
-                    "MATLAB, pandas and JavaScript would read it as another's); number the "
-                    "tracks from a smaller first id (--first-id N, first_track_id=N)"), \
+                    f"{stopped_at} (frame {stopped_at + 1} counted from 1, as tracks.csv and "
+                    f"MOTChallenge number them): a new track would be numbered past {largest} "
+                    "(2^53, the largest id a double holds exactly: MATLAB, pandas and "
+                    "JavaScript would read it as another's); number the tracks from a smaller "
+                    "first id (--first-id N, first_track_id=N)"), \
         done.stderr
     record = json.loads((out / "run.json").read_text())
     assert record["status"] == "failed"

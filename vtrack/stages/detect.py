@@ -116,7 +116,8 @@ class TrackIds:
         if self._next > MAX_TRACK_ID:
             raise ConfigError(
                 f"the track ids from {self._ctx.first_track_id} are used up at frame "
-                f"{self._ctx.frame.index} (tracks.csv's frame {self._ctx.frame.index + 1}): "
+                f"{self._ctx.frame.index} (frame {self._ctx.frame.index + 1} counted from 1, as "
+                "tracks.csv and MOTChallenge number them): "
                 f"a new track would be numbered past {MAX_TRACK_ID} "
                 "(2^53, the largest id a double holds exactly: MATLAB, pandas and JavaScript "
                 "would read it as another's); number the tracks from a smaller first id "
