@@ -491,19 +491,21 @@ def test_an_option_the_input_would_ignore_is_refused(occlusion_clip, tmp_path: P
 def test_vtrack_batch_says_a_missing_folder_is_missing(tmp_path: Path) -> None:
     """`vtrack batch footag/` (a typo) said 'footag: not a folder', as for a file, where
     `vtrack run` says 'no such file' and `vtrack report` 'no such file or folder'. `vtrack
-    batch clip.mp4` said only 'clip.mp4: not a folder': it now points at `vtrack run`."""
-    for name in ("clip.mp4", "my clip.MOV", "notes.txt"):
+    batch clip.mp4` said only 'clip.mp4: not a folder': it now points at `vtrack run`, with a
+    name starting with '-' as ./-x.mp4 (`vtrack run -x.mp4` reads an option)."""
+    for name in ("clip.mp4", "my clip.MOV", "notes.txt", "-x.mp4"):
         (tmp_path / name).write_bytes(b"")
     (tmp_path / "gone").symlink_to(tmp_path / "nowhere")
     one_input = "not a folder: a batch tracks the inputs in a folder; vtrack run"
     for name, problem in (("footag", "no such folder"), ("gone", "no such folder (broken link)"),
                           ("clip.mp4", f"{one_input} clip.mp4 tracks one input"),
                           ("my clip.MOV", f"{one_input} 'my clip.MOV' tracks one input"),
-                          ("notes.txt", "not a folder")):
+                          ("notes.txt", "not a folder"),
+                          ("./-x.mp4", f"{one_input} ./-x.mp4 tracks one input")):
         line = assert_one_line_error(vtrack("batch", name, "-o", "res", cwd=tmp_path))
-        assert line == f"vtrack: error: {name}: {problem}"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.mp4", "gone", "my clip.MOV",
-                                                         "notes.txt"]
+        assert line == f"vtrack: error: {name.removeprefix('./')}: {problem}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["-x.mp4", "clip.mp4", "gone",
+                                                         "my clip.MOV", "notes.txt"]
 
 
 def test_an_error_naming_a_file_with_a_newline_is_one_line(occlusion_clip,

@@ -213,7 +213,8 @@ def test_a_foreign_vectors_folder_is_one_error_line(vectors, tmp_path, name: str
 
 def test_a_dump_and_vectors_given_swapped_are_told_the_order(vectors, tmp_path) -> None:
     """`vtrack vectors check DUMP VECTORS` said 'DUMP: not a vectors folder (manifest.json: No
-    such file or directory)', nothing about the order; two dumps still say only that."""
+    such file or directory)', nothing about the order; two dumps still say only that, as does a
+    first argument that is no folder (missing, or a file): the order it gave was refused too."""
     out, _ = vectors
     dump = tmp_path / "dump"
     dump.mkdir()
@@ -226,6 +227,11 @@ def test_a_dump_and_vectors_given_swapped_are_told_the_order(vectors, tmp_path) 
                            f"dump (vtrack vectors check {out} {dump})\n")
     done = vtrack("vectors", "check", str(dump), str(dump))
     assert (done.returncode, done.stderr) == (2, f"{not_vectors}\n")
+    for first in (tmp_path / "nosuch", dump / "trace.csv"):
+        done = vtrack("vectors", "check", str(first), str(out))
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert done.stderr.startswith(f"vtrack: error: {first}: ") and "come first" not in \
+            done.stderr, done.stderr
     assert vtrack("vectors", "check", str(out), str(dump)).returncode == 0
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import shlex
 import signal
 import threading
 import unicodedata
@@ -58,6 +59,15 @@ def names_a_path(word: str) -> bool:
     URL: one that exists, or holds ``.``, ``/``, ``:`` or ``\\``, which no such name does. No
     near name is guessed for it (``scene.mp4`` is not a typo of ``scene``)."""
     return any(mark in word for mark in "./:\\") or os.path.lexists(word)
+
+
+def shell_word(path: str | os.PathLike[str]) -> str:
+    """``path`` as one word of a command line a user can paste into a POSIX shell: quoted when
+    the shell would split or expand it, and with ``./`` before a name starting with ``-``
+    (``./-x.mp4``), which a command would read as an option; ``-`` alone (standard input) is
+    kept."""
+    text = os.fspath(path)
+    return shlex.quote(f"./{text}" if text.startswith("-") and text != "-" else text)
 
 
 def number_text(value: float) -> str:

@@ -27,7 +27,6 @@ from __future__ import annotations
 import math
 import os
 import platform
-import shlex
 import signal
 import sys
 import time
@@ -59,6 +58,7 @@ from vtrack.errors import (
     number_text,
     plural,
     printable,
+    shell_word,
 )
 from vtrack.evaluate.groundtruth import (
     dropped_notes,
@@ -929,7 +929,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         raise ConfigError(
             f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
             f"{give_box} or write x,y,w,h into {sidecar_path(request.input)} "
-            f"(vtrack select {shlex.quote(str(request.input))} picks it)"
+            f"(vtrack select {shell_word(request.input)} picks it)"
         )
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, read_from,
@@ -957,7 +957,7 @@ def _targets_truth(sequence: Path, targets: list[Path], names: OptionNames) -> s
 def _give_file(names: OptionNames, name: str, path: Path) -> str:
     """How ``name`` is given file ``path`` (:meth:`OptionNames.give`), quoted for a shell
     when ``names`` are a command's options: ``--gt 'my seq/groundtruth_rect.txt'``."""
-    return names.give(name, shlex.quote(str(path)) if names.options else str(path))
+    return names.give(name, shell_word(path) if names.options else str(path))
 
 
 def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:

@@ -8,12 +8,11 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import shlex
 import sys
 
 import click
 
-from vtrack.errors import close_names, guess_text, names_a_path, printable
+from vtrack.errors import close_names, guess_text, names_a_path, printable, shell_word
 
 
 def error_line(message: str) -> str:
@@ -31,7 +30,7 @@ def no_such_command(ctx: click.Context, word: str,
     bare "No such command 'x'." otherwise."""
     message = f"No such command {word!r}"
     if names_a_path(word):
-        message += f"; to track it: vtrack run {shlex.quote(word)}"
+        message += f"; to track it: vtrack run {shell_word(word)}"
     elif close := close_names(word, commands):
         message += f". Did you mean {guess_text(close)}?"
     elif word.casefold() in ("config", "configs"):

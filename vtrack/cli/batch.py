@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shlex
 import sys
 from collections.abc import Callable
 from contextlib import closing
@@ -31,6 +30,7 @@ from vtrack.errors import (
     handling_stop_signals,
     passing_stop_to,
     plural,
+    shell_word,
 )
 from vtrack.machine import WORKER_MEMORY, available_memory, workers_memory_holds
 from vtrack.params import MAX_WAIT_S
@@ -147,7 +147,7 @@ def _refuse_one_video(folder: Path) -> None:
 
     if folder.suffix.lower() in VIDEO_SUFFIXES and folder.is_file():
         raise InputError(f"{folder}: not a folder: a batch tracks the inputs in a folder; "
-                         f"vtrack run {shlex.quote(str(folder))} tracks one input")
+                         f"vtrack run {shell_word(folder)} tracks one input")
 
 
 def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
@@ -368,7 +368,7 @@ def _left_out(nested: NestedInputs) -> str | None:
     them = "it" if len(found) == 1 and nested.whole else "them"
     return (f"{what} in sub-folders {verb} ({found[0]}{more}{looked}): a batch takes the "
             "videos directly in the folder and its sequence folders (img/, img1/, color/); to "
-            f"track {them}, {example}vtrack batch {shlex.quote(str(found[0].parent))}")
+            f"track {them}, {example}vtrack batch {shell_word(found[0].parent)}")
 
 
 def _report(outcomes: list[Outcome], pairs: int, summary_path: Path, quiet: bool,

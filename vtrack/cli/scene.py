@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-import shlex
 from pathlib import Path
 
 import click
@@ -13,7 +12,7 @@ from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_perio
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
 from vtrack.cli._signals import stopping_as_interrupted
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, shell_word
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.params import MAX_CRF, MAX_SEED
@@ -98,7 +97,7 @@ def command(
                           "beside it): name one, e.g. clip.mp4 or clip.raw --format raw")
     if name not in SCENARIOS and str(out) in SCENARIOS:  # `vtrack scene clip.mp4 occlusion`
         raise ConfigError(f"unknown scenario {name!r}: NAME comes before OUT (vtrack scene "
-                          f"{out} {shlex.quote(name)})")
+                          f"{out} {shell_word(name)})")
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")

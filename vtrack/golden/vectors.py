@@ -23,14 +23,13 @@ import json
 import math
 import os
 import re
-import shlex
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError, OutputError
+from vtrack.errors import ConfigError, InputError, OutputError, shell_word
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
@@ -534,10 +533,11 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
     try:
         width = _frame_width(vectors)
     except InputError as exc:
-        if _config_of(dump) is not None and _config_of(vectors) is None:  # given swapped
+        # given swapped: the first a folder (a dump), the second the vectors
+        if vectors.is_dir() and _config_of(dump) is not None and _config_of(vectors) is None:
             raise InputError(f"{exc}; {dump} is one: the vectors come first, then the dump "
-                             f"(vtrack vectors check {shlex.quote(str(dump))} "
-                             f"{shlex.quote(str(vectors))})") from None
+                             f"(vtrack vectors check {shell_word(dump)} "
+                             f"{shell_word(vectors)})") from None
         raise
     if not dump.is_dir():
         raise InputError(f"{dump}: no such folder")
