@@ -78,13 +78,33 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
     """`vtrack scene.mp4` (a file there) said "Did you mean 'scene'?", `vtrack runs/` "Did you
     mean 'run'?" and `vtrack scene clip.mp4 out.mp4` "did you mean 'clip_ramp'?": a file is
     no typo of a name. `vtrack RUN` got no guess (click compares case); `vtrack configs` ended
-    in two parentheses in a row. A file or folder now gets the vtrack run that tracks it."""
+    in two parentheses in a row. A file or folder now gets the vtrack run that tracks it.
+    That was said of any path: a folder of videos, a results folder, a config, a summary.csv
+    got 'vtrack run' too, and `vtrack -` (standard input) no hint; each now gets the command
+    that takes it."""
+    import cv2
+    import numpy as np
+
     (tmp_path / "scene.mp4").write_bytes(b"")
     (tmp_path / "my footage").mkdir()
+    (tmp_path / "seq" / "img").mkdir(parents=True)
+    assert cv2.imwrite(str(tmp_path / "seq" / "img" / "0001.jpg"), np.zeros((8, 8, 3), np.uint8))
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "summary.csv").write_text("input\n")
+    (tmp_path / "mine.toml").write_text("")
     for word, said in (
             ("scene.mp4", "No such command 'scene.mp4'; to track it: vtrack run scene.mp4"),
             ("runs/", "No such command 'runs/'; to track it: vtrack run runs/"),
-            ("my footage", "No such command 'my footage'; to track it: vtrack run 'my footage'"),
+            ("seq", "No such command 'seq'; to track it: vtrack run seq"),
+            ("my footage", "No such command 'my footage'; to track the inputs in it: vtrack "
+                           "batch 'my footage'"),
+            ("results", "No such command 'results'; to report its results: vtrack report "
+                        "results"),
+            ("results/summary.csv", "No such command 'results/summary.csv'; to report "
+                                    "results: vtrack report results"),
+            ("mine.toml", "No such command 'mine.toml'; a config: vtrack run INPUT -c "
+                          "mine.toml"),
+            ("-", "No such command '-'; to track it: vtrack run -"),
             ("RUN", "No such command 'RUN'. Did you mean 'run'?"),
             ("configs", "No such command 'configs'; vtrack stages lists the shipped configs "
                         "and their stages")):
@@ -95,7 +115,8 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
     line = one_error_line(vtrack("scene", "clip.mp4", "out.mp4", cwd=tmp_path))
     assert line.startswith("vtrack: error: unknown scenario 'clip.mp4'; choose one of: ")
     assert "did you mean" not in line
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["my footage", "scene.mp4"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml", "my footage", "results",
+                                                         "scene.mp4", "seq"]
 
 
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:

@@ -56,9 +56,10 @@ def did_you_mean(given: str, names: Iterable[str]) -> str:
 
 def names_a_path(word: str) -> bool:
     """Whether ``word``, refused as a name (a command, a scenario), is rather a file, folder or
-    URL: one that exists, or holds ``.``, ``/``, ``:`` or ``\\``, which no such name does. No
-    near name is guessed for it (``scene.mp4`` is not a typo of ``scene``)."""
-    return any(mark in word for mark in "./:\\") or os.path.lexists(word)
+    URL: one that exists, or holds ``.``, ``/``, ``:`` or ``\\``, which no such name does, or
+    ``-`` (standard input, as ``vtrack run -`` reads it). No near name is guessed for it
+    (``scene.mp4`` is not a typo of ``scene``)."""
+    return word == "-" or any(mark in word for mark in "./:\\") or os.path.lexists(word)
 
 
 def shell_word(path: str | os.PathLike[str]) -> str:

@@ -43,8 +43,9 @@ class _Group(click.Group):
         """As click's, but a mistyped command is offered the near one, case aside (``vtrack
         rnu``, ``vtrack RUN``: "Did you mean 'run'?"; click looks only in the commands a group
         holds, and this one loads them on demand), a file or folder given as a command is told
-        how to track it (``vtrack clip.mp4``: "to track it: vtrack run clip.mp4", no guess),
-        and ``vtrack configs`` is told where the configs are listed."""
+        the command that takes it (``vtrack clip.mp4``: "to track it: vtrack run clip.mp4",
+        ``vtrack footage/``: "vtrack batch footage/", no guess), and ``vtrack configs`` is told
+        where the configs are listed."""
         try:
             return super().resolve_command(ctx, args)
         except click.exceptions.NoSuchCommand as exc:

@@ -9,6 +9,7 @@ import contextlib
 import errno
 import os
 import sys
+from pathlib import Path
 
 import click
 
@@ -20,18 +21,43 @@ def error_line(message: str) -> str:
     return f"vtrack: error: {printable(message)}"
 
 
-def no_such_command(ctx: click.Context, word: str,
-                    commands: list[str]) -> click.exceptions.NoSuchCommand:
+def _path_hint(word: str) -> str:
+    """The command that takes the file, folder or URL ``word``: ``vtrack report`` for a results
+    folder (one holding run.json or summary.csv), a run.json, or the folder of another .csv
+    or .json (vtrack's results); ``-c`` for a .toml config; ``vtrack batch`` for a folder that
+    is no image sequence; ``vtrack run`` for anything else (a video, images, a URL, ``-``)."""
+    from vtrack.io.images import holds_images
+
+    path = Path(word)
+    suffix = path.suffix.lower()
+    if path.is_dir():
+        if any((path / name).exists() for name in ("run.json", "summary.csv")):
+            return f"; to report its results: vtrack report {shell_word(word)}"
+        if not holds_images(path):
+            return f"; to track the inputs in it: vtrack batch {shell_word(word)}"
+    elif path.name == "run.json":
+        return f"; to report that run: vtrack report {shell_word(word)}"
+    elif suffix in (".csv", ".json"):
+        return f"; to report results: vtrack report {shell_word(path.parent)}"
+    elif suffix == ".toml":
+        return f"; a config: vtrack run INPUT -c {shell_word(word)}"
+    return f"; to track it: vtrack run {shell_word(word)}"
+
+
+def no_such_command(ctx: click.Context, word: str, commands: list[str],
+                    close: list[str] | None = None) -> click.exceptions.NoSuchCommand:
     """The usage error for ``word`` given where ``ctx``'s group takes one of ``commands``:
-    "No such command 'rnu'. Did you mean 'run'?" for a near miss (case aside: ``RUN``);
-    "No such command 'clip.mp4'; to track it: vtrack run clip.mp4" for a file, folder or URL
-    (:func:`~vtrack.errors.names_a_path`: no guess), "No such command 'configs'; vtrack stages
+    "No such command 'rnu'. Did you mean 'run'?" for a near miss (case aside: ``RUN``; or the
+    ``close`` names a caller already found for a word that names no path);
+    "No such command 'clip.mp4'; to track it: vtrack run clip.mp4" for a file, folder, URL or
+    ``-`` (:func:`~vtrack.errors.names_a_path`: no guess; :func:`_path_hint` names the command
+    that takes it: run, batch, report or -c), "No such command 'configs'; vtrack stages
     lists the shipped configs and their stages" for the word a new user types for those; the
     bare "No such command 'x'." otherwise."""
     message = f"No such command {word!r}"
-    if names_a_path(word):
-        message += f"; to track it: vtrack run {shell_word(word)}"
-    elif close := close_names(word, commands):
+    if not close and names_a_path(word):
+        message += _path_hint(word)
+    elif close := close or close_names(word, commands):
         message += f". Did you mean {guess_text(close)}?"
     elif word.casefold() in ("config", "configs"):
         message += "; vtrack stages lists the shipped configs and their stages"
