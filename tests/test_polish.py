@@ -151,6 +151,32 @@ def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None
         "; did you mean 'meanshift'?")
 
 
+def test_an_unknown_parameter_is_said_one_way_wherever_it_is_given(tmp_path: Path) -> None:
+    """`--set meanshift.iteration=3` said "stage 'meanshift' has no parameter 'iteration'",
+    a config file or a keyword "stage 'meanshift': unknown parameter 'iteration'": one
+    message in two wordings. `vtrack frame --help` gave --step's limit twice ("at most 16384
+    (...)" and click's [2<=x<=16384])."""
+    import vtrack as library
+
+    said = ("stage 'meanshift': unknown parameter 'iteration' (parameters: method, "
+            "iterations, ")
+    s0 = library.load_config("s0")
+    for make, where in ((lambda: s0.with_overrides(["meanshift.iteration=3"]),
+                         "--set meanshift.iteration=3"),
+                        (lambda: s0.with_values({"meanshift.iteration": 3}),
+                         "meanshift.iteration=3")):
+        with pytest.raises(library.ConfigError) as caught:
+            make()
+        assert str(caught.value).startswith(f"{where}: {said}"), caught.value
+    config = tmp_path / "bad.toml"
+    config.write_text('name = "bad"\n[[stage]]\nname = "meanshift"\niteration = 3\n')
+    with pytest.raises(library.ConfigError) as caught:
+        library.load_config(str(config))
+    assert str(caught.value).startswith(f"{config}: {said}"), caught.value
+    step = vtrack("frame", "--help").stdout.split("--step", 1)[1].split("--no-grid", 1)[0]
+    assert step.count("16384") == 1, step
+
+
 @pytest.mark.parametrize(("stage", "line", "said", "near"), [
     ("backprojct", "", "unknown stage 'backprojct' (known stages: background, backproject, ",
      "backproject"),

@@ -39,6 +39,7 @@ from vtrack.stages.base import (
     Stage,
     build_stage,
     checked_values,
+    declared_param,
     stage_class,
 )
 
@@ -190,13 +191,8 @@ class Config:
                 raise ConfigError(f"{where}: stage {shown(stage_name)} is not in the chain "
                                   f"({chain}){near}")
             declared = {p.name: p for p in stage_class(stage_name, where).params}
-            if param_name not in declared:
-                known = ", ".join(declared) or "none"
-                raise ConfigError(
-                    f"{where}: stage '{stage_name}' has no parameter {shown(param_name)} "
-                    f"(parameters: {known}){did_you_mean(param_name, declared)}"
-                )
-            param, place = declared[param_name], f"{where}: stage '{stage_name}'"
+            param = declared_param(where, stage_name, param_name, declared)
+            place = f"{where}: stage '{stage_name}'"
             value = param.parse(given, place) if is_text else param.validate(given, place)
             for values in matches:
                 values[param_name] = value

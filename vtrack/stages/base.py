@@ -395,6 +395,17 @@ def build_stage(name: str, values: dict[str, Any], where: str) -> Stage:
     return stage_class(name, where)(**checked_values(name, values, where))
 
 
+def declared_param(where: str, name: str, key: object, declared: dict[str, Param]) -> Param:
+    """Parameter ``key`` of stage ``name`` (``declared``: its parameters by name); ConfigError
+    "WHERE: stage 'NAME': unknown parameter 'KEY' (parameters: ...)" with the near name for a
+    near miss when the stage has none of that name."""
+    if not isinstance(key, str) or key not in declared:
+        known = ", ".join(declared) or "none"
+        raise ConfigError(f"{where}: stage '{name}': unknown parameter {shown(key)} "
+                          f"(parameters: {known}){did_you_mean(str(key), declared)}")
+    return declared[key]
+
+
 def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
     """``values`` of stage ``name`` each as its parameter's type (:meth:`Param.validate`: a
     NumPy number as a Python one); ConfigError naming ``where``, the stage and the parameter
@@ -403,15 +414,10 @@ def checked_values(name: str, values: dict[str, Any], where: str) -> dict[str, A
     (:meth:`Stage.values_problem`)."""
     cls = stage_class(name, where)
     declared = {p.name: p for p in cls.params}
-    where = f"{where}: stage '{name}'"
-    checked = {}
-    for key, value in values.items():
-        if key not in declared:
-            known = ", ".join(declared) or "none"
-            raise ConfigError(f"{where}: unknown parameter {shown(key)} (parameters: {known})"
-                              f"{did_you_mean(str(key), declared)}")
-        checked[key] = declared[key].validate(value, where)
+    place = f"{where}: stage '{name}'"
+    checked = {key: declared_param(where, name, key, declared).validate(value, place)
+               for key, value in values.items()}
     problem = cls.values_problem({p.name: checked.get(p.name, p.default) for p in cls.params})
     if problem:
-        raise ConfigError(f"{where}: {problem}")
+        raise ConfigError(f"{place}: {problem}")
     return checked
