@@ -1314,7 +1314,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
                 if status == STATUS_INTERRUPTED and not source.live else None),
     )
     past_ids = _past_track_ids(request, summary, next_id)
-    summary.warnings += [past_ids] if past_ids else []
+    if past_ids:
+        summary.warnings.append(past_ids)
     summary.warnings += tracked.timeline.warnings(request.input, request.gt_path)
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL

@@ -69,14 +69,15 @@ def _local_executor(jobs: int | None, batch: Plan,
     cores shared among the workers that start (one per run to do, at most)."""
     from vtrack.batch import LocalExecutor, cpu_count
 
-    wanted = jobs or cpu_count()
+    cores = cpu_count()  # (it walks the cgroup tree: once)
+    wanted = jobs or cores
     available = available_memory()
     held = workers_memory_holds(available)
     workers = wanted if held is None else min(wanted, held)
     runs = len(batch.jobs)
     if min(wanted, runs) > workers:
         warn(_fewer_workers(jobs, wanted, runs, workers, available or 0))
-    threads = max(1, cpu_count() // max(1, min(workers, runs)))
+    threads = max(1, cores // max(1, min(workers, runs)))
     batch.jobs[:] = [replace(job, threads=threads) for job in batch.jobs]
     return LocalExecutor(workers, on_progress=on_progress)
 
