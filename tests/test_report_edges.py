@@ -9,10 +9,11 @@ from pathlib import Path
 import pytest
 
 import vtrack.report
+from vtrack.geometry import Box
 from vtrack.report import build, plots
 from vtrack.report.pages import _md
 from vtrack.report.runs import RunResult
-from vtrack.report.tables import Cell, Table, _say_beside
+from vtrack.report.tables import Cell, Table, _say_beside, average_table
 
 
 def test_no_notes_change_no_row() -> None:
@@ -29,6 +30,50 @@ def test_no_notes_change_no_row() -> None:
 def _run(config: str, overlap: float) -> RunResult:
     return RunResult(Path(config), "clip", config, "complete", 4, 30.0, 0, 0, False,
                      states=["tracking"] * 4, overlaps=[overlap] * 4, errors=[1.0] * 4)
+
+
+TARGET = Box(0, 0, 10, 10)
+
+
+def _scored(config: str, input: str, overlaps: list[float | None], state: str = "tracking",
+            box: Box = TARGET) -> RunResult:
+    """A run of 4 frames on ``input`` (the target :data:`TARGET` where ``overlaps`` has a
+    value) whose box is ``box``."""
+    truth = [TARGET if o is not None else None for o in overlaps]
+    return RunResult(Path(config, input), input, config, "complete", 4, 30.0, 0, 0, False,
+                     states=[state] * 4, overlaps=overlaps, errors=[1.0] * 4,
+                     boxes=[box] * 4, truth=truth)
+
+
+def test_averages_rank_a_config_only_if_it_has_every_input_another_has() -> None:
+    """`z` has no frame evaluated: every config lacks every score there, yet every average
+    said "(on 2 of 3 inputs)" and none was marked best. Now only a config lacking a score on
+    an input where another has it (a's tracking miss on y: no frame called tracking) says so
+    and is not ranked, its two notes in one parenthesis (they were "(on 1 of 2 inputs) (box
+    >4x on 1 input)"); the others rank as before, on the inputs all have."""
+    none: list[float | None] = [None] * 4
+    by_config = {
+        "a": [_scored("a", "x", [0.11] * 4, box=Box(0, 0, 30, 30)),
+              _scored("a", "y", [0.0] * 4, "lost"), _scored("a", "z", none)],
+        "b": [_scored("b", "x", [0.6] * 4), _scored("b", "y", [0.6] * 4),
+              _scored("b", "z", none)],
+        "c": [_scored("c", "x", [0.6, 0.6, 0.0, 0.0]), _scored("c", "y", [0.6] * 4),
+              _scored("c", "z", none)],
+    }
+    table = average_table(by_config)
+    cells = {row[0].text: dict(zip(table.header, row, strict=True)) for row in table.rows}
+    assert cells["a"]["Tracking miss"].text == "0.000 (on 1 of 2 inputs; box >4x on 1 input)"
+    assert [cells[c]["Tracking miss"].text for c in "bc"] == ["0.000", "0.250"]
+    best = {title: {c for c in cells if cells[c][title].best} for title in table.header}
+    assert best["Tracking miss"] == {"b"}  # (a's 0.000 as low, not ranked)
+    assert best["AUC"] == best["Mean IoU"] == best["SR0.5"] == {"b"}
+    assert best["Miss flagged"] == best["Inputs"] == set()
+    # miss flagged: a's on y only (x: no frame misses), c's on x only, b's on neither
+    assert [cells[c]["Miss flagged"].text for c in "abc"] == [
+        "1.000 (on 1 of 2 inputs)", "—", "0.000 (on 1 of 2 inputs)"]
+    assert [(c, title) for c in cells for title in table.header
+            if "inputs" in cells[c][title].text] == [
+        ("a", "Tracking miss"), ("a", "Miss flagged"), ("c", "Miss flagged")]
 
 
 def test_one_run_drawn_is_the_best(monkeypatch: pytest.MonkeyPatch) -> None:

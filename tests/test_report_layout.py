@@ -178,31 +178,52 @@ def test_no_curve_a_legend_names_is_grey_as_those_it_does_not() -> None:
         assert "c07" in named and to_hex("C7") not in named.values(), named
 
 
-def test_an_average_a_score_some_inputs_lack_says_over_how_many(tmp_path: Path) -> None:
-    """camshift on `jump` misses frames and flags none (miss flagged 0.000) and on `smooth`
-    misses none (miss flagged —): its All inputs row showed 0.000, a mean over one input
-    read as over both. It now says over how many, and is not ranked; a score every input has
-    is as before."""
+def test_averages_over_inputs_alike_for_every_config_are_ranked_without_notes(
+        tmp_path: Path) -> None:
+    """An input whose ground truth never shows the target (`gone`: 90 lines 0,0,0,0) has no
+    score for any config, and camshift and s0 both have no miss flagged on `smooth` (no frame
+    misses): every config's averages are over the same inputs. The All inputs row said
+    "0.581 (on 2 of 3 inputs)" in every score of every config and marked no best; the
+    averages are now ranked as usual, no cell saying over how many, and `gone`'s heading
+    says once that no frame is evaluated there."""
     (tmp_path / "in").mkdir()
     for scenario in ("jump", "smooth"):
         clip_with_gt(tmp_path / "in", scenario, 90)
+    scene = make_scene("smooth", seed=0, width=W, height=H, frames=90, fps=30)
+    write_video(scene, tmp_path / "in" / "gone.mp4")
+    (tmp_path / "in" / "gone.gt.txt").write_text("0,0,0,0\n" * 90)
+    (tmp_path / "in" / "gone.init.txt").write_text("30,80,20,16\n")
     done = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(tmp_path / "in"),
                            "-c", "camshift", "-c", "s0", "--no-video", "--quiet", "--out",
                            str(tmp_path / "res")], capture_output=True, text=True,
                           timeout=300, check=False)
     assert done.returncode == 0, done.stderr
+    names = ("gone", "jump", "smooth")
     runs = {(name, config): load_run(tmp_path / "res" / name / config)
-            for name in ("jump", "smooth") for config in ("camshift", "s0")}
-    for config in ("camshift", "s0"):  # (what the test stands on: smooth's is undefined)
+            for name in names for config in ("camshift", "s0")}
+    for config in ("camshift", "s0"):  # (what the test stands on)
+        assert runs["gone", config].scores.frames_evaluated == 0
         assert math.isnan(runs["smooth", config].scores.miss_flagged)
         assert runs["jump", config].scores.miss_flagged >= 0
     build_report([tmp_path / "res"], tmp_path / "report")
     markdown = (tmp_path / "report" / "summary.md").read_text()
-    rows = table_rows(markdown, "## All inputs")
     header = markdown.split("## All inputs", 1)[1].split("| Config |", 1)[1].split("\n")[0]
     columns = ["Config", *(c.strip() for c in header.strip("|").split("|"))]
-    averages = {row[0]: dict(zip(columns, row, strict=True)) for row in rows}
+    lines = [x for x in markdown.split("## All inputs", 1)[1].split("## ", 1)[0].splitlines()
+             if x.startswith("| camshift") or x.startswith("| s0")]
+    cells = {row[0].strip(): dict(zip(columns, (c.strip() for c in row), strict=True))
+             for row in (x.strip("|").split("|") for x in lines)}
     for config in ("camshift", "s0"):
+        assert cells[config]["Inputs"] == "3"
+        assert not any("inputs" in text for text in cells[config].values()), cells[config]
         flagged = runs["jump", config].scores.miss_flagged
-        assert averages[config]["Miss flagged"] == f"{flagged:.3f} (on 1 of 2 inputs)"
-        assert averages[config]["Inputs"] == "2" and "inputs" not in averages[config]["AUC"]
+        assert cells[config]["Miss flagged"] == f"{flagged:.3f}"
+    auc = {c: (runs["jump", c].scores.auc + runs["smooth", c].scores.auc) / 2
+           for c in ("camshift", "s0")}
+    best = max(auc, key=auc.get)
+    assert auc[best] > min(auc.values())
+    assert {c for c in auc if cells[c]["AUC"].startswith("**")} == {best}, cells
+    assert cells[best]["AUC"] == f"**{auc[best]:.3f}**"
+    gone = markdown.split("## gone", 1)[1].split("## ", 1)[0]
+    assert "No frame evaluated" in gone and "No frame evaluated" not in markdown.split(
+        "## gone", 1)[0]

@@ -522,7 +522,8 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
         scored_drawn = _drawn_by_auc(scored)
         unscored_drawn = unscored_here[:plots.MAX_RUNS_DRAWN]
         notes = [note for note in (_drawn_note(scored, scored_drawn, True),
-                                   _drawn_note(unscored_here, unscored_drawn, False)) if note]
+                                   _drawn_note(unscored_here, unscored_drawn, False),
+                                   _unevaluated_note(scored)) if note]
         figures = []
         if unscored_drawn:
             figures.append(_save(staged, plots.state_figure(name, unscored_drawn, palette),
@@ -589,6 +590,16 @@ def _named(runs: Sequence[RunResult], auc: bool = False) -> str:
              for r in runs]
     more = len(names) - NAMED_LEFT_OUT
     return ", ".join(names[:NAMED_LEFT_OUT]) + (f" and {more} more" if more > 0 else "")
+
+
+def _unevaluated_note(scored: Sequence[RunResult]) -> str | None:
+    """The note under an input's heading when none of its ``scored`` runs has a frame to
+    evaluate (its ground truth never shows the target): the dashes in its rows, said once
+    rather than beside every average it leaves alike; None otherwise."""
+    if not scored or any(r.scores is not None and r.scores.frames_evaluated for r in scored):
+        return None
+    return ("No frame evaluated: the ground truth never has the target in view, so no run "
+            "has a score here, and the All inputs averages are over the other inputs.")
 
 
 def _drawn_note(runs: Sequence[RunResult], drawn: Sequence[RunResult], scored: bool

@@ -29,9 +29,10 @@ DEFINITIONS = (
     "error); summary.csv's mean_center_error is the mean over the evaluated frames where the "
     "tracker claims a box, lost frames left out (read it beside precision20 and frames_lost). "
     "Averages over inputs are means of the per-input curves and scores (lost frames: "
-    "their total); a score some inputs lack (a dash in their rows: miss flagged where no "
-    "frame misses) is the mean over the others, which its cell counts (on 1 of 2 inputs), "
-    "not ranked. Best value per "
+    "their total) over the inputs that have them; a configuration lacking a score on an "
+    "input where another has it (a dash in its row: tracking miss where no frame is called "
+    "tracking) is not ranked by it, and its cell says over how many inputs it is (on 1 of 2 "
+    "inputs). Best value per "
     "column (among the configurations of an input, or among configurations) in bold; columns "
     "that describe rather than rank (frames, miss flagged, lost frames) mark none.{sorting} "
     + " ".join(f"{title}: {note}." for title, note in NOTES.items()

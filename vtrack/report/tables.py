@@ -166,6 +166,9 @@ SCORE_COLUMNS = (
     _column("FPS", 1),
     _column("Lost frames", 0, None),
 )
+#: How many of :data:`SCORE_COLUMNS` are a run's scores (:func:`_scores` after its frames
+#: evaluated): all but FPS and lost frames.
+SCORED = len(SCORE_COLUMNS) - 2
 
 #: Per input x configuration: OTB scores, speed and lost frames.
 RESULT_COLUMNS = (
@@ -241,39 +244,55 @@ def _mean(values: Sequence[float | None]) -> float | None:
     return sum(present) / len(present) if present else None
 
 
+def _fewer_inputs(scored_by: Sequence[Sequence[RunResult]]) -> list[dict[int, str]]:
+    """Per configuration (its scored runs), the score columns (indices in
+    :data:`AVERAGE_COLUMNS`) it has on fewer inputs than the configurations together: its
+    mean there is over other inputs than theirs, not ranked, and said so, ``on 1 of 2
+    inputs`` (of the inputs any configuration has that score on). None where every
+    configuration has a score on the same inputs (an input none has one on, with no frame
+    evaluated say, leaves every mean alike), nor where one has it on none (``—``)."""
+    notes: list[dict[int, str]] = [{} for _ in scored_by]
+    for c in range(1, 1 + SCORED):  # (AUC ... miss flagged: at c in _scores and the table)
+        have = [{r.input for r in scored if _finite(_scores(r)[c])} for scored in scored_by]
+        every = set().union(*have)
+        for config, inputs in zip(notes, have, strict=True):
+            if inputs and inputs != every:
+                config[c] = f"on {len(inputs)} of {plural(len(every), 'input')}"
+    return notes
+
+
 def average_table(by_config: dict[str, list[RunResult]]) -> Table:
     """One row per configuration over the inputs it counts: the runs with ground truth (the
     inputs of the "All inputs" plot), or, for a configuration without any, the runs that
-    tracked frames. Each score is the mean over those runs, fps their mean and lost frames
-    their total; a configuration whose counted runs include partial (or interrupted) ones says
-    how many, and one with :attr:`~vtrack.report.runs.RunResult.oversized` runs is not ranked
-    by its tracking miss, which says on how many inputs. A score some of those runs lack
-    (``—`` in their rows: miss flagged where no frame misses) is the mean over the others,
-    said beside it (``0.250 (on 1 of 2 inputs)``) and not ranked; one all of them lack is
-    ``—``."""
+    tracked frames. Each score is the mean over those runs that have it (``—`` where none
+    has), fps their mean and lost frames their total; a configuration whose counted runs
+    include partial (or interrupted) ones says how many. A score a configuration lacks on
+    an input where another has it (``—`` in its row there: tracking miss where no frame is
+    called tracking) is not ranked and says over how many inputs it is (``0.250 (on 1 of 2
+    inputs)``, :func:`_fewer_inputs`), as a tracking miss of
+    :attr:`~vtrack.report.runs.RunResult.oversized` runs says on how many inputs (both:
+    ``0.250 (on 1 of 2 inputs; box >4x on 1 input)``)."""
     table = _table(["Config"], AVERAGE_COLUMNS)
-    values, labels, oversized, fewer = [], [], [], []
+    values, labels, scored_by = [], [], []
     for config, runs in by_config.items():
         scored = [r for r in runs if r.scores is not None]
         counted = scored or [r for r in runs if r.frames > 0]
         scores = list(zip(*(_scores(r)[1:] for r in scored), strict=True))
-        means = [_mean(column) for column in scores] if scores else [None] * 8
+        means = [_mean(column) for column in scores] if scores else [None] * SCORED
         values.append([len(counted), *means, _mean([r.fps for r in counted]),
                        sum(r.frames_lost for r in counted)])
         partial = sum(r.status in INCOMPLETE for r in counted)
         labels.append([f"{config} ({partial} partial)" if partial else config])
-        oversized.append(sum(r.oversized for r in scored))
-        over = {1 + c: sum(map(_finite, column)) for c, column in enumerate(scores)}
-        fewer.append({c: f"on {n} of {plural(len(scored), 'input')}"
-                      for c, n in over.items() if 0 < n < len(scored)})
+        scored_by.append(scored)
     miss = _tracking_miss(AVERAGE_COLUMNS)
-    _add_group(table, labels, values, AVERAGE_COLUMNS, None,
-               [set(notes) | ({miss} if n else set()) for notes, n in zip(fewer, oversized,
-                                                                             strict=True)])
-    for c in sorted({c for notes in fewer for c in notes}):
-        _say_beside(table, 1 + c, [notes.get(c) for notes in fewer])
-    _say_beside(table, 1 + miss, [
-        f"box >{OVERSIZED_AREA:g}x on {plural(n, 'input')}" if n else None for n in oversized])
+    notes = _fewer_inputs(scored_by)
+    for config, scored in zip(notes, scored_by, strict=True):
+        if oversized := sum(r.oversized for r in scored):
+            box = f"box >{OVERSIZED_AREA:g}x on {plural(oversized, 'input')}"
+            config[miss] = "; ".join(filter(None, (config.get(miss), box)))
+    _add_group(table, labels, values, AVERAGE_COLUMNS, None, notes)
+    for c in sorted({c for config in notes for c in config}):
+        _say_beside(table, 1 + c, [config.get(c) for config in notes])
     return table
 
 
