@@ -250,13 +250,17 @@ def test_a_summary_csv_link_in_a_loop_and_a_linked_run_folder_are_named(
     """Below a results folder, a batch's summary.csv that is a symbolic link in a loop was
     passed over without a word (Path.rglob takes it for missing), and so was a run folder that
     is a symbolic link (not followed): the report showed fewer runs and said nothing. Each is
-    one warning now; the linked folder given itself is reported."""
+    one warning now; the linked folder given itself is reported. A link into the folders
+    walked (`latest -> whole`, as a batch tree's `latest -> batch-2`) was warned of as well,
+    in summary.md and index.html too, even when given itself: its runs are reported where it
+    leads, and it is no warning now."""
     results = tmp_path / "results"
     whole = results / "whole"
     whole.mkdir(parents=True)
     for name in ("run.json", "track.csv"):
         (whole / name).write_bytes((run_dir / name).read_bytes())
     (results / "linked").symlink_to(run_dir)
+    (results / "latest").symlink_to("whole")  # (as a batch tree's latest -> batch-N)
     (results / "batch").mkdir()
     (results / "batch" / "summary.csv").symlink_to("summary.csv")
     code, stderr = report(results, tmp_path / "rep")
@@ -268,6 +272,16 @@ def test_a_summary_csv_link_in_a_loop_and_a_linked_run_folder_are_named(
         f"vtrack: warning: {results / 'batch' / 'summary.csv'}: cannot read "
         f"({os.strerror(errno.ELOOP)}); the runs without results it lists are not shown"]
     assert len((tmp_path / "rep" / "summary.csv").read_text().splitlines()) == 2  # the whole
+    assert "not followed" not in (tmp_path / "rep" / "summary.md").read_text().replace(
+        f"not followed: {results / 'linked'} ", "")
     code, stderr = report(results / "linked", tmp_path / "rep2")
     assert code == 0 and "followed" not in stderr, stderr
     assert len((tmp_path / "rep2" / "summary.csv").read_text().splitlines()) == 2
+    # a link into what is walked, given too, is no warning either (its run once)
+    done = vtrack("report", str(results), str(results / "latest"), "-o",
+                  str(tmp_path / "rep3"), "-q")
+    assert done.returncode == 0, done.stderr
+    assert [line for line in done.stderr.decode().splitlines() if "followed" in line] == [
+        f"vtrack: warning: not followed: {results / 'linked'} (a symbolic link to a folder; "
+        "give it as RESULTS to report the runs in it)"]
+    assert len((tmp_path / "rep3" / "summary.csv").read_text().splitlines()) == 2

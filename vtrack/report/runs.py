@@ -672,15 +672,18 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     return result
 
 
-def run_folders(paths: Iterable[Path], problems: list[str] | None = None) -> list[Path]:
+def run_folders(paths: Sequence[Path], problems: list[str] | None = None) -> list[Path]:
     """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats).
 
     A path may be a run folder, a batch folder, any folder above them, or a ``run.json``.
     A symbolic link to a folder below one is not followed (it may lead anywhere, or back up):
-    one line naming it is appended to ``problems``.
+    one that leads out of the folders walked is one line naming it appended to ``problems``
+    (one into them, as a batch tree's ``latest``, is nothing: its runs are found where it
+    leads).
     """
     found: dict[Path, None] = {}
     links: dict[Path, None] = {}
+    walked = [path.resolve() for path in paths if path.is_dir()]
     for path in paths:
         if path.is_dir():
             for folder in sorted(_holding(path, "run.json", links)):
@@ -693,7 +696,8 @@ def run_folders(paths: Iterable[Path], problems: list[str] | None = None) -> lis
             raise InputError(f"{path}: not a results folder or run.json")
     if problems is not None:
         problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
-                     "to report the runs in it)" for link in sorted(links)]
+                     "to report the runs in it)" for link in sorted(links)
+                     if not any(link.resolve().is_relative_to(top) for top in walked)]
     return list(found)
 
 
