@@ -710,10 +710,13 @@ def _two_datasets_runs(tmp_path: Path, ext: str) -> None:
                       "--out", f"runs/{out}").exit_code == 0
 
 
-def _as_older(record: Path) -> None:
-    """``record`` (a run.json) as a vtrack before ``input.image_identity`` wrote it."""
+def _as_older(record: Path, image_bytes: int | None = None) -> None:
+    """``record`` (a run.json) as a vtrack before ``input.image_identity`` wrote it (with
+    ``image_bytes``, one that recorded the images' total size instead)."""
     data = json.loads(record.read_text())
     del data["input"]["image_identity"]
+    if image_bytes is not None:
+        data["input"]["image_bytes"] = image_bytes
     record.write_text(json.dumps(data))
 
 
@@ -758,6 +761,25 @@ def test_an_older_record_joins_the_one_input_of_its_key_that_has_a_fingerprint(
     assert vtrack("report", "runs", "--out", "apart").exit_code == 0
     markdown = (tmp_path / "apart" / "summary.md").read_text()
     assert "3 runs of 3 inputs with 2 configurations;" in markdown, markdown
+
+
+def test_older_records_of_other_image_totals_stay_two_inputs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Records a vtrack wrote with input.image_bytes (the images' total size) and no
+    image_identity: d1/Car/img's and d2/Car/img's, other totals, were kept apart by it once,
+    and joined as one input "Car" since the report keyed on image_identity alone. They are
+    two inputs again, d2/Car's run one with d2/Car/img's (one total)."""
+    monkeypatch.chdir(tmp_path)
+    _two_datasets_runs(tmp_path, "jpg")
+    for out, dataset in (("a", "d1"), ("b", "d2"), ("c", "d2")):
+        total = sum(p.stat().st_size for p in (tmp_path / dataset / "Car" / "img").iterdir())
+        _as_older(tmp_path / "runs" / out / "run.json", total)
+    assert vtrack("report", "runs", "--out", "older").exit_code == 0
+    markdown = (tmp_path / "older" / "summary.md").read_text()
+    assert "3 runs of 2 inputs with 2 configurations;" in markdown, markdown
+    labels = _table_labels(markdown)
+    inputs = {config: {i for i, c in labels if c == config} for config in ("s0", "camshift")}
+    assert len(inputs["s0"]) == 2 and inputs["camshift"] < inputs["s0"], labels
 
 
 def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(

@@ -79,14 +79,17 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
 def _same_inputs(runs: list[RunResult]) -> dict[str, list[RunResult]]:
     """``runs`` by the input each read: its ``input_key``, an image sequence's also the
     fingerprint of its images (two datasets' ``Car/img`` of one frame count and size are two
-    inputs). A run whose record has no fingerprint (an older vtrack's) joins the one input of
-    its key that has one, when there is only one."""
-    groups = _group(runs, lambda r: f"{r.input_key} {r.image_identity}")
+    inputs). Runs whose records have no fingerprint (an older vtrack's) are one input by key
+    and the images' total size some recorded (:attr:`~vtrack.report.runs.RunResult.image_bytes`),
+    which joins the one input of its key that has one, when there is only one such input
+    and only one without."""
+    groups = _group(runs, lambda r: f"{r.input_key} "
+                                    f"{r.image_identity or f'(bytes {r.image_bytes})'}")
     for key, same in list(groups.items()):
         if same[0].image_identity is None:
-            known = [k for k, g in groups.items()
-                     if g[0].input_key == same[0].input_key and g[0].image_identity is not None]
-            if len(known) == 1:
+            of_key = [k for k, g in groups.items() if g[0].input_key == same[0].input_key]
+            known = [k for k in of_key if groups[k][0].image_identity is not None]
+            if len(known) == 1 and len(of_key) == 2:  # (the other: this one)
                 groups[known[0]] += groups.pop(key)
     return groups
 

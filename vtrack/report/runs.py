@@ -160,6 +160,10 @@ class RunResult:
     #: before vtrack recorded it), which tells two sequences of one key apart
     #: (:func:`vtrack.report.build._same_inputs`).
     image_identity: str | None = None
+    #: An image sequence's total size, which a record without ``image_identity`` may hold
+    #: instead (``input.image_bytes``: vtrack recorded it for a short while): two of one key
+    #: and other sizes are other sequences.
+    image_bytes: int | None = None
     #: The target of an OTB sequence of several the run tracked (None: the input's only one).
     target: int | None = None
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
@@ -541,6 +545,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         input_frames=_int_or_none((record.get("input") or {}).get("frame_count")),
         input_key=_input_key(record),
         image_identity=_image_identity(record),
+        image_bytes=_int_or_none((record.get("input") or {}).get("image_bytes")),
         target=_target(record),
         config_key=json.dumps((record.get("config") or {}).get("stages") or "",
                               sort_keys=True),
