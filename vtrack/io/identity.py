@@ -48,15 +48,17 @@ def _folder_identity(folder: Path) -> dict[str, int]:
 
 def images_identity(paths: Sequence[Path]) -> str | None:
     """A fingerprint of an image sequence's images ``paths`` (in frame order, at least one):
-    a hash of their total size and of the first and last images' bytes, which tells two
-    sequences of one name, frame count and frame size apart even when every image of both has
-    one size (uncompressed BMP, PPM, TIFF). None when an image cannot be looked at or read
-    (gone)."""
+    a hash of their total size and of the first and last images' bytes, each after its size
+    (sizes as 8 bytes, little-endian: no two sequences' parts run into each other), which
+    tells two sequences of one name, frame count and frame size apart even when every image
+    of both has one size (uncompressed BMP, PPM, TIFF). None when an image cannot be looked
+    at or read (gone)."""
     digest = hashlib.blake2b(digest_size=16)
     try:
-        digest.update(str(sum(path.stat().st_size for path in paths)).encode())
+        digest.update(sum(path.stat().st_size for path in paths).to_bytes(8, "little"))
         for path in (paths[0], paths[-1]) if len(paths) > 1 else paths[:1]:
             with path.open("rb") as file:
+                digest.update(os.fstat(file.fileno()).st_size.to_bytes(8, "little"))
                 while chunk := file.read(1 << 20):
                     digest.update(chunk)
     except OSError:
