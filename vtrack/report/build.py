@@ -36,6 +36,7 @@ from vtrack.report.runs import (
     source_name,
     still_written,
 )
+from vtrack.report.walk import walk_results
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED
 
 DEFAULT_TITLE = "vtrack report"
@@ -396,9 +397,10 @@ def build_report(results: Sequence[Path], out_dir: Path,
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
     truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
     _refuse_two_files_for_one_input(truths)
-    warnings: list[str] = still_written(results)
+    walked = walk_results(results)
+    warnings: list[str] = still_written(walked)
     runs: list[RunResult] = []
-    for folder in run_folders(results, warnings):
+    for folder in run_folders(results, walked, warnings):
         try:
             runs.append(load_run(folder, truths))
         except InputError as exc:
@@ -414,7 +416,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
             warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
                             f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
                             "for each input")
-    failed = failed_runs(results, runs, warnings)
+    failed = failed_runs(results, walked, runs, warnings)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
         if len(warnings) == 1:

@@ -25,7 +25,7 @@ import errno
 import json
 import math
 import os
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -57,6 +57,7 @@ from vtrack.io.outdir import (
 )
 from vtrack.io.sidecar import sequence_of
 from vtrack.io.specs import is_live, is_url
+from vtrack.report.walk import Walked
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED, STATUS_PARTIAL
 
 
@@ -677,8 +678,10 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
     return result
 
 
-def run_folders(paths: Sequence[Path], problems: list[str] | None = None) -> list[Path]:
-    """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats).
+def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
+                problems: list[str] | None = None) -> list[Path]:
+    """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats), as
+    ``walked`` (:func:`~vtrack.report.walk.walk_results`) found them.
 
     A path may be a run folder, a batch folder, any folder above them, or a ``run.json``.
     A symbolic link to a folder below one is not followed (it may lead anywhere, or back up):
@@ -688,11 +691,13 @@ def run_folders(paths: Sequence[Path], problems: list[str] | None = None) -> lis
     """
     found: dict[Path, None] = {}
     links: dict[Path, None] = {}
-    walked = [path.resolve() for path in paths if path.is_dir()]
+    tops = [path.resolve() for path in paths if path.is_dir()]
     for path in paths:
         if path.is_dir():
-            for folder in sorted(_holding(path, "run.json", links)):
+            here = walked.get(path, Walked())
+            for folder in sorted(here.holding["run.json"]):
                 found.setdefault(folder.resolve())
+            links.update(dict.fromkeys(here.links))
         elif path.name == "run.json" and os.path.lexists(path):
             found.setdefault(path.parent.resolve())  # (a link in a loop: reading it says why)
         elif not path.exists():
@@ -702,7 +707,7 @@ def run_folders(paths: Sequence[Path], problems: list[str] | None = None) -> lis
     if problems is not None:
         problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
                      "to report the runs in it)" for link in sorted(links)
-                     if not any(link.resolve().is_relative_to(top) for top in walked)]
+                     if not any(link.resolve().is_relative_to(top) for top in tops)]
     return list(found)
 
 
@@ -719,32 +724,18 @@ def _link_note(path: Path) -> str:
     return " (a symbolic link to nothing)"
 
 
-def _holding(top: Path, name: str, links: dict[Path, None] | None = None) -> Iterator[Path]:
-    """The folders at or below ``top`` that hold an entry ``name`` (``run.json``,
-    ``summary.csv``), one that cannot be read included (a symbolic link in a loop or to
-    nothing, which ``Path.rglob`` passes over as missing): reading it says why it is left out.
-    Symbolic links to folders below ``top`` are not followed, each put in ``links``."""
-    for folder, folders, files in os.walk(top):
-        if name in files or name in folders:
-            yield Path(folder)
-        if links is not None:
-            links.update((Path(folder, f), None) for f in folders
-                         if os.path.islink(os.path.join(folder, f)))
-
-
-def still_written(paths: Iterable[Path]) -> list[str]:
-    """A warning per folder at, above or below ``paths`` that a running ``vtrack batch`` (or
-    ``vtrack run``) still writes (its lock is held by a live process,
+def still_written(walked: Mapping[Path, Walked]) -> list[str]:
+    """A warning per folder at, above or below the paths ``walked``
+    (:func:`~vtrack.report.walk.walk_results`) that a running ``vtrack batch`` (or ``vtrack
+    run``) still writes (its lock is held by a live process,
     :func:`~vtrack.io.outdir.live_holder`; a stale lock is no warning): a report of it shows
     only what was finished. A folder inside one already named is not named again."""
     folders: set[Path] = set()
-    for path in paths:
-        if not path.exists():
-            continue  # (named as missing by run_folders)
+    for path, found in walked.items():  # (a path not there: named as missing by run_folders)
         path = path.resolve()
         start = path if path.is_dir() else path.parent
         folders.update([start, *start.parents])
-        folders.update(lock.parent for lock in start.rglob(LOCK_NAME))
+        folders.update(folder.resolve() for folder in found.holding[LOCK_NAME])
     named: list[Path] = []
     warnings = []
     for folder in sorted(folders, key=lambda f: len(f.parts)):
@@ -816,9 +807,10 @@ def _lines(first: int, last: int) -> str:
     return str(first) if first >= last else f"{first}-{last}"
 
 
-def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: list[str]
-                ) -> list[FailedRun]:
-    """Rows of batch ``summary.csv`` files at or below ``paths`` that are not complete and
+def failed_runs(paths: Iterable[Path], walked: Mapping[Path, Walked],
+                reported: Iterable[RunResult], problems: list[str]) -> list[FailedRun]:
+    """Rows of batch ``summary.csv`` files at or below ``paths`` (as ``walked`` found them,
+    :func:`~vtrack.report.walk.walk_results`) that are not complete and
     left no results (no run of ``reported`` is in their results folder, the batch's
     ``<input>/<config>/``: names alone may have been told apart since), each (input, config)
     once (a report's own ``summary.csv``, :func:`~vtrack.io.outdir.is_report_folder`, is no
@@ -829,7 +821,7 @@ def failed_runs(paths: Iterable[Path], reported: Iterable[RunResult], problems: 
     failed = []
     for path in paths:
         summaries = [path] if path.is_file() else sorted(
-            folder / "summary.csv" for folder in _holding(path, "summary.csv"))
+            folder / "summary.csv" for folder in walked.get(path, Walked()).holding["summary.csv"])
         for summary in summaries:
             if summary.name != "summary.csv" or is_report_folder(summary.parent):
                 continue
