@@ -285,3 +285,31 @@ def test_a_summary_csv_link_in_a_loop_and_a_linked_run_folder_are_named(
         f"vtrack: warning: not followed: {results / 'linked'} (a symbolic link to a folder; "
         "give it as RESULTS to report the runs in it)"]
     assert len((tmp_path / "rep3" / "summary.csv").read_text().splitlines()) == 2
+
+
+def test_a_folder_the_walk_cannot_read_is_named(run_dir: Path, tmp_path: Path) -> None:
+    """A folder below RESULTS that cannot be listed (here: too deep, its path past the
+    system's limit) was passed over without a word, the runs in it left out; it is one
+    warning now, naming it and why."""
+    results = tmp_path / "results"
+    whole = results / "whole"
+    whole.mkdir(parents=True)
+    for name in ("run.json", "track.csv"):
+        (whole / name).write_bytes((run_dir / name).read_bytes())
+    deep = results / "deep"
+    deep.mkdir()
+    fd = os.open(deep, os.O_RDONLY)
+    try:
+        for _ in range(os.pathconf(deep, "PC_PATH_MAX") // 200 + 1):  # (each 200 + 1 long)
+            os.mkdir("d" * 200, dir_fd=fd)
+            fd, parent = os.open("d" * 200, os.O_RDONLY, dir_fd=fd), fd
+            os.close(parent)
+    finally:
+        os.close(fd)
+    code, stderr = report(results, tmp_path / "rep")
+    assert code == 0, stderr
+    (line,) = [line for line in stderr.splitlines() if "cannot read" in line]
+    assert line.startswith(f"vtrack: warning: {deep}/{'d' * 200}/"), line
+    assert line.endswith(f": cannot read ({os.strerror(errno.ENAMETOOLONG)}); what is in it "
+                         "is not reported"), line
+    assert "cannot read" in (tmp_path / "rep" / "summary.md").read_text()

@@ -687,10 +687,11 @@ def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
     A symbolic link to a folder below one is not followed (it may lead anywhere, or back up):
     one that leads out of the folders walked is one line naming it appended to ``problems``
     (one into them, as a batch tree's ``latest``, is nothing: its runs are found where it
-    leads).
+    leads); so is each folder that could not be read, once.
     """
     found: dict[Path, None] = {}
     links: dict[Path, None] = {}
+    unreadable: dict[str, None] = {}
     tops = [path.resolve() for path in paths if path.is_dir()]
     for path in paths:
         if path.is_dir():
@@ -698,6 +699,7 @@ def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
             for folder in sorted(here.holding["run.json"]):
                 found.setdefault(folder.resolve())
             links.update(dict.fromkeys(here.links))
+            unreadable.update(dict.fromkeys(here.unreadable))
         elif path.name == "run.json" and os.path.lexists(path):
             found.setdefault(path.parent.resolve())  # (a link in a loop: reading it says why)
         elif not path.exists():
@@ -705,6 +707,7 @@ def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
         else:
             raise InputError(f"{path}: not a results folder or run.json")
     if problems is not None:
+        problems += list(unreadable)
         problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
                      "to report the runs in it)" for link in sorted(links)
                      if not any(link.resolve().is_relative_to(top) for top in tops)]
