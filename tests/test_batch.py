@@ -1325,6 +1325,38 @@ def test_a_local_batch_shares_the_cores_among_the_workers_it_starts(
         [cores // min(4, 2)] * 2  # 4 each, not 8 // 4 = 2
 
 
+def test_a_dask_jobs_thread_guess_never_fails_the_job(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """A Dask job's OpenCV threads are its worker's cores over the tasks the workers at its
+    host run at once, as the scheduler lists them. An error there other than OSError,
+    KeyError or ValueError (an entry whose nthreads is None: TypeError; anything the client
+    raises) failed every job of the batch, though it only spoils that guess: the count is now
+    the worker's own tasks, with a warning and its traceback in the worker's log."""
+    from vtrack.batch.worker import tasks_at_host
+
+    here, there = "tcp://10.0.0.5:4001", "tcp://10.0.0.6:4001"
+    workers = {here: {"host": "10.0.0.5", "nthreads": 1},
+               "tcp://10.0.0.5:4002": {"host": "10.0.0.5", "nthreads": 2},
+               there: {"host": "10.0.0.6", "nthreads": 4}}
+    assert tasks_at_host(here, 1, lambda: workers) == 3
+    assert tasks_at_host(there, 4, lambda: workers) == 4
+    assert caplog.records == []
+
+    def closing() -> dict:
+        raise RuntimeError("the client is closing")
+
+    broken = {here: {"host": "10.0.0.5", "nthreads": None}}
+    for listed, error in ((closing, RuntimeError), (lambda: broken, TypeError),
+                          (lambda: {}, KeyError)):
+        caplog.clear()
+        with caplog.at_level("WARNING", logger="distributed.worker"):
+            assert tasks_at_host(here, 2, listed) == 2
+        [record] = caplog.records
+        assert record.name == "distributed.worker" and record.levelname == "WARNING"
+        assert "this worker's 2 tasks" in record.getMessage()
+        assert record.exc_info is not None and record.exc_info[0] is error
+
+
 def test_a_jobs_opencv_threads_come_from_the_machine_that_runs_it(
         tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
     """`vtrack batch in/ --scheduler ADDRESS` read this machine's free memory to cap

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 
 def cpu_count() -> int:
     """Cores this process may use: its CPU affinity where the system has one (as FFmpeg
-    counts them), or fewer where this process's cgroup, or one above it, has a CPU quota (a
-    container's, a Kubernetes pod's, a Slurm job's: :func:`cpu_quota`); at least 1."""
+    counts them: a Slurm job's or ``taskset``'s cores), or fewer where this process's cgroup,
+    or one above it, has a CPU quota (a container's, a Kubernetes pod's: :func:`cpu_quota`);
+    at least 1."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
         os.cpu_count() or 1)
     quota = cpu_quota()

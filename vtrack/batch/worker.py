@@ -10,10 +10,11 @@ import signal
 import threading
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from multiprocessing.connection import Connection
 from pathlib import Path
+from typing import Any
 
 import cv2
 
@@ -101,24 +102,35 @@ def stop_signal_name(stop_event: str) -> str:
 
 def dask_threads() -> int:
     """The OpenCV threads of a job on this Dask worker: this machine's cores
-    (:func:`~vtrack.machine.cpu_count`, the worker's own) over the jobs the workers on this
-    machine run at once (the threads of each, as the scheduler lists them; this worker's own
-    when it cannot say, a warning in the worker's log saying why), at least 1: as a local
-    batch shares the cores among its workers.
+    (:func:`~vtrack.machine.cpu_count`, the worker's own) over the jobs the workers at this
+    worker's host address run at once (:func:`tasks_at_host`), at least 1: as a local batch
+    shares the cores among its workers.
     ``dask worker --nworkers 2 --nthreads 1`` on 8 cores: 4 a job."""
     from distributed import get_client, get_worker
 
     worker = get_worker()
-    tasks = worker.state.nthreads
-    try:
-        workers = get_client().scheduler_info(n_workers=-1)["workers"]
-        host = workers[worker.address]["host"]
-        tasks = sum(int(w["nthreads"]) for w in workers.values() if w.get("host") == host)
-    except (OSError, KeyError, ValueError) as exc:  # the scheduler gone, no entry or host
-        logging.getLogger("distributed.worker").warning(
-            "vtrack: the workers on this machine are not known (%r): a job's OpenCV threads "
-            "are its cores over this worker's %d tasks", exc, worker.state.nthreads)
+    tasks = tasks_at_host(worker.address, worker.state.nthreads,
+                          lambda: get_client().scheduler_info(n_workers=-1)["workers"])
     return max(1, cpu_count() // max(1, tasks))
+
+
+def tasks_at_host(address: str, own: int,
+                  listed: Callable[[], Mapping[str, Mapping[str, Any]]]) -> int:
+    """The tasks the Dask workers at the host of the worker at ``address`` run at once: the
+    sum of their threads, as ``listed()`` (the scheduler's workers by address) gives them.
+    Any error there (the scheduler gone, no entry for ``address``, an answer not as expected)
+    only costs that guess: it returns ``own`` (the worker's own threads) and leaves a
+    warning, with its traceback, in the worker's log (``distributed.worker``)."""
+    try:
+        workers = listed()
+        host = workers[address]["host"]
+        return sum(int(entry["nthreads"]) for entry in workers.values()
+                   if entry.get("host") == host)
+    except Exception:  # a thread-count guess must never fail the job
+        logging.getLogger("distributed.worker").warning(
+            "vtrack: the workers at this worker's host are not known: a job's OpenCV threads "
+            "are its cores over this worker's %d tasks", own, exc_info=True)
+        return own
 
 
 def execute_on_dask(job: Job, stop_event: str) -> Outcome:
