@@ -19,6 +19,7 @@ from pathlib import Path
 import av
 import numpy as np
 import pytest
+from conftest import START_BOUND_S, wait_for_stop_handlers
 
 from vtrack.geometry import Box, iou
 from vtrack.run import TRACK_COLUMNS
@@ -340,12 +341,12 @@ def test_ctrl_c_leaves_valid_partial_outputs(smooth_scene, tmp_path: Path) -> No
     for frame in frames[:30]:
         process.stdin.write(frame.tobytes())
     process.stdin.flush()
-    deadline = time.monotonic() + 60
-    partial = list(out.glob("*track*.csv"))
-    while time.monotonic() < deadline:
-        partial = list(out.glob("*track*.csv"))
-        if partial and len(partial[0].read_text().splitlines()) >= 20:
-            break
+    wait_for_stop_handlers(process)  # its start-up over, however loaded the machine
+    deadline = time.monotonic() + START_BOUND_S
+    while not ((partial := list(out.glob("*track*.csv")))
+               and len(partial[0].read_text().splitlines()) >= 20):
+        assert process.poll() is None, "vtrack ended before it wrote 20 rows"
+        assert time.monotonic() < deadline, "vtrack wrote no 20 rows within the time"
         time.sleep(0.1)
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)

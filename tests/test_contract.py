@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from conftest import START_BOUND_S
 
 from vtrack.cli import main
 from vtrack.config import load_config, parse_config
@@ -152,7 +153,7 @@ def test_repeated_configs_and_integers_too_long_to_read_are_named_for_what_they_
 
     def vtrack(*args: str) -> subprocess.CompletedProcess[str]:
         return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
-                              text=True, timeout=60, check=False)
+                              text=True, timeout=START_BOUND_S, check=False)
 
     twice = vtrack("run", "clip.mp4", "-c", "s0", "-c", "s1", "--init", "1,1,8,8")
     assert twice.returncode == 2 and "Traceback" not in twice.stderr

@@ -17,6 +17,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from conftest import START_BOUND_S
 
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
@@ -122,7 +123,7 @@ def batch_on_a_cluster(folder: Path, out: Path) -> Iterator[
             [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
              "--preset", "slow", "-o", str(out)],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 90
+        deadline = time.monotonic() + START_BOUND_S
         while not any(p.read_bytes().count(b"\n") > 3
                       for p in (out / "a").glob("*/.track.tmp-*.csv")):
             assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
@@ -160,7 +161,7 @@ def test_the_dashboard_port_and_a_batch_whose_workers_all_die(folder: Path,
             [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler",
              f"tcp://127.0.0.1:{port}", "--worker-timeout", "2", "--preset", "slow",
              "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 90
+        deadline = time.monotonic() + START_BOUND_S
         while not list((out / "a").glob("*/.track.tmp-*.csv")):
             assert time.monotonic() < deadline and batch.poll() is None, "the job should start"
             time.sleep(0.05)
@@ -277,7 +278,7 @@ def test_a_job_done_before_its_worker_died_is_not_run_again(tmp_path: Path) -> N
         assert batch.stdout is not None
         first = batch.stdout.readline()  # the batch has taken a's outcome
         assert first.startswith("a [robust]: 20 frames"), first
-        deadline = time.monotonic() + 90
+        deadline = time.monotonic() + START_BOUND_S
         while not list((out / "b").glob("*/.track.tmp-*.csv")):  # b runs
             assert time.monotonic() < deadline and batch.poll() is None, "b should start"
             time.sleep(0.05)

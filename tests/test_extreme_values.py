@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import START_BOUND_S
 from test_cli import assert_one_line_error, vtrack
 
 import vtrack as vtrack_package
@@ -66,7 +67,8 @@ def test_scene_to_a_dash_is_refused_not_a_file_named_dash(tmp_path: Path, fmt: s
     """``vtrack scene smooth - --format raw`` wrote files named ``-`` and ``-.gt.txt``, while
     ``vtrack run -`` reads standard input."""
     result = subprocess.run([sys.executable, "-m", "vtrack", "scene", "smooth", "-", "--format",
-                             fmt], capture_output=True, timeout=60, check=False, cwd=tmp_path,
+                             fmt], capture_output=True, timeout=START_BOUND_S, check=False,
+                            cwd=tmp_path,
                             env={**os.environ, "PYTHONPATH": str(
                                 Path(vtrack_package.__file__).parents[1])})  # this vtrack
     assert_one_line_error(result, "OUT -: vtrack scene writes files")

@@ -15,6 +15,7 @@ import av
 import cv2
 import numpy as np
 import pytest
+from conftest import START_BOUND_S
 
 from vtrack.io import open_source
 from vtrack.io.pyfile import CountedStream
@@ -34,7 +35,7 @@ def long_clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def vtrack(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
-                          text=True, timeout=60, check=False)
+                          text=True, timeout=START_BOUND_S, check=False)
 
 
 def test_a_frame_past_the_stated_count_is_refused_before_any_is_decoded(
@@ -133,7 +134,7 @@ def test_run_starts_from_the_key_frame_before_its_start_with_the_same_frames(
         with long_clip.open("rb") as stdin:
             done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", "--start", start,
                                    *init, "-o", str(whole)], stdin=stdin, capture_output=True,
-                                  text=True, timeout=60, check=False)
+                                  text=True, timeout=START_BOUND_S, check=False)
         assert done.returncode == 0, done.stderr
         records = [json.loads((out / "run.json").read_text()) for out in (jumped, whole)]
         assert [(r["start_frame"], r["read_from_frame"], r["frames"]) for r in records] == [
@@ -237,7 +238,7 @@ def test_a_fragmented_mp4_is_not_judged_by_its_first_fragment(tmp_path: Path) ->
     listed = _fragmented(tmp_path / "frag2.mp4", "frag_keyframe")
     done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", *init,  # a pipe
                            "-o", str(tmp_path / "piped")], input=piped.read_bytes(),
-                          capture_output=True, timeout=60, check=False)
+                          capture_output=True, timeout=START_BOUND_S, check=False)
     assert done.returncode == 0, done.stderr.decode()
     done = vtrack("run", str(listed), *init, "-o", str(tmp_path / "listed"))
     assert done.returncode == 0, done.stderr
@@ -252,9 +253,9 @@ def _run_on_stdin(stdin: Path | bytes, *args: str) -> subprocess.CompletedProces
     command = [sys.executable, "-m", "vtrack", "run", *args]
     if isinstance(stdin, bytes):
         return subprocess.run(command, input=stdin, capture_output=True, text=False,
-                              timeout=60, check=False)
+                              timeout=START_BOUND_S, check=False)
     with stdin.open("rb") as handle:
-        return subprocess.run(command, stdin=handle, capture_output=True, timeout=60,
+        return subprocess.run(command, stdin=handle, capture_output=True, timeout=START_BOUND_S,
                               check=False)
 
 

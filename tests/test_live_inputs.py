@@ -22,13 +22,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import wait_for_stop_handlers
+from conftest import START_BOUND_S, wait_for_stop_handlers
 
 from vtrack.io.videowriter import VideoWriter
 from vtrack.scenes import make_scene, write_clip, write_video
 
 
-def _run(args: list[str], timeout: float = 120, **kwargs: object) -> subprocess.CompletedProcess:
+def _run(args: list[str], timeout: float = START_BOUND_S,
+         **kwargs: object) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "vtrack", "run", *args], capture_output=True,
                           timeout=timeout, check=False, **kwargs)  # type: ignore[call-overload]
 
@@ -140,7 +141,7 @@ def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     for url in (f"tcp://127.0.0.1:{port}", f"http://127.0.0.1:{port}/x.mp4"):
-        done = _run([url, "--init", "1,1,8,8", "--out", str(tmp_path / "o")], timeout=60)
+        done = _run([url, "--init", "1,1,8,8", "--out", str(tmp_path / "o")])
         assert done.returncode != 0
         lines = done.stderr.decode().strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith(f"vtrack: error: {url}: cannot be opened")
@@ -150,7 +151,7 @@ def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path
     assert done.returncode != 0 and done.stderr.decode().strip() == (
         f"vtrack: error: {quiet}: cannot be opened (nothing came within 1 s; --timeout "
         "SECONDS waits longer)")
-    done = _run(["srt://127.0.0.1:9000", "--init", "1,1,8,8"], timeout=60)
+    done = _run(["srt://127.0.0.1:9000", "--init", "1,1,8,8"])
     assert done.returncode != 0 and b"srt:// is not in the FFmpeg" in done.stderr
 
 
@@ -166,7 +167,7 @@ def _free_port(kind: int = socket.SOCK_STREAM) -> int:
 
 
 def _wait_for(condition: Callable[[], bool], what: str, receiver: subprocess.Popen,
-              limit_s: float = 60) -> None:
+              limit_s: float = START_BOUND_S) -> None:
     """Wait (bounded) until ``condition()`` holds; fail naming ``what`` if the receiver ended
     first or the limit passed."""
     deadline = time.monotonic() + limit_s
@@ -253,7 +254,7 @@ def test_a_udp_stream_joined_far_from_its_next_key_frame_is_not_called_no_video(
     try:
         time.sleep(1.0)  # past the key frame
         done = _run([f"udp://127.0.0.1:{port}", "--init", "1,1,8,8", "--timeout", "1",
-                     "--no-video", "-o", str(tmp_path / "out")], timeout=60)
+                     "--no-video", "-o", str(tmp_path / "out")])
     finally:
         sender.kill()
         sender.wait()
@@ -285,7 +286,8 @@ def _sent_whole(tmp_path: Path, options: list[str]) -> tuple[int, bytes]:
                           "--no-video", "-o", str(tmp_path / "out")])
     try:
         _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)
-        subprocess.run([*SENDER, str(clip), f"udp://127.0.0.1:{port}"], check=True, timeout=60)
+        subprocess.run([*SENDER, str(clip), f"udp://127.0.0.1:{port}"], check=True,
+                       timeout=START_BOUND_S)
         _, stderr = receiver.communicate(timeout=60)
     finally:
         if receiver.poll() is None:
@@ -349,7 +351,7 @@ def test_rtsp_pushed_to_vtrack_listening_gives_every_frame(tmp_path: Path,
         send = ([*SENDER, str(clip), url, "rtsp"] if sender_kind == "pyav" else
                 ["ffmpeg", "-loglevel", "error", "-re", "-i", str(clip), "-c", "copy", "-f",
                  "rtsp", url])
-        subprocess.run(send, check=True, timeout=60)
+        subprocess.run(send, check=True, timeout=START_BOUND_S)
         _, stderr = receiver.communicate(timeout=60)
     finally:
         if receiver.poll() is None:
@@ -545,7 +547,7 @@ def test_a_capture_device_is_read_through_opencv(tmp_path: Path) -> None:
     if not devices:
         pytest.skip("no V4L2 capture device (/dev/videoN) on this machine")
     done = _run([str(devices[0]), "-c", "s2", "--init", "10,10,20,20", "--frames", "5",
-                 "--no-video", "-o", str(tmp_path / "cam")], timeout=60)
+                 "--no-video", "-o", str(tmp_path / "cam")])
     if done.returncode != 0 and b"cannot be opened as a V4L2" in done.stderr:
         pytest.skip(f"{devices[0]} is not a camera that can be opened here")
     assert done.returncode == 0, done.stderr

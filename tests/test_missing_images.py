@@ -14,6 +14,7 @@ import av
 import cv2
 import numpy as np
 import pytest
+from conftest import START_BOUND_S
 
 import vtrack.io.images as images_module
 from vtrack.errors import PartialInputError
@@ -414,7 +415,7 @@ def test_the_resume_hint_of_a_chain_without_a_box_goes_on_over_a_missing_image(
                                 "--no-video", "-o", str(first)],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     wait_for_stop_handlers(process)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + START_BOUND_S
     while not any(len(p.read_bytes().splitlines()) > 20 for p in first.glob(".track*")):
         assert process.poll() is None and time.monotonic() < deadline, process.communicate()
         time.sleep(0.01)

@@ -123,7 +123,7 @@ def test_two_batches_into_one_folder_at_once(inputs: Path, tmp_path: Path) -> No
     out = tmp_path / "out"
     args = ("batch", str(inputs), "-c", "s0", "-c", "camshift", "--jobs", "1", "--out", str(out))
     first = start(*args)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + START_BOUND_S
     while not (out / LOCK_NAME).exists() and first.poll() is None \
             and time.monotonic() < deadline:
         time.sleep(0.02)

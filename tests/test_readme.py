@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import START_BOUND_S
 
 from vtrack.config import load_config
 from vtrack.configs import DEFAULT_CONFIG
@@ -180,7 +181,7 @@ def test_readme_dask_cluster_recipe_runs(inputs: Path, tmp_path: Path) -> None:
 
     try:
         start(f"{scheduler} --host 127.0.0.1 --port {port} --no-dashboard")
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + START_BOUND_S
         while True:  # listening before the batch asks (a refused connection is an error)
             with socket.socket() as probe:
                 if probe.connect_ex(("127.0.0.1", port)) == 0:

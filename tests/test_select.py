@@ -23,6 +23,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import START_BOUND_S
 
 import vtrack as vtrack_package
 from vtrack.errors import InputError
@@ -84,7 +85,7 @@ def test_format_box_is_what_init_takes() -> None:
 
 def vtrack(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=60, check=False)
+                          text=True, cwd=cwd, timeout=START_BOUND_S, check=False)
 
 
 def test_frame_writes_the_frame_with_a_light_grid(clip: Path, tmp_path: Path) -> None:
@@ -180,7 +181,8 @@ def test_frame_never_writes_into_its_input(clip: Path, tmp_path: Path) -> None:
     assert sorted(p.name for p in folder.rglob("*.png")) == []
     with clip.open("rb") as stdin:
         done = subprocess.run([sys.executable, "-m", "vtrack", "frame", "-"], stdin=stdin,
-                              capture_output=True, text=True, timeout=60, check=False,
+                              capture_output=True, text=True, timeout=START_BOUND_S,
+                              check=False,
                               cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(
                                   Path(vtrack_package.__file__).parents[1])})
     assert done.returncode == 0 and (tmp_path / "stdin-frame0.png").is_file(), done.stderr

@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import START_BOUND_S
 from test_select import Select, _browser
 
 from vtrack.errors import InputError
@@ -63,7 +64,8 @@ def test_the_picker_numbers_frames_as_the_input_does(gapped: Path) -> None:
 def test_select_names_a_missing_start_frame_and_the_page_server_steps_over_it(
         gapped: Path) -> None:
     done = subprocess.run([sys.executable, "-m", "vtrack", "select", str(gapped), "--frame", "4"],
-                          capture_output=True, text=True, timeout=60, check=False)
+                          capture_output=True, text=True, timeout=START_BOUND_S,
+                          check=False)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr == (f"vtrack: error: {gapped}: frame 4 is missing from the numbering "
                            "(no image between 0003.jpg and 0007.jpg); the next frame it has is "

@@ -15,6 +15,7 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 import pytest
+from conftest import START_BOUND_S
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_select import Select, post
@@ -217,7 +218,7 @@ def test_a_stream_whose_early_frames_left_the_cache_says_it_cannot_be_read_again
     """
     with clip.open("rb") as stdin:
         done = subprocess.run([sys.executable, "-c", script], stdin=stdin, capture_output=True,
-                              text=True, timeout=60, check=False)
+                              text=True, timeout=START_BOUND_S, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == ("-: its earlier frames are no longer held and it cannot be "
                                    "read again (a stream); pick a later frame, or give the "

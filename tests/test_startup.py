@@ -12,6 +12,7 @@ import subprocess
 import sys
 
 import pytest
+from conftest import START_BOUND_S
 
 HEAVY = ("matplotlib", "dask", "distributed", "vtrack.report")
 
@@ -30,7 +31,7 @@ finally:
 
 def loaded_modules(*args: str) -> tuple[set[str], str]:
     done = subprocess.run([sys.executable, "-c", PROBE, *args], capture_output=True, text=True,
-                          timeout=60, check=False)
+                          timeout=START_BOUND_S, check=False)
     line = next(x for x in done.stderr.splitlines() if x.startswith("MODULES "))
     return set(json.loads(line.removeprefix("MODULES "))), done.stdout
 
@@ -73,7 +74,7 @@ def test_import_vtrack_is_lazy_and_its_names_still_resolve() -> None:
              "print(before, 'vtrack.config' in sys.modules, box.w, "
              "sorted(n for n in vtrack.__all__ if not hasattr(vtrack, n)))")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          timeout=60, check=True)
+                          timeout=START_BOUND_S, check=True)
     assert done.stdout.split() == ["False", "False", "3", "[]"]
 
 
@@ -111,7 +112,7 @@ def test_the_errors_a_caller_catches_are_reached_from_a_bare_import_vtrack() -> 
              "vtrack.OutputError.exit_code, vtrack.evaluate.summarize.__name__, "
              "'vtrack.config' in sys.modules, {'errors', 'InputError'} <= set(dir(vtrack)))")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          timeout=60, check=False)
+                          timeout=START_BOUND_S, check=False)
     assert done.stdout.split() == ["InputError", "True", "True", "2", "summarize", "False",
                                    "True"], done.stderr
 

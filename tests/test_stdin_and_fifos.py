@@ -18,7 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import wait_for_stop_handlers
+from conftest import START_BOUND_S, wait_for_stop_handlers
 
 from vtrack.io import follow
 from vtrack.io.follow import GrowingFile
@@ -100,7 +100,7 @@ def test_stream_into_a_fifo_no_reader_opens_ends_after_timeout(tmp_path: Path) -
     done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
                            "--stream", str(fifo), "--timeout", "1", "-o", str(tmp_path / "out")],
-                          capture_output=True, timeout=60, check=False)
+                          capture_output=True, timeout=START_BOUND_S, check=False)
     assert done.returncode == 2, done.stderr
     assert done.stderr.decode().strip() == (f"vtrack: error: --stream {fifo}: a FIFO that no "
                                             "reader opened within 1 s (--timeout)")
@@ -143,7 +143,7 @@ def test_follow_is_refused_where_it_cannot_apply(tmp_path: Path) -> None:
     for args, reason in cases:
         done = subprocess.run([sys.executable, "-m", "vtrack", "run", *args, "--follow", "1",
                                "-c", "s0", "--init", "1,1,8,8", "-o", str(tmp_path / "out")],
-                              capture_output=True, timeout=60, check=False,
+                              capture_output=True, timeout=START_BOUND_S, check=False,
                               stdin=subprocess.DEVNULL)
         assert done.returncode == 2, (args, done.stderr)
         line = done.stderr.decode().strip()
@@ -159,14 +159,14 @@ def test_stdin_closed_or_a_terminal_is_one_line(tmp_path: Path, raw: bool) -> No
     what = "raw frames" if raw else "a video"
     args = [sys.executable, "-m", "vtrack", "run", "-", *(["--raw", "160x120"] if raw else []),
             "-c", "s0", "--init", "1,1,8,8", "--no-video", "-o", str(tmp_path / "out")]
-    closed = subprocess.run(args, capture_output=True, timeout=60, check=False,
+    closed = subprocess.run(args, capture_output=True, timeout=START_BOUND_S, check=False,
                             preexec_fn=lambda: os.close(0))
     assert closed.returncode == 2
     assert closed.stderr.decode().strip() == (f"vtrack: error: stdin is closed; pipe {what} "
                                               "into vtrack")
     leader, follower = pty.openpty()
     try:
-        on_terminal = subprocess.run(args, capture_output=True, timeout=60, check=False,
+        on_terminal = subprocess.run(args, capture_output=True, timeout=START_BOUND_S, check=False,
                                      stdin=follower)
     finally:
         os.close(leader)
@@ -326,7 +326,7 @@ def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
                            "--stream", str(out / ".vtrack.lock"), "-o", str(out)],
-                          capture_output=True, timeout=60, check=False)
+                          capture_output=True, timeout=START_BOUND_S, check=False)
     assert done.returncode == 2
     assert "is one of this run's own outputs" in done.stderr.decode()
 
@@ -338,7 +338,7 @@ def test_an_empty_path_argument_is_refused(tmp_path: Path, command: list[str]) -
     it (an empty --out was already refused)."""
     args = [str(tmp_path / "o") if a == "OUT" else a for a in command]
     done = subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
-                          timeout=60, check=False, cwd=tmp_path)
+                          timeout=START_BOUND_S, check=False, cwd=tmp_path)
     assert done.returncode == 2
     assert "empty; give " in done.stderr.decode()  # what the argument takes
     assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from conftest import sigterm_as_called, wait_for_stop_handlers
+from conftest import START_BOUND_S, sigterm_as_called, wait_for_stop_handlers
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -95,7 +95,7 @@ def _terminated_while_staging(args: list[str], cwd: Path, out: Path) -> subproce
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         wait_for_stop_handlers(process)
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + START_BOUND_S
         while not (out.is_dir() and any(p.name.startswith(".") for p in out.iterdir())):
             assert process.poll() is None, "vtrack ended before it staged a file"
             assert time.monotonic() < deadline, "vtrack staged no file within the time"

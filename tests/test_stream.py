@@ -13,7 +13,7 @@ import threading
 from pathlib import Path
 
 import pytest
-from conftest import LinesAsTheyCome
+from conftest import START_BOUND_S, LinesAsTheyCome
 
 from vtrack.errors import StreamReaderGone
 from vtrack.io.outdir import RUN_OUTPUTS
@@ -119,7 +119,7 @@ def test_each_line_arrives_while_the_input_is_still_open(tmp_path: Path) -> None
         for index in range(10):
             proc.stdin.write(raw[index * size:(index + 1) * size])
             proc.stdin.flush()
-            line = lines.next(60)  # a bound, not a measure
+            line = lines.next(START_BOUND_S)  # a bound, not a measure
             assert line, f"no line for frame {index} while the input stays open"
             assert json.loads(line)["frame"] == index
         proc.stdin.close()
