@@ -275,16 +275,17 @@ def hard_means(overrides: list[str], seeds: range, frames: int = 120,
                size: tuple[int, int] | None = None,
                names: tuple[str, ...] = HARD) -> dict[str, list[float | None]]:
     """Per randomised hard scene, robust's (with ``overrides``) mean IoU on each seed; None for
-    a seed whose scene robust refuses to start on (at a small ``size`` a target may start under
-    the 4x4 pixels a tracker starts from), with its reason on stderr. A scene that cannot be
-    made at all (``size`` or ``frames`` out of its range) raises VtrackError."""
+    a seed whose scene cannot be made (its drawn parameters do not fit ``size`` or ``frames``:
+    at 100x400 and 60 frames some slabs' occlusions) or robust refuses to start on (at a small
+    ``size`` a target may start under the 4x4 pixels a tracker starts from), with its reason
+    on stderr. :func:`can_be_made` first tells a scene no seed can be made of."""
     config = load_config("robust").with_overrides(overrides)
     width, height = size or (None, None)
     means: dict[str, list[float | None]] = {}
     for name in names:
         for seed in seeds:
-            scene = make_scene(name, seed=seed, frames=frames, width=width, height=height)
             try:
+                scene = make_scene(name, seed=seed, frames=frames, width=width, height=height)
                 boxes = track_clip(Clip(name, list(scene.frames()), list(scene.boxes)), config)
             except VtrackError as exc:
                 print(f"{name} seed {seed}: left out: {exc}", file=sys.stderr)
@@ -312,21 +313,31 @@ def hard_size(text: str | None) -> tuple[int, int] | None:
     return int(width), int(height)
 
 
-def can_be_made(names: Iterable[str], seed: int, frames: int,
+def can_be_made(names: Iterable[str], seeds: range, frames: int,
                 size: tuple[int, int] | None) -> None:
-    """Make one scene of each of ``names`` (at ``seed``, ``frames``, ``size``), so that a
-    ``--frames`` or ``--size`` the scenes cannot be made at raises VtrackError before a table's
-    header is printed, not after it."""
+    """Make each of ``names`` at ``frames`` and ``size`` from one of ``seeds`` on, so that a
+    ``--frames`` or ``--size`` no seed's scene can be made at raises (the first seed's
+    VtrackError) before a table's header is printed, not after it; a scene only some seeds
+    cannot be made of is theirs to leave out (:func:`hard_means`)."""
     width, height = size or (None, None)
     for name in dict.fromkeys(names):
-        make_scene(name, seed=seed, frames=frames, width=width, height=height)
+        first: VtrackError | None = None
+        for seed in seeds:
+            try:
+                make_scene(name, seed=seed, frames=frames, width=width, height=height)
+                break
+            except VtrackError as exc:
+                first = first or exc
+        else:
+            if first is not None:
+                raise first
 
 
 def hard(overrides: list[str], seeds: range, frames: int,
          size: tuple[int, int] | None) -> None:
     """Mean IoU of robust (with ``overrides``) on each randomised hard scene, per seed (the
     parameters are drawn per seed; the tests use seeds 0-2 at 120 frames, 320x240)."""
-    can_be_made(HARD, seeds.start, frames, size)
+    can_be_made(HARD, seeds, frames, size)
     where = f"{size[0]}x{size[1]}" if size else "320x240"
     print(f"| scene ({where}, {frames} frames) | seeds {seeds.start}-{seeds.stop - 1} | mean "
           "| min |")
@@ -349,7 +360,7 @@ def drift(overrides: list[str], seeds: range, frames: int) -> None:
     of each frame's sub-pixel motion is short of it trails the target more and more (the
     static background in its region matches best where it was)."""
     config = load_config("robust").with_overrides(overrides)
-    can_be_made(("smooth",), seeds.start, frames, (320, 240))
+    can_be_made(("smooth",), seeds, frames, (320, 240))
     print(f"| seed (smooth, 320x240, {frames} frames) | mean IoU per 1/{DRIFT_PARTS} of the "
           "clip | mean | last frame |")
     print("|---|---|---:|---:|")
@@ -399,7 +410,7 @@ def beyond(overrides: list[str], seeds: range, frames: int,
            draws: tuple[tuple[str, str, tuple[float, float]], ...] = BEYOND) -> None:
     """Mean IoU of robust (with ``overrides``) on each hard scene with one parameter drawn
     beyond its declared range (``draws``: :data:`BEYOND` or :data:`LOOKS`), per seed."""
-    can_be_made((name for name, _, _ in draws), seeds.start, frames, None)
+    can_be_made((name for name, _, _ in draws), seeds, frames, None)
     print(f"| scene (320x240, {frames} frames) | parameter: declared -> drawn | seeds "
           f"{seeds.start}-{seeds.stop - 1} | mean | min |")
     print("|---|---|---|---:|---:|")
@@ -510,10 +521,6 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, start
     first boxes, ``jobs`` sequences at once): AUC per sequence and variant, then per variant
     the means (all, tune, check), the honest-state shares pooled over the frames and, with
     ``with_scenes``, the slow slab and hard scenes' mean IoU."""
-    try:
-        load_config("robust").with_overrides(extra)
-    except VtrackError as exc:
-        sys.exit(str(exc))
     variants = usable(ABLATIONS, extra)
     names = [seq.name for seq in sequences]
     table: dict[str, list[Result]] = {key: [] for key, _, _ in variants}
@@ -558,17 +565,27 @@ def ablate(sequences: list[Sequence], extra: list[str], with_scenes: bool, start
         sys.stdout.flush()
 
 
-def whole_number(least: int) -> Callable[[str], int]:
-    """An argparse type: a whole number from ``least`` on; else argparse's one-line error."""
+def whole_number(least: int, most: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``least`` on (to ``most``, when given); else
+    argparse's one-line error."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r}: not a whole number") from None
-        if value < least:
-            raise argparse.ArgumentTypeError(f"{text!r}: give {least} or more")
+        if value < least or (most is not None and value > most):
+            raise argparse.ArgumentTypeError(
+                f"{text!r}: give {least} or more" if most is None else
+                f"{text!r}: give {least} to {most}")
         return value
     return parse
+
+
+def scored_config(args: argparse.Namespace) -> str:
+    """The config the mode ``args`` asks for runs with ``--set``: ``--config`` for the
+    per-sequence table and ``--variants``; robust for every other mode."""
+    other = (args.ablate, args.speed, args.hard, args.beyond, args.looks, args.drift)
+    return "robust" if any(other) else args.config
 
 
 def main() -> None:
@@ -592,14 +609,18 @@ def main() -> None:
     parser.add_argument("--seeds", type=whole_number(1), default=9,
                         help="--hard, --beyond, --looks, --drift: how many seeds (default 9)")
     parser.add_argument("--first-seed", type=whole_number(0), default=0,
-                        help="--hard: the first seed (default 0; the tests use 0-5, the tables "
-                             "0-8: a higher one scores parameters never looked at)")
+                        help="--hard, --beyond, --looks, --drift: the first seed (default 0; "
+                             "the tests use 0-5, the tables 0-8: a higher one scores "
+                             "parameters never looked at)")
     parser.add_argument("--drift", action="store_true",
                         help="mean IoU on a slowly moving target over a long clip (--seeds, "
                              f"--frames: default {DRIFT_FRAMES})")
     parser.add_argument("--frames", type=whole_number(1), default=None,
-                        help="--hard: frames per scene (default 120)")
-    parser.add_argument("--size", default=None, help="--hard: WxH (default 320x240)")
+                        help="--hard, --beyond, --looks: frames per scene (default 120); "
+                             f"--drift: frames of its clip (default {DRIFT_FRAMES})")
+    parser.add_argument("--size", default=None,
+                        help="--hard only: WxH (default 320x240; the other modes' scenes are "
+                             "320x240)")
     parser.add_argument("--variants", action="store_true",
                         help="every sequence also at half size, every second frame, mirrored "
                              "and backwards, from the given box")
@@ -610,14 +631,26 @@ def main() -> None:
                              "moved 10%% of its size along each diagonal; 13: OTB's whole "
                              "spatial robustness set (also moved along each axis, and scaled "
                              "by 0.8-1.2); the scores are the runs' means")
-    parser.add_argument("--jobs", type=int, default=1,
-                        help="sequences scored at once in worker processes (scores are the "
-                             "same; the us/frame column then also counts the other jobs)")
+    parser.add_argument("--jobs", type=whole_number(1, 64), default=1,
+                        help="sequences scored at once in worker processes, 1 to 64 (scores "
+                             "are the same; the us/frame column then also counts the other "
+                             "jobs)")
     parser.add_argument("--config", default="robust",
                         help="another shipped config to score the same way (e.g. s0)")
     args = parser.parse_args()
-    if not 1 <= args.jobs <= 64:
-        parser.error(f"--jobs {args.jobs}: give 1 to 64 worker processes")
+    if args.size is not None and not args.hard:
+        parser.error("--size: only --hard takes a size (the other modes' scenes are 320x240)")
+    if args.overrides and args.scenes:
+        parser.error("--set: --scenes scores the shipped robust and s0 as they are")
+    try:  # a --set the config refuses, a scene that cannot be made at that --size or --frames
+        load_config(scored_config(args)).with_overrides(args.overrides)
+        run_mode(args)
+    except VtrackError as exc:
+        sys.exit(f"robust_tune.py: {exc}")
+
+
+def run_mode(args: argparse.Namespace) -> None:
+    """Print the table of the mode ``args`` asks for."""
     if args.speed:
         speed(args.overrides)
         return
@@ -626,18 +659,15 @@ def main() -> None:
         return
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     frames = args.frames or 120
-    try:  # a scene that cannot be made at that --size or --frames, a --set robust refuses
-        if args.drift:
-            drift(args.overrides, seeds, args.frames or DRIFT_FRAMES)
-            return
-        if args.beyond or args.looks:
-            beyond(args.overrides, seeds, frames, LOOKS if args.looks else BEYOND)
-            return
-        if args.hard:
-            hard(args.overrides, seeds, frames, hard_size(args.size))
-            return
-    except VtrackError as exc:
-        sys.exit(f"robust_tune.py: {exc}")
+    if args.drift:
+        drift(args.overrides, seeds, args.frames or DRIFT_FRAMES)
+        return
+    if args.beyond or args.looks:
+        beyond(args.overrides, seeds, frames, LOOKS if args.looks else BEYOND)
+        return
+    if args.hard:
+        hard(args.overrides, seeds, frames, hard_size(args.size))
+        return
     sequences = [s for s in single_target_sequences() if not args.only or s.name in args.only]
     if args.split != "all":
         check = args.split == "check"

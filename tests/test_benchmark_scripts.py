@@ -101,3 +101,59 @@ def test_robust_tune_refuses_a_seed_count_or_first_seed_out_of_range(option: str
         f"robust_tune.py: error: argument {option}: '{value}': give "
         f"{1 if option != '--first-seed' else 0} or more"), done.stderr
     assert done.stdout == ""
+
+
+@pytest.mark.parametrize("mode", [(), ("--starts", "5"), ("--hard",), ("--beyond",),
+                                  ("--looks",), ("--drift",), ("--variants",), ("--speed",),
+                                  ("--ablate",)], ids=lambda mode: " ".join(mode) or "table")
+def test_robust_tune_refuses_a_bad_set_before_any_table(mode: tuple[str, ...]) -> None:
+    """A --set robust refuses was taken up only as each mode got to it: `--hard` and
+    `--beyond` printed the header first, `--variants` and `--speed` ended in a traceback, the
+    default table and `--starts` printed rows of 0.000 and exited 0, `--ablate` exited with the
+    message alone. Every mode now refuses it in one line before anything runs."""
+    done = run_script("robust_tune.py", *mode, "--set", "nope.x=1", "--seeds", "1")
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "robust_tune.py: --set nope.x=1: stage 'nope' is not in the chain (robust_model -> "
+        "robust_search -> robust_failure -> robust_motion)"], done.stderr
+    assert done.stdout == ""
+
+
+@pytest.mark.parametrize(("args", "error"), [
+    (("--scenes", "--set", "robust_failure.lost_after=30"),
+     "--set: --scenes scores the shipped robust and s0 as they are"),
+    (("--looks", "--size", "480x360"),
+     "--size: only --hard takes a size (the other modes' scenes are 320x240)"),
+    (("--jobs", "65"), "argument --jobs: '65': give 1 to 64")])
+def test_robust_tune_refuses_what_a_mode_would_pass_over(args: tuple[str, ...],
+                                                         error: str) -> None:
+    """`--scenes --set ...` scored the shipped configs without a word of the --set, and
+    `--looks --size 480x360` its scenes at 320x240: both are refused now, as argparse refuses
+    a --jobs out of range."""
+    done = run_script("robust_tune.py", *args)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines()[-1] == f"robust_tune.py: error: {error}"
+    assert done.stdout == ""
+
+
+def test_robust_tune_looks_leaves_out_a_seed_whose_scene_cannot_be_made() -> None:
+    """`--looks --frames 60 --first-seed 1 --seeds 5` printed the header and two rows, then
+    ended with "60 frames are too few for its occlusion" (seed 4's slab of a size beyond its
+    declared range): only the first seed was made before the table. That seed is now left out
+    of its row (a '-' cell, the reason on stderr) and the table goes on, as a seed robust
+    refuses to start on is."""
+    done = run_script("robust_tune.py", "--looks", "--frames", "60", "--first-seed", "3",
+                      "--seeds", "2")
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    rows = [line.split(" | ") for line in done.stdout.splitlines()
+            if line.startswith("| slab | ")]
+    assert len(rows) == 8, done.stdout  # every look of robust_tune's LOOKS
+    cells = {row[1]: row[2].split() for row in rows}
+    assert cells["size: 0.6-1 -> 1-1.6"][1] == "-", done.stdout
+    assert float(cells["size: 0.6-1 -> 1-1.6"][0]) >= 0, done.stdout
+    assert all(cell != "-" for name, row in cells.items() if not name.startswith("size")
+               for cell in row), done.stdout
+    assert done.stderr.splitlines() == [
+        "slab seed 4: left out: scenario 'slab' at 320x240: 60 frames are too few for its "
+        "occlusion"], done.stderr
