@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 from test_cli import assert_one_line_error, vtrack
 
+from vtrack import Tracker
+from vtrack.errors import InputError
 from vtrack.scenes import make_scene, write_groundtruth, write_video
 
 
@@ -45,3 +47,21 @@ def test_a_refused_run_into_a_new_folder_leaves_no_folder(tmp_path: Path) -> Non
                     "-o", str(tmp_path / "new" / "out"))
     assert result.returncode == 2
     assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize(("config", "start"), [("s0", "0"), ("camshift", "5")])
+def test_a_stage_refusing_the_first_frame_names_the_input_and_frame(tmp_path: Path, config: str,
+                                                                    start: str) -> None:
+    """A stage's refusal of the first frame said `backproject: no pixel of the initial box ...`
+    without the input it was about; it now begins with the input and the refused frame, as the
+    run's other input errors do. The library keeps the stage's own words."""
+    grey = clip(tmp_path, "grey")
+    result = vtrack("run", str(grey[0]), "--init", "30,20,24,18", "-c", config, "--start",
+                    start, "-o", str(tmp_path / "out"))
+    line = assert_one_line_error(result, "no colour")
+    assert line.startswith(f"vtrack: error: {grey[0]}: frame {start}: backproject: no pixel "), line
+    assert result.returncode == 2
+    assert not (tmp_path / "out").exists()
+    picture = make_scene("grey", seed=0, width=96, height=72, frames=10, fps=30.0).frame(0)
+    with pytest.raises(InputError, match=r"^backproject: no pixel of the initial box"):
+        Tracker(config).init(picture, (30, 20, 24, 18))

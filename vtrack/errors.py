@@ -178,6 +178,21 @@ class ConfigError(VtrackError):
     """A configuration or parameter that is unknown, mistyped or impossible."""
 
 
+class FirstFrameError(InputError):
+    """A stage's refusal of the track's first frame or of the box given in it (a box that puts
+    no pixel under the stage's window, a target without colour for a hue tracker). The library
+    says it as the stage does; ``vtrack run`` (:func:`vtrack.run.run`) names its input and the
+    frame first. ``frame_index``: the refused frame's index, once the pipeline knows it."""
+
+    def __init__(self, message: str, frame_index: int | None = None) -> None:
+        super().__init__(message)
+        self.frame_index = frame_index
+
+    def at(self, frame_index: int) -> FirstFrameError:
+        """The same refusal, of frame ``frame_index``."""
+        return FirstFrameError(str(self), frame_index)
+
+
 class OutputError(VtrackError):
     """An output location that cannot be written."""
 

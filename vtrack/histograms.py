@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 
 
 def hue_histogram(
@@ -36,13 +36,13 @@ def bhattacharyya_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def refuse_colourless(bgr: np.ndarray, stage: str, box_text: str) -> None:
-    """InputError when no pixel of ``bgr`` (the initial box's pixels, BGR or grey) has a hue:
+    """FirstFrameError when no pixel of ``bgr`` (the initial box's pixels, BGR or grey) has a hue:
     every pixel's three channels are equal (grey footage), so a hue histogram holds one bin
     whatever the target is, and a hue tracker follows nothing while it reports tracking."""
     if bgr.ndim == 3 and bgr.shape[2] == 3:
         blue, green, red = cv2.split(bgr)
         if cv2.countNonZero(cv2.absdiff(blue, green)) or cv2.countNonZero(cv2.absdiff(green, red)):
             return
-    raise InputError(
+    raise FirstFrameError(
         f"{stage}: no pixel of the initial box {box_text} has a colour (grey footage?): a hue "
         "tracker has nothing to follow; try --config robust or s2")

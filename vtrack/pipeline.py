@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from vtrack.config import check_stages
-from vtrack.errors import ConfigError, InputError
+from vtrack.errors import ConfigError, FirstFrameError, InputError
 from vtrack.frame import Frame, GrayFrame
 from vtrack.geometry import Box, as_box, check_init_box
 from vtrack.overlays import Overlay
@@ -207,10 +207,13 @@ class Pipeline:
             ctx = TrackContext(frame=frame, seed=self.seed, box=init_box,
                                first_track_id=self.first_track_id)
             ctx.new_frame(frame)
-            for stage in self.stages:
-                started = timer()
-                stage.start(ctx)
-                self.stage_seconds[stage.name] += timer() - started
+            try:
+                for stage in self.stages:
+                    started = timer()
+                    stage.start(ctx)
+                    self.stage_seconds[stage.name] += timer() - started
+            except FirstFrameError as exc:  # a stage that cannot start: which frame it refused
+                raise exc.at(frame.index) from None
             if init_box is not None:
                 ctx.box = init_box  # the first frame's answer is the box we were given
             # the track's first frame, once it started there: a frame refused as the first

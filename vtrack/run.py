@@ -46,6 +46,7 @@ from vtrack.annotate import Annotator
 from vtrack.errors import (
     LIBRARY_NAMES,
     ConfigError,
+    FirstFrameError,
     InputError,
     Interrupted,
     OptionNames,
@@ -1112,6 +1113,10 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             given = resolved.names.start_given(request.start, request.start_s)
             raise InputError(f"{given}: {request.input} has no frame "
                              f"{resolved.start} ({_numbering(source.info)})")
+    except FirstFrameError as exc:  # a stage refused the first frame: name the input
+        named = FirstFrameError(f"{request.input}: frame {exc.frame_index}: {exc}",
+                                exc.frame_index)
+        out.status, out.error, out.failure = STATUS_FAILED, str(named), named
     except PartialInputError as exc:
         if signals.draining is None:
             out.status, out.error = STATUS_PARTIAL, str(exc)

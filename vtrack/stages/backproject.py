@@ -30,7 +30,7 @@ import math
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.geometry import Box, Window
 from vtrack.histograms import hue_histogram
 from vtrack.params import Param
@@ -102,14 +102,15 @@ class BackProject(Stage):
         part = None if box is None or not box.is_valid() else box_slices(ctx.window, box)
         if box is None or part is None:
             shown = box.text() if box is not None else None
-            raise InputError(f"backproject: the initial box {shown} covers no pixel of the frame")
+            raise FirstFrameError(f"backproject: the initial box {shown} covers no pixel of the "
+                                  "frame")
         levels = ctx.feature_levels
         mask = ctx.feature_mask
         part_mask = None if mask is None else mask[part]
         hist = hue_histogram(ctx.feature[part], part_mask, self.bins, levels).astype(np.float64)
         top = float(hist.max())
         if top == 0:
-            raise InputError(
+            raise FirstFrameError(
                 f"backproject: no pixel of the initial box {box.text()} passes the hue stage's "
                 "saturation/value mask: the target has no colour for a hue tracker (grey footage? "
                 "try --config robust or s2, or lower hue.sat_min / hue.val_min)"

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from vtrack.clock import FrameClock
-from vtrack.errors import ConfigError, InputError, did_you_mean
+from vtrack.errors import ConfigError, FirstFrameError, did_you_mean
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.overlays import Overlay
@@ -309,12 +309,12 @@ class Stage:
         return None
 
     def initial_box(self, ctx: TrackContext) -> Box:
-        """The first frame's box this stage starts from; InputError naming the stage when there
+        """The first frame's box this stage starts from; FirstFrameError naming the stage when there
         is none or it is not a finite box of positive size."""
         box = ctx.box
         if box is None or not box.is_valid():
             shown = box.text() if box is not None else None
-            raise InputError(f"{self.name} needs a valid initial box, got {shown}")
+            raise FirstFrameError(f"{self.name} needs a valid initial box, got {shown}")
         return box
 
     def settings(self) -> dict[str, Any]:

@@ -44,7 +44,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya
@@ -222,7 +222,7 @@ class KernelMeanShift(Stage):
         self._scale = 1.0
         sample = self._sample(ctx.frame, box.cx, box.cy, 1.0)
         if sample is None:
-            raise InputError(f"{self.name}: the initial box {box.text()} puts no frame pixel "
+            raise FirstFrameError(f"{self.name}: the initial box {box.text()} puts no frame pixel "
                              "under S2's kernel (move it further into the frame)")
         # S2 step 1 (eqs. 1 and 3): q_u = sum K(X_i*) [b(X_i) = u] and C = sum K, not divided
         self._q = sample.hist

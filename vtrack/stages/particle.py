@@ -32,7 +32,7 @@ from collections import deque
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.frame import Frame
 from vtrack.geometry import Box, Window
 from vtrack.histograms import bhattacharyya_rows, hue_histogram, refuse_colourless
@@ -173,7 +173,7 @@ class ParticleFilter(Stage):
         assert box is not None  # needs_init_box: the pipeline refuses to start without one
         window = box.window(frame.width, frame.height)
         if window is None:
-            raise InputError(
+            raise FirstFrameError(
                 f"stage '{self.name}': initial box {tuple(box)} is outside the "
                 f"{frame.width}x{frame.height} frame"
             )

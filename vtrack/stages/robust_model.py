@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.features.colour import ColourHistograms, cell_response
 from vtrack.features.dcf import CorrelationFilter, gaussian_label, hann2d, shift_spectrum
 from vtrack.features.fhog import fhog
@@ -324,7 +324,8 @@ class RobustModel(Stage):
     def start(self, ctx: TrackContext) -> None:
         box = self.initial_box(ctx)
         if box.outside(ctx.frame.width, ctx.frame.height):
-            raise InputError(f"robust_model: the initial box {box.text()} is outside the frame")
+            raise FirstFrameError(f"robust_model: the initial box {box.text()} is outside the "
+                                  "frame")
         side = (box.w + box.h) / 2 * self.padding
         region_w, region_h = box.w + side, box.h + side
         factor = self.working_area / math.sqrt(region_w * region_h)

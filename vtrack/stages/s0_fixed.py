@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.geometry import Box, Window
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
@@ -109,7 +109,7 @@ class HueBpFixed(Stage):
         record.hist = s0.histogram(hue, mask, self.hist_bits)
         record.hist_max = int(record.hist.max())
         if record.hist_max == 0:
-            raise InputError(
+            raise FirstFrameError(
                 f"hue_bp_fixed: no pixel of the initial box {box.text()} passes the S/V mask "
                 "(lower hue_bp_fixed.sat_min / val_min)"
             )

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from vtrack.errors import InputError
+from vtrack.errors import FirstFrameError
 from vtrack.frame import Frame
 from vtrack.geometry import Box
 from vtrack.golden import s2
@@ -92,7 +92,7 @@ class KernelMeanShiftInt(Stage):
         self._frame_bins = None
         model = self._sample(ctx.frame, *self._pos, 10000)
         if model is None:
-            raise InputError(f"{self.name}: the initial box {box.text()} puts no frame pixel "
+            raise FirstFrameError(f"{self.name}: the initial box {box.text()} puts no frame pixel "
                              "under S2's kernel (move it further into the frame)")
         self._q, self._c = model.hist, model.total
         self.record.hist, self.record.hist_max = model.hist, int(model.hist.max())
