@@ -290,20 +290,31 @@ def test_a_batch_whose_stdout_cannot_take_its_lines_says_so_in_one_line(tmp_path
     (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the line naming the files written"),
     (["report", "OUT/run", "--out", "OUT/report"], "the summary line"),
     (["stages"], "the listing"),
-    (["stages", "s0", "--toml"], "the config")])
+    (["stages", "s0", "--toml"], "the config"),
+    (["frame", "OUT/clip.mp4", "--at", "3", "-o", "OUT/fr.png"],
+     "the line naming the image written"),
+    (["vectors", "OUT/clip.mp4", "--init", "INIT", "--frames", "2", "--out", "OUT/vec"],
+     "the line naming the files written"),
+    (["vectors", "check", "OUT/vec", "OUT/vec"], "the comparison")])
 def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, command: list[str],
                                                           what: str) -> None:
     """`vtrack scene smooth clip.mp4 > /dev/full` (and `vtrack report`, `vtrack stages`, `vtrack
     stages s0 --toml`) ended in a traceback (OSError: [Errno 28] No space left on device from
     click.echo), exit 1. As `vtrack run`'s summary line, it is now one line naming standard
     output and what was not printed, exit 1; the files are made as they would be."""
-    if command[0] == "report":  # a run to report on
-        scene = make_scene("smooth", seed=3, width=160, height=120, frames=12, fps=30)
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=12, fps=30)
+    init = ",".join(f"{v:g}" for v in scene.boxes[0])
+    if command[0] in ("report", "frame", "vectors"):  # a clip to read
         clip = write_video(scene, tmp_path / "clip.mp4")
+    if command[:2] == ["vectors", "check"]:  # vectors to compare with themselves
+        subprocess.run([sys.executable, "-m", "vtrack", "vectors", str(clip), "--init", init,
+                        "--frames", "2", "--out", str(tmp_path / "vec")], capture_output=True,
+                       timeout=120, check=True)
+    if command[0] == "report":  # a run to report on
         subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0", "--init",
-                        ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video", "-o",
+                        init, "--no-video", "-o",
                         str(tmp_path / "run")], capture_output=True, timeout=120, check=True)
-    args = [arg.replace("OUT", str(tmp_path)) for arg in command]
+    args = [arg.replace("OUT", str(tmp_path)).replace("INIT", init) for arg in command]
     with open("/dev/full", "wb") as full:
         done = subprocess.run([sys.executable, "-m", "vtrack", *args], stdout=full,
                               stderr=subprocess.PIPE, timeout=120, check=False)
@@ -315,6 +326,8 @@ def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, comman
         assert (tmp_path / "clip.mp4").is_file() and (tmp_path / "clip.gt.txt").is_file()
     if command[0] == "report":
         assert (tmp_path / "report" / "index.html").is_file()
+    if command[0] == "frame":
+        assert (tmp_path / "fr.png").is_file()
 
 
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:

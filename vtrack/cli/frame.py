@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from vtrack.cli._messages import echo_result
 from vtrack.cli._options import StartPoint, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 from vtrack.cli._signals import stopping_as_interrupted
@@ -60,7 +61,8 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             _refuse_replacing(out, str(out), overwrite)
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old one
-    click.echo(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
+    echo_result(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})",
+                "the line naming the image written")
 
 
 def _checked_ext(out: Path, input_spec: str) -> str:

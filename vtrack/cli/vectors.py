@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import no_such_command, warn
+from vtrack.cli._messages import echo_result, no_such_command, warn
 from vtrack.cli._options import NumberWord
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 from vtrack.cli._signals import stopping_as_interrupted
@@ -128,7 +128,8 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     if written < count:
         warn(f"{input_spec}: {plural(written, 'frame')} to write of the {count} asked for "
              "(--frames)")
-    click.echo(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
+    echo_result(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}",
+                "the line naming the files written")
 
 
 @command.command("check")
@@ -143,8 +144,7 @@ def check(vectors_dir: Path, dump_dir: Path) -> None:
     if compared == 0 and not lines:
         raise InputError(f"{dump_dir}: holds none of the vector files (frame_NNNN/*.hex, "
                          "trace.csv, iterations.csv)")
-    for line in lines:
-        click.echo(line)
     if lines:
+        echo_result("\n".join(lines), "the differences")
         sys.exit(1)
-    click.echo(f"{compared} file(s) equal")
+    echo_result(f"{compared} file(s) equal", "the comparison")
