@@ -130,6 +130,23 @@ def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
            "file (vtrack stages lists them)" in line, line
 
 
+@pytest.mark.parametrize(("head", "said"), [
+    ('nmae = "x"\n', "unknown top-level key(s) 'nmae' (expected name, description, [[stage]]); "
+     "did you mean 'name'?"),
+    ('nmae = "x"\ndescriptoin = "y"\nfoo = 1\n',
+     "unknown top-level key(s) 'descriptoin', 'foo', 'nmae' (expected name, description, "
+     "[[stage]]); did you mean 'description' for 'descriptoin', 'name' for 'nmae'?"),
+    ("foo = 1\n", "unknown top-level key(s) 'foo' (expected name, description, [[stage]])")])
+def test_a_mistyped_top_level_key_is_offered_the_near_one(tmp_path: Path, head: str,
+                                                          said: str) -> None:
+    """`nmae = "s0"` in a config was refused with no suggestion, where a mistyped stage or
+    parameter gets one ("did you mean ..."); a key near none of them still gets none."""
+    config = tmp_path / "my4.toml"
+    config.write_text(head + CHAIN_TAIL)
+    for line in refusals(config, tmp_path):
+        assert line == f"vtrack: error: {config}: {said}", line
+
+
 def test_a_config_saved_as_utf16_says_so(tmp_path: Path) -> None:
     """A config saved by Windows Notepad as "Unicode" (UTF-16 with its byte-order mark) was
     refused 'config is not text (not UTF-8)': it is text, in another encoding."""

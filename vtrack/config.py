@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
-from vtrack.errors import ConfigError, InputError, did_you_mean
+from vtrack.errors import ConfigError, InputError, close_names, did_you_mean, guess_text
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
 from vtrack.params import cut, float_from_text, shown
@@ -273,13 +273,26 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     return parse_config(data, where, default_name=path.stem), text
 
 
+def _near_keys(unknown: list[str], keys: tuple[str, ...]) -> str:
+    """How a refusal of ``unknown`` keys ends: ``"; did you mean 'name'?"`` for one that is a
+    near miss of one of ``keys`` (:func:`~vtrack.errors.did_you_mean`); for several, each near
+    miss with its guess (``"; did you mean 'name' for 'nmae', 'stage' for 'stages'?"``); ``""``
+    when none is near."""
+    if len(unknown) == 1:
+        return did_you_mean(unknown[0], keys)
+    guesses = [f"{guess_text(close)} for {shown(key)}" for key in unknown
+               if (close := close_names(key, keys))]
+    return f"; did you mean {', '.join(guesses)}?" if guesses else ""
+
+
 def parse_config(data: dict[str, Any], where: str, default_name: str = "config") -> Config:
     """Validate a decoded TOML document (see the module docstring for its shape)."""
-    unknown = set(data) - {"name", "description", "stage"}
+    keys = ("name", "description", "stage")
+    unknown = sorted(set(data) - set(keys))
     if unknown:
         raise ConfigError(
-            f"{where}: unknown top-level key(s) {', '.join(shown(k) for k in sorted(unknown))} "
-            "(expected name, description, [[stage]])"
+            f"{where}: unknown top-level key(s) {', '.join(shown(k) for k in unknown)} "
+            f"(expected name, description, [[stage]]){_near_keys(unknown, keys)}"
         )
     raw_stages = data.get("stage")
     if not isinstance(raw_stages, list) or not raw_stages:
