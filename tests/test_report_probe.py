@@ -130,6 +130,23 @@ def test_a_multi_target_record_with_metrics_of_the_wrong_kind_is_left_out(
     assert html.count("<td class=\"label\">s3") == 1  # the good run only
 
 
+@pytest.mark.parametrize(("text", "missing"), [('{"a": 1}', "'status' or 'frames'"),
+                                               ('{"status": "complete"}', "'frames'")])
+def test_a_record_without_a_runs_keys_is_left_out_as_no_run_record(
+        results: Path, tmp_path: Path, text: str, missing: str) -> None:
+    """A run.json replaced by `{"a":1}` was read as a run of 0 frames: the report blamed its
+    track.csv ('holds 60 rows, run.json records 0 frames (cut or edited after the run)'). It
+    is now left out as what it is, no run's record, naming the keys it lacks."""
+    shutil.copytree(results, tmp_path / "runs")
+    record_path = tmp_path / "runs" / "s0" / "run.json"
+    record_path.write_text(text)
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert [line for line in done.stderr.splitlines() if "left out" in line] == [
+        f"vtrack: warning: left out: {record_path}: not a vtrack run record (it has no "
+        f"{missing})"]
+
+
 def test_a_dash_for_a_measure_of_a_run_with_ground_truth_is_explained(
         multi_run: Path, tmp_path: Path) -> None:
     """Probe 52b: a multi-target run whose track boxes matched no ground-truth box showed MOTP

@@ -43,16 +43,21 @@ def write_json(path: Path | str, data: Any) -> None:
     write_text_atomic(Path(path), json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n")
 
 
+#: The keys every ``run.json`` record holds (a run writes them whatever its end): a JSON object
+#: without them is no run's record.
+RECORD_KEYS = ("status", "frames")
+
 #: The parts of a ``run.json`` record that are JSON objects when present.
 RECORD_OBJECTS = ("request", "summary", "config", "input", "timing", "identity", "output_bytes",
                   "metrics")
 
 
 def read_run_record(path: Path) -> dict[str, Any]:
-    """The ``run.json`` at ``path`` as a dict whose :data:`RECORD_OBJECTS` are dicts (or
-    absent/null) and whose ``frames`` is a whole number. Raises InputError naming the file when
-    it cannot be read, is larger than :data:`RECORD_BYTES`, or is not such a record (a file
-    edited by hand: not JSON, nested too deep, a part of the wrong type)."""
+    """The ``run.json`` at ``path`` as a dict holding :data:`RECORD_KEYS`, whose
+    :data:`RECORD_OBJECTS` are dicts (or absent/null) and whose ``frames`` is a whole number.
+    Raises InputError naming the file when it cannot be read, is larger than
+    :data:`RECORD_BYTES`, or is not such a record (a file edited by hand: not JSON, nested too
+    deep, a part of the wrong type, a JSON object without the keys every record holds)."""
     data = read_bounded(path, RECORD_BYTES, "run record")
     try:
         record = json.loads(data.decode("utf-8"))
@@ -63,4 +68,8 @@ def read_run_record(path: Path) -> dict[str, Any]:
             or any(not isinstance(record.get(k), dict | None) for k in RECORD_OBJECTS)
             or not (frames is None or (isinstance(frames, int) and frames >= 0))):
         raise InputError(f"{path}: not a vtrack run record")
+    missing = [key for key in RECORD_KEYS if key not in record]
+    if missing:
+        raise InputError(f"{path}: not a vtrack run record (it has no "
+                         f"{' or '.join(repr(key) for key in missing)})")
     return record
