@@ -122,6 +122,22 @@ def test_a_huge_value_given_to_the_tracker_is_named_in_a_short_line() -> None:
     assert len(str(caught.value)) < 400
 
 
+@pytest.mark.parametrize("args", [
+    ("run", "in.mp4", "-c", "LONG", "--init", "1,1,9,9"),
+    ("run", "in.mp4", "-c", "d/LONG.toml", "--init", "1,1,9,9"),
+    ("stages", "LONG"),
+    ("run", "in.mp4", "-c", "s0", "--set", "LONG", "--init", "1,1,9,9"),
+    ("run", "in.mp4", "-c", "s0", "--set", "hue.sat_min=LONG", "--init", "1,1,9,9")])
+def test_an_overlong_config_name_or_set_value_is_cut_in_its_line(args: tuple[str, ...]) -> None:
+    """A 100000-character config name gave a 100054-character "one line" (`vtrack stages` a
+    traceback: OSError File name too long); such a value is now cut, its length said."""
+    given = [arg.replace("LONG", "a" * 100_000) for arg in args]
+    line = one_error_line(vtrack(*given))
+    assert len(line) < 1000, line[:1000]
+    long = max(given, key=len)
+    assert f"{long[:100]}...{long[-30:]} ({len(long)} characters)" in line, line
+
+
 def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     """`vtrack stages ''` said ': not a stage, a shipped config or a config file (stages: ...)',
     naming nothing, where `vtrack run -c ''` says what --config takes."""

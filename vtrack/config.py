@@ -29,10 +29,17 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.configs import CONFIG_HINT, DEFAULT_CONFIG
-from vtrack.errors import ConfigError, InputError, close_names, did_you_mean, guess_text
+from vtrack.errors import (
+    ConfigError,
+    InputError,
+    close_names,
+    cut,
+    did_you_mean,
+    guess_text,
+)
 from vtrack.io.files import os_reason
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
-from vtrack.params import cut, float_from_text, shown
+from vtrack.params import float_from_text, shown
 from vtrack.stages.base import (
     DERIVED,
     PIPELINE_PROVIDES,
@@ -242,21 +249,21 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     if not os.fspath(spec).strip():  # ("" would be opened as the current folder)
         raise ConfigError(f"config: empty; give {CONFIG_HINT}")
     path = config_file(spec)
-    if not _is_file(path, str(spec)):
+    where = cut(str(spec))  # how its messages and the config's source name it
+    if not _is_file(path, where):
         kind = special_kind(path)
         if kind is not None:
-            raise ConfigError(not_a_file(spec, kind, "config"))
+            raise ConfigError(not_a_file(where, kind, "config"))
         if path.is_dir():
-            raise ConfigError(f"{spec}: is a folder, not a config file")
+            raise ConfigError(f"{where}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
-            raise ConfigError(f"{spec}: config file not found")
+            raise ConfigError(f"{where}: config file not found")
         else:
             shipped = sorted(shipped_configs())
             raise ConfigError(
-                f"{spec}: no such config file or shipped config (shipped: {', '.join(shipped)})"
+                f"{where}: no such config file or shipped config (shipped: {', '.join(shipped)})"
                 f"{did_you_mean(str(spec), shipped)}"
             )
-    where = str(spec)
     try:
         text = read_text_bounded(path, CONFIG_BYTES, "config")
         data = tomllib.loads(text, parse_float=float_from_text)  # (1e400: named as written)

@@ -157,6 +157,19 @@ def real_or_nan(value: object) -> float:
         return math.nan
 
 
+#: The longest text a user gave that a message quotes whole (:func:`cut`).
+LONGEST_SHOWN = 200
+
+
+def cut(text: str) -> str:
+    """``text`` a user gave (a config's name or path, a ``--set`` assignment), for a one-line
+    message: whole up to :data:`LONGEST_SHOWN` characters, else its first and last characters
+    around ``...`` and its length: ``aaaa...aaaa (100000 characters)``."""
+    if len(text) <= LONGEST_SHOWN:
+        return text
+    return f"{text[:100]}...{text[-30:]} ({len(text)} characters)"
+
+
 def printable(text: str) -> str:
     """``text`` with each control character (newline, tab, escape, ...) written as its Python
     escape (``\\n``): a name taken from the file system stays one line of a message, a table

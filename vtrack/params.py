@@ -281,12 +281,6 @@ _SHORT = _ShortRepr()
 _SHORT.maxstring = _SHORT.maxother = 80
 
 
-def cut(text: str) -> str:
-    """``text`` a user wrote (a ``--set`` assignment), for a one-line message: whole up to 80
-    characters, else its first and last characters around ``...``."""
-    return text if len(text) <= _SHORT.maxstring else f"{text[:60]}...{text[-16:]}"
-
-
 def shown(value: object) -> str:
     """A value a user gave, for a one-line message: an integer as :func:`_number` writes it
     (a 5000-digit one is not spelt out), anything else as its ``repr`` cut to about 80

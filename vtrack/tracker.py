@@ -15,11 +15,11 @@ import numpy as np
 
 from vtrack.config import Config, load_config
 from vtrack.configs import DEFAULT_CONFIG
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, cut
 from vtrack.frame import BgrFrame, Frame, GrayFrame, check_pixels
 from vtrack.geometry import Box, frame_size_problem
 from vtrack.io.raw import checked_fps
-from vtrack.params import check_flag, check_seed, cut, shown
+from vtrack.params import check_flag, check_seed, shown
 from vtrack.pipeline import FrameResult, Pipeline, check_first_track_id
 
 #: A frame as :meth:`Tracker.update` takes it.

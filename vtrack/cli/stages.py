@@ -81,10 +81,11 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
     config or a config file, as ``--config`` takes them, as its chain), each with the settings
     of every named config holding it (config name or file, settings). ConfigError for a name
     that is none of them, or a config file with a mistake (as ``vtrack run`` says it)."""
+    import os
     from pathlib import Path
 
     from vtrack.config import load_config, shipped_configs
-    from vtrack.errors import ConfigError, did_you_mean
+    from vtrack.errors import ConfigError, cut, did_you_mean
     from vtrack.stages.base import all_stages
 
     known, configs = all_stages(), shipped_configs()
@@ -93,11 +94,12 @@ def _selected(names: tuple[str, ...]) -> dict[str, list[tuple[str, dict]]]:
         if name in known:
             chosen.setdefault(name, [])
         elif name in configs or Path(name).suffix == ".toml" or "/" in name \
-                or Path(name).exists():  # a folder too: load_config says what it is
+                or os.path.exists(name):  # a folder too: load_config says what it is
+            # (os.path.exists: False for a name too long for the file system, not OSError)
             for stage, settings in load_config(name).stages:
                 chosen.setdefault(stage, []).append((name, settings))
         else:
-            raise ConfigError(f"{name}: not a stage, a shipped config or a config file "
+            raise ConfigError(f"{cut(name)}: not a stage, a shipped config or a config file "
                               f"(stages: {', '.join(known)}; configs: "
                               f"{', '.join(sorted(configs))})"
                               f"{did_you_mean(name, [*known, *configs])}")
