@@ -360,6 +360,31 @@ def test_a_word_for_a_wait_that_excludes_0_says_above_0(args: tuple[str, ...],
     assert "from 0 to" not in line
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "in.ts", "--timeout", "1e-400"), "'--timeout': '1e-400' is not a number of "
+                                              "seconds from 0.1 to 3600"),
+    (("run", "in.ts", "--stats-period", "-1"), "'--stats-period': '-1' is not a number of "
+                                               "seconds from 0 to 3600"),
+    (("run", "in.ts", "--stats-period", "nan"), "'--stats-period': 'nan' is not a number of "
+                                                "seconds from 0 to 3600"),
+    (("run", "in.ts", "--follow", "0"), "'--follow': '0' is not a number of seconds above 0 "
+                                        "and at most 86400"),
+    (("batch", "in", "--scheduler-timeout", "0.05"), "'--scheduler-timeout': '0.05' is not a "
+                                                     "number of seconds from 0.1 to 86400"),
+], ids=["timeout-underflow", "stats-period-negative", "stats-period-nan", "follow-0",
+        "scheduler-timeout"])
+def test_a_number_of_seconds_out_of_range_is_named_as_typed_in_one_wording(
+        args: tuple[str, ...], said: str) -> None:
+    """`--timeout 1e-400` said '0.0 is not in the range 0.1<=x<=3600.0' (click's words for the
+    float it made of the value), `--stats-period -1` '-1.0 is not in the range 0<=x<=3600.'
+    where `--stats-period nan` said "'nan' is not a number of seconds from 0 to 3600": every
+    seconds option now refuses a value out of its range as it refuses a word, the value as
+    typed."""
+    line = one_error_line(vtrack(*args))
+    assert said in line, line
+    assert "<=x" not in line and "<x" not in line
+
+
 def test_follow_taking_the_input_as_its_seconds_says_how_to_give_both() -> None:
     """`vtrack run --follow rec.ts --init ...` takes rec.ts as --follow's seconds (its number
     may be left out); the refusal said only that rec.ts is no number. It now says how to give

@@ -15,7 +15,10 @@ from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 class Seconds(click.FloatRange):
     """A duration in seconds from ``min`` to ``max`` (both finite): click's FloatRange lets
-    ``nan`` through every bound (it compares false), and ``inf`` through an open one.
+    ``nan`` through every bound (it compares false), and ``inf`` through an open one. A value
+    that is no number, or one out of the range, is refused in one wording naming the value as
+    given (``'1e-400' is not a number of seconds from 0.1 to 3600``: click named the float it
+    made of it, ``0.0 is not in the range 0.1<=x<=3600.0``).
     ``optional``: the option's own flag (``--follow``) may come without a number, so a word
     after it may be the argument that was meant to follow it: its refusal says how to give
     that."""
@@ -32,7 +35,7 @@ class Seconds(click.FloatRange):
             seconds, word = float(value), False
         except (TypeError, ValueError):
             seconds, word = math.nan, True
-        if not math.isfinite(seconds):
+        if not (math.isfinite(seconds) and self._within(seconds)):
             hint = ""
             if word and self.optional and isinstance(param, click.Option):
                 flag = max(param.opts, key=len)
@@ -41,6 +44,12 @@ class Seconds(click.FloatRange):
             self.fail(f"{value!r} is not a number of seconds {self.range_words()}{hint}",
                       param, ctx)
         return super().convert(value, param, ctx)
+
+    def _within(self, seconds: float) -> bool:
+        """Whether ``seconds`` is in the range (its open bounds excluded)."""
+        low = self.min is None or (seconds > self.min if self.min_open else seconds >= self.min)
+        high = self.max is None or (seconds < self.max if self.max_open else seconds <= self.max)
+        return low and high
 
     def range_words(self) -> str:
         """The range as words, its open bounds said so: ``from 0.1 to 3600``, ``above 0 and
