@@ -242,3 +242,25 @@ def test_readme_set_examples_are_valid_for_their_config() -> None:
         load_config(config.group(1) if config else DEFAULT_CONFIG).with_overrides(assignments)
         checked += len(assignments)
     assert checked >= 8
+
+
+def test_readme_and_help_say_the_profile_crf_0_writes(tmp_path: Path) -> None:
+    """`--crf 0` writes lossless H.264 in the High 4:4:4 Predictive profile (yuv420p still),
+    which many players refuse; README and --help said only 'lower is better and larger'."""
+    import av
+
+    clip = tmp_path / "c.mp4"
+    done = subprocess.run([sys.executable, "-m", "vtrack", "scene", "smooth", str(clip),
+                           "--frames", "12", "--crf", "0"], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    with av.open(str(clip)) as container:
+        stream = container.streams.video[0].codec_context
+        profile, pix_fmt = stream.profile, stream.pix_fmt
+    assert (profile, pix_fmt) == ("High 4:4:4 Predictive", "yuv420p")
+    assert f"`--crf 0` is lossless: x264 writes it in the {profile}" in " ".join(README.split())
+    for command in ("run", "scene"):
+        shown = subprocess.run([sys.executable, "-m", "vtrack", command, "--help"],
+                               capture_output=True, text=True, timeout=60, check=True).stdout
+        assert "0 is lossless, in a profile (High 4:4:4) many players refuse" in " ".join(
+            shown.split()), shown

@@ -139,7 +139,8 @@ def default_out_dir(input_spec: str, config: str | None = None,
               help="x264 preset of annotated.mp4 (ultrafast keeps up with 1080p60 here; slower "
                    "to placebo make a smaller file and a slower run).")
 @click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
-              help="x264 quality of annotated.mp4 (lower is better and larger).")
+              help="x264 quality of annotated.mp4 (lower is better and larger; 0 is lossless, "
+                   "in a profile (High 4:4:4) many players refuse).")
 @click.option("--seed", type=WholeNumber(0, MAX_SEED), default=0, show_default=True,
               help="Seed of the stochastic stages (particle filter), recorded in run.json.")
 @click.option("--first-id", "first_id", type=WholeNumber(1, MAX_TRACK_ID), default=1,

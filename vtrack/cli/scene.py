@@ -65,7 +65,8 @@ def _scenario_list() -> str:
     help="mp4: encoder pixel format [yuv420p]; raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
 @click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
-              help="x264 quality of mp4 output (lower is better and larger).")
+              help="x264 quality of mp4 output (lower is better and larger; 0 is lossless, in "
+                   "a profile (High 4:4:4) many players refuse).")
 @click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
               help="x264 preset of mp4 output.")
 @stats_period_option()
