@@ -798,20 +798,25 @@ def test_a_signal_while_a_stream_url_opens_ends_the_run_at_once(tmp_path: Path,
     passed (7 s after a SIGTERM at 3 s with --timeout 10, an hour with 3600; `timeout 30
     vtrack run ...` never stopped it), though a signal while an input opens ends the run
     interrupted. FFmpeg now opens a URL in a thread of its own, and the signal ends the run
-    as it comes: exit 143 (130), 'vtrack: interrupted', no folder."""
-    port = _free_port(socket.SOCK_DGRAM)
-    out = tmp_path / "out"
-    receiver = _receiver([f"udp://127.0.0.1:{port}", "--timeout", "3600", "--init",
-                          "10,10,20,20", "--no-video", "-o", str(out)])
-    try:
-        wait_for_stop_handlers(receiver)
-        _wait_for(lambda: _bound(port, "udp"), "UDP port bound", receiver)  # FFmpeg opens it
-        receiver.send_signal(stop)
-        _, stderr = receiver.communicate(timeout=60)  # (before: up to the hour's timeout)
-    finally:
-        if receiver.poll() is None:
-            receiver.kill()
-            receiver.wait()
-    assert receiver.returncode == 128 + stop, stderr
-    assert stderr.decode().splitlines()[-1] == "vtrack: interrupted"
-    assert not out.exists()
+    as it comes: exit 143 (130), 'vtrack: interrupted', no folder. Every time: the open
+    still running aside crashed some of these runs at the interpreter's teardown (PyAV's open
+    timeout calling into Python from it: exit -11, a segmentation fault, in about 1 of 40),
+    so the test repeats it."""
+    for round_ in range(15):
+        port = _free_port(socket.SOCK_DGRAM)
+        out = tmp_path / f"out{round_}"
+        receiver = _receiver([f"udp://127.0.0.1:{port}", "--timeout", "3600", "--init",
+                              "10,10,20,20", "--no-video", "-o", str(out)])
+        try:
+            wait_for_stop_handlers(receiver)
+            _wait_for(functools.partial(_bound, port, "udp"), "UDP port bound", receiver)
+            receiver.send_signal(stop)
+            _, stderr = receiver.communicate(timeout=60)  # (before: up to the hour's timeout)
+        finally:
+            if receiver.poll() is None:
+                receiver.kill()
+                receiver.wait()
+        # a negative code: a signal of its own ended it (-11: it crashed)
+        assert receiver.returncode == 128 + stop, (round_, receiver.returncode, stderr)
+        assert stderr.decode().splitlines()[-1] == "vtrack: interrupted"
+        assert not out.exists()

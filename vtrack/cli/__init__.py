@@ -13,7 +13,9 @@ vectors``) prints its help on stderr, as click does, and exits 2.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import os
 import pkgutil
 import sys
 from typing import Any
@@ -57,8 +59,19 @@ class _Group(click.Group):
     owns_process = False
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        """Run as the process's own program. When the command ends while FFmpeg still opens a
+        URL aside (a signal ended the wait: :func:`~vtrack.io.threads.aside_running`), the
+        process ends at once with the command's status, its output flushed: PyAV's open
+        timeout calls into Python from that thread, and the interpreter's teardown meanwhile
+        could crash the process (a segmentation fault, exit -11, instead of 130 or 143)."""
         self.owns_process = True
-        return self.main(*args, **kwargs)
+        try:
+            return self.main(*args, **kwargs)
+        except SystemExit as exc:
+            from vtrack.io.threads import aside_running
+            if aside_running():
+                _exit_now(exc.code)
+            raise
 
     def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
         """As click's ``main``, but a usage error is one ``vtrack: error:`` line naming the
@@ -91,6 +104,15 @@ class _Group(click.Group):
         except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM as errors.Interrupted
             click.echo("vtrack: interrupted", err=True)
             sys.exit(getattr(exc, "exit_code", 130))
+
+
+def _exit_now(code: object) -> None:
+    """End the process now with exit status ``code`` (None: 0; not an int: 1), stdout and
+    stderr flushed first, without the interpreter's teardown."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # gone, closed, None
+            stream.flush()
+    os._exit(code if isinstance(code, int) else 0 if code is None else 1)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

@@ -268,30 +268,51 @@ class KeepingUp(Generic[T]):
         return self._thread.finish(timeout)
 
 
+#: One item for each work :func:`run_aside` started that has not finished (an abandoned one
+#: too); not ``Thread.is_alive()``, which a ``join()`` cut short by a signal's exception may
+#: leave False for a thread still running (Python 3.11's ``_wait_for_tstate_lock``).
+_ASIDE: set[object] = set()
+
+
+def aside_running() -> bool:
+    """Whether work :func:`run_aside` started is still running: after a signal ended the
+    caller's wait, FFmpeg still opening a URL aside. PyAV's open timeout calls into Python
+    from that thread while it waits, and doing so as the interpreter is torn down at the
+    process's exit may crash the process (a segmentation fault): a program then ends with
+    ``os._exit``."""
+    return bool(_ASIDE)
+
+
 def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
     """``work()``'s result, computed in a daemon thread while this one waits in steps of
     :data:`STOP_POLL_S`, so that a signal's Python handler runs (and may raise: Ctrl-C,
     ``vtrack run``'s Interrupted) at once: a C call that holds its thread until its own timeout
     (FFmpeg opening a network input that sends nothing) delays the handlers of the thread it
     runs in until it returns. ``work``'s exception is raised here. When this thread leaves by
-    an exception of its own (a handler's), ``work`` finishes aside and what it gives, if
-    anything, is handed to ``discard`` (e.g. closed)."""
+    an exception of its own (a handler's), ``work`` finishes aside (:func:`aside_running` says
+    so meanwhile) and what it gives, if anything, is handed to ``discard`` (e.g. closed)."""
     lock = threading.Lock()
     outcome: list[tuple[bool, Any]] = []  # [(succeeded, result or exception)]
     left = False
 
+    running = object()
+
     def aside() -> None:
         try:
-            result: tuple[bool, Any] = (True, work())
-        except BaseException as exc:  # noqa: BLE001 - carried to the waiting thread
-            result = (False, exc)
-        with lock:
-            outcome.append(result)
-            abandoned = left
-        if abandoned and result[0]:
-            discard(result[1])
+            try:
+                result: tuple[bool, Any] = (True, work())
+            except BaseException as exc:  # noqa: BLE001 - carried to the waiting thread
+                result = (False, exc)
+            with lock:
+                outcome.append(result)
+                abandoned = left
+            if abandoned and result[0]:
+                discard(result[1])
+        finally:
+            _ASIDE.discard(running)
 
     thread = threading.Thread(target=aside, name="vtrack-aside", daemon=True)
+    _ASIDE.add(running)
     thread.start()
     try:
         while thread.is_alive():
