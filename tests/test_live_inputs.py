@@ -10,6 +10,7 @@ import functools
 import http.server
 import json
 import os
+import re
 import shutil
 import signal
 import socket
@@ -820,3 +821,40 @@ def test_a_signal_while_a_stream_url_opens_ends_the_run_at_once(tmp_path: Path,
         assert receiver.returncode == 128 + stop, (round_, receiver.returncode, stderr)
         assert stderr.decode().splitlines()[-1] == "vtrack: interrupted"
         assert not out.exists()
+
+
+def test_reopening_a_url_an_interrupted_open_still_holds_says_so() -> None:
+    """vtrack.open_source('udp://127.0.0.1:PORT') interrupted (KeyboardInterrupt, SIGTERM)
+    while FFmpeg waited for it, then opened again in the same process: 'cannot be opened
+    (Address already in use)', as if another program held the port. The interrupted open
+    still runs aside and holds it until its timeout; the message now says so, and how long at
+    most."""
+    from vtrack import open_source
+    from vtrack.errors import InputError, Interrupted, handling_stop_signals, interrupt
+    from vtrack.io.threads import aside_running
+    from vtrack.io.video import FFmpegInput
+
+    port = _free_port(socket.SOCK_DGRAM)
+    url = f"udp://127.0.0.1:{port}"
+    how = FFmpegInput(timeout_s=5)
+
+    def signal_once_bound() -> None:  # FFmpeg's open has taken the port: it waits for data
+        deadline = time.monotonic() + START_BOUND_S
+        while not _bound(port, "udp") and time.monotonic() < deadline:
+            time.sleep(0.01)
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
+
+    threading.Thread(target=signal_once_bound, daemon=True).start()
+    try:
+        with handling_stop_signals(interrupt), pytest.raises(Interrupted):
+            open_source(url, ffmpeg=how)
+        with pytest.raises(InputError) as refused:
+            open_source(url, ffmpeg=how)
+        assert re.fullmatch(
+            rf"{re.escape(url)}: cannot be opened \(Address already in use; an interrupted "
+            r"open of it still runs and may hold the address up to \d+ s more\)",
+            str(refused.value)), str(refused.value)
+    finally:  # the open left aside ends at its timeout: not at this process's exit
+        deadline = time.monotonic() + 60
+        while aside_running() and time.monotonic() < deadline:
+            time.sleep(0.05)

@@ -32,9 +32,12 @@ has no video to read.
 
 from __future__ import annotations
 
+import errno
 import itertools
+import math
 import os
 import re
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
@@ -328,8 +331,45 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
         options["listen_timeout"] = str(max(1, round(how.timeout_s)))
     # in a thread of its own: FFmpeg holds the thread that opens a URL until something comes
     # or the timeout passes (up to an hour), and Ctrl-C or SIGTERM must not wait that long
-    return run_aside(lambda: av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs),
-                     lambda container: container.close())
+    return run_aside(lambda: _open_url(path, how, kwargs), lambda container: container.close())
+
+
+#: The URLs being opened (by :func:`_open_url`), each with the ``time.monotonic()`` by which
+#: each of its opens gives up at the latest: one whose caller was interrupted still opens
+#: aside, and holds what it took (a UDP port) meanwhile.
+_OPENING: dict[str, list[float]] = {}
+_OPENING_LOCK = threading.Lock()
+#: Seconds an open may go on past its timeout: FFmpeg notices it at its next check (about
+#: every 0.1 s while it waits) and then lets go of what it opened.
+OPEN_SLACK_S = 1.0
+
+
+def _open_url(path: str, how: FFmpegInput, kwargs: dict[str, Any]) -> av.container.InputContainer:
+    """The URL ``path`` opened by FFmpeg, with ``how.timeout_s`` for its header and for its
+    streams' probe (so twice that at most), listed in :data:`_OPENING` meanwhile."""
+    ends = time.monotonic() + 2 * how.timeout_s + OPEN_SLACK_S
+    with _OPENING_LOCK:
+        _OPENING.setdefault(path, []).append(ends)
+    try:
+        return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
+    finally:
+        with _OPENING_LOCK:
+            _OPENING[path].remove(ends)
+            if not _OPENING[path]:
+                del _OPENING[path]
+
+
+def _still_opening(path: str, exc: BaseException) -> str:
+    """``; an interrupted open of it still runs ...`` when ``exc`` is FFmpeg's "Address
+    already in use" opening the URL ``path`` while an earlier open of it (its caller
+    interrupted) still holds the address; else ``""``."""
+    with _OPENING_LOCK:
+        ends = max(_OPENING.get(path, [0.0]))
+    if getattr(exc, "errno", None) != errno.EADDRINUSE or not ends:
+        return ""
+    left = max(1, math.ceil(ends - time.monotonic()))
+    return (f"; an interrupted open of it still runs and may hold the address up to {left} s "
+            "more")
 
 
 def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputContainer:
@@ -405,7 +445,7 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
     reason = os_reason(exc)
     if "://" in path:  # a network input, as _open_container opens it
         if not isinstance(exc, av.error.InvalidDataError):
-            return f"{path}: cannot be opened ({reason})"
+            return f"{path}: cannot be opened ({reason}{_still_opening(path, exc)})"
         return (f"{path}: nothing FFmpeg could decode came within {how.timeout_s:g} s "
                 f"({reason}): a live stream starts at a key frame{how.waits_longer()}")
     if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
