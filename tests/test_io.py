@@ -10,6 +10,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
@@ -41,7 +42,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.files import temp_path
-from vtrack.io.threads import Prefetcher
+from vtrack.io.threads import Prefetcher, aside_running, run_aside
 from vtrack.io.video import (
     DECODER_PICTURE_BUDGET,
     MIN_DECODER_THREADS,
@@ -631,6 +632,62 @@ def test_a_signal_as_a_prefetchers_thread_is_started_waits_for_the_start() -> No
         next(iter(prefetch))
     assert prefetch.close(timeout=10) is True
     assert not prefetch._thread.is_alive()
+
+
+def _run_aside_left(started_as: object) -> tuple[list[str], threading.Event]:
+    """run_aside with work that waits to be released, then gives "container": SIGTERM
+    (Interrupted) in the caller's thread as ``started_as`` (a function's code) is first called
+    there. The list ``discard`` fills, and the event that releases the work."""
+    release, discarded = threading.Event(), []
+
+    def work() -> str:
+        release.wait(60)
+        return "container"
+
+    with (sigterm_as_called(started_as), handling_stop_signals(interrupt),
+          pytest.raises(Interrupted)):
+        run_aside(work, discarded.append)
+    return discarded, release
+
+
+def _wait_for_no_work_aside() -> None:
+    deadline = time.monotonic() + 60  # a bound, not a measure
+    while aside_running() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not aside_running(), "the work aside did not end"
+
+
+def test_run_aside_raises_the_works_exception_and_discards_nothing() -> None:
+    """What the work raised in its thread is raised in the caller's; nothing is discarded."""
+    discarded: list[object] = []
+
+    def work() -> object:
+        raise av.error.ExitError(-1414092869, "Immediate exit requested")
+
+    with pytest.raises(av.error.ExitError):
+        run_aside(work, discarded.append)
+    assert discarded == [] and not aside_running()
+
+
+def test_run_aside_left_by_a_signal_discards_what_its_work_gives_later() -> None:
+    """A signal while the caller waits raises there at once; the work goes on aside
+    (aside_running) and what it gives once done is handed to discard (e.g. closed)."""
+    discarded, release = _run_aside_left(threading.Thread.join.__code__)
+    assert aside_running() and discarded == []
+    release.set()
+    _wait_for_no_work_aside()
+    assert discarded == ["container"]
+
+
+def test_a_signal_as_run_asides_thread_is_started_still_discards_its_result() -> None:
+    """SIGTERM landing in Thread.start once the thread was launched (its wait for the thread
+    to run) raised before run_aside's try: the caller was gone, yet the work's result (an
+    opened container) was never handed to discard, so never closed. The signal is now handled
+    once start() is over, inside the try."""
+    discarded, release = _run_aside_left(threading.Event.wait.__code__)
+    release.set()
+    _wait_for_no_work_aside()
+    assert discarded == ["container"]
 
 # --- image folders ----------------------------------------------------------------------------
 

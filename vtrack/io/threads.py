@@ -1,7 +1,11 @@
-"""Run a producer in a background thread, handing its items over through a small bounded queue.
+"""Work in background threads: producers handing their items over through a small bounded
+queue (:class:`Prefetcher`, :class:`KeepingUp`), and one call run aside while the caller waits
+for it and stays open to signals (:func:`run_aside`).
 
-Readers and writers use this to keep decoding and encoding off the tracker thread: PyAV/FFmpeg and
-file reads release the GIL, so a second core does the I/O while the first one tracks.
+Readers and writers use the producers to keep decoding and encoding off the tracker thread:
+PyAV/FFmpeg and file reads release the GIL, so a second core does the I/O while the first one
+tracks. A network input is opened by :func:`run_aside`: FFmpeg holds the thread that opens it
+until data comes or its timeout passes.
 """
 
 from __future__ import annotations
@@ -284,17 +288,23 @@ def aside_running() -> bool:
 
 
 def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
-    """``work()``'s result, computed in a daemon thread while this one waits in steps of
-    :data:`STOP_POLL_S`, so that a signal's Python handler runs (and may raise: Ctrl-C,
-    ``vtrack run``'s Interrupted) at once: a C call that holds its thread until its own timeout
-    (FFmpeg opening a network input that sends nothing) delays the handlers of the thread it
-    runs in until it returns. ``work``'s exception is raised here. When this thread leaves by
-    an exception of its own (a handler's), ``work`` finishes aside (:func:`aside_running` says
-    so meanwhile) and what it gives, if anything, is handed to ``discard`` (e.g. closed)."""
+    """``work()``'s result, computed in a daemon thread (SIGINT and SIGTERM blocked in it, as
+    in a producer's) while this one waits in steps of :data:`STOP_POLL_S`, so that a signal's
+    Python handler runs (and may raise: Ctrl-C, ``vtrack run``'s Interrupted) at once: a C call
+    that holds its thread until its own timeout (FFmpeg opening a network input that sends
+    nothing) delays the handlers of the thread it runs in until it returns. ``work``'s
+    exception is raised here. When this thread leaves by an exception of its own (a
+    handler's, also one that came as the thread was started), ``work`` finishes aside
+    (:func:`aside_running` says so meanwhile) and what it gives, if anything, is handed to
+    ``discard`` (e.g. closed).
+
+    The wait is in steps rather than one ``join()`` (which a signal does cut short on POSIX):
+    a signal sent to the process may be delivered to another of its threads, one that does
+    not block it, and then this thread's ``join()`` would go on waiting; a step ends anyway,
+    and the handler runs then."""
     lock = threading.Lock()
     outcome: list[tuple[bool, Any]] = []  # [(succeeded, result or exception)]
     left = False
-
     running = object()
 
     def aside() -> None:
@@ -311,10 +321,14 @@ def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
         finally:
             _ASIDE.discard(running)
 
-    thread = threading.Thread(target=aside, name="vtrack-aside", daemon=True)
+    thread = _Producer(aside, "vtrack-aside")
     _ASIDE.add(running)
-    thread.start()
     try:
+        try:
+            thread.start()
+        except RuntimeError:  # no thread could be started: nothing runs aside
+            _ASIDE.discard(running)
+            raise
         while thread.is_alive():
             thread.join(STOP_POLL_S)
     except BaseException:
