@@ -8,6 +8,7 @@ import fcntl
 import json
 import os
 import pickle
+import re
 import shlex
 from dataclasses import replace
 from decimal import Decimal
@@ -648,8 +649,25 @@ def test_a_frames_number_and_time_are_python_numbers_whatever_they_were_given_as
     json.dumps([(r.index, r.time_s) for r in results])
     tracker.init(vtrack.BgrFrame(3, Decimal("0.1"), image), (60, 40, 40, 40))
     assert tracker.update(image).time_s == pytest.approx(0.1 + 1 / 30)
-    with pytest.raises(ValueError, match=r"^frame 3: time_s True is not a finite number$"):
+    with pytest.raises(TypeError, match=r"^frame 3: time_s True is not a number$"):
         vtrack.BgrFrame(3, True, image)
+
+
+def test_a_frames_time_of_another_type_is_a_type_error_its_value_shortened() -> None:
+    """vtrack.BgrFrame(3, "0.1", image) raised ValueError (a wrong index type: TypeError) and
+    a 10,000-character string was echoed whole in the message; a time that is no number is
+    now a TypeError showing the value cut short, NaN and infinity still a ValueError."""
+    image = np.zeros((120, 160, 3), np.uint8)
+    with pytest.raises(TypeError, match=r"^frame 3: time_s '0\.1' is not a number$"):
+        vtrack.BgrFrame(3, "0.1", image)
+    with pytest.raises(TypeError, match=r"^frame 3: time_s None is not a number$"):
+        vtrack.GrayFrame(3, None, image[:, :, 0])
+    with pytest.raises(TypeError) as refused:
+        vtrack.BgrFrame(3, "x" * 10_000, image)
+    assert re.fullmatch(r"frame 3: time_s 'x+\.\.\.x+' is not a number", str(refused.value))
+    assert len(str(refused.value)) < 150
+    with pytest.raises(ValueError, match=r"^frame 3: time_s inf is not a finite number$"):
+        vtrack.BgrFrame(3, float("inf"), image)
 
 
 def test_a_container_given_to_open_source_as_raw_frames_is_told_by_raw_not_the_option(

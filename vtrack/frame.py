@@ -15,8 +15,9 @@ from abc import ABC, abstractmethod
 import cv2
 import numpy as np
 
-from vtrack.errors import real_or_nan
+from vtrack.errors import is_real, real_or_nan
 from vtrack.geometry import Window, frame_size_problem
+from vtrack.params import shown
 
 
 def i420_planes(buffer: np.ndarray, width: int, height: int) -> tuple[np.ndarray, ...]:
@@ -71,9 +72,10 @@ class Frame(ABC):
 
     The constructors refuse what cannot be a frame: an ``index`` that is not a whole number
     >= 0, pixels that are not uint8 or not in the class's layout (TypeError), a size
-    :func:`frame_size_problem` refuses or a ``time_s`` that is not a finite real number
-    (ValueError; True is no time), each naming the frame (``frame 3: ...``). They are kept as
-    a Python ``int`` and ``float`` whatever number types they were given as (NumPy's too).
+    :func:`frame_size_problem` refuses or a ``time_s`` that is not finite (ValueError; one
+    that is not a real number, True included, a TypeError), each naming the frame (``frame
+    3: ...``). They are kept as a Python ``int`` and ``float`` whatever number types they were
+    given as (NumPy's too).
     """
 
     __slots__ = ("index", "time_s", "width", "height")
@@ -83,9 +85,11 @@ class Frame(ABC):
         problem = frame_size_problem(width, height)
         if problem:
             raise ValueError(f"frame {index}: {problem}")
-        seconds = real_or_nan(time_s)  # (NaN for None, text, True: no time)
+        if not is_real(time_s):  # None, text, True: no time
+            raise TypeError(f"frame {index}: time_s {shown(time_s)} is not a number")
+        seconds = real_or_nan(time_s)  # (NaN for a Decimal beyond a float's range)
         if not math.isfinite(seconds):
-            raise ValueError(f"frame {index}: time_s {time_s!r} is not a finite number")
+            raise ValueError(f"frame {index}: time_s {shown(time_s)} is not a finite number")
         # a Python int and float, whatever number type was given: results and the frames
         # numbered after this one compute with them (an np.uint8 255 + 1 would be 0)
         self.index = int(index)
