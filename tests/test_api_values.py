@@ -631,6 +631,23 @@ def test_fixed_cameras_tracks_hold_python_numbers_in_a_crowd() -> None:
     assert all(type(t.confidence) is float for r in results for t in r.tracks)
 
 
+def test_a_tracks_plain_copy_holds_python_numbers_and_leaves_the_track() -> None:
+    """Track.plain() (what a result's tracks are made with, beside Box.plain()): the id a
+    Python int, the box and confidence Python floats of the same values, the state kept, the
+    track itself unchanged."""
+    from vtrack.geometry import Box
+    from vtrack.stages.base import Track, TrackStatus
+
+    state = next(iter(TrackStatus))
+    track = Track(np.int64(7), Box(np.float32(1.5), np.float64(2), 3, np.float32(4.25)),
+                  np.float32(0.5), state)
+    plain = track.plain()
+    assert plain == Track(7, Box(1.5, 2.0, 3.0, 4.25), 0.5, state) and plain is not track
+    assert type(plain.id) is int and type(plain.confidence) is float
+    assert {type(v) for v in (plain.box.x, plain.box.y, plain.box.w, plain.box.h)} == {float}
+    assert type(track.id) is np.int64 and type(track.box.x) is np.float32
+
+
 def test_a_frames_number_and_time_are_python_numbers_whatever_they_were_given_as() -> None:
     """vtrack.BgrFrame(np.uint8(254), 254 / 30, image) kept its np.uint8 index: the images given
     to Tracker.update after it were numbered 255, then 0, 1 (uint8 wrapping, with NumPy's

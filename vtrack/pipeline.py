@@ -9,7 +9,6 @@ as a config's chain is (:func:`vtrack.config.check_stages`).
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -245,7 +244,7 @@ class Pipeline:
             score=float(max(ctx.score, 0.0)),  # a signal below its reference is no evidence: 0
             prediction=None if ctx.prediction is None else ctx.prediction.plain(),
             extras=ctx.extras,
-            tracks=[_plain(track) for track in ctx.tracks],
+            tracks=[track.plain() for track in ctx.tracks],
             overlays=ctx.overlays,
         )
 
@@ -263,13 +262,6 @@ class Pipeline:
         name (``run.json``'s ``timing.stage_us_per_frame``)."""
         n = max(self.frames_done, 1)
         return {name: seconds * 1e6 / n for name, seconds in self.stage_seconds.items()}
-
-
-def _plain(track: Track) -> Track:
-    """``track`` with its id a Python ``int`` and its box and confidence Python ``float``s (a
-    stage's NumPy numbers taken as their values): what the public results hold."""
-    return dataclasses.replace(track, id=int(track.id), box=track.box.plain(),
-                               confidence=float(track.confidence))
 
 
 def _shape(frame: Frame) -> tuple[int, int, bool]:

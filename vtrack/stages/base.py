@@ -90,6 +90,13 @@ class Track:
     confidence: float
     state: TrackStatus
 
+    def plain(self) -> Track:
+        """This track with its id a Python ``int`` and its box and confidence Python
+        ``float``s (a stage's NumPy numbers taken as their values): what the public results
+        hold. Built directly (``dataclasses.replace`` takes several times as long, once per
+        track and frame)."""
+        return Track(int(self.id), self.box.plain(), float(self.confidence), self.state)
+
 
 #: A value given for a scene's targets (an aspect, a size) weighs as many measured boxes as this
 #: when mixed with the one learnt from them (:meth:`TargetShape.mixed`).
