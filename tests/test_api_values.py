@@ -305,6 +305,35 @@ def test_a_run_requests_paths_flags_and_preset_are_taken_as_a_user_gives_them(
             replace(request, **{field: value})
 
 
+def test_open_source_names_its_arguments_not_vtrack_runs_options(tmp_path: Path) -> None:
+    """vtrack.open_source('z.raw', raw='160x120', live=True) said 'ConfigError --live: raw
+    frames are read as they come ...', and ffmpeg=FFmpegInput(follow_s=1), format= or
+    options= given where they cannot apply were called --follow, --format and
+    --input-option: options of a command the caller never ran. Each now names the argument
+    or field given (vtrack run's messages keep the options: tests/test_cli.py and others)."""
+    raw = tmp_path / "z.raw"
+    raw.write_bytes(bytes(160 * 120 * 3))
+    url = "udp://127.0.0.1:9"
+    cases = (
+        (dict(spec=raw, raw="160x120", live=True),
+         "live: raw frames are read as they come (a pipe holds the sender back); give a "
+         "container (e.g. -f mpegts) to skip frames"),
+        (dict(spec=url, ffmpeg=FFmpegInput(follow_s=1)),
+         f"ffmpeg.follow_s reads a video file that is still being written; {url} is a stream, "
+         "read until it ends (ffmpeg.timeout_s)"),
+        (dict(spec=raw, raw="160x120", ffmpeg=FFmpegInput(format="mjpeg")),
+         "ffmpeg.format is for inputs FFmpeg reads; raw input (raw=) is read as bare frames "
+         "without it"),
+        (dict(spec=raw, raw="160x120", ffmpeg=FFmpegInput(options=(("probesize", "32"),))),
+         "ffmpeg.options is for inputs FFmpeg reads; raw input (raw=) is read as bare frames "
+         "without it"),
+    )
+    for kwargs, message in cases:
+        with pytest.raises(ConfigError) as refused:
+            vtrack.open_source(**kwargs)
+        assert str(refused.value) == message
+
+
 def test_library_messages_name_the_requests_fields_and_the_command_its_options(
         tmp_path: Path) -> None:
     """vtrack.run.run(RunRequest(init_box=(1e308, 1, 2, 3), ...)) said '--init: the box ...',

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config
-from vtrack.errors import ConfigError, InputError, InputWarning
+from vtrack.errors import LIBRARY_NAMES, ConfigError, InputError, InputWarning
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
@@ -155,7 +155,7 @@ def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = N
         ffmpeg = checked_ffmpeg(ffmpeg)
     if live is not None:  # (a RunRequest's is checked as it is made)
         live = check_flag(live, "live")
-    return inputs.source_opener(_path_text(spec, "spec"), raw, fps=fps, fps_name="fps",
+    return inputs.source_opener(_path_text(spec, "spec"), raw, fps=fps, names=LIBRARY_NAMES,
                                 ffmpeg=ffmpeg, live=live)
 
 

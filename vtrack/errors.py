@@ -104,6 +104,16 @@ class OptionNames:
     no_video: str
     #: What sends the annotated video to a live output instead of a file.
     video_out: str
+    #: What gives raw frames' format (``--raw``; ``raw=``).
+    raw: str
+    #: What says the input is live (frames passed over to keep up).
+    live: str
+    #: What reads a file while it is being written.
+    follow: str
+    #: What names FFmpeg's input format.
+    format: str
+    #: What hands FFmpeg an input option.
+    input_option: str
 
     @property
     def options(self) -> bool:
@@ -120,6 +130,11 @@ class OptionNames:
         """How a first box is given: ``--init x,y,w,h``, ``init_box=(x, y, w, h)``."""
         return self.give(self.init, "x,y,w,h" if self.options else "(x, y, w, h)")
 
+    @property
+    def give_raw(self) -> str:
+        """How raw frames' format is given: ``--raw WxH``, ``raw=``."""
+        return f"{self.raw} WxH" if self.options else self.raw
+
     def start_given(self, start: int, start_s: float | None) -> str:
         """The first frame as the caller gave it, to begin a message: ``--start 75``,
         ``--start 2.5s``; ``start 75``, ``start_s 2.5``."""
@@ -131,11 +146,15 @@ class OptionNames:
 COMMAND_NAMES = OptionNames(init="--init", fps="--fps", start="--start", start_s="--start",
                             gt="--gt", stream="--stream", out="--out",
                             overwrite="--overwrite (-y)", timeout="--timeout",
-                            no_video="--no-video", video_out="--video-out")
+                            no_video="--no-video", video_out="--video-out", raw="--raw",
+                            live="--live", follow="--follow", format="--format",
+                            input_option="--input-option")
 LIBRARY_NAMES = OptionNames(init="init_box", fps="fps", start="start", start_s="start_s",
                             gt="gt_path", stream="stream", out="out_dir",
                             overwrite="overwrite=True", timeout="ffmpeg.timeout_s",
-                            no_video="video=False", video_out="video_out")
+                            no_video="video=False", video_out="video_out", raw="raw=",
+                            live="live", follow="ffmpeg.follow_s", format="ffmpeg.format",
+                            input_option="ffmpeg.options")
 
 
 def is_real(value: object) -> bool:

@@ -702,11 +702,11 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
         # past the frames the input states is refused at once: that input opens first
         later = request.starts_later
-        source: Source | None = _open(request, signals, names.fps) if later else None
+        source: Source | None = _open(request, signals, names) if later else None
         try:
             resolved = _resolve(request, source, names)
             if source is None:
-                source = _open(request, signals, names.fps)
+                source = _open(request, signals, names)
         except BaseException:
             if source is not None:
                 source.close()
@@ -745,13 +745,13 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
     return summary
 
 
-def _open(request: RunRequest, signals: _Signals, fps_name: str) -> Source:
-    """The request's input opened (messages about its frame rate naming it ``fps_name``);
+def _open(request: RunRequest, signals: _Signals, names: OptionNames) -> Source:
+    """The request's input opened (its messages calling what the caller gave by ``names``);
     Interrupted when a signal came while it opened, whatever error the interrupted open then
     gave (FFmpeg turns it into EINTR or "invalid data")."""
     try:
         return open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                           live=request.live, fps_name=fps_name)
+                           live=request.live, names=names)
     except Exception:
         if signals.received is not None:
             raise Interrupted(signals.received) from None
@@ -904,7 +904,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         init_box, init_from = gt[start], str(request.gt_path)
     if init_box is None and pipeline.needs_init_box:
         if source is None:
-            _refuse_unreadable(request, names.fps)
+            _refuse_unreadable(request, names)
         give_gt = names.give(names.gt, "FILE")
         sequence = sidecar_path(request.input).parent
         targets = (numbered_groundtruth(sequence)
@@ -961,14 +961,14 @@ def _give_file(names: OptionNames, name: str, path: Path) -> str:
     return names.give(name, shell_word(path) if names.options else str(path))
 
 
-def _refuse_unreadable(request: RunRequest, fps_name: str) -> None:
+def _refuse_unreadable(request: RunRequest, names: OptionNames) -> None:
     """InputError naming a local file or folder input that vtrack cannot read (a folder without
     images, a file that is not a video), found by opening it once: a run told that it lacks a
     first box hears of its input first. Stdin, FIFOs, devices and URLs are read once only, by
     the run itself."""
     if os.path.isfile(request.input) or os.path.isdir(request.input):
         open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
-                    live=request.live, fps_name=fps_name).close()
+                    live=request.live, names=names).close()
 
 
 def _first_frame(request: RunRequest, source: Source | None, names: OptionNames

@@ -6,7 +6,7 @@ import os
 from collections.abc import Callable
 from functools import partial
 
-from vtrack.errors import ConfigError
+from vtrack.errors import COMMAND_NAMES, ConfigError, OptionNames
 from vtrack.io.files import check_input_path
 from vtrack.io.images import ImageFolderSource, images_of
 from vtrack.io.raw import RawFormat, RawSource, checked_fps
@@ -25,7 +25,7 @@ def check_input(spec: str) -> None:
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
                 ffmpeg: FFmpegInput | None = None, live: bool | None = None,
-                fps_name: str = "--fps") -> Source:
+                names: OptionNames = COMMAND_NAMES) -> Source:
     """Open an input and decode its first frame; raise InputError if that is impossible.
 
     - ``raw`` given: raw frames of that format from ``spec`` (``-`` = stdin, a FIFO or a file);
@@ -41,15 +41,16 @@ def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = 
 
     ``live`` (None: :func:`is_live`) makes the source hand over the frames its consumer keeps
     up with and pass over the others, counted (:attr:`Source.frames_passed`,
-    :class:`~vtrack.io.threads.KeepingUp`). Messages about ``fps`` name it ``fps_name``
-    (the command's ``--fps``, the library's ``fps``).
+    :class:`~vtrack.io.threads.KeepingUp`). Messages name what the caller gave by ``names``
+    (the command's ``--fps``, ``--raw``, ``--follow`` ...; the library's ``fps``, ``raw=``,
+    ``ffmpeg.follow_s`` ...: :data:`~vtrack.errors.LIBRARY_NAMES`).
     """
-    return source_opener(spec, raw, fps=fps, ffmpeg=ffmpeg, live=live, fps_name=fps_name)()
+    return source_opener(spec, raw, fps=fps, ffmpeg=ffmpeg, live=live, names=names)()
 
 
 def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
                   ffmpeg: FFmpegInput | None = None, live: bool | None = None,
-                  fps_name: str = "--fps") -> Callable[[], Source]:
+                  names: OptionNames = COMMAND_NAMES) -> Callable[[], Source]:
     """What :func:`open_source` opens, checked without opening it: the arguments (ConfigError,
     as open_source gives it) and, for a local path, that it exists and can be read, and that
     a folder holds an image (InputError); nothing is opened (a FIFO, stdin, a URL, a device)
@@ -58,21 +59,22 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
     if fps is not None:
-        fps = checked_fps(fps, fps_name)  # a float from here (a Decimal, a NumPy number)
-    unfollowable = _not_followed(spec, raw) if ffmpeg.follow_s is not None else None
+        fps = checked_fps(fps, names.fps)  # a float from here (a Decimal, a NumPy number)
+    unfollowable = _not_followed(spec, raw, names) if ffmpeg.follow_s is not None else None
     if unfollowable:
-        raise ConfigError(f"--follow reads a video file that is still being written; "
+        raise ConfigError(f"{names.follow} reads a video file that is still being written; "
                           f"{unfollowable}")
-    given = "--format" if ffmpeg.format is not None else "--input-option" if ffmpeg.options \
-        else None
-    elsewhere = _not_through_ffmpeg(spec, raw) if given else None
+    given = names.format if ffmpeg.format is not None else names.input_option \
+        if ffmpeg.options else None
+    elsewhere = _not_through_ffmpeg(spec, raw, names) if given else None
     if elsewhere:
         raise ConfigError(f"{given} is for inputs FFmpeg reads; {elsewhere}")
     if raw is not None:
         if live:
-            raise ConfigError("--live: raw frames are read as they come (a pipe holds the "
-                              "sender back); give a container (e.g. -f mpegts) to skip frames")
-        return partial(RawSource, spec, raw, raw_name=_raw_name(fps_name))
+            raise ConfigError(f"{names.live}: raw frames are read as they come (a pipe holds "
+                              "the sender back); give a container (e.g. -f mpegts) to skip "
+                              "frames")
+        return partial(RawSource, spec, raw, raw_name=names.raw)
     device = device_number(spec)
     if not (spec == "-" or is_url(spec)):
         check_input_path(spec)
@@ -84,9 +86,8 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
                 f"{spec} is a video file, whose frames carry their own timestamps"
                 if device is None and not is_url(spec) else
                 f"{spec} carries its own timestamps")
-        raise ConfigError(f"{fps_name}: {what}; {fps_name} applies to raw input "
-                          f"({_raw_name(fps_name)}) and image "
-                          "folders only")
+        raise ConfigError(f"{names.fps}: {what}; {names.fps} applies to raw input "
+                          f"({names.give_raw}) and image folders only")
 
     def opened() -> Source:
         if device is not None:
@@ -101,31 +102,26 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
     return opened
 
 
-def _raw_name(fps_name: str) -> str:
-    """How the caller whose frame rate is called ``fps_name`` gives raw frames' format: the
-    command's ``--raw WxH`` (``--fps``), the library's ``raw=`` (``fps``)."""
-    return "--raw WxH" if fps_name == "--fps" else "raw="
-
-
-def _not_followed(spec: str, raw: RawFormat | None) -> str | None:
-    """Why ``--follow`` (a video file still being written) cannot apply to ``spec``, if so."""
+def _not_followed(spec: str, raw: RawFormat | None, names: OptionNames) -> str | None:
+    """Why ``--follow`` (a video file still being written) cannot apply to ``spec``, if so
+    (what the caller gave called by ``names``)."""
     if raw is not None:
         return ("raw frames are read to the end of what is there (pipe a growing raw file in "
                 "with tail -c +1 -f FILE | vtrack run - --raw WxH)")
     if spec == "-":
         return "stdin is read until its writer closes it"
     if is_url(spec):
-        return f"{spec} is a stream, read until it ends (--timeout)"
+        return f"{spec} is a stream, read until it ends ({names.timeout})"
     if os.path.isdir(spec):
         return f"{spec} is an image folder, read as it is when it opens"
     return None
 
 
-def _not_through_ffmpeg(spec: str, raw: RawFormat | None) -> str | None:
+def _not_through_ffmpeg(spec: str, raw: RawFormat | None, names: OptionNames) -> str | None:
     """Why FFmpeg's input options (``--format``, ``--input-option``) cannot apply to ``spec``,
-    if so: it is not an input FFmpeg opens."""
+    if so: it is not an input FFmpeg opens (raw input called by ``names``)."""
     if raw is not None:
-        return "--raw input is read as bare frames without it"
+        return f"raw input ({names.raw}) is read as bare frames without it"
     if device_number(spec) is not None:
         return f"{spec} is a capture device, read through OpenCV's V4L2 backend"
     if spec != "-" and not is_url(spec) and os.path.isdir(spec):

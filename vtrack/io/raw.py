@@ -172,11 +172,11 @@ class _AfterHead:
 def _refuse_a_container(label: str, head: bytes, raw_name: str) -> None:
     """InputError when ``head``, the input's first bytes, begins a container or an image
     (:func:`~vtrack.io.signatures.container_kind`): its bytes would be tracked as pixels.
-    ``raw_name``: how the caller gave the raw format (``--raw WxH``, ``raw=``)."""
+    ``raw_name``: how the caller gave the raw format (``--raw``, ``raw=``)."""
     kind = container_kind(head)
     if kind:
         raise InputError(f"{label}: {kind}, not raw frames: read it without "
-                         f"{raw_name.split()[0]} (its frames carry their own size and pixel "
+                         f"{raw_name} (its frames carry their own size and pixel "
                          "format)")
 
 
