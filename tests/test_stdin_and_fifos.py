@@ -286,6 +286,26 @@ def test_a_batch_whose_stdout_cannot_take_its_lines_says_so_in_one_line(tmp_path
     assert _statuses(out) == ["complete"] * 2
 
 
+
+def _closing_stderr() -> None:
+    os.close(2)  # `2>&-`
+
+
+def test_a_batch_without_stderr_keeps_its_errors_off_stdout(tmp_path: Path) -> None:
+    """`vtrack batch in/ -c s0 -q 2>&- > out.txt` with an input that fails: its error line
+    went to standard output (print and tqdm.write take ``file=None`` for stdout), into the
+    file of results. With no stderr, the batch's error and warning lines are dropped."""
+    folder = _batch_folder(tmp_path, 2)
+    (folder / "c1.mp4").write_bytes((folder / "c0.mp4").read_bytes()[:3000])  # cut off
+    done = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s0",
+                           "-q", "--no-video", "-o", str(tmp_path / "out")],
+                          stdout=subprocess.PIPE, timeout=120, check=False,
+                          preexec_fn=_closing_stderr)
+    assert done.returncode == 1
+    assert done.stdout == b""
+    assert _statuses(tmp_path / "out") == ["complete", "failed"]
+
+
 @pytest.mark.parametrize(("command", "what"), [
     (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the line naming the files written"),
     (["report", "OUT/run", "--out", "OUT/report"], "the summary line"),

@@ -125,12 +125,14 @@ class BatchProgress(_Shown):
     def write(self, line: str, err: bool = False) -> None:
         """A line on stdout (``err``: stderr) that does not break the bar, and never stops the
         batch: once a line fails on stdout (:attr:`stdout_failure`) the later ones are dropped
-        (standard output goes to the null device), as are stderr's when its reader went away."""
+        (standard output goes to the null device), as are stderr's when its reader went away
+        or there is no stderr (``2>&-``)."""
         if not err and self.stdout_failure is not None:
             return
         stream = sys.stderr if err else sys.stdout
-        if stream is None and not err:  # (>&-: no standard output from the start)
-            self.stdout_failure = OSError(errno.EBADF, "closed before vtrack started")
+        if stream is None:  # (>&- or 2>&-: closed from the start; print would use stdout)
+            if not err:
+                self.stdout_failure = OSError(errno.EBADF, "closed before vtrack started")
             return
         try:
             if self.bar is not None and not isinstance(self.bar, ProgressLines):
