@@ -306,6 +306,35 @@ def test_a_batch_without_stderr_keeps_its_errors_off_stdout(tmp_path: Path) -> N
     assert _statuses(tmp_path / "out") == ["complete", "failed"]
 
 
+
+@pytest.mark.parametrize("command", ["run", "batch"])
+def test_progress_without_stderr_does_not_stop_the_work(tmp_path: Path, command: str) -> None:
+    """`vtrack batch in/ -c s0 2>&-` (and `vtrack run`): the first progress asked
+    ``sys.stderr.isatty()`` of no stderr: the batch stopped, its rows `interrupted`; the run
+    ended `failed`: "'NoneType' object has no attribute 'isatty'". With no stderr there is no
+    progress, and the work completes; stdout has its lines only."""
+    folder = _batch_folder(tmp_path, 2)
+    out = tmp_path / "out"
+    if command == "run":
+        scene = make_scene("smooth", seed=3, width=160, height=120, frames=20, fps=30)
+        args = ["run", str(folder / "c0.mp4"), "--init",
+                ",".join(f"{v:g}" for v in scene.boxes[0])]
+    else:
+        args = ["batch", str(folder)]
+    done = subprocess.run([sys.executable, "-m", "vtrack", *args, "-c", "s0", "--no-video",
+                           "--stats-period", "0.001", "-o", str(out)],
+                          stdout=subprocess.PIPE, timeout=120, check=False,
+                          preexec_fn=_closing_stderr)
+    assert done.returncode == 0
+    lines = done.stdout.decode().splitlines()
+    if command == "run":
+        assert json.loads((out / "run.json").read_text())["status"] == "complete"
+        assert len(lines) == 1 and lines[0].startswith(f"{folder / 'c0.mp4'}: 20 frames"), lines
+    else:
+        assert _statuses(out) == ["complete"] * 2
+        assert len(lines) == 3 and "frames" not in lines[-1], lines
+
+
 @pytest.mark.parametrize(("command", "what"), [
     (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the line naming the files written"),
     (["report", "OUT/run", "--out", "OUT/report"], "the summary line"),

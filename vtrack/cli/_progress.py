@@ -38,8 +38,9 @@ STATS_PERIOD = 10.0
 
 
 def terminal(quiet: bool) -> bool:
-    """Whether to draw a bar: not ``--quiet`` and stderr is a terminal."""
-    return not quiet and sys.stderr.isatty()
+    """Whether to draw a bar: not ``--quiet`` and stderr is a terminal (none at all: ``2>&-``,
+    no bar)."""
+    return not quiet and sys.stderr is not None and sys.stderr.isatty()
 
 
 def progress_line(name: str, done: int, total: int | None, seconds: float,
@@ -65,9 +66,11 @@ class ProgressLines:
         self.started = self.last = time.monotonic() if started is None else started
 
     def update(self, done: int, note: str = "", seconds: float | None = None) -> None:
-        """A line if ``period`` has passed since the last one: ``done`` over ``seconds`` (by
-        default, the time since ``started``)."""
+        """A line on stderr if ``period`` has passed since the last one: ``done`` over
+        ``seconds`` (by default, the time since ``started``); none without stderr (``2>&-``)."""
         now = time.monotonic()
+        if sys.stderr is None:  # (2>&-: print would write the line on stdout)
+            return
         if now - self.last >= self.period:
             self.last = now
             total = max(self.total, done) if self.total else None
