@@ -3,11 +3,13 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -148,3 +150,38 @@ def test_a_refused_connection_is_said_at_once(folder: Path, tmp_path: Path) -> N
     result = vtrack("batch", str(folder), "--scheduler", address, "--scheduler-timeout", "20",
                     "--out", str(tmp_path / "out"))
     assert_one_error(result, address, "connection refused")
+
+
+def test_a_waiting_line_nobody_reads_is_no_lost_scheduler(folder: Path, tmp_path: Path) -> None:
+    """`vtrack batch in/ --scheduler ADDRESS 2>&1 | true` with no worker yet: the waiting line
+    met the closed pipe, and its BrokenPipeError was taken for the scheduler gone ("lost the
+    connection to the scheduler"), exit 2. The line is dropped; the batch waits, and runs once
+    a worker connects."""
+    scheduler, address = start_scheduler()
+    worker = None
+    reader, writer = os.pipe()
+    os.close(reader)  # stderr's reader is gone from the start
+    try:
+        batch = subprocess.Popen(
+            [sys.executable, "-m", "vtrack", "batch", str(folder), "--scheduler", address,
+             "--worker-timeout", "90", "--no-video", "--out", str(tmp_path / "out")],
+            stdout=subprocess.PIPE, stderr=writer, text=True)
+        os.close(writer)
+        with distributed.Client(address, set_as_default=False) as client:
+            def others() -> set[str]:  # the scheduler's clients but this one
+                ids = client.run_on_scheduler(lambda dask_scheduler: list(dask_scheduler.clients))
+                return set(ids) - {client.id, "fire-and-forget"}
+            while not others() and batch.poll() is None:  # until the batch connects
+                time.sleep(0.05)
+        worker = subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
+             "--nthreads", "1", "--no-dashboard"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        out, _ = batch.communicate(timeout=120)
+        assert batch.returncode == 0
+        assert "1 run (1 complete)" in out
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.terminate()
+                process.wait(timeout=30)

@@ -290,12 +290,12 @@ class DaskExecutor:
         the scheduler goes away meanwhile, the client is closed and a :class:`VtrackError`
         names the scheduler and what happened."""
         self.worker_timeout_s = timeout_s
-        try:
-            if self.client.scheduler_info().get("workers"):
-                return
-            limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
-            say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
-                f"--worker-timeout)")
+        if self.client.scheduler_info().get("workers"):
+            return
+        limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
+        say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
+            f"--worker-timeout)")
+        try:  # (only the wait: an error of ``say`` is no lost scheduler)
             with _client_log_off():  # (its "Failed to reconnect": the error line below says so)
                 self.client.wait_for_workers(1, timeout=timeout_s)
         except TimeoutError:

@@ -76,6 +76,14 @@ def warn(message: str) -> None:
     click.echo(warning_line(message), err=True)
 
 
+def say(line: str) -> None:
+    """``line`` on stderr; nothing when its reader went away (``2>&1 | head``) or it cannot be
+    written: what a command says there never stops its work (its exit status, its files and
+    records say how it ended)."""
+    with contextlib.suppress(OSError, ValueError):
+        click.echo(line, err=True)
+
+
 def note(command: str, message: str) -> None:
     """Write ``vtrack COMMAND: MESSAGE`` on stderr as one line: what ``vtrack COMMAND`` says
     of its work (``vtrack select: saved in clip.init.txt ...``)."""

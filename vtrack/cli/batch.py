@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import click
 from click.core import ParameterSource
 
-from vtrack.cli._messages import error_line, stdout_problem, warn, warning_line
+from vtrack.cli._messages import error_line, say, stdout_problem, warn, warning_line
 from vtrack.cli._options import (
     Seconds,
     WholeNumber,
@@ -279,7 +279,7 @@ def command(folder: Path, config_specs: tuple[str, ...], out_dir: Path | None,
         dask: DaskExecutor | None = None
         if scheduler is not None:
             dask = DaskExecutor(scheduler, scheduler_timeout)
-            dask.wait_for_workers(worker_timeout, lambda line: click.echo(line, err=True))
+            dask.wait_for_workers(worker_timeout, say)
         settings = RunRequest(input=str(folder), out_dir=out_dir,
                               config=next(iter(configs.values())), video=not no_video,
                               preset=preset, crf=crf, seed=seed, start=start[0],

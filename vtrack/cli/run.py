@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
 import sys
@@ -12,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from vtrack.cli._messages import echo_stdout, error_line, stdout_problem, warning_line
+from vtrack.cli._messages import echo_stdout, error_line, say, stdout_problem, warning_line
 from vtrack.cli._options import (
     FRAME_RATE,
     FrameSpan,
@@ -260,20 +259,20 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
             progress.close()
         ending.code = _exit_code(summary)
         for warning in summary.warnings:
-            _say(warning_line(warning))
+            say(warning_line(warning))
         if not quiet and stream == "-":
-            _say(summary.line())
+            say(summary.line())
         elif not quiet and not _said_on_stdout(summary.line()):
             ending.code = ending.code or 1
         if summary.interrupted_by == "SIGPIPE":
             pass  # the --stream reader went away (| head): quiet, as a pipe's writer; run.json
         elif summary.status == STATUS_INTERRUPTED:  # says why
-            _say(error_line(f"{summary.error}; partial results in {summary.out_dir}"))
+            say(error_line(f"{summary.error}; partial results in {summary.out_dir}"))
             if summary.resume is not None:
-                _say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
+                say(printable(f"vtrack: {summary.input}: to go on from where it stopped, run "
                                f"the same command with {summary.resume} and another --out"))
         elif summary.status != STATUS_COMPLETE:
-            _say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"))
+            say(error_line(f"{summary.error}; results up to there are in {summary.out_dir}"))
     if ending.code:
         sys.exit(ending.code)
 
@@ -348,15 +347,8 @@ def _said_on_stdout(line: str) -> bool:
     problem = stdout_problem(echo_stdout(line), "the summary line was not printed there")
     if problem is None:
         return True
-    _say(error_line(problem))
+    say(error_line(problem))
     return False
-
-
-def _say(line: str) -> None:
-    """``line`` on stderr; nothing when its reader went away (``2>&1 | head``): the run's exit
-    status says how the run ended, its files and run.json what it did."""
-    with contextlib.suppress(OSError, ValueError):
-        click.echo(line, err=True)
 
 
 def _refuse_pix_fmt_without_raw(raw: bool) -> None:
