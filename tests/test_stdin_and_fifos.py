@@ -287,6 +287,26 @@ def test_a_batch_whose_stdout_cannot_take_its_lines_says_so_in_one_line(tmp_path
 
 
 
+def test_a_batch_whose_warning_nobody_reads_runs(tmp_path: Path) -> None:
+    """`vtrack batch in/ -c s0 2>&1 | true` with an input in a sub-folder: the warning naming
+    it, written before any run, met the closed pipe (BrokenPipeError): the batch ended there,
+    exit 1, saying nothing, with no summary.csv. A warning nobody reads is dropped, and the
+    batch runs."""
+    folder = _batch_folder(tmp_path, 2)
+    (folder / "sub").mkdir()
+    (folder / "c1.mp4").rename(folder / "sub" / "c1.mp4")
+    reader, writer = os.pipe()
+    os.close(reader)  # `2>&1 | true`: nobody reads either stream
+    try:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s0",
+                               "--no-video", "-o", str(tmp_path / "out")],
+                              stdout=writer, stderr=writer, timeout=120, check=False)
+    finally:
+        os.close(writer)
+    assert done.returncode == 0
+    assert _statuses(tmp_path / "out") == ["complete"]
+
+
 def _closing_stderr() -> None:
     os.close(2)  # `2>&-`
 

@@ -72,8 +72,9 @@ def warning_line(message: str) -> str:
 
 
 def warn(message: str) -> None:
-    """Write :func:`warning_line` of ``message`` on stderr."""
-    click.echo(warning_line(message), err=True)
+    """Write :func:`warning_line` of ``message`` on stderr (:func:`say`: a warning nobody
+    reads stops nothing)."""
+    say(warning_line(message))
 
 
 def say(line: str) -> None:
@@ -85,9 +86,9 @@ def say(line: str) -> None:
 
 
 def note(command: str, message: str) -> None:
-    """Write ``vtrack COMMAND: MESSAGE`` on stderr as one line: what ``vtrack COMMAND`` says
-    of its work (``vtrack select: saved in clip.init.txt ...``)."""
-    click.echo(f"vtrack {command}: {printable(message)}", err=True)
+    """Write ``vtrack COMMAND: MESSAGE`` on stderr as one line (:func:`say`): what ``vtrack
+    COMMAND`` says of its work (``vtrack select: saved in clip.init.txt ...``)."""
+    say(f"vtrack {command}: {printable(message)}")
 
 
 def echo_stdout(line: str, nl: bool = True) -> OSError | ValueError | None:
