@@ -4,6 +4,7 @@ them, stdin closed or a terminal, a --stream FIFO nobody reads, --follow where i
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import fcntl
 import json
@@ -13,6 +14,7 @@ import signal
 import subprocess
 import sys
 import termios
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -305,6 +307,42 @@ def test_a_batch_whose_warning_nobody_reads_runs(tmp_path: Path) -> None:
         os.close(writer)
     assert done.returncode == 0
     assert _statuses(tmp_path / "out") == ["complete"]
+
+
+def test_a_batch_with_a_bar_hands_its_lines_on_as_they_come(tmp_path: Path) -> None:
+    """`vtrack batch in/ -c s0 | tee log` in a terminal (a bar on stderr): tqdm.write does not
+    flush, so a run's line reached the pipe only once 8 KB of lines had, or at exit. It now
+    arrives as its run ends: the batch is still running when it is read (a stop then
+    interrupts the runs left)."""
+    folder = _batch_folder(tmp_path, 4)
+    leader, follower = pty.openpty()
+    drained = threading.Thread(target=_drain, args=(leader,), daemon=True)
+    drained.start()
+    batch = subprocess.Popen([sys.executable, "-m", "vtrack", "batch", str(folder), "-c", "s1",
+                              "--jobs", "1", "--no-video", "-o", str(tmp_path / "out")],
+                             stdout=subprocess.PIPE, stderr=follower, text=True,
+                             env={**os.environ, "PYTHONUNBUFFERED": ""})  # (as by default)
+    os.close(follower)
+    try:
+        assert batch.stdout is not None
+        wait_for_stop_handlers(batch)
+        first = batch.stdout.readline()  # (old code: at exit, every run done)
+        batch.send_signal(signal.SIGINT)
+        batch.wait(timeout=120)
+    finally:
+        batch.kill()
+        batch.wait(timeout=30)
+        drained.join(timeout=30)
+    assert first.startswith("c0 [s1]: "), first
+    assert "interrupted" in _statuses(tmp_path / "out")
+
+
+def _drain(leader: int) -> None:
+    """Read a terminal's output until its last writer is gone (a full terminal would block)."""
+    with contextlib.suppress(OSError):
+        while os.read(leader, 4096):
+            pass
+    os.close(leader)
 
 
 def _closing_stderr() -> None:

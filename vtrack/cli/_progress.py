@@ -140,6 +140,7 @@ class BatchProgress(_Shown):
         try:
             if self.bar is not None and not isinstance(self.bar, ProgressLines):
                 self.bar.write(line, file=stream)
+                stream.flush()  # (tqdm.write does not: into a pipe, lines came 8 KB at once)
             else:
                 print(line, file=stream, flush=True)
         except (OSError, ValueError) as exc:
