@@ -129,6 +129,8 @@ def test_a_scheduler_gone_while_the_batch_waits_for_a_worker_is_one_line(
     result = subprocess.CompletedProcess(batch.args, batch.returncode, out, first + err)
     lines = assert_one_error(result, f"--scheduler {address}: lost the connection to the "
                                      "scheduler before a worker connected")
+    if "Timed out" in err or "within" in err:  # (SIGTERM: its reconnection gave up)
+        assert "(no reconnection within 2 s, --scheduler-timeout)" in err, err
     assert len(lines) == 2 and out == ""
     assert not (tmp_path / "out").exists()
 
@@ -185,3 +187,15 @@ def test_a_waiting_line_nobody_reads_is_no_lost_scheduler(folder: Path, tmp_path
             if process is not None:
                 process.terminate()
                 process.wait(timeout=30)
+
+
+def test_a_reconnection_given_up_names_scheduler_timeout() -> None:
+    """A scheduler stopped by SIGTERM while the batch waited could end (as Dask's client
+    retried) in "lost the connection ... (Timed out trying to connect to tcp://... after 2 s)",
+    naming no option: the wait was --scheduler-timeout's."""
+    from vtrack.batch.executors import lost_reason
+
+    timed_out = OSError("Timed out trying to connect to tcp://127.0.0.1:8786 after 2 s")
+    assert lost_reason(timed_out, 2) == "no reconnection within 2 s, --scheduler-timeout"
+    reset = OSError("in <TCP (closed)>: ConnectionResetError: [Errno 104] Connection reset by peer")
+    assert lost_reason(reset, 2) == "[Errno 104] Connection reset by peer"

@@ -345,6 +345,21 @@ def _drain(leader: int) -> None:
     os.close(leader)
 
 
+def test_stdout_pointed_at_the_null_device_keeps_no_descriptor_open(tmp_path: Path) -> None:
+    """stdout_to_null (after a line standard output could not take) opened the null device
+    and duplicated it onto stdout, leaving the descriptor it opened open for the rest of the
+    process: one more at each call."""
+    script = ("import os, sys\n"
+              "from vtrack.cli._messages import stdout_to_null\n"
+              "before = sorted(os.listdir('/proc/self/fd'))\n"
+              "stdout_to_null(); stdout_to_null()\n"
+              "print(before == sorted(os.listdir('/proc/self/fd')), file=sys.stderr)\n")
+    with open(tmp_path / "out.txt", "wb") as out:
+        done = subprocess.run([sys.executable, "-c", script], stdout=out,
+                              stderr=subprocess.PIPE, timeout=60, check=True)
+    assert done.stderr.decode().strip() == "True"
+
+
 def _closing_stderr() -> None:
     os.close(2)  # `2>&-`
 
@@ -394,14 +409,13 @@ def test_progress_without_stderr_does_not_stop_the_work(tmp_path: Path, command:
 
 
 @pytest.mark.parametrize(("command", "what"), [
-    (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the line naming the files written"),
+    (["scene", "smooth", "OUT/clip.mp4", "--frames", "12"], "the summary line"),
     (["report", "OUT/run", "--out", "OUT/report"], "the summary line"),
     (["stages"], "the listing"),
     (["stages", "s0", "--toml"], "the config"),
-    (["frame", "OUT/clip.mp4", "--at", "3", "-o", "OUT/fr.png"],
-     "the line naming the image written"),
+    (["frame", "OUT/clip.mp4", "--at", "3", "-o", "OUT/fr.png"], "the summary line"),
     (["vectors", "OUT/clip.mp4", "--init", "INIT", "--frames", "2", "--out", "OUT/vec"],
-     "the line naming the files written"),
+     "the summary line"),
     (["vectors", "check", "OUT/vec", "OUT/vec"], "the comparison")])
 def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, command: list[str],
                                                           what: str) -> None:

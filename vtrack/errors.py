@@ -264,9 +264,9 @@ class InputWarning(UserWarning):
 
 
 class OutputBrokenError(OutputError):
-    """An output that could not be written part way (a full disk): what is on disk is whole
-    and ``run.json`` (when it could be written) says what is there. Exit code 1: tracking had
-    started."""
+    """An output that could not be written part way (a full disk, standard output that cannot
+    take a command's line): what is on disk is whole, and says what is there (a run's
+    ``run.json``, when it could be written). Exit code 1: the command's work had started."""
 
     exit_code = 1
 

@@ -272,6 +272,7 @@ class DaskExecutor:
         if problem:
             raise VtrackError(f"--scheduler {address}: {problem}")
         self.address = address
+        self.scheduler_timeout_s = timeout_s
         self.worker_timeout_s: float | None = None
         try:
             _probe(address, timeout_s)
@@ -304,9 +305,9 @@ class DaskExecutor:
                               f"{_seconds(timeout_s or 0)} (--worker-timeout)") from None
         except OSError as exc:  # CommClosedError: the scheduler stopped, its machine went away
             self.close()
-            reason = str(exc).rsplit(": ", 1)[-1] or type(exc).__name__
             raise VtrackError(f"--scheduler {self.address}: lost the connection to the "
-                              f"scheduler before a worker connected ({reason})") from None
+                              f"scheduler before a worker connected "
+                              f"({lost_reason(exc, self.scheduler_timeout_s)})") from None
 
     def close(self) -> None:
         """Disconnect; nothing is printed if the scheduler is already gone (the Client's
@@ -499,6 +500,17 @@ def _probe(address: str, timeout_s: float) -> None:
             raise TimeoutError(f"no answer within {_seconds(timeout_s)}") from None
 
     asyncio.run(bounded())
+
+
+def lost_reason(exc: OSError, scheduler_timeout_s: float) -> str:
+    """Why the connection to a scheduler was lost, from Dask's ``exc``: its last part
+    (``[Errno 104] Connection reset by peer``); when the client's reconnection gave up ("Timed
+    out trying to connect to tcp://... after 10 s"), the option that set that wait:
+    ``no reconnection within 10 s, --scheduler-timeout``."""
+    reason = str(exc).rsplit(": ", 1)[-1] or type(exc).__name__
+    if reason.startswith("Timed out"):
+        return f"no reconnection within {_seconds(scheduler_timeout_s)}, --scheduler-timeout"
+    return reason
 
 
 def _seconds(value: float) -> str:

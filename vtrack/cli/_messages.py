@@ -108,16 +108,21 @@ def echo_stdout(line: str, nl: bool = True) -> OSError | ValueError | None:
     return None
 
 
-def stdout_problem(failure: OSError | ValueError | None, what: str) -> str | None:
-    """The error of a command whose lines met ``failure`` on standard output
-    (:func:`echo_stdout`): ``standard output: REASON: WHAT`` (``> /dev/full``, an I/O error,
-    ``>&-``); None when there was none or its reader went away (``| head``: quiet, as a pipe's
-    writer)."""
+def stdout_failed(failure: OSError | ValueError, what: str) -> str:
+    """``standard output: REASON: WHAT``: the error of a command whose line met ``failure`` on
+    standard output (:func:`echo_stdout`)."""
     from vtrack.io.files import os_reason
 
+    return f"standard output: {os_reason(failure)}: {what}"
+
+
+def stdout_problem(failure: OSError | ValueError | None, what: str) -> str | None:
+    """:func:`stdout_failed` for a command whose lines met ``failure`` on standard output
+    (``> /dev/full``, an I/O error, ``>&-``); None when there was none or its reader went
+    away (``| head``: quiet, as a pipe's writer)."""
     if failure is None or isinstance(failure, BrokenPipeError):
         return None
-    return f"standard output: {os_reason(failure)}: {what}"
+    return stdout_failed(failure, what)
 
 
 def echo_result(text: str, what: str, nl: bool = True) -> None:
@@ -136,4 +141,8 @@ def stdout_to_null() -> None:
     """Point standard output, whose last write failed, at the null device: what is left in
     its buffer and any later line go nowhere, and the interpreter's last flush adds no error."""
     with contextlib.suppress(OSError, ValueError):
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, sys.stdout.fileno())
+        finally:
+            os.close(null)

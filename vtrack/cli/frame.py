@@ -62,7 +62,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old one
     echo_result(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})",
-                "the line naming the image written")
+                "the summary line")
 
 
 def _checked_ext(out: Path, input_spec: str) -> str:

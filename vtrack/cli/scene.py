@@ -129,4 +129,4 @@ def command(
     layout = f", {pix_fmt or 'bgr24'}" if fmt == "raw" else ""
     echo_result(f"wrote {files.clip} ({len(scene)} frames, {scene.width}x{scene.height}"
                 f"{layout}, {scene.fps:g} fps) with ground truth {files.groundtruth}{extra}",
-                "the line naming the files written")
+                "the summary line")

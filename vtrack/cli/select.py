@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from vtrack.cli._messages import echo_stdout, note, warn
+from vtrack.cli._messages import echo_stdout, note, stdout_failed, warn
 from vtrack.cli._options import WholeNumber
 from vtrack.cli._paths import INPUT
 from vtrack.params import MAX_FRAME_NUMBER
@@ -69,9 +69,7 @@ def _print(line: str, kept: str) -> None:
     before vtrack started (``vtrack select clip.mp4 >&-``: Python has no ``sys.stdout`` then,
     and click would print nothing without a word)."""
     from vtrack.errors import OutputBrokenError
-    from vtrack.io.files import os_reason
 
     failure = echo_stdout(line)
     if failure is not None:
-        raise OutputBrokenError(f"standard output: {os_reason(failure)}: {line} was not "
-                                f"printed there; {kept}")
+        raise OutputBrokenError(stdout_failed(failure, f"{line} was not printed there; {kept}"))

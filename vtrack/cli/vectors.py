@@ -129,7 +129,7 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
         warn(f"{input_spec}: {plural(written, 'frame')} to write of the {count} asked for "
              "(--frames)")
     echo_result(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}",
-                "the line naming the files written")
+                "the summary line")
 
 
 @command.command("check")
