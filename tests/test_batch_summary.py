@@ -265,3 +265,29 @@ def test_rows_of_pairs_without_an_outcome_name_their_ground_truth(tmp_path: Path
         _, rows = read(path)
         assert [(rows[name, "s0"]["ground_truth"], rows[name, "s0"]["error"])
                 for name in "ab"] == [(os.path.realpath(gt), error), ("", error)], rows
+
+
+def test_an_input_whose_name_is_not_utf8_is_tracked_and_named_readably(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A batch over `c\\xff.mp4` (a name that is not UTF-8) crashed writing summary.csv before
+    any run (UnicodeEncodeError: surrogates not allowed, a traceback, exit 1). It is tracked;
+    summary.csv and the report's summary.md are UTF-8 and name it `c\\xff`; run again, the
+    batch takes its row back (one row, not run again)."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    name = os.fsdecode(b"c\xff")
+    shutil.copy(clip.path, inputs / f"{name}.mp4")
+    shutil.copy(clip.gt, inputs / f"{name}.gt.txt")
+    out = tmp_path / "results"
+    for _ in range(2):
+        result = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "-o", str(out))
+        assert result.exit_code == 0, result.output
+        rows = (out / "summary.csv").read_bytes().decode("utf-8").splitlines()[1:]
+        assert [row.split(",")[:3] for row in rows] == [["c\\xff", "s0", "complete"]]
+    assert "not run again" in result.output
+    report = vtrack("report", str(out), "--out", str(tmp_path / "report"))
+    assert report.exit_code == 0, report.output
+    assert "warning" not in report.output  # (its row is the run the report found)
+    assert "| c\\xff | s0 | complete |" in (tmp_path / "report" / "summary.md").read_text(
+        encoding="utf-8")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shlex
 import signal
 import threading
@@ -189,11 +190,25 @@ def cut(text: str) -> str:
     return f"{text[:100]}...{text[-30:]} ({len(text)} characters)"
 
 
+#: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
+#: 0xff is U+DCFF).
+_UNDECODED = re.compile("[\udc80-\udcff]")
+
+
+def escape_undecoded(text: str) -> str:
+    """``text`` with each byte of a file name that is not UTF-8 (``c\\xff.mp4`` on disk, which
+    Python names ``c\\udcff.mp4``) written as its escape, ``\\xff``: text that can be
+    written, printed and drawn, and says which byte it was."""
+    return _UNDECODED.sub(lambda match: f"\\x{ord(match.group()) - 0xDC00:02x}", text)
+
+
 def printable(text: str) -> str:
     """``text`` with each control character (newline, tab, escape, ...) written as its Python
-    escape (``\\n``): a name taken from the file system stays one line of a message, a table
-    row or a plot title."""
-    return "".join(repr(c)[1:-1] if unicodedata.category(c) == "Cc" else c for c in text)
+    escape (``\\n``), and each byte of a name that is not UTF-8 as its own (``\\xff``,
+    :func:`escape_undecoded`): a name taken from the file system stays one line of a message,
+    a table row or a plot title."""
+    return "".join(repr(c)[1:-1] if unicodedata.category(c) == "Cc" else c
+                   for c in escape_undecoded(text))
 
 
 class VtrackError(Exception):

@@ -17,7 +17,7 @@ from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome, read_row
 from vtrack.batch.plan import Plan, recorded_summary
 from vtrack.errors import OutputError, passing_stop_to
-from vtrack.io.files import folder_name, write_text_atomic
+from vtrack.io.files import folder_name, read_name, write_text_atomic
 from vtrack.io.identity import file_identity
 from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED
@@ -196,7 +196,9 @@ def earlier_rows(path: Path, planned: Collection[tuple[str, str]] = ()
     try:
         with path.open(newline="", encoding="utf-8") as handle:
             reader = csv.DictReader(handle)
-            rows = {(row["input"], row["config"]): {c: row.get(c) for c in SUMMARY_COLUMNS}
+            # (an input named as text_bytes writes it: c\xff, a byte not UTF-8, is c\udcff)
+            rows = {(read_name(row["input"]), row["config"]): {c: row.get(c)
+                                                             for c in SUMMARY_COLUMNS}
                     for row in reader}
     except (OSError, KeyError, UnicodeDecodeError, csv.Error):
         return {}, {}

@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import BinaryIO, Generic, Self, TypeVar
 
-from vtrack.errors import InputError, OutputError, plural
+from vtrack.errors import InputError, OutputError, escape_undecoded, plural
 
 
 class Closing:
@@ -328,7 +328,25 @@ def write_bytes_atomic(path: Path, data: bytes) -> Path:
     return path
 
 
+#: A byte of a file name that is not UTF-8 as :func:`text_bytes` writes it (``\xff``).
+_WRITTEN_UNDECODED = re.compile(r"\\x([89a-f][0-9a-f])")
+
+
+def text_bytes(text: str) -> bytes:
+    """``text`` in UTF-8, a file name's bytes that are not UTF-8 (``c\xff.mp4`` on disk)
+    written as their escapes, ``c\xff.mp4``: a results file naming such an input stays
+    UTF-8 text, and says which bytes its name holds (:func:`read_name` reads it back)."""
+    return escape_undecoded(text).encode("utf-8", "backslashreplace")
+
+
+def read_name(text: str) -> str:
+    """A name as :func:`text_bytes` wrote it, as Python names that file (``c\xff.mp4``, the
+    escape of a byte that is not UTF-8, back to the byte's ``surrogateescape`` character)."""
+    return _WRITTEN_UNDECODED.sub(lambda match: chr(0xDC00 + int(match.group(1), 16)), text)
+
+
 def write_text_atomic(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file renamed when complete (readers never
-    see a half-written file) and return ``path``; OutputError naming it if it cannot be."""
-    return write_bytes_atomic(path, text.encode("utf-8"))
+    """Write ``text`` to ``path`` (UTF-8, as :func:`text_bytes` makes it) through a temporary
+    file renamed when complete (readers never see a half-written file) and return ``path``;
+    OutputError naming it if it cannot be."""
+    return write_bytes_atomic(path, text_bytes(text))

@@ -23,6 +23,7 @@ from vtrack.io.files import (
     prepare_output_dir,
     remove_quietly,
     removing_new_folders,
+    text_bytes,
 )
 from vtrack.io.outdir import is_batch_folder
 from vtrack.report import failures, pages, plots, tables
@@ -502,7 +503,7 @@ def _remove_stale_plots(plot_dir: Path, written: Sequence[Path]) -> None:
 
 
 def _stage_text(staged: StagedFiles, path: Path, text: str) -> Path:
-    return staged.write(path, lambda temp: temp.write_text(text, encoding="utf-8"))
+    return staged.write(path, lambda temp: temp.write_bytes(text_bytes(text)))
 
 
 def _save(staged: StagedFiles, figure: Figure, path: Path) -> Path:

@@ -44,7 +44,7 @@ from vtrack.evaluate.groundtruth import (
 )
 from vtrack.geometry import Box
 from vtrack.io.csvfile import scores_as_written
-from vtrack.io.files import folder_name, os_reason
+from vtrack.io.files import folder_name, os_reason, read_name
 from vtrack.io.identity import file_identity, sizes
 from vtrack.io.jsonfile import read_run_record
 from vtrack.io.limits import special_kind
@@ -791,6 +791,7 @@ def _batch_rows(summary: Path, problems: list[str]) -> list[dict[str, str]]:
                         or not row["input"] or not row["config"]):
                     unread.append(_lines(first, reader.line_num))
                     continue
+                row["input"] = read_name(row["input"])  # (c\xff: the input c\udcff)
                 rows[(row["input"], row["config"])] = row
     except OSError as exc:
         problems.append(f"{summary}: cannot read ({os_reason(exc)}); the runs without results "
