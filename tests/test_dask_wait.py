@@ -55,6 +55,20 @@ def start_scheduler() -> tuple[subprocess.Popen[str], str]:
     raise AssertionError("the scheduler said no address")
 
 
+def run_with_a_worker(batch: subprocess.Popen[str], address: str) -> tuple[str, str]:
+    """``batch``'s stdout and stderr once it ends, with one ``dask worker`` process of one
+    thread started to connect to ``address`` (stopped after)."""
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
+         "--nthreads", "1", "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        return batch.communicate(timeout=120)
+    finally:
+        worker.terminate()
+        worker.wait(timeout=30)
+
+
 def assert_one_error(result: subprocess.CompletedProcess[str], *words: str) -> list[str]:
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr and "Exception ignored" not in result.stderr
@@ -80,7 +94,6 @@ def test_no_worker_says_it_waits_and_gives_up(folder: Path, tmp_path: Path) -> N
 def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
                                                              tmp_path: Path) -> None:
     scheduler, address = start_scheduler()
-    worker = None
     try:
         assert address.startswith("tcp://127.0.0.1:")
         batch = subprocess.Popen(
@@ -90,18 +103,12 @@ def test_a_worker_that_connects_while_waiting_runs_the_batch(folder: Path,
         assert batch.stderr is not None
         first = batch.stderr.readline()
         assert first.startswith("vtrack: waiting for a Dask worker") and "90 s" in first
-        worker = subprocess.Popen(
-            [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
-             "--nthreads", "1", "--no-dashboard"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        out, err = batch.communicate(timeout=120)
+        out, err = run_with_a_worker(batch, address)
         assert batch.returncode == 0, first + err
         assert "1 run (1 complete)" in out
     finally:
-        for process in (worker, scheduler):
-            if process is not None:
-                process.terminate()
-                process.wait(timeout=30)
+        scheduler.terminate()
+        scheduler.wait(timeout=30)
 
 
 @pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM])
@@ -160,7 +167,6 @@ def test_a_waiting_line_nobody_reads_is_no_lost_scheduler(folder: Path, tmp_path
     connection to the scheduler"), exit 2. The line is dropped; the batch waits, and runs once
     a worker connects."""
     scheduler, address = start_scheduler()
-    worker = None
     reader, writer = os.pipe()
     os.close(reader)  # stderr's reader is gone from the start
     try:
@@ -175,18 +181,12 @@ def test_a_waiting_line_nobody_reads_is_no_lost_scheduler(folder: Path, tmp_path
                 return set(ids) - {client.id, "fire-and-forget"}
             while not others() and batch.poll() is None:  # until the batch connects
                 time.sleep(0.05)
-        worker = subprocess.Popen(
-            [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
-             "--nthreads", "1", "--no-dashboard"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        out, _ = batch.communicate(timeout=120)
+        out, _ = run_with_a_worker(batch, address)
         assert batch.returncode == 0
         assert "1 run (1 complete)" in out
     finally:
-        for process in (worker, scheduler):
-            if process is not None:
-                process.terminate()
-                process.wait(timeout=30)
+        scheduler.terminate()
+        scheduler.wait(timeout=30)
 
 
 def test_a_reconnection_given_up_names_scheduler_timeout() -> None:
