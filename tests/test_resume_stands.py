@@ -136,3 +136,26 @@ def test_force_replaces_results_of_other_settings_as_its_help_says(folder: Path,
     force = help_text.split("--force ", 1)[1].split(" -y, --overwrite", 1)[0]
     assert "other settings" in force and "--overwrite" in force, force
     assert "without it (or --force) those pairs fail" in help_text
+
+
+def test_a_config_at_a_long_path_is_recorded_whole_and_resumed(folder: Path,
+                                                               tmp_path: Path) -> None:
+    """A config at a path of more than 200 characters was recorded cut (``aaaa...aaaa (N
+    characters)``) in run.json's request.config.source: a result made before was seen as made
+    with other settings, and two long paths differing in the middle compared equal."""
+    from vtrack.config import config_file
+
+    deep = tmp_path / ("c" * 120) / ("d" * 120)
+    deep.mkdir(parents=True)
+    config = deep / "mine.toml"
+    config.write_text(config_file("s0").read_text())
+    assert len(str(config)) > 200
+    out = tmp_path / "r"
+    args = ("batch", str(folder), "-c", str(config), "-o", str(out), "-j", "1")
+    first = vtrack(*args)
+    assert first.returncode == 0, first.stderr.decode()
+    record = json.loads((out / "occ" / "s0" / "run.json").read_text())  # (its name)
+    assert record["request"]["config"]["source"] == str(config)
+    again = vtrack(*args)
+    assert again.returncode == 0, again.stderr.decode()
+    assert "already complete: not run again" in again.stdout.decode(), again.stdout.decode()

@@ -249,26 +249,27 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     if not os.fspath(spec).strip():  # ("" would be opened as the current folder)
         raise ConfigError(f"config: empty; give {CONFIG_HINT}")
     path = config_file(spec)
-    where = cut(str(spec))  # how its messages and the config's source name it
-    if not _is_file(path, where):
+    where = str(spec)  # the config's source, whole: run.json records it and resume compares it
+    named = cut(where)  # how a refusal's one line names a spec it could not read
+    if not _is_file(path, named):
         kind = special_kind(path)
         if kind is not None:
-            raise ConfigError(not_a_file(where, kind, "config"))
+            raise ConfigError(not_a_file(named, kind, "config"))
         if path.is_dir():
-            raise ConfigError(f"{where}: is a folder, not a config file")
+            raise ConfigError(f"{named}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
-            raise ConfigError(f"{where}: config file not found")
+            raise ConfigError(f"{named}: config file not found")
         else:
             shipped = sorted(shipped_configs())
             raise ConfigError(
-                f"{where}: no such config file or shipped config (shipped: {', '.join(shipped)})"
+                f"{named}: no such config file or shipped config (shipped: {', '.join(shipped)})"
                 f"{did_you_mean(str(spec), shipped)}"
             )
     try:
         text = read_text_bounded(path, CONFIG_BYTES, "config")
         data = tomllib.loads(text, parse_float=float_from_text)  # (1e400: named as written)
     except InputError as exc:
-        raise ConfigError(str(exc).replace(str(path), where, 1)) from None
+        raise ConfigError(str(exc).replace(str(path), named, 1)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{where}: not valid TOML ({exc})") from None
     except RecursionError:  # tomllib reads nested arrays and tables recursively
