@@ -81,7 +81,9 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
     in two parentheses in a row. A file or folder now gets the vtrack run that tracks it.
     That was said of any path: a folder of videos, a results folder, a config, a summary.csv
     got 'vtrack run' too, and `vtrack -` (standard input) no hint; each now gets the command
-    that takes it."""
+    that takes it. A name too long for the file system ended in a traceback (OSError from
+    Path.is_dir), a `vtrack report` folder (or its summary.csv) was sent to `vtrack report`,
+    which refuses it, and a URL ending .csv to `vtrack report http:/host`."""
     import cv2
     import numpy as np
 
@@ -92,6 +94,10 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
     (tmp_path / "results").mkdir()
     (tmp_path / "results" / "summary.csv").write_text("input\n")
     (tmp_path / "mine.toml").write_text("")
+    (tmp_path / "rep").mkdir()
+    for name in ("index.html", "summary.md", "summary.csv"):  # a vtrack report's files
+        (tmp_path / "rep" / name).write_text("input\n")
+    long = "a" * 300 + ".mp4"
     for word, said in (
             ("scene.mp4", "No such command 'scene.mp4'; to track it: vtrack run scene.mp4"),
             ("runs/", "No such command 'runs/'; to track it: vtrack run runs/"),
@@ -105,6 +111,12 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
             ("mine.toml", "No such command 'mine.toml'; a config: vtrack run INPUT -c "
                           "mine.toml"),
             ("-", "No such command '-'; to track it: vtrack run -"),
+            (long, f"No such command '{long}'; to track it: vtrack run {long}"),
+            ("rep", "No such command 'rep'; a vtrack report's folder: open rep/index.html"),
+            ("rep/summary.csv", "No such command 'rep/summary.csv'; a vtrack report's table: "
+                                "open rep/index.html"),
+            ("http://host/a.csv", "No such command 'http://host/a.csv'; to track it: vtrack "
+                                  "run http://host/a.csv"),
             ("RUN", "No such command 'RUN'. Did you mean 'run'?"),
             ("configs", "No such command 'configs'; vtrack stages lists the shipped configs "
                         "and their stages")):
@@ -115,8 +127,8 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
     line = one_error_line(vtrack("scene", "clip.mp4", "out.mp4", cwd=tmp_path))
     assert line.startswith("vtrack: error: unknown scenario 'clip.mp4'; choose one of: ")
     assert "did you mean" not in line
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml", "my footage", "results",
-                                                         "scene.mp4", "seq"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml", "my footage", "rep",
+                                                         "results", "scene.mp4", "seq"]
 
 
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:

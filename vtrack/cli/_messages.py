@@ -22,22 +22,31 @@ def error_line(message: str) -> str:
 
 
 def _path_hint(word: str) -> str:
-    """The command that takes the file, folder or URL ``word``: ``vtrack report`` for a results
-    folder (one holding run.json or summary.csv), a run.json, or the folder of another .csv
-    or .json (vtrack's results); ``-c`` for a .toml config; ``vtrack batch`` for a folder that
-    is no image sequence; ``vtrack run`` for anything else (a video, images, a URL, ``-``)."""
+    """The command that takes the file, folder or URL ``word``: for a ``vtrack report``'s
+    folder (or a table in it), its page to open; ``vtrack report`` for a results folder (one
+    holding run.json or summary.csv), a run.json, or the folder of another .csv or .json
+    (vtrack's results); ``-c`` for a .toml config; ``vtrack batch`` for a folder that is no
+    image sequence; ``vtrack run`` for anything else (a video, images, a URL, ``-``, a name the
+    file system cannot look up)."""
     from vtrack.io.images import holds_images
+    from vtrack.io.outdir import REPORT_PAGE, is_report_folder
 
+    if "://" in word:
+        return f"; to track it: vtrack run {shell_word(word)}"
     path = Path(word)
     suffix = path.suffix.lower()
-    if path.is_dir():
-        if any((path / name).exists() for name in ("run.json", "summary.csv")):
+    if os.path.isdir(word):  # (False, where Path.is_dir raises, for a name too long)
+        if is_report_folder(path):
+            return f"; a vtrack report's folder: open {shell_word(path / REPORT_PAGE)}"
+        if any(os.path.exists(path / name) for name in ("run.json", "summary.csv")):
             return f"; to report its results: vtrack report {shell_word(word)}"
         if not holds_images(path):
             return f"; to track the inputs in it: vtrack batch {shell_word(word)}"
     elif path.name == "run.json":
         return f"; to report that run: vtrack report {shell_word(word)}"
     elif suffix in (".csv", ".json"):
+        if is_report_folder(path.parent):
+            return f"; a vtrack report's table: open {shell_word(path.parent / REPORT_PAGE)}"
         return f"; to report results: vtrack report {shell_word(path.parent)}"
     elif suffix == ".toml":
         return f"; a config: vtrack run INPUT -c {shell_word(word)}"
