@@ -10,6 +10,7 @@ import fcntl
 import json
 import os
 import pty
+import shutil
 import signal
 import subprocess
 import sys
@@ -416,13 +417,15 @@ def test_progress_without_stderr_does_not_stop_the_work(tmp_path: Path, command:
     (["frame", "OUT/clip.mp4", "--at", "3", "-o", "OUT/fr.png"], "the summary line"),
     (["vectors", "OUT/clip.mp4", "--init", "INIT", "--frames", "2", "--out", "OUT/vec"],
      "the summary line"),
-    (["vectors", "check", "OUT/vec", "OUT/vec"], "the comparison")])
+    (["vectors", "check", "OUT/vec", "OUT/vec"], "the comparison"),
+    (["vectors", "check", "OUT/vec", "OUT/dump"], "the list of differences")])
 def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, command: list[str],
                                                           what: str) -> None:
     """`vtrack scene smooth clip.mp4 > /dev/full` (and `vtrack report`, `vtrack stages`, `vtrack
     stages s0 --toml`) ended in a traceback (OSError: [Errno 28] No space left on device from
     click.echo), exit 1. As `vtrack run`'s summary line, it is now one line naming standard
-    output and what was not printed, exit 1; the files are made as they would be."""
+    output and what was not printed, exit 1; the files are made as they would be. (`vtrack
+    vectors check` of differing vectors said "the differences was not printed there".)"""
     scene = make_scene("smooth", seed=3, width=160, height=120, frames=12, fps=30)
     init = ",".join(f"{v:g}" for v in scene.boxes[0])
     if command[0] in ("report", "frame", "vectors"):  # a clip to read
@@ -431,6 +434,11 @@ def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, comman
         subprocess.run([sys.executable, "-m", "vtrack", "vectors", str(clip), "--init", init,
                         "--frames", "2", "--out", str(tmp_path / "vec")], capture_output=True,
                        timeout=120, check=True)
+        dump = tmp_path / "dump"  # the vectors with one value of the trace changed
+        shutil.copytree(tmp_path / "vec", dump)
+        trace = (dump / "trace.csv").read_text().splitlines()
+        trace[-1] = trace[-1][:-1] + ("1" if trace[-1][-1] != "1" else "2")
+        (dump / "trace.csv").write_text("\n".join(trace) + "\n")
     if command[0] == "report":  # a run to report on
         subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0", "--init",
                         init, "--no-video", "-o",
@@ -449,6 +457,10 @@ def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, comman
         assert (tmp_path / "report" / "index.html").is_file()
     if command[0] == "frame":
         assert (tmp_path / "fr.png").is_file()
+    if command[0] == "vectors" and command[1] != "check":
+        assert (tmp_path / "vec" / "trace.csv").is_file()
+        assert sorted(p.name for p in (tmp_path / "vec").glob("frame_*")) == [
+            "frame_0000", "frame_0001"]
 
 
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:

@@ -145,6 +145,6 @@ def check(vectors_dir: Path, dump_dir: Path) -> None:
         raise InputError(f"{dump_dir}: holds none of the vector files (frame_NNNN/*.hex, "
                          "trace.csv, iterations.csv)")
     if lines:
-        echo_result("\n".join(lines), "the differences")
+        echo_result("\n".join(lines), "the list of differences")
         sys.exit(1)
     echo_result(f"{compared} file(s) equal", "the comparison")
