@@ -65,3 +65,20 @@ def test_a_stage_refusing_the_first_frame_names_the_input_and_frame(tmp_path: Pa
     picture = make_scene("grey", seed=0, width=96, height=72, frames=10, fps=30.0).frame(0)
     with pytest.raises(InputError, match=r"^backproject: no pixel of the initial box"):
         Tracker(config).init(picture, (30, 20, 24, 18))
+
+
+def test_the_librarys_first_frame_refusal_is_the_stages_own_exception() -> None:
+    """The pipeline raised a new FirstFrameError in place of a stage's (``raise exc.at(index)
+    from None``): the traceback ended in the pipeline, not at the stage's line that refused,
+    and a subclass of FirstFrameError came back as the base class. The stage's own exception
+    now goes on, given the refused frame's index."""
+    import traceback
+
+    from vtrack.errors import FirstFrameError
+
+    picture = make_scene("grey", seed=0, width=96, height=72, frames=10, fps=30.0).frame(0)
+    with pytest.raises(FirstFrameError) as caught:
+        Tracker("s0").init(picture, (30, 20, 24, 18))
+    assert caught.value.frame_index == 0
+    refused_in = traceback.extract_tb(caught.value.__traceback__)[-1]
+    assert Path(refused_in.filename).parts[-2:] == ("stages", "backproject.py"), refused_in

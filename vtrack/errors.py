@@ -235,10 +235,6 @@ class FirstFrameError(InputError):
         super().__init__(message)
         self.frame_index = frame_index
 
-    def at(self, frame_index: int) -> FirstFrameError:
-        """The same refusal, of frame ``frame_index``."""
-        return FirstFrameError(str(self), frame_index)
-
 
 class OutputError(VtrackError):
     """An output location that cannot be written."""

@@ -212,7 +212,8 @@ class Pipeline:
                     stage.start(ctx)
                     self.stage_seconds[stage.name] += timer() - started
             except FirstFrameError as exc:  # a stage that cannot start: which frame it refused
-                raise exc.at(frame.index) from None
+                exc.frame_index = frame.index  # (raised as it is: its class, the stage's line)
+                raise
             if init_box is not None:
                 ctx.box = init_box  # the first frame's answer is the box we were given
             # the track's first frame, once it started there: a frame refused as the first

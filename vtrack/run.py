@@ -1114,8 +1114,8 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
             raise InputError(f"{given}: {request.input} has no frame "
                              f"{resolved.start} ({_numbering(source.info)})")
     except FirstFrameError as exc:  # a stage refused the first frame: name the input
-        named = FirstFrameError(f"{request.input}: frame {exc.frame_index}: {exc}",
-                                exc.frame_index)
+        refused = "" if exc.frame_index is None else f"frame {exc.frame_index}: "
+        named = FirstFrameError(f"{request.input}: {refused}{exc}", exc.frame_index)
         out.status, out.error, out.failure = STATUS_FAILED, str(named), named
     except PartialInputError as exc:
         if signals.draining is None:
