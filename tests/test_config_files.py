@@ -152,11 +152,19 @@ def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     ('nmae = "x"\ndescriptoin = "y"\nfoo = 1\n',
      "unknown top-level key(s) 'descriptoin', 'foo', 'nmae' (expected name, description, "
      "[[stage]]); did you mean 'description' for 'descriptoin', 'name' for 'nmae'?"),
-    ("foo = 1\n", "unknown top-level key(s) 'foo' (expected name, description, [[stage]])")])
+    ("foo = 1\n", "unknown top-level key(s) 'foo' (expected name, description, [[stage]])"),
+    ('name = "x"\nNAME = "y"\n', "unknown top-level key(s) 'NAME' (expected name, "
+     "description, [[stage]])"),
+    ("".join(f"k{i} = 1\nnam{i} = 2\n" for i in range(8)),
+     "unknown top-level key(s) 'k0', 'k1', 'k2', 'k3', 'k4' and 11 more (expected name, "
+     "description, [[stage]]); did you mean 'name' for 'nam0', 'name' for 'nam1', 'name' for "
+     "'nam2', 'name' for 'nam3', 'name' for 'nam4' and 3 more?")])
 def test_a_mistyped_top_level_key_is_offered_the_near_one(tmp_path: Path, head: str,
                                                           said: str) -> None:
     """`nmae = "s0"` in a config was refused with no suggestion, where a mistyped stage or
-    parameter gets one ("did you mean ..."); a key near none of them still gets none."""
+    parameter gets one ("did you mean ..."); a key near none of them still gets none. `NAME`
+    beside `name` was asked "did you mean 'name'?" (a key the file has), and 16 unknown keys
+    were all listed, each with its guess: the first 5 and how many more now."""
     config = tmp_path / "my4.toml"
     config.write_text(head + CHAIN_TAIL)
     for line in refusals(config, tmp_path):

@@ -22,7 +22,7 @@ import os
 import sys
 import tomllib
 from collections import Counter
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -35,6 +35,7 @@ from vtrack.errors import (
     close_names,
     cut,
     did_you_mean,
+    first_few,
     guess_text,
 )
 from vtrack.io.files import os_reason
@@ -281,16 +282,17 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     return parse_config(data, where, default_name=path.stem), text
 
 
-def _near_keys(unknown: list[str], keys: tuple[str, ...]) -> str:
+def _near_keys(unknown: list[str], keys: tuple[str, ...], present: Iterable[str]) -> str:
     """How a refusal of ``unknown`` keys ends: ``"; did you mean 'name'?"`` for one that is a
-    near miss of one of ``keys`` (:func:`~vtrack.errors.did_you_mean`); for several, each near
-    miss with its guess (``"; did you mean 'name' for 'nmae', 'stage' for 'stages'?"``); ``""``
-    when none is near."""
-    if len(unknown) == 1:
-        return did_you_mean(unknown[0], keys)
-    guesses = [f"{guess_text(close)} for {shown(key)}" for key in unknown
-               if (close := close_names(key, keys))]
-    return f"; did you mean {', '.join(guesses)}?" if guesses else ""
+    near miss of one of ``keys`` (:func:`~vtrack.errors.close_names`) not already ``present`` in
+    the file (``NAME`` beside ``name`` gets no guess); for several, each near miss with its
+    guess (``"; did you mean 'name' for 'nmae', 'stage' for 'stages'?"``), the first
+    :data:`~vtrack.errors.MOST_LISTED` and how many more; ``""`` when none is near."""
+    taken = set(present)
+    guesses = [guess_text(close) + (f" for {shown(key)}" if len(unknown) > 1 else "")
+               for key in unknown
+               if (close := [name for name in close_names(key, keys) if name not in taken])]
+    return f"; did you mean {first_few(guesses)}?" if guesses else ""
 
 
 def parse_config(data: dict[str, Any], where: str, default_name: str = "config") -> Config:
@@ -299,8 +301,8 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
     unknown = sorted(set(data) - set(keys))
     if unknown:
         raise ConfigError(
-            f"{where}: unknown top-level key(s) {', '.join(shown(k) for k in unknown)} "
-            f"(expected name, description, [[stage]]){_near_keys(unknown, keys)}"
+            f"{where}: unknown top-level key(s) {first_few([shown(k) for k in unknown])} "
+            f"(expected name, description, [[stage]]){_near_keys(unknown, keys, data)}"
         )
     raw_stages = data.get("stage")
     if not isinstance(raw_stages, list) or not raw_stages:

@@ -9,7 +9,7 @@ import shlex
 import signal
 import threading
 import unicodedata
-from collections.abc import Callable, Generator, Iterable, Iterator
+from collections.abc import Callable, Generator, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from decimal import Decimal
@@ -200,6 +200,17 @@ def escape_undecoded(text: str) -> str:
     Python names ``c\\udcff.mp4``) written as its escape, ``\\xff``: text that can be
     written, printed and drawn, and says which byte it was."""
     return _UNDECODED.sub(lambda match: f"\\x{ord(match.group()) - 0xDC00:02x}", text)
+
+
+#: A refusal names at most this many of the keys it refuses or guesses (:func:`first_few`).
+MOST_LISTED = 5
+
+
+def first_few(items: Sequence[str], most: int = MOST_LISTED) -> str:
+    """``items`` for a one-line message: joined by commas, the first ``most`` and how many more
+    (``'a', 'b', 'c', 'd', 'e' and 3 more``); all of them when there are no more."""
+    more = len(items) - most
+    return ", ".join(items[:most]) + (f" and {more} more" if more > 0 else "")
 
 
 def printable(text: str) -> str:
