@@ -796,3 +796,15 @@ def test_batch_progress_counts_frames_in_a_log(clip_factory, tmp_path: Path) -> 
     assert int(lines[-1].group(2)) == 120 and lines[-1].group(3) == "2"
     # as soon as the first run opened its input: the frames of every run to do, estimated
     assert (frames[0], int(lines[0].group(2)), lines[0].group(3)) == (0, 120, "0")
+
+
+def test_frame_step_help_says_where_its_range_is_shown() -> None:
+    """`vtrack frame --help` said --step goes "up to the largest frame side vtrack reads, the
+    range below", where click prints that range at the end of the same text ([2<=x<=16384]);
+    the particle stage's near_share help cited "6 of [0042]'s 8", a count [0042] does not
+    give."""
+    step = " ".join(vtrack("frame", "--help").stdout.split())
+    assert "the range shown at the end). Default: a round step giving ~16 lines. " \
+           "[2<=x<=16384]" in step, step
+    stages = " ".join(vtrack("stages", "particle").stdout.split())
+    assert "no count given; 0.75: 6 of S1's 8 particles" in stages, stages

@@ -29,7 +29,7 @@ from vtrack.geometry import MAX_FRAME_SIDE
                    "results).")
 @click.option("--step", type=WholeNumber(2, MAX_FRAME_SIDE), default=None, metavar="PX",
               help="Grid spacing in pixels (up to the largest frame side vtrack reads, the "
-                   "range below). Default: a round step giving ~16 lines.")
+                   "range shown at the end). Default: a round step giving ~16 lines.")
 @click.option("--no-grid", is_flag=True, help="The frame as it is, without grid and scale.")
 def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             overwrite: bool, step: int | None, no_grid: bool) -> None:

@@ -103,7 +103,8 @@ class ParticleFilter(Stage):
             float,
             0.75,
             "share of particles scattered near the last position while tracked, the rest over "
-            "the whole frame (S1 step 3, [0011]: 'more' near, 'fewer' elsewhere; 6 of [0042]'s 8)",
+            "the whole frame (S1 step 3, [0011]/[0042]: 'more' near, 'fewer' elsewhere, no "
+            "count given; 0.75: 6 of S1's 8 particles)",
             min=0.0,
             max=1.0,
         ),
