@@ -264,3 +264,30 @@ def test_readme_and_help_say_the_profile_crf_0_writes(tmp_path: Path) -> None:
                                capture_output=True, text=True, timeout=60, check=True).stdout
         assert "0 is lossless, in a profile (High 4:4:4) many players refuse" in " ".join(
             shown.split()), shown
+
+
+@pytest.mark.parametrize("pix_fmt", ["yuv444p", "yuv422p"])
+def test_readme_and_help_say_the_profile_scene_pix_fmt_writes(tmp_path: Path,
+                                                              pix_fmt: str) -> None:
+    """`vtrack scene --pix-fmt yuv444p` (yuv422p) writes H.264 in the High 4:4:4 Predictive
+    (High 4:2:2) profile, which many players refuse as they do `--crf 0`'s; README and
+    `vtrack scene --help` said only 'encoder pixel format'."""
+    import av
+
+    clip = tmp_path / "c.mp4"
+    done = subprocess.run([sys.executable, "-m", "vtrack", "scene", "smooth", str(clip),
+                           "--frames", "12", "--pix-fmt", pix_fmt], capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    with av.open(str(clip)) as container:
+        profile = container.streams.video[0].codec_context.profile
+    readme = " ".join(README.split())
+    assert ("a `vtrack scene --pix-fmt yuv444p` or `--pix-fmt yuv422p` one: the High 4:4:4 "
+            "Predictive and High 4:2:2 profiles" in readme)
+    assert profile in readme
+    shown = " ".join(subprocess.run([sys.executable, "-m", "vtrack", "scene", "--help"],
+                                    capture_output=True, text=True, timeout=60,
+                                    check=True).stdout.split())
+    assert ("yuv444p and yuv422p write profiles (High 4:4:4, High 4:2:2) many players refuse"
+            in shown), shown
+    assert " ".join(profile.split()[:2]) in shown

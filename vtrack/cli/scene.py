@@ -62,7 +62,8 @@ def _scenario_list() -> str:
 )
 @click.option(
     "--pix-fmt",
-    help="mp4: encoder pixel format [yuv420p]; raw: bgr24, rgb24, yuv420p or gray [bgr24].",
+    help="mp4: encoder pixel format [yuv420p]; yuv444p and yuv422p write profiles (High "
+         "4:4:4, High 4:2:2) many players refuse. raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
 @click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,
               help="x264 quality of mp4 output (lower is better and larger; 0 is lossless, in "
