@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import CodeType
-from typing import IO, TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Any
 
 import pytest
 
@@ -106,20 +106,41 @@ START_BOUND_S = 600
 
 
 def wait_for_stop_handlers(process: subprocess.Popen,
-                           timeout_s: float = START_BOUND_S) -> None:
+                           timeout_s: float = START_BOUND_S, ended_ok: bool = False) -> None:
     """Return once ``process`` (a ``python -m vtrack ...``) catches SIGTERM: vtrack's stop
     handlers are in place (Python itself catches only SIGINT), so its start-up is over and a
     signal sent now is vtrack's to handle, however loaded the machine (a fixed sleep was not
-    always long enough). Linux: reads ``/proc/PID/status``."""
+    always long enough). Linux: reads ``/proc/PID/status``. ``ended_ok``: return too once it
+    has ended (a refusal may hold its handlers for less than a poll's interval)."""
     deadline = time.monotonic() + timeout_s
     while True:
         with open(f"/proc/{process.pid}/status", encoding="ascii") as status:
             caught = next(line for line in status if line.startswith("SigCgt:"))
         if int(caught.split()[1], 16) >> (signal.SIGTERM - 1) & 1:
             return
+        if ended_ok and process.poll() is not None:
+            return
         assert process.poll() is None, "vtrack ended before it handled signals"
         assert time.monotonic() < deadline, "vtrack did not start within the time"
         time.sleep(0.05)
+
+
+def run_after_start(args: list[str], after_s: float = 60,
+                    **popen: Any) -> subprocess.CompletedProcess:
+    """Run ``args`` (a ``python -m vtrack ...`` that ends by itself) to its end, its output
+    captured: up to :data:`START_BOUND_S` for its start-up (:func:`wait_for_stop_handlers`),
+    then up to ``after_s`` seconds (subprocess.TimeoutExpired after them, the process
+    killed): a run that waits for ever fails within a minute of its start-up, however loaded
+    the machine."""
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **popen)
+    try:
+        wait_for_stop_handlers(process, ended_ok=True)
+        stdout, stderr = process.communicate(timeout=after_s)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    return subprocess.CompletedProcess(args, process.returncode, stdout, stderr)
 
 
 @contextmanager

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import START_BOUND_S, wait_for_stop_handlers
+from conftest import START_BOUND_S, run_after_start, wait_for_stop_handlers
 
 from vtrack.io.videowriter import VideoWriter
 from vtrack.scenes import make_scene, write_clip, write_video
@@ -33,6 +33,12 @@ def _run(args: list[str], timeout: float = START_BOUND_S,
          **kwargs: object) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "vtrack", "run", *args], capture_output=True,
                           timeout=timeout, check=False, **kwargs)  # type: ignore[call-overload]
+
+
+def _run_after_start(args: list[str]) -> subprocess.CompletedProcess:
+    """:func:`_run`, bounded at a minute once vtrack's start-up is over (``run_after_start``):
+    for the runs that once waited for ever."""
+    return run_after_start([sys.executable, "-m", "vtrack", "run", *args])
 
 
 def test_a_container_on_stdin_gives_the_same_csv_as_its_file(tmp_path: Path) -> None:
@@ -142,7 +148,7 @@ def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     for url in (f"tcp://127.0.0.1:{port}", f"http://127.0.0.1:{port}/x.mp4"):
-        done = _run([url, "--init", "1,1,8,8", "--out", str(tmp_path / "o")])
+        done = _run_after_start([url, "--init", "1,1,8,8", "--out", str(tmp_path / "o")])
         assert done.returncode != 0
         lines = done.stderr.decode().strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith(f"vtrack: error: {url}: cannot be opened")
@@ -152,7 +158,7 @@ def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path
     assert done.returncode != 0 and done.stderr.decode().strip() == (
         f"vtrack: error: {quiet}: cannot be opened (nothing came within 1 s; --timeout "
         "SECONDS waits longer)")
-    done = _run(["srt://127.0.0.1:9000", "--init", "1,1,8,8"])
+    done = _run_after_start(["srt://127.0.0.1:9000", "--init", "1,1,8,8"])
     assert done.returncode != 0 and b"srt:// is not in the FFmpeg" in done.stderr
 
 

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import START_BOUND_S, wait_for_stop_handlers
+from conftest import START_BOUND_S, run_after_start, wait_for_stop_handlers
 
 from vtrack.io import follow
 from vtrack.io.follow import GrowingFile
@@ -100,10 +100,10 @@ def test_stream_into_a_fifo_no_reader_opens_ends_after_timeout(tmp_path: Path) -
     clip = write_video(scene, tmp_path / "clip.mp4")
     fifo = tmp_path / "lines"
     os.mkfifo(fifo)
-    done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
-                           "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
-                           "--stream", str(fifo), "--timeout", "1", "-o", str(tmp_path / "out")],
-                          capture_output=True, timeout=START_BOUND_S, check=False)
+    done = run_after_start([sys.executable, "-m", "vtrack", "run", str(clip), "-c", "s0",
+                            "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                            "--stream", str(fifo), "--timeout", "1", "-o",
+                            str(tmp_path / "out")])
     assert done.returncode == 2, done.stderr
     assert done.stderr.decode().strip() == (f"vtrack: error: --stream {fifo}: a FIFO that no "
                                             "reader opened within 1 s (--timeout)")
@@ -162,15 +162,13 @@ def test_stdin_closed_or_a_terminal_is_one_line(tmp_path: Path, raw: bool) -> No
     what = "raw frames" if raw else "a video"
     args = [sys.executable, "-m", "vtrack", "run", "-", *(["--raw", "160x120"] if raw else []),
             "-c", "s0", "--init", "1,1,8,8", "--no-video", "-o", str(tmp_path / "out")]
-    closed = subprocess.run(args, capture_output=True, timeout=START_BOUND_S, check=False,
-                            preexec_fn=lambda: os.close(0))
+    closed = run_after_start(args, preexec_fn=lambda: os.close(0))
     assert closed.returncode == 2
     assert closed.stderr.decode().strip() == (f"vtrack: error: stdin is closed; pipe {what} "
                                               "into vtrack")
     leader, follower = pty.openpty()
     try:
-        on_terminal = subprocess.run(args, capture_output=True, timeout=START_BOUND_S, check=False,
-                                     stdin=follower)
+        on_terminal = run_after_start(args, stdin=follower)
     finally:
         os.close(leader)
         os.close(follower)
