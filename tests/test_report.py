@@ -782,6 +782,29 @@ def test_older_records_of_other_image_totals_stay_two_inputs(
     assert len(inputs["s0"]) == 2 and inputs["camshift"] < inputs["s0"], labels
 
 
+def test_an_older_record_without_a_total_joins_the_one_other_input_of_its_key(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Three runs of d2/Car/img: one recorded with image_identity, one with input.image_bytes
+    only, one with neither (the oldest vtrack's). The report said "3 runs of 3 inputs": the
+    total told the second from the first, which has none, and the third stayed apart from
+    both. A total tells runs apart only from another total: they are one input "Car", and so
+    are the two older runs alone."""
+    monkeypatch.chdir(tmp_path)
+    _two_datasets_runs(tmp_path, "jpg")
+    assert vtrack("run", "d2/Car/img", "--gt", "d2/Car/groundtruth_rect.txt", "-c", "s1",
+                  "--no-video", "--quiet", "--out", "runs/d").exit_code == 0
+    total = sum(p.stat().st_size for p in (tmp_path / "d2" / "Car" / "img").iterdir())
+    _as_older(tmp_path / "runs" / "c" / "run.json", total)
+    _as_older(tmp_path / "runs" / "d" / "run.json")
+    assert vtrack("report", "runs/b", "runs/c", "runs/d", "--out", "one").exit_code == 0
+    markdown = (tmp_path / "one" / "summary.md").read_text()
+    assert "3 runs of 1 input with 3 configurations;" in markdown, markdown
+    assert _table_labels(markdown) == {("Car", "s0"), ("Car", "camshift"), ("Car", "s1")}
+    assert vtrack("report", "runs/c", "runs/d", "--out", "older").exit_code == 0
+    markdown = (tmp_path / "older" / "summary.md").read_text()
+    assert "2 runs of 1 input with 2 configurations;" in markdown, markdown
+
+
 def test_configs_of_one_name_but_other_chains_are_told_apart_over_every_input(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """Two TOML files both named "mine": run on different inputs they were averaged as one

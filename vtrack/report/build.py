@@ -81,18 +81,27 @@ def _slugs(names: Sequence[str]) -> dict[str, str]:
 def _same_inputs(runs: list[RunResult]) -> dict[str, list[RunResult]]:
     """``runs`` by the input each read: its ``input_key``, an image sequence's also the
     fingerprint of its images (two datasets' ``Car/img`` of one frame count and size are two
-    inputs). Runs whose records have no fingerprint (an older vtrack's) are one input by key
-    and the images' total size some recorded (:attr:`~vtrack.report.runs.RunResult.image_bytes`),
-    which joins the one input of its key that has one, when there is only one such input
-    and only one without."""
+    inputs). Runs whose records have no fingerprint (an older vtrack's) are told apart by the
+    images' total size only from others that recorded one
+    (:attr:`~vtrack.report.runs.RunResult.image_bytes`): runs of one total join the one input
+    of their key that has a fingerprint when they are its only such total, and runs with
+    neither join the one other input of their key, when there is one."""
     groups = _group(runs, lambda r: f"{r.input_key} "
                                     f"{r.image_identity or f'(bytes {r.image_bytes})'}")
-    for key, same in list(groups.items()):
-        if same[0].image_identity is None:
-            of_key = [k for k, g in groups.items() if g[0].input_key == same[0].input_key]
-            known = [k for k in of_key if groups[k][0].image_identity is not None]
-            if len(known) == 1 and len(of_key) == 2:  # (the other: this one)
-                groups[known[0]] += groups.pop(key)
+    for bare in (False, True):  # (totals first: a run with neither may then have one input)
+        for key, same in list(groups.items()):
+            first = same[0]
+            if first.image_identity is not None or (first.image_bytes is None) != bare:
+                continue
+            others = [k for k, g in groups.items() if k != key
+                      and g[0].input_key == first.input_key]
+            if not bare:  # (the key's runs with neither cannot tell two totals apart)
+                totals = [k for k in others if groups[k][0].image_identity is None
+                          and groups[k][0].image_bytes is not None]
+                others = [] if totals else [k for k in others
+                                            if groups[k][0].image_identity is not None]
+            if len(others) == 1:
+                groups[others[0]] += groups.pop(key)
     return groups
 
 
