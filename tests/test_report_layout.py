@@ -227,3 +227,38 @@ def test_averages_over_inputs_alike_for_every_config_are_ranked_without_notes(
     gone = markdown.split("## gone", 1)[1].split("## ", 1)[0]
     assert "No frame evaluated" in gone and "No frame evaluated" not in markdown.split(
         "## gone", 1)[0]
+
+
+def test_an_input_with_no_frame_evaluated_is_not_counted_in_the_all_inputs_plot(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`gone` (ground truth 0,0,0,0 on every frame) beside `smooth`: the All inputs plot,
+    whose curves average `smooth` alone, was titled "mean over 2 inputs", and `gone`'s note
+    said "the All inputs averages are over the other inputs" even in a report of `gone`
+    alone. The title counts the inputs with a frame evaluated ("mean over 1 input"), and the
+    note says so of other inputs only when another input has a score."""
+    scene = make_scene("smooth", seed=0, width=W, height=H, frames=40, fps=30)
+    gone = write_video(scene, tmp_path / "gone.mp4")
+    (tmp_path / "gone.gt.txt").write_text("0,0,0,0\n" * 40)
+    smooth, gt = clip_with_gt(tmp_path, "smooth", 40)
+    for clip, truth, init in ((gone, tmp_path / "gone.gt.txt", ["--init", "30,80,20,16"]),
+                              (smooth, gt, [])):
+        done = vtrack_run(clip, tmp_path / "runs" / clip.stem, "--gt", str(truth), "-c", "s0",
+                          *init)
+        assert done.returncode == 0, done.stderr
+    titles: list[str] = []
+    drawn = plots.curves_figure
+
+    def curves_figure(title: str, *args: object, **kwargs: object) -> object:
+        titles.append(title)
+        return drawn(title, *args, **kwargs)
+
+    monkeypatch.setattr(plots, "curves_figure", curves_figure)
+    build_report([tmp_path / "runs"], tmp_path / "both")
+    assert titles == ["smooth", "All inputs (mean over 1 input)"], titles
+    markdown = (tmp_path / "both" / "summary.md").read_text()
+    assert "so no run has a score here, and the All inputs averages are over the other " \
+           "inputs." in markdown.split("## gone", 1)[1], markdown
+    build_report([tmp_path / "runs" / "gone"], tmp_path / "alone")
+    markdown = (tmp_path / "alone" / "summary.md").read_text()
+    assert "so no run has a score here." in markdown, markdown
+    assert "other inputs" not in markdown, markdown

@@ -297,13 +297,19 @@ def _group(runs: Sequence[RunResult], key: Callable[[RunResult], str]
     return groups
 
 
+def _evaluated(run: RunResult) -> bool:
+    """Whether ``run`` has scores over at least one frame (its ground truth shows the target
+    somewhere): the runs the curves and the All inputs plot average."""
+    return run.scores is not None and run.scores.frames_evaluated > 0
+
+
 def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Per config, the mean success and precision curves over its scored runs (for the runs of
     one input: each run's own curves)."""
     success: dict[str, list[np.ndarray]] = {}
     precision: dict[str, list[np.ndarray]] = {}
     for run in runs:
-        if run.scores is not None and run.scores.frames_evaluated:
+        if _evaluated(run):
             success.setdefault(run.config, []).append(run.scores.success)
             precision.setdefault(run.config, []).append(run.scores.precision)
     return ({c: np.mean(v, axis=0) for c, v in success.items()},
@@ -530,6 +536,7 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
     written: list[Path] = []
     sections = []
     once: list[str] = []  # inputs whose failure frames are not drawn: read once, live
+    evaluated = {name for name, runs in by_input.items() if any(map(_evaluated, runs))}
     for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
@@ -538,7 +545,8 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
         unscored_drawn = unscored_here[:plots.MAX_RUNS_DRAWN]
         notes = [note for note in (_drawn_note(scored, scored_drawn, True),
                                    _drawn_note(unscored_here, unscored_drawn, False),
-                                   _unevaluated_note(scored)) if note]
+                                   _unevaluated_note(scored, bool(evaluated - {name})))
+                 if note]
         figures = []
         if unscored_drawn:
             figures.append(_save(staged, plots.state_figure(name, unscored_drawn, palette),
@@ -607,14 +615,17 @@ def _named(runs: Sequence[RunResult], auc: bool = False) -> str:
     return ", ".join(names[:NAMED_LEFT_OUT]) + (f" and {more} more" if more > 0 else "")
 
 
-def _unevaluated_note(scored: Sequence[RunResult]) -> str | None:
+def _unevaluated_note(scored: Sequence[RunResult], others: bool) -> str | None:
     """The note under an input's heading when none of its ``scored`` runs has a frame to
     evaluate (its ground truth never shows the target): the dashes in its rows, said once
-    rather than beside every average it leaves alike; None otherwise."""
-    if not scored or any(r.scores is not None and r.scores.frames_evaluated for r in scored):
+    rather than beside every average it leaves alike, and, when ``others`` (another input has
+    a run with a frame evaluated), that the All inputs averages are over those; None
+    otherwise."""
+    if not scored or any(map(_evaluated, scored)):
         return None
     return ("No frame evaluated: the ground truth never has the target in view, so no run "
-            "has a score here, and the All inputs averages are over the other inputs.")
+            "has a score here" + (", and the All inputs averages are over the other inputs"
+                                  if others else "") + ".")
 
 
 def _drawn_note(runs: Sequence[RunResult], drawn: Sequence[RunResult], scored: bool
@@ -651,12 +662,12 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
     success, precision = _mean_curves(counted)
     if not success:
         return None
-    scored_inputs = {r.input for r in counted if r.scores is not None}
-    covered = {c: {r.input for r in v if r.scores is not None} for c, v in by_config.items()}
+    scored_inputs = {r.input for r in counted if _evaluated(r)}  # (those the curves average)
+    covered = {c: {r.input for r in v if _evaluated(r)} for c, v in by_config.items()}
     # (a config scored nowhere is in no average: the no-ground-truth warning names it)
     if any(inputs and inputs != scored_inputs for inputs in covered.values()):
         warnings.append("configurations were scored on different inputs: their averages "
                         "are not directly comparable")
-    return _save(staged, plots.curves_figure(
-        f"All inputs (mean over {len(scored_inputs)} inputs)", success, precision, palette),
-        plot_dir / f"curves_{ALL_INPUTS}.png")
+    title = f"All inputs (mean over {plural(len(scored_inputs), 'input')})"
+    return _save(staged, plots.curves_figure(title, success, precision, palette),
+                 plot_dir / f"curves_{ALL_INPUTS}.png")
