@@ -147,6 +147,26 @@ def test_a_record_without_a_runs_keys_is_left_out_as_no_run_record(
         f"{missing})"]
 
 
+@pytest.mark.parametrize("frames", ["null", "true", "-1", "2.5", '"60"'])
+def test_a_record_whose_frames_is_no_whole_number_is_left_out_as_no_run_record(
+        results: Path, tmp_path: Path, frames: str) -> None:
+    """`{"status": "complete", "frames": null}` (or `true`) passed as a run's record: null was
+    read as 0 frames (the report blamed the track.csv for holding 60 rows), true as 1. A
+    record's frames is a whole number of 0 or more, else it is left out as no run's record,
+    saying so."""
+    shutil.copytree(results, tmp_path / "runs")
+    record_path = tmp_path / "runs" / "s0" / "run.json"
+    record = json.loads(record_path.read_text())
+    record_path.write_text(json.dumps(record).replace(f'"frames": {record["frames"]}',
+                                                      f'"frames": {frames}', 1))
+    assert json.loads(record_path.read_text())["frames"] == json.loads(frames)
+    done = vtrack("report", str(tmp_path / "runs"), "-o", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert [line for line in done.stderr.splitlines() if "left out" in line] == [
+        f"vtrack: warning: left out: {record_path}: not a vtrack run record (its 'frames' is "
+        "not a whole number of 0 or more)"]
+
+
 def test_a_dash_for_a_measure_of_a_run_with_ground_truth_is_explained(
         multi_run: Path, tmp_path: Path) -> None:
     """Probe 52b: a multi-target run whose track boxes matched no ground-truth box showed MOTP

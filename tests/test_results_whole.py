@@ -113,8 +113,10 @@ def test_a_hand_damaged_run_json_is_left_out_and_the_other_runs_reported(
     result = vtrack("report", str(damaged), str(run_dir), "-o", str(tmp_path / "rep"), "-q")
     stderr = result.stderr.decode()
     assert result.returncode == 0 and "Traceback" not in stderr, stderr
+    why = " (its 'frames' is not a whole number of 0 or more)" if damage == {
+        "frames": 1e999} else ""
     assert stderr.strip() == (f"vtrack: warning: left out: {damaged / 'run.json'}: "
-                              "not a vtrack run record")
+                              f"not a vtrack run record{why}")
     rows = (tmp_path / "rep" / "summary.csv").read_text().splitlines()
     assert len(rows) == 2  # the whole run
 

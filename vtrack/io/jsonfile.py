@@ -57,19 +57,22 @@ def read_run_record(path: Path) -> dict[str, Any]:
     :data:`RECORD_OBJECTS` are dicts (or absent/null) and whose ``frames`` is a whole number.
     Raises InputError naming the file when it cannot be read, is larger than
     :data:`RECORD_BYTES`, or is not such a record (a file edited by hand: not JSON, nested too
-    deep, a part of the wrong type, a JSON object without the keys every record holds)."""
+    deep, a part of the wrong type, a JSON object without the keys every record holds, a
+    ``frames`` that is not a whole number of 0 or more: null, ``true``, ``-1``, ``2.5``)."""
     data = read_bounded(path, RECORD_BYTES, "run record")
     try:
         record = json.loads(data.decode("utf-8"))
     except (ValueError, RecursionError):
         record = None
-    frames = record.get("frames", 0) if isinstance(record, dict) else None
     if (not isinstance(record, dict)
-            or any(not isinstance(record.get(k), dict | None) for k in RECORD_OBJECTS)
-            or not (frames is None or (isinstance(frames, int) and frames >= 0))):
+            or any(not isinstance(record.get(k), dict | None) for k in RECORD_OBJECTS)):
         raise InputError(f"{path}: not a vtrack run record")
     missing = [key for key in RECORD_KEYS if key not in record]
     if missing:
         raise InputError(f"{path}: not a vtrack run record (it has no "
                          f"{' or '.join(repr(key) for key in missing)})")
+    frames = record["frames"]
+    if isinstance(frames, bool) or not isinstance(frames, int) or frames < 0:
+        raise InputError(f"{path}: not a vtrack run record (its 'frames' is not a whole "
+                         "number of 0 or more)")
     return record

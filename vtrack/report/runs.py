@@ -527,7 +527,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         raise ValueError(f"fps {fps!r}")
     if (record.get("request") or {}).get("gt_origin", 0) not in (0, 1):
         raise ValueError("gt_origin")
-    if record.get("status", "?") not in (*BATCH_STATUSES, "?"):
+    if record["status"] not in BATCH_STATUSES:  # (read_run_record: it has one)
         raise ValueError("status")
     _start(record)  # frame numbers (read again with the rows)
     _last_frame(record)
@@ -535,8 +535,8 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         folder=folder,
         input=_input_name(record, folder),
         config=str((record.get("config") or {}).get("name") or summary.get("config") or "?"),
-        status=str(record.get("status", "?")),
-        frames=int(record.get("frames") or 0),
+        status=str(record["status"]),
+        frames=record["frames"],
         fps=fps,
         frames_occluded=int(summary.get("frames_occluded") or 0),
         frames_lost=int(summary.get("frames_lost") or 0),
