@@ -7,6 +7,7 @@ import csv
 import errno
 import json
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -292,7 +293,8 @@ def test_a_summary_csv_link_in_a_loop_and_a_linked_run_folder_are_named(
 def test_a_folder_the_walk_cannot_read_is_named(run_dir: Path, tmp_path: Path) -> None:
     """A folder below RESULTS that cannot be listed (here: too deep, its path past the
     system's limit) was passed over without a word, the runs in it left out; it is one
-    warning now, naming it and why."""
+    warning now, naming it and why, its path cut as other overlong echoes are (it was
+    written whole, over 4000 characters)."""
     results = tmp_path / "results"
     whole = results / "whole"
     whole.mkdir(parents=True)
@@ -311,7 +313,11 @@ def test_a_folder_the_walk_cannot_read_is_named(run_dir: Path, tmp_path: Path) -
     code, stderr = report(results, tmp_path / "rep")
     assert code == 0, stderr
     (line,) = [line for line in stderr.splitlines() if "cannot read" in line]
-    assert line.startswith(f"vtrack: warning: {deep}/{'d' * 200}/"), line
+    shown = re.fullmatch(r"vtrack: warning: (.{100})\.\.\.(.{30}) \((\d+) characters\): "
+                         r"cannot read .*", line)
+    assert shown is not None, line
+    assert shown[1] == (str(deep) + f"/{'d' * 200}" * 2)[:100], line
+    assert shown[2] == "d" * 30 and int(shown[3]) >= os.pathconf(deep, "PC_PATH_MAX"), line
     assert line.endswith(f": cannot read ({os.strerror(errno.ENAMETOOLONG)}); what is in it "
                          "is not reported"), line
     assert "cannot read" in (tmp_path / "rep" / "summary.md").read_text()

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from vtrack.errors import cut
 from vtrack.io.files import os_reason
 from vtrack.io.outdir import LOCK_NAME
 
@@ -35,8 +36,8 @@ def walk(top: Path) -> Walked:
     found = Walked()
 
     def unreadable(exc: OSError) -> None:
-        found.unreadable.append(f"{exc.filename}: cannot read ({os_reason(exc)}); what is in "
-                                "it is not reported")
+        found.unreadable.append(f"{cut(str(exc.filename))}: cannot read ({os_reason(exc)}); "
+                                "what is in it is not reported")  # (a path past PATH_MAX)
 
     for folder, folders, files in os.walk(top, onerror=unreadable):
         for name in NAMES:
