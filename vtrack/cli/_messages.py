@@ -53,20 +53,19 @@ def _path_hint(word: str) -> str:
     return f"; to track it: vtrack run {shell_word(word)}"
 
 
-def no_such_command(ctx: click.Context, word: str, commands: list[str],
-                    close: list[str] | None = None) -> click.exceptions.NoSuchCommand:
+def no_such_command(ctx: click.Context, word: str,
+                    commands: list[str]) -> click.exceptions.NoSuchCommand:
     """The usage error for ``word`` given where ``ctx``'s group takes one of ``commands``:
-    "No such command 'rnu'. Did you mean 'run'?" for a near miss (case aside: ``RUN``; or the
-    ``close`` names a caller already found for a word that names no path);
+    "No such command 'rnu'. Did you mean 'run'?" for a near miss (case aside: ``RUN``);
     "No such command 'clip.mp4'; to track it: vtrack run clip.mp4" for a file, folder, URL or
     ``-`` (:func:`~vtrack.errors.names_a_path`: no guess; :func:`_path_hint` names the command
     that takes it: run, batch, report or -c), "No such command 'configs'; vtrack stages
     lists the shipped configs and their stages" for the word a new user types for those; the
     bare "No such command 'x'." otherwise."""
     message = f"No such command {word!r}"
-    if not close and names_a_path(word):
+    if names_a_path(word):
         message += _path_hint(word)
-    elif close := close or close_names(word, commands):
+    elif close := close_names(word, commands):
         message += f". Did you mean {guess_text(close)}?"
     elif word.casefold() in ("config", "configs"):
         message += "; vtrack stages lists the shipped configs and their stages"

@@ -43,13 +43,12 @@ class Seconds(click.FloatRange):
                         f"seconds ({flag} 5 {value})")
             self.fail(f"{value!r} is not a number of seconds {self.range_words()}{hint}",
                       param, ctx)
-        return super().convert(value, param, ctx)
+        return seconds
 
     def _within(self, seconds: float) -> bool:
         """Whether ``seconds`` is in the range (its open bounds excluded)."""
-        low = self.min is None or (seconds > self.min if self.min_open else seconds >= self.min)
-        high = self.max is None or (seconds < self.max if self.max_open else seconds <= self.max)
-        return low and high
+        return ((seconds > self.min if self.min_open else seconds >= self.min)
+                and (seconds < self.max if self.max_open else seconds <= self.max))
 
     def range_words(self) -> str:
         """The range as words, its open bounds said so: ``from 0.1 to 3600``, ``above 0 and

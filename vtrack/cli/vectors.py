@@ -48,8 +48,8 @@ def _refuse_a_mistyped_command(ctx: click.Context, word: str, commands: list[str
     """Refuse ``word``, given where ``vtrack vectors`` takes INPUT or a command, when it is a
     near miss of a command (``chek``, ``CHECK``) and names no file, folder or URL: read as
     INPUT it was refused for a missing ``--init``, which said nothing of the typo."""
-    if not names_a_path(word) and (close := close_names(word, commands)):
-        raise no_such_command(ctx, word, commands, close)
+    if not names_a_path(word) and close_names(word, commands):
+        raise no_such_command(ctx, word, commands)
 
 
 class _NamedAsTheGroup(click.Context):

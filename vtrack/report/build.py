@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vtrack import __version__
-from vtrack.errors import InputError, OutputError, plural
+from vtrack.errors import InputError, OutputError, first_few, plural
 from vtrack.io.files import (
     StagedFiles,
     prepare_output_dir,
@@ -611,8 +611,7 @@ def _named(runs: Sequence[RunResult], auc: bool = False) -> str:
     """The configurations of ``runs`` (with their AUC), the first :data:`NAMED_LEFT_OUT`."""
     names = [f"{r.config} {_auc(r):.3f}" if auc and math.isfinite(_auc(r)) else r.config
              for r in runs]
-    more = len(names) - NAMED_LEFT_OUT
-    return ", ".join(names[:NAMED_LEFT_OUT]) + (f" and {more} more" if more > 0 else "")
+    return first_few(names, NAMED_LEFT_OUT)
 
 
 def _unevaluated_note(scored: Sequence[RunResult], others: bool) -> str | None:

@@ -679,7 +679,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
 
 
 def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
-                problems: list[str] | None = None) -> list[Path]:
+                problems: list[str]) -> list[Path]:
     """Every folder holding a ``run.json`` at or below ``paths`` (sorted, without repeats), as
     ``walked`` (:func:`~vtrack.report.walk.walk_results`) found them.
 
@@ -695,7 +695,7 @@ def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
     tops = [path.resolve() for path in paths if path.is_dir()]
     for path in paths:
         if path.is_dir():
-            here = walked.get(path, Walked())
+            here = walked[path]
             for folder in sorted(here.holding["run.json"]):
                 found.setdefault(folder.resolve())
             links.update(dict.fromkeys(here.links))
@@ -706,11 +706,10 @@ def run_folders(paths: Sequence[Path], walked: Mapping[Path, Walked],
             raise InputError(f"{path}: no such file or folder{_link_note(path)}")
         else:
             raise InputError(f"{path}: not a results folder or run.json")
-    if problems is not None:
-        problems += list(unreadable)
-        problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
-                     "to report the runs in it)" for link in sorted(links)
-                     if not any(link.resolve().is_relative_to(top) for top in tops)]
+    problems += list(unreadable)
+    problems += [f"not followed: {link} (a symbolic link to a folder; give it as RESULTS "
+                 "to report the runs in it)" for link in sorted(links)
+                 if not any(link.resolve().is_relative_to(top) for top in tops)]
     return list(found)
 
 

@@ -109,9 +109,6 @@ class TrackIds:
         self._ctx = ctx
         self._next = ctx.first_track_id
 
-    def __iter__(self) -> TrackIds:
-        return self
-
     def __next__(self) -> int:
         if self._next > MAX_TRACK_ID:
             raise ConfigError(
