@@ -68,8 +68,10 @@ class _Group(click.Group):
         try:
             return self.main(*args, **kwargs)
         except SystemExit as exc:
-            from vtrack.io.threads import aside_running
-            if aside_running():
+            # (only a command that read an input imported the threads: --version must not
+            # import PyAV, OpenCV and NumPy to learn that nothing runs aside)
+            threads = sys.modules.get("vtrack.io.threads")
+            if threads is not None and threads.aside_running():
                 _exit_now(exc.code)
             raise
 
