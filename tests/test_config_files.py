@@ -138,6 +138,23 @@ def test_an_overlong_config_name_or_set_value_is_cut_in_its_line(args: tuple[str
     assert f"{long[:100]}...{long[-30:]} ({len(long)} characters)" in line, line
 
 
+@pytest.mark.parametrize(("text", "said"), [
+    ('nmae = "x"\n[[stage]]\nname = "hue"\n', "unknown top-level key(s) 'nmae'"),
+    ("name = \n", "not valid TOML")])
+def test_a_readable_config_at_a_long_path_is_named_cut_when_refused(
+        tmp_path: Path, text: str, said: str) -> None:
+    """A config file at a 250-character path that could be read but not taken (a key it
+    lacks, TOML it is not) was refused naming the whole path, though a file it could not read
+    was named cut (and the path is kept whole only in run.json's record)."""
+    folder = tmp_path / ("c" * 120) / ("d" * 120)
+    folder.mkdir(parents=True)
+    config = folder / "mine.toml"
+    config.write_text(text)
+    line = one_error_line(vtrack("run", "in.mp4", "-c", str(config), "--init", "1,1,9,9"))
+    long = str(config)
+    assert f"{long[:100]}...{long[-30:]} ({len(long)} characters): {said}" in line, line
+
+
 def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     """`vtrack stages ''` said ': not a stage, a shipped config or a config file (stages: ...)',
     naming nothing, where `vtrack run -c ''` says what --config takes."""

@@ -262,3 +262,13 @@ def test_an_input_with_no_frame_evaluated_is_not_counted_in_the_all_inputs_plot(
     markdown = (tmp_path / "alone" / "summary.md").read_text()
     assert "so no run has a score here." in markdown, markdown
     assert "other inputs" not in markdown, markdown
+    # the other input's only run failed part way: left out of the All inputs plot, so no
+    # average is over it (the note said there was one)
+    record = tmp_path / "runs" / "smooth" / "run.json"
+    record.write_text(record.read_text().replace('"status": "complete"', '"status": "failed"', 1))
+    titles.clear()
+    build_report([tmp_path / "runs"], tmp_path / "failed")
+    assert "All inputs (mean over 1 input)" not in titles, titles
+    markdown = (tmp_path / "failed" / "summary.md").read_text()
+    assert "so no run has a score here." in markdown, markdown
+    assert "other inputs" not in markdown, markdown

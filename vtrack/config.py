@@ -272,14 +272,19 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     except InputError as exc:
         raise ConfigError(str(exc).replace(str(path), named, 1)) from None
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{where}: not valid TOML ({exc})") from None
+        raise ConfigError(f"{named}: not valid TOML ({exc})") from None
     except RecursionError:  # tomllib reads nested arrays and tables recursively
-        raise ConfigError(f"{where}: arrays or tables nested too deeply to read (a config's "
+        raise ConfigError(f"{named}: arrays or tables nested too deeply to read (a config's "
                           "values are numbers, text and true/false)") from None
     except ValueError:  # tomllib's int() of a decimal integer longer than Python converts
-        raise ConfigError(f"{where}: an integer of more than {sys.get_int_max_str_digits()} "
+        raise ConfigError(f"{named}: an integer of more than {sys.get_int_max_str_digits()} "
                           "digits, too long to read") from None
-    return parse_config(data, where, default_name=path.stem), text
+    try:
+        return parse_config(data, where, default_name=path.stem), text
+    except ConfigError as exc:  # (its one line names a long path cut, its record keeps it whole)
+        if named == where:
+            raise
+        raise ConfigError(str(exc).replace(where, named, 1)) from None
 
 
 def _near_keys(unknown: list[str], keys: tuple[str, ...], present: Iterable[str]) -> str:

@@ -536,7 +536,9 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
     written: list[Path] = []
     sections = []
     once: list[str] = []  # inputs whose failure frames are not drawn: read once, live
-    evaluated = {name for name, runs in by_input.items() if any(map(_evaluated, runs))}
+    # (the inputs the All inputs plot averages: runs that failed part way are left out of it)
+    evaluated = {name for name, runs in by_input.items()
+                 if any(r.status != STATUS_FAILED and _evaluated(r) for r in runs)}
     for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
