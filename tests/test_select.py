@@ -540,3 +540,19 @@ def test_an_empty_file_option_names_what_it_takes(clip: Path, tmp_path: Path, co
                                   f"{takes} (see ")
     assert len(done.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_select_whose_address_line_stderr_cannot_take_ends_at_once(tmp_path: Path) -> None:
+    """`vtrack select clip.mp4 2>/dev/full`: its page's address is the only way to it, and a
+    note that stderr could not take was dropped (b3f5606), so select waited for ever for a box
+    on a page nobody was told of. It ends at once, exit 1, nothing saved."""
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full (a device that takes no byte) on this machine")
+    clip = write_video(make_scene("smooth", seed=3, width=W, height=H, frames=12, fps=30),
+                       tmp_path / "clip.mp4")
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "select", str(clip)],
+                              stderr=full, stdout=subprocess.PIPE, cwd=tmp_path,
+                              timeout=START_BOUND_S)
+    assert done.returncode == 1, done
+    assert not sidecar_path(clip).exists()

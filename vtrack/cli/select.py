@@ -39,8 +39,12 @@ def command(input_spec: str, frame: int, port: int) -> None:
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
                              f"(frames 0..{store.count - 1})")
         server = SelectionServer(input_spec, store, frame, port)
-        note("select", f"drag a box around the target at {server.url}  (Ctrl-C to cancel; "
-                       f"over SSH: ssh -L {server.port}:127.0.0.1:{server.port} HOST)")
+        try:  # the page's address is the only way to it: unsaid, select would wait for ever
+            click.echo(f"vtrack select: drag a box around the target at {server.url}  (Ctrl-C "
+                       f"to cancel; over SSH: ssh -L {server.port}:127.0.0.1:{server.port} "
+                       "HOST)", err=True)
+        except (OSError, ValueError):
+            raise SystemExit(1) from None
         if server.unreadable:
             warn(f"{server.unreadable}; the box you confirm replaces it")
         selection = server.wait()
