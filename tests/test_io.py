@@ -42,7 +42,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.files import temp_path
-from vtrack.io.threads import Prefetcher, aside_running, run_aside
+from vtrack.io.threads import Prefetcher, _Producer, aside_running, run_aside
 from vtrack.io.video import (
     DECODER_PICTURE_BUDGET,
     MIN_DECODER_THREADS,
@@ -688,6 +688,15 @@ def test_a_signal_as_run_asides_thread_is_started_still_discards_its_result() ->
     release.set()
     _wait_for_no_work_aside()
     assert discarded == ["container"]
+
+def test_a_signal_before_run_asides_thread_is_launched_leaves_nothing_running() -> None:
+    """SIGTERM handled as run_aside's thread was about to be started (before any thread ran)
+    left run_aside's marker set for good: aside_running() stayed True with no thread behind
+    it (the CLI then ended with os._exit for nothing; a library caller told to wait for it
+    waited for ever)."""
+    discarded, release = _run_aside_left(_Producer.start.__code__)
+    release.set()
+    assert discarded == [] and not aside_running()
 
 # --- image folders ----------------------------------------------------------------------------
 

@@ -332,6 +332,8 @@ def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
         while thread.is_alive():
             thread.join(STOP_POLL_S)
     except BaseException:
+        if thread.ident is None:  # a signal handled before the thread was launched: none runs
+            _ASIDE.discard(running)
         with lock:
             left = True
             done = list(outcome)
