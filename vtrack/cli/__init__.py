@@ -67,12 +67,13 @@ class _Group(click.Group):
         self.owns_process = True
         try:
             return self.main(*args, **kwargs)
-        except SystemExit as exc:
+        except BaseException as exc:  # (also a second Ctrl-C as the first one's line is said)
             # (only a command that read an input imported the threads: --version must not
             # import PyAV, OpenCV and NumPy to learn that nothing runs aside)
             threads = sys.modules.get("vtrack.io.threads")
             if threads is not None and threads.aside_running():
-                _exit_now(exc.code)
+                _exit_now(exc.code if isinstance(exc, SystemExit)
+                          else 130 if isinstance(exc, KeyboardInterrupt) else 1)
             raise
 
     def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
