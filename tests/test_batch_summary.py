@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import pytest
 from click.testing import CliRunner, Result
 
 from vtrack.batch import Job, execute
@@ -267,16 +268,20 @@ def test_rows_of_pairs_without_an_outcome_name_their_ground_truth(tmp_path: Path
                 for name in "ab"] == [(os.path.realpath(gt), error), ("", error)], rows
 
 
+@pytest.mark.parametrize(("on_disk", "cell"), [
+    (b"c\xff", "c\\xff"),
+    (b"c\\xff", "c\\\\xff")])  # (UTF-8 holding the text \xff: its backslash doubled in the cell)
 def test_an_input_whose_name_is_not_utf8_is_tracked_and_named_readably(
-        clip_factory: ClipFactory, tmp_path: Path) -> None:
+        clip_factory: ClipFactory, tmp_path: Path, on_disk: bytes, cell: str) -> None:
     """A batch over `c\\xff.mp4` (a name that is not UTF-8) crashed writing summary.csv before
     any run (UnicodeEncodeError: surrogates not allowed, a traceback, exit 1). It is tracked;
     summary.csv and the report's summary.md are UTF-8 and name it `c\\xff`; run again, the
-    batch takes its row back (one row, not run again)."""
+    batch takes its row back (one row, not run again). A UTF-8 name holding that text (a
+    backslash, then xff) was read back as the other name: a second row, a report warning."""
     inputs = tmp_path / "in"
     inputs.mkdir()
     clip = clip_factory("smooth", width=W, height=H, frames=20)
-    name = os.fsdecode(b"c\xff")
+    name = os.fsdecode(on_disk)
     shutil.copy(clip.path, inputs / f"{name}.mp4")
     shutil.copy(clip.gt, inputs / f"{name}.gt.txt")
     out = tmp_path / "results"
@@ -284,7 +289,7 @@ def test_an_input_whose_name_is_not_utf8_is_tracked_and_named_readably(
         result = vtrack("batch", str(inputs), "-c", "s0", "--no-video", "-o", str(out))
         assert result.exit_code == 0, result.output
         rows = (out / "summary.csv").read_bytes().decode("utf-8").splitlines()[1:]
-        assert [row.split(",")[:3] for row in rows] == [["c\\xff", "s0", "complete"]]
+        assert [row.split(",")[:3] for row in rows] == [[cell, "s0", "complete"]]
     assert "not run again" in result.output
     report = vtrack("report", str(out), "--out", str(tmp_path / "report"))
     assert report.exit_code == 0, report.output

@@ -17,7 +17,7 @@ from vtrack.batch.executors import Executor
 from vtrack.batch.jobs import SUMMARY_COLUMNS, Outcome, read_row
 from vtrack.batch.plan import Plan, recorded_summary
 from vtrack.errors import OutputError, passing_stop_to
-from vtrack.io.files import folder_name, read_name, write_text_atomic
+from vtrack.io.files import folder_name, name_cell, read_name, write_text_atomic
 from vtrack.io.identity import file_identity
 from vtrack.io.outdir import EARLIER_BATCH_COLUMNS
 from vtrack.run import STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED
@@ -334,7 +334,9 @@ class SummaryWriter:
                  **self._planned_ground_truth((name, config))} if row is None else row
                 for (name, config), row in self.rows.items()]
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(self.path, render(rows))
+        # (an input's name as read_name reads it back: one holding the text \xff stays itself)
+        write_text_atomic(self.path, render([{**row, "input": name_cell(row["input"])}
+                                             for row in rows]))
         with contextlib.suppress(OutputError):  # (without it, a resumed pair is read again)
             write_text_atomic(self.path.parent / SUMMARY_SOURCES, json.dumps(
                 [[*key, source["size"], source["mtime_ns"]]

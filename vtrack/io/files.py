@@ -328,8 +328,12 @@ def write_bytes_atomic(path: Path, data: bytes) -> Path:
     return path
 
 
-#: A byte of a file name that is not UTF-8 as :func:`text_bytes` writes it (``\xff``).
-_WRITTEN_UNDECODED = re.compile(r"\\x([89a-f][0-9a-f])")
+#: Backslashes a name holds right before text that reads as an escaped byte (``a\xff`` as
+#: UTF-8 text) or before such a byte: :func:`name_cell` doubles them.
+_BACKSLASHES_BEFORE_ESCAPE = re.compile(r"\\+(?=x[89a-f][0-9a-f]|[\udc80-\udcff])")
+#: An escaped byte as :func:`text_bytes` writes it (``\xff``), after the backslashes before it:
+#: an odd count is the escape's own and the name's doubled; an even count only the name's.
+_WRITTEN_ESCAPE = re.compile(r"(\\+)x([89a-f][0-9a-f])")
 
 
 def text_bytes(text: str) -> bytes:
@@ -339,10 +343,22 @@ def text_bytes(text: str) -> bytes:
     return escape_undecoded(text).encode("utf-8", "backslashreplace")
 
 
+def name_cell(name: str) -> str:
+    """``name`` for a cell that :func:`read_name` reads back once :func:`text_bytes` wrote it:
+    the backslashes it holds before ``xff`` text or a byte that is not UTF-8 doubled (a UTF-8
+    name ``a\xff.mp4`` is then not read back as ``a`` and the byte 0xff)."""
+    return _BACKSLASHES_BEFORE_ESCAPE.sub(lambda match: match.group() * 2, name)
+
+
 def read_name(text: str) -> str:
-    """A name as :func:`text_bytes` wrote it, as Python names that file (``c\xff.mp4``, the
-    escape of a byte that is not UTF-8, back to the byte's ``surrogateescape`` character)."""
-    return _WRITTEN_UNDECODED.sub(lambda match: chr(0xDC00 + int(match.group(1), 16)), text)
+    """A name as :func:`name_cell` and :func:`text_bytes` wrote it, as Python names that file
+    (``c\xff.mp4``, the escape of a byte that is not UTF-8, back to the byte's
+    ``surrogateescape`` character; ``a\\xff`` back to the text ``a\xff``)."""
+    def read(match: re.Match[str]) -> str:
+        count, code = len(match.group(1)), match.group(2)
+        return "\\" * (count // 2) + (chr(0xDC00 + int(code, 16)) if count % 2 else f"x{code}")
+
+    return _WRITTEN_ESCAPE.sub(read, text)
 
 
 def write_text_atomic(path: Path, text: str) -> Path:
