@@ -324,15 +324,11 @@ def run_aside(work: Callable[[], T], discard: Callable[[T], None]) -> T:
     thread = _Producer(aside, "vtrack-aside")
     _ASIDE.add(running)
     try:
-        try:
-            thread.start()
-        except RuntimeError:  # no thread could be started: nothing runs aside
-            _ASIDE.discard(running)
-            raise
+        thread.start()
         while thread.is_alive():
             thread.join(STOP_POLL_S)
     except BaseException:
-        if thread.ident is None:  # a signal handled before the thread was launched: none runs
+        if thread.ident is None:  # never launched (no thread could be, or a signal came first)
             _ASIDE.discard(running)
         with lock:
             left = True

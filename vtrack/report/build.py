@@ -472,14 +472,15 @@ def build_report(results: Sequence[Path], out_dir: Path,
                             "part way: "
                             "listed per input, left out of the averages and the All inputs plot")
         by_config = _group(counted, lambda r: r.config)
+        averaged = {r.input for r in counted if _evaluated(r)}  # (the All inputs plot's inputs)
         palette = plots.colours(sorted({r.config for r in runs}))
         with StagedFiles(settled) as staged, catch_warnings():  # in place together once all written
             # matplotlib's notes (a glyph the font lacks, a layout it could not fit) are about the
             # drawing, not the runs: the terminal shows vtrack's warnings only
             simplefilter("ignore", UserWarning)
-            written, sections = _write_plots(staged, plot_dir, by_input, palette, warnings,
-                                             on_input)
-            overall = _overall_plot(staged, plot_dir, by_config, palette, warnings)
+            written, sections = _write_plots(staged, plot_dir, by_input, averaged, palette,
+                                             warnings, on_input)
+            overall = _overall_plot(staged, plot_dir, by_config, averaged, palette, warnings)
             page = pages.Page(
                 title=title,
                 meta=(f"{_counts(runs, failed)}; generated "
@@ -526,19 +527,17 @@ def _save(staged: StagedFiles, figure: Figure, path: Path) -> Path:
 
 
 def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[RunResult]],
-                 palette: dict[str, str], warnings: list[str],
+                 averaged: set[str], palette: dict[str, str], warnings: list[str],
                  on_input: Callable[[int, int], None] | None = None
                  ) -> tuple[list[Path], list[pages.Section]]:
     """Stage the plots of each input in ``plot_dir`` (a thumbnail problem is appended to
     ``warnings``; ``on_input(done, inputs)`` after each input's): the plots written and a
-    section per input (its plots relative to the report folder). OutputError naming the plot
-    that cannot be written."""
+    section per input (its plots relative to the report folder; an input with no frame
+    evaluated says whether ``averaged``, the All inputs plot's inputs, holds others). OutputError
+    naming the plot that cannot be written."""
     written: list[Path] = []
     sections = []
     once: list[str] = []  # inputs whose failure frames are not drawn: read once, live
-    # (the inputs the All inputs plot averages: runs that failed part way are left out of it)
-    evaluated = {name for name, runs in by_input.items()
-                 if any(r.status != STATUS_FAILED and _evaluated(r) for r in runs)}
     for done, (name, slug) in enumerate(_slugs(list(by_input)).items(), 1):
         scored = [r for r in by_input[name] if r.scores is not None]
         unscored_here = [r for r in by_input[name] if r.scores is None and r.states]
@@ -547,7 +546,7 @@ def _write_plots(staged: StagedFiles, plot_dir: Path, by_input: dict[str, list[R
         unscored_drawn = unscored_here[:plots.MAX_RUNS_DRAWN]
         notes = [note for note in (_drawn_note(scored, scored_drawn, True),
                                    _drawn_note(unscored_here, unscored_drawn, False),
-                                   _unevaluated_note(scored, bool(evaluated - {name})))
+                                   _unevaluated_note(scored, bool(averaged - {name})))
                  if note]
         figures = []
         if unscored_drawn:
@@ -656,19 +655,19 @@ def _drawn_note(runs: Sequence[RunResult], drawn: Sequence[RunResult], scored: b
 
 
 def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list[RunResult]],
-                  palette: dict[str, str], warnings: list[str]) -> Path | None:
+                  averaged: set[str], palette: dict[str, str],
+                  warnings: list[str]) -> Path | None:
     """Stage the success and precision plots averaged over inputs (None: no config is scored);
     warn when the configs were scored on different inputs."""
     counted = [r for runs in by_config.values() for r in runs]
     success, precision = _mean_curves(counted)
     if not success:
         return None
-    scored_inputs = {r.input for r in counted if _evaluated(r)}  # (those the curves average)
     covered = {c: {r.input for r in v if _evaluated(r)} for c, v in by_config.items()}
     # (a config scored nowhere is in no average: the no-ground-truth warning names it)
-    if any(inputs and inputs != scored_inputs for inputs in covered.values()):
+    if any(inputs and inputs != averaged for inputs in covered.values()):
         warnings.append("configurations were scored on different inputs: their averages "
                         "are not directly comparable")
-    title = f"All inputs (mean over {plural(len(scored_inputs), 'input')})"
+    title = f"All inputs (mean over {plural(len(averaged), 'input')})"
     return _save(staged, plots.curves_figure(title, success, precision, palette),
                  plot_dir / f"curves_{ALL_INPUTS}.png")
