@@ -461,6 +461,27 @@ def test_a_commands_result_stdout_cannot_take_is_one_line(tmp_path: Path, comman
             "frame_0000", "frame_0001"]
 
 
+@pytest.mark.parametrize(("args", "what"), [
+    (["--version"], "the version"), (["--help"], "the help"), (["run", "--help"], "the help"),
+    (["stages", "-h"], "the help"), (["vectors", "check", "--help"], "the help"),
+    (["vectors", "clip.mp4", "--help"], "the help")])
+def test_help_or_version_stdout_cannot_take_is_one_line(args: list[str], what: str) -> None:
+    """`vtrack --version > /dev/full` and `vtrack run --help > /dev/full` ended in click's
+    traceback (OSError: [Errno 28] No space left on device, from the option's callback, while
+    the arguments were parsed), exit 1. As a command's result, it is one line naming standard
+    output and what was not printed, exit 1; to a pipe they print as before."""
+    with open("/dev/full", "wb") as full:
+        done = subprocess.run([sys.executable, "-m", "vtrack", *args], stdout=full,
+                              stderr=subprocess.PIPE, timeout=START_BOUND_S, check=False)
+    assert done.returncode == 1
+    assert done.stderr.decode().splitlines() == [
+        f"vtrack: error: standard output: No space left on device: {what} was not printed there"]
+    printed = subprocess.run([sys.executable, "-m", "vtrack", *args], capture_output=True,
+                             text=True, timeout=START_BOUND_S, check=False)
+    assert printed.returncode == 0 and printed.stderr == ""
+    assert printed.stdout.startswith("vtrack, version 0." if what == "the version" else "Usage: ")
+
+
 def test_stream_into_the_folders_lock_file_is_refused(tmp_path: Path) -> None:
     """`--stream OUT/.vtrack.lock` was accepted, and the lines were deleted with the lock at the
     end of the run."""

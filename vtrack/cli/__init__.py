@@ -23,7 +23,7 @@ from typing import Any
 import click
 
 from vtrack import __version__
-from vtrack.cli._messages import error_line, no_such_command
+from vtrack.cli._messages import echo_result, error_line, no_such_command
 from vtrack.errors import VtrackError
 
 
@@ -38,7 +38,12 @@ class _Group(click.Group):
         if cmd_name not in self.list_commands(ctx):
             return None
         command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
-        return command if isinstance(command, click.Command) else None
+        return _help_printed_as_a_result(command, ctx) if isinstance(command,
+                                                                     click.Command) else None
+
+    def get_help_option(self, ctx: click.Context) -> click.Option | None:
+        """As click's, printing the help as :func:`_print_help` does."""
+        return _printing_help(super().get_help_option(ctx))
 
     def resolve_command(self, ctx: click.Context,
                         args: list[str]) -> tuple[str | None, click.Command | None, list[str]]:
@@ -93,6 +98,8 @@ class _Group(click.Group):
         except click.ClickException as exc:
             click.echo(error_line(exc.format_message()), err=True)
             sys.exit(exc.exit_code)
+        except VtrackError as exc:  # (--help, --version: standard output could not take it)
+            _refuse(exc)
         except click.Abort:
             click.echo("vtrack: interrupted", err=True)
             sys.exit(130)
@@ -101,12 +108,54 @@ class _Group(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except VtrackError as exc:  # one line, whatever names it quotes (a newline in one)
-            click.echo(error_line(str(exc)), err=True)
-            sys.exit(exc.exit_code)
+        except VtrackError as exc:
+            _refuse(exc)
         except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM as errors.Interrupted
             click.echo("vtrack: interrupted", err=True)
             sys.exit(getattr(exc, "exit_code", 130))
+
+
+def _refuse(exc: VtrackError) -> None:
+    """End the command for ``exc``: its one ``vtrack: error:`` line (whatever names it quotes: a
+    newline in one) and its exit code."""
+    click.echo(error_line(str(exc)), err=True)
+    sys.exit(exc.exit_code)
+
+
+def _print_help(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``--help``'s callback: as click's, but standard output that cannot take the help (``>
+    /dev/full``) is one line saying so and exit code 1, not click's traceback
+    (:func:`~vtrack.cli._messages.echo_result`); its reader gone (``| head``), nothing."""
+    if value and not ctx.resilient_parsing:
+        echo_result(ctx.get_help(), "the help")
+        ctx.exit()
+
+
+def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``--version``'s callback: ``vtrack, version X`` as click's ``version_option`` says it,
+    printed as :func:`_print_help` prints the help."""
+    if value and not ctx.resilient_parsing:
+        echo_result(f"vtrack, version {__version__}", "the version")
+        ctx.exit()
+
+
+def _printing_help(option: click.Option | None) -> click.Option | None:
+    """``option``, a command's ``--help`` (None: it has none), with :func:`_print_help` as its
+    callback."""
+    if option is not None:
+        option.callback = _print_help
+    return option
+
+
+def _help_printed_as_a_result(command: click.Command, ctx: click.Context) -> click.Command:
+    """``command``, its ``--help`` and that of every command of it (``vtrack vectors check``)
+    printed by :func:`_print_help`: click's writes the help from the option's callback, while
+    the arguments are parsed, before any command runs (and so outside its handling of
+    standard output)."""
+    _printing_help(command.get_help_option(ctx))
+    for sub in getattr(command, "commands", {}).values():
+        _help_printed_as_a_result(sub, ctx)
+    return command
 
 
 def _exit_now(code: object) -> None:
@@ -119,7 +168,8 @@ def _exit_now(code: object) -> None:
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="vtrack")
+@click.option("--version", is_flag=True, expose_value=False, is_eager=True,
+              callback=_print_version, help="Show the version and exit.")
 def main() -> None:
     """Classic real-time video object tracking: run a tracker over video, image sequences or raw
     streams; batch whole folders; report overlap against ground truth."""
