@@ -6,6 +6,7 @@ import csv
 import json
 import os
 import re
+import shlex
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -325,6 +326,35 @@ def test_a_run_the_given_gt_does_not_fit_is_not_said_to_lack_ground_truth(
     assert result.stderr == (f"vtrack: warning: {run}: input {clip.path.stem} not scored: "
                              f"{short} has 30 boxes for its 40 frames; give --gt "
                              f"{clip.path.stem}=FILE with its own ground truth\n")
+
+
+def test_the_gt_suggested_for_a_run_not_scored_works_pasted(clip_factory: ClipFactory,
+                                                           tmp_path: Path) -> None:
+    """`vtrack report` of a run of `my clip (1).mp4` given a --gt that does not fit suggested
+    `--gt my clip (1)=FILE`, unquoted: pasted into a shell, that is three words and a syntax
+    error. The input is quoted as a shell word now, and the suggestion pasted (FILE the clip's
+    own ground truth) scores the run."""
+    clip = clip_factory("smooth", width=W, height=H, frames=40)
+    named = tmp_path / "my clip (1).mp4"
+    shutil.copy(clip.path, named)
+    lines = clip.gt.read_text().splitlines()
+    run = tmp_path / "run"
+    assert vtrack("run", str(named), "--init", lines[0], "-c", "s0", "--no-video", "--quiet",
+                  "--out", str(run)).exit_code == 0
+    short = tmp_path / "short.txt"
+    short.write_text("\n".join(lines[:30]) + "\n")
+    result = vtrack("report", str(run), "--gt", str(short), "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert result.stderr.endswith("; give --gt 'my clip (1)'=FILE with its own ground truth\n")
+    suggested = result.stderr.split("; give ")[1].removesuffix(" with its own ground truth\n")
+    words = shlex.split(suggested.replace("FILE", shlex.quote(str(clip.gt))))
+    scored = vtrack("report", str(run), *words, "--out", str(tmp_path / "r2"))
+    assert scored.exit_code == 0 and scored.stderr == "", scored.output
+    with (tmp_path / "r2" / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(row["input"], row["ground_truth"]) for row in rows] == [("my clip (1)",
+                                                                      str(clip.gt))]
+    assert rows[0]["auc"] != ""
 
 
 def test_a_config_without_ground_truth_is_not_said_to_be_scored_on_other_inputs(

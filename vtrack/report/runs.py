@@ -25,6 +25,7 @@ import errno
 import json
 import math
 import os
+import shlex
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -664,8 +665,11 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
             whole = result.status == "complete" and not _stopped_by_frames(record, frames)
             misfit = truth.misfit(frames, whole, start)
             if misfit:
+                # (quoted as a shell word, without shell_word's ./ before a leading -: INPUT
+                # is a name here, and --gt takes a value starting with - as it is)
                 result.note = (f"{folder}: input {result.input} not scored: {misfit}; give "
-                               f"--gt {result.input}=FILE with its own ground truth")
+                               f"--gt {shlex.quote(result.input)}=FILE with its own ground "
+                               "truth")
             else:
                 result.ground_truth = truth.path
                 result.truth = truth.boxes[start:]
