@@ -168,6 +168,11 @@ def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> 
     ("320x240", "rgb24", "libx264 does not take pixel format rgb24; it takes yuv420p"),
     ("320x240", "bgr24", "libx264 does not take pixel format bgr24"),
     ("320x240", "gbrp", "libx264 does not take pixel format gbrp"),
+    # (`--pix-fmt gray` wrote a yuv420p clip, exit 0: x264 takes grey frames, writes colour)
+    ("320x240", "gray", "libx264 does not take pixel format gray (it writes grey as yuv420p); "
+                        "it takes yuv420p"),
+    ("320x240", "gray10le", "libx264 does not take pixel format gray10le (it writes grey as "
+                            "yuv420p); it takes yuv420p"),
     ("641x479", "yuv422p", "pixel format yuv422p needs an even width, the scene is 641x479"),
     ("641x479", "nv12", "pixel format nv12 needs an even width and height, the scene is 641x479"),
     ("320x239", "nv12", "pixel format nv12 needs an even width and height"),
@@ -182,7 +187,7 @@ def test_a_pixel_format_the_encoder_cannot_write_is_one_line(
 
 
 @pytest.mark.parametrize(("size", "pix_fmt"), [("640x479", "yuv422p"), ("641x479", "yuv444p"),
-                                               ("641x479", "gray")])
+                                               ("641x479", "yuv444p10le")])
 def test_a_pixel_format_whose_chroma_is_not_halved_that_way_takes_an_odd_size(
         tmp_path: Path, size: str, pix_fmt: str) -> None:
     out = tmp_path / "a.mp4"

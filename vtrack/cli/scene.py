@@ -62,7 +62,8 @@ def _scenario_list() -> str:
 )
 @click.option(
     "--pix-fmt",
-    help="mp4: encoder pixel format [yuv420p]; yuv444p and yuv422p write profiles (High "
+    help="mp4: encoder pixel format, a colour one (H.264: yuv420p, yuv422p, yuv444p, "
+         "their 10-bit forms; no grey) [yuv420p]; yuv444p and yuv422p write profiles (High "
          "4:4:4, High 4:2:2) many players refuse. raw: bgr24, rgb24, yuv420p or gray [bgr24].",
 )
 @click.option("--crf", type=WholeNumber(0, MAX_CRF), default=23, show_default=True,

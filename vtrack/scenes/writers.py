@@ -178,9 +178,12 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
     except ValueError as exc:
         raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
     taken = [f.name for f in av.codec.Codec(codec, "w").video_formats or ()]
+    if codec == "libx264":  # it takes grey frames, but writes them as yuv420p (colour)
+        taken = [name for name in taken if len(av.VideoFormat(name).components) > 1]
     if taken and pix_fmt not in taken:
-        raise ConfigError(f"{path}: {codec} does not take pixel format {pix_fmt}; it takes "
-                          f"{', '.join(taken)}")
+        grey = " (it writes grey as yuv420p)" if len(layout.components) == 1 else ""
+        raise ConfigError(f"{path}: {codec} does not take pixel format {pix_fmt}{grey}; it "
+                          f"takes {', '.join(taken)}")
     _need_even_for(scene, layout, f"{path}: pixel format {pix_fmt}")
 
 
