@@ -56,6 +56,17 @@ def test_usage_errors_are_one_vtrack_error_line(args: tuple[str, ...], tmp_path:
     assert not list(tmp_path.iterdir())
 
 
+def test_an_overlong_unknown_command_is_shown_cut(tmp_path: Path) -> None:
+    """`vtrack xxx...` (300 characters) echoed the whole word in "No such command '...'",
+    where other messages cut an overlong name (errors.cut). It is cut now; a word up to the
+    limit is shown whole, quoted, as before."""
+    line = one_error_line(vtrack("x" * 300, cwd=tmp_path))
+    assert line == (f"vtrack: error: No such command {'x' * 100}...{'x' * 30} (300 characters). "
+                    "(see 'python -m vtrack --help')")
+    assert one_error_line(vtrack("y" * 200, cwd=tmp_path)).startswith(
+        f"vtrack: error: No such command '{'y' * 200}'. (see ")
+
+
 def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
     """`vtrack rnu clip.mp4` said "No such command 'rnu'." and nothing more (click looks for
     near names only in the commands a group holds; vtrack's loads them on demand); `vtrack
@@ -111,7 +122,8 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
             ("mine.toml", "No such command 'mine.toml'; a config: vtrack run INPUT -c "
                           "mine.toml"),
             ("-", "No such command '-'; to track it: vtrack run -"),
-            (long, f"No such command '{long}'; to track it: vtrack run {long}"),
+            (long, f"No such command {'a' * 100}...{'a' * 26}.mp4 (304 characters); to "
+                   f"track it: vtrack run {long}"),  # (the name cut; the command to paste not)
             ("rep", "No such command 'rep'; a vtrack report's folder: open rep/index.html"),
             ("rep/summary.csv", "No such command 'rep/summary.csv'; a vtrack report's table: "
                                 "open rep/index.html"),
