@@ -155,6 +155,37 @@ def test_a_readable_config_at_a_long_path_is_named_cut_when_refused(
     assert f"{long[:100]}...{long[-30:]} ({len(long)} characters): {said}" in line, line
 
 
+def test_a_config_at_a_long_path_is_named_cut_in_later_refusals(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A config at a 2000-character path was named whole in the refusals built later from
+    its source (no box given to a tracker that needs one; two batch --configs of one results
+    folder, either way round), though the refusals of the file itself cut it. Cut there too;
+    run.json's record keeps it whole."""
+    folder = tmp_path.joinpath(*["d" * 200] * 10)
+    folder.mkdir(parents=True)
+    config = folder / "s0.toml"
+    config.write_text(vtrack("stages", "s0", "--toml").stdout)
+    long = str(config)
+    named = f"{long[:100]}...{long[-30:]} ({len(long)} characters)"
+    clip = clip_factory("smooth", width=160, height=120, frames=10)
+    alone = tmp_path / "alone.mp4"  # no ground truth or initial box beside it
+    alone.write_bytes(clip.path.read_bytes())
+    inputs = tmp_path / "inputs"
+    inputs.mkdir()
+    lines = [one_error_line(vtrack(*args)) for args in (
+        ("run", str(alone), "-c", long, "--no-video", "-o", str(tmp_path / "o")),
+        ("batch", str(inputs), "-c", long, "-c", "s0", "-o", str(tmp_path / "b")),
+        ("batch", str(inputs), "-c", "s0", "-c", long, "-o", str(tmp_path / "b")))]
+    for line in lines:
+        assert long not in line and named in line and len(line) < 1000, line[:1000]
+    assert "this tracker needs an initial box" in lines[0]
+    assert "another config has the results folder of 's0'" in lines[1]
+    run = tmp_path / "run"
+    assert vtrack("run", str(clip.path), "-c", long, "--init", clip.gt.read_text().split()[0],
+                  "--no-video", "-o", str(run)).exit_code == 0
+    assert json.loads((run / "run.json").read_text())["config"]["source"] == long
+
+
 def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     """`vtrack stages ''` said ': not a stage, a shipped config or a config file (stages: ...)',
     naming nothing, where `vtrack run -c ''` says what --config takes."""

@@ -55,6 +55,7 @@ from vtrack.errors import (
     PartialInputError,
     StreamReaderGone,
     VtrackError,
+    cut,
     handling_stop_signals,
     number_text,
     plural,
@@ -906,12 +907,13 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         if source is None:
             _refuse_unreadable(request, names)
         give_gt = names.give(names.gt, "FILE")
+        config = cut(request.config.source)  # (its record keeps it whole)
         sequence = sidecar_path(request.input).parent
         targets = (numbered_groundtruth(sequence)
                    if has_sidecar(request.input) and Path(request.input).is_dir() else [])
         if targets:  # OTB's sequences of several targets: which one is the user's to say
             needs = f"the target's box in frame {start}" if start else "an initial box"
-            raise ConfigError(f"{request.config.source}: this tracker needs {needs}, and "
+            raise ConfigError(f"{config}: this tracker needs {needs}, and "
                               f"{_targets_truth(sequence, targets, names)}")
         if start:
             raise ConfigError(f"{names.start_given(request.start, request.start_s)}: this "
@@ -920,7 +922,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         if request.raw is not None or not has_sidecar(request.input):  # a run reads none
             why = ("raw frames have no sidecar file" if request.raw is not None
                    else f"{request.input} has no sidecar file to hold one")
-            raise ConfigError(f"{request.config.source}: this tracker needs an initial box: give "
+            raise ConfigError(f"{config}: this tracker needs an initial box: give "
                               f"{give_box} (or {give_gt}); {why}")
         beside = groundtruth_beside(request.input)
         if beside is None and Path(request.input).is_dir():  # SEQ/img: SEQ's ground truth
@@ -928,7 +930,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         gt_hint = (give_gt if beside is None else f"{_give_file(names, names.gt, beside)} "
                    "(its ground truth, which vtrack batch takes by itself)")
         raise ConfigError(
-            f"{request.config.source}: this tracker needs an initial box: give {gt_hint}, "
+            f"{config}: this tracker needs an initial box: give {gt_hint}, "
             f"{give_box} or write x,y,w,h into {sidecar_path(request.input)} "
             f"(vtrack select {shell_word(request.input)} picks it)"
         )

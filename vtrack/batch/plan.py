@@ -10,7 +10,7 @@ from typing import Any
 from vtrack.batch.discover import BatchInput, unscored_by_multi_target
 from vtrack.batch.jobs import Job, Outcome
 from vtrack.config import Config
-from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OutputError
+from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OutputError, cut
 from vtrack.evaluate.groundtruth import (
     MULTI_TARGET_CONFIGS,
     groundtruth_names,
@@ -135,10 +135,10 @@ def folder_clash(label: str, configs: ConfigFolders) -> tuple[str, str] | None:
     (other, config), by_case = clash
     if by_case:
         return other, (f"the results folders of '{label}' and of '{other}' "
-                       f"({config.source}) differ only in case, one folder on a "
+                       f"({cut(config.source)}) differ only in case, one folder on a "
                        "case-insensitive disk (macOS, Windows): rename one")
     return other, (f"another config has the results folder of '{label}' "
-                   f"({config.source}); results are kept per name, rename one")
+                   f"({cut(config.source)}); results are kept per name, rename one")
 
 
 def _refuse_shared_folders(configs: Mapping[str, Config]) -> None:

@@ -27,6 +27,7 @@ from vtrack.configs import DEFAULT_CONFIG
 from vtrack.errors import (
     ConfigError,
     Interrupted,
+    cut,
     handling_stop_signals,
     passing_stop_to,
     plural,
@@ -125,15 +126,15 @@ def _configs(specs: tuple[str, ...], overrides: tuple[str, ...]) -> dict[str, Co
         try:
             config = config.with_overrides(list(overrides))
         except ConfigError as exc:  # name the config: the chain alone did not say which
-            raise ConfigError(f"--config {spec}: {exc}; each --set applies to every "
+            raise ConfigError(f"--config {cut(spec)}: {exc}; each --set applies to every "
                               "--config") from None
         file = config_file(spec).resolve()  # ./mine.toml is mine.toml; s0 its shipped file
         clash = folder_clash(config.name, folders)
         if clash is not None and files[clash[0]] == file:
-            raise ConfigError(f"--config {spec}: given twice; each config runs once on every "
+            raise ConfigError(f"--config {cut(spec)}: given twice; each config runs once on every "
                               "input")
         if clash is not None:
-            raise ConfigError(f"--config {spec}: {clash[1]}")
+            raise ConfigError(f"--config {cut(spec)}: {clash[1]}")
         configs[config.name] = config
         folders.take(config.name, (config.name, config))
         files[config.name] = file
