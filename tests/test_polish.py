@@ -67,6 +67,20 @@ def test_an_overlong_unknown_command_is_shown_cut(tmp_path: Path) -> None:
         f"vtrack: error: No such command '{'y' * 200}'. (see ")
 
 
+@pytest.mark.parametrize("args", [("--follow=-1",), ("--follow", "-1"), ("--follow=-0.5",),
+                                  ("--follow", "-1e3")])
+def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,
+                                                         args: tuple[str, ...]) -> None:
+    """`vtrack run clip.mp4 --follow=-1` said "No such option '-1'" (click's parser read the
+    value, which starts with -, as the next option, --follow taking its default 5), naming
+    neither --follow nor its range; so did `--follow -1`. Refused now as `--follow 0` is."""
+    line = one_error_line(vtrack("run", "clip.mp4", *args, "--init", "1,1,9,9", cwd=tmp_path))
+    value = args[-1].removeprefix("--follow=")
+    assert line == (f"vtrack: error: Invalid value for '--follow': '{value}' is not a number of "
+                    "seconds above 0 and at most 86400 (see 'python -m vtrack run --help')")
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:
     """`vtrack rnu clip.mp4` said "No such command 'rnu'." and nothing more (click looks for
     near names only in the commands a group holds; vtrack's loads them on demand); `vtrack

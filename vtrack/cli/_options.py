@@ -60,6 +60,39 @@ class Seconds(click.FloatRange):
         return f"{low} and {high}"
 
 
+class SecondsCommand(click.Command):
+    """A command whose :class:`Seconds` options that may come without a number (``optional``:
+    ``--follow [SECONDS]``) are refused, as any value out of their range is, when given a
+    negative number (``--follow -1``) or any value starting with ``-`` (``--follow=-1``):
+    click's parser reads such a value as the next option, "No such option '-1'", not naming
+    the option it was given to."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        optional = {name: param for param in self.params
+                    if isinstance(param, click.Option) and isinstance(param.type, Seconds)
+                    and param.type.optional for name in param.opts}
+        for index, arg in enumerate(args):
+            if arg == "--":
+                break
+            name, given, value = arg.partition("=")
+            if not given:  # (a word after the flag is its value only if it is a number)
+                value = args[index + 1] if index + 1 < len(args) else ""
+                value = value if _is_number(value) else ""
+            option = optional.get(name)
+            if option is not None and value.startswith("-") and len(value) > 1:
+                option.type.convert(value, option, ctx)  # (out of range: its usage error)
+        return super().parse_args(ctx, args)
+
+
+def _is_number(word: str) -> bool:
+    """Whether ``word`` is a number as ``float()`` reads it (``-1``, ``-1e3``, ``-inf``)."""
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
+
+
 class WholeNumber(click.IntRange):
     """A whole number in click's ``IntRange`` bounds; a value that is none is refused naming
     the range, as one out of it is (click said "'abc' is not a valid integer range.")."""

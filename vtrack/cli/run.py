@@ -16,6 +16,7 @@ from vtrack.cli._options import (
     FRAME_RATE,
     FrameSpan,
     Seconds,
+    SecondsCommand,
     StartPoint,
     WholeNumber,
     gt_origin_option,
@@ -72,7 +73,7 @@ def default_out_dir(input_spec: str, config: str | None = None,
     return folder / folder_name(config) if config else folder
 
 
-@click.command("run")
+@click.command("run", cls=SecondsCommand)
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME", type=CONFIG,
               help="Tracker config: a TOML file or a shipped name (s0, camshift, s1, s2, ...). "
