@@ -284,6 +284,27 @@ def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize(("read", "text", "line", "shown"), [
+    # read as Box(10, 20, 30, 40): the 20 meant for y taken as x's neighbour, all shifted
+    (read_boxes, "1,2,3,4\n10,,20,30,40\n", 2, "'10,,20,30,40'"),
+    (read_boxes, ",10,20,30,40\n", 1, "',10,20,30,40'"),
+    (read_boxes, "1,2,3,4\n10, ,20,30\n", 2, "'10, ,20,30'"),
+    # x left out: read as x 0, y 10, w 10, h 1, consider 1, class 1, scored without a word
+    (read_mot, "1,1,,0,10,10,1,1,1\n", 1, "'1,1,,0,10,10,1,1,1'"),
+    (read_mot_detections, "1,-1,5,5,10,10,0.9\n2,-1,,5,10,10,0.9,1\n", 2,
+     "'2,-1,,5,10,10,0.9,1'"),
+])
+def test_an_empty_field_is_refused_not_closed_up(tmp_path, read, text, line, shown):
+    """An empty field between commas was skipped, the numbers after it read into the columns
+    before (``10,,20,30,40`` the box 10,20,30,40): a number left out is named, as ``--init``
+    names ``10,,20,30,40``."""
+    path = write(tmp_path, text)
+    with pytest.raises(InputError) as info:
+        read(path)
+    assert str(info.value) == (f"{path} line {line}: an empty field in {shown} (a number left "
+                               "out: the numbers after it would be read into the wrong columns)")
+
+
 def test_read_boxes_unreadable_or_empty(tmp_path):
     with pytest.raises(InputError, match="missing.txt"):
         read_boxes(tmp_path / "missing.txt")

@@ -193,6 +193,20 @@ def _tokens(line: str) -> list[str]:
     return [t for t in _SEPARATORS.split(line) if t]
 
 
+#: An empty field between two commas (``10,,20,30,40``) or before the first number
+#: (``,10,20,30,40``); one after the last (``10,20,30,40,``) leaves every number where it is.
+_EMPTY_FIELD = re.compile(r"^\s*,|,\s*,")
+
+
+def _check_fields(path: str | PathLike[str], number: int, line: str) -> None:
+    """InputError naming ``path`` and line ``number`` when ``line`` has an empty field
+    (:data:`_EMPTY_FIELD`): a number left out, which reading the others as they come would
+    put the numbers after it in the wrong columns (``10,,20,30,40`` a box at x 10, y 20)."""
+    if _EMPTY_FIELD.search(line):
+        raise InputError(f"{path} line {number}: an empty field in {_quote(line)} (a number "
+                         "left out: the numbers after it would be read into the wrong columns)")
+
+
 #: Characters that separate numbers in files vtrack does not read (a semicolon CSV, as
 #: spreadsheets write it where the comma is the decimal mark; bars; slashes).
 _OTHER_SEPARATORS = re.compile(r"[;|/]+")
@@ -304,7 +318,8 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     ``h <= 0`` (which includes the ``0,0,0,0`` UAV123/LaSOT write for out-of-view), means the
     target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
     from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
-    4 or 8 numbers, an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
+    4 or 8 numbers, an empty field (``10,,20,30,40``: a number left out; a comma after the last
+    number is taken), an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
     line of 8 numbers only because each of its 4 space-separated fields holds a comma
     (``262,2 71,35 40,8 31,2``: decimal commas, or a polygon's points; said which to write), a
     missing, unreadable or empty file. A file whose first line is a MOTChallenge row
@@ -316,6 +331,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
         raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
     boxes: list[Box | None] = []
     for number, line in enumerate(_read_lines(path, "ground-truth"), start=1):
+        _check_fields(path, number, line)
         tokens = _tokens(line)
         try:
             values = [float(t) for t in tokens]
@@ -365,13 +381,15 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
 
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
     finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer from 1
-    to :data:`MAX_MOT_FRAME`.
+    to :data:`MAX_MOT_FRAME`; no field may be empty (``1,1,,20,30,40``: a number left out),
+    though a comma may follow the last.
     Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
     for number, line in enumerate(_read_lines(path, "MOT"), start=1):
         if not line.strip():
             continue
+        _check_fields(path, number, line)
         try:
             values = [float(t) for t in _tokens(line)]
         except ValueError:
