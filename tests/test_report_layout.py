@@ -272,3 +272,39 @@ def test_an_input_with_no_frame_evaluated_is_not_counted_in_the_all_inputs_plot(
     markdown = (tmp_path / "failed" / "summary.md").read_text()
     assert "so no run has a score here." in markdown, markdown
     assert "other inputs" not in markdown, markdown
+
+
+def test_the_all_inputs_plot_says_which_curves_are_over_fewer_inputs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """s0 run on `smooth` and `occlusion`, s2 on `smooth` alone: the All inputs plot, titled
+    "mean over 2 inputs", labelled s2's curve with its `smooth` score alone ("s2 [0.9..]"),
+    ranked beside s0's mean over both, while the table's row said "(on 1 of 2 inputs)". Its
+    legend now says so too, on both plots; s0's, over every input, says nothing more."""
+    for scenario, configs in (("smooth", ("s0", "s2")), ("occlusion", ("s0",))):
+        clip, gt = clip_with_gt(tmp_path, scenario, 60)
+        for config in configs:
+            done = vtrack_run(clip, tmp_path / "runs" / config / scenario, "--gt", str(gt),
+                              "-c", config)
+            assert done.returncode == 0, done.stderr
+    legends: dict[str, list[list[str]]] = {}
+    drawn = plots.curves_figure
+
+    def curves_figure(title: str, *args: object, **kwargs: object) -> object:
+        figure = drawn(title, *args, **kwargs)
+        legends[title] = [[t.get_text() for t in axis.get_legend().get_texts()]
+                          for axis in figure.axes]
+        return figure
+
+    monkeypatch.setattr(plots, "curves_figure", curves_figure)
+    report = build_report([tmp_path / "runs"], tmp_path / "report")
+    runs = {(r.input, r.config): r for r in report.runs}
+    s0 = next(c for i, c in runs if c.startswith("s0"))
+    s2 = next(c for i, c in runs if c.startswith("s2"))
+    mean_auc = (runs["smooth", s0].scores.auc + runs["occlusion", s0].scores.auc) / 2
+    success, precision = legends["All inputs (mean over 2 inputs)"]
+    assert sorted(success) == sorted([
+        f"{s0} [{mean_auc:.3f}]",
+        f"{s2} [{runs['smooth', s2].scores.auc:.3f}, on 1 of 2 inputs]"]), success
+    assert f"{s2} [{runs['smooth', s2].scores.precision20:.3f}, on 1 of 2 inputs]" in precision
+    # an input's own plot has no such note: each curve there is the run's own
+    assert not any("inputs" in label for label in sum(legends["smooth"], []))

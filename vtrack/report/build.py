@@ -658,7 +658,9 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
                   averaged: set[str], palette: dict[str, str],
                   warnings: list[str]) -> Path | None:
     """Stage the success and precision plots averaged over inputs (None: no config is scored);
-    warn when the configs were scored on different inputs."""
+    warn when the configs were scored on different inputs, and say beside the score of a
+    config scored on fewer inputs than the plot's on how many (``[0.948, on 1 of 2
+    inputs]``)."""
     counted = [r for runs in by_config.values() for r in runs]
     success, precision = _mean_curves(counted)
     if not success:
@@ -669,5 +671,8 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
         warnings.append("configurations were scored on different inputs: their averages "
                         "are not directly comparable")
     title = f"All inputs (mean over {plural(len(averaged), 'input')})"
-    return _save(staged, plots.curves_figure(title, success, precision, palette),
+    # a config's curves over fewer inputs say so beside their score, as its table row does
+    notes = {c: tables.on_inputs(len(inputs), len(averaged)) for c, inputs in covered.items()
+             if inputs and inputs != averaged}
+    return _save(staged, plots.curves_figure(title, success, precision, palette, notes),
                  plot_dir / f"curves_{ALL_INPUTS}.png")

@@ -156,8 +156,10 @@ def state_figure(name: str, runs: Sequence[RunResult], palette: Mapping[str, str
 
 
 def _ranked_curves(axis, thresholds: np.ndarray, curves: Mapping[str, np.ndarray],
-                   palette: Mapping[str, str], score: Callable[[np.ndarray], float]) -> None:
-    """Draw ``curves`` best ``score`` first, each labelled with its score, in its colour and
+                   palette: Mapping[str, str], score: Callable[[np.ndarray], float],
+                   notes: Mapping[str, str]) -> None:
+    """Draw ``curves`` best ``score`` first, each labelled with its score (and its ``notes``
+    entry, if any, after it: ``[0.948, on 1 of 2 inputs]``), in its colour and
     line style (:func:`curve_style`); past the best
     :data:`MAX_LEGEND` the others are thin grey lines under one legend entry that counts them
     (the legend stays within the figure however many configurations there are)."""
@@ -165,7 +167,8 @@ def _ranked_curves(axis, thresholds: np.ndarray, curves: Mapping[str, np.ndarray
     for config in ranked[:MAX_LEGEND]:
         axis.plot(thresholds, curves[config], color=palette[config], lw=1.8, zorder=3,
                   ls=curve_style(palette, config),
-                  label=f"{printable(config)} [{score(curves[config]):.3f}]")
+                  label=f"{printable(config)} [{score(curves[config]):.3f}"
+                        f"{', ' + notes[config] if config in notes else ''}]")
     others = ranked[MAX_LEGEND:]
     if others:  # one collection: drawn as fast as a line, however many
         axis.add_collection(LineCollection(
@@ -174,9 +177,12 @@ def _ranked_curves(axis, thresholds: np.ndarray, curves: Mapping[str, np.ndarray
 
 
 def curves_figure(title: str, success: Mapping[str, np.ndarray],
-                  precision: Mapping[str, np.ndarray], palette: Mapping[str, str]) -> Figure:
+                  precision: Mapping[str, np.ndarray], palette: Mapping[str, str],
+                  notes: Mapping[str, str] | None = None) -> Figure:
     """Success plot and precision plot side by side, configurations ordered best first; the
-    legends name the best :data:`MAX_LEGEND` and count the others (drawn in grey).
+    legends name the best :data:`MAX_LEGEND` and count the others (drawn in grey), each
+    score followed by the configuration's ``notes`` entry when it has one (the All inputs
+    plot's ``on 1 of 2 inputs`` for a configuration scored on fewer inputs than the others).
 
     ``success[config]`` holds the 21 success rates at :data:`OVERLAP_THRESHOLDS`, its legend the
     AUC (their mean); ``precision[config]`` the 51 rates at :data:`ERROR_THRESHOLDS`, its legend
@@ -185,8 +191,11 @@ def curves_figure(title: str, success: Mapping[str, np.ndarray],
     figure = Figure(figsize=(10, 3.8), dpi=DPI, layout="constrained")
     left, right = figure.subplots(1, 2)
     at20 = int(np.searchsorted(ERROR_THRESHOLDS, PRECISION_THRESHOLD_PX))
-    _ranked_curves(left, OVERLAP_THRESHOLDS, success, palette, lambda curve: curve.mean())
-    _ranked_curves(right, ERROR_THRESHOLDS, precision, palette, lambda curve: curve[at20])
+    notes = notes or {}
+    _ranked_curves(left, OVERLAP_THRESHOLDS, success, palette, lambda curve: curve.mean(),
+                   notes)
+    _ranked_curves(right, ERROR_THRESHOLDS, precision, palette, lambda curve: curve[at20],
+                   notes)
     right.axvline(PRECISION_THRESHOLD_PX, color="0.5", lw=0.8, ls="--")
     for axis, xlabel, name, xmax in (
         (left, "overlap threshold", "Success plot (AUC)", 1.0),

@@ -257,8 +257,13 @@ def _fewer_inputs(scored_by: Sequence[Sequence[RunResult]]) -> list[dict[int, st
         every = set().union(*have)
         for config, inputs in zip(notes, have, strict=True):
             if inputs and inputs != every:
-                config[c] = f"on {len(inputs)} of {plural(len(every), 'input')}"
+                config[c] = on_inputs(len(inputs), len(every))
     return notes
+
+
+def on_inputs(inputs: int, every: int) -> str:
+    """What a mean over ``inputs`` of ``every`` inputs says beside it: ``on 1 of 2 inputs``."""
+    return f"on {inputs} of {plural(every, 'input')}"
 
 
 def average_table(by_config: dict[str, list[RunResult]]) -> Table:
