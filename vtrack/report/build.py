@@ -317,16 +317,18 @@ def _mean_curves(runs: Sequence[RunResult]) -> tuple[dict[str, np.ndarray], dict
 
 
 def _mixed_truth_warning(name: str, runs: Sequence[RunResult]) -> str | None:
-    """A warning when the scored runs of input ``name`` were scored against different ground
-    truth (files whose bytes differ, or that cannot be read and have different paths): the
-    table ranks them side by side as if against one truth."""
+    """A warning when the scored runs of input ``name`` (its single-target runs, or its
+    multi-target runs: one table's) were scored against different ground truth (files whose
+    bytes differ, or that cannot be read and have different paths): the table ranks them side
+    by side as if against one truth."""
     def content(path: str) -> str:
         try:
             return hashlib.sha256(Path(path).read_bytes()).hexdigest()
         except OSError:
             return path
 
-    scored = [r for r in runs if r.scores is not None and r.ground_truth]
+    # (a multi-target run's metrics are its run.json's, against the file it records)
+    scored = [r for r in runs if r.ground_truth and (r.scores is not None or r.multi_target)]
     digests = {path: content(path) for path in {str(r.ground_truth) for r in scored}}
     truths = _group(scored, lambda r: digests[str(r.ground_truth)])
     if len(truths) < 2:
@@ -465,6 +467,9 @@ def build_report(results: Sequence[Path], out_dir: Path,
         warnings += [line for name, group in by_input.items()
                      for warn in (_mixed_truth_warning, _mixed_span_warning)
                      if (line := warn(name, group))]
+        multi_by_input = _group(multi, lambda r: r.input)
+        warnings += [line for name, group in multi_by_input.items()
+                     if (line := _mixed_truth_warning(name, group))]
         # a run that failed part way is listed with its frames' scores but averaged with no other
         counted = [r for r in single if r.status != STATUS_FAILED]
         if len(counted) < len(single):
@@ -489,8 +494,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
                 overall_plot=overall and overall.relative_to(out_dir).as_posix(),
                 averages=tables.average_table(by_config) if by_config else None,
                 results=tables.results_table(list(by_input.values())) if single else None,
-                mot=tables.mot_table(list(_group(multi, lambda r: r.input).values()))
-                if multi else None,
+                mot=tables.mot_table(list(multi_by_input.values())) if multi else None,
                 failed=failed,
                 sections=sections,
             )
