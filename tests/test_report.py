@@ -169,6 +169,30 @@ def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
             "--gt does not replace") in result.stderr.splitlines()
 
 
+def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A plain ``--gt FILE`` given to the report of a run that recorded its own ground truth,
+    and of a multi-target run, scored neither (the report showed the run's own file's scores)
+    without a word, exit 0: the user who meant to score against FILE read the scores of
+    another. Now a warning says no run was scored with it, and why."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    multi = clip_factory("multi", width=W, height=H, frames=60)
+    assert multi.mot is not None
+    for name, args in (("single", (str(clip.path), "--gt", str(clip.gt))),
+                       ("multi", (str(multi.path), "-c", "s3", "--gt", str(multi.mot)))):
+        assert vtrack("run", *args, "--no-video", "--quiet",
+                      "--out", str(tmp_path / "runs" / name)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    result = vtrack("report", str(tmp_path / "runs"), "--gt", str(other), "--out",
+                    str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert (f"vtrack: warning: --gt {other}: no run was scored with it: 1 run was already "
+            f"scored with its own ground truth ({clip.gt}), which --gt does not replace; 1 "
+            "multi-target run is scored only with the ground truth given to vtrack run --gt"
+            ) in result.stderr.splitlines(), result.stderr
+
+
 def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said

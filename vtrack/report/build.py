@@ -381,17 +381,35 @@ def _refuse_two_files_for_one_input(truths: Sequence[GroundTruth]) -> None:
 
 
 def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
-    """The warning for ``--gt INPUT=FILE`` that scored no run: saying, when it is so, that
-    runs of that input were already scored with the ground truth they recorded (which
-    ``--gt`` does not replace)."""
-    warning = f"--gt {truth.input}={truth.path}: no run of input {truth.input} was scored with it"
-    own = [r for r in runs if truth.belongs_to(r.input, {}) and r.ground_truth]
-    if not own:
-        return warning
-    files = ", ".join(sorted({str(r.ground_truth) for r in own}))
-    return (f"{warning}: {plural(len(own), 'run')} of it {'was' if len(own) == 1 else 'were'} "
-            f"already scored with {'its' if len(own) == 1 else 'their'} own ground truth "
-            f"({files}), which --gt does not replace")
+    """The warning for ``--gt INPUT=FILE``, or a plain ``--gt FILE``, that scored no run:
+    saying, when it is so, that runs of that input (of any input, for a plain one) were
+    already scored with the ground truth they recorded (which ``--gt`` does not replace), and
+    how many are multi-target runs (which it never scores)."""
+    if truth.input is None:
+        warning, of = f"--gt {truth.path}: no run was scored with it", ""
+    else:
+        warning = (f"--gt {truth.input}={truth.path}: no run of input {truth.input} was scored "
+                   "with it")
+        of = " of it"
+    mine = [r for r in runs if truth.belongs_to(r.input, {})]
+    own = [r for r in mine if r.ground_truth and not r.multi_target]
+    why = []
+    if own:
+        files = ", ".join(sorted({str(r.ground_truth) for r in own}))
+        why.append(f"{plural(len(own), 'run')}{of} {'was' if len(own) == 1 else 'were'} "
+                   f"already scored with {'its' if len(own) == 1 else 'their'} own ground "
+                   f"truth ({files}), which --gt does not replace")
+    if multi := sum(r.multi_target for r in mine):
+        why.append(f"{plural(multi, 'multi-target run')}{of} "
+                   f"{'is' if multi == 1 else 'are'} scored only with the ground truth given "
+                   "to vtrack run --gt")
+    return "; ".join([f"{warning}: {why[0]}", *why[1:]]) if why else warning
+
+
+def _takes_plain_gt(run: RunResult) -> bool:
+    """Whether a plain ``--gt FILE`` is for ``run``: a single-target run that recorded no
+    ground truth (one whose frames the file does not fit has a warning of its own)."""
+    return not run.multi_target and not run.ground_truth
 
 
 def build_report(results: Sequence[Path], out_dir: Path,
@@ -427,7 +445,8 @@ def build_report(results: Sequence[Path], out_dir: Path,
             if runs[-1].note:
                 warnings.append(runs[-1].note)
     for truth in truths:
-        if truth.input is not None and not any(r.ground_truth == truth.path for r in runs):
+        unused = not any(r.ground_truth == truth.path for r in runs)
+        if unused and (truth.input is not None or not any(map(_takes_plain_gt, runs))):
             warnings.append(_unused_gt_warning(truth, runs))
         scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
         if truth.input is None and len(scored) > 1:  # one file is one input's ground truth
