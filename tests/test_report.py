@@ -169,6 +169,41 @@ def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
             "--gt does not replace") in result.stderr.splitlines()
 
 
+def test_boxes_of_negative_size_are_warned_of_not_dropped_silently(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A ground-truth line `x,y,-w,h` (a converter's x2 - x1 of swapped corners) was read as
+    the target absent, as `0,0,0,0` is: its frame left out of every score (frames_evaluated
+    16 of 20 here) without a word. Still absent, now counted in a warning by
+    vtrack run (on stderr and in run.json) and vtrack report --gt; `0,0,0,0` and NaN, the
+    datasets' marks, are not."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    lines = clip.gt.read_text().splitlines()
+    x, y, w, h = lines[7].split(",")
+    lines[3], lines[5], lines[7], lines[9] = ("0,0,0,0", "NaN,NaN,NaN,NaN", f"{x},{y},-{w},{h}",
+                                              f"{x},{y},{w},-{h}")
+    damaged = tmp_path / "damaged.gt.txt"
+    damaged.write_text("\n".join(lines) + "\n")
+    note = (f"{damaged}: 2 boxes with a negative width or height (the first on line 8) read "
+            "as the target absent: their frames are not scored")
+    run = tmp_path / "run"
+    result = vtrack("run", str(clip.path), "--gt", str(damaged), "--no-video", "--quiet",
+                    "--out", str(run))
+    assert result.exit_code == 0, result.output
+    assert f"vtrack: warning: {note}" in result.stderr.splitlines(), result.stderr
+    record = json.loads((run / "run.json").read_text())
+    assert note in record["warnings"] and record["metrics"]["frames_evaluated"] == 16
+    box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
+    assert vtrack("run", str(clip.path), "--init", box, "--no-video", "--quiet", "--out",
+                  str(tmp_path / "bare")).exit_code == 0
+    result = vtrack("report", str(tmp_path / "bare"), "--gt", str(damaged), "--out",
+                    str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert f"vtrack: warning: {note}" in result.stderr.splitlines(), result.stderr
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "--quiet",
+                    "--out", str(tmp_path / "clean"))
+    assert "negative" not in result.stderr
+
+
 def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A plain ``--gt FILE`` given to the report of a run that recorded its own ground truth,

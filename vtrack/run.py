@@ -65,10 +65,11 @@ from vtrack.errors import (
 from vtrack.evaluate.groundtruth import (
     dropped_notes,
     groundtruth_beside,
+    negative_note,
     numbered_groundtruth,
     past_end_note,
-    read_boxes,
     read_mot_counting,
+    read_truth,
 )
 from vtrack.evaluate.metrics import SKIPPED, score_frame, summarize_scores
 from vtrack.frame import Frame
@@ -877,7 +878,9 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         mot_gt, distractors = truth.boxes, truth.distractors
         warnings += dropped_notes(request.gt_path, truth)
     elif request.gt_path is not None:
-        gt = read_boxes(request.gt_path, origin=request.gt_origin)
+        single = read_truth(request.gt_path, origin=request.gt_origin)
+        gt = single.boxes
+        warnings += filter(None, [negative_note(request.gt_path, single)])
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
     # says, vtrack.io.sidecar), else the first ground-truth box
     # (the sidecar holds frame 0's box: not for a run that starts later)

@@ -310,19 +310,49 @@ def _is_mot_row(values: list[float]) -> bool:
 
 
 def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
-    """Read single-target ground truth: one box per frame, ``None`` where the target is absent.
+    """Read single-target ground truth: one box per frame, ``None`` where the target is absent
+    (:func:`read_truth`'s boxes)."""
+    return read_truth(path, origin).boxes
+
+
+class SingleTruth(NamedTuple):
+    """Single-target ground truth as :func:`read_truth` reads it."""
+
+    #: One box per frame, None where the target is absent (:func:`read_boxes`).
+    boxes: list[Box | None]
+    #: The lines (1-based) whose box has a negative width or height: read as the target
+    #: absent, as ``0,0,0,0`` is, though no dataset marks it so (:func:`negative_note`).
+    negative: list[int]
+
+
+def negative_note(path: str | PathLike[str], truth: SingleTruth) -> str | None:
+    """The warning for the boxes of ``truth`` (read from ``path``) with a negative width or
+    height: how many, the line of the first, and that their frames are not scored; None when
+    there are none."""
+    if not truth.negative:
+        return None
+    count = len(truth.negative)
+    return (f"{path}: {plural(count, 'box', 'boxes')} with a negative width or height (the "
+            f"first on line {truth.negative[0]}) read as the target absent: "
+            f"{'its frame is' if count == 1 else 'their frames are'} not scored")
+
+
+def read_truth(path: str | PathLike[str], origin: int = 0) -> SingleTruth:
+    """Read single-target ground truth: one box per frame, ``None`` where the target is absent,
+    and the lines whose box has a negative width or height (:class:`SingleTruth`).
 
     Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
-    ``x1,y1,...,x4,y4``, which becomes its axis-aligned bounding box. Numbers may be separated by
-    commas, tabs or spaces, mixed freely. A line holding NaN, or whose box has ``w <= 0`` or
+    ``x1,y1,...,x4,y4``, which becomes its axis-aligned bounding box. Numbers may be separated
+    by commas, tabs or spaces, mixed freely. A line holding NaN, or whose box has ``w <= 0`` or
     ``h <= 0`` (which includes the ``0,0,0,0`` UAV123/LaSOT write for out-of-view), means the
-    target is absent in that frame. ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is subtracted
-    from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a line without
-    4 or 8 numbers, an empty field (``10,,20,30,40``: a number left out; a comma after the last
-    number is taken), an infinite number or one beyond ``MAX_COORDINATE`` is an error, as are a
-    line of 8 numbers only because each of its 4 space-separated fields holds a comma
-    (``262,2 71,35 40,8 31,2``: decimal commas, or a polygon's points; said which to write), a
-    missing, unreadable or empty file. A file whose first line is a MOTChallenge row
+    target is absent in that frame (a negative ``w`` or ``h``, which no dataset writes for it,
+    is noted in :attr:`SingleTruth.negative`). ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is
+    subtracted from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a
+    line without 4 or 8 numbers, an empty field (``10,,20,30,40``: a number left out; a comma
+    after the last number is taken), an infinite number or one beyond ``MAX_COORDINATE`` is an
+    error, as are a line of 8 numbers only because each of its 4 space-separated fields holds a
+    comma (``262,2 71,35 40,8 31,2``: decimal commas, or a polygon's points; said which to
+    write), a missing, unreadable or empty file. A file whose first line is a MOTChallenge row
     (:func:`_is_mot_row`) raises :class:`MultiTargetTruthError`; in a file of boxes, a later
     line of 8 numbers is a polygon, also one that could be read as such a row (a polygon
     touching the frame's top-left corner, ``5,2,25,2,25,12,1,12``).
@@ -330,6 +360,7 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
     if origin not in (0, 1):
         raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
     boxes: list[Box | None] = []
+    negative: list[int] = []
     for number, line in enumerate(_read_lines(path, "ground-truth"), start=1):
         _check_fields(path, number, line)
         tokens = _tokens(line)
@@ -369,11 +400,13 @@ def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
             box = Box(min(xs), min(ys), max(xs) - min(xs), max(ys) - min(ys))
         else:
             box = Box(*values)
+        if box.w < 0 or box.h < 0:
+            negative.append(number)
         if box.w <= 0 or box.h <= 0:
             boxes.append(None)
         else:
             boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
-    return boxes
+    return SingleTruth(boxes, negative)
 
 
 def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int, list[float]]]:

@@ -434,7 +434,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
     _refuse_two_files_for_one_input(truths)
     walked = walk_results(results)
-    warnings: list[str] = still_written(walked)
+    warnings: list[str] = [t.note for t in truths if t.note] + still_written(walked)
     runs: list[RunResult] = []
     for folder in run_folders(results, walked, warnings):
         try:

@@ -40,7 +40,9 @@ from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import (
     MultiTargetTruthError,
     gt_origin_of,
+    negative_note,
     read_boxes,
+    read_truth,
     target_input,
 )
 from vtrack.geometry import Box
@@ -212,13 +214,17 @@ class GroundTruth:
     boxes: list[Box | None]
     #: The input it belongs to (``--gt INPUT=FILE``); None: any run that recorded none.
     input: str | None = None
+    #: The warning of its boxes with a negative width or height, read as the target absent
+    #: (:func:`~vtrack.evaluate.groundtruth.negative_note`); None when it has none.
+    note: str | None = None
 
     @classmethod
     def read(cls, path: Path, origin: int | None = 0, input: str | None = None) -> GroundTruth:
-        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_boxes` (InputError);
+        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_truth` (InputError);
         ``origin`` None: :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
         try:
-            return cls(str(path), read_boxes(path, origin=gt_origin_of(path, origin)), input)
+            truth = read_truth(path, origin=gt_origin_of(path, origin))
+            return cls(str(path), truth.boxes, input, negative_note(path, truth))
         except MultiTargetTruthError:
             raise InputError(f"--gt {path}: MOTChallenge ground truth (many targets); the "
                              "report's --gt scores single-target runs: a multi-target run is "
