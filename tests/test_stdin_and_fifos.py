@@ -695,3 +695,32 @@ def test_a_followed_file_replaced_by_rename_ends_the_run_partial_naming_it(
            "(renamed over it, or the recording rotated)" in record["error"]
     assert "(as tail -f, not tail -F)" in record["error"]
     assert stderr.decode().count("vtrack: error:") == 1
+
+
+def test_raw_frames_from_a_file_on_stdin_read_past_its_start_are_counted_from_there(
+        tmp_path: Path) -> None:
+    """A file on stdin that an earlier reader had read 4 frames of (`{ dd ...; vtrack run -
+    --raw WxH; } < clip.bgr`) was counted from its start: run.json said 10 frames for the 6
+    tracked, and `--start 7` was refused as ``has no frame 7 (frames 0..9)`` only after
+    reading to the end. They are counted from where stdin is."""
+    scene = make_scene("smooth", seed=1, width=160, height=120, frames=10, fps=30)
+    clip = write_clip(scene, tmp_path / "clip.bgr", fmt="raw").clip
+    box = ",".join(f"{v:g}" for v in scene.boxes[4])
+    frame_bytes = 160 * 120 * 3
+    out = tmp_path / "out"
+    with clip.open("rb") as stdin:
+        stdin.seek(4 * frame_bytes)
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", "--raw", "160x120",
+                               "-c", "s0", "--init", box, "--no-video", "-o", str(out), "-q"],
+                              stdin=stdin, capture_output=True, timeout=120)
+        assert done.returncode == 0, done.stderr.decode()
+        stdin.seek(4 * frame_bytes)
+        late = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", "--raw", "160x120",
+                               "-c", "s0", "--init", box, "--start", "7", "--no-video",
+                               "-o", str(tmp_path / "late")],
+                              stdin=stdin, capture_output=True, timeout=120)
+    record = json.loads((out / "run.json").read_text())
+    assert (record["frames"], record["input"]["frame_count"]) == (6, 6)
+    assert late.returncode == 2
+    assert late.stderr.decode().strip() == ("vtrack: error: --start 7: -: has no frame 7 "
+                                            "(frames 0..5)")

@@ -196,8 +196,9 @@ class RawSource(Source):
             frame_count = None
             if stat.S_ISFIFO(mode):
                 _enlarge_pipe(fd)
-            elif stat.S_ISREG(mode):
-                frame_count = os.fstat(fd).st_size // fmt.frame_bytes
+            elif stat.S_ISREG(mode):  # stdin may be a file read from past its start
+                left = os.fstat(fd).st_size - os.lseek(fd, 0, os.SEEK_CUR)
+                frame_count = max(left, 0) // fmt.frame_bytes
             ring = self.depth + _RING_SLACK
             self._ring = [np.empty(fmt.shape, np.uint8) for _ in range(ring)]
             self._rgb = np.empty(fmt.shape, np.uint8) if fmt.pix_fmt == "rgb24" else None
