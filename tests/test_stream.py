@@ -19,7 +19,7 @@ from vtrack.errors import StreamReaderGone
 from vtrack.io.outdir import RUN_OUTPUTS
 from vtrack.io.stream import StreamWriter
 from vtrack.pipeline import FrameResult
-from vtrack.scenes import make_scene, write_raw, write_video
+from vtrack.scenes import make_scene, write_clip, write_raw, write_video
 from vtrack.stages.base import TrackState
 
 W, H = 160, 120
@@ -172,6 +172,27 @@ def test_no_output_of_a_run_is_written_over_what_it_reads(tmp_path: Path) -> Non
     assert clip.read_bytes() == original and inside.read_bytes() == original
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
+
+def test_an_image_of_the_input_sequence_is_refused_as_the_stream(tmp_path: Path) -> None:
+    """`vtrack run SEQ -y --stream SEQ/img/0004.jpg` replaced an image of the sequence being
+    read with the run's JSON lines, exit 0 (only an input file itself was refused)."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    seq = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    image = seq / "img" / "0004.jpg"
+    original = image.read_bytes()
+    for given, stream in ((seq, image), (seq / "img", seq / "img" / ".." / "img" / "0004.jpg")):
+        done = _vtrack("run", str(given), "--init", box, "--no-video", "-y",
+                       "--out", str(tmp_path / "out"), "--stream", str(stream))
+        assert (done.returncode, done.stderr) == (2, (
+            f"vtrack: error: --stream {stream}: is an image of the input of this run "
+            f"({given}); write the results elsewhere\n"))
+    assert image.read_bytes() == original and not (tmp_path / "out").exists()
+    beside = seq / "notes.jpg"  # beside img/: not one of the sequence's images
+    done = _vtrack("run", str(seq), "--init", box, "--no-video", "-q",
+                   "--out", str(tmp_path / "out"), "--stream", str(beside))
+    assert done.returncode == 0, done.stderr
+    assert len(beside.read_text().splitlines()) == 10
 
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:

@@ -86,6 +86,7 @@ from vtrack.io import (
 from vtrack.io.csvfile import box_as_written, scores_as_written
 from vtrack.io.files import is_temp_of, refuse_replacing_file
 from vtrack.io.identity import sizes
+from vtrack.io.images import is_image_of
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.source import (
@@ -774,7 +775,8 @@ class _Writers:
 def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: OptionNames
                                 ) -> None:
     """ConfigError when a file this run would write (``files`` in its folder, the ``--stream``
-    file) is the input or the ground truth it reads, or the stream is one of its own outputs
+    file) is the input or the ground truth it reads (the stream: or an image of an input
+    folder, :func:`~vtrack.io.images.is_image_of`), or the stream is one of its own outputs
     (any file of ``RUN_OUTPUTS``: the folder's clearing would remove it):
     ``--overwrite`` replaces an earlier run's results, never what this run reads. Messages
     call the folder and the stream by ``names``."""
@@ -787,6 +789,9 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
                     and os.path.samefile(output, source):
                 raise ConfigError(f"{option} {output}: is {what} of this run ({source}); "
                                   "write the results elsewhere")
+    if stream is not None and is_image_of(request.input, stream):
+        raise ConfigError(f"{names.stream} {stream}: is an image of the input of this run "
+                          f"({request.input}); write the results elsewhere")
     own = [request.out_dir / name for name in (*RUN_OUTPUTS, LOCK_NAME)]  # all it clears
     if stream is not None and any(stream.resolve() == output.resolve() for output in own):
         raise ConfigError(f"{names.stream} {stream}: is one of this run's own outputs; name "

@@ -113,6 +113,17 @@ def sequence_images(folder: Path) -> Path | None:
     return None
 
 
+def is_image_of(folder: str | os.PathLike[str], path: Path) -> bool:
+    """Whether ``path`` is (or would be) an image of the sequence ``folder`` (a folder: one in
+    its images' folder, :func:`sequence_images`, named as :func:`list_images` lists images),
+    however either is named (a symbolic link, ``..``)."""
+    root = Path(folder)
+    if not root.is_dir():
+        return False
+    where = (sequence_images(root) or root).resolve()
+    return _image_name(path.name) and path.resolve().parent == where
+
+
 def holds_images(folder: Path, count: int = 1) -> bool:
     """Whether ``folder`` (or its images' folder, :func:`sequence_images`) holds at least
     ``count`` (>= 1) images, as :func:`list_images` lists them; False when it cannot be
