@@ -194,6 +194,22 @@ def test_an_image_of_the_input_sequence_is_refused_as_the_stream(tmp_path: Path)
     assert done.returncode == 0, done.stderr
     assert len(beside.read_text().splitlines()) == 10
 
+def test_the_inputs_sidecar_box_is_refused_as_the_stream(tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 -y --stream clip.init.txt` read its first box from the sidecar
+    and then wrote its JSON lines over it, exit 0; the next run without --init failed on it
+    (``holds 10 lines of values; expected one line x,y,w,h``)."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    sidecar = tmp_path / "clip.init.txt"
+    sidecar.write_text(",".join(f"{v:g}" for v in scene.boxes[0]) + "\n")
+    original = sidecar.read_bytes()
+    done = _vtrack("run", str(clip), "--no-video", "-y", "--out", str(tmp_path / "out"),
+                   "--stream", str(sidecar))
+    assert (done.returncode, done.stderr) == (2, (
+        f"vtrack: error: --stream {sidecar}: is the sidecar box of this run ({sidecar}); "
+        "write the results elsewhere\n"))
+    assert sidecar.read_bytes() == original and not (tmp_path / "out").exists()
+
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:
     """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was
