@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from conftest import one_error_line
-from PIL import Image
+from PIL import Image, ImageOps
 
 from vtrack.batch import VIDEO_SUFFIXES
 from vtrack.cli import main
@@ -101,6 +101,33 @@ def test_a_folder_of_photos_turned_by_an_editor_and_tagged_photos_is_read_whole(
     assert [frame.shape for frame in frames] == [(64, 48, 3)] * 6
     assert all(frame[:, -10:].max() > 200 and frame[:, :10].max() < 100 for frame in frames)
 
+
+@pytest.mark.parametrize("suffix", [".jpg", ".png", ".tiff", ".webp"])
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_a_photo_is_upright_by_each_orientation_mirrored_ones_too(tmp_path, orientation, suffix):
+    """The orientations that mirror a photo (2, 4, 5, 7: a front camera's) were read as
+    FFmpeg's quarter turn alone: 2 turned 180 degrees (upside down), 4 not at all, 5 and 7
+    turned but mirrored. A photo alone and in a folder are now upright as EXIF says (as
+    Pillow's exif_transpose turns it); the others as before."""
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    pixels = np.full((48, 64, 3), 60, np.uint8)
+    pixels[:12, :12] = 250
+    pixels[:12, 20:30] = (250, 0, 0)
+    exif = Image.Exif()
+    exif[EXIF_ORIENTATION] = orientation
+    photos = [folder / f"{i + 1:04d}{suffix}" for i in range(2)]
+    for photo in photos:
+        Image.fromarray(pixels).save(photo, exif=exif.tobytes(), quality=95, lossless=True)
+    upright = np.asarray(ImageOps.exif_transpose(Image.open(photos[0])).convert("RGB"))
+    with open_source(str(photos[0])) as source:
+        frames = [next(iter(source)).bgr()]
+    if suffix != ".webp":  # no image of a sequence, read alone only
+        with open_source(str(folder)) as source:
+            frames.append(next(iter(source)).bgr())
+    for frame in frames:
+        assert frame.shape == upright.shape
+        assert np.abs(frame[..., ::-1].astype(int) - upright).mean() < 3
 
 def _song_with_cover(path: Path) -> Path:
     """An MP3 of silence whose only picture is its album art (a 32x32 attached picture)."""

@@ -39,7 +39,12 @@ from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
 from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
-from vtrack.io.signatures import declared_size_problem, jpeg_cut_short
+from vtrack.io.signatures import (
+    PHOTO_CODECS,
+    declared_size_problem,
+    jpeg_cut_short,
+    photo_mirrored,
+)
 from vtrack.io.source import InputInfo, Source
 
 JPEG_SUFFIXES = frozenset({".jpg", ".jpeg"})
@@ -172,8 +177,9 @@ def read_image(path: Path) -> np.ndarray:
 
 
 def read_stored(path: Path) -> tuple[np.ndarray, int]:
-    """Decode one image as stored (``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR)
-    and the quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
+    """Decode one image as stored (``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR;
+    flipped top to bottom when its orientation mirrors it, :func:`photo_mirrored`) and the
+    quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
 
     Raises InputError naming the file when it cannot be read (gone, or not readable), FFmpeg
     cannot decode it, or it is a JPEG cut short (which FFmpeg decodes with its missing part
@@ -194,8 +200,10 @@ def read_stored(path: Path) -> tuple[np.ndarray, int]:
                 raise InputError(f"{path}: a JPEG cut short (no end-of-image marker after its "
                                  "image data): part of the picture is missing")
             grey = picture.format.name.startswith(("gray", "ya"))
-            return (picture.to_ndarray(format="gray" if grey else "bgr24"),
-                    quarter_turns(picture.rotation))
+            pixels = picture.to_ndarray(format="gray" if grey else "bgr24")
+            if codec.name in PHOTO_CODECS and photo_mirrored(path):  # FFmpeg: the turn alone
+                pixels = cv2.flip(pixels, 0)
+            return pixels, quarter_turns(picture.rotation)
     except (av.FFmpegError, OSError, StopIteration) as exc:
         if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None

@@ -306,6 +306,82 @@ def jpeg_cut_short(path: str | os.PathLike[str]) -> bool:
     return True  # ends before its first scan
 
 
+#: Bytes at a photo's start looked at for its EXIF orientation (JPEG's APP1 segment holding it
+#: is at most 64 KiB).
+_PHOTO_HEAD = 1 << 17
+#: EXIF orientations that mirror the picture (2, 4, 5, 7); FFmpeg reads them as the turn alone.
+_MIRRORED = frozenset({2, 4, 5, 7})
+#: FFmpeg's decoders of the photos :func:`photo_mirrored` reads the orientation of.
+PHOTO_CODECS = frozenset({"mjpeg", "png", "tiff", "webp"})
+
+
+def photo_mirrored(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path``, a JPEG, PNG, TIFF or WebP photo, has an EXIF orientation that mirrors
+    its picture (2, 4, 5 or 7: a front camera's selfie). FFmpeg reads such a tag as its
+    quarter turn alone: 2 as 180 degrees, 4 as none; the picture is upright once flipped top
+    to bottom, then turned as FFmpeg says. False when it is none of them, has no such tag or
+    cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(_PHOTO_HEAD)
+    except OSError:
+        return False
+    return _exif_orientation(_exif_of(data)) in _MIRRORED
+
+
+def _exif_of(data: bytes) -> bytes:
+    """The EXIF data (from its TIFF header on) in ``data``, a photo's first bytes: a JPEG's
+    APP1 segment, a PNG's eXIf chunk, a WebP's EXIF chunk or a TIFF file itself; b"" when
+    there is none among them."""
+    if data[:4] in (b"II*\x00", b"MM\x00*"):
+        return data
+    if data.startswith(b"\xff\xd8"):
+        at = 2
+        while at + 4 <= len(data) and data[at] == 0xFF:
+            marker, length = data[at + 1], int.from_bytes(data[at + 2:at + 4], "big")
+            if marker == 0xE1 and data[at + 4:at + 10] == b"Exif\x00\x00":
+                return data[at + 10:at + 2 + length]
+            if marker == 0xDA:  # start of scan: no EXIF after it
+                break
+            at += 1 if marker == 0xFF else 2 + length
+    elif data.startswith(b"\x89PNG\r\n\x1a\n"):
+        at = 8
+        while at + 8 <= len(data) and data[at + 4:at + 8] != b"IDAT":
+            length = int.from_bytes(data[at:at + 4], "big")
+            if data[at + 4:at + 8] == b"eXIf":
+                return data[at + 8:at + 8 + length]
+            at += 12 + length
+    elif data[:4] == b"RIFF" and data[8:12] == b"WEBP":
+        at = 12
+        while at + 8 <= len(data):
+            length = int.from_bytes(data[at + 4:at + 8], "little")
+            if data[at:at + 4] == b"EXIF":
+                exif = data[at + 8:at + 8 + length]
+                return exif[6:] if exif.startswith(b"Exif\x00\x00") else exif
+            at += 8 + length + length % 2
+    return b""
+
+
+def _exif_orientation(tiff: bytes) -> int | None:
+    """The Orientation (tag 0x0112) of the first image directory of EXIF data ``tiff`` (its
+    TIFF header on); None when it has none or the data is cut short."""
+    order = {b"II": "little", b"MM": "big"}.get(tiff[:2])
+    if order is None:
+        return None
+
+    def number(at: int, size: int) -> int:
+        return int.from_bytes(tiff[at:at + size], order)  # type: ignore[arg-type]
+
+    directory = number(4, 4)
+    for entry in range(number(directory, 2) if directory + 2 <= len(tiff) else 0):
+        at = directory + 2 + 12 * entry
+        if at + 12 > len(tiff):
+            break
+        if number(at, 2) == 0x0112:
+            return number(at + 8, 2)
+    return None
+
+
 def declared_size(head: bytes) -> tuple[int, int] | None:
     """The picture size a PNG's header (IHDR) or a YUV4MPEG2 stream's header line declares
     at the start of ``head`` (a file's first 64 bytes or more), as (width, height); None for

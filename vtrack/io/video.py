@@ -44,6 +44,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import av
+import cv2
 import numpy as np
 
 from vtrack.errors import InputError, PartialInputError, plural
@@ -55,12 +56,14 @@ from vtrack.io.follow import FollowedFileChanged, GrowingFile
 from vtrack.io.planes import quarter_turns, rotate_i420, turned
 from vtrack.io.pyfile import HEAD_BYTES, CapturingStream, CountedStream
 from vtrack.io.signatures import (
+    PHOTO_CODECS,
     header_problem,
     matroska_torn_element,
     mp4_fragmented,
     mp4_head_fragmented,
     mp4_index_problem,
     mp4_torn_box,
+    photo_mirrored,
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
 from vtrack.io.specs import input_name
@@ -394,13 +397,18 @@ RAW_SUFFIXES = (".raw", ".yuv", ".rgb", ".bgr", ".gray")
 
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
-                  rotation: int | None = None) -> Frame:
+                  rotation: int | None = None, mirrored: bool = False) -> Frame:
     """A decoded picture as the :class:`Frame` every reader hands over: I420 planes as they
     are (4:2:0 of even size; converted by OpenCV only where a stage asks), else BGR from
     FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix; None:
-    the picture's own, as ``vtrack run`` turns a phone's footage)."""
+    the picture's own, as ``vtrack run`` turns a phone's footage), after a flip top to
+    bottom when ``mirrored`` (a photo's mirroring orientation, FFmpeg's turn being the rest of
+    it: :func:`~vtrack.io.signatures.photo_mirrored`)."""
     if rotation is None:
         rotation = quarter_turns(decoded.rotation)
+    if mirrored:
+        return BgrFrame(index, time_s,
+                        turned(cv2.flip(decoded.to_ndarray(format="bgr24"), 0), rotation))
     even = decoded.width % 2 == 0 and decoded.height % 2 == 0
     if even and decoded.format.name in I420_FORMATS and rotation:
         planes = rotate_i420(decoded.to_ndarray(), decoded.width, decoded.height, rotation)
@@ -634,6 +642,9 @@ class VideoSource(Source):
         self._uncounted: int | None = None
 
         self._rotation = quarter_turns(self._first.rotation)
+        # a photo whose orientation tag mirrors it (FFmpeg's rotation is the rest of it)
+        self._mirrored = stream.codec_context.name in PHOTO_CODECS and os.path.isfile(path) \
+            and photo_mirrored(path)
         width, height = self._first.width, self._first.height
         self._coded_size = (width, height)
         if self._rotation in (90, 270):
@@ -844,7 +855,7 @@ class VideoSource(Source):
                 if self._uncounted is None and self._tracked(index, time_s):
                     # places passed over before the run's frames (see _run_begins)
                     self._uncounted = self._run_begins(index) - yielded
-                yield decoded_frame(decoded, index, time_s, self._rotation)
+                yield decoded_frame(decoded, index, time_s, self._rotation, self._mirrored)
                 index += 1
                 yielded += 1
         except av.error.ExitError:  # the timeout's interrupt: a network input went quiet
