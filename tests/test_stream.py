@@ -173,6 +173,14 @@ def test_no_output_of_a_run_is_written_over_what_it_reads(tmp_path: Path) -> Non
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
+def _refused_as_stream(out: Path, stream: Path, problem: str, *args: str) -> None:
+    """`vtrack run ARGS --no-video -y --out OUT --stream STREAM` is refused, exit 2, in one
+    line: ``--stream STREAM: PROBLEM; write the results elsewhere``."""
+    done = _vtrack("run", *args, "--no-video", "-y", "--out", str(out), "--stream", str(stream))
+    assert (done.returncode, done.stderr) == (2, (
+        f"vtrack: error: --stream {stream}: {problem}; write the results elsewhere\n"))
+
+
 def test_an_image_of_the_input_sequence_is_refused_as_the_stream(tmp_path: Path) -> None:
     """`vtrack run SEQ -y --stream SEQ/img/0004.jpg` replaced an image of the sequence being
     read with the run's JSON lines, exit 0 (only an input file itself was refused)."""
@@ -182,17 +190,16 @@ def test_an_image_of_the_input_sequence_is_refused_as_the_stream(tmp_path: Path)
     image = seq / "img" / "0004.jpg"
     original = image.read_bytes()
     for given, stream in ((seq, image), (seq / "img", seq / "img" / ".." / "img" / "0004.jpg")):
-        done = _vtrack("run", str(given), "--init", box, "--no-video", "-y",
-                       "--out", str(tmp_path / "out"), "--stream", str(stream))
-        assert (done.returncode, done.stderr) == (2, (
-            f"vtrack: error: --stream {stream}: is an image of the input of this run "
-            f"({given}); write the results elsewhere\n"))
+        _refused_as_stream(tmp_path / "out", stream,
+                           f"is an image of the input of this run ({given})",
+                           str(given), "--init", box)
     assert image.read_bytes() == original and not (tmp_path / "out").exists()
     beside = seq / "notes.jpg"  # beside img/: not one of the sequence's images
     done = _vtrack("run", str(seq), "--init", box, "--no-video", "-q",
                    "--out", str(tmp_path / "out"), "--stream", str(beside))
     assert done.returncode == 0, done.stderr
     assert len(beside.read_text().splitlines()) == 10
+
 
 def test_the_inputs_sidecar_box_is_refused_as_the_stream(tmp_path: Path) -> None:
     """`vtrack run clip.mp4 -y --stream clip.init.txt` read its first box from the sidecar
@@ -203,12 +210,26 @@ def test_the_inputs_sidecar_box_is_refused_as_the_stream(tmp_path: Path) -> None
     sidecar = tmp_path / "clip.init.txt"
     sidecar.write_text(",".join(f"{v:g}" for v in scene.boxes[0]) + "\n")
     original = sidecar.read_bytes()
-    done = _vtrack("run", str(clip), "--no-video", "-y", "--out", str(tmp_path / "out"),
-                   "--stream", str(sidecar))
-    assert (done.returncode, done.stderr) == (2, (
-        f"vtrack: error: --stream {sidecar}: is the sidecar box of this run ({sidecar}); "
-        "write the results elsewhere\n"))
+    _refused_as_stream(tmp_path / "out", sidecar,
+                       f"is the sidecar box of this run ({sidecar})", str(clip))
     assert sidecar.read_bytes() == original and not (tmp_path / "out").exists()
+
+
+def test_the_sequences_seqinfo_is_refused_as_the_stream(tmp_path: Path) -> None:
+    """`vtrack run SEQ -y --stream SEQ/seqinfo.ini` read the sequence's frame rate from it,
+    then wrote its JSON lines over it, exit 0; the next run of SEQ failed on it (``not a
+    MOTChallenge seqinfo.ini``)."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    seq = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    info = seq / "seqinfo.ini"
+    original = info.read_bytes()
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    for given in (seq, seq / "img"):
+        _refused_as_stream(tmp_path / "out", info,
+                           f"is the sequence's seqinfo.ini of this run ({info})",
+                           str(given), "--init", box)
+    assert info.read_bytes() == original and not (tmp_path / "out").exists()
+
 
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:

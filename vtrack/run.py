@@ -86,7 +86,7 @@ from vtrack.io import (
 from vtrack.io.csvfile import box_as_written, scores_as_written
 from vtrack.io.files import is_temp_of, refuse_replacing_file
 from vtrack.io.identity import sizes
-from vtrack.io.images import is_image_of
+from vtrack.io.images import is_image_of, sequence_info
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
 from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.source import (
@@ -775,16 +775,18 @@ class _Writers:
 def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: OptionNames
                                 ) -> None:
     """ConfigError when a file this run would write (``files`` in its folder, the ``--stream``
-    file) is the input, its sidecar box or the ground truth it reads (the stream: or an image
-    of an input folder, :func:`~vtrack.io.images.is_image_of`), or the stream is one of its
-    own outputs (any file of ``RUN_OUTPUTS``: the folder's clearing would remove it):
-    ``--overwrite`` replaces an earlier run's results, never what this run reads. Messages
-    call the folder and the stream by ``names``."""
+    file) is the input, its sidecar box, its seqinfo.ini or the ground truth it reads (the
+    stream: or an image of an input folder, :func:`~vtrack.io.images.is_image_of`), or the
+    stream is one of its own outputs (any file of ``RUN_OUTPUTS``: the folder's clearing
+    would remove it): ``--overwrite`` replaces an earlier run's results, never what this run
+    reads. Messages call the folder and the stream by ``names``."""
     outputs = [(request.out_dir / name, names.out) for name in files]
     stream = _stream_file(request)
     reads = [(Path(request.input), "the input"), (request.gt_path, "the ground truth")]
     if has_sidecar(request.input):  # read when no --init is given, and by later runs
         reads.append((sidecar_path(request.input), "the sidecar box"))
+    if Path(request.input).is_dir():  # its frame rate, when no --fps is given
+        reads.append((sequence_info(Path(request.input)), "the sequence's seqinfo.ini"))
     for output, option in outputs + ([(stream, names.stream)] if stream else []):
         for source, what in reads:
             if source is not None and output.exists() and source.exists() \

@@ -218,12 +218,18 @@ def read_stored(path: Path) -> tuple[np.ndarray, int]:
 SEQUENCE_INFO = "seqinfo.ini"
 
 
+def sequence_info(folder: Path) -> Path:
+    """Where the :data:`SEQUENCE_INFO` of the sequence folder or its ``img1/`` (``folder``)
+    lives (the file need not exist)."""
+    return (sequence_of(folder) or folder) / SEQUENCE_INFO
+
+
 def sequence_fps(folder: Path) -> float | None:
     """The frame rate a MOTChallenge sequence's :data:`SEQUENCE_INFO` gives (its
     ``frameRate``), for the sequence folder or its ``img1/`` (``folder``); None when there is no
     such file or it gives none. InputError naming the file when it cannot be read or its
     ``frameRate`` is not a number > 0."""
-    path = (sequence_of(folder) or folder) / SEQUENCE_INFO
+    path = sequence_info(folder)
     if not path.is_file():
         return None
     parser = configparser.ConfigParser(interpolation=None)
