@@ -211,6 +211,24 @@ def test_scale_filter_recovers_a_size_change(ratio: float) -> None:
     assert found == pytest.approx(ratio, abs=0.025)
 
 
+@pytest.mark.parametrize("area", [64, 512, 2048])
+@pytest.mark.parametrize("width, height", [(4, 240), (240, 4), (10, 200), (16, 200), (60, 40),
+                                           (3, 3), (1900, 1000)])
+def test_a_scale_sample_holds_at_most_the_model_area_whatever_the_targets_shape(
+        width: int, height: int, area: int) -> None:
+    """fDSST's samples are resampled to at most ``model_area`` pixels, at least two cells a
+    side: a thin target's length is cut to fit (it took a 4 x 240 box to 8 x 172 pixels
+    at 512, and the scale filter's products past the size where NumPy's BLAS splits them
+    over threads)."""
+    scale = ScaleFilter(width, height, scales=17, step=1.02, rate=0.025, model_area=area,
+                        cell=4, interp_scales=33)
+    assert scale.model_w % 4 == 0 and scale.model_h % 4 == 0
+    assert scale.model_w >= 8 and scale.model_h >= 8
+    assert scale.model_w * scale.model_h <= area
+    samples = scale.samples(BgrFrame(0, 0.0, texture(240, 320, seed=5)), 160, 120, width, height)
+    assert samples.shape == (scale.model_w // 4 * scale.model_h // 4 * CHANNELS, 17)
+
+
 def test_patch_inside_the_frame_is_its_pixels_and_edges_are_replicated() -> None:
     image = texture(100, 120)
     frame = BgrFrame(0, 0.0, image)

@@ -54,6 +54,13 @@ class ScaleFilter:
         shrink = min(1.0, math.sqrt(model_area / (width * height)))
         self.model_w = max(int(width * shrink) // cell, 2) * cell
         self.model_h = max(int(height * shrink) // cell, 2) * cell
+        # a thin target's two cells across would take its length past the model's area: the
+        # length is cut to fit (the samples' features, and so their cost, stay bounded)
+        if self.model_w * self.model_h > model_area:
+            if self.model_w < self.model_h:
+                self.model_h = max(model_area // self.model_w // cell, 2) * cell
+            else:
+                self.model_w = max(model_area // self.model_h // cell, 2) * cell
         self.cell = cell
         self.rate = rate
         # the label over the samples' exponents, peak at index 0 (wrapped)
