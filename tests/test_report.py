@@ -415,8 +415,10 @@ def test_a_run_the_given_gt_does_not_fit_is_not_said_to_lack_ground_truth(
     result = vtrack("report", str(run), "--gt", str(short), "--out", str(tmp_path / "r"))
     assert result.exit_code == 0, result.output
     assert result.stderr == (f"vtrack: warning: {run}: input {clip.path.stem} not scored: "
-                             f"{short} has 30 boxes for its 40 frames; give --gt "
-                             f"{clip.path.stem}=FILE with its own ground truth\n")
+                             f"{short} has 30 boxes for its 40 frames; if its first box "
+                             "is of a later frame, give --gt-first 10 (its last box then the "
+                             f"last frame's); give --gt {clip.path.stem}=FILE with its own "
+                             "ground truth\n")
 
 
 def test_the_gt_suggested_for_a_run_not_scored_works_pasted(clip_factory: ClipFactory,

@@ -33,6 +33,7 @@ OTHER: dict[str, Any] = {
     "init_box": Box(1, 2, 30, 40),
     "gt_path": Path("other.gt.txt"),
     "gt_origin": 1,
+    "gt_first": 4,
     "raw": RawFormat(160, 120, "bgr24", 30.0),
     "fps": 12.5,
     "video": False,

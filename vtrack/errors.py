@@ -11,7 +11,7 @@ import threading
 import unicodedata
 from collections.abc import Callable, Generator, Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from decimal import Decimal
 from numbers import Real
 from typing import Any
@@ -95,6 +95,8 @@ class OptionNames:
     #: The start given as a time (``--start 2.5s``; ``start_s``).
     start_s: str
     gt: str
+    #: What says which frame the ground truth's first box is of (``--gt-first``; ``gt_first``).
+    gt_first: str
     stream: str
     out: str
     #: How the caller says "replace what is there".
@@ -145,17 +147,20 @@ class OptionNames:
 
 
 COMMAND_NAMES = OptionNames(init="--init", fps="--fps", start="--start", start_s="--start",
-                            gt="--gt", stream="--stream", out="--out",
+                            gt="--gt", gt_first="--gt-first", stream="--stream", out="--out",
                             overwrite="--overwrite (-y)", timeout="--timeout",
                             no_video="--no-video", video_out="--video-out", raw="--raw",
                             live="--live", follow="--follow", format="--format",
                             input_option="--input-option")
 LIBRARY_NAMES = OptionNames(init="init_box", fps="fps", start="start", start_s="start_s",
-                            gt="gt_path", stream="stream", out="out_dir",
+                            gt="gt_path", gt_first="gt_first", stream="stream", out="out_dir",
                             overwrite="overwrite=True", timeout="ffmpeg.timeout_s",
                             no_video="video=False", video_out="video_out", raw="raw=",
                             live="live", follow="ffmpeg.follow_s", format="ffmpeg.format",
                             input_option="ffmpeg.options")
+#: How a batch's messages name what its runs were given: ``vtrack run``'s options, but for
+#: what only ``vtrack run`` takes (a batch's inputs each have their own ground truth).
+BATCH_NAMES = replace(COMMAND_NAMES, gt_first="vtrack run --gt-first")
 
 
 def is_real(value: object) -> bool:

@@ -47,7 +47,10 @@ class RunRequest:
 
     ``init_box`` None takes the input's sidecar box (``NAME.init.txt``, :mod:`vtrack.io.sidecar`)
     or else the first ground-truth box (single-target configs); ``gt_origin`` 1
-    reads 1-based (MATLAB) ground-truth boxes; ``raw`` describes raw-frame input (None: a video
+    reads 1-based (MATLAB) ground-truth boxes; ``gt_first`` is the frame (0-based, as
+    ``start``) the single-target ground truth's first box belongs to (its frames before it
+    have none and are not scored; a multi-target config refuses it: MOTChallenge rows number
+    their frames); ``raw`` describes raw-frame input (None: a video
     file or image folder); ``video`` writes ``annotated.mp4`` with ``preset``/``crf``; ``seed``
     seeds the stochastic stages; ``start`` is the first frame tracked (the input's 0-based
     frame number; an MP4 or MOV file of constant frame rate is read from the key frame at or
@@ -71,6 +74,9 @@ class RunRequest:
     init_box: Box | None = None
     gt_path: Path | None = None
     gt_origin: int = 0
+    #: ``--gt-first N``: the 0-based frame of the ground truth's first box (0 to
+    #: :data:`~vtrack.params.MAX_FRAME_NUMBER`).
+    gt_first: int = 0
     raw: RawFormat | None = None
     #: Frame rate of an image folder (None: 30); refused for a video file (raw: in ``raw``).
     fps: float | None = None
@@ -172,6 +178,7 @@ class RunRequest:
             "init": None if self.init_box is None else list(self.init_box),
             "gt": None if self.gt_path is None else str(self.gt_path),
             "gt_origin": self.gt_origin,
+            "gt_first": self.gt_first,
             "raw": None if self.raw is None else asdict(self.raw),
             "fps": self.fps,
             "video": self.video,
@@ -205,6 +212,7 @@ class RunRequest:
             init_box=None if data["init"] is None else Box(*map(float, data["init"])),
             gt_path=None if data["gt"] is None else Path(data["gt"]),
             gt_origin=int(data["gt_origin"]),
+            gt_first=int(data["gt_first"]),
             raw=None if data["raw"] is None else RawFormat(**data["raw"]),
             fps=None if data.get("fps") is None else float(data["fps"]),
             video=bool(data["video"]),
@@ -288,14 +296,15 @@ class RunRequest:
 def _moot(request: dict[str, Any]) -> set[str]:
     """The fields of ``request`` (a ``run.json`` ``"request"``) that change nothing in its run:
     the video's ``--preset`` and ``--crf`` when no video is made (``--no-video``),
-    ``--gt-origin`` without ground truth, and ``--seed`` for a chain no stage of which draws
-    random numbers (none ``requires`` the run's ``rng``: all but the particle filter). Two
-    requests that both leave one moot are the same run whatever it says."""
+    ``--gt-origin`` and ``--gt-first`` without ground truth, and ``--seed`` for a chain no
+    stage of which draws random numbers (none ``requires`` the run's ``rng``: all but the
+    particle filter). Two requests that both leave one moot are the same run whatever it
+    says."""
     moot = set()
     if request.get("video") is False:
         moot |= {"preset", "crf"}
     if request.get("gt") is None:
-        moot.add("gt_origin")
+        moot |= {"gt_origin", "gt_first"}
     config = request.get("config")
     stages = config.get("stages") if isinstance(config, dict) else None
     if isinstance(stages, list) and all(isinstance(s, dict) for s in stages):
@@ -312,8 +321,9 @@ def _moot(request: dict[str, Any]) -> set[str]:
 _ABSENT = object()
 #: Fields ``run.json`` records since a later version, with what a record without one (or with
 #: null) meant: a run of an input's only target, its tracks numbered from 1 (a ``run.json``
-#: written before there was a first track id); its results still resume.
-_RECORDED_LATER: dict[str, Any] = {"target": None, "first_track_id": 1}
+#: written before there was a first track id), its ground truth's first box frame 0's; its
+#: results still resume.
+_RECORDED_LATER: dict[str, Any] = {"target": None, "first_track_id": 1, "gt_first": 0}
 
 
 def _with_recorded_later(request: dict[str, Any]) -> dict[str, Any]:
@@ -324,7 +334,7 @@ def _with_recorded_later(request: dict[str, Any]) -> dict[str, Any]:
 _SETTING_NAMES = {
     "input": "the input's path", "config": "the config (its file or a --set)",
     "init": "the first box (--init or NAME.init.txt)", "gt": "the ground truth (--gt)",
-    "gt_origin": "--gt-origin", "raw": "--raw/--pix-fmt", "fps": "--fps",
+    "gt_origin": "--gt-origin", "gt_first": "--gt-first", "raw": "--raw/--pix-fmt", "fps": "--fps",
     "video": "--no-video", "preset": "--preset", "crf": "--crf", "seed": "--seed",
     "max_frames": "--frames", "max_s": "--frames", "start": "--start", "start_s": "--start",
     "init_from": "the first box (--init or NAME.init.txt)", "stream": "--stream",
@@ -353,6 +363,7 @@ _WHOLE_NUMBERS = (
     ("max_frames", 1, MAX_FRAME_NUMBER, "how many frames to track; None: to the end"),
     ("crf", 0, MAX_CRF, "the annotated video's x264 quality"),
     ("gt_origin", 0, 1, "1: the ground truth's boxes are 1-based"),
+    ("gt_first", 0, MAX_FRAME_NUMBER, "the frame of the ground truth's first box, 0-based"),
     ("target", 0, MAX_TARGET, "the N of the target's groundtruth_rect.N.txt"),
 )
 #: The whole numbers of :data:`_WHOLE_NUMBERS` that may be None.

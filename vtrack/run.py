@@ -65,6 +65,7 @@ from vtrack.errors import (
 from vtrack.evaluate.groundtruth import (
     dropped_notes,
     groundtruth_beside,
+    later_first_hint,
     negative_note,
     numbered_groundtruth,
     past_end_note,
@@ -877,6 +878,10 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     gt = mot_gt = None
     distractors: dict[int, list[tuple[Box, bool]]] = {}
     warnings: list[str] = []
+    if request.gt_first and pipeline.multi_target:
+        raise ConfigError(f"{names.gt_first} {request.gt_first}: {request.config.name} reads "
+                          "MOTChallenge ground truth, whose rows number their frames "
+                          f"themselves; leave {names.gt_first} out")
     if request.gt_path is not None and pipeline.multi_target:
         try:
             truth = read_mot_counting(request.gt_path)
@@ -887,7 +892,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         mot_gt, distractors = truth.boxes, truth.distractors
         warnings += dropped_notes(request.gt_path, truth)
     elif request.gt_path is not None:
-        single = read_truth(request.gt_path, origin=request.gt_origin)
+        single = read_truth(request.gt_path, origin=request.gt_origin, first=request.gt_first)
         gt = single.boxes
         warnings += filter(None, [negative_note(request.gt_path, single)])
     # the first box: --init, else the input's sidecar (0-based pixels whatever --gt-origin
@@ -909,6 +914,12 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     if init_box is None and gt is not None and pipeline.needs_init_box:
         if start >= len(gt) or gt[start] is None:
             where = "first ground-truth box" if not start else f"ground-truth box of frame {start}"
+            if start < request.gt_first:  # (the file has a box: gt_first < len(gt))
+                raise InputError(
+                    f"{request.gt_path}: the {where} is missing: the file's boxes begin at frame "
+                    f"{request.gt_first} ({names.give(names.gt_first, str(request.gt_first))}); "
+                    f"give {names.give(names.start, str(request.gt_first))} to track from "
+                    f"there, or {give_box}")
             why = ("marked absent (NaN, or w or h <= 0: the target out of view)"
                    if start < len(gt) else
                    f"missing: the file has boxes for frames 0..{len(gt) - 1} only (a file "
@@ -949,6 +960,28 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
     return _Resolved(pipeline, gt, mot_gt, init_box, init_from if init_box else None, ignored,
                      request.file_identities(), start, read_from,
                      _Span(request.max_frames, request.max_s), warnings, distractors, names)
+
+
+def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: list[Box | None],
+                       span: int, stopped: bool) -> str:
+    """The warning of single-target ground truth ``gt`` (indexed by frame, its boxes from
+    frame ``request.gt_first`` on) that has fewer or more boxes than the ``span`` frames the run
+    tracked from ``resolved.start`` (``stopped`` by ``--frames``): how many, and from which
+    frame on the overlap is empty or which boxes are ignored; with fewer in a run that read
+    its input to the end, also how a file whose first box is of a later frame is aligned
+    (:func:`~vtrack.evaluate.groundtruth.later_first_hint`)."""
+    start, first = resolved.start, request.gt_first
+    covers = max(len(gt) - start, 0)  # the run's frames the file reaches
+    boxes = len(gt) - first  # the file's own
+    fewer = covers < span
+    note = (f"{request.gt_path}: ground truth has {plural(boxes, 'box', 'boxes')}"
+            f"{f' from frame {first}' if first else ''} for {plural(span, 'frame')}"
+            f"{f' from frame {start}' if start else ''} ({'fewer' if fewer else 'more'}); "
+            + (f"overlap is empty from frame {start + covers} on" if fewer
+               else "extra boxes ignored"))
+    if fewer and not stopped and start + span - boxes > first:
+        note += later_first_hint(boxes, span, start, resolved.names)
+    return note
 
 
 def _targets_truth(sequence: Path, targets: list[Path], names: OptionNames) -> str:
@@ -1351,15 +1384,8 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.overlaps)  # frames tracked, and those the input skipped among them
         if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
-            side = "fewer" if len(gt) < span else "more"
-            note = (
-                f"{request.gt_path}: ground truth has {plural(len(gt), 'box', 'boxes')} for "
-                f"{plural(span, 'frame')}{f' from frame {start}' if start else ''} "
-                f"({side}); " + ("overlap is empty from frame "
-                                 f"{start + len(gt)} on" if len(gt) < span
-                                 else "extra boxes ignored")
-            )
-            summary.warnings.append(note)
+            summary.warnings.append(_truth_length_note(request, resolved, resolved.gt, span,
+                                                      stopped))
         absent = min(len(gt), span)  # the run's frames the file has a box for
         if absent and not metrics["frames_evaluated"] and status == STATUS_COMPLETE:
             summary.warnings.append(

@@ -21,7 +21,7 @@ import cv2
 from vtrack.batch.jobs import Job, Outcome, Progress, read_row
 from vtrack.batch.plan import recorded_summary
 from vtrack.errors import (
-    COMMAND_NAMES,
+    BATCH_NAMES,
     FolderInUseError,
     Interrupted,
     OutputBrokenError,
@@ -232,7 +232,7 @@ def _run_when_free(job: Job, report: Report | None = None) -> RunSummary:
             # a batch's messages name the options its runs share with vtrack run, as before
             # the library's names (init_box, start, out_dir) are for run()'s own callers
             return run(job.request, on_frame=on_frame, on_open=on_open,
-                       names=COMMAND_NAMES)
+                       names=BATCH_NAMES)
         except FolderInUseError:
             if time.monotonic() >= deadline:
                 raise

@@ -175,14 +175,33 @@ def gt_origin_option() -> Callable[[Any], Any]:
              "MOTChallenge ground truth is read as written, as TrackEval reads it.")
 
 
+def gt_first_option() -> Callable[[Any], Any]:
+    """``--gt-first N`` of ``run`` and ``report``: the 0-based frame (as ``--start`` counts
+    them) the single-target ground truth's first box belongs to, 0 to
+    :data:`~vtrack.params.MAX_FRAME_NUMBER`; default 0."""
+    return click.option(
+        "--gt-first", "gt_first", type=WholeNumber(0, MAX_FRAME_NUMBER), default=0,
+        show_default=True, metavar="N",
+        help="The frame single-target ground truth's first box belongs to, 0-based as --start "
+             f"counts frames (0 to {MAX_FRAME_NUMBER}; an image folder's frame is its image's "
+             "number less the first image's): for files that start later than the images, as "
+             "OTB's David (startFrame 300 of img/0001.jpg...: --gt-first 299) and UAV123's "
+             "sub-sequences. Frames before it have no ground truth and are not scored. "
+             "MOTChallenge ground truth numbers its frames itself.")
+
+
 def refuse_gt_origin_without_gt(gt_given: bool) -> None:
-    """Without ``--gt``, refuse ``--gt-origin 0`` or ``1`` (``run``, ``report``): it sets the
-    origin of ``--gt``'s boxes and would change nothing (click.UsageError, one line, exit 2).
-    ``auto``, the default, passes."""
-    origin = click.get_current_context().params.get("gt_origin")
+    """Without ``--gt``, refuse ``--gt-origin 0`` or ``1`` and a ``--gt-first`` other than 0
+    (``run``, ``report``): they say how to read ``--gt``'s boxes and would change nothing
+    (click.UsageError, one line, exit 2). The defaults pass."""
+    params = click.get_current_context().params
+    origin, first = params.get("gt_origin"), params.get("gt_first")
     if not gt_given and origin is not None:
         raise click.UsageError(f"--gt-origin {origin}: sets the origin of --gt's boxes, and no "
                                "--gt is given; give both or neither")
+    if not gt_given and first:
+        raise click.UsageError(f"--gt-first {first}: says which frame --gt's first box is of, "
+                               "and no --gt is given; give both or neither")
 
 
 def _frames_or_seconds(text: str, least: int) -> tuple[int | None, float | None] | str:

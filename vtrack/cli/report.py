@@ -8,6 +8,7 @@ import click
 
 from vtrack.cli._messages import echo_result, warn
 from vtrack.cli._options import (
+    gt_first_option,
     gt_origin_option,
     refuse_gt_origin_without_gt,
     stats_period_option,
@@ -34,13 +35,15 @@ DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it
                    "whose frame count differs from the file's boxes is not scored (a warning "
                    "names it).")
 @gt_origin_option()
+@gt_first_option()
 @click.option("--title", default=DEFAULT_TITLE, show_default=True,
               type=NonEmptyText(f"the page's title, or leave --title out for {DEFAULT_TITLE!r}"),
               help="Page title.")
 @stats_period_option()
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
-            gt_origin: int | None, title: str, stats_period: float, quiet: bool) -> None:
+            gt_origin: int | None, gt_first: int, title: str, stats_period: float,
+            quiet: bool) -> None:
     """Write an overlap report of every run found in RESULTS (run folders or batch folders,
     searched for run.json): per-input overlap over time, OTB success and precision plots,
     tables per input and configuration; open DIR/index.html in a browser."""
@@ -52,8 +55,8 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
         # SIGTERM as Ctrl-C: no staged plot left behind; once they go in place, nothing
         with stopping_as_interrupted() as settled:
             report = build_report(list(results), out_dir, gt=list(gt_specs),
-                                  gt_origin=gt_origin, title=title, on_input=progress,
-                                  settled=settled)
+                                  gt_origin=gt_origin, gt_first=gt_first, title=title,
+                                  on_input=progress, settled=settled)
     finally:
         progress.close()
     for warning in report.warnings:

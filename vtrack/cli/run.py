@@ -19,6 +19,7 @@ from vtrack.cli._options import (
     SecondsCommand,
     StartPoint,
     WholeNumber,
+    gt_first_option,
     gt_origin_option,
     refuse_encoding_without_video,
     refuse_gt_origin_without_gt,
@@ -87,6 +88,7 @@ def default_out_dir(input_spec: str, config: str | None = None,
               help="Ground truth (OTB x,y,w,h lines, VOT polygons; MOTChallenge gt.txt for "
                    "multi-target configs): fills overlap and center_error.")
 @gt_origin_option()
+@gt_first_option()
 @click.option("--out", "-o", "out_dir", type=PATH, metavar="DIR",
               help="Output folder. Default: ./vtrack-out/<input name>/<config name>/. A folder "
                    "holding an earlier run's results is refused unless --overwrite.")
@@ -173,7 +175,8 @@ def default_out_dir(input_spec: str, config: str | None = None,
 @stats_period_option()
 @click.option("--quiet", "-q", is_flag=True, help="No progress and no summary line.")
 def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | None,
-            gt_path: Path | None, gt_origin: int | None, out_dir: Path | None, overwrite: bool,
+            gt_path: Path | None, gt_origin: int | None, gt_first: int, out_dir: Path | None,
+            overwrite: bool,
             overrides: tuple[str, ...],
             raw_size: str | None, pix_fmt: str, fps: float | None, no_video: bool, preset: str,
             input_format: str | None, input_options: tuple[str, ...], timeout_s: float,
@@ -222,6 +225,7 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
         init_box=parse_box(init_text) if init_text is not None else None,
         gt_path=gt_path,
         gt_origin=0 if gt_path is None else gt_origin_of(gt_path, gt_origin),
+        gt_first=gt_first,
         raw=raw,
         fps=None if raw else fps,
         video=not no_video,

@@ -15,12 +15,13 @@ from os import PathLike
 from pathlib import Path
 from typing import NamedTuple
 
-from vtrack.errors import ConfigError, InputError, number_text, plural
+from vtrack.errors import ConfigError, InputError, OptionNames, number_text, plural
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
 from vtrack.io.sidecar import SEQUENCE_ONLY_IMAGES, SEQUENCE_SIDECAR, sequence_of
 from vtrack.io.specs import VIDEO_SUFFIXES
+from vtrack.params import MAX_FRAME_NUMBER
 
 #: OTB files separate numbers by commas, tabs or spaces, sometimes mixed on one line.
 _SEPARATORS = re.compile(r"[,\s]+")
@@ -271,6 +272,9 @@ def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
 #: Largest coordinate a ground-truth box may have: frames are at most 16384 pixels a side, so
 #: anything near this is a damaged file (and 1e308 would overflow the metrics and the drawing).
 MAX_COORDINATE = 1e6
+#: Largest frame a single-target file's first box may be given (``--gt-first``): the largest
+#: frame number (:data:`vtrack.params.MAX_FRAME_NUMBER`).
+MAX_GT_FIRST = MAX_FRAME_NUMBER
 #: Largest frame number a MOTChallenge file may give (over a year of 30 fps video): beyond it the
 #: file is damaged, and a 300-digit number would be printed whole in the warning of frames past
 #: the input.
@@ -309,10 +313,10 @@ def _is_mot_row(values: list[float]) -> bool:
     return values[0] >= 1 and values[6] in (0, 1) and values[7] in MOT_CLASSES
 
 
-def read_boxes(path: str | PathLike[str], origin: int = 0) -> list[Box | None]:
+def read_boxes(path: str | PathLike[str], origin: int = 0, first: int = 0) -> list[Box | None]:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent
-    (:func:`read_truth`'s boxes)."""
-    return read_truth(path, origin).boxes
+    (:func:`read_truth`'s boxes, the first of frame ``first``)."""
+    return read_truth(path, origin, first).boxes
 
 
 class SingleTruth(NamedTuple):
@@ -337,9 +341,14 @@ def negative_note(path: str | PathLike[str], truth: SingleTruth) -> str | None:
             f"{'its frame is' if count == 1 else 'their frames are'} not scored")
 
 
-def read_truth(path: str | PathLike[str], origin: int = 0) -> SingleTruth:
+def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> SingleTruth:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent,
     and the lines whose box has a negative width or height (:class:`SingleTruth`).
+
+    ``first`` is the 0-based frame the file's first box belongs to (``--gt-first``: OTB's
+    ``David`` starts at its image 300, frame 299): the boxes come back indexed by frame, the
+    ``first`` frames before it None (no ground truth, not scored); ConfigError for a ``first``
+    that is not a whole number from 0 to :data:`MAX_GT_FIRST`.
 
     Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
     ``x1,y1,...,x4,y4``, which becomes its axis-aligned bounding box. Numbers may be separated
@@ -359,7 +368,10 @@ def read_truth(path: str | PathLike[str], origin: int = 0) -> SingleTruth:
     """
     if origin not in (0, 1):
         raise ConfigError(f"ground-truth origin must be 0 or 1, got {origin!r}")
-    boxes: list[Box | None] = []
+    if isinstance(first, bool) or not isinstance(first, int) or not 0 <= first <= MAX_GT_FIRST:
+        raise ConfigError(f"ground truth's first frame must be a whole number from 0 to "
+                          f"{MAX_GT_FIRST}, got {first!r}")
+    boxes: list[Box | None] = [None] * first
     negative: list[int] = []
     for number, line in enumerate(_read_lines(path, "ground-truth"), start=1):
         _check_fields(path, number, line)
@@ -407,6 +419,17 @@ def read_truth(path: str | PathLike[str], origin: int = 0) -> SingleTruth:
         else:
             boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
     return SingleTruth(boxes, negative)
+
+
+def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) -> str:
+    """The clause a warning of ground truth with fewer ``boxes`` (the file's) than the
+    ``frames`` a run tracked from frame ``start`` ends with: how a file whose first box is of
+    a later frame (OTB's ``David``, UAV123's ``bird1_2``) is aligned (``names.gt_first``), with
+    the frame that ends it at the run's last frame: ``; if its first box is of a later frame,
+    give --gt-first 5 (its last box then the last frame's)``."""
+    give = names.give(names.gt_first, str(start + frames - boxes))
+    return (f"; if its first box is of a later frame, give {give} (its last box then the last "
+            "frame's)")
 
 
 def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int, list[float]]]:

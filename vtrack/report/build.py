@@ -416,12 +416,13 @@ def build_report(results: Sequence[Path], out_dir: Path,
                  gt: Path | str | Sequence[Path | str] | None = None,
                  gt_origin: int | None = 0, title: str = DEFAULT_TITLE,
                  on_input: Callable[[int, int], None] | None = None,
-                 settled: Callable[[], object] | None = None) -> Report:
+                 settled: Callable[[], object] | None = None, gt_first: int = 0) -> Report:
     """Read every run below ``results`` and write the report into ``out_dir``.
 
     ``gt`` scores the single-target runs that recorded no ground truth (boxes from their
     ``track.csv``; ``gt_origin=1`` for 1-based OTB boxes, None to tell from each file's
-    place): ``FILE`` or ``INPUT=FILE`` specs, one or several; a run is scored only against a
+    place; ``gt_first`` the frame their first box belongs to, ``--gt-first``): ``FILE`` or
+    ``INPUT=FILE`` specs, one or several; a run is scored only against a
     file of its own length (else a warning names the run and the file). A run folder that
     cannot be read is left out with a warning. Raises InputError when nothing below
     ``results`` is a run (or a failed batch row) and OutputError when ``out_dir`` cannot be
@@ -431,7 +432,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     """
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
-    truths = [GroundTruth.parse(str(spec), gt_origin) for spec in specs]
+    truths = [GroundTruth.parse(str(spec), gt_origin, gt_first) for spec in specs]
     _refuse_two_files_for_one_input(truths)
     walked = walk_results(results)
     warnings: list[str] = [t.note for t in truths if t.note] + still_written(walked)

@@ -4,7 +4,8 @@ Per-frame scores of a single-target run are its ``track.csv`` boxes scored by
 :func:`vtrack.evaluate.metrics.frame_scores`, rounded as ``track.csv`` writes scores (as
 ``run.json``'s are), against:
 
-- the ground truth the run recorded in ``run.json``, read with the recorded ``gt_origin``; a
+- the ground truth the run recorded in ``run.json``, read with the recorded ``gt_origin`` and
+  ``gt_first`` (the frame of its first box; 0 for a record without one); a
   record without one gets the origin (0 or 1) whose scores reproduce the run's own ``overlap``
   column. If that file can no longer be read, the run's ``overlap`` and ``center_error`` columns
   are used as they are (rounded to 6 and 3 decimals; an empty ``center_error`` next to an
@@ -35,11 +36,13 @@ from typing import Any
 import numpy as np
 
 from vtrack.batch.summary import NEVER_RAN
-from vtrack.errors import ConfigError, InputError, plural, printable
+from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, plural, printable
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import (
+    MAX_GT_FIRST,
     MultiTargetTruthError,
     gt_origin_of,
+    later_first_hint,
     negative_note,
     read_boxes,
     read_truth,
@@ -217,27 +220,32 @@ class GroundTruth:
     #: The warning of its boxes with a negative width or height, read as the target absent
     #: (:func:`~vtrack.evaluate.groundtruth.negative_note`); None when it has none.
     note: str | None = None
+    #: The frame its first box belongs to (``--gt-first``): ``boxes`` holds None before it.
+    first: int = 0
 
     @classmethod
-    def read(cls, path: Path, origin: int | None = 0, input: str | None = None) -> GroundTruth:
-        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_truth` (InputError);
-        ``origin`` None: :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
+    def read(cls, path: Path, origin: int | None = 0, input: str | None = None,
+             first: int = 0) -> GroundTruth:
+        """Read ``path`` with :func:`~vtrack.evaluate.groundtruth.read_truth` (InputError),
+        its first box frame ``first``'s; ``origin`` None:
+        :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
         try:
-            truth = read_truth(path, origin=gt_origin_of(path, origin))
-            return cls(str(path), truth.boxes, input, negative_note(path, truth))
+            truth = read_truth(path, origin=gt_origin_of(path, origin), first=first)
+            return cls(str(path), truth.boxes, input, negative_note(path, truth), first)
         except MultiTargetTruthError:
             raise InputError(f"--gt {path}: MOTChallenge ground truth (many targets); the "
                              "report's --gt scores single-target runs: a multi-target run is "
                              "scored with the ground truth given to vtrack run --gt") from None
 
     @classmethod
-    def parse(cls, text: str, origin: int | None = 0) -> GroundTruth:
+    def parse(cls, text: str, origin: int | None = 0, first: int = 0) -> GroundTruth:
         """``--gt FILE`` or ``--gt INPUT=FILE`` (INPUT: an input's name, as the report shows
-        it, or its path as given to ``vtrack run``). A file whose name holds ``=`` is a FILE."""
+        it, or its path as given to ``vtrack run``), its first box frame ``first``'s. A file
+        whose name holds ``=`` is a FILE."""
         name, sep, path = text.partition("=")
         if sep and name and path and not Path(text).exists():
-            return cls.read(Path(path), origin, name)
-        return cls.read(Path(text), origin)
+            return cls.read(Path(path), origin, name, first)
+        return cls.read(Path(text), origin, first=first)
 
     def belongs_to(self, name: str, request: dict[str, Any], found: str | None = None) -> bool:
         """Whether this file is for the run of input ``name`` (True for a plain ``--gt``):
@@ -256,13 +264,19 @@ class GroundTruth:
 
     def misfit(self, frames: int, whole: bool, start: int = 0) -> str | None:
         """Why these boxes cannot be a run's ground truth: a run over the whole input (from
-        ``start`` on) must have as many frames as boxes, a run that stopped early (``--frames``,
-        an error) no more (None: they fit)."""
-        boxes = len(self.boxes) - start
-        if frames > boxes or (whole and frames != boxes):
-            return (f"{self.path} has {plural(boxes, 'box', 'boxes')} for its "
-                    f"{plural(frames, 'frame')}")
-        return None
+        ``start`` on) must span as many frames as the boxes reach (from their :attr:`first`
+        frame on), a run that stopped early (``--frames``, an error) no more (None: they
+        fit); for fewer boxes than a whole run's frames, also how a file whose first box is of
+        a later frame is aligned (:func:`~vtrack.evaluate.groundtruth.later_first_hint`)."""
+        covers = max(len(self.boxes) - start, 0)
+        if frames <= covers and not (whole and frames != covers):
+            return None
+        boxes = len(self.boxes) - self.first
+        hint = ("" if not whole or frames < covers or start + frames - boxes <= self.first
+                else later_first_hint(boxes, frames, start, COMMAND_NAMES))
+        return (f"{self.path} has {plural(boxes, 'box', 'boxes')}"
+                f"{f' from frame {self.first}' if self.first else ''} for its "
+                f"{plural(frames, 'frame')}{f' from frame {start}' if start else ''}{hint}")
 
     def second_to(self, earlier: GroundTruth) -> str:
         """The one line refusing this file as a second ground truth for the runs ``earlier``
@@ -340,7 +354,7 @@ def _rescored(rows: list[dict[str, str]], request: dict[str, Any], gt: str, star
     candidates = []
     for origin in origins:
         try:
-            truth = read_boxes(gt, origin=origin)[start:]
+            truth = read_boxes(gt, origin=origin, first=_gt_first(request))[start:]
             scores = _scored_as_written(boxes, truth)
         except InputError:
             return recorded, None
@@ -368,6 +382,15 @@ def _start(record: dict[str, Any]) -> int:
     if start is None:
         start = (record.get("request") or {}).get("start") or 0
     return _whole_number(start, "start_frame")
+
+
+def _gt_first(request: dict[str, Any]) -> int:
+    """The frame the recorded ground truth's first box belongs to (``--gt-first``; 0 for
+    records made before it existed). ValueError when it is not a frame number."""
+    first = _whole_number(request.get("gt_first") or 0, "gt_first")
+    if first > MAX_GT_FIRST:
+        raise ValueError(f"gt_first {first!r}")
+    return first
 
 
 def _last_frame(record: dict[str, Any]) -> int | None:
@@ -534,6 +557,7 @@ def _run_result(folder: Path, record: dict[str, Any], summary: dict[str, Any]) -
         raise ValueError(f"fps {fps!r}")
     if (record.get("request") or {}).get("gt_origin", 0) not in (0, 1):
         raise ValueError("gt_origin")
+    _gt_first(record.get("request") or {})
     if record["status"] not in BATCH_STATUSES:  # (read_run_record: it has one)
         raise ValueError("status")
     _start(record)  # frame numbers (read again with the rows)

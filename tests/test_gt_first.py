@@ -1,0 +1,197 @@
+"""Ground truth whose first box is of a later frame (OTB's David: img/0001.jpg..0770.jpg, boxes
+for images 300..770; UAV123's sub-sequences): ``--gt-first N`` aligns it, for ``vtrack run``,
+the library's ``RunRequest``, ``vtrack report`` (recorded and ``--gt``), and the warning of a
+file with fewer boxes than frames says how (``vtrack batch`` too). Real image sequences."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pytest
+from click.testing import CliRunner, Result
+from conftest import one_error_line
+
+from vtrack.cli import main
+from vtrack.config import load_config
+from vtrack.errors import ConfigError
+from vtrack.request import RunRequest
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+FRAMES = 30
+#: The file's first box is of this frame (OTB's startFrame less the first image's number).
+LATER = 10
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, [*args], catch_exceptions=False)
+
+
+@pytest.fixture
+def david(tmp_path: Path, clip_factory: ClipFactory) -> tuple[Path, Path, Path]:
+    """(a sequence folder whose groundtruth_rect.txt holds only the boxes of frames LATER..,
+    as OTB's David's does, the whole file, the sequence's own folder)."""
+    clip = clip_factory("smooth", frames=FRAMES, fmt="images")
+    folder = tmp_path / "dav"
+    shutil.copytree(clip.path / "img", folder / "img")
+    whole = Path(clip.gt)
+    lines = whole.read_text().splitlines(keepends=True)
+    (folder / "groundtruth_rect.txt").write_text("".join(lines[LATER:]))
+    return folder, whole, Path(clip.path)
+
+
+def recorded(out: Path) -> dict:
+    return json.loads((out / "run.json").read_text())
+
+
+def overlaps(out: Path) -> list[str]:
+    with (out / "track.csv").open(newline="") as handle:
+        return [row["overlap"] for row in csv.DictReader(handle)]
+
+
+def test_a_file_starting_later_scores_as_the_aligned_one(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Probe N: a groundtruth_rect.txt of the boxes of frames 10..29 beside 30 images was
+    scored against frames 0..19 (AUC 0.124 on `vtrack scene smooth`'s 20 frames, a warning of
+    fewer boxes only); `--start 10` took the file's row 10. `--gt-first 10` now aligns it:
+    with `--start 10` the run is the one against the whole file, score for score; from frame 0
+    (an --init box) frames 0..9 are not scored and the others as against the whole file."""
+    folder, whole, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    aligned, truth = tmp_path / "aligned", tmp_path / "truth"
+    result = vtrack("run", str(folder), "--gt", str(gt), "--gt-first", str(LATER), "--start",
+                    str(LATER), "-c", "s0", "--no-video", "-o", str(aligned), "-q")
+    assert result.exit_code == 0, result.output
+    assert result.stderr == "", result.stderr  # no warning: the boxes fit
+    result = vtrack("run", str(folder), "--gt", str(whole), "--start", str(LATER), "-c", "s0",
+                    "--no-video", "-o", str(truth), "-q")
+    assert result.exit_code == 0, result.output
+    mine, theirs = recorded(aligned), recorded(truth)
+    assert mine["request"]["gt_first"] == LATER
+    for key in ("frames_evaluated", "auc", "precision20", "mean_overlap"):
+        assert mine["metrics"][key] == theirs["metrics"][key], key
+    assert mine["metrics"]["frames_evaluated"] == FRAMES - LATER
+    assert overlaps(aligned) == overlaps(truth)
+
+    first = whole.read_text().splitlines()[0]
+    from_zero, whole_zero = tmp_path / "from0", tmp_path / "whole0"
+    for out, file, extra in ((from_zero, gt, ("--gt-first", str(LATER))),
+                             (whole_zero, whole, ())):
+        result = vtrack("run", str(folder), "--gt", str(file), *extra, "--init", first,
+                        "-c", "s0", "--no-video", "-o", str(out), "-q")
+        assert result.exit_code == 0, result.output
+        assert result.stderr == "", result.stderr
+    assert recorded(from_zero)["metrics"]["frames_evaluated"] == FRAMES - LATER
+    assert overlaps(from_zero)[:LATER] == [""] * LATER
+    assert overlaps(from_zero)[LATER:] == overlaps(whole_zero)[LATER:]
+
+
+def test_the_library_takes_it_and_refuses_out_of_range(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """`vtrack.RunRequest(gt_first=...)` aligns as `--gt-first` does, and a value out of 0 to
+    10^12 (or no whole number) is refused naming the field."""
+    from vtrack.run import run
+
+    folder, whole, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    mine, theirs = (run(RunRequest(input=str(folder), out_dir=tmp_path / name,
+                                   config=load_config("s0"), gt_path=path, gt_origin=1,
+                                   gt_first=first, start=LATER, video=False))
+                    for name, path, first in (("lib", gt, LATER), ("whole", whole, 0)))
+    assert mine.warnings == [] and mine.auc is not None and mine.auc == theirs.auc
+    assert mine.mean_overlap == theirs.mean_overlap
+    for bad in (-1, 10**12 + 1, 2.5, "3"):
+        with pytest.raises((ConfigError, TypeError), match="gt_first"):
+            RunRequest(input=str(folder), out_dir=tmp_path / "x", config=load_config("s0"),
+                       gt_path=gt, gt_first=bad)
+
+
+@pytest.mark.parametrize("value", ["-1", "1000000000001", "many", "2.5"])
+def test_a_first_frame_out_of_range_is_one_line(
+        tmp_path: Path, david: tuple[Path, Path, Path], value: str) -> None:
+    folder, _, _ = david
+    for command in (("run", str(folder)), ("report", str(tmp_path))):
+        line = one_error_line(vtrack(*command, "--gt", str(folder / "groundtruth_rect.txt"),
+                                     "--gt-first", value, "-o", str(tmp_path / "o")))
+        assert "--gt-first" in line and value in line and "1000000000000" in line, line
+
+
+def test_without_gt_or_with_a_multi_target_config_it_is_refused(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    folder, _, _ = david
+    line = one_error_line(vtrack("run", str(folder), "--init", "10,10,20,20", "--gt-first", "3",
+                                 "-o", str(tmp_path / "o")))
+    assert line.startswith("vtrack: error: --gt-first 3: ") and "no --gt" in line, line
+    line = one_error_line(vtrack("report", str(tmp_path), "--gt-first", "3"))
+    assert line.startswith("vtrack: error: --gt-first 3: ") and "no --gt" in line, line
+    line = one_error_line(vtrack("run", str(folder), "-c", "s3", "--gt",
+                                 str(folder / "groundtruth_rect.txt"), "--gt-first", "3",
+                                 "-o", str(tmp_path / "o")))
+    assert "--gt-first 3: s3 reads MOTChallenge ground truth" in line, line
+
+
+def test_a_run_before_the_first_box_needs_a_start_or_a_box(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    folder, _, _ = david
+    line = one_error_line(vtrack("run", str(folder), "--gt", str(folder / "groundtruth_rect.txt"),
+                                 "--gt-first", str(LATER), "-o", str(tmp_path / "o")))
+    assert f"the file's boxes begin at frame {LATER} (--gt-first {LATER}); give --start " \
+           f"{LATER} to track from there, or --init x,y,w,h" in line, line
+
+
+def test_the_fewer_boxes_warning_says_how_to_align(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """The warning of a file with fewer boxes than frames (run and batch alike) names the
+    --gt-first that ends the file at the input's last frame."""
+    folder, _, _ = david
+    result = vtrack("run", str(folder), "--gt", str(folder / "groundtruth_rect.txt"), "-c",
+                    "robust", "--no-video", "-o", str(tmp_path / "o"), "-q")
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        f"vtrack: warning: {folder / 'groundtruth_rect.txt'}: ground truth has 20 boxes for 30 "
+        "frames (fewer); overlap is empty from frame 20 on; if its first box is of a later "
+        f"frame, give --gt-first {LATER} (its last box then the last frame's)"], result.stderr
+    batch_in = tmp_path / "in"
+    shutil.copytree(folder, batch_in / "dav")
+    result = vtrack("batch", str(batch_in), "-c", "robust", "--no-video", "-j", "1", "-o",
+                    str(tmp_path / "b"), "-q")
+    assert result.exit_code == 0, result.output
+    assert f"give vtrack run --gt-first {LATER} (its last box" in result.stderr, result.stderr
+
+
+def test_the_report_rescored_as_the_run(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """`vtrack report` re-scores a run with the gt_first it recorded (its AUC the run's), and
+    its own `--gt FILE --gt-first N` scores a run made without ground truth as the run with it
+    scored itself; without --gt-first that file does not fit, and the warning says how."""
+    folder, _, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    first = Path(david[1]).read_text().splitlines()[0]
+    scored, bare = tmp_path / "runs" / "scored", tmp_path / "bare" / "run"
+    result = vtrack("run", str(folder), "--gt", str(gt), "--gt-first", str(LATER), "--init",
+                    first, "-c", "s0", "--no-video", "-o", str(scored), "-q")
+    assert result.exit_code == 0, result.output
+    result = vtrack("run", str(folder), "--init", first, "-c", "s0", "--no-video", "-o",
+                    str(bare), "-q")
+    assert result.exit_code == 0, result.output
+    auc = recorded(scored)["metrics"]["auc"]
+
+    def report_auc(*args: str) -> str:
+        result = vtrack("report", *args, "-q")
+        assert result.exit_code == 0, result.output
+        with (Path(args[args.index("-o") + 1]) / "summary.csv").open(newline="") as handle:
+            return next(csv.DictReader(handle))["auc"]
+
+    assert float(report_auc(str(scored.parent), "-o", str(tmp_path / "r1"))) == \
+        pytest.approx(auc, abs=1e-6)
+    assert float(report_auc(str(bare.parent), "-o", str(tmp_path / "r2"), "--gt", str(gt),
+                            "--gt-first", str(LATER))) == pytest.approx(auc, abs=1e-6)
+    result = vtrack("report", str(bare.parent), "-o", str(tmp_path / "r3"), "--gt", str(gt),
+                    "-q")
+    assert f"has 20 boxes for its 30 frames; if its first box is of a later frame, give " \
+           f"--gt-first {LATER}" in result.stderr, result.stderr
