@@ -241,11 +241,16 @@ class GroundTruth:
     def parse(cls, text: str, origin: int | None = 0, first: int = 0) -> GroundTruth:
         """``--gt FILE`` or ``--gt INPUT=FILE`` (INPUT: an input's name, as the report shows
         it, or its path as given to ``vtrack run``), its first box frame ``first``'s. A file
-        whose name holds ``=`` is a FILE."""
-        name, sep, path = text.partition("=")
-        if sep and name and path and not Path(text).exists():
-            return cls.read(Path(path), origin, name, first)
-        return cls.read(Path(text), origin, first=first)
+        whose name holds ``=`` is a FILE; an INPUT holding ``=`` (``a=b.mp4``, named ``a=b``:
+        ``--gt a=b=FILE``, as the report's warnings suggest) is split at the ``=`` after which
+        a file is there, the first such (at the first ``=`` when none is: the file is
+        missing)."""
+        splits = [(text[:at], text[at + 1:]) for at, mark in enumerate(text) if mark == "="]
+        splits = [(name, path) for name, path in splits if name and path]
+        if not splits or Path(text).exists():
+            return cls.read(Path(text), origin, first=first)
+        name, path = next((s for s in splits if Path(s[1]).exists()), splits[0])
+        return cls.read(Path(path), origin, name, first)
 
     def belongs_to(self, name: str, request: dict[str, Any], found: str | None = None) -> bool:
         """Whether this file is for the run of input ``name`` (True for a plain ``--gt``):

@@ -1,0 +1,42 @@
+"""``vtrack report --gt INPUT=FILE`` for an input whose name holds ``=``: the suggestion the
+report's warning gives works when pasted. A real generated clip."""
+
+from __future__ import annotations
+
+import shlex
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from click.testing import CliRunner, Result
+
+from vtrack.cli import main
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
+
+
+def vtrack(*args: str) -> Result:
+    return CliRunner().invoke(main, [*args], catch_exceptions=False)
+
+
+def test_the_suggested_gt_for_an_input_named_with_equals_works(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch) -> None:  # noqa: ANN001
+    """Probe N: a run of `a=b.mp4` reported with a --gt that does not fit said 'give --gt
+    a=b=FILE with its own ground truth'; pasted, `--gt a=b=a=b.gt.txt` was split at the first
+    `=` ('b=a=b.gt.txt: cannot read ground-truth file'). Now it is split where the file is."""
+    clip = clip_factory("smooth", frames=20)
+    monkeypatch.chdir(tmp_path)
+    Path("a=b.mp4").write_bytes(Path(clip.path).read_bytes())
+    Path("a=b.gt.txt").write_text(Path(clip.gt).read_text())
+    lines = Path(clip.gt).read_text().splitlines()
+    Path("short.txt").write_text("\n".join(lines[:12]) + "\n")
+    result = vtrack("run", "a=b.mp4", "--init", lines[0], "-c", "s0", "--no-video", "-o", "ab",
+                    "-q")
+    assert result.exit_code == 0, result.output
+    result = vtrack("report", "ab", "-o", "r1", "--gt", "short.txt", "-q")
+    assert "give --gt a=b=FILE with its own ground truth" in result.stderr, result.stderr
+    suggested = shlex.split(result.stderr.split("give --gt ")[-1].split(" with")[0])[0]
+    result = vtrack("report", "ab", "-o", "r2", "--gt", suggested.replace("FILE", "a=b.gt.txt"),
+                    "-q")
+    assert result.exit_code == 0 and result.stderr == "", result.output
+    assert "a=b.gt.txt" in Path("r2/summary.csv").read_text()
