@@ -3,6 +3,7 @@ messages that name the real problem, options that agree between commands."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -79,6 +80,31 @@ def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,
     assert line == (f"vtrack: error: Invalid value for '--follow': '{value}' is not a number of "
                     "seconds above 0 and at most 86400 (see 'python -m vtrack run --help')")
     assert not list(tmp_path.iterdir())
+
+
+def test_a_negative_follow_is_still_another_options_value(clip_factory, tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 --gt GT --no-video -o --follow=-1` was refused naming --follow
+    (its values were looked at before click parsed, whichever option they followed); the word
+    is -o's value: the run writes its results there, as it did before --follow's values were
+    looked at."""
+    clip = clip_factory("smooth", frames=10)
+    result = vtrack("run", str(clip.path), "--gt", str(clip.gt), "--no-video", "-q", "-o",
+                    "--follow=-1", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "--follow=-1" / "run.json").is_file()
+
+
+def test_shell_completion_after_a_negative_follow_completes(tmp_path: Path) -> None:
+    """Completing `vtrack run clip.mp4 --follow -1 --no` printed the --follow refusal and
+    exited 2 (the values were checked before click parsed, even while completing); it offers
+    the options again, as before."""
+    env = {**os.environ, "_VTRACK_COMPLETE": "bash_complete", "COMP_CWORD": "5",
+           "COMP_WORDS": "vtrack run clip.mp4 --follow -1 --no"}
+    program = "from vtrack.cli import main; main(prog_name='vtrack')"
+    result = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                            cwd=tmp_path, env=env, timeout=120, check=False)
+    assert (result.returncode, result.stderr) == (0, "")
+    assert result.stdout.split() == ["plain,--no-live", "plain,--no-video"]
 
 
 def test_a_mistyped_command_is_offered_the_near_one(tmp_path: Path) -> None:

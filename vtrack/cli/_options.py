@@ -63,25 +63,43 @@ class Seconds(click.FloatRange):
 class SecondsCommand(click.Command):
     """A command whose :class:`Seconds` options that may come without a number (``optional``:
     ``--follow [SECONDS]``) are refused, as any value out of their range is, when given a
-    negative number (``--follow -1``) or any value starting with ``-`` (``--follow=-1``):
-    click's parser reads such a value as the next option, "No such option '-1'", not naming
-    the option it was given to."""
+    value starting with ``-`` that click's parser read as the next option, unknown: "No such
+    option '-1'" for ``--follow -1`` or ``--follow=-1`` (the flag taking its default), not
+    naming the option it was given to. Only the word click found no option for is looked at:
+    a word that is another option's value (``-o --follow=-1``: a folder) is left to click,
+    and so is shell completion (which parses leaving out usage errors)."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        optional = {name: param for param in self.params
-                    if isinstance(param, click.Option) and isinstance(param.type, Seconds)
-                    and param.type.optional for name in param.opts}
-        for index, arg in enumerate(args):
-            if arg == "--":
-                break
-            name, given, value = arg.partition("=")
-            if not given:  # (a word after the flag is its value only if it is a number)
-                value = args[index + 1] if index + 1 < len(args) else ""
-                value = value if _is_number(value) else ""
-            option = optional.get(name)
-            if option is not None and value.startswith("-") and len(value) > 1:
+        words = list(args)  # (click's parser takes the words out of ``args`` as it reads them)
+        try:
+            return super().parse_args(ctx, args)
+        except click.NoSuchOption as exc:
+            given = _value_read_as_option(self, words, exc.option_name)
+            if given is not None:
+                option, value = given
                 option.type.convert(value, option, ctx)  # (out of range: its usage error)
-        return super().parse_args(ctx, args)
+            raise
+
+
+def _value_read_as_option(command: click.Command, args: list[str],
+                          unknown: str) -> tuple[click.Option, str] | None:
+    """The optional :class:`Seconds` option of ``command`` and the value given to it (attached
+    with ``=``, or a number after it: ``--follow -x`` may be an unknown option indeed) that
+    click's parser read as the option ``unknown``, which it has not (``-1`` of ``--follow
+    -1e3``: a short option's name is its first two characters); None if no such value comes
+    before ``--``."""
+    optional = {name: param for param in command.params
+                if isinstance(param, click.Option) and isinstance(param.type, Seconds)
+                and param.type.optional for name in param.opts}
+    words = args[:args.index("--")] if "--" in args else args
+    for before, word in zip(["", *words], words, strict=False):
+        flag, attached, value = word.partition("=")
+        if not attached:
+            flag, value = before, (word if _is_number(word) else "")
+        option = optional.get(flag)
+        if option is not None and len(value) > 1 and value.startswith(unknown):
+            return option, value
+    return None
 
 
 def _is_number(word: str) -> bool:
