@@ -82,6 +82,19 @@ def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("value", ["-x", "--bogus", "abc"])
+def test_a_follow_value_that_cannot_be_input_gets_no_input_hint(tmp_path: Path,
+                                                                value: str) -> None:
+    """`vtrack run clip.mp4 --follow=-x` was told "if it is INPUT, put it before --follow or
+    give the seconds (--follow 5 -x)", which then said "No such option '-x'"; a value attached
+    with = (`--follow=abc`) is no INPUT either. Refused now naming the value and the range only
+    (`vtrack run --follow rec.ts` keeps its hint: tests/test_messages.py)."""
+    line = one_error_line(vtrack("run", "clip.mp4", f"--follow={value}", "--init", "1,1,9,9",
+                                 cwd=tmp_path))
+    assert line == (f"vtrack: error: Invalid value for '--follow': '{value}' is not a number of "
+                    "seconds above 0 and at most 86400 (see 'python -m vtrack run --help')")
+
+
 def test_a_negative_follow_is_still_another_options_value(clip_factory, tmp_path: Path) -> None:
     """`vtrack run clip.mp4 --gt GT --no-video -o --follow=-1` was refused naming --follow
     (its values were looked at before click parsed, whichever option they followed); the word

@@ -21,7 +21,9 @@ class Seconds(click.FloatRange):
     made of it, ``0.0 is not in the range 0.1<=x<=3600.0``).
     ``optional``: the option's own flag (``--follow``) may come without a number, so a word
     after it may be the argument that was meant to follow it: its refusal says how to give
-    that."""
+    that; not for a value starting with ``-`` (which would be read as an option there), nor
+    one attached with ``=`` (``--follow=abc``: :class:`SecondsCommand` notes those in
+    ``ctx.meta``)."""
 
     name = "seconds"
 
@@ -37,7 +39,9 @@ class Seconds(click.FloatRange):
             seconds, word = math.nan, True
         if not (math.isfinite(seconds) and self._within(seconds)):
             hint = ""
-            if word and self.optional and isinstance(param, click.Option):
+            attached = ctx.meta.get(_ATTACHED, ()) if ctx is not None else ()
+            if (word and self.optional and isinstance(param, click.Option)
+                    and not str(value).startswith("-") and value not in attached):
                 flag = max(param.opts, key=len)
                 hint = (f"; if it is {self.optional}, put it before {flag} or give the "
                         f"seconds ({flag} 5 {value})")
@@ -71,26 +75,39 @@ class SecondsCommand(click.Command):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         words = list(args)  # (click's parser takes the words out of ``args`` as it reads them)
+        optional = _optional_seconds(self)
+        ctx.meta[_ATTACHED] = {value for flag, attached, value in
+                               (word.partition("=") for word in words)
+                               if attached and flag in optional}
         try:
             return super().parse_args(ctx, args)
         except click.NoSuchOption as exc:
-            given = _value_read_as_option(self, words, exc.option_name)
+            given = _value_read_as_option(optional, words, exc.option_name)
             if given is not None:
                 option, value = given
                 option.type.convert(value, option, ctx)  # (out of range: its usage error)
             raise
 
 
-def _value_read_as_option(command: click.Command, args: list[str],
+#: ``ctx.meta`` key: the values given attached to an optional :class:`Seconds` option's flag
+#: (``--follow=abc``), which cannot be the argument meant to come after it.
+_ATTACHED = "vtrack.seconds_attached"
+
+
+def _optional_seconds(command: click.Command) -> dict[str, click.Option]:
+    """The :class:`Seconds` options of ``command`` that may come without a number, by flag."""
+    return {name: param for param in command.params
+            if isinstance(param, click.Option) and isinstance(param.type, Seconds)
+            and param.type.optional for name in param.opts}
+
+
+def _value_read_as_option(optional: dict[str, click.Option], args: list[str],
                           unknown: str) -> tuple[click.Option, str] | None:
-    """The optional :class:`Seconds` option of ``command`` and the value given to it (attached
+    """The option of ``optional`` (:func:`_optional_seconds`) and the value given to it (attached
     with ``=``, or a number after it: ``--follow -x`` may be an unknown option indeed) that
     click's parser read as the option ``unknown``, which it has not (``-1`` of ``--follow
     -1e3``: a short option's name is its first two characters); None if no such value comes
     before ``--``."""
-    optional = {name: param for param in command.params
-                if isinstance(param, click.Option) and isinstance(param.type, Seconds)
-                and param.type.optional for name in param.opts}
     words = args[:args.index("--")] if "--" in args else args
     for before, word in zip(["", *words], words, strict=False):
         flag, attached, value = word.partition("=")
