@@ -68,6 +68,22 @@ def test_an_overlong_unknown_command_is_shown_cut(tmp_path: Path) -> None:
         f"vtrack: error: No such command '{'y' * 200}'. (see ")
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "--" + "x" * 300), "No such option {}...{} (302 characters). "),
+    (("run", "clip.mp4", "--preset", "p" * 400),
+     "Invalid value for '--preset': {}...{} (400 characters) is not one of 'ultrafast', "),
+])
+def test_an_overlong_option_word_is_shown_cut(tmp_path: Path, args: tuple[str, ...],
+                                             said: str) -> None:
+    """An unknown option of 300 characters and a --preset value of 400 were echoed whole
+    (click's "No such option" and "is not one of"), where an overlong command word is cut
+    (errors.cut); both are cut now, as it is."""
+    word = args[-1]
+    line = one_error_line(vtrack(*args, cwd=tmp_path))
+    assert line.startswith("vtrack: error: " + said.format(word[:100], word[-30:])), line
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args", [("--follow=-1",), ("--follow", "-1"), ("--follow=-0.5",),
                                   ("--follow", "-1e3")])
 def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,

@@ -195,6 +195,19 @@ def cut(text: str) -> str:
     return f"{text[:100]}...{text[-30:]} ({len(text)} characters)"
 
 
+#: A quoted word of click's messages (``'--xxx'``, ``"it's"``: as ``repr`` quotes it).
+_QUOTED = re.compile(r"'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"")
+
+
+def cut_quoted(message: str) -> str:
+    """``message`` (click's, quoting the words a user gave: "No such option '--xxx'.",
+    "Invalid value for '--preset': 'xxx' is not one of ...") with each quoted word of more
+    than :data:`LONGEST_SHOWN` characters shown as :func:`cut` shows it, unquoted."""
+    return _QUOTED.sub(lambda match: (cut(match.group()[1:-1])
+                                      if len(match.group()) - 2 > LONGEST_SHOWN
+                                      else match.group()), message)
+
+
 #: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
 #: 0xff is U+DCFF).
 _UNDECODED = re.compile("[\udc80-\udcff]")

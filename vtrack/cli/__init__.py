@@ -24,7 +24,7 @@ import click
 
 from vtrack import __version__
 from vtrack.cli._messages import echo_result, error_line, no_such_command
-from vtrack.errors import VtrackError
+from vtrack.errors import VtrackError, cut_quoted
 
 
 class _Group(click.Group):
@@ -93,7 +93,7 @@ class _Group(click.Group):
             sys.exit(exc.exit_code)
         except click.UsageError as exc:
             where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
-            click.echo(error_line(f"{exc.format_message()}{where}"), err=True)
+            click.echo(error_line(f"{cut_quoted(exc.format_message())}{where}"), err=True)
             sys.exit(exc.exit_code)
         except click.ClickException as exc:
             click.echo(error_line(exc.format_message()), err=True)
