@@ -293,6 +293,8 @@ def test_read_boxes_malformed_line_names_file_and_line(tmp_path, text, problem):
     (read_mot, "1,1,,0,10,10,1,1,1\n", 1, "'1,1,,0,10,10,1,1,1'"),
     (read_mot_detections, "1,-1,5,5,10,10,0.9\n2,-1,,5,10,10,0.9,1\n", 2,
      "'2,-1,,5,10,10,0.9,1'"),
+    # padded as a spreadsheet pads a short row, but a number is still left out before them
+    (read_boxes, "10,,20,30,40,,,\n", 1, "'10,,20,30,40,,,'"),
 ])
 def test_an_empty_field_is_refused_not_closed_up(tmp_path, read, text, line, shown):
     """An empty field between commas was skipped, the numbers after it read into the columns
@@ -303,6 +305,21 @@ def test_an_empty_field_is_refused_not_closed_up(tmp_path, read, text, line, sho
         read(path)
     assert str(info.value) == (f"{path} line {line}: an empty field in {shown} (a number left "
                                "out: the numbers after it would be read into the wrong columns)")
+
+
+@pytest.mark.parametrize(("read", "text", "expected"), [
+    (read_boxes, "10,20,30,40,\n", [Box(10, 20, 30, 40)]),
+    # a spreadsheet's CSV export pads short rows with empty fields: no number moves
+    (read_boxes, "10,20,30,40,,,,\n", [Box(10, 20, 30, 40)]),
+    (read_boxes, "10,20,30,40, ,\n", [Box(10, 20, 30, 40)]),
+    (read_mot, "1,1,10,20,30,40,1,1,1,,\n", {0: [(1, Box(10, 20, 30, 40))]}),
+    (read_mot_detections, "1,-1,10,20,30,40,0.9,,,\n", {0: [(Box(10, 20, 30, 40), 0.9)]}),
+])
+def test_empty_fields_after_the_last_number_are_taken(tmp_path, read, text, expected):
+    """The empty-field refusal above took a row's padding after its last number
+    (``10,20,30,40,,,,``) for a number left out and refused a file read before: nothing
+    follows those fields, so no number is in the wrong column."""
+    assert read(write(tmp_path, text)) == expected
 
 
 def test_read_boxes_unreadable_or_empty(tmp_path):

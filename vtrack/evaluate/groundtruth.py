@@ -195,15 +195,18 @@ def _tokens(line: str) -> list[str]:
 
 
 #: An empty field between two commas (``10,,20,30,40``) or before the first number
-#: (``,10,20,30,40``); one after the last (``10,20,30,40,``) leaves every number where it is.
+#: (``,10,20,30,40``). Searched with the line's trailing separators cut: empty fields after
+#: the last number (``10,20,30,40,``, a spreadsheet's padding ``10,20,30,40,,,,``) leave
+#: every number where it is.
 _EMPTY_FIELD = re.compile(r"^\s*,|,\s*,")
 
 
 def _check_fields(path: str | PathLike[str], number: int, line: str) -> None:
     """InputError naming ``path`` and line ``number`` when ``line`` has an empty field
     (:data:`_EMPTY_FIELD`): a number left out, which reading the others as they come would
-    put the numbers after it in the wrong columns (``10,,20,30,40`` a box at x 10, y 20)."""
-    if _EMPTY_FIELD.search(line):
+    put the numbers after it in the wrong columns (``10,,20,30,40`` a box at x 10, y 20).
+    Empty fields with no number after them (``10,20,30,40,,,``) are taken."""
+    if _EMPTY_FIELD.search(line.rstrip(", \t\r\n\f\v")):
         raise InputError(f"{path} line {number}: an empty field in {_quote(line)} (a number "
                          "left out: the numbers after it would be read into the wrong columns)")
 
@@ -357,8 +360,8 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
     target is absent in that frame (a negative ``w`` or ``h``, which no dataset writes for it,
     is noted in :attr:`SingleTruth.negative`). ``origin=1`` reads MATLAB 1-based OTB boxes: 1 is
     subtracted from ``x`` and ``y``. Trailing blank lines are ignored; any other blank line, a
-    line without 4 or 8 numbers, an empty field (``10,,20,30,40``: a number left out; a comma
-    after the last number is taken), an infinite number or one beyond ``MAX_COORDINATE`` is an
+    line without 4 or 8 numbers, an empty field (``10,,20,30,40``: a number left out; empty fields
+    after the last number are taken), an infinite number or one beyond ``MAX_COORDINATE`` is an
     error, as are a line of 8 numbers only because each of its 4 space-separated fields holds a
     comma (``262,2 71,35 40,8 31,2``: decimal commas, or a polygon's points; said which to
     write), a missing, unreadable or empty file. A file whose first line is a MOTChallenge row
@@ -438,7 +441,7 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
     finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer from 1
     to :data:`MAX_MOT_FRAME`; no field may be empty (``1,1,,20,30,40``: a number left out),
-    though a comma may follow the last.
+    though empty fields may follow the last number.
     Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
