@@ -15,8 +15,10 @@ from click.testing import CliRunner, Result
 from conftest import one_error_line
 
 from vtrack.cli import main
+from vtrack.errors import ConfigError
 from vtrack.frame import GrayFrame
 from vtrack.geometry import Box
+from vtrack.scenes import write_video
 from vtrack.stages.base import Stage, TrackContext, TrackStatus
 from vtrack.stages.detect import Detection
 from vtrack.stages.kalman_bytetrack import ByteTracks
@@ -171,8 +173,9 @@ def test_a_scene_frame_rate_past_the_limit_is_shown_as_given(tmp_path: Path) -> 
     # (`--pix-fmt gray` wrote a yuv420p clip, exit 0: x264 takes grey frames, writes colour)
     ("320x240", "gray", "libx264 does not take pixel format gray (it writes grey as yuv420p); "
                         "it takes yuv420p"),
+    # (gray10le was said to be written as yuv420p: x264 writes it as yuv420p10le, High 10)
     ("320x240", "gray10le", "libx264 does not take pixel format gray10le (it writes grey as "
-                            "yuv420p); it takes yuv420p"),
+                            "yuv420p10le); it takes yuv420p"),
     ("641x479", "yuv422p", "pixel format yuv422p needs an even width, the scene is 641x479"),
     ("641x479", "nv12", "pixel format nv12 needs an even width and height, the scene is 641x479"),
     ("320x239", "nv12", "pixel format nv12 needs an even width and height"),
@@ -183,6 +186,17 @@ def test_a_pixel_format_the_encoder_cannot_write_is_one_line(
     line = one_error_line(vtrack("scene", "smooth", str(out), "--frames", "10", "--size", size,
                             "--pix-fmt", pix_fmt))
     assert f"{out}: {problem}" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_encoder_without_grey_is_not_said_to_write_it_as_colour(
+        tmp_path: Path, scene_factory) -> None:
+    """mpeg4 takes only yuv420p: its refusal of gray said "(it writes grey as yuv420p)", as
+    only libx264 (which takes grey frames and writes colour) does."""
+    out = tmp_path / "a.mp4"
+    with pytest.raises(ConfigError) as info:
+        write_video(scene_factory("smooth", frames=10), out, codec="mpeg4", pix_fmt="gray")
+    assert str(info.value) == f"{out}: mpeg4 does not take pixel format gray; it takes yuv420p"
     assert list(tmp_path.iterdir()) == []
 
 

@@ -178,10 +178,12 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
     except ValueError as exc:
         raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
     taken = [f.name for f in av.codec.Codec(codec, "w").video_formats or ()]
-    if codec == "libx264":  # it takes grey frames, but writes them as yuv420p (colour)
+    grey = ""
+    if codec == "libx264":  # it takes grey frames, but writes them as 4:2:0 colour
+        if pix_fmt in taken and len(layout.components) == 1:  # gray10le as yuv420p10le
+            grey = f" (it writes grey as {pix_fmt.replace('gray', 'yuv420p')})"
         taken = [name for name in taken if len(av.VideoFormat(name).components) > 1]
     if taken and pix_fmt not in taken:
-        grey = " (it writes grey as yuv420p)" if len(layout.components) == 1 else ""
         raise ConfigError(f"{path}: {codec} does not take pixel format {pix_fmt}{grey}; it "
                           f"takes {', '.join(taken)}")
     _need_even_for(scene, layout, f"{path}: pixel format {pix_fmt}")
