@@ -200,6 +200,26 @@ def test_an_encoder_without_grey_is_not_said_to_write_it_as_colour(
     assert list(tmp_path.iterdir()) == []
 
 
+def test_h264_is_checked_and_written_as_libx264_is(tmp_path: Path, scene_factory) -> None:
+    """``codec="h264"`` opens libx264, but the checks were keyed on the name ``libx264``: a
+    gray clip was written as yuv420p without a word, a preset x264 lacks failed as "cannot
+    write (Invalid argument)", and the bytes differed from libx264's (no
+    DETERMINISTIC_X264)."""
+    scene = scene_factory("smooth", width=64, height=48, frames=10)
+    out = tmp_path / "a.mp4"
+    with pytest.raises(ConfigError) as info:
+        write_video(scene, out, codec="h264", pix_fmt="gray")
+    assert str(info.value).startswith(
+        f"{out}: h264 does not take pixel format gray (it writes grey as yuv420p); it takes "
+        "yuv420p, ")
+    with pytest.raises(ConfigError, match=r"preset 'bogus': choose one of ultrafast, "):
+        write_video(scene, out, codec="h264", preset="bogus")
+    assert list(tmp_path.iterdir()) == []
+    named = write_video(scene, tmp_path / "h264.mp4", codec="h264", preset="veryfast")
+    default = write_video(scene, tmp_path / "libx264.mp4", preset="veryfast")
+    assert named.read_bytes() == default.read_bytes()
+
+
 @pytest.mark.parametrize(("size", "pix_fmt"), [("640x479", "yuv422p"), ("641x479", "yuv444p"),
                                                ("641x479", "yuv444p10le")])
 def test_a_pixel_format_whose_chroma_is_not_halved_that_way_takes_an_odd_size(

@@ -152,34 +152,36 @@ def write_video(
     ``crf`` / ``preset`` are passed to the encoder (x264 / x265 understand both). For yuv420p
     the BGR -> I420 conversion is done by OpenCV (width and height must be even). ``keyint``:
     a key frame at least every that many frames (a stream a receiver may join part way; None:
-    the encoder's choice). With libx264 (the default) the bytes are deterministic too: the
-    same scene and parameters give the same file (:data:`DETERMINISTIC_X264`; another
-    ``codec``'s need not be). ``path`` appears only once the video is complete.
+    the encoder's choice). With libx264 (the default; ``h264`` opens it too) the bytes are
+    deterministic too: the same scene and parameters give the same file
+    (:data:`DETERMINISTIC_X264`; another encoder's need not be). ``path`` appears only once
+    the video is complete.
     """
     path = Path(path)
-    _check_video(scene, path, preset, codec, pix_fmt)
+    encoder = _check_video(scene, path, preset, codec, pix_fmt)
     with replacing(path) as (temp,):
-        _encode_video(scene, path, temp, crf, preset, codec, pix_fmt, progress, keyint)
+        _encode_video(scene, path, temp, crf, preset, encoder, pix_fmt, progress, keyint)
     return path
 
 
-def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str) -> None:
-    """OutputError naming ``path`` when FFmpeg has no container for its name; then
-    ConfigError when the encoder, preset or pixel format cannot be used."""
+def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str) -> str:
+    """The name of the encoder ``codec`` opens (``libx264`` for ``h264``); OutputError naming
+    ``path`` when FFmpeg has no container for its name; then ConfigError when the encoder,
+    preset or pixel format cannot be used."""
     _check_container(path)
     try:
-        av.codec.Codec(codec, "w")
+        encoder = av.codec.Codec(codec, "w")
     except ValueError as exc:
         raise ConfigError(f"{path}: no video encoder named {codec!r}") from exc
-    if codec in ("libx264", "libx265") and preset not in X264_PRESETS:
+    if encoder.name in ("libx264", "libx265") and preset not in X264_PRESETS:
         raise ConfigError(f"{path}: preset {preset!r}: choose one of {', '.join(X264_PRESETS)}")
     try:
         layout = av.VideoFormat(pix_fmt, 2, 2)
     except ValueError as exc:
         raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
-    taken = [f.name for f in av.codec.Codec(codec, "w").video_formats or ()]
+    taken = [f.name for f in encoder.video_formats or ()]
     grey = ""
-    if codec == "libx264":  # it takes grey frames, but writes them as 4:2:0 colour
+    if encoder.name == "libx264":  # it takes grey frames, but writes them as 4:2:0 colour
         if pix_fmt in taken and len(layout.components) == 1:  # gray10le as yuv420p10le
             grey = f" (it writes grey as {pix_fmt.replace('gray', 'yuv420p')})"
         taken = [name for name in taken if len(av.VideoFormat(name).components) > 1]
@@ -187,6 +189,7 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
         raise ConfigError(f"{path}: {codec} does not take pixel format {pix_fmt}{grey}; it "
                           f"takes {', '.join(taken)}")
     _need_even_for(scene, layout, f"{path}: pixel format {pix_fmt}")
+    return encoder.name
 
 
 def _encode_video(scene: Scene, path: Path, temp: Path, crf: int, preset: str, codec: str,
