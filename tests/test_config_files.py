@@ -186,6 +186,33 @@ def test_a_config_at_a_long_path_is_named_cut_in_later_refusals(
     assert json.loads((run / "run.json").read_text())["config"]["source"] == long
 
 
+def test_a_long_config_path_is_named_cut_in_refusals_of_the_loaded_config(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """Refusals the Config builds once loaded named a 2000-character path whole: a
+    mot_detections stage with no path (vtrack run, and a Tracker), a --set whose value
+    contradicts another parameter. Cut there too."""
+    folder = tmp_path.joinpath(*["d" * 200] * 10)
+    folder.mkdir(parents=True)
+    mot = folder / "mot.toml"
+    mot.write_text('[[stage]]\nname = "mot_detections"\n[[stage]]\nname = "kalman_tracks"\n')
+    robust = folder / "robust.toml"
+    robust.write_text(vtrack("stages", "robust", "--toml").stdout)
+    clip = clip_factory("smooth", width=160, height=120, frames=10)
+    box = clip.gt.read_text().split()[0]
+    lines = [one_error_line(vtrack("run", str(clip.path), "--no-video", "-o",
+                                   str(tmp_path / "o"), *args)) for args in (
+        ("-c", str(mot)),
+        ("-c", str(robust), "--init", box, "--set", "robust_search.interp_scales=5"))]
+    with pytest.raises(ConfigError) as info:
+        Tracker(config=str(mot))
+    lines.append(str(info.value))
+    for line, config in zip(lines, (mot, robust, mot), strict=True):
+        named = f"{str(config)[:100]}...{str(config)[-30:]} ({len(str(config))} characters)"
+        assert str(config) not in line and named in line and len(line) < 1000, line[:1000]
+    assert "stage 'mot_detections': parameter 'path' must name the file it reads" in lines[0]
+    assert "interp_scales (5) is smaller than scales (17)" in lines[1]
+
+
 def test_an_empty_name_given_to_stages_says_what_it_takes() -> None:
     """`vtrack stages ''` said ': not a stage, a shipped config or a config file (stages: ...)',
     naming nothing, where `vtrack run -c ''` says what --config takes."""

@@ -102,23 +102,29 @@ class Config:
             raise TypeError("Config stages: expected a list of (stage name, {parameter: "
                             f"value}}) pairs, got {shown(self.stages)}")
         if not self.stages:
-            raise ConfigError(f"{self.source}: no stages: a config is a chain of stages")
+            raise ConfigError(f"{self._named}: no stages: a config is a chain of stages")
         # names, parameters and types checked; each value kept as its parameter's Python type
         object.__setattr__(self, "stages", tuple(
-            (name, StageValues(checked_values(name, values, self.source)))
+            (name, StageValues(checked_values(name, values, self._named)))
             for name, values in self.stages))
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
-                raise ConfigError(f"{self.source}: {key} must be text, got "
+                raise ConfigError(f"{self._named}: {key} must be text, got "
                                   f"{shown(getattr(self, key))}")
         if not self.name.strip():
-            raise ConfigError(f"{self.source}: name is empty: a config's name names its "
+            raise ConfigError(f"{self._named}: name is empty: a config's name names its "
                               "results folder")
         check_chain(self)
 
+    @property
+    def _named(self) -> str:
+        """``source`` as a one-line refusal names it (:func:`~vtrack.errors.cut`: a path of
+        thousands of characters shortened); ``source`` and run.json keep it whole."""
+        return cut(self.source)
+
     def build(self) -> list[Stage]:
         """Construct the stages (values were validated when the Config was made)."""
-        return [build_stage(name, values, self.source) for name, values in self.stages]
+        return [build_stage(name, values, self._named) for name, values in self.stages]
 
     def check_files_named(self) -> None:
         """ConfigError naming ``source``, the stage and the parameter for a parameter naming a
@@ -127,7 +133,7 @@ class Config:
         a Tracker, before any frame is read."""
         for _, stage, name, value in self.file_values():
             if not value:
-                raise ConfigError(f"{self.source}: stage '{stage}': parameter '{name}' must "
+                raise ConfigError(f"{self._named}: stage '{stage}': parameter '{name}' must "
                                   f"name the file it reads ({name} = \"FILE\" in its "
                                   f"[[stage]] table, or --set {stage}.{name}=FILE)")
 
@@ -136,13 +142,13 @@ class Config:
         file its stage reads (the stage's ``file_params``: mot_detections.path), in chain
         order."""
         for index, (stage, values) in enumerate(self.stages):
-            for name in stage_class(stage, self.source).file_params:
+            for name in stage_class(stage, self._named).file_params:
                 yield index, stage, name, values.get(name)
 
     def stage_classes(self) -> list[type[Stage]]:
         """The stages' classes (their declarations: parameters, requires/provides, kind), no
         stage built."""
-        return [stage_class(name, self.source) for name, _ in self.stages]
+        return [stage_class(name, self._named) for name, _ in self.stages]
 
     @property
     def multi_target(self) -> bool:
@@ -344,7 +350,7 @@ def check_chain(config: Config) -> None:
     """Reject a chain in which a stage reads a context field no earlier stage provides (or whose
     value an earlier stage made stale, see :data:`~vtrack.stages.base.DERIVED`), and a chain
     that cannot track (:func:`_check_tracks`)."""
-    check_stages(config.source, config.stage_classes(), [values for _, values in config.stages])
+    check_stages(config._named, config.stage_classes(), [values for _, values in config.stages])
 
 
 def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str, Any]]) -> None:
