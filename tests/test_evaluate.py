@@ -17,12 +17,14 @@ from vtrack.evaluate import (
     frame_scores,
     mean_center_error,
     mean_overlap,
+    negative_note,
     parse_box,
     precision_at,
     precision_curve,
     read_boxes,
     read_mot,
     read_mot_detections,
+    read_truth,
     success_curve,
     summarize,
     tracking_miss_rate,
@@ -320,6 +322,20 @@ def test_empty_fields_after_the_last_number_are_taken(tmp_path, read, text, expe
     (``10,20,30,40,,,,``) for a number left out and refused a file read before: nothing
     follows those fields, so no number is in the wrong column."""
     assert read(write(tmp_path, text)) == expected
+
+
+def test_the_negative_size_note_is_reachable_from_vtrack_evaluate(tmp_path):
+    """read_boxes reads a box of negative width or height as the target absent, and
+    ``vtrack run --gt`` warns of it; the library's readers in vtrack.evaluate had no way to
+    that warning (read_truth and negative_note were in vtrack.evaluate.groundtruth only)."""
+    path = write(tmp_path, "10,20,30,40\n5,5,-3,4\n0,0,0,0\n")
+    truth = read_truth(path)
+    assert truth.boxes == read_boxes(path) == [Box(10, 20, 30, 40), None, None]
+    assert truth.negative == [2]
+    assert negative_note(path, truth) == (f"{path}: 1 box with a negative width or height (the "
+                                          "first on line 2) read as the target absent: its "
+                                          "frame is not scored")
+    assert negative_note(path, read_truth(write(tmp_path, "1,2,3,4\n", "ok.txt"))) is None
 
 
 def test_read_boxes_unreadable_or_empty(tmp_path):
