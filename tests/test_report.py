@@ -169,6 +169,28 @@ def test_gt_for_an_input_whose_runs_have_their_own_says_why_it_went_unused(
             "--gt does not replace") in result.stderr.splitlines()
 
 
+def test_gt_naming_the_runs_own_file_another_way_is_not_said_unused(
+        clip_factory: ClipFactory, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack run clip.mp4 --gt clip.gt.txt -o run; vtrack report run --gt clip.gt.txt` warned
+    "--gt clip.gt.txt: no run was scored with it: 1 run was already scored with its own ground
+    truth (/abs/clip.gt.txt)", the very same file (the run records the path it found); so did
+    `--gt clip=clip.gt.txt`. The same file, however named, is no warning; a copy still is."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    shutil.copy(clip.path, tmp_path / "clip.mp4")
+    shutil.copy(clip.gt, tmp_path / "clip.gt.txt")
+    shutil.copy(clip.gt, tmp_path / "copy.gt.txt")
+    monkeypatch.chdir(tmp_path)
+    assert vtrack("run", "clip.mp4", "--gt", "clip.gt.txt", "--no-video", "--quiet",
+                  "--out", "run").exit_code == 0
+    for gt in ("clip.gt.txt", "clip=clip.gt.txt", "clip=./clip.gt.txt"):
+        result = vtrack("report", "run", "--gt", gt, "--out", "r")
+        assert result.exit_code == 0 and "warning" not in result.stderr, (gt, result.stderr)
+    result = vtrack("report", "run", "--gt", "copy.gt.txt", "--out", "r")
+    assert ("vtrack: warning: --gt copy.gt.txt: no run was scored with it: 1 run was already "
+            f"scored with its own ground truth ({tmp_path.resolve() / 'clip.gt.txt'}), which "
+            "--gt does not replace") in result.stderr.splitlines(), result.stderr
+
+
 def test_boxes_of_negative_size_are_warned_of_not_dropped_silently(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A ground-truth line `x,y,-w,h` (a converter's x2 - x1 of swapped corners) was read as

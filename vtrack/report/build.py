@@ -406,6 +406,24 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
     return "; ".join([f"{warning}: {why[0]}", *why[1:]]) if why else warning
 
 
+def _same_file(one: str, other: str) -> bool:
+    """Whether the paths ``one`` and ``other`` name one file (as text, or found from here: a
+    run records the ground truth it read by the path found from where it started)."""
+    try:
+        return one == other or os.path.samefile(one, other)
+    except (OSError, ValueError):  # (not a file here)
+        return False
+
+
+def _scored_with(truth: GroundTruth, runs: Sequence[RunResult]) -> bool:
+    """Whether a run was scored with ``truth``'s file: this report scored it with ``truth``,
+    or it is a run ``truth`` is for that recorded that very file as its own ground truth
+    (``vtrack report RUN --gt FILE`` of ``vtrack run --gt FILE``: nothing went unused)."""
+    return any(r.ground_truth == truth.path
+               or (r.ground_truth and truth.belongs_to(r.input, {})
+                   and _same_file(r.ground_truth, truth.path)) for r in runs)
+
+
 def _takes_plain_gt(run: RunResult) -> bool:
     """Whether a plain ``--gt FILE`` is for ``run``: a single-target run that recorded no
     ground truth (one whose frames the file does not fit has a warning of its own)."""
@@ -446,7 +464,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
             if runs[-1].note:
                 warnings.append(runs[-1].note)
     for truth in truths:
-        unused = not any(r.ground_truth == truth.path for r in runs)
+        unused = not _scored_with(truth, runs)
         if unused and (truth.input is not None or not any(map(_takes_plain_gt, runs))):
             warnings.append(_unused_gt_warning(truth, runs))
         scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
