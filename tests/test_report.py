@@ -191,6 +191,30 @@ def test_gt_naming_the_runs_own_file_another_way_is_not_said_unused(
             "--gt does not replace") in result.stderr.splitlines(), result.stderr
 
 
+def test_gt_warnings_are_no_reason_for_a_report_without_runs(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`vtrack report empty --gt clip.gt.txt` said "empty: no run to report; --gt clip.gt.txt:
+    no run was scored with it" (was: "no run.json found"), the --gt warning as its reason; a
+    file with a negative-size box gave "2 left out", its note among them; a folder with one
+    broken run.json said "2 left out". The --gt files' warnings are given with a report's runs,
+    never as why there are none."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    negative = tmp_path / "negative.txt"
+    negative.write_text("1,1,5,5\n1,1,-5,5\n")
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "broken" / "x").mkdir(parents=True)
+    (tmp_path / "broken" / "x" / "run.json").write_text("{")
+    for gt in (clip.gt, negative):
+        assert one_error_line(vtrack("report", str(tmp_path / "empty"), "--gt", str(gt),
+                                     "--out", str(tmp_path / "r"))) == (
+            f"vtrack: error: {tmp_path / 'empty'}: no run.json found (give vtrack run or vtrack "
+            "batch output folders)")
+        assert one_error_line(vtrack("report", str(tmp_path / "broken"), "--gt", str(gt),
+                                     "--out", str(tmp_path / "r"))) == (
+            f"vtrack: error: {tmp_path / 'broken'}: no run to report; left out: "
+            f"{tmp_path / 'broken' / 'x' / 'run.json'}: not a vtrack run record")
+
+
 def test_boxes_of_negative_size_are_warned_of_not_dropped_silently(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A ground-truth line `x,y,-w,h` (a converter's x2 - x1 of swapped corners) was read as

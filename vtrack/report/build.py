@@ -424,6 +424,22 @@ def _scored_with(truth: GroundTruth, runs: Sequence[RunResult]) -> bool:
                    and _same_file(r.ground_truth, truth.path)) for r in runs)
 
 
+def _gt_warnings(truths: Sequence[GroundTruth], runs: Sequence[RunResult]) -> list[str]:
+    """The warnings of the report's ``--gt`` files that scored no run (and why), and of a
+    plain one that scored several inputs (one file is one input's ground truth)."""
+    warnings = []
+    for truth in truths:
+        unused = not _scored_with(truth, runs)
+        if unused and (truth.input is not None or not any(map(_takes_plain_gt, runs))):
+            warnings.append(_unused_gt_warning(truth, runs))
+        scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
+        if truth.input is None and len(scored) > 1:
+            warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
+                            f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
+                            "for each input")
+    return warnings
+
+
 def _takes_plain_gt(run: RunResult) -> bool:
     """Whether a plain ``--gt FILE`` is for ``run``: a single-target run that recorded no
     ground truth (one whose frames the file does not fit has a warning of its own)."""
@@ -453,7 +469,7 @@ def build_report(results: Sequence[Path], out_dir: Path,
     truths = [GroundTruth.parse(str(spec), gt_origin, gt_first) for spec in specs]
     _refuse_two_files_for_one_input(truths)
     walked = walk_results(results)
-    warnings: list[str] = [t.note for t in truths if t.note] + still_written(walked)
+    warnings = still_written(walked)
     runs: list[RunResult] = []
     for folder in run_folders(results, walked, warnings):
         try:
@@ -463,15 +479,6 @@ def build_report(results: Sequence[Path], out_dir: Path,
         else:
             if runs[-1].note:
                 warnings.append(runs[-1].note)
-    for truth in truths:
-        unused = not _scored_with(truth, runs)
-        if unused and (truth.input is not None or not any(map(_takes_plain_gt, runs))):
-            warnings.append(_unused_gt_warning(truth, runs))
-        scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
-        if truth.input is None and len(scored) > 1:  # one file is one input's ground truth
-            warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
-                            f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "
-                            "for each input")
     failed = failed_runs(results, walked, runs, warnings)
     if not runs and not failed:
         named = ", ".join(str(r) for r in results)
@@ -485,6 +492,9 @@ def build_report(results: Sequence[Path], out_dir: Path,
                              + (f"; and {more} more" if more > 0 else ""))
         raise InputError(f"{named}: no run.json found (give vtrack run or vtrack batch output "
                          "folders)")
+    # (of the --gt files, not of runs left out: not a reason for a report without runs)
+    warnings[:0] = [t.note for t in truths if t.note]
+    warnings += _gt_warnings(truths, runs)
     failed = _distinct_failed(failed, runs)  # (by the runs' input names, not yet told apart)
     _distinct_inputs(runs)
     failed = _distinct_labels(runs, failed, results)
