@@ -274,6 +274,35 @@ def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
             ) in result.stderr.splitlines(), result.stderr
 
 
+def test_gt_for_an_input_by_its_file_name_says_why_it_went_unused(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """`--gt clip.mp4=FILE` (the input by its file name, as --gt INPUT=FILE takes it) for a run
+    that recorded its own ground truth, or a multi-target run, warned only "no run of input
+    clip.mp4 was scored with it", no reason: the runs of that input were matched by their
+    name alone. Now the reason is given, and the run's own file so named is no warning."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    multi = clip_factory("multi", width=W, height=H, frames=60)
+    assert multi.mot is not None
+    for name, args in (("single", (str(clip.path), "--gt", str(clip.gt))),
+                       ("multi", (str(multi.path), "-c", "s3", "--gt", str(multi.mot)))):
+        assert vtrack("run", *args, "--no-video", "--quiet",
+                      "--out", str(tmp_path / "runs" / name)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    for path, why in ((clip.path, f"1 run of it was already scored with its own ground truth "
+                                  f"({clip.gt}), which --gt does not replace"),
+                      (multi.path, "1 multi-target run of it is scored only with the ground "
+                                   "truth given to vtrack run --gt")):
+        result = vtrack("report", str(tmp_path / "runs"), "--gt", f"{path.name}={other}",
+                        "--out", str(tmp_path / "r"))
+        assert result.exit_code == 0, result.output
+        assert (f"vtrack: warning: --gt {path.name}={other}: no run of input {path.name} was "
+                f"scored with it: {why}") in result.stderr.splitlines(), result.stderr
+    result = vtrack("report", str(tmp_path / "runs" / "single"), "--gt",
+                    f"{clip.path.name}={clip.gt}", "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0 and "warning" not in result.stderr, result.stderr
+
+
 def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said

@@ -391,7 +391,7 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
         warning = (f"--gt {truth.input}={truth.path}: no run of input {truth.input} was scored "
                    "with it")
         of = " of it"
-    mine = [r for r in runs if truth.belongs_to(r.input, {})]
+    mine = [r for r in runs if truth.input is None or r.gt_given is truth]
     own = [r for r in mine if r.ground_truth and not r.multi_target]
     why = []
     if own:
@@ -416,12 +416,11 @@ def _same_file(one: str, other: str) -> bool:
 
 
 def _scored_with(truth: GroundTruth, runs: Sequence[RunResult]) -> bool:
-    """Whether a run was scored with ``truth``'s file: this report scored it with ``truth``,
-    or it is a run ``truth`` is for that recorded that very file as its own ground truth
-    (``vtrack report RUN --gt FILE`` of ``vtrack run --gt FILE``: nothing went unused)."""
-    return any(r.ground_truth == truth.path
-               or (r.ground_truth and truth.belongs_to(r.input, {})
-                   and _same_file(r.ground_truth, truth.path)) for r in runs)
+    """Whether a run ``truth`` is for (its :attr:`~.runs.RunResult.gt_given`) was scored with
+    its file: by this report, or as the run's own ground truth, that very file (``vtrack report
+    RUN --gt FILE`` of ``vtrack run --gt FILE``: nothing went unused)."""
+    return any(r.gt_given is truth and r.ground_truth and _same_file(r.ground_truth, truth.path)
+               for r in runs)
 
 
 def _gt_warnings(truths: Sequence[GroundTruth], runs: Sequence[RunResult]) -> list[str]:

@@ -175,6 +175,9 @@ class RunResult:
     target: int | None = None
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
     config_key: str = ""
+    #: The report's ``--gt`` for this run (:func:`pick_ground_truth`: its input's before a
+    #: plain one), whether or not it scored it; None: none is for it.
+    gt_given: GroundTruth | None = field(default=None, compare=False, repr=False)
 
     @cached_property
     def box_to_target(self) -> float | None:
@@ -654,7 +657,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
         found_input = _found_path(record, "input")
         # the --gt for its input, matched for every run: one input named two ways is refused
         # whether or not the run takes it (its own ground truth, several targets)
-        truth = pick_ground_truth(truths, result.input, request, found_input)
+        truth = result.gt_given = pick_ground_truth(truths, result.input, request, found_input)
         if result.multi_target:
             result.mot = _mot_metrics(record)
     except (TypeError, ValueError, OverflowError):
