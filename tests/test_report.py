@@ -303,6 +303,28 @@ def test_gt_for_an_input_by_its_file_name_says_why_it_went_unused(
     assert result.exit_code == 0 and "warning" not in result.stderr, result.stderr
 
 
+def test_a_plain_gt_unused_for_an_inputs_own_gt_names_that_one(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A run made without ground truth, `--gt other --gt clip=good`: the run took its input's
+    own file, and other was said unused because the run "was already scored with its own
+    ground truth (good), which --gt does not replace", though good came from the report's
+    own --gt. Now it says the run was scored with --gt clip=good instead."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    run = tmp_path / "run"
+    box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
+    assert vtrack("run", str(clip.path), "--init", box, "--no-video", "--quiet", "--out",
+                  str(run)).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    name = clip.path.stem
+    result = vtrack("report", str(run), "--gt", str(other), "--gt", f"{name}={clip.gt}",
+                    "--out", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    assert [line for line in result.stderr.splitlines() if "--gt" in line] == [
+        f"vtrack: warning: --gt {other}: no run was scored with it: 1 run was scored with "
+        f"--gt {name}={clip.gt} instead"], result.stderr
+
+
 def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said

@@ -383,8 +383,9 @@ def _refuse_two_files_for_one_input(truths: Sequence[GroundTruth]) -> None:
 def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
     """The warning for ``--gt INPUT=FILE``, or a plain ``--gt FILE``, that scored no run:
     saying, when it is so, that runs of that input (of any input, for a plain one) were
-    already scored with the ground truth they recorded (which ``--gt`` does not replace), and
-    how many are multi-target runs (which it never scores)."""
+    scored with another ``--gt INPUT=FILE`` (for a plain one: their input's own, which it
+    does not replace) or already with the ground truth they recorded (which ``--gt`` does not
+    replace), and how many are multi-target runs (which it never scores)."""
     if truth.input is None:
         warning, of = f"--gt {truth.path}: no run was scored with it", ""
     else:
@@ -392,8 +393,13 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
                    "with it")
         of = " of it"
     mine = [r for r in runs if truth.input is None or r.gt_given is truth]
-    own = [r for r in mine if r.ground_truth and not r.multi_target]
-    why = []
+    own = [r for r in mine if r.ground_truth and not r.multi_target and not r.gt_scored]
+    # (a plain one's runs that took their input's --gt INPUT=FILE: a reason of its own)
+    taken = [r.gt_given for r in mine if r.gt_scored and r.gt_given and r.gt_given is not truth]
+    why = [f"{plural(n, 'run')} {'was' if n == 1 else 'were'} scored with --gt "
+           f"{other.input}={other.path} instead"
+           for other in {id(t): t for t in taken}.values()
+           if (n := sum(t is other for t in taken))]
     if own:
         files = ", ".join(sorted({str(r.ground_truth) for r in own}))
         why.append(f"{plural(len(own), 'run')}{of} {'was' if len(own) == 1 else 'were'} "
@@ -431,7 +437,7 @@ def _gt_warnings(truths: Sequence[GroundTruth], runs: Sequence[RunResult]) -> li
         unused = not _scored_with(truth, runs)
         if unused and (truth.input is not None or not any(map(_takes_plain_gt, runs))):
             warnings.append(_unused_gt_warning(truth, runs))
-        scored = sorted({r.input for r in runs if r.ground_truth == truth.path})
+        scored = sorted({r.input for r in runs if r.gt_scored and r.gt_given is truth})
         if truth.input is None and len(scored) > 1:
             warnings.append(f"--gt {truth.path} scored {len(scored)} inputs "
                             f"({', '.join(scored)}), each of its length: give --gt INPUT=FILE "

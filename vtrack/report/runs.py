@@ -176,8 +176,10 @@ class RunResult:
     #: What tells configs of one name apart: the resolved chain the run recorded, else the name.
     config_key: str = ""
     #: The report's ``--gt`` for this run (:func:`pick_ground_truth`: its input's before a
-    #: plain one), whether or not it scored it; None: none is for it.
+    #: plain one; None: none is for it), and whether the run was scored with it (not: its own
+    #: ground truth, several targets, another length).
     gt_given: GroundTruth | None = field(default=None, compare=False, repr=False)
+    gt_scored: bool = False
 
     @cached_property
     def box_to_target(self) -> float | None:
@@ -709,7 +711,7 @@ def load_run(folder: Path, gt: GroundTruth | Sequence[GroundTruth] | None = None
                                f"--gt {shlex.quote(result.input)}=FILE with its own ground "
                                "truth")
             else:
-                result.ground_truth = truth.path
+                result.ground_truth, result.gt_scored = truth.path, True
                 result.truth = truth.boxes[start:]
                 result.overlaps, result.errors = _scored_as_written(result.boxes,
                                                                     result.truth)
