@@ -325,6 +325,27 @@ def test_a_plain_gt_unused_for_an_inputs_own_gt_names_that_one(
         f"--gt {name}={clip.gt} instead"], result.stderr
 
 
+def test_a_plain_gt_unused_by_many_runs_names_a_few_of_their_files(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A plain --gt no run took named every run's own ground truth in its one line (a batch of
+    100 inputs: 100 paths). Now it names the first 4 and how many more."""
+    clip = clip_factory("smooth", width=W, height=H, frames=20)
+    for n in range(6):
+        gt = tmp_path / f"gt{n}.txt"
+        gt.write_text(clip.gt.read_text())
+        assert vtrack("run", str(clip.path), "--gt", str(gt), "--no-video", "--quiet",
+                      "--out", str(tmp_path / "runs" / f"r{n}")).exit_code == 0
+    other = tmp_path / "other.gt.txt"
+    other.write_text(clip.gt.read_text())
+    result = vtrack("report", str(tmp_path / "runs"), "--gt", str(other), "--out",
+                    str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    files = ", ".join(str(tmp_path / f"gt{n}.txt") for n in range(4))
+    assert (f"vtrack: warning: --gt {other}: no run was scored with it: 6 runs were already "
+            f"scored with their own ground truth ({files} and 2 more), which --gt does not "
+            "replace") in result.stderr.splitlines(), result.stderr
+
+
 def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
         clip_factory: ClipFactory, tmp_path: Path) -> None:
     """A run made without ground truth, `--gt clip=good --gt clip=other`: the second was said

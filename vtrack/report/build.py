@@ -401,7 +401,7 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
            for other in {id(t): t for t in taken}.values()
            if (n := sum(t is other for t in taken))]
     if own:
-        files = ", ".join(sorted({str(r.ground_truth) for r in own}))
+        files = first_few(sorted({str(r.ground_truth) for r in own}), NAMED_REASONS)
         why.append(f"{plural(len(own), 'run')}{of} {'was' if len(own) == 1 else 'were'} "
                    f"already scored with {'its' if len(own) == 1 else 'their'} own ground "
                    f"truth ({files}), which --gt does not replace")
