@@ -23,7 +23,7 @@ from vtrack.evaluate import auc, frame_scores, precision_at, read_boxes
 from vtrack.geometry import Box
 
 if TYPE_CHECKING:
-    from conftest import ClipFactory
+    from conftest import Clip, ClipFactory
 
 W, H = 160, 120
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -250,12 +250,11 @@ def test_boxes_of_negative_size_are_warned_of_not_dropped_silently(
     assert "negative" not in result.stderr
 
 
-def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
-        clip_factory: ClipFactory, tmp_path: Path) -> None:
-    """A plain ``--gt FILE`` given to the report of a run that recorded its own ground truth,
-    and of a multi-target run, scored neither (the report showed the run's own file's scores)
-    without a word, exit 0: the user who meant to score against FILE read the scores of
-    another. Now a warning says no run was scored with it, and why."""
+def _runs_with_their_own_ground_truth(clip_factory: ClipFactory,
+                                      tmp_path: Path) -> tuple[Clip, Clip, Path]:
+    """A single-target run and a multi-target (s3) run under ``tmp_path/runs``, each scored
+    with its clip's own ground truth, and a copy of the single clip's file elsewhere
+    (``other.gt.txt``): a --gt the report can be given that no run recorded."""
     clip = clip_factory("smooth", width=W, height=H, frames=20)
     multi = clip_factory("multi", width=W, height=H, frames=60)
     assert multi.mot is not None
@@ -265,6 +264,16 @@ def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
                       "--out", str(tmp_path / "runs" / name)).exit_code == 0
     other = tmp_path / "other.gt.txt"
     other.write_text(clip.gt.read_text())
+    return clip, multi, other
+
+
+def test_a_plain_gt_no_run_takes_says_why_it_went_unused(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A plain ``--gt FILE`` given to the report of a run that recorded its own ground truth,
+    and of a multi-target run, scored neither (the report showed the run's own file's scores)
+    without a word, exit 0: the user who meant to score against FILE read the scores of
+    another. Now a warning says no run was scored with it, and why."""
+    clip, multi, other = _runs_with_their_own_ground_truth(clip_factory, tmp_path)
     result = vtrack("report", str(tmp_path / "runs"), "--gt", str(other), "--out",
                     str(tmp_path / "r"))
     assert result.exit_code == 0, result.output
@@ -280,15 +289,7 @@ def test_gt_for_an_input_by_its_file_name_says_why_it_went_unused(
     that recorded its own ground truth, or a multi-target run, warned only "no run of input
     clip.mp4 was scored with it", no reason: the runs of that input were matched by their
     name alone. Now the reason is given, and the run's own file so named is no warning."""
-    clip = clip_factory("smooth", width=W, height=H, frames=20)
-    multi = clip_factory("multi", width=W, height=H, frames=60)
-    assert multi.mot is not None
-    for name, args in (("single", (str(clip.path), "--gt", str(clip.gt))),
-                       ("multi", (str(multi.path), "-c", "s3", "--gt", str(multi.mot)))):
-        assert vtrack("run", *args, "--no-video", "--quiet",
-                      "--out", str(tmp_path / "runs" / name)).exit_code == 0
-    other = tmp_path / "other.gt.txt"
-    other.write_text(clip.gt.read_text())
+    clip, multi, other = _runs_with_their_own_ground_truth(clip_factory, tmp_path)
     for path, why in ((clip.path, f"1 run of it was already scored with its own ground truth "
                                   f"({clip.gt}), which --gt does not replace"),
                       (multi.path, "1 multi-target run of it is scored only with the ground "
