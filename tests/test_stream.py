@@ -201,6 +201,31 @@ def test_an_image_of_the_input_sequence_is_refused_as_the_stream(tmp_path: Path)
     assert len(beside.read_text().splitlines()) == 10
 
 
+def test_an_image_of_the_input_sequence_through_a_link_is_refused_as_the_stream(
+        tmp_path: Path) -> None:
+    """A stream that is a symbolic link to an image of the sequence (`--stream out.jsonl`,
+    out.jsonl -> SEQ/img/0003.jpg) or an image of a sequence of links (`--stream L/0003.jpg`,
+    L/0003.jpg -> SEQ/img/0003.jpg) replaced the image with the run's JSON lines, exit 0: the
+    image name was read from the path as typed but its folder from the file it leads to."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    seq = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    images = sorted((seq / "img").iterdir())
+    originals = [image.read_bytes() for image in images]
+    link = tmp_path / "out.jsonl"
+    link.symlink_to(seq / "img" / "0003.jpg")
+    links = tmp_path / "links"  # a sequence whose images are links to another's
+    links.mkdir()
+    for image in images:
+        (links / image.name).symlink_to(image)
+    for given, stream in ((seq, link), (links, links / "0003.jpg")):
+        _refused_as_stream(tmp_path / "out", stream,
+                           f"is an image of the input of this run ({given})",
+                           str(given), "--init", box)
+    assert [image.read_bytes() for image in images] == originals
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_inputs_sidecar_box_is_refused_as_the_stream(tmp_path: Path) -> None:
     """`vtrack run clip.mp4 -y --stream clip.init.txt` read its first box from the sidecar
     and then wrote its JSON lines over it, exit 0; the next run without --init failed on it

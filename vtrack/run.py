@@ -85,7 +85,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.csvfile import box_as_written, scores_as_written
-from vtrack.io.files import is_temp_of, refuse_replacing_file
+from vtrack.io.files import is_temp_of, places_of, refuse_replacing_file
 from vtrack.io.identity import sizes
 from vtrack.io.images import is_image_of, sequence_info
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
@@ -802,7 +802,7 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
         raise ConfigError(f"{names.stream} {stream}: is one of this run's own outputs; name "
                           "another file")
     folder = request.out_dir.resolve()  # ... with their temporaries, however the stream is named
-    for place in ({stream.resolve(), stream.parent.resolve() / stream.name} if stream else ()):
+    for place in (places_of(stream) if stream else ()):
         if place.parent == folder and any(is_temp_of(place.name, n) for n in RUN_OUTPUTS):
             raise ConfigError(f"{names.stream} {stream}: is named as a temporary file of this "
                               "run's outputs, which the folder's clean-up removes; name "

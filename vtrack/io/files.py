@@ -115,6 +115,14 @@ class SharedFolders(Generic[T]):
                 else (taken[1], taken[0] != folder_name(name, self._fallback)))
 
 
+def places_of(path: Path) -> set[Path]:
+    """The files ``path`` names, whether they exist or not, however its symbolic links are read:
+    the file it leads to (``path.resolve()``) and its own entry in its folder
+    (``path.parent.resolve() / path.name``, which a writer renaming over it replaces). One
+    place unless ``path`` itself is a symbolic link."""
+    return {path.resolve(), path.parent.resolve() / path.name}
+
+
 def temp_path(path: Path) -> Path:
     """Where a writer writes ``path`` until it is complete: ``dir/.name.tmp-PID-RANDOM.ext``,
     a name no other process (or other writer of this one) uses at the same time.

@@ -34,7 +34,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.files import ffmpeg_file, os_reason
+from vtrack.io.files import ffmpeg_file, os_reason, places_of
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
@@ -121,12 +121,13 @@ def sequence_images(folder: Path) -> Path | None:
 def is_image_of(folder: str | os.PathLike[str], path: Path) -> bool:
     """Whether ``path`` is (or would be) an image of the sequence ``folder`` (a folder: one in
     its images' folder, :func:`sequence_images`, named as :func:`list_images` lists images),
-    however either is named (a symbolic link, ``..``)."""
+    however either is named (``..``, a symbolic link: either the image it leads to or itself,
+    :func:`~vtrack.io.files.places_of`)."""
     root = Path(folder)
     if not root.is_dir():
         return False
     where = (sequence_images(root) or root).resolve()
-    return _image_name(path.name) and path.resolve().parent == where
+    return any(_image_name(place.name) and place.parent == where for place in places_of(path))
 
 
 def holds_images(folder: Path, count: int = 1) -> bool:
