@@ -256,6 +256,27 @@ def test_the_sequences_seqinfo_is_refused_as_the_stream(tmp_path: Path) -> None:
     assert info.read_bytes() == original and not (tmp_path / "out").exists()
 
 
+def test_a_sidecar_or_seqinfo_not_there_yet_is_refused_as_the_stream(tmp_path: Path) -> None:
+    """With --init and no sidecar yet, `vtrack run SEQ --init BOX -y --stream SEQ/init.txt`
+    wrote the sidecar as the run's JSON lines, exit 0, and the next `vtrack run SEQ` failed on
+    it (``holds 10 lines of values``); the same for a video's clip.init.txt, and for
+    `--stream SEQ/seqinfo.ini` in a sequence without one (next run: ``not a MOTChallenge
+    seqinfo.ini``): only files that existed were compared."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    seq = write_clip(scene, tmp_path / "seq", fmt="images").clip
+    (seq / "seqinfo.ini").unlink()
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    cases = [(seq, seq / "init.txt", "the sidecar box"),
+             (seq / "img", seq / "init.txt", "the sidecar box"),
+             (clip, tmp_path / "clip.init.txt", "the sidecar box"),
+             (seq, seq / "seqinfo.ini", "the sequence's seqinfo.ini")]
+    for given, stream, what in cases:
+        _refused_as_stream(tmp_path / "out", stream, f"is {what} of this run ({stream})",
+                           str(given), "--init", box)
+        assert not stream.exists() and not (tmp_path / "out").exists()
+
+
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:
     """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was

@@ -85,7 +85,7 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.csvfile import box_as_written, scores_as_written
-from vtrack.io.files import is_temp_of, places_of, refuse_replacing_file
+from vtrack.io.files import is_temp_of, places_of, refuse_replacing_file, same_file
 from vtrack.io.identity import sizes
 from vtrack.io.images import is_image_of, sequence_info
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
@@ -783,15 +783,17 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
     reads. Messages call the folder and the stream by ``names``."""
     outputs = [(request.out_dir / name, names.out) for name in files]
     stream = _stream_file(request)
-    reads = [(Path(request.input), "the input"), (request.gt_path, "the ground truth")]
+    # what a run reads, compared by path: a sidecar or seqinfo.ini not there yet would be read
+    # by the next run (the input itself when it is a file: not stdin, a URL or a camera)
+    reads = [(Path(request.input), "the input")] if os.path.exists(request.input) else []
+    reads.append((request.gt_path, "the ground truth"))
     if has_sidecar(request.input):  # read when no --init is given, and by later runs
         reads.append((sidecar_path(request.input), "the sidecar box"))
     if Path(request.input).is_dir():  # its frame rate, when no --fps is given
         reads.append((sequence_info(Path(request.input)), "the sequence's seqinfo.ini"))
     for output, option in outputs + ([(stream, names.stream)] if stream else []):
         for source, what in reads:
-            if source is not None and output.exists() and source.exists() \
-                    and os.path.samefile(output, source):
+            if source is not None and same_file(output, source):
                 raise ConfigError(f"{option} {output}: is {what} of this run ({source}); "
                                   "write the results elsewhere")
     if stream is not None and is_image_of(request.input, stream):

@@ -123,6 +123,14 @@ def places_of(path: Path) -> set[Path]:
     return {path.resolve(), path.parent.resolve() / path.name}
 
 
+def same_file(one: Path, other: Path) -> bool:
+    """Whether ``one`` and ``other`` name the same file, whether it exists yet or not: a place
+    in common (:func:`places_of`), or one existing file both lead to (a hard link)."""
+    if places_of(one) & places_of(other):
+        return True
+    return one.exists() and other.exists() and os.path.samefile(one, other)
+
+
 def temp_path(path: Path) -> Path:
     """Where a writer writes ``path`` until it is complete: ``dir/.name.tmp-PID-RANDOM.ext``,
     a name no other process (or other writer of this one) uses at the same time.
