@@ -102,14 +102,10 @@ def test_a_folder_of_photos_turned_by_an_editor_and_tagged_photos_is_read_whole(
     assert all(frame[:, -10:].max() > 200 and frame[:, :10].max() < 100 for frame in frames)
 
 
-@pytest.mark.parametrize("suffix", [".jpg", ".png", ".tiff", ".webp"])
-@pytest.mark.parametrize("orientation", range(1, 9))
-def test_a_photo_is_upright_by_each_orientation_mirrored_ones_too(tmp_path, orientation, suffix):
-    """The orientations that mirror a photo (2, 4, 5, 7: a front camera's) were read as
-    FFmpeg's quarter turn alone: 2 turned 180 degrees (upside down), 4 not at all, 5 and 7
-    turned but mirrored. A photo alone and in a folder are now upright as EXIF says (as
-    Pillow's exif_transpose turns it); the others as before."""
-    folder = tmp_path / "seq"
+def _tagged_photos(folder: Path, suffix: str, orientation: int) -> tuple[list[Path], np.ndarray]:
+    """Two photos ``FOLDER/0001SUFFIX`` and ``0002SUFFIX`` (made) of a picture marked in its
+    top left corner, saved by Pillow with the EXIF ``orientation``, and the picture upright
+    as Pillow's exif_transpose (and any viewer) shows it, RGB."""
     folder.mkdir()
     pixels = np.full((48, 64, 3), 60, np.uint8)
     pixels[:12, :12] = 250
@@ -119,15 +115,63 @@ def test_a_photo_is_upright_by_each_orientation_mirrored_ones_too(tmp_path, orie
     photos = [folder / f"{i + 1:04d}{suffix}" for i in range(2)]
     for photo in photos:
         Image.fromarray(pixels).save(photo, exif=exif.tobytes(), quality=95, lossless=True)
-    upright = np.asarray(ImageOps.exif_transpose(Image.open(photos[0])).convert("RGB"))
-    with open_source(str(photos[0])) as source:
-        frames = [next(iter(source)).bgr()]
-    if suffix != ".webp":  # no image of a sequence, read alone only
-        with open_source(str(folder)) as source:
-            frames.append(next(iter(source)).bgr())
+    return photos, np.asarray(ImageOps.exif_transpose(Image.open(photos[0])).convert("RGB"))
+
+
+def _assert_upright(frames: list[np.ndarray], upright: np.ndarray) -> None:
+    """Each of ``frames`` (BGR) is the picture ``upright`` (RGB)."""
     for frame in frames:
         assert frame.shape == upright.shape
         assert np.abs(frame[..., ::-1].astype(int) - upright).mean() < 3
+
+
+@pytest.mark.parametrize("suffix", [".jpg", ".png", ".tiff", ".webp"])
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_a_photo_is_upright_by_each_orientation_mirrored_ones_too(tmp_path, orientation, suffix):
+    """The orientations that mirror a photo (2, 4, 5, 7: a front camera's) were read as
+    FFmpeg's quarter turn alone: 2 turned 180 degrees (upside down), 4 not at all, 5 and 7
+    turned but mirrored. A photo alone and in a folder are now upright as EXIF says (as
+    Pillow's exif_transpose turns it); the others as before."""
+    photos, upright = _tagged_photos(tmp_path / "seq", suffix, orientation)
+    with open_source(str(photos[0])) as source:
+        frames = [next(iter(source)).bgr()]
+    if suffix != ".webp":  # no image of a sequence, read alone only
+        with open_source(str(photos[0].parent)) as source:
+            frames.append(next(iter(source)).bgr())
+    _assert_upright(frames, upright)
+
+
+def _exif_after_image_data(png: Path) -> None:
+    """Move the eXIf chunk of ``png`` after its image data (IDAT), just before IEND: where
+    the PNG specification allows it, and FFmpeg and Pillow read it."""
+    data = png.read_bytes()
+    chunks, at = [], 8
+    while at < len(data):
+        length = int.from_bytes(data[at:at + 4], "big")
+        chunks.append(data[at:at + 12 + length])
+        at += 12 + length
+    exif = next(chunk for chunk in chunks if chunk[4:8] == b"eXIf")
+    chunks.remove(exif)
+    chunks.insert(len(chunks) - 1, exif)
+    png.write_bytes(data[:8] + b"".join(chunks))
+
+
+@pytest.mark.parametrize("orientation", [2, 5])
+def test_a_png_whose_exif_follows_its_image_data_is_upright(tmp_path, orientation):
+    """A PNG's eXIf chunk after its image data (IDAT) was not looked for (the chunks were read
+    up to IDAT, in the first 128 KiB): FFmpeg turned it as the tag's quarter turn, and the
+    picture was left mirrored (2: upside down). Now upright, alone and in a folder."""
+    photos, upright = _tagged_photos(tmp_path / "seq", ".png", orientation)
+    for photo in photos:
+        _exif_after_image_data(photo)
+    moved = ImageOps.exif_transpose(Image.open(photos[0])).convert("RGB")  # Pillow reads it
+    assert np.array_equal(np.asarray(moved), upright)
+    frames = []
+    for given in (photos[0], photos[0].parent):
+        with open_source(str(given)) as source:
+            frames.append(next(iter(source)).bgr())
+    _assert_upright(frames, upright)
+
 
 def _song_with_cover(path: Path) -> Path:
     """An MP3 of silence whose only picture is its album art (a 32x32 attached picture)."""

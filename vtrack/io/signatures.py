@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from typing import BinaryIO
 
 from vtrack.geometry import frame_size_problem
 
@@ -307,8 +308,11 @@ def jpeg_cut_short(path: str | os.PathLike[str]) -> bool:
 
 
 #: Bytes at a photo's start looked at for its EXIF orientation (JPEG's APP1 segment holding it
-#: is at most 64 KiB).
+#: is at most 64 KiB); a PNG's chunks are walked instead, up to :data:`_PNG_CHUNKS` of them.
 _PHOTO_HEAD = 1 << 17
+#: Chunks of a PNG looked at for its eXIf chunk, which may come after its image data (IDAT,
+#: often in chunks of 4 or 8 KiB): those of a picture of FFmpeg's largest size and more.
+_PNG_CHUNKS = 1 << 17
 #: EXIF orientations that mirror the picture (2, 4, 5, 7); FFmpeg reads them as the turn alone.
 _MIRRORED = frozenset({2, 4, 5, 7})
 #: FFmpeg's decoders of the photos :func:`photo_mirrored` reads the orientation of.
@@ -322,17 +326,17 @@ def photo_mirrored(path: str | os.PathLike[str]) -> bool:
     to bottom, then turned as FFmpeg says. False when it is none of them, has no such tag or
     cannot be read."""
     try:
-        with open(path, "rb") as handle:
-            data = handle.read(_PHOTO_HEAD)
+        with open(path, "rb", buffering=0) as handle:  # a PNG's chunks: 8 bytes read each
+            return _exif_orientation(_exif_of(handle)) in _MIRRORED
     except OSError:
         return False
-    return _exif_orientation(_exif_of(data)) in _MIRRORED
 
 
-def _exif_of(data: bytes) -> bytes:
-    """The EXIF data (from its TIFF header on) in ``data``, a photo's first bytes: a JPEG's
-    APP1 segment, a PNG's eXIf chunk, a WebP's EXIF chunk or a TIFF file itself; b"" when
-    there is none among them."""
+def _exif_of(photo: BinaryIO) -> bytes:
+    """The EXIF data (from its TIFF header on) of the photo ``photo`` reads, from its start: a
+    JPEG's APP1 segment, a PNG's eXIf chunk (before or after its image data), a WebP's EXIF
+    chunk or a TIFF file itself; b"" when there is none among them."""
+    data = photo.read(_PHOTO_HEAD)
     if data[:4] in (b"II*\x00", b"MM\x00*"):
         return data
     if data.startswith(b"\xff\xd8"):
@@ -345,12 +349,7 @@ def _exif_of(data: bytes) -> bytes:
                 break
             at += 1 if marker == 0xFF else 2 + length
     elif data.startswith(b"\x89PNG\r\n\x1a\n"):
-        at = 8
-        while at + 8 <= len(data) and data[at + 4:at + 8] != b"IDAT":
-            length = int.from_bytes(data[at:at + 4], "big")
-            if data[at + 4:at + 8] == b"eXIf":
-                return data[at + 8:at + 8 + length]
-            at += 12 + length
+        return _png_exif(photo)
     elif data[:4] == b"RIFF" and data[8:12] == b"WEBP":
         at = 12
         while at + 8 <= len(data):
@@ -359,6 +358,22 @@ def _exif_of(data: bytes) -> bytes:
                 exif = data[at + 8:at + 8 + length]
                 return exif[6:] if exif.startswith(b"Exif\x00\x00") else exif
             at += 8 + length + length % 2
+    return b""
+
+
+def _png_exif(photo: BinaryIO) -> bytes:
+    """The data of the eXIf chunk of the PNG ``photo`` reads (b"" when it has none before
+    IEND, or among its first :data:`_PNG_CHUNKS` chunks), its chunks walked by their 8-byte
+    headers, each one's data skipped by seeking."""
+    photo.seek(8)
+    for _ in range(_PNG_CHUNKS):
+        header = photo.read(8)
+        if len(header) < 8 or header[4:] == b"IEND":
+            break
+        length = int.from_bytes(header[:4], "big")
+        if header[4:] == b"eXIf":
+            return photo.read(min(length, _PHOTO_HEAD))
+        photo.seek(length + 4, os.SEEK_CUR)  # its data and CRC
     return b""
 
 
