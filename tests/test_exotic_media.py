@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import re
 import struct
 import subprocess
 import sys
+import threading
 import zlib
 from fractions import Fraction
 from pathlib import Path
@@ -170,6 +172,34 @@ def test_a_png_whose_exif_follows_its_image_data_is_upright(tmp_path, orientatio
     for given in (photos[0], photos[0].parent):
         with open_source(str(given)) as source:
             frames.append(next(iter(source)).bgr())
+    _assert_upright(frames, upright)
+
+
+@pytest.mark.parametrize(("suffix", "orientation"), [(".jpg", 5), (".png", 2)])
+def test_a_mirrored_photo_on_a_pipe_or_a_fifo_is_upright(tmp_path, monkeypatch, suffix,
+                                                          orientation):
+    """A photo whose orientation mirrors it, read from a pipe on stdin or from a FIFO, was left
+    as FFmpeg's quarter turn alone (2 upside down, 5 turned but mirrored): its orientation
+    was read only from a regular file. Now from the photo's bytes as they came."""
+    photos, upright = _tagged_photos(tmp_path / "seq", suffix, orientation)
+    data = photos[0].read_bytes()
+    read_fd, write_fd = os.pipe()
+    fifo = tmp_path / "feed"
+    os.mkfifo(fifo)
+
+    def feed(into: int | Path) -> None:
+        with open(into, "wb") as pipe:
+            pipe.write(data)
+
+    frames = []
+    with open(read_fd, "rb") as stdin:
+        monkeypatch.setattr(sys, "stdin", stdin)
+        for given, into in (("-", write_fd), (str(fifo), fifo)):
+            feeder = threading.Thread(target=feed, args=(into,), daemon=True)
+            feeder.start()
+            with open_source(given) as source:
+                frames.append(next(iter(source)).bgr())
+            feeder.join()
     _assert_upright(frames, upright)
 
 

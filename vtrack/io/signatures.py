@@ -9,6 +9,7 @@ headers in a row whose continuity counters advance as a stream's do.
 
 from __future__ import annotations
 
+import io
 import os
 from collections.abc import Iterator
 from typing import BinaryIO
@@ -330,6 +331,12 @@ def photo_mirrored(path: str | os.PathLike[str]) -> bool:
             return _exif_orientation(_exif_of(handle)) in _MIRRORED
     except OSError:
         return False
+
+
+def photo_bytes_mirrored(photo: bytes) -> bool:
+    """:func:`photo_mirrored` for a photo given as its bytes (read from what cannot be read
+    again: a pipe, a FIFO, a URL)."""
+    return _exif_orientation(_exif_of(io.BytesIO(photo))) in _MIRRORED
 
 
 def _exif_of(photo: BinaryIO) -> bytes:

@@ -63,6 +63,7 @@ from vtrack.io.signatures import (
     mp4_head_fragmented,
     mp4_index_problem,
     mp4_torn_box,
+    photo_bytes_mirrored,
     photo_mirrored,
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
@@ -602,6 +603,13 @@ class VideoSource(Source):
         # a live source waits for no frame: one frame thread per core (each holds back a frame)
         stream.codec_context.thread_count = cpu_count() if live else decoder_threads(
             stream.codec_context.width, stream.codec_context.height, cpu_count())
+        # a photo's orientation tag is read from the file, or for what cannot be read again
+        # from its first packet (the photo's bytes, as the image demuxers hand a photo over),
+        # which :meth:`_decode` keeps as ``_photo`` until it is read
+        photo = stream.codec_context.name in PHOTO_CODECS
+        rereadable = path != "-" and "://" not in path and os.path.isfile(path)
+        self._photo: bytes | None = None
+        self._keep_photo = photo and not rereadable
         self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
@@ -643,8 +651,9 @@ class VideoSource(Source):
 
         self._rotation = quarter_turns(self._first.rotation)
         # a photo whose orientation tag mirrors it (FFmpeg's rotation is the rest of it)
-        self._mirrored = stream.codec_context.name in PHOTO_CODECS and os.path.isfile(path) \
-            and photo_mirrored(path)
+        self._mirrored = photo and (photo_mirrored(path) if rereadable else
+                                    photo_bytes_mirrored(self._photo or b""))
+        self._photo = None
         width, height = self._first.width, self._first.height
         self._coded_size = (width, height)
         if self._rotation in (90, 270):
@@ -721,6 +730,8 @@ class VideoSource(Source):
         frames the decoder still holds (one per frame thread)."""
         try:
             for packet in self._container.demux(self._stream):
+                if self._keep_photo:  # a photo's first packet: the whole photo, its tags too
+                    self._keep_photo, self._photo = False, bytes(packet)
                 try:
                     frames = packet.decode()
                 except av.error.InvalidDataError:
