@@ -643,12 +643,14 @@ def test_run_of_a_sequence_of_targets_names_its_other_ground_truth_and_quotes_th
     ("scene", "--frames", ("108000",)),
     ("scene", "--size", ("64x48", "7680x4320")),
     ("scene", "--fps", ("0.01", "10000")),
+    ("run", "--raw", ("1x1", "16384x16384")),
+    ("vectors", "--frames", ("1 to 300",)),
 ])
 def test_an_options_help_says_its_range(command: str, option: str, limits: tuple[str, ...]
                                         ) -> None:
     """Every value a user gives has a declared range, and --help says it (run's --fps,
     --start, --frames and scene's --frames, --size, --fps said none, though each is refused
-    outside it)."""
+    outside it; so did run's --raw and vectors' --frames, which said only its upper end)."""
     help_text = vtrack(command, "--help").stdout.decode()
     row = re.search(rf"^ +(-\w, )?{option} .*?(?=^ +-)", help_text, re.M | re.S)
     assert row is not None, help_text

@@ -37,6 +37,7 @@ from vtrack.errors import (
     ignore_stop_signals,
     printable,
 )
+from vtrack.geometry import MAX_FRAME_SIDE
 from vtrack.params import (
     MAX_CRF,
     MAX_FRAME_NUMBER,
@@ -98,7 +99,8 @@ def default_out_dir(input_spec: str, config: str | None = None,
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
               help="Override a stage parameter (repeatable). See `vtrack stages`.")
 @click.option("--raw", "raw_size", metavar="WxH",
-              help="Input is raw frames of this size (from -, a FIFO or a file).")
+              help=f"Input is raw frames of this size (from -, a FIFO or a file), from 1x1 to "
+                   f"{MAX_FRAME_SIDE}x{MAX_FRAME_SIDE} (yuv420p: an even width and height).")
 @click.option("--pix-fmt", type=click.Choice(["bgr24", "rgb24", "yuv420p", "gray"]),
               default="bgr24", show_default=True, help="Pixel format of --raw input.")
 @click.option("--fps", type=FRAME_RATE, default=None,

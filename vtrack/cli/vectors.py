@@ -88,7 +88,7 @@ def command() -> None:
               help="Initial box (top-left x, y, width, height): x,y,w,h or x y w h.")
 @click.option("--frames", "count", type=NumberWord(int, "a whole number of frames, 1 to 300"),
               default=10, show_default=True,
-              help="Frames to write (at most 300: a 1080p frame is ~25 MB of hex).")
+              help="Frames to write, from 1 to 300 (a 1080p frame is ~25 MB of hex).")
 @click.option("--out", "-o", "out_dir", type=PATH, required=True,
               metavar="DIR", help="Output folder (created; existing vector files are replaced).")
 @click.option("--set", "-s", "overrides", multiple=True, metavar="STAGE.PARAM=VALUE",
