@@ -445,6 +445,39 @@ def test_cli_writing_into_a_log_says_how_far_it_is(tmp_path, fmt):
     assert "40 frames, 160x120" in done.stdout
 
 
+@pytest.mark.parametrize(("fmt", "mine"), [("mp4", "own.mp4"), ("mp4", "own.gt.txt"),
+                                            ("mp4", "own.mot.txt"), ("raw", "own.mp4"),
+                                            ("images", "own.mp4/img/0001.jpg"),
+                                            ("images", "own.mp4/groundtruth_rect.txt")])
+def test_cli_replaces_a_file_already_there_only_with_overwrite(tmp_path, fmt, mine):
+    """`vtrack scene occlusion footage.mp4` (NAME and OUT taken for an input and what to do
+    with it) replaced the user's own footage.mp4 and its footage.gt.txt with a generated clip
+    without a word, where vtrack frame and vtrack run replace nothing without -y. It is now
+    one line naming the file, exit 2, and the file as it was; --overwrite (-y) replaces it."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "own.mp4"
+    held = tmp_path / mine
+    held.parent.mkdir(parents=True, exist_ok=True)
+    held.write_bytes(b"the user's own recording")
+    args = [sys.executable, "-m", "vtrack", "scene", "smooth", str(out), "--frames", "10",
+            "--size", "160x120", "--preset", "ultrafast", "--format", fmt]
+    refused = subprocess.run(args, capture_output=True, text=True, timeout=120, check=False)
+    assert refused.returncode == 2, refused.stderr
+    lines = refused.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("vtrack: error: "), lines
+    line = lines[0]
+    assert str(held if fmt != "images" or held.parent.name != "img" else held.parent) in line
+    assert "--overwrite (-y)" in line
+    assert held.read_bytes() == b"the user's own recording"
+    assert refused.stdout == ""
+    done = subprocess.run([*args, "-y"], capture_output=True, text=True, timeout=120,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert "10 frames, 160x120" in done.stdout
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -68,8 +68,8 @@ def test_a_failed_scene_leaves_no_partial_clip_and_keeps_the_earlier_one(
     assert vtrack("scene", "smooth", out, "--frames", "30", "--format", fmt,
                   cwd=tmp_path).returncode == 0
     before = snapshot(tmp_path / "sc")
-    one_error(limited("scene", "smooth", out, "--frames", "60", "--format", fmt, cwd=tmp_path),
-              out)
+    one_error(limited("scene", "smooth", out, "--frames", "60", "--format", fmt, "-y",
+                      cwd=tmp_path), out)
     after = snapshot(tmp_path / "sc")
     assert after == before  # the 30-frame clip and its 30-line ground truth, as they were
     assert sum(name.endswith("gt.txt") or name.endswith("rect.txt") for name in after) == 1

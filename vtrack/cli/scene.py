@@ -33,6 +33,30 @@ def _parse_size(size: str | None) -> tuple[int | None, int | None]:
     return int(match.group(1)), int(match.group(2))
 
 
+def _refuse_replacing(out: Path, fmt: str) -> None:
+    """OutputError when a file that writing a ``fmt`` clip to ``out`` replaces or removes (the
+    clip, its OTB and MOTChallenge ground truth, an image folder's seqinfo.ini) holds something,
+    or an image folder's ``img/`` holds a file: a clip of the user's own at OUT (``vtrack scene
+    occlusion footage.mp4``) is not replaced without ``--overwrite``, as ``vtrack frame`` and
+    ``vtrack run`` replace nothing without it."""
+    from vtrack.errors import COMMAND_NAMES, OutputError
+    from vtrack.io.files import refuse_replacing_file
+    from vtrack.io.images import SEQUENCE_INFO
+    from vtrack.scenes.writers import sidecar
+
+    if fmt == "images":
+        files = [out / name for name in ("groundtruth_rect.txt", "groundtruth_mot.txt",
+                                          SEQUENCE_INFO)]
+        images = out / "img"
+        if images.is_dir() and any(images.iterdir()):
+            raise OutputError(f"{images}: holds files already; {COMMAND_NAMES.overwrite} "
+                              "replaces the folder")
+    else:
+        files = [out, sidecar(out, "gt"), sidecar(out, "mot")]
+    for file in files:
+        refuse_replacing_file(file, str(file), COMMAND_NAMES.overwrite)
+
+
 def _scenario_list() -> str:
     width = max(len(name) for name in SCENARIOS)
     lines = [f"  {name:<{width}}  {s.summary}" for name, s in SCENARIOS.items()]
@@ -71,6 +95,10 @@ def _scenario_list() -> str:
                    "a profile (High 4:4:4) many players refuse).")
 @click.option("--preset", type=click.Choice(X264_PRESETS), default="medium", show_default=True,
               help="x264 preset of mp4 output.")
+@click.option("--overwrite", "-y", is_flag=True,
+              help="Replace a clip or ground-truth file already where OUT's files go (as "
+                   "vtrack frame -y replaces its image); without it, one line and nothing "
+                   "written.")
 @stats_period_option()
 def command(
     name: str,
@@ -83,6 +111,7 @@ def command(
     pix_fmt: str | None,
     crf: int,
     preset: str,
+    overwrite: bool,
     stats_period: float,
 ) -> None:
     """Write scenario NAME to OUT with its exact ground truth beside it.
@@ -121,6 +150,8 @@ def command(
                               f"starts {first.w:.1f}x{first.h:.1f} pixels, under the "
                               f"{MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} a tracker starts from: give "
                               "a larger --size")
+        if not overwrite:  # (after the arguments' own refusals: a mistyped NAME says so)
+            _refuse_replacing(out, fmt)
         progress = StepProgress(False, out.name, "frames", stats_period)
         try:
             files = write_clip(scene, out, fmt=fmt, pix_fmt=pix_fmt, crf=crf, preset=preset,
