@@ -195,3 +195,36 @@ def test_the_report_rescored_as_the_run(
                     "-q")
     assert f"has 20 boxes for its 30 frames; if its first box is of a later frame, give " \
            f"--gt-first {LATER}" in result.stderr, result.stderr
+
+
+def test_a_first_frame_far_past_the_input_is_not_padded(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Review: `--gt-first 1000000000000` (in range) made a list of 10^12 Nones: MemoryError
+    and a traceback from vtrack run and vtrack report. The frames before the first box are not
+    stored; vtrack run refuses a first frame past the input's last in one line, the report
+    reads the file at once and does not score the run with it."""
+    from vtrack.evaluate import read_truth
+
+    folder, _, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    far = 10**12
+    boxes = read_truth(gt, first=far).boxes
+    assert len(boxes) == far + FRAMES - LATER
+    assert boxes[far] is not None and boxes[far - 1] is None and boxes[5] is None
+    assert boxes[far:] == read_truth(gt).boxes and len(boxes[3:8]) == 5
+    assert list(boxes[far - 2:far + 1]) == [None, None, boxes[far]]
+    for value in (str(far), str(FRAMES)):
+        line = one_error_line(vtrack("run", str(folder), "--gt", str(gt), "--gt-first", value,
+                                     "--start", "3", "--no-video", "-o", str(tmp_path / "o")))
+        assert line == (f"vtrack: error: --gt-first {value}: {folder}: has no frame {value} "
+                        f"(frames 0..{FRAMES - 1}); the file's first box is of one of its "
+                        "frames"), line
+    run_dir = tmp_path / "runs" / "n0"
+    first = Path(david[1]).read_text().splitlines()[0]
+    result = vtrack("run", str(folder), "--init", first, "-c", "s0", "--no-video",
+                    "-o", str(run_dir), "-q")
+    assert result.exit_code == 0, result.output
+    result = vtrack("report", str(run_dir.parent), "--gt", str(gt), "--gt-first", str(far),
+                    "-o", str(tmp_path / "rep"), "-q")
+    assert result.exit_code == 0, result.output
+    assert "not scored" in result.stderr, result.stderr

@@ -63,6 +63,7 @@ from vtrack.errors import (
     shell_word,
 )
 from vtrack.evaluate.groundtruth import (
+    FrameBoxes,
     dropped_notes,
     groundtruth_beside,
     later_first_hint,
@@ -93,6 +94,7 @@ from vtrack.io.sidecar import has_sidecar, read_sidecar, sidecar_path
 from vtrack.io.source import (
     TIME_SLACK_S,
     no_frame_after_text,
+    past_end,
     past_end_text,
     seek_time,
     start_toward,
@@ -433,7 +435,7 @@ class _SingleTargetRows:
     run's length). The scores are those of the box as written, rounded as written: run.json's
     metrics are what anyone recomputes from ``track.csv``."""
 
-    def __init__(self, extras: tuple[str, ...], gt: list[Box | None] | None,
+    def __init__(self, extras: tuple[str, ...], gt: Sequence[Box | None] | None,
                  start: int = 0) -> None:
         self.columns = TRACK_COLUMNS + extras
         self.extras = extras
@@ -594,7 +596,7 @@ class _Resolved:
     """What a request resolves to before any frame is tracked."""
 
     pipeline: Pipeline
-    gt: list[Box | None] | None  # single-target ground truth
+    gt: FrameBoxes | None  # single-target ground truth
     mot_gt: dict[int, list[tuple[int, Box]]] | None  # multi-target ground truth (MOTChallenge)
     init_box: Box | None
     #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
@@ -894,6 +896,10 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         mot_gt, distractors = truth.boxes, truth.distractors
         warnings += dropped_notes(request.gt_path, truth)
     elif request.gt_path is not None:
+        if request.gt_first and source is not None and past_end(source.info, request.gt_first):
+            raise InputError(f"{names.give(names.gt_first, str(request.gt_first))}: "
+                             + past_end_text(request.input, request.gt_first, source.info)
+                             + "; the file's first box is of one of its frames")
         single = read_truth(request.gt_path, origin=request.gt_origin, first=request.gt_first)
         gt = single.boxes
         warnings += filter(None, [negative_note(request.gt_path, single)])
@@ -964,7 +970,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                      _Span(request.max_frames, request.max_s), warnings, distractors, names)
 
 
-def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: list[Box | None],
+def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: FrameBoxes,
                        span: int, stopped: bool) -> str:
     """The warning of single-target ground truth ``gt`` (indexed by frame, its boxes from
     frame ``request.gt_first`` on) that has fewer or more boxes than the ``span`` frames the run

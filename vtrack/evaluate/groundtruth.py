@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 import re
 from collections import Counter
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from os import PathLike
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, overload
 
 from vtrack.errors import ConfigError, InputError, OptionNames, number_text, plural
 from vtrack.geometry import Box, parse_box_text
@@ -316,7 +316,59 @@ def _is_mot_row(values: list[float]) -> bool:
     return values[0] >= 1 and values[6] in (0, 1) and values[7] in MOT_CLASSES
 
 
-def read_boxes(path: str | PathLike[str], origin: int = 0, first: int = 0) -> list[Box | None]:
+class FrameBoxes(Sequence[Box | None]):
+    """Ground-truth boxes indexed by frame: None for the :attr:`first` frames before the file's
+    first box (``--gt-first``), then the file's own boxes (:attr:`own`). The frames before
+    are not stored (``--gt-first`` may be 10^12): a slice is another FrameBoxes, as short as
+    a list's slice would be. Equal to any sequence of the same boxes (a list too)."""
+
+    def __init__(self, own: Sequence[Box | None], first: int = 0) -> None:
+        #: The file's own boxes, the first of frame :attr:`first`.
+        self.own: list[Box | None] = list(own)
+        #: The frame the file's first box belongs to.
+        self.first = first
+
+    def __len__(self) -> int:
+        return self.first + len(self.own)
+
+    @overload
+    def __getitem__(self, index: int) -> Box | None: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> FrameBoxes: ...
+
+    def __getitem__(self, index: int | slice) -> Box | None | FrameBoxes:
+        if isinstance(index, slice):
+            begin, end, step = index.indices(len(self))
+            if step != 1:
+                return FrameBoxes([self[i] for i in range(begin, end, step)])
+            end = max(end, begin)
+            return FrameBoxes(self.own[max(begin - self.first, 0):max(end - self.first, 0)],
+                              min(max(self.first - begin, 0), end - begin))
+        frame = index + len(self) if index < 0 else index
+        if not 0 <= frame < len(self):
+            raise IndexError(f"frame {index} out of range")
+        return None if frame < self.first else self.own[frame - self.first]
+
+    def __iter__(self) -> Iterator[Box | None]:
+        for _ in range(self.first):
+            yield None
+        yield from self.own
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, FrameBoxes):
+            return (self.first, self.own) == (other.first, other.own)
+        if not isinstance(other, Sequence) or isinstance(other, str) or len(other) != len(self):
+            return False
+        return all(a == b for a, b in zip(self, other, strict=True))
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"FrameBoxes({self.own!r}, first={self.first})"
+
+
+def read_boxes(path: str | PathLike[str], origin: int = 0, first: int = 0) -> FrameBoxes:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent
     (:func:`read_truth`'s boxes, the first of frame ``first``)."""
     return read_truth(path, origin, first).boxes
@@ -325,8 +377,9 @@ def read_boxes(path: str | PathLike[str], origin: int = 0, first: int = 0) -> li
 class SingleTruth(NamedTuple):
     """Single-target ground truth as :func:`read_truth` reads it."""
 
-    #: One box per frame, None where the target is absent (:func:`read_boxes`).
-    boxes: list[Box | None]
+    #: One box per frame, None where the target is absent (:func:`read_boxes`); the ``first``
+    #: frames before the file's first box are None without being stored (:class:`FrameBoxes`).
+    boxes: FrameBoxes
     #: The lines (1-based) whose box has a negative width or height: read as the target
     #: absent, as ``0,0,0,0`` is, though no dataset marks it so (:func:`negative_note`).
     negative: list[int]
@@ -350,7 +403,8 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
 
     ``first`` is the 0-based frame the file's first box belongs to (``--gt-first``: OTB's
     ``David`` starts at its image 300, frame 299): the boxes come back indexed by frame, the
-    ``first`` frames before it None (no ground truth, not scored); ConfigError for a ``first``
+    ``first`` frames before it None (no ground truth, not scored; not stored,
+    :class:`FrameBoxes`); ConfigError for a ``first``
     that is not a whole number from 0 to :data:`MAX_GT_FIRST`.
 
     Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
@@ -374,7 +428,7 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
     if isinstance(first, bool) or not isinstance(first, int) or not 0 <= first <= MAX_GT_FIRST:
         raise ConfigError(f"ground truth's first frame must be a whole number from 0 to "
                           f"{MAX_GT_FIRST}, got {first!r}")
-    boxes: list[Box | None] = [None] * first
+    boxes: list[Box | None] = []
     negative: list[int] = []
     for number, line in enumerate(_read_lines(path, "ground-truth"), start=1):
         _check_fields(path, number, line)
@@ -421,7 +475,7 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
             boxes.append(None)
         else:
             boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
-    return SingleTruth(boxes, negative)
+    return SingleTruth(FrameBoxes(boxes, first), negative)
 
 
 def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) -> str:

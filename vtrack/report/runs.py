@@ -159,7 +159,7 @@ class RunResult:
     live_input: bool = False
     #: The tracker's box per frame (None: lost) and the ground truth's, when it was rescored.
     boxes: list[Box | None] = field(default_factory=list)
-    truth: list[Box | None] | None = None
+    truth: Sequence[Box | None] | None = None
     #: What tells inputs of one name apart (:func:`_input_key`).
     input_key: str = ""
     #: An image sequence's: the fingerprint of its images the run recorded
@@ -219,7 +219,7 @@ class GroundTruth:
     """A ground-truth file given to the report (``--gt [INPUT=]FILE``), read once."""
 
     path: str
-    boxes: list[Box | None]
+    boxes: Sequence[Box | None]
     #: The input it belongs to (``--gt INPUT=FILE``); None: any run that recorded none.
     input: str | None = None
     #: The warning of its boxes with a negative width or height, read as the target absent
@@ -354,7 +354,7 @@ def _recorded_scores(rows: list[dict[str, str]]) -> FrameScores:
 
 
 def _rescored(rows: list[dict[str, str]], request: dict[str, Any], gt: str, start: int
-              ) -> tuple[FrameScores, list[Box | None] | None]:
+              ) -> tuple[FrameScores, Sequence[Box | None] | None]:
     """The run's boxes against the ground truth it recorded (found at ``gt``, see the module
     docstring), and those ground-truth boxes (None: the file could not be read, the recorded
     scores are used)."""
