@@ -228,3 +228,33 @@ def test_a_first_frame_far_past_the_input_is_not_padded(
                     "-o", str(tmp_path / "rep"), "-q")
     assert result.exit_code == 0, result.output
     assert "not scored" in result.stderr, result.stderr
+
+
+def test_frames_before_the_first_box_are_not_counted_as_the_file_s(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Review: the run counted the frames before --gt-first as the file's: `--frames 5` before
+    the first box warned the target "absent in all 5 frames"; a file of absent boxes from
+    frame 10 "absent in all 30 frames"; a --start past the file's end said "boxes for frames
+    0..N" whatever --gt-first said."""
+    folder, whole, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    first = whole.read_text().splitlines()[0]
+    result = vtrack("run", str(folder), "--gt", str(gt), "--gt-first", str(LATER), "--init",
+                    first, "--frames", "5", "-c", "s0", "--no-video", "-o",
+                    str(tmp_path / "a"), "-q")
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        f"vtrack: warning: {gt}: the file's boxes begin at frame {LATER} (--gt-first {LATER}), "
+        "after the run's last frame (4): no frame is scored"], result.stderr
+    absent = tmp_path / "absent.txt"
+    absent.write_text("0,0,0,0\n" * (FRAMES - LATER))
+    result = vtrack("run", str(folder), "--gt", str(absent), "--gt-first", str(LATER), "--init",
+                    first, "-c", "s0", "--no-video", "-o", str(tmp_path / "b"), "-q")
+    assert result.exit_code == 0, result.output
+    assert f"in all {FRAMES - LATER} frames of the run it has boxes for" in result.stderr, \
+        result.stderr
+    short = tmp_path / "short.txt"
+    short.write_text("".join(whole.read_text().splitlines(keepends=True)[:5]))
+    line = one_error_line(vtrack("run", str(folder), "--gt", str(short), "--gt-first", "5",
+                                 "--start", "12", "-o", str(tmp_path / "c")))
+    assert "the file has boxes for frames 5..9 only" in line, line

@@ -930,7 +930,8 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                     f"there, or {give_box}")
             why = ("marked absent (NaN, or w or h <= 0: the target out of view)"
                    if start < len(gt) else
-                   f"missing: the file has boxes for frames 0..{len(gt) - 1} only (a file "
+                   f"missing: the file has boxes for frames {gt.first}..{len(gt) - 1} only "
+                   "(a file "
                    f"shorter than the input, or frame {start} past the input's end)")
             raise InputError(f"{request.gt_path}: the {where} is {why}; give {give_box}")
         init_box, init_from = gt[start], str(request.gt_path)
@@ -1391,10 +1392,17 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         summary.auc = metrics.get("auc")
         summary.precision20 = metrics.get("precision20")
         span = len(formatter.overlaps)  # frames tracked, and those the input skipped among them
-        if len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
+        end = start + span  # the frame after the run's last
+        if request.gt_first >= end and status == STATUS_COMPLETE:
+            summary.warnings.append(
+                f"{request.gt_path}: the file's boxes begin at frame {request.gt_first} "
+                f"({resolved.names.give(resolved.names.gt_first, str(request.gt_first))}), "
+                f"after the run's last frame ({end - 1}): no frame is scored")
+        elif len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             summary.warnings.append(_truth_length_note(request, resolved, resolved.gt, span,
                                                       stopped))
-        absent = min(len(gt), span)  # the run's frames the file has a box for
+        # the run's frames the file has a box for (none before its first, --gt-first)
+        absent = max(min(len(gt), span) - max(request.gt_first - start, 0), 0)
         if absent and not metrics["frames_evaluated"] and status == STATUS_COMPLETE:
             summary.warnings.append(
                 f"{request.gt_path}: the ground truth marks the target absent (NaN, or w or "
