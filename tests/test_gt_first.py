@@ -258,3 +258,29 @@ def test_frames_before_the_first_box_are_not_counted_as_the_file_s(
     line = one_error_line(vtrack("run", str(folder), "--gt", str(short), "--gt-first", "5",
                                  "--start", "12", "-o", str(tmp_path / "c")))
     assert "the file has boxes for frames 5..9 only" in line, line
+
+
+def test_the_counts_of_a_later_run_or_file_explain_themselves(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Review: a run from frame 5 and a file of as many boxes from frame 0 was refused by the
+    report saying "has 25 boxes for its 25 frames from frame 5", vtrack run warned "25 boxes
+    for 25 frames from frame 5 (fewer)": the boxes' frames are named now."""
+    folder, whole, _ = david
+    lines = whole.read_text().splitlines(keepends=True)
+    gt = tmp_path / "dgt.txt"
+    gt.write_text("".join(lines[5:]))
+    run_dir = tmp_path / "runs" / "n5"
+    result = vtrack("run", str(folder), "--gt", str(gt), "--init", lines[5].strip(), "--start",
+                    "5", "-c", "s0", "--no-video", "-o", str(run_dir), "-q")
+    assert result.exit_code == 0, result.output
+    assert f"{gt}: ground truth has 25 boxes, frames 0..24, for 25 frames from frame 5 " \
+           "(fewer); overlap is empty from frame 25 on" in result.stderr, result.stderr
+    bare = tmp_path / "bare" / "n5"
+    result = vtrack("run", str(folder), "--init", lines[5].strip(), "--start", "5", "-c", "s0",
+                    "--no-video", "-o", str(bare), "-q")
+    assert result.exit_code == 0, result.output
+    result = vtrack("report", str(bare.parent), "--gt", str(gt), "-o", str(tmp_path / "r"),
+                    "-q")
+    assert result.exit_code == 0, result.output
+    assert f"{gt} has 25 boxes, frames 0..24, for its 25 frames from frame 5;" \
+        in result.stderr, result.stderr

@@ -64,6 +64,7 @@ from vtrack.errors import (
 )
 from vtrack.evaluate.groundtruth import (
     FrameBoxes,
+    boxes_for_frames,
     dropped_notes,
     groundtruth_beside,
     later_first_hint,
@@ -983,9 +984,8 @@ def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: FrameBoxes,
     covers = max(len(gt) - start, 0)  # the run's frames the file reaches
     boxes = len(gt) - first  # the file's own
     fewer = covers < span
-    note = (f"{request.gt_path}: ground truth has {plural(boxes, 'box', 'boxes')}"
-            f"{f' from frame {first}' if first else ''} for {plural(span, 'frame')}"
-            f"{f' from frame {start}' if start else ''} ({'fewer' if fewer else 'more'}); "
+    note = (f"{request.gt_path}: ground truth has {boxes_for_frames(boxes, first, span, start)} "
+            f"({'fewer' if fewer else 'more'}); "
             + (f"overlap is empty from frame {start + covers} on" if fewer
                else "extra boxes ignored"))
     if fewer and not stopped and start + span - boxes > first:

@@ -478,6 +478,17 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
     return SingleTruth(FrameBoxes(boxes, first), negative)
 
 
+def boxes_for_frames(boxes: int, first: int, frames: int, start: int, its: str = "") -> str:
+    """How many ``boxes`` a ground-truth file has (the first frame ``first``'s) for the
+    ``frames`` a run tracked from frame ``start`` (``its``: a word before ``frames``), naming
+    the boxes' frames when either does not begin at frame 0, so that the counts explain
+    themselves: ``15 boxes, frames 0..14, for its 15 frames from frame 5``."""
+    held = plural(boxes, "box", "boxes")
+    if first or start:
+        held += f", frames {first}..{first + boxes - 1}," if boxes else ","
+    return f"{held} for {its}{plural(frames, 'frame')}{f' from frame {start}' if start else ''}"
+
+
 def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) -> str:
     """The clause a warning of ground truth with fewer ``boxes`` (the file's) than the
     ``frames`` a run tracked from frame ``start`` ends with: how a file whose first box is of

@@ -41,6 +41,7 @@ from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import (
     MAX_GT_FIRST,
     MultiTargetTruthError,
+    boxes_for_frames,
     gt_origin_of,
     later_first_hint,
     negative_note,
@@ -284,9 +285,8 @@ class GroundTruth:
         boxes = len(self.boxes) - self.first
         hint = ("" if not whole or frames < covers or start + frames - boxes <= self.first
                 else later_first_hint(boxes, frames, start, COMMAND_NAMES))
-        return (f"{self.path} has {plural(boxes, 'box', 'boxes')}"
-                f"{f' from frame {self.first}' if self.first else ''} for its "
-                f"{plural(frames, 'frame')}{f' from frame {start}' if start else ''}{hint}")
+        return (f"{self.path} has {boxes_for_frames(boxes, self.first, frames, start, 'its ')}"
+                f"{hint}")
 
     def second_to(self, earlier: GroundTruth) -> str:
         """The one line refusing this file as a second ground truth for the runs ``earlier``
