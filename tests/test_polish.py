@@ -4,6 +4,7 @@ messages that name the real problem, options that agree between commands."""
 from __future__ import annotations
 
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -66,6 +67,21 @@ def test_an_overlong_unknown_command_is_shown_cut(tmp_path: Path) -> None:
                     "(see 'python -m vtrack --help')")
     assert one_error_line(vtrack("y" * 200, cwd=tmp_path)).startswith(
         f"vtrack: error: No such command '{'y' * 200}'. (see ")
+
+
+@pytest.mark.parametrize("name", ["q" * 205 + " x.mp4", "it's " + "q" * 205 + ".mp4"],
+                         ids=["space", "apostrophe"])
+def test_an_overlong_file_given_as_a_command_is_told_whole_and_quoted(tmp_path: Path,
+                                                                      name: str) -> None:
+    """The command to paste for a file given as a command (``vtrack "qqq... x.mp4"``, 211
+    characters) was cut and unquoted by the cut of click's quoted words: "to track it: vtrack
+    run qqq...qqq x.mp4 (211 characters)", which runs something else (an apostrophe in the
+    name broke its shell quoting). The name is cut where it is refused, and the command to
+    paste is whole and shell-quoted, as no_such_command writes it."""
+    line = one_error_line(vtrack(name, cwd=tmp_path))
+    assert line == (f"vtrack: error: No such command {name[:100]}...{name[-30:]} "
+                    f"({len(name)} characters); to track it: vtrack run {shlex.quote(name)} "
+                    "(see 'python -m vtrack --help')")
 
 
 @pytest.mark.parametrize(("args", "said"), [

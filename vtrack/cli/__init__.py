@@ -93,7 +93,12 @@ class _Group(click.Group):
             sys.exit(exc.exit_code)
         except click.UsageError as exc:
             where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
-            click.echo(error_line(f"{cut_quoted(exc.format_message())}{where}"), err=True)
+            message = exc.format_message()
+            if not isinstance(exc, click.exceptions.NoSuchCommand):
+                # (click's words; no_such_command's are vtrack's: the word cut already, the
+                # command to paste whole and shell-quoted)
+                message = cut_quoted(message)
+            click.echo(error_line(f"{message}{where}"), err=True)
             sys.exit(exc.exit_code)
         except click.ClickException as exc:
             click.echo(error_line(exc.format_message()), err=True)
