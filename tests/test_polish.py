@@ -100,6 +100,27 @@ def test_an_overlong_option_word_is_shown_cut(tmp_path: Path, args: tuple[str, .
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize(("byte", "escape"), [("\udcff", "\\xff"), ("\x01", "\\x01")],
+                         ids=["not-utf8", "control"])
+def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
+                                                   escape: str) -> None:
+    """A quoted word of click's message was measured and cut as its escaped text: a --preset
+    value of 60 bytes 0xff (``\\udcff`` each, 360 characters) was cut mid-escape and shown as
+    "\\udcff...\\udc... (360 characters)", an option of 60 control characters as "(242
+    characters)". The word is measured as typed now: 60 characters are quoted whole, 260 are
+    cut as errors.cut cuts them, each character shown as its usual escape."""
+    for word, args in ((byte * 60, ("--preset", byte * 60)), ("--" + byte * 260,
+                                                               ("--" + byte * 260,))):
+        line = one_error_line(vtrack("run", "clip.mp4", *args, cwd=tmp_path))
+        if len(word) <= 200:
+            assert " characters)" not in line and "..." not in line, line
+        else:
+            shown = word.replace(byte, escape)
+            assert (f" {shown[:2 + 4 * 98]}...{escape * 30} ({len(word)} characters)"
+                    in line), line
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args", [("--follow=-1",), ("--follow", "-1"), ("--follow=-0.5",),
                                   ("--follow", "-1e3")])
 def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,

@@ -200,12 +200,25 @@ _QUOTED = re.compile(r"'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"")
 
 
 def cut_quoted(message: str) -> str:
-    """``message`` (click's, quoting the words a user gave: "No such option '--xxx'.",
-    "Invalid value for '--preset': 'xxx' is not one of ...") with each quoted word of more
-    than :data:`LONGEST_SHOWN` characters shown as :func:`cut` shows it, unquoted."""
-    return _QUOTED.sub(lambda match: (cut(match.group()[1:-1])
-                                      if len(match.group()) - 2 > LONGEST_SHOWN
-                                      else match.group()), message)
+    """``message`` (click's, quoting the words a user gave as ``repr`` does: "No such option
+    '--xxx'.", "Invalid value for '--preset': 'xxx' is not one of ...") with each quoted word
+    of more than :data:`LONGEST_SHOWN` characters, counted as typed (``\\xff`` and ``\\x01``
+    are one character each, not the four of their escape), shown as :func:`cut` shows it,
+    unquoted (:func:`printable` escapes its control characters and undecoded bytes); shorter
+    words are left as quoted."""
+    return _QUOTED.sub(lambda match: _cut_word(match.group()), message)
+
+
+def _cut_word(quoted: str) -> str:
+    """``quoted``, a word as ``repr`` quotes it, as :func:`cut` shows the word it quotes
+    when that is longer than :data:`LONGEST_SHOWN`; else (or not a quoted word) as it is."""
+    import ast
+
+    try:
+        word = ast.literal_eval(quoted)
+    except (ValueError, SyntaxError):
+        return quoted
+    return cut(word) if isinstance(word, str) and len(word) > LONGEST_SHOWN else quoted
 
 
 #: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
