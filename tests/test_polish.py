@@ -121,6 +121,27 @@ def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("--follow", "w" * 300), "; if it is INPUT, put it before --follow or give the seconds "
+                              "(--follow 5 {}...{} (300 characters)) (see "),
+    (("w" * 300,), "vtrack: error: Got unexpected extra argument ({}...{} (300 characters)) "),
+    (("x'" + "q" * 300 + "'y",),
+     "vtrack: error: Got unexpected extra argument ({}...{} (304 characters)) "),
+], ids=["follow-hint", "extra-argument", "apostrophes"])
+def test_an_overlong_word_click_does_not_quote_is_shown_cut(tmp_path: Path,
+                                                           args: tuple[str, ...],
+                                                           said: str) -> None:
+    """An overlong word was still echoed whole where no quotes mark it: the --follow hint
+    "(--follow 5 www...)" and click's "Got unexpected extra argument (www...)", 300
+    characters each; in ``x'qqq...'y`` the cut of quoted words took the stray apostrophes for
+    quotes. Each is cut as errors.cut cuts it now, the word's own ends and length."""
+    word = args[-1]
+    line = one_error_line(vtrack("run", "a.mp4", *args, cwd=tmp_path))
+    assert said.format(word[:100], word[-30:]) in line, line
+    assert word not in line
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args", [("--follow=-1",), ("--follow", "-1"), ("--follow=-0.5",),
                                   ("--follow", "-1e3")])
 def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,

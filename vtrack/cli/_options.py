@@ -10,6 +10,7 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._progress import STATS_PERIOD
+from vtrack.errors import cut
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 
@@ -44,7 +45,7 @@ class Seconds(click.FloatRange):
                     and not str(value).startswith("-") and value not in attached):
                 flag = max(param.opts, key=len)
                 hint = (f"; if it is {self.optional}, put it before {flag} or give the "
-                        f"seconds ({flag} 5 {value})")
+                        f"seconds ({flag} 5 {cut(value)})")
             self.fail(f"{value!r} is not a number of seconds {self.range_words()}{hint}",
                       param, ctx)
         return seconds
@@ -64,7 +65,25 @@ class Seconds(click.FloatRange):
         return f"{low} and {high}"
 
 
-class SecondsCommand(click.Command):
+class VtrackCommand(click.Command):
+    """A vtrack command: arguments it does not take are refused as click refuses them, "Got
+    unexpected extra argument (clip.gt.txt)", each shown as :func:`~vtrack.errors.cut` shows
+    it (click echoed a word of any length whole)."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        refused = not ctx.allow_extra_args
+        ctx.allow_extra_args = True  # (to see the extra ones: click names them all, whole)
+        try:
+            extra = super().parse_args(ctx, args)
+        finally:
+            ctx.allow_extra_args = not refused
+        if extra and refused and not ctx.resilient_parsing:
+            words = " ".join(cut(word) for word in extra)
+            ctx.fail(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} ({words})")
+        return extra
+
+
+class SecondsCommand(VtrackCommand):
     """A command whose :class:`Seconds` options that may come without a number (``optional``:
     ``--follow [SECONDS]``) are refused, as any value out of their range is, when given a
     value starting with ``-`` that click's parser read as the next option, unknown: "No such

@@ -15,6 +15,7 @@ from click.core import ParameterSource
 from vtrack.cli._messages import error_line, say, stdout_problem, warn, warning_line
 from vtrack.cli._options import (
     Seconds,
+    VtrackCommand,
     WholeNumber,
     gt_origin_option,
     refuse_encoding_without_video,
@@ -175,7 +176,7 @@ def _check_scheduler_options(scheduler: str | None, jobs: int | None) -> None:
 
 @_run_options("overrides", "no_video", "preset", "crf", "seed", "start", "max_frames",
               "stats_period", "quiet")
-@click.command("batch")
+@click.command("batch", cls=VtrackCommand)
 @click.argument("folder", type=PATH)
 @click.option("--config", "-c", "config_specs", multiple=True, metavar="FILE|NAME", type=CONFIG,
               help="Tracker config, a TOML file or a shipped name; repeat to run every input "

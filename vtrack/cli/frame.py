@@ -9,13 +9,13 @@ from pathlib import Path
 import click
 
 from vtrack.cli._messages import echo_result
-from vtrack.cli._options import StartPoint, WholeNumber
+from vtrack.cli._options import StartPoint, VtrackCommand, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.geometry import MAX_FRAME_SIDE
 
 
-@click.command("frame")
+@click.command("frame", cls=VtrackCommand)
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--at", "at", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="The frame: a 0-based frame number N (as track.csv numbers "

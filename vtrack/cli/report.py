@@ -8,6 +8,7 @@ import click
 
 from vtrack.cli._messages import echo_result, warn
 from vtrack.cli._options import (
+    VtrackCommand,
     gt_first_option,
     gt_origin_option,
     refuse_gt_origin_without_gt,
@@ -21,7 +22,7 @@ from vtrack.errors import plural
 DEFAULT_TITLE = "vtrack report"  # vtrack.report.DEFAULT_TITLE; not imported: it loads matplotlib
 
 
-@click.command("report")
+@click.command("report", cls=VtrackCommand)
 @click.argument("results", nargs=-1, required=True, type=PATH)
 @click.option("--out", "-o", "out_dir", type=PATH,
               default=Path("vtrack-report"), show_default=True, metavar="DIR",

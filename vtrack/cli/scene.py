@@ -8,7 +8,13 @@ from pathlib import Path
 import click
 
 from vtrack.cli._messages import echo_result
-from vtrack.cli._options import FRAME_RATE, NumberWord, WholeNumber, stats_period_option
+from vtrack.cli._options import (
+    FRAME_RATE,
+    NumberWord,
+    VtrackCommand,
+    WholeNumber,
+    stats_period_option,
+)
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
 from vtrack.cli._signals import stopping_as_interrupted
@@ -63,7 +69,7 @@ def _scenario_list() -> str:
     return "Scenarios:\n\n\b\n" + "\n".join(lines)
 
 
-@click.command("scene", epilog=_scenario_list())
+@click.command("scene", cls=VtrackCommand, epilog=_scenario_list())
 @click.argument("name")
 @click.argument("out", type=CLIP_PATH)
 @click.option("--frames", type=NumberWord(int, "a whole number of frames"),

@@ -5,12 +5,12 @@ from __future__ import annotations
 import click
 
 from vtrack.cli._messages import echo_stdout, note, stdout_failed, warn
-from vtrack.cli._options import WholeNumber
+from vtrack.cli._options import VtrackCommand, WholeNumber
 from vtrack.cli._paths import INPUT
 from vtrack.params import MAX_FRAME_NUMBER
 
 
-@click.command("select")
+@click.command("select", cls=VtrackCommand)
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--frame", "frame", type=WholeNumber(0, MAX_FRAME_NUMBER), default=0,
               show_default=True,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from vtrack.cli._messages import echo_result
+from vtrack.cli._options import VtrackCommand
 from vtrack.cli._paths import NonEmptyText
 
 
@@ -165,7 +166,7 @@ def config_toml(name: str) -> str:
     return config_and_text(name)[1]  # its mistakes said as run says them
 
 
-@click.command("stages")
+@click.command("stages", cls=VtrackCommand)
 @click.argument("names", nargs=-1, metavar="[STAGE|CONFIG]...",
                 type=NonEmptyText("a stage's name, a shipped config's name or a TOML file "
                                   "(vtrack stages lists them)"))

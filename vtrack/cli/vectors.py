@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from vtrack.cli._messages import echo_result, no_such_command, warn
-from vtrack.cli._options import NumberWord
+from vtrack.cli._options import NumberWord, VtrackCommand
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.errors import close_names, names_a_path
@@ -62,7 +62,7 @@ class _NamedAsTheGroup(click.Context):
         return self.parent.command_path if self.parent is not None else super().command_path
 
 
-class _Generate(click.Command):
+class _Generate(VtrackCommand):
     context_class = _NamedAsTheGroup
 
 
@@ -132,7 +132,7 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
                 "the summary line")
 
 
-@command.command("check")
+@command.command("check", cls=VtrackCommand)
 @click.argument("vectors_dir", metavar="DIR", type=PATH)
 @click.argument("dump_dir", metavar="DUMP", type=PATH)
 def check(vectors_dir: Path, dump_dir: Path) -> None:
