@@ -142,6 +142,25 @@ def test_an_overlong_word_click_does_not_quote_is_shown_cut(tmp_path: Path,
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize(("args", "hint"), [
+    (("run", "clip.mp4", "clip.gt.txt"), "; if it is the ground truth: --gt clip.gt.txt"),
+    (("run", "clip.mp4", "groundtruth_rect.txt"),
+     "; if it is the ground truth: --gt groundtruth_rect.txt"),
+    (("frame", "clip.mp4", "frame.png"), "; if it is the image to write: -o frame.png"),
+    (("run", "clip.mp4", "frame.png"), ""),  # (run's -o is a folder)
+    (("run", "clip.mp4", "notes.txt"), ""),
+], ids=["gt", "otb-gt", "frame-image", "run-image", "other"])
+def test_an_extra_file_is_told_the_option_that_takes_it(tmp_path: Path, args: tuple[str, ...],
+                                                       hint: str) -> None:
+    """``vtrack run clip.mp4 clip.gt.txt`` said only "Got unexpected extra argument
+    (clip.gt.txt)"; a ground-truth file is told --gt now, an image given to vtrack frame its
+    -o; a file of no kind a command's FILE option takes, nothing more."""
+    line = one_error_line(vtrack(*args, cwd=tmp_path))
+    assert line == (f"vtrack: error: Got unexpected extra argument ({args[-1]}){hint} "
+                    f"(see 'python -m vtrack {args[0]} --help')")
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args", [("--follow=-1",), ("--follow", "-1"), ("--follow=-0.5",),
                                   ("--follow", "-1e3")])
 def test_a_negative_follow_is_refused_naming_the_option(tmp_path: Path,

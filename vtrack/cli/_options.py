@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -10,7 +11,7 @@ import click
 from click.core import ParameterSource
 
 from vtrack.cli._progress import STATS_PERIOD
-from vtrack.errors import cut
+from vtrack.errors import cut, shell_word
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 
@@ -79,8 +80,31 @@ class VtrackCommand(click.Command):
             ctx.allow_extra_args = not refused
         if extra and refused and not ctx.resilient_parsing:
             words = " ".join(cut(word) for word in extra)
-            ctx.fail(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} ({words})")
+            ctx.fail(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} ({words})"
+                     f"{self._option_for(extra[-1]) if len(extra) == 1 else ''}")
         return extra
+
+    def _option_for(self, word: str) -> str:
+        """``"; if it is the ground truth: --gt clip.gt.txt"``: the option of this command
+        that takes a file of ``word``'s kind (:data:`_FILE_KINDS`), for an extra argument
+        that may be meant for it; ``""`` when none does."""
+        for kind, looks_like, flag in _FILE_KINDS:
+            option = next((param for param in self.params if isinstance(param, click.Option)
+                           and flag in param.opts and param.metavar == "FILE"), None)
+            if option is not None and looks_like(os.path.basename(word).lower()):
+                return f"; if it is {kind}: {min(option.opts, key=len)} {shell_word(word)}"
+        return ""
+
+
+#: The kinds of file an extra argument may be (what it is, whether a name in lower case looks
+#: like one, the option that takes it where that option takes a FILE): a ground-truth file
+#: (``clip.gt.txt``, ``gt.txt``, ``groundtruth_rect.txt``), an image to write (``frame.png``).
+_FILE_KINDS: tuple[tuple[str, Callable[[str], bool], str], ...] = (
+    ("the ground truth", lambda name: name.endswith(".txt") and ("gt" in name.split(".")[:-1]
+                                                                 or "groundtruth" in name),
+     "--gt"),
+    ("the image to write", lambda name: name.endswith((".png", ".jpg", ".jpeg")), "--out"),
+)
 
 
 class SecondsCommand(VtrackCommand):
