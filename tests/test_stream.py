@@ -277,6 +277,37 @@ def test_a_sidecar_or_seqinfo_not_there_yet_is_refused_as_the_stream(tmp_path: P
         assert not stream.exists() and not (tmp_path / "out").exists()
 
 
+def test_a_symbolic_link_to_itself_among_what_a_run_reads_or_writes(tmp_path: Path) -> None:
+    """A seqinfo.ini or init.txt that is a link to itself (`ln -s seqinfo.ini SEQ/seqinfo.ini`),
+    with --init given, made `vtrack run SEQ --init BOX -y -o OUT` end in a RuntimeError
+    traceback (``Symlink loop from 'SEQ/seqinfo.ini'``: Path.resolve() on Python 3.11), and so
+    did `--stream S` where S links to itself; the run now goes on (it reads neither), a
+    looping link as the stream is still refused as what the run reads, and a looping stream
+    is one line."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    for name in ("seqinfo.ini", "init.txt"):
+        seq = write_clip(scene, tmp_path / name / "seq", fmt="images").clip
+        (seq / name).unlink(missing_ok=True)
+        (seq / name).symlink_to(name)
+        out = tmp_path / name / "out"
+        done = _vtrack("run", str(seq), "--init", box, "--no-video", "-y", "-o", str(out))
+        assert done.returncode == 0, done.stderr
+        assert "10 frames" in done.stdout and (out / "track.csv").is_file()
+        what = "the sequence's seqinfo.ini" if name == "seqinfo.ini" else "the sidecar box"
+        _refused_as_stream(tmp_path / "refused", seq / name, f"is {what} of this run "
+                           f"({seq / name})", str(seq), "--init", box)
+        assert (seq / name).is_symlink() and not (tmp_path / "refused").exists()
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    stream = tmp_path / "s.jsonl"
+    stream.symlink_to(stream.name)
+    done = _vtrack("run", str(clip), "--init", box, "--no-video", "-y", "-o",
+                   str(tmp_path / "out"), "--stream", str(stream))
+    assert (done.returncode, done.stderr) == (2, (
+        f"vtrack: error: --stream {stream}: Too many levels of symbolic links\n"))
+    assert stream.is_symlink() and not (tmp_path / "out").exists()
+
+
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:
     """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was

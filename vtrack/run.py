@@ -87,7 +87,13 @@ from vtrack.io import (
     write_json,
 )
 from vtrack.io.csvfile import box_as_written, scores_as_written
-from vtrack.io.files import is_temp_of, places_of, refuse_replacing_file, same_file
+from vtrack.io.files import (
+    is_temp_of,
+    places_of,
+    real_path,
+    refuse_replacing_file,
+    same_file,
+)
 from vtrack.io.identity import sizes
 from vtrack.io.images import is_image_of, sequence_info
 from vtrack.io.outdir import LOCK_NAME, RUN_OUTPUTS, OutputFolder, refuse_replacing
@@ -803,10 +809,10 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
         raise ConfigError(f"{names.stream} {stream}: is an image of the input of this run "
                           f"({request.input}); write the results elsewhere")
     own = [request.out_dir / name for name in (*RUN_OUTPUTS, LOCK_NAME)]  # all it clears
-    if stream is not None and any(stream.resolve() == output.resolve() for output in own):
+    if stream is not None and any(real_path(stream) == real_path(output) for output in own):
         raise ConfigError(f"{names.stream} {stream}: is one of this run's own outputs; name "
                           "another file")
-    folder = request.out_dir.resolve()  # ... with their temporaries, however the stream is named
+    folder = real_path(request.out_dir)  # ... with their temporaries, however the stream is named
     for place in (places_of(stream) if stream else ()):
         if place.parent == folder and any(is_temp_of(place.name, n) for n in RUN_OUTPUTS):
             raise ConfigError(f"{names.stream} {stream}: is named as a temporary file of this "

@@ -115,12 +115,19 @@ class SharedFolders(Generic[T]):
                 else (taken[1], taken[0] != folder_name(name, self._fallback)))
 
 
+def real_path(path: Path) -> Path:
+    """``path`` absolute, its symbolic links followed as far as they lead: as
+    ``Path.resolve()``, which on Python 3.11 raises RuntimeError on a link that leads to
+    itself, where this stops at the looping link (``os.path.realpath``, not strict)."""
+    return Path(os.path.realpath(path))
+
+
 def places_of(path: Path) -> set[Path]:
-    """The files ``path`` names, whether they exist or not, however its symbolic links are read:
-    the file it leads to (``path.resolve()``) and its own entry in its folder
-    (``path.parent.resolve() / path.name``, which a writer renaming over it replaces). One
-    place unless ``path`` itself is a symbolic link."""
-    return {path.resolve(), path.parent.resolve() / path.name}
+    """The files ``path`` names, whether they exist or not, however its symbolic links are read
+    (a loop of links included): the file it leads to (:func:`real_path`) and its own entry in
+    its folder (``real_path(path.parent) / path.name``, which a writer renaming over it
+    replaces). One place unless ``path`` itself is a symbolic link."""
+    return {real_path(path), real_path(path.parent) / path.name}
 
 
 def same_file(one: Path, other: Path) -> bool:
