@@ -308,6 +308,31 @@ def test_a_symbolic_link_to_itself_among_what_a_run_reads_or_writes(tmp_path: Pa
     assert stream.is_symlink() and not (tmp_path / "out").exists()
 
 
+def test_the_config_file_and_a_file_a_stage_reads_are_refused_as_the_stream(
+        tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 -c mine.toml ... -y --stream mine.toml` exited 0 having written
+    the run's JSON lines over the config file (the next run: ``not valid TOML``); the same for
+    `--stream det.txt` over the det.txt a mot_detections stage reads."""
+    scene = make_scene("multi", seed=0, width=W, height=H, frames=60, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{i + 1},-1,{b.x},{b.y},{b.w},{b.h},0.9\n"
+                           for i, frame in enumerate(scene.tracks) for _, b in frame))
+    config = tmp_path / "mine.toml"
+    config.write_text(f'name = "mine"\n[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    texts = {path: path.read_text() for path in (config, det)}
+    for stream, what in ((config, "the config file"), (det, "the mot_detections.path file")):
+        _refused_as_stream(tmp_path / "out", stream, f"is {what} of this run ({stream})",
+                           str(clip), "-c", str(config))
+    assert {path: path.read_text() for path in texts} == texts
+    assert not (tmp_path / "out").exists()
+    done = _vtrack("run", str(clip), "-c", str(config), "--no-video", "-y", "-q",
+                   "--out", str(tmp_path / "out"), "--stream", str(tmp_path / "s.jsonl"))
+    assert done.returncode == 0, done.stderr  # (a stream beside them is written)
+    assert len((tmp_path / "s.jsonl").read_text().splitlines()) == 60
+
+
 def test_every_file_the_folder_clearing_removes_is_refused_as_the_stream(
         tmp_path: Path) -> None:
     """`--stream OUT/tracks.csv` (or `error.log`; `track.csv` for a multi-target config) was

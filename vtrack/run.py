@@ -43,6 +43,7 @@ import numpy as np
 
 from vtrack import __version__
 from vtrack.annotate import Annotator
+from vtrack.config import config_file
 from vtrack.errors import (
     LIBRARY_NAMES,
     ConfigError,
@@ -785,11 +786,12 @@ class _Writers:
 def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: OptionNames
                                 ) -> None:
     """ConfigError when a file this run would write (``files`` in its folder, the ``--stream``
-    file) is the input, its sidecar box, its seqinfo.ini or the ground truth it reads (the
-    stream: or an image of an input folder, :func:`~vtrack.io.images.is_image_of`), or the
-    stream is one of its own outputs (any file of ``RUN_OUTPUTS``: the folder's clearing
-    would remove it): ``--overwrite`` replaces an earlier run's results, never what this run
-    reads. Messages call the folder and the stream by ``names``."""
+    file) is the input, its sidecar box, its seqinfo.ini, the ground truth it reads, its config
+    file or a file a stage of it reads (:func:`_config_files`) (the stream: or an image of an
+    input folder, :func:`~vtrack.io.images.is_image_of`), or the stream is one of its own
+    outputs (any file of ``RUN_OUTPUTS``: the folder's clearing would remove it):
+    ``--overwrite`` replaces an earlier run's results, never what this run reads. Messages call
+    the folder and the stream by ``names``."""
     outputs = [(request.out_dir / name, names.out) for name in files]
     stream = _stream_file(request)
     # what a run reads, compared by path: a sidecar or seqinfo.ini not there yet would be read
@@ -800,6 +802,7 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
         reads.append((sidecar_path(request.input), "the sidecar box"))
     if Path(request.input).is_dir():  # its frame rate, when no --fps is given
         reads.append((sequence_info(Path(request.input)), "the sequence's seqinfo.ini"))
+    reads += _config_files(request)
     for output, option in outputs + ([(stream, names.stream)] if stream else []):
         for source, what in reads:
             if source is not None and same_file(output, source):
@@ -818,6 +821,17 @@ def _refuse_writing_over_inputs(request: RunRequest, files: list[str], names: Op
             raise ConfigError(f"{names.stream} {stream}: is named as a temporary file of this "
                               "run's outputs, which the folder's clean-up removes; name "
                               "another file")
+
+
+def _config_files(request: RunRequest) -> list[tuple[Path, str]]:
+    """The files the request's config came from and its stages read, each with what it is:
+    the config file (when its source names one: a path given, or a shipped config's file; not
+    a Config made in code) and each file a stage parameter names (``mot_detections.path``:
+    ``the mot_detections.path file``)."""
+    config = config_file(request.config.source)
+    files = [(config, "the config file")] if os.path.isfile(config) else []  # (never raises)
+    return files + [(Path(value), f"the {stage}.{name} file")
+                    for _, stage, name, value in request.config.file_values() if value]
 
 
 def _stream_file(request: RunRequest) -> Path | None:
