@@ -289,6 +289,27 @@ def test_a_file_given_as_a_command_is_told_how_to_track_it_not_a_near_command(
                                                          "results", "scene.mp4", "seq"]
 
 
+def test_a_set_without_its_stage_is_offered_the_one_stage_that_declares_it(
+        tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 --set padding=2` said only "expected stage.param=value", when one
+    stage of the chain (robust_model) has a parameter padding: that stage is now offered, with
+    the value given; a name two stages declare, or none, is offered nothing."""
+    import vtrack as library
+
+    line = one_error_line(vtrack("run", "clip.mp4", "--set", "padding=2", cwd=tmp_path))
+    assert line == ("vtrack: error: --set padding=2: expected stage.param=value; did you mean "
+                    "robust_model.padding=2?")
+    with pytest.raises(library.ConfigError) as caught:
+        library.load_config("robust").with_values({"padding": 2})
+    assert str(caught.value).endswith("; did you mean robust_model.padding?"), caught.value
+    s3 = library.load_config("s3")
+    assert sum(any(p.name == "initial" for p in cls.params) for cls in s3.stage_classes()) > 1
+    for given in ("nosuch=1", "initial=1"):  # (s3: two of its stages declare initial)
+        with pytest.raises(library.ConfigError) as caught:
+            s3.with_overrides([given])
+        assert str(caught.value) == f"--set {given}: expected stage.param=value"
+
+
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
     """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
     `vtrack stages meanshif` listed every name and left the reader to find the one meant;

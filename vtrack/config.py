@@ -190,6 +190,16 @@ class Config:
         return self._changed([(key, value, f"{cut(key)}={shown(value)}", False)
                               for key, value in values.items()])
 
+    def _stage_of(self, param: str, given: Any, is_text: bool) -> str:
+        """How a refusal of ``param`` given without its stage ends: ``"; did you mean
+        robust_model.padding=2?"`` when one stage of the chain (by name) declares a parameter
+        of that name (``=2``: the text given, only for text), else ``""``."""
+        stages = {name for name in dict(self.stages)
+                  if any(p.name == param for p in stage_class(name, self._named).params)}
+        if len(stages) != 1:
+            return ""
+        return f"; did you mean {stages.pop()}.{param}{f'={cut(given)}' if is_text else ''}?"
+
     def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
         """This chain with each ``(stage.param, value, where, is_text)`` applied: text is
         parsed as ``--set`` parses it, other values are validated as they are."""
@@ -197,7 +207,8 @@ class Config:
         for key, given, where, is_text in changes:
             stage_name, dot, param_name = key.strip().partition(".")
             if not dot or not stage_name or not param_name:
-                raise ConfigError(f"{where}: expected stage.param=value")
+                raise ConfigError(f"{where}: expected stage.param=value"
+                                  f"{self._stage_of(key.strip(), given, is_text)}")
             matches = [values for name, values in stages if name == stage_name]
             if not matches:
                 chain = " -> ".join(name for name, _ in stages)
