@@ -689,6 +689,25 @@ def test_a_display_matrix_that_is_no_quarter_turn_is_warned_of(tmp_path):
         assert turned.warnings == []
 
 
+def test_a_box_refused_by_a_turned_frame_size_says_the_rotation_turned_it(tmp_path):
+    """`ffmpeg -i clip.mp4 -c copy -metadata:s:v rotate=90 c_rot.mp4; vtrack run c_rot.mp4
+    --init 262,71,40,31` said "the box ... lies outside the 240x320 frame" of a clip every
+    other reader shows as 320x240, without a word of the rotation: now it says the input's
+    rotation metadata turned it. A frame no rotation turned is refused as before."""
+    turned = _red_target_clip(tmp_path / "turned.mp4", None, "libx264", frames=1, rate=30,
+                              rotation=90)
+    plain = _red_target_clip(tmp_path / "plain.mp4", None, "libx264", frames=1, rate=30)
+    note = " (the input's rotation metadata turned it 90 degrees, from 64x48)"
+    for clip, box, problem, size, said in (
+            (turned, "50,10,10,10", "lies outside", "48x64", note),
+            (turned, "2,2,60,10", "is larger than", "48x64", note),
+            (plain, "2,2,60,60", "is larger than", "64x48", "")):
+        result = CliRunner().invoke(main, ["run", str(clip), "--init", box,
+                                           "-o", str(tmp_path / "out")])
+        assert one_error_line(result) == (f"vtrack: error: --init: the box {box} {problem} "
+                                          f"the {size} frame{said}")
+
+
 def test_a_file_with_two_video_streams_warns_which_it_tracks(clip_factory, tmp_path):
     """`ffmpeg -i a.mp4 -i b.mp4 -map 0:v -map 1:v -c copy two.mkv`: vtrack run tracked the
     first stream without a word that there was another; now one warning line says so, on

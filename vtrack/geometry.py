@@ -226,10 +226,11 @@ def as_box(box: Box | Any, where: str = "init_box") -> Box:
     return Box(*values)
 
 
-def check_init_box(box: Box, width: int, height: int, where: str) -> None:
+def check_init_box(box: Box, width: int, height: int, where: str, frame_note: str = "") -> None:
     """Refuse an initial box the trackers cannot start from: not finite, empty, smaller than
     ``MIN_BOX_SIDE`` pixels, larger than the frame, or not overlapping it. The message shows
-    the box's numbers as given (rounding could put one onto the limit it breaks)."""
+    the box's numbers as given (rounding could put one onto the limit it breaks); the last two
+    end with ``frame_note`` (what made the frame that size: an input's rotation)."""
     shown = ",".join(number_text(v) for v in box)
     if not all(math.isfinite(v) for v in box):
         raise ConfigError(f"{where}: the box {shown} holds a value that is not a finite number")
@@ -241,6 +242,8 @@ def check_init_box(box: Box, width: int, height: int, where: str) -> None:
             "pixels, too small to track"
         )
     if box.w > width or box.h > height:
-        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame")
+        raise ConfigError(f"{where}: the box {shown} is larger than the {width}x{height} frame"
+                          f"{frame_note}")
     if box.window(width, height) is None:
-        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame")
+        raise ConfigError(f"{where}: the box {shown} lies outside the {width}x{height} frame"
+                          f"{frame_note}")

@@ -729,7 +729,8 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
             info = source.info
             for box in (resolved.init_box, resolved.init_ignored):
                 if box is not None:
-                    check_init_box(box, info.width, info.height, resolved.init_from or names.init)
+                    check_init_box(box, info.width, info.height,
+                                   resolved.init_from or names.init, info.turned_note())
             _refuse_writing_over_inputs(request, _output_names(request, resolved), names)
             if not overwrite:
                 refuse_replacing(request.out_dir, names)

@@ -119,7 +119,8 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     # SIGTERM as Ctrl-C: the staged vector files are removed, earlier vectors stay whole;
     # once they go in place, a signal changes nothing (the input's closing included)
     with stopping_as_interrupted() as settled, open_source(input_spec) as source:
-        check_init_box(init_box, source.info.width, source.info.height, "--init")
+        check_init_box(init_box, source.info.width, source.info.height, "--init",
+                       source.info.turned_note())
         frames = itertools.islice(iter(source), count)
         written = write_vectors(frames, stages, Pipeline(stages), init_box, out_dir, extra,
                                 settled)

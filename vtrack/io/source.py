@@ -60,6 +60,16 @@ class InputInfo:
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
+    def turned_note(self) -> str:
+        """What a refusal of a box against the frame size adds when the stream's display
+        matrix turned the pictures a quarter turn (the size is not the stored one, which a box
+        drawn on a frame from another reader fits): `` (the input's rotation metadata turned it
+        90 degrees, from 320x240)``; ``""`` for no quarter turn."""
+        if self.rotation not in (90, 270):
+            return ""
+        return (f" (the input's rotation metadata turned it {self.rotation} degrees, from "
+                f"{self.height}x{self.width})")
+
 
 class Source(Closing, ABC):
     """An opened input: ``info``, one pass over its frames in order, ``close()``.
