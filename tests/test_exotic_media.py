@@ -430,6 +430,26 @@ def test_raw_rows_whose_repeating_headers_carry_no_payload_are_pixels(tmp_path, 
     assert done.exit_code == 0, done.output
     assert len((tmp_path / "ramp" / "track.csv").read_text().splitlines()) == 1 + 3
 
+def test_a_batch_takes_an_animated_gif_or_apng_as_vtrack_run_does(tmp_path):
+    """`vtrack batch odd2` skipped odd2/c.gif without a word (no inputs, when alone) while
+    `vtrack run odd2/c.gif` tracks it: an animation FFmpeg decodes (GIF, APNG) is now one of
+    a batch's videos."""
+    clip = _red_target_clip(tmp_path / "c.mp4", None, "libx264", frames=3, rate=25)
+    folder = tmp_path / "odd2"
+    folder.mkdir()
+    for name, options in (("c.gif", []), ("d.apng", ["-f", "apng"])):
+        subprocess.run(["ffmpeg", "-v", "error", "-i", str(clip), *options,
+                        str(folder / name)], check=True, timeout=60)
+        (folder / f"{Path(name).stem}.init.txt").write_text("5,10,20,20\n")
+    result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
+                                       "-o", str(tmp_path / "out")], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(row["input"], row["status"], row["frames"]) for row in rows] == [
+        ("c", "complete", "3"), ("d", "complete", "3")], result.output
+
+
 def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):
     """vtrack batch of a folder of a camera's .MXF clips said 'no inputs (video files or
     sequence folders ...)' though vtrack run tracks them and --help said inputs are the video

@@ -15,12 +15,13 @@ LIVE_SCHEMES = frozenset({"rtsp", "rtsps", "rtp", "udp", "tcp", "rtmp", "srt"})
 _DEVICE = re.compile(r"/dev/video(\d+)$")
 #: File suffixes taken as videos (a batch's inputs; a folder holding one is no flat image
 #: sequence): what phones, cameras (MXF, DV, HDV .m2t, camcorders' .mod/.tod, GoPro's .lrv),
-#: DVDs, IP cameras (ASF, Dahua's .dav) and tools write.
+#: DVDs, IP cameras (ASF, Dahua's .dav) and tools write, and the animations FFmpeg decodes as
+#: frames, as ``vtrack run`` tracks them (GIF, APNG; not an animated WebP, which it refuses).
 VIDEO_SUFFIXES = frozenset({
     ".mp4", ".m4v", ".mov", ".qt", ".mkv", ".webm", ".avi", ".divx", ".ts", ".mts", ".m2ts",
     ".m2t", ".mpg", ".mpeg", ".m2v", ".vob", ".mod", ".tod", ".mxf", ".dv", ".flv", ".f4v",
     ".wmv", ".asf", ".ogv", ".3gp", ".3g2", ".lrv", ".dav", ".nut", ".ivf", ".y4m", ".h264",
-    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg",
+    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg", ".gif", ".apng",
 })
 
 
