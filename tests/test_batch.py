@@ -658,8 +658,35 @@ def test_a_motchallenge_sequence_plays_at_its_seqinfo_frame_rate(
                       )["input"]["fps"] == 25.0
     info.write_text("[Sequence]\nframeRate=fast\n")
     assert one_error_line(run(str(seq))) == (
-        f"vtrack: error: {info}: frameRate must be a number > 0, got 'fast' (--fps N gives the "
-        "sequence's frame rate instead)")
+        f"vtrack: error: {info}: frameRate must be a frame rate from 0.01 to 10000 frames per "
+        "second, got 'fast' (--fps N gives the sequence's frame rate instead)")
+
+
+@pytest.mark.parametrize("rate", ["1e13", "1e-300", "20000"])
+def test_a_seqinfo_frame_rate_past_what_fps_takes_is_one_line(
+        rate: str, tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A MOTChallenge sequence whose seqinfo.ini says frameRate=1e13 (or 1e-300, or 20000)
+    was taken though --fps refuses such a rate: `vtrack run SEQ -c fixed_camera` ended in an
+    OverflowError traceback from PyAV's add_stream (1e13), in `annotated.mp4: cannot write
+    video (Python int too large to convert to C long)` after tracking, exit 1 (1e-300), or
+    wrote a video at 90000 fps, not 20000. It is one line naming the file and the range --fps
+    takes now, exit 2, nothing written; --fps still wins over the file."""
+    clip = clip_factory("multi", frames=60, fmt="images")
+    seq = tmp_path / "SEQ-03"
+    shutil.copytree(clip.path / "img", seq / "img1")
+    info = seq / "seqinfo.ini"
+    info.write_text(f"[Sequence]\nname=SEQ-03\nimDir=img1\nframeRate={rate}\nseqLength=60\n")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["run", str(seq), "-c", "fixed_camera", "-q", "-o",
+                                       str(out)])
+    assert one_error_line(result) == (
+        f"vtrack: error: {info}: frameRate must be a frame rate from 0.01 to 10000 frames per "
+        f"second, got '{rate}' (--fps N gives the sequence's frame rate instead)")
+    assert result.exit_code == 2 and not out.exists()
+    given = CliRunner().invoke(main, ["run", str(seq), "-c", "fixed_camera", "-q", "--fps", "25",
+                                      "-o", str(out)])
+    assert given.exit_code == 0, given.output
+    assert json.loads((out / "run.json").read_text())["input"]["fps"] == 25.0
 
 
 def test_videos_in_sub_folders_are_counted_in_one_warning(tmp_path: Path,

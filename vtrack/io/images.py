@@ -38,6 +38,7 @@ from vtrack.io.files import ffmpeg_file, os_reason, places_of
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
+from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
 from vtrack.io.signatures import (
     PHOTO_CODECS,
@@ -229,7 +230,8 @@ def sequence_fps(folder: Path) -> float | None:
     """The frame rate a MOTChallenge sequence's :data:`SEQUENCE_INFO` gives (its
     ``frameRate``), for the sequence folder or its ``img1/`` (``folder``); None when there is no
     such file or it gives none. InputError naming the file when it cannot be read or its
-    ``frameRate`` is not a number > 0."""
+    ``frameRate`` is not a frame rate ``--fps`` takes (:data:`~vtrack.io.raw.MIN_FPS` to
+    :data:`~vtrack.io.raw.MAX_FPS`: past them the annotated video's time base overflows)."""
     path = sequence_info(folder)
     if not path.is_file():
         return None
@@ -246,9 +248,10 @@ def sequence_fps(folder: Path) -> float | None:
         fps = float(text)
     except ValueError:
         fps = math.nan
-    if not (math.isfinite(fps) and fps > 0):
-        raise InputError(f"{path}: frameRate must be a number > 0, got {text!r} (--fps N "
-                         "gives the sequence's frame rate instead)")
+    if not (math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
+        raise InputError(f"{path}: frameRate must be a frame rate from {MIN_FPS:g} to "
+                         f"{MAX_FPS:g} frames per second, got {text!r} (--fps N gives the "
+                         "sequence's frame rate instead)")
     return fps
 
 
