@@ -199,3 +199,37 @@ def test_a_reconnection_given_up_names_scheduler_timeout() -> None:
     assert lost_reason(timed_out, 2) == "no reconnection within 2 s, --scheduler-timeout"
     reset = OSError("in <TCP (closed)>: ConnectionResetError: [Errno 104] Connection reset by peer")
     assert lost_reason(reset, 2) == "[Errno 104] Connection reset by peer"
+
+
+def test_a_worker_without_vtrack_is_named_before_any_job_is_sent(folder: Path,
+                                                                 tmp_path: Path) -> None:
+    """A `dask worker` that cannot import vtrack (README: every worker needs the batch's
+    version) died unpickling the first job (its `dask worker` process ended), and the batch,
+    left without a worker, failed every row after --worker-timeout: "Dask: no worker
+    connected to ADDRESS for 5 s", exit 1, never naming the cause. It is now one line naming
+    the worker, what it lacks and the version to install, exit 2, before anything runs."""
+    fake = tmp_path / "path" / "vtrack"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text('raise ImportError("no vtrack here")\n')
+    scheduler, address = start_scheduler()
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
+         "--nthreads", "1", "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONPATH": str(tmp_path / "path")}, cwd=tmp_path)
+    try:
+        result = vtrack("batch", str(folder), "--scheduler", address, "--worker-timeout", "5",
+                        "--no-video", "--out", str(tmp_path / "out"))
+        assert worker.poll() is None  # the worker lives on, no job sent to it
+    finally:
+        worker.terminate()
+        worker.wait(timeout=30)
+        scheduler.terminate()
+        scheduler.wait(timeout=30)
+    from vtrack import __version__
+
+    lines = assert_one_error(result, f"--scheduler {address}: worker tcp://127.0.0.1:",
+                             "has no vtrack it can import (no vtrack here)",
+                             f"every worker needs vtrack {__version__}")
+    assert len(lines) == 1 or lines[0].startswith("vtrack: waiting for a Dask worker")
+    assert not (tmp_path / "out" / "summary.csv").exists()

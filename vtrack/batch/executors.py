@@ -289,10 +289,15 @@ class DaskExecutor:
         """Return once at least one worker is connected to the scheduler; if none is, ``say``
         so (one line) and wait up to ``timeout_s`` seconds (None: for ever). On expiry, or when
         the scheduler goes away meanwhile, the client is closed and a :class:`VtrackError`
-        names the scheduler and what happened."""
+        names the scheduler and what happened; as it does when a connected worker cannot run
+        the batch's jobs (:meth:`_refuse_workers_without_vtrack`)."""
         self.worker_timeout_s = timeout_s
-        if self.client.scheduler_info().get("workers"):
-            return
+        if not self.client.scheduler_info().get("workers"):
+            self._wait_for_a_worker(timeout_s, say)
+        self._refuse_workers_without_vtrack()
+
+    def _wait_for_a_worker(self, timeout_s: float | None, say: Callable[[str], None]) -> None:
+        """:meth:`wait_for_workers`' wait, when no worker is connected yet."""
         limit = "for ever" if timeout_s is None else f"up to {_seconds(timeout_s)}"
         say(f"vtrack: waiting for a Dask worker to connect to {self.address} ({limit}, "
             f"--worker-timeout)")
@@ -308,6 +313,31 @@ class DaskExecutor:
             raise VtrackError(f"--scheduler {self.address}: lost the connection to the "
                               f"scheduler before a worker connected "
                               f"({lost_reason(exc, self.scheduler_timeout_s)})") from None
+
+    def _refuse_workers_without_vtrack(self) -> None:
+        """Ask every connected worker which vtrack it imports, before any job is sent: a
+        worker without vtrack would die unpickling the first job (its ``dask worker`` ends,
+        and the batch could only say that no worker is connected), and one of another version
+        may read a job otherwise. A :class:`VtrackError` (the client closed) names the first
+        such worker, what it has, and the version the batch needs. (A worker that connects
+        later is not asked.)"""
+        from vtrack import __version__
+
+        # (a builtin, pickled by name: a worker unpickles it without vtrack)
+        answers = self.client.run(eval, "__import__('vtrack').__version__", on_error="return")
+        for worker, answer in sorted(answers.items()):
+            if answer == __version__:
+                continue
+            reason = str(answer).splitlines()[0] if str(answer) else type(answer).__name__
+            has = (f"vtrack {answer}" if isinstance(answer, str)
+                   else f"no vtrack it can import ({reason})")
+            others = len(answers) - 1
+            also = f" ({others} other worker{'s' if others > 1 else ''} connected)"
+            self.close()
+            raise VtrackError(
+                f"--scheduler {self.address}: worker {worker} has {has}; every worker needs "
+                f"vtrack {__version__}, the batch's (pip install "
+                f"'vtrack[dask]=={__version__}' where it runs)" + (also if others else ""))
 
     def close(self) -> None:
         """Disconnect; nothing is printed if the scheduler is already gone (the Client's
