@@ -91,6 +91,23 @@ def test_a_malformed_address_is_one_line(folder: Path, tmp_path: Path) -> None:
                      "--scheduler-timeout", "2", "-o", str(tmp_path / "out")), "[::zz]")
 
 
+@pytest.mark.parametrize(("address", "said"), [
+    ("tcp://127.0.0.1:8786/", "not '/': drop it"), ("127.0.0.1:8786/x?y", "not '/x?y'"),
+    ("tcp://127.0.0.1:8786#a", "not '#a'"), ("tcp://me@127.0.0.1:8786", "no user@")])
+def test_an_address_with_more_than_host_and_port_says_what_to_drop(address: str,
+                                                                   said: str) -> None:
+    """`--scheduler tcp://localhost:8786/` (a slash pasted from a browser) reached a running
+    scheduler and was refused as "cannot reach the Dask scheduler (not a Dask scheduler)";
+    `tcp://me@HOST:8786` waited the whole --scheduler-timeout, then "Timed out trying to
+    connect". Both are refused before connecting, saying what to drop."""
+    from vtrack.batch.executors import scheduler_address_problem
+
+    problem = scheduler_address_problem(address)
+    assert problem is not None and said in problem
+    assert scheduler_address_problem(address.partition("/x")[0].rstrip("/#a")
+                                     .replace("me@", "")) is None
+
+
 def start(command: list[str]) -> subprocess.Popen[str]:
     return subprocess.Popen([sys.executable, "-m", *command], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)

@@ -473,6 +473,13 @@ def scheduler_address_problem(address: str) -> str | None:
         _, host, port = _host_port(address)
     except ValueError:  # not a number, or past 65535
         return "the port is not a number from 1 to 65535 (tcp://HOST:PORT)"
+    location = address.partition("://")[2] if "://" in address else address
+    netloc = urlsplit(f"//{location}").netloc  # (up to the first / ? or #)
+    extra = location[len(netloc):]
+    if extra:  # (Dask's address has no path: a scheduler there was called none)
+        return f"nothing follows the port in tcp://HOST:PORT, not {extra!r}: drop it"
+    if "@" in netloc:  # (Dask's address has no user)
+        return "no user@ in tcp://HOST:PORT: drop it"
     if not host:
         return "no host: give tcp://HOST:PORT"
     if port is None:
