@@ -592,6 +592,38 @@ def test_a_replaced_detections_file_runs_again(tmp_path: Path, clip_factory: Cli
     assert tracks.read_text() != before
 
 
+def test_the_same_config_file_named_another_way_resumes(
+        tmp_path: Path, clip_factory: ClipFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`vtrack batch IN -c mot.toml -o OUT`, then `-c /abs/work/mot.toml` (or from a folder
+    below, `-c ../mot.toml`) said "not run: OUT/multi/mot: holds the results of an earlier run
+    ...; give --overwrite ... (made with other settings: the config (its file or a --set))":
+    run.json records the config's source as typed. The same file is now the same run; another
+    file of that name with other values, or a --set, still is not. (det.txt is named whole:
+    a relative one is read from the folder the batch runs in, another file from below.)"""
+    folder, work = detections_setup(tmp_path, clip_factory)
+    config = MOT_CONFIG.replace('path = "det.txt"', f'path = "{work / "det.txt"}"')
+    (work / "mot.toml").write_text(config)
+    monkeypatch.chdir(work)
+    out = tmp_path / "out"
+    first = batch(str(folder), "-c", "mot.toml", "-j", "1", "--no-video", "-o", str(out))
+    assert first.exit_code == 0, first.output
+    below = work / "below"
+    below.mkdir()
+    for where, spec in ((work, str(work / "mot.toml")), (below, "../mot.toml")):
+        monkeypatch.chdir(where)
+        again = batch(str(folder), "-c", spec, "-j", "1", "--no-video", "-o", str(out))
+        assert again.exit_code == 0, again.output
+        assert "not run again" in again.output and "other settings" not in again.output
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "mot.toml").write_text(config + "q = 2.0\n")
+    for args in (["-c", str(other / "mot.toml")],
+                 ["-c", str(work / "mot.toml"), "--set", "byte_tracks.q=2"]):
+        changed = batch(str(folder), *args, "-j", "1", "--no-video", "-o", str(out))
+        assert changed.exit_code != 0
+        assert "made with other settings: the config (its file or a --set)" in changed.output
+
+
 def mot_sequence(seq: Path, clip_factory: ClipFactory) -> Path:
     """A MOTChallenge sequence folder ``seq`` (img1/000001.jpg ..., gt/gt.txt) of 60 frames of
     the generated ``multi`` scene."""

@@ -267,7 +267,7 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
     if not os.fspath(spec).strip():  # ("" would be opened as the current folder)
         raise ConfigError(f"config: empty; give {CONFIG_HINT}")
     path = config_file(spec)
-    where = str(spec)  # the config's source, whole: run.json records it and resume compares it
+    where = str(spec)  # the config's source, whole: run.json records it (resume ignores it)
     named = cut(where)  # how a refusal's one line names a spec it could not read
     if not _is_file(path, named):
         kind = special_kind(path)

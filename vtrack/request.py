@@ -5,7 +5,8 @@
 config from a template), recorded in ``run.json`` as ``"request"`` through :meth:`to_dict`, read
 back with :meth:`from_dict`, and compared whole by batch's resume test (:meth:`same_run`): a
 result is reused only if every field of the request that made it is the same (but for the
-results folder's own place: a batch folder moved whole resumes).
+results folder's own place: a batch folder moved whole resumes; and the config's source, how
+its file was named: the same file named another way is the same chain).
 """
 
 from __future__ import annotations
@@ -284,8 +285,8 @@ class RunRequest:
         the same run."""
         if not isinstance(recorded, dict):
             return ["the whole request (run.json records none)"]
-        mine = json.loads(json.dumps(self.to_dict()))
-        recorded = _with_recorded_later(recorded)
+        mine = _compared(json.loads(json.dumps(self.to_dict())))
+        recorded = _compared(_with_recorded_later(recorded))
         moot = _moot(mine) & _moot(recorded)
         keys = [k for k in dict.fromkeys([*mine, *recorded])
                 if k != "out_dir" and k not in moot
@@ -330,6 +331,17 @@ def _with_recorded_later(request: dict[str, Any]) -> dict[str, Any]:
     """``request`` (a ``run.json`` ``"request"``) with each field of :data:`_RECORDED_LATER`
     it lacks or holds as null set to what a record without it meant."""
     return {**request, **{k: v for k, v in _RECORDED_LATER.items() if request.get(k) is None}}
+def _compared(request: dict[str, Any]) -> dict[str, Any]:
+    """``request`` (a ``run.json`` ``"request"``) as two runs are compared: its config without
+    its ``source``, the config's name as it was typed (``-c det.toml``, ``-c /abs/det.toml`` or
+    ``-c ../det.toml`` from a folder below are one file, one run); the config's name,
+    description and every stage's every parameter still are."""
+    config = request.get("config")
+    if not isinstance(config, dict) or "source" not in config:
+        return request
+    return {**request, "config": {k: v for k, v in config.items() if k != "source"}}
+
+
 #: How a user sets each field of :meth:`RunRequest.to_dict` (named when it differs).
 _SETTING_NAMES = {
     "input": "the input's path", "config": "the config (its file or a --set)",
