@@ -686,6 +686,41 @@ def test_ground_truth_whose_every_row_is_ignored_is_a_warning(tmp_path, clip_fac
     assert record["metrics"]["gt_boxes"] == 0 and any(note in w for w in record["warnings"])
 
 
+def _scored_with_warning(clip, gt, out, note: str) -> dict:
+    """The run.json of ``vtrack run CLIP -c s3 --gt GT`` into ``out``, which succeeded with
+    ``note`` as its only warning, on stderr and in run.json."""
+    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
+                                       "--no-video", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert result.stderr == f"vtrack: warning: {note}\n"
+    record = json.loads((out / "run.json").read_text())
+    assert note in record["warnings"]
+    return record
+
+
+@pytest.mark.parametrize("text", ["", "\n \n"])
+def test_empty_ground_truth_of_a_scene_without_targets_scores_its_false_positives(
+        tmp_path, clip_factory, text) -> None:
+    """An empty MOTChallenge gt.txt (a scene with no target: its false alarms are what a
+    surveillance user measures) was refused, "gt.txt: MOT file is empty", while a file whose
+    every row is ignored scored with a warning. It scores the same way now: every track box a
+    false positive, gt_boxes 0, mota null, and a warning; a single target's empty ground truth
+    is still refused."""
+    clip = clip_factory("multi", seed=0, frames=MULTI_FRAMES)
+    gt = tmp_path / "gt.txt"
+    gt.write_text(text)
+    out = tmp_path / "out"
+    note = (f"{gt}: no ground-truth rows (a scene without targets): every track box is a false "
+            "positive (gt_boxes 0, mota null)")
+    metrics = _scored_with_warning(clip, gt, out, note)["metrics"]
+    assert metrics["gt_boxes"] == 0 and metrics["mota"] is None
+    tracked = len((out / "tracks.csv").read_text().splitlines()) - 1
+    assert tracked > 0 and metrics["false_positives"] == tracked
+    single = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s0", "--gt", str(gt),
+                                       "--no-video", "--out", str(tmp_path / "one"), "--quiet"])
+    assert single.exit_code != 0 and f"{gt}: ground-truth file is empty" in single.output
+
+
 def test_ground_truth_rows_with_an_empty_box_are_a_warning(tmp_path, clip_factory) -> None:
     """Rows of a MOTChallenge gt.txt with a negative width or height were dropped without a
     word (the run's MOTA went up: those targets were no longer missed). The run now warns how
@@ -697,15 +732,9 @@ def test_ground_truth_rows_with_an_empty_box_are_a_warning(tmp_path, clip_factor
     gt.write_text("".join(
         (",".join([*row.split(",")[:4], f"-{row.split(',')[4]}", *row.split(",")[5:]])
          if index in bad else row) + "\n" for index, row in enumerate(rows)))
-    out = tmp_path / "out"
-    result = CliRunner().invoke(main, ["run", str(clip.path), "--config", "s3", "--gt", str(gt),
-                                       "--no-video", "--out", str(out), "--quiet"])
-    assert result.exit_code == 0, result.output
     note = (f"{gt}: 3 ground-truth rows with w or h <= 0 ignored (the first on line 3): not "
             "scored, as if the file did not have them")
-    assert result.stderr == f"vtrack: warning: {note}\n"
-    record = json.loads((out / "run.json").read_text())
-    assert note in record["warnings"]
+    record = _scored_with_warning(clip, gt, tmp_path / "out", note)
     assert record["metrics"]["gt_boxes"] == len(rows) - 3
 
 

@@ -260,14 +260,15 @@ def _spaced_decimal_commas(line: str) -> str | None:
     return fields[0]
 
 
-def _read_lines(path: str | PathLike[str], what: str) -> list[str]:
+def _read_lines(path: str | PathLike[str], what: str, empty_ok: bool = False) -> list[str]:
     """The file's lines without trailing blank lines; InputError if unreadable, larger than
-    :data:`~vtrack.io.limits.GROUND_TRUTH_BYTES`, not UTF-8 or empty."""
+    :data:`~vtrack.io.limits.GROUND_TRUTH_BYTES`, not UTF-8 or, unless ``empty_ok``, empty
+    (nothing but blank lines)."""
     text = read_text_bounded(path, GROUND_TRUTH_BYTES, f"{what} file")
     lines = text.splitlines()
     while lines and not lines[-1].strip():
         lines.pop()
-    if not lines:
+    if not lines and not empty_ok:
         raise InputError(f"{path}: {what} file is empty")
     return lines
 
@@ -500,8 +501,11 @@ def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) ->
             "frame's)")
 
 
-def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int, list[float]]]:
-    """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file.
+def _mot_rows(path: str | PathLike[str], layout: str,
+              empty_ok: bool = False) -> Iterator[tuple[int, int, list[float]]]:
+    """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file
+    (an empty one is an InputError unless ``empty_ok``: ground truth of a scene without
+    targets).
 
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
     finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer from 1
@@ -510,7 +514,7 @@ def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int
     Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
-    for number, line in enumerate(_read_lines(path, "MOT"), start=1):
+    for number, line in enumerate(_read_lines(path, "MOT", empty_ok), start=1):
         if not line.strip():
             continue
         _check_fields(path, number, line)
@@ -558,9 +562,10 @@ def read_mot(path: str | PathLike[str]) -> dict[int, list[tuple[int, Box]]]:
 
     Frames without kept rows are not keys; keys are ascending, rows keep file order. Frame 1 of
     the file is key 0; boxes are taken as written (MOTChallenge's top-left corner). Blank lines
-    are skipped. Two kept rows for one (frame, id) are an error: a target is in one place at a
-    time. For ``det.txt`` files use :func:`read_mot_detections`; :func:`read_mot_counting`
-    also says which rows were dropped.
+    are skipped; a file of none but them (or of 0 bytes) is the ground truth of a scene
+    without targets, no key (:func:`dropped_notes` warns of it). Two kept rows for one
+    (frame, id) are an error: a target is in one place at a time. For ``det.txt`` files use
+    :func:`read_mot_detections`; :func:`read_mot_counting` also says which rows were dropped.
     """
     return read_mot_counting(path).boxes
 
@@ -604,7 +609,7 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
     seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
     dropped = Dropped()
     rows: dict[int, list[tuple[Box, bool]]] = {}  # every row with a box, for the distractors
-    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
+    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h", empty_ok=True):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, "
                              f"got {number_text(values[1])}")
@@ -640,11 +645,15 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
 
 def dropped_notes(path: str | PathLike[str], truth: MotTruth) -> list[str]:
     """The warnings for the rows of MOTChallenge ground truth :func:`read_mot_counting` did not
-    score: when it dropped every row, how many and why; else, when rows had an empty box (w or
-    h <= 0: no MOTChallenge row has one, the file is wrong there), how many and the line of the
-    first. Rows MOTChallenge itself leaves out (consider flag 0, classes other than
+    score: when the file has no row (a scene without targets), that each track box is a false
+    positive; when it dropped every row, how many and why; else, when rows had an empty box (w
+    or h <= 0: no MOTChallenge row has one, the file is wrong there), how many and the line of
+    the first. Rows MOTChallenge itself leaves out (consider flag 0, classes other than
     pedestrian) are not warned about when others are scored."""
     dropped = truth.dropped
+    if not truth.boxes and not dropped:
+        return [f"{path}: no ground-truth rows (a scene without targets): every track box is a "
+                "false positive (gt_boxes 0, mota null)"]
     if not truth.boxes and dropped:
         why = "; ".join(f"{count} with {reason}" for reason, count in dropped.most_common())
         return [f"{path}: all {sum(dropped.values())} ground-truth rows are ignored ({why}): "
