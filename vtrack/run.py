@@ -108,7 +108,7 @@ from vtrack.io.source import (
     start_toward,
 )
 from vtrack.io.stream import STDOUT, StreamWriter
-from vtrack.io.videowriter import VideoTooSmallError, verify_video
+from vtrack.io.videowriter import VideoRefusedError, verify_video
 from vtrack.latency import Latencies
 from vtrack.params import MAX_TRACK_ID
 from vtrack.pipeline import FrameResult, Pipeline
@@ -865,12 +865,11 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
             writers.video = VideoWriter(request.out_dir / "annotated.mp4", info.width,
                                         info.height, info.fps or 30.0, preset=request.preset,
                                         crf=request.crf, url=request.video_out,
-                                        stall_s=request.ffmpeg.timeout_s)
-        except VideoTooSmallError as exc:  # the way out, as the caller names it
+                                        stall_s=request.ffmpeg.timeout_s,
+                                        span_s=info.duration_s)
+        except VideoRefusedError as exc:
             writers.csv.abort()
-            way = (f"leave {names.video_out} out and give {names.no_video}" if request.video_out
-                   else f"give {names.no_video}")  # without --video-out: annotated.mp4, as small
-            raise VideoTooSmallError(f"{exc}; {way} to track it without the video") from None
+            raise _way_out(exc, request, names) from None
         except BaseException:
             writers.csv.abort()
             raise
@@ -890,6 +889,14 @@ def _open_writers(request: RunRequest, resolved: _Resolved, info: InputInfo,
                 writers.video.abort()
             raise
     return writers
+
+
+def _way_out(exc: VideoRefusedError, request: RunRequest, names: OptionNames
+             ) -> VideoRefusedError:
+    """``exc`` naming the way out, as the caller names it: tracking without the video."""
+    way = (f"leave {names.video_out} out and give {names.no_video}" if request.video_out
+           else f"give {names.no_video}")  # without --video-out: annotated.mp4, as small
+    return type(exc)(f"{exc}; {way} to track it without the video")
 
 
 def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> _Resolved:
@@ -1174,8 +1181,12 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     assert result.frame is not None
                     if first_time is None:
                         first_time = result.time_s
-                    video.write(result.frame, lambda planes, r=result: annotator.draw(
-                        planes, r), time_s=result.time_s - first_time, stop=signals.stopping)
+                    try:
+                        video.write(result.frame, lambda planes, r=result: annotator.draw(
+                            planes, r), time_s=result.time_s - first_time,
+                            stop=signals.stopping)
+                    except VideoRefusedError as exc:  # a frame its clock cannot hold
+                        raise _way_out(exc, request, resolved.names) from None
                 if writers.stream is not None:  # last: a signal may cut short its wait
                     writers.stream.write(result, stop=signals.stopping)
             received = source.received

@@ -4,7 +4,8 @@
 frame: the decoder keeps it as a reference, PERFORMANCE.md point 4), lets the caller draw on that
 copy, and queues it. The encoder thread copies it into a reused ``av.VideoFrame`` (honouring
 FFmpeg's padded line sizes) and encodes it with frame threads. Timestamps follow the input's
-(90 kHz clock), so variable frame rate input keeps its timing.
+(a 90 kHz clock, coarser only for an input whose span it cannot hold:
+:mod:`vtrack.io.videoclock`), so variable frame rate input keeps its timing.
 
 The file is written under a temporary name and renamed by ``close()``, which also flushes the
 encoder; call it in a ``finally`` so an error or Ctrl-C mid-run still leaves a playable video.
@@ -17,6 +18,7 @@ import os
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
@@ -31,9 +33,11 @@ from vtrack.geometry import Window
 from vtrack.io.files import Closing, ffmpeg_file, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
 from vtrack.io.threads import STOP_POLL_S
+from vtrack.io.videoclock import RATES, VideoClock, longest_span_s, video_clock
 
-#: Clock of the output timestamps: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
-TIME_BASE = Fraction(1, 90000)
+#: Clock of a live output's timestamps (and of a file's, unless its span needs a coarser one):
+#: exact for 24, 25, 30, 60 and the 1001-based NTSC rates.
+TIME_BASE = Fraction(1, RATES[0])
 
 Draw = Callable[[np.ndarray], None]
 
@@ -58,7 +62,18 @@ class _Slot:
         return frame
 
 
-class VideoTooSmallError(OutputError):
+class VideoRefusedError(OutputError):
+    """The annotated video cannot be written for this input; the input can be tracked
+    without it (``vtrack run --no-video``, ``RunRequest(video=False)``)."""
+
+
+class VideoTooLongError(VideoRefusedError):
+    """Timestamps the video's clock cannot hold: an input spanning more than that, refused as
+    the writer opens, or (its span unknown or understated) a frame too long after those before
+    it, refused by :meth:`VideoWriter.write` (the partial video is then thrown away)."""
+
+
+class VideoTooSmallError(VideoRefusedError):
     """Pictures too small for the annotated video (under 2x2 pixels), refused as the writer
     opens, before a frame is tracked: the input can be tracked without the video (``vtrack run
     --no-video``, ``RunRequest(video=False)``)."""
@@ -76,6 +91,10 @@ class VideoWriter(Closing):
     takes nothing for ``stall_s`` seconds (FFmpeg's write to it blocks) is an OutputError,
     from :meth:`write` or :meth:`close`: the run never waits on it for ever; a stop gives way
     sooner (see :meth:`write`).
+
+    ``span_s`` is how long the input lasts (None when not known): a file's clock is the finest
+    that holds it (:func:`~vtrack.io.videoclock.video_clock`, 90 kHz for any ordinary clip); a
+    longer span than any clock holds is refused (VideoTooLongError) before anything is written.
     """
 
     #: Output pictures in flight between the caller and the encoder thread.
@@ -92,6 +111,7 @@ class VideoWriter(Closing):
         codec: str = "libx264",
         url: str | None = None,
         stall_s: float = 10.0,
+        span_s: float | None = None,
     ) -> None:
         self.path = Path(path)
         self.url = url
@@ -104,6 +124,16 @@ class VideoWriter(Closing):
         if self.width <= 0 or self.height <= 0:  # before anything is written
             raise VideoTooSmallError(f"{url or self.path}: cannot encode a {width}x{height} "
                                      "video (H.264 in yuv420p needs at least 2x2 pixels)")
+        #: None for a live output (MPEG-TS, RTSP, FLV: no 32-bit steps to guard).
+        self._clock: VideoClock | None = None
+        if url is None:
+            self._clock = video_clock(preset, span_s)
+            if self._clock is None:
+                raise VideoTooLongError(
+                    f"{self.path}: the input spans {span_s:g} s, more than the video's "
+                    f"timestamps hold ({longest_span_s(preset):g} s with preset {preset})")
+        self._preset = preset
+        self._recent: deque[int] = deque(maxlen=self._clock.window if self._clock else 1)
         self._temp = temp_path(self.path) if url is None else None
         self._rate = Fraction(fps).limit_denominator(1001) if fps and fps > 0 else Fraction(30)
         self._container = self._open(preset, crf, codec)
@@ -128,14 +158,15 @@ class VideoWriter(Closing):
         where = self.url if self.url is not None else str(self._temp)
         try:  # a file: nothing touches the disk yet
             container = av.open(where if live else ffmpeg_file(where), "w",
-                                format=live_format(where) if live else None)
+                                format=live_format(where) if live else None,
+                                options=self._muxer_options())
         except (av.FFmpegError, OSError) as exc:  # a live output that cannot be reached
             raise OutputError(f"--video-out {where}: cannot be opened ({os_reason(exc)})"
                               ) from None
         try:
             stream = container.add_stream(codec, rate=self._rate)
             stream.width, stream.height, stream.pix_fmt = self.width, self.height, "yuv420p"
-            stream.codec_context.time_base = stream.time_base = TIME_BASE
+            stream.codec_context.time_base = stream.time_base = self.time_base
             # frame threads: +28% over slices (PERFORMANCE.md 2), but each holds a picture back
             stream.codec_context.thread_type = "SLICE" if live else "FRAME"
             stream.options = {"preset": preset, "crf": str(crf),
@@ -155,6 +186,13 @@ class VideoWriter(Closing):
             raise OutputError(f"{self.url or self.path}: cannot write ({os_reason(exc)})"
                               ) from None
         return container
+
+    def _muxer_options(self) -> dict[str, str]:
+        """A file's track keeps the clock's ticks: left to itself, the MP4 muxer doubles a
+        clock under 10 kHz until it is not (1 kHz would become 16 kHz, 16 times shorter)."""
+        if self._clock is None:
+            return {}
+        return {"video_track_timescale": str(self._clock.rate)}
 
     def _encode_loop(self) -> None:
         """Encoder thread: encode queued slots in order; ``True`` flushes and ends, ``False``
@@ -220,6 +258,9 @@ class VideoWriter(Closing):
         self._raise_error()
         if time_s is None and isinstance(image, Frame):
             time_s = image.time_s
+        if time_s is None:
+            time_s = self._frames / self._rate
+        pts = self._pts(time_s)
         slot = self._free_slot(stop if self.url is not None else None)
         if slot is None:
             self._gave_way = True
@@ -231,13 +272,33 @@ class VideoWriter(Closing):
         except BaseException:
             self._free.put(slot)
             raise
-        if time_s is None:
-            time_s = self._frames / self._rate
-        pts = max(round(time_s / TIME_BASE), self._last_pts + 1)  # strictly increasing
         slot.pts = self._last_pts = pts
+        self._recent.append(pts)
         self._frames += 1
         self._todo.put(slot)
         return True
+
+    @property
+    def time_base(self) -> Fraction:
+        """The clock of the video's timestamps."""
+        return TIME_BASE if self._clock is None else self._clock.time_base
+
+    def _pts(self, time_s: float) -> int:
+        """The timestamp of a picture at ``time_s``: strictly increasing. Raises
+        VideoTooLongError (and throws the video away on close) when the clock cannot hold it."""
+        pts = max(round(time_s / self.time_base), self._last_pts + 1)
+        clock = self._clock
+        if clock is not None and self._recent and pts - self._recent[0] > clock.bound_ticks:
+            back = ("the frame before it" if clock.window == 1
+                    else f"the frame {clock.window} before it")
+            self._error_reported = True  # said here, not on close
+            self._error = VideoTooLongError(
+                f"{self.path}: the frame at {time_s:.9g} s comes "
+                f"{clock.seconds(pts - self._recent[0]):.9g} s after {back}, more than the "
+                f"video's timestamps hold ({clock.seconds(clock.bound_ticks):.9g} s with preset "
+                f"{self._preset})")
+            raise self._error
+        return pts
 
     def _free_slot(self, stop: Callable[[], bool] | None) -> _Slot | None:
         """An output buffer the encoder is done with, waiting for one at most ``stall_s``
