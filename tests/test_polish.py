@@ -142,21 +142,37 @@ def test_an_overlong_word_click_does_not_quote_is_shown_cut(tmp_path: Path,
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize(("args", "hint"), [
-    (("run", "clip.mp4", "clip.gt.txt"), "; if it is the ground truth: --gt clip.gt.txt"),
+_Q205 = "q" * 205 + " x.gt.txt"  # (an overlong ground-truth name: the hint pastes it whole)
+_APOSTROPHE = "it's " + "q" * 190 + ".png"
+_Q150 = "q" * 150
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "clip.mp4", "clip.gt.txt"),
+     " (clip.gt.txt); if it is the ground truth: --gt clip.gt.txt"),
     (("run", "clip.mp4", "groundtruth_rect.txt"),
-     "; if it is the ground truth: --gt groundtruth_rect.txt"),
-    (("frame", "clip.mp4", "frame.png"), "; if it is the image to write: -o frame.png"),
-    (("run", "clip.mp4", "frame.png"), ""),  # (run's -o is a folder)
-    (("run", "clip.mp4", "notes.txt"), ""),
-], ids=["gt", "otb-gt", "frame-image", "run-image", "other"])
+     " (groundtruth_rect.txt); if it is the ground truth: --gt groundtruth_rect.txt"),
+    (("frame", "clip.mp4", "frame.png"), " (frame.png); if it is the image to write: -o frame.png"),
+    (("run", "clip.mp4", "frame.png"), " (frame.png)"),  # (run's -o is a folder)
+    (("run", "clip.mp4", "notes.txt"), " (notes.txt)"),
+    (("run", "clip.mp4", _Q205),
+     f" ({_Q205[:100]}...{_Q205[-30:]} (214 characters)); if it is the ground truth: "
+     f"--gt '{_Q205}'"),
+    (("frame", "clip.mp4", _APOSTROPHE),
+     f" ({_APOSTROPHE}); if it is the image to write: -o {shlex.quote(_APOSTROPHE)}"),
+    (("run", "clip.mp4", "it's", _Q150, _Q150, "don't"), f"s (it's {_Q150} {_Q150} don't)"),
+], ids=["gt", "otb-gt", "frame-image", "run-image", "other", "overlong-gt", "apostrophe-image",
+        "apostrophes-across-words"])
 def test_an_extra_file_is_told_the_option_that_takes_it(tmp_path: Path, args: tuple[str, ...],
-                                                       hint: str) -> None:
+                                                       said: str) -> None:
     """``vtrack run clip.mp4 clip.gt.txt`` said only "Got unexpected extra argument
     (clip.gt.txt)"; a ground-truth file is told --gt now, an image given to vtrack frame its
-    -o; a file of no kind a command's FILE option takes, nothing more."""
+    -o; a file of no kind a command's FILE option takes, nothing more. The hint is a word to
+    paste, whole and shell-quoted: click's quoted words were cut over the whole line, which cut
+    and unquoted an overlong name's hint ("--gt qqq...qqq x.gt.txt (214 characters)"), garbled
+    a name with an apostrophe, and took stray apostrophes of several words for quotes."""
     line = one_error_line(vtrack(*args, cwd=tmp_path))
-    assert line == (f"vtrack: error: Got unexpected extra argument ({args[-1]}){hint} "
+    assert line == (f"vtrack: error: Got unexpected extra argument{said} "
                     f"(see 'python -m vtrack {args[0]} --help')")
     assert not list(tmp_path.iterdir())
 

@@ -23,7 +23,7 @@ from typing import Any
 import click
 
 from vtrack import __version__
-from vtrack.cli._messages import echo_result, error_line, no_such_command
+from vtrack.cli._messages import WordsCut, echo_result, error_line, no_such_command
 from vtrack.errors import VtrackError, cut_quoted
 
 
@@ -94,9 +94,9 @@ class _Group(click.Group):
         except click.UsageError as exc:
             where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
             message = exc.format_message()
-            if not isinstance(exc, click.exceptions.NoSuchCommand):
-                # (click's words; no_such_command's are vtrack's: the word cut already, the
-                # command to paste whole and shell-quoted)
+            if not isinstance(exc, (click.exceptions.NoSuchCommand, WordsCut)):
+                # (click's words; no_such_command's and WordsCut's are vtrack's: the words
+                # cut already, the command to paste whole and shell-quoted)
                 message = cut_quoted(message)
             click.echo(error_line(f"{message}{where}"), err=True)
             sys.exit(exc.exit_code)

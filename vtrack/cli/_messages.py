@@ -16,6 +16,12 @@ import click
 from vtrack.errors import close_names, cut, guess_text, names_a_path, printable, shell_word
 
 
+class WordsCut(click.UsageError):
+    """A usage error in vtrack's own words: each word a user gave is cut already
+    (:func:`~vtrack.errors.cut`) and a command to paste is whole and shell-quoted, so the
+    message is said as it is (click's own are cut by :func:`~vtrack.errors.cut_quoted`)."""
+
+
 def error_line(message: str) -> str:
     """``vtrack: error: MESSAGE`` as one line."""
     return f"vtrack: error: {printable(message)}"

@@ -10,6 +10,7 @@ from typing import Any
 import click
 from click.core import ParameterSource
 
+from vtrack.cli._messages import WordsCut
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.errors import cut, shell_word
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
@@ -69,7 +70,8 @@ class Seconds(click.FloatRange):
 class VtrackCommand(click.Command):
     """A vtrack command: arguments it does not take are refused as click refuses them, "Got
     unexpected extra argument (clip.gt.txt)", each shown as :func:`~vtrack.errors.cut` shows
-    it (click echoed a word of any length whole)."""
+    it (click echoed a word of any length whole), a :class:`~vtrack.cli._messages.WordsCut`:
+    the option hint of :meth:`_option_for` is said whole and shell-quoted."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         refused = not ctx.allow_extra_args
@@ -80,8 +82,9 @@ class VtrackCommand(click.Command):
             ctx.allow_extra_args = not refused
         if extra and refused and not ctx.resilient_parsing:
             words = " ".join(cut(word) for word in extra)
-            ctx.fail(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} ({words})"
-                     f"{self._option_for(extra[-1]) if len(extra) == 1 else ''}")
+            raise WordsCut(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} "
+                           f"({words}){self._option_for(extra[-1]) if len(extra) == 1 else ''}",
+                           ctx=ctx)
         return extra
 
     def _option_for(self, word: str) -> str:
