@@ -161,8 +161,11 @@ _Q150 = "q" * 150
     (("frame", "clip.mp4", _APOSTROPHE),
      f" ({_APOSTROPHE}); if it is the image to write: -o {shlex.quote(_APOSTROPHE)}"),
     (("run", "clip.mp4", "it's", _Q150, _Q150, "don't"), f"s (it's {_Q150} {_Q150} don't)"),
+    (("run", "clip.mp4", "--gt", "a.gt.txt", "b.gt.txt"), " (b.gt.txt)"),
+    (("frame", "clip.mp4", "-o", "a.png", "b.png"), " (b.png)"),
+    (("frame", "clip.mp4", "--out=a.png", "b.png"), " (b.png)"),
 ], ids=["gt", "otb-gt", "frame-image", "run-image", "other", "overlong-gt", "apostrophe-image",
-        "apostrophes-across-words"])
+        "apostrophes-across-words", "gt-given", "image-given", "image-given-attached"])
 def test_an_extra_file_is_told_the_option_that_takes_it(tmp_path: Path, args: tuple[str, ...],
                                                        said: str) -> None:
     """``vtrack run clip.mp4 clip.gt.txt`` said only "Got unexpected extra argument
@@ -170,7 +173,9 @@ def test_an_extra_file_is_told_the_option_that_takes_it(tmp_path: Path, args: tu
     -o; a file of no kind a command's FILE option takes, nothing more. The hint is a word to
     paste, whole and shell-quoted: click's quoted words were cut over the whole line, which cut
     and unquoted an overlong name's hint ("--gt qqq...qqq x.gt.txt (214 characters)"), garbled
-    a name with an apostrophe, and took stray apostrophes of several words for quotes."""
+    a name with an apostrophe, and took stray apostrophes of several words for quotes. An
+    option given already is not suggested again (``--gt a.gt.txt b.gt.txt`` was told "--gt
+    b.gt.txt", which would replace a.gt.txt)."""
     line = one_error_line(vtrack(*args, cwd=tmp_path))
     assert line == (f"vtrack: error: Got unexpected extra argument{said} "
                     f"(see 'python -m vtrack {args[0]} --help')")

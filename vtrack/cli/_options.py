@@ -82,19 +82,22 @@ class VtrackCommand(click.Command):
             ctx.allow_extra_args = not refused
         if extra and refused and not ctx.resilient_parsing:
             words = " ".join(cut(word) for word in extra)
+            hint = self._option_for(ctx, extra[-1]) if len(extra) == 1 else ""
             raise WordsCut(f"Got unexpected extra argument{'s' if len(extra) > 1 else ''} "
-                           f"({words}){self._option_for(extra[-1]) if len(extra) == 1 else ''}",
-                           ctx=ctx)
+                           f"({words}){hint}", ctx=ctx)
         return extra
 
-    def _option_for(self, word: str) -> str:
+    def _option_for(self, ctx: click.Context, word: str) -> str:
         """``"; if it is the ground truth: --gt clip.gt.txt"``: the option of this command
         that takes a file of ``word``'s kind (:data:`_FILE_KINDS`), for an extra argument
-        that may be meant for it; ``""`` when none does."""
+        that may be meant for it; ``""`` when none does, or when that option was given on the
+        command line already (``--gt a.gt.txt b.gt.txt``: a second --gt would replace it)."""
         for kind, looks_like, flag in _FILE_KINDS:
             option = next((param for param in self.params if isinstance(param, click.Option)
                            and flag in param.opts and param.metavar == "FILE"), None)
-            if option is not None and looks_like(os.path.basename(word).lower()):
+            if (option is not None and option.name is not None
+                    and ctx.get_parameter_source(option.name) is not ParameterSource.COMMANDLINE
+                    and looks_like(os.path.basename(word).lower())):
                 return f"; if it is {kind}: {min(option.opts, key=len)} {shell_word(word)}"
         return ""
 
