@@ -93,7 +93,7 @@ def load_clip(seq: Sequence) -> Clip:
     """A real sequence: its ``img/`` frames read once with ``cv2.imread``, 1-based ground truth."""
     paths = sorted(p for p in (seq.folder / "img").iterdir() if p.suffix in (".jpg", ".png"))
     frames = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
-    return Clip(seq.name, frames, read_boxes(seq.groundtruth, origin=1)[: len(frames)])
+    return Clip(seq.name, frames, list(read_boxes(seq.groundtruth, origin=1)[: len(frames)]))
 
 
 def scene_clip(name: str, seed: int) -> Clip:

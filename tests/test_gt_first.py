@@ -284,3 +284,46 @@ def test_the_counts_of_a_later_run_or_file_explain_themselves(
     assert result.exit_code == 0, result.output
     assert f"{gt} has 25 boxes, frames 0..24, for its 25 frames from frame 5;" \
         in result.stderr, result.stderr
+
+
+def test_boxes_from_frame_0_are_a_list_and_later_ones_are_not_walked(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Review: read_boxes and read_truth(...).boxes came back as a FrameBoxes even with no
+    first frame given, and library code that took them as a list failed (json.dumps, t +
+    [None], [None] + t, t.append, t[0] = ..., isinstance(t, list)); a list now, a FrameBoxes
+    only for a file whose first box is of a later frame. Its stepped slices, ``in``, index,
+    count and reversed visited each of 10^12 frames before the first box (a MemoryError or
+    minutes); they count them now."""
+    from vtrack.evaluate import read_boxes, read_truth
+    from vtrack.geometry import Box
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,2,3,4\n0,0,0,0\n5,6,7,8\n")
+    boxes = read_boxes(gt)
+    assert isinstance(boxes, list) and isinstance(read_truth(gt).boxes, list)
+    assert json.loads(json.dumps(boxes)) == [[1, 2, 3, 4], None, [5, 6, 7, 8]]
+    assert boxes + [None] == [*boxes, None] and [None] + boxes == [None, *boxes]
+    boxes.append(None)
+    boxes[0] = Box(0, 0, 1, 1)
+    assert boxes == [Box(0, 0, 1, 1), None, Box(5, 6, 7, 8), None]
+    far = 10**12
+    later = read_boxes(gt, first=far)
+    own = [Box(1, 2, 3, 4), None, Box(5, 6, 7, 8)]
+    assert later[:far:far // 4] == [None] * 4 and later[far::2] == [own[0], own[2]]
+    assert later[far - 1::2] == [None, None] and len(later[1::3]) == len(range(1, far + 3, 3))
+    assert later[::-1][:4] == [own[2], None, own[0], None] and later[far + 5:] == []
+    assert later[:far - 2:-1] == [own[2], None, own[0], None]
+    assert None in later and Box(5, 6, 7, 8) in later and Box(9, 9, 9, 9) not in later
+    assert later.count(None) == far + 1 and later.count(Box(1, 2, 3, 4)) == 1
+    assert later.index(Box(5, 6, 7, 8)) == far + 2 and later.index(None) == 0
+    assert later.index(None, far) == far + 1 and later.index(None, 5, 9) == 5
+    with pytest.raises(ValueError):
+        later.index(Box(1, 2, 3, 4), far + 1)
+    assert list(zip(reversed(later), range(5), strict=False)) == [
+        (own[2], 0), (None, 1), (own[0], 2), (None, 3), (None, 4)]
+    folder, whole, _ = david
+    short = tmp_path / "short.txt"
+    short.write_text("".join(whole.read_text().splitlines(keepends=True)[:5]))
+    line = one_error_line(vtrack("run", str(folder), "--gt", str(short), "--start", "12",
+                                 "-o", str(tmp_path / "c")))
+    assert "the file has boxes for frames 0..4 only" in line, line

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import math
 import re
+from bisect import bisect_left
 from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
+from itertools import chain, repeat
 from os import PathLike
 from pathlib import Path
 from typing import NamedTuple, overload
@@ -318,19 +320,24 @@ def _is_mot_row(values: list[float]) -> bool:
 
 
 class FrameBoxes(Sequence[Box | None]):
-    """Ground-truth boxes indexed by frame: None for the :attr:`first` frames before the file's
-    first box (``--gt-first``), then the file's own boxes (:attr:`own`). The frames before
-    are not stored (``--gt-first`` may be 10^12): a slice is another FrameBoxes, as short as
-    a list's slice would be. Equal to any sequence of the same boxes (a list too)."""
+    """Ground-truth boxes indexed by frame, of a file whose first box is of a later frame than
+    0 (``--gt-first``): None for the :attr:`first` frames before the file's first box, then the
+    file's own boxes (:attr:`own`), then None for :attr:`after` frames (a reversed slice's).
+    The frames of None are not stored (``--gt-first`` may be 10^12): a slice is another
+    FrameBoxes, as long as a list's slice would be, and ``in``, :meth:`index`, :meth:`count`
+    and ``reversed`` count them without visiting each. Equal to any sequence of the same boxes
+    (a list too)."""
 
-    def __init__(self, own: Sequence[Box | None], first: int = 0) -> None:
+    def __init__(self, own: Sequence[Box | None], first: int = 0, after: int = 0) -> None:
         #: The file's own boxes, the first of frame :attr:`first`.
         self.own: list[Box | None] = list(own)
         #: The frame the file's first box belongs to.
         self.first = first
+        #: The frames of None after the own boxes.
+        self.after = after
 
     def __len__(self) -> int:
-        return self.first + len(self.own)
+        return self.first + len(self.own) + self.after
 
     @overload
     def __getitem__(self, index: int) -> Box | None: ...
@@ -340,25 +347,55 @@ class FrameBoxes(Sequence[Box | None]):
 
     def __getitem__(self, index: int | slice) -> Box | None | FrameBoxes:
         if isinstance(index, slice):
-            begin, end, step = index.indices(len(self))
-            if step != 1:
-                return FrameBoxes([self[i] for i in range(begin, end, step)])
-            end = max(end, begin)
-            return FrameBoxes(self.own[max(begin - self.first, 0):max(end - self.first, 0)],
-                              min(max(self.first - begin, 0), end - begin))
+            frames = range(len(self))[index]
+            before, own, after = self._parts(frames if frames.step > 0 else frames[::-1])
+            boxes = [self.own[frame - self.first] for frame in own]
+            if frames.step < 0:
+                return FrameBoxes(boxes[::-1], len(after), len(before))
+            return FrameBoxes(boxes, len(before), len(after))
         frame = index + len(self) if index < 0 else index
         if not 0 <= frame < len(self):
             raise IndexError(f"frame {index} out of range")
-        return None if frame < self.first else self.own[frame - self.first]
+        own = frame - self.first
+        return self.own[own] if 0 <= own < len(self.own) else None
+
+    def _parts(self, frames: range) -> tuple[range, range, range]:
+        """The frames of ``frames`` (ascending) before the own boxes, of them, and after."""
+        end = self.first + len(self.own)
+        cuts = [bisect_left(frames, frame) for frame in (self.first, end)]
+        return frames[:cuts[0]], frames[cuts[0]:cuts[1]], frames[cuts[1]:]
 
     def __iter__(self) -> Iterator[Box | None]:
-        for _ in range(self.first):
-            yield None
-        yield from self.own
+        return chain(repeat(None, self.first), self.own, repeat(None, self.after))
+
+    def __reversed__(self) -> Iterator[Box | None]:
+        return chain(repeat(None, self.after), reversed(self.own), repeat(None, self.first))
+
+    def __contains__(self, value: object) -> bool:
+        return bool(_is_none(value) and (self.first or self.after)) or value in self.own
+
+    def count(self, value: object) -> int:
+        """How many frames hold ``value`` (None: also the frames before and after the own
+        boxes)."""
+        return (self.first + self.after if _is_none(value) else 0) + self.own.count(value)
+
+    def index(self, value: object, start: int = 0, stop: int | None = None) -> int:
+        """The first frame from ``start`` to before ``stop`` (as a list's ``index`` takes them)
+        that holds ``value``; ValueError if none does."""
+        before, own, after = self._parts(range(len(self))[start:stop])
+        if _is_none(value) and before:
+            return before[0]
+        for frame in own:
+            box = self.own[frame - self.first]
+            if box is value or box == value:
+                return frame
+        if _is_none(value) and after:
+            return after[0]
+        raise ValueError(f"{value!r} is not in the ground truth's frames")
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, FrameBoxes):
-            return (self.first, self.own) == (other.first, other.own)
+            return (self.first, self.own, self.after) == (other.first, other.own, other.after)
         if not isinstance(other, Sequence) or isinstance(other, str) or len(other) != len(self):
             return False
         return all(a == b for a, b in zip(self, other, strict=True))
@@ -366,21 +403,38 @@ class FrameBoxes(Sequence[Box | None]):
     __hash__ = None  # type: ignore[assignment]
 
     def __repr__(self) -> str:
-        return f"FrameBoxes({self.own!r}, first={self.first})"
+        after = f", after={self.after}" if self.after else ""
+        return f"FrameBoxes({self.own!r}, first={self.first}{after})"
 
 
-def read_boxes(path: str | PathLike[str], origin: int = 0, first: int = 0) -> FrameBoxes:
+class BoxList(list[Box | None]):
+    """The boxes of a file whose first box is of frame 0: a list (``json.dumps``, ``+``,
+    ``append`` as any list), with :attr:`first`, 0, as a :class:`FrameBoxes` has."""
+
+    #: The frame the file's first box belongs to.
+    first = 0
+
+
+def _is_none(value: object) -> bool:
+    """Whether a frame of no box (None) holds ``value``, as a list compares its items."""
+    return value is None or value == None  # noqa: E711 (as list.index and list.count compare)
+
+
+def read_boxes(path: str | PathLike[str], origin: int = 0,
+               first: int = 0) -> BoxList | FrameBoxes:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent
-    (:func:`read_truth`'s boxes, the first of frame ``first``)."""
+    (:func:`read_truth`'s boxes, the first of frame ``first``): a list when ``first`` is 0, a
+    :class:`FrameBoxes` otherwise."""
     return read_truth(path, origin, first).boxes
 
 
 class SingleTruth(NamedTuple):
     """Single-target ground truth as :func:`read_truth` reads it."""
 
-    #: One box per frame, None where the target is absent (:func:`read_boxes`); the ``first``
-    #: frames before the file's first box are None without being stored (:class:`FrameBoxes`).
-    boxes: FrameBoxes
+    #: One box per frame, None where the target is absent (:func:`read_boxes`): a list
+    #: (:class:`BoxList`) when the file's first box is of frame 0; else a :class:`FrameBoxes`,
+    #: whose ``first`` frames before the file's first box are None without being stored.
+    boxes: BoxList | FrameBoxes
     #: The lines (1-based) whose box has a negative width or height: read as the target
     #: absent, as ``0,0,0,0`` is, though no dataset marks it so (:func:`negative_note`).
     negative: list[int]
@@ -404,9 +458,9 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
 
     ``first`` is the 0-based frame the file's first box belongs to (``--gt-first``: OTB's
     ``David`` starts at its image 300, frame 299): the boxes come back indexed by frame, the
-    ``first`` frames before it None (no ground truth, not scored; not stored,
-    :class:`FrameBoxes`); ConfigError for a ``first``
-    that is not a whole number from 0 to :data:`MAX_GT_FIRST`.
+    ``first`` frames before it None (no ground truth, not scored; not stored: a
+    :class:`FrameBoxes`; with ``first`` 0, the boxes are a list, :class:`BoxList`); ConfigError
+    for a ``first`` that is not a whole number from 0 to :data:`MAX_GT_FIRST`.
 
     Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
     ``x1,y1,...,x4,y4``, which becomes its axis-aligned bounding box. Numbers may be separated
@@ -476,7 +530,7 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
             boxes.append(None)
         else:
             boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
-    return SingleTruth(FrameBoxes(boxes, first), negative)
+    return SingleTruth(FrameBoxes(boxes, first) if first else BoxList(boxes), negative)
 
 
 def boxes_for_frames(boxes: int, first: int, frames: int, start: int, its: str = "") -> str:
