@@ -64,7 +64,6 @@ from vtrack.errors import (
     shell_word,
 )
 from vtrack.evaluate.groundtruth import (
-    FrameBoxes,
     boxes_for_frames,
     dropped_notes,
     groundtruth_beside,
@@ -604,7 +603,7 @@ class _Resolved:
     """What a request resolves to before any frame is tracked."""
 
     pipeline: Pipeline
-    gt: FrameBoxes | None  # single-target ground truth
+    gt: Sequence[Box | None] | None  # single-target ground truth (a FrameBoxes past --gt-first)
     mot_gt: dict[int, list[tuple[int, Box]]] | None  # multi-target ground truth (MOTChallenge)
     init_box: Box | None
     #: Where ``init_box`` came from, for messages and ``run.json``: ``--init``, a sidecar file or
@@ -959,7 +958,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                     f"there, or {give_box}")
             why = ("marked absent (NaN, or w or h <= 0: the target out of view)"
                    if start < len(gt) else
-                   f"missing: the file has boxes for frames {gt.first}..{len(gt) - 1} only "
+                   f"missing: the file has boxes for frames {request.gt_first}..{len(gt) - 1} only "
                    "(a file "
                    f"shorter than the input, or frame {start} past the input's end)")
             raise InputError(f"{request.gt_path}: the {where} is {why}; give {give_box}")
@@ -1000,7 +999,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
                      _Span(request.max_frames, request.max_s), warnings, distractors, names)
 
 
-def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: FrameBoxes,
+def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: Sequence[Box | None],
                        span: int, stopped: bool) -> str:
     """The warning of single-target ground truth ``gt`` (indexed by frame, its boxes from
     frame ``request.gt_first`` on) that has fewer or more boxes than the ``span`` frames the run

@@ -407,21 +407,13 @@ class FrameBoxes(Sequence[Box | None]):
         return f"FrameBoxes({self.own!r}, first={self.first}{after})"
 
 
-class BoxList(list[Box | None]):
-    """The boxes of a file whose first box is of frame 0: a list (``json.dumps``, ``+``,
-    ``append`` as any list), with :attr:`first`, 0, as a :class:`FrameBoxes` has."""
-
-    #: The frame the file's first box belongs to.
-    first = 0
-
-
 def _is_none(value: object) -> bool:
     """Whether a frame of no box (None) holds ``value``, as a list compares its items."""
     return value is None or value == None  # noqa: E711 (as list.index and list.count compare)
 
 
 def read_boxes(path: str | PathLike[str], origin: int = 0,
-               first: int = 0) -> BoxList | FrameBoxes:
+               first: int = 0) -> list[Box | None] | FrameBoxes:
     """Read single-target ground truth: one box per frame, ``None`` where the target is absent
     (:func:`read_truth`'s boxes, the first of frame ``first``): a list when ``first`` is 0, a
     :class:`FrameBoxes` otherwise."""
@@ -431,10 +423,10 @@ def read_boxes(path: str | PathLike[str], origin: int = 0,
 class SingleTruth(NamedTuple):
     """Single-target ground truth as :func:`read_truth` reads it."""
 
-    #: One box per frame, None where the target is absent (:func:`read_boxes`): a list
-    #: (:class:`BoxList`) when the file's first box is of frame 0; else a :class:`FrameBoxes`,
-    #: whose ``first`` frames before the file's first box are None without being stored.
-    boxes: BoxList | FrameBoxes
+    #: One box per frame, None where the target is absent (:func:`read_boxes`): a list when
+    #: the file's first box is of frame 0; else a :class:`FrameBoxes`, whose ``first`` frames
+    #: before the file's first box are None without being stored.
+    boxes: list[Box | None] | FrameBoxes
     #: The lines (1-based) whose box has a negative width or height: read as the target
     #: absent, as ``0,0,0,0`` is, though no dataset marks it so (:func:`negative_note`).
     negative: list[int]
@@ -459,7 +451,7 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
     ``first`` is the 0-based frame the file's first box belongs to (``--gt-first``: OTB's
     ``David`` starts at its image 300, frame 299): the boxes come back indexed by frame, the
     ``first`` frames before it None (no ground truth, not scored; not stored: a
-    :class:`FrameBoxes`; with ``first`` 0, the boxes are a list, :class:`BoxList`); ConfigError
+    :class:`FrameBoxes`; with ``first`` 0, the boxes are a list); ConfigError
     for a ``first`` that is not a whole number from 0 to :data:`MAX_GT_FIRST`.
 
     Each line is ``x,y,w,h`` (OTB, UAV123, LaSOT, VOT rectangles) or an 8-number VOT polygon
@@ -530,7 +522,7 @@ def read_truth(path: str | PathLike[str], origin: int = 0, first: int = 0) -> Si
             boxes.append(None)
         else:
             boxes.append(box._replace(x=box.x - origin, y=box.y - origin))
-    return SingleTruth(FrameBoxes(boxes, first) if first else BoxList(boxes), negative)
+    return SingleTruth(FrameBoxes(boxes, first) if first else boxes, negative)
 
 
 def boxes_for_frames(boxes: int, first: int, frames: int, start: int, its: str = "") -> str:
