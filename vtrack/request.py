@@ -331,6 +331,8 @@ def _with_recorded_later(request: dict[str, Any]) -> dict[str, Any]:
     """``request`` (a ``run.json`` ``"request"``) with each field of :data:`_RECORDED_LATER`
     it lacks or holds as null set to what a record without it meant."""
     return {**request, **{k: v for k, v in _RECORDED_LATER.items() if request.get(k) is None}}
+
+
 def _compared(request: dict[str, Any]) -> dict[str, Any]:
     """``request`` (a ``run.json`` ``"request"``) as two runs are compared: its config without
     its ``source``, the config's name as it was typed (``-c det.toml``, ``-c /abs/det.toml`` or

@@ -34,7 +34,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.files import ffmpeg_file, os_reason, places_of
+from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
 from vtrack.io.planes import quarter_turns, turned
@@ -127,7 +127,7 @@ def is_image_of(folder: str | os.PathLike[str], path: Path) -> bool:
     root = Path(folder)
     if not root.is_dir():
         return False
-    where = (sequence_images(root) or root).resolve()
+    where = real_path(sequence_images(root) or root)
     return any(_image_name(place.name) and place.parent == where for place in places_of(path))
 
 

@@ -550,10 +550,10 @@ class VideoSource(Source):
             raise InputError(_undecodable(path, how, exc)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
-        # a regular file can jump to a key frame (start_near): not stdin, a FIFO, a URL or a
-        # growing file
-        self._seekable = not live and how.follow_s is None and "://" not in path \
-            and path != "-" and os.path.isfile(path)
+        # a regular file can be read again (a photo's orientation tag) and, unless it grows,
+        # jump to a key frame (start_near): not stdin, a FIFO or a URL
+        self._regular = "://" not in path and path != "-" and os.path.isfile(path)
+        self._seekable = not live and how.follow_s is None and self._regular
         try:
             info = self._open(path, container, live)
         except BaseException:
@@ -607,9 +607,8 @@ class VideoSource(Source):
         # from its first packet (the photo's bytes, as the image demuxers hand a photo over),
         # which :meth:`_decode` keeps as ``_photo`` until it is read
         photo = stream.codec_context.name in PHOTO_CODECS
-        rereadable = path != "-" and "://" not in path and os.path.isfile(path)
         self._photo: bytes | None = None
-        self._keep_photo = photo and not rereadable
+        self._keep_photo = photo and not self._regular
         self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
@@ -651,7 +650,7 @@ class VideoSource(Source):
 
         self._rotation = quarter_turns(self._first.rotation)
         # a photo whose orientation tag mirrors it (FFmpeg's rotation is the rest of it)
-        self._mirrored = photo and (photo_mirrored(path) if rereadable else
+        self._mirrored = photo and (photo_mirrored(path) if self._regular else
                                     photo_bytes_mirrored(self._photo or b""))
         self._photo = None
         width, height = self._first.width, self._first.height

@@ -7,6 +7,7 @@ import json
 import math
 import os
 import re
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from datetime import datetime
@@ -396,10 +397,10 @@ def _unused_gt_warning(truth: GroundTruth, runs: Sequence[RunResult]) -> str:
     own = [r for r in mine if r.ground_truth and not r.multi_target and not r.gt_scored]
     # (a plain one's runs that took their input's --gt INPUT=FILE: a reason of its own)
     taken = [r.gt_given for r in mine if r.gt_scored and r.gt_given and r.gt_given is not truth]
+    counts = Counter(map(id, taken))
     why = [f"{plural(n, 'run')} {'was' if n == 1 else 'were'} scored with --gt "
            f"{other.input}={other.path} instead"
-           for other in {id(t): t for t in taken}.values()
-           if (n := sum(t is other for t in taken))]
+           for other in {id(t): t for t in taken}.values() for n in [counts[id(other)]]]
     if own:
         files = first_few(sorted({str(r.ground_truth) for r in own}), NAMED_REASONS)
         why.append(f"{plural(len(own), 'run')}{of} {'was' if len(own) == 1 else 'were'} "
@@ -723,13 +724,13 @@ def _overall_plot(staged: StagedFiles, plot_dir: Path, by_config: dict[str, list
     if not success:
         return None
     covered = {c: {r.input for r in v if _evaluated(r)} for c, v in by_config.items()}
+    # a config's curves over fewer inputs say so beside their score, as its table row does
     # (a config scored nowhere is in no average: the no-ground-truth warning names it)
-    if any(inputs and inputs != averaged for inputs in covered.values()):
+    notes = {c: tables.on_inputs(len(inputs), len(averaged)) for c, inputs in covered.items()
+             if inputs and inputs != averaged}
+    if notes:
         warnings.append("configurations were scored on different inputs: their averages "
                         "are not directly comparable")
     title = f"All inputs (mean over {plural(len(averaged), 'input')})"
-    # a config's curves over fewer inputs say so beside their score, as its table row does
-    notes = {c: tables.on_inputs(len(inputs), len(averaged)) for c, inputs in covered.items()
-             if inputs and inputs != averaged}
     return _save(staged, plots.curves_figure(title, success, precision, palette, notes),
                  plot_dir / f"curves_{ALL_INPUTS}.png")
