@@ -23,7 +23,7 @@ from click.testing import CliRunner
 from conftest import one_error_line
 from PIL import Image, ImageOps
 
-from vtrack.batch import VIDEO_SUFFIXES
+from vtrack.batch import BATCH_SUFFIXES, find_inputs, nested_inputs
 from vtrack.cli import main
 from vtrack.io import open_source
 from vtrack.io.signatures import photo_mirrored
@@ -441,13 +441,39 @@ def test_a_batch_takes_an_animated_gif_or_apng_as_vtrack_run_does(tmp_path):
         subprocess.run(["ffmpeg", "-v", "error", "-i", str(clip), *options,
                         str(folder / name)], check=True, timeout=60)
         (folder / f"{Path(name).stem}.init.txt").write_text("5,10,20,20\n")
-    result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
-                                       "-o", str(tmp_path / "out")], catch_exceptions=False)
-    assert result.exit_code == 0, result.output
-    with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    assert [(row["input"], row["status"], row["frames"]) for row in rows] == [
-        ("c", "complete", "3"), ("d", "complete", "3")], result.output
+    result, rows = _batch_s0(folder, tmp_path / "out")
+    assert rows == [("c", "complete", "3"), ("d", "complete", "3")], result.output
+
+
+def test_a_gif_thumbnail_beside_a_sequences_frames_leaves_it_a_sequence(tmp_path):
+    """`vtrack batch seq` of 0001.jpg..0005.jpg, groundtruth.txt and a one-frame thumb.gif
+    tried thumb.gif ('no ground truth or initial box') and dropped the sequence: an animation
+    made the folder no sequence, as a video does. It is one input again, in a folder of
+    inputs and below one; a folder of GIFs alone still yields each."""
+    top = tmp_path / "in"
+    seq = top / "seq"
+    seq.mkdir(parents=True)
+    for i in range(1, 6):
+        frame = np.full((48, 64, 3), 40, np.uint8)
+        frame[10 + i:26 + i, 10 + i:26 + i] = (0, 0, 255)
+        cv2.imwrite(str(seq / f"{i:04d}.jpg"), frame)
+    (seq / "groundtruth.txt").write_text("".join(f"{10 + i},{10 + i},16,16\n"
+                                                 for i in range(1, 6)))
+    subprocess.run(["ffmpeg", "-v", "error", "-i", str(seq / "0001.jpg"),
+                    str(seq / "thumb.gif")], check=True, timeout=60)
+    result, rows = _batch_s0(seq, tmp_path / "out")
+    assert rows == [("seq", "complete", "5")], result.output
+    gifs = top / "gifs"
+    gifs.mkdir()
+    for name in ("a.gif", "b.gif"):
+        (gifs / name).write_bytes((seq / "thumb.gif").read_bytes())
+    assert [item.name for item in find_inputs(top)] == ["seq"]
+    assert [item.name for item in find_inputs(gifs)] == ["a", "b"]
+    assert nested_inputs(top).found == [gifs / "a.gif", gifs / "b.gif"]
+    group = tmp_path / "group"
+    group.mkdir()
+    seq.rename(group / "seq")
+    assert nested_inputs(tmp_path).found == [group / "seq", gifs / "a.gif", gifs / "b.gif"]
 
 
 def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_takes(tmp_path):
@@ -458,15 +484,22 @@ def test_a_batch_takes_a_broadcast_cameras_mxf_and_the_readme_lists_what_it_take
     folder.mkdir()
     _red_target_clip(folder / "A001.MXF", "mxf", "mpeg2video", frames=3, rate=25)
     (folder / "A001.init.txt").write_text("5,10,20,20\n")
-    result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
-                                       "-o", str(tmp_path / "out")], catch_exceptions=False)
-    with (tmp_path / "out" / "summary.csv").open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    assert [(row["input"], row["status"], row["frames"]) for row in rows] == [
-        ("A001", "complete", "3")], result.output
+    result, rows = _batch_s0(folder, tmp_path / "out")
+    assert rows == [("A001", "complete", "3")], result.output
     readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
     listed = re.search(r"Video files are known by their names.*?: (`\.[^(]*)\(", readme, re.S)
-    assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(VIDEO_SUFFIXES)
+    assert listed and set(re.findall(r"`(\.\w+)`", listed[1])) == set(BATCH_SUFFIXES)
+
+
+def _batch_s0(folder: Path, out: Path) -> tuple[object, list[tuple[str, str, str]]]:
+    """``vtrack batch FOLDER -c s0`` into ``out``: click's result and each summary row's input,
+    status and frame count."""
+    result = CliRunner().invoke(main, ["batch", str(folder), "-c", "s0", "--no-video", "-j", "1",
+                                       "-o", str(out)], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    with (out / "summary.csv").open(newline="") as handle:
+        return result, [(row["input"], row["status"], row["frames"])
+                        for row in csv.DictReader(handle)]
 
 
 def _red_target_clip(path: Path, fmt: str | None, codec: str, *, frames: int, rate: int,

@@ -11,7 +11,9 @@ Inputs (:func:`find_inputs`), looked for directly inside the folder (video files
 sub-folders, and sequence folders there, are not inputs: :func:`nested_inputs` finds them, for
 the batch to say so):
 
-- video files (by suffix, :data:`VIDEO_SUFFIXES`), with ground truth beside them:
+- video files (by suffix, :data:`VIDEO_SUFFIXES`) and animations (GIF, APNG:
+  :data:`ANIMATION_SUFFIXES`; one in a sequence folder is no input: a thumbnail), with
+  ground truth beside them:
   ``name.gt.txt`` or ``name.txt`` (single target, ``x,y,w,h`` lines) and ``name.mot.txt``
   (MOTChallenge, for multi-target configs);
 - sequence folders (:func:`is_sequence_folder`: images in OTB's ``img/`` or MOTChallenge's
@@ -55,7 +57,6 @@ from vtrack.batch.discover import (
     SEQUENCE_MOT_GT,
     VIDEO_INIT,
     VIDEO_MOT_GT,
-    VIDEO_SUFFIXES,
     BatchInput,
     find_inputs,
     is_sequence_folder,
@@ -67,11 +68,13 @@ from vtrack.batch.plan import Plan, completed_summary, plan
 from vtrack.batch.summary import SummaryWriter, run_batch
 from vtrack.batch.worker import execute
 from vtrack.evaluate.groundtruth import SEQUENCE_GT, VIDEO_GT
+from vtrack.io.specs import ANIMATION_SUFFIXES, BATCH_SUFFIXES, VIDEO_SUFFIXES
 from vtrack.machine import cpu_count
 from vtrack.run import STATUS_FAILED
 
 __all__ = [
-    "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT", "SEQUENCE_MOT_GT", "STATUS_FAILED",
+    "ANIMATION_SUFFIXES", "BATCH_SUFFIXES", "RETRIES", "SEQUENCE_GT", "SEQUENCE_INIT",
+    "SEQUENCE_MOT_GT", "STATUS_FAILED",
     "SUMMARY_COLUMNS", "VIDEO_GT", "VIDEO_INIT", "VIDEO_MOT_GT", "VIDEO_SUFFIXES", "BatchInput",
     "DaskExecutor", "Executor", "Job", "LocalExecutor", "Outcome", "Plan", "SummaryWriter",
     "completed_summary", "cpu_count", "execute", "find_inputs", "is_sequence_folder",

@@ -23,7 +23,7 @@ from vtrack.io.files import SharedFolders, folder_key, folder_name
 from vtrack.io.outdir import BATCH_SUMMARY, is_batch_folder
 from vtrack.io.sidecar import SEQUENCE_SIDECAR as SEQUENCE_INIT
 from vtrack.io.sidecar import VIDEO_SIDECAR as VIDEO_INIT
-from vtrack.io.specs import VIDEO_SUFFIXES
+from vtrack.io.specs import BATCH_SUFFIXES
 
 #: The batch's own file in its results folder, beside the inputs' folders: no input's folder.
 SUMMARY_FILE = BATCH_SUMMARY
@@ -197,7 +197,7 @@ def find_inputs(folder: Path, gt_origin: int | None = None,
         _refuse_shared_folders(folder, found)
         return sorted(found, key=lambda i: i.name)
     entries = sorted(folder.resolve().iterdir())
-    named = [p for p in entries if p.suffix.lower() in VIDEO_SUFFIXES]
+    named = [p for p in entries if p.suffix.lower() in BATCH_SUFFIXES]
     videos = [p for p in named if p.is_file()]
     found = [item for p in entries if p.is_dir() and not _results_folder(p)
              and is_sequence_folder(p) for item in _sequence(p, gt_origin, multi_target)]
@@ -321,7 +321,7 @@ def nested_inputs(folder: Path, looks: int = NESTED_LOOKS) -> NestedInputs:
                         found.append(entry)
                     elif not entry.is_symlink():
                         deeper.append(entry)
-                elif entry.suffix.lower() in VIDEO_SUFFIXES and entry.is_file():
+                elif entry.suffix.lower() in BATCH_SUFFIXES and entry.is_file():
                     found.append(entry)
         level = deeper
     return NestedInputs(sorted(found, key=_nearest), True)

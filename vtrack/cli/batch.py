@@ -146,9 +146,9 @@ def _refuse_one_video(folder: Path) -> None:
     """InputError when FOLDER is a video file (by its suffix, as a batch knows its videos): one
     line saying it is not a folder and that ``vtrack run`` tracks it."""
     from vtrack.errors import InputError
-    from vtrack.io.specs import VIDEO_SUFFIXES
+    from vtrack.io.specs import BATCH_SUFFIXES
 
-    if folder.suffix.lower() in VIDEO_SUFFIXES and folder.is_file():
+    if folder.suffix.lower() in BATCH_SUFFIXES and folder.is_file():
         raise InputError(f"{folder}: not a folder: a batch tracks the inputs in a folder; "
                          f"vtrack run {shell_word(folder)} tracks one input")
 

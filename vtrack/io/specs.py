@@ -15,14 +15,21 @@ LIVE_SCHEMES = frozenset({"rtsp", "rtsps", "rtp", "udp", "tcp", "rtmp", "srt"})
 _DEVICE = re.compile(r"/dev/video(\d+)$")
 #: File suffixes taken as videos (a batch's inputs; a folder holding one is no flat image
 #: sequence): what phones, cameras (MXF, DV, HDV .m2t, camcorders' .mod/.tod, GoPro's .lrv),
-#: DVDs, IP cameras (ASF, Dahua's .dav) and tools write, and the animations FFmpeg decodes as
-#: frames, as ``vtrack run`` tracks them (GIF, APNG; not an animated WebP, which it refuses).
+#: DVDs, IP cameras (ASF, Dahua's .dav) and tools write.
 VIDEO_SUFFIXES = frozenset({
     ".mp4", ".m4v", ".mov", ".qt", ".mkv", ".webm", ".avi", ".divx", ".ts", ".mts", ".m2ts",
     ".m2t", ".mpg", ".mpeg", ".m2v", ".vob", ".mod", ".tod", ".mxf", ".dv", ".flv", ".f4v",
     ".wmv", ".asf", ".ogv", ".3gp", ".3g2", ".lrv", ".dav", ".nut", ".ivf", ".y4m", ".h264",
-    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg", ".gif", ".apng",
+    ".264", ".h265", ".hevc", ".mjpeg", ".mjpg",
 })
+#: The animations FFmpeg decodes as frames, as ``vtrack run`` tracks them (GIF, APNG; not an
+#: animated WebP, which it refuses): a batch's inputs in a folder that is no sequence, but
+#: not videos that make a folder no flat image sequence (a sequence's ``thumb.gif`` beside its
+#: frames leaves it a sequence).
+ANIMATION_SUFFIXES = frozenset({".gif", ".apng"})
+#: File suffixes a batch takes as inputs in a folder that is no sequence folder: videos and
+#: animations.
+BATCH_SUFFIXES = VIDEO_SUFFIXES | ANIMATION_SUFFIXES
 
 
 def is_url(spec: str) -> bool:
