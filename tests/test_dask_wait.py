@@ -233,3 +233,32 @@ def test_a_worker_without_vtrack_is_named_before_any_job_is_sent(folder: Path,
                              f"every worker needs vtrack {__version__}")
     assert len(lines) == 1 or lines[0].startswith("vtrack: waiting for a Dask worker")
     assert not (tmp_path / "out" / "summary.csv").exists()
+
+
+def test_a_stopped_worker_asked_which_vtrack_it_imports_cannot_hold_the_batch(
+        folder: Path, tmp_path: Path) -> None:
+    """A worker stopped (`kill -STOP` of a `dask worker --no-nanny`) before the batch asked
+    which vtrack it imports held the batch for ever: the question had no time limit, and
+    neither --worker-timeout nor --scheduler-timeout applied. It has the worker timeout now
+    (30 s at most): one line names the worker that did not answer, exit 2, nothing run."""
+    scheduler, address = start_scheduler()
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", address, "--no-nanny",
+         "--nthreads", "1", "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        with distributed.Client(address, timeout=30) as client:
+            client.wait_for_workers(1, timeout=60)
+        os.kill(worker.pid, signal.SIGSTOP)
+        result = vtrack("batch", str(folder), "--scheduler", address, "--worker-timeout", "2",
+                        "--no-video", "--out", str(tmp_path / "out"))
+    finally:
+        os.kill(worker.pid, signal.SIGCONT)
+        worker.terminate()
+        worker.wait(timeout=30)
+        scheduler.terminate()
+        scheduler.wait(timeout=30)
+    assert_one_error(result, f"--scheduler {address}: worker tcp://127.0.0.1:",
+                     "did not answer which vtrack it imports (no answer within 2 s)",
+                     "no job is sent before every connected worker has")
+    assert not (tmp_path / "out" / "summary.csv").exists()

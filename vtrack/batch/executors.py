@@ -38,6 +38,9 @@ RECORD_GRACE_S = 10.0
 #: give a Client (``tls``/``wss``: certificates; ``ucx``: UCX-Py and its network) or cannot
 #: reach another process at all (``inproc``).
 SCHEDULER_PROTOCOLS = ("tcp", "ws")
+#: How long each connected worker has, at most, to say which vtrack it imports before a Dask
+#: batch sends any job (seconds; the worker timeout when shorter).
+ASK_WORKER_S = 30.0
 
 
 class _StopSignal:
@@ -318,26 +321,37 @@ class DaskExecutor:
         """Ask every connected worker which vtrack it imports, before any job is sent: a
         worker without vtrack would die unpickling the first job (its ``dask worker`` ends,
         and the batch could only say that no worker is connected), and one of another version
-        may read a job otherwise. A :class:`VtrackError` (the client closed) names the first
-        such worker, what it has, and the version the batch needs. (A worker that connects
-        later is not asked.)"""
+        may read a job otherwise. Each is given :data:`ASK_WORKER_S` at most (the worker
+        timeout, if shorter): one stopped (``kill -STOP``) or gone cannot hold the batch. A
+        :class:`VtrackError` (the client closed) names the first worker that has another
+        vtrack, none it can import, or did not answer, and the version the batch needs. (A
+        worker that connects later is not asked.)"""
         from vtrack import __version__
 
-        # (a builtin, pickled by name: a worker unpickles it without vtrack)
-        answers = self.client.run(eval, "__import__('vtrack').__version__", on_error="return")
+        limit_s = min(self.worker_timeout_s or ASK_WORKER_S, ASK_WORKER_S)
+        workers = sorted(self.client.scheduler_info().get("workers", {}))
+        answers = self.client.sync(_ask_workers, self.client, workers, limit_s)
         for worker, answer in sorted(answers.items()):
             if answer == __version__:
                 continue
             reason = str(answer).splitlines()[0] if str(answer) else type(answer).__name__
-            has = (f"vtrack {answer}" if isinstance(answer, str)
-                   else f"no vtrack it can import ({reason})")
+            need = (f"every worker needs vtrack {__version__}, the batch's (pip install "
+                    f"'vtrack[dask]=={__version__}' where it runs)")
+            if isinstance(answer, str):
+                has = f"has vtrack {answer}"
+            elif isinstance(answer, (ImportError, AttributeError)):
+                has = f"has no vtrack it can import ({reason})"
+            elif isinstance(answer, OSError):  # (TimeoutError, CommClosedError: it left)
+                has = f"did not answer which vtrack it imports ({reason})"
+                need = ("no job is sent before every connected worker has (a stopped worker: "
+                        "resume or end it)")
+            else:
+                has = f"cannot import vtrack ({type(answer).__name__}: {reason})"
             others = len(answers) - 1
             also = f" ({others} other worker{'s' if others > 1 else ''} connected)"
             self.close()
-            raise VtrackError(
-                f"--scheduler {self.address}: worker {worker} has {has}; every worker needs "
-                f"vtrack {__version__}, the batch's (pip install "
-                f"'vtrack[dask]=={__version__}' where it runs)" + (also if others else ""))
+            raise VtrackError(f"--scheduler {self.address}: worker {worker} {has}; {need}"
+                              + (also if others else ""))
 
     def close(self) -> None:
         """Disconnect; nothing is printed if the scheduler is already gone (the Client's
@@ -447,6 +461,29 @@ class DaskExecutor:
                 first = str(exc).splitlines()[0] if str(exc).strip() else ""
                 error = f"Dask: {type(exc).__name__}: {first}".rstrip(": ")
             return Outcome(job.input, job.config, STATUS_FAILED, error=error)
+
+
+async def _ask_workers(client: Any, workers: list[str], limit_s: float) -> dict[str, object]:
+    """Which vtrack each of ``workers`` (connected to ``client``'s scheduler) imports: its
+    ``__version__``, the exception importing it raised (ImportError; AttributeError: no
+    version), or a TimeoutError when it did not answer within ``limit_s`` seconds (an
+    OSError when the scheduler could not reach it). Each worker is asked on its own, so one
+    that does not answer hides no other's answer."""
+    import asyncio
+
+    async def ask(worker: str) -> dict[str, object]:
+        # (a builtin, pickled by name: a worker unpickles it without vtrack)
+        asked = client.run(eval, "__import__('vtrack').__version__", workers=[worker],
+                           on_error="return", asynchronous=True)
+        try:
+            return await asyncio.wait_for(asked, limit_s)
+        except TimeoutError:
+            return {worker: TimeoutError(f"no answer within {_seconds(limit_s)}")}
+
+    answers: dict[str, object] = {}
+    for found in await asyncio.gather(*(ask(worker) for worker in workers)):
+        answers.update(found)
+    return answers
 
 
 def _host_port(address: str) -> tuple[str, str, int | None]:
