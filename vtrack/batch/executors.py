@@ -513,12 +513,12 @@ def scheduler_address_problem(address: str) -> str | None:
     location = address.partition("://")[2] if "://" in address else address
     netloc = urlsplit(f"//{location}").netloc  # (up to the first / ? or #)
     extra = location[len(netloc):]
+    if not host:  # (first: ``tcp:///h:8786`` has no host, and dropping ``/h:8786`` gives none)
+        return "no host: give tcp://HOST:PORT"
     if extra:  # (Dask's address has no path: a scheduler there was called none)
         return f"nothing follows the port in tcp://HOST:PORT, not {extra!r}: drop it"
     if "@" in netloc:  # (Dask's address has no user)
         return "no user@ in tcp://HOST:PORT: drop it"
-    if not host:
-        return "no host: give tcp://HOST:PORT"
     if port is None:
         return "no port: give tcp://HOST:PORT (a scheduler listens on 8786 unless told otherwise)"
     if port == 0:
