@@ -674,6 +674,11 @@ class _Tracked:
     #: The first frame's timestamp (None: no frame was written).
     first_time_s: float | None = None
     timeline: _Timeline = field(default_factory=_Timeline)
+    #: The last frame the annotated video holds, as (index, timestamp) (None: none yet).
+    last_shown: tuple[int, float] | None = None
+    #: The video ended before the run (its clock cannot hold a frame after those before it):
+    #: that frame (index, timestamp) and why (:attr:`VideoWriter.ended`); None: it did not.
+    video_end: tuple[int, float, str] | None = None
 
     def interrupted(self, by: Interrupted) -> None:
         """Record that the loop ended by the signal ``by`` (Ctrl-C, SIGTERM)."""
@@ -1180,12 +1185,12 @@ def _track(request: RunRequest, resolved: _Resolved, source: Source, writers: _W
                     assert result.frame is not None
                     if first_time is None:
                         first_time = result.time_s
-                    try:
-                        video.write(result.frame, lambda planes, r=result: annotator.draw(
+                    if video.write(result.frame, lambda planes, r=result: annotator.draw(
                             planes, r), time_s=result.time_s - first_time,
-                            stop=signals.stopping)
-                    except VideoRefusedError as exc:  # a frame its clock cannot hold
-                        raise _way_out(exc, request, resolved.names) from None
+                            stop=signals.stopping):
+                        out.last_shown = result.index, result.time_s
+                    elif video.ended is not None and out.video_end is None:  # tracked on
+                        out.video_end = result.index, result.time_s, video.ended
                 if writers.stream is not None:  # last: a signal may cut short its wait
                     writers.stream.write(result, stop=signals.stopping)
             received = source.received
@@ -1366,6 +1371,21 @@ def _past_track_ids(request: RunRequest, summary: RunSummary, next_id: int) -> s
             "numbers its tracks as this one did; renumber one of the two tracks.csv to join them")
 
 
+def _video_end_note(resolved: _Resolved, writers: _Writers, tracked: _Tracked) -> str | None:
+    """The warning of an annotated video that ended before the run (its clock could not hold
+    a frame after those before it): where it ends, why, and that the CSV goes on; frames
+    numbered as the CSV and the video number them. None when it did not end early."""
+    video, end, shown = writers.video, tracked.video_end, tracked.last_shown
+    if video is None or end is None or shown is None or tracked.last_frame is None:
+        return None
+    number = 1 if resolved.pipeline.multi_target else 0  # tracks.csv's frames are 1-based
+    index, time_s, why = end
+    return (f"{video.path}: ends at frame {shown[0] + number} ({shown[1]:.9g} s; "
+            f"{plural(video.frames_written, 'frame')} of the run's {tracked.frames}): frame "
+            f"{index + number} ({time_s:.9g} s) is left out, {why}; {writers.csv.path.name} "
+            f"goes on to frame {tracked.last_frame.index + number}")
+
+
 def _next_track_id(request: RunRequest, last_track_id: int | None) -> int:
     """The id a run that goes on from this one numbers its tracks from: one after
     ``last_track_id``, the highest this run wrote to ``tracks.csv`` (its first track id when
@@ -1408,6 +1428,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
     past_ids = _past_track_ids(request, summary, next_id)
     if past_ids:
         summary.warnings.append(past_ids)
+    video_end = _video_end_note(resolved, writers, tracked)
+    if video_end:
+        summary.warnings.append(video_end)
     summary.warnings += tracked.timeline.warnings(request.input, request.gt_path)
     if frames == 0 and status == STATUS_COMPLETE:
         status = summary.status = STATUS_PARTIAL
@@ -1499,6 +1522,9 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         "live": source.live,
         "outputs": outputs,
         "output_bytes": sizes(request.out_dir, outputs),
+        # the frames the annotated video holds (null: no video): fewer than frames when its
+        # clock ended it before the run (a warning names where)
+        "video_frames": None if writers.video is None else writers.video.frames_written,
         "identity": resolved.identity,
         "versions": versions(),
         "command": sys.argv,

@@ -68,9 +68,9 @@ class VideoRefusedError(OutputError):
 
 
 class VideoTooLongError(VideoRefusedError):
-    """Timestamps the video's clock cannot hold: an input spanning more than that, refused as
-    the writer opens, or (its span unknown or understated) a frame too long after those before
-    it, refused by :meth:`VideoWriter.write` (the partial video is then thrown away)."""
+    """An input spanning more than the video's clock holds, refused as the writer opens (a
+    frame too long after those before it, its span unknown or understated, ends the video
+    instead: :attr:`VideoWriter.ended`)."""
 
 
 class VideoTooSmallError(VideoRefusedError):
@@ -95,6 +95,9 @@ class VideoWriter(Closing):
     ``span_s`` is how long the input lasts (None when not known): a file's clock is the finest
     that holds it (:func:`~vtrack.io.videoclock.video_clock`, 90 kHz for any ordinary clip); a
     longer span than any clock holds is refused (VideoTooLongError) before anything is written.
+    A frame the clock cannot hold after those before it (the span unknown or understated) ends
+    the video at the frame before it (:attr:`ended`): the file is finished as usual on
+    :meth:`close`, whole and playable up to there.
     """
 
     #: Output pictures in flight between the caller and the encoder thread.
@@ -144,6 +147,9 @@ class VideoWriter(Closing):
         self._todo: queue.Queue[_Slot | bool] = queue.Queue()
         self._error: BaseException | None = None
         self._error_reported = False
+        #: Why the video ended before the picture :meth:`write` refused first (``it comes ... s
+        #: after the frame before it, more than ...``); None while it takes pictures.
+        self.ended: str | None = None
         self._frames = 0
         self._last_pts = -1
         self._closed = False
@@ -251,7 +257,9 @@ class VideoWriter(Closing):
         picture's time (a Frame's own by default; else ``frame number / fps``).
         Blocks while the encoder is ``depth`` pictures behind; True once the picture is
         queued. For a live output, False (the picture not written, and :meth:`close` then
-        waits no more for the receiver) when ``stop()`` turned true while it waited.
+        waits no more for the receiver) when ``stop()`` turned true while it waited. False
+        (nothing written) for this picture and every later one once the clock cannot hold
+        this one (:attr:`ended` says why): the video ends at the picture before.
         """
         if self._closed:
             raise RuntimeError(f"{self.path}: the video writer is closed")
@@ -261,6 +269,8 @@ class VideoWriter(Closing):
         if time_s is None:
             time_s = self._frames / self._rate
         pts = self._pts(time_s)
+        if pts is None:
+            return False
         slot = self._free_slot(stop if self.url is not None else None)
         if slot is None:
             self._gave_way = True
@@ -283,21 +293,21 @@ class VideoWriter(Closing):
         """The clock of the video's timestamps."""
         return TIME_BASE if self._clock is None else self._clock.time_base
 
-    def _pts(self, time_s: float) -> int:
-        """The timestamp of a picture at ``time_s``: strictly increasing. Raises
-        VideoTooLongError (and throws the video away on close) when the clock cannot hold it."""
+    def _pts(self, time_s: float) -> int | None:
+        """The timestamp of a picture at ``time_s``: strictly increasing. None, and the video
+        :attr:`ended` (with why), when the clock cannot hold it, or could not an earlier one."""
+        if self.ended is not None:
+            return None
         pts = max(round(time_s / self.time_base), self._last_pts + 1)
         clock = self._clock
         if clock is not None and self._recent and pts - self._recent[0] > clock.bound_ticks:
             back = ("the frame before it" if clock.window == 1
                     else f"the frame {clock.window} before it")
-            self._error_reported = True  # said here, not on close
-            self._error = VideoTooLongError(
-                f"{self.path}: the frame at {time_s:.9g} s comes "
-                f"{clock.seconds(pts - self._recent[0]):.9g} s after {back}, more than the "
-                f"video's timestamps hold ({clock.seconds(clock.bound_ticks):.9g} s with preset "
-                f"{self._preset})")
-            raise self._error
+            self.ended = (
+                f"it comes {clock.seconds(pts - self._recent[0]):.9g} s after {back}, more than "
+                f"the video's timestamps hold ({clock.seconds(clock.bound_ticks):.9g} s with "
+                f"preset {self._preset})")
+            return None
         return pts
 
     def _free_slot(self, stop: Callable[[], bool] | None) -> _Slot | None:
