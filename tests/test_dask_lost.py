@@ -108,7 +108,6 @@ def test_an_address_with_more_than_host_and_port_says_what_to_drop(address: str,
                                      .replace("me@", "")) is None
 
 
-
 @pytest.mark.parametrize("address", ["tcp:///h:8786", "tcp://:8786/x"])
 def test_an_address_without_a_host_says_so_before_what_follows_the_port(address: str) -> None:
     """`--scheduler tcp:///h:8786` (a third slash) was told "nothing follows the port in
@@ -117,6 +116,16 @@ def test_an_address_without_a_host_says_so_before_what_follows_the_port(address:
     from vtrack.batch.executors import scheduler_address_problem
 
     assert scheduler_address_problem(address) == "no host: give tcp://HOST:PORT"
+
+
+@pytest.mark.parametrize("address", ["tcp://h/x", "tcp://h?y"])
+def test_an_address_without_a_port_says_so_before_what_follows_it(address: str) -> None:
+    """`--scheduler tcp://h/x` was told "nothing follows the port in tcp://HOST:PORT, not
+    '/x': drop it", and dropping it leaves no port: a missing port is said first."""
+    from vtrack.batch.executors import scheduler_address_problem
+
+    assert scheduler_address_problem(address).startswith("no port: give tcp://HOST:PORT")
+
 
 def start(command: list[str]) -> subprocess.Popen[str]:
     return subprocess.Popen([sys.executable, "-m", *command], stdout=subprocess.DEVNULL,

@@ -329,7 +329,8 @@ class DaskExecutor:
         from vtrack import __version__
 
         limit_s = min(self.worker_timeout_s or ASK_WORKER_S, ASK_WORKER_S)
-        workers = sorted(self.client.scheduler_info().get("workers", {}))
+        # (every worker: some Dask releases list 5 unless told otherwise, as worker.py says)
+        workers = sorted(self.client.scheduler_info(n_workers=-1).get("workers", {}))
         answers = self.client.sync(_ask_workers, self.client, workers, limit_s)
         for worker, answer in sorted(answers.items()):
             if answer == __version__:
@@ -344,7 +345,7 @@ class DaskExecutor:
             elif isinstance(answer, OSError):  # (TimeoutError, CommClosedError: it left)
                 has = f"did not answer which vtrack it imports ({reason})"
                 need = ("no job is sent before every connected worker has (a stopped worker: "
-                        "resume or end it)")
+                        "resume or end it; one that left as it was asked: run the batch again)")
             else:
                 has = f"cannot import vtrack ({type(answer).__name__}: {reason})"
             others = len(answers) - 1
@@ -513,14 +514,15 @@ def scheduler_address_problem(address: str) -> str | None:
     location = address.partition("://")[2] if "://" in address else address
     netloc = urlsplit(f"//{location}").netloc  # (up to the first / ? or #)
     extra = location[len(netloc):]
-    if not host:  # (first: ``tcp:///h:8786`` has no host, and dropping ``/h:8786`` gives none)
+    # a missing host or port first: dropping what follows leaves none (``tcp:///h:8786``)
+    if not host:
         return "no host: give tcp://HOST:PORT"
+    if port is None:
+        return "no port: give tcp://HOST:PORT (a scheduler listens on 8786 unless told otherwise)"
     if extra:  # (Dask's address has no path: a scheduler there was called none)
         return f"nothing follows the port in tcp://HOST:PORT, not {extra!r}: drop it"
     if "@" in netloc:  # (Dask's address has no user)
         return "no user@ in tcp://HOST:PORT: drop it"
-    if port is None:
-        return "no port: give tcp://HOST:PORT (a scheduler listens on 8786 unless told otherwise)"
     if port == 0:
         return "port 0 is no port a scheduler listens on (tcp://HOST:PORT)"
     return None
