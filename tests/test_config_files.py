@@ -342,6 +342,30 @@ def test_a_detections_file_with_an_empty_box_is_refused_naming_its_line(
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("text", ["", "\n \n"])
+def test_an_empty_detections_file_is_no_detection_with_a_warning(
+        tmp_path: Path, clip_factory: ClipFactory, text: str) -> None:
+    """`vtrack run clip.mp4 -c det.toml` (mot_detections -> byte_tracks) on an empty det.txt (a
+    detector that found nothing in the scene) was refused, "det.txt: MOT file is empty", while
+    an empty gt.txt scores. It runs now, no detection in any frame (tracks.csv has no row), and
+    warns of it on stderr and in run.json."""
+    clip = clip_factory("multi", width=160, height=120, frames=60)
+    det = tmp_path / "det.txt"
+    det.write_text(text)
+    config = tmp_path / "det.toml"
+    config.write_text(f'name = "det"\n[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                      '[[stage]]\nname = "byte_tracks"\n')
+    out = tmp_path / "o"
+    result = vtrack("run", str(clip.path), "-c", str(config), "--no-video", "-q",
+                    "--out", str(out))
+    assert result.exit_code == 0, result.output
+    note = (f"{det}: the file holds no detection (0 bytes or blank lines only): no frame had "
+            "any to track")
+    assert result.stderr == f"vtrack: warning: {note}\n"
+    assert json.loads((out / "run.json").read_text())["warnings"] == [note]
+    assert (out / "tracks.csv").read_text().splitlines()[1:] == []
+
+
 @pytest.mark.parametrize("shipped", ["robust", "fixed_camera", "s0"])
 def test_a_shipped_config_printed_as_toml_loads_back_as_the_same_chain(
         tmp_path: Path, shipped: str) -> None:

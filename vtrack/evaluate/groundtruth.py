@@ -547,11 +547,10 @@ def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) ->
             "frame's)")
 
 
-def _mot_rows(path: str | PathLike[str], layout: str,
-              empty_ok: bool = False) -> Iterator[tuple[int, int, list[float]]]:
+def _mot_rows(path: str | PathLike[str], layout: str) -> Iterator[tuple[int, int, list[float]]]:
     """``(line number, 0-based frame, numbers)`` for each non-blank line of a MOTChallenge file
-    (an empty one is an InputError unless ``empty_ok``: ground truth of a scene without
-    targets).
+    (none for an empty one: ground truth of a scene without targets, detections of a detector
+    that found nothing).
 
     ``layout`` names the columns every row must have (``"frame,id,x,y,w,h"``); they must be
     finite numbers, the box's within +-:data:`MAX_COORDINATE` and the frame an integer from 1
@@ -560,7 +559,7 @@ def _mot_rows(path: str | PathLike[str], layout: str,
     Further columns are passed through unchecked.
     """
     min_columns = layout.count(",") + 1
-    for number, line in enumerate(_read_lines(path, "MOT", empty_ok), start=1):
+    for number, line in enumerate(_read_lines(path, "MOT", empty_ok=True), start=1):
         if not line.strip():
             continue
         _check_fields(path, number, line)
@@ -655,7 +654,7 @@ def read_mot_counting(path: str | PathLike[str]) -> MotTruth:
     seen: dict[tuple[int, int], int] = {}  # (frame, id) -> line
     dropped = Dropped()
     rows: dict[int, list[tuple[Box, bool]]] = {}  # every row with a box, for the distractors
-    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h", empty_ok=True):
+    for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h"):
         if not values[1].is_integer():
             raise InputError(f"{path} line {number}: id must be an integer, "
                              f"got {number_text(values[1])}")
@@ -733,7 +732,8 @@ def read_mot_detections(path: str | PathLike[str]) -> dict[int, list[tuple[Box, 
     thresholding is the caller's job). A box with ``w <= 0`` or ``h <= 0`` is an InputError
     naming the file and line, as any malformed row is: a detector gives no empty box, so the
     file is not what it should be there. Keys are ascending, detections keep file order;
-    frames without detections are not keys.
+    frames without detections are not keys. A file of 0 bytes or blank lines only (a detector
+    that found nothing in the scene) has no key.
     """
     frames: dict[int, list[tuple[Box, float]]] = {}
     for number, frame, values in _mot_rows(path, "frame,id,x,y,w,h,conf"):

@@ -93,9 +93,13 @@ class MotDetections(Stage):
         ctx.detections.extend(found)
 
     def notes(self) -> list[str]:
-        """How many of the file's detections lay wholly outside the frame, and how many frames
+        """That the file holds no detection (0 bytes or blank lines only: a detector that found
+        nothing), how many of its detections lay wholly outside the frame, and how many frames
         listed more than ``max_detections``, if any."""
         notes = []
+        if getattr(self, "_frames", None) == {}:
+            notes.append(f"{self.path}: the file holds no detection (0 bytes or blank lines "
+                         "only): no frame had any to track")
         if getattr(self, "_outside", 0):
             width, height = self._frame_size
             notes.append(f"{self.path}: {plural(self._outside, 'detection')} lay wholly outside "
