@@ -331,6 +331,23 @@ def test_a_set_without_its_stage_is_offered_the_one_stage_that_declares_it(
         assert str(caught.value) == f"--set {given}: expected stage.param=value"
 
 
+def test_a_set_without_its_stage_or_value_is_offered_the_one_stage_that_declares_it(
+        tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 --set padding` (no `=`) said only "expected stage.param=value",
+    while `--set padding=2` is offered robust_model.padding=2: it is offered
+    robust_model.padding=VALUE now; a name two stages declare, or none, is offered nothing."""
+    import vtrack as library
+
+    line = one_error_line(vtrack("run", "clip.mp4", "--set", "padding", cwd=tmp_path))
+    assert line == ("vtrack: error: --set padding: expected stage.param=value; did you mean "
+                    "robust_model.padding=VALUE?")
+    s3 = library.load_config("s3")
+    for given in ("nosuch", "initial"):  # (s3: two of its stages declare initial)
+        with pytest.raises(library.ConfigError) as caught:
+            s3.with_overrides([given])
+        assert str(caught.value) == f"--set {given}: expected stage.param=value"
+
+
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
     """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
     `vtrack stages meanshif` listed every name and left the reader to find the one meant;

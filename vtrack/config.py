@@ -166,12 +166,15 @@ class Config:
         }
 
     def with_overrides(self, assignments: list[str]) -> Config:
-        """Apply ``stage.param=value`` strings (``--set``); the stage must be in the chain."""
+        """Apply ``stage.param=value`` strings (``--set``); the stage must be in the chain. A
+        text without ``=`` is refused, naming the stage's parameter when it is one of the
+        chain's without its stage (``--set padding``: ``robust_model.padding=VALUE``)."""
         changes = []
         for text in assignments:
             key, sep, raw = text.partition("=")
             if not sep:
-                raise ConfigError(f"--set {cut(text)}: expected stage.param=value")
+                raise ConfigError(f"--set {cut(text)}: expected stage.param=value"
+                                  f"{self._stage_of(key.strip(), 'VALUE', True)}")
             changes.append((key, raw.strip(), f"--set {cut(text)}", True))
         return self._changed(changes)
 
