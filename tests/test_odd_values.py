@@ -86,6 +86,21 @@ def test_a_negative_zero_is_zero(clip: Path, tmp_path: Path) -> None:
     assert json.loads((tmp_path / "out" / "run.json").read_text())["frames"] == 12
 
 
+def test_a_box_that_rounds_to_zero_shows_0_not_minus_0(tmp_path: Path) -> None:
+    """`vtrack run --init -1e-9,0,10,10 -c s0 grey.mp4` said "no pixel of the initial box
+    -0,0,10,10 passes the hue stage's saturation/value mask": a message's box (Box.text) showed
+    a value that rounds to zero as -0. It shows 0 now."""
+    from vtrack.geometry import Box
+
+    assert Box(-1e-9, -0.004, 10, 10).text() == "0,0,10,10"
+    scene = make_scene("grey", seed=0, width=96, height=72, frames=10, fps=30)
+    grey = write_video(scene, tmp_path / "grey.mp4")
+    done = _vtrack("run", "--init", "-1e-9,0,10,10", "-c", "s0", str(grey), "--no-video",
+                   "-o", "out", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert "no pixel of the initial box 0,0,10,10 passes" in done.stderr, done.stderr
+
+
 def test_the_report_keeps_matplotlibs_notes_off_the_terminal(clip: Path, tmp_path: Path) -> None:
     """A config named with an emoji and a long name: matplotlib printed UserWarnings (a missing
     glyph, a layout it could not apply) among vtrack's own lines."""

@@ -82,8 +82,9 @@ class Box(NamedTuple):
         return all(math.isfinite(v) for v in self) and self.w > 0 and self.h > 0
 
     def text(self) -> str:
-        """``x,y,w,h`` as ``--init`` takes it (2 decimals at most): how a message shows a box."""
-        return ",".join(f"{round(v, 2):g}" for v in self)
+        """``x,y,w,h`` as ``--init`` takes it (2 decimals at most): how a message shows a box.
+        A value that rounds to zero shows as ``0``, never ``-0`` (``-1e-9``, ``-0.004``)."""
+        return ",".join(f"{round(v, 2) + 0.0:g}" for v in self)
 
     def outside(self, width: int, height: int) -> bool:
         """True when no part of the box lies in a ``width`` x ``height`` frame (a NaN box is
