@@ -122,6 +122,33 @@ def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
 
 
 @pytest.mark.parametrize(("args", "said"), [
+    (("run", "clip.mp4", "--preset", "\udcff" * 10),
+     "Invalid value for '--preset': '" + "\\xff" * 10 + "' is not one of "),
+    (("run", "clip.mp4", "--preset", "it's\udcff"),
+     "Invalid value for '--preset': \"it's\\xff\" is not one of "),
+    (("run", "clip.mp4", "--x\udcfe"), "No such option '--x\\xfe'."),
+    (("\udcff" * 3,), "No such command '" + "\\xff" * 3 + "'."),
+    # a backslash typed is kept as repr shows it, before a byte and before "udcff"
+    (("run", "clip.mp4", "--preset", "\\\udcff"),
+     "Invalid value for '--preset': '\\\\\\xff' is not one of "),
+    (("run", "clip.mp4", "--preset", "\\udcff"),
+     "Invalid value for '--preset': '\\\\udcff' is not one of "),
+    (("\\udcff",), "No such command '\\\\udcff'"),
+], ids=["preset", "apostrophe", "option", "command", "backslash-byte", "backslash-text",
+        "backslash-command"])
+def test_a_quoted_word_shows_a_byte_not_utf8_as_the_other_messages_do(
+        tmp_path: Path, args: tuple[str, ...], said: str) -> None:
+    """A short word with bytes that are not UTF-8 was quoted as repr writes it, Python's
+    surrogate escape: `vtrack run clip.mp4 --preset $'\\xff...'` said "Invalid value for
+    '--preset': '\\udcff\\udcff...'", `vtrack $'\\xff'` "No such command '\\udcff'", where
+    vtrack's other messages write the byte as \\xff. They do too now; a backslash the user
+    typed is still shown as repr shows it (\\\\)."""
+    line = one_error_line(vtrack(*args, cwd=tmp_path))
+    assert line.startswith("vtrack: error: " + said), line
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(("args", "said"), [
     (("--follow", "w" * 300), "; if it is INPUT, put it before --follow or give the seconds "
                               "(--follow 5 {}...{} (300 characters)) (see "),
     (("w" * 300,), "vtrack: error: Got unexpected extra argument ({}...{} (300 characters)) "),

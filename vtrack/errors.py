@@ -205,7 +205,8 @@ def cut_quoted(message: str) -> str:
     of more than :data:`LONGEST_SHOWN` characters, counted as typed (``\\xff`` and ``\\x01``
     are one character each, not the four of their escape), shown as :func:`cut` shows it,
     unquoted (:func:`printable` escapes its control characters and undecoded bytes); shorter
-    words are left as quoted."""
+    words are left as quoted, but for a byte that is not UTF-8, shown as :func:`quoted` shows
+    it (``'\\xff'``, not ``repr``'s ``'\\udcff'``)."""
     return _QUOTED.sub(lambda match: _cut_word(match.group()), message)
 
 
@@ -218,7 +219,30 @@ def _cut_word(quoted: str) -> str:
         word = ast.literal_eval(quoted)
     except (ValueError, SyntaxError):
         return quoted
-    return cut(word) if isinstance(word, str) and len(word) > LONGEST_SHOWN else quoted
+    if not isinstance(word, str):
+        return quoted
+    return cut(word) if len(word) > LONGEST_SHOWN else _undecoded_escapes(quoted)
+
+
+#: In a word as ``repr`` quotes it: a backslash the word holds (``\\\\``, kept as it is) or
+#: the escape ``repr`` writes for a byte of a name that is not UTF-8 (``\\udcff``; group 1:
+#: the byte's hex digits).
+_REPR_UNDECODED = re.compile(r"\\\\|\\udc([89a-f][0-9a-f])")
+
+
+def _undecoded_escapes(quoted: str) -> str:
+    """``quoted``, a word as ``repr`` quotes it, with each byte that is not UTF-8 written as
+    :func:`escape_undecoded` writes it (``\\udcff`` as ``\\xff``); a backslash the word holds
+    (``\\\\udcff`` in ``repr``, typed as such) is left as it is."""
+    return _REPR_UNDECODED.sub(lambda match: f"\\x{match.group(1)}" if match.group(1)
+                               else match.group(), quoted)
+
+
+def quoted(word: str) -> str:
+    """``word`` a user gave, quoted for a message as ``repr`` quotes it (``'rnu'``, ``'a\\tb'``),
+    but for each byte of a name that is not UTF-8, written as :func:`escape_undecoded` writes
+    it (``'\\xff'``, not ``repr``'s ``'\\udcff'``), as vtrack's other messages say it."""
+    return _undecoded_escapes(repr(word))
 
 
 #: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
