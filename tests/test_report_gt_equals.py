@@ -8,8 +8,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from click.testing import CliRunner, Result
+from conftest import one_error_line
 
 from vtrack.cli import main
+from vtrack.report.runs import GroundTruth
 
 if TYPE_CHECKING:
     from conftest import ClipFactory
@@ -40,3 +42,20 @@ def test_the_suggested_gt_for_an_input_named_with_equals_works(
                     "-q")
     assert result.exit_code == 0 and result.stderr == "", result.output
     assert "a=b.gt.txt" in Path("r2/summary.csv").read_text()
+
+
+def test_a_gt_that_reads_two_ways_is_refused(tmp_path: Path, clip_factory: ClipFactory,
+                                             monkeypatch) -> None:  # noqa: ANN001
+    """`--gt a=b=c.txt` with both `b=c.txt` and `c.txt` there was read silently as input `a`,
+    file `b=c.txt` (the first split after which a file is there). Both readings are named in
+    one line now, nothing written; with one file there, it is read as before."""
+    clip = clip_factory("smooth", frames=20)
+    monkeypatch.chdir(tmp_path)
+    Path("c.txt").write_text(Path(clip.gt).read_text())
+    Path("b=c.txt").write_text(Path(clip.gt).read_text())
+    line = one_error_line(vtrack("report", "nothing", "-o", "r", "--gt", "a=b=c.txt", "-q"))
+    assert line == ("vtrack: error: --gt a=b=c.txt: reads as input a with file b=c.txt or "
+                    "input a=b with file c.txt, and each file is there; rename b=c.txt"), line
+    assert not Path("r").exists()
+    Path("b=c.txt").unlink()
+    assert GroundTruth.parse("a=b=c.txt").input == "a=b"

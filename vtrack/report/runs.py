@@ -249,13 +249,20 @@ class GroundTruth:
         it, or its path as given to ``vtrack run``), its first box frame ``first``'s. A file
         whose name holds ``=`` is a FILE; an INPUT holding ``=`` (``a=b.mp4``, named ``a=b``:
         ``--gt a=b=FILE``, as the report's warnings suggest) is split at the ``=`` after which
-        a file is there, the first such (at the first ``=`` when none is: the file is
-        missing)."""
+        a file is there (at the first ``=`` when none is: the file is missing). InputError
+        naming the readings when files are there after several (``--gt a=b=c.txt``, both
+        ``b=c.txt`` and ``c.txt`` there: input ``a`` or input ``a=b``)."""
         splits = [(text[:at], text[at + 1:]) for at, mark in enumerate(text) if mark == "="]
         splits = [(name, path) for name, path in splits if name and path]
         if not splits or Path(text).exists():
             return cls.read(Path(text), origin, first=first)
-        name, path = next((s for s in splits if Path(s[1]).exists()), splits[0])
+        there = [(name, path) for name, path in splits if Path(path).exists()]
+        if len(there) > 1:
+            readings = " or ".join(f"input {name} with file {path}" for name, path in there)
+            held = ", ".join(path for _, path in there[:-1])  # (each holds the next one's =)
+            raise InputError(f"--gt {text}: reads as {readings}, and each file is there; rename "
+                             f"{held}")
+        name, path = (there or splits)[0]
         return cls.read(Path(path), origin, name, first)
 
     def belongs_to(self, name: str, request: dict[str, Any], found: str | None = None) -> bool:
