@@ -115,3 +115,21 @@ def test_the_report_keeps_matplotlibs_notes_off_the_terminal(clip: Path, tmp_pat
     assert report.returncode == 0, report.stderr
     assert "Warning" not in report.stderr and "warn(" not in report.stderr, report.stderr
     assert (tmp_path / "rep" / "index.html").is_file()
+
+
+def test_a_long_value_is_cut_between_its_characters_not_inside_an_escape() -> None:
+    """A value shown cut (params.shown) was cut on its quoted text, which could split a typed
+    backslash from the ``udcff`` after it: the message then showed a byte the user never gave
+    (``--start`` of 100 a's, the six characters \\udcff, 32 b's named ``\\xff``). Now the
+    characters are cut, then quoted: the shown text holds no character the value did not."""
+    import ast
+
+    from vtrack.params import shown
+
+    typed = "a" * 100 + "\\udcff" + "b" * 32
+    text = shown(typed)
+    assert len(text) <= 90 and "..." in text
+    assert set(ast.literal_eval(text)) <= set(typed) | {"."}
+    bytes_not_utf8 = "\udcff" * 60
+    assert len(shown(bytes_not_utf8)) <= 90
+

@@ -276,6 +276,21 @@ class _ShortRepr(reprlib.Repr):
     def repr_int(self, x: int, level: int) -> str:
         return _number(x)
 
+    def repr_str(self, x: str, level: int) -> str:
+        """A long string cut on its characters, then quoted: reprlib cuts the quoted text,
+        which can split an escape (``\\\\udcff`` typed, cut to a lone ``\\udcff``: a byte
+        the user never gave)."""
+        if len(x) <= self.maxstring:
+            text = repr(x)
+            if len(text) <= self.maxstring:
+                return text
+        keep = max(0, (self.maxstring - 3) // 2)
+        text = repr(x[:keep] + "..." + x[len(x) - keep:])
+        while len(text) > self.maxstring and keep > 4:  # escapes take several characters each
+            keep //= 2
+            text = repr(x[:keep] + "..." + x[len(x) - keep:])
+        return text
+
 
 _SHORT = _ShortRepr()
 _SHORT.maxstring = _SHORT.maxother = 80
