@@ -340,9 +340,7 @@ def test_a_value_that_is_no_number_is_refused_naming_the_options_range(
     """`vtrack batch -j abc` said "'abc' is not a valid integer range." (and a word for a time,
     "'soon' is not a valid seconds."): now what the option takes, as a number out of its
     range is told."""
-    line = one_error_line(vtrack(*args))
-    assert said in line, line
-    assert "is not a valid" not in line
+    _said_not(args, said, "is not a valid")
 
 
 @pytest.mark.parametrize(("args", "said"), [
@@ -355,9 +353,14 @@ def test_a_word_for_a_wait_that_excludes_0_says_above_0(args: tuple[str, ...],
                                                         said: str) -> None:
     """`vtrack run rec.ts --follow later` said "is not a number of seconds from 0 to 86400",
     though --follow 0 is refused ('not in the range 0<x<=86400'): an open bound is said as one."""
+    _said_not(args, said, "from 0 to")
+
+
+def _said_not(args: tuple[str, ...], said: str, not_said: str) -> None:
+    """``vtrack ARGS`` fails with one error line that holds ``said`` and not ``not_said``."""
     line = one_error_line(vtrack(*args))
     assert said in line, line
-    assert "from 0 to" not in line
+    assert not_said not in line
 
 
 @pytest.mark.parametrize(("args", "said"), [

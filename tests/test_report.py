@@ -304,12 +304,10 @@ def test_gt_for_an_input_by_its_file_name_says_why_it_went_unused(
     assert result.exit_code == 0 and "warning" not in result.stderr, result.stderr
 
 
-def test_a_plain_gt_unused_for_an_inputs_own_gt_names_that_one(
-        clip_factory: ClipFactory, tmp_path: Path) -> None:
-    """A run made without ground truth, `--gt other --gt clip=good`: the run took its input's
-    own file, and other was said unused because the run "was already scored with its own
-    ground truth (good), which --gt does not replace", though good came from the report's
-    own --gt. Now it says the run was scored with --gt clip=good instead."""
+def _run_without_ground_truth(clip_factory: ClipFactory,
+                              tmp_path: Path) -> tuple[Clip, Path, Path]:
+    """A run made without ground truth (``--init`` its clip's first box) at ``tmp_path/run``,
+    and a copy of the clip's ground truth elsewhere (``other.gt.txt``)."""
     clip = clip_factory("smooth", width=W, height=H, frames=20)
     run = tmp_path / "run"
     box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
@@ -317,6 +315,16 @@ def test_a_plain_gt_unused_for_an_inputs_own_gt_names_that_one(
                   str(run)).exit_code == 0
     other = tmp_path / "other.gt.txt"
     other.write_text(clip.gt.read_text())
+    return clip, run, other
+
+
+def test_a_plain_gt_unused_for_an_inputs_own_gt_names_that_one(
+        clip_factory: ClipFactory, tmp_path: Path) -> None:
+    """A run made without ground truth, `--gt other --gt clip=good`: the run took its input's
+    own file, and other was said unused because the run "was already scored with its own
+    ground truth (good), which --gt does not replace", though good came from the report's
+    own --gt. Now it says the run was scored with --gt clip=good instead."""
+    clip, run, other = _run_without_ground_truth(clip_factory, tmp_path)
     name = clip.path.stem
     result = vtrack("report", str(run), "--gt", str(other), "--gt", f"{name}={clip.gt}",
                     "--out", str(tmp_path / "r"))
@@ -355,13 +363,7 @@ def test_two_gt_files_for_the_same_runs_are_refused_naming_both(
     run with the first and never read the second, exit 0 and not a word. One input named two
     ways (`--gt clip=good --gt clip.mp4=other`, or its path): both match the run, which took
     the first, and the second was said 'no run of input clip.mp4 was scored with it'."""
-    clip = clip_factory("smooth", width=W, height=H, frames=20)
-    run = tmp_path / "run"
-    box = ",".join(f"{v:g}" for v in read_boxes(clip.gt)[0])
-    assert vtrack("run", str(clip.path), "--init", box, "--no-video", "--quiet", "--out",
-                  str(run)).exit_code == 0
-    other = tmp_path / "other.gt.txt"
-    other.write_text(clip.gt.read_text())
+    clip, run, other = _run_without_ground_truth(clip_factory, tmp_path)
     name = clip.path.stem
     twice = vtrack("report", str(run), "--gt", f"{name}={clip.gt}", "--gt", f"{name}={other}",
                    "--out", str(tmp_path / "r"))

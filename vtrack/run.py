@@ -1020,8 +1020,8 @@ def _truth_length_note(request: RunRequest, resolved: _Resolved, gt: Sequence[Bo
             f"({'fewer' if fewer else 'more'}); "
             + (f"overlap is empty from frame {start + covers} on" if fewer
                else "extra boxes ignored"))
-    if fewer and not stopped and start + span - boxes > first:
-        note += later_first_hint(boxes, span, start, resolved.names)
+    if fewer and not stopped:
+        note += later_first_hint(boxes, span, start, first, resolved.names)
     return note
 
 

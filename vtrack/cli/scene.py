@@ -47,18 +47,16 @@ def _refuse_replacing(out: Path, fmt: str) -> None:
     ``vtrack run`` replace nothing without it."""
     from vtrack.errors import COMMAND_NAMES, OutputError
     from vtrack.io.files import refuse_replacing_file
-    from vtrack.io.images import SEQUENCE_INFO
-    from vtrack.scenes.writers import sidecar
+    from vtrack.scenes.writers import clip_paths
 
+    clip, gt, mot, rate = clip_paths(out, fmt)
     if fmt == "images":
-        files = [out / name for name in ("groundtruth_rect.txt", "groundtruth_mot.txt",
-                                          SEQUENCE_INFO)]
-        images = out / "img"
-        if images.is_dir() and any(images.iterdir()):
-            raise OutputError(f"{images}: holds files already; {COMMAND_NAMES.overwrite} "
+        if clip.is_dir() and any(clip.iterdir()):
+            raise OutputError(f"{clip}: holds files already; {COMMAND_NAMES.overwrite} "
                               "replaces the folder")
+        files = [gt, mot, *rate]
     else:
-        files = [out, sidecar(out, "gt"), sidecar(out, "mot")]
+        files = [clip, gt, mot]
     for file in files:
         refuse_replacing_file(file, str(file), COMMAND_NAMES.overwrite)
 

@@ -536,12 +536,16 @@ def boxes_for_frames(boxes: int, first: int, frames: int, start: int, its: str =
     return f"{held} for {its}{plural(frames, 'frame')}{f' from frame {start}' if start else ''}"
 
 
-def later_first_hint(boxes: int, frames: int, start: int, names: OptionNames) -> str:
-    """The clause a warning of ground truth with fewer ``boxes`` (the file's) than the
-    ``frames`` a run tracked from frame ``start`` ends with: how a file whose first box is of
-    a later frame (OTB's ``David``, UAV123's ``bird1_2``) is aligned (``names.gt_first``), with
-    the frame that ends it at the run's last frame: ``; if its first box is of a later frame,
-    give --gt-first 5 (its last box then the last frame's)``."""
+def later_first_hint(boxes: int, frames: int, start: int, first: int,
+                     names: OptionNames) -> str:
+    """The clause a warning of ground truth with fewer ``boxes`` (the file's, its first of
+    frame ``first``) than the ``frames`` a run tracked from frame ``start`` ends with: how a
+    file whose first box is of a later frame (OTB's ``David``, UAV123's ``bird1_2``) is aligned
+    (``names.gt_first``), with the frame that ends it at the run's last frame: ``; if its first
+    box is of a later frame, give --gt-first 5 (its last box then the last frame's)``; empty
+    when that frame is no later than ``first``."""
+    if start + frames - boxes <= first:
+        return ""
     give = names.give(names.gt_first, str(start + frames - boxes))
     return (f"; if its first box is of a later frame, give {give} (its last box then the last "
             "frame's)")

@@ -290,8 +290,8 @@ class GroundTruth:
         if frames <= covers and not (whole and frames != covers):
             return None
         boxes = len(self.boxes) - self.first
-        hint = ("" if not whole or frames < covers or start + frames - boxes <= self.first
-                else later_first_hint(boxes, frames, start, COMMAND_NAMES))
+        hint = ("" if not whole or frames < covers
+                else later_first_hint(boxes, frames, start, self.first, COMMAND_NAMES))
         return (f"{self.path} has {boxes_for_frames(boxes, self.first, frames, start, 'its ')}"
                 f"{hint}")
 

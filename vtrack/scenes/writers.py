@@ -362,6 +362,16 @@ class ClipFiles:
     mot: Path | None
 
 
+def clip_paths(out: Path, fmt: str) -> tuple[Path, Path, Path, list[Path]]:
+    """The files writing a ``fmt`` clip to ``out`` puts in place: the clip (an image folder's
+    ``img/``), its OTB and its MOTChallenge ground truth, and (an image folder only) the file
+    of its frame rate, ``seqinfo.ini``."""
+    if fmt == "images":
+        return (out / "img", out / "groundtruth_rect.txt", out / "groundtruth_mot.txt",
+                [out / SEQUENCE_INFO])
+    return out, sidecar(out, "gt"), sidecar(out, "mot"), []
+
+
 def write_clip(
     scene: Scene,
     out: str | Path,
@@ -399,10 +409,7 @@ def write_clip(
     else:
         _check_folder(out)
     multi = any(len(tracks) > 1 for tracks in scene.tracks)
-    clip = out / "img" if fmt == "images" else out
-    gt = out / "groundtruth_rect.txt" if fmt == "images" else sidecar(out, "gt")
-    mot = out / "groundtruth_mot.txt" if fmt == "images" else sidecar(out, "mot")
-    rate = [out / SEQUENCE_INFO] if fmt == "images" else []  # the folder's frame rate
+    clip, gt, mot, rate = clip_paths(out, fmt)
     # stopped part way (an error, Ctrl-C, SIGTERM), it leaves no folder it created
     with (removing_new_folders(clip.parent),
           replacing(clip, gt, *rate, *([mot] if multi else []), settled=settled) as temps):
