@@ -1,5 +1,6 @@
 """The ``vtrack`` command. Each module of this package defines one click command as ``command``,
-named like the module; the group finds them, so a command lives in one file and this file never
+named like the module, a :class:`~vtrack.cli._options.HelpPrinted` (its ``--help`` printed as
+a command's result); the group finds them, so a command lives in one file and this file never
 changes for it. A command's module is imported only when that command (or the command list of
 ``vtrack --help``) is asked for, and command modules import their heavy parts inside the command
 function: ``vtrack run --help`` never loads the report's plotting, Dask or the scene generator.
@@ -24,10 +25,11 @@ import click
 
 from vtrack import __version__
 from vtrack.cli._messages import WordsCut, echo_result, error_line, no_such_command
+from vtrack.cli._options import HelpPrinted
 from vtrack.errors import VtrackError, cut_quoted
 
 
-class _Group(click.Group):
+class _Group(HelpPrinted, click.Group):
     """A group that loads a command's module on demand and turns user errors into one line and
     a non-zero exit, never a traceback."""
 
@@ -38,12 +40,7 @@ class _Group(click.Group):
         if cmd_name not in self.list_commands(ctx):
             return None
         command = getattr(importlib.import_module(f"{__name__}.{cmd_name}"), "command", None)
-        return _help_printed_as_a_result(command, ctx) if isinstance(command,
-                                                                     click.Command) else None
-
-    def get_help_option(self, ctx: click.Context) -> click.Option | None:
-        """As click's, printing the help as :func:`_print_help` does."""
-        return _printing_help(super().get_help_option(ctx))
+        return command if isinstance(command, click.Command) else None
 
     def resolve_command(self, ctx: click.Context,
                         args: list[str]) -> tuple[str | None, click.Command | None, list[str]]:
@@ -127,40 +124,12 @@ def _refuse(exc: VtrackError) -> None:
     sys.exit(exc.exit_code)
 
 
-def _print_help(ctx: click.Context, param: click.Parameter, value: bool) -> None:
-    """``--help``'s callback: as click's, but standard output that cannot take the help (``>
-    /dev/full``) is one line saying so and exit code 1, not click's traceback
-    (:func:`~vtrack.cli._messages.echo_result`); its reader gone (``| head``), nothing."""
-    if value and not ctx.resilient_parsing:
-        echo_result(ctx.get_help(), "the help")
-        ctx.exit()
-
-
 def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
     """``--version``'s callback: ``vtrack, version X`` as click's ``version_option`` says it,
-    printed as :func:`_print_help` prints the help."""
+    printed as :func:`~vtrack.cli._options.print_help` prints the help."""
     if value and not ctx.resilient_parsing:
         echo_result(f"vtrack, version {__version__}", "the version")
         ctx.exit()
-
-
-def _printing_help(option: click.Option | None) -> click.Option | None:
-    """``option``, a command's ``--help`` (None: it has none), with :func:`_print_help` as its
-    callback."""
-    if option is not None:
-        option.callback = _print_help
-    return option
-
-
-def _help_printed_as_a_result(command: click.Command, ctx: click.Context) -> click.Command:
-    """``command``, its ``--help`` and that of every command of it (``vtrack vectors check``)
-    printed by :func:`_print_help`: click's writes the help from the option's callback, while
-    the arguments are parsed, before any command runs (and so outside its handling of
-    standard output)."""
-    _printing_help(command.get_help_option(ctx))
-    for sub in getattr(command, "commands", {}).values():
-        _help_printed_as_a_result(sub, ctx)
-    return command
 
 
 def _exit_now(code: object) -> None:

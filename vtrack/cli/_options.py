@@ -10,7 +10,7 @@ from typing import Any
 import click
 from click.core import ParameterSource
 
-from vtrack.cli._messages import WordsCut
+from vtrack.cli._messages import WordsCut, echo_result
 from vtrack.cli._progress import STATS_PERIOD
 from vtrack.errors import cut, shell_word
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
@@ -67,7 +67,31 @@ class Seconds(click.FloatRange):
         return f"{low} and {high}"
 
 
-class VtrackCommand(click.Command):
+def print_help(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``--help``'s callback: as click's, but standard output that cannot take the help (``>
+    /dev/full``) is one line saying so and exit code 1, not click's traceback
+    (:func:`~vtrack.cli._messages.echo_result`); its reader gone (``| head``), nothing."""
+    if value and not ctx.resilient_parsing:
+        echo_result(ctx.get_help(), "the help")
+        ctx.exit()
+
+
+class HelpPrinted(click.Command):
+    """A command (or group: put this class before click's among its bases) whose ``--help``
+    is printed by :func:`print_help`: click's writes the help from the option's callback, while
+    the arguments are parsed, before any command runs (and so outside its handling of standard
+    output)."""
+
+    def get_help_option(self, ctx: click.Context) -> click.Option | None:
+        """As click's (None: the command has no ``--help``), with :func:`print_help` as the
+        option's callback."""
+        option = super().get_help_option(ctx)
+        if option is not None:
+            option.callback = print_help
+        return option
+
+
+class VtrackCommand(HelpPrinted):
     """A vtrack command: arguments it does not take are refused as click refuses them, "Got
     unexpected extra argument (clip.gt.txt)", each shown as :func:`~vtrack.errors.cut` shows
     it (click echoed a word of any length whole), a :class:`~vtrack.cli._messages.WordsCut`:

@@ -14,13 +14,13 @@ from pathlib import Path
 import click
 
 from vtrack.cli._messages import echo_result, no_such_command, warn
-from vtrack.cli._options import NumberWord, VtrackCommand
+from vtrack.cli._options import HelpPrinted, NumberWord, VtrackCommand
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.errors import close_names, names_a_path
 
 
-class _DefaultGroup(click.Group):
+class _DefaultGroup(HelpPrinted, click.Group):
     """A group whose arguments go to ``generate`` unless they start with a subcommand name."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
