@@ -293,19 +293,34 @@ def jpeg_cut_short(path: str | os.PathLike[str]) -> bool:
         return False
     if not data.startswith(b"\xff\xd8"):
         return False
-    at = 2
-    while at + 4 <= len(data):  # marker segments up to the scan (EXIF's thumbnail inside one)
-        if data[at] != 0xFF:
+    for at, marker, length in _jpeg_segments(data):  # (EXIF's thumbnail inside one)
+        if marker is None:
             return False
+        if marker == 0xDA:  # start of scan: entropy-coded data, where FF D9 cannot occur
+            return data.find(b"\xff\xd9", at + 2 + length) < 0
+    return True  # ends before its first scan
+
+
+def _jpeg_segments(data: bytes) -> Iterator[tuple[int, int | None, int]]:
+    """The marker segments of the JPEG ``data`` (its bytes from its start-of-image marker on,
+    as far as they go), each as (its offset, its marker, its length: the bytes after the
+    marker), up to its first start of scan (marker 0xDA, the last one given) and fill bytes
+    skipped; where a marker should be and none is (no JPEG as written), (its offset, None, 0)
+    is the last one. The walk ends where ``data`` does (a segment's length may reach past it)."""
+    at = 2
+    while at + 4 <= len(data):
+        if data[at] != 0xFF:
+            yield at, None, 0
+            return
         marker = data[at + 1]
         if marker == 0xFF:  # fill byte
             at += 1
             continue
         length = int.from_bytes(data[at + 2:at + 4], "big")
-        if marker == 0xDA:  # start of scan: entropy-coded data, where FF D9 cannot occur
-            return data.find(b"\xff\xd9", at + 2 + length) < 0
+        yield at, marker, length
+        if marker == 0xDA:
+            return
         at += 2 + length
-    return True  # ends before its first scan
 
 
 #: Bytes at a photo's start looked at for its EXIF orientation (JPEG's APP1 segment holding it
@@ -348,14 +363,9 @@ def _exif_of(photo: BinaryIO) -> bytes:
     if data[:4] in (b"II*\x00", b"MM\x00*"):
         return data
     if data.startswith(b"\xff\xd8"):
-        at = 2
-        while at + 4 <= len(data) and data[at] == 0xFF:
-            marker, length = data[at + 1], int.from_bytes(data[at + 2:at + 4], "big")
+        for at, marker, length in _jpeg_segments(data):  # (none after the start of scan)
             if marker == 0xE1 and data[at + 4:at + 10] == b"Exif\x00\x00":
                 return data[at + 10:at + 2 + length]
-            if marker == 0xDA:  # start of scan: no EXIF after it
-                break
-            at += 1 if marker == 0xFF else 2 + length
     elif data.startswith(b"\x89PNG\r\n\x1a\n"):
         return _png_exif(photo)
     elif data[:4] == b"RIFF" and data[8:12] == b"WEBP":
