@@ -930,7 +930,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
         warnings += dropped_notes(request.gt_path, truth)
     elif request.gt_path is not None:
         if request.gt_first and source is not None and past_end(source.info, request.gt_first):
-            raise InputError(f"{names.give(names.gt_first, str(request.gt_first))}: "
+            raise InputError(f"{_gt_first_given(request, names)}: "
                              + past_end_text(request.input, request.gt_first, source.info)
                              + "; the file's first box is of one of its frames")
         single = read_truth(request.gt_path, origin=request.gt_origin, first=request.gt_first)
@@ -958,7 +958,7 @@ def _resolve(request: RunRequest, source: Source | None, names: OptionNames) -> 
             if start < request.gt_first:  # (the file has a box: gt_first < len(gt))
                 raise InputError(
                     f"{request.gt_path}: the {where} is missing: the file's boxes begin at frame "
-                    f"{request.gt_first} ({names.give(names.gt_first, str(request.gt_first))}); "
+                    f"{request.gt_first} ({_gt_first_given(request, names)}); "
                     f"give {names.give(names.start, str(request.gt_first))} to track from "
                     f"there, or {give_box}")
             why = ("marked absent (NaN, or w or h <= 0: the target out of view)"
@@ -1047,6 +1047,12 @@ def _give_file(names: OptionNames, name: str, path: Path) -> str:
     """How ``name`` is given file ``path`` (:meth:`OptionNames.give`), quoted for a shell
     when ``names`` are a command's options: ``--gt 'my seq/groundtruth_rect.txt'``."""
     return names.give(name, shell_word(path) if names.options else str(path))
+
+
+def _gt_first_given(request: RunRequest, names: OptionNames) -> str:
+    """How ``request`` gave the frame of its ground truth's first box, as ``names`` call it:
+    ``--gt-first 3`` (``gt_first=3`` for the library)."""
+    return names.give(names.gt_first, str(request.gt_first))
 
 
 def _refuse_unreadable(request: RunRequest, names: OptionNames) -> None:
@@ -1450,7 +1456,7 @@ def _record(request: RunRequest, resolved: _Resolved, source: Source, writers: _
         if request.gt_first >= end and status == STATUS_COMPLETE:
             summary.warnings.append(
                 f"{request.gt_path}: the file's boxes begin at frame {request.gt_first} "
-                f"({resolved.names.give(resolved.names.gt_first, str(request.gt_first))}), "
+                f"({_gt_first_given(request, resolved.names)}), "
                 f"after the run's last frame ({end - 1}): no frame is scored")
         elif len(gt) != span and status == STATUS_COMPLETE and not (stopped and len(gt) > span):
             summary.warnings.append(_truth_length_note(request, resolved, resolved.gt, span,
