@@ -40,6 +40,7 @@ from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, plural, printa
 from vtrack.evaluate import metrics
 from vtrack.evaluate.groundtruth import (
     MAX_GT_FIRST,
+    FrameBoxes,
     MultiTargetTruthError,
     boxes_for_frames,
     gt_origin_of,
@@ -226,8 +227,12 @@ class GroundTruth:
     #: The warning of its boxes with a negative width or height, read as the target absent
     #: (:func:`~vtrack.evaluate.groundtruth.negative_note`); None when it has none.
     note: str | None = None
-    #: The frame its first box belongs to (``--gt-first``): ``boxes`` holds None before it.
-    first: int = 0
+
+    @property
+    def first(self) -> int:
+        """The frame its first box belongs to (``--gt-first``): ``boxes`` holds None before it
+        (:func:`~vtrack.evaluate.groundtruth.read_truth`'s boxes: a list when it is 0)."""
+        return self.boxes.first if isinstance(self.boxes, FrameBoxes) else 0
 
     @classmethod
     def read(cls, path: Path, origin: int | None = 0, input: str | None = None,
@@ -237,7 +242,7 @@ class GroundTruth:
         :func:`~vtrack.evaluate.groundtruth.gt_origin_of` the file."""
         try:
             truth = read_truth(path, origin=gt_origin_of(path, origin), first=first)
-            return cls(str(path), truth.boxes, input, negative_note(path, truth), first)
+            return cls(str(path), truth.boxes, input, negative_note(path, truth))
         except MultiTargetTruthError:
             raise InputError(f"--gt {path}: MOTChallenge ground truth (many targets); the "
                              "report's --gt scores single-target runs: a multi-target run is "
