@@ -88,12 +88,14 @@ def test_an_overlong_file_given_as_a_command_is_told_whole_and_quoted(tmp_path: 
     (("run", "--" + "x" * 300), "No such option {}...{} (302 characters). "),
     (("run", "clip.mp4", "--preset", "p" * 400),
      "Invalid value for '--preset': {}...{} (400 characters) is not one of 'ultrafast', "),
+    (("scene", "occlusion", "o.mp4", "--size", "s" * 300),
+     "--size {}...{} (300 characters): expected WIDTHxHEIGHT"),
 ])
 def test_an_overlong_option_word_is_shown_cut(tmp_path: Path, args: tuple[str, ...],
                                              said: str) -> None:
     """An unknown option of 300 characters and a --preset value of 400 were echoed whole
     (click's "No such option" and "is not one of"), where an overlong command word is cut
-    (errors.cut); both are cut now, as it is."""
+    (errors.cut), and so was vtrack scene's --size; all are cut now, as it is."""
     word = args[-1]
     line = one_error_line(vtrack(*args, cwd=tmp_path))
     assert line.startswith("vtrack: error: " + said.format(word[:100], word[-30:])), line
@@ -134,15 +136,22 @@ def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
     (("run", "clip.mp4", "--preset", "\\udcff"),
      "Invalid value for '--preset': '\\\\udcff' is not one of "),
     (("\\udcff",), "No such command '\\\\udcff'"),
+    (("scene", "occlusion", "o.mp4", "--size", "\udcff320x240"),
+     "--size '\\xff320x240': expected WIDTHxHEIGHT"),
+    (("scene", "occl\udcffusion", "o.mp4"), "unknown scenario 'occl\\xffusion'; choose one of: "),
+    (("scene", "\udcffbad", "occlusion"),
+     "unknown scenario '\\xffbad': NAME comes before OUT"),
 ], ids=["preset", "apostrophe", "option", "command", "backslash-byte", "backslash-text",
-        "backslash-command"])
+        "backslash-command", "scene-size", "scenario", "scenario-before-out"])
 def test_a_quoted_word_shows_a_byte_not_utf8_as_the_other_messages_do(
         tmp_path: Path, args: tuple[str, ...], said: str) -> None:
     """A short word with bytes that are not UTF-8 was quoted as repr writes it, Python's
     surrogate escape: `vtrack run clip.mp4 --preset $'\\xff...'` said "Invalid value for
     '--preset': '\\udcff\\udcff...'", `vtrack $'\\xff'` "No such command '\\udcff'", where
-    vtrack's other messages write the byte as \\xff. They do too now; a backslash the user
-    typed is still shown as repr shows it (\\\\)."""
+    vtrack's other messages write the byte as \\xff; so did vtrack scene's own refusals of
+    --size and of a scenario's name (``--size '\\udcff320x240'``, ``unknown scenario
+    '\\udcffbad'``). They do too now; a backslash the user typed is still shown as repr shows
+    it (\\\\)."""
     line = one_error_line(vtrack(*args, cwd=tmp_path))
     assert line.startswith("vtrack: error: " + said), line
     assert not list(tmp_path.iterdir())

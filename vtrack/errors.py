@@ -245,6 +245,14 @@ def quoted(word: str) -> str:
     return _undecoded_escapes(repr(word))
 
 
+def quoted_or_cut(word: str) -> str:
+    """``word`` a user gave, for a one-line message: quoted as :func:`quoted` quotes it up to
+    :data:`LONGEST_SHOWN` characters, else as :func:`cut` shows it (its ends and its length,
+    unquoted)."""
+    shown = cut(word)
+    return quoted(word) if shown == word else shown
+
+
 #: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
 #: 0xff is U+DCFF).
 _UNDECODED = re.compile("[\udc80-\udcff]")

@@ -13,7 +13,14 @@ from pathlib import Path
 
 import click
 
-from vtrack.errors import close_names, cut, guess_text, names_a_path, printable, quoted, shell_word
+from vtrack.errors import (
+    close_names,
+    guess_text,
+    names_a_path,
+    printable,
+    quoted_or_cut,
+    shell_word,
+)
 
 
 class WordsCut(click.UsageError):
@@ -68,8 +75,7 @@ def no_such_command(ctx: click.Context, word: str,
     that takes it: run, batch, report or -c), "No such command 'configs'; vtrack stages
     lists the shipped configs and their stages" for the word a new user types for those; the
     bare "No such command 'x'." otherwise."""
-    shown = cut(word)  # (an overlong word as its ends and its length, unquoted)
-    message = f"No such command {quoted(word) if shown == word else shown}"
+    message = f"No such command {quoted_or_cut(word)}"
     if names_a_path(word):
         message += _path_hint(word)
     elif close := close_names(word, commands):

@@ -18,7 +18,7 @@ from vtrack.cli._options import (
 from vtrack.cli._paths import CLIP_PATH
 from vtrack.cli._progress import StepProgress
 from vtrack.cli._signals import stopping_as_interrupted
-from vtrack.errors import ConfigError, shell_word
+from vtrack.errors import ConfigError, quoted_or_cut, shell_word
 from vtrack.geometry import MIN_BOX_SIDE
 from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.params import MAX_CRF, MAX_SEED
@@ -35,7 +35,7 @@ def _parse_size(size: str | None) -> tuple[int | None, int | None]:
         return None, None
     match = _SIZE.match(size)
     if match is None:
-        raise ConfigError(f"--size {size!r}: expected WIDTHxHEIGHT, e.g. 320x240")
+        raise ConfigError(f"--size {quoted_or_cut(size)}: expected WIDTHxHEIGHT, e.g. 320x240")
     return int(match.group(1)), int(match.group(2))
 
 
@@ -132,8 +132,8 @@ def command(
         raise ConfigError("OUT -: vtrack scene writes files (the clip and its ground truth "
                           "beside it): name one, e.g. clip.mp4 or clip.raw --format raw")
     if name not in SCENARIOS and str(out) in SCENARIOS:  # `vtrack scene clip.mp4 occlusion`
-        raise ConfigError(f"unknown scenario {name!r}: NAME comes before OUT (vtrack scene "
-                          f"{out} {shell_word(name)})")
+        raise ConfigError(f"unknown scenario {quoted_or_cut(name)}: NAME comes before OUT "
+                          f"(vtrack scene {out} {shell_word(name)})")
     width, height = _parse_size(size)
     if pix_fmt is not None and fmt == "images":
         raise ConfigError("--pix-fmt applies to mp4 and raw output, not to images")

@@ -16,7 +16,14 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, did_you_mean, names_a_path, number_text, plural
+from vtrack.errors import (
+    ConfigError,
+    did_you_mean,
+    names_a_path,
+    number_text,
+    plural,
+    quoted_or_cut,
+)
 from vtrack.geometry import Window
 from vtrack.io.raw import MAX_FPS, MIN_FPS
 from vtrack.scenes.render import (
@@ -547,8 +554,8 @@ def make_scene(
     scenario = SCENARIOS.get(name)
     if scenario is None:
         near = "" if names_a_path(str(name)) else did_you_mean(str(name), SCENARIOS)
-        raise ConfigError(f"unknown scenario {name!r}; choose one of: {', '.join(SCENARIOS)}"
-                          f"{near}")
+        raise ConfigError(f"unknown scenario {quoted_or_cut(str(name))}; choose one of: "
+                          f"{', '.join(SCENARIOS)}{near}")
     spec = SceneSpec(
         name=name,
         seed=seed,
