@@ -98,6 +98,24 @@ def test_start_compares_with_the_oldest_weight_until_the_history_is_full() -> No
     )
 
 
+def test_a_box_outside_the_frame_is_refused_naming_it_as_the_other_stages_do() -> None:
+    """The stage's own refusal of a first box outside the frame (the pipeline refuses it
+    first, as init_box; the stage started by itself does not) showed it as a Python tuple,
+    "stage 'particle': initial box (500.0, 400.0, 20.5, 20.0) is outside the 320x240 frame".
+    It names the box as --init takes it, Box.text(), as the other stages' refusals do."""
+    from vtrack.errors import FirstFrameError
+    from vtrack.stages.base import TrackContext
+
+    frame = BgrFrame(0, 0.0, np.full((240, 320, 3), 90, np.uint8))
+    ctx = TrackContext(frame=frame, box=Box(500.0, 400.0, 20.5, 20.0))
+    ctx.new_frame(frame)
+    stage = build_stage("particle", {}, "test.toml")
+    with pytest.raises(FirstFrameError) as refused:
+        stage.start(ctx)
+    assert str(refused.value) == ("particle: the initial box 500,400,20.5,20 is outside the "
+                                  "320x240 frame")
+
+
 def _leave_return(seed: int, overrides: tuple[str, ...] = ()) -> tuple[Scene, list[FrameResult]]:
     scene, frames = _scene("leave_return", seed)
     assert scene.boxes[0] is not None

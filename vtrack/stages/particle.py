@@ -175,7 +175,7 @@ class ParticleFilter(Stage):
         window = box.window(frame.width, frame.height)
         if window is None:
             raise FirstFrameError(
-                f"stage '{self.name}': initial box {tuple(box)} is outside the "
+                f"{self.name}: the initial box {box.text()} is outside the "
                 f"{frame.width}x{frame.height} frame"
             )
         refuse_colourless(frame.bgr(window), self.name, box.text())
