@@ -865,6 +865,34 @@ def test_detections_past_the_end_are_a_warning_as_ground_truth_is(tmp_path,
                          "det.txt?)"], []]
 
 
+def test_detections_ending_before_the_end_are_a_warning_as_those_past_it_are(
+        tmp_path, clip_factory) -> None:
+    """A det.txt whose last detection is in frame 12 of a 20-frame input (written for a shorter
+    clip) gave no word, where one with rows past the input's end does. It is now a warning
+    alike, unless --frames ended the run before the input's end (its length is then not
+    known); a file whose rows reach the last frame gets none."""
+    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    warnings = []
+    for last, extra in ((12, []), (12, ["--frames", "15"]), (20, [])):
+        det = tmp_path / f"det{last}.txt"
+        det.write_text("".join(f"{i},-1,40,40,20,20,0.9\n" for i in range(1, last + 1)))
+        config = tmp_path / f"det{last}.toml"
+        config.write_text(f'[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
+                          '[[stage]]\nname = "byte_tracks"\n')
+        out = tmp_path / f"out{last}-{len(extra)}"
+        result = CliRunner().invoke(main, ["run", str(clip.path), "-c", str(config),
+                                           "--no-video", "--out", str(out), *extra])
+        assert result.exit_code == 0, result.output
+        recorded = json.loads((out / "run.json").read_text())["warnings"]
+        assert [f"vtrack: warning: {w}" for w in recorded] == [
+            line for line in result.stderr.splitlines() if line.startswith("vtrack: warning")]
+        warnings.append(recorded)
+    det = tmp_path / "det12.txt"
+    assert warnings == [[f"{det}: the file's detections end at frame 12, before the input's "
+                         "last frame 20; the 8 frames after it had none (is it this input's "
+                         "det.txt?)"], [], []]
+
+
 @pytest.mark.parametrize("start", [0, 40])
 def test_a_run_scores_as_it_goes_what_its_tracks_csv_scores(tmp_path, clip_factory,
                                                            start) -> None:

@@ -113,9 +113,20 @@ class MotDetections(Stage):
 
     def past_end_notes(self) -> list[str]:
         """The file's detections in frames after the last one processed, if any: they were not
-        used (is the file this input's?)."""
-        if not hasattr(self, "_end"):
-            return []
+        used; or, when its last detection is in an earlier frame (a file written for a shorter
+        clip), that the frames after it had none. Either asks whether the file is this
+        input's."""
+        if not getattr(self, "_frames", None) or not hasattr(self, "_end"):
+            return []  # (a file of no detection has its own note)
         note = past_end_note(self.path, "the file has detections", self._frames, self._end,
-                             "they were not used (is it this input's det.txt?)")
+                             f"they were not used ({_WHOSE})")
+        last = max(self._frames) + 1  # 1-based, as the file numbers it
+        if note is None and last < self._end:
+            after = plural(self._end - last, "frame")
+            note = (f"{self.path}: the file's detections end at frame {last}, before the "
+                    f"input's last frame {self._end}; the {after} after it had none ({_WHOSE})")
         return [] if note is None else [note]
+
+
+#: What a warning of a det.txt's frames that do not fit the input asks.
+_WHOSE = "is it this input's det.txt?"
