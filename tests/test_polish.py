@@ -257,6 +257,23 @@ def test_a_negative_follow_is_still_another_options_value(clip_factory, tmp_path
     assert (tmp_path / "--follow=-1" / "run.json").is_file()
 
 
+@pytest.mark.parametrize(("args", "said"), [
+    (("-o", "--follow", "-1"), "No such option '-1': the '--follow' before it was read as -o's "
+                               "value (is -o's value missing?)"),
+    (("--out", "--fps", "-x"), "No such option '-x': the '--fps' before it was read as --out's "
+                               "value (is --out's value missing?)"),
+], ids=["follow", "fps"])
+def test_an_options_name_taken_as_outs_value_is_named_so(tmp_path: Path, args: tuple[str, ...],
+                                                        said: str) -> None:
+    """`vtrack run clip.mp4 -o --follow -1` said "Invalid value for '--follow': '-1' is not a
+    number of seconds ...", naming an option that was not given: -o took the word --follow as
+    its folder, and -1 was then read as an unknown option. The refusal now says so, and that
+    -o's value may be missing."""
+    line = one_error_line(vtrack("run", "clip.mp4", *args, cwd=tmp_path))
+    assert line == f"vtrack: error: {said} (see 'python -m vtrack run --help')"
+    assert not list(tmp_path.iterdir())
+
+
 def test_shell_completion_after_a_negative_follow_completes(tmp_path: Path) -> None:
     """Completing `vtrack run clip.mp4 --follow -1 --no` printed the --follow refusal and
     exited 2 (the values were checked before click parsed, even while completing); it offers

@@ -12,7 +12,7 @@ from click.core import ParameterSource
 
 from vtrack.cli._messages import WordsCut, echo_result
 from vtrack.cli._progress import STATS_PERIOD
-from vtrack.errors import cut, shell_word
+from vtrack.errors import cut, quoted_or_cut, shell_word
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 
@@ -95,13 +95,24 @@ class VtrackCommand(HelpPrinted):
     """A vtrack command: arguments it does not take are refused as click refuses them, "Got
     unexpected extra argument (clip.gt.txt)", each shown as :func:`~vtrack.errors.cut` shows
     it (click echoed a word of any length whole), a :class:`~vtrack.cli._messages.WordsCut`:
-    the option hint of :meth:`_option_for` is said whole and shell-quoted."""
+    the option hint of :meth:`_option_for` is said whole and shell-quoted. An unknown option
+    right after an option's name that another option took as its value (``-o --follow -1``)
+    is refused saying so (:func:`_option_taken_as_value`)."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         refused = not ctx.allow_extra_args
         ctx.allow_extra_args = True  # (to see the extra ones: click names them all, whole)
+        words = list(args)  # (click's parser takes the words out of ``args`` as it reads them)
         try:
             extra = super().parse_args(ctx, args)
+        except click.NoSuchOption as exc:
+            taken = _option_taken_as_value(self, words, exc.option_name)
+            if taken is not None:
+                flag, value = taken
+                raise WordsCut(f"No such option {quoted_or_cut(exc.option_name)}: the "
+                               f"{quoted_or_cut(value)} before it was read as {flag}'s value "
+                               f"(is {flag}'s value missing?)", ctx=ctx) from None
+            raise
         finally:
             ctx.allow_extra_args = not refused
         if extra and refused and not ctx.resilient_parsing:
@@ -124,6 +135,26 @@ class VtrackCommand(HelpPrinted):
                     and looks_like(os.path.basename(word).lower())):
                 return f"; if it is {kind}: {min(option.opts, key=len)} {shell_word(word)}"
         return ""
+
+
+def _option_taken_as_value(command: click.Command, args: list[str],
+                           unknown: str) -> tuple[str, str] | None:
+    """The option (as typed) and the word that click's parser took as its value, when that
+    word is the name of an option of ``command`` (``-o --follow -1``: ``-o`` took
+    ``--follow``, and ``-1`` was then read as an option, the unknown ``unknown``): the
+    option's value is likely missing. None when no word starting with ``unknown`` (before
+    ``--``) comes after such a value."""
+    names = {name for param in command.params if isinstance(param, click.Option)
+             for name in (*param.opts, *param.secondary_opts)}
+    takes_value = {name for param in command.params if isinstance(param, click.Option)
+                   and not param.is_flag and not param.count and param.nargs == 1
+                   and not getattr(param, "_flag_needs_value", False) for name in param.opts}
+    words = args[:args.index("--")] if "--" in args else args
+    for flag, value, word in zip(words, words[1:], words[2:], strict=False):
+        if (word.startswith(unknown) and flag in takes_value
+                and value.partition("=")[0] in names):
+            return flag, value
+    return None
 
 
 #: The kinds of file an extra argument may be (what it is, whether a name in lower case looks
