@@ -12,7 +12,9 @@ not: ``git clone https://github.com/OWNER/NAME PATH``) and writes, under ``OUT``
   ``seqinfo.ini``: MOTChallenge's layout, for ``VTRACK_MOT=OUT/mot/A:OUT/mot/B python
   benchmarks/multi_bench.py 1 outside``.
 
-Sequences whose repository is not given are skipped with a line naming the clone they need.
+Sequences whose repository is not given are skipped with a line naming the clone they need;
+those with a file the clone lists but does not hold (a copy made without its large files) with a
+line naming the file, and nothing of them is written.
 None of ``robust``'s or ``fixed_camera``'s values were chosen on these (benchmarks/RESULTS.md,
 sections 5 and 8, say where they were used to check a change).
 """
@@ -54,11 +56,15 @@ SINGLE = (
 
 #: MOTChallenge sequences: (name, repository of the frames, frames folder or video file,
 #: repository of the ground truth, its folder (gt/gt.txt, seqinfo.ini), frames kept or 0: all).
+#: All are MOT15 training sequences filmed by a fixed camera (MOTChallenge's table of the
+#: sequences); the moving-camera ones (ETH-*, KITTI-13, ADL-Rundle-8) are left out.
 MOT = (
     ("TUD-Stadtmitte", MASA, "benchmarks/MOT15/TUD-Stadtmitte/TUD-Stadtmitte.mp4", MASA,
      "benchmarks/MOT15/TUD-Stadtmitte", 0),
     ("PETS09-S2L1-300", RPI, "data/images/PETS09-S2L1", MASA, "benchmarks/MOT15/PETS09-S2L1",
      300),
+    *((name, MASA, f"benchmarks/MOT15/{name}/{name}.mp4", MASA, f"benchmarks/MOT15/{name}", 0)
+      for name in ("PETS09-S2L1", "Venice-2", "KITTI-17", "ADL-Rundle-6")),
 )
 
 
@@ -70,6 +76,22 @@ def git(clone: Path, *args: str) -> bytes:
 
 def show(clone: Path, path: str) -> bytes:
     return git(clone, "show", f"HEAD:{path}")
+
+
+def absent(clone: Path, paths: list[str]) -> str | None:
+    """The first of ``paths`` that the clone's HEAD lists but cannot give (a copy made without
+    its large files, or Git LFS content never fetched), or None when it holds them all."""
+    asked = "".join(f"HEAD:{path}\n" for path in paths)
+    answer = subprocess.run(["git", "-C", str(clone), "cat-file", "--batch-check"],
+                            input=asked.encode(), capture_output=True, check=True).stdout
+    for path, line in zip(paths, answer.decode().splitlines(), strict=True):
+        if line.endswith(" missing"):
+            return path
+    return None
+
+
+def skipped(name: str, repo: str, path: str) -> None:
+    print(f"{name}: skipped ({path} is not in the clone of {repo}: clone it whole)")
 
 
 def images(clone: Path, folder: str) -> list[str]:
@@ -92,8 +114,16 @@ def single(out: Path, clones: dict[str, Path]) -> None:
         if repo not in clones:
             print(f"{name}: skipped (needs --clone {repo}=PATH)")
             continue
+        missing = absent(clones[repo], [truth])
+        if missing:
+            skipped(name, repo, missing)
+            continue
         boxes = ground_truth(show(clones[repo], truth).decode(), layout)
         frames = images(clones[repo], folder)[first:first + len(boxes)]
+        missing = absent(clones[repo], frames)
+        if missing:
+            skipped(name, repo, missing)
+            continue
         target = out / "single" / name
         (target / "img").mkdir(parents=True, exist_ok=True)
         for k, path in enumerate(frames, 1):
@@ -110,6 +140,15 @@ def mot(out: Path, clones: dict[str, Path]) -> None:
             print(f"{name}: skipped (needs " + ", ".join(f"--clone {r}=PATH" for r in missing)
                   + ")")
             continue
+        video = frames_path.endswith(".mp4")
+        frames = [frames_path] if video else images(clones[frames_repo], frames_path)[:keep or None]
+        needed = {truth_repo: [f"{truth_folder}/gt/gt.txt", f"{truth_folder}/seqinfo.ini"]}
+        needed.setdefault(frames_repo, []).extend(frames)
+        gone = [(repo, path) for repo, paths in needed.items()
+                if (path := absent(clones[repo], paths))]
+        if gone:
+            skipped(name, *gone[0])
+            continue
         target = out / "mot" / name
         (target / "gt").mkdir(parents=True, exist_ok=True)
         rows = show(clones[truth_repo], f"{truth_folder}/gt/gt.txt").decode().splitlines()
@@ -118,12 +157,11 @@ def mot(out: Path, clones: dict[str, Path]) -> None:
         (target / "gt" / "gt.txt").write_text("\n".join(rows) + "\n")
         (target / "seqinfo.ini").write_bytes(show(clones[truth_repo],
                                                    f"{truth_folder}/seqinfo.ini"))
-        if frames_path.endswith(".mp4"):
+        if video:
             (target / Path(frames_path).name).write_bytes(show(clones[frames_repo], frames_path))
             print(f"{name}: video")
             continue
         (target / "img1").mkdir(exist_ok=True)
-        frames = images(clones[frames_repo], frames_path)[:keep or None]
         for path in frames:
             (target / "img1" / Path(path).name).write_bytes(show(clones[frames_repo], path))
         print(f"{name}: {len(frames)} frames")

@@ -6,8 +6,12 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from conftest import ClipFactory
 
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 SCRIPTS = sorted(path.name for path in BENCHMARKS.glob("*.py") if path.name != "common.py")
@@ -157,3 +161,37 @@ def test_robust_tune_looks_leaves_out_a_seed_whose_scene_cannot_be_made() -> Non
     assert done.stderr.splitlines() == [
         "slab seed 4: left out: scenario 'slab' at 320x240: 60 frames are too few for its "
         "occlusion"], done.stderr
+
+
+def test_outside_footage_skips_a_sequence_whose_file_the_clone_lacks(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A clone made without its large files lists them but cannot give them: the sequence
+    that needs one is a line naming the file, nothing of it is written, the others are laid
+    out."""
+    clips = {name: clip_factory("multi", seed=seed, width=160, height=120, frames=60)
+             for seed, name in enumerate(("TUD-Stadtmitte", "KITTI-17"))}
+    clone = tmp_path / "MASA-OA"
+    for name, clip in clips.items():
+        folder = clone / "benchmarks" / "MOT15" / name
+        (folder / "gt").mkdir(parents=True)
+        (folder / "gt" / "gt.txt").write_bytes(clip.mot.read_bytes())
+        (folder / "seqinfo.ini").write_text(f"[Sequence]\nname={name}\nframeRate=30\n")
+        (folder / f"{name}.mp4").write_bytes(clip.path.read_bytes())
+    git = ["git", "-C", str(clone), "-c", "user.name=t", "-c", "user.email=t@t"]
+    for args in (["init", "-q"], ["add", "."], ["commit", "-q", "-m", "sequences"]):
+        subprocess.run([*git, *args], check=True, capture_output=True)
+    video = "benchmarks/MOT15/TUD-Stadtmitte/TUD-Stadtmitte.mp4"
+    blob = subprocess.run([*git, "rev-parse", f"HEAD:{video}"], check=True, capture_output=True,
+                          text=True).stdout.strip()
+    (clone / ".git" / "objects" / blob[:2] / blob[2:]).unlink()  # listed, not held
+    out = tmp_path / "out"
+    done = run_script("outside_footage.py", str(out), "--clone",
+                      f"gonzalocarreteroh/MASA-OA={clone}")
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert (f"TUD-Stadtmitte: skipped ({video} is not in the clone of gonzalocarreteroh/MASA-OA"
+            in done.stdout), done.stdout
+    assert not (out / "mot" / "TUD-Stadtmitte").exists()
+    assert "KITTI-17: video" in done.stdout
+    kitti = clips["KITTI-17"]
+    assert (out / "mot/KITTI-17/KITTI-17.mp4").read_bytes() == kitti.path.read_bytes()
+    assert (out / "mot/KITTI-17/gt/gt.txt").read_text() == kitti.mot.read_text()
