@@ -657,3 +657,32 @@ def test_an_options_help_says_its_range(command: str, option: str, limits: tuple
     entry = " ".join(row.group().split())
     for limit in limits:
         assert limit in entry, (option, entry)
+
+
+def test_every_command_prints_its_help_as_a_result() -> None:
+    """Each command's ``--help`` is printed by vtrack's own callback (so a full standard
+    output is one line, not click's traceback) because each command, and each group under a
+    command, is a ``HelpPrinted``: the group no longer patches the commands it loads, so a
+    plain ``click.Command`` added as a module's ``command`` would escape."""
+    import click
+
+    from vtrack.cli import main
+    from vtrack.cli._options import HelpPrinted, print_help
+
+    def commands(group: click.Group, ctx: click.Context) -> list[click.Command]:
+        found = []
+        for name in group.list_commands(ctx):
+            command = group.get_command(ctx, name)
+            assert command is not None, name
+            found.append(command)
+            if isinstance(command, click.Group):
+                found += commands(command, click.Context(command, parent=ctx))
+        return found
+
+    ctx = click.Context(main)
+    every = commands(main, ctx)
+    assert {c.name for c in every} >= {"run", "batch", "report", "scene", "stages"}
+    for command in [main, *every]:
+        assert isinstance(command, HelpPrinted), command.name
+        option = command.get_help_option(click.Context(command, parent=ctx))
+        assert option is not None and option.callback is print_help, command.name
