@@ -34,6 +34,7 @@ from vtrack.report.runs import (
     RunResult,
     failed_runs,
     load_run,
+    names_a_run,
     run_folders,
     source_name,
     still_written,
@@ -472,12 +473,15 @@ def build_report(results: Sequence[Path], out_dir: Path,
     """
     _refuse_batch_folder(out_dir)
     specs = [] if gt is None else [gt] if isinstance(gt, (str, Path)) else list(gt)
-    truths = [GroundTruth.parse(str(spec), gt_origin, gt_first) for spec in specs]
-    _refuse_two_files_for_one_input(truths)
     walked = walk_results(results)
     warnings = still_written(walked)
+    folders = run_folders(results, walked, warnings)
+    # (a --gt INPUT=FILE that reads two ways: the readings naming a run found count)
+    named = names_a_run(folders)
+    truths = [GroundTruth.parse(str(spec), gt_origin, gt_first, named) for spec in specs]
+    _refuse_two_files_for_one_input(truths)
     runs: list[RunResult] = []
-    for folder in run_folders(results, walked, warnings):
+    for folder in folders:
         try:
             runs.append(load_run(folder, truths))
         except InputError as exc:

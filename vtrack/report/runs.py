@@ -27,9 +27,9 @@ import json
 import math
 import os
 import shlex
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cache, cached_property
 from pathlib import Path
 from typing import Any
 
@@ -249,19 +249,25 @@ class GroundTruth:
                              "scored with the ground truth given to vtrack run --gt") from None
 
     @classmethod
-    def parse(cls, text: str, origin: int | None = 0, first: int = 0) -> GroundTruth:
+    def parse(cls, text: str, origin: int | None = 0, first: int = 0,
+              names_run: Callable[[str], bool] | None = None) -> GroundTruth:
         """``--gt FILE`` or ``--gt INPUT=FILE`` (INPUT: an input's name, as the report shows
         it, or its path as given to ``vtrack run``), its first box frame ``first``'s. A file
         whose name holds ``=`` is a FILE; an INPUT holding ``=`` (``a=b.mp4``, named ``a=b``:
         ``--gt a=b=FILE``, as the report's warnings suggest) is split at the ``=`` after which
-        a file is there (at the first ``=`` when none is: the file is missing). InputError
-        naming the readings when files are there after several (``--gt a=b=c.txt``, both
-        ``b=c.txt`` and ``c.txt`` there: input ``a`` or input ``a=b``)."""
+        a file is there (at the first ``=`` when none is: the file is missing).
+        ``names_run(INPUT)``: whether INPUT names a run the report found (None: any does); of
+        several such splits, those naming one count (the first split when none does).
+        InputError naming the readings when files are there after several that count
+        (``--gt a=b=c.txt``, both ``b=c.txt`` and ``c.txt`` there, runs of inputs ``a`` and
+        ``a=b``)."""
         splits = [(text[:at], text[at + 1:]) for at, mark in enumerate(text) if mark == "="]
         splits = [(name, path) for name, path in splits if name and path]
         if not splits or Path(text).exists():
             return cls.read(Path(text), origin, first=first)
         there = [(name, path) for name, path in splits if Path(path).exists()]
+        if len(there) > 1 and names_run is not None:
+            there = [(name, path) for name, path in there if names_run(name)] or there[:1]
         if len(there) > 1:
             readings = " or ".join(f"input {name} with file {path}" for name, path in there)
             held = ", ".join(path for _, path in there[:-1])  # (each holds the next one's =)
@@ -272,18 +278,8 @@ class GroundTruth:
 
     def belongs_to(self, name: str, request: dict[str, Any], found: str | None = None) -> bool:
         """Whether this file is for the run of input ``name`` (True for a plain ``--gt``):
-        INPUT is its name, its path as the run recorded it, or a path to the same file as
-        ``found`` (where the run's input is found from here: a batch records absolute paths,
-        and ``--gt footage/a.mp4=...`` names one of them)."""
-        if self.input is None:
-            return True
-        given = str(request.get("input") or "").rstrip("/")
-        if self.input.rstrip("/") in (name, given, Path(given).name):
-            return True
-        try:
-            return found is not None and os.path.samefile(self.input, found)
-        except (OSError, ValueError):  # (not a file here: a name, a URL, -)
-            return False
+        :func:`names_input` of its INPUT."""
+        return self.input is None or names_input(self.input, name, request, found)
 
     def misfit(self, frames: int, whole: bool, start: int = 0) -> str | None:
         """Why these boxes cannot be a run's ground truth: a run over the whole input (from
@@ -309,6 +305,43 @@ class GroundTruth:
                     "for each input")
         return (f"--gt {self.input}={self.path}: input {self.input} has its ground truth "
                 f"already (--gt {earlier.input}={earlier.path}); give one file per input")
+
+
+def names_input(given_input: str, name: str, request: dict[str, Any],
+                found: str | None = None) -> bool:
+    """Whether ``--gt INPUT=FILE``'s INPUT (``given_input``) names the run of input ``name``:
+    its name, its path as the run recorded it (``request``'s input), or a path to the same
+    file as ``found`` (where the run's input is found from here: a batch records absolute
+    paths, and ``--gt footage/a.mp4=...`` names one of them)."""
+    given = str(request.get("input") or "").rstrip("/")
+    if given_input.rstrip("/") in (name, given, Path(given).name):
+        return True
+    try:
+        return found is not None and os.path.samefile(given_input, found)
+    except (OSError, ValueError):  # (not a file here: a name, a URL, -)
+        return False
+
+
+def names_a_run(folders: Sequence[Path]) -> Callable[[str], bool]:
+    """Whether a ``--gt INPUT=FILE``'s INPUT names the input of a run in ``folders``
+    (:func:`names_input`); their records are read on the first question (one that cannot
+    be read names none: the report leaves it out, saying why)."""
+    @cache
+    def runs() -> list[tuple[str, dict[str, Any], str | None]]:
+        found = []
+        for folder in folders:
+            try:
+                record = read_run_record(folder / "run.json")
+                found.append((_input_name(record, folder), dict(record.get("request") or {}),
+                              _found_path(record, "input")))
+            except (InputError, TypeError, ValueError, AttributeError):
+                continue
+        return found
+
+    def named(given_input: str) -> bool:
+        return any(names_input(given_input, *run) for run in runs())
+
+    return named
 
 
 def pick_ground_truth(truths: Sequence[GroundTruth], name: str, request: dict[str, Any],
