@@ -133,3 +133,19 @@ def test_a_long_value_is_cut_between_its_characters_not_inside_an_escape() -> No
     bytes_not_utf8 = "\udcff" * 60
     assert len(shown(bytes_not_utf8)) <= 90
 
+
+
+def test_a_long_plain_value_is_shown_to_about_80_characters() -> None:
+    """9fd9031 left no room for the quote marks: every plain string over 80 characters was
+    halved and shown in 43 (``shown('a' * 100)``); reprlib showed 80. Now ~80, escapes and a
+    typed backslash still whole."""
+    import ast
+
+    from vtrack.params import shown
+
+    for value in ("a" * 100, "abcdefghij" * 10, "é" * 200):
+        text = shown(value)
+        assert 75 <= len(text) <= 80 and "..." in text, text
+    typed = "\\" * 100
+    text = shown(typed)
+    assert 70 <= len(text) <= 80 and set(ast.literal_eval(text)) <= {"\\", "."}, text

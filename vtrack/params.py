@@ -284,10 +284,12 @@ class _ShortRepr(reprlib.Repr):
             text = repr(x)
             if len(text) <= self.maxstring:
                 return text
-        keep = max(0, (self.maxstring - 3) // 2)
+        keep = max(0, (self.maxstring - 5) // 2)  # (two quote marks and the ...)
         text = repr(x[:keep] + "..." + x[len(x) - keep:])
-        while len(text) > self.maxstring and keep > 4:  # escapes take several characters each
-            keep //= 2
+        while len(text) > self.maxstring and keep > 1:
+            # an escape takes up to 10 characters (\U0001f600): a character fewer each side
+            # shortens the text by 2 to 20
+            keep = max(1, keep - max(1, (len(text) - self.maxstring) // 20))
             text = repr(x[:keep] + "..." + x[len(x) - keep:])
         return text
 
