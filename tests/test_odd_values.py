@@ -149,3 +149,22 @@ def test_a_long_plain_value_is_shown_to_about_80_characters() -> None:
     typed = "\\" * 100
     text = shown(typed)
     assert 70 <= len(text) <= 80 and set(ast.literal_eval(text)) <= {"\\", "."}, text
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("--set", "\udcff.a=1"), "stage '\\xff' is not in the chain"),
+    (("--set", "robust_model.\udcff=1"), "unknown parameter '\\xff'"),
+    (("--set", "robust_model.padding=\udcff"), "must be a number, got '\\xff'"),
+    (("--init", "\udcff"), "got '\\xff'"),
+])
+def test_a_byte_not_utf8_in_vtracks_own_errors_is_written_as_usage_messages_write_it(
+        clip: Path, tmp_path: Path, args: tuple[str, ...], said: str) -> None:
+    """Usage messages said a byte that is not UTF-8 as ``\\xff``, vtrack's own errors as
+    Python's ``\\udcff`` (`--set $'\\xff'.a=1`: "stage '\\udcff' is not in the chain",
+    `--init $'\\xff'`: "got '\\udcff'"). Now both as ``\\xff``."""
+    init = () if args[0] == "--init" else ("--init", "10,10,20,20")
+    done = _vtrack("run", str(clip), *init, *args, "--no-video", "-o", "o", cwd=tmp_path)
+    lines = done.stderr.splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert said in lines[0] and "udc" not in lines[0], lines[0]
+    assert not (tmp_path / "o").exists()

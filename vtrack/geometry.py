@@ -12,7 +12,7 @@ import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from vtrack.errors import ConfigError, is_real, number_text
+from vtrack.errors import ConfigError, is_real, number_text, quoted
 from vtrack.params import shown
 
 if TYPE_CHECKING:
@@ -183,10 +183,10 @@ def box_from_parts(parts: Sequence[str], where: str, expected: str, shown: str,
     except ValueError:
         values = []
     if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise error(f"{where}: expected {expected}, got {shown!r}")
+        raise error(f"{where}: expected {expected}, got {quoted(shown)}")
     box = Box(*values)
     if box.w <= 0 or box.h <= 0:
-        raise error(f"{where}: width and height must be positive, got {shown!r}")
+        raise error(f"{where}: width and height must be positive, got {quoted(shown)}")
     return box
 
 

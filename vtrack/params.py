@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
 
-from vtrack.errors import ConfigError, is_real, number_text, real_or_nan
+from vtrack.errors import ConfigError, is_real, number_text, quoted, real_or_nan
 
 #: The longest time a run's start or span takes in seconds (``--start Ts``, ``--frames Ts``,
 #: RunRequest's ``start_s`` and ``max_s``): a year, so a frame number fits any rate.
@@ -277,20 +277,21 @@ class _ShortRepr(reprlib.Repr):
         return _number(x)
 
     def repr_str(self, x: str, level: int) -> str:
-        """A long string cut on its characters, then quoted: reprlib cuts the quoted text,
-        which can split an escape (``\\\\udcff`` typed, cut to a lone ``\\udcff``: a byte
-        the user never gave)."""
+        """A long string cut on its characters, then quoted as :func:`~vtrack.errors.quoted`
+        quotes it (a byte that is not UTF-8 as ``\\xff``, as usage messages say it): reprlib
+        cuts the quoted text, which can split an escape (``\\\\udcff`` typed, cut to a lone
+        ``\\udcff``: a byte the user never gave)."""
         if len(x) <= self.maxstring:
-            text = repr(x)
+            text = quoted(x)
             if len(text) <= self.maxstring:
                 return text
         keep = max(0, (self.maxstring - 5) // 2)  # (two quote marks and the ...)
-        text = repr(x[:keep] + "..." + x[len(x) - keep:])
+        text = quoted(x[:keep] + "..." + x[len(x) - keep:])
         while len(text) > self.maxstring and keep > 1:
             # an escape takes up to 10 characters (\U0001f600): a character fewer each side
             # shortens the text by 2 to 20
             keep = max(1, keep - max(1, (len(text) - self.maxstring) // 20))
-            text = repr(x[:keep] + "..." + x[len(x) - keep:])
+            text = quoted(x[:keep] + "..." + x[len(x) - keep:])
         return text
 
 

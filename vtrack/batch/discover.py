@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from vtrack.errors import InputError, plural
+from vtrack.errors import InputError, plural, quoted
 from vtrack.evaluate.groundtruth import (
     groundtruth_beside,
     gt_origin_of,
@@ -227,18 +227,19 @@ def _refuse_shared_folders(folder: Path, found: list[BatchInput]) -> None:
         other, by_case = clash
         if other is None:
             case = f" {SUMMARY_FILE} on a case-insensitive disk (macOS, Windows)" if by_case else ""
-            raise InputError(f"{folder}: {item.shown!r} would have the results folder "
-                             f"{_folder(item.name)!r}, the batch's own summary{case}: rename it")
+            raise InputError(f"{folder}: {quoted(item.shown)} would have the results folder "
+                             f"{quoted(_folder(item.name))}, the batch's own summary{case}: "
+                             "rename it")
         if by_case:
             raise InputError(
-                f"{folder}: the results folders of {other.shown!r} and of "
-                f"{item.shown!r} differ only in case, one folder on a case-insensitive "
+                f"{folder}: the results folders of {quoted(other.shown)} and of "
+                f"{quoted(item.shown)} differ only in case, one folder on a case-insensitive "
                 "disk (macOS, Windows): rename one")
-        why = (f"both are named {item.name!r}" if other.name == item.name else
+        why = (f"both are named {quoted(item.name)}" if other.name == item.name else
                "names differ only in characters a folder name cannot hold")
         raise InputError(
-            f"{folder}: {other.shown!r} and {item.shown!r} would share the results "
-            f"folder {_folder(item.name)!r} ({why}): rename one")
+            f"{folder}: {quoted(other.shown)} and {quoted(item.shown)} would share the results "
+            f"folder {quoted(_folder(item.name))} ({why}): rename one")
 
 
 def unscored_by_multi_target(inputs: Iterable[BatchInput], configs: list[str]) -> str | None:

@@ -22,7 +22,7 @@ from urllib.parse import urlsplit
 
 from vtrack.batch.jobs import Job, Outcome, Progress
 from vtrack.batch.worker import _serve, execute_on_dask, stop_signal_name
-from vtrack.errors import Interrupted, VtrackError
+from vtrack.errors import Interrupted, VtrackError, quoted
 from vtrack.run import STATUS_FAILED
 
 #: How often a job whose worker process died is started again before it is reported failed.
@@ -520,7 +520,7 @@ def scheduler_address_problem(address: str) -> str | None:
     if port is None:
         return "no port: give tcp://HOST:PORT (a scheduler listens on 8786 unless told otherwise)"
     if extra:  # (Dask's address has no path: a scheduler there was called none)
-        return f"nothing follows the port in tcp://HOST:PORT, not {extra!r}: drop it"
+        return f"nothing follows the port in tcp://HOST:PORT, not {quoted(extra)}: drop it"
     if "@" in netloc:  # (Dask's address has no user)
         return "no user@ in tcp://HOST:PORT: drop it"
     if port == 0:
@@ -555,7 +555,7 @@ def _probe(address: str, timeout_s: float) -> None:
         except ConnectionRefusedError:
             raise OSError("connection refused") from None
         except socket.gaierror:
-            raise OSError(f"no host named {host!r} is known") from None
+            raise OSError(f"no host named {quoted(host)} is known") from None
         writer.close()
 
     async def identity() -> None:

@@ -36,6 +36,7 @@ from vtrack.errors import (
     VtrackError,
     ignore_stop_signals,
     printable,
+    quoted,
 )
 from vtrack.geometry import MAX_FRAME_SIDE
 from vtrack.params import (
@@ -294,7 +295,7 @@ def _named_folder(config_spec: str | None, config: Config) -> str:
     if config_spec is None or config_spec in shipped_configs() \
             or config.name == Path(config_spec).stem:
         return ""
-    return (f" (the folder is named after the config's name, {config.name!r} in "
+    return (f" (the folder is named after the config's name, {quoted(config.name)} in "
             f"{config_spec}: give the config a name of its own)")
 
 

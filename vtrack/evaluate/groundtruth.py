@@ -17,7 +17,7 @@ from os import PathLike
 from pathlib import Path
 from typing import NamedTuple, overload
 
-from vtrack.errors import ConfigError, InputError, OptionNames, number_text, plural
+from vtrack.errors import ConfigError, InputError, OptionNames, number_text, plural, quoted
 from vtrack.geometry import Box, parse_box_text
 from vtrack.io.images import holds_images, sequence_images
 from vtrack.io.limits import GROUND_TRUTH_BYTES, read_text_bounded
@@ -236,7 +236,7 @@ def _separator_hint(line: str) -> str:
             [float(t.replace(",", ".")) for t in fields]
     except ValueError:
         return ""
-    rule = f"numbers are separated by commas, tabs or spaces, not {separator!r}"
+    rule = f"numbers are separated by commas, tabs or spaces, not {quoted(separator)}"
     if decimal is None:
         return f" ({rule})"
     return _decimal_hint(decimal, rule)

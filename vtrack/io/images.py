@@ -31,7 +31,7 @@ import av
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError, PartialInputError, plural
+from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
@@ -250,7 +250,7 @@ def sequence_fps(folder: Path) -> float | None:
         fps = math.nan
     if not (math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS):
         raise InputError(f"{path}: frameRate must be a frame rate from {MIN_FPS:g} to "
-                         f"{MAX_FPS:g} frames per second, got {text!r} (--fps N gives the "
+                         f"{MAX_FPS:g} frames per second, got {quoted(text)} (--fps N gives the "
                          "sequence's frame rate instead)")
     return fps
 
