@@ -401,6 +401,27 @@ def test_a_set_without_its_stage_or_value_is_offered_the_one_stage_that_declares
         assert str(caught.value) == f"--set {given}: expected stage.param=value"
 
 
+def test_a_set_with_its_stage_and_no_value_or_an_empty_one_is_told_to_give_a_value(
+        tmp_path: Path) -> None:
+    """`--set robust_model.padding` (no `=`) got no hint, and `--set padding=` was offered
+    `robust_model.padding=`, which is refused in turn: told to give a value now, and offered
+    robust_model.padding=VALUE; a stage.param the chain does not declare gets no hint."""
+    import vtrack as library
+
+    line = one_error_line(vtrack("run", "clip.mp4", "--set", "robust_model.padding",
+                                 cwd=tmp_path))
+    assert line == ("vtrack: error: --set robust_model.padding: expected stage.param=value; "
+                    "give a value: robust_model.padding=VALUE")
+    line = one_error_line(vtrack("run", "clip.mp4", "--set", "padding=", cwd=tmp_path))
+    assert line == ("vtrack: error: --set padding=: expected stage.param=value; did you mean "
+                    "robust_model.padding=VALUE?")
+    robust = library.load_config("robust")
+    for given in ("robust_model.nosuch", "hue.padding"):
+        with pytest.raises(library.ConfigError) as caught:
+            robust.with_overrides([given])
+        assert str(caught.value) == f"--set {given}: expected stage.param=value"
+
+
 def test_a_mistyped_config_stage_or_parameter_is_offered_the_near_name() -> None:
     """`-c robst`, `-c S0`, `--set meanshft.iterations=3`, `--set meanshift.iteration=3` and
     `vtrack stages meanshif` listed every name and left the reader to find the one meant;

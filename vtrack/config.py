@@ -196,12 +196,22 @@ class Config:
     def _stage_of(self, param: str, given: Any, is_text: bool) -> str:
         """How a refusal of ``param`` given without its stage ends: ``"; did you mean
         robust_model.padding=2?"`` when one stage of the chain (by name) declares a parameter
-        of that name (``=2``: the text given, only for text), else ``""``."""
-        stages = {name for name in dict(self.stages)
-                  if any(p.name == param for p in stage_class(name, self._named).params)}
+        of that name (``=2``: the text given, only for text; ``=VALUE`` for empty text), else
+        ``""``; for a ``stage.param`` of the chain (given without ``=``): ``"; give a value:
+        robust_model.padding=VALUE"``."""
+        if "." in param:
+            return f"; give a value: {param}=VALUE" if self._declares(param) else ""
+        stages = {name for name in dict(self.stages) if self._declares(f"{name}.{param}")}
         if len(stages) != 1:
             return ""
-        return f"; did you mean {stages.pop()}.{param}{f'={cut(given)}' if is_text else ''}?"
+        value = f"={cut(given) or 'VALUE'}" if is_text else ""
+        return f"; did you mean {stages.pop()}.{param}{value}?"
+
+    def _declares(self, key: str) -> bool:
+        """Whether ``key``, ``stage.param``, names a parameter of a stage of the chain."""
+        stage, _, param = key.partition(".")
+        return stage in dict(self.stages) and any(
+            p.name == param for p in stage_class(stage, self._named).params)
 
     def _changed(self, changes: list[tuple[str, Any, str, bool]]) -> Config:
         """This chain with each ``(stage.param, value, where, is_text)`` applied: text is
