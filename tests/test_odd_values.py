@@ -101,6 +101,21 @@ def test_a_box_that_rounds_to_zero_shows_0_not_minus_0(tmp_path: Path) -> None:
     assert "no pixel of the initial box 0,0,10,10 passes" in done.stderr, done.stderr
 
 
+def test_a_negative_zero_outside_a_box_text_shows_0(clip: Path, tmp_path: Path) -> None:
+    """Box.text showed -0 as 0, number_text did not: `vtrack.track(clip, init_box=(-0.0, 0, 2,
+    2), config='s0')` said "the box -0,0,2,2 is smaller...", `--fps=-0.0` "--fps -0: ...".
+    Both say 0 now."""
+    import vtrack as library
+
+    with pytest.raises(library.ConfigError) as caught:
+        list(library.track(str(clip), init_box=(-0.0, 0, 2, 2), config="s0"))
+    assert str(caught.value).startswith("init_box: the box 0,0,2,2 is smaller"), caught.value
+    done = _vtrack("run", str(clip), "--init", "10,10,20,20", "--fps=-0.0", "--no-video", "-o",
+                   "out", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("vtrack: error: --fps 0: must be a frame rate"), done.stderr
+
+
 def test_the_report_keeps_matplotlibs_notes_off_the_terminal(clip: Path, tmp_path: Path) -> None:
     """A config named with an emoji and a long name: matplotlib printed UserWarnings (a missing
     glyph, a layout it could not apply) among vtrack's own lines."""

@@ -75,9 +75,11 @@ def shell_word(path: str | os.PathLike[str]) -> str:
 def number_text(value: float) -> str:
     """A number for a user message: ``5``, ``0.25``, ``1e+06`` (six significant digits), or
     Python's shortest exact form (``10.000000000000002``, ``320.0001``, ``1e-300``) when six
-    digits would show another number: a value a hair past a limit never reads as the limit."""
+    digits would show another number: a value a hair past a limit never reads as the limit.
+    Zero is ``0``, never ``-0`` (``-0.0``: the number 0)."""
     if isinstance(value, int):  # exact already (and may be too large for a float)
         return str(value)
+    value = value + 0.0  # (-0.0 + 0.0 is 0.0)
     short = f"{value:g}"
     return short if float(short) == value else repr(float(value))
 
