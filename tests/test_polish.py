@@ -123,6 +123,19 @@ def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
     assert not list(tmp_path.iterdir())
 
 
+def test_an_overlong_word_tells_a_typed_backslash_from_a_byte(tmp_path: Path) -> None:
+    """A quoted word over 200 characters is shown cut and unquoted: a typed ``\\xff`` and a
+    byte 0xff both read ``\\xff`` (`--preset '\\xff'aaa...`, `--preset $'\\xff'aaa...`).
+    A typed backslash is written ``\\\\`` there now, as in the quoted words."""
+    lines = [one_error_line(vtrack("run", "clip.mp4", "--preset", first + "a" * 300,
+                                   cwd=tmp_path)) for first in ("\\xff", "\udcff")]
+    said = "vtrack: error: Invalid value for '--preset': "
+    assert lines[0].startswith(said + "\\\\xffaaa"), lines[0]
+    assert lines[1].startswith(said + "\\xffaaa"), lines[1]
+    assert "(304 characters)" in lines[0] and "(301 characters)" in lines[1], lines
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize(("args", "said"), [
     (("run", "clip.mp4", "--preset", "\udcff" * 10),
      "Invalid value for '--preset': '" + "\\xff" * 10 + "' is not one of "),

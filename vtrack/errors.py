@@ -206,7 +206,8 @@ def cut_quoted(message: str) -> str:
     '--xxx'.", "Invalid value for '--preset': 'xxx' is not one of ...") with each quoted word
     of more than :data:`LONGEST_SHOWN` characters, counted as typed (``\\xff`` and ``\\x01``
     are one character each, not the four of their escape), shown as :func:`cut` shows it,
-    unquoted (:func:`printable` escapes its control characters and undecoded bytes); shorter
+    unquoted (:func:`printable` escapes its control characters and undecoded bytes; a typed
+    backslash is written ``\\\\``, as ``repr`` writes it, so ``\\xff`` typed is not a byte); shorter
     words are left as quoted, but for a byte that is not UTF-8, shown as :func:`quoted` shows
     it (``'\\xff'``, not ``repr``'s ``'\\udcff'``)."""
     return _QUOTED.sub(lambda match: _cut_word(match.group()), message)
@@ -223,7 +224,9 @@ def _cut_word(quoted: str) -> str:
         return quoted
     if not isinstance(word, str):
         return quoted
-    return cut(word) if len(word) > LONGEST_SHOWN else _undecoded_escapes(quoted)
+    if len(word) > LONGEST_SHOWN:  # (a typed backslash as \\, as repr writes it: not a byte)
+        return cut(word).replace("\\", "\\\\")
+    return _undecoded_escapes(quoted)
 
 
 #: In a word as ``repr`` quotes it: a backslash the word holds (``\\\\``, kept as it is) or
