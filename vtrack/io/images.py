@@ -5,7 +5,8 @@ decoded with PyAV in the reader thread, each turned upright by its orientation (
 photo's EXIF tag); one that its own tag would not turn to the sequence's size (a tag lost or
 added in an edit) is turned as the first image, with a warning. A sequence whose first image
 is grey becomes :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s
-(later images are converted to match). There are no timestamps: ``time_s = index / fps``.
+(later images are converted to match); 16-bit grey images are scaled to 8 bits by the bits the
+first one uses (:mod:`vtrack.io.depth`). There are no timestamps: ``time_s = index / fps``.
 An image that cannot be decoded (after the first) is skipped with a warning; the frames after
 it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
@@ -34,6 +35,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
+from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, used_bits
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
@@ -171,15 +173,18 @@ def frame_places(files: list[Path]) -> list[int]:
 
 
 def read_image(path: Path) -> np.ndarray:
-    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR, turned
-    upright by its orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run``
-    turns an image given alone (the benchmarks read sequences through it). InputError as
+    """Decode one image: ``(h, w)`` uint8 when it is grey (a 16-bit one scaled by the bits it
+    uses, :func:`~vtrack.io.depth.used_bits`), else ``(h, w, 3)`` BGR, turned upright by its
+    orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run`` turns an
+    image given alone (the benchmarks read sequences through it). InputError as
     :func:`read_stored`."""
-    return turned(*read_stored(path))
+    stored, turn = read_stored(path)
+    return turned(eight_bit(stored, used_bits(stored) if stored.dtype == np.uint16 else 8), turn)
 
 
 def read_stored(path: Path) -> tuple[np.ndarray, int]:
-    """Decode one image as stored (``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR;
+    """Decode one image as stored (``(h, w)`` when it is grey: uint16 when its values have more
+    than 8 bits (a 16-bit PNG or TIFF), else uint8; else ``(h, w, 3)`` BGR;
     flipped top to bottom when its orientation mirrors it, :func:`photo_mirrored`) and the
     quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
 
@@ -202,7 +207,9 @@ def read_stored(path: Path) -> tuple[np.ndarray, int]:
                 raise InputError(f"{path}: a JPEG cut short (no end-of-image marker after its "
                                  "image data): part of the picture is missing")
             grey = picture.format.name.startswith(("gray", "ya"))
-            pixels = picture.to_ndarray(format="gray" if grey else "bgr24")
+            deep = grey and picture.format.components[0].bits > 8
+            pixels = picture.to_ndarray(format="gray16le" if deep else "gray" if grey else
+                                        "bgr24")
             if codec.name in PHOTO_CODECS and photo_mirrored(path):  # FFmpeg: the turn alone
                 pixels = cv2.flip(pixels, 0)
             return pixels, quarter_turns(picture.rotation)
@@ -273,7 +280,9 @@ class ImageFolderSource(Source):
         self._ended = False
         self._notes: list[_Note] = []
         stored, self._turn = read_stored(self._files[0])
-        self._first = turned(stored, self._turn)
+        #: The bits the sequence's 16-bit values use (the first image's; 16 when it is 8-bit).
+        self._bits = used_bits(stored) if stored.dtype == np.uint16 else MAX_BITS
+        self._first = turned(eight_bit(stored, self._bits), self._turn)
         height, width = self._first.shape[:2]
         fps = fps or sequence_fps(root) or DEFAULT_FPS
         # given the img/ folder itself: named after the sequence
@@ -290,9 +299,12 @@ class ImageFolderSource(Source):
                 frame_count=self._places[-1] + 1,
                 duration_s=(self._places[-1] + 1) / fps,
                 codec=self._files[0].suffix.lower().lstrip("."),
-                pix_fmt="gray" if self._first.ndim == 2 else "bgr24",
+                pix_fmt=("gray16le" if stored.dtype == np.uint16 else "gray"
+                         if self._first.ndim == 2 else "bgr24"),
             )
         )
+        if stored.dtype == np.uint16:
+            self._notes.append(_Note(0, depth_note(folder, self._bits)))
 
     def image_identity(self) -> str | None:
         return images_identity(self._files)
@@ -419,6 +431,7 @@ class ImageFolderSource(Source):
                     pixels = first
                 else:
                     stored, turn = read_stored(path)
+                    stored = eight_bit(stored, self._bits)
                     pixels = turned(stored, turn)
                     if pixels.shape[:2] != size and turn != self._turn:
                         pixels = turned(stored, self._turn)  # a tag lost or added in an edit
