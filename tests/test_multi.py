@@ -865,21 +865,28 @@ def test_detections_past_the_end_are_a_warning_as_ground_truth_is(tmp_path,
                          "det.txt?)"], []]
 
 
-def test_detections_ending_before_the_end_are_a_warning_as_those_past_it_are(
+def test_detections_ending_well_before_the_end_are_a_warning_as_those_past_it_are(
         tmp_path, clip_factory) -> None:
-    """A det.txt whose last detection is in frame 12 of a 20-frame input (written for a shorter
-    clip) gave no word, where one with rows past the input's end does. It is now a warning
-    alike, unless --frames ended the run before the input's end (its length is then not
-    known); a file whose rows reach the last frame gets none."""
-    clip = clip_factory("smooth", width=160, height=120, frames=20)
+    """A det.txt whose last detection is in frame 12 of a 40-frame input (written for a shorter
+    clip) is a warning alike those past the end, counting the frames the run processed after
+    it. A correct file whose scene is empty for its last few frames (its last row in frame 39)
+    is none, as is a file whose rows end after fewer than half the frames the run processed
+    (--start 10, rows to frame 26: 14 of 30); with --start 30 and rows to frame 12 the run's
+    10 frames had none (the old note warned of the one frame early, said 28 frames there, and
+    warned at --start 10). No warning when --frames ended
+    the run before the input's end (its length is then not known), nor for a file whose rows
+    reach the last frame."""
+    clip = clip_factory("smooth", width=160, height=120, frames=40)
     warnings = []
-    for last, extra in ((12, []), (12, ["--frames", "15"]), (20, [])):
+    runs = ((39, []), (12, []), (12, ["--start", "30"]), (26, ["--start", "10"]),
+            (12, ["--frames", "15"]), (40, []))
+    for number, (last, extra) in enumerate(runs):
         det = tmp_path / f"det{last}.txt"
         det.write_text("".join(f"{i},-1,40,40,20,20,0.9\n" for i in range(1, last + 1)))
         config = tmp_path / f"det{last}.toml"
         config.write_text(f'[[stage]]\nname = "mot_detections"\npath = "{det}"\n'
                           '[[stage]]\nname = "byte_tracks"\n')
-        out = tmp_path / f"out{last}-{len(extra)}"
+        out = tmp_path / f"out{number}"
         result = CliRunner().invoke(main, ["run", str(clip.path), "-c", str(config),
                                            "--no-video", "--out", str(out), *extra])
         assert result.exit_code == 0, result.output
@@ -888,9 +895,9 @@ def test_detections_ending_before_the_end_are_a_warning_as_those_past_it_are(
             line for line in result.stderr.splitlines() if line.startswith("vtrack: warning")]
         warnings.append(recorded)
     det = tmp_path / "det12.txt"
-    assert warnings == [[f"{det}: the file's detections end at frame 12, before the input's "
-                         "last frame 20; the 8 frames after it had none (is it this input's "
-                         "det.txt?)"], [], []]
+    ended = (f"{det}: the file's detections end at frame 12, before the input's last frame 40; "
+             "the {} frames after it had none (is it this input's det.txt?)")
+    assert warnings == [[], [ended.format(28)], [ended.format(10)], [], [], []]
 
 
 @pytest.mark.parametrize("start", [0, 40])

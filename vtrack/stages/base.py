@@ -341,8 +341,8 @@ class Stage:
 
     def past_end_notes(self) -> list[str]:
         """What the stage warns of about what it was given against the input's whole length
-        (rows of a file past the input's end, or a file ending before it); a run asks only when
-        it read its input to the end (complete, no ``--frames``). Default: nothing."""
+        (rows of a file past the input's end, or a file ending well before it); a run asks only
+        when it read its input to the end (complete, no ``--frames``). Default: nothing."""
         return []
 
 

@@ -73,6 +73,7 @@ class MotDetections(Stage):
         self._outside = 0
         self._crowded = 0  # frames that listed more than max_detections
         self._frame_size = (ctx.frame.width, ctx.frame.height)
+        self._first = ctx.frame.index  # the run's first frame (0-based; --start moves it)
         self.step(ctx)
 
     def step(self, ctx: TrackContext) -> None:
@@ -113,18 +114,20 @@ class MotDetections(Stage):
 
     def past_end_notes(self) -> list[str]:
         """The file's detections in frames after the last one processed, if any: they were not
-        used; or, when its last detection is in an earlier frame (a file written for a shorter
-        clip), that the frames after it had none. Either asks whether the file is this
-        input's."""
+        used; or, when more than half of the frames the run processed come after the file's
+        last detection (a file written for a clip half as long or less), that those frames had
+        none. A scene empty for its last few frames is no warning. Either asks whether the file
+        is this input's."""
         if not getattr(self, "_frames", None) or not hasattr(self, "_end"):
             return []  # (a file of no detection has its own note)
         note = past_end_note(self.path, "the file has detections", self._frames, self._end,
                              f"they were not used ({_WHOSE})")
         last = max(self._frames) + 1  # 1-based, as the file numbers it
-        if note is None and last < self._end:
-            after = plural(self._end - last, "frame")
+        after = self._end - max(last, self._first)  # the run's frames after the last detection
+        if note is None and 2 * after > self._end - self._first:
             note = (f"{self.path}: the file's detections end at frame {last}, before the "
-                    f"input's last frame {self._end}; the {after} after it had none ({_WHOSE})")
+                    f"input's last frame {self._end}; the {plural(after, 'frame')} after it had "
+                    f"none ({_WHOSE})")
         return [] if note is None else [note]
 
 
