@@ -13,8 +13,9 @@ not: ``git clone https://github.com/OWNER/NAME PATH``) and writes, under ``OUT``
   benchmarks/multi_bench.py 1 outside``.
 
 Sequences whose repository is not given are skipped with a line naming the clone they need;
-those with a file the clone lists but does not hold (a copy made without its large files) with a
-line naming the file, and nothing of them is written.
+those with a file the clone lists but does not hold (a copy made without its large files, or one
+holding only the Git LFS pointer of a file whose content was never fetched) with a line naming
+the file, and nothing of them is written.
 None of ``robust``'s or ``fixed_camera``'s values were chosen on these (benchmarks/RESULTS.md,
 sections 5 and 8, say where they were used to check a change).
 """
@@ -78,16 +79,52 @@ def show(clone: Path, path: str) -> bytes:
     return git(clone, "show", f"HEAD:{path}")
 
 
+#: How a Git LFS pointer file begins: a clone that holds one in place of a file never fetched
+#: the file's content (``git lfs pull`` does).
+LFS_POINTER = b"version https://git-lfs.github.com/spec/v1"
+#: Git LFS pointer files are smaller than this (the specification's bound): only blobs this
+#: small are read to tell a pointer.
+LFS_POINTER_MAX = 1024
+
+
 def absent(clone: Path, paths: list[str]) -> str | None:
     """The first of ``paths`` that the clone's HEAD lists but cannot give (a copy made without
-    its large files, or Git LFS content never fetched), or None when it holds them all."""
+    its large files, or a Git LFS pointer whose content was never fetched: its ~130 bytes would
+    be written as the file), or None when it holds them all."""
     asked = "".join(f"HEAD:{path}\n" for path in paths)
     answer = subprocess.run(["git", "-C", str(clone), "cat-file", "--batch-check"],
                             input=asked.encode(), capture_output=True, check=True).stdout
+    # path: object name of the blobs small enough to be an LFS pointer, up to the first missing
+    # (None), in the order of paths
+    objects: dict[str, str | None] = {}
     for path, line in zip(paths, answer.decode().splitlines(), strict=True):
         if line.endswith(" missing"):
-            return path
-    return None
+            objects[path] = None
+            break
+        name, kind, size = line.rsplit(" ", 2)
+        if kind == "blob" and int(size) < LFS_POINTER_MAX:
+            objects[path] = name
+    pointers = lfs_pointers(clone, {name for name in objects.values() if name})
+    return next((path for path, name in objects.items() if name is None or name in pointers),
+                None)
+
+
+def lfs_pointers(clone: Path, names: set[str]) -> set[str]:
+    """Those of the blobs ``names`` (object names the clone holds) that are Git LFS pointers."""
+    if not names:
+        return set()
+    answer = subprocess.run(["git", "-C", str(clone), "cat-file", "--batch"],
+                            input="".join(f"{name}\n" for name in names).encode(),
+                            capture_output=True, check=True).stdout
+    pointers, at = set(), 0
+    while at < len(answer):  # each: "NAME TYPE SIZE\n", SIZE bytes, "\n"
+        header_end = answer.index(b"\n", at)
+        name, _, size = answer[at:header_end].decode().split(" ")
+        content = answer[header_end + 1:header_end + 1 + int(size)]
+        if content.startswith(LFS_POINTER):
+            pointers.add(name)
+        at = header_end + 1 + int(size) + 1
+    return pointers
 
 
 def skipped(name: str, repo: str, path: str) -> None:

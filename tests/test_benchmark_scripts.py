@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 import pytest
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from conftest import ClipFactory
 
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
@@ -163,10 +165,15 @@ def test_robust_tune_looks_leaves_out_a_seed_whose_scene_cannot_be_made() -> Non
         "occlusion"], done.stderr
 
 
-def test_outside_footage_skips_a_sequence_whose_file_the_clone_lacks(
-        tmp_path: Path, clip_factory: ClipFactory) -> None:
-    """A clone made without its large files lists them but cannot give them: the sequence
-    that needs one is a line naming the file, nothing of it is written, the others are laid
+#: The video of the sequence the outside_footage tests make the clone fail to give.
+TUD_VIDEO = "benchmarks/MOT15/TUD-Stadtmitte/TUD-Stadtmitte.mp4"
+
+
+def _outside_footage_without(tmp_path: Path, clip_factory: ClipFactory,
+                             lose: Callable[[Path, list[str]], None]) -> None:
+    """Run outside_footage.py on a real git clone laid out as MASA-OA's TUD-Stadtmitte and
+    KITTI-17 (committed), after ``lose(clone, git)`` made it unable to give TUD_VIDEO:
+    TUD-Stadtmitte is a line naming the file and nothing of it is written, KITTI-17 is laid
     out."""
     clips = {name: clip_factory("multi", seed=seed, width=160, height=120, frames=60)
              for seed, name in enumerate(("TUD-Stadtmitte", "KITTI-17"))}
@@ -180,18 +187,44 @@ def test_outside_footage_skips_a_sequence_whose_file_the_clone_lacks(
     git = ["git", "-C", str(clone), "-c", "user.name=t", "-c", "user.email=t@t"]
     for args in (["init", "-q"], ["add", "."], ["commit", "-q", "-m", "sequences"]):
         subprocess.run([*git, *args], check=True, capture_output=True)
-    video = "benchmarks/MOT15/TUD-Stadtmitte/TUD-Stadtmitte.mp4"
-    blob = subprocess.run([*git, "rev-parse", f"HEAD:{video}"], check=True, capture_output=True,
-                          text=True).stdout.strip()
-    (clone / ".git" / "objects" / blob[:2] / blob[2:]).unlink()  # listed, not held
+    lose(clone, git)
     out = tmp_path / "out"
     done = run_script("outside_footage.py", str(out), "--clone",
                       f"gonzalocarreteroh/MASA-OA={clone}")
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
-    assert (f"TUD-Stadtmitte: skipped ({video} is not in the clone of gonzalocarreteroh/MASA-OA"
-            in done.stdout), done.stdout
+    assert (f"TUD-Stadtmitte: skipped ({TUD_VIDEO} is not in the clone of "
+            "gonzalocarreteroh/MASA-OA" in done.stdout), done.stdout
     assert not (out / "mot" / "TUD-Stadtmitte").exists()
     assert "KITTI-17: video" in done.stdout
     kitti = clips["KITTI-17"]
     assert (out / "mot/KITTI-17/KITTI-17.mp4").read_bytes() == kitti.path.read_bytes()
     assert (out / "mot/KITTI-17/gt/gt.txt").read_text() == kitti.mot.read_text()
+
+
+def test_outside_footage_skips_a_sequence_whose_file_the_clone_lacks(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A clone made without its large files lists them but cannot give them: the sequence
+    that needs one is a line naming the file, nothing of it is written, the others are laid
+    out."""
+    def unlink_the_blob(clone: Path, git: list[str]) -> None:
+        blob = subprocess.run([*git, "rev-parse", f"HEAD:{TUD_VIDEO}"], check=True,
+                              capture_output=True, text=True).stdout.strip()
+        (clone / ".git" / "objects" / blob[:2] / blob[2:]).unlink()  # listed, not held
+
+    _outside_footage_without(tmp_path, clip_factory, unlink_the_blob)
+
+
+def test_outside_footage_skips_a_sequence_whose_file_is_a_git_lfs_pointer(
+        tmp_path: Path, clip_factory: ClipFactory) -> None:
+    """A clone whose Git LFS content was never fetched holds each such file as its pointer
+    (~130 bytes of text), which git reports as present: the script wrote the pointer as the
+    sequence's MP4. Such a file is now missing as an unheld one is."""
+    def commit_a_pointer(clone: Path, git: list[str]) -> None:
+        video = clone / TUD_VIDEO
+        size = video.stat().st_size
+        video.write_text("version https://git-lfs.github.com/spec/v1\n"
+                         f"oid sha256:{'4d7a' * 16}\nsize {size}\n")
+        subprocess.run([*git, "commit", "-q", "-a", "-m", "the video as an LFS pointer"],
+                       check=True, capture_output=True)
+
+    _outside_footage_without(tmp_path, clip_factory, commit_a_pointer)
