@@ -123,16 +123,25 @@ def test_a_quoted_word_is_measured_and_cut_as_typed(tmp_path: Path, byte: str,
     assert not list(tmp_path.iterdir())
 
 
-def test_an_overlong_word_tells_a_typed_backslash_from_a_byte(tmp_path: Path) -> None:
-    """A quoted word over 200 characters is shown cut and unquoted: a typed ``\\xff`` and a
-    byte 0xff both read ``\\xff`` (`--preset '\\xff'aaa...`, `--preset $'\\xff'aaa...`).
-    A typed backslash is written ``\\\\`` there now, as in the quoted words."""
-    lines = [one_error_line(vtrack("run", "clip.mp4", "--preset", first + "a" * 300,
+@pytest.mark.parametrize(("args", "said"), [
+    (("run", "clip.mp4", "--preset", "{}"), "Invalid value for '--preset': "),
+    (("scene", "{}", "o.mp4"), "unknown scenario "),
+    (("run", "clip.mp4", "-o", "--fps", "--{}"), "No such option --"),
+], ids=["click-preset", "scene-name", "option-taken-as-value"])
+def test_an_overlong_word_tells_a_typed_backslash_from_a_byte(
+        tmp_path: Path, args: tuple[str, ...], said: str) -> None:
+    """A word over 200 characters is shown cut and unquoted: a typed ``\\xff`` and a byte 0xff
+    both read ``\\xff`` (`--preset '\\xff'aaa...`, `--preset $'\\xff'aaa...`). A typed
+    backslash is written ``\\\\`` there now, as in the quoted words: in click's messages
+    (errors.cut_quoted) and in vtrack's own (errors.quoted_or_cut: `vtrack scene '\\xff'aaa...
+    o.mp4`, `vtrack run clip.mp4 -o --fps '--\\xff'aaa...`, which still said ``\\xff``)."""
+    lines = [one_error_line(vtrack(*(arg.format(first + "a" * 300) for arg in args),
                                    cwd=tmp_path)) for first in ("\\xff", "\udcff")]
-    said = "vtrack: error: Invalid value for '--preset': "
-    assert lines[0].startswith(said + "\\\\xffaaa"), lines[0]
-    assert lines[1].startswith(said + "\\xffaaa"), lines[1]
-    assert "(304 characters)" in lines[0] and "(301 characters)" in lines[1], lines
+    typed = len(next(arg for arg in args if "{}" in arg).format("\\xff" + "a" * 300))
+    assert lines[0].startswith("vtrack: error: " + said + "\\\\xffaaa"), lines[0]
+    assert lines[1].startswith("vtrack: error: " + said + "\\xffaaa"), lines[1]
+    assert f"({typed} characters)" in lines[0], lines[0]
+    assert f"({typed - 3} characters)" in lines[1], lines[1]
     assert not list(tmp_path.iterdir())
 
 

@@ -214,8 +214,9 @@ def cut_quoted(message: str) -> str:
 
 
 def _cut_word(quoted: str) -> str:
-    """``quoted``, a word as ``repr`` quotes it, as :func:`cut` shows the word it quotes
-    when that is longer than :data:`LONGEST_SHOWN`; else (or not a quoted word) as it is."""
+    """``quoted``, a word as ``repr`` quotes it, as :func:`quoted_or_cut` shows the word it
+    quotes when that is longer than :data:`LONGEST_SHOWN`; else (or not a quoted word) as it
+    is."""
     import ast
 
     try:
@@ -224,8 +225,8 @@ def _cut_word(quoted: str) -> str:
         return quoted
     if not isinstance(word, str):
         return quoted
-    if len(word) > LONGEST_SHOWN:  # (a typed backslash as \\, as repr writes it: not a byte)
-        return cut(word).replace("\\", "\\\\")
+    if len(word) > LONGEST_SHOWN:
+        return quoted_or_cut(word)
     return _undecoded_escapes(quoted)
 
 
@@ -253,9 +254,11 @@ def quoted(word: str) -> str:
 def quoted_or_cut(word: str) -> str:
     """``word`` a user gave, for a one-line message: quoted as :func:`quoted` quotes it up to
     :data:`LONGEST_SHOWN` characters, else as :func:`cut` shows it (its ends and its length,
-    unquoted)."""
-    shown = cut(word)
-    return quoted(word) if shown == word else shown
+    unquoted, with each backslash it holds written ``\\\\``, as :func:`quoted` and ``repr``
+    write it: a typed ``\\xff`` reads ``\\\\xff``, a byte 0xff ``\\xff``)."""
+    if len(word) <= LONGEST_SHOWN:
+        return quoted(word)
+    return cut(word).replace("\\", "\\\\")
 
 
 #: A byte of a file name that is not UTF-8, as Python decodes it (``surrogateescape``: byte
