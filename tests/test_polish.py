@@ -163,8 +163,15 @@ def test_an_overlong_word_tells_a_typed_backslash_from_a_byte(
     (("scene", "occl\udcffusion", "o.mp4"), "unknown scenario 'occl\\xffusion'; choose one of: "),
     (("scene", "\udcffbad", "occlusion"),
      "unknown scenario '\\xffbad': NAME comes before OUT"),
+    (("scene", "occlusion", "o.mp4", "--pix-fmt", "a\udcff"),
+     "o.mp4: 'a\\xff' is not a pixel format"),
+    (("scene", "occlusion", "o.mp4", "--pix-fmt", "a\\xff"),
+     "o.mp4: 'a\\\\xff' is not a pixel format"),
+    (("scene", "occlusion", "o.raw", "--format", "raw", "--pix-fmt", "a\udcff"),
+     "raw pixel format 'a\\xff': choose one of "),
 ], ids=["preset", "apostrophe", "option", "command", "backslash-byte", "backslash-text",
-        "backslash-command", "scene-size", "scenario", "scenario-before-out"])
+        "backslash-command", "scene-size", "scenario", "scenario-before-out", "scene-pix-fmt",
+        "scene-pix-fmt-backslash", "scene-raw-pix-fmt"])
 def test_a_quoted_word_shows_a_byte_not_utf8_as_the_other_messages_do(
         tmp_path: Path, args: tuple[str, ...], said: str) -> None:
     """A short word with bytes that are not UTF-8 was quoted as repr writes it, Python's
@@ -172,8 +179,9 @@ def test_a_quoted_word_shows_a_byte_not_utf8_as_the_other_messages_do(
     '--preset': '\\udcff\\udcff...'", `vtrack $'\\xff'` "No such command '\\udcff'", where
     vtrack's other messages write the byte as \\xff; so did vtrack scene's own refusals of
     --size and of a scenario's name (``--size '\\udcff320x240'``, ``unknown scenario
-    '\\udcffbad'``). They do too now; a backslash the user typed is still shown as repr shows
-    it (\\\\)."""
+    '\\udcffbad'``) and of a pixel format (``vtrack scene occlusion o.mp4 --pix-fmt
+    $'a\\xff'``: "o.mp4: 'a\\udcff' is not a pixel format", raw frames too). They do too now;
+    a backslash the user typed is still shown as repr shows it (\\\\)."""
     line = one_error_line(vtrack(*args, cwd=tmp_path))
     assert line.startswith("vtrack: error: " + said), line
     assert not list(tmp_path.iterdir())

@@ -20,6 +20,7 @@ from vtrack.scenes import (
     make_scene,
     write_clip,
     write_groundtruth,
+    write_image_sequence,
     write_raw,
     write_video,
 )
@@ -400,6 +401,27 @@ def test_writers_reject_bad_requests(tmp_path, scene_factory):
     with pytest.raises(ConfigError, match="even"):
         write_raw(odd, tmp_path / "x.raw", "yuv420p")
     write_groundtruth(odd, tmp_path / "deep" / "gt.txt")  # parent folders are created
+
+
+@pytest.mark.parametrize(("write", "said"), [
+    (lambda scene, out, word: write_video(scene, out, codec=word), "no video encoder named '"),
+    (lambda scene, out, word: write_video(scene, out, preset=word), "preset '"),
+    (lambda scene, out, word: write_video(scene, out, pix_fmt=word), ": '"),
+    (lambda scene, out, word: write_raw(scene, out, pix_fmt=word), "raw pixel format '"),
+    (lambda scene, out, word: write_image_sequence(scene, out, ext=word), "image format '"),
+    (lambda scene, out, word: write_clip(scene, out, fmt=word), "clip format '"),
+], ids=["codec", "preset", "pix-fmt", "raw-pix-fmt", "image-ext", "clip-format"])
+def test_writers_name_a_byte_not_utf8_as_vtracks_messages_do(tmp_path, scene_factory, write,
+                                                             said):
+    """A writer's refusal quoted the word it was given as repr does: a byte 0xff of
+    ``codec="x\\udcff"`` read "no video encoder named 'x\\udcff'", not \\xff as vtrack's other
+    messages write it; a typed backslash is written \\\\, as repr writes it."""
+    scene = scene_factory("smooth", frames=10)
+    for word, shown in (("x\udcff", "x\\xff'"), ("x\\xff", "x\\\\xff'")):
+        with pytest.raises(ConfigError) as refused:
+            write(scene, tmp_path / "out.mp4", word)
+        assert said + shown in str(refused.value), str(refused.value)
+    assert not list(tmp_path.iterdir())
 
 
 def test_scene_feeds_vtrack_frames_directly(scene_factory):

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from vtrack.errors import ConfigError, OutputError
+from vtrack.errors import ConfigError, OutputError, quoted_or_cut
 from vtrack.io.files import ffmpeg_file, os_reason, removing_new_folders, replacing
 from vtrack.io.images import SEQUENCE_INFO, encode_image
 from vtrack.io.raw import PIX_FMTS as RAW_PIX_FMTS  # (write_raw's layouts: those vtrack reads)
@@ -172,13 +172,14 @@ def _check_video(scene: Scene, path: Path, preset: str, codec: str, pix_fmt: str
     try:
         encoder = av.codec.Codec(codec, "w")
     except ValueError as exc:
-        raise ConfigError(f"{path}: no video encoder named {codec!r}") from exc
+        raise ConfigError(f"{path}: no video encoder named {quoted_or_cut(codec)}") from exc
     if encoder.name in ("libx264", "libx265") and preset not in X264_PRESETS:
-        raise ConfigError(f"{path}: preset {preset!r}: choose one of {', '.join(X264_PRESETS)}")
+        raise ConfigError(f"{path}: preset {quoted_or_cut(preset)}: choose one of "
+                          f"{', '.join(X264_PRESETS)}")
     try:
         layout = av.VideoFormat(pix_fmt, 2, 2)
     except ValueError as exc:
-        raise ConfigError(f"{path}: {pix_fmt!r} is not a pixel format") from exc
+        raise ConfigError(f"{path}: {quoted_or_cut(pix_fmt)} is not a pixel format") from exc
     taken = [f.name for f in encoder.video_formats or ()]
     grey = ""
     if encoder.name == "libx264":  # it takes grey frames, but writes them as 4:2:0 colour
@@ -288,7 +289,7 @@ def write_image_sequence(
 
 def _check_image_ext(ext: str) -> None:
     if ext not in ("jpg", "png"):
-        raise ConfigError(f"image format {ext!r}: choose jpg or png")
+        raise ConfigError(f"image format {quoted_or_cut(ext)}: choose jpg or png")
 
 
 def _images_to(scene: Scene, images: Path, temp: Path, ext: str, progress: Progress) -> None:
@@ -335,7 +336,8 @@ def write_raw(
 
 def _check_raw(scene: Scene, path: Path, pix_fmt: str) -> None:
     if pix_fmt not in _RAW_CONVERSIONS:
-        raise ConfigError(f"raw pixel format {pix_fmt!r}: choose one of {', '.join(RAW_PIX_FMTS)}")
+        raise ConfigError(f"raw pixel format {quoted_or_cut(pix_fmt)}: choose one of "
+                          f"{', '.join(RAW_PIX_FMTS)}")
     if pix_fmt == "yuv420p":
         _need_even(scene, f"{path}: pixel format yuv420p")
 
@@ -400,7 +402,8 @@ def write_clip(
     """
     out = Path(out)
     if fmt not in CLIP_FORMATS:
-        raise ConfigError(f"clip format {fmt!r}: choose one of {', '.join(CLIP_FORMATS)}")
+        raise ConfigError(f"clip format {quoted_or_cut(fmt)}: choose one of "
+                          f"{', '.join(CLIP_FORMATS)}")
     pix = pix_fmt or ("yuv420p" if fmt == "mp4" else "bgr24")
     if fmt == "mp4":
         _check_video(scene, out, preset, CODEC, pix)
