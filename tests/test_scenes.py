@@ -99,6 +99,17 @@ def test_unknown_scenario_lists_the_valid_ones():
         make_scene("nope")
 
 
+def test_a_scenario_name_that_is_not_text_is_shown_as_it_is():
+    """make_scene(None) said "unknown scenario 'None'; ...; did you mean 'bounce'?", as if
+    the text None were given; it shows None unquoted now, and guesses no near name."""
+    with pytest.raises(ConfigError) as refused:
+        make_scene(None)  # type: ignore[arg-type]
+    assert str(refused.value).startswith("unknown scenario None; choose one of: smooth, ")
+    assert "did you mean" not in str(refused.value)
+    with pytest.raises(ConfigError, match="^unknown scenario 'None'; .*did you mean 'bounce'"):
+        make_scene("None")
+
+
 @pytest.mark.parametrize(
     "kwargs", [{"frames": 20}, {"width": 32}, {"fps": 0.0}, {"seed": -1}], ids=str
 )

@@ -553,9 +553,11 @@ def make_scene(
     """
     scenario = SCENARIOS.get(name)
     if scenario is None:
-        near = "" if names_a_path(str(name)) else did_you_mean(str(name), SCENARIOS)
-        raise ConfigError(f"unknown scenario {quoted_or_cut(str(name))}; choose one of: "
-                          f"{', '.join(SCENARIOS)}{near}")
+        shown, near = repr(name), ""  # (not text, make_scene(None): no text to quote or guess)
+        if isinstance(name, str):
+            shown = quoted_or_cut(name)
+            near = "" if names_a_path(name) else did_you_mean(name, SCENARIOS)
+        raise ConfigError(f"unknown scenario {shown}; choose one of: {', '.join(SCENARIOS)}{near}")
     spec = SceneSpec(
         name=name,
         seed=seed,
