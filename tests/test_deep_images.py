@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import av
 import cv2
 import numpy as np
 import pytest
@@ -12,24 +13,35 @@ from click.testing import CliRunner
 
 from vtrack.cli import main
 from vtrack.io.images import ImageFolderSource, read_image
+from vtrack.io.video import VideoSource
 
 SKY, TARGET, BOX = 0.3, 0.9, 6
 
 
-def write_sequence(folder: Path, bits: int, frames: int = 20, ext: str = ".png") -> Path:
-    """A small bright target crossing a flat sky, values of ``bits`` bits in 16-bit images,
-    with two hot pixels at 65535; OTB ground truth beside it."""
-    folder.mkdir()
+def scene(bits: int, i: int) -> np.ndarray:
+    """Frame ``i`` of a small bright target crossing a flat sky, values of ``bits`` bits in a
+    16-bit image, with two hot pixels at 65535 (the target's top left at ``20 + 4i, 40 + i``)."""
     top = (1 << bits) - 1
-    boxes = []
+    image = np.full((120, 160), round(top * SKY), np.uint16)
+    x, y = 20 + 4 * i, 40 + i
+    image[y:y + BOX, x:x + BOX] = round(top * TARGET)
+    image[5, 5] = image[100, 150] = 65535
+    return image
+
+
+def write_truth(path: Path, frames: int) -> Path:
+    """OTB ground truth (1-based) of :func:`scene`'s first ``frames`` frames at ``path``."""
+    path.write_text("".join(f"{20 + 4 * i + 1},{40 + i + 1},{BOX},{BOX}\n"
+                            for i in range(frames)))
+    return path
+
+
+def write_sequence(folder: Path, bits: int, frames: int = 20, ext: str = ".png") -> Path:
+    """:func:`scene`'s frames as 16-bit images in ``folder``; OTB ground truth beside it."""
+    folder.mkdir()
     for i in range(frames):
-        image = np.full((120, 160), round(top * SKY), np.uint16)
-        x, y = 20 + 4 * i, 40 + i
-        image[y:y + BOX, x:x + BOX] = round(top * TARGET)
-        image[5, 5] = image[100, 150] = 65535
-        assert cv2.imwrite(str(folder / f"frame_{i:04d}{ext}"), image)
-        boxes.append(f"{x + 1},{y + 1},{BOX},{BOX}")
-    (folder / "groundtruth_rect.txt").write_text("\n".join(boxes) + "\n")
+        assert cv2.imwrite(str(folder / f"frame_{i:04d}{ext}"), scene(bits, i))
+    write_truth(folder / "groundtruth_rect.txt", frames)
     return folder
 
 
@@ -68,3 +80,55 @@ def test_12_bit_sequence_tracked_as_its_8_bit_copy(tmp_path: Path) -> None:
     assert len(rows) == 20
     overlaps = [float(row.split(",")[10]) for row in rows]
     assert min(overlaps) > 0.5
+
+
+def write_gray16_video(path: Path, bits: int, frames: int = 20) -> Path:
+    """:func:`scene`'s frames as lossless FFV1 ``gray16le`` in Matroska (a thermal camera's
+    recording)."""
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("ffv1", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "gray16le"
+        for i in range(frames):
+            picture = av.VideoFrame.from_ndarray(scene(bits, i), format="gray16le")
+            for packet in stream.encode(picture):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    return path
+
+
+def test_12_bit_video_tracked_as_its_8_bit_copy(tmp_path: Path) -> None:
+    """A 16-bit grey video was converted by FFmpeg (its top 8 bits: 0..15): s2 lost it."""
+    video = write_gray16_video(tmp_path / "thermal.mkv", 12)
+    truth = write_truth(tmp_path / "thermal.txt", 20)
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["run", str(video), "--config", "s2", "--gt", str(truth),
+                                     "--gt-origin", "1", "-o", str(out), "--no-video"])
+    assert done.exit_code == 0, done.output
+    run = json.loads((out / "run.json").read_text())
+    assert run["input"]["pix_fmt"] == "gray16le"
+    assert run["warnings"] == [
+        f"{video}: 16-bit grey frames whose values use 12 bits (the first frame's, hot pixels "
+        "aside): read as 8-bit grey, 0..4095 scaled to 0..255 (a brighter value clips at 255)"]
+    overlaps = [float(row.split(",")[10]) for row in
+                (out / "track.csv").read_text().splitlines()[1:]]
+    assert len(overlaps) == 20 and min(overlaps) > 0.5
+
+
+@pytest.mark.parametrize("given", ["video", "png"])
+def test_deep_grey_frames_scaled_by_the_first_frames_bits(tmp_path: Path, given: str) -> None:
+    """One scale for the whole stream, the first frame's; a single 16-bit PNG alike."""
+    if given == "png":
+        path = tmp_path / "one.png"
+        assert cv2.imwrite(str(path), scene(14, 2))
+    else:
+        path = write_gray16_video(tmp_path / "deep.mkv", 14, frames=3)
+    with VideoSource(str(path)) as source:
+        frames = list(source)
+        assert source.warnings[0].startswith(f"{path}: 16-bit grey frames whose values use "
+                                             "14 bits")
+    pixels = frames[-1].gray()
+    assert pixels.dtype == np.uint8
+    assert pixels[0, 80] == round(round(16383 * SKY) * 255 / 16383)  # 77, not 19 (>> 8)
+    assert pixels[42, 30] == round(round(16383 * TARGET) * 255 / 16383)
+    assert pixels[5, 5] == 255

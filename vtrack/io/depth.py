@@ -1,16 +1,18 @@
-"""Deep grey images (16-bit PNG, TIFF, PGM: a thermal or high-speed camera's) read as 8-bit.
+"""Deep grey pictures (16-bit PNG, TIFF, PGM, FFV1: a thermal or high-speed camera's) read as
+8-bit.
 
 Trackers work on 8-bit pixels. A camera's 12- or 14-bit values stored in 16-bit files use only
 the low bits, so FFmpeg's conversion (the top 8 of the 16 bits) would leave them 0..15 or
-0..63: a picture near black, its contrast gone. A sequence is scaled instead by the bits its
-first image uses: its largest value once isolated pixels (hot or dead pixels, a marker at
-65535) are set aside by a 3x3 median, rounded up to a whole number of bits (at least 8), is
-mapped to 255; every image of the sequence is scaled alike (no gain that changes from frame to
-frame), a brighter value clipping at 255.
+0..63: a picture near black, its contrast gone. A sequence (an image folder, a video) is
+scaled instead by the bits its first picture uses: its largest value once isolated pixels (hot
+or dead pixels, a marker at 65535) are set aside by a 3x3 median, rounded up to a whole number
+of bits (at least 8), is mapped to 255; every picture of the sequence is scaled alike (no gain
+that changes from frame to frame), a brighter value clipping at 255.
 """
 
 from __future__ import annotations
 
+import av
 import cv2
 import numpy as np
 
@@ -26,6 +28,26 @@ def used_bits(pixels: np.ndarray) -> int:
     return min(MAX_BITS, max(8, largest.bit_length()))
 
 
+def deep(fmt: av.VideoFormat) -> bool:
+    """Whether pictures of pixel format ``fmt`` hold grey values of more than 8 bits (a 16-bit
+    PNG's ``gray16be``, FFV1's ``gray16le``): read by the bits they use, not FFmpeg's top 8."""
+    return fmt.name.startswith(("gray", "ya")) and fmt.components[0].bits > 8
+
+
+def stored_pixels(picture: av.VideoFrame) -> np.ndarray:
+    """``picture``'s pixels as stored: ``(h, w)`` when it is grey (uint16 when :func:`deep`,
+    else uint8), else ``(h, w, 3)`` BGR uint8."""
+    grey = picture.format.name.startswith(("gray", "ya"))
+    return picture.to_ndarray(format="gray16le" if deep(picture.format) else "gray" if grey
+                              else "bgr24")
+
+
+def first_bits(picture: av.VideoFrame) -> int | None:
+    """The bits a stream whose first picture is ``picture`` is scaled by (:func:`used_bits`
+    of it) when it is :func:`deep`; None when it is not (FFmpeg's conversion serves)."""
+    return used_bits(stored_pixels(picture)) if deep(picture.format) else None
+
+
 def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     """``pixels`` as uint8: as they are when they are 8-bit, else 16-bit values of ``bits``
     bits scaled so that ``2**bits - 1`` is 255 (rounded; a larger value clips at 255)."""
@@ -34,9 +56,10 @@ def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     return cv2.convertScaleAbs(pixels, alpha=255.0 / ((1 << bits) - 1))
 
 
-def depth_note(name: str, bits: int) -> str:
-    """The warning saying how a sequence of 16-bit grey images ``name`` was read."""
+def depth_note(name: str, bits: int, what: str = "images", stored: int = MAX_BITS) -> str:
+    """The warning saying how ``name``'s grey ``what`` (``images`` of a sequence, ``frames`` of
+    a video) of ``stored`` bits, whose values use ``bits`` bits, were read."""
     top = (1 << bits) - 1
-    return (f"{name}: 16-bit grey images whose values use {bits} bits (the first image's, hot "
-            f"pixels aside): read as 8-bit grey, 0..{top} scaled to 0..255 (a brighter value "
-            "clips at 255)")
+    return (f"{name}: {stored}-bit grey {what} whose values use {bits} bits (the first "
+            f"{what[:-1]}'s, hot pixels aside): read as 8-bit grey, 0..{top} scaled to 0..255 (a "
+            "brighter value clips at 255)")

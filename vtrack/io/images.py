@@ -35,7 +35,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, used_bits
+from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, stored_pixels, used_bits
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
@@ -206,10 +206,7 @@ def read_stored(path: Path) -> tuple[np.ndarray, int]:
             if path.suffix.lower() in JPEG_SUFFIXES and jpeg_cut_short(path):
                 raise InputError(f"{path}: a JPEG cut short (no end-of-image marker after its "
                                  "image data): part of the picture is missing")
-            grey = picture.format.name.startswith(("gray", "ya"))
-            deep = grey and picture.format.components[0].bits > 8
-            pixels = picture.to_ndarray(format="gray16le" if deep else "gray" if grey else
-                                        "bgr24")
+            pixels = stored_pixels(picture)
             if codec.name in PHOTO_CODECS and photo_mirrored(path):  # FFmpeg: the turn alone
                 pixels = cv2.flip(pixels, 0)
             return pixels, quarter_turns(picture.rotation)

@@ -3,8 +3,10 @@
 yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no full-frame
 colour conversion; full-range levels and BT.709 colours are marked, ``full_range`` and
 ``bt709``, and moved to video range and BT.601 only where pixels are converted); anything else
-is converted once to BGR. ``time_s`` is each frame's presentation time relative to the first
-frame, so variable frame rate input keeps its timing.
+is converted once to BGR, but deep grey pictures (16-bit: a thermal camera's 12 bits in FFV1
+``gray16le``, a 16-bit PNG) are scaled by the bits the first frame uses, as an image folder's
+are (:mod:`vtrack.io.depth`), with a warning. ``time_s`` is each frame's presentation time
+relative to the first frame, so variable frame rate input keeps its timing.
 A display-matrix rotation (phone footage) is applied to the pixels and recorded in
 ``info.rotation``.
 
@@ -48,8 +50,9 @@ import cv2
 import numpy as np
 
 from vtrack.errors import InputError, PartialInputError, plural
-from vtrack.frame import BgrFrame, Frame, I420Frame
+from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
+from vtrack.io.depth import deep, depth_note, eight_bit, first_bits, stored_pixels
 from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
@@ -398,15 +401,23 @@ RAW_SUFFIXES = (".raw", ".yuv", ".rgb", ".bgr", ".gray")
 
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
-                  rotation: int | None = None, mirrored: bool = False) -> Frame:
+                  rotation: int | None = None, mirrored: bool = False,
+                  bits: int | None = None) -> Frame:
     """A decoded picture as the :class:`Frame` every reader hands over: I420 planes as they
     are (4:2:0 of even size; converted by OpenCV only where a stage asks), else BGR from
     FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix; None:
     the picture's own, as ``vtrack run`` turns a phone's footage), after a flip top to
     bottom when ``mirrored`` (a photo's mirroring orientation, FFmpeg's turn being the rest of
-    it: :func:`~vtrack.io.signatures.photo_mirrored`)."""
+    it: :func:`~vtrack.io.signatures.photo_mirrored`). With ``bits`` (the bits the stream's
+    first frame uses, :func:`~vtrack.io.depth.first_bits`), a deep grey picture is a
+    :class:`GrayFrame` scaled by them (:func:`~vtrack.io.depth.eight_bit`); without, FFmpeg
+    converts it (its top 8 bits)."""
     if rotation is None:
         rotation = quarter_turns(decoded.rotation)
+    if bits is not None and deep(decoded.format):
+        pixels = eight_bit(stored_pixels(decoded), bits)
+        return GrayFrame(index, time_s, turned(cv2.flip(pixels, 0) if mirrored else pixels,
+                                               rotation))
     if mirrored:
         return BgrFrame(index, time_s,
                         turned(cv2.flip(decoded.to_ndarray(format="bgr24"), 0), rotation))
@@ -560,6 +571,9 @@ class VideoSource(Source):
             container.close()
             raise
         super().__init__(info)
+        if self._bits is not None:
+            self._warnings.append(depth_note(path, self._bits, "frames",
+                                             self._first.format.components[0].bits))
         several = _several_videos(path, container, self._stream)
         if several:
             self._warnings.append(several)
@@ -649,6 +663,8 @@ class VideoSource(Source):
         self._uncounted: int | None = None
 
         self._rotation = quarter_turns(self._first.rotation)
+        #: The bits a deep grey stream's values use (its first frame's; None: not deep).
+        self._bits = first_bits(self._first)
         # a photo whose orientation tag mirrors it (FFmpeg's rotation is the rest of it)
         self._mirrored = photo and (photo_mirrored(path) if self._regular else
                                     photo_bytes_mirrored(self._photo or b""))
@@ -865,7 +881,8 @@ class VideoSource(Source):
                 if self._uncounted is None and self._tracked(index, time_s):
                     # places passed over before the run's frames (see _run_begins)
                     self._uncounted = self._run_begins(index) - yielded
-                yield decoded_frame(decoded, index, time_s, self._rotation, self._mirrored)
+                yield decoded_frame(decoded, index, time_s, self._rotation, self._mirrored,
+                                    self._bits)
                 index += 1
                 yielded += 1
         except av.error.ExitError:  # the timeout's interrupt: a network input went quiet
