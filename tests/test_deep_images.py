@@ -132,3 +132,35 @@ def test_deep_grey_frames_scaled_by_the_first_frames_bits(tmp_path: Path, given:
     assert pixels[0, 80] == round(round(16383 * SKY) * 255 / 16383)  # 77, not 19 (>> 8)
     assert pixels[42, 30] == round(round(16383 * TARGET) * 255 / 16383)
     assert pixels[5, 5] == 255
+
+
+def colour_scene(bits: int, i: int, alpha: bool) -> np.ndarray:
+    """:func:`scene` in colour (BGR: blue and red its values, green half of them), with an
+    opaque alpha channel when ``alpha`` (a 16-bit PNG's rgba64be, else rgb48be)."""
+    grey = scene(bits, i)
+    channels = [grey, grey // 2, grey] + ([np.full_like(grey, 65535)] if alpha else [])
+    return np.dstack(channels)
+
+
+@pytest.mark.parametrize("alpha", [False, True])
+def test_deep_colour_scaled_by_the_bits_used(tmp_path: Path, alpha: bool) -> None:
+    """16-bit colour PNGs were read as their top 8 bits (12-bit sky 1228 -> 4), silently."""
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    for i in range(3):
+        assert cv2.imwrite(str(folder / f"{i:04d}.png"), colour_scene(12, i, alpha))
+    source = ImageFolderSource(str(folder))
+    frames = list(source)
+    assert source.info.pix_fmt == "bgr48le"
+    assert source.warnings == [
+        f"{folder}: 16-bit colour images whose values use 12 bits (the first image's, hot "
+        "pixels aside): read as 8-bit colour, 0..4095 scaled to 0..255 (a brighter value "
+        "clips at 255)"]
+    sky, target = [76, 38, 76], [230, 115, 230]  # 1228, 614 and 3686, 1843 of 4095
+    assert frames[2].bgr()[0, 80].tolist() == sky
+    assert frames[2].bgr()[42, 30].tolist() == target
+    assert read_image(folder / "0002.png")[42, 30].tolist() == target
+    with VideoSource(str(folder / "0002.png")) as alone:  # a PNG given alone
+        assert alone.warnings[0].startswith(f"{folder / '0002.png'}: 16-bit colour frames "
+                                            "whose values use 12 bits")
+        assert next(iter(alone)).bgr()[42, 30].tolist() == target

@@ -1,13 +1,14 @@
-"""Deep grey pictures (16-bit PNG, TIFF, PGM, FFV1: a thermal or high-speed camera's) read as
-8-bit.
+"""Deep pictures (16-bit grey or colour PNG, TIFF, PGM, FFV1: a thermal or high-speed camera's,
+a scanner's) read as 8-bit.
 
 Trackers work on 8-bit pixels. A camera's 12- or 14-bit values stored in 16-bit files use only
 the low bits, so FFmpeg's conversion (the top 8 of the 16 bits) would leave them 0..15 or
 0..63: a picture near black, its contrast gone. A sequence (an image folder, a video) is
-scaled instead by the bits its first picture uses: its largest value once isolated pixels (hot
-or dead pixels, a marker at 65535) are set aside by a 3x3 median, rounded up to a whole number
-of bits (at least 8), is mapped to 255; every picture of the sequence is scaled alike (no gain
-that changes from frame to frame), a brighter value clipping at 255.
+scaled instead by the bits its first picture uses: its largest value (of its three channels,
+in colour) once isolated pixels (hot or dead pixels, a marker at 65535) are set aside by a 3x3
+median, rounded up to a whole number of bits (at least 8), is mapped to 255; every picture of
+the sequence is scaled alike (no gain that changes from frame to frame), a brighter value
+clipping at 255.
 """
 
 from __future__ import annotations
@@ -21,25 +22,42 @@ MAX_BITS = 16
 
 
 def used_bits(pixels: np.ndarray) -> int:
-    """The bits (8 to 16) a 16-bit grey image's values use: those of its largest value once
-    isolated pixels (hot pixels) are set aside by a 3x3 median, at least 8."""
+    """The bits (8 to 16) a 16-bit grey or colour image's values use: those of its largest
+    value (of any channel) once isolated pixels (hot pixels) are set aside by a 3x3 median,
+    at least 8."""
     largest = int(cv2.medianBlur(pixels, 3).max()) if min(pixels.shape[:2]) >= 3 else \
         int(pixels.max())
     return min(MAX_BITS, max(8, largest.bit_length()))
 
 
+def grey(fmt: av.VideoFormat) -> bool:
+    """Whether pictures of pixel format ``fmt`` are grey (with or without alpha)."""
+    return fmt.name.startswith(("gray", "ya"))
+
+
 def deep(fmt: av.VideoFormat) -> bool:
-    """Whether pictures of pixel format ``fmt`` hold grey values of more than 8 bits (a 16-bit
-    PNG's ``gray16be``, FFV1's ``gray16le``): read by the bits they use, not FFmpeg's top 8."""
-    return fmt.name.startswith(("gray", "ya")) and fmt.components[0].bits > 8
+    """Whether pictures of pixel format ``fmt`` hold grey or RGB values of more than 8 bits (a
+    16-bit PNG's ``gray16be`` or ``rgb48be``, FFV1's ``gray16le``): read by the bits they use,
+    not FFmpeg's top 8 (YUV video of 10 bits declares its depth: FFmpeg's conversion
+    serves)."""
+    return (grey(fmt) or fmt.is_rgb) and fmt.components[0].bits > 8
 
 
 def stored_pixels(picture: av.VideoFrame) -> np.ndarray:
-    """``picture``'s pixels as stored: ``(h, w)`` when it is grey (uint16 when :func:`deep`,
-    else uint8), else ``(h, w, 3)`` BGR uint8."""
-    grey = picture.format.name.startswith(("gray", "ya"))
-    return picture.to_ndarray(format="gray16le" if deep(picture.format) else "gray" if grey
-                              else "bgr24")
+    """``picture``'s pixels as stored: ``(h, w)`` when it is grey, else ``(h, w, 3)`` BGR;
+    uint16 when :func:`deep`, else uint8 (:func:`layout` names them)."""
+    fmt = picture.format
+    return picture.to_ndarray(format=("gray16le" if deep(fmt) else "gray") if grey(fmt) else
+                              "bgr48le" if deep(fmt) else "bgr24")
+
+
+def layout(pixels: np.ndarray) -> str:
+    """The pixel format of ``pixels`` as :func:`stored_pixels` gives them (``gray``,
+    ``gray16le``, ``bgr24``, ``bgr48le``)."""
+    deeper = pixels.dtype == np.uint16
+    if pixels.ndim == 2:
+        return "gray16le" if deeper else "gray"
+    return "bgr48le" if deeper else "bgr24"
 
 
 def first_bits(picture: av.VideoFrame) -> int | None:
@@ -56,10 +74,13 @@ def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     return cv2.convertScaleAbs(pixels, alpha=255.0 / ((1 << bits) - 1))
 
 
-def depth_note(name: str, bits: int, what: str = "images", stored: int = MAX_BITS) -> str:
-    """The warning saying how ``name``'s grey ``what`` (``images`` of a sequence, ``frames`` of
-    a video) of ``stored`` bits, whose values use ``bits`` bits, were read."""
+def depth_note(name: str, bits: int, what: str = "images", stored: int = MAX_BITS,
+               colour: bool = False) -> str:
+    """The warning saying how ``name``'s grey (or ``colour``) ``what`` (``images`` of a
+    sequence, ``frames`` of a video) of ``stored`` bits, whose values use ``bits`` bits, were
+    read."""
     top = (1 << bits) - 1
-    return (f"{name}: {stored}-bit grey {what} whose values use {bits} bits (the first "
-            f"{what[:-1]}'s, hot pixels aside): read as 8-bit grey, 0..{top} scaled to 0..255 (a "
-            "brighter value clips at 255)")
+    shade = "colour" if colour else "grey"
+    return (f"{name}: {stored}-bit {shade} {what} whose values use {bits} bits (the first "
+            f"{what[:-1]}'s, hot pixels aside): read as 8-bit {shade}, 0..{top} scaled to 0..255 "
+            "(a brighter value clips at 255)")

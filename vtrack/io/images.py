@@ -5,8 +5,9 @@ decoded with PyAV in the reader thread, each turned upright by its orientation (
 photo's EXIF tag); one that its own tag would not turn to the sequence's size (a tag lost or
 added in an edit) is turned as the first image, with a warning. A sequence whose first image
 is grey becomes :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s
-(later images are converted to match); 16-bit grey images are scaled to 8 bits by the bits the
-first one uses (:mod:`vtrack.io.depth`). There are no timestamps: ``time_s = index / fps``.
+(later images are converted to match); 16-bit images (grey or colour) are scaled to 8 bits by
+the bits the first one uses (:mod:`vtrack.io.depth`). There are no timestamps:
+``time_s = index / fps``.
 An image that cannot be decoded (after the first) is skipped with a warning; the frames after
 it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of
@@ -35,7 +36,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, stored_pixels, used_bits
+from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, layout, stored_pixels, used_bits
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
@@ -173,8 +174,8 @@ def frame_places(files: list[Path]) -> list[int]:
 
 
 def read_image(path: Path) -> np.ndarray:
-    """Decode one image: ``(h, w)`` uint8 when it is grey (a 16-bit one scaled by the bits it
-    uses, :func:`~vtrack.io.depth.used_bits`), else ``(h, w, 3)`` BGR, turned upright by its
+    """Decode one image: ``(h, w)`` uint8 when it is grey, else ``(h, w, 3)`` BGR (a 16-bit one
+    scaled by the bits it uses, :func:`~vtrack.io.depth.used_bits`), turned upright by its
     orientation (a phone photo's EXIF tag, as FFmpeg reads it), as ``vtrack run`` turns an
     image given alone (the benchmarks read sequences through it). InputError as
     :func:`read_stored`."""
@@ -183,8 +184,8 @@ def read_image(path: Path) -> np.ndarray:
 
 
 def read_stored(path: Path) -> tuple[np.ndarray, int]:
-    """Decode one image as stored (``(h, w)`` when it is grey: uint16 when its values have more
-    than 8 bits (a 16-bit PNG or TIFF), else uint8; else ``(h, w, 3)`` BGR;
+    """Decode one image as stored (``(h, w)`` when it is grey, else ``(h, w, 3)`` BGR: uint16
+    when its values have more than 8 bits (a 16-bit PNG or TIFF), else uint8;
     flipped top to bottom when its orientation mirrors it, :func:`photo_mirrored`) and the
     quarter turn its orientation asks for (0, 90, 180 or 270 degrees counter-clockwise).
 
@@ -296,12 +297,12 @@ class ImageFolderSource(Source):
                 frame_count=self._places[-1] + 1,
                 duration_s=(self._places[-1] + 1) / fps,
                 codec=self._files[0].suffix.lower().lstrip("."),
-                pix_fmt=("gray16le" if stored.dtype == np.uint16 else "gray"
-                         if self._first.ndim == 2 else "bgr24"),
+                pix_fmt=layout(stored),
             )
         )
         if stored.dtype == np.uint16:
-            self._notes.append(_Note(0, depth_note(folder, self._bits)))
+            self._notes.append(_Note(0, depth_note(folder, self._bits,
+                                                   colour=stored.ndim == 3)))
 
     def image_identity(self) -> str | None:
         return images_identity(self._files)

@@ -3,8 +3,8 @@
 yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no full-frame
 colour conversion; full-range levels and BT.709 colours are marked, ``full_range`` and
 ``bt709``, and moved to video range and BT.601 only where pixels are converted); anything else
-is converted once to BGR, but deep grey pictures (16-bit: a thermal camera's 12 bits in FFV1
-``gray16le``, a 16-bit PNG) are scaled by the bits the first frame uses, as an image folder's
+is converted once to BGR, but deep grey or RGB pictures (16-bit: a thermal camera's 12 bits in
+FFV1 ``gray16le``, a 16-bit PNG) are scaled by the bits the first frame uses, as an image folder's
 are (:mod:`vtrack.io.depth`), with a warning. ``time_s`` is each frame's presentation time
 relative to the first frame, so variable frame rate input keeps its timing.
 A display-matrix rotation (phone footage) is applied to the pixels and recorded in
@@ -409,15 +409,15 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
     the picture's own, as ``vtrack run`` turns a phone's footage), after a flip top to
     bottom when ``mirrored`` (a photo's mirroring orientation, FFmpeg's turn being the rest of
     it: :func:`~vtrack.io.signatures.photo_mirrored`). With ``bits`` (the bits the stream's
-    first frame uses, :func:`~vtrack.io.depth.first_bits`), a deep grey picture is a
-    :class:`GrayFrame` scaled by them (:func:`~vtrack.io.depth.eight_bit`); without, FFmpeg
-    converts it (its top 8 bits)."""
+    first frame uses, :func:`~vtrack.io.depth.first_bits`), a deep picture is a
+    :class:`GrayFrame` (RGB: a :class:`BgrFrame`) scaled by them
+    (:func:`~vtrack.io.depth.eight_bit`); without, FFmpeg converts it (its top 8 bits)."""
     if rotation is None:
         rotation = quarter_turns(decoded.rotation)
     if bits is not None and deep(decoded.format):
         pixels = eight_bit(stored_pixels(decoded), bits)
-        return GrayFrame(index, time_s, turned(cv2.flip(pixels, 0) if mirrored else pixels,
-                                               rotation))
+        pixels = turned(cv2.flip(pixels, 0) if mirrored else pixels, rotation)
+        return (GrayFrame if pixels.ndim == 2 else BgrFrame)(index, time_s, pixels)
     if mirrored:
         return BgrFrame(index, time_s,
                         turned(cv2.flip(decoded.to_ndarray(format="bgr24"), 0), rotation))
@@ -572,8 +572,9 @@ class VideoSource(Source):
             raise
         super().__init__(info)
         if self._bits is not None:
-            self._warnings.append(depth_note(path, self._bits, "frames",
-                                             self._first.format.components[0].bits))
+            fmt = self._first.format
+            self._warnings.append(depth_note(path, self._bits, "frames", fmt.components[0].bits,
+                                             fmt.is_rgb))
         several = _several_videos(path, container, self._stream)
         if several:
             self._warnings.append(several)
