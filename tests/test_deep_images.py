@@ -164,3 +164,27 @@ def test_deep_colour_scaled_by_the_bits_used(tmp_path: Path, alpha: bool) -> Non
         assert alone.warnings[0].startswith(f"{folder / '0002.png'}: 16-bit colour frames "
                                             "whose values use 12 bits")
         assert next(iter(alone)).bgr()[42, 30].tolist() == target
+
+
+@pytest.mark.parametrize("first_deep", [False, True])
+def test_an_image_of_another_depth_is_warned_of_once(tmp_path: Path, first_deep: bool) -> None:
+    """A 16-bit image among 8-bit ones (or the reverse) was read by another scale, silently."""
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    for i in range(4):
+        deep_one = first_deep == (i in (0, 3))  # images 1 and 2 of the other depth
+        image = scene(12, i)
+        assert cv2.imwrite(str(folder / f"{i:04d}.png"),
+                           image if deep_one else (image >> 4).clip(0, 255).astype(np.uint8))
+    source = ImageFolderSource(str(folder))
+    assert len(list(source)) == 4
+    other = [line for line in source.warnings if "16-bit grey images" not in line]
+    if first_deep:
+        assert other == [f"{folder / '0001.png'}: an 8-bit image among 16-bit ones (values of "
+                         "12 bits, 0..4095 scaled to 0..255): read as it is, 0..255 (the "
+                         "sequence's depth is its first image's; later images of another "
+                         "depth are not named)"]
+    else:
+        assert other == [f"{folder / '0001.png'}: a 16-bit image among 8-bit ones: read as "
+                         "16-bit values, 0..65535 scaled to 0..255 (the sequence's depth is "
+                         "its first image's; later images of another depth are not named)"]

@@ -74,6 +74,20 @@ def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     return cv2.convertScaleAbs(pixels, alpha=255.0 / ((1 << bits) - 1))
 
 
+def mixed_note(path: object, bits: int | None) -> str:
+    """The warning of ``path``, an image of another depth than its sequence's first: 16-bit in
+    a sequence of 8-bit images (``bits`` None), or 8-bit in one of 16-bit images whose values
+    use ``bits`` bits; said once, of the first such image."""
+    if bits is None:
+        how = "among 8-bit ones: read as 16-bit values, 0..65535 scaled to 0..255"
+    else:
+        how = (f"among 16-bit ones (values of {bits} bits, 0..{(1 << bits) - 1} scaled to "
+               "0..255): read as it is, 0..255")
+    kind = "an 8-bit" if bits is not None else "a 16-bit"
+    return (f"{path}: {kind} image {how} (the sequence's depth is its first image's; later "
+            "images of another depth are not named)")
+
+
 def depth_note(name: str, bits: int, what: str = "images", stored: int = MAX_BITS,
                colour: bool = False) -> str:
     """The warning saying how ``name``'s grey (or ``colour``) ``what`` (``images`` of a

@@ -36,7 +36,15 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.depth import MAX_BITS, depth_note, eight_bit, layout, stored_pixels, used_bits
+from vtrack.io.depth import (
+    MAX_BITS,
+    depth_note,
+    eight_bit,
+    layout,
+    mixed_note,
+    stored_pixels,
+    used_bits,
+)
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
@@ -278,8 +286,10 @@ class ImageFolderSource(Source):
         self._ended = False
         self._notes: list[_Note] = []
         stored, self._turn = read_stored(self._files[0])
-        #: The bits the sequence's 16-bit values use (the first image's; 16 when it is 8-bit).
-        self._bits = used_bits(stored) if stored.dtype == np.uint16 else MAX_BITS
+        #: Whether the sequence is of 16-bit images (its first image is), and the bits their
+        #: values use (the first image's; 16 when it is 8-bit).
+        self._deep = stored.dtype == np.uint16
+        self._bits = used_bits(stored) if self._deep else MAX_BITS
         self._first = turned(eight_bit(stored, self._bits), self._turn)
         height, width = self._first.shape[:2]
         fps = fps or sequence_fps(root) or DEFAULT_FPS
@@ -300,7 +310,7 @@ class ImageFolderSource(Source):
                 pix_fmt=layout(stored),
             )
         )
-        if stored.dtype == np.uint16:
+        if self._deep:
             self._notes.append(_Note(0, depth_note(folder, self._bits,
                                                    colour=stored.ndim == 3)))
 
@@ -411,6 +421,7 @@ class ImageFolderSource(Source):
         size = self._first.shape[:2]
         first, self._first = self._first, None
         turned_apart = False  # an image's own tag said another turn than the first's
+        mixed = False  # an image of another depth than the first's was noted
         places, files = self._places[self._begin:], self._files[self._begin:]
         # Skips count from the run's first frame on: a start given as a frame number
         # (start_near) is that frame, decoded or not, as in a whole run; a start by time
@@ -429,6 +440,10 @@ class ImageFolderSource(Source):
                     pixels = first
                 else:
                     stored, turn = read_stored(path)
+                    if not mixed and (stored.dtype == np.uint16) != self._deep:
+                        mixed = True
+                        self._notes.append(_Note(index, mixed_note(
+                            path, self._bits if self._deep else None)))
                     stored = eight_bit(stored, self._bits)
                     pixels = turned(stored, turn)
                     if pixels.shape[:2] != size and turn != self._turn:
