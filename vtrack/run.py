@@ -346,6 +346,9 @@ class _Span:
     ended_by_time: bool = False
     #: Frames handed on so far.
     taken: int = 0
+    #: The count's last frame was the input's last (:meth:`Source.ends_after`): the input
+    #: ended there as well, so ``--frames`` did not end the run before it.
+    input_ended: bool = False
 
     @property
     def given(self) -> bool:
@@ -354,9 +357,11 @@ class _Span:
 
     @property
     def stopped(self) -> bool:
-        """Whether ``--frames`` ended the run (its count of frames taken, or a frame at or
-        past its duration came) rather than the input's end."""
-        return self.ended_by_time or (self.count is not None and self.taken >= self.count)
+        """Whether ``--frames`` ended the run (its count of frames taken, unless the last of
+        them was the input's last, known without reading on; or a frame at or past its
+        duration came) rather than the input's end."""
+        return self.ended_by_time or (self.count is not None and self.taken >= self.count
+                                      and not self.input_ended)
 
     def take(self, source: Source, frames: Iterator[Frame]) -> Iterator[Frame]:
         """``frames`` (``source``'s) up to the end of the span. A count ends it as its last
@@ -378,6 +383,7 @@ class _Span:
             self.taken += 1
             yield frame
             if self.count is not None and self.taken >= self.count:
+                self.input_ended = source.ends_after(frame.index)
                 return
 
 

@@ -317,6 +317,10 @@ class ImageFolderSource(Source):
     def image_identity(self) -> str | None:
         return images_identity(self._files)
 
+    def ends_after(self, index: int) -> bool:
+        """Whether ``index`` is the last image's place (its numbering's last)."""
+        return index == self._places[-1]
+
     @property
     def warnings(self) -> list[str]:
         """The warnings of the frames handed on so far (not of those the reader has gone

@@ -194,11 +194,16 @@ class RawSource(Source):
             fd = self._stream.fileno()
             mode = os.fstat(fd).st_mode
             frame_count = None
+            #: A regular file's frame count when it holds whole frames only (None: not known
+            #: without reading to its end, a pipe; or stray bytes end it).
+            self._whole_frames: int | None = None
             if stat.S_ISFIFO(mode):
                 _enlarge_pipe(fd)
             elif stat.S_ISREG(mode):  # stdin may be a file read from past its start
                 left = os.fstat(fd).st_size - os.lseek(fd, 0, os.SEEK_CUR)
                 frame_count = max(left, 0) // fmt.frame_bytes
+                if left % fmt.frame_bytes == 0:
+                    self._whole_frames = frame_count
             ring = self.depth + _RING_SLACK
             self._ring = [np.empty(fmt.shape, np.uint8) for _ in range(ring)]
             self._rgb = np.empty(fmt.shape, np.uint8) if fmt.pix_fmt == "rgb24" else None
@@ -226,6 +231,10 @@ class RawSource(Source):
         if self._first is None:
             self._release()
             raise InputError(f"{self._label}: no raw frames (the input is empty)")
+
+    def ends_after(self, index: int) -> bool:
+        """Whether ``index`` is a regular file's last whole frame (it ends there)."""
+        return self._whole_frames is not None and index == self._whole_frames - 1
 
     def _open(self, spec: str) -> BinaryIO:
         if spec == "-":

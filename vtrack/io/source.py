@@ -117,6 +117,12 @@ class Source(Closing, ABC):
         the counts and warnings of what the run read (:attr:`frames_skipped`,
         :attr:`warnings`) stop at the frame before it. Nothing to undo here."""
 
+    def ends_after(self, index: int) -> bool:
+        """Whether frame ``index`` is the input's last, known without reading on (an image
+        folder's last numbered image, a regular raw file's last whole frame); False when only
+        reading on could tell (a video, a pipe, a stream)."""
+        return False
+
     def image_identity(self) -> str | None:
         """An image sequence's: a fingerprint of its images
         (:func:`~vtrack.io.identity.images_identity`), taken when asked (``run.json`` records

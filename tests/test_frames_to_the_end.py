@@ -1,0 +1,70 @@
+"""``stopped_by_frames``: whether ``--frames N`` ended a run before its input ended. An input
+whose length is known without reading on (an image folder, a regular file of raw frames) that
+ends at the N-th frame was read to its end, not stopped."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vtrack.scenes import make_scene, write_clip
+
+FRAMES = 10
+
+
+@pytest.fixture(scope="module")
+def clips(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, str]:
+    """An image folder and a raw bgr24 file of one scene of :data:`FRAMES` frames, and the
+    first ground-truth box."""
+    folder = tmp_path_factory.mktemp("ends")
+    scene = make_scene("smooth", seed=3, width=160, height=120, frames=FRAMES, fps=30)
+    images = write_clip(scene, folder / "seq", fmt="images").clip
+    raw = write_clip(scene, folder / "clip.bgr", fmt="raw").clip
+    return images, raw, ",".join(f"{v:g}" for v in scene.boxes[0])
+
+
+def _stopped(args: list[str], out: Path, stdin: Path | None = None) -> tuple[int, bool]:
+    """``vtrack run ARGS`` (s2, no video): its run.json's frames and stopped_by_frames."""
+    with open(stdin or "/dev/null", "rb") as feed:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", *args, "-c", "s2", "-q",
+                               "--no-video", "-o", str(out)], stdin=feed, capture_output=True,
+                              text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "complete"
+    return record["frames"], record["stopped_by_frames"]
+
+
+@pytest.mark.parametrize(("span", "expected"), [
+    (["--frames", str(FRAMES)], (FRAMES, False)),
+    (["--start", str(FRAMES - 1), "--frames", "1"], (1, False)),
+    (["--frames", str(FRAMES - 1)], (FRAMES - 1, True)),
+])
+def test_image_folder(clips: tuple[Path, Path, str], tmp_path: Path, span: list[str],
+                      expected: tuple[int, bool]) -> None:
+    images, _, _ = clips
+    truth = str(images / "groundtruth_rect.txt")
+    assert _stopped([str(images), "--gt", truth, *span], tmp_path / "out") == expected
+
+
+@pytest.mark.parametrize(("frames", "expected"), [(FRAMES, False), (FRAMES - 1, True)])
+def test_raw_file(clips: tuple[Path, Path, str], tmp_path: Path, frames: int,
+                  expected: bool) -> None:
+    _, raw, box = clips
+    args = ["--raw", "160x120", "--init", box, "--frames", str(frames)]
+    assert _stopped([str(raw), *args], tmp_path / "file") == (frames, expected)
+    # a pipe: the end is not known without reading one more frame, which --frames must not
+    fed = subprocess.Popen(["cat", str(raw)], stdout=subprocess.PIPE)
+    try:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", *args, "-c", "s2",
+                               "-q", "--no-video", "-o", str(tmp_path / "pipe")],
+                              stdin=fed.stdout, capture_output=True, text=True, timeout=120,
+                              check=False)
+    finally:
+        fed.wait()
+    assert done.returncode == 0, done.stderr
+    assert json.loads((tmp_path / "pipe" / "run.json").read_text())["stopped_by_frames"]
