@@ -10,6 +10,7 @@ import cv2
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.io.images import ImageFolderSource, read_image
@@ -188,3 +189,18 @@ def test_an_image_of_another_depth_is_warned_of_once(tmp_path: Path, first_deep:
         assert other == [f"{folder / '0001.png'}: a 16-bit image among 8-bit ones: read as "
                          "16-bit values, 0..65535 scaled to 0..255 (the sequence's depth is "
                          "its first image's; later images of another depth are not named)"]
+
+
+@pytest.mark.parametrize("alone", [False, True])
+def test_a_float_tiff_is_refused_saying_so(tmp_path: Path, alone: bool) -> None:
+    """It was "not an image FFmpeg can decode (Invalid data found when processing input)"
+    (a folder) or "no frame could be decoded" (given alone)."""
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    image = folder / "0001.tif"
+    assert cv2.imwrite(str(image), scene(12, 0).astype(np.float32) / 4095)
+    given = image if alone else folder
+    done = CliRunner().invoke(main, ["run", str(given), "--config", "s2", "--init",
+                                     "20,40,6,6", "-o", str(tmp_path / "out")])
+    assert one_error_line(done) == (f"vtrack: error: {image}: 32-bit float TIFF is not "
+                                    "supported; save it as 8- or 16-bit")

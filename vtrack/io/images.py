@@ -54,6 +54,7 @@ from vtrack.io.sidecar import SEQUENCE_IMAGES, sequence_of
 from vtrack.io.signatures import (
     PHOTO_CODECS,
     declared_size_problem,
+    float_tiff_problem,
     jpeg_cut_short,
     photo_mirrored,
 )
@@ -222,9 +223,10 @@ def read_stored(path: Path) -> tuple[np.ndarray, int]:
     except (av.FFmpegError, OSError, StopIteration) as exc:
         if isinstance(exc, (FileNotFoundError, PermissionError)):  # gone, or not ours to read
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
-        too_big = declared_size_problem(path)  # FFmpeg's message names no size
-        if too_big:
-            raise InputError(f"{path}: {too_big}") from None
+        # FFmpeg's message names no size, nor a float TIFF ("Invalid data found ...")
+        problem = declared_size_problem(path) or float_tiff_problem(path)
+        if problem:
+            raise InputError(f"{path}: {problem}") from None
         reason = "no picture" if isinstance(exc, StopIteration) else os_reason(exc)
         raise InputError(f"{path}: not an image FFmpeg can decode ({reason})") from None
 

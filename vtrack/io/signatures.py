@@ -440,6 +440,45 @@ def _head(path: str | os.PathLike[str]) -> tuple[bytes, int] | None:
         return None
 
 
+#: TIFF tags of the first image directory: BitsPerSample, SampleFormat (3: floating point).
+_TIFF_BITS, _TIFF_SAMPLE_FORMAT, _TIFF_FLOAT = 258, 339, 3
+
+
+def float_tiff_problem(path: str | os.PathLike[str]) -> str | None:
+    """``32-bit float TIFF is not supported; ...`` when ``path`` is a TIFF whose first image
+    holds floating-point samples (SampleFormat 3: a thermal camera's or a scientific tool's
+    export), which the FFmpeg vtrack reads with cannot decode ("Invalid data found"); None
+    otherwise, or when it cannot be read."""
+    shorts: dict[int, int] = {}
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(8)
+            order = {b"II*\x00": "little", b"MM\x00*": "big"}.get(head[:4])
+            if order is None:
+                return None
+
+            def number(data: bytes) -> int:
+                return int.from_bytes(data, order)  # type: ignore[arg-type]
+
+            handle.seek(number(head[4:8]))
+            entries = handle.read(12 * min(number(handle.read(2)), 4096))
+            for at in range(0, len(entries) - 11, 12):
+                tag = number(entries[at:at + 2])
+                if tag not in (_TIFF_BITS, _TIFF_SAMPLE_FORMAT):
+                    continue
+                if number(entries[at + 4:at + 8]) <= 2:  # SHORTs in the entry itself
+                    shorts[tag] = number(entries[at + 8:at + 10])
+                else:  # one per channel, elsewhere: the first
+                    handle.seek(number(entries[at + 8:at + 12]))
+                    shorts[tag] = number(handle.read(2))
+    except (OSError, ValueError):
+        return None
+    if shorts.get(_TIFF_SAMPLE_FORMAT) != _TIFF_FLOAT:
+        return None
+    return (f"{shorts.get(_TIFF_BITS, 32)}-bit float TIFF is not supported; save it as 8- or "
+            "16-bit")
+
+
 def declared_size_problem(path: str | os.PathLike[str]) -> str | None:
     """Why the pictures the header of ``path`` declares (:func:`declared_size`) cannot be
     tracked, ``the frames are 50000x50000; vtrack accepts at most ...``; None when they can,
@@ -462,6 +501,8 @@ def header_problem(path: str | os.PathLike[str]) -> str | None:
     too_big = declared and frame_size_problem(*declared)
     if too_big:
         return too_big
+    if head[:4] in (b"II*\x00", b"MM\x00*"):
+        return float_tiff_problem(path)
     if head[:4] == b"RIFF" and head[8:16] == b"WEBPVP8X" and len(head) > 20 and head[20] & 2:
         return ("an animated WebP, which the FFmpeg vtrack reads with cannot decode (it decodes "
                 "still WebP only): write its frames as images (an img/ folder) or a video "
