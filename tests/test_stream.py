@@ -507,3 +507,21 @@ def test_a_reader_gone_after_one_line_is_told_in_the_singular(tmp_path: Path) ->
         writer.close()
     assert str(gone.value) == (f"--stream {fifo}: its reader went away (closed the pipe) after "
                                "1 line: the run stopped there (SIGPIPE)")
+
+
+def test_stream_to_a_closed_standard_output_is_refused_in_one_line(tmp_path: Path) -> None:
+    """`vtrack run clip.mp4 --stream - >&-` ended in a traceback (AttributeError: 'NoneType'
+    object has no attribute 'flush'), exit 1: it is refused before a frame is tracked, as a
+    --stream FIFO no reader opens is, and leaves no folder."""
+    scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "vtrack", "run", str(clip), "--init", box, "--no-video",
+               "--out", str(out), "--stream", "-"]
+    done = subprocess.run(["sh", "-c", '"$@" >&-', "sh", *command], capture_output=True,
+                          timeout=120, check=False, text=True)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip() == ("vtrack: error: --stream -: standard output was closed "
+                                   "before vtrack started (>&-): nothing can read the lines")
+    assert not out.exists()

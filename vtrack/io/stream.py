@@ -264,6 +264,11 @@ def _open_or_make(target: str) -> tuple[IO[bytes], str | None]:
 
 
 def _stdout_bytes() -> IO[bytes]:
-    """Standard output for bytes, after what was printed to it as text."""
+    """Standard output for bytes, after what was printed to it as text. EBADF OSError when the
+    process has none (``>&-``: Python then sets ``sys.stdout`` to None), as a closed file
+    descriptor is."""
+    if sys.stdout is None:
+        raise OSError(errno.EBADF, "standard output was closed before vtrack started (>&-): "
+                                   "nothing can read the lines")
     sys.stdout.flush()
     return sys.stdout.buffer if hasattr(sys.stdout, "buffer") else sys.stdout  # type: ignore[return-value]
