@@ -143,6 +143,30 @@ def test_http_and_a_fifo_give_the_same_csv_as_the_file(tmp_path: Path) -> None:
     assert (tmp_path / "fifo" / "track.csv").read_bytes() == expected
 
 
+def test_a_file_served_over_http_that_is_no_video_is_not_called_a_late_joined_stream(
+        tmp_path: Path) -> None:
+    """Bytes that are no video, served whole by a local HTTP server, were called "nothing
+    FFmpeg could decode came within 10 s (...): a live stream starts at a key frame; --timeout
+    SECONDS waits longer", though they came at once and a longer wait finds nothing more:
+    they are "not a video FFmpeg can decode", as the same bytes in a file or on stdin are.
+    Read --live, they may still be a stream joined between its key frames."""
+    (tmp_path / "junk.ts").write_bytes(bytes(range(256)) * 200)
+    server, thread = _serve(tmp_path)
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/junk.ts"
+        done = _run([url, "--init", "1,1,8,8", "--no-video", "-o", str(tmp_path / "o")])
+        live = _run([url, "--live", "--init", "1,1,8,8", "--no-video", "-o",
+                     str(tmp_path / "o")])
+    finally:
+        server.shutdown()
+        thread.join()
+    assert done.returncode == 2 and done.stderr.decode().strip() == (
+        f"vtrack: error: {url}: not a video FFmpeg can decode (Invalid data found when "
+        "processing input)")
+    assert live.returncode == 2 and b"a live stream starts at a key frame" in live.stderr
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path) -> None:
     with socket.socket() as probe:  # a port that was free a moment ago: nothing listens there
         probe.bind(("127.0.0.1", 0))

@@ -70,7 +70,7 @@ from vtrack.io.signatures import (
     photo_mirrored,
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
-from vtrack.io.specs import input_name
+from vtrack.io.specs import input_name, is_live
 from vtrack.io.threads import run_aside
 from vtrack.machine import cpu_count
 from vtrack.params import MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S, checked_seconds
@@ -458,14 +458,19 @@ def _cut_file(path: str, follow_s: float | None) -> str | None:
             "without it")
 
 
-def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError) -> str:
+def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError, live: bool) -> str:
     """The one line for an input FFmpeg could not open or decode a first frame from, saying
     what the way it was read (a URL, ``--follow``), its bytes (none; an MP4 without its whole index)
-    or its name (raw frames) makes likely."""
+    or its name (raw frames) makes likely. Data that is no video from a URL is said to be a
+    stream joined between key frames only when it may be one: read as ``live``, or of a live
+    scheme (udp, rtsp, ...); an ``http://`` file serves its bytes from the start, as a file
+    holds them."""
     reason = os_reason(exc)
     if "://" in path:  # a network input, as _open_container opens it
         if not isinstance(exc, av.error.InvalidDataError):
             return f"{path}: cannot be opened ({reason}{_still_opening(path, exc)})"
+        if not (live or is_live(path)):
+            return f"{path}: not a video FFmpeg can decode ({reason})"
         return (f"{path}: nothing FFmpeg could decode came within {how.timeout_s:g} s "
                 f"({reason}): a live stream starts at a key frame{how.waits_longer()}")
     if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
@@ -558,7 +563,7 @@ class VideoSource(Source):
             raise InputError(f"{path}: cannot be opened (nothing came within "
                              f"{how.timeout_s:g} s{how.waits_longer()})") from None
         except av.FFmpegError as exc:
-            raise InputError(_undecodable(path, how, exc)) from None
+            raise InputError(_undecodable(path, how, exc, live)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         # a regular file can be read again (a photo's orientation tag) and, unless it grows,
@@ -630,7 +635,7 @@ class VideoSource(Source):
         except StopIteration:
             raise InputError(_no_frame(path, self._how)) from None
         except av.FFmpegError as exc:
-            raise InputError(_undecodable(path, self._how, exc)) from None
+            raise InputError(_undecodable(path, self._how, exc, live)) from None
 
         rate = stream.guessed_rate or stream.average_rate
         fps = float(rate) if rate else None
