@@ -247,6 +247,27 @@ def test_a_pyav_object_that_is_no_picture_vtrack_reads_is_a_type_error() -> None
     assert result.frame.bgr()[50, 60].any() and not result.frame.bgr()[0, 0].any()
 
 
+def test_a_pyav_frame_with_a_pts_but_no_time_base_is_refused_naming_what_is_missing() -> None:
+    """A frame made with av.VideoFrame.from_ndarray and given a pts but no time_base (PyAV's
+    time: NaN) was refused as "frame 1: time_s nan is not a finite number", a value the caller
+    never gave; with a time_base it is timed by it, with no pts at index / fps."""
+    from fractions import Fraction
+
+    import av
+
+    images = _red_block(2)
+    frames = [av.VideoFrame.from_ndarray(image, format="bgr24") for image in images]
+    frames[1].pts = 5
+    tracker = vtrack.Tracker("robust")
+    assert tracker.init(frames[0], (50, 40, 40, 30)).time_s == 0.0
+    with pytest.raises(ValueError, match=r"^frame 1: an av.VideoFrame with pts 5 but no "
+                       r"time_base: its time cannot be told \(set its time_base, or its pts "
+                       r"to None to have it timed as a NumPy image is\)$"):
+        tracker.update(frames[1])
+    frames[1].time_base = Fraction(1, 10)
+    assert tracker.update(frames[1]).time_s == 0.5
+
+
 def test_one_image_given_as_the_frames_is_refused_not_read_row_by_row() -> None:
     """One 240x320x3 image was tracked as 240 grey 3x320 frames: "the box ... is larger than
     the 3x320 frame"."""

@@ -34,7 +34,7 @@ def as_frame(item: FrameLike, index: int, fps: float, time_s: float | None = Non
     TypeError for anything else: pixels that are not uint8, a 4-channel image (BGRA or RGBA:
     which, and whether the 4th is alpha, the array does not say; the message says how to give
     its colour), a picture FFmpeg cannot convert to BGR (rgb4); ValueError for a size vtrack
-    refuses."""
+    refuses and for an ``av.VideoFrame`` whose ``pts`` has no ``time_base`` (no time)."""
     if isinstance(item, Frame):
         return item
     if time_s is None:
@@ -80,6 +80,10 @@ def _decoded(item: Any, index: int, untimed_s: float) -> Frame:
     problem = frame_size_problem(item.width, item.height)
     if problem:
         raise ValueError(f"frame {index}: {problem}")
+    if item.pts is not None and item.time_base is None:  # (PyAV's time: NaN)
+        raise ValueError(f"frame {index}: an av.VideoFrame with pts {item.pts} but no "
+                         "time_base: its time cannot be told (set its time_base, or its pts "
+                         "to None to have it timed as a NumPy image is)")
     time_s = untimed_s if item.time is None else float(item.time)
     try:
         return decoded_frame(item, index, time_s)  # as vtrack run reads it
