@@ -187,7 +187,7 @@ def test_any_config_name_plans_one_folder_inside_the_results(tmp_path, name: str
     config = replace(load_config("s4"), name=name)
     out = tmp_path / "out"
     item = BatchInput(name="clip", path=tmp_path / "clip.mp4")
-    settings_ = RunRequest(input="", out_dir=out, config=config)
+    settings_ = RunRequest(input=str(tmp_path), out_dir=out, config=config)
     batch = plan([item], {name: config}, out, settings_)
     (job,) = batch.jobs
     folder = job.request.out_dir

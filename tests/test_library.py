@@ -621,6 +621,18 @@ def test_an_empty_input_or_config_names_the_argument(empty: str) -> None:
         vtrack.Tracker(empty)
 
 
+@pytest.mark.parametrize("empty", ["", " "])
+def test_a_request_of_an_empty_input_names_its_field(empty: str, tmp_path: Path) -> None:
+    """RunRequest(input="") was made: run() then said ': no such file' (naming nothing) and
+    track() 'spec: empty', an argument the caller never gave; the request is refused as it is
+    made, naming its field."""
+    with pytest.raises(InputError, match="^input: empty; give a video file, an image folder, "
+                       "a URL or a capture device$"):
+        vtrack.RunRequest(input=empty, out_dir=tmp_path / "out",
+                          config=vtrack.load_config("s0"), init_box=(1, 1, 10, 10))
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_config_made_in_python_is_checked_as_a_config_file_is() -> None:
     """vtrack.Config made in Python skipped the chain's checks: Config("mine", "mine", "",
     [("hue", {}), ("backproject", {})]) tracked 3 frames "tracking" at the first box (no stage

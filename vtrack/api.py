@@ -15,10 +15,11 @@ from typing import Any
 import numpy as np
 
 from vtrack.config import Config
-from vtrack.errors import LIBRARY_NAMES, ConfigError, InputError, InputWarning
+from vtrack.errors import LIBRARY_NAMES, ConfigError, InputWarning
 from vtrack.frame import Frame
 from vtrack.geometry import Box, as_box
 from vtrack.io import inputs
+from vtrack.io.files import path_text
 from vtrack.io.images import DEFAULT_FPS
 from vtrack.io.raw import RawFormat
 from vtrack.io.source import Source
@@ -110,7 +111,7 @@ def track(frames: FrameInput,
         raise first_box_refused(f"init_box: {tracker.config.name}", "leave init_box out")
     if isinstance(frames, str | bytes | os.PathLike):  # bytes: a path, not 1-byte frames
         # an image folder is timed at fps; a video keeps its own timestamps (fps refused)
-        opener = _source_opener(_path_text(frames, "frames"), fps=fps)
+        opener = _source_opener(path_text(frames, "frames"), fps=fps)
         return _closing(opener, lambda source: _run(tracker, source, box))
     return _run(tracker, frames, box)
 
@@ -155,18 +156,8 @@ def _source_opener(spec: str | os.PathLike[str], raw: RawFormat | str | None = N
         ffmpeg = checked_ffmpeg(ffmpeg)
     if live is not None:  # (a RunRequest's is checked as it is made)
         live = check_flag(live, "live")
-    return inputs.source_opener(_path_text(spec, "spec"), raw, fps=fps, names=LIBRARY_NAMES,
+    return inputs.source_opener(path_text(spec, "spec"), raw, fps=fps, names=LIBRARY_NAMES,
                                 ffmpeg=ffmpeg, live=live)
-
-
-def _path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:
-    """``path`` as text; InputError naming the argument ``name`` for an empty one (it would be
-    opened as the current folder, or named in a message as nothing: ``: no such file``)."""
-    text = os.fsdecode(path)
-    if not text.strip():
-        raise InputError(f"{name}: empty; give a video file, an image folder, a URL or a "
-                         "capture device")
-    return text
 
 
 #: The last axis of an ``HxWxC`` NumPy image: BGR, BGRA (a PNG with alpha) or one channel.

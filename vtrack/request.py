@@ -24,6 +24,7 @@ from vtrack.errors import ConfigError, real_or_nan
 from vtrack.evaluate.groundtruth import MAX_TARGET
 from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
+from vtrack.io.files import path_text
 from vtrack.io.identity import file_identity
 from vtrack.io.source import frame_at_time
 from vtrack.io.video import FFmpegInput, checked_ffmpeg
@@ -124,7 +125,8 @@ class RunRequest:
             if not isinstance(value, str | os.PathLike):
                 raise TypeError(f"{name}: expected a path (str or pathlib.Path), got "
                                 f"{type(value).__name__}")
-            object.__setattr__(self, name, os.fspath(value) if name == "input" else Path(value))
+            object.__setattr__(self, name, path_text(value, name) if name == "input"
+                               else Path(value))
         if isinstance(self.stream, os.PathLike):  # (a file: a path as the others; "-" stdout)
             object.__setattr__(self, "stream", os.fspath(self.stream))
         for name in ("stream", "init_from", "video_out"):

@@ -15,7 +15,7 @@ import stat
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import BinaryIO, Generic, Self, TypeVar
+from typing import Any, BinaryIO, Generic, Self, TypeVar
 
 from vtrack.errors import InputError, OutputError, escape_undecoded, plural
 
@@ -41,6 +41,16 @@ def ffmpeg_file(path: str | Path) -> str:
     "Protocol not found"; ``file:z.mp4``: the file ``z.mp4``; ``:x.png``, ``subfile,...``),
     and its file protocol takes exactly one ``file:`` off."""
     return f"file:{path}"
+
+
+def path_text(path: str | bytes | os.PathLike[Any], name: str) -> str:
+    """``path`` as text; InputError naming the argument ``name`` for an empty one (it would be
+    opened as the current folder, or named in a message as nothing: ``: no such file``)."""
+    text = os.fsdecode(path)
+    if not text.strip():
+        raise InputError(f"{name}: empty; give a video file, an image folder, a URL or a "
+                         "capture device")
+    return text
 
 
 def check_input_path(path: str) -> None:
