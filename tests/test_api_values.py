@@ -256,6 +256,39 @@ def test_a_run_requests_raw_format_and_input_waits_are_checked_as_the_options_ar
     assert str(caught.value) == said
 
 
+@pytest.mark.parametrize(("ffmpeg", "said"), [
+    (FFmpegInput(options={"probesize": "32"}),  # type: ignore[arg-type]
+     'ffmpeg.options: expected (key, value) pairs of text, e.g. (("probesize", "32"),), got '
+     "dict (a dict's: tuple(options.items()))"),
+    (FFmpegInput(options=["probesize=32"]),  # type: ignore[list-item]
+     'ffmpeg.options: expected (key, value) pairs of text, e.g. (("probesize", "32"),), got '
+     "'probesize=32'"),
+    (FFmpegInput(options=(("probesize", 32),)),  # type: ignore[arg-type]
+     'ffmpeg.options: expected (key, value) pairs of text, e.g. (("probesize", "32"),), got '
+     "('probesize', 32)"),
+    (FFmpegInput(format=3),  # type: ignore[arg-type]
+     "ffmpeg.format: expected a format name (text) or None, got int"),
+], ids=["dict", "key=value", "number", "format-number"])
+def test_ffmpeg_options_of_another_shape_are_one_type_error_naming_the_field(
+        ffmpeg: FFmpegInput, said: str, tmp_path: Path) -> None:
+    """FFmpegInput(options={"probesize": "32"}) (PyAV's av.open takes a dict) or
+    ["probesize=32"] raised Python's own 'ValueError: too many values to unpack (expected 2)'
+    from inside vtrack.open_source and RunRequest, a number for a value 'TypeError: expected
+    string or bytes-like object, got 'int'', and format=3 was called '--format 3: not a format
+    PyAV's FFmpeg reads', an option of a command never run."""
+    clip = tmp_path / "clip.ts"
+    clip.write_bytes(b"")
+    with pytest.raises(TypeError) as caught:
+        vtrack.open_source(clip, ffmpeg=ffmpeg)
+    assert str(caught.value) == said
+    with pytest.raises(TypeError) as caught:
+        vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "out",
+                          config=vtrack.load_config("s0"), ffmpeg=ffmpeg)
+    assert str(caught.value) == said
+    pairs = FFmpegInput(options=[["probesize", "32"]]).checked()  # type: ignore[list-item]
+    assert pairs.options == (("probesize", "32"),)
+
+
 def test_open_source_checks_a_raw_format_made_in_python(tmp_path: Path) -> None:
     """vtrack.open_source('f.raw', RawFormat(-5, 2, 'bgr24', 30.0)) raised 'ValueError:
     negative dimensions are not allowed', a rate of 0 'ZeroDivisionError: float division by

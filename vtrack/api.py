@@ -127,7 +127,8 @@ def open_source(spec: str | os.PathLike[str], raw: RawFormat | str | None = None
     for a raw format vtrack cannot read, naming this function's arguments: ``raw``,
     ``pix_fmt`` and ``fps`` (a RawFormat's fields ``raw.pix_fmt``, ``raw.fps``), for a
     ``live`` of another kind (``"no"`` is true to Python, not the answer given), or an
-    ``ffmpeg`` wait out of its range (:meth:`~vtrack.io.video.FFmpegInput.checked`)."""
+    ``ffmpeg`` wait out of its range (:meth:`~vtrack.io.video.FFmpegInput.checked`; TypeError
+    for its ``format`` or ``options`` of another kind)."""
     return _source_opener(spec, raw, pix_fmt=pix_fmt, fps=fps, ffmpeg=ffmpeg, live=live)()
 
 

@@ -49,7 +49,7 @@ import av
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError, PartialInputError, plural
+from vtrack.errors import InputError, PartialInputError, cut, plural
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.depth import deep, depth_note, eight_bit, first_bits, stored_pixels
@@ -270,14 +270,36 @@ class FFmpegInput:
         (``--timeout``: ``timeout_s`` from :data:`~vtrack.params.MIN_TIMEOUT_S` to
         :data:`~vtrack.params.MAX_TIMEOUT_S`; ``--follow``: ``follow_s`` None or above 0 to
         :data:`~vtrack.params.MAX_WAIT_S`); ConfigError naming the field otherwise (a wait
-        of nan or 10**5000 would never end)."""
+        of nan or 10**5000 would never end). TypeError naming the field for a ``format`` that
+        is not text or None and for ``options`` that are not (key, value) pairs of text (a
+        dict, a ``"KEY=VALUE"`` string, a number for a value), which FFmpeg would be handed
+        as Python's own errors; the pairs come back as a tuple of tuples."""
+        if self.format is not None and not isinstance(self.format, str):
+            raise TypeError(f"ffmpeg.format: expected a format name (text) or None, got "
+                            f"{type(self.format).__name__}")
+        options = _option_pairs(self.options)
         timeout = checked_seconds("ffmpeg.timeout_s", self.timeout_s, MIN_TIMEOUT_S,
                                   MAX_TIMEOUT_S, False,
                                   " (how long a network input may send nothing)")
         follow = None if self.follow_s is None else checked_seconds(
             "ffmpeg.follow_s", self.follow_s, 0, MAX_WAIT_S, True, " (how long a file being "
             "written may not grow)")
-        return replace(self, timeout_s=timeout, follow_s=follow)
+        return replace(self, options=options, timeout_s=timeout, follow_s=follow)
+
+
+def _option_pairs(options: object) -> tuple[tuple[str, str], ...]:
+    """``options`` (:attr:`FFmpegInput.options`) as a tuple of (key, value) text pairs;
+    TypeError naming ``ffmpeg.options`` and what was given otherwise."""
+    if not isinstance(options, tuple | list):
+        hint = " (a dict's: tuple(options.items()))" if isinstance(options, dict) else ""
+        raise TypeError(f"ffmpeg.options: expected (key, value) pairs of text, e.g. "
+                        f"((\"probesize\", \"32\"),), got {type(options).__name__}{hint}")
+    for pair in options:
+        if not (isinstance(pair, tuple | list) and len(pair) == 2
+                and all(isinstance(part, str) for part in pair)):
+            raise TypeError(f"ffmpeg.options: expected (key, value) pairs of text, e.g. "
+                            f"((\"probesize\", \"32\"),), got {cut(repr(pair))}")
+    return tuple((key, value) for key, value in options)
 
 
 def checked_ffmpeg(how: object) -> FFmpegInput:
