@@ -22,7 +22,7 @@ from test_cli import vtrack as vtrack_command
 
 import vtrack
 from vtrack.config import shipped_configs
-from vtrack.errors import ConfigError
+from vtrack.errors import ConfigError, InputError
 from vtrack.io import RawFormat
 from vtrack.io.video import FFmpegInput
 from vtrack.run import run
@@ -365,6 +365,44 @@ def test_open_source_names_its_arguments_not_vtrack_runs_options(tmp_path: Path)
         with pytest.raises(ConfigError) as refused:
             vtrack.open_source(**kwargs)
         assert str(refused.value) == message
+
+
+def test_what_opening_a_video_refuses_names_the_library_arguments(tmp_path: Path) -> None:
+    """vtrack.open_source (and vtrack.track) said what FFmpeg refused opening a video in
+    vtrack run's words: FFmpegInput(format="nope") was '--format nope: not a format PyAV's
+    FFmpeg reads (... need no --format)', options=(("nokey", "1"),) '--input-option nokey:
+    FFmpeg did not use it ...', fflags=nobuffer '... or --live)', a .raw file '... raw frames
+    are read only by vtrack run --raw WxH (with --pix-fmt, --fps)' and an empty followed file
+    '... needs a longer --follow)': options of a command never run. They name the fields and
+    arguments given; vtrack run keeps its options (tests/test_live_inputs.py and others)."""
+    clip = write_video(make_scene("smooth", seed=4, width=96, height=72, frames=10, fps=30),
+                       tmp_path / "clip.ts")
+    raw = tmp_path / "z.raw"
+    raw.write_bytes(bytes(96 * 72 * 3))
+    empty = tmp_path / "empty.ts"
+    empty.write_bytes(b"")
+    cases = (
+        (clip, FFmpegInput(format="nope"),
+         "ffmpeg.format nope: not a format PyAV's FFmpeg reads (ffmpeg -formats lists them; "
+         "capture devices /dev/videoN need no ffmpeg.format)"),
+        (clip, FFmpegInput(options=(("nokey", "1"),)),
+         f"ffmpeg.options nokey: FFmpeg did not use it opening {clip} (not an option of its "),
+        (clip, FFmpegInput(options=(("fflags", "nobuffer"),)),
+         f"ffmpeg.options fflags=nobuffer: FFmpeg drops the packets it reads probing {clip}, "
+         "so its first frames would be lost; nobuffer is for live streams (rtsp://, udp:// "
+         "..., or live=True)"),
+        (raw, FFmpegInput(), f"{raw}: not a video FFmpeg can decode (Invalid argument); raw "
+         "frames are read only by raw='WxH' (with pix_fmt, fps)"),
+        (empty, FFmpegInput(follow_s=0.2),
+         f"{empty}: stayed empty (0 bytes) for ffmpeg.follow_s's wait of 0.2 s: nothing was "
+         "written to it (a writer that starts later, or holds its first bytes longer, needs "
+         "a longer ffmpeg.follow_s)"),
+    )
+    for spec, ffmpeg, said in cases:
+        with pytest.raises(InputError) as refused:
+            vtrack.open_source(spec, ffmpeg=ffmpeg)
+        assert str(refused.value).startswith(said), str(refused.value)
+        assert "--" not in str(refused.value)
 
 
 def test_library_messages_name_the_requests_fields_and_the_command_its_options(

@@ -38,8 +38,11 @@ class GrowingFile(CapturingStream):
     :meth:`stop_at_end` ends the stream where the file ends now (a signal: the frames already
     in the file still come out of the decoder)."""
 
-    def __init__(self, path: str, idle_s: float) -> None:
+    def __init__(self, path: str, idle_s: float, option: str = "--follow") -> None:
+        """``option``: what the caller set ``idle_s`` with, for a message (``--follow``,
+        ``ffmpeg.follow_s``)."""
         super().__init__()
+        self._option = option
         self._file = open(path, "rb", buffering=0)  # noqa: SIM115 (closed by close())
         self._path = path
         opened = os.fstat(self._file.fileno())
@@ -83,7 +86,7 @@ class GrowingFile(CapturingStream):
                     raise FollowedFileReplaced(
                         f"another file now has its name (renamed over it, or the recording "
                         f"rotated); the {read} bytes of the one opened were read and it stayed "
-                        f"{self.idle_s:g} s without growing; --follow does not go on to the "
+                        f"{self.idle_s:g} s without growing; {self._option} does not go on to the "
                         "new one (as tail -f, not tail -F)")
                 return self._ended(now)
             time.sleep(POLL_S)

@@ -95,7 +95,7 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
 
             source: Source = CaptureSource(spec, device)
         else:
-            source = VideoSource(spec, ffmpeg, live)
+            source = VideoSource(spec, ffmpeg, live, names)
         source.live = live
         return source
 

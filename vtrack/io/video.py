@@ -49,7 +49,14 @@ import av
 import cv2
 import numpy as np
 
-from vtrack.errors import InputError, PartialInputError, cut, plural
+from vtrack.errors import (
+    COMMAND_NAMES,
+    InputError,
+    OptionNames,
+    PartialInputError,
+    cut,
+    plural,
+)
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
 from vtrack.io.depth import deep, depth_note, eight_bit, first_bits, stored_pixels
@@ -331,13 +338,15 @@ def text_file_problem(path: str, container: av.container.InputContainer) -> str 
 PIPE_BUFFER_BYTES = 5_000_000
 
 
-def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
+def _open_container(path: str, how: FFmpegInput, names: OptionNames
+                    ) -> av.container.InputContainer:
     """``path`` opened by FFmpeg as ``how`` says: ``-`` is stdin, ``scheme://`` a network
     input (with ``how.timeout_s``; ``srt://`` refused: the wheel's FFmpeg has no SRT), a file
-    with ``how.follow_s`` read while it grows."""
+    with ``how.follow_s`` read while it grows. Messages call ``how``'s fields by ``names``."""
     if how.format is not None and how.format not in av.formats_available:
-        raise InputError(f"--format {how.format}: not a format PyAV's FFmpeg reads (ffmpeg "
-                         "-formats lists them; capture devices /dev/videoN need no --format)")
+        raise InputError(f"{names.format} {how.format}: not a format PyAV's FFmpeg reads "
+                         "(ffmpeg -formats lists them; capture devices /dev/videoN need no "
+                         f"{names.format})")
     kwargs: dict[str, Any] = {"format": how.format, "options": dict(how.options)}
     if path == "-":
         stdin = piped_stdin("a video")
@@ -348,7 +357,7 @@ def _open_container(path: str, how: FFmpegInput) -> av.container.InputContainer:
         return _open_stream(CountedStream(stdin), buffer_size=PIPE_BUFFER_BYTES, **kwargs)
     if "://" not in path:
         if how.follow_s is not None:
-            return _open_stream(GrowingFile(path, how.follow_s), **kwargs)
+            return _open_stream(GrowingFile(path, how.follow_s, names.follow), **kwargs)
         return av.open(ffmpeg_file(path), **kwargs)
     scheme = path.split("://", 1)[0].lower()
     if scheme == "srt":
@@ -455,7 +464,7 @@ def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
     return BgrFrame(index, time_s, turned(decoded.to_ndarray(format="bgr24"), rotation))
 
 
-def _cut_file(path: str, follow_s: float | None) -> str | None:
+def _cut_file(path: str, follow_s: float | None, names: OptionNames) -> str | None:
     """The line for ``path``, a local file, when it is empty (and stayed so for ``--follow``'s
     ``follow_s``), declares pictures larger than vtrack takes, has a header FFmpeg cannot
     decode from (:func:`~vtrack.io.signatures.header_problem`), or is an MP4 whose index is
@@ -465,9 +474,9 @@ def _cut_file(path: str, follow_s: float | None) -> str | None:
         return None
     if os.path.getsize(path) == 0:
         if follow_s is not None:
-            return (f"{path}: stayed empty (0 bytes) for --follow's wait of {follow_s:g} s: "
-                    "nothing was written to it (a writer that starts later, or holds its "
-                    "first bytes longer, needs a longer --follow)")
+            return (f"{path}: stayed empty (0 bytes) for {names.follow}'s wait of "
+                    f"{follow_s:g} s: nothing was written to it (a writer that starts later, "
+                    f"or holds its first bytes longer, needs a longer {names.follow})")
         return f"{path}: an empty file (0 bytes), not a video"
     problem = header_problem(path)
     if problem:
@@ -480,7 +489,8 @@ def _cut_file(path: str, follow_s: float | None) -> str | None:
             "without it")
 
 
-def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError, live: bool) -> str:
+def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError, live: bool,
+                 names: OptionNames) -> str:
     """The one line for an input FFmpeg could not open or decode a first frame from, saying
     what the way it was read (a URL, ``--follow``), its bytes (none; an MP4 without its whole index)
     or its name (raw frames) makes likely. Data that is no video from a URL is said to be a
@@ -498,18 +508,20 @@ def _undecodable(path: str, how: FFmpegInput, exc: av.FFmpegError, live: bool) -
     if how.follow_s is not None and path.lower().endswith(INDEX_LAST_SUFFIXES):
         return (f"{path}: cannot be read as it grows ({reason}): a plain MP4 holds its index "
                 "at its end; follow fragmented MP4, MPEG-TS or Matroska, or read a finished "
-                "MP4 without --follow")
-    cut = _cut_file(path, how.follow_s)
+                f"MP4 without {names.follow}")
+    cut = _cut_file(path, how.follow_s, names)
     if cut:
         return cut
     if path.lower().endswith(RAW_SUFFIXES):
+        raw = "vtrack run --raw WxH (with --pix-fmt, --fps)" if names.options else \
+            f"{names.raw}'WxH' (with pix_fmt, fps)"
         return (f"{path}: not a video FFmpeg can decode ({reason}); raw frames are read only "
-                "by vtrack run --raw WxH (with --pix-fmt, --fps)")
+                f"by {raw}")
     return f"{path}: not a video FFmpeg can decode ({reason})"
 
 
 def _refuse_unused_options(path: str, how: FFmpegInput,
-                           container: av.container.InputContainer) -> None:
+                           container: av.container.InputContainer, names: OptionNames) -> None:
     """InputError naming the first ``--input-option`` FFmpeg had no use for opening ``path``
     (it ignores those without a word; :mod:`vtrack.io.ffoptions`)."""
     demuxer = container.format.name
@@ -517,21 +529,23 @@ def _refuse_unused_options(path: str, how: FFmpegInput,
     unused = unused_options([key for key, _ in how.options], demuxer, protocols)
     if unused:
         read = f"its {demuxer} demuxer" + "".join(f", the {p} protocol" for p in protocols)
-        raise InputError(f"--input-option {unused[0]}: FFmpeg did not use it opening {path} "
+        raise InputError(f"{names.input_option} {unused[0]}: FFmpeg did not use it opening "
+                         f"{path} "
                          f"(not an option of {read} or of every input; ffmpeg -h "
                          f"demuxer={demuxer.split(',')[0]} lists the demuxer's)")
 
 
-def _refuse_nobuffer(path: str, how: FFmpegInput) -> None:
+def _refuse_nobuffer(path: str, how: FFmpegInput, names: OptionNames) -> None:
     """InputError for ``fflags=nobuffer`` opening ``path``, an input that is not live: FFmpeg
     then drops the packets it reads to probe it (less delay on a live stream), so a file's
     first frames, up to a key frame after them, would be lost without a word (all of them in
     a clip with one key frame), and ground truth would no longer line up."""
     value = _nobuffer(how)
     if value is not None:
-        raise InputError(f"--input-option fflags={value}: FFmpeg drops the packets it reads "
-                         f"probing {path}, so its first frames would be lost; nobuffer is "
-                         "for live streams (rtsp://, udp:// ..., or --live)")
+        raise InputError(f"{names.input_option} fflags={value}: FFmpeg drops the packets "
+                         f"it reads probing {path}, so its first frames would be lost; "
+                         "nobuffer is for live streams (rtsp://, udp:// ..., or "
+                         f"{names.live if names.options else names.live + '=True'})")
 
 
 def _nobuffer(how: FFmpegInput) -> str | None:
@@ -544,14 +558,14 @@ def _nobuffer(how: FFmpegInput) -> str | None:
     return None
 
 
-def _no_frame(path: str, how: FFmpegInput) -> str:
+def _no_frame(path: str, how: FFmpegInput, names: OptionNames) -> str:
     """The message for an input of which no frame could be decoded; with ``fflags=nobuffer``
     it says that the flag may be why: FFmpeg drops the packets it read probing the input,
     which may have held its only key frame (every frame after needs it)."""
     value = _nobuffer(how)
     if value is None:
-        return _cut_file(path, how.follow_s) or f"{path}: no frame could be decoded"
-    return (f"{path}: no frame could be decoded; --input-option fflags={value} may have "
+        return _cut_file(path, how.follow_s, names) or f"{path}: no frame could be decoded"
+    return (f"{path}: no frame could be decoded; {names.input_option} fflags={value} may have "
             "dropped the stream's only key frame (FFmpeg drops the packets it reads probing "
             "the input): try without it")
 
@@ -567,16 +581,20 @@ def _check_estimate(info: InputInfo, index: int, time_s: float, fps: float) -> N
 
 class VideoSource(Source):
     """A video file, stream or URL (anything FFmpeg opens, as ``how`` says), decoded with frame
-    threads in a reader thread (fewer for a ``live`` source: each holds back a frame)."""
+    threads in a reader thread (fewer for a ``live`` source: each holds back a frame). Its
+    messages call ``how``'s fields by ``names`` (``--follow``, ``--input-option``; the
+    library's ``ffmpeg.follow_s``, ``ffmpeg.options``)."""
 
-    def __init__(self, path: str, how: FFmpegInput | None = None, live: bool = False) -> None:
+    def __init__(self, path: str, how: FFmpegInput | None = None, live: bool = False,
+                 names: OptionNames = COMMAND_NAMES) -> None:
         self._how = how = how or FFmpegInput()
+        self._names = names
         if not live:
-            _refuse_nobuffer(path, how)
+            _refuse_nobuffer(path, how, names)
         try:
             # ``-``: the container on stdin, through Python's file object so that FFmpeg may
             # seek in a redirected file (``< clip.mp4``) and reads a pipe as a stream
-            container = _open_container(path, how)
+            container = _open_container(path, how, names)
         except PermissionError:
             raise InputError(f"{path}: cannot be read (permission denied)") from None
         except FileNotFoundError:
@@ -585,7 +603,7 @@ class VideoSource(Source):
             raise InputError(f"{path}: cannot be opened (nothing came within "
                              f"{how.timeout_s:g} s{how.waits_longer()})") from None
         except av.FFmpegError as exc:
-            raise InputError(_undecodable(path, how, exc, live)) from None
+            raise InputError(_undecodable(path, how, exc, live, names)) from None
         except (OSError, ValueError) as exc:  # ValueError: PyAV found stdin unreadable
             raise InputError(f"{path}: cannot be read ({os_reason(exc)})") from None
         # a regular file can be read again (a photo's orientation tag) and, unless it grows,
@@ -614,9 +632,9 @@ class VideoSource(Source):
     def _open(self, path: str, container: av.container.InputContainer, live: bool
               ) -> InputInfo:
         """Pick the video stream, decode the first frame, describe the input."""
-        _refuse_unused_options(path, self._how, container)
+        _refuse_unused_options(path, self._how, container, self._names)
         if not any(not _is_cover(s) for s in container.streams.video):
-            cut = _cut_file(path, self._how.follow_s)
+            cut = _cut_file(path, self._how.follow_s, self._names)
             if cut:
                 raise InputError(cut)
             kinds = ", ".join(sorted({"cover picture" if _is_cover(s) else s.type
@@ -629,7 +647,7 @@ class VideoSource(Source):
         self._stream = stream = _main_video_stream(container)
         if stream.codec_context is None:  # e.g. a video file read with --format image2
             raise InputError(f"{path}: no decoder for its video stream as FFmpeg reads it "
-                             f"(format {container.format.name}; a wrong --format?)")
+                             f"(format {container.format.name}; a wrong {self._names.format}?)")
         self._dropped = 0  # packets the decoder refused (damage in the middle of the file)
         self._corrupt = 0  # pictures the decoder marked as decoded with errors
         self._damaged = False  # damage seen: later frames keep their places in the stream
@@ -655,9 +673,9 @@ class VideoSource(Source):
         try:
             self._first = next(self._decoded)
         except StopIteration:
-            raise InputError(_no_frame(path, self._how)) from None
+            raise InputError(_no_frame(path, self._how, self._names)) from None
         except av.FFmpegError as exc:
-            raise InputError(_undecodable(path, self._how, exc, live)) from None
+            raise InputError(_undecodable(path, self._how, exc, live, self._names)) from None
 
         rate = stream.guessed_rate or stream.average_rate
         fps = float(rate) if rate else None
@@ -937,8 +955,9 @@ class VideoSource(Source):
         if shortfall:
             follow_s = self._how.follow_s
             cause = ("truncated file?" if follow_s is None else
-                     f"truncated, or its writer paused longer than --follow's {follow_s:g} s: "
-                     "give a longer --follow if it was still being written")
+                     f"truncated, or its writer paused longer than {self._names.follow}'s "
+                     f"{follow_s:g} s: give a longer {self._names.follow} if it was still "
+                     "being written")
             raise PartialInputError(
                 f"{info.path}: decoding stopped at frame {index} ({shortfall}; {cause})", index)
         if not self._stream.frames:  # read to its end: the count is known now
