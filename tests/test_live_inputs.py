@@ -697,6 +697,37 @@ def test_video_out_sends_the_annotated_video_live_over_udp(tmp_path: Path) -> No
         refused.stderr
 
 
+def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None:
+    """`--video-out file:///.../clip.mp4` wrote the annotated video over the run's own input
+    (48862 bytes became 157168, the run then ending 'partial' at frame 80 as it read its own
+    output), past the checks that keep a run off its input and an earlier run's results;
+    `http://` was taken and failed after tracking ('cannot write video (Broken pipe)', exit 1)
+    and `udp://127.0.0.1:99999` ran, sending to a port FFmpeg chose. Each is refused before
+    anything runs, naming the option, and RunRequest(video_out=...) the same."""
+    scene = make_scene("smooth", seed=8, width=160, height=120, frames=10, fps=30)
+    clip = write_video(scene, tmp_path / "clip.mp4")
+    before = clip.read_bytes()
+    box = ",".join(f"{v:g}" for v in scene.boxes[0])
+    where = ("(udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is annotated.mp4 in --out "
+             "(see 'python -m vtrack run --help')")
+    for url, said in ((f"file://{clip}", f"file:// is not a live output vtrack sends to {where}"),
+                      ("http://127.0.0.1:9/x", f"http:// is not a live output vtrack sends to "
+                                               f"{where}"),
+                      ("udp://127.0.0.1:99999", "its port must be a number from 1 to 65535 "
+                                                "(see 'python -m vtrack run --help')")):
+        done = _run([str(clip), "--init", box, "--video-out", url, "-o", str(tmp_path / "o")])
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.decode().strip() == f"vtrack: error: --video-out {url}: {said}"
+    assert clip.read_bytes() == before and not (tmp_path / "o").exists()
+    import vtrack
+
+    with pytest.raises(vtrack.ConfigError, match=r"^video_out file:///x.ts: file:// is not a "
+                       r"live output vtrack sends to \(udp://HOST:PORT, tcp://, rtsp://, "
+                       r"rtmp://\); a file is annotated.mp4 in out_dir$"):
+        vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
+                          config=vtrack.load_config("s0"), video_out="file:///x.ts")
+
+
 def test_keeping_up_works_through_a_burst_and_passes_over_for_a_slow_consumer() -> None:
     """io.threads.KeepingUp: a burst a quick consumer can work through arrives whole; a
     consumer slower than the source (period 1 ms, 20 ms an item) gets the newest item and

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from vtrack.config import Config, config_from_resolved
-from vtrack.errors import ConfigError, real_or_nan
+from vtrack.errors import ConfigError, cut, real_or_nan
 from vtrack.evaluate.groundtruth import MAX_TARGET
 from vtrack.geometry import Box, as_box
 from vtrack.io import RawFormat
@@ -28,6 +28,7 @@ from vtrack.io.files import path_text
 from vtrack.io.identity import file_identity
 from vtrack.io.source import frame_at_time
 from vtrack.io.video import FFmpegInput, checked_ffmpeg
+from vtrack.io.videowriter import video_out_problem
 from vtrack.params import (
     MAX_CRF,
     MAX_FRAME_NUMBER,
@@ -133,6 +134,10 @@ class RunRequest:
             if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
                 raise TypeError(f"{name}: expected text or None, got "
                                 f"{type(getattr(self, name)).__name__}")
+        problem = None if self.video_out is None else video_out_problem(self.video_out,
+                                                                        "out_dir")
+        if problem:
+            raise ConfigError(f"video_out {cut(self.video_out)}: {problem}")
         object.__setattr__(self, "video", check_flag(self.video, "video"))
         if self.live is not None:
             object.__setattr__(self, "live", check_flag(self.live, "live"))

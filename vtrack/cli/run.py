@@ -200,14 +200,15 @@ def command(input_spec: str, config_specs: tuple[str, ...], init_text: str | Non
     from vtrack.evaluate.groundtruth import gt_origin_of, parse_box, target_of
     from vtrack.io import RawFormat
     from vtrack.io.video import FFmpegInput
+    from vtrack.io.videowriter import video_out_problem
     from vtrack.pipeline import check_first_track_id
     from vtrack.run import STATUS_COMPLETE, STATUS_INTERRUPTED, RunRequest, run
 
-    if video_out is not None and (no_video or "://" not in video_out):
-        raise click.UsageError(f"--video-out {video_out}: " + (
-            "the annotated video cannot go out with --no-video" if no_video else
-            "expected a URL (udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is "
-            "annotated.mp4 in --out"))
+    problem = None if video_out is None else \
+        "the annotated video cannot go out with --no-video" if no_video else \
+        video_out_problem(video_out)
+    if problem:
+        raise click.UsageError(f"--video-out {video_out}: {problem}")
     refuse_encoding_without_video(no_video)
     refuse_gt_origin_without_gt(gt_path is not None)
     if len(config_specs) > 1:  # click keeps the last of a repeated option without a word

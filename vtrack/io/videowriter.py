@@ -22,12 +22,13 @@ from collections import deque
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
+from urllib.parse import urlsplit
 
 import av
 import cv2
 import numpy as np
 
-from vtrack.errors import ConfigError, OutputError
+from vtrack.errors import ConfigError, OutputError, cut
 from vtrack.frame import Frame, I420Frame, to_video_range
 from vtrack.geometry import Window
 from vtrack.io.files import Closing, ffmpeg_file, os_reason, remove_quietly, temp_path
@@ -381,11 +382,36 @@ class VideoWriter(Closing):
 
 
 
+#: The live outputs ``--video-out`` sends to, by scheme, and the container each is sent as.
+LIVE_OUTPUT_FORMATS = {"udp": "mpegts", "tcp": "mpegts", "rtsp": "rtsp", "rtmp": "flv",
+                       "rtmps": "flv"}
+
+
 def live_format(url: str) -> str:
     """The container a live output ``url`` is sent as: RTSP to ``rtsp://``, FLV to
-    ``rtmp://``, MPEG-TS to anything else (``udp://``, ``tcp://`` ...)."""
-    scheme = url.split("://", 1)[0].lower()
-    return {"rtsp": "rtsp", "rtmp": "flv", "rtmps": "flv"}.get(scheme, "mpegts")
+    ``rtmp://``, MPEG-TS to ``udp://`` and ``tcp://`` (:data:`LIVE_OUTPUT_FORMATS`)."""
+    return LIVE_OUTPUT_FORMATS.get(url.split("://", 1)[0].lower(), "mpegts")
+
+
+def video_out_problem(url: str, out: str = "--out") -> str | None:
+    """Why ``url`` cannot be ``--video-out``'s live output, if so: not a URL, or one of a
+    scheme not in :data:`LIVE_OUTPUT_FORMATS` (``file://`` would write a file past the checks
+    that keep a run off its own input and an earlier run's results, ``http://`` is no live
+    output), or a port outside 1 to 65535 (FFmpeg would send to another one). ``out``: what
+    names the run's folder (``--out``, ``out_dir``)."""
+    scheme, sep, _ = url.partition("://")
+    where = f"udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is annotated.mp4 in {out}"
+    if not sep:
+        return f"expected a URL ({where}"
+    if scheme not in LIVE_OUTPUT_FORMATS:  # (FFmpeg reads udp, not UDP)
+        return f"{cut(scheme)}:// is not a live output vtrack sends to ({where}"
+    try:
+        port = urlsplit(url).port
+    except ValueError:  # Port out of range 0-65535, or not a number
+        port = 0
+    if port == 0:
+        return "its port must be a number from 1 to 65535"
+    return None
 
 
 def verify_video(path: Path | str, frames: int) -> str | None:
