@@ -6,7 +6,7 @@ import os
 from collections.abc import Callable
 from functools import partial
 
-from vtrack.errors import COMMAND_NAMES, ConfigError, OptionNames
+from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OptionNames
 from vtrack.io.files import check_input_path
 from vtrack.io.images import ImageFolderSource, images_of
 from vtrack.io.raw import RawFormat, RawSource, checked_fps
@@ -17,10 +17,21 @@ from vtrack.io.video import FFmpegInput, VideoSource
 
 def check_input(spec: str) -> None:
     """Raise InputError when ``spec`` is a local path that does not exist or cannot be read
-    (``-`` and URLs are checked when they are opened). Cheap: callers check it first, so a
-    mistyped name is reported as that, not as whatever else is missing."""
+    (``-`` and URLs are checked when they are opened), or a ``file://`` URL
+    (:func:`_refuse_file_url`). Cheap: callers check it first, so a mistyped name is reported
+    as that, not as whatever else is missing."""
+    _refuse_file_url(spec)
     if spec != "-" and not is_url(spec):
         check_input_path(spec)
+
+
+def _refuse_file_url(spec: str) -> None:
+    """InputError for a ``file://`` URL: FFmpeg reads it as the file it names, but as a URL
+    it is none of what keeps a run off the file it reads (``--stream``, ``--out`` and
+    ``--video-out`` written over it, ``--overwrite`` or not), nor read as a file is (its
+    sidecar box, a late start's seek): the file's path is asked for."""
+    if spec[:7].lower() == "file://":
+        raise InputError(f"{spec}: a file: URL; give the file's path ({spec[7:] or '/'})")
 
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
@@ -56,6 +67,7 @@ def source_opener(spec: str, raw: RawFormat | None = None, *, fps: float | None 
     a folder holds an image (InputError); nothing is opened (a FIFO, stdin, a URL, a device)
     or decoded. Returns the function that opens it and decodes its first frame (InputError
     when that is impossible)."""
+    _refuse_file_url(spec)
     ffmpeg = ffmpeg or FFmpegInput()
     live = is_live(spec) if live is None else live
     if fps is not None:
