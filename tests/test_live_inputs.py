@@ -167,6 +167,34 @@ def test_a_file_served_over_http_that_is_no_video_is_not_called_a_late_joined_st
     assert not (tmp_path / "o").exists()
 
 
+def test_a_tcp_sender_that_closes_inside_a_frame_is_not_called_a_truncated_file(
+        tmp_path: Path) -> None:
+    """A TCP sender that closed its connection inside a frame (killed mid-send) ended the run
+    'partial' with '... (3 frames missing before the last one; truncated file?)': no file was
+    cut. It says the sender stopped; the run is partial as before, its rows the frames that
+    came."""
+    scene = make_scene("smooth", seed=7, width=160, height=120, frames=60, fps=30)
+    data = write_video(scene, tmp_path / "clip.ts").read_bytes()
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def send_half() -> None:
+        with server, server.accept()[0] as connection:
+            connection.sendall(data[:len(data) // 2 + 50])  # 50 bytes into a 188-byte packet
+
+    sender = threading.Thread(target=send_half, daemon=True)
+    sender.start()
+    url = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    done = _run([url, "--init", ",".join(f"{v:g}" for v in scene.boxes[0]), "--no-video",
+                 "--timeout", "5", "-o", str(tmp_path / "out")])
+    sender.join(timeout=30)
+    assert done.returncode == 1, done.stderr
+    record = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert record["status"] == "partial"
+    assert record["error"].startswith(f"{url}: decoding stopped at frame ")
+    assert record["error"].endswith("; the sender stopped mid-stream?)"), record["error"]
+    assert "truncated file" not in done.stderr.decode()
+
+
 def test_a_url_nothing_listens_on_is_one_line_and_a_non_zero_exit(tmp_path: Path) -> None:
     with socket.socket() as probe:  # a port that was free a moment ago: nothing listens there
         probe.bind(("127.0.0.1", 0))

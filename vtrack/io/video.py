@@ -77,7 +77,7 @@ from vtrack.io.signatures import (
     photo_mirrored,
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
-from vtrack.io.specs import input_name, is_live
+from vtrack.io.specs import input_name, is_live, is_url
 from vtrack.io.threads import run_aside
 from vtrack.machine import cpu_count
 from vtrack.params import MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S, checked_seconds
@@ -954,7 +954,10 @@ class VideoSource(Source):
                      or self._torn_container())
         if shortfall:
             follow_s = self._how.follow_s
-            cause = ("truncated file?" if follow_s is None else
+            # (a URL: its sender closed the connection inside its last frames, as a killed
+            # one may; no file was cut)
+            cause = ("the sender stopped mid-stream?" if is_url(info.path) else
+                     "truncated file?" if follow_s is None else
                      f"truncated, or its writer paused longer than {self._names.follow}'s "
                      f"{follow_s:g} s: give a longer {self._names.follow} if it was still "
                      "being written")
