@@ -633,6 +633,19 @@ def test_a_request_of_an_empty_input_names_its_field(empty: str, tmp_path: Path)
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("empty", ["", " "])
+def test_a_request_streaming_to_an_empty_name_is_refused(empty: str, tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """RunRequest(stream="") ran and failed with 'stream : No such file or directory' (naming
+    nothing), and stream=" " wrote its lines into a file named " " in the current folder; both
+    are refused as the request is made, as vtrack run --stream "" is."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError, match=r"^stream: empty; give a file or - \(stdout\)$"):
+        vtrack.RunRequest(input=str(tmp_path), out_dir=tmp_path / "out",
+                          config=vtrack.load_config("s0"), stream=empty)
+    assert sorted(os.listdir(tmp_path)) == []
+
+
 def test_a_config_made_in_python_is_checked_as_a_config_file_is() -> None:
     """vtrack.Config made in Python skipped the chain's checks: Config("mine", "mine", "",
     [("hue", {}), ("backproject", {})]) tracked 3 frames "tracking" at the first box (no stage

@@ -134,6 +134,8 @@ class RunRequest:
             if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
                 raise TypeError(f"{name}: expected text or None, got "
                                 f"{type(getattr(self, name)).__name__}")
+        if self.stream is not None and not self.stream.strip():  # (as --stream refuses it)
+            raise ConfigError("stream: empty; give a file or - (stdout)")
         problem = None if self.video_out is None else video_out_problem(self.video_out,
                                                                         "out_dir")
         if problem:
