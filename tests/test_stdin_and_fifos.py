@@ -155,6 +155,37 @@ def test_follow_is_refused_where_it_cannot_apply(tmp_path: Path) -> None:
         assert not (tmp_path / "out").exists()
 
 
+def test_follow_is_refused_for_a_fifo_and_a_device(tmp_path: Path) -> None:
+    """`vtrack run FIFO --follow 1` tracked what its writer sent, then ended in a traceback
+    (GrowingFile asked the FIFO where it was: 'OSError: [Errno 29] Illegal seek', exit 1,
+    run.json 'failed'); /dev/zero with --follow was taken too. A FIFO is read until its
+    writer closes it, as stdin is: --follow is refused for it, and for a device, before
+    anything is read."""
+    fifo = tmp_path / "feed"
+    os.mkfifo(fifo)
+    clip = write_video(make_scene("smooth", seed=3, width=160, height=120, frames=10, fps=30),
+                       tmp_path / "clip.ts")
+    writer = subprocess.Popen([sys.executable, "-c", "import shutil, sys; shutil.copyfileobj("
+                               "open(sys.argv[1], 'rb'), open(sys.argv[2], 'wb'))",
+                               str(clip), str(fifo)], stderr=subprocess.DEVNULL)
+    try:
+        for spec, reason in ((fifo, f"{fifo} is a FIFO, read until its writer closes it"),
+                             ("/dev/zero", "/dev/zero is a device, not a file being written")):
+            done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(spec), "--follow",
+                                   "1", "--init", "1,1,8,8", "-o", str(tmp_path / "out")],
+                                  capture_output=True, timeout=START_BOUND_S, check=False)
+            assert done.returncode == 2, done.stderr
+            assert done.stderr.decode().strip() == (
+                "vtrack: error: --follow reads a video file that is still being written; "
+                f"{reason}")
+            assert not (tmp_path / "out").exists()
+    finally:
+        with contextlib.suppress(OSError):  # let a writer still waiting for a reader go on
+            os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
+        writer.kill()
+        writer.wait()
+
+
 @pytest.mark.parametrize("raw", [False, True])
 def test_stdin_closed_or_a_terminal_is_one_line(tmp_path: Path, raw: bool) -> None:
     """A closed stdin (`<&-`) was an AttributeError traceback; a terminal on stdin made a

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Callable
 from functools import partial
 
@@ -126,6 +127,14 @@ def _not_followed(spec: str, raw: RawFormat | None, names: OptionNames) -> str |
         return f"{spec} is a stream, read until it ends ({names.timeout})"
     if os.path.isdir(spec):
         return f"{spec} is an image folder, read as it is when it opens"
+    try:
+        mode = os.stat(spec).st_mode
+    except OSError:  # (not there: said as the path is checked)
+        return None
+    if stat.S_ISFIFO(mode):  # (no size to follow, no place to read from: as stdin)
+        return f"{spec} is a FIFO, read until its writer closes it"
+    if not stat.S_ISREG(mode):  # (a capture device too: read through OpenCV as it comes)
+        return f"{spec} is a device, not a file being written"
     return None
 
 
