@@ -6,6 +6,7 @@ import contextlib
 import csv
 import os
 import re
+import threading
 import warnings
 from collections.abc import Iterator
 from dataclasses import replace
@@ -145,6 +146,34 @@ def _red_block(count: int = 3) -> list[np.ndarray]:
     for frame in frames:
         frame[40:70, 50:90] = (0, 0, 255)
     return frames
+
+
+def test_a_source_closed_while_it_is_read_ends_its_reading_with_one_error(
+        tmp_path: Path) -> None:
+    """`it = iter(source); next(it); source.close(); next(it)` waited for ever (the reader
+    thread stopped without a word and the consumer waited on its queue), as did a loop over a
+    source another thread closed (a camera's stop button). The reading ends with one
+    RuntimeError saying the source was closed, not as if the input had ended."""
+    clip = write_video(make_scene("smooth", seed=2, width=96, height=72, frames=30, fps=30),
+                       tmp_path / "clip.mp4")
+    source = vtrack.open_source(clip)
+    frames = iter(source)
+    assert next(frames).index == 0
+    source.close()
+    result: list[BaseException] = []
+
+    def read_on() -> None:
+        try:
+            list(frames)
+        except RuntimeError as error:
+            result.append(error)
+
+    reader = threading.Thread(target=read_on, daemon=True)
+    reader.start()
+    reader.join(timeout=60)
+    assert not reader.is_alive(), "iterating a closed source still waits"
+    assert [str(error) for error in result] == [
+        f"{clip}: the source was closed while it was read"]
 
 
 def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: Path) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import itertools
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Literal
 
@@ -170,7 +170,15 @@ class Source(Closing, ABC):
         self._prefetch = (KeepingUp(self._frames(), name, 1.0 / (self.info.fps or 30.0))
                           if self.live
                           else Prefetcher(self._frames(), self.depth, name))
-        return iter(self._prefetch)
+        return self._while_open(self._prefetch)
+
+    def _while_open(self, frames: Iterable[Frame]) -> Iterator[Frame]:
+        """``frames``, then RuntimeError if they ended because the source was closed while
+        they were read (:meth:`close` from another thread, or between two ``next()``): not
+        the input's end."""
+        yield from frames
+        if self._closed:
+            raise RuntimeError(f"{self.info.path}: the source was closed while it was read")
 
     def skip_to(self, seconds: float) -> int | None:
         """Decode and drop the frames before ``seconds`` (their ``time_s``, the input's own

@@ -90,7 +90,9 @@ class Prefetcher(Generic[T]):
 
     Iterating the prefetcher yields the producer's items in order; if the producer raised, the
     same exception is raised in the consumer after every item produced before it. ``close()``
-    stops the producer (it notices at its next item) and waits for its thread to finish.
+    stops the producer (it notices at its next item) and waits for its thread to finish; an
+    iteration under way then ends (as :class:`KeepingUp`'s does), where it waited for ever for
+    an item the stopped producer would never queue.
     """
 
     def __init__(self, items: Iterator[T], depth: int, name: str) -> None:
@@ -127,8 +129,11 @@ class Prefetcher(Generic[T]):
         if not self._started:
             self._started = True
             self._thread.start()
-        while True:
-            item = self._queue.get()
+        while not self._stop.is_set():
+            try:
+                item = self._queue.get(timeout=STOP_POLL_S)
+            except queue.Empty:
+                continue
             if item is _END:
                 return
             if isinstance(item, _Failure):
