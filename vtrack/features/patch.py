@@ -110,13 +110,17 @@ def region_patch(frame: Frame, cx: float, cy: float, width: float, height: float
     if any(pad):
         pad = tuple(-(-p // k) for p in pad)
         pixels = cv2.copyMakeBorder(pixels, *pad, cv2.BORDER_REPLICATE)
-    # The sub-pixel offset of the region inside the cut pixels, then one resample.
     sx = (ix1 - ix0) / pixels.shape[1]
     sy = (iy1 - iy0) / pixels.shape[0]
     scale_x, scale_y = width / sx / out_w, height / sy / out_h
-    off_x, off_y = (x0 - ix0) / sx, (y0 - iy0) / sy
-    if min(scale_x, scale_y) > 1.5 and abs(off_x) < 1 and abs(off_y) < 1:  # INTER_AREA
+    if min(scale_x, scale_y) > 1.5:
+        # An area average of the whole pixels the region spans: its sub-pixel offset (under a
+        # pixel) is dropped and the span is up to two pixels wider. An exact average (offset
+        # and border pixels weighted) lowered the check sequences (benchmarks/RESULTS.md
+        # section 8, stop 59).
         return area_resized(pixels, out_w, out_h)
+    # The sub-pixel offset of the region inside the cut pixels, then one resample.
+    off_x, off_y = (x0 - ix0) / sx, (y0 - iy0) / sy
     matrix = np.array([[scale_x, 0.0, off_x + 0.5 * scale_x - 0.5],
                        [0.0, scale_y, off_y + 0.5 * scale_y - 0.5]])
     return cv2.warpAffine(pixels, matrix, (out_w, out_h),
