@@ -14,6 +14,7 @@ from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.io.images import ImageFolderSource, read_image
+from vtrack.io.signatures import float_tiff_problem
 from vtrack.io.video import VideoSource
 
 SKY, TARGET, BOX = 0.3, 0.9, 6
@@ -204,3 +205,28 @@ def test_a_float_tiff_is_refused_saying_so(tmp_path: Path, alone: bool) -> None:
                                      "20,40,6,6", "-o", str(tmp_path / "out")])
     assert one_error_line(done) == (f"vtrack: error: {image}: 32-bit float TIFF is not "
                                     "supported; save it as 8- or 16-bit")
+
+
+@pytest.mark.parametrize("order", ["big", "little"])
+@pytest.mark.parametrize("channels", [1, 3])
+def test_a_float_tiff_whose_tags_are_longs_is_named(tmp_path: Path, order: str,
+                                                    channels: int) -> None:
+    """BitsPerSample and SampleFormat typed LONG (4 bytes) rather than SHORT: a big-endian
+    file's were read as their first 2 bytes (0), and the float TIFF was not named."""
+    def number(value: int, size: int) -> bytes:
+        return value.to_bytes(size, order)  # type: ignore[arg-type]
+
+    far = 8 + 2 + 2 * 12 + 4  # where values that do not fit in their entry go
+    entries, values = b"", b""
+    for tag, value in ((258, 32), (339, 3)):  # BitsPerSample, SampleFormat
+        if channels == 1:
+            entries += number(tag, 2) + number(4, 2) + number(1, 4) + number(value, 4)
+        else:
+            entries += (number(tag, 2) + number(4, 2) + number(channels, 4)
+                        + number(far + len(values), 4))
+            values += number(value, 4) * channels
+    image = tmp_path / "float.tif"
+    image.write_bytes((b"MM\x00*" if order == "big" else b"II*\x00") + number(8, 4)
+                      + number(2, 2) + entries + number(0, 4) + values)
+    assert float_tiff_problem(image) == ("32-bit float TIFF is not supported; save it as 8- "
+                                         "or 16-bit")

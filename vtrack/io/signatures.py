@@ -442,6 +442,8 @@ def _head(path: str | os.PathLike[str]) -> tuple[bytes, int] | None:
 
 #: TIFF tags of the first image directory: BitsPerSample, SampleFormat (3: floating point).
 _TIFF_BITS, _TIFF_SAMPLE_FORMAT, _TIFF_FLOAT = 258, 339, 3
+#: The TIFF field type of 4-byte values (LONG); the others these tags take are 2-byte SHORTs.
+_TIFF_LONG = 4
 
 
 def float_tiff_problem(path: str | os.PathLike[str]) -> str | None:
@@ -449,7 +451,7 @@ def float_tiff_problem(path: str | os.PathLike[str]) -> str | None:
     holds floating-point samples (SampleFormat 3: a thermal camera's or a scientific tool's
     export), which the FFmpeg vtrack reads with cannot decode ("Invalid data found"); None
     otherwise, or when it cannot be read."""
-    shorts: dict[int, int] = {}
+    values: dict[int, int] = {}
     try:
         with open(path, "rb") as handle:
             head = handle.read(8)
@@ -466,16 +468,18 @@ def float_tiff_problem(path: str | os.PathLike[str]) -> str | None:
                 tag = number(entries[at:at + 2])
                 if tag not in (_TIFF_BITS, _TIFF_SAMPLE_FORMAT):
                     continue
-                if number(entries[at + 4:at + 8]) <= 2:  # SHORTs in the entry itself
-                    shorts[tag] = number(entries[at + 8:at + 10])
+                # SHORT (type 3) or LONG (type 4) values, in the entry itself when they fit
+                size = 4 if number(entries[at + 2:at + 4]) == _TIFF_LONG else 2
+                if number(entries[at + 4:at + 8]) * size <= 4:
+                    values[tag] = number(entries[at + 8:at + 8 + size])
                 else:  # one per channel, elsewhere: the first
                     handle.seek(number(entries[at + 8:at + 12]))
-                    shorts[tag] = number(handle.read(2))
+                    values[tag] = number(handle.read(size))
     except (OSError, ValueError):
         return None
-    if shorts.get(_TIFF_SAMPLE_FORMAT) != _TIFF_FLOAT:
+    if values.get(_TIFF_SAMPLE_FORMAT) != _TIFF_FLOAT:
         return None
-    return (f"{shorts.get(_TIFF_BITS, 32)}-bit float TIFF is not supported; save it as 8- or "
+    return (f"{values.get(_TIFF_BITS, 32)}-bit float TIFF is not supported; save it as 8- or "
             "16-bit")
 
 
