@@ -230,3 +230,29 @@ def test_a_float_tiff_whose_tags_are_longs_is_named(tmp_path: Path, order: str,
                       + number(2, 2) + entries + number(0, 4) + values)
     assert float_tiff_problem(image) == ("32-bit float TIFF is not supported; save it as 8- "
                                          "or 16-bit")
+
+
+def test_a_12_bit_format_is_read_by_ffmpegs_conversion(tmp_path: Path) -> None:
+    """A ``gray12le`` FFV1 declares its depth: FFmpeg's 8-bit conversion is right for it. It
+    was taken for a 16-bit one, warned of as "12-bit grey frames whose values use 16 bits"
+    (FFmpeg widens 12-bit values to 16 bits) and scaled as such."""
+    path = tmp_path / "g12.mkv"
+    image = scene(12, 0)
+    image[5, 5] = image[100, 150] = 4095  # the hot pixels, at a 12-bit top
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("ffv1", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "gray12le"
+        for _ in range(3):
+            picture = av.VideoFrame.from_ndarray(image << 4, format="gray16le")
+            for packet in stream.encode(picture.reformat(format="gray12le")):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    with VideoSource(str(path)) as source:
+        assert source.info.pix_fmt == "gray12le"
+        frames = list(source)
+        assert source.warnings == []
+    pixels = frames[-1].gray()
+    assert pixels.dtype == np.uint8
+    assert abs(int(pixels[0, 80]) - round(4095 * SKY) * 255 / 4095) <= 1  # 76 or 77
+    assert abs(int(pixels[42, 22]) - round(4095 * TARGET) * 255 / 4095) <= 1

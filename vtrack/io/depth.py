@@ -36,11 +36,12 @@ def grey(fmt: av.VideoFormat) -> bool:
 
 
 def deep(fmt: av.VideoFormat) -> bool:
-    """Whether pictures of pixel format ``fmt`` hold grey or RGB values of more than 8 bits (a
-    16-bit PNG's ``gray16be`` or ``rgb48be``, FFV1's ``gray16le``): read by the bits they use,
-    not FFmpeg's top 8 (YUV video of 10 bits declares its depth: FFmpeg's conversion
-    serves)."""
-    return (grey(fmt) or fmt.is_rgb) and fmt.components[0].bits > 8
+    """Whether pictures of pixel format ``fmt`` hold grey or RGB values of 16 bits (a 16-bit
+    PNG's ``gray16be`` or ``rgb48be``, FFV1's ``gray16le``, ``gbrp16le``): read by the bits
+    they use, not FFmpeg's top 8. Formats of 9 to 15 bits (``gray12le``, ``gbrp10le``: FFV1,
+    DPX, RGB HEVC) and YUV video of 10 bits declare their depth: FFmpeg's conversion
+    serves."""
+    return (grey(fmt) or fmt.is_rgb) and fmt.components[0].bits == MAX_BITS
 
 
 def stored_pixels(picture: av.VideoFrame) -> np.ndarray:
@@ -88,13 +89,11 @@ def mixed_note(path: object, bits: int | None) -> str:
             "images of another depth are not named)")
 
 
-def depth_note(name: str, bits: int, what: str = "images", stored: int = MAX_BITS,
-               colour: bool = False) -> str:
-    """The warning saying how ``name``'s grey (or ``colour``) ``what`` (``images`` of a
-    sequence, ``frames`` of a video) of ``stored`` bits, whose values use ``bits`` bits, were
-    read."""
+def depth_note(name: str, bits: int, what: str = "images", colour: bool = False) -> str:
+    """The warning saying how ``name``'s 16-bit grey (or ``colour``) ``what`` (``images`` of a
+    sequence, ``frames`` of a video), whose values use ``bits`` bits, were read."""
     top = (1 << bits) - 1
     shade = "colour" if colour else "grey"
-    return (f"{name}: {stored}-bit {shade} {what} whose values use {bits} bits (the first "
+    return (f"{name}: {MAX_BITS}-bit {shade} {what} whose values use {bits} bits (the first "
             f"{what[:-1]}'s, hot pixels aside): read as 8-bit {shade}, 0..{top} scaled to 0..255 "
             "(a brighter value clips at 255)")

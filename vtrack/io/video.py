@@ -617,9 +617,8 @@ class VideoSource(Source):
             raise
         super().__init__(info)
         if self._bits is not None:
-            fmt = self._first.format
-            self._warnings.append(depth_note(path, self._bits, "frames", fmt.components[0].bits,
-                                             fmt.is_rgb))
+            self._warnings.append(depth_note(path, self._bits, "frames",
+                                             colour=self._first.format.is_rgb))
         several = _several_videos(path, container, self._stream)
         if several:
             self._warnings.append(several)
