@@ -1,6 +1,6 @@
 """``stopped_by_frames``: whether ``--frames N`` ended a run before its input ended. An input
-whose length is known without reading on (an image folder, a regular file of raw frames) that
-ends at the N-th frame was read to its end, not stopped."""
+whose length is known without reading on (an image folder, a regular file of raw frames, an
+image given alone) that ends at the N-th frame was read to its end, not stopped."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import cv2
 import pytest
 
 from vtrack.scenes import make_scene, write_clip
@@ -68,3 +69,19 @@ def test_raw_file(clips: tuple[Path, Path, str], tmp_path: Path, frames: int,
         fed.wait()
     assert done.returncode == 0, done.stderr
     assert json.loads((tmp_path / "pipe" / "run.json").read_text())["stopped_by_frames"]
+
+
+
+@pytest.mark.parametrize(("ext", "copies", "expected"), [
+    (".jpg", 1, False), (".png", 1, False), (".png", 2, True)])
+def test_a_still_image_given_alone(clips: tuple[Path, Path, str], tmp_path: Path, ext: str,
+                                   copies: int, expected: bool) -> None:
+    """A JPEG or PNG given alone ends at frame 0: ``--frames 1`` read it to its end. It was
+    recorded as stopped by ``--frames`` (a video's end is known only by reading on). A file of
+    two PNGs one after the other (FFmpeg reads both) still is."""
+    images, _, box = clips
+    photo = tmp_path / f"photo{ext}"
+    assert cv2.imwrite(str(photo), cv2.imread(str(sorted((images / "img").iterdir())[0])))
+    photo.write_bytes(photo.read_bytes() * copies)
+    assert _stopped([str(photo), "--init", box, "--frames", "1"], tmp_path / "out") == (
+        1, expected)

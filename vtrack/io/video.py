@@ -668,6 +668,10 @@ class VideoSource(Source):
         photo = stream.codec_context.name in PHOTO_CODECS
         self._photo: bytes | None = None
         self._keep_photo = photo and not self._regular
+        #: A photo file's size until its first packet is read (:meth:`_decode`), and whether
+        #: that packet was the whole file: a still image alone, frame 0 its last.
+        self._photo_size = os.path.getsize(path) if photo and self._seekable else None
+        self._still = False
         self._decoded = self._decode()
         try:
             self._first = next(self._decoded)
@@ -779,6 +783,11 @@ class VideoSource(Source):
         read = _python_file(self._container)
         return read.end_wait if isinstance(read, GrowingFile) else self._quiet
 
+    def ends_after(self, index: int) -> bool:
+        """Frame 0 of a still image given alone (a PNG, JPEG, TIFF or WebP file whose first
+        picture is the whole file) is its last; for any other input, only reading on tells."""
+        return self._still and index == 0
+
     def stop_at_end(self) -> bool:
         read = _python_file(self._container)
         return isinstance(read, GrowingFile) and read.stop_at_end()
@@ -792,6 +801,9 @@ class VideoSource(Source):
             for packet in self._container.demux(self._stream):
                 if self._keep_photo:  # a photo's first packet: the whole photo, its tags too
                     self._keep_photo, self._photo = False, bytes(packet)
+                if self._photo_size is not None:  # the image is the whole file: nothing after
+                    self._still = packet.size == self._photo_size
+                    self._photo_size = None
                 try:
                     frames = packet.decode()
                 except av.error.InvalidDataError:
