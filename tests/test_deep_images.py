@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import av
@@ -256,3 +258,35 @@ def test_a_12_bit_format_is_read_by_ffmpegs_conversion(tmp_path: Path) -> None:
     assert pixels.dtype == np.uint8
     assert abs(int(pixels[0, 80]) - round(4095 * SKY) * 255 / 4095) <= 1  # 76 or 77
     assert abs(int(pixels[42, 22]) - round(4095 * TARGET) * 255 / 4095) <= 1
+
+
+def test_an_8_bit_frame_in_a_deep_stream_is_read_as_the_first(tmp_path: Path) -> None:
+    """PNGs on stdin (``--format image2pipe``), a 12-bit one in 16 bits then an 8-bit grey
+    one: the second was converted by FFmpeg to colour and the run refused it ("frame 1:
+    160x120 colour, the first frame was 160x120 grey"). It is read as it is, grey as the first,
+    with one warning."""
+    deep_png, grey_png = tmp_path / "deep.png", tmp_path / "grey.png"
+    assert cv2.imwrite(str(deep_png), scene(12, 0))
+    assert cv2.imwrite(str(grey_png), (scene(12, 1) >> 4).astype(np.uint8))
+    stream = tmp_path / "frames.pngs"
+    stream.write_bytes(deep_png.read_bytes() + grey_png.read_bytes() + deep_png.read_bytes())
+    with VideoSource(str(stream)) as source:
+        frames = list(source)
+        warnings = source.warnings
+    assert [type(frame).__name__ for frame in frames] == ["GrayFrame"] * 3
+    assert frames[1].gray()[0, 80] == round(4095 * SKY) >> 4
+    assert frames[2].gray()[0, 80] == round(round(4095 * SKY) * 255 / 4095)
+    mixed = (f"{stream}: frame 1: an 8-bit frame among 16-bit ones (values of 12 bits, "
+             "0..4095 scaled to 0..255): read as it is, 0..255 (the sequence's depth is its "
+             "first frame's; later frames of another depth are not named)")
+    assert warnings[1:] == [mixed]
+    out = tmp_path / "out"
+    with open(stream, "rb") as feed:
+        done = subprocess.run([sys.executable, "-m", "vtrack", "run", "-", "--format",
+                               "image2pipe", "--init", "20,40,6,6", "-c", "s2", "-q",
+                               "--no-video", "-o", str(out)], stdin=feed, capture_output=True,
+                              text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    run = json.loads((out / "run.json").read_text())
+    assert run["frames"] == 3
+    assert run["warnings"][1] == mixed.replace(str(stream), "-")

@@ -61,12 +61,6 @@ def layout(pixels: np.ndarray) -> str:
     return "bgr48le" if deeper else "bgr24"
 
 
-def first_bits(picture: av.VideoFrame) -> int | None:
-    """The bits a stream whose first picture is ``picture`` is scaled by (:func:`used_bits`
-    of it) when it is :func:`deep`; None when it is not (FFmpeg's conversion serves)."""
-    return used_bits(stored_pixels(picture)) if deep(picture.format) else None
-
-
 def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     """``pixels`` as uint8: as they are when they are 8-bit, else 16-bit values of ``bits``
     bits scaled so that ``2**bits - 1`` is 255 (rounded; a larger value clips at 255)."""
@@ -75,18 +69,66 @@ def eight_bit(pixels: np.ndarray, bits: int = MAX_BITS) -> np.ndarray:
     return cv2.convertScaleAbs(pixels, alpha=255.0 / ((1 << bits) - 1))
 
 
-def mixed_note(path: object, bits: int | None) -> str:
-    """The warning of ``path``, an image of another depth than its sequence's first: 16-bit in
-    a sequence of 8-bit images (``bits`` None), or 8-bit in one of 16-bit images whose values
-    use ``bits`` bits; said once, of the first such image."""
+def mixed_note(path: object, bits: int | None, what: str = "image") -> str:
+    """The warning of ``path``, an image (or a video's frame: ``what``) of another depth than
+    its sequence's first: 16-bit in a sequence of 8-bit ones (``bits`` None), or 8-bit in one
+    of 16-bit ones whose values use ``bits`` bits; said once, of the first such one."""
     if bits is None:
         how = "among 8-bit ones: read as 16-bit values, 0..65535 scaled to 0..255"
     else:
         how = (f"among 16-bit ones (values of {bits} bits, 0..{(1 << bits) - 1} scaled to "
                "0..255): read as it is, 0..255")
     kind = "an 8-bit" if bits is not None else "a 16-bit"
-    return (f"{path}: {kind} image {how} (the sequence's depth is its first image's; later "
-            "images of another depth are not named)")
+    return (f"{path}: {kind} {what} {how} (the sequence's depth is its first {what}'s; later "
+            f"{what}s of another depth are not named)")
+
+
+def as_kind(pixels: np.ndarray, colour: bool) -> np.ndarray:
+    """8-bit ``pixels`` (grey ``(h, w)`` or BGR ``(h, w, 3)``) as ``colour`` (BGR) or grey
+    ones: a sequence is grey or colour as its first picture is."""
+    if colour and pixels.ndim == 2:
+        return cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
+    if not colour and pixels.ndim == 3:
+        return cv2.cvtColor(pixels, cv2.COLOR_BGR2GRAY)
+    return pixels
+
+
+class DepthScale:
+    """How the pictures of a sequence (an image folder's ``images``, a video's ``frames``:
+    ``what``) named ``name``, whose first picture as stored (:func:`stored_pixels`) is
+    ``first``, are read as 8-bit: the 16-bit ones by the bits the first one uses
+    (:func:`used_bits`; 16 when the first is 8-bit), 8-bit ones as they are. Its
+    :attr:`notes` (frame index, warning) say so: the depth of a 16-bit sequence, and the first
+    picture of another depth than the first's."""
+
+    def __init__(self, name: str, first: np.ndarray, what: str = "images") -> None:
+        self.name, self.what = name, what
+        #: Whether the sequence is 16-bit (its first picture is), and grey or colour.
+        self.deep = first.dtype == np.uint16
+        self.colour = first.ndim == 3
+        #: The bits 16-bit values are scaled by.
+        self.bits = used_bits(first) if self.deep else MAX_BITS
+        self.notes: list[tuple[int, str]] = []
+        if self.deep:
+            self.notes.append((0, depth_note(name, self.bits, what, self.colour)))
+        self._mixed = False  # a picture of another depth than the first's was noted
+        self._told = 0  # the notes :meth:`news` handed on
+
+    def frame(self, pixels: np.ndarray, index: int, path: object = None) -> np.ndarray:
+        """``pixels``, picture ``index`` as stored (``path``, the image it was read from;
+        None: a frame of ``name``), as uint8, grey or BGR as they are (:func:`as_kind`
+        matches them to the sequence's)."""
+        if not self._mixed and (pixels.dtype == np.uint16) != self.deep:
+            self._mixed = True
+            subject = path if path is not None else f"{self.name}: frame {index}"
+            self.notes.append((index, mixed_note(subject, self.bits if self.deep else None,
+                                                 self.what[:-1])))
+        return eight_bit(pixels, self.bits)
+
+    def news(self) -> list[tuple[int, str]]:
+        """The :attr:`notes` added since the last call."""
+        new, self._told = self.notes[self._told:], len(self.notes)
+        return new
 
 
 def depth_note(name: str, bits: int, what: str = "images", colour: bool = False) -> str:

@@ -36,15 +36,7 @@ import numpy as np
 from vtrack.errors import InputError, PartialInputError, plural, quoted
 from vtrack.frame import BgrFrame, Frame, GrayFrame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.depth import (
-    MAX_BITS,
-    depth_note,
-    eight_bit,
-    layout,
-    mixed_note,
-    stored_pixels,
-    used_bits,
-)
+from vtrack.io.depth import DepthScale, as_kind, eight_bit, layout, stored_pixels, used_bits
 from vtrack.io.files import ffmpeg_file, os_reason, places_of, real_path
 from vtrack.io.identity import images_identity
 from vtrack.io.limits import SIDECAR_BYTES, read_text_bounded
@@ -288,11 +280,9 @@ class ImageFolderSource(Source):
         self._ended = False
         self._notes: list[_Note] = []
         stored, self._turn = read_stored(self._files[0])
-        #: Whether the sequence is of 16-bit images (its first image is), and the bits their
-        #: values use (the first image's; 16 when it is 8-bit).
-        self._deep = stored.dtype == np.uint16
-        self._bits = used_bits(stored) if self._deep else MAX_BITS
-        self._first = turned(eight_bit(stored, self._bits), self._turn)
+        #: How the images are read as 8-bit (the first image's depth and bits).
+        self._scale = DepthScale(folder, stored)
+        self._first = turned(self._scale.frame(stored, 0), self._turn)
         height, width = self._first.shape[:2]
         fps = fps or sequence_fps(root) or DEFAULT_FPS
         # given the img/ folder itself: named after the sequence
@@ -312,12 +302,14 @@ class ImageFolderSource(Source):
                 pix_fmt=layout(stored),
             )
         )
-        if self._deep:
-            self._notes.append(_Note(0, depth_note(folder, self._bits,
-                                                   colour=stored.ndim == 3)))
+        self._note_depth()
 
     def image_identity(self) -> str | None:
         return images_identity(self._files)
+
+    def _note_depth(self) -> None:
+        """Keep the notes :attr:`_scale` added (the sequence's depth, an image of another)."""
+        self._notes.extend(_Note(index, text) for index, text in self._scale.news())
 
     def ends_after(self, index: int) -> bool:
         """Whether ``index`` is the last image's place (its numbering's last)."""
@@ -427,7 +419,6 @@ class ImageFolderSource(Source):
         size = self._first.shape[:2]
         first, self._first = self._first, None
         turned_apart = False  # an image's own tag said another turn than the first's
-        mixed = False  # an image of another depth than the first's was noted
         places, files = self._places[self._begin:], self._files[self._begin:]
         # Skips count from the run's first frame on: a start given as a frame number
         # (start_near) is that frame, decoded or not, as in a whole run; a start by time
@@ -446,11 +437,8 @@ class ImageFolderSource(Source):
                     pixels = first
                 else:
                     stored, turn = read_stored(path)
-                    if not mixed and (stored.dtype == np.uint16) != self._deep:
-                        mixed = True
-                        self._notes.append(_Note(index, mixed_note(
-                            path, self._bits if self._deep else None)))
-                    stored = eight_bit(stored, self._bits)
+                    stored = self._scale.frame(stored, index, path)
+                    self._note_depth()
                     pixels = turned(stored, turn)
                     if pixels.shape[:2] != size and turn != self._turn:
                         pixels = turned(stored, self._turn)  # a tag lost or added in an edit
@@ -475,14 +463,9 @@ class ImageFolderSource(Source):
                 began = True
                 self._run_first = self._run_begins(index)
             time_s = index / fps
-            if first.ndim == 2:  # the first image decides: a sequence is grey or colour
-                if pixels.ndim == 3:
-                    pixels = cv2.cvtColor(pixels, cv2.COLOR_BGR2GRAY)
-                yield GrayFrame(index, time_s, pixels)
-            else:
-                if pixels.ndim == 2:
-                    pixels = cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
-                yield BgrFrame(index, time_s, pixels)
+            # the first image decides: a sequence is grey or colour
+            pixels = as_kind(pixels, self._scale.colour)
+            yield (BgrFrame if self._scale.colour else GrayFrame)(index, time_s, pixels)
 
     def _release(self) -> None:
         """Nothing stays open: each image is opened and closed by :func:`read_stored`."""

@@ -59,7 +59,7 @@ from vtrack.errors import (
 )
 from vtrack.frame import BgrFrame, Frame, GrayFrame, I420Frame
 from vtrack.geometry import frame_size_problem
-from vtrack.io.depth import deep, depth_note, eight_bit, first_bits, stored_pixels
+from vtrack.io.depth import DepthScale, as_kind, deep, stored_pixels
 from vtrack.io.ffoptions import input_protocols, unused_options
 from vtrack.io.files import ffmpeg_file, os_reason, piped_stdin
 from vtrack.io.follow import FollowedFileChanged, GrowingFile
@@ -433,22 +433,23 @@ RAW_SUFFIXES = (".raw", ".yuv", ".rgb", ".bgr", ".gray")
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
                   rotation: int | None = None, mirrored: bool = False,
-                  bits: int | None = None) -> Frame:
+                  scale: DepthScale | None = None) -> Frame:
     """A decoded picture as the :class:`Frame` every reader hands over: I420 planes as they
     are (4:2:0 of even size; converted by OpenCV only where a stage asks), else BGR from
     FFmpeg's converter; turned by ``rotation`` degrees (the stream's display matrix; None:
     the picture's own, as ``vtrack run`` turns a phone's footage), after a flip top to
     bottom when ``mirrored`` (a photo's mirroring orientation, FFmpeg's turn being the rest of
-    it: :func:`~vtrack.io.signatures.photo_mirrored`). With ``bits`` (the bits the stream's
-    first frame uses, :func:`~vtrack.io.depth.first_bits`), a deep picture is a
-    :class:`GrayFrame` (RGB: a :class:`BgrFrame`) scaled by them
-    (:func:`~vtrack.io.depth.eight_bit`); without, FFmpeg converts it (its top 8 bits)."""
+    it: :func:`~vtrack.io.signatures.photo_mirrored`). With ``scale``, the reading of a deep
+    stream (its first frame is :func:`~vtrack.io.depth.deep`), every picture, deep or 8-bit,
+    is read by it (:meth:`~vtrack.io.depth.DepthScale.frame`) and is a :class:`GrayFrame` or
+    a :class:`BgrFrame` as the first frame is; without, FFmpeg converts a deep picture (its
+    top 8 bits)."""
     if rotation is None:
         rotation = quarter_turns(decoded.rotation)
-    if bits is not None and deep(decoded.format):
-        pixels = eight_bit(stored_pixels(decoded), bits)
+    if scale is not None:
+        pixels = as_kind(scale.frame(stored_pixels(decoded), index), scale.colour)
         pixels = turned(cv2.flip(pixels, 0) if mirrored else pixels, rotation)
-        return (GrayFrame if pixels.ndim == 2 else BgrFrame)(index, time_s, pixels)
+        return (BgrFrame if scale.colour else GrayFrame)(index, time_s, pixels)
     if mirrored:
         return BgrFrame(index, time_s,
                         turned(cv2.flip(decoded.to_ndarray(format="bgr24"), 0), rotation))
@@ -616,9 +617,7 @@ class VideoSource(Source):
             container.close()
             raise
         super().__init__(info)
-        if self._bits is not None:
-            self._warnings.append(depth_note(path, self._bits, "frames",
-                                             colour=self._first.format.is_rgb))
+        self._note_depth()
         several = _several_videos(path, container, self._stream)
         if several:
             self._warnings.append(several)
@@ -712,8 +711,10 @@ class VideoSource(Source):
         self._uncounted: int | None = None
 
         self._rotation = quarter_turns(self._first.rotation)
-        #: The bits a deep grey stream's values use (its first frame's; None: not deep).
-        self._bits = first_bits(self._first)
+        #: How a deep stream (its first frame is deep) is read as 8-bit; None: FFmpeg's
+        #: conversion serves.
+        self._scale = DepthScale(path, stored_pixels(self._first), "frames") if deep(
+            self._first.format) else None
         # a photo whose orientation tag mirrors it (FFmpeg's rotation is the rest of it)
         self._mirrored = photo and (photo_mirrored(path) if self._regular else
                                     photo_bytes_mirrored(self._photo or b""))
@@ -782,6 +783,11 @@ class VideoSource(Source):
         quiet: the frames the decoder still held come only after it."""
         read = _python_file(self._container)
         return read.end_wait if isinstance(read, GrowingFile) else self._quiet
+
+    def _note_depth(self) -> None:
+        """Keep the warnings :attr:`_scale` added (the stream's depth, a frame of another)."""
+        if self._scale is not None:
+            self._warnings.extend(text for _, text in self._scale.news())
 
     def ends_after(self, index: int) -> bool:
         """Frame 0 of a still image given alone (a PNG, JPEG, TIFF or WebP file whose first
@@ -938,8 +944,10 @@ class VideoSource(Source):
                 if self._uncounted is None and self._tracked(index, time_s):
                     # places passed over before the run's frames (see _run_begins)
                     self._uncounted = self._run_begins(index) - yielded
-                yield decoded_frame(decoded, index, time_s, self._rotation, self._mirrored,
-                                    self._bits)
+                frame = decoded_frame(decoded, index, time_s, self._rotation, self._mirrored,
+                                      self._scale)
+                self._note_depth()
+                yield frame
                 index += 1
                 yielded += 1
         except av.error.ExitError:  # the timeout's interrupt: a network input went quiet
