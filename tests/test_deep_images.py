@@ -64,8 +64,9 @@ def test_deep_grey_scaled_by_the_bits_used(tmp_path: Path, bits: int, ext: str) 
     assert pixels[5, 5] == 255  # a hot pixel clips
     assert source.warnings == [
         f"{folder}: 16-bit grey images whose values use {bits} bits (the first image's, hot "
-        f"pixels aside): read as 8-bit grey, 0..{top} scaled to 0..255 (a brighter value "
-        "clips at 255)"]
+        f"pixels aside): read as 8-bit grey, 0..{top} scaled to 0..255 (a later "
+        "image whose values use more bits scales by them from it on, with a warning; isolated "
+        "brighter pixels clip at 255)"]
     assert read_image(folder / f"frame_0002{ext}")[0, 80] == pixels[0, 80]
 
 
@@ -113,7 +114,9 @@ def test_12_bit_video_tracked_as_its_8_bit_copy(tmp_path: Path) -> None:
     assert run["input"]["pix_fmt"] == "gray16le"
     assert run["warnings"] == [
         f"{video}: 16-bit grey frames whose values use 12 bits (the first frame's, hot pixels "
-        "aside): read as 8-bit grey, 0..4095 scaled to 0..255 (a brighter value clips at 255)"]
+        "aside): read as 8-bit grey, 0..4095 scaled to 0..255 (a later frame whose values use "
+        "more bits scales by them from it on, with a warning; isolated brighter pixels clip at "
+        "255)"]
     overlaps = [float(row.split(",")[10]) for row in
                 (out / "track.csv").read_text().splitlines()[1:]]
     assert len(overlaps) == 20 and min(overlaps) > 0.5
@@ -158,8 +161,9 @@ def test_deep_colour_scaled_by_the_bits_used(tmp_path: Path, alpha: bool) -> Non
     assert source.info.pix_fmt == "bgr48le"
     assert source.warnings == [
         f"{folder}: 16-bit colour images whose values use 12 bits (the first image's, hot "
-        "pixels aside): read as 8-bit colour, 0..4095 scaled to 0..255 (a brighter value "
-        "clips at 255)"]
+        "pixels aside): read as 8-bit colour, 0..4095 scaled to 0..255 (a later "
+        "image whose values use more bits scales by them from it on, with a warning; isolated "
+        "brighter pixels clip at 255)"]
     sky, target = [76, 38, 76], [230, 115, 230]  # 1228, 614 and 3686, 1843 of 4095
     assert frames[2].bgr()[0, 80].tolist() == sky
     assert frames[2].bgr()[42, 30].tolist() == target
@@ -290,3 +294,50 @@ def test_an_8_bit_frame_in_a_deep_stream_is_read_as_the_first(tmp_path: Path) ->
     run = json.loads((out / "run.json").read_text())
     assert run["frames"] == 3
     assert run["warnings"][1] == mixed.replace(str(stream), "-")
+
+
+@pytest.mark.parametrize("given", ["folder", "video"])
+def test_a_dark_first_frame_does_not_white_out_the_rest(tmp_path: Path, given: str) -> None:
+    """A black first frame (a lens cap, a shutter frame) then 12-bit frames, then 14-bit ones:
+    the scale was the first frame's 8-bit floor, every later value clipped at 255 (a white
+    picture) and the warning said "0..255 scaled to 0..255". It rises with the bits a later
+    frame uses, one warning per rise, and never falls."""
+    pictures = [np.zeros((120, 160), np.uint16), scene(12, 1), scene(12, 2), scene(14, 3),
+                scene(12, 4)]
+    if given == "folder":
+        path = tmp_path / "seq"
+        path.mkdir()
+        for i, picture in enumerate(pictures):
+            assert cv2.imwrite(str(path / f"{i:04d}.png"), picture)
+        source: ImageFolderSource | VideoSource = ImageFolderSource(str(path))
+        what, rise = "image", [f"{path / '0001.png'}: frame 1", f"{path / '0003.png'}: frame 3"]
+    else:
+        path = tmp_path / "dark.mkv"
+        with av.open(str(path), "w") as container:
+            stream = container.add_stream("ffv1", rate=30)
+            stream.width, stream.height, stream.pix_fmt = 160, 120, "gray16le"
+            for picture in pictures:
+                for packet in stream.encode(av.VideoFrame.from_ndarray(picture,
+                                                                       format="gray16le")):
+                    container.mux(packet)
+            for packet in stream.encode():
+                container.mux(packet)
+        source = VideoSource(str(path))
+        what, rise = "frame", [f"{path}: frame 1", f"{path}: frame 3"]
+    with source:
+        frames = [frame.gray() for frame in source]
+        warnings = source.warnings
+    assert warnings == [
+        f"{path}: 16-bit grey {what}s whose values use 8 bits or fewer (the first {what}'s, hot "
+        f"pixels aside): read as 8-bit grey, 0..255 as they are (a later {what} whose values "
+        "use more bits scales by them from it on, with a warning; isolated brighter pixels "
+        "clip at 255)",
+        f"{rise[0]}'s values use 12 bits, more than before: scaled 0..4095 to 0..255 from this "
+        f"{what} on",
+        f"{rise[1]}'s values use 14 bits, more than before: scaled 0..16383 to 0..255 from "
+        f"this {what} on"]
+    assert frames[0].max() == 0
+    sky12, sky14 = round(4095 * SKY), round(16383 * SKY)
+    assert frames[2][0, 80] == round(sky12 * 255 / 4095)  # 76, not 255
+    assert frames[3][0, 80] == round(sky14 * 255 / 16383)
+    assert frames[4][0, 80] == round(sky12 * 255 / 16383)  # the scale does not fall back

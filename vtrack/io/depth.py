@@ -6,9 +6,11 @@ the low bits, so FFmpeg's conversion (the top 8 of the 16 bits) would leave them
 0..63: a picture near black, its contrast gone. A sequence (an image folder, a video) is
 scaled instead by the bits its first picture uses: its largest value (of its three channels,
 in colour) once isolated pixels (hot or dead pixels, a marker at 65535) are set aside by a 3x3
-median, rounded up to a whole number of bits (at least 8), is mapped to 255; every picture of
-the sequence is scaled alike (no gain that changes from frame to frame), a brighter value
-clipping at 255.
+median, rounded up to a whole number of bits (at least 8), is mapped to 255. The pictures
+after it are scaled alike (no gain that follows each frame's brightness) until one uses more
+bits (a dark or dim first frame: a lens cap, a fade-in, a thermal camera's shutter): the
+scale rises to them from that picture on, with a warning, and never falls; isolated pixels
+brighter than the scale clip at 255.
 """
 
 from __future__ import annotations
@@ -97,16 +99,18 @@ class DepthScale:
     """How the pictures of a sequence (an image folder's ``images``, a video's ``frames``:
     ``what``) named ``name``, whose first picture as stored (:func:`stored_pixels`) is
     ``first``, are read as 8-bit: the 16-bit ones by the bits the first one uses
-    (:func:`used_bits`; 16 when the first is 8-bit), 8-bit ones as they are. Its
-    :attr:`notes` (frame index, warning) say so: the depth of a 16-bit sequence, and the first
-    picture of another depth than the first's."""
+    (:func:`used_bits`; 16 when the first is 8-bit), raised from a later one whose values use
+    more bits on, 8-bit ones as they are. Its :attr:`notes` (frame index, warning) say so: the
+    depth of a 16-bit sequence, each rise, and the first picture of another depth than the
+    first's."""
 
     def __init__(self, name: str, first: np.ndarray, what: str = "images") -> None:
         self.name, self.what = name, what
         #: Whether the sequence is 16-bit (its first picture is), and grey or colour.
         self.deep = first.dtype == np.uint16
         self.colour = first.ndim == 3
-        #: The bits 16-bit values are scaled by.
+        #: The bits 16-bit values are scaled by: the first picture's, then those of a later one
+        #: whose values use more (the scale rises, never falls).
         self.bits = used_bits(first) if self.deep else MAX_BITS
         self.notes: list[tuple[int, str]] = []
         if self.deep:
@@ -118,12 +122,26 @@ class DepthScale:
         """``pixels``, picture ``index`` as stored (``path``, the image it was read from;
         None: a frame of ``name``), as uint8, grey or BGR as they are (:func:`as_kind`
         matches them to the sequence's)."""
-        if not self._mixed and (pixels.dtype == np.uint16) != self.deep:
+        subject = path if path is not None else self.name
+        deeper = pixels.dtype == np.uint16
+        if not self._mixed and deeper != self.deep:
             self._mixed = True
-            subject = path if path is not None else f"{self.name}: frame {index}"
-            self.notes.append((index, mixed_note(subject, self.bits if self.deep else None,
-                                                 self.what[:-1])))
+            self.notes.append((index, mixed_note(
+                subject if path is not None else f"{subject}: frame {index}",
+                self.bits if self.deep else None, self.what[:-1])))
+        elif deeper and self.deep and (bits := self._bits_over(pixels)) > self.bits:
+            self.bits = bits
+            top = (1 << self.bits) - 1
+            self.notes.append((index, (
+                f"{subject}: frame {index}'s values use {self.bits} bits, more than before: "
+                f"scaled 0..{top} to 0..255 from this {self.what[:-1]} on")))
         return eight_bit(pixels, self.bits)
+
+    def _bits_over(self, pixels: np.ndarray) -> int:
+        """The bits 16-bit ``pixels`` use (:func:`used_bits`, hot pixels aside) when their
+        plain largest value (cheap: looked at first) is above the scale; else the scale's."""
+        largest = cv2.minMaxLoc(pixels.reshape(pixels.shape[0], -1))[1]
+        return used_bits(pixels) if largest > (1 << self.bits) - 1 else self.bits
 
     def news(self) -> list[tuple[int, str]]:
         """The :attr:`notes` added since the last call."""
@@ -133,9 +151,13 @@ class DepthScale:
 
 def depth_note(name: str, bits: int, what: str = "images", colour: bool = False) -> str:
     """The warning saying how ``name``'s 16-bit grey (or ``colour``) ``what`` (``images`` of a
-    sequence, ``frames`` of a video), whose values use ``bits`` bits, were read."""
-    top = (1 << bits) - 1
+    sequence, ``frames`` of a video), whose first one's values use ``bits`` bits (8: 8 or
+    fewer, read as they are), are read."""
     shade = "colour" if colour else "grey"
-    return (f"{name}: {MAX_BITS}-bit {shade} {what} whose values use {bits} bits (the first "
-            f"{what[:-1]}'s, hot pixels aside): read as 8-bit {shade}, 0..{top} scaled to 0..255 "
-            "(a brighter value clips at 255)")
+    how = (f"{bits} bits (the first {what[:-1]}'s, hot pixels aside): read as 8-bit {shade}, "
+           f"0..{(1 << bits) - 1} scaled to 0..255" if bits > 8 else
+           f"8 bits or fewer (the first {what[:-1]}'s, hot pixels aside): read as 8-bit "
+           f"{shade}, 0..255 as they are")
+    return (f"{name}: {MAX_BITS}-bit {shade} {what} whose values use {how} (a later "
+            f"{what[:-1]} whose values use more bits scales by them from it on, with a warning; "
+            "isolated brighter pixels clip at 255)")

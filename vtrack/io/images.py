@@ -6,8 +6,8 @@ photo's EXIF tag); one that its own tag would not turn to the sequence's size (a
 added in an edit) is turned as the first image, with a warning. A sequence whose first image
 is grey becomes :class:`~vtrack.frame.GrayFrame` s, otherwise :class:`~vtrack.frame.BgrFrame` s
 (later images are converted to match); 16-bit images (grey or colour) are scaled to 8 bits by
-the bits the first one uses (:mod:`vtrack.io.depth`). There are no timestamps:
-``time_s = index / fps``.
+the bits the first one uses, rising with a later one's (:mod:`vtrack.io.depth`). There are no
+timestamps: ``time_s = index / fps``.
 An image that cannot be decoded (after the first) is skipped with a warning; the frames after
 it keep their indices.
 Images numbered alike (``0001.jpg``, ``0002.jpg``, ...: one name but for its last number, of

@@ -4,9 +4,10 @@ yuv420p/yuvj420p frames of even size become :class:`~vtrack.frame.I420Frame` (no
 colour conversion; full-range levels and BT.709 colours are marked, ``full_range`` and
 ``bt709``, and moved to video range and BT.601 only where pixels are converted); anything else
 is converted once to BGR, but deep grey or RGB pictures (16-bit: a thermal camera's 12 bits in
-FFV1 ``gray16le``, a 16-bit PNG) are scaled by the bits the first frame uses, as an image folder's
-are (:mod:`vtrack.io.depth`), with a warning. ``time_s`` is each frame's presentation time
-relative to the first frame, so variable frame rate input keeps its timing.
+FFV1 ``gray16le``, a 16-bit PNG) are scaled by the bits the first frame uses (rising with a
+later frame's), as an image folder's are (:mod:`vtrack.io.depth`), with a warning. ``time_s``
+is each frame's presentation time relative to the first frame, so variable frame rate input
+keeps its timing.
 A display-matrix rotation (phone footage) is applied to the pixels and recorded in
 ``info.rotation``.
 
