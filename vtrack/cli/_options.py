@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable
+from decimal import Decimal
 from typing import Any
 
 import click
@@ -249,7 +250,8 @@ class WholeNumber(click.IntRange):
 class NumberWord(click.ParamType):
     """A number (``kind``: int or float) whose range the command checks itself, in its own
     words; a value that is no number is refused here saying what the option takes (click said
-    "'abc' is not a valid float.")."""
+    "'abc' is not a valid float."), and so is a float's text beyond what a float holds
+    (``1e-400``, ``1e400``: the command would have named the 0 or inf it became), as typed."""
 
     def __init__(self, kind: type[int] | type[float], takes: str) -> None:
         self.kind, self.takes = kind, takes
@@ -260,9 +262,24 @@ class NumberWord(click.ParamType):
         if isinstance(value, self.kind) and not isinstance(value, bool):
             return value
         try:
-            return self.kind(value)
+            number = self.kind(value)
         except (TypeError, ValueError):
             self.fail(f"{value!r} is not {self.takes}", param, ctx)
+        if self.kind is float and not _held(number, value):
+            self.fail(f"{value!r} is not {self.takes}", param, ctx)
+        return number
+
+
+def _held(number: float, text: Any) -> bool:
+    """Whether ``number`` (``float(text)``) is the number ``text`` says: false for text that
+    underflowed to 0 or overflowed to inf (``1e-400``, ``-1e400``)."""
+    if number != 0 and math.isfinite(number):
+        return True
+    try:
+        written = Decimal(str(text).strip().replace("_", ""))
+    except ArithmeticError:  # (decimal.InvalidOperation: text float() reads and Decimal not)
+        return True
+    return (written == 0) == (number == 0) and written.is_finite() == math.isfinite(number)
 
 
 #: ``--fps`` of ``run`` and ``scene`` (the range: :func:`vtrack.io.raw.checked_fps`'s, which
