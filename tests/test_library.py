@@ -419,7 +419,8 @@ def test_pipeline_refuses_a_frame_of_another_size_or_kind_than_the_first(config:
 
 def test_a_frame_index_that_is_not_a_frame_number_is_one_line_naming_it() -> None:
     """BgrFrame(image, 0, 0.0) (arguments swapped) raised 'frame [[[0 0 0] ...' with the whole
-    image printed over dozens of lines; an index of 'a', -1 or 1.5 made a frame."""
+    image printed over dozens of lines; an index of 'a', -1 or 1.5 made a frame. BgrFrame(-1,
+    ...) then raised a TypeError ('got -1'), though -1 is of the right type: a ValueError."""
     image = _red_block(1)[0]
     with pytest.raises(TypeError, match=r"^frame index: expected a whole number >= 0 \(the "
                        r"frame's 0-based number, the first argument\), got ndarray$"):
@@ -429,8 +430,15 @@ def test_a_frame_index_that_is_not_a_frame_number_is_one_line_naming_it() -> Non
     for index, shown in (("a", "str"), (1.5, "float"), (True, "bool")):
         with pytest.raises(TypeError, match=f"^frame index: .*got {shown}$"):
             vtrack.BgrFrame(index, 0.0, image)  # type: ignore[arg-type]
-    with pytest.raises(TypeError, match="^frame index: expected a whole number >= 0, got -1$"):
+    # a negative index is of the right type: a ValueError, in the same words
+    negative = (r"^frame index: expected a whole number >= 0 \(the frame's 0-based number, "
+                r"the first argument\), got -1$")
+    with pytest.raises(ValueError, match=negative):
         vtrack.I420Frame(-1, 0.0, np.zeros((180, 160), np.uint8))
+    with pytest.raises(ValueError, match=negative):
+        vtrack.BgrFrame(-1, 0.0, image)
+    with pytest.raises(ValueError, match=negative):
+        vtrack.GrayFrame(np.int64(-1), 0.0, image[:, :, 0])
     assert vtrack.BgrFrame(np.int64(3), 0.1, image).index == 3
 
 

@@ -42,20 +42,23 @@ def halved(image: np.ndarray, k: int) -> np.ndarray:
 
 
 def check_index(index: object) -> None:
-    """TypeError unless ``index`` is a whole number >= 0 (a frame's 0-based number; a NumPy
-    integer too). The message shows a number, else only the type: an image given in its place
+    """Nothing when ``index`` is a whole number >= 0 (a frame's 0-based number; a NumPy
+    integer too); TypeError for one that is no whole number, ValueError for a negative one, in
+    one wording. The message shows a number, else only the type: an image given in its place
     (arguments swapped) is not printed."""
+    expected = "frame index: expected a whole number >= 0 (the frame's 0-based number, the " \
+               "first argument), got"
     if isinstance(index, bool) or not isinstance(index, int | np.integer):
-        raise TypeError(f"frame index: expected a whole number >= 0 (the frame's 0-based "
-                        f"number, the first argument), got {type(index).__name__}")
+        raise TypeError(f"{expected} {type(index).__name__}")
     if index < 0:
-        raise TypeError(f"frame index: expected a whole number >= 0, got {index}")
+        raise ValueError(f"{expected} {index}")
 
 
 def check_pixels(index: int, pixels: object, ndim: int, layout: str) -> None:
     """TypeError naming frame ``index`` unless ``pixels`` is a uint8 NumPy array of ``ndim``
     dimensions (3: the last one of 3 channels), the ``layout`` a message names ("HxWx3 BGR");
-    TypeError first for an ``index`` that is not a frame number (:func:`check_index`).
+    TypeError (ValueError: a negative one) first for an ``index`` that is not a frame number
+    (:func:`check_index`).
     A few attribute checks, no pixel is read: the frames' constructors call it per frame."""
     check_index(index)
     if not isinstance(pixels, np.ndarray):
@@ -71,7 +74,8 @@ class Frame(ABC):
     """One picture of the input. ``index`` is 0-based; ``time_s`` comes from its timestamp.
 
     The constructors refuse what cannot be a frame: an ``index`` that is not a whole number
-    >= 0, pixels that are not uint8 or not in the class's layout (TypeError), a size
+    (TypeError) or is negative (ValueError), pixels that are not uint8 or not in the class's
+    layout (TypeError), a size
     :func:`frame_size_problem` refuses or a ``time_s`` that is not finite (ValueError; one
     that is not a real number, True included, a TypeError), each naming the frame (``frame
     3: ...``). They are kept as a Python ``int`` and ``float`` whatever number types they were
