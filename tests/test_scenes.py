@@ -110,6 +110,18 @@ def test_a_scenario_name_that_is_not_text_is_shown_as_it_is():
         make_scene("None")
 
 
+@pytest.mark.parametrize(("name", "given"), [
+    (["a"], "['a']"), ({"smooth": 1}, "{'smooth': 1}"), (np.zeros((2, 3)), "a NumPy array of "
+                                                          "shape (2, 3)")], ids=str)
+def test_a_scenario_name_that_cannot_be_looked_up_is_named_as_none_is(name: object,
+                                                                     given: str) -> None:
+    """make_scene(['a']) raised "TypeError: unhashable type: 'list'" from the scenarios' table
+    (a NumPy array too), not the ConfigError make_scene(None) raises: it names the value."""
+    with pytest.raises(ConfigError) as refused:
+        make_scene(name)  # type: ignore[arg-type]
+    assert str(refused.value).startswith(f"unknown scenario {given}; choose one of: smooth, ")
+
+
 @pytest.mark.parametrize(
     "kwargs", [{"frames": 20}, {"width": 32}, {"fps": 0.0}, {"seed": -1}], ids=str
 )

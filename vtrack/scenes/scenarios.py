@@ -26,6 +26,7 @@ from vtrack.errors import (
 )
 from vtrack.geometry import Window
 from vtrack.io.raw import MAX_FPS, MIN_FPS
+from vtrack.params import shown
 from vtrack.scenes.render import (
     CAMERA,
     FLOOR,
@@ -551,13 +552,14 @@ def make_scene(
     :data:`~vtrack.io.raw.MIN_FPS`..``MAX_FPS``: its message names the setting as ``names``
     calls it (:data:`SETTING_NAMES`'s keys) and gives the valid range.
     """
-    scenario = SCENARIOS.get(name)
+    # (not text, make_scene(None) or make_scene(['a']): no name, however it hashes)
+    scenario = SCENARIOS.get(name) if isinstance(name, str) else None
     if scenario is None:
-        shown, near = repr(name), ""  # (not text, make_scene(None): no text to quote or guess)
+        given, near = shown(name), ""  # (not text: no text to quote or guess from)
         if isinstance(name, str):
-            shown = quoted_or_cut(name)
+            given = quoted_or_cut(name)
             near = "" if names_a_path(name) else did_you_mean(name, SCENARIOS)
-        raise ConfigError(f"unknown scenario {shown}; choose one of: {', '.join(SCENARIOS)}{near}")
+        raise ConfigError(f"unknown scenario {given}; choose one of: {', '.join(SCENARIOS)}{near}")
     spec = SceneSpec(
         name=name,
         seed=seed,
