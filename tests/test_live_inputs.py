@@ -143,6 +143,37 @@ def test_http_and_a_fifo_give_the_same_csv_as_the_file(tmp_path: Path) -> None:
     assert (tmp_path / "fifo" / "track.csv").read_bytes() == expected
 
 
+def test_a_url_scheme_in_capitals_is_read_as_the_lowercase_one(tmp_path: Path) -> None:
+    """`vtrack run HTTP://127.0.0.1:PORT/clip.mp4` said 'cannot be opened (Protocol not
+    found)' (FFmpeg's protocol names are case-sensitive) though vtrack read the scheme in any
+    case elsewhere (UDP:// was live, FILE:// refused as file://): the clip is tracked as from
+    http://, its folder named alike; UDP:// is a live input and a --video-out as udp:// is."""
+    from vtrack.io.specs import input_name, is_live
+    from vtrack.io.videowriter import video_out_problem
+
+    scene = make_scene("smooth", seed=7, width=160, height=120, frames=20, fps=30)
+    write_video(scene, tmp_path / "clip.mp4")
+    common = ["--config", "s0", "--init", ",".join(f"{v:g}" for v in scene.boxes[0]),
+              "--no-video"]
+    server, thread = _serve(tmp_path)
+    try:
+        where = f"127.0.0.1:{server.server_address[1]}/clip.mp4"
+        lower = _run([f"http://{where}", *common, "--out", str(tmp_path / "lower")])
+        upper = _run([f"HTTP://{where}", *common, "--out", str(tmp_path / "upper")])
+    finally:
+        server.shutdown()
+        thread.join()
+    assert lower.returncode == 0, lower.stderr
+    assert upper.returncode == 0, upper.stderr
+    assert (tmp_path / "upper" / "track.csv").read_bytes() == \
+        (tmp_path / "lower" / "track.csv").read_bytes()
+    assert input_name(f"HTTP://{where}") == input_name(f"http://{where}")
+    assert is_live("UDP://127.0.0.1:5000") and is_live("Rtsp://127.0.0.1/x")
+    assert video_out_problem("UDP://127.0.0.1:5000") is None
+    assert video_out_problem("HTTP://127.0.0.1:5000") == \
+        video_out_problem("http://127.0.0.1:5000").replace("http://", "HTTP://")
+
+
 def test_a_file_served_over_http_that_is_no_video_is_not_called_a_late_joined_stream(
         tmp_path: Path) -> None:
     """Bytes that are no video, served whole by a local HTTP server, were called "nothing

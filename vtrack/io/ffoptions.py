@@ -18,6 +18,8 @@ from collections.abc import Iterable
 
 import av.format
 
+from vtrack.io.specs import url_scheme
+
 #: av_opt_find's AV_OPT_SEARCH_FAKE_OBJ: the object is a pointer to an AVClass.
 _SEARCH_FAKE_OBJ = 2
 #: Protocols a network protocol may open below itself, handing them the options it left.
@@ -78,9 +80,8 @@ def input_protocols(path: str, python_io: bool) -> tuple[str, ...]:
     :data:`TRANSPORTS` a network protocol may open below it."""
     if python_io:
         return ()
-    if "://" not in path:
-        return ("file",)
-    return (path.split("://", 1)[0].lower(), *TRANSPORTS)
+    scheme = url_scheme(path)
+    return ("file",) if scheme is None else (scheme, *TRANSPORTS)
 
 
 def unused_options(keys: Iterable[str], demuxer: str, protocols: Iterable[str]) -> list[str]:

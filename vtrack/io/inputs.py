@@ -12,7 +12,7 @@ from vtrack.io.files import check_input_path
 from vtrack.io.images import ImageFolderSource, images_of
 from vtrack.io.raw import RawFormat, RawSource, checked_fps
 from vtrack.io.source import Source
-from vtrack.io.specs import device_number, is_live, is_url
+from vtrack.io.specs import device_number, is_live, is_url, url_scheme
 from vtrack.io.video import FFmpegInput, VideoSource
 
 
@@ -31,8 +31,9 @@ def _refuse_file_url(spec: str) -> None:
     it is none of what keeps a run off the file it reads (``--stream``, ``--out`` and
     ``--video-out`` written over it, ``--overwrite`` or not), nor read as a file is (its
     sidecar box, a late start's seek): the file's path is asked for."""
-    if spec[:7].lower() == "file://":
-        raise InputError(f"{spec}: a file: URL; give the file's path ({spec[7:] or '/'})")
+    if url_scheme(spec) == "file":
+        path = spec.partition("://")[2]
+        raise InputError(f"{spec}: a file: URL; give the file's path ({path or '/'})")
 
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,

@@ -32,9 +32,25 @@ ANIMATION_SUFFIXES = frozenset({".gif", ".apng"})
 BATCH_SUFFIXES = VIDEO_SUFFIXES | ANIMATION_SUFFIXES
 
 
+def url_scheme(spec: str) -> str | None:
+    """The scheme of ``spec`` when it is a URL (``scheme://...``, the scheme letters only),
+    lowercased: a scheme is read in any case (RFC 3986), ``UDP://`` as ``udp://``,
+    ``FILE://`` as ``file://``; None for a path. The one place vtrack reads a scheme."""
+    scheme, sep, _ = spec.partition("://")
+    return scheme.lower() if sep and scheme.isalpha() else None
+
+
+def ffmpeg_url(spec: str) -> str:
+    """``spec`` as FFmpeg is given it: a URL with its scheme lowercased (FFmpeg's protocol
+    names are case-sensitive: ``UDP://`` is 'Protocol not found' there), anything else as
+    it is."""
+    scheme = url_scheme(spec)
+    return spec if scheme is None else f"{scheme}://{spec.partition('://')[2]}"
+
+
 def is_url(spec: str) -> bool:
     """True when ``spec`` names a network input (``scheme://...``) rather than a path."""
-    return "://" in spec and spec.split("://", 1)[0].lower().isalpha()
+    return url_scheme(spec) is not None
 
 
 def device_number(spec: str) -> int | None:
@@ -50,7 +66,7 @@ def is_live(spec: str) -> bool:
     """Whether ``spec`` is a live source by default: a stream URL (rtsp, rtp, udp, tcp, ...)
     or a capture device. Its frames come at their own pace (see ``--live``)."""
     if is_url(spec):
-        return spec.split("://", 1)[0].lower() in LIVE_SCHEMES
+        return url_scheme(spec) in LIVE_SCHEMES
     return device_number(spec) is not None
 
 
@@ -60,9 +76,9 @@ def input_name(spec: str) -> str:
     ``udp-127.0.0.1-5000`` for a URL, ``video0`` for a device."""
     if spec == "-":
         return "stdin"
-    if is_url(spec):
-        scheme, rest = spec.split("://", 1)
-        rest = rest.split("?", 1)[0].strip("/")
+    scheme = url_scheme(spec)
+    if scheme is not None:  # (UDP://... names the folder as udp://... does)
+        rest = spec.split("://", 1)[1].split("?", 1)[0].strip("/")
         return folder_name(f"{scheme}-{rest}".replace(":", "-").replace("/", "-"), "stream")
     path = Path(spec.rstrip("/") or "/")
     if path.is_dir():  # SEQ/img, SEQ/img1: the sequence's name, as the images' reader names

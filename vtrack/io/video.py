@@ -78,7 +78,7 @@ from vtrack.io.signatures import (
     photo_mirrored,
 )
 from vtrack.io.source import ESTIMATE_SLACK_FRAMES, ESTIMATE_SLACK_SHARE, InputInfo, Source
-from vtrack.io.specs import input_name, is_live, is_url
+from vtrack.io.specs import ffmpeg_url, input_name, is_live, is_url, url_scheme
 from vtrack.io.threads import run_aside
 from vtrack.machine import cpu_count
 from vtrack.params import MAX_TIMEOUT_S, MAX_WAIT_S, MIN_TIMEOUT_S, checked_seconds
@@ -360,7 +360,7 @@ def _open_container(path: str, how: FFmpegInput, names: OptionNames
         if how.follow_s is not None:
             return _open_stream(GrowingFile(path, how.follow_s, names.follow), **kwargs)
         return av.open(ffmpeg_file(path), **kwargs)
-    scheme = path.split("://", 1)[0].lower()
+    scheme = url_scheme(path)
     if scheme == "srt":
         raise InputError(f"{path}: srt:// is not in the FFmpeg that PyAV's wheel ships; relay "
                          "it, e.g. ffmpeg -i srt://... -c copy -f mpegts udp://127.0.0.1:5000")
@@ -390,7 +390,7 @@ def _open_url(path: str, how: FFmpegInput, kwargs: dict[str, Any]) -> av.contain
     with _OPENING_LOCK:
         _OPENING.setdefault(path, []).append(ends)
     try:
-        return av.open(path, timeout=(how.timeout_s, how.timeout_s), **kwargs)
+        return av.open(ffmpeg_url(path), timeout=(how.timeout_s, how.timeout_s), **kwargs)
     finally:
         with _OPENING_LOCK:
             _OPENING[path].remove(ends)

@@ -33,6 +33,7 @@ from vtrack.frame import Frame, I420Frame, to_video_range
 from vtrack.geometry import Window
 from vtrack.io.files import Closing, ffmpeg_file, os_reason, remove_quietly, temp_path
 from vtrack.io.planes import i420_planes
+from vtrack.io.specs import ffmpeg_url, url_scheme
 from vtrack.io.threads import STOP_POLL_S
 from vtrack.io.videoclock import RATES, VideoClock, longest_span_s, video_clock
 
@@ -164,7 +165,7 @@ class VideoWriter(Closing):
         live = self.url is not None
         where = self.url if self.url is not None else str(self._temp)
         try:  # a file: nothing touches the disk yet
-            container = av.open(where if live else ffmpeg_file(where), "w",
+            container = av.open(ffmpeg_url(where) if live else ffmpeg_file(where), "w",
                                 format=live_format(where) if live else None,
                                 options=self._muxer_options())
         except (av.FFmpegError, OSError) as exc:  # a live output that cannot be reached
@@ -390,7 +391,7 @@ LIVE_OUTPUT_FORMATS = {"udp": "mpegts", "tcp": "mpegts", "rtsp": "rtsp", "rtmp":
 def live_format(url: str) -> str:
     """The container a live output ``url`` is sent as: RTSP to ``rtsp://``, FLV to
     ``rtmp://``, MPEG-TS to ``udp://`` and ``tcp://`` (:data:`LIVE_OUTPUT_FORMATS`)."""
-    return LIVE_OUTPUT_FORMATS.get(url.split("://", 1)[0].lower(), "mpegts")
+    return LIVE_OUTPUT_FORMATS.get(url_scheme(url) or "", "mpegts")
 
 
 def video_out_problem(url: str, out: str = "--out") -> str | None:
@@ -403,7 +404,7 @@ def video_out_problem(url: str, out: str = "--out") -> str | None:
     where = f"udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is annotated.mp4 in {out}"
     if not sep:
         return f"expected a URL ({where}"
-    if scheme not in LIVE_OUTPUT_FORMATS:  # (FFmpeg reads udp, not UDP)
+    if url_scheme(url) not in LIVE_OUTPUT_FORMATS:  # (UDP:// is udp://, as for an input)
         return f"{cut(scheme)}:// is not a live output vtrack sends to ({where}"
     try:
         port = urlsplit(url).port
