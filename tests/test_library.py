@@ -176,6 +176,31 @@ def test_a_source_closed_while_it_is_read_ends_its_reading_with_one_error(
         f"{clip}: the source was closed while it was read"]
 
 
+@pytest.mark.parametrize("live", [False, True])
+def test_a_source_closed_after_its_input_ended_ends_its_reading_as_the_end_does(
+        tmp_path: Path, live: bool) -> None:
+    """Every frame read, the reader thread at the input's end, then ``close()``: the next
+    ``next()`` raised RuntimeError "the source was closed while it was read" (close() threw
+    the queued end away; a live source's reader ended as a stopped one), where the input had
+    ended: it is StopIteration now, for a live source too."""
+    clip = write_video(make_scene("smooth", seed=2, width=96, height=72, frames=30, fps=30),
+                       tmp_path / "clip.mp4")
+    source = vtrack.open_source(clip, live=live)
+    frames = iter(source)
+    taken = 0
+    while taken + source.frames_passed < 30:
+        next(frames)
+        taken += 1
+    reader = f"vtrack-read:{source.info.name}"
+    for _ in range(600):  # the reader thread has gone past the last frame and ended
+        if not any(thread.name == reader for thread in threading.enumerate()):
+            break
+        threading.Event().wait(0.05)
+    source.close()
+    with pytest.raises(StopIteration):
+        next(frames)
+
+
 def test_open_source_takes_a_path_and_the_raw_size_as_vtrack_run_does(tmp_path: Path) -> None:
     """``open_source(pathlib.Path)`` raised TypeError (``'PosixPath' is not iterable``) and
     ``raw="320x240"`` AttributeError (``'str' object has no attribute 'frame_bytes'``)."""

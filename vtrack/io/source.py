@@ -11,7 +11,7 @@ from __future__ import annotations
 import itertools
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Literal
 
@@ -172,12 +172,13 @@ class Source(Closing, ABC):
                           else Prefetcher(self._frames(), self.depth, name))
         return self._while_open(self._prefetch)
 
-    def _while_open(self, frames: Iterable[Frame]) -> Iterator[Frame]:
-        """``frames``, then RuntimeError if they ended because the source was closed while
-        they were read (:meth:`close` from another thread, or between two ``next()``): not
-        the input's end."""
+    def _while_open(self, frames: Prefetcher[Frame] | KeepingUp[Frame]) -> Iterator[Frame]:
+        """``frames``, then RuntimeError if they ended because the source was closed before
+        the input's end was reached (:meth:`close` from another thread, or between two
+        ``next()``), a live source's too; a close after the reader reached the end, every
+        frame handed over, ends them as the end does."""
         yield from frames
-        if self._closed:
+        if self._closed and not frames.reached_end:
             raise RuntimeError(f"{self.info.path}: the source was closed while it was read")
 
     def skip_to(self, seconds: float) -> int | None:
@@ -249,7 +250,10 @@ class Source(Closing, ABC):
         return False
 
     def close(self) -> None:
-        """Stop decoding and release the input. Safe to call twice and mid-stream."""
+        """Stop decoding and release the input. Safe to call twice and mid-stream, from
+        another thread too: an iteration under way then ends with RuntimeError (the source
+        was closed while it was read) unless the reader had reached the input's end and
+        handed every frame over, when it ends as the end does (:meth:`_while_open`)."""
         if self._closed:
             return
         self._closed = True

@@ -92,7 +92,8 @@ class Prefetcher(Generic[T]):
     same exception is raised in the consumer after every item produced before it. ``close()``
     stops the producer (it notices at its next item) and waits for its thread to finish; an
     iteration under way then ends (as :class:`KeepingUp`'s does), where it waited for ever for
-    an item the stopped producer would never queue.
+    an item the stopped producer would never queue; :attr:`reached_end` tells whether that end
+    was the items' own.
     """
 
     def __init__(self, items: Iterator[T], depth: int, name: str) -> None:
@@ -101,6 +102,19 @@ class Prefetcher(Generic[T]):
         self._stop = threading.Event()
         self._thread = _Producer(self._produce, name)
         self._started = False
+        self._closing = threading.RLock()  # close()'s stop and discarding as one step (a
+        # signal handler in the consumer thread may close it while reached_end reads)
+        self._exhausted = False  # the producer went through all its items
+        self._dropped = False  # close() discarded an item the consumer had not taken
+
+    @property
+    def reached_end(self) -> bool:
+        """Whether the producer went through all its items and the consumer was handed every
+        one (a :meth:`close` after the last item, its end marker still queued, leaves it
+        True); False when the producer raised or was stopped before its end, or ``close()``
+        discarded an item not taken. Final once the iteration has ended."""
+        with self._closing:
+            return self._exhausted and not self._dropped
 
     def _put(self, item: object) -> bool:
         """Queue ``item``; False when asked to stop before there was room."""
@@ -117,6 +131,7 @@ class Prefetcher(Generic[T]):
             for item in self._items:
                 if not self._put(item):
                     return
+            self._exhausted = True  # (before the marker: a close() may leave it unqueued)
             self._put(_END)
         except BaseException as exc:  # handed to the consumer, who decides what it means
             self._put(_Failure(exc))
@@ -146,14 +161,16 @@ class Prefetcher(Generic[T]):
         False means the producer is stuck in a blocking call (e.g. a read from an idle pipe) and
         still owns its resources; it is a daemon thread and dies with the process.
         """
-        self._stop.set()
+        with self._closing:
+            self._stop.set()
+            while True:  # free the queued items (and a producer blocked on a full queue)
+                try:
+                    item = self._queue.get_nowait()
+                except queue.Empty:
+                    break
+                self._dropped = self._dropped or item is not _END
         if not self._started:
             return True
-        while True:  # free the queued items (and a producer blocked on a full queue)
-            try:
-                self._queue.get_nowait()
-            except queue.Empty:
-                break
         return self._thread.finish(timeout)
 
 
@@ -185,6 +202,8 @@ class KeepingUp(Generic[T]):
         self._depth = max(depth, 1)
         self._ready = threading.Condition()
         self._end: object | None = None  # _END or a _Failure once the producer has finished
+        self._exhausted = False  # the producer went through all its items
+        self._dropped = False  # close() discarded items the consumer had not been handed
         self._stop = threading.Event()
         self._thread = _Producer(self._produce, name)
         self._started = False
@@ -192,8 +211,17 @@ class KeepingUp(Generic[T]):
         self.passed = 0
         self.received = 0.0
 
+    @property
+    def reached_end(self) -> bool:
+        """Whether the producer went through all its items and the consumer was handed every
+        one not passed over; False when the producer raised or was stopped before its end, or
+        :meth:`close` discarded items waiting. Final once the iteration has ended."""
+        with self._ready:
+            return self._exhausted and not self._dropped
+
     def _produce(self) -> None:
         end: object = _END
+        exhausted = False
         try:
             for item in self._items:
                 if self._stop.is_set():
@@ -205,11 +233,13 @@ class KeepingUp(Generic[T]):
                         return
                     self._waiting.append((item, produced))
                     self._ready.notify_all()
+            exhausted = True
         except BaseException as exc:  # handed to the consumer, who decides what it means
             end = _Failure(exc)
         finally:
             with self._ready:
                 self._end = end
+                self._exhausted = exhausted
                 self._ready.notify_all()
             close = getattr(self._items, "close", None)
             if close is not None:
@@ -268,8 +298,9 @@ class KeepingUp(Generic[T]):
 
     def close(self, timeout: float = 2.0) -> bool:
         """Stop the producer; True once its thread has finished (or never started)."""
-        self._stop.set()
         with self._ready:
+            self._stop.set()
+            self._dropped = self._dropped or bool(self._waiting)
             self._waiting.clear()
             self._ready.notify_all()
         if not self._started:
