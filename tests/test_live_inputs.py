@@ -761,8 +761,10 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
     (48862 bytes became 157168, the run then ending 'partial' at frame 80 as it read its own
     output), past the checks that keep a run off its input and an earlier run's results;
     `http://` was taken and failed after tracking ('cannot write video (Broken pipe)', exit 1)
-    and `udp://127.0.0.1:99999` ran, sending to a port FFmpeg chose. Each is refused before
-    anything runs, naming the option, and RunRequest(video_out=...) the same."""
+    and `udp://127.0.0.1:99999` ran, sending to a port FFmpeg chose; `udp://127.0.0.1` (no
+    port) made the folder and tracked, then failed 'cannot write video (Invalid argument)',
+    exit 1. Each is refused before anything runs, naming the option, and
+    RunRequest(video_out=...) the same."""
     scene = make_scene("smooth", seed=8, width=160, height=120, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
     before = clip.read_bytes()
@@ -773,7 +775,11 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
                       ("http://127.0.0.1:9/x", f"http:// is not a live output vtrack sends to "
                                                f"{where}"),
                       ("udp://127.0.0.1:99999", "its port must be a number from 1 to 65535 "
-                                                "(see 'python -m vtrack run --help')")):
+                                                "(see 'python -m vtrack run --help')"),
+                      ("udp://127.0.0.1", "needs a port: udp://HOST:PORT "
+                                          "(see 'python -m vtrack run --help')"),
+                      ("tcp://127.0.0.1", "needs a port: tcp://HOST:PORT "
+                                          "(see 'python -m vtrack run --help')")):
         done = _run([str(clip), "--init", box, "--video-out", url, "-o", str(tmp_path / "o")])
         assert done.returncode == 2, done.stderr
         assert done.stderr.decode().strip() == f"vtrack: error: --video-out {url}: {said}"
@@ -785,6 +791,10 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
                        r"rtmp://\); a file is annotated.mp4 in out_dir$"):
         vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
                           config=vtrack.load_config("s0"), video_out="file:///x.ts")
+    with pytest.raises(vtrack.ConfigError, match=r"^video_out udp://127.0.0.1: needs a port: "
+                       r"udp://HOST:PORT$"):
+        vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
+                          config=vtrack.load_config("s0"), video_out="udp://127.0.0.1")
 
 
 def test_keeping_up_works_through_a_burst_and_passes_over_for_a_slow_consumer() -> None:

@@ -388,6 +388,10 @@ LIVE_OUTPUT_FORMATS = {"udp": "mpegts", "tcp": "mpegts", "rtsp": "rtsp", "rtmp":
                        "rtmps": "flv"}
 
 
+#: The live outputs that have no default port: FFmpeg refuses to send to one without a port.
+_PORT_NEEDED = ("udp", "tcp")
+
+
 def live_format(url: str) -> str:
     """The container a live output ``url`` is sent as: RTSP to ``rtsp://``, FLV to
     ``rtmp://``, MPEG-TS to ``udp://`` and ``tcp://`` (:data:`LIVE_OUTPUT_FORMATS`)."""
@@ -398,7 +402,8 @@ def video_out_problem(url: str, out: str = "--out") -> str | None:
     """Why ``url`` cannot be ``--video-out``'s live output, if so: not a URL, or one of a
     scheme not in :data:`LIVE_OUTPUT_FORMATS` (``file://`` would write a file past the checks
     that keep a run off its own input and an earlier run's results, ``http://`` is no live
-    output), or a port outside 1 to 65535 (FFmpeg would send to another one). ``out``: what
+    output), a port outside 1 to 65535 (FFmpeg would send to another one), or no port for
+    ``udp://`` and ``tcp://`` (``rtsp://`` and ``rtmp://`` have default ones). ``out``: what
     names the run's folder (``--out``, ``out_dir``)."""
     scheme, sep, _ = url.partition("://")
     where = f"udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is annotated.mp4 in {out}"
@@ -412,6 +417,8 @@ def video_out_problem(url: str, out: str = "--out") -> str | None:
         port = 0
     if port == 0:
         return "its port must be a number from 1 to 65535"
+    if port is None and scheme in _PORT_NEEDED:  # (FFmpeg fails only once it sends)
+        return f"needs a port: {scheme}://HOST:PORT"
     return None
 
 
