@@ -549,3 +549,13 @@ def test_an_input_given_as_a_file_url_is_refused_not_written_over(tmp_path: Path
     for call in (lambda: vtrack.open_source(url), lambda: vtrack.track(url, "s0", (1, 1, 8, 8))):
         with pytest.raises(vtrack.InputError, match=f"^{re.escape(url)}: a file: URL; give"):
             call()
+    # a host named: this one's (localhost) asks for the URL's path, not "localhost/..." (a
+    # relative path it suggested); another's cannot be read
+    local = f"file://localhost{clip}"
+    with pytest.raises(vtrack.InputError) as refused:
+        vtrack.open_source(local)
+    assert str(refused.value) == f"{local}: a file: URL; give the file's path ({clip})"
+    with pytest.raises(vtrack.InputError) as refused:
+        vtrack.open_source(f"file://server{clip}")
+    assert str(refused.value) == (f"file://server{clip}: a file: URL of another host (server) "
+                                  "cannot be read; give a local file's path")

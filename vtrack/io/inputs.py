@@ -6,6 +6,7 @@ import os
 import stat
 from collections.abc import Callable
 from functools import partial
+from urllib.parse import urlsplit
 
 from vtrack.errors import COMMAND_NAMES, ConfigError, InputError, OptionNames
 from vtrack.io.files import check_input_path
@@ -30,10 +31,19 @@ def _refuse_file_url(spec: str) -> None:
     """InputError for a ``file://`` URL: FFmpeg reads it as the file it names, but as a URL
     it is none of what keeps a run off the file it reads (``--stream``, ``--out`` and
     ``--video-out`` written over it, ``--overwrite`` or not), nor read as a file is (its
-    sidecar box, a late start's seek): the file's path is asked for."""
+    sidecar box, a late start's seek): the file's path is asked for, the URL's path when it
+    names this host (no host, ``localhost``); a file: URL of another host cannot be read."""
     if url_scheme(spec) == "file":
-        path = spec.partition("://")[2]
-        raise InputError(f"{spec}: a file: URL; give the file's path ({path or '/'})")
+        try:
+            parts = urlsplit(spec)
+            here = parts.hostname in (None, "localhost")
+        except ValueError:  # (a host with an unclosed [: no host of this machine)
+            here = False
+        if not here:
+            host = spec.partition("://")[2].partition("/")[0]
+            raise InputError(f"{spec}: a file: URL of another host ({host}) cannot be read; "
+                             "give a local file's path")
+        raise InputError(f"{spec}: a file: URL; give the file's path ({parts.path or '/'})")
 
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
