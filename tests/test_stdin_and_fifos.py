@@ -12,6 +12,7 @@ import os
 import pty
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import termios
@@ -155,14 +156,17 @@ def test_follow_is_refused_where_it_cannot_apply(tmp_path: Path) -> None:
         assert not (tmp_path / "out").exists()
 
 
-def test_follow_is_refused_for_a_fifo_and_a_device(tmp_path: Path) -> None:
+def test_follow_is_refused_for_a_fifo_a_device_and_a_socket(tmp_path: Path) -> None:
     """`vtrack run FIFO --follow 1` tracked what its writer sent, then ended in a traceback
     (GrowingFile asked the FIFO where it was: 'OSError: [Errno 29] Illegal seek', exit 1,
     run.json 'failed'); /dev/zero with --follow was taken too. A FIFO is read until its
     writer closes it, as stdin is: --follow is refused for it, and for a device, before
-    anything is read."""
+    anything is read. A Unix socket was refused as "a device": it is called a socket."""
     fifo = tmp_path / "feed"
     os.mkfifo(fifo)
+    sock_path = tmp_path / "sock"
+    listening = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    listening.bind(str(sock_path))
     clip = write_video(make_scene("smooth", seed=3, width=160, height=120, frames=10, fps=30),
                        tmp_path / "clip.ts")
     writer = subprocess.Popen([sys.executable, "-c", "import shutil, sys; shutil.copyfileobj("
@@ -170,7 +174,8 @@ def test_follow_is_refused_for_a_fifo_and_a_device(tmp_path: Path) -> None:
                                str(clip), str(fifo)], stderr=subprocess.DEVNULL)
     try:
         for spec, reason in ((fifo, f"{fifo} is a FIFO, read until its writer closes it"),
-                             ("/dev/zero", "/dev/zero is a device, not a file being written")):
+                             ("/dev/zero", "/dev/zero is a device, not a file being written"),
+                             (sock_path, f"{sock_path} is a socket, not a file being written")):
             done = subprocess.run([sys.executable, "-m", "vtrack", "run", str(spec), "--follow",
                                    "1", "--init", "1,1,8,8", "-o", str(tmp_path / "out")],
                                   capture_output=True, timeout=START_BOUND_S, check=False)
@@ -184,6 +189,7 @@ def test_follow_is_refused_for_a_fifo_and_a_device(tmp_path: Path) -> None:
             os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
         writer.kill()
         writer.wait()
+        listening.close()
 
 
 @pytest.mark.parametrize("raw", [False, True])

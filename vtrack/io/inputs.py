@@ -144,8 +144,12 @@ def _not_followed(spec: str, raw: RawFormat | None, names: OptionNames) -> str |
         return None
     if stat.S_ISFIFO(mode):  # (no size to follow, no place to read from: as stdin)
         return f"{spec} is a FIFO, read until its writer closes it"
-    if not stat.S_ISREG(mode):  # (a capture device too: read through OpenCV as it comes)
+    if stat.S_ISSOCK(mode):
+        return f"{spec} is a socket, not a file being written"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):  # (a capture device too: through OpenCV)
         return f"{spec} is a device, not a file being written"
+    if not stat.S_ISREG(mode):
+        return f"{spec} is not a regular file"
     return None
 
 
