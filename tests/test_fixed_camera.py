@@ -265,6 +265,28 @@ def test_two_people_side_by_side_are_split_where_they_touch_least() -> None:
     assert len(grouped(mask, split=0.0)) == 1
 
 
+def test_heads_cut_people_one_behind_another_where_no_column_is_a_valley() -> None:
+    """Two people, the one behind half hidden: every column between them is as full as the
+    fullest, so the split by columns finds no valley and leaves them one detection. With
+    ``heads`` (W4) the blob is cut at the lowest point of its top contour between the two
+    heads; a dip shallower than half a head (1/16 of the height) is no second head."""
+    mask = np.zeros((200, 200), np.uint8)
+    mask[46:56, 62:78] = 255  # the front person's head ...
+    mask[56:166, 52:110] = 255  # ... and body
+    mask[48:64, 116:132] = 255  # the head of the one behind ...
+    mask[64:160, 84:140] = 255  # ... and the body beside and behind the first one's
+    (group,) = grouped(mask)
+    assert tuple(group.box) == (52, 46, 88, 120)
+    front, behind = sorted(grouped(mask, heads=True), key=lambda d: d.box.x)
+    assert front.box.x == 52 and front.box.y == 46 and 108 <= front.box.x + front.box.w <= 116
+    assert behind.box.x == front.box.x + front.box.w and behind.box.y == 48
+    assert behind.box.x + behind.box.w == 140
+    mask[54:64, 78:116] = 255  # the contour between the heads 6 rows under the lower one's
+    assert len(grouped(mask, heads=True)) == 1  # top: under 1/16 of 120
+    mask[54:56, 78:116] = 0  # 8 rows under it
+    assert len(grouped(mask, heads=True)) == 2
+
+
 def test_scores_and_limits_follow_the_learnt_shape() -> None:
     mask = np.zeros((200, 300), np.uint8)
     mask[20:140, 20:68] = 255  # a person (aspect 2.5)

@@ -16,6 +16,9 @@ usual area:
    flatter blob, a shadow or a low wall, is no row of targets); it is cut at the columns
    of least foreground near its ``n``-ths where these are valleys (at most ``VALLEY`` of the
    fullest column: a solid blob is not cut), and each part gets the box of its own foreground;
+   with ``heads``, it is cut between the peaks of its top contour instead where two or more
+   are found (W4's heads, :func:`head_cuts`: people one behind or beside another, with or
+   without a valley between them);
 3. **trim**: each detection's left and right sides are moved in to the columns that leave
    ``trim`` of its foreground outside on either side (:func:`trimmed`): a silhouette's
    extreme columns are thin parts - a foot mid-stride, an arm, a shadow's fringe, what the
@@ -48,8 +51,8 @@ aspect counts for (``PRIOR_SAMPLES``) and their median is off the aspect in use 
 factor ``UNLIKE``, that median is the aspect for the rest of the run (on footage of people,
 where they agree, nothing changes).
 Work per frame: at most ``M`` rounds of ``M^2`` NumPy box comparisons for ``M`` blobs
-(``blobs.max_blobs`` bounds ``M``), one column profile per blob that is split, and with
-``persist`` one per blob and ``M^2`` box overlaps.
+(``blobs.max_blobs`` bounds ``M``), one column profile per blob that is split (with ``heads``
+its top contour too), and with ``persist`` one per blob and ``M^2`` box overlaps.
 """
 
 from __future__ import annotations
@@ -81,6 +84,16 @@ FULL_SIZE = 0.5
 MAX_PARTS = 4
 #: A blob is cut only at a column holding at most this share of its fullest column's foreground.
 VALLEY = 0.9
+#: With ``heads``, a blob is cut between the peaks of its top contour instead, where two or
+#: more are found (W4's heads): the contour is smoothed over a head's width, this share of a
+#: target's width (a head ~0.15 m across, a walking person's box ~0.7 m wide) ...
+HEAD_WIDTH = 0.25
+#: ... two heads are at least this share of a target's width apart (people side by side or
+#: one behind the other; less is one head and its shoulder) ...
+HEAD_APART = 0.5
+#: ... and the contour between them dips by at least this share of the blob's height (a head
+#: is ~1/8 of a person's height: half a head).
+HEAD_DIP = 1.0 / 16
 #: A blob is the same one in the next frame when their boxes overlap by this IoU ...
 SAME_BLOB = 0.5
 #: ... and its shape is steady while its height/width stays within this factor over the last
@@ -145,21 +158,55 @@ def merge_fragments(detections: list[Detection], gap: float, aspect: float) -> l
     return found
 
 
+def head_cuts(inside: np.ndarray, parts: int, aspect: float) -> list[int]:
+    """The columns of ``inside`` (a blob's foreground, rows x columns) between the heads of up
+    to ``parts`` people standing side by side or one behind the other (W4, Haritaoglu,
+    Harwood and Davis, TPAMI 2000): the heads are the peaks of the silhouette's top contour
+    (each column's topmost foreground row), smoothed over a head's width (``HEAD_WIDTH`` of a
+    target's ``h / aspect``); of its local maxima, the highest ones at least ``HEAD_APART`` of
+    a target's width apart, ``parts`` at most, are heads. Two neighbouring heads are cut at
+    the lowest point of the contour between them, where it dips by at least ``HEAD_DIP`` of
+    the blob's height below the lower head. Sorted, none when no two heads are found."""
+    rows, columns = inside.shape
+    width = rows / aspect
+    filled = inside.any(axis=0)
+    top = np.where(filled, rows - np.argmax(inside, axis=0), 0).astype(float)
+    head = max(1, round(HEAD_WIDTH * width))
+    contour = np.convolve(np.pad(top, (head // 2, head - 1 - head // 2), mode="edge"),
+                          np.ones(head) / head, mode="valid")
+    padded = np.pad(contour, 1, constant_values=-1.0)
+    peaks = np.flatnonzero((contour >= padded[:-2]) & (contour > padded[2:]) & filled)
+    heads: list[int] = []
+    for peak in peaks[np.argsort(-contour[peaks], kind="stable")]:
+        if all(abs(int(peak) - h) >= HEAD_APART * width for h in heads):
+            heads.append(int(peak))
+            if len(heads) == parts:
+                break
+    heads.sort()
+    cuts = []
+    for left, right in zip(heads[:-1], heads[1:], strict=True):
+        cut = left + int(np.argmin(contour[left:right + 1]))
+        if min(contour[left], contour[right]) - contour[cut] >= HEAD_DIP * rows:
+            cuts.append(cut)
+    return cuts
+
+
 def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
-                       scale: float) -> list[Detection]:
-    """``detection`` cut into up to ``parts`` side by side, at the columns of least foreground
-    of ``mask`` (``scale`` frame pixels per mask pixel) within a quarter part of its equal
-    divisions, where that column holds at most ``VALLEY`` of the fullest column's foreground
-    (a solid blob is not cut); each part gets the box and the pixel count of its own
-    foreground."""
+                       scale: float, heads: float | None = None) -> list[Detection]:
+    """``detection`` cut into up to ``parts`` side by side: when ``heads`` (the targets' usual
+    aspect) is given, between the heads of its top contour where two or more are found
+    (:func:`head_cuts`); otherwise at the columns of least foreground of ``mask`` (``scale``
+    frame pixels per mask pixel) within a quarter part of its equal divisions, where that
+    column holds at most ``VALLEY`` of the fullest column's foreground (a solid blob is not
+    cut). Each part gets the box and the pixel count of its own foreground."""
     covered, inside = foreground_under(detection.box, mask, scale)
     x0, y0 = covered.x0, covered.y0
     if inside.shape[1] < 2 * parts:
         return [detection]
     profile = inside.sum(axis=0)
     width = inside.shape[1] / parts
-    cuts = [0]
-    for k in range(1, parts):
+    cuts = [0] + ([] if heads is None else head_cuts(inside, parts, heads))
+    for k in range(1, parts if len(cuts) == 1 else 1):
         lo, hi = round(k * width - width / 4), round(k * width + width / 4) + 1
         cut = lo + int(np.argmin(profile[lo:hi]))
         if profile[cut] <= VALLEY * profile.max():
@@ -307,6 +354,11 @@ class GroupBlobs(Stage):
         Param("min_share", float, 0.15,
               "once an area is learnt, detections smaller than this share of it are dropped",
               min=0.0, max=1.0),
+        Param("heads", bool, False,
+              "a detection split by its width is cut between the peaks of its top contour "
+              "where two or more are found (W4's heads: people one behind or beside another, "
+              "with or without a gap), at its columns of least foreground elsewhere; false: "
+              "at its columns of least foreground only"),
         Param("trim", float, 0.0,
               "each detection's left and right sides are moved in to the columns that leave "
               "this share of its foreground outside on either side (a stride's foot, an arm, "
@@ -362,7 +414,8 @@ class GroupBlobs(Stage):
             if self.split and b.w * aspect > self.split * b.h and 2 <= parts <= MAX_PARTS:
                 assert ctx.likelihood is not None
                 grouped.extend(self._trimmed(d, ctx) for d in split_side_by_side(
-                    detection, parts, ctx.likelihood, ctx.feature_scale))
+                    detection, parts, ctx.likelihood, ctx.feature_scale,
+                    aspect if self.heads else None))
             else:
                 grouped.append(self._trimmed(detection, ctx) if whole is None else whole[n])
         scored = []
