@@ -763,7 +763,8 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
     `http://` was taken and failed after tracking ('cannot write video (Broken pipe)', exit 1)
     and `udp://127.0.0.1:99999` ran, sending to a port FFmpeg chose; `udp://127.0.0.1` (no
     port) made the folder and tracked, then failed 'cannot write video (Invalid argument)',
-    exit 1. Each is refused before anything runs, naming the option, and
+    exit 1, and so did `UDP://127.0.0.1` after the check was added (the scheme compared as
+    typed). Each is refused before anything runs, naming the option, and
     RunRequest(video_out=...) the same."""
     scene = make_scene("smooth", seed=8, width=160, height=120, frames=10, fps=30)
     clip = write_video(scene, tmp_path / "clip.mp4")
@@ -779,6 +780,8 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
                       ("udp://127.0.0.1", "needs a port: udp://HOST:PORT "
                                           "(see 'python -m vtrack run --help')"),
                       ("tcp://127.0.0.1", "needs a port: tcp://HOST:PORT "
+                                          "(see 'python -m vtrack run --help')"),
+                      ("UDP://127.0.0.1", "needs a port: udp://HOST:PORT "
                                           "(see 'python -m vtrack run --help')")):
         done = _run([str(clip), "--init", box, "--video-out", url, "-o", str(tmp_path / "o")])
         assert done.returncode == 2, done.stderr
@@ -791,10 +794,11 @@ def test_video_out_is_refused_for_what_is_no_live_output(tmp_path: Path) -> None
                        r"rtmp://\); a file is annotated.mp4 in out_dir$"):
         vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
                           config=vtrack.load_config("s0"), video_out="file:///x.ts")
-    with pytest.raises(vtrack.ConfigError, match=r"^video_out udp://127.0.0.1: needs a port: "
-                       r"udp://HOST:PORT$"):
-        vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
-                          config=vtrack.load_config("s0"), video_out="udp://127.0.0.1")
+    for url in ("udp://127.0.0.1", "UDP://127.0.0.1"):
+        with pytest.raises(vtrack.ConfigError, match=rf"^video_out {url}: needs a port: "
+                           r"udp://HOST:PORT$"):
+            vtrack.RunRequest(input=str(clip), out_dir=tmp_path / "o",
+                              config=vtrack.load_config("s0"), video_out=url)
 
 
 def test_keeping_up_works_through_a_burst_and_passes_over_for_a_slow_consumer() -> None:

@@ -409,7 +409,8 @@ def video_out_problem(url: str, out: str = "--out") -> str | None:
     where = f"udp://HOST:PORT, tcp://, rtsp://, rtmp://); a file is annotated.mp4 in {out}"
     if not sep:
         return f"expected a URL ({where}"
-    if url_scheme(url) not in LIVE_OUTPUT_FORMATS:  # (UDP:// is udp://, as for an input)
+    lowered = url_scheme(url)  # (UDP:// is udp://, as for an input)
+    if lowered not in LIVE_OUTPUT_FORMATS:
         return f"{cut(scheme)}:// is not a live output vtrack sends to ({where}"
     try:
         port = urlsplit(url).port
@@ -417,8 +418,8 @@ def video_out_problem(url: str, out: str = "--out") -> str | None:
         port = 0
     if port == 0:
         return "its port must be a number from 1 to 65535"
-    if port is None and scheme in _PORT_NEEDED:  # (FFmpeg fails only once it sends)
-        return f"needs a port: {scheme}://HOST:PORT"
+    if port is None and lowered in _PORT_NEEDED:  # (FFmpeg fails only once it sends)
+        return f"needs a port: {lowered}://HOST:PORT"
     return None
 
 
