@@ -531,8 +531,9 @@ def test_an_input_given_as_a_file_url_is_refused_not_written_over(tmp_path: Path
     """`vtrack run file:///.../clip.mp4 --stream .../clip.mp4 -y` wrote its lines over its own
     input (48862 bytes became 10063, the run then ending 'partial' at frame 80): read through
     FFmpeg's file protocol the input was a URL, none of the files a run keeps from writing
-    over (also --out's annotated.mp4). A file: URL is refused, asking for the file's path;
-    vtrack.open_source and vtrack.track the same."""
+    over (also --out's annotated.mp4). A file: URL is refused, asking for the file's path
+    (all of it: a name holding '#' or '?' was cut there); vtrack.open_source and vtrack.track
+    the same."""
     import vtrack
 
     scene = make_scene("smooth", seed=1, width=W, height=H, frames=10, fps=30)
@@ -559,3 +560,10 @@ def test_an_input_given_as_a_file_url_is_refused_not_written_over(tmp_path: Path
         vtrack.open_source(f"file://server{clip}")
     assert str(refused.value) == (f"file://server{clip}: a file: URL of another host (server) "
                                   "cannot be read; give a local file's path")
+    # a file name holding '#' or '?' is the path asked for, not cut there (it said /tmp/take)
+    for name in ("take#2.mp4", "take?2.mp4"):
+        named = f"file://{tmp_path / name}"
+        with pytest.raises(vtrack.InputError) as refused:
+            vtrack.open_source(named)
+        assert str(refused.value) == f"{named}: a file: URL; give the file's path " \
+                                     f"({tmp_path / name})"

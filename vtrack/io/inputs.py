@@ -32,18 +32,19 @@ def _refuse_file_url(spec: str) -> None:
     it is none of what keeps a run off the file it reads (``--stream``, ``--out`` and
     ``--video-out`` written over it, ``--overwrite`` or not), nor read as a file is (its
     sidecar box, a late start's seek): the file's path is asked for, the URL's path when it
-    names this host (no host, ``localhost``); a file: URL of another host cannot be read."""
+    names this host (no host, ``localhost``): all the text after the host, ``#`` and ``?``
+    included (file names hold them; FFmpeg's file protocol reads them as such); a file: URL
+    of another host cannot be read."""
     if url_scheme(spec) == "file":
+        host, slash, tail = spec.partition("://")[2].partition("/")
         try:
-            parts = urlsplit(spec)
-            here = parts.hostname in (None, "localhost")
+            here = urlsplit("//" + host).hostname in (None, "localhost")
         except ValueError:  # (a host with an unclosed [: no host of this machine)
             here = False
         if not here:
-            host = spec.partition("://")[2].partition("/")[0]
             raise InputError(f"{spec}: a file: URL of another host ({host}) cannot be read; "
                              "give a local file's path")
-        raise InputError(f"{spec}: a file: URL; give the file's path ({parts.path or '/'})")
+        raise InputError(f"{spec}: a file: URL; give the file's path ({slash + tail or '/'})")
 
 
 def open_source(spec: str, raw: RawFormat | None = None, *, fps: float | None = None,
