@@ -595,6 +595,49 @@ def test_prefetcher_hands_over_items_then_the_producer_error():
     assert prefetch.close() is True
 
 
+def test_a_prefetcher_closed_from_another_thread_never_ends_as_complete_with_an_item_left():
+    """close() from another thread as the producer was queueing the last item (past its stop
+    check, not yet put) emptied a queue still empty; the item was put after, the consumer
+    left on the stop without it, and reached_end said True ([1, 2] handed over, 3 still
+    queued): a source closed so ended as if read to its end. An end the producer reaches
+    once close() has begun is not counted now. Nor does reached_end turn True after close()
+    has returned False (a producer slow to find its end, finding it later): it was final
+    only in name. The interleaving is held by events, not timing."""
+    prefetch = Prefetcher(iter([1, 2, 3]), depth=8, name="test-close-race")
+    queue_item = prefetch._queue.put
+
+    def put(item: object, *args: object, **kwargs: object) -> None:
+        if item == 3:  # past the stop check: wait until close() has emptied the queue
+            assert prefetch._stop.wait(60)
+            with prefetch._closing:
+                pass
+        queue_item(item, *args, **kwargs)
+
+    prefetch._queue.put = put  # type: ignore[method-assign]
+    items = iter(prefetch)
+    got = [next(items), next(items)]
+    closer = threading.Thread(target=prefetch.close, kwargs={"timeout": 60})
+    closer.start()
+    got += list(items)
+    closer.join(60)
+    assert got == [1, 2] and not prefetch._thread.is_alive()
+    assert list(prefetch._queue.queue) == [3]  # never handed over
+    assert prefetch.reached_end is False
+
+    release = threading.Event()
+
+    def slow_end():
+        yield 1
+        release.wait(60)  # the end, found late
+
+    slow = Prefetcher(slow_end(), depth=2, name="test-slow-end")
+    assert next(iter(slow)) == 1
+    assert slow.close(timeout=0.1) is False and slow.reached_end is False
+    release.set()
+    slow._thread.join(60)
+    assert not slow._thread.is_alive() and slow.reached_end is False
+
+
 def test_a_prefetcher_whose_start_a_signal_interrupted_closes_without_an_error():
     """SIGTERM to `vtrack vectors` as its reader's thread was being started raised in
     Thread.start's wait for the new thread (launched, not yet running); closing the source

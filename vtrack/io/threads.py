@@ -111,8 +111,10 @@ class Prefetcher(Generic[T]):
     def reached_end(self) -> bool:
         """Whether the producer went through all its items and the consumer was handed every
         one (a :meth:`close` after the last item, its end marker still queued, leaves it
-        True); False when the producer raised or was stopped before its end, or ``close()``
-        discarded an item not taken. Final once the iteration has ended."""
+        True); False when the producer raised or was stopped before its end (an end it
+        reached once ``close()`` had begun is not counted), or ``close()`` discarded an item
+        not taken. Final once the iteration has ended on its own, or ``close()`` has returned
+        (whatever the producer does later)."""
         with self._closing:
             return self._exhausted and not self._dropped
 
@@ -131,7 +133,10 @@ class Prefetcher(Generic[T]):
             for item in self._items:
                 if not self._put(item):
                     return
-            self._exhausted = True  # (before the marker: a close() may leave it unqueued)
+            # (before the marker: a close() may leave it unqueued). Not once close() has
+            # begun: the last item may have been queued after close() emptied the queue, and
+            # the consumer left without it; and reached_end is final once close() returned.
+            self._exhausted = not self._stop.is_set()
             self._put(_END)
         except BaseException as exc:  # handed to the consumer, who decides what it means
             self._put(_Failure(exc))
