@@ -392,13 +392,17 @@ def test_a_number_of_seconds_out_of_range_is_named_as_typed_in_one_wording(
     ("run", "-", "--raw", "64x48", "--init", "1,1,8,8", "--fps", "1e-400"),
     ("scene", "smooth", "out.mp4", "--fps", "1e-400"),
     ("scene", "smooth", "out.mp4", "--fps", "-1e400"),
-], ids=["run-underflow", "scene-underflow", "scene-overflow"])
+    ("run", "-", "--raw", "64x48", "--init", "1,1,8,8", "--fps", "1e-320"),
+    ("scene", "smooth", "out.mp4", "--fps", "1e-320"),
+], ids=["run-underflow", "scene-underflow", "scene-overflow", "run-subnormal",
+        "scene-subnormal"])
 def test_a_frame_rate_beyond_a_float_is_named_as_typed(args: tuple[str, ...]) -> None:
     """`--fps 1e-400` said '--fps 0: must be a frame rate ...' (the 0.0 the text became before
-    the range check), `--fps -1e400` '--fps -inf': the value is now named as typed."""
+    the range check), `--fps -1e400` '--fps -inf', `--fps 1e-320` '--fps 9.99989e-321' (a
+    subnormal float, some of its digits lost): the value is now named as typed."""
     line = one_error_line(vtrack(*args))
     assert f"'{args[-1]}' is not a frame rate" in line, line
-    assert "--fps 0" not in line and "inf" not in line
+    assert "--fps 0" not in line and "inf" not in line and "--fps 9.9" not in line
 
 
 def test_follow_taking_the_input_as_its_seconds_says_how_to_give_both() -> None:

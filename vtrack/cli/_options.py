@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections.abc import Callable
 from decimal import Decimal
 from typing import Any
@@ -251,7 +252,8 @@ class NumberWord(click.ParamType):
     """A number (``kind``: int or float) whose range the command checks itself, in its own
     words; a value that is no number is refused here saying what the option takes (click said
     "'abc' is not a valid float."), and so is a float's text beyond what a float holds
-    (``1e-400``, ``1e400``: the command would have named the 0 or inf it became), as typed."""
+    (``1e-400``, ``1e400``, ``1e-320``: the command would have named the 0, inf or
+    9.99989e-321 it became), as typed."""
 
     def __init__(self, kind: type[int] | type[float], takes: str) -> None:
         self.kind, self.takes = kind, takes
@@ -272,9 +274,13 @@ class NumberWord(click.ParamType):
 
 def _held(number: float, text: Any) -> bool:
     """Whether ``number`` (``float(text)``) is the number ``text`` says: false for text that
-    underflowed to 0 or overflowed to inf (``1e-400``, ``-1e400``)."""
-    if number != 0 and math.isfinite(number):
+    underflowed to 0 or overflowed to inf (``1e-400``, ``-1e400``), or to a subnormal float,
+    nonzero and below ``sys.float_info.min``, that keeps only some of its digits (``1e-320``
+    became 9.99989e-321)."""
+    if math.isfinite(number) and abs(number) >= sys.float_info.min:
         return True
+    if number != 0 and math.isfinite(number):
+        return False
     try:
         written = Decimal(str(text).strip().replace("_", ""))
     except ArithmeticError:  # (decimal.InvalidOperation: text float() reads and Decimal not)
