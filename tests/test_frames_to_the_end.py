@@ -85,3 +85,15 @@ def test_a_still_image_given_alone(clips: tuple[Path, Path, str], tmp_path: Path
     photo.write_bytes(photo.read_bytes() * copies)
     assert _stopped([str(photo), "--init", box, "--frames", "1"], tmp_path / "out") == (
         1, expected)
+
+
+def test_a_still_image_repeated_by_an_input_option_is_not_taken_as_ended(
+        clips: tuple[Path, Path, str], tmp_path: Path) -> None:
+    """``--input-option loop=1`` repeats a still image without end: ``--frames 1`` stopped it,
+    which run.json said was its end (the first packet was still the whole file)."""
+    images, _, box = clips
+    photo = tmp_path / "photo.png"
+    assert cv2.imwrite(str(photo), cv2.imread(str(sorted((images / "img").iterdir())[0])))
+    looped = [str(photo), "--format", "image2", "--input-option", "loop=1", "--init", box]
+    assert _stopped([*looped, "--frames", "1"], tmp_path / "one") == (1, True)
+    assert _stopped([*looped, "--frames", "3"], tmp_path / "three") == (3, True)

@@ -425,6 +425,9 @@ def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputCo
     return container
 
 
+#: Input options that repeat the input (FFmpeg's image demuxers' ``loop``, ``-stream_loop``):
+#: a still image so given does not end after its one frame.
+REPEATING_OPTIONS = frozenset({"loop", "stream_loop"})
 #: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
 #: records it at the end, once finished).
 INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
@@ -669,8 +672,11 @@ class VideoSource(Source):
         self._photo: bytes | None = None
         self._keep_photo = photo and not self._regular
         #: A photo file's size until its first packet is read (:meth:`_decode`), and whether
-        #: that packet was the whole file: a still image alone, frame 0 its last.
-        self._photo_size = os.path.getsize(path) if photo and self._seekable else None
+        #: that packet was the whole file: a still image alone, frame 0 its last (not when an
+        #: input option repeats it: the image demuxers' ``loop``, ``stream_loop``).
+        repeated = any(key in REPEATING_OPTIONS for key, _ in self._how.options)
+        self._photo_size = (os.path.getsize(path) if photo and self._seekable and not repeated
+                            else None)
         self._still = False
         self._decoded = self._decode()
         try:
