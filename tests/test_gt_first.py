@@ -327,3 +327,30 @@ def test_boxes_from_frame_0_are_a_list_and_later_ones_are_not_walked(
     line = one_error_line(vtrack("run", str(folder), "--gt", str(short), "--start", "12",
                                  "-o", str(tmp_path / "c")))
     assert "the file has boxes for frames 0..4 only" in line, line
+
+
+def test_a_first_frame_past_the_input_is_refused_from_frame_0_too(
+        tmp_path: Path, david: tuple[Path, Path, Path]) -> None:
+    """Probe RD: the README says a --gt-first past the input's last frame is refused in one
+    line, but only a run with --start was: `vtrack run dav --gt FILE --gt-first 30 --init BOX`
+    tracked every frame, scored none and ended 0 with a warning, and without --init it said
+    "give --start 30 to track from there", a start the next run refused. Now every run with
+    --gt-first opens its input first and refuses it, and so does the library's RunRequest."""
+    from vtrack import track
+    from vtrack.errors import InputError
+
+    folder, whole, _ = david
+    gt = folder / "groundtruth_rect.txt"
+    first = whole.read_text().splitlines()[0]
+    expected = (f"vtrack: error: --gt-first {FRAMES}: {folder}: has no frame {FRAMES} "
+                f"(frames 0..{FRAMES - 1}); the file's first box is of one of its frames")
+    for box in (("--init", first), ()):
+        line = one_error_line(vtrack("run", str(folder), "--gt", str(gt), "--gt-first",
+                                     str(FRAMES), *box, "-c", "s0", "--no-video",
+                                     "-o", str(tmp_path / "o")))
+        assert line == expected, line
+    assert not (tmp_path / "o").exists()
+    request = RunRequest(input=str(folder), out_dir=tmp_path / "lib", config=load_config("s0"),
+                         gt_path=gt, gt_first=FRAMES, video=False)
+    with pytest.raises(InputError, match=f"gt_first={FRAMES}: .* has no frame {FRAMES} "):
+        next(iter(track(request)))

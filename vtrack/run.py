@@ -724,9 +724,9 @@ def run(request: RunRequest, on_frame: Callable[[int, float], None] | None = Non
     with _Signals() as signals:
         check_input(request.input)  # a mistyped name first, before what else it lacks
         # a start time (--start 2.5s) is found in the frames' timestamps, and a start frame
-        # past the frames the input states is refused at once: that input opens first
-        later = request.starts_later
-        source: Source | None = _open(request, signals, names) if later else None
+        # (or --gt-first) past the frames the input states is refused at once: it opens first
+        source: Source | None = (_open(request, signals, names) if _opens_first(request)
+                                 else None)
         try:
             resolved = _resolve(request, source, names)
             if source is None:
@@ -1071,6 +1071,14 @@ def _refuse_unreadable(request: RunRequest, names: OptionNames) -> None:
                     live=request.live, names=names).close()
 
 
+def _opens_first(request: RunRequest) -> bool:
+    """Whether ``request`` is settled in its opened input: a start after the first frame
+    (:attr:`RunRequest.starts_later`, found in its frames), or single-target ground truth whose
+    first box is of a later frame (``--gt-first``), refused where the input's frame count says
+    it has no such frame before a first box is looked for in the file."""
+    return request.starts_later or bool(request.gt_first and request.gt_path is not None)
+
+
 def _first_frame(request: RunRequest, source: Source | None, names: OptionNames
                  ) -> tuple[int, int]:
     """The first frame to track, ``--start N``, or for ``--start Ts`` the first frame of
@@ -1107,9 +1115,9 @@ def requested_frames(request: RunRequest
     tracked) and the frames from ``--start`` on, at most ``--frames`` of them, given by the
     function returned once it is called with the opened input. ConfigError or InputError as
     :func:`run` gives them: at once, before the input is opened, as run settles them, unless
-    the request starts later (``start``, ``start_s``: found in the opened input), then from
-    that function."""
-    resolved = None if request.starts_later else _resolve(request, None, LIBRARY_NAMES)
+    the request is settled in the opened input (:func:`_opens_first`: ``start``, ``start_s``,
+    ``gt_first``), then from that function."""
+    resolved = None if _opens_first(request) else _resolve(request, None, LIBRARY_NAMES)
 
     def frames(source: Source) -> tuple[Box | None, Iterator[Frame]]:
         settled = resolved or _resolve(request, source, LIBRARY_NAMES)
