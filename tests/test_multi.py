@@ -506,7 +506,8 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
     """`vtrack run clip.mp4 -c s0 --first-id 3` and its library forms: a single-target config
     numbers no tracks, so a first track id other than 1 is refused in one line naming what was
     given (before the output folder is made), as one out of its range (1 to 2**53) is;
-    1 is every config's (the default)."""
+    1 is every config's (the default). The line named `vtrack configs`, no command (probe RD):
+    it names `vtrack stages`, which lists the shipped configs."""
     import vtrack
     from vtrack.request import RunRequest
 
@@ -516,8 +517,8 @@ def test_a_first_track_id_is_refused_where_no_track_is_numbered(
                                        "--gt", str(clip.gt), "-o", str(out)])
     assert one_error_line(result) == (
         "vtrack: error: --first-id 3: s0 tracks one target and numbers no tracks; only a "
-        "multi-target config (s3, s4_multi, fixed_camera, ...: vtrack configs) takes a first "
-        "track id")
+        "multi-target config (s3, s4_multi, fixed_camera, ...: vtrack stages lists the shipped "
+        "configs) takes a first track id")
     assert not out.exists()
     result = CliRunner().invoke(main, ["run", str(clip.path), "-c", "s3", "--first-id", "0",
                                        "-o", str(out)])

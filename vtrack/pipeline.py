@@ -91,7 +91,7 @@ def check_first_track_id(value: object, multi_target: bool, chain: str,
     if first != 1 and not multi_target:
         raise ConfigError(f"{name} {first}: {chain} tracks one target and numbers no tracks; "
                           "only a multi-target config (s3, s4_multi, fixed_camera, ...: "
-                          "vtrack configs) takes a first track id")
+                          "vtrack stages lists the shipped configs) takes a first track id")
     return first
 
 
