@@ -185,3 +185,14 @@ def test_readme_robust_pairs_are_in_results_section_8() -> None:
     missing = [pair for pair in pairs
                if pair not in section and f"| {pair.replace(' / ', ' | ')} |" not in section]
     assert missing == []
+
+
+def test_readme_names_the_packages_ci_installs() -> None:
+    """Every package `.ci/run` installs for a test is one the README's Development section
+    names: it installed `ffmpeg` for an RTSP test the README did not mention (probe RD)."""
+    script = (ROOT / ".ci" / "run").read_text()
+    packages = {word for line in re.findall(r"apt-get install ([^>|&;]+)", script)
+                for word in line.split() if not word.startswith("-")}
+    assert {"chromium", "chromium-driver", "ffmpeg"} <= packages
+    development = (ROOT / "README.md").read_text().split("## Development", 1)[1]
+    assert [name for name in sorted(packages) if f"`{name}`" not in development] == []
