@@ -173,8 +173,8 @@ def test_numpy_numbers_in_a_config_made_in_python_are_taken_as_python_values() -
     assert [type(v) for v in values.values()] == [int, bool, float, float]
     assert type(config.stages[1][1]["scales"]) is int
     json.dumps(config.stages)  # plain Python values
-    with pytest.raises(ConfigError, match="parameter 'working_area' must be an integer, got "
-                                          "150.0"):
+    with pytest.raises(ConfigError, match="parameter 'working_area' must be an integer in "
+                                          "the range 32 to 250, got 150.0"):
         vtrack.Config("mine", "python", "", [("robust_model", {"working_area": np.float64(150)}),
                                              *stages[1:]])
     with pytest.raises(ConfigError, match="parameter 'colour' must be true or false, got 1"):
@@ -594,7 +594,8 @@ def test_a_numpy_array_as_a_parameter_is_refused_by_its_shape(value: np.ndarray)
     with pytest.raises(ConfigError) as caught:
         vtrack.Config("mine", "python", "", [("robust_model", {"working_area": value}), *rest])
     assert str(caught.value) == ("python: stage 'robust_model': parameter 'working_area' must "
-                                 f"be an integer, got a NumPy array of shape {value.shape}")
+                                 "be an integer in the range 32 to 250, got a NumPy array of "
+                                 f"shape {value.shape}")
     with pytest.raises(ConfigError, match=r"got a NumPy array of shape"):
         vtrack.Tracker("robust", **{"robust_model.working_area": value})
     zero_d = vtrack.Config("mine", "python", "",

@@ -15,6 +15,7 @@ from conftest import one_error_line
 
 from vtrack.cli import main
 from vtrack.errors import ConfigError
+from vtrack.stages.base import all_stages
 from vtrack.tracker import Tracker
 
 if TYPE_CHECKING:
@@ -66,8 +67,8 @@ def test_a_config_toml_cannot_turn_into_values_is_one_line(text: str, said: str,
                                            "got an integer of more than 4000 digits"),
     ("hue_scale", '"' + "x" * 900_000 + '"', "parameter 'hue_scale' must be one of 'full', "
                                             "'opencv', got 'xxxxxxxx"),
-    ("sat_min", "[" + "1, " * 200_000 + "]", "parameter 'sat_min' must be an integer, got "
-                                             "[1, 1, 1, 1, 1, 1, ...]"),
+    ("sat_min", "[" + "1, " * 200_000 + "]", "parameter 'sat_min' must be an integer in the "
+                                             "range 0 to 255, got [1, 1, 1, 1, 1, 1, ...]"),
     ("k" * 900_000, "1", "unknown parameter 'kkkkkkkk"),
 ], ids=["int", "float", "bool", "long-text", "long-array", "long-name"])
 def test_a_huge_value_in_a_config_is_named_in_a_short_line(param: str, value: str, said: str,
@@ -451,3 +452,28 @@ def test_scales_past_interp_scales_run_when_the_scale_filter_is_off(
         (tmp_path / "alone" / "track.csv").read_text()
     Tracker("robust", robust_search__scale=False, robust_search__scales=33,
             robust_search__interp_scales=17)
+
+
+def test_a_value_of_the_wrong_type_is_refused_with_its_range_in_the_same_line(
+        tmp_path: Path) -> None:
+    """`search_scale = "2"` (a string for a number) said "parameter 'search_scale' must be a
+    number, got '2'" and `hue_scale = 1` "must be a string, got 1": what the value may be was
+    left to `vtrack stages`, unlike a number out of range ("must be in the range 1 to 16"). Now
+    every parameter of every stage, given a value of another type, names its declared range or
+    choices in the line that refuses it."""
+    config = tmp_path / "typed.toml"
+    config.write_text(f'name = "x"\n[[stage]]\nname = "hue"\nsearch_scale = "2"\n{CHAIN_TAIL}')
+    for line in refusals(config, tmp_path):
+        assert line == (f"vtrack: error: {config}: stage 'hue': parameter 'search_scale' must "
+                        "be a number in the range 1 to 16, got '2'"), line
+    for name, cls in all_stages().items():
+        for param in cls.params:
+            wrong = 1 if param.type is str else "x"
+            with pytest.raises(ConfigError) as refused:
+                param.validate(wrong, f"mine.toml: stage '{name}'")
+            said = str(refused.value)
+            if param.range_text():
+                assert f"in the range {param.range_text()}, got 'x'" in said, said
+            elif param.choices is not None:
+                options = ", ".join(repr(c) for c in param.choices)
+                assert f"one of {options}, got {wrong!r}" in said, said

@@ -169,7 +169,8 @@ def test_a_long_plain_value_is_shown_to_about_80_characters() -> None:
 @pytest.mark.parametrize(("args", "said"), [
     (("--set", "\udcff.a=1"), "stage '\\xff' is not in the chain"),
     (("--set", "robust_model.\udcff=1"), "unknown parameter '\\xff'"),
-    (("--set", "robust_model.padding=\udcff"), "must be a number, got '\\xff'"),
+    (("--set", "robust_model.padding=\udcff"),
+     "must be a number in the range 0.2 to 4, got '\\xff'"),
     (("--init", "\udcff"), "got '\\xff'"),
 ])
 def test_a_byte_not_utf8_in_vtracks_own_errors_is_written_as_usage_messages_write_it(

@@ -617,7 +617,7 @@ def test_stages_of_a_config_file_show_the_values_it_sets(tmp_path: Path) -> None
                                        'iterations = "many"\n')
     assert one_error_line(vtrack("stages", "bad.toml", cwd=tmp_path)) == (
         "vtrack: error: bad.toml: stage 'meanshift': parameter 'iterations' must be an "
-        "integer, got 'many'")
+        "integer in the range 1 to 100, got 'many'")
 
 
 def test_a_missing_input_is_named_before_what_else_is_missing(tmp_path: Path) -> None:

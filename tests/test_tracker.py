@@ -195,7 +195,8 @@ def test_keyword_parameters_take_python_and_numpy_values_as_a_config_file_does()
     assert values["occlusion"]["threshold"] == pytest.approx(0.25)
     with pytest.raises(ConfigError, match="'model' must be one of 'cv', 'ca', 'gravity', got 'zz'"):
         vtrack.Tracker("s0", kalman__model="zz")
-    with pytest.raises(ConfigError, match="'iterations' must be an integer, got '7'"):
+    with pytest.raises(ConfigError, match="'iterations' must be an integer in the range 1 to 100, "
+                                          "got '7'"):
         vtrack.Tracker("s0", meanshift__iterations="7")
     assert vtrack.Tracker(None).config.name == vtrack.load_config(None).name
 

@@ -136,6 +136,15 @@ class Param:
             return f"in the range {self.range_text()}"
         return "one of " + ", ".join(repr(c) for c in self.choices or ())
 
+    def wanted_text(self) -> str:
+        """What a value of this parameter must be, for a message refusing one of another type:
+        its type and its declared range or choices (``an integer in the range 1 to 100``,
+        ``a string, one of 'full', 'opencv'``), so that one line says all of it."""
+        kind = _A_TYPE[self.type]
+        if self.range_text():
+            return f"{kind} {self.allowed_text()}"
+        return f"{kind}, {self.allowed_text()}" if self.choices is not None else kind
+
     def validate(self, value: Any, where: str) -> Any:
         """Return ``value`` as this parameter's type, or raise ConfigError naming ``where``.
 
@@ -146,7 +155,6 @@ class Param:
         (:func:`~vtrack.errors.is_real`: an int, ``Fraction``, ``Decimal``) as a ``float`` for a
         number; nothing else is converted (a string is not a number, nor True the number 1).
         """
-        expected = _A_TYPE[self.type]
         if type(value).__module__ == "numpy" and getattr(value, "shape", None) == ():
             value = value.item()  # (a NumPy scalar or 0-d array; NumPy is not imported here)
         if self.type is int and isinstance(value, Integral) and not isinstance(value, bool):
@@ -162,7 +170,8 @@ class Param:
         wrong_bool = self.type is not bool and isinstance(value, bool)
         if wrong_bool or not isinstance(value, self.type):
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be {expected}, got {shown(value)}"
+                f"{where}: parameter '{self.name}' must be {self.wanted_text()}, got "
+                f"{shown(value)}"
             )
         if self.type is float and not math.isfinite(value):
             raise ConfigError(f"{where}: parameter '{self.name}' must be {self.allowed_text()}, "
@@ -205,7 +214,7 @@ class Param:
                 value = float_from_text(text)
         except ValueError:
             raise ConfigError(
-                f"{where}: parameter '{self.name}' must be {_A_TYPE[self.type]}, got "
+                f"{where}: parameter '{self.name}' must be {self.wanted_text()}, got "
                 f"{shown(text)}"
             ) from None
         return self.validate(value, where)
