@@ -164,3 +164,29 @@ def test_repeated_configs_and_integers_too_long_to_read_are_named_for_what_they_
         config.with_overrides(["meanshift.iterations=" + "9" * 5000])
     with pytest.raises(ConfigError, match="'bins' must be one of .*, got a 4001-digit integer"):
         load_config("robust").with_overrides(["robust_model.bins=" + "1" * 4001])
+
+
+def test_vtrack_stages_lists_what_a_stage_needs_gives_and_the_rules_its_values_keep() -> None:
+    """`vtrack stages` and docs/stages.md listed each parameter's range only: a config author
+    learnt what a stage needs from earlier stages (`stage 'meanshift' needs likelihood,
+    target_model, which no earlier stage provides`) and the rules between its values
+    (`interp_scales (3) is smaller than scales (17)`, `low (0.9) is above high (0.5)`) only from
+    a refusal. Each stage's entry now ends with what it needs and gives, and every stage whose
+    values or place in a chain are checked beyond the ranges declares those rules, listed."""
+    entries: dict[str, str] = {}  # each stage's indented lines, by the name starting its entry
+    stage = ""
+    for line in CliRunner().invoke(main, ["stages"]).output.splitlines(keepends=True):
+        stage = stage if line.startswith(" ") else line.split(":")[0]
+        entries[stage] = entries.get(stage, "") + line * line.startswith(" ")
+    for name, cls in all_stages().items():
+        entry = entries[name]
+        needs = ", ".join(sorted(cls.requires - PIPELINE_PROVIDES)) or "nothing"
+        assert f"    needs: {needs}; gives: {', '.join(sorted(cls.provides))}\n" in entry, name
+        checked = {"values_problem", "chain_problem"} & set(vars(cls))
+        assert bool(checked) == bool(cls.rules), (name, checked, cls.rules)
+        for rule in cls.rules:
+            assert f"    rule: {rule}\n" in entry, (name, rule)
+    search = CliRunner().invoke(main, ["stages", "robust_search"]).output
+    assert "    rule: interp_scales >= scales when scale is on\n" in search
+    with pytest.raises(ConfigError, match=r"interp_scales \(3\) is smaller than scales \(17\)"):
+        load_config("robust").with_values({"robust_search.interp_scales": 3})

@@ -23,7 +23,9 @@ def limits_text() -> str:
 
 Every number a stage takes has a declared range, shown after its help below. A value outside it,
 or one that is not finite (NaN, inf), is refused before anything runs with one line naming the
-stage, the parameter and the range (exit code 2). Frames are at most
+stage, the parameter and the range (exit code 2). Each stage's entry ends with the values it
+needs from earlier stages of a chain and those it gives, and each rule its values or its place
+in a chain must keep: a config breaking one is refused the same way. Frames are at most
 {MAX_FRAME_SIDE}x{MAX_FRAME_SIDE} pixels (checked from the file's header or `--raw WxH` before a
 frame is allocated). An initial box (`--init` or the first ground-truth box) must be finite,
 at least {MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} pixels, no larger than the frame and overlap it.
@@ -60,6 +62,18 @@ Per frame, with N the frame's pixels, every config stays within these bounds:
 """
 
 
+def contract(cls: type) -> list[str]:
+    """What a stage's place in a chain takes, a line each, as ``vtrack stages`` and
+    docs/stages.md list it: the values it needs from earlier stages and those it gives (the
+    chain check, :func:`vtrack.config.check_chain`, refuses a stage whose needs no earlier
+    stage gives), then each rule its values and place must keep (its ``rules``)."""
+    from vtrack.stages.base import PIPELINE_PROVIDES
+
+    needs = ", ".join(sorted(cls.requires - PIPELINE_PROVIDES)) or "nothing"
+    lines = [f"needs: {needs}; gives: {', '.join(sorted(cls.provides))}"]
+    return lines + [f"rule: {rule}" for rule in cls.rules]
+
+
 def _plain(name: str, cls: type, sets: list[tuple[str, dict]] | None = None) -> list[str]:
     """One stage's plain-text entry: its summary, a line per parameter, its CSV columns; with
     configs' ``sets`` (config name, its settings of this stage), each parameter a config sets
@@ -72,6 +86,7 @@ def _plain(name: str, cls: type, sets: list[tuple[str, dict]] | None = None) -> 
             if value != param.default:
                 line += f"; {config} sets {param.value_text(value)}"
         lines.append(line)
+    lines += [f"    {line}" for line in contract(cls)]
     if cls.columns:
         lines.append(f"    csv columns: {', '.join(cls.columns)}")
     return lines
@@ -129,6 +144,8 @@ def stages_text(markdown: bool = False, names: tuple[str, ...] = ()) -> str:
         if markdown:
             lines += [f"## `{name}`", "", cls.summary, ""]
             lines += [f"- `{p.name}`{p.describe().removeprefix(p.name)}" for p in cls.params]
+            for line in contract(cls):
+                lines += ["", f"{line[0].upper()}{line[1:]}"]
             if cls.columns:
                 lines += ["", "CSV columns: " + ", ".join(f"`{c}`" for c in cls.columns)]
             lines.append("")

@@ -297,6 +297,10 @@ class Stage:
     #: Parameters naming a file the stage reads (``mot_detections``' det.txt): a relative path
     #: is the folder's the run was requested in, and the file counts among a run's inputs.
     file_params: ClassVar[tuple[str, ...]] = ()
+    #: What :meth:`values_problem` and :meth:`chain_problem` refuse beyond each parameter's own
+    #: range, one rule a line as ``vtrack stages`` lists it (tests check a stage with either
+    #: declares its rules).
+    rules: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, **values: Any) -> None:
         """``values`` are validated (see :func:`build_stage`); missing ones take defaults."""

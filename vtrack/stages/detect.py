@@ -650,6 +650,7 @@ class Blobs(Stage):
     requires = _SEGMENTS
     provides = frozenset({"detections", "candidate_grey"})
     needs_init_box = False
+    rules = ("min_area <= max_area when max_area is set (not 0)",)
 
     @classmethod
     def values_problem(cls, values: dict[str, Any]) -> str | None:

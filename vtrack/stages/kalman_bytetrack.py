@@ -167,6 +167,7 @@ class ByteTracks(Stage):
     provides = frozenset({"tracks", "target_shape"})
     multi_target = True
     needs_init_box = False
+    rules = ("low <= high", "colour_gate below 1 needs detection_colours before this stage")
 
     @classmethod
     def values_problem(cls, values: dict[str, Any]) -> str | None:

@@ -78,6 +78,7 @@ class RobustSearch(Stage):
     scale_rate: float
     scale_area: int
     min_side: float
+    rules = ("interp_scales >= scales when scale is on",)
 
     @classmethod
     def values_problem(cls, values: dict[str, Any]) -> str | None:

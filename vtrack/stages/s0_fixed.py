@@ -47,6 +47,10 @@ def integer_window(box: Box) -> tuple[int, int, int, int, int, int]:
     return cx - w // 2, cy - h // 2, w, h, cx, cy
 
 
+#: The rule of a stage reading hue_bp_fixed's S0 record (:func:`_s0_record_problem`).
+_S0_RECORD_RULE = "hue_bp_fixed before this stage (it reads its S0 fixed-point record)"
+
+
 def _s0_record_problem(before: list[str]) -> str | None:
     """Why a stage reading hue_bp_fixed's S0 record cannot follow the stages ``before`` (the
     chain's fixed-point record is then another document's, S2's; None: it can)."""
@@ -200,6 +204,7 @@ class MeanShiftFixed(Stage):
     requires = frozenset({"window", "likelihood", "fixed"})
     provides = frozenset({"measurement", "box", "state", "score"})
     columns = ("sum_bp", "step_x", "step_y")
+    rules = (_S0_RECORD_RULE,)
 
     @classmethod
     def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
@@ -316,6 +321,7 @@ class KalmanF32Stage(Stage):
     requires = frozenset({"measurement", "box", "fixed"})
     provides = frozenset({"box", "prediction"})
     columns = ("pred_cx", "pred_cy")
+    rules = (_S0_RECORD_RULE,)
 
     @classmethod
     def chain_problem(cls, values: dict[str, Any], before: list[str]) -> str | None:
