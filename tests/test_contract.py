@@ -190,3 +190,24 @@ def test_vtrack_stages_lists_what_a_stage_needs_gives_and_the_rules_its_values_k
     assert "    rule: interp_scales >= scales when scale is on\n" in search
     with pytest.raises(ConfigError, match=r"interp_scales \(3\) is smaller than scales \(17\)"):
         load_config("robust").with_values({"robust_search.interp_scales": 3})
+
+
+def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:
+    """`[[stage]] name = "kalman"` before S0's stages said only "stage 'kalman' needs
+    measurement, which no earlier stage provides (check the order of the chain)": which stage
+    makes a measurement was for the author to find. The line now names, for each value lacking,
+    the stages that make it (not those that only change one they need, as occlusion does)."""
+    with pytest.raises(ConfigError) as refused:
+        parse_config({"stage": [{"name": n} for n in ("kalman", "hue", "backproject",
+                                                       "meanshift")]}, "chain.toml")
+    assert str(refused.value) == (
+        "chain.toml: stage 'kalman' needs measurement, which no earlier stage provides (check "
+        "the order of the chain: measurement comes from kernel_meanshift, kernel_meanshift_int, "
+        "largest_blob, meanshift, meanshift_fixed, robust_search)")
+    with pytest.raises(ConfigError, match=r"^chain.toml: stage 'byte_tracks' needs detections, "
+                       r"which no earlier stage provides \(check the order of the chain: "
+                       r"detections comes from blobs, mot_detections\)$"):
+        parse_config({"stage": [{"name": "byte_tracks"}]}, "chain.toml")
+    needed = set().union(*(cls.requires for cls in all_stages().values())) - PIPELINE_PROVIDES
+    assert all(any(value in cls.provides - cls.requires for cls in all_stages().values())
+               for value in needed)  # (no line says a value comes "from no stage")

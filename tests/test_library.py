@@ -745,7 +745,9 @@ def test_a_pipeline_checks_its_stages_as_a_config_is_checked() -> None:
                            rf"vtrack.load_config\(name\).build\(\)\), got {shown}$"):
             vtrack.Pipeline(given)  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="^pipeline: stage 'kalman' needs measurement, which "
-                       r"no earlier stage provides \(check the order of the chain\)$"):
+                       r"no earlier stage provides \(check the order of the chain: measurement "
+                       "comes from kernel_meanshift, kernel_meanshift_int, largest_blob, "
+                       r"meanshift, meanshift_fixed, robust_search\)$"):
         vtrack.Pipeline(stages[::-1])
     with pytest.raises(ConfigError, match="^pipeline: stage 'hue' appears 2 times"):
         vtrack.Pipeline(stages + vtrack.load_config("s0").build())

@@ -45,6 +45,7 @@ from vtrack.stages.base import (
     DERIVED,
     PIPELINE_PROVIDES,
     Stage,
+    all_stages,
     build_stage,
     checked_values,
     declared_param,
@@ -388,7 +389,8 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
         if missing:
             raise ConfigError(
                 f"{source}: stage '{cls.name}' needs {', '.join(sorted(missing))}, "
-                "which no earlier stage provides (check the order of the chain)"
+                f"which no earlier stage provides (check the order of the chain: "
+                f"{_givers(sorted(missing))})"
             )
         problem = cls.chain_problem(settings, before)
         if problem:
@@ -397,6 +399,19 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
         for provided in cls.provides:  # what an older value was computed from is stale now
             available -= DERIVED.get(provided, frozenset()) - cls.provides
         available |= cls.provides
+
+
+def _givers(values: list[str]) -> str:
+    """Which stages make each of ``values`` (shared values a stage needs), for a refusal of a
+    chain lacking them: ``likelihood comes from background, backproject, ...; target_model
+    from backproject`` (a stage that changes a value it needs, occlusion's measurement, is not
+    where it comes from)."""
+    stages = all_stages()
+    return "; ".join(
+        f"{value} {'comes ' if index == 0 else ''}from "
+        + (", ".join(name for name, cls in stages.items()
+                     if value in cls.provides - cls.requires) or "no stage")
+        for index, value in enumerate(values))
 
 
 #: What a single-target stage sets: a chain that tracks several targets writes none of it.
