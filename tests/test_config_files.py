@@ -477,3 +477,20 @@ def test_a_value_of_the_wrong_type_is_refused_with_its_range_in_the_same_line(
             elif param.choices is not None:
                 options = ", ".join(repr(c) for c in param.choices)
                 assert f"one of {options}, got {wrong!r}" in said, said
+
+
+@pytest.mark.parametrize(("text", "said"), [
+    ('[stage]\nname = "hue"\n', "stage is one table ([stage]), not a list of them: write each "
+                                "stage as a [[stage]] table (two brackets), in the order of the "
+                                "chain"),
+    ('stage = "hue"\n', "stage = 'hue': write each stage as a [[stage]] table (name = \"hue\" "
+                        "...), in the order of the chain"),
+], ids=["one-bracket", "text"])
+def test_stages_not_written_as_stage_tables_are_told_how_to_write_them(
+        text: str, said: str, tmp_path: Path) -> None:
+    """A config of `[stage]` (one bracket: a table, not an array of tables) or `stage = "hue"`
+    was told "no [[stage]] tables: a config is a chain of stages", as if it had none."""
+    config = tmp_path / "one.toml"
+    config.write_text(text)
+    for line in refusals(config, tmp_path):
+        assert line == f"vtrack: error: {config}: {said}", line

@@ -341,6 +341,13 @@ def parse_config(data: dict[str, Any], where: str, default_name: str = "config")
             f"(expected name, description, [[stage]]){_near_keys(unknown, keys, data)}"
         )
     raw_stages = data.get("stage")
+    if isinstance(raw_stages, dict):  # [stage] (one bracket): a table, not a list of them
+        raise ConfigError(f"{where}: stage is one table ([stage]), not a list of them: write "
+                          "each stage as a [[stage]] table (two brackets), in the order of the "
+                          "chain")
+    if raw_stages is not None and not isinstance(raw_stages, list):
+        raise ConfigError(f"{where}: stage = {shown(raw_stages)}: write each stage as a "
+                          "[[stage]] table (name = \"hue\" ...), in the order of the chain")
     if not isinstance(raw_stages, list) or not raw_stages:
         raise ConfigError(f"{where}: no [[stage]] tables: a config is a chain of stages")
     stages: list[tuple[str, dict[str, Any]]] = []
