@@ -494,3 +494,19 @@ def test_stages_not_written_as_stage_tables_are_told_how_to_write_them(
     config.write_text(text)
     for line in refusals(config, tmp_path):
         assert line == f"vtrack: error: {config}: {said}", line
+
+
+def test_a_stage_named_twice_is_refused_before_its_values(tmp_path: Path) -> None:
+    """A chain naming hue twice, the second with `sat_min = 999`, said "stage 'hue': parameter
+    'sat_min' must be in the range 0 to 255, got 999" (which of the two hue tables was left
+    unsaid), and only once that was fixed "stage 'hue' appears 2 times". The repeated stage is
+    the mistake named first; an unknown name still before it."""
+    config = tmp_path / "twice.toml"
+    config.write_text(f'[[stage]]\nname = "hue"\n{CHAIN_TAIL}[[stage]]\nname = "hue"\n'
+                      "sat_min = 999\n")
+    for line in refusals(config, tmp_path):
+        assert line == (f"vtrack: error: {config}: stage 'hue' appears 2 times; a chain runs "
+                        "each stage once"), line
+    config.write_text('[[stage]]\nname = "hu"\n[[stage]]\nname = "hu"\n')
+    for line in refusals(config, tmp_path):
+        assert line.startswith(f"vtrack: error: {config}: unknown stage 'hu' "), line

@@ -104,6 +104,10 @@ class Config:
                             f"value}}) pairs, got {shown(self.stages)}")
         if not self.stages:
             raise ConfigError(f"{self._named}: no stages: a config is a chain of stages")
+        # stages known and each once before the values: a refusal of a value of a stage named
+        # twice could not say which of them
+        refuse_repeats(self._named, [stage_class(name, self._named).name
+                                     for name, _ in self.stages])
         # names, parameters and types checked; each value kept as its parameter's Python type
         object.__setattr__(self, "stages", tuple(
             (name, StageValues(checked_values(name, values, self._named)))
@@ -421,6 +425,15 @@ def _givers(values: list[str]) -> str:
         for index, value in enumerate(values))
 
 
+def refuse_repeats(source: str, names: list[str]) -> None:
+    """ConfigError naming ``source`` for a stage named twice in the chain ``names`` (one stage
+    runs once a frame)."""
+    for name, count in Counter(names).items():
+        if count > 1:
+            raise ConfigError(f"{source}: stage {shown(name)} appears {count} times; a chain "
+                              "runs each stage once")
+
+
 #: What a single-target stage sets: a chain that tracks several targets writes none of it.
 SINGLE_TARGET_OUTPUTS = frozenset({"box", "measurement"})
 
@@ -433,10 +446,7 @@ def _check_tracks(source: str, classes: list[type[Stage]]) -> None:
     setting the tracks; a multi-target chain with a stage of a single target (its box would be
     thrown away, or it would need a first box the chain refuses)."""
     names = [cls.name for cls in classes]
-    for name, count in Counter(names).items():
-        if count > 1:
-            raise ConfigError(f"{source}: stage '{name}' appears {count} times; a chain runs "
-                              "each stage once")
+    refuse_repeats(source, names)
     records = [cls.name for cls in classes if "fixed" in cls.provides]
     if len(records) > 1:
         raise ConfigError(f"{source}: stages {' and '.join(records)} both keep the chain's "
