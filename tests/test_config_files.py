@@ -510,3 +510,21 @@ def test_a_stage_named_twice_is_refused_before_its_values(tmp_path: Path) -> Non
     config.write_text('[[stage]]\nname = "hu"\n[[stage]]\nname = "hu"\n')
     for line in refusals(config, tmp_path):
         assert line.startswith(f"vtrack: error: {config}: unknown stage 'hu' "), line
+
+
+@pytest.mark.parametrize("given", ["s0.toml", "./s0", "configs/robust.toml"])
+def test_a_shipped_configs_name_given_as_a_missing_file_is_told_the_shipped_name(
+        given: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`-c s0.toml` (or `./s0`, `configs/robust.toml` outside the source tree) where no such
+    file is said "s0.toml: config file not found" only, though s0 is shipped: the name that
+    loads it was left to guess. The line now names it; another missing file is unchanged."""
+    monkeypatch.chdir(tmp_path)
+    name = Path(given).stem
+    (tmp_path / "inputs").mkdir()
+    for line in [one_error_line(vtrack(*args)) for args in (
+            ("run", "in.mp4", "-c", given, "--init", "1,1,9,9"),
+            ("batch", "inputs", "-c", given), ("stages", given))]:
+        assert line == (f"vtrack: error: {given}: config file not found; did you mean the "
+                        f"shipped config '{name}' (named without a path or .toml)?"), line
+    assert refusals(Path("mine.toml"), tmp_path)[0] == (
+        "vtrack: error: mine.toml: config file not found")

@@ -294,7 +294,10 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
         if path.is_dir():
             raise ConfigError(f"{named}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
-            raise ConfigError(f"{named}: config file not found")
+            shipped = path.stem if path.stem in shipped_configs() else None
+            raise ConfigError(f"{named}: config file not found" + (
+                f"; did you mean the shipped config {shipped!r} (named without a path or "
+                ".toml)?" if shipped else ""))
         else:
             shipped = sorted(shipped_configs())
             raise ConfigError(
