@@ -479,3 +479,27 @@ def test_an_error_of_vtrack_vectors_input_names_the_command_typed() -> None:
     assert line.endswith(" vtrack vectors --help')"), line
     usage = vtrack("vectors", "clip.mp4", "--help").stdout
     assert "vtrack vectors [OPTIONS] INPUT" in usage and "generate" not in usage, usage
+
+
+def test_a_dumps_names_and_values_stay_one_line_each(vectors, tmp_path) -> None:
+    """A dump's trace.csv value holding a newline (a quoted CSV cell) and a dumped file named
+    with a newline or a terminal escape were printed as they are: 'trace.csv: ... got 12' then
+    a line 'fake line: ok' of its own, and ESC [2J cleared the user's terminal."""
+    out, _ = vectors
+    with (out / "trace.csv").open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    column = rows[0].index("sum_bp")
+    expected, rows[2][column] = rows[2][column], "12\nfake line: ok"  # frame 1
+    dump = tmp_path / "dump"
+    dump.mkdir()
+    with (dump / "trace.csv").open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    (dump / "evil\nname.hex").write_text("00\n")
+    (dump / "\x1b[2Jclear.hex").write_text("00\n")
+    differ = vtrack("vectors", "check", str(out), str(dump))
+    assert differ.returncode == 1, differ.stderr
+    assert differ.stdout.splitlines() == [
+        "\\x1b[2Jclear.hex: not in the vectors",
+        "evil\\nname.hex: not in the vectors",
+        f"trace.csv: 1 differing value(s); frame 1 column sum_bp: expected {expected}, "
+        "got 12\\nfake line: ok"]

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from vtrack.errors import ConfigError, InputError, OutputError, shell_word
+from vtrack.errors import ConfigError, InputError, OutputError, printable, shell_word
 from vtrack.golden import s0
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s2 import gray8
@@ -525,7 +525,9 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
     """Compare every file of ``dump`` that the vectors also have (any subset of them).
 
     Returns one line per differing file (naming frame, file, line with pixel x, y or trace
-    column, and both values for the first :data:`SHOWN` differences) and the number of files
+    column, and both values for the first :data:`SHOWN` differences; the dump's names and
+    values with their control characters escaped, :func:`~vtrack.errors.printable`, so a
+    newline or a terminal escape in them stays text of that one line) and the number of files
     compared. Files of ``dump`` the vectors do not have are reported too. InputError for
     ``vectors`` that are none (saying the order when ``dump`` is the vectors folder), or a
     ``dump`` that is no folder.
@@ -560,4 +562,4 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
             diff = _csv_differences(name, expected, path)
         if diff is not None:
             lines.append(diff)
-    return lines, compared
+    return [printable(line) for line in lines], compared
