@@ -503,3 +503,32 @@ def test_a_dumps_names_and_values_stay_one_line_each(vectors, tmp_path) -> None:
         "evil\\nname.hex: not in the vectors",
         f"trace.csv: 1 differing value(s); frame 1 column sum_bp: expected {expected}, "
         "got 12\\nfake line: ok"]
+
+
+@pytest.mark.parametrize(("name", "damage", "problem"), [
+    ("frame_0001/rgb.hex", lambda data: data[: len(data) // 2],
+     "(38400 lines where its manifest.json gives 76800)"),
+    ("frame_0001/rgb.hex", lambda data: data[:1000], "(its last line, 143, is cut short)"),
+    ("frame_0001/bp.hex", lambda data: data.replace(data[:3], b"zz\n", 1),
+     "(line 1 is zz, not 2 hex digits)"),
+    ("trace.csv", lambda data: data[: data.rindex(b"\n", 0, -1) + 1],
+     f"({FRAMES - 1} rows where its manifest.json gives {FRAMES} frames)"),
+    ("trace.csv", lambda data: data[:-40] + b"\n", f"(line {FRAMES + 1} has "),
+    ("trace.csv", lambda data: data[:-3], f"(its last line, {FRAMES + 1}, is cut short)"),
+])
+def test_damaged_vectors_are_an_error_not_a_difference_of_the_dump(
+        vectors, tmp_path, name: str, damage, problem: str) -> None:
+    """A vectors folder with a file cut short or changed was compared as if it were whole, and
+    the dump got the blame (exit 1): 'frame_0001/rgb.hex: 76800 lines, expected 38400',
+    'trace.csv: 4 rows, expected 3', 'line 1 (x=0, y=0): expected zz, got ..'."""
+    out, _ = vectors
+    damaged = tmp_path / "vec"
+    shutil.copytree(out, damaged)
+    (damaged / name).write_bytes(damage((out / name).read_bytes()))
+    done = vtrack("vectors", "check", str(damaged), str(out))
+    assert (done.returncode, done.stdout) == (2, ""), done.stdout + done.stderr
+    assert done.stderr.startswith(f"vtrack: error: {damaged / name}: not the file vtrack "
+                                  f"vectors wrote {problem}"), done.stderr
+    assert done.stderr.endswith("; write the vectors again\n") and done.stderr.count("\n") == 1
+    whole = vtrack("vectors", "check", str(out), str(out))
+    assert (whole.returncode, whole.stderr) == (0, ""), whole.stderr

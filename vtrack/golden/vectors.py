@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
 import json
 import math
 import os
@@ -419,14 +420,59 @@ def _same_cell(a: str, b: str) -> bool:
 _COLUMNS_SHOWN = 8
 
 
-def _read_expected_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
-    """The header and rows of a vectors CSV; InputError naming it when it cannot be read."""
+def _read_expected_csv(path: Path, frames: int | None
+                       ) -> tuple[list[str], list[dict[str, str]]]:
+    """The header and rows of a vectors CSV (``frames``: the rows it must hold, None when
+    unknown); InputError naming it when it cannot be read, a row's values do not match the
+    header's columns (a file cut short inside a row), or it holds another number of rows."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as f:
-            reader = csv.DictReader(f)
-            return list(reader.fieldnames or []), list(reader)
+            text = f.read()
+        reader = csv.DictReader(io.StringIO(text, newline=""))
+        header, rows = list(reader.fieldnames or []), list(reader)
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(f"{path}: not a vectors CSV file ({os_reason(exc)})") from None
+    if text and not text.endswith("\n"):  # each row of the file ends with one
+        raise _damaged(path, f"its last line, {text.count(chr(10)) + 1}, is cut short")
+    for number, row in enumerate(rows, 2):
+        if None in row or None in row.values():  # (DictReader's marks of a ragged row)
+            values = sum(v is not None for k, v in row.items() if k is not None) + len(
+                row.get(None) or [])
+            raise _damaged(path, f"line {number} has {values} values where the header names "
+                                 f"{len(header)} columns")
+    if frames is not None and len(rows) != frames:
+        raise _damaged(path, f"{len(rows)} rows where its manifest.json gives {frames} frames")
+    return header, rows
+
+
+def _damaged(path: Path, problem: str) -> InputError:
+    """The error for a file of a vectors folder that is not as ``vtrack vectors`` wrote it
+    (cut short, changed): comparing a dump with it would blame the dump."""
+    return InputError(f"{path}: not the file vtrack vectors wrote ({problem}); write the "
+                      "vectors again")
+
+
+def _refuse_a_damaged_hex(path: Path, data: bytes, manifest: dict[str, Any]) -> None:
+    """InputError (:func:`_damaged`) when ``data``, the vectors' ``.hex`` file at ``path``, is
+    not as ``vtrack vectors`` writes it: as many lines as its ``manifest.json`` gives
+    (``files.NAME.lines``), each of 6 (``rgb.hex``) or 2 lower-case hex digits. A file the
+    manifest does not describe (one of the user's own) is compared as it is."""
+    spec = manifest["files"].get(path.name)
+    lines = spec.get("lines") if isinstance(spec, dict) else None
+    if isinstance(lines, bool) or not isinstance(lines, int) or lines <= 0:
+        return
+    digits = 6 if path.name == "rgb.hex" else 2
+    if re.fullmatch(rb"(?:[0-9a-f]{%d}\n)*" % digits, data) is None:
+        words = data.split(b"\n")
+        if words[-1]:  # what follows the last newline: nothing in a whole file
+            raise _damaged(path, f"its last line, {len(words)}, is cut short")
+        number, word = next((i, w) for i, w in enumerate(words, 1)
+                            if not re.fullmatch(rb"[0-9a-f]{%d}" % digits, w))
+        raise _damaged(path, f"line {number} is {_shown(word) or 'empty'}, not {digits} hex "
+                             "digits")
+    count = data.count(b"\n")
+    if count != lines:
+        raise _damaged(path, f"{count} lines where its manifest.json gives {lines}")
 
 
 def _missing_columns(name: str, want: list[str], have: list[str]) -> str | None:
@@ -446,8 +492,8 @@ def _missing_columns(name: str, want: list[str], have: list[str]) -> str | None:
     return line
 
 
-def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
-    columns, want = _read_expected_csv(expected)
+def _csv_differences(name: str, expected: Path, got: Path, frames: int | None) -> str | None:
+    columns, want = _read_expected_csv(expected, frames)
     try:
         # utf-8-sig: a header saved with a byte-order mark (Excel) names its first column
         with got.open(newline="", encoding="utf-8-sig") as f:
@@ -477,9 +523,9 @@ def _csv_differences(name: str, expected: Path, got: Path) -> str | None:
     return f"{name}: {body}" if missing is None else f"{missing}; {body}"
 
 
-def _frame_width(vectors: Path) -> int:
-    """The frame width ``manifest.json`` of ``vectors`` gives (rgb.hex's ``width``); InputError
-    naming the manifest when it is missing, not JSON or not a vectors manifest."""
+def _read_manifest(vectors: Path) -> dict[str, Any]:
+    """``manifest.json`` of ``vectors``, whose ``files.rgb.hex.width`` is the frame width;
+    InputError naming the manifest when it is missing, not JSON or not a vectors manifest."""
     path = vectors / "manifest.json"
     try:
         info = json.loads(path.read_text(encoding="utf-8"))
@@ -492,7 +538,13 @@ def _frame_width(vectors: Path) -> int:
     if isinstance(width, bool) or not isinstance(width, int) or width <= 0:
         raise InputError(f"{path}: not a vectors manifest (no whole positive "
                          "files.rgb.hex.width, the frame width; written by vtrack vectors)")
-    return width
+    return info
+
+
+def _frames_of(manifest: dict[str, Any]) -> int | None:
+    """The number of frames ``manifest`` gives (trace.csv's rows), None when none."""
+    frames = manifest.get("frames")
+    return None if isinstance(frames, bool) or not isinstance(frames, int) else frames
 
 
 def _config_of(folder: Path) -> str | None:
@@ -533,7 +585,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
     ``dump`` that is no folder.
     """
     try:
-        width = _frame_width(vectors)
+        manifest = _read_manifest(vectors)
     except InputError as exc:
         # given swapped: the first a folder (a dump), the second the vectors
         if vectors.is_dir() and _config_of(dump) is not None and _config_of(vectors) is None:
@@ -541,6 +593,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
                              f"(vtrack vectors check {shell_word(dump)} "
                              f"{shell_word(vectors)})") from None
         raise
+    width = manifest["files"]["rgb.hex"]["width"]
     if not dump.is_dir():
         raise InputError(f"{dump}: no such folder")
     _refuse_another_config(vectors, dump)
@@ -557,9 +610,12 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
             continue
         compared += 1
         if path.suffix == ".hex":
-            diff = _hex_differences(name, _read_bytes(expected), _read_bytes(path), width)
+            want = _read_bytes(expected)
+            _refuse_a_damaged_hex(expected, want, manifest)
+            diff = _hex_differences(name, want, _read_bytes(path), width)
         else:
-            diff = _csv_differences(name, expected, path)
+            diff = _csv_differences(name, expected, path,
+                                    _frames_of(manifest) if name == "trace.csv" else None)
         if diff is not None:
             lines.append(diff)
     return [printable(line) for line in lines], compared
