@@ -761,3 +761,40 @@ def test_raw_frames_from_a_file_on_stdin_read_past_its_start_are_counted_from_th
     assert late.returncode == 2
     assert late.stderr.decode().strip() == ("vtrack: error: --start 7: -: has no frame 7 "
                                             "(frames 0..5)")
+
+
+def _waiting_for_a_writer(process: subprocess.Popen) -> None:
+    """Return once ``process`` is blocked opening a FIFO no writer opened (Linux: the kernel
+    function it sleeps in, ``/proc/PID/wchan``), or has ended."""
+    deadline = time.monotonic() + START_BOUND_S
+    while process.poll() is None:
+        with contextlib.suppress(OSError):
+            if Path(f"/proc/{process.pid}/wchan").read_text() == "wait_for_partner":
+                return
+        assert time.monotonic() < deadline, "it never waited for the FIFO's writer"
+        time.sleep(0.05)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("command", [["frame", "-o", "frame.png"],
+                                     ["vectors", "--init", "1,1,8,8", "-o", "vec"],
+                                     ["select"]])
+def test_a_signal_while_frame_vectors_or_select_wait_for_a_fifos_writer_interrupts_them(
+        tmp_path: Path, signum: int, command: list[str]) -> None:
+    """`vtrack frame FIFO` (and vectors, select), given Ctrl-C or SIGTERM while FFmpeg's open
+    waited for a writer, said "FIFO: not a video FFmpeg can decode (Interrupted system call)"
+    and exited 2, as vtrack run did before it learnt to say `interrupted`."""
+    fifo = tmp_path / "feed"
+    os.mkfifo(fifo)
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", command[0], str(fifo),
+                                *command[1:]], cwd=tmp_path, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_stop_handlers(process)
+        _waiting_for_a_writer(process)
+        process.send_signal(signum)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert (process.returncode, stdout, stderr) == (128 + signum, "", "vtrack: interrupted\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["feed"]

@@ -7,6 +7,7 @@ import click
 from vtrack.cli._messages import echo_stdout, note, stdout_failed, warn
 from vtrack.cli._options import VtrackCommand, WholeNumber
 from vtrack.cli._paths import INPUT
+from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.params import MAX_FRAME_NUMBER
 
 
@@ -28,13 +29,13 @@ def command(input_spec: str, frame: int, port: int) -> None:
     URL or a device has none). A box confirmed on a frame N other than 0 is printed as --start
     N --init x,y,w,h and not saved: the sidecar holds frame 0's box.
     """
-    from vtrack.errors import InputError, handling_stop_signals, interrupt
+    from vtrack.errors import InputError
     from vtrack.io.sidecar import format_box
     from vtrack.picker.frames import FrameStore
     from vtrack.picker.server import SelectionServer
 
     # SIGTERM (kill, timeout) as Ctrl-C: 'vtrack: interrupted', exit 143, as vtrack run
-    with handling_stop_signals(interrupt), FrameStore(input_spec) as store:
+    with stopping_as_interrupted(), FrameStore(input_spec) as store:
         if store.get(frame) is None:  # (at once when the input's frame count says so)
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
                              f"(frames 0..{store.count - 1})")
