@@ -303,6 +303,29 @@ def test_select_says_a_name_with_a_newline_in_one_line(clip: Path, tmp_path: Pat
                          "and vtrack batch use it when no --init is given)")
 
 
+def test_summary_lines_say_a_name_with_a_newline_in_one_line(clip: Path, tmp_path: Path
+                                                             ) -> None:
+    """`vtrack frame 'a<newline>b.mp4'` printed 'wrote a' and, on a line of its own,
+    'b-frame0.png (frame 0, 320x240)'; so did the summary lines of vtrack vectors (its --out
+    folder), vtrack scene and vtrack report, where vtrack run's and every error escape control
+    characters."""
+    video = tmp_path / "a\nb.mp4"
+    shutil.copy(clip, video)
+    frame = vtrack("frame", str(video), cwd=tmp_path)
+    assert (frame.returncode, frame.stdout) == (0, f"wrote a\\nb-frame0.png (frame 0, {W}x{H})\n")
+    assert (tmp_path / "a\nb-frame0.png").is_file()
+    out = tmp_path / "v\nw"
+    vectors = vtrack("vectors", str(video), "--init", "20,20,30,30", "--frames", "1", "-o",
+                     str(out))
+    assert vectors.returncode == 0, vectors.stderr
+    assert vectors.stdout == f"wrote 1 frame of s0-fixed vectors to {tmp_path}/v\\nw\n"
+    scene = vtrack("scene", "smooth", str(tmp_path / "x\ty.mp4"), "--frames", "10", "--size",
+                   "64x48")
+    assert scene.returncode == 0, scene.stderr
+    assert scene.stdout.startswith(f"wrote {tmp_path}/x\\ty.mp4 (10 frames, ") and \
+        scene.stdout.count("\n") == 1, scene.stdout
+
+
 def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> None:
     """The page's server without a browser: info, frames, a rejected box, a confirmed one."""
     sidecar_path(clip).unlink(missing_ok=True)

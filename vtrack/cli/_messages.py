@@ -158,6 +158,13 @@ def echo_result(text: str, what: str, nl: bool = True) -> None:
         raise OutputBrokenError(problem)
 
 
+def echo_summary(line: str) -> None:
+    """A command's summary line (``wrote clip.mp4 (...)``) on standard output as
+    :func:`echo_result` prints it, the control characters of the names it holds escaped
+    (:func:`~vtrack.errors.printable`): one line, whatever a file or folder is named."""
+    echo_result(printable(line), "the summary line")
+
+
 def stdout_to_null() -> None:
     """Point standard output, whose last write failed, at the null device: what is left in
     its buffer and any later line go nowhere, and the interpreter's last flush adds no error."""

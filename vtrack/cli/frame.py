@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import echo_result
+from vtrack.cli._messages import echo_summary
 from vtrack.cli._options import StartPoint, VtrackCommand, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 from vtrack.cli._signals import stopping_as_interrupted
@@ -61,8 +61,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             _refuse_replacing(out, str(out), overwrite)
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(out, encode_image(image, ext))  # a failed write keeps the old one
-    echo_result(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})",
-                "the summary line")
+    echo_summary(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
 
 
 def _checked_ext(out: Path, input_spec: str) -> str:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import echo_result, warn
+from vtrack.cli._messages import echo_summary, warn
 from vtrack.cli._options import (
     VtrackCommand,
     gt_first_option,
@@ -63,5 +63,5 @@ def command(results: tuple[Path, ...], out_dir: Path, gt_specs: tuple[str, ...],
     for warning in report.warnings:
         warn(warning)
     if not quiet:
-        echo_result(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
-                    f"-> {report.index}", "the summary line")
+        echo_summary(f"{plural(len(report.runs), 'run')}, {plural(len(report.plots), 'plot')} "
+                     f"-> {report.index}")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import echo_result
+from vtrack.cli._messages import echo_summary
 from vtrack.cli._options import (
     FRAME_RATE,
     NumberWord,
@@ -164,6 +164,5 @@ def command(
             progress.close()
     extra = f" and {files.mot}" if files.mot else ""
     layout = f", {pix_fmt or 'bgr24'}" if fmt == "raw" else ""
-    echo_result(f"wrote {files.clip} ({len(scene)} frames, {scene.width}x{scene.height}"
-                f"{layout}, {scene.fps:g} fps) with ground truth {files.groundtruth}{extra}",
-                "the summary line")
+    echo_summary(f"wrote {files.clip} ({len(scene)} frames, {scene.width}x{scene.height}"
+                 f"{layout}, {scene.fps:g} fps) with ground truth {files.groundtruth}{extra}")

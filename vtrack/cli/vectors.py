@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from vtrack.cli._messages import echo_result, no_such_command, warn
+from vtrack.cli._messages import echo_result, echo_summary, no_such_command, warn
 from vtrack.cli._options import HelpPrinted, NumberWord, VtrackCommand
 from vtrack.cli._paths import CONFIG, INPUT, PATH
 from vtrack.cli._signals import stopping_as_interrupted
@@ -129,8 +129,7 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
     if written < count:
         warn(f"{input_spec}: {plural(written, 'frame')} to write of the {count} asked for "
              "(--frames)")
-    echo_result(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}",
-                "the summary line")
+    echo_summary(f"wrote {plural(written, 'frame')} of {config.name} vectors to {out_dir}")
 
 
 @command.command("check", cls=VtrackCommand)
