@@ -326,6 +326,30 @@ def test_summary_lines_say_a_name_with_a_newline_in_one_line(clip: Path, tmp_pat
         scene.stdout.count("\n") == 1, scene.stdout
 
 
+@pytest.mark.parametrize("size", [(3, 3), (2, 400)])
+def test_select_refuses_frames_too_small_for_any_box(tmp_path: Path,
+                                                    size: tuple[int, int]) -> None:
+    """`vtrack select` of a 3x3 image served its page and waited for ever: every box dragged
+    on it was refused (smaller than 4x4, or larger than the frame), as vtrack run refuses it."""
+    image = tmp_path / "small.png"
+    assert cv2.imwrite(str(image), np.zeros((*size, 3), np.uint8))
+    process = subprocess.Popen([sys.executable, "-m", "vtrack", "select", str(image)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:  # its first line: the error (it printed the page's URL and waited)
+        assert process.stderr is not None
+        first = process.stderr.readline()
+        if first.startswith("vtrack: error: "):
+            process.wait(timeout=START_BOUND_S)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        stdout, _ = process.communicate()
+    assert first == (f"vtrack: error: {image}: its frames are {size[1]}x{size[0]}, too small "
+                     "for the smallest box vtrack run tracks (4x4 pixels): there is no box to "
+                     "select\n")
+    assert (process.returncode, stdout) == (2, "")
+
+
 def test_select_page_protocol_validates_and_writes_the_sidecar(clip: Path) -> None:
     """The page's server without a browser: info, frames, a rejected box, a confirmed one."""
     sidecar_path(clip).unlink(missing_ok=True)

@@ -36,6 +36,7 @@ def command(input_spec: str, frame: int, port: int) -> None:
 
     # SIGTERM (kill, timeout) as Ctrl-C: 'vtrack: interrupted', exit 143, as vtrack run
     with stopping_as_interrupted(), FrameStore(input_spec) as store:
+        _refuse_frames_too_small(input_spec, store.info.width, store.info.height)
         if store.get(frame) is None:  # (at once when the input's frame count says so)
             raise InputError(f"{input_spec}: --frame {frame}: there is no such frame "
                              f"(frames 0..{store.count - 1})")
@@ -64,6 +65,19 @@ def command(input_spec: str, frame: int, port: int) -> None:
         _print(f"--init {format_box(selection.box)}", f"it is saved in {selection.sidecar}")
         note("select", f"saved in {selection.sidecar} (vtrack run and vtrack batch use it "
                        "when no --init is given)")
+
+
+def _refuse_frames_too_small(input_spec: str, width: int, height: int) -> None:
+    """InputError when frames of ``width`` x ``height`` hold no box vtrack run takes (a side
+    under :data:`~vtrack.geometry.MIN_BOX_SIDE`): the page would refuse every box dragged on
+    them, and wait for ever."""
+    from vtrack.errors import InputError
+    from vtrack.geometry import MIN_BOX_SIDE
+
+    if min(width, height) < MIN_BOX_SIDE:
+        raise InputError(f"{input_spec}: its frames are {width}x{height}, too small for the "
+                         f"smallest box vtrack run tracks ({MIN_BOX_SIDE:g}x{MIN_BOX_SIDE:g} "
+                         "pixels): there is no box to select")
 
 
 def _print(line: str, kept: str) -> None:
