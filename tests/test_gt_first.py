@@ -7,13 +7,15 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 from click.testing import CliRunner, Result
-from conftest import one_error_line
+from conftest import one_error_line, run_after_start
 
 from vtrack.cli import main
 from vtrack.config import load_config
@@ -354,3 +356,32 @@ def test_a_first_frame_past_the_input_is_refused_from_frame_0_too(
                          gt_path=gt, gt_first=FRAMES, video=False)
     with pytest.raises(InputError, match=f"gt_first={FRAMES}: .* has no frame {FRAMES} "):
         next(iter(track(request)))
+
+
+def test_a_fifo_waiting_for_its_writer_hears_of_the_ground_truths_mistake_at_once(
+        tmp_path: Path) -> None:
+    """Probe F8: with --gt-first every run opened its input before reading the ground truth,
+    so `vtrack run FIFO --raw 64x48 --fps 30 --gt bad.txt --gt-first 3 --init 1,1,5,5` waited
+    for the FIFO's writer for ever instead of naming bad.txt's first line. Only a local file or
+    folder states a frame count to check --gt-first against: the others open after the ground
+    truth is read (for the CLI and the library's RunRequest)."""
+    from vtrack import Box, track
+    from vtrack.errors import InputError
+    from vtrack.io import RawFormat
+
+    fifo, bad = tmp_path / "ff", tmp_path / "bad.txt"
+    os.mkfifo(fifo)
+    bad.write_text("1,2,3\n")
+    expected = f"{bad} line 1: expected 4 or 8 numbers, got '1,2,3'"
+    # (a run that waits for the writer is killed: the bound is a safety net, not a measure)
+    done = run_after_start([sys.executable, "-m", "vtrack", "run", str(fifo), "--raw", "64x48",
+                            "--fps", "30", "--gt", str(bad), "--gt-first", "3", "--init",
+                            "1,1,5,5", "-c", "s0", "--no-video", "-o", str(tmp_path / "o")])
+    assert (done.returncode, done.stderr.decode()) == (2, f"vtrack: error: {expected}\n")
+    assert not (tmp_path / "o").exists()
+    request = RunRequest(input=str(fifo), out_dir=tmp_path / "lib", config=load_config("s0"),
+                         raw=RawFormat(64, 48, "gray", 30.0), gt_path=bad, gt_first=3,
+                         init_box=Box(1, 1, 5, 5), video=False)
+    with pytest.raises(InputError) as refused:
+        track(request)  # (at once, before the FIFO is opened)
+    assert str(refused.value) == expected

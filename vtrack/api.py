@@ -60,7 +60,8 @@ def track(frames: FrameInput,
 
     Checked when ``track`` is called, before it returns: the arguments, the config and the
     first box (a request's too, from its sidecar or ground truth, unless it starts later:
-    ``start``, ``start_s``) and, for a path or a request's input, what needs no opening:
+    ``start``, ``start_s``, or a local file or folder is checked for a single-target
+    ``gt_first``'s frame) and, for a path or a request's input, what needs no opening:
     ``fps`` and ``raw`` for it, and a local path that exists and can be read (a folder: that
     it holds an image). Nothing is opened then: the input is opened and its first frame
     decoded at the first ``next()`` (a file that is no video, a URL that does not answer, a
@@ -92,7 +93,9 @@ def track(frames: FrameInput,
                                 ffmpeg=request.ffmpeg, live=request.live)
         from vtrack.run import requested_frames  # the run machinery only for a request
 
-        requested = requested_frames(request)  # (its box now, unless it starts later)
+        # (its box now, unless it starts later or a local input is checked for gt_first's
+        # frame: then once the input opens)
+        requested = requested_frames(request)
 
         def results(source: Source) -> Iterator[FrameResult]:
             box, taken = requested(source)

@@ -1066,7 +1066,7 @@ def _refuse_unreadable(request: RunRequest, names: OptionNames) -> None:
     images, a file that is not a video), found by opening it once: a run told that it lacks a
     first box hears of its input first. Stdin, FIFOs, devices and URLs are read once only, by
     the run itself."""
-    if os.path.isfile(request.input) or os.path.isdir(request.input):
+    if _local(request.input):
         open_source(request.input, request.raw, fps=request.fps, ffmpeg=request.ffmpeg,
                     live=request.live, names=names).close()
 
@@ -1075,8 +1075,19 @@ def _opens_first(request: RunRequest) -> bool:
     """Whether ``request`` is settled in its opened input: a start after the first frame
     (:attr:`RunRequest.starts_later`, found in its frames), or single-target ground truth whose
     first box is of a later frame (``--gt-first``), refused where the input's frame count says
-    it has no such frame before a first box is looked for in the file."""
-    return request.starts_later or bool(request.gt_first and request.gt_path is not None)
+    it has no such frame before a first box is looked for in the file. Only a local file or
+    folder can state a frame count (stdin, a FIFO, a device or a URL would be waited on before
+    the ground truth's own mistakes are told), and a multi-target chain refuses ``--gt-first``
+    itself: those are resolved before the input opens."""
+    return request.starts_later or bool(
+        request.gt_first and request.gt_path is not None and not request.config.multi_target
+        and _local(request.input))
+
+
+def _local(source: str) -> bool:
+    """Whether the input ``source`` is a local file or folder: one that can be opened to look
+    and then read again (stdin, FIFOs, devices and URLs are read once only, by the run)."""
+    return os.path.isfile(source) or os.path.isdir(source)
 
 
 def _first_frame(request: RunRequest, source: Source | None, names: OptionNames
