@@ -90,10 +90,14 @@ def test_a_still_image_given_alone(clips: tuple[Path, Path, str], tmp_path: Path
 def test_a_still_image_repeated_by_an_input_option_is_not_taken_as_ended(
         clips: tuple[Path, Path, str], tmp_path: Path) -> None:
     """``--input-option loop=1`` repeats a still image without end: ``--frames 1`` stopped it,
-    which run.json said was its end (the first packet was still the whole file)."""
+    which run.json said was its end (the first packet was still the whole file). ``loop=0``
+    (image2's default) repeats nothing: its one frame is its end, as without the option (it
+    was counted as repeating: stopped by --frames)."""
     images, _, box = clips
     photo = tmp_path / "photo.png"
     assert cv2.imwrite(str(photo), cv2.imread(str(sorted((images / "img").iterdir())[0])))
     looped = [str(photo), "--format", "image2", "--input-option", "loop=1", "--init", box]
     assert _stopped([*looped, "--frames", "1"], tmp_path / "one") == (1, True)
     assert _stopped([*looped, "--frames", "3"], tmp_path / "three") == (3, True)
+    once = [str(photo), "--format", "image2", "--input-option", "loop=0", "--init", box]
+    assert _stopped([*once, "--frames", "1"], tmp_path / "once") == (1, False)

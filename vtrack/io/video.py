@@ -426,13 +426,25 @@ def _open_stream(stream: CapturingStream, **kwargs: Any) -> av.container.InputCo
 
 
 #: Input options that repeat the input (FFmpeg's image demuxers' ``loop``, ``-stream_loop``):
-#: a still image so given does not end after its one frame.
+#: a still image so given does not end after its one frame, unless the value is one of
+#: :data:`NO_REPEAT` (``loop=0``: the image demuxers' default).
 REPEATING_OPTIONS = frozenset({"loop", "stream_loop"})
+#: Values of :data:`REPEATING_OPTIONS` that repeat nothing: zero, empty (FFmpeg takes an empty
+#: number as 0) and FFmpeg's words for a false flag.
+NO_REPEAT = frozenset({"", "0", "false", "n", "no", "disable", "disabled", "off"})
 #: Containers FFmpeg cannot read as a stream unless their index comes first (a plain MP4
 #: records it at the end, once finished).
 INDEX_LAST_SUFFIXES = (".mp4", ".mov", ".m4v", ".3gp")
 #: Names of files of raw frames (no header: nothing FFmpeg opens without their size).
 RAW_SUFFIXES = (".raw", ".yuv", ".rgb", ".bgr", ".gray")
+
+
+def _repeats(how: FFmpegInput) -> bool:
+    """Whether ``how``'s input options repeat the input: one of :data:`REPEATING_OPTIONS`
+    whose value (the last given: FFmpeg takes that one) is not one of :data:`NO_REPEAT`."""
+    given = dict(how.options)
+    return any(given[key].strip().lower() not in NO_REPEAT
+               for key in REPEATING_OPTIONS.intersection(given))
 
 
 def decoded_frame(decoded: av.VideoFrame, index: int, time_s: float,
@@ -674,7 +686,7 @@ class VideoSource(Source):
         #: A photo file's size until its first packet is read (:meth:`_decode`), and whether
         #: that packet was the whole file: a still image alone, frame 0 its last (not when an
         #: input option repeats it: the image demuxers' ``loop``, ``stream_loop``).
-        repeated = any(key in REPEATING_OPTIONS for key, _ in self._how.options)
+        repeated = _repeats(self._how)
         self._photo_size = (os.path.getsize(path) if photo and self._seekable and not repeated
                             else None)
         self._still = False
