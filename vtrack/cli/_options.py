@@ -14,7 +14,7 @@ from click.core import ParameterSource
 
 from vtrack.cli._messages import WordsCut, echo_result
 from vtrack.cli._progress import STATS_PERIOD
-from vtrack.errors import cut, quoted_or_cut, shell_word
+from vtrack.errors import cut, number_text, quoted_or_cut, shell_word
 from vtrack.params import MAX_FRAME_NUMBER, MAX_SECONDS, shown
 
 
@@ -275,16 +275,17 @@ class NumberWord(click.ParamType):
 def _held(number: float, text: Any) -> bool:
     """Whether ``number`` (``float(text)``) is the number ``text`` says: false for text that
     underflowed to 0 or overflowed to inf (``1e-400``, ``-1e400``), or to a subnormal float,
-    nonzero and below ``sys.float_info.min``, that keeps only some of its digits (``1e-320``
-    became 9.99989e-321)."""
+    nonzero and below ``sys.float_info.min``, that a message would print as another number
+    (``1e-320`` became 9.99989e-321, :func:`~vtrack.errors.number_text`); a subnormal that
+    prints back as typed (``2e-308``) is held."""
     if math.isfinite(number) and abs(number) >= sys.float_info.min:
         return True
-    if number != 0 and math.isfinite(number):
-        return False
     try:
         written = Decimal(str(text).strip().replace("_", ""))
     except ArithmeticError:  # (decimal.InvalidOperation: text float() reads and Decimal not)
         return True
+    if number != 0 and math.isfinite(number):
+        return Decimal(number_text(number)) == written
     return (written == 0) == (number == 0) and written.is_finite() == math.isfinite(number)
 
 
