@@ -532,3 +532,26 @@ def test_damaged_vectors_are_an_error_not_a_difference_of_the_dump(
     assert done.stderr.endswith("; write the vectors again\n") and done.stderr.count("\n") == 1
     whole = vtrack("vectors", "check", str(out), str(out))
     assert (whole.returncode, whole.stderr) == (0, ""), whole.stderr
+
+
+@pytest.mark.parametrize(("name", "change"), [
+    ("frame_0001/bp.hex", lambda data: data.replace(b"\n", b"\r\n")),  # a Windows checkout
+])
+def test_vectors_changed_but_not_damaged_are_compared_as_before(
+        vectors, tmp_path, name: str, change) -> None:
+    """Vectors a checkout or a tool changed without changing a value (and the user's own files
+    in the folder) were refused as damaged: 'frame_0001/bp.hex: not the file vtrack vectors
+    wrote (line 1 is 13\\r, not 2 hex digits)'. They compare with the dump as before."""
+    out, _ = vectors
+    changed, dump = tmp_path / "vec", tmp_path / "dump"
+    shutil.copytree(out, changed)
+    shutil.copytree(out, dump)
+    ours = (out / name).is_file()
+    data = change((out / name).read_bytes() if ours else b"")
+    # a vector changed is checked against the whole dump; a file of the user's own is in both
+    for folder in (changed,) if ours else (changed, dump):
+        (folder / name).parent.mkdir(exist_ok=True)
+        (folder / name).write_bytes(data)
+    done = vtrack("vectors", "check", str(changed), str(dump))
+    assert (done.returncode, done.stderr) == (0, ""), done.stdout + done.stderr
+    assert done.stdout.endswith(" file(s) equal\n"), done.stdout
