@@ -455,21 +455,22 @@ def _damaged(path: Path, problem: str) -> InputError:
 def _refuse_a_damaged_hex(path: Path, data: bytes, manifest: dict[str, Any]) -> None:
     """InputError (:func:`_damaged`) when ``data``, the vectors' ``.hex`` file at ``path``, is
     not as ``vtrack vectors`` writes it: as many lines as its ``manifest.json`` gives
-    (``files.NAME.lines``), each of 6 (``rgb.hex``) or 2 lower-case hex digits and its line
-    end (``\\n``, or ``\\r\\n`` of a Windows checkout). A file the manifest does not describe (one
-    of the user's own) is compared as it is."""
+    (``files.NAME.lines``), each of 6 (``rgb.hex``) or 2 hex digits (of either case: values
+    compare as numbers) and its line end (``\\n``, or ``\\r\\n`` of a Windows checkout). A
+    file the manifest does not describe (one of the user's own) is compared as it is."""
     spec = manifest["files"].get(path.name)
     lines = spec.get("lines") if isinstance(spec, dict) else None
     if isinstance(lines, bool) or not isinstance(lines, int) or lines <= 0:
         return
     digits = 6 if path.name == "rgb.hex" else 2
-    if re.fullmatch(rb"(?:[0-9a-f]{%d}\r?\n)*" % digits, data) is None:
+    word = rb"[0-9a-fA-F]{%d}" % digits
+    if re.fullmatch(rb"(?:%s\r?\n)*" % word, data) is None:
         words = re.split(rb"\r?\n", data)
         if words[-1]:  # what follows the last newline: nothing in a whole file
             raise _damaged(path, f"its last line, {len(words)}, is cut short")
-        number, word = next((i, w) for i, w in enumerate(words, 1)
-                            if not re.fullmatch(rb"[0-9a-f]{%d}" % digits, w))
-        raise _damaged(path, f"line {number} is {_shown(word) or 'empty'}, not {digits} hex "
+        number, bad = next((i, w) for i, w in enumerate(words, 1)
+                           if not re.fullmatch(word, w))
+        raise _damaged(path, f"line {number} is {_shown(bad) or 'empty'}, not {digits} hex "
                              "digits")
     count = data.count(b"\n")
     if count != lines:
