@@ -420,11 +420,12 @@ def _same_cell(a: str, b: str) -> bool:
 _COLUMNS_SHOWN = 8
 
 
-def _read_expected_csv(path: Path, frames: int | None
+def _read_expected_csv(path: Path, ours: bool, frames: int | None
                        ) -> tuple[list[str], list[dict[str, str]]]:
-    """The header and rows of a vectors CSV (``frames``: the rows it must hold, None when
-    unknown); InputError naming it when it cannot be read, a row's values do not match the
-    header's columns (a file cut short inside a row), or it holds another number of rows."""
+    """The header and rows of a vectors CSV; InputError naming it when it cannot be read, and
+    when ``ours`` (one of :data:`_TABLES`, not a file of the user's own) also when a row's
+    values do not match the header's columns (a file cut short inside a row) or it holds
+    another number of rows than ``frames`` (None: unknown)."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as f:
             text = f.read()
@@ -432,6 +433,8 @@ def _read_expected_csv(path: Path, frames: int | None
         header, rows = list(reader.fieldnames or []), list(reader)
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(f"{path}: not a vectors CSV file ({os_reason(exc)})") from None
+    if not ours:
+        return header, rows
     if text and not text.endswith("\n"):  # each row of the file ends with one
         raise _damaged(path, f"its last line, {text.count(chr(10)) + 1}, is cut short")
     for number, row in enumerate(rows, 2):
@@ -494,8 +497,9 @@ def _missing_columns(name: str, want: list[str], have: list[str]) -> str | None:
     return line
 
 
-def _csv_differences(name: str, expected: Path, got: Path, frames: int | None) -> str | None:
-    columns, want = _read_expected_csv(expected, frames)
+def _csv_differences(name: str, expected: Path, got: Path, ours: bool, frames: int | None
+                     ) -> str | None:
+    columns, want = _read_expected_csv(expected, ours, frames)
     try:
         # utf-8-sig: a header saved with a byte-order mark (Excel) names its first column
         with got.open(newline="", encoding="utf-8-sig") as f:
@@ -616,7 +620,7 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
             _refuse_a_damaged_hex(expected, want, manifest)
             diff = _hex_differences(name, want, _read_bytes(path), width)
         else:
-            diff = _csv_differences(name, expected, path,
+            diff = _csv_differences(name, expected, path, name in _TABLES,
                                     _frames_of(manifest) if name == "trace.csv" else None)
         if diff is not None:
             lines.append(diff)
