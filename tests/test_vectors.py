@@ -538,6 +538,7 @@ def test_damaged_vectors_are_an_error_not_a_difference_of_the_dump(
     ("frame_0001/bp.hex", lambda data: data.replace(b"\n", b"\r\n")),  # a Windows checkout
     ("frame_0001/rgb.hex", bytes.upper),  # re-saved by an HDL tool
     ("notes.csv", lambda _: b"note,value\nlast,1"),  # the user's own, with no last newline
+    ("mytest/rgb.hex", lambda _: b"ff0000\n00ff"),  # the user's own, named like a vector
 ])
 def test_vectors_changed_but_not_damaged_are_compared_as_before(
         vectors, tmp_path, name: str, change) -> None:

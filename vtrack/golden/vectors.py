@@ -291,12 +291,17 @@ def _stage_vectors(staged: StagedFiles, results: Iterator[Any], owner: Any, out_
 _TABLES = ("manifest.json", "trace.csv", "iterations.csv")
 
 
+def _is_frame_folder(name: str) -> bool:
+    """Whether ``name`` is that of a frame folder of vectors: ``frame_`` and a number."""
+    return name.startswith("frame_") and name.removeprefix("frame_").isdigit()
+
+
 def _remove_earlier_vectors(out_dir: Path, written: set[Path]) -> None:
     """Remove the vector files an earlier ``generate`` left in ``out_dir`` that are not among
     those just ``written`` (its frame folders, traces and manifest; nothing else), so that no
     frame of another run is checked against. Best effort: one that cannot be removed stays."""
     folders = [folder for folder in out_dir.glob("frame_*")
-               if folder.is_dir() and folder.name.removeprefix("frame_").isdigit()]
+               if folder.is_dir() and _is_frame_folder(folder.name)]
     stale = [out_dir / name for name in _TABLES] + [
         vector for folder in folders for vector in folder.glob("*.hex")
         if not vector.name.startswith(".")]  # (not a temporary name)
@@ -456,11 +461,12 @@ def _damaged(path: Path, problem: str) -> InputError:
 
 
 def _refuse_a_damaged_hex(path: Path, data: bytes, manifest: dict[str, Any]) -> None:
-    """InputError (:func:`_damaged`) when ``data``, the vectors' ``.hex`` file at ``path``, is
-    not as ``vtrack vectors`` writes it: as many lines as its ``manifest.json`` gives
-    (``files.NAME.lines``), each of 6 (``rgb.hex``) or 2 hex digits (of either case: values
-    compare as numbers) and its line end (``\\n``, or ``\\r\\n`` of a Windows checkout). A
-    file the manifest does not describe (one of the user's own) is compared as it is."""
+    """InputError (:func:`_damaged`) when ``data``, the ``.hex`` file at ``path`` in a frame
+    folder of the vectors (``frame_NNNN/``; the caller's to know), is not as ``vtrack vectors``
+    writes it: as many lines as its ``manifest.json`` gives (``files.NAME.lines``), each of 6
+    (``rgb.hex``) or 2 hex digits (of either case: values compare as numbers) and its line end
+    (``\\n``, or ``\\r\\n`` of a Windows checkout). A file the manifest does not describe
+    (one of the user's own) is compared as it is."""
     spec = manifest["files"].get(path.name)
     lines = spec.get("lines") if isinstance(spec, dict) else None
     if isinstance(lines, bool) or not isinstance(lines, int) or lines <= 0:
@@ -617,7 +623,8 @@ def check(vectors: Path, dump: Path) -> tuple[list[str], int]:
         compared += 1
         if path.suffix == ".hex":
             want = _read_bytes(expected)
-            _refuse_a_damaged_hex(expected, want, manifest)
+            if len(rel.parts) == 2 and _is_frame_folder(rel.parts[0]):  # (not the user's own)
+                _refuse_a_damaged_hex(expected, want, manifest)
             diff = _hex_differences(name, want, _read_bytes(path), width)
         else:
             diff = _csv_differences(name, expected, path, name in _TABLES,
