@@ -515,6 +515,8 @@ def test_a_dumps_names_and_values_stay_one_line_each(vectors, tmp_path) -> None:
      f"({FRAMES - 1} rows where its manifest.json gives {FRAMES} frames)"),
     ("trace.csv", lambda data: data[:-40] + b"\n", f"(line {FRAMES + 1} has "),
     ("trace.csv", lambda data: data[:-3], f"(its last line, {FRAMES + 1}, is cut short)"),
+    ("trace.csv", lambda data: data.replace(b"\n", b"\n\n", 1)[:-40] + b"\n",  # a blank line
+     f"(line {FRAMES + 2} has "),
 ])
 def test_damaged_vectors_are_an_error_not_a_difference_of_the_dump(
         vectors, tmp_path, name: str, damage, problem: str) -> None:

@@ -435,14 +435,18 @@ def _read_expected_csv(path: Path, ours: bool, frames: int | None
         with path.open(newline="", encoding="utf-8-sig") as f:
             text = f.read()
         reader = csv.DictReader(io.StringIO(text, newline=""))
-        header, rows = list(reader.fieldnames or []), list(reader)
+        header = list(reader.fieldnames or [])
+        # each row with the line it ends on (blank lines are skipped, a quoted value may span
+        # lines: not one line per row)
+        numbered = [(row, reader.line_num) for row in reader]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(f"{path}: not a vectors CSV file ({os_reason(exc)})") from None
+    rows = [row for row, _ in numbered]
     if not ours:
         return header, rows
     if text and not text.endswith("\n"):  # each row of the file ends with one
         raise _damaged(path, f"its last line, {text.count(chr(10)) + 1}, is cut short")
-    for number, row in enumerate(rows, 2):
+    for row, number in numbered:
         if None in row or None in row.values():  # (DictReader's marks of a ragged row)
             values = sum(v is not None for k, v in row.items() if k is not None) + len(
                 row.get(None) or [])
