@@ -517,7 +517,9 @@ def test_a_shipped_configs_name_given_as_a_missing_file_is_told_the_shipped_name
         given: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """`-c s0.toml` (or `./s0`, `configs/robust.toml` outside the source tree) where no such
     file is said "s0.toml: config file not found" only, though s0 is shipped: the name that
-    loads it was left to guess. The line now names it; another missing file is unchanged."""
+    loads it was left to guess. The line now names it; another missing file is unchanged,
+    and so is one in another folder or with another extension (`exp/robust.toml`,
+    `x/s0.json`: the user's own file, which the shipped one is not)."""
     monkeypatch.chdir(tmp_path)
     name = Path(given).stem
     (tmp_path / "inputs").mkdir()
@@ -526,5 +528,6 @@ def test_a_shipped_configs_name_given_as_a_missing_file_is_told_the_shipped_name
             ("batch", "inputs", "-c", given), ("stages", given))]:
         assert line == (f"vtrack: error: {given}: config file not found; did you mean the "
                         f"shipped config '{name}' (named without a path or .toml)?"), line
-    assert refusals(Path("mine.toml"), tmp_path)[0] == (
-        "vtrack: error: mine.toml: config file not found")
+    for mine in ("mine.toml", "exp/robust.toml", "x/s0.json"):
+        assert refusals(Path(mine), tmp_path)[0] == (
+            f"vtrack: error: {mine}: config file not found")

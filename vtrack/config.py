@@ -294,7 +294,7 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
         if path.is_dir():
             raise ConfigError(f"{named}: is a folder, not a config file")
         elif path.suffix == ".toml" or "/" in str(spec):
-            shipped = path.stem if path.stem in shipped_configs() else None
+            shipped = _shipped_meant(path)
             raise ConfigError(f"{named}: config file not found" + (
                 f"; did you mean the shipped config {shipped!r} (named without a path or "
                 ".toml)?" if shipped else ""))
@@ -323,6 +323,18 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
         if named == where:
             raise
         raise ConfigError(str(exc).replace(where, named, 1)) from None
+
+
+def _shipped_meant(path: Path) -> str | None:
+    """The shipped config a missing config file most likely meant: its stem when that names
+    one, the file has no extension or ``.toml`` and its folder is the current one or one whose
+    name ends in ``configs`` (``s0.toml``, ``./s0``, ``configs/robust.toml``); None for
+    another folder's or another extension's file (``exp/robust.toml``, ``x/s0.json``: the
+    user's own file, whose values the shipped one does not have)."""
+    if path.suffix not in ("", ".toml") or not (
+            path.parent == Path(".") or path.parent.name.endswith("configs")):
+        return None
+    return path.stem if path.stem in shipped_configs() else None
 
 
 def _near_keys(unknown: list[str], keys: tuple[str, ...], present: Iterable[str]) -> str:
