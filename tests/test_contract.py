@@ -196,7 +196,10 @@ def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:
     """`[[stage]] name = "kalman"` before S0's stages said only "stage 'kalman' needs
     measurement, which no earlier stage provides (check the order of the chain)": which stage
     makes a measurement was for the author to find. The line now names, for each value lacking,
-    the stages that make it (not those that only change one they need, as occlusion does)."""
+    the stages that make it (not those that only change one they need, as occlusion does).
+    hue, backproject, meanshift_fixed was told "fixed comes from hue_bp_fixed,
+    kernel_meanshift_int", though meanshift_fixed refuses kernel_meanshift_int (its record is
+    S2's): a maker the needing stage's own check refuses is left out."""
     with pytest.raises(ConfigError) as refused:
         parse_config({"stage": [{"name": n} for n in ("kalman", "hue", "backproject",
                                                        "meanshift")]}, "chain.toml")
@@ -208,6 +211,16 @@ def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:
                        r"which no earlier stage provides \(check the order of the chain: "
                        r"detections comes from blobs, mot_detections\)$"):
         parse_config({"stage": [{"name": "byte_tracks"}]}, "chain.toml")
+    with pytest.raises(ConfigError, match=r"^chain.toml: stage 'byte_tracks' needs detections, "
+                       r"which no earlier stage provides \(check the order of the chain: "
+                       r"detections comes from blobs, mot_detections\)$"):  # (none is the gate's)
+        parse_config({"stage": [{"name": "byte_tracks", "colour_gate": 0.5}]}, "chain.toml")
+    with pytest.raises(ConfigError) as refused:  # (not kernel_meanshift_int: S2's record)
+        parse_config({"stage": [{"name": n} for n in ("hue", "backproject", "meanshift_fixed",
+                                                       "kalman_f32")]}, "chain.toml")
+    assert str(refused.value) == (
+        "chain.toml: stage 'meanshift_fixed' needs fixed, which no earlier stage provides "
+        "(check the order of the chain: fixed comes from hue_bp_fixed)")
     needed = set().union(*(cls.requires for cls in all_stages().values())) - PIPELINE_PROVIDES
     assert all(any(value in cls.provides - cls.requires for cls in all_stages().values())
                for value in needed)  # (no line says a value comes "from no stage")

@@ -416,7 +416,7 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
             raise ConfigError(
                 f"{source}: stage '{cls.name}' needs {', '.join(sorted(missing))}, "
                 f"which no earlier stage provides (check the order of the chain: "
-                f"{_givers(sorted(missing))})"
+                f"{_givers(sorted(missing), cls, settings, before)})"
             )
         problem = cls.chain_problem(settings, before)
         if problem:
@@ -427,16 +427,26 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
         available |= cls.provides
 
 
-def _givers(values: list[str]) -> str:
-    """Which stages make each of ``values`` (shared values a stage needs), for a refusal of a
-    chain lacking them: ``likelihood comes from background, backproject, ...; target_model
-    from backproject`` (a stage that changes a value it needs, occlusion's measurement, is not
-    where it comes from)."""
+def _givers(values: list[str], needing: type[Stage], settings: dict[str, Any],
+            before: list[str]) -> str:
+    """Which stages make each of ``values`` (shared values the stage ``needing``, with these
+    parameter ``settings``, lacks after the stages ``before``), for a refusal of the chain:
+    ``likelihood comes from background, backproject, ...; target_model from backproject`` (a
+    stage that changes a value it needs, occlusion's measurement, is not where it comes from).
+    A maker ``needing``'s own check (:meth:`~vtrack.stages.base.Stage.chain_problem`) would
+    refuse before it is left out when another is not (meanshift_fixed's fixed comes from
+    hue_bp_fixed, not kernel_meanshift_int, whose record is S2's); when it refuses them all,
+    the refusal is not the maker's and each is named."""
     stages = all_stages()
+
+    def makers(value: str) -> list[str]:
+        made = [name for name, cls in stages.items() if value in cls.provides - cls.requires]
+        accepted = [name for name in made
+                    if needing.chain_problem(settings, [*before, name]) is None]
+        return accepted or made
+
     return "; ".join(
-        f"{value} {'comes ' if index == 0 else ''}from "
-        + (", ".join(name for name, cls in stages.items()
-                     if value in cls.provides - cls.requires) or "no stage")
+        f"{value} {'comes ' if index == 0 else ''}from {', '.join(makers(value)) or 'no stage'}"
         for index, value in enumerate(values))
 
 
