@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -172,7 +173,10 @@ def test_vtrack_stages_lists_what_a_stage_needs_gives_and_the_rules_its_values_k
     target_model, which no earlier stage provides`) and the rules between its values
     (`interp_scales (3) is smaller than scales (17)`, `low (0.9) is above high (0.5)`) only from
     a refusal. Each stage's entry now ends with what it needs and gives, and every stage whose
-    values or place in a chain are checked beyond the ranges declares those rules, listed."""
+    values or place in a chain are checked beyond the ranges declares those rules, listed.
+    hue_bp_fixed and kernel_meanshift_int did not declare that they may not share a chain (one
+    fixed-point record, config._check_tracks): each rule declared is now broken on purpose and
+    refused."""
     entries: dict[str, str] = {}  # each stage's indented lines, by the name starting its entry
     stage = ""
     for line in CliRunner().invoke(main, ["stages"]).output.splitlines(keepends=True):
@@ -183,13 +187,62 @@ def test_vtrack_stages_lists_what_a_stage_needs_gives_and_the_rules_its_values_k
         needs = ", ".join(sorted(cls.requires - PIPELINE_PROVIDES)) or "nothing"
         assert f"    needs: {needs}; gives: {', '.join(sorted(cls.provides))}\n" in entry, name
         checked = {"values_problem", "chain_problem"} & set(vars(cls))
-        assert bool(checked) == bool(cls.rules), (name, checked, cls.rules)
+        assert not checked or cls.rules, (name, checked)
         for rule in cls.rules:
             assert f"    rule: {rule}\n" in entry, (name, rule)
     search = CliRunner().invoke(main, ["stages", "robust_search"]).output
     assert "    rule: interp_scales >= scales when scale is on\n" in search
-    with pytest.raises(ConfigError, match=r"interp_scales \(3\) is smaller than scales \(17\)"):
-        load_config("robust").with_values({"robust_search.interp_scales": 3})
+    broken = _rules_broken()
+    assert set(broken) == {(name, rule) for name, cls in all_stages().items()
+                           for rule in cls.rules}  # (each rule declared is broken below)
+    for (name, rule), (breaks, said) in broken.items():
+        with pytest.raises(ConfigError) as refused:
+            breaks()
+        assert said in str(refused.value), (name, rule, str(refused.value))
+
+
+def _rules_broken() -> dict[tuple[str, str], tuple[Callable[[], object], str]]:
+    """Each stage's declared rule (stage, rule) -> a config breaking it on purpose (every other
+    rule kept) and what its refusal says."""
+    def chain(*names: str) -> Callable[[], object]:
+        return lambda: parse_config({"stage": [{"name": n} for n in names]}, "chain.toml")
+
+    def shipped(name: str, values: dict[str, object]) -> Callable[[], object]:
+        return lambda: load_config(name).with_values(values)
+
+    def without(name: str, stage: str) -> Callable[[], object]:
+        return lambda: parse_config({"stage": [{"name": n, **v} for n, v in
+                                               load_config(name).stages if n != stage]}, name)
+
+    record = "it reads the S0 fixed-point record of hue_bp_fixed, which must come before it"
+    both = ("stages hue_bp_fixed and kernel_meanshift_int both keep the chain's fixed-point "
+            "record")
+    one_record = ("no other stage keeping a fixed-point record (hue_bp_fixed, "
+                  "kernel_meanshift_int) in the chain: a chain computes one")
+    s0_record = "hue_bp_fixed before this stage (it reads its S0 fixed-point record)"
+    return {
+        ("blobs", "min_area <= max_area when max_area is set (not 0)"): (
+            shipped("s4", {"blobs.min_area": 50, "blobs.max_area": 40}),
+            "stage 'blobs': min_area (50) is larger than max_area (40)"),
+        ("byte_tracks", "low <= high"): (
+            shipped("fixed_camera", {"byte_tracks.low": 0.9, "byte_tracks.high": 0.5}),
+            "stage 'byte_tracks': low (0.9) is above high (0.5)"),
+        ("byte_tracks", "colour_gate below 1 needs detection_colours before this stage"): (
+            without("fixed_camera", "detection_colours"),
+            "stage 'byte_tracks': colour_gate below 1 needs the detection_colours stage"),
+        ("robust_search", "interp_scales >= scales when scale is on"): (
+            shipped("robust", {"robust_search.interp_scales": 3}),
+            "stage 'robust_search': interp_scales (3) is smaller than scales (17)"),
+        ("meanshift_fixed", s0_record): (
+            chain("kernel_meanshift_int", "hue", "backproject", "meanshift_fixed"),
+            f"stage 'meanshift_fixed': {record}"),
+        ("kalman_f32", s0_record): (
+            chain("kernel_meanshift_int", "kalman_f32"), f"stage 'kalman_f32': {record}"),
+        ("hue_bp_fixed", one_record): (
+            chain("hue_bp_fixed", "meanshift_fixed", "kernel_meanshift_int"), both),
+        ("kernel_meanshift_int", one_record): (
+            chain("hue_bp_fixed", "kernel_meanshift_int", "kalman_f32"), both),
+    }
 
 
 def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:

@@ -193,8 +193,9 @@ def config_toml(name: str) -> str:
                    "from (vtrack stages robust --toml > mine.toml): values a file leaves out "
                    "are the stages' defaults, not robust's.")
 def command(names: tuple[str, ...], markdown: bool, toml: bool) -> None:
-    """List the stages, their parameters (type, default, help) and the shipped configs; with
-    STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0, vtrack stages
+    """List the stages, their parameters (type, default, help), what each needs from earlier
+    stages and gives, the rules its values and place in a chain keep, and the shipped configs;
+    with STAGE or CONFIG names (vtrack stages robust_model, vtrack stages s0, vtrack stages
     mine.toml), only those stages, and for a CONFIG (a shipped name or a file, as --config
     takes) the values it sets."""
     if names and markdown:

@@ -70,6 +70,11 @@ class TrackStatus(StrEnum):
 PIPELINE_PROVIDES = frozenset({"frame", "clock", "box", "prediction", "state", "rng",
                                "search_growth", "first_track_id"})
 
+#: The rule of a stage keeping the chain's fixed-point record (``provides = {"fixed"}``:
+#: hue_bp_fixed's S0 one, kernel_meanshift_int's S2 one), which config._check_tracks keeps.
+ONE_RECORD_RULE = ("no other stage keeping a fixed-point record (hue_bp_fixed, "
+                   "kernel_meanshift_int) in the chain: a chain computes one")
+
 #: Fields computed from another field: a stage that sets the key field without setting these
 #: leaves them describing an older value, so later stages may not read them (a new search
 #: window has no back-projection until a stage makes one).

@@ -35,7 +35,7 @@ from vtrack.golden.record import FixedRecord
 from vtrack.histograms import refuse_colourless
 from vtrack.overlays import SearchWindow
 from vtrack.params import Param
-from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.base import ONE_RECORD_RULE, Stage, TrackContext, TrackState, register
 from vtrack.stages.occlusion import best_placement
 
 
@@ -91,6 +91,7 @@ class HueBpFixed(Stage):
     )
     requires = frozenset({"frame", "box", "prediction"})
     provides = frozenset({"window", "feature", "likelihood", "fixed"})
+    rules = (ONE_RECORD_RULE,)
 
     hist_bits: int
     hue_divider_bits: int

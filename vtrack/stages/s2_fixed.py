@@ -27,7 +27,7 @@ from vtrack.golden import s2
 from vtrack.golden.record import FixedRecord
 from vtrack.golden.s0 import split_rgb
 from vtrack.params import Param
-from vtrack.stages.base import Stage, TrackContext, TrackState, register
+from vtrack.stages.base import ONE_RECORD_RULE, Stage, TrackContext, TrackState, register
 from vtrack.stages.kernel_meanshift import SAMPLED_ABOVE, step_limit
 
 ACCEPT, FAST_MOTION, OCCLUSION = "accept", "fast_motion", "occlusion"
@@ -69,6 +69,7 @@ class KernelMeanShiftInt(Stage):
     requires = frozenset({"frame", "box", "prediction"})
     provides = frozenset({"box", "measurement", "state", "score", "fixed"})
     columns = ("decision", "scale", "iterations")
+    rules = (ONE_RECORD_RULE,)
 
     bins: int
     weight_frac_bits: int
