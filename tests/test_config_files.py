@@ -459,24 +459,27 @@ def test_a_value_of_the_wrong_type_is_refused_with_its_range_in_the_same_line(
     """`search_scale = "2"` (a string for a number) said "parameter 'search_scale' must be a
     number, got '2'" and `hue_scale = 1` "must be a string, got 1": what the value may be was
     left to `vtrack stages`, unlike a number out of range ("must be in the range 1 to 16"). Now
-    every parameter of every stage, given a value of another type, names its declared range or
-    choices in the line that refuses it."""
+    every parameter of every stage, given a value of another type, names its type and its
+    declared range or choices in the line that refuses it (the whole line checked, true/false
+    and text parameters too: bool ones and mot_detections.path)."""
     config = tmp_path / "typed.toml"
     config.write_text(f'name = "x"\n[[stage]]\nname = "hue"\nsearch_scale = "2"\n{CHAIN_TAIL}')
     for line in refusals(config, tmp_path):
         assert line == (f"vtrack: error: {config}: stage 'hue': parameter 'search_scale' must "
                         "be a number in the range 1 to 16, got '2'"), line
+    kinds = {int: "an integer", float: "a number", bool: "true or false", str: "a string"}
     for name, cls in all_stages().items():
         for param in cls.params:
             wrong = 1 if param.type is str else "x"
             with pytest.raises(ConfigError) as refused:
                 param.validate(wrong, f"mine.toml: stage '{name}'")
-            said = str(refused.value)
-            if param.range_text():
-                assert f"in the range {param.range_text()}, got 'x'" in said, said
+            wanted = kinds[param.type]
+            if param.min is not None and param.max is not None:
+                wanted += f" in the range {param.range_text()}"
             elif param.choices is not None:
-                options = ", ".join(repr(c) for c in param.choices)
-                assert f"one of {options}, got {wrong!r}" in said, said
+                wanted += ", one of " + ", ".join(repr(c) for c in param.choices)
+            assert str(refused.value) == (f"mine.toml: stage '{name}': parameter "
+                                          f"'{param.name}' must be {wanted}, got {wrong!r}")
 
 
 @pytest.mark.parametrize(("text", "said"), [
