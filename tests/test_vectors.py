@@ -540,6 +540,8 @@ def test_damaged_vectors_are_an_error_not_a_difference_of_the_dump(
     ("frame_0001/bp.hex", lambda data: data.replace(b"\n", b"\r\n")),  # a Windows checkout
     ("frame_0001/rgb.hex", bytes.upper),  # re-saved by an HDL tool
     ("notes.csv", lambda _: b"note,value\nlast,1"),  # the user's own, with no last newline
+    ("notes.csv", lambda _: b"a,b\n1\n"),  # the user's own, a row short of a value
+    ("notes.csv", lambda _: b"a,b\n1\n1,2,3\n"),  # ... and a row with a value past the header
     ("mytest/rgb.hex", lambda _: b"ff0000\n00ff"),  # the user's own, named like a vector
 ])
 def test_vectors_changed_but_not_damaged_are_compared_as_before(
@@ -560,3 +562,26 @@ def test_vectors_changed_but_not_damaged_are_compared_as_before(
     done = vtrack("vectors", "check", str(changed), str(dump))
     assert (done.returncode, done.stderr) == (0, ""), done.stdout + done.stderr
     assert done.stdout.endswith(" file(s) equal\n"), done.stdout
+
+
+@pytest.mark.parametrize(("mine", "dumped", "difference"), [
+    (b"a,b\n1\n", b"a,b\n1,2\n", "frame 0 column b: expected nothing, got 2"),
+    (b"a,b\n1,2,3\n", b"a,b\n1,2,4\n", "frame 0 values past the header: expected 3, got 4"),
+    (b"a,b\n1,2\n", b"a,b\n1,2,3,4\n",
+     "frame 0 values past the header: expected nothing, got 3,4"),
+])
+def test_ragged_rows_of_the_users_own_csv_are_a_difference(
+        vectors, tmp_path, mine: bytes, dumped: bytes, difference: str) -> None:
+    """A CSV of the user's own with a row short of a value or with values past the header
+    crashed vtrack vectors check with a TypeError traceback (float(None), float(['3'])), or
+    said equal when only the dump had the values past the header. A missing value is nothing,
+    the values past the header are compared as one text."""
+    out, _ = vectors
+    changed, dump = tmp_path / "vec", tmp_path / "dump"
+    shutil.copytree(out, changed)
+    shutil.copytree(out, dump)
+    (changed / "notes.csv").write_bytes(mine)
+    (dump / "notes.csv").write_bytes(dumped)
+    done = vtrack("vectors", "check", str(changed), str(dump))
+    assert (done.returncode, done.stderr) == (1, ""), done.stdout + done.stderr
+    assert f"notes.csv: 1 differing value(s); {difference}\n" in done.stdout, done.stdout

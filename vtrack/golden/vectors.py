@@ -412,6 +412,15 @@ def _shown_cell(text: str | None) -> str:
     return _shown(text) if text else "nothing"
 
 
+def _cells(row: dict[Any, Any]) -> dict[str | None, str]:
+    """A row of :class:`csv.DictReader` as text only: a value missing from a short row is "",
+    and the values past the header's columns (DictReader's key None, "" when there are none)
+    are one text, joined by commas, under the key None."""
+    cells: dict[str | None, str] = {k: v or "" for k, v in row.items() if k is not None}
+    cells[None] = ",".join(row.get(None) or [])
+    return cells
+
+
 def _same_cell(a: str, b: str) -> bool:
     if a == b:
         return True
@@ -523,15 +532,17 @@ def _csv_differences(name: str, expected: Path, got: Path, ours: bool, frames: i
     missing = _missing_columns(name, columns, header)
     found: list[str] = []
     total = 0
-    for i, (row_w, row_h) in enumerate(zip(want, have, strict=False)):
+    for i, (raw_w, raw_h) in enumerate(zip(want, have, strict=False)):
+        row_w, row_h = _cells(raw_w), _cells(raw_h)
         for column, value in row_h.items():
             if column not in row_w:
                 continue  # a dump may hold extra columns
-            if not _same_cell(row_w[column], value or ""):
+            if not _same_cell(row_w[column], value):
                 total += 1
                 if len(found) < SHOWN:
                     frame = row_w.get("frame", str(i))
-                    found.append(f"frame {frame} column {column}: expected "
+                    where = "values past the header" if column is None else f"column {column}"
+                    found.append(f"frame {frame} {where}: expected "
                                  f"{_shown_cell(row_w[column])}, got {_shown_cell(value)}")
     body = _differences(total, found, _length(len(have), len(want), "rows"))
     if body is None:
