@@ -274,6 +274,19 @@ def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:
     assert str(refused.value) == (
         "chain.toml: stage 'meanshift_fixed' needs fixed, which no earlier stage provides "
         "(check the order of the chain: fixed comes from hue_bp_fixed)")
+    # kernel_meanshift_int would keep a second record (S2's) beside hue_bp_fixed's, before it
+    # or named for the lacking fixed; hue_bp_fixed itself may give two values
+    measurement = ("measurement {}from kernel_meanshift, largest_blob, meanshift, "
+                   "meanshift_fixed, robust_search)")
+    for names, lacking in [(("hue_bp_fixed", "kalman_f32"), measurement.format("comes ")),
+                           (("kalman_f32",), "fixed comes from hue_bp_fixed; "
+                                             + measurement.format(""))]:
+        with pytest.raises(ConfigError) as refused:
+            parse_config({"stage": [{"name": n} for n in names]}, "chain.toml")
+        assert str(refused.value).endswith(f"(check the order of the chain: {lacking}"), names
+    with pytest.raises(ConfigError) as refused:
+        parse_config({"stage": [{"name": "meanshift_fixed"}]}, "chain.toml")
+    assert "; likelihood from background, backproject, hue_bp_fixed, " in str(refused.value)
     needed = set().union(*(cls.requires for cls in all_stages().values())) - PIPELINE_PROVIDES
     assert all(any(value in cls.provides - cls.requires for cls in all_stages().values())
                for value in needed)  # (no line says a value comes "from no stage")

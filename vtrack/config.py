@@ -433,21 +433,39 @@ def _givers(values: list[str], needing: type[Stage], settings: dict[str, Any],
     parameter ``settings``, lacks after the stages ``before``), for a refusal of the chain:
     ``likelihood comes from background, backproject, ...; target_model from backproject`` (a
     stage that changes a value it needs, occlusion's measurement, is not where it comes from).
-    A maker ``needing``'s own check (:meth:`~vtrack.stages.base.Stage.chain_problem`) would
-    refuse before it is left out when another is not (meanshift_fixed's fixed comes from
-    hue_bp_fixed, not kernel_meanshift_int, whose record is S2's); when it refuses them all,
-    the refusal is not the maker's and each is named."""
+    A maker the chain would refuse is left out when another is not: one ``needing``'s own check
+    (:meth:`~vtrack.stages.base.Stage.chain_problem`) refuses (meanshift_fixed's fixed comes
+    from hue_bp_fixed, not kernel_meanshift_int, whose record is S2's), and one keeping a
+    second fixed-point record (:func:`_records`) beside a stage ``before`` or the makers named
+    for an earlier value, all of which keep one (kalman_f32's measurement after hue_bp_fixed
+    is not kernel_meanshift_int's). An earlier value's only maker counts as in the chain (the
+    author adds it: kalman_f32 alone is told fixed comes from hue_bp_fixed, and measurement
+    from the makers that can follow it); when all are refused, the refusal is not the maker's
+    and each is named."""
     stages = all_stages()
-
-    def makers(value: str) -> list[str]:
+    chain = list(before)  # and each earlier value's only maker: the author adds it
+    # the stages keeping the chain's record, each set one of which will (one stage before, or
+    # the makers of an earlier value when all of them keep one)
+    kept = [{name} for name in _records(stages[name] for name in before)]
+    lines: list[str] = []
+    for index, value in enumerate(values):
         made = [name for name, cls in stages.items() if value in cls.provides - cls.requires]
         accepted = [name for name in made
-                    if needing.chain_problem(settings, [*before, name]) is None]
-        return accepted or made
+                    if not (_records([stages[name]]) and any(name not in k for k in kept))
+                    and needing.chain_problem(settings, [*chain, name]) is None] or made
+        if len(accepted) == 1:
+            chain.append(accepted[0])
+        if accepted and len(_records(stages[name] for name in accepted)) == len(accepted):
+            kept.append(set(accepted))
+        lines.append(f"{value} {'comes ' if index == 0 else ''}from "
+                     f"{', '.join(accepted) or 'no stage'}")
+    return "; ".join(lines)
 
-    return "; ".join(
-        f"{value} {'comes ' if index == 0 else ''}from {', '.join(makers(value)) or 'no stage'}"
-        for index, value in enumerate(values))
+
+def _records(classes: Iterable[type[Stage]]) -> list[str]:
+    """The names of ``classes`` that keep a fixed-point record (provide ``fixed``, each of its
+    own document's model, S0 or S2): a chain keeps one (:func:`_check_tracks`)."""
+    return [cls.name for cls in classes if "fixed" in cls.provides]
 
 
 def refuse_repeats(source: str, names: list[str]) -> None:
@@ -472,7 +490,7 @@ def _check_tracks(source: str, classes: list[type[Stage]]) -> None:
     thrown away, or it would need a first box the chain refuses)."""
     names = [cls.name for cls in classes]
     refuse_repeats(source, names)
-    records = [cls.name for cls in classes if "fixed" in cls.provides]
+    records = _records(classes)
     if len(records) > 1:
         raise ConfigError(f"{source}: stages {' and '.join(records)} both keep the chain's "
                           "fixed-point record, each of its own document's model (S0, S2): "
