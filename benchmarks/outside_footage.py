@@ -69,9 +69,9 @@ MOT = (
 )
 
 
-def git(clone: Path, *args: str) -> bytes:
-    """Output of ``git -C clone ARGS`` (bare clones too)."""
-    return subprocess.run(["git", "-C", str(clone), *args], capture_output=True,
+def git(clone: Path, *args: str, given: bytes | None = None) -> bytes:
+    """Output of ``git -C clone ARGS`` (bare clones too), ``given`` on its standard input."""
+    return subprocess.run(["git", "-C", str(clone), *args], input=given, capture_output=True,
                           check=True).stdout
 
 
@@ -92,8 +92,7 @@ def absent(clone: Path, paths: list[str]) -> str | None:
     its large files, or a Git LFS pointer whose content was never fetched: its ~130 bytes would
     be written as the file), or None when it holds them all."""
     asked = "".join(f"HEAD:{path}\n" for path in paths)
-    answer = subprocess.run(["git", "-C", str(clone), "cat-file", "--batch-check"],
-                            input=asked.encode(), capture_output=True, check=True).stdout
+    answer = git(clone, "cat-file", "--batch-check", given=asked.encode())
     # path: object name of the blobs small enough to be an LFS pointer, up to the first missing
     # (None), in the order of paths
     objects: dict[str, str | None] = {}
@@ -113,9 +112,8 @@ def lfs_pointers(clone: Path, names: set[str]) -> set[str]:
     """Those of the blobs ``names`` (object names the clone holds) that are Git LFS pointers."""
     if not names:
         return set()
-    answer = subprocess.run(["git", "-C", str(clone), "cat-file", "--batch"],
-                            input="".join(f"{name}\n" for name in names).encode(),
-                            capture_output=True, check=True).stdout
+    answer = git(clone, "cat-file", "--batch",
+                 given="".join(f"{name}\n" for name in names).encode())
     pointers, at = set(), 0
     while at < len(answer):  # each: "NAME TYPE SIZE\n", SIZE bytes, "\n"
         header_end = answer.index(b"\n", at)

@@ -50,8 +50,9 @@ def stored_pixels(picture: av.VideoFrame) -> np.ndarray:
     """``picture``'s pixels as stored: ``(h, w)`` when it is grey, else ``(h, w, 3)`` BGR;
     uint16 when :func:`deep`, else uint8 (:func:`layout` names them)."""
     fmt = picture.format
-    return picture.to_ndarray(format=("gray16le" if deep(fmt) else "gray") if grey(fmt) else
-                              "bgr48le" if deep(fmt) else "bgr24")
+    wide = deep(fmt)
+    return picture.to_ndarray(format=("gray16le" if wide else "gray") if grey(fmt) else
+                              "bgr48le" if wide else "bgr24")
 
 
 def layout(pixels: np.ndarray) -> str:
@@ -116,7 +117,6 @@ class DepthScale:
         if self.deep:
             self.notes.append((0, depth_note(name, self.bits, what, self.colour)))
         self._mixed = False  # a picture of another depth than the first's was noted
-        self._told = 0  # the notes :meth:`news` handed on
 
     def frame(self, pixels: np.ndarray, index: int, path: object = None) -> np.ndarray:
         """``pixels``, picture ``index`` as stored (``path``, the image it was read from;
@@ -127,7 +127,7 @@ class DepthScale:
         if not self._mixed and deeper != self.deep:
             self._mixed = True
             self.notes.append((index, mixed_note(
-                subject if path is not None else f"{subject}: frame {index}",
+                path if path is not None else f"{self.name}: frame {index}",
                 self.bits if self.deep else None, self.what[:-1])))
         elif deeper and self.deep and (bits := self._bits_over(pixels)) > self.bits:
             self.bits = bits
@@ -140,12 +140,18 @@ class DepthScale:
     def _bits_over(self, pixels: np.ndarray) -> int:
         """The bits 16-bit ``pixels`` use (:func:`used_bits`, hot pixels aside) when their
         plain largest value (cheap: looked at first) is above the scale; else the scale's."""
+        top = (1 << self.bits) - 1
         largest = cv2.minMaxLoc(pixels.reshape(pixels.shape[0], -1))[1]
-        return used_bits(pixels) if largest > (1 << self.bits) - 1 else self.bits
+        # A 3x3 median exceeds ``top`` only where 5 of its 9 values do, and one pixel fills at
+        # most 4 of a window's (at a corner, the border replicated): one stuck pixel above the
+        # scale (a marker at 65535) asks for no median, on every frame.
+        if largest <= top or np.count_nonzero(pixels > top) < 2:
+            return self.bits
+        return used_bits(pixels)
 
     def news(self) -> list[tuple[int, str]]:
-        """The :attr:`notes` added since the last call."""
-        new, self._told = self.notes[self._told:], len(self.notes)
+        """The :attr:`notes` added since the last call (handed on: they are let go)."""
+        new, self.notes = self.notes, []
         return new
 
 

@@ -555,10 +555,9 @@ def make_scene(
     # (not text, make_scene(None) or make_scene(['a']): no name, however it hashes)
     scenario = SCENARIOS.get(name) if isinstance(name, str) else None
     if scenario is None:
-        given, near = shown(name), ""  # (not text: no text to quote or guess from)
-        if isinstance(name, str):
-            given = quoted_or_cut(name)
-            near = "" if names_a_path(name) else did_you_mean(name, SCENARIOS)
+        text = isinstance(name, str)  # (not text: no text to quote or guess from)
+        given = quoted_or_cut(name) if text else shown(name)
+        near = did_you_mean(name, SCENARIOS) if text and not names_a_path(name) else ""
         raise ConfigError(f"unknown scenario {given}; choose one of: {', '.join(SCENARIOS)}{near}")
     spec = SceneSpec(
         name=name,

@@ -203,14 +203,15 @@ def split_side_by_side(detection: Detection, parts: int, mask: np.ndarray,
     x0, y0 = covered.x0, covered.y0
     if inside.shape[1] < 2 * parts:
         return [detection]
-    profile = inside.sum(axis=0)
-    width = inside.shape[1] / parts
     cuts = [0] + ([] if heads is None else head_cuts(inside, parts, heads))
-    for k in range(1, parts if len(cuts) == 1 else 1):
-        lo, hi = round(k * width - width / 4), round(k * width + width / 4) + 1
-        cut = lo + int(np.argmin(profile[lo:hi]))
-        if profile[cut] <= VALLEY * profile.max():
-            cuts.append(cut)
+    if len(cuts) == 1:  # no heads to cut between: the columns of least foreground
+        profile = inside.sum(axis=0)
+        width = inside.shape[1] / parts
+        for k in range(1, parts):
+            lo, hi = round(k * width - width / 4), round(k * width + width / 4) + 1
+            cut = lo + int(np.argmin(profile[lo:hi]))
+            if profile[cut] <= VALLEY * profile.max():
+                cuts.append(cut)
     if len(cuts) == 1:
         return [detection]
     cuts.append(inside.shape[1])
