@@ -341,3 +341,33 @@ def test_a_dark_first_frame_does_not_white_out_the_rest(tmp_path: Path, given: s
     assert frames[2][0, 80] == round(sky12 * 255 / 4095)  # 76, not 255
     assert frames[3][0, 80] == round(sky14 * 255 / 16383)
     assert frames[4][0, 80] == round(sky12 * 255 / 16383)  # the scale does not fall back
+
+
+@pytest.mark.parametrize("shape", [(2, 8), (1, 8), (2, 8, 3), (16, 16), (16, 16, 3)])
+def test_a_later_picture_using_more_bits_raises_the_scale_whatever_its_size(
+        shape: tuple[int, ...]) -> None:
+    """A value of 12 bits in a later picture of a 10-bit sequence raises the scale to 12 bits
+    with a warning. A picture under 3 pixels high or wide (no 3x3 median: its plain largest
+    value) clipped it instead, silently, once a shortcut skipped the median for fewer than two
+    values above the scale; a picture with two such values side by side still raises it, and a
+    lone stuck pixel (the median sets it aside) does not."""
+    from vtrack.io.depth import DepthScale
+    first = np.full(shape, 1000, np.uint16)
+    scale = DepthScale("seq", first)
+    assert scale.bits == 10
+    later = first.copy()
+    if min(shape[:2]) < 3:
+        later[0, 0] = 4000
+    else:
+        later[4:7, 4:7] = 4000  # a patch the 3x3 median keeps
+        later[0, 15] = 65535  # and a stuck pixel it sets aside
+    out = scale.frame(later, 1)
+    assert scale.bits == 12
+    spot = (0, 0) if min(shape[:2]) < 3 else (5, 5)
+    assert int(np.max(out[spot])) == round(4000 * 255 / 4095)  # not clipped at 255
+    assert any("frame 1's values use 12 bits" in text for _, text in scale.news())
+    stuck = first.copy()
+    stuck[0, 0] = 65535
+    if min(shape[:2]) >= 3:
+        scale.frame(stuck, 2)
+        assert scale.bits == 12  # (the median sets a lone stuck pixel aside)

@@ -144,8 +144,10 @@ class DepthScale:
         largest = cv2.minMaxLoc(pixels.reshape(pixels.shape[0], -1))[1]
         # A 3x3 median exceeds ``top`` only where 5 of its 9 values do, and one pixel fills at
         # most 4 of a window's (at a corner, the border replicated): one stuck pixel above the
-        # scale (a marker at 65535) asks for no median, on every frame.
-        if largest <= top or np.count_nonzero(pixels > top) < 2:
+        # scale (a marker at 65535) asks for no median, on every frame (a picture too small
+        # for the median is read by its plain largest value: used_bits).
+        above = (pixels > top).reshape(-1, pixels.shape[2] if pixels.ndim == 3 else 1)
+        if largest <= top or (min(pixels.shape[:2]) >= 3 and int(above.sum(axis=0).max()) < 2):
             return self.bits
         return used_bits(pixels)
 
