@@ -531,6 +531,10 @@ def test_a_shipped_configs_name_given_as_a_missing_file_is_told_the_shipped_name
             ("batch", "inputs", "-c", given), ("stages", given))]:
         assert line == (f"vtrack: error: {given}: config file not found; did you mean the "
                         f"shipped config '{name}' (named without a path or .toml)?"), line
-    for mine in ("mine.toml", "exp/robust.toml", "x/s0.json"):
+    for mine in ("mine.toml", "exp/robust.toml", "x/s0.json", "my_configs/robust.toml"):
         assert refusals(Path(mine), tmp_path)[0] == (
             f"vtrack: error: {mine}: config file not found")
+    here = tmp_path / f"{name}.toml"  # the current folder written whole ($PWD/s0.toml)
+    assert one_error_line(vtrack("stages", str(here))) == (
+        f"vtrack: error: {here}: config file not found; did you mean the shipped config "
+        f"'{name}' (named without a path or .toml)?")

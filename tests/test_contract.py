@@ -279,6 +279,9 @@ def test_a_chain_lacking_a_value_is_told_which_stages_make_it() -> None:
     measurement = ("measurement {}from kernel_meanshift, largest_blob, meanshift, "
                    "meanshift_fixed, robust_search)")
     for names, lacking in [(("hue_bp_fixed", "kalman_f32"), measurement.format("comes ")),
+                           (("kalman", "hue_bp_fixed", "meanshift_fixed"),  # (after it too)
+                            "measurement comes from kernel_meanshift, largest_blob, meanshift, "
+                            "meanshift_fixed, robust_search)"),
                            (("kalman_f32",), "fixed comes from hue_bp_fixed; "
                                              + measurement.format(""))]:
         with pytest.raises(ConfigError) as refused:

@@ -327,12 +327,16 @@ def config_and_text(spec: str | Path | None = None) -> tuple[Config, str]:
 
 def _shipped_meant(path: Path) -> str | None:
     """The shipped config a missing config file most likely meant: its stem when that names
-    one, the file has no extension or ``.toml`` and its folder is the current one or one whose
-    name ends in ``configs`` (``s0.toml``, ``./s0``, ``configs/robust.toml``); None for
-    another folder's or another extension's file (``exp/robust.toml``, ``x/s0.json``: the
-    user's own file, whose values the shipped one does not have)."""
-    if path.suffix not in ("", ".toml") or not (
-            path.parent == Path(".") or path.parent.name.endswith("configs")):
+    one, the file has no extension or ``.toml`` and its folder is the current one (however
+    written) or one named ``configs`` (``s0.toml``, ``./s0``, ``$PWD/s0.toml``,
+    ``configs/robust.toml``); None for another folder's or another extension's file
+    (``exp/robust.toml``, ``my_configs/robust.toml``, ``x/s0.json``: the user's own file,
+    whose values the shipped one does not have)."""
+    try:
+        here = path.parent.resolve() == Path.cwd().resolve()
+    except OSError:  # (a folder that cannot be resolved, or a current one removed)
+        here = False
+    if path.suffix not in ("", ".toml") or not (here or path.parent.name == "configs"):
         return None
     return path.stem if path.stem in shipped_configs() else None
 
@@ -416,7 +420,7 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
             raise ConfigError(
                 f"{source}: stage '{cls.name}' needs {', '.join(sorted(missing))}, "
                 f"which no earlier stage provides (check the order of the chain: "
-                f"{_givers(sorted(missing), cls, settings, before)})"
+                f"{_givers(sorted(missing), cls, settings, before, _records(classes))})"
             )
         problem = cls.chain_problem(settings, before)
         if problem:
@@ -428,7 +432,7 @@ def check_stages(source: str, classes: list[type[Stage]], values: list[dict[str,
 
 
 def _givers(values: list[str], needing: type[Stage], settings: dict[str, Any],
-            before: list[str]) -> str:
+            before: list[str], records: list[str]) -> str:
     """Which stages make each of ``values`` (shared values the stage ``needing``, with these
     parameter ``settings``, lacks after the stages ``before``), for a refusal of the chain:
     ``likelihood comes from background, backproject, ...; target_model from backproject`` (a
@@ -436,17 +440,18 @@ def _givers(values: list[str], needing: type[Stage], settings: dict[str, Any],
     A maker the chain would refuse is left out when another is not: one ``needing``'s own check
     (:meth:`~vtrack.stages.base.Stage.chain_problem`) refuses (meanshift_fixed's fixed comes
     from hue_bp_fixed, not kernel_meanshift_int, whose record is S2's), and one keeping a
-    second fixed-point record (:func:`_records`) beside a stage ``before`` or the makers named
-    for an earlier value, all of which keep one (kalman_f32's measurement after hue_bp_fixed
+    second fixed-point record (:func:`_records`) beside the chain's own ``records`` (anywhere
+    in it, before or after ``needing``) or the makers named for an earlier value, all of
+    which keep one (kalman_f32's measurement after hue_bp_fixed
     is not kernel_meanshift_int's). An earlier value's only maker counts as in the chain (the
     author adds it: kalman_f32 alone is told fixed comes from hue_bp_fixed, and measurement
     from the makers that can follow it); when all are refused, the refusal is not the maker's
     and each is named."""
     stages = all_stages()
     chain = list(before)  # and each earlier value's only maker: the author adds it
-    # the stages keeping the chain's record, each set one of which will (one stage before, or
+    # the stages keeping the chain's record, each set one of which will (the chain's own, or
     # the makers of an earlier value when all of them keep one)
-    kept = [{name} for name in _records(stages[name] for name in before)]
+    kept = [{name} for name in records]
     lines: list[str] = []
     for index, value in enumerate(values):
         made = [name for name, cls in stages.items() if value in cls.provides - cls.requires]
