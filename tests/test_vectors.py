@@ -569,6 +569,8 @@ def test_vectors_changed_but_not_damaged_are_compared_as_before(
     (b"a,b\n1,2,3\n", b"a,b\n1,2,4\n", "frame 0 values past the header: expected 3, got 4"),
     (b"a,b\n1,2\n", b"a,b\n1,2,3,4\n",
      "frame 0 values past the header: expected nothing, got 3,4"),
+    # a row short of its frame value is named by its place (it said "frame  column a")
+    (b"a,frame\n1\n", b"a,frame\n2\n", "frame 0 column a: expected 1, got 2"),
 ])
 def test_ragged_rows_of_the_users_own_csv_are_a_difference(
         vectors, tmp_path, mine: bytes, dumped: bytes, difference: str) -> None:

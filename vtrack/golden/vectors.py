@@ -540,7 +540,7 @@ def _csv_differences(name: str, expected: Path, got: Path, ours: bool, frames: i
             if not _same_cell(row_w[column], value):
                 total += 1
                 if len(found) < SHOWN:
-                    frame = row_w.get("frame", str(i))
+                    frame = row_w.get("frame") or str(i)
                     where = "values past the header" if column is None else f"column {column}"
                     found.append(f"frame {frame} {where}: expected "
                                  f"{_shown_cell(row_w[column])}, got {_shown_cell(value)}")
