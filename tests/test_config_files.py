@@ -534,6 +534,9 @@ def test_a_shipped_configs_name_given_as_a_missing_file_is_told_the_shipped_name
     for mine in ("mine.toml", "exp/robust.toml", "x/s0.json", "my_configs/robust.toml"):
         assert refusals(Path(mine), tmp_path)[0] == (
             f"vtrack: error: {mine}: config file not found")
+    (tmp_path / "loop").symlink_to("loop")  # a folder that cannot be resolved: no hint
+    looped = Path("loop") / Path(given).name
+    assert refusals(looped, tmp_path)[0] == f"vtrack: error: {looped}: config file not found"
     here = tmp_path / f"{name}.toml"  # the current folder written whole ($PWD/s0.toml)
     assert one_error_line(vtrack("stages", str(here))) == (
         f"vtrack: error: {here}: config file not found; did you mean the shipped config "

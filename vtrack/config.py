@@ -334,7 +334,7 @@ def _shipped_meant(path: Path) -> str | None:
     whose values the shipped one does not have)."""
     try:
         here = path.parent.resolve() == Path.cwd().resolve()
-    except OSError:  # (a folder that cannot be resolved, or a current one removed)
+    except (OSError, RuntimeError):  # (a folder that cannot be resolved: removed, a loop)
         here = False
     if path.suffix not in ("", ".toml") or not (here or path.parent.name == "configs"):
         return None

@@ -146,9 +146,12 @@ class DepthScale:
         # most 4 of a window's (at a corner, the border replicated): one stuck pixel above the
         # scale (a marker at 65535) asks for no median, on every frame (a picture too small
         # for the median is read by its plain largest value: used_bits).
-        above = (pixels > top).reshape(-1, pixels.shape[2] if pixels.ndim == 3 else 1)
-        if largest <= top or (min(pixels.shape[:2]) >= 3 and int(above.sum(axis=0).max()) < 2):
+        if largest <= top:
             return self.bits
+        if min(pixels.shape[:2]) >= 3:
+            above = (pixels > top).reshape(-1, pixels.shape[2] if pixels.ndim == 3 else 1)
+            if int(above.sum(axis=0).max()) < 2:
+                return self.bits
         return used_bits(pixels)
 
     def news(self) -> list[tuple[int, str]]:
