@@ -38,7 +38,7 @@ from vtrack.errors import (
     first_few,
     guess_text,
 )
-from vtrack.io.files import os_reason
+from vtrack.io.files import os_reason, real_path
 from vtrack.io.limits import CONFIG_BYTES, not_a_file, read_text_bounded, special_kind
 from vtrack.params import float_from_text, shown
 from vtrack.stages.base import (
@@ -333,8 +333,8 @@ def _shipped_meant(path: Path) -> str | None:
     (``exp/robust.toml``, ``my_configs/robust.toml``, ``x/s0.json``: the user's own file,
     whose values the shipped one does not have)."""
     try:
-        here = path.parent.resolve() == Path.cwd().resolve()
-    except (OSError, RuntimeError):  # (a folder that cannot be resolved: removed, a loop)
+        here = real_path(path.parent) == real_path(Path.cwd())  # (a looping link: no error)
+    except OSError:  # (the current folder removed)
         here = False
     if path.suffix not in ("", ".toml") or not (here or path.parent.name == "configs"):
         return None
