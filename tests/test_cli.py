@@ -686,3 +686,27 @@ def test_every_command_prints_its_help_as_a_result() -> None:
         assert isinstance(command, HelpPrinted), command.name
         option = command.get_help_option(click.Context(command, parent=ctx))
         assert option is not None and option.callback is print_help, command.name
+
+
+@pytest.mark.parametrize(("command", "option"), [("frame", "--at"), ("run", "--start")])
+def test_the_time_forms_a_help_names_are_the_ones_taken(command: str, option: str) -> None:
+    """frame --at and run --start said a time works "like ffmpeg -ss", yet 00:00:00.5 and a
+    bare 2.5 (both ffmpeg -ss forms) are refused: the help names the forms taken and the ones
+    refused, and the parser agrees with each."""
+    import click
+
+    from vtrack.cli._options import StartPoint
+
+    help_text = vtrack(command, "--help").stdout.decode()
+    row = re.search(rf"^ +(-\w, )?{option} .*?(?=^ +-)", help_text, re.M | re.S)
+    assert row is not None, help_text
+    entry = " ".join(row.group().split())
+    forms = re.search(r"time T in seconds ending in s \(([^;]+); not (.+?), which", entry)
+    assert forms is not None, entry
+    taken, refused = forms.group(1).split(", "), forms.group(2).split(" nor ")
+    assert any(":" in form for form in refused) and any("." in f for f in refused), refused
+    for form in taken:
+        assert StartPoint().convert(form, None, None)[1] is not None, form
+    for form in refused:
+        with pytest.raises(click.BadParameter):
+            StartPoint().convert(form, None, None)

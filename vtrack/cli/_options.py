@@ -406,6 +406,11 @@ class _FramesOrSeconds(click.ParamType):
         return parsed
 
 
+#: The time forms ``--start``/``--at`` take, for their help: only seconds ending in ``s``.
+TIME_FORMS = ("a time T in seconds ending in s (2.5s, 3s; not 00:00:02.5 nor a bare 2.5, "
+              "which ffmpeg -ss would take)")
+
+
 class StartPoint(_FramesOrSeconds):
     """``--start``: a 0-based frame number (``75``) or a time in seconds (``2.5s``, as
     ``ffmpeg -ss``). Converts to ``(frame, seconds)``: ``(75, None)`` or ``(0, 2.5)``."""

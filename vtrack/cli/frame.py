@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from vtrack.cli._messages import echo_summary
-from vtrack.cli._options import StartPoint, VtrackCommand, WholeNumber
+from vtrack.cli._options import TIME_FORMS, StartPoint, VtrackCommand, WholeNumber
 from vtrack.cli._paths import IMAGE_PATH, INPUT
 from vtrack.cli._signals import stopping_as_interrupted
 from vtrack.geometry import MAX_FRAME_SIDE
@@ -19,8 +19,8 @@ from vtrack.geometry import MAX_FRAME_SIDE
 @click.argument("input_spec", metavar="INPUT", type=INPUT)
 @click.option("--at", "at", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="The frame: a 0-based frame number N (as track.csv numbers "
-              "them), or a time T like ffmpeg -ss (2.5s: the first frame whose timestamp is at "
-              "or after it), as vtrack run --start takes them.")
+              f"them), or {TIME_FORMS}: the first frame whose timestamp is at or after it; as "
+              "vtrack run --start takes them.")
 @click.option("--out", "-o", "out", type=IMAGE_PATH, metavar="FILE",
               help="Image to write (.png or .jpg). Default: ./<input name>-frame<N>.png. A "
                    "file already there is replaced only with --overwrite.")

@@ -14,6 +14,7 @@ import click
 from vtrack.cli._messages import echo_stdout, error_line, say, stdout_problem, warning_line
 from vtrack.cli._options import (
     FRAME_RATE,
+    TIME_FORMS,
     FrameSpan,
     Seconds,
     SecondsCommand,
@@ -156,14 +157,13 @@ def default_out_dir(input_spec: str, config: str | None = None,
                    "ids. Refused by a single-target config, which numbers no tracks.")
 @click.option("--start", "start", type=StartPoint(), default="0", show_default=True,
               metavar="N|Ts", help="First frame to track: a 0-based frame number N "
-              f"(as track.csv numbers them; at most {MAX_FRAME_NUMBER}) or a time T like ffmpeg "
-              f"-ss (2.5s, at most {MAX_SECONDS}s: the first frame whose timestamp is at or "
-              "after it). The target's box in it: --init's "
-              "(vtrack run), else the ground truth's box of that frame (a sidecar box is frame "
-              "0's). An MP4 or MOV file of constant frame rate is read from the key frame "
-              "at or before it, an image folder from its image; other videos (MKV, WebM, "
-              "MPEG-TS, AVI, fragmented MP4, a variable frame rate), streams and raw frames "
-              "decode the earlier frames and skip them.")
+              f"(as track.csv numbers them; at most {MAX_FRAME_NUMBER}) or {TIME_FORMS}, at "
+              f"most {MAX_SECONDS}s: the first frame whose timestamp is at or after it. The "
+              "target's box in it: --init's (vtrack run), else the ground truth's box of that "
+              "frame (a sidecar box is frame 0's). An MP4 or MOV file of constant frame rate "
+              "is read from the key frame at or before it, an image folder from its image; "
+              "other videos (MKV, WebM, MPEG-TS, AVI, fragmented MP4, a variable frame rate), "
+              "streams and raw frames decode the earlier frames and skip them.")
 @click.option("--frames", "max_frames", type=FrameSpan(), default=None, metavar="N|Ts",
               help=f"Stop after N frames (1 to {MAX_FRAME_NUMBER}), or after T seconds of the "
                    f"input (10s, above 0 and at most {MAX_SECONDS}s, like ffmpeg "
