@@ -265,6 +265,26 @@ def post(url: str, data: dict) -> tuple[int, dict]:
         return exc.code, json.loads(exc.read())
 
 
+def test_frame_writes_through_a_link_it_is_given_as_out(clip: Path, tmp_path: Path) -> None:
+    """``vtrack frame CLIP -o link.png -y`` with link.png a symbolic link replaced the link by
+    a regular file (the file it led to kept its old bytes): the image goes to the file the link
+    leads to, the link stays; a looping link is one line, nothing written."""
+    (tmp_path / "real.png").write_bytes(b"old")
+    link = tmp_path / "link.png"
+    link.symlink_to("real.png")
+    done = vtrack("frame", str(clip), "-o", str(link), "-y")
+    assert done.returncode == 0, done.stderr
+    assert link.is_symlink() and os.readlink(link) == "real.png"
+    assert cv2.imread(str(tmp_path / "real.png")).shape == (H, W, 3)
+    loop = tmp_path / "loop.png"
+    loop.symlink_to("loop.png")
+    done = vtrack("frame", str(clip), "-o", str(loop), "-y")
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == f"vtrack: error: --out {loop}: Too many levels of symbolic links\n"
+    assert loop.is_symlink() and sorted(p.name for p in tmp_path.iterdir()) == [
+        "link.png", "loop.png", "real.png"]
+
+
 def test_a_box_drawn_on_a_later_frame_is_printed_with_its_frame_not_saved(clip: Path) -> None:
     """A box drawn on frame 7 was saved as the sidecar, which run and batch take as frame 0's
     box (only a warning said so)."""
