@@ -587,3 +587,26 @@ def test_ragged_rows_of_the_users_own_csv_are_a_difference(
     done = vtrack("vectors", "check", str(changed), str(dump))
     assert (done.returncode, done.stderr) == (1, ""), done.stdout + done.stderr
     assert f"notes.csv: 1 differing value(s); {difference}\n" in done.stdout, done.stdout
+
+
+def test_check_says_when_the_vectors_are_of_another_vtrack_version(vectors, tmp_path) -> None:
+    """``vtrack vectors check`` ignored the manifest's ``vtrack`` version: vectors written by
+    another version are still compared (the format is stable), with one warning line naming
+    both versions; vectors of this version, none."""
+    from vtrack import __version__
+
+    out, _ = vectors
+    same = vtrack("vectors", "check", str(out), str(out))
+    assert (same.returncode, same.stderr) == (0, ""), same.stderr
+    older = tmp_path / "older"
+    shutil.copytree(out, older)
+    manifest = json.loads((older / "manifest.json").read_text())
+    assert manifest["vtrack"] == __version__
+    manifest["vtrack"] = "0.0.1"
+    (older / "manifest.json").write_text(json.dumps(manifest))
+    done = vtrack("vectors", "check", str(older), str(out))
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == (f"vtrack: warning: {older}: vectors written by vtrack 0.0.1, checked "
+                           f"by vtrack {__version__} (manifest.json): a difference may be the "
+                           "versions'\n")
+    assert done.stdout.endswith("file(s) equal\n")

@@ -137,10 +137,16 @@ def generate(input_spec: str, config_spec: str, init_text: str, count: int, out_
 @click.argument("dump_dir", metavar="DUMP", type=PATH)
 def check(vectors_dir: Path, dump_dir: Path) -> None:
     """Compare a simulator's DUMP (same layout, any subset of the files) with the vectors DIR."""
+    from vtrack import __version__
     from vtrack.errors import InputError
     from vtrack.golden.vectors import check as compare
+    from vtrack.golden.vectors import other_version
 
     lines, compared = compare(vectors_dir, dump_dir)
+    written = other_version(vectors_dir, __version__)
+    if written is not None:  # the format is the same: said, not refused
+        warn(f"{vectors_dir}: vectors written by vtrack {written}, checked by vtrack "
+             f"{__version__} (manifest.json): a difference may be the versions'")
     if compared == 0 and not lines:
         raise InputError(f"{dump_dir}: holds none of the vector files (frame_NNNN/*.hex, "
                          "trace.csv, iterations.csv)")

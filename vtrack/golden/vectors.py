@@ -568,6 +568,15 @@ def _read_manifest(vectors: Path) -> dict[str, Any]:
     return info
 
 
+def other_version(vectors: Path, version: str) -> str | None:
+    """The vtrack version ``vectors``' ``manifest.json`` says wrote them, when it is not
+    ``version`` (None when it is, or names none): vectors keep their format across versions,
+    but a difference a check finds may be the two versions'. InputError as ``check`` gives
+    for a folder that holds no vectors manifest."""
+    written = _read_manifest(vectors).get("vtrack")
+    return written if isinstance(written, str) and written != version else None
+
+
 def _frames_of(manifest: dict[str, Any]) -> int | None:
     """The number of frames ``manifest`` gives (trace.csv's rows), None when none."""
     frames = manifest.get("frames")
