@@ -523,6 +523,37 @@ def test_cli_replaces_a_file_already_there_only_with_overwrite(tmp_path, fmt, mi
     assert "10 frames, 160x120" in done.stdout
 
 
+def test_cli_writes_through_a_link_it_is_given_as_out(tmp_path):
+    """`vtrack scene smooth l.mp4 -y` with l.mp4 a symbolic link to real.mp4 replaced the link
+    by a regular file (real.mp4 kept its old bytes): the clip goes to real.mp4, the link stays,
+    its ground truth is l.gt.txt beside the link; a looping link is one line, nothing
+    written."""
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "real.mp4").write_bytes(b"")
+    link = tmp_path / "l.mp4"
+    link.symlink_to("real.mp4")
+    args = [sys.executable, "-m", "vtrack", "scene", "smooth", "--frames", "10",
+            "--size", "160x120", "--preset", "ultrafast", "-y"]
+    done = subprocess.run([*args, str(link)], capture_output=True, text=True, timeout=120,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert link.is_symlink() and os.readlink(link) == "real.mp4"
+    with av.open(str(tmp_path / "real.mp4")) as container:
+        assert sum(1 for _ in container.decode(video=0)) == 10
+    assert len((tmp_path / "l.gt.txt").read_text().splitlines()) == 10
+    loop = tmp_path / "loop.mp4"
+    loop.symlink_to("loop.mp4")
+    done = subprocess.run([*args, str(loop)], capture_output=True, text=True, timeout=120,
+                          check=False)
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == f"vtrack: error: {loop}: Too many levels of symbolic links\n"
+    assert loop.is_symlink() and sorted(p.name for p in tmp_path.iterdir()) == [
+        "l.gt.txt", "l.mp4", "loop.mp4", "real.mp4"]
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -38,7 +38,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
     light pixel grid and its scale (x along the top, y down the left), to read the target's box
     x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError
-    from vtrack.io.files import write_bytes_atomic
+    from vtrack.io.files import write_bytes_atomic, written_file
     from vtrack.io.images import encode_image
     from vtrack.io.specs import input_name
     from vtrack.picker.frames import read_frame, read_frame_at
@@ -50,7 +50,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
     if out is not None:  # refused before a frame is decoded
         ext = _checked_ext(out, input_spec)
         _refuse_replacing(out, f"--out {out}", overwrite)
-        target = _written_file(out, f"--out {out}")
+        target = written_file(out, f"--out {out}")
     index, seconds = at
     with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary image left behind
         if seconds is None:
@@ -61,7 +61,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
             ext = _checked_ext(out, input_spec)
             _refuse_replacing(out, str(out), overwrite)
-            target = _written_file(out, str(out))
+            target = written_file(out, str(out))
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(target, encode_image(image, ext))  # a failed write keeps the old one
     echo_summary(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
@@ -82,24 +82,6 @@ def _checked_ext(out: Path, input_spec: str) -> str:
         raise ConfigError(f"--out {out}: is, or is inside, the input {input_spec} (it would "
                           "replace or add one of its frames); write the image elsewhere")
     return ext
-
-
-def _written_file(out: Path, named: str) -> Path:
-    """The file the image is written to: ``out``, or the file a symbolic link ``out`` leads to
-    (written through: the link stays, as ``open()`` would write); OutputError naming
-    ``named`` for a link that cannot be followed (a loop)."""
-    from vtrack.errors import OutputError
-    from vtrack.io.files import os_reason, real_path
-
-    if not out.is_symlink():
-        return out
-    try:
-        os.stat(out)
-    except FileNotFoundError:
-        pass  # a link to a file not there yet: that file is written
-    except OSError as exc:
-        raise OutputError(f"{named}: {os_reason(exc)}") from None
-    return real_path(out)
 
 
 def _refuse_replacing(out: Path, named: str, overwrite: bool) -> None:

@@ -132,6 +132,21 @@ def real_path(path: Path) -> Path:
     return Path(os.path.realpath(path))
 
 
+def written_file(out: Path, named: str) -> Path:
+    """The file a writer of ``out`` writes: ``out``, or the file a symbolic link ``out`` leads
+    to (written through: the link stays, as ``open()`` would write); OutputError naming
+    ``named`` for a link that cannot be followed (a loop)."""
+    if not out.is_symlink():
+        return out
+    try:
+        os.stat(out)
+    except FileNotFoundError:
+        pass  # a link to a file not there yet: that file is written
+    except OSError as exc:
+        raise OutputError(f"{named}: {os_reason(exc)}") from None
+    return real_path(out)
+
+
 def places_of(path: Path) -> set[Path]:
     """The files ``path`` names, whether they exist or not, however its symbolic links are read
     (a loop of links included): the file it leads to (:func:`real_path`) and its own entry in

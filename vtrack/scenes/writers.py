@@ -30,7 +30,13 @@ import numpy as np
 from tqdm import tqdm
 
 from vtrack.errors import ConfigError, OutputError, quoted_or_cut
-from vtrack.io.files import ffmpeg_file, os_reason, removing_new_folders, replacing
+from vtrack.io.files import (
+    ffmpeg_file,
+    os_reason,
+    removing_new_folders,
+    replacing,
+    written_file,
+)
 from vtrack.io.images import SEQUENCE_INFO, encode_image
 from vtrack.io.raw import PIX_FMTS as RAW_PIX_FMTS  # (write_raw's layouts: those vtrack reads)
 from vtrack.params import X264_PRESETS
@@ -398,7 +404,9 @@ def write_clip(
     together once all are complete: when a write fails none of them appears, and an earlier
     clip there is left as it was. Written over an earlier clip, nothing of that one is left:
     ``out/img`` is replaced as a whole, and a MOTChallenge file the new scene does not have is
-    removed. ``progress``: see :data:`Progress`.
+    removed. A file ``out`` that is a symbolic link is written through (the file it leads to
+    is replaced, the link kept: :func:`~vtrack.io.files.written_file`); its ground truth is
+    written beside the link, named after it. ``progress``: see :data:`Progress`.
     """
     out = Path(out)
     if fmt not in CLIP_FORMATS:
@@ -413,6 +421,8 @@ def write_clip(
         _check_folder(out)
     multi = any(len(tracks) > 1 for tracks in scene.tracks)
     clip, gt, mot, rate = clip_paths(out, fmt)
+    if fmt != "images":  # a link OUT is written through; its ground truth goes beside it
+        clip = written_file(clip, str(out))
     # stopped part way (an error, Ctrl-C, SIGTERM), it leaves no folder it created
     with (removing_new_folders(clip.parent),
           replacing(clip, gt, *rate, *([mot] if multi else []), settled=settled) as temps):
