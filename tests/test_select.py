@@ -285,6 +285,19 @@ def test_frame_writes_through_a_link_it_is_given_as_out(clip: Path, tmp_path: Pa
         "link.png", "loop.png", "real.png"]
 
 
+def test_frame_names_out_for_a_link_into_a_missing_folder(clip: Path, tmp_path: Path) -> None:
+    """``vtrack frame CLIP -o d.png -y`` with d.png a link to nowhere/x.png said
+    ``/abs/nowhere/x.png: cannot write (No such file or directory)``, naming neither --out nor
+    the link: one line naming --out d.png and where its link leads, nothing written."""
+    link = tmp_path / "d.png"
+    link.symlink_to("nowhere/x.png")
+    done = vtrack("frame", str(clip), "-o", str(link), "-y")
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == (f"vtrack: error: --out {link}: its link leads to nowhere/x.png, "
+                           "whose folder does not exist\n")
+    assert link.is_symlink() and [p.name for p in tmp_path.iterdir()] == ["d.png"]
+
+
 def test_a_box_drawn_on_a_later_frame_is_printed_with_its_frame_not_saved(clip: Path) -> None:
     """A box drawn on frame 7 was saved as the sidecar, which run and batch take as frame 0's
     box (only a warning said so)."""

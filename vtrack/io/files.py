@@ -135,16 +135,21 @@ def real_path(path: Path) -> Path:
 def written_file(out: Path, named: str) -> Path:
     """The file a writer of ``out`` writes: ``out``, or the file a symbolic link ``out`` leads
     to (written through: the link stays, as ``open()`` would write); OutputError naming
-    ``named`` for a link that cannot be followed (a loop)."""
+    ``named`` for a link that cannot be followed (a loop) or that leads into a folder that is
+    not there (it is not created: the link may be stale)."""
     if not out.is_symlink():
         return out
     try:
         os.stat(out)
     except FileNotFoundError:
-        pass  # a link to a file not there yet: that file is written
+        pass  # a link to a file not there yet: that file is written, if its folder is there
     except OSError as exc:
         raise OutputError(f"{named}: {os_reason(exc)}") from None
-    return real_path(out)
+    target = real_path(out)
+    if not target.parent.is_dir():
+        raise OutputError(f"{named}: its link leads to {os.readlink(out)}, whose folder does "
+                          "not exist")
+    return target
 
 
 def places_of(path: Path) -> set[Path]:
