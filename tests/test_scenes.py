@@ -766,3 +766,22 @@ def test_a_long_street_keeps_each_newcomer_only_while_it_crosses(scene_factory, 
     assert all(s.span[1] - s.span[0] == len(s.cx) for s in newcomers)
     seen = {tid for tracks in scene.tracks for tid, _ in tracks}
     assert {s.track_id for s in newcomers if s.track_id} <= seen  # each crosses in view
+
+
+def test_cli_refuses_a_link_out_to_its_own_ground_truth(tmp_path: Path) -> None:
+    """``ln -s l.gt.txt l.mp4; vtrack scene smooth l.mp4 -y``: written through the link, the
+    clip and its ground truth would be one file, the clip overwritten by the boxes (a file that
+    looks complete and is not). Refused in one line, nothing written."""
+    import subprocess
+    import sys
+
+    link = tmp_path / "l.mp4"
+    link.symlink_to("l.gt.txt")
+    done = subprocess.run([sys.executable, "-m", "vtrack", "scene", "smooth", str(link),
+                           "--frames", "10", "-y"], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [
+        f"vtrack: error: {link}: its link leads to l.gt.txt, the scene's own ground-truth "
+        "file: name OUT another file"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["l.mp4"]

@@ -35,6 +35,7 @@ from vtrack.io.files import (
     os_reason,
     removing_new_folders,
     replacing,
+    same_file,
     written_file,
 )
 from vtrack.io.images import SEQUENCE_INFO, encode_image
@@ -423,6 +424,10 @@ def write_clip(
     clip, gt, mot, rate = clip_paths(out, fmt)
     if fmt != "images":  # a link OUT is written through; its ground truth goes beside it
         clip = written_file(clip, str(out))
+        beside = next((path for path in (gt, mot, *rate) if same_file(clip, path)), None)
+        if beside is not None:
+            raise OutputError(f"{out}: its link leads to {beside.name}, the scene's own "
+                              "ground-truth file: name OUT another file")
     # stopped part way (an error, Ctrl-C, SIGTERM), it leaves no folder it created
     with (removing_new_folders(clip.parent),
           replacing(clip, gt, *rate, *([mot] if multi else []), settled=settled) as temps):
