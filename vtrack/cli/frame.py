@@ -38,7 +38,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
     light pixel grid and its scale (x along the top, y down the left), to read the target's box
     x,y,w,h off for --init or NAME.init.txt."""
     from vtrack.errors import ConfigError
-    from vtrack.io.files import write_bytes_atomic, written_file
+    from vtrack.io.files import write_bytes_atomic
     from vtrack.io.images import encode_image
     from vtrack.io.specs import input_name
     from vtrack.picker.frames import read_frame, read_frame_at
@@ -48,9 +48,7 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
         raise ConfigError(f"--step {step}: spaces the grid's lines, and --no-grid draws none; "
                           "give one of them")
     if out is not None:  # refused before a frame is decoded
-        ext = _checked_ext(out, input_spec)
-        _refuse_replacing(out, f"--out {out}", overwrite)
-        target = written_file(out, f"--out {out}")
+        ext, target = _place(out, f"--out {out}", input_spec, overwrite)
     index, seconds = at
     with stopping_as_interrupted():  # SIGTERM as Ctrl-C: no temporary image left behind
         if seconds is None:
@@ -59,12 +57,20 @@ def command(input_spec: str, at: tuple[int, float | None], out: Path | None,
             index, bgr = read_frame_at(input_spec, seconds)
         if out is None:
             out = Path(f"{input_name(input_spec.rstrip('/')) or 'input'}-frame{index}.png")
-            ext = _checked_ext(out, input_spec)
-            _refuse_replacing(out, str(out), overwrite)
-            target = written_file(out, str(out))
+            ext, target = _place(out, str(out), input_spec, overwrite)
         image = bgr if no_grid else draw_grid(bgr, step)
         write_bytes_atomic(target, encode_image(image, ext))  # a failed write keeps the old one
     echo_summary(f"wrote {out} (frame {index}, {bgr.shape[1]}x{bgr.shape[0]})")
+
+
+def _place(out: Path, named: str, input_spec: str, overwrite: bool) -> tuple[str, Path]:
+    """The image type ``out`` names and the file written for it (a symbolic link's target),
+    once it is checked that it may be written (``named`` as the refusals name it)."""
+    from vtrack.io.files import written_file
+
+    ext = _checked_ext(out, input_spec)
+    _refuse_replacing(out, named, overwrite)
+    return ext, written_file(out, named)
 
 
 def _checked_ext(out: Path, input_spec: str) -> str:
